@@ -1,0 +1,24 @@
+// Error types. Every error that the user can fix names the file and/or field and
+// says how to fix it; the CLI maps InputError to exit code 1 with that message.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace sl {
+
+/// Bad user input (file, field, value). `what()` is the full message for the user.
+class InputError : public std::runtime_error {
+  public:
+    using std::runtime_error::runtime_error;
+};
+
+/// Builds "<where>: <problem>. <fix>" in one place so messages are uniform.
+inline InputError inputError(const std::string& where, const std::string& problem,
+                             const std::string& fix = {}) {
+    std::string msg = where.empty() ? problem : where + ": " + problem;
+    if (!fix.empty()) msg += ". " + fix;
+    return InputError(msg);
+}
+
+}  // namespace sl
