@@ -1,0 +1,50 @@
+// EnvMapIO: environment maps in and out, and area-weighted resampling onto the texel grid.
+//
+// Texel grid (Mitsuba 3's `envmap` emitter, see scene/EnvMapBasis.h): texel (row j, column i)
+// of a W×H map sits at θ_j = jπ/(H−1) (row 0 = +Y pole, row H−1 = −Y pole) and u_i = (i+½)/W
+// (φ = 2πu, wrapping in u). For resampling, texel (j, i) stands for the cell
+//     u ∈ [i/W, (i+1)/W] × θ ∈ [max(0, (j−½)π/(H−1)), min(π, (j+½)π/(H−1))]
+// (half-height cells at the poles); the cells partition the sphere.
+//
+// Input images use the usual pixel-area equirectangular convention: pixel (x, y) of a
+// Win×Hin image covers u ∈ [x/Win, (x+1)/Win] × θ ∈ [yπ/Hin, (y+1)π/Hin].
+//
+// resampleEquirect gives each texel the solid-angle-weighted mean of the input over its cell:
+// exact overlaps, length in u times ∫ sinθ dθ = cosθ0 − cosθ1 in θ, separable, O(Win·Hin),
+// accumulated in double. Hence Σ texel·cellSolidAngle = ∫ input dω (to rounding).
+// Channels: 1-channel output from RGB input is the luminance Y = 0.2126R + 0.7152G + 0.0722B;
+// 3-channel output from gray input repeats it; an alpha channel is ignored. Values are not
+// clamped (an optimizer's bounds are its own business).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/Image.h"
+#include "scene/EnvMap.h"
+
+namespace sl {
+
+/// Area-weighted resampling of an equirectangular image (1–4 channels; 2 = gray+alpha,
+/// 4 = RGBA) onto a width×height texel grid with `channels` (1 or 3) channels.
+/// Requires width >= 1, height >= 2 and finite input; `where` names the source in errors.
+EnvMap resampleEquirect(const Image& src, int width, int height, int channels,
+                        const std::string& where = "env map image");
+
+/// Reads an env map image (readImage: EXR/HDR linear, PNG/JPEG sRGB-decoded) and resamples it
+/// with resampleEquirect. Exception: a file that already has exactly width×height pixels is
+/// taken as texels on the grid (what writeEnvMap writes and how Mitsuba reads it), so a saved
+/// map loads back unchanged; only its channels are converted.
+EnvMap loadEnvMap(const std::filesystem::path& file, int width, int height, int channels);
+
+/// Solid angle of every texel's cell, row-major (width*height values), summing to 4π.
+std::vector<double> envCellSolidAngles(int width, int height);
+
+/// Writes the env map as float32 EXR ("Y" or "R","G","B"), atomically.
+void writeEnvMap(const std::filesystem::path& file, const EnvMap& env);
+
+/// Nearest-neighbour enlargement by `scale` (>= 1) for a readable PNG preview (writePng).
+Image envMapPreview(const EnvMap& env, int scale);
+
+}  // namespace sl

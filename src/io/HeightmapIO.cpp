@@ -1,0 +1,305 @@
+#include "io/HeightmapIO.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <new>
+#include <system_error>
+
+#include "core/Error.h"
+#include "io/ImageIO.h"
+#include "io/Npy.h"
+
+namespace sl {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* const kFixFloat =
+    "Save heights as float32 (EXR, TIFF or .npy) or uint16 (PNG, TIFF) and try again";
+
+std::string lower(std::string s) {
+    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+}
+
+std::string typeName(OIIO::TypeDesc t) {
+    if (t == OIIO::TypeDesc::HALF) return "float16";
+    if (t == OIIO::TypeDesc::FLOAT) return "float32";
+    if (t == OIIO::TypeDesc::DOUBLE) return "float64";
+    if (t == OIIO::TypeDesc::UINT8) return "uint8";
+    if (t == OIIO::TypeDesc::UINT16) return "uint16";
+    return t.c_str();
+}
+
+std::string formatShortName(const std::string& oiioName) {
+    if (oiioName == "openexr") return "exr";
+    return oiioName;
+}
+
+/// How raw values (float heights, or integer codes 0..65535) become heights.
+struct Mapping {
+    bool integer = false;
+    double lo = 0.0, hi = 1.0;  // integer maps
+    double scale = 1.0;         // float maps
+};
+
+void checkOptions(const std::string& where, const HeightmapOptions& opt) {
+    if (!std::isfinite(opt.heightScale) || opt.heightScale == 0.0)
+        throw inputError(
+            where, "heightmap.height_scale = " + std::to_string(opt.heightScale) + " is invalid",
+            "Use a finite, non-zero height_scale (1 keeps the file's values)");
+    if (opt.heightRange) {
+        const auto& r = *opt.heightRange;
+        if (!std::isfinite(r[0]) || !std::isfinite(r[1]) || !(r[0] < r[1]))
+            throw inputError(where,
+                             "heightmap.height_range [" + std::to_string(r[0]) + ", " +
+                                 std::to_string(r[1]) + "] is invalid",
+                             "Give [min, max] in scene units with min < max");
+    }
+}
+
+Mapping mappingFor(const std::string& where, const HeightmapOptions& opt, bool integer,
+                   const std::string& format) {
+    Mapping m;
+    m.integer = integer;
+    if (integer) {
+        if (!opt.heightRange)
+            throw inputError(where,
+                             "integer height map needs heightmap.height_range: [min, max] in "
+                             "scene units (this map is " +
+                                 format + ")",
+                             "Add \"height_range\": [min, max] to the scene's heightmap "
+                             "section (the file's 0 maps to min, its largest code to max), or "
+                             "save float heights");
+        if (opt.heightScale != 1.0)
+            throw inputError(where,
+                             "heightmap.height_scale applies to float height maps only; this "
+                             "map is " +
+                                 format,
+                             "Remove height_scale and put the scale into height_range");
+        m.lo = (*opt.heightRange)[0];
+        m.hi = (*opt.heightRange)[1];
+    } else {
+        if (opt.heightRange)
+            throw inputError(where,
+                             "heightmap.height_range applies to integer (8/16-bit) height maps "
+                             "only; this map is " +
+                                 format + " and stores heights in scene units",
+                             "Remove height_range (use height_scale to scale float heights)");
+        m.scale = opt.heightScale;
+    }
+    return m;
+}
+
+void checkSize(const std::string& where, long long w, long long h) {
+    if (w < 2 || h < 2)
+        throw inputError(where,
+                         "height map has " + std::to_string(h) + " rows and " + std::to_string(w) +
+                             " columns; a height map must be at least 2x2",
+                         "Use a map with at least 2 rows and 2 columns");
+}
+
+/// Integer code (0..65535, stored as the value of type T) -> height.
+template <typename T>
+float integerHeight(const Mapping& m, T code) {
+    const double t = static_cast<double>(code) / 65535.0;
+    return static_cast<float>(m.lo + (m.hi - m.lo) * t);
+}
+
+/// Scales float heights (in double, rounded once) and checks every one is finite; names the
+/// first bad sample.
+void finishFloat(const std::string& where, HeightmapData& d, double scale) {
+    const size_t w = static_cast<size_t>(d.width);
+    const bool doScale = scale != 1.0;
+    bool bad = false;
+    for (float& v : d.heights) {
+        if (doScale) v = static_cast<float>(static_cast<double>(v) * scale);
+        bad |= !std::isfinite(v);
+    }
+    if (!bad) return;
+    for (size_t k = 0; k < d.heights.size(); ++k) {
+        if (std::isfinite(d.heights[k])) continue;
+        const std::string what = std::isnan(d.heights[k]) ? "NaN"
+                                 : doScale                ? "infinite (height_scale applied)"
+                                                          : "infinite";
+        throw inputError(where,
+                         "height is " + what + " at row " + std::to_string(k / w) + ", column " +
+                             std::to_string(k % w) + " (the first such sample)",
+                         "Replace NaN/Inf samples (e.g. numpy.nan_to_num) and save the map again");
+    }
+}
+
+HeightmapData loadNpy(const fs::path& file, const HeightmapOptions& opt) {
+    const std::string where = file.string();
+    const NpyHeader h = readNpyHeader(file);
+    const bool integer = h.type == NpyType::UInt16;
+    const std::string format = std::string("npy ") + npyTypeName(h.type);
+    checkSize(where, static_cast<long long>(h.shape[1]), static_cast<long long>(h.shape[0]));
+    const Mapping m = mappingFor(where, opt, integer, format);
+
+    NpyMatrix mat = readNpy2D(file);
+    HeightmapData d;
+    d.width = mat.cols;
+    d.height = mat.rows;
+    d.format = format;
+    d.heights = std::move(mat.data);
+    if (integer) {
+        for (float& v : d.heights) v = integerHeight(m, v);
+    } else {
+        finishFloat(where, d, m.scale);
+    }
+    return d;
+}
+
+/// Copies channel 0 of a strip of interleaved pixels into `out` (packed T values, written with
+/// memcpy because `out` may be the float buffer's storage), after checking that the other
+/// colour channels equal channel 0 and that alpha (if any) is opaque.
+template <typename T>
+void takeGrayChannel(const std::string& where, const T* strip, size_t pixels, int nch, int alpha,
+                     T opaque, int firstRow, int width, unsigned char* out) {
+    for (size_t p = 0; p < pixels; ++p) {
+        const T* px = strip + p * static_cast<size_t>(nch);
+        for (int c = 1; c < nch; ++c) {
+            const bool ok = c == alpha ? px[c] == opaque
+                                       : (px[c] == px[0] || (px[c] != px[c] && px[0] != px[0]));
+            if (!ok) {
+                const size_t row = static_cast<size_t>(firstRow) + p / static_cast<size_t>(width);
+                const size_t col = p % static_cast<size_t>(width);
+                if (c == alpha)
+                    throw inputError(where,
+                                     "height map has transparent pixels (first at row " +
+                                         std::to_string(row) + ", column " + std::to_string(col) +
+                                         ")",
+                                     "Save the heights as one opaque gray channel");
+                throw inputError(where,
+                                 "height map has " + std::to_string(nch) +
+                                     " channels that differ (first at row " + std::to_string(row) +
+                                     ", column " + std::to_string(col) + ", channel " +
+                                     std::to_string(c) + "); a height map has one channel",
+                                 "Save the heights as a single-channel (gray) image");
+            }
+        }
+        std::memcpy(out + p * sizeof(T), px, sizeof(T));
+    }
+}
+
+HeightmapData loadWithOiio(const fs::path& file, const HeightmapOptions& opt) {
+    const std::string where = file.string();
+    auto in = OIIO::ImageInput::open(file.string());
+    if (!in)
+        throw inputError(where, "cannot read the height map (" + OIIO::geterror() + ")",
+                         "Check that the file is a complete EXR, TIFF, PNG or .npy file");
+    const OIIO::ImageSpec& spec = in->spec();
+    const std::string fmtName = formatShortName(in->format_name());
+    if (spec.deep || spec.depth > 1)
+        throw inputError(where, "deep or volume images cannot be height maps", kFixFloat);
+    checkSize(where, spec.width, spec.height);
+
+    const OIIO::TypeDesc native = spec.format;
+    const bool isFloat = native == OIIO::TypeDesc::HALF || native == OIIO::TypeDesc::FLOAT ||
+                         native == OIIO::TypeDesc::DOUBLE;
+    const bool isInt = native == OIIO::TypeDesc::UINT8 || native == OIIO::TypeDesc::UINT16;
+    const std::string format = fmtName + " " + typeName(native);
+    if (!isFloat && !isInt)
+        throw inputError(where, "unsupported pixel type " + typeName(native) + " (" + format + ")",
+                         kFixFloat);
+    const Mapping m = mappingFor(where, opt, isInt, format);
+
+    HeightmapData d;
+    d.width = spec.width;
+    d.height = spec.height;
+    d.format = format;
+    const size_t n = static_cast<size_t>(spec.width) * static_cast<size_t>(spec.height);
+    try {
+        d.heights.resize(n);
+    } catch (const std::bad_alloc&) {
+        throw inputError(where, "not enough memory for a " + std::to_string(spec.width) + "x" +
+                                    std::to_string(spec.height) + " height map");
+    }
+    // Integers are read as UINT16 (OIIO scales uint8 by 257, exactly: v/255 == 257v/65535) and
+    // mapped by us in double; OIIO's own uint16 -> float conversion is not correctly rounded.
+    const OIIO::TypeDesc readAs = isInt ? OIIO::TypeDesc::UINT16 : OIIO::TypeDesc::FLOAT;
+    const int nch = spec.nchannels;
+
+    if (nch == 1) {
+        if (!in->read_image(0, 0, 0, 1, readAs, d.heights.data()))
+            throw inputError(where, "cannot read the pixels (" + in->geterror() + ")",
+                             "The file is damaged or truncated; save it again");
+    } else {
+        // Strips of rows: all channels into a small buffer, channel 0 into the heights.
+        // Tiled files are read by bands of whole tile rows (OIIO 2.4's read_scanlines crashes
+        // with SIGFPE on tiled files).
+        const bool tiled = spec.tile_width > 0;
+        int rowsPerStrip = std::max(
+            1, static_cast<int>((size_t(1) << 22) /
+                                (static_cast<size_t>(spec.width) * static_cast<size_t>(nch))));
+        if (tiled)
+            rowsPerStrip =
+                (rowsPerStrip + spec.tile_height - 1) / spec.tile_height * spec.tile_height;
+        const size_t stripValues = static_cast<size_t>(rowsPerStrip) *
+                                   static_cast<size_t>(spec.width) * static_cast<size_t>(nch);
+        std::vector<float> fbuf;
+        std::vector<uint16_t> ibuf;
+        if (isInt)
+            ibuf.resize(stripValues);
+        else
+            fbuf.resize(stripValues);
+        // uint16 codes are stored packed at the front of the float buffer, widened below.
+        unsigned char* bytes = reinterpret_cast<unsigned char*>(d.heights.data());
+        for (int y0 = 0; y0 < spec.height; y0 += rowsPerStrip) {
+            const int y1 = std::min(spec.height, y0 + rowsPerStrip);
+            void* buf = isInt ? static_cast<void*>(ibuf.data()) : static_cast<void*>(fbuf.data());
+            const bool ok =
+                tiled ? in->read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y + y0, spec.y + y1,
+                                       spec.z, spec.z + 1, 0, nch, readAs, buf)
+                      : in->read_scanlines(0, 0, spec.y + y0, spec.y + y1, spec.z, 0, nch, readAs,
+                                           buf);
+            if (!ok)
+                throw inputError(where, "cannot read the pixels (" + in->geterror() + ")",
+                                 "The file is damaged or truncated; save it again");
+            const size_t px = static_cast<size_t>(y1 - y0) * static_cast<size_t>(spec.width);
+            const size_t off = static_cast<size_t>(y0) * static_cast<size_t>(spec.width);
+            if (isInt)
+                takeGrayChannel<uint16_t>(where, ibuf.data(), px, nch, spec.alpha_channel,
+                                          uint16_t(65535), y0, spec.width,
+                                          bytes + off * sizeof(uint16_t));
+            else
+                takeGrayChannel<float>(where, fbuf.data(), px, nch, spec.alpha_channel, 1.0f, y0,
+                                       spec.width, bytes + off * sizeof(float));
+        }
+    }
+    in->close();
+
+    if (isInt) {
+        detail::widenInPlace<uint16_t>(d.heights.data(), n,
+                                       [&m](uint16_t v, size_t) { return integerHeight(m, v); });
+    } else {
+        finishFloat(where, d, m.scale);
+    }
+    return d;
+}
+
+}  // namespace
+
+HeightmapData loadHeightmap(const fs::path& file, const HeightmapOptions& opt) {
+    const std::string where = file.string();
+    checkOptions(where, opt);
+    std::error_code ec;
+    if (!fs::exists(file, ec))
+        throw inputError(where, "height map file not found",
+                         "Check heightmap.path (relative paths are resolved against the scene "
+                         "file's directory)");
+    if (!fs::is_regular_file(file, ec))
+        throw inputError(where, "the height map path is not a regular file",
+                         "Point heightmap.path at an EXR, TIFF, PNG or .npy file");
+    if (lower(file.extension().string()) == ".npy") return loadNpy(file, opt);
+    return loadWithOiio(file, opt);
+}
+
+}  // namespace sl
