@@ -1,0 +1,142 @@
+// scratchlight bench render [SCENE.json] [--sizes 1024,5000] [--resolution R] [--spp N] [--csv F]
+// Prints a table and writes CSV: renderer rays/s next to bare Embree closest-hit rays/s on the
+// same height field in the same run, and the height field's build time and memory.
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <fstream>
+#include <memory>
+
+#include "cli/Commands.h"
+#include "cli/Common.h"
+#include "io/AtomicFile.h"
+#include "io/SceneFile.h"
+#include "render/Benchmark.h"
+#include "render/Render.h"
+#include "scene/Scene.h"
+#include "synth/SurfaceGenerator.h"
+
+namespace sl::cli {
+
+namespace {
+struct BenchArgs {
+    std::string scene, csv = "bench-render.csv";
+    std::vector<int> sizes{1024, 5000};
+    int resolution = 256, spp = 16, threads = 0, repeats = 3;
+};
+
+struct Row {
+    std::string map;
+    double genSeconds = 0;
+    HeightfieldStats hs;
+    ThroughputRow renderer, bare;
+};
+
+double mb(size_t b) {
+    return static_cast<double>(b) / 1e6;
+}
+
+/// The run of median time (the rays are identical across repeats).
+ThroughputRow median(std::vector<ThroughputRow> rows) {
+    std::sort(rows.begin(), rows.end(),
+              [](const auto& x, const auto& y) { return x.seconds < y.seconds; });
+    return rows[rows.size() / 2];
+}
+
+Row measure(const Scene& scene, const std::string& name, double genSeconds, const BenchArgs& a) {
+    RenderOptions opt = renderOptionsFor(scene);
+    opt.spp = a.spp;
+    opt.threads = a.threads;
+    Row r{name, genSeconds, scene.surface->stats(), {}, {}};
+    // Interleave so that both see the same machine state.
+    std::vector<ThroughputRow> ren, bare;
+    for (int i = 0; i < a.repeats; ++i) {
+        ren.push_back(benchRenderer(scene, opt));
+        bare.push_back(benchBareEmbree(scene, opt));
+    }
+    r.renderer = median(std::move(ren));
+    r.bare = median(std::move(bare));
+    return r;
+}
+
+int runBench(const BenchArgs& a) {
+    std::vector<Row> rows;
+    if (!a.scene.empty()) {
+        SceneDesc d = readSceneFile(a.scene);
+        d.camera.width = d.camera.height = a.resolution;
+        auto scene = loadScene(d);
+        rows.push_back(measure(*scene, std::filesystem::path(a.scene).filename().string(), 0, a));
+    }
+    for (int n : a.sizes) {
+        SurfaceSpec spec;
+        spec.width = spec.height = n;
+        spec.pitch = 10.0 / (n - 1);  // a 10 mm part at every size
+        auto t0 = std::chrono::steady_clock::now();
+        GeneratedSurface g = generateSurface(spec);
+        double gen = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        SceneDesc d;
+        d.heightmap.pitch = g.pitch;
+        d.material.params.alphaU = d.material.params.alphaV = 0.05f;
+        d.material.params.ior = ComplexIor{Rgb{1.0f}, Rgb{7.0f}};  // a bright metal
+        d.camera.width = d.camera.height = a.resolution;
+        Scene scene(d, g.width, g.height, std::move(g.heights));
+        rows.push_back(measure(scene, std::to_string(n) + "x" + std::to_string(n), gen, a));
+        spdlog::info("measured {}x{}", n, n);
+    }
+
+    std::printf("%-14s %8s %9s %10s %10s %10s | %14s %14s %7s\n", "height map", "gen s", "build s",
+                "vertex MB", "embree MB", "peak MB", "renderer Mr/s", "bare Mr/s", "ratio");
+    for (const Row& r : rows)
+        std::printf("%-14s %8.2f %9.3f %10.1f %10.1f %10.1f | %14.2f %14.2f %6.1f%%\n",
+                    r.map.c_str(), r.genSeconds, r.hs.buildSeconds, mb(r.hs.vertexBytes),
+                    mb(r.hs.embreeBytes), mb(r.hs.embreePeakBytes),
+                    r.renderer.raysPerSecond() / 1e6, r.bare.raysPerSecond() / 1e6,
+                    100.0 * r.renderer.raysPerSecond() / r.bare.raysPerSecond());
+    std::printf("(%dx%d image, %d spp, median of %d interleaved runs; ratio = renderer/bare)\n",
+                a.resolution, a.resolution, a.spp, a.repeats);
+
+    AtomicOutput file(a.csv);
+    {
+        std::ofstream os(file.tempPath());
+        os << "height_map,generate_s,build_s,vertex_bytes,embree_bytes,embree_peak_bytes,"
+              "image,spp,renderer_rays,renderer_s,renderer_rays_per_s,bare_rays,bare_s,"
+              "bare_rays_per_s,ratio\n";
+        for (const Row& r : rows)
+            os << r.map << ',' << r.genSeconds << ',' << r.hs.buildSeconds << ','
+               << r.hs.vertexBytes << ',' << r.hs.embreeBytes << ',' << r.hs.embreePeakBytes << ','
+               << a.resolution << ',' << a.spp << ',' << r.renderer.rays << ','
+               << r.renderer.seconds << ',' << r.renderer.raysPerSecond() << ',' << r.bare.rays
+               << ',' << r.bare.seconds << ',' << r.bare.raysPerSecond() << ','
+               << r.renderer.raysPerSecond() / r.bare.raysPerSecond() << '\n';
+    }
+    file.commit();
+    std::printf("wrote %s\n", a.csv.c_str());
+    return kOk;
+}
+}  // namespace
+
+void registerBench(CLI::App& app, std::function<int()>& run) {
+    CLI::App* bench = app.add_subcommand("bench", "Benchmarks (print a table, write CSV)");
+    bench->require_subcommand(1);
+    auto a = std::make_shared<BenchArgs>();
+    CLI::App* c = bench->add_subcommand(
+        "render", "Renderer rays/s vs bare Embree closest-hit rays/s; height-field build cost");
+    c->add_option("scene", a->scene, "Also measure this scene (optional)");
+    c->add_option("--sizes", a->sizes, "Synthetic height-map sizes (N for NxN)")
+        ->delimiter(',')
+        ->capture_default_str();
+    c->add_option("--resolution", a->resolution, "Image width and height")
+        ->check(CLI::Range(8, 4096))
+        ->capture_default_str();
+    c->add_option("--spp", a->spp, "Samples per pixel")
+        ->check(CLI::Range(1, 4096))
+        ->capture_default_str();
+    c->add_option("--repeats", a->repeats, "Runs per measurement (median)")
+        ->check(CLI::Range(1, 50))
+        ->capture_default_str();
+    c->add_option("--threads", a->threads, "Worker threads (0: all)")->capture_default_str();
+    c->add_option("--csv", a->csv, "CSV output")->capture_default_str();
+    c->callback([a, &run] { run = [a] { return runBench(*a); }; });
+}
+
+}  // namespace sl::cli

@@ -1,0 +1,13 @@
+// Each command registers its CLI11 subcommand and, when chosen, sets `run`.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace sl::cli {
+
+void registerRender(CLI::App& app, std::function<int()>& run);
+void registerGenSurface(CLI::App& app, std::function<int()>& run);
+void registerBench(CLI::App& app, std::function<int()>& run);
+
+}  // namespace sl::cli

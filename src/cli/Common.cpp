@@ -1,0 +1,55 @@
+#include "cli/Common.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <mutex>
+
+#include "core/Error.h"
+#include "io/EnvMapIO.h"
+#include "scene/EnvMapPresets.h"
+#include "scene/Scene.h"
+
+namespace sl::cli {
+
+std::function<void(double)> progressBar(const std::string& label) {
+    if (!isatty(STDERR_FILENO)) return {};
+    return [label, last = std::make_shared<int>(-1)](double f) {
+        int pct = static_cast<int>(f * 100.0);
+        if (pct == *last) return;
+        *last = pct;
+        constexpr int kWidth = 40;
+        int filled = pct * kWidth / 100;
+        std::fprintf(stderr, "\r%s [%s%s] %3d%%", label.c_str(), std::string(filled, '#').c_str(),
+                     std::string(kWidth - filled, ' ').c_str(), pct);
+        if (pct >= 100) std::fprintf(stderr, "\n");
+        std::fflush(stderr);
+    };
+}
+
+EnvMap chooseEnvMap(const Scene& scene, const std::string& envmapFile,
+                    std::optional<float> constant) {
+    const int w = scene.basis.width(), h = scene.basis.height();
+    if (!envmapFile.empty() && constant)
+        throw UsageError("give either --envmap or --constant, not both");
+    if (!envmapFile.empty()) return loadEnvMap(envmapFile, w, h, 3);
+    if (constant) {
+        if (!(*constant >= 0)) throw UsageError("--constant must be >= 0");
+        return EnvMap::constant(w, h, *constant);
+    }
+    const EnvMapDesc& e = scene.desc.envmap;
+    if (!e.path.empty()) return loadEnvMap(e.path, w, h, 3);
+    if (e.constant) return EnvMap::constant(w, h, *e.constant);
+    return presetEnvMap(e.preset.empty() ? "studio" : e.preset, w, h);
+}
+
+std::filesystem::path siblingPath(const std::filesystem::path& out, const std::string& ext,
+                                  const std::string& siblingExt) {
+    if (out.extension() != ext)
+        throw UsageError("output '" + out.string() + "' must end in " + ext);
+    std::filesystem::path p = out;
+    p.replace_extension(siblingExt);
+    return p;
+}
+
+}  // namespace sl::cli

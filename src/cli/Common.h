@@ -1,0 +1,38 @@
+// Shared helpers of the CLI commands (argument plumbing only; the work is in the library).
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+
+#include "scene/EnvMap.h"
+
+namespace sl {
+struct Scene;
+}
+
+namespace sl::cli {
+
+/// Exit codes of every command.
+enum Exit : int { kOk = 0, kRuntimeError = 1, kUsageError = 2 };
+
+/// A usage error detected after parsing (bad combination of options): exit code 2.
+struct UsageError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+/// Progress bar on stderr when it is a terminal (nothing otherwise).
+std::function<void(double)> progressBar(const std::string& label);
+
+/// The env map for a scene: --envmap FILE, --constant V, else the scene's envmap section,
+/// else the "studio" preset. RGB files stay RGB; constants and presets are gray.
+EnvMap chooseEnvMap(const Scene& scene, const std::string& envmapFile,
+                    std::optional<float> constant);
+
+/// Checks an output path ends in `ext` (usage error otherwise) and returns the sibling with
+/// extension `siblingExt` (e.g. the PNG preview next to an EXR).
+std::filesystem::path siblingPath(const std::filesystem::path& out, const std::string& ext,
+                                  const std::string& siblingExt);
+
+}  // namespace sl::cli

@@ -1,0 +1,46 @@
+// scratchlight: the command line, a thin shell over the library.
+// Exit codes: 0 ok, 1 runtime error (bad input file, I/O, ...), 2 usage error.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <exception>
+
+#include "cli/Commands.h"
+#include "cli/Common.h"
+#include "core/Error.h"
+
+int main(int argc, char** argv) {
+    using namespace sl::cli;
+    CLI::App app{
+        "scratchlight: find the environment light under which the scratches and tool marks of a "
+        "machined metal part show best."};
+    app.require_subcommand(1);
+    app.set_help_all_flag("--help-all", "Show the help of every command");
+
+    std::function<int()> run;
+    registerRender(app, run);
+    registerGenSurface(app, run);
+    registerBench(app, run);
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForAllHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+        app.exit(e);
+        return kUsageError;
+    }
+    try {
+        return run ? run() : kUsageError;
+    } catch (const UsageError& e) {
+        std::fprintf(stderr, "error: %s (see --help)\n", e.what());
+        return kUsageError;
+    } catch (const sl::InputError& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return kRuntimeError;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return kRuntimeError;
+    }
+}

@@ -1,0 +1,273 @@
+#include "io/SceneFile.h"
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "core/Error.h"
+#include "io/HeightmapIO.h"
+#include "scene/Materials.h"
+
+namespace sl {
+
+namespace {
+
+using json = nlohmann::json;
+
+/// Reads the fields of one JSON object, remembering which were used, so that anything left
+/// over is reported as an unknown field (with the list of valid ones).
+class Fields {
+  public:
+    Fields(const json& obj, std::string where, std::string prefix)
+        : obj_(obj), where_(std::move(where)), prefix_(std::move(prefix)) {
+        if (!obj.is_object()) throw inputError(where_, name("") + " must be a JSON object");
+    }
+    std::string name(const std::string& key) const {
+        return key.empty() ? (prefix_.empty() ? "the scene" : prefix_)
+                           : (prefix_.empty() ? key : prefix_ + "." + key);
+    }
+    const json* get(const std::string& key) {
+        known_.insert(key);
+        auto it = obj_.find(key);
+        return it == obj_.end() ? nullptr : &*it;
+    }
+    [[noreturn]] void fail(const std::string& key, const std::string& problem,
+                           const std::string& fix = {}) const {
+        throw inputError(where_ + ": " + name(key), problem, fix);
+    }
+    double number(const std::string& key, double def) {
+        const json* v = get(key);
+        if (!v) return def;
+        if (!v->is_number()) fail(key, "must be a number, got " + v->dump());
+        double d = v->get<double>();
+        if (!std::isfinite(d)) fail(key, "must be finite");
+        return d;
+    }
+    double positive(const std::string& key, double def) {
+        double d = number(key, def);
+        if (!(d > 0)) fail(key, "must be > 0, got " + json(d).dump());
+        return d;
+    }
+    int integer(const std::string& key, int def, int lo, int hi) {
+        const json* v = get(key);
+        if (!v) return def;
+        if (!v->is_number_integer()) fail(key, "must be a whole number, got " + v->dump());
+        auto i = v->get<long long>();
+        if (i < lo || i > hi)
+            fail(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
+                          std::to_string(i));
+        return static_cast<int>(i);
+    }
+    std::string string(const std::string& key, const std::string& def) {
+        const json* v = get(key);
+        if (!v) return def;
+        if (!v->is_string()) fail(key, "must be a string, got " + v->dump());
+        return v->get<std::string>();
+    }
+    std::string choice(const std::string& key, const std::string& def,
+                       const std::vector<std::string>& options) {
+        std::string s = string(key, def);
+        for (const auto& o : options)
+            if (o == s) return s;
+        std::string list;
+        for (const auto& o : options) list += (list.empty() ? "" : ", ") + o;
+        fail(key, "unknown value \"" + s + "\"", "use one of: " + list);
+    }
+    std::optional<Vec3d> vec3(const std::string& key) {
+        const json* v = get(key);
+        if (!v) return std::nullopt;
+        if (!v->is_array() || v->size() != 3)
+            fail(key, "must be an array of 3 numbers, got " + v->dump());
+        Vec3d r;
+        for (int i = 0; i < 3; ++i) {
+            if (!(*v)[i].is_number() || !std::isfinite((*v)[i].get<double>()))
+                fail(key, "must be an array of 3 finite numbers, got " + v->dump());
+            r[i] = (*v)[i].get<double>();
+        }
+        return r;
+    }
+    /// A number (all channels) or [r, g, b].
+    std::optional<Rgb> rgb(const std::string& key) {
+        const json* v = get(key);
+        if (!v) return std::nullopt;
+        if (v->is_number()) return Rgb(v->get<float>());
+        known_.erase(key);
+        auto r = vec3(key);
+        known_.insert(key);
+        return Rgb(*r);
+    }
+    std::optional<Fields> object(const std::string& key) {
+        const json* v = get(key);
+        if (!v) return std::nullopt;
+        return Fields(*v, where_, name(key));
+    }
+    void rejectUnknown() const {
+        for (auto it = obj_.begin(); it != obj_.end(); ++it) {
+            if (known_.count(it.key())) continue;
+            std::string list;
+            for (const auto& k : known_) list += (list.empty() ? "" : ", ") + k;
+            fail(it.key(), "unknown field", "valid fields here are: " + list);
+        }
+    }
+
+  private:
+    const json& obj_;
+    std::string where_, prefix_;
+    std::set<std::string> known_;
+};
+
+void parseHeightmap(Fields& f, const std::filesystem::path& baseDir, HeightmapDesc& h) {
+    const json* p = f.get("path");
+    if (!p) f.fail("path", "is required", "name the height-map file (EXR, TIFF, PNG16 or .npy)");
+    if (!p->is_string() || p->get<std::string>().empty())
+        f.fail("path", "must be a non-empty string");
+    std::filesystem::path path = p->get<std::string>();
+    h.path = path.is_absolute() ? path : baseDir / path;
+    h.pitch = f.positive("pixel_pitch", h.pitch);
+    h.heightScale = f.number("height_scale", h.heightScale);
+    if (!(h.heightScale != 0)) f.fail("height_scale", "must be non-zero");
+    if (const json* r = f.get("height_range")) {
+        if (!r->is_array() || r->size() != 2 || !(*r)[0].is_number() || !(*r)[1].is_number())
+            f.fail("height_range", "must be [min, max], got " + r->dump());
+        double lo = (*r)[0].get<double>(), hi = (*r)[1].get<double>();
+        if (!std::isfinite(lo) || !std::isfinite(hi) || !(hi > lo))
+            f.fail("height_range", "must be [min, max] with max > min, got " + r->dump());
+        h.heightRange = std::array<double, 2>{lo, hi};
+    }
+    f.rejectUnknown();
+}
+
+void parseMaterial(Fields& f, MaterialDesc& m) {
+    m.type = f.choice("type", m.type, {"roughconductor", "conductor"});
+    ConductorParams& p = m.params;
+    p.smooth = m.type == "conductor";
+    std::string dist = f.choice("distribution", "ggx", {"ggx", "beckmann"});
+    p.distribution = dist == "ggx" ? Microfacet::GGX : Microfacet::Beckmann;
+    double alpha = f.positive("alpha", 0.05);
+    p.alphaU = static_cast<float>(f.positive("alpha_u", alpha));
+    p.alphaV = static_cast<float>(f.positive("alpha_v", alpha));
+    auto eta = f.rgb("eta"), k = f.rgb("k");
+    bool hasName = f.get("material") != nullptr;
+    if (eta || k) {
+        if (!eta || !k) f.fail(eta ? "k" : "eta", "is required when the other of eta/k is given");
+        if (hasName) f.fail("material", "cannot be combined with eta/k", "give one or the other");
+        m.name = "custom";
+        p.ior = ComplexIor{*eta, *k};
+    } else {
+        m.name = f.string("material", m.name);
+        try {
+            p.ior = namedConductor(m.name);
+        } catch (const InputError& e) {
+            f.fail("material", e.what());
+        }
+    }
+    f.rejectUnknown();
+}
+
+void parseCamera(Fields& f, CameraSpec& c) {
+    c.type = f.choice("type", "perspective", {"perspective", "orthographic"}) == "perspective"
+                 ? CameraDesc::Type::Perspective
+                 : CameraDesc::Type::Orthographic;
+    c.origin = f.vec3("origin");
+    c.target = f.vec3("target");
+    c.up = f.vec3("up");
+    c.fovDeg = f.positive("fov", c.fovDeg);
+    if (c.fovDeg >= 180) f.fail("fov", "must be below 180 degrees");
+    if (f.get("width_mm")) c.widthMm = f.positive("width_mm", 1.0);
+    c.width = f.integer("width", c.width, 1, 16384);
+    c.height = f.integer("height", c.height, 1, 16384);
+    f.rejectUnknown();
+}
+
+void parseEnvmap(Fields& f, const std::filesystem::path& baseDir, EnvMapDesc& e) {
+    e.width = f.integer("width", e.width, 2, 4096);
+    e.height = f.integer("height", e.height, 3, 2048);
+    std::string path = f.string("path", "");
+    if (!path.empty())
+        e.path = std::filesystem::path(path).is_absolute() ? std::filesystem::path(path)
+                                                           : baseDir / path;
+    if (f.get("constant")) {
+        double v = f.number("constant", 1.0);
+        if (v < 0) f.fail("constant", "must be >= 0");
+        e.constant = static_cast<float>(v);
+    }
+    if (f.get("preset")) e.preset = f.choice("preset", "studio", {"studio"});
+    int given = (!e.path.empty()) + (e.constant.has_value()) + (!e.preset.empty());
+    if (given > 1) f.fail("", "give at most one of path, constant and preset");
+    f.rejectUnknown();
+}
+
+void parseRender(Fields& f, RenderDesc& r) {
+    r.spp = f.integer("spp", r.spp, 1, 1 << 20);
+    r.maxDepth = f.integer("max_depth", r.maxDepth, 1, 64);
+    const json* s = f.get("seed");
+    if (s) {
+        if (!s->is_number_unsigned() && !(s->is_number_integer() && s->get<long long>() >= 0))
+            f.fail("seed", "must be a non-negative whole number");
+        r.seed = s->get<uint64_t>();
+    }
+    f.rejectUnknown();
+}
+
+}  // namespace
+
+SceneDesc parseScene(const std::string& text, const std::filesystem::path& baseDir,
+                     const std::string& where) {
+    json j;
+    try {
+        j = json::parse(text);
+    } catch (const json::parse_error& e) {
+        throw inputError(where, std::string("not valid JSON: ") + e.what(),
+                         "fix the syntax (a JSON validator shows the spot)");
+    }
+    SceneDesc d;
+    d.canonicalJson = j.dump();
+    Fields top(j, where, "");
+    auto hm = top.object("heightmap");
+    if (!hm) top.fail("heightmap", "is required", "add {\"heightmap\": {\"path\": \"part.exr\"}}");
+    parseHeightmap(*hm, baseDir, d.heightmap);
+    // Omitted sections are parsed as {} so that every default is applied in one place.
+    const json empty = json::object();
+    auto section = [&](const char* key) {
+        return top.object(key).value_or(Fields(empty, where, key));
+    };
+    auto material = section("material");
+    parseMaterial(material, d.material);
+    auto camera = section("camera");
+    parseCamera(camera, d.camera);
+    auto envmap = section("envmap");
+    parseEnvmap(envmap, baseDir, d.envmap);
+    auto render = section("render");
+    parseRender(render, d.render);
+    top.string("description", "");
+    top.rejectUnknown();
+    return d;
+}
+
+SceneDesc readSceneFile(const std::filesystem::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    if (!in)
+        throw inputError(file.string(), "cannot open the scene file",
+                         "check the path (scene files are JSON)");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    SceneDesc d = parseScene(ss.str(), file.parent_path(), file.string());
+    d.file = file;
+    return d;
+}
+
+std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
+    HeightmapOptions opt;
+    opt.heightRange = desc.heightmap.heightRange;
+    opt.heightScale = desc.heightmap.heightScale;
+    HeightmapData map = loadHeightmap(desc.heightmap.path, opt);
+    return std::make_unique<Scene>(desc, map.width, map.height, std::move(map.heights));
+}
+
+std::unique_ptr<Scene> loadScene(const std::filesystem::path& file) {
+    return loadScene(readSceneFile(file));
+}
+
+}  // namespace sl

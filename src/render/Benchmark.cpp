@@ -1,0 +1,75 @@
+#include "render/Benchmark.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <chrono>
+
+#include "core/Rng.h"
+#include "render/Render.h"
+#include "scene/EnvMapPresets.h"
+#include "scene/Scene.h"
+
+namespace sl {
+
+ThroughputRow benchRenderer(const Scene& scene, const RenderOptions& options) {
+    EnvMap env = studioEnvMap(scene.basis.width(), scene.basis.height());
+    RenderResult r = render(scene, env, options);
+    return {"renderer (path tracer + radiance sink)", r.summary.rays, r.summary.seconds};
+}
+
+ThroughputRow benchBareEmbree(const Scene& scene, const RenderOptions& opt) {
+    const Camera& cam = scene.camera;
+    const int W = cam.width(), H = cam.height(), spp = opt.spp;
+    const auto [nx, ny] = strataFor(spp);
+    RTCScene rs = scene.surface->rtcScene();
+    tbb::combinable<uint64_t> rays;
+    auto t0 = std::chrono::steady_clock::now();
+    auto body = [&](const tbb::blocked_range<int>& rowsRange) {
+        uint64_t& count = rays.local();
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        for (int y = rowsRange.begin(); y < rowsRange.end(); ++y) {
+            for (int x = 0; x < W; ++x) {
+                const auto pixel = static_cast<uint64_t>(y) * W + x;
+                for (int s = 0; s < spp; ++s) {
+                    Pcg32 rng = sampleRng(opt.seed, pixel, static_cast<uint64_t>(s));
+                    double fx = x + (s % nx + rng.nextDouble()) / nx;
+                    double fy = y + (s / nx + rng.nextDouble()) / ny;
+                    Ray ray = cam.generateRay(fx, fy);
+                    for (int depth = 0; depth < opt.maxDepth; ++depth) {
+                        RTCRayHit rh{};
+                        rh.ray.org_x = ray.origin.x;
+                        rh.ray.org_y = ray.origin.y;
+                        rh.ray.org_z = ray.origin.z;
+                        rh.ray.dir_x = ray.direction.x;
+                        rh.ray.dir_y = ray.direction.y;
+                        rh.ray.dir_z = ray.direction.z;
+                        rh.ray.tnear = 0.0f;
+                        rh.ray.tfar = std::numeric_limits<float>::infinity();
+                        rh.ray.mask = 0xFFFFFFFFu;
+                        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                        rtcIntersect1(rs, &ctx, &rh);
+                        ++count;
+                        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || depth + 1 >= opt.maxDepth)
+                            break;
+                        Vec3f n = normalize(Vec3f{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z});
+                        if (n.y < 0) n = -n;
+                        Vec3f p = ray.origin + ray.direction * rh.ray.tfar;
+                        ray.direction = ray.direction - n * (2.0f * dot(ray.direction, n));
+                        ray.origin = offsetRayOrigin(p, n);
+                    }
+                }
+            }
+        }
+    };
+    tbb::task_arena arena(opt.threads > 0 ? opt.threads : tbb::task_arena::automatic);
+    arena.execute([&] { tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), body); });
+    double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return {"bare Embree rtcIntersect1 (camera + mirror bounces)", rays.combine(std::plus<>()),
+            secs};
+}
+
+}  // namespace sl

@@ -1,0 +1,118 @@
+#include "render/PathTracer.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <stdexcept>
+
+#include "core/Rng.h"
+#include "scene/Scene.h"
+
+namespace sl {
+
+std::pair<int, int> strataFor(int spp) {
+    int nx = static_cast<int>(std::sqrt(static_cast<double>(spp)));
+    while (nx > 1 && spp % nx != 0) --nx;
+    return {nx, spp / nx};
+}
+
+namespace {
+
+struct Counters {
+    uint64_t rays = 0, camera = 0, escaped = 0;
+};
+
+}  // namespace
+
+TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
+    if (opt.spp < 1) throw std::invalid_argument("render.spp must be >= 1");
+    if (opt.maxDepth < 1) throw std::invalid_argument("render.max_depth must be >= 1");
+    const Camera& cam = scene_.camera;
+    const Heightfield& surf = *scene_.surface;
+    const ConductorBsdf& bsdf = scene_.bsdf;
+    const int W = cam.width(), H = cam.height(), spp = opt.spp;
+    const auto [nx, ny] = strataFor(spp);
+    const float invSpp = 1.0f / static_cast<float>(spp);
+
+    TraceSummary sum;
+    sum.width = W;
+    sum.height = H;
+    sum.spp = spp;
+    sum.objectMask.assign(static_cast<size_t>(W) * H, 0);
+    sum.coverage.assign(static_cast<size_t>(W) * H, 0.0f);
+
+    tbb::combinable<Counters> counters;
+    std::atomic<int> rowsDone{0};
+    std::mutex progressMutex;
+    auto t0 = std::chrono::steady_clock::now();
+
+    auto body = [&](const tbb::blocked_range<int>& rows) {
+        std::vector<EscapedPath> paths;
+        paths.reserve(static_cast<size_t>(spp));
+        Counters& c = counters.local();
+        for (int y = rows.begin(); y < rows.end(); ++y) {
+            for (int x = 0; x < W; ++x) {
+                const uint32_t pixel = static_cast<uint32_t>(y * W + x);
+                paths.clear();
+                uint32_t hits = 0;
+                for (int s = 0; s < spp; ++s) {
+                    Pcg32 rng = sampleRng(opt.seed, pixel, static_cast<uint64_t>(s));
+                    const int sx = s % nx, sy = s / nx;
+                    double fx = x + (sx + rng.nextDouble()) / nx;
+                    double fy = y + (sy + rng.nextDouble()) / ny;
+                    Ray ray = cam.generateRay(fx, fy);
+                    Rgb throughput{1.0f};
+                    ++c.camera;
+                    for (int depth = 0;; ++depth) {
+                        SurfaceHit hit;
+                        ++c.rays;
+                        if (!surf.intersect(ray, 0.0f, hit)) {
+                            if (depth > 0) paths.push_back({throughput * invSpp, ray.direction});
+                            break;
+                        }
+                        if (depth == 0) ++hits;
+                        if (depth + 1 >= opt.maxDepth) break;
+                        Frame frame = shadingFrame(hit.normal);
+                        Vec3f wi = frame.toLocal(-ray.direction);
+                        float u1 = rng.nextFloat(), u2 = rng.nextFloat(), u3 = rng.nextFloat();
+                        BsdfSample bs = bsdf.sample(wi, u1, u2, u3);
+                        if (!bs.valid) break;
+                        throughput *= bs.weight;
+                        if (maxComponent(throughput) <= 0.0f) break;
+                        ray.origin = offsetRayOrigin(hit.position, hit.normal);
+                        ray.direction = normalize(frame.toWorld(bs.wo));
+                    }
+                }
+                c.escaped += paths.size();
+                sum.coverage[pixel] = static_cast<float>(hits) * invSpp;
+                sum.objectMask[pixel] = hits == static_cast<uint32_t>(spp) ? 1 : 0;
+                sink.consume(PixelPaths{pixel, hits, paths});
+            }
+            int done = ++rowsDone;
+            if (opt.progress) {
+                std::unique_lock lock(progressMutex, std::try_to_lock);
+                if (lock.owns_lock() || done == H) opt.progress(static_cast<double>(done) / H);
+            }
+        }
+    };
+
+    int threads = opt.threads > 0 ? opt.threads : tbb::task_arena::automatic;
+    tbb::task_arena arena(threads);
+    arena.execute([&] { tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), body); });
+
+    sum.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    counters.combine_each([&](const Counters& c) {
+        sum.rays += c.rays;
+        sum.cameraRays += c.camera;
+        sum.escapedPaths += c.escaped;
+    });
+    return sum;
+}
+
+}  // namespace sl

@@ -1,0 +1,54 @@
+// PathTracer: camera rays with a box pixel filter and stratified jitter, Embree closest hits,
+// BSDF sampling at each conductor interaction, and escaped paths handed to a PathSink.
+//
+// CONVENTION (path length): `maxDepth` as in Mitsuba 3's `path` integrator: 1 = only what the
+// camera sees directly (the env map is hidden, so nothing), 2 = one reflection, 3 = up to two.
+// Pixels whose camera ray misses the part are background: 0, as Mitsuba's hide_emitters.
+// No Russian roulette (Mitsuba's starts at depth 5; scenes here stay below).
+// CONVENTION (seeding): sample s of pixel p draws everything from sampleRng(seed, p, s)
+// (core/Rng.h), so the result does not depend on the number of threads.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "render/PathSink.h"
+
+namespace sl {
+
+struct Scene;
+
+struct RenderOptions {
+    int spp = 64;
+    int maxDepth = 4;
+    uint64_t seed = 0;
+    int threads = 0;                       // 0: all cores
+    std::function<void(double)> progress;  // fraction done, called from any thread, serialised
+};
+
+struct TraceSummary {
+    int width = 0, height = 0, spp = 0;
+    uint64_t cameraRays = 0;  // primary rays
+    uint64_t rays = 0;        // all closest-hit queries (camera + bounces)
+    uint64_t escapedPaths = 0;
+    double seconds = 0;
+    std::vector<uint8_t> objectMask;  // 1 where every camera sample of the pixel hit the part
+    std::vector<float> coverage;      // fraction of camera samples that hit the part
+
+    double raysPerSecond() const { return seconds > 0 ? static_cast<double>(rays) / seconds : 0; }
+};
+
+class PathTracer {
+  public:
+    explicit PathTracer(const Scene& scene) : scene_(scene) {}
+    TraceSummary trace(const RenderOptions& options, PathSink& sink) const;
+
+  private:
+    const Scene& scene_;
+};
+
+/// Stratification of spp camera samples: nx × ny strata with nx the largest divisor <= sqrt(spp).
+std::pair<int, int> strataFor(int spp);
+
+}  // namespace sl

@@ -1,0 +1,33 @@
+// EnvMap: the environment map's texel values on the EnvMapBasis grid
+// (see scene/EnvMapBasis.h for the direction <-> texel convention).
+// channels == 1: grayscale E, drives R, G and B equally. channels == 3: linear RGB.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "core/Image.h"
+
+namespace sl {
+
+struct EnvMap {
+    int width = 50, height = 25, channels = 1;
+    std::vector<float> texels;  // row-major, row 0 = +Y (top), channels interleaved
+
+    static EnvMap constant(int w, int h, float value, int channels = 1) {
+        EnvMap e;
+        e.width = w;
+        e.height = h;
+        e.channels = channels;
+        e.texels.assign(static_cast<size_t>(w) * h * channels, value);
+        return e;
+    }
+    size_t texelCount() const { return static_cast<size_t>(width) * height; }
+    Image toImage() const {
+        Image img(width, height, channels);
+        img.data = texels;
+        return img;
+    }
+};
+
+}  // namespace sl

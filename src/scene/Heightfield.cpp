@@ -1,0 +1,157 @@
+#include "scene/Heightfield.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "core/Error.h"
+
+namespace sl {
+
+namespace {
+constexpr int kMaxGridVertices = 32767;  // RTCGrid width/height limit
+
+bool memoryMonitor(void* ptr, ssize_t bytes, bool /*post*/) {
+    auto* m = static_cast<std::atomic<int64_t>*>(ptr);
+    int64_t now = m[0].fetch_add(bytes) + bytes;
+    int64_t peak = m[1].load();
+    while (now > peak && !m[1].compare_exchange_weak(peak, now)) {
+    }
+    return true;
+}
+
+[[noreturn]] void embreeFail(RTCDevice device, const char* what) {
+    RTCError e = rtcGetDeviceError(device);
+    throw std::runtime_error(std::string("Embree: ") + what + " failed (error " +
+                             std::to_string(static_cast<int>(e)) +
+                             "); if this is out of memory, use a smaller height map");
+}
+}  // namespace
+
+Heightfield::Heightfield(int width, int height, double pitch, std::span<const float> heights)
+    : width_(width), height_(height), pitch_(pitch), memory_(new std::atomic<int64_t>[2]) {
+    if (width < 2 || height < 2)
+        throw inputError(
+            "heightmap",
+            "size " + std::to_string(width) + "x" + std::to_string(height) + " is too small",
+            "a height map needs at least 2x2 samples");
+    if (!(pitch > 0) || !std::isfinite(pitch))
+        throw inputError("heightmap.pixel_pitch", "must be a positive number",
+                         "give the sample spacing in scene units (mm)");
+    if (heights.size() != static_cast<size_t>(width) * height)
+        throw std::invalid_argument("Heightfield: heights.size() != width*height");
+    memory_[0] = 0;
+    memory_[1] = 0;
+
+    auto t0 = std::chrono::steady_clock::now();
+    device_ = rtcNewDevice(nullptr);
+    if (!device_) throw std::runtime_error("Embree: could not create a device");
+    rtcSetDeviceMemoryMonitorFunction(device_, memoryMonitor, memory_.get());
+
+    scene_ = rtcNewScene(device_);
+    RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_GRID);
+    size_t nv = static_cast<size_t>(width) * height;
+    auto* verts = static_cast<float*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), nv));
+    if (!verts) embreeFail(device_, "allocating the vertex buffer");
+    stats_.vertexBytes = nv * 3 * sizeof(float);
+
+    const double cx = 0.5 * (width - 1), cz = 0.5 * (height - 1);
+    tbb::parallel_for(0, height, [&](int j) {
+        float z = static_cast<float>((j - cz) * pitch);
+        float* row = verts + static_cast<size_t>(j) * width * 3;
+        const float* h = heights.data() + static_cast<size_t>(j) * width;
+        for (int i = 0; i < width; ++i) {
+            row[3 * i + 0] = static_cast<float>((i - cx) * pitch);
+            row[3 * i + 1] = h[i];
+            row[3 * i + 2] = z;
+        }
+    });
+    auto [mn, mx] = std::minmax_element(heights.begin(), heights.end());
+    minH_ = *mn;
+    maxH_ = *mx;
+
+    // Blocks of at most 32767 vertices per side, sharing their border vertices.
+    std::vector<RTCGrid> grids;
+    for (int j0 = 0; j0 < height - 1; j0 += kMaxGridVertices - 1) {
+        int hj = std::min(kMaxGridVertices, height - j0);
+        for (int i0 = 0; i0 < width - 1; i0 += kMaxGridVertices - 1) {
+            int wi = std::min(kMaxGridVertices, width - i0);
+            RTCGrid g{};
+            g.startVertexID = static_cast<unsigned>(static_cast<size_t>(j0) * width + i0);
+            g.stride = static_cast<unsigned>(width);
+            g.width = static_cast<unsigned short>(wi);
+            g.height = static_cast<unsigned short>(hj);
+            grids.push_back(g);
+        }
+    }
+    auto* gbuf = static_cast<RTCGrid*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_GRID, 0, RTC_FORMAT_GRID, sizeof(RTCGrid), grids.size()));
+    if (!gbuf) embreeFail(device_, "allocating the grid buffer");
+    std::copy(grids.begin(), grids.end(), gbuf);
+    stats_.gridCount = static_cast<int>(grids.size());
+
+    rtcCommitGeometry(geom);
+    rtcAttachGeometry(scene_, geom);
+    rtcReleaseGeometry(geom);
+    rtcCommitScene(scene_);
+    if (rtcGetDeviceError(device_) != RTC_ERROR_NONE) embreeFail(device_, "building the BVH");
+    stats_.buildSeconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    stats_.embreeBytes = static_cast<size_t>(std::max<int64_t>(0, memory_[0].load()));
+    stats_.embreePeakBytes = static_cast<size_t>(std::max<int64_t>(0, memory_[1].load()));
+}
+
+Heightfield::~Heightfield() {
+    if (scene_) rtcReleaseScene(scene_);
+    if (device_) rtcReleaseDevice(device_);
+}
+
+bool Heightfield::intersect(const Ray& ray, float tnear, SurfaceHit& hit) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRayHit rh;
+    rh.ray.org_x = ray.origin.x;
+    rh.ray.org_y = ray.origin.y;
+    rh.ray.org_z = ray.origin.z;
+    rh.ray.dir_x = ray.direction.x;
+    rh.ray.dir_y = ray.direction.y;
+    rh.ray.dir_z = ray.direction.z;
+    rh.ray.tnear = tnear;
+    rh.ray.tfar = std::numeric_limits<float>::infinity();
+    rh.ray.time = 0;
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.ray.id = 0;
+    rh.ray.flags = 0;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(scene_, &ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    hit.t = rh.ray.tfar;
+    hit.position = ray.origin + ray.direction * hit.t;
+    Vec3f n{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
+    n = normalize(n);
+    if (n.y < 0) n = -n;  // a height field always faces +Y
+    hit.normal = n;
+    return true;
+}
+
+Vec3f Heightfield::samplePosition(int row, int col, float h) const {
+    return {static_cast<float>((col - 0.5 * (width_ - 1)) * pitch_), h,
+            static_cast<float>((row - 0.5 * (height_ - 1)) * pitch_)};
+}
+
+std::array<int, 2> Heightfield::cellAt(const Vec3f& p) const {
+    double fi = p.x / pitch_ + 0.5 * (width_ - 1);
+    double fj = p.z / pitch_ + 0.5 * (height_ - 1);
+    int i = std::clamp(static_cast<int>(std::floor(fi)), 0, width_ - 2);
+    int j = std::clamp(static_cast<int>(std::floor(fj)), 0, height_ - 2);
+    return {j, i};
+}
+
+}  // namespace sl

@@ -1,0 +1,95 @@
+// Heightfield: the machined surface as Embree grid geometry (RTC_GEOMETRY_TYPE_GRID).
+//
+// CONVENTION (world frame): +Y up. Sample (row j, column i) of a W×H map with pitch p and height h
+// sits at x = (i − (W−1)/2)·p, y = h, z = (j − (H−1)/2)·p: the map is centred at the origin, the
+// surface faces +Y and row 0 is at −z. Each cell (quad v0=(i,j), v1=(i+1,j), v2=(i+1,j+1),
+// v3=(i,j+1)) is split by Embree into triangles (v0,v1,v3) and (v2,v3,v1): diagonal v1–v3.
+// Normals are the triangles' geometric normals, oriented toward +Y.
+// Shading frame: s = normalize(cross(n, +z)) (the in-plane direction of constant z, i.e. the
+// map's column direction +x), t = cross(n, s); this is Mitsuba's frame for a mesh whose uv has u
+// along +x and v along +z, so `alpha_u` acts along +x and `alpha_v` along z.
+#pragma once
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+
+#include "core/Vec3.h"
+#include "scene/Camera.h"
+
+namespace sl {
+
+struct HeightfieldStats {
+    int gridCount = 0;           // RTCGrid primitives (blocks of <= 32767 vertices per side)
+    size_t vertexBytes = 0;      // the grid's vertex buffer
+    size_t embreeBytes = 0;      // everything Embree holds after the build (incl. vertex buffer)
+    size_t embreePeakBytes = 0;  // peak during the build
+    double buildSeconds = 0;     // vertex fill + BVH build
+};
+
+struct SurfaceHit {
+    float t = 0;
+    Vec3f position;
+    Vec3f normal;  // unit geometric normal, y > 0
+};
+
+/// Shading frame at a surface point with unit normal n (see CONVENTION above).
+inline Frame shadingFrame(const Vec3f& n) {
+    Frame f;
+    f.n = n;
+    f.s = normalize(cross(n, Vec3f{0, 0, 1}));  // in-plane direction of constant z (≈ +x)
+    f.t = cross(n, f.s);
+    return f;
+}
+
+/// Origin for a ray leaving surface point p (unit normal n): offset along n by a few float
+/// ulps of the coordinates' magnitude so the ray does not re-hit the triangle it leaves.
+inline Vec3f offsetRayOrigin(const Vec3f& p, const Vec3f& n) {
+    float m = std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z), 1.0f});
+    return p + n * (m * 1e-5f);
+}
+
+class Heightfield {
+  public:
+    /// heights: W×H, row-major, row 0 first, in scene units. Throws InputError if too small.
+    Heightfield(int width, int height, double pitch, std::span<const float> heights);
+    ~Heightfield();
+    Heightfield(const Heightfield&) = delete;
+    Heightfield& operator=(const Heightfield&) = delete;
+
+    /// Closest hit along ray with t in (tnear, inf). Returns false on a miss.
+    bool intersect(const Ray& ray, float tnear, SurfaceHit& hit) const;
+
+    int width() const { return width_; }
+    int height() const { return height_; }
+    double pitch() const { return pitch_; }
+    double extentX() const { return (width_ - 1) * pitch_; }
+    double extentZ() const { return (height_ - 1) * pitch_; }
+    float minHeight() const { return minH_; }
+    float maxHeight() const { return maxH_; }
+    const HeightfieldStats& stats() const { return stats_; }
+    RTCScene rtcScene() const { return scene_; }
+
+    /// World position of sample (row, col).
+    Vec3f samplePosition(int row, int col, float h) const;
+    /// Cell (row, col) of the map under world point p (clamped to the map).
+    std::array<int, 2> cellAt(const Vec3f& p) const;
+
+  private:
+    int width_, height_;
+    double pitch_;
+    float minH_ = 0, maxH_ = 0;
+    RTCDevice device_ = nullptr;
+    RTCScene scene_ = nullptr;
+    HeightfieldStats stats_;
+    std::unique_ptr<std::atomic<int64_t>[]> memory_;  // [current, peak] for Embree's monitor
+};
+
+}  // namespace sl

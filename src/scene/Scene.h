@@ -1,0 +1,81 @@
+// Scene: everything the path tracer needs, built from a SceneDesc (the parsed scene file,
+// see io/SceneFile.h for the JSON fields and their defaults).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "scene/Camera.h"
+#include "scene/Conductor.h"
+#include "scene/EnvMapBasis.h"
+#include "scene/Heightfield.h"
+
+namespace sl {
+
+struct HeightmapDesc {
+    std::filesystem::path path;                        // resolved against the scene file
+    double pitch = 0.01;                               // mm between samples
+    std::optional<std::array<double, 2>> heightRange;  // integer maps: [min, max] in mm
+    double heightScale = 1.0;                          // float maps: multiplier
+};
+
+struct EnvMapDesc {
+    int width = 50, height = 25;
+    std::filesystem::path path;     // optional default env map for `render`
+    std::optional<float> constant;  // optional constant value (used when no path)
+    std::string preset;             // optional built-in map ("studio"), see io/EnvMapPresets.h
+};
+
+struct RenderDesc {
+    int spp = 64;
+    int maxDepth = 4;
+    uint64_t seed = 0;
+};
+
+struct MaterialDesc {
+    ConductorParams params;
+    std::string name = "Al";  // named metal, or "custom" when eta/k were given
+    std::string type = "roughconductor";
+};
+
+/// Camera fields as written in the scene; what is omitted comes from defaultCameraFor the part.
+struct CameraSpec {
+    CameraDesc::Type type = CameraDesc::Type::Perspective;
+    std::optional<Vec3d> origin, target, up;
+    double fovDeg = 35.0;
+    std::optional<double> widthMm;  // orthographic; default: 1.05 × the part's larger extent
+    int width = 512, height = 512;
+};
+
+/// Resolve a CameraSpec against the part it looks at.
+CameraDesc resolveCamera(const CameraSpec& spec, const Heightfield& surface);
+
+struct SceneDesc {
+    std::filesystem::path file;  // the scene file (empty if built in code)
+    std::string canonicalJson;   // the scene as parsed, keys sorted (for fingerprints)
+    HeightmapDesc heightmap;
+    MaterialDesc material;
+    CameraSpec camera;
+    EnvMapDesc envmap;
+    RenderDesc render;
+};
+
+struct Scene {
+    /// heights: W×H row-major in scene units (already scaled). Builds the Embree surface.
+    Scene(SceneDesc desc, int mapWidth, int mapHeight, std::vector<float> heights);
+
+    SceneDesc desc;
+    int mapWidth, mapHeight;
+    std::vector<float> heights;
+    std::unique_ptr<Heightfield> surface;
+    Camera camera;
+    ConductorBsdf bsdf;
+    EnvMapBasis basis;
+};
+
+}  // namespace sl

@@ -1,0 +1,74 @@
+// Helpers shared by tests: temporary directories, tiny file writers, running the CLI.
+#pragma once
+
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace sl::test {
+
+/// A fresh directory under the system temp dir, removed when the object dies.
+class TempDir {
+  public:
+    explicit TempDir(const std::string& tag) {
+        std::random_device rd;
+        path_ = std::filesystem::temp_directory_path() /
+                ("sl-test-" + tag + "-" + std::to_string(rd()) + std::to_string(rd()));
+        std::filesystem::create_directories(path_);
+    }
+    ~TempDir() {
+        std::error_code ec;
+        std::filesystem::remove_all(path_, ec);
+    }
+    const std::filesystem::path& path() const { return path_; }
+    std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+  private:
+    std::filesystem::path path_;
+};
+
+inline void writeText(const std::filesystem::path& p, const std::string& text) {
+    std::ofstream(p, std::ios::binary) << text;
+}
+
+/// Writes a float32 C-order .npy file of shape (rows, cols).
+inline void writeNpyF32(const std::filesystem::path& p, int rows, int cols,
+                        const std::vector<float>& v) {
+    std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (" +
+                         std::to_string(rows) + ", " + std::to_string(cols) + "), }";
+    size_t total = 10 + header.size() + 1;
+    header += std::string((64 - total % 64) % 64, ' ') + "\n";
+    std::ofstream os(p, std::ios::binary);
+    os.write("\x93NUMPY\x01\x00", 8);
+    auto len = static_cast<uint16_t>(header.size());
+    os.put(static_cast<char>(len & 0xff));
+    os.put(static_cast<char>(len >> 8));
+    os << header;
+    os.write(reinterpret_cast<const char*>(v.data()),
+             static_cast<std::streamsize>(v.size() * sizeof(float)));
+}
+
+struct RunResult {
+    int exitCode = -1;
+    std::string output;  // stdout and stderr
+};
+
+/// Runs the scratchlight CLI with the given argument string; captures its output.
+inline RunResult runCli(const std::string& args) {
+    std::string cmd = std::string(SL_CLI_PATH) + " " + args + " 2>&1";
+    RunResult r;
+    FILE* f = popen(cmd.c_str(), "r");
+    if (!f) return r;
+    char buf[4096];
+    size_t n;
+    while ((n = fread(buf, 1, sizeof buf, f)) > 0) r.output.append(buf, n);
+    int status = pclose(f);
+    r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return r;
+}
+
+}  // namespace sl::test

@@ -1,0 +1,155 @@
+// The CLI's contract: exit codes 0/1/2, messages that name the file or field and the fix,
+// and no output written (nor an existing file clobbered) when the input is bad.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+
+#include "TestUtil.h"
+#include "core/Image.h"
+#include "io/ImageIO.h"
+
+using namespace sl;
+using test::runCli;
+
+namespace {
+
+class CliTest : public ::testing::Test {
+  protected:
+    test::TempDir dir{"cli"};
+    std::string out() const { return (dir / "out.exr").string(); }
+    std::string png() const { return (dir / "out.png").string(); }
+
+    void writeGoodMap() {
+        std::vector<float> h(16 * 12);
+        for (size_t i = 0; i < h.size(); ++i) h[i] = 0.001f * static_cast<float>(i % 7);
+        test::writeNpyF32(dir / "map.npy", 12, 16, h);
+    }
+    std::string scene(const std::string& json) {
+        auto p = dir / "scene.json";
+        test::writeText(p, json);
+        return p.string();
+    }
+    /// Runs `render` and expects a runtime error whose message contains every needle,
+    /// and no output files.
+    void expectInputError(const std::string& sceneFile, std::vector<std::string> needles,
+                          const std::string& extra = "") {
+        auto r = runCli("render " + sceneFile + " --spp 1 -o " + out() + " " + extra);
+        EXPECT_EQ(r.exitCode, 1) << r.output;
+        for (const auto& n : needles)
+            EXPECT_NE(r.output.find(n), std::string::npos)
+                << "message should mention '" << n << "': " << r.output;
+        EXPECT_FALSE(std::filesystem::exists(out()));
+        EXPECT_FALSE(std::filesystem::exists(png()));
+        for (auto& e : std::filesystem::directory_iterator(dir.path()))
+            EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
+    }
+    const std::string smallCamera = R"("camera": {"width": 16, "height": 16})";
+};
+
+}  // namespace
+
+TEST_F(CliTest, HelpAndUsageErrors) {
+    EXPECT_EQ(runCli("--help").exitCode, 0);
+    EXPECT_EQ(runCli("render --help").exitCode, 0);
+    EXPECT_EQ(runCli("gen-surface --help").exitCode, 0);
+    EXPECT_EQ(runCli("bench render --help").exitCode, 0);
+    EXPECT_EQ(runCli("").exitCode, 2);
+    EXPECT_EQ(runCli("render").exitCode, 2);
+    EXPECT_EQ(runCli("render x.json --no-such-option").exitCode, 2);
+    EXPECT_EQ(runCli("render x.json --spp 0").exitCode, 2);
+    EXPECT_EQ(runCli("render x.json --envmap a.exr --constant 1").exitCode, 2);
+    writeGoodMap();
+    auto r = runCli("render " + scene(R"({"heightmap": {"path": "map.npy"}})") + " -o " +
+                    (dir / "out.tif").string());
+    EXPECT_EQ(r.exitCode, 2) << r.output;
+}
+
+TEST_F(CliTest, RendersAndWritesExrAndPng) {
+    writeGoodMap();
+    auto r = runCli(
+        "render " +
+        scene(R"({"heightmap": {"path": "map.npy", "pixel_pitch": 0.1}, )" + smallCamera + "}") +
+        " --spp 2 --constant 0.5 -o " + out());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    Image exr = readImage(out());
+    EXPECT_EQ(exr.width, 16);
+    EXPECT_EQ(exr.height, 16);
+    EXPECT_EQ(exr.channels, 3);
+    EXPECT_TRUE(std::filesystem::exists(png()));
+}
+
+TEST_F(CliTest, MissingSceneFile) {
+    expectInputError((dir / "nope.json").string(), {"nope.json"});
+}
+
+TEST_F(CliTest, MissingHeightMap) {
+    expectInputError(scene(R"({"heightmap": {"path": "absent.exr"}})"), {"absent.exr"});
+}
+
+TEST_F(CliTest, UnreadableImage) {
+    test::writeText(dir / "junk.exr", "this is not an image");
+    expectInputError(scene(R"({"heightmap": {"path": "junk.exr"}})"), {"junk.exr"});
+}
+
+TEST_F(CliTest, NanAndInfHeights) {
+    for (float bad :
+         {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+        std::vector<float> h(16, 0.0f);
+        h[5] = bad;
+        test::writeNpyF32(dir / "bad.npy", 4, 4, h);
+        expectInputError(scene(R"({"heightmap": {"path": "bad.npy"}})"), {"bad.npy"});
+    }
+}
+
+TEST_F(CliTest, IntegerMapWithoutHeightRange) {
+    Image img(8, 8, 1, 0.5f);
+    writePng16(dir / "int.png", img);
+    expectInputError(scene(R"({"heightmap": {"path": "int.png"}})"), {"int.png", "height_range"});
+}
+
+TEST_F(CliTest, UnknownJsonField) {
+    writeGoodMap();
+    expectInputError(scene(R"({"heightmap": {"path": "map.npy"}, "material": {"alpah": 0.1}})"),
+                     {"material.alpah", "unknown field", "alpha"});
+    expectInputError(scene(R"({"heightmap": {"path": "map.npy"}, "lights": []})"),
+                     {"lights", "unknown field"});
+}
+
+TEST_F(CliTest, NegativePitch) {
+    writeGoodMap();
+    expectInputError(scene(R"({"heightmap": {"path": "map.npy", "pixel_pitch": -0.01}})"),
+                     {"heightmap.pixel_pitch", "> 0"});
+}
+
+TEST_F(CliTest, ZeroSizeMap) {
+    test::writeNpyF32(dir / "empty.npy", 0, 0, {});
+    expectInputError(scene(R"({"heightmap": {"path": "empty.npy"}})"), {"empty.npy"});
+}
+
+TEST_F(CliTest, BadValuesNameTheirField) {
+    writeGoodMap();
+    expectInputError(scene(R"({"heightmap": {"path": "map.npy"}, "material": {"material": "Xx"}})"),
+                     {"material.material", "Xx"});
+    expectInputError(
+        scene(R"({"heightmap": {"path": "map.npy"}, "material": {"distribution": "phong"}})"),
+        {"material.distribution", "ggx"});
+    expectInputError(scene(R"({"heightmap": {"path": "map.npy"}, "render": {"spp": 0}})"),
+                     {"render.spp"});
+    expectInputError(scene(R"({"heightmap": {"path": "map.npy"}, "camera": {"fov": "wide"}})"),
+                     {"camera.fov"});
+    expectInputError(scene(R"({"heightmap": {"path": "map.npy"},)"), {"scene.json", "JSON"});
+}
+
+TEST_F(CliTest, FailedRenderKeepsExistingOutput) {
+    test::writeText(out(), "precious");
+    test::writeText(png(), "precious too");
+    auto r = runCli("render " + scene(R"({"heightmap": {"path": "absent.npy"}})") + " -o " + out());
+    EXPECT_EQ(r.exitCode, 1);
+    std::ifstream a(out()), b(png());
+    std::string sa((std::istreambuf_iterator<char>(a)), {}),
+        sb((std::istreambuf_iterator<char>(b)), {});
+    EXPECT_EQ(sa, "precious");
+    EXPECT_EQ(sb, "precious too");
+}
