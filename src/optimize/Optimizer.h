@@ -1,0 +1,76 @@
+// Optimizers behind one interface: an Options struct in, a Summary out (the shape of Ceres'
+// GradientProblemSolver). The problem is box-constrained to [lower, upper] (E in [0, 1]).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace sl {
+
+/// f(x, grad): the objective at x; fills grad (same size as x) when grad is non-empty.
+struct Problem {
+    size_t dimension = 0;
+    std::function<double(std::span<const double> x, std::span<double> grad)> evaluate;
+    double lower = 0.0, upper = 1.0;
+};
+
+struct IterationRecord {
+    int iteration = 0;    // 0 = the initial point
+    int evaluations = 0;  // objective evaluations so far
+    double loss = 0;      // at the current iterate
+    double seconds = 0;   // wall time since the start of the optimization
+};
+
+struct OptimizerOptions {
+    std::string method = "adam";  // adam | lbfgs | mma | ccsaq | mlsl | ceres-lbfgs
+    int iterations = 100;         // Adam steps; NLopt/Ceres: see Optimizer.cpp
+    // Adam (the paper's setting, as Mitsuba 3's optimizer: bias-corrected, x clamped after
+    // every step).
+    double learningRate = 0.02;
+    double beta1 = 0.9, beta2 = 0.999, epsilon = 1e-8;
+    // NLopt / Ceres stopping tolerances (0 = off).
+    double relativeFunctionTolerance = 0.0;
+    // mlsl: seed of NLopt's random numbers (nlopt::srand, a process-wide generator). MLSL
+    // samples a Sobol' sequence up to 1111 dimensions, which the seed does not change; above
+    // that (a 25×50 map has 1250 texels) NLopt falls back to pseudo-random points, which it does.
+    uint64_t seed = 0;
+    // mlsl: sample points added per MLSL iteration (NLopt's set_population; 0 = NLopt's
+    // default, 4).
+    int population = 0;
+    /// Called after every iteration (and for the initial point); returning false stops.
+    std::function<bool(const IterationRecord&, std::span<const double> x)> callback;
+};
+
+struct OptimizerSummary {
+    std::string method;
+    int iterations = 0;
+    int evaluations = 0;
+    double initialLoss = 0, finalLoss = 0;
+    double seconds = 0;
+    std::string termination;  // why it stopped
+    /// True when the method stopped on an internal failure (NLopt failure, Ceres failure, a
+    /// roundoff-limited stop before any progress); x is still the best iterate, in bounds.
+    bool failed = false;
+    size_t dimension = 0;
+    double lower = 0, upper = 1;
+    std::string settings;  // the method's settings, one line, for fullReport()
+    /// history[0] is the initial point; history.back() is the returned x (finalLoss).
+    std::vector<IterationRecord> history;
+
+    std::string briefReport() const;  // one line
+    std::string fullReport() const;   // a short page
+};
+
+/// Names of the available methods.
+std::vector<std::string> optimizerMethods();
+
+/// Minimizes problem from x (in/out; clamped to the bounds first). Throws InputError for an
+/// unknown method or bad options (naming the option), std::runtime_error naming the method and
+/// iteration when the objective returns NaN/Inf; exceptions from the objective propagate.
+OptimizerSummary minimize(const Problem& problem, std::vector<double>& x,
+                          const OptimizerOptions& options);
+
+}  // namespace sl
