@@ -11,10 +11,14 @@
 #include "cli/Common.h"
 #include "io/AtomicFile.h"
 #include "io/SceneFile.h"
+#include "objective/TransportLoss.h"
+#include "optimize/InitialState.h"
 #include "render/Benchmark.h"
 #include "render/Render.h"
+#include "scene/EnvMapPresets.h"
 #include "scene/Scene.h"
 #include "synth/SurfaceGenerator.h"
+#include "transport/TransportSink.h"
 
 namespace sl::cli {
 
@@ -113,6 +117,100 @@ int runBench(const BenchArgs& a) {
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
+struct TransportBenchArgs {
+    std::string scene = "scenes/default/scene.json", csv = "bench-transport.csv";
+    int resolution = 512, spp = 64, iterations = 100, repeats = 3, threads = 0;
+};
+
+template <typename F>
+double medianSeconds(int repeats, F&& f) {
+    std::vector<double> t;
+    for (int i = 0; i < repeats; ++i) {
+        auto t0 = std::chrono::steady_clock::now();
+        f();
+        t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    }
+    std::sort(t.begin(), t.end());
+    return t[t.size() / 2];
+}
+
+int runTransportBench(const TransportBenchArgs& a) {
+    SceneDesc d = readSceneFile(a.scene);
+    d.camera.width = d.camera.height = a.resolution;
+    d.render.spp = a.spp;
+    auto scene = loadScene(d);
+    RenderOptions opt = renderOptionsFor(*scene);
+    opt.threads = a.threads;
+
+    // 1. Tracing: renderer (radiance sink) and precompute (transport sink), interleaved.
+    std::vector<ThroughputRow> ren, pre;
+    TransportMatrix T;
+    for (int i = 0; i < a.repeats; ++i) {
+        ren.push_back(benchRenderer(*scene, opt));
+        PrecomputeResult p = precomputeTransport(*scene, opt, 1);
+        pre.push_back(
+            {"precompute (path tracer + transport sink)", p.summary.rays, p.summary.seconds});
+        if (i == 0) T = std::move(p.matrix);
+    }
+    ThroughputRow r = median(ren), p = median(pre);
+    T.threads = a.threads;
+
+    // 2. Products and the optimizer on T.
+    ObjectiveOptions oo;
+    ImageObjective obj(T.width, T.height, T.objectMask, oo);
+    TransportLoss loss(T, obj, false);
+    std::vector<double> e = initialEnvMap("const:0.5", T.envWidth, T.envHeight, false);
+    std::vector<double> g(loss.dimension());
+    const int reps = std::max(5, 4 * a.repeats + 1);
+    volatile double sink = 0;
+    double tRead = medianSeconds(reps, [&] { sink = sink + streamingRead(T); });
+    double tIter = medianSeconds(reps, [&] { sink = sink + loss.evaluate(e, g).total; });
+    std::vector<double> y(T.rows());
+    double tApply = medianSeconds(reps, [&] { T.applyLuminance(e, y); });
+    double tAdam = medianSeconds(a.repeats, [&] {
+        std::vector<double> x = e;
+        OptimizerOptions oopt;
+        oopt.iterations = a.iterations;
+        minimize(loss.problem(), x, oopt);
+    });
+
+    std::printf("scene %s at %dx%d, %d spp, max_depth %d\n", a.scene.c_str(), T.width, T.height,
+                a.spp, opt.maxDepth);
+    std::printf("  %-44s %12.2f Mrays/s\n", r.workload.c_str(), r.raysPerSecond() / 1e6);
+    std::printf("  %-44s %12.2f Mrays/s   (%.1f%% of the renderer)\n", p.workload.c_str(),
+                p.raysPerSecond() / 1e6, 100.0 * p.raysPerSecond() / r.raysPerSecond());
+    std::printf("  T: %s, nnz %zu, density %.4f, %.1f MB\n",
+                T.storage == TransportStorage::Sparse ? "CSR" : "dense", T.nnz(), T.density(),
+                static_cast<double>(T.bytes()) / 1e6);
+    std::printf("  %-44s %12.3f ms\n", "streaming read of T's bytes", tRead * 1e3);
+    std::printf("  %-44s %12.3f ms   (%.2f x the streaming read)\n", "T.E (luminance product)",
+                tApply * 1e3, tApply / tRead);
+    std::printf("  %-44s %12.3f ms   (%.2f x the streaming read; %.2f Gnnz/s)\n",
+                "one iteration: loss + exact gradient", tIter * 1e3, tIter / tRead,
+                2.0 * static_cast<double>(T.nnz()) / tIter / 1e9);
+    std::printf("  %-44s %12.3f s\n",
+                ("Adam, " + std::to_string(a.iterations) + " iterations").c_str(), tAdam);
+    std::printf("(medians: tracing of %d interleaved runs, products of %d runs)\n", a.repeats,
+                reps);
+
+    AtomicOutput file(a.csv);
+    {
+        std::ofstream os(file.tempPath());
+        os << "scene,width,height,spp,renderer_rays_per_s,precompute_rays_per_s,precompute_ratio,"
+              "storage,nnz,density,bytes,streaming_read_s,apply_s,iteration_s,iteration_ratio,"
+              "adam_iterations,adam_s\n";
+        os << a.scene << ',' << T.width << ',' << T.height << ',' << a.spp << ','
+           << r.raysPerSecond() << ',' << p.raysPerSecond() << ','
+           << p.raysPerSecond() / r.raysPerSecond() << ','
+           << (T.storage == TransportStorage::Sparse ? "csr" : "dense") << ',' << T.nnz() << ','
+           << T.density() << ',' << T.bytes() << ',' << tRead << ',' << tApply << ',' << tIter
+           << ',' << tIter / tRead << ',' << a.iterations << ',' << tAdam << '\n';
+    }
+    file.commit();
+    std::printf("wrote %s\n", a.csv.c_str());
+    return kOk;
+}
+
 }  // namespace
 
 void registerBench(CLI::App& app, std::function<int()>& run) {
@@ -137,6 +235,24 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     c->add_option("--threads", a->threads, "Worker threads (0: all)")->capture_default_str();
     c->add_option("--csv", a->csv, "CSV output")->capture_default_str();
     c->callback([a, &run] { run = [a] { return runBench(*a); }; });
+
+    auto b = std::make_shared<TransportBenchArgs>();
+    CLI::App* t = bench->add_subcommand(
+        "transport", "Precompute vs render rays/s; Adam on T; one iteration vs a read of T");
+    t->add_option("scene", b->scene, "Scene file")->capture_default_str();
+    t->add_option("--resolution", b->resolution, "Image width and height")
+        ->check(CLI::Range(8, 4096))
+        ->capture_default_str();
+    t->add_option("--spp", b->spp, "Samples per pixel")
+        ->check(CLI::Range(1, 65536))
+        ->capture_default_str();
+    t->add_option("--iterations", b->iterations, "Adam iterations")->capture_default_str();
+    t->add_option("--repeats", b->repeats, "Runs per tracing measurement (median)")
+        ->check(CLI::Range(1, 50))
+        ->capture_default_str();
+    t->add_option("--threads", b->threads, "Worker threads (0: all)")->capture_default_str();
+    t->add_option("--csv", b->csv, "CSV output")->capture_default_str();
+    t->callback([b, &run] { run = [b] { return runTransportBench(*b); }; });
 }
 
 }  // namespace sl::cli

@@ -9,5 +9,6 @@ namespace sl::cli {
 void registerRender(CLI::App& app, std::function<int()>& run);
 void registerGenSurface(CLI::App& app, std::function<int()>& run);
 void registerBench(CLI::App& app, std::function<int()>& run);
+void registerTransport(CLI::App& app, std::function<int()>& run);
 
 }  // namespace sl::cli

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
     std::function<int()> run;
     registerRender(app, run);
     registerGenSurface(app, run);
+    registerTransport(app, run);
     registerBench(app, run);
 
     try {

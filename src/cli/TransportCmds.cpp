@@ -1,0 +1,177 @@
+// scratchlight precompute SCENE.json [--spp N] [--rgb] [-o part.tm]
+// scratchlight relight part.tm (--envmap FILE | --constant V) [-o OUT.exr]
+// scratchlight optimize (SCENE.json | part.tm) [--optimizer NAME] [--lambda L[,L...]] ...
+#include <spdlog/spdlog.h>
+
+#include <memory>
+
+#include "app/OptimizeJob.h"
+#include "app/Transport.h"
+#include "cli/Commands.h"
+#include "cli/Common.h"
+#include "core/Error.h"
+#include "io/EnvMapIO.h"
+#include "io/ImageIO.h"
+
+namespace sl::cli {
+
+namespace {
+
+void addTraceOptions(CLI::App* c, PrecomputeOptions& p) {
+    c->add_option("--spp", p.spp, "Samples per pixel (overrides render.spp)")
+        ->check(CLI::Range(1, 1 << 20));
+    c->add_option("--max-depth", p.maxDepth, "Mitsuba max_depth (overrides render.max_depth)")
+        ->check(CLI::Range(1, 64));
+    c->add_option("--seed", p.seed, "Random seed (overrides render.seed)");
+    c->add_option("--threads", p.threads, "Worker threads (0: all cores)")
+        ->check(CLI::Range(0, 4096));
+}
+
+void printTransport(const TransportSource& s) {
+    const TransportMatrix& t = s.file.matrix;
+    std::printf(
+        "transport matrix %dx%d px x %dx%d texels, %s T, %s, nnz %zu (density %.4f), %.1f MB\n",
+        t.width, t.height, t.envWidth, t.envHeight, t.channels == 3 ? "RGB" : "gray",
+        t.storage == TransportStorage::Sparse ? "CSR" : "dense", t.nnz(), t.density(),
+        static_cast<double>(t.bytes()) / 1e6);
+    if (s.trace.rays)
+        std::printf("traced %llu rays in %.3f s (%.2f Mrays/s), total %.3f s\n",
+                    static_cast<unsigned long long>(s.trace.rays), s.trace.seconds,
+                    s.trace.raysPerSecond() / 1e6, s.secondsTotal);
+}
+
+struct PrecomputeArgs {
+    std::string scene, out = "part.tm";
+    PrecomputeOptions p;
+};
+
+int runPrecompute(const PrecomputeArgs& a) {
+    if (std::filesystem::path(a.out).extension() != ".tm")
+        throw UsageError("output '" + a.out + "' must end in .tm");
+    PrecomputeOptions p = a.p;
+    p.progress = progressBar("precompute");
+    TransportSource s = precomputeToFile(a.scene, p, a.out);
+    printTransport(s);
+    std::printf("wrote %s (fingerprint %s)\n", a.out.c_str(),
+                s.file.provenance.fingerprint.c_str());
+    return kOk;
+}
+
+struct RelightArgs {
+    std::string tm, envmap, out = "relight.exr";
+    std::optional<float> constant;
+};
+
+int runRelight(const RelightArgs& a) {
+    const auto png = siblingPath(a.out, ".exr", ".png");
+    if (a.envmap.empty() == !a.constant.has_value())
+        throw UsageError("give exactly one of --envmap FILE and --constant V");
+    TransportFile f = readTransportFile(a.tm);
+    const TransportMatrix& t = f.matrix;
+    std::vector<double> e;
+    if (a.constant) {
+        if (!(*a.constant >= 0)) throw UsageError("--constant must be >= 0");
+        e.assign(t.cols(), *a.constant);
+    } else {
+        EnvMap m = loadEnvMap(a.envmap, t.envWidth, t.envHeight, t.channels == 3 ? 3 : 1);
+        if (t.channels == 1)
+            spdlog::warn(
+                "gray transport matrix: the env map is used as its luminance; the "
+                "result equals a render only for gray maps (precompute with --rgb)");
+        e.assign(m.texels.begin(), m.texels.end());
+    }
+    const int ch = t.channels == 3 ? 3 : 1;
+    std::vector<double> img(t.rows() * ch);
+    if (ch == 3)
+        t.applyRgb(e, img);
+    else
+        t.applyLuminance(e, img);
+    writeRender(a.out, img, t.width, t.height, ch);
+    std::printf("relit %dx%d (%s) from %s\nwrote %s and %s\n", t.width, t.height,
+                ch == 3 ? "RGB" : "luminance", a.tm.c_str(), a.out.c_str(), png.string().c_str());
+    return kOk;
+}
+
+struct OptimizeArgs {
+    OptimizeJobOptions job;
+    std::string input, out = "out/optimize", reg = "envmap";
+};
+
+int runOptimize(OptimizeArgs a) {
+    a.job.input = a.input;
+    a.job.outDir = a.out;
+    a.job.objective.reg = a.reg == "image" ? RegTarget::Image : RegTarget::EnvMap;
+    a.job.precompute.progress = progressBar("precompute");
+    OptimizeJobSummary s = runOptimizeJob(a.job);
+    printTransport(s.transport);
+    std::printf("mask: %zu pixels\n", s.maskPixels);
+    std::printf("%10s %-12s %6s %6s %14s %14s %12s %10s\n", "lambda", "optimizer", "iters", "evals",
+                "initial loss", "final loss", "final L_grad", "seconds");
+    for (const OptimizeRun& r : s.runs)
+        std::printf("%10g %-12s %6d %6d %14.6g %14.6g %12.6g %10.4f\n", r.lambda,
+                    r.optimizer.method.c_str(), r.optimizer.iterations, r.optimizer.evaluations,
+                    r.initial.total, r.final.total, r.final.lGrad, r.optimizer.seconds);
+    std::printf("wrote %s/\n", a.out.c_str());
+    return kOk;
+}
+
+}  // namespace
+
+void registerTransport(CLI::App& app, std::function<int()>& run) {
+    {
+        auto a = std::make_shared<PrecomputeArgs>();
+        CLI::App* c = app.add_subcommand(
+            "precompute", "Trace the scene once into its light-transport matrix T (I = T·E)");
+        c->add_option("scene", a->scene, "Scene file (JSON)")->required();
+        addTraceOptions(c, a->p);
+        c->add_flag("--rgb", a->p.rgb, "Store RGB T (3 blocks) instead of luminance T");
+        c->add_option("-o,--output", a->out, "Output transport-matrix file (.tm)")
+            ->capture_default_str();
+        c->callback([a, &run] { run = [a] { return runPrecompute(*a); }; });
+    }
+    {
+        auto a = std::make_shared<RelightArgs>();
+        CLI::App* c = app.add_subcommand(
+            "relight", "Render I = T·E from a transport matrix, without tracing a ray");
+        c->add_option("transport", a->tm, "Transport-matrix file (.tm)")->required();
+        auto* e = c->add_option("--envmap", a->envmap, "Equirectangular env map");
+        auto* k = c->add_option("--constant", a->constant, "Constant env map value");
+        e->excludes(k);
+        c->add_option("-o,--output", a->out, "Output EXR; a PNG preview is written beside it")
+            ->capture_default_str();
+        c->callback([a, &run] { run = [a] { return runRelight(*a); }; });
+    }
+    {
+        auto a = std::make_shared<OptimizeArgs>();
+        OptimizeJobOptions& j = a->job;
+        CLI::App* c = app.add_subcommand(
+            "optimize", "Optimize the env map so the part's scratches show (paper eq. 1-3)");
+        c->add_option("input", a->input, "Scene file (.json, T is traced and cached) or .tm")
+            ->required();
+        c->add_option("--optimizer", j.optimizer.method, "Optimizer")
+            ->check(CLI::IsMember(optimizerMethods()))
+            ->capture_default_str();
+        c->add_option("--lambda", j.lambdas, "Regulariser weight(s); several run a sweep")
+            ->delimiter(',')
+            ->capture_default_str();
+        c->add_option("--reg", a->reg, "L2 regulariser on the env map or on the image")
+            ->check(CLI::IsMember({"envmap", "image"}))
+            ->capture_default_str();
+        c->add_option("--init", j.init, "Initial env map: const:V | envmap:FILE | random:SEED")
+            ->capture_default_str();
+        c->add_option("--mask", j.mask, "Region mask (PNG/EXR, image space; white = inside)");
+        c->add_flag("--rgb", j.rgb, "Optimize an RGB env map (needs/creates an RGB T)");
+        c->add_flag("--smooth-abs", j.objective.smoothAbs, "Use sqrt(x²+ε²)−ε for |x|");
+        c->add_option("--iterations", j.optimizer.iterations, "Iterations / evaluation budget")
+            ->check(CLI::Range(1, 1000000))
+            ->capture_default_str();
+        c->add_option("--lr", j.optimizer.learningRate, "Adam learning rate")
+            ->check(CLI::PositiveNumber)
+            ->capture_default_str();
+        addTraceOptions(c, j.precompute);
+        c->add_option("-o,--output", a->out, "Output directory")->capture_default_str();
+        c->callback([a, &run] { run = [a] { return runOptimize(*a); }; });
+    }
+}
+
+}  // namespace sl::cli

@@ -1,0 +1,45 @@
+// TransportLoss: the objective as a function of the env map E through a transport matrix,
+// with its exact gradient  dLoss/dE = Tᵀ·dLoss/dY + dReg/dE  (DESIGN.md "The one idea").
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "objective/Objective.h"
+#include "optimize/Optimizer.h"
+#include "transport/TransportMatrix.h"
+
+namespace sl {
+
+class TransportLoss {
+  public:
+    /// rgb: E has 3 values per texel (needs an RGB T); otherwise one (gray).
+    TransportLoss(const TransportMatrix& t, const ImageObjective& objective, bool rgb);
+
+    size_t dimension() const { return dimension_; }
+    /// Loss parts at E; fills grad (size dimension()) when it is non-empty.
+    LossParts evaluate(std::span<const double> E, std::span<double> grad) const;
+    /// The same loss and gradient in one streaming pass over T: bands of rows compute Y, the
+    /// signs dG/dY of the pairs they own (with one halo row each side) and accumulate Tᵀ·s
+    /// while T's rows are still in cache; the global factor −S/G² is applied at the end.
+    /// Chunks are fixed, so the result does not depend on the number of threads.
+    LossParts evaluateFused(std::span<const double> E, std::span<double> grad) const;
+
+    /// The luminance image T·E.
+    std::vector<double> image(std::span<const double> E) const;
+
+    /// The box-constrained problem for the optimizers. `last` (optional) receives the parts
+    /// of every evaluation.
+    Problem problem(LossParts* last = nullptr, bool fused = true) const;
+
+    const TransportMatrix& matrix() const { return t_; }
+    const ImageObjective& objective() const { return obj_; }
+
+  private:
+    const TransportMatrix& t_;
+    const ImageObjective& obj_;
+    size_t dimension_;
+    mutable std::vector<double> y_, dLdY_;
+};
+
+}  // namespace sl

@@ -1,0 +1,18 @@
+// Initial env maps for the optimizers (`optimize --init`):
+//   const:V        every texel V (the paper's default: 0.5)
+//   envmap:FILE    an equirectangular image, area-resampled to the env-map grid; gray by CIE L*
+//                  (LUV lightness)/100 of each texel, as the paper does (RGB kept with rgb=true);
+//                  values clamped to [0, 1]
+//   random:SEED    uniform in [0, 1], from PCG32(SEED)
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace sl {
+
+/// E0 for an env map of width×height texels, 1 value per texel (gray) or 3 (rgb, interleaved).
+/// Throws InputError naming `--init` and the accepted forms for a malformed spec.
+std::vector<double> initialEnvMap(const std::string& spec, int width, int height, bool rgb);
+
+}  // namespace sl

@@ -1,0 +1,55 @@
+// Transport-matrix files (.tm): one binary file, little-endian.
+//
+//   "SLTMATRX" (8 bytes) | u32 format version | u32 header length | header (JSON text)
+//   | u64 hash of the header text | sections, in the order the header lists them
+//
+// The header holds the dimensions, storage, nnz, env-map convention, what produced the matrix
+// (the resolved scene parameters, height-map content hash, spp, seed, max_depth) with its
+// fingerprint, and for every section (mask, row pointers, column indices, values) its offset,
+// size and hash. Loading checks the magic, version, header hash, file size and every section's
+// hash, and, when the caller knows which inputs it wants, the fingerprint: a damaged or stale
+// file is refused with a message that says which and how to fix it. Files are written to a
+// temporary name and renamed into place.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "render/PathTracer.h"
+#include "transport/TransportMatrix.h"
+
+namespace sl {
+
+struct Scene;
+
+/// The env-map convention T's columns follow (stored in the header; checked on load).
+inline constexpr const char* kTransportConvention =
+    "mitsuba3-envmap-bilinear: u=atan2(x,-z)/2pi, v=acos(y)/pi, rows at j*pi/(H-1), "
+    "columns at (i+0.5)/W";
+
+struct TransportProvenance {
+    std::string fingerprint;  // 32 hex digits over everything that determines T
+    std::string inputs;       // JSON text of those inputs (for people and `relight`)
+    int spp = 0, maxDepth = 0;
+    uint64_t seed = 0;
+};
+
+/// Fingerprint of the inputs that determine T: resolved camera, material, env-map size,
+/// height-map pitch and content, spp, seed, max_depth, channels, convention.
+TransportProvenance transportProvenance(const Scene& scene, const RenderOptions& options,
+                                        int channels);
+
+void writeTransportFile(const std::filesystem::path& file, const TransportMatrix& t,
+                        const TransportProvenance& provenance);
+
+struct TransportFile {
+    TransportMatrix matrix;
+    TransportProvenance provenance;
+};
+
+/// Reads and verifies a .tm file. If expectedFingerprint is non-empty and differs, throws
+/// InputError saying the file is stale. Damage, truncation, wrong version: InputError.
+TransportFile readTransportFile(const std::filesystem::path& file,
+                                const std::string& expectedFingerprint = {});
+
+}  // namespace sl

@@ -1,0 +1,249 @@
+#include "transport/TransportMatrix.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <stdexcept>
+
+#include "core/Color.h"
+
+namespace sl {
+
+namespace {
+
+constexpr double kLum[3] = {0.2126, 0.7152, 0.0722};
+
+/// Runs f(chunk, rowBegin, rowEnd) over the fixed chunks [k·chunkRows, (k+1)·chunkRows) of
+/// rows, in parallel. (A blocked_range with a grain size would split anywhere, not at
+/// multiples of the grain, so chunks are enumerated explicitly.)
+template <typename F>
+void forRowChunks(const TransportMatrix& t, size_t chunkRows, F&& f) {
+    const size_t n = t.rows(), chunks = (n + chunkRows - 1) / chunkRows;
+    auto body = [&] {
+        tbb::parallel_for(size_t(0), chunks,
+                          [&](size_t k) { f(k, k * chunkRows, std::min(n, (k + 1) * chunkRows)); });
+    };
+    if (t.threads > 0) {
+        tbb::task_arena arena(t.threads);
+        arena.execute(body);
+    } else {
+        body();
+    }
+}
+
+/// Calls f(col, values) for every stored entry of row r (values: `channels` floats).
+template <typename F>
+inline void forRow(const TransportMatrix& t, size_t r, F&& f) {
+    const int ch = t.channels;
+    if (t.storage == TransportStorage::Sparse) {
+        const uint64_t b = t.rowPtr[r], e = t.rowPtr[r + 1];
+        const uint16_t* col = t.colIdx.data();
+        const float* v = t.values.data();
+        for (uint64_t k = b; k < e; ++k) f(static_cast<size_t>(col[k]), v + k * ch);
+    } else {
+        const size_t cols = t.cols();
+        const float* v = t.values.data() + r * cols * ch;
+        for (size_t c = 0; c < cols; ++c) f(c, v + c * ch);
+    }
+}
+
+enum class EKind { Gray, Rgb };
+
+EKind checkE(const TransportMatrix& t, size_t size, const char* what) {
+    if (size == t.cols()) return EKind::Gray;
+    if (size == 3 * t.cols()) {
+        if (t.channels != 3)
+            throw std::invalid_argument(std::string(what) +
+                                        ": an RGB env map needs an RGB transport matrix "
+                                        "(precompute with --rgb)");
+        return EKind::Rgb;
+    }
+    throw std::invalid_argument(std::string(what) + ": env-map size does not match T's columns");
+}
+
+}  // namespace
+
+size_t TransportMatrix::nnz() const {
+    return storage == TransportStorage::Sparse ? colIdx.size() : rows() * cols();
+}
+
+double TransportMatrix::density() const {
+    if (rows() == 0 || cols() == 0) return 0;
+    if (storage == TransportStorage::Dense) {
+        size_t nz = 0;
+        for (size_t i = 0; i < values.size(); i += channels) {
+            bool any = false;
+            for (int c = 0; c < channels; ++c) any |= values[i + c] != 0.0f;
+            nz += any;
+        }
+        return static_cast<double>(nz) /
+               (static_cast<double>(rows()) * static_cast<double>(cols()));
+    }
+    return static_cast<double>(colIdx.size()) /
+           (static_cast<double>(rows()) * static_cast<double>(cols()));
+}
+
+size_t TransportMatrix::bytes() const {
+    return rowPtr.size() * sizeof(uint64_t) + colIdx.size() * sizeof(uint16_t) +
+           values.size() * sizeof(float);
+}
+
+void TransportMatrix::applyLuminanceRows(const double* e, bool rgbE, double* Y, size_t r0,
+                                         size_t r1) const {
+    for (size_t r = r0; r < r1; ++r) {
+        double acc = 0;
+        if (channels == 1) {
+            forRow(*this, r, [&](size_t c, const float* v) { acc += double(v[0]) * e[c]; });
+        } else if (!rgbE) {
+            forRow(*this, r, [&](size_t c, const float* v) {
+                acc += (kLum[0] * v[0] + kLum[1] * v[1] + kLum[2] * v[2]) * e[c];
+            });
+        } else {
+            forRow(*this, r, [&](size_t c, const float* v) {
+                acc += kLum[0] * v[0] * e[3 * c] + kLum[1] * v[1] * e[3 * c + 1] +
+                       kLum[2] * v[2] * e[3 * c + 2];
+            });
+        }
+        Y[r - r0] = acc;
+    }
+}
+
+void TransportMatrix::accumulateTransposeRows(const double* g, bool rgbE, double* acc, size_t r0,
+                                              size_t r1) const {
+    for (size_t r = r0; r < r1; ++r) {
+        const double gr = g[r - r0];
+        if (gr == 0.0) continue;
+        if (channels == 1) {
+            forRow(*this, r, [&](size_t c, const float* v) { acc[c] += double(v[0]) * gr; });
+        } else if (!rgbE) {
+            forRow(*this, r, [&](size_t c, const float* v) {
+                acc[c] += (kLum[0] * v[0] + kLum[1] * v[1] + kLum[2] * v[2]) * gr;
+            });
+        } else {
+            forRow(*this, r, [&](size_t c, const float* v) {
+                for (int k = 0; k < 3; ++k) acc[3 * c + k] += kLum[k] * v[k] * gr;
+            });
+        }
+    }
+}
+
+void TransportMatrix::applyLuminance(std::span<const double> E, std::span<double> Y) const {
+    const bool rgbE = checkE(*this, E.size(), "TransportMatrix::applyLuminance") == EKind::Rgb;
+    if (Y.size() != rows()) throw std::invalid_argument("applyLuminance: Y size != rows");
+    forRowChunks(*this, 256, [&](size_t, size_t r0, size_t r1) {
+        applyLuminanceRows(E.data(), rgbE, Y.data() + r0, r0, r1);
+    });
+}
+
+void TransportMatrix::applyRgb(std::span<const double> E, std::span<double> rgb) const {
+    if (channels != 3)
+        throw std::invalid_argument("applyRgb: needs an RGB transport matrix (--rgb)");
+    EKind kind = checkE(*this, E.size(), "TransportMatrix::applyRgb");
+    if (rgb.size() != 3 * rows()) throw std::invalid_argument("applyRgb: output size != 3*rows");
+    const double* e = E.data();
+    forRowChunks(*this, 256, [&](size_t, size_t r0, size_t r1) {
+        for (size_t r = r0; r < r1; ++r) {
+            double a[3] = {0, 0, 0};
+            forRow(*this, r, [&](size_t c, const float* v) {
+                for (int k = 0; k < 3; ++k)
+                    a[k] += double(v[k]) * (kind == EKind::Gray ? e[c] : e[3 * c + k]);
+            });
+            for (int k = 0; k < 3; ++k) rgb[3 * r + k] = a[k];
+        }
+    });
+}
+
+void TransportMatrix::applyTransposeLuminance(std::span<const double> g,
+                                              std::span<double> out) const {
+    const bool rgbE =
+        checkE(*this, out.size(), "TransportMatrix::applyTransposeLuminance") == EKind::Rgb;
+    if (g.size() != rows()) throw std::invalid_argument("applyTranspose: g size != rows");
+    // Fixed chunks with one partial sum each, reduced in chunk order: the result does not
+    // depend on the number of threads.
+    const size_t chunkRows = std::max<size_t>(1024, (rows() + 63) / 64);
+    const size_t nChunks = (rows() + chunkRows - 1) / chunkRows;
+    const size_t n = out.size();
+    std::vector<double> partial(nChunks * n, 0.0);
+    forRowChunks(*this, chunkRows, [&](size_t k, size_t r0, size_t r1) {
+        accumulateTransposeRows(g.data() + r0, rgbE, partial.data() + k * n, r0, r1);
+    });
+    std::fill(out.begin(), out.end(), 0.0);
+    for (size_t k = 0; k < nChunks; ++k)
+        for (size_t i = 0; i < n; ++i) out[i] += partial[k * n + i];
+}
+
+void TransportMatrix::toDense() {
+    if (storage == TransportStorage::Dense) return;
+    const size_t cols_ = cols();
+    std::vector<float> dense(rows() * cols_ * channels, 0.0f);
+    for (size_t r = 0; r < rows(); ++r)
+        for (uint64_t k = rowPtr[r]; k < rowPtr[r + 1]; ++k)
+            for (int c = 0; c < channels; ++c)
+                dense[(r * cols_ + colIdx[k]) * channels + c] = values[k * channels + c];
+    values = std::move(dense);
+    rowPtr.clear();
+    rowPtr.shrink_to_fit();
+    colIdx.clear();
+    colIdx.shrink_to_fit();
+    storage = TransportStorage::Dense;
+}
+
+void TransportMatrix::toSparse() {
+    if (storage == TransportStorage::Sparse) return;
+    const size_t cols_ = cols();
+    std::vector<uint64_t> ptr(rows() + 1, 0);
+    std::vector<uint16_t> idx;
+    std::vector<float> val;
+    for (size_t r = 0; r < rows(); ++r) {
+        for (size_t c = 0; c < cols_; ++c) {
+            const float* v = &values[(r * cols_ + c) * channels];
+            bool any = false;
+            for (int k = 0; k < channels; ++k) any |= v[k] != 0.0f;
+            if (!any) continue;
+            idx.push_back(static_cast<uint16_t>(c));
+            val.insert(val.end(), v, v + channels);
+        }
+        ptr[r + 1] = idx.size();
+    }
+    rowPtr = std::move(ptr);
+    colIdx = std::move(idx);
+    values = std::move(val);
+    storage = TransportStorage::Sparse;
+}
+
+void chooseStorage(TransportMatrix& t) {
+    const double rows = static_cast<double>(t.rows()), cols = static_cast<double>(t.cols());
+    const double nz = t.density() * rows * cols;
+    const double sparseBytes = nz * (2.0 + 4.0 * t.channels) + 8.0 * (rows + 1);
+    const double denseBytes = rows * cols * t.channels * 4.0;
+    if (sparseBytes <= denseBytes)
+        t.toSparse();
+    else
+        t.toDense();
+}
+
+double streamingRead(const TransportMatrix& t) {
+    // Same chunking and threads as the products, summing every array element once.
+    const size_t chunkRows = 256;
+    const size_t nChunks = (t.rows() + chunkRows - 1) / chunkRows;
+    std::vector<double> partial(nChunks, 0.0);
+    forRowChunks(t, chunkRows, [&](size_t chunk, size_t r0, size_t r1) {
+        double s = 0;
+        uint64_t si = 0;
+        if (t.storage == TransportStorage::Sparse) {
+            const uint64_t b = t.rowPtr[r0], e = t.rowPtr[r1];
+            for (uint64_t k = b; k < e; ++k) si += t.colIdx[k];
+            for (uint64_t k = b * t.channels; k < e * t.channels; ++k) s += t.values[k];
+        } else {
+            const size_t w = t.cols() * t.channels;
+            for (size_t k = r0 * w; k < r1 * w; ++k) s += t.values[k];
+        }
+        partial[chunk] = s + static_cast<double>(si);
+    });
+    double total = 0;
+    for (double p : partial) total += p;
+    return total;
+}
+
+}  // namespace sl

@@ -1,0 +1,90 @@
+#include "transport/TransportSink.h"
+
+#include <algorithm>
+#include <array>
+#include <stdexcept>
+
+#include "core/Color.h"
+#include "scene/Scene.h"
+
+namespace sl {
+
+TransportSink::TransportSink(const EnvMapBasis& basis, int width, int height, int channels)
+    : basis_(basis),
+      width_(width),
+      height_(height),
+      channels_(channels),
+      cols_(static_cast<size_t>(width) * height),
+      vals_(static_cast<size_t>(width) * height) {
+    if (channels != 1 && channels != 3)
+        throw std::invalid_argument("TransportSink: channels must be 1 or 3");
+    if (basis.texelCount() > 65536)
+        throw std::invalid_argument("TransportSink: more than 65536 texels");
+}
+
+void TransportSink::consume(const PixelPaths& px) {
+    struct Entry {
+        uint16_t col;
+        std::array<double, 3> v;
+    };
+    thread_local std::vector<Entry> entries;
+    entries.clear();
+    for (const EscapedPath& p : px.paths) {
+        TexelWeights tw = basis_.weights(p.direction);
+        std::array<double, 3> w{p.weight.x, p.weight.y, p.weight.z};
+        if (channels_ == 1) w = {luminance<double>(w[0], w[1], w[2]), 0, 0};
+        for (int k = 0; k < 4; ++k) {
+            if (tw.weight[k] == 0.0f) continue;
+            const double b = tw.weight[k];
+            entries.push_back({static_cast<uint16_t>(tw.index[k]), {w[0] * b, w[1] * b, w[2] * b}});
+        }
+    }
+    std::sort(entries.begin(), entries.end(),
+              [](const Entry& a, const Entry& b) { return a.col < b.col; });
+    auto& cols = cols_[px.pixel];
+    auto& vals = vals_[px.pixel];
+    cols.clear();
+    vals.clear();
+    for (size_t i = 0; i < entries.size();) {
+        std::array<double, 3> sum{0, 0, 0};
+        const uint16_t c = entries[i].col;
+        for (; i < entries.size() && entries[i].col == c; ++i)
+            for (int k = 0; k < 3; ++k) sum[k] += entries[i].v[k];
+        cols.push_back(c);
+        for (int k = 0; k < channels_; ++k) vals.push_back(static_cast<float>(sum[k]));
+    }
+}
+
+TransportMatrix TransportSink::finish(const TraceSummary& summary) {
+    TransportMatrix t;
+    t.width = width_;
+    t.height = height_;
+    t.envWidth = basis_.width();
+    t.envHeight = basis_.height();
+    t.channels = channels_;
+    t.storage = TransportStorage::Sparse;
+    t.rowPtr.assign(t.rows() + 1, 0);
+    for (size_t r = 0; r < t.rows(); ++r) t.rowPtr[r + 1] = t.rowPtr[r] + cols_[r].size();
+    t.colIdx.resize(t.rowPtr.back());
+    t.values.resize(t.rowPtr.back() * channels_);
+    for (size_t r = 0; r < t.rows(); ++r) {
+        std::copy(cols_[r].begin(), cols_[r].end(), t.colIdx.begin() + t.rowPtr[r]);
+        std::copy(vals_[r].begin(), vals_[r].end(), t.values.begin() + t.rowPtr[r] * channels_);
+        std::vector<uint16_t>().swap(cols_[r]);
+        std::vector<float>().swap(vals_[r]);
+    }
+    t.objectMask = summary.objectMask;
+    return t;
+}
+
+PrecomputeResult precomputeTransport(const Scene& scene, const RenderOptions& options,
+                                     int channels) {
+    TransportSink sink(scene.basis, scene.camera.width(), scene.camera.height(), channels);
+    PrecomputeResult r;
+    r.summary = PathTracer(scene).trace(options, sink);
+    r.matrix = sink.finish(r.summary);
+    chooseStorage(r.matrix);
+    return r;
+}
+
+}  // namespace sl
