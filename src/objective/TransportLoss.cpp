@@ -11,21 +11,55 @@
 namespace sl {
 
 TransportLoss::TransportLoss(const TransportMatrix& t, const ImageObjective& objective, bool rgb)
-    : t_(t), obj_(objective), dimension_(t.cols() * (rgb ? 3 : 1)), y_(t.rows()), dLdY_(t.rows()) {
+    : t_(t), obj_(&objective), dimension_(t.cols() * (rgb ? 3 : 1)), y_(t.rows()), dLdY_(t.rows()) {
     if (rgb && t.channels != 3)
         throw std::invalid_argument("an RGB env map needs an RGB transport matrix (--rgb)");
     if (static_cast<size_t>(objective.width()) * objective.height() != t.rows())
         throw std::invalid_argument("objective image size != transport matrix rows");
 }
 
+TransportLoss::TransportLoss(const TransportMatrix& t, const UnbiasedObjective& objective, bool rgb)
+    : t_(t),
+      unb_(&objective),
+      dimension_(t.cols() * (rgb ? 3 : 1)),
+      y_(t.rows()),
+      dLdY_(t.rows()),
+      yb_(t.rows()),
+      dLdYb_(t.rows()) {
+    if (rgb && t.channels != 3)
+        throw std::invalid_argument("an RGB env map needs an RGB transport matrix (--rgb)");
+    if (t.planes != 2)
+        throw std::invalid_argument(
+            "the unbiased objective needs the two halves of T (precompute with two sample sets)");
+    if (static_cast<size_t>(objective.width()) * objective.height() != t.rows())
+        throw std::invalid_argument("objective image size != transport matrix rows");
+}
+
+LossParts TransportLoss::evaluateUnbiased(std::span<const double> E, std::span<double> grad) const {
+    t_.applyLuminance(E, y_, 0);
+    t_.applyLuminance(E, yb_, 1);
+    if (grad.empty()) return unb_->evaluate(y_, yb_, E);
+    std::vector<double> dLdE(dimension_), gb(dimension_);
+    LossParts parts = unb_->evaluate(y_, yb_, E, dLdY_, dLdYb_, dLdE);
+    t_.applyTransposeLuminance(dLdY_, grad, 0);
+    t_.applyTransposeLuminance(dLdYb_, gb, 1);
+    for (size_t i = 0; i < dimension_; ++i) grad[i] += gb[i] + dLdE[i];
+    return parts;
+}
+
 LossParts TransportLoss::evaluate(std::span<const double> E, std::span<double> grad) const {
     if (E.size() != dimension_) throw std::invalid_argument("TransportLoss: E has the wrong size");
+    if (unb_) {
+        if (!grad.empty() && grad.size() != dimension_)
+            throw std::invalid_argument("TransportLoss: gradient has the wrong size");
+        return evaluateUnbiased(E, grad);
+    }
     t_.applyLuminance(E, y_);
-    if (grad.empty()) return obj_.evaluate(y_, E);
+    if (grad.empty()) return obj_->evaluate(y_, E);
     if (grad.size() != dimension_)
         throw std::invalid_argument("TransportLoss: gradient has the wrong size");
     std::vector<double> dLdE(dimension_);
-    LossParts parts = obj_.evaluate(y_, E, dLdY_, dLdE);
+    LossParts parts = obj_->evaluate(y_, E, dLdY_, dLdE);
     t_.applyTransposeLuminance(dLdY_, grad);
     for (size_t i = 0; i < dimension_; ++i) grad[i] += dLdE[i];
     return parts;
@@ -33,13 +67,13 @@ LossParts TransportLoss::evaluate(std::span<const double> E, std::span<double> g
 
 LossParts TransportLoss::evaluateFused(std::span<const double> E, std::span<double> grad) const {
     if (E.size() != dimension_) throw std::invalid_argument("TransportLoss: E has the wrong size");
-    if (grad.empty()) return evaluate(E, grad);
+    if (grad.empty() || unb_) return evaluate(E, grad);
     if (grad.size() != dimension_)
         throw std::invalid_argument("TransportLoss: gradient has the wrong size");
     const int W = t_.width, H = t_.height;
     const size_t w = static_cast<size_t>(W), n = dimension_;
     const bool rgbE = dimension_ == 3 * t_.cols();
-    const double regScale = obj_.imageRegScale();
+    const double regScale = obj_->imageRegScale();
     const int chunkRows = std::max(16, (H + 15) / 16), band = 2;
     const int nChunks = (H + chunkRows - 1) / chunkRows;
     std::vector<double> gs(static_cast<size_t>(nChunks) * n, 0.0);
@@ -60,14 +94,14 @@ LossParts TransportLoss::evaluateFused(std::span<const double> E, std::span<doub
         };
         if (a > 0) {  // the vertical pairs (a-1, a) that the previous chunk owns touch row a
             ensureY(a + 1);
-            obj_.accumulateSignsRows(yl.data(), sl.data(), a - 1, a, lo);
+            obj_->accumulateSignsRows(yl.data(), sl.data(), a - 1, a, lo);
         }
         double* gsk = gs.data() + static_cast<size_t>(k) * n;
         double* gyk = gy.empty() ? nullptr : gy.data() + static_cast<size_t>(k) * n;
         for (int y0 = a; y0 < b; y0 += band) {
             const int y1 = std::min(y0 + band, b);
             ensureY(std::min(y1 + 1, hi));
-            obj_.accumulateSignsRows(yl.data(), sl.data(), y0, y1, lo);
+            obj_->accumulateSignsRows(yl.data(), sl.data(), y0, y1, lo);
             // Rows [y0, y1) now have their final s; their T rows were just read for Y.
             t_.accumulateTransposeRows(rowOf(sl, y0), rgbE, gsk, y0 * w, y1 * w);
             if (gyk) t_.accumulateTransposeRows(rowOf(yl, y0), rgbE, gyk, y0 * w, y1 * w);
@@ -91,8 +125,8 @@ LossParts TransportLoss::evaluateFused(std::span<const double> E, std::span<doub
 
     // The values (and the env-map regulariser's gradient) from the objective itself.
     std::vector<double> dLdE(dimension_);
-    LossParts parts = obj_.evaluate(y_, E, {}, dLdE);
-    const double scale = obj_.lGradScale(parts.G);
+    LossParts parts = obj_->evaluate(y_, E, {}, dLdE);
+    const double scale = obj_->lGradScale(parts.G);
     for (size_t i = 0; i < n; ++i) {
         double s = 0, yy = 0;
         for (int k = 0; k < nChunks; ++k) {
@@ -106,7 +140,7 @@ LossParts TransportLoss::evaluateFused(std::span<const double> E, std::span<doub
 
 std::vector<double> TransportLoss::image(std::span<const double> E) const {
     std::vector<double> y(t_.rows());
-    t_.applyLuminance(E, y);
+    t_.applyLuminance(E, y);  // T = (T_a + T_b)/2 for halves
     return y;
 }
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "objective/Objective.h"
+#include "objective/UnbiasedObjective.h"
 #include "optimize/Optimizer.h"
 #include "transport/TransportMatrix.h"
 
@@ -15,6 +16,9 @@ class TransportLoss {
   public:
     /// rgb: E has 3 values per texel (needs an RGB T); otherwise one (gray).
     TransportLoss(const TransportMatrix& t, const ImageObjective& objective, bool rgb);
+    /// The noise-unbiased objective on the halves of T (t.planes must be 2):
+    /// Y_a = T_a·E, Y_b = T_b·E, gradient T_aᵀ·dL/dY_a + T_bᵀ·dL/dY_b + dReg/dE.
+    TransportLoss(const TransportMatrix& t, const UnbiasedObjective& objective, bool rgb);
 
     size_t dimension() const { return dimension_; }
     /// Loss parts at E; fills grad (size dimension()) when it is non-empty.
@@ -33,13 +37,16 @@ class TransportLoss {
     Problem problem(LossParts* last = nullptr, bool fused = true) const;
 
     const TransportMatrix& matrix() const { return t_; }
-    const ImageObjective& objective() const { return obj_; }
+    bool unbiased() const { return unb_ != nullptr; }
 
   private:
     const TransportMatrix& t_;
-    const ImageObjective& obj_;
+    const ImageObjective* obj_ = nullptr;
+    const UnbiasedObjective* unb_ = nullptr;
     size_t dimension_;
-    mutable std::vector<double> y_, dLdY_;
+    mutable std::vector<double> y_, dLdY_, yb_, dLdYb_;
+
+    LossParts evaluateUnbiased(std::span<const double> E, std::span<double> grad) const;
 };
 
 }  // namespace sl

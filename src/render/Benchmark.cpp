@@ -23,7 +23,6 @@ ThroughputRow benchRenderer(const Scene& scene, const RenderOptions& options) {
 ThroughputRow benchBareEmbree(const Scene& scene, const RenderOptions& opt) {
     const Camera& cam = scene.camera;
     const int W = cam.width(), H = cam.height(), spp = opt.spp;
-    const auto [nx, ny] = strataFor(spp);
     RTCScene rs = scene.surface->rtcScene();
     tbb::combinable<uint64_t> rays;
     auto t0 = std::chrono::steady_clock::now();
@@ -36,9 +35,9 @@ ThroughputRow benchBareEmbree(const Scene& scene, const RenderOptions& opt) {
                 const auto pixel = static_cast<uint64_t>(y) * W + x;
                 for (int s = 0; s < spp; ++s) {
                     Pcg32 rng = sampleRng(opt.seed, pixel, static_cast<uint64_t>(s));
-                    double fx = x + (s % nx + rng.nextDouble()) / nx;
-                    double fy = y + (s / nx + rng.nextDouble()) / ny;
-                    Ray ray = cam.generateRay(fx, fy);
+                    const double u1 = rng.nextDouble(), u2 = rng.nextDouble();
+                    const auto [ox, oy] = sampleOffset(s, spp, 1, u1, u2);
+                    Ray ray = cam.generateRay(x + ox, y + oy);
                     for (int depth = 0; depth < opt.maxDepth; ++depth) {
                         RTCRayHit rh{};
                         rh.ray.org_x = ray.origin.x;

@@ -14,7 +14,8 @@ namespace sl {
 /// (so a pixel's value is the plain sum over its paths of weight · E(direction)).
 struct EscapedPath {
     Rgb weight;
-    Vec3f direction;  // unit world direction the path travels when it escapes
+    Vec3f direction;   // unit world direction the path travels when it escapes
+    uint32_t set = 0;  // sample set of the camera sample (RenderOptions::sampleSets)
 };
 
 struct PixelPaths {

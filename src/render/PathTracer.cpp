@@ -22,6 +22,12 @@ std::pair<int, int> strataFor(int spp) {
     return {nx, spp / nx};
 }
 
+std::pair<double, double> sampleOffset(int s, int spp, int sampleSets, double u1, double u2) {
+    const int perSet = spp / sampleSets, k = s % perSet;
+    const auto [nx, ny] = strataFor(perSet);
+    return {(k % nx + u1) / nx, (k / nx + u2) / ny};
+}
+
 namespace {
 
 struct Counters {
@@ -33,11 +39,15 @@ struct Counters {
 TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
     if (opt.spp < 1) throw std::invalid_argument("render.spp must be >= 1");
     if (opt.maxDepth < 1) throw std::invalid_argument("render.max_depth must be >= 1");
+    if (opt.sampleSets != 1 && opt.sampleSets != 2)
+        throw std::invalid_argument("RenderOptions::sampleSets must be 1 or 2");
+    if (opt.spp % opt.sampleSets != 0)
+        throw std::invalid_argument("two sample sets need an even spp");
     const Camera& cam = scene_.camera;
     const Heightfield& surf = *scene_.surface;
     const ConductorBsdf& bsdf = scene_.bsdf;
     const int W = cam.width(), H = cam.height(), spp = opt.spp;
-    const auto [nx, ny] = strataFor(spp);
+    const int perSet = spp / opt.sampleSets;
     const float invSpp = 1.0f / static_cast<float>(spp);
 
     TraceSummary sum;
@@ -63,25 +73,27 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
                 uint32_t hits = 0;
                 for (int s = 0; s < spp; ++s) {
                     Pcg32 rng = sampleRng(opt.seed, pixel, static_cast<uint64_t>(s));
-                    const int sx = s % nx, sy = s / nx;
-                    double fx = x + (sx + rng.nextDouble()) / nx;
-                    double fy = y + (sy + rng.nextDouble()) / ny;
-                    Ray ray = cam.generateRay(fx, fy);
+                    const double u1 = rng.nextDouble(), u2 = rng.nextDouble();
+                    const auto [ox, oy] = sampleOffset(s, spp, opt.sampleSets, u1, u2);
+                    Ray ray = cam.generateRay(x + ox, y + oy);
+                    const auto set = static_cast<uint32_t>(s / perSet);
                     Rgb throughput{1.0f};
                     ++c.camera;
                     for (int depth = 0;; ++depth) {
                         SurfaceHit hit;
                         ++c.rays;
                         if (!surf.intersect(ray, 0.0f, hit)) {
-                            if (depth > 0) paths.push_back({throughput * invSpp, ray.direction});
+                            if (depth > 0)
+                                paths.push_back({throughput * invSpp, ray.direction, set});
                             break;
                         }
                         if (depth == 0) ++hits;
                         if (depth + 1 >= opt.maxDepth) break;
                         Frame frame = shadingFrame(hit.normal);
                         Vec3f wi = frame.toLocal(-ray.direction);
-                        float u1 = rng.nextFloat(), u2 = rng.nextFloat(), u3 = rng.nextFloat();
-                        BsdfSample bs = bsdf.sample(wi, u1, u2, u3);
+                        const float b1 = rng.nextFloat(), b2 = rng.nextFloat(),
+                                    b3 = rng.nextFloat();
+                        BsdfSample bs = bsdf.sample(wi, b1, b2, b3);
                         if (!bs.valid) break;
                         throughput *= bs.weight;
                         if (maxComponent(throughput) <= 0.0f) break;

@@ -23,7 +23,11 @@ struct RenderOptions {
     int spp = 64;
     int maxDepth = 4;
     uint64_t seed = 0;
-    int threads = 0;                       // 0: all cores
+    int threads = 0;  // 0: all cores
+    /// 1, or 2: the spp samples form two independent sample sets of spp/2 (samples
+    /// [0, spp/2) and [spp/2, spp)), each stratified over the whole pixel on its own, so that
+    /// either half alone is an unbiased estimate (used for the noise-unbiased objective).
+    int sampleSets = 1;
     std::function<void(double)> progress;  // fraction done, called from any thread, serialised
 };
 
@@ -50,5 +54,9 @@ class PathTracer {
 
 /// Stratification of spp camera samples: nx × ny strata with nx the largest divisor <= sqrt(spp).
 std::pair<int, int> strataFor(int spp);
+
+/// Film offset in [0,1)² of sample s of a pixel: stratum (k mod nx, k div nx) of the sample's
+/// set (k = index within the set) jittered by two uniform numbers (u1, u2).
+std::pair<double, double> sampleOffset(int s, int spp, int sampleSets, double u1, double u2);
 
 }  // namespace sl

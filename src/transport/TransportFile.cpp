@@ -48,6 +48,7 @@ TransportProvenance transportProvenance(const Scene& scene, const RenderOptions&
     in["format"] = "scratchlight transport v1";
     in["convention"] = kTransportConvention;
     in["channels"] = channels;
+    in["planes"] = opt.sampleSets;  // 2: two independent sample sets, the halves T_a, T_b
     in["camera"] = {
         {"type", c.type == CameraDesc::Type::Perspective ? "perspective" : "orthographic"},
         {"origin", vec(c.origin)},
@@ -103,6 +104,7 @@ void writeTransportFile(const std::filesystem::path& file, const TransportMatrix
     h["env_width"] = t.envWidth;
     h["env_height"] = t.envHeight;
     h["channels"] = t.channels;
+    h["planes"] = t.planes;
     h["storage"] = t.storage == TransportStorage::Sparse ? "csr" : "dense";
     h["nnz"] = t.nnz();
     h["convention"] = kTransportConvention;
@@ -177,6 +179,7 @@ TransportFile readTransportFile(const std::filesystem::path& file,
         t.envWidth = h.at("env_width").get<int>();
         t.envHeight = h.at("env_height").get<int>();
         t.channels = h.at("channels").get<int>();
+        t.planes = h.value("planes", 1);
         t.storage = h.at("storage").get<std::string>() == "csr" ? TransportStorage::Sparse
                                                                 : TransportStorage::Dense;
         out.provenance.fingerprint = h.at("fingerprint").get<std::string>();
@@ -196,7 +199,7 @@ TransportFile readTransportFile(const std::filesystem::path& file,
                          "map, spp, seed or max_depth) than the ones given",
                          "recompute it with `scratchlight precompute`");
     if (t.width < 1 || t.height < 1 || t.envWidth < 2 || t.envHeight < 3 ||
-        (t.channels != 1 && t.channels != 3))
+        (t.channels != 1 && t.channels != 3) || (t.planes != 1 && t.planes != 2))
         throw InputError(damaged(file, "bad dimensions"));
 
     const uint64_t payloadStart = 16ull + len + 8;
@@ -236,11 +239,12 @@ TransportFile readTransportFile(const std::filesystem::path& file,
     bool ok = t.objectMask.size() == rows;
     if (t.storage == TransportStorage::Sparse) {
         ok = ok && t.rowPtr.size() == rows + 1 && t.rowPtr.front() == 0 &&
-             t.rowPtr.back() == t.colIdx.size() && t.values.size() == t.colIdx.size() * t.channels;
+             t.rowPtr.back() == t.colIdx.size() &&
+             t.values.size() == t.colIdx.size() * static_cast<size_t>(t.stride());
         for (size_t r = 0; ok && r < rows; ++r) ok = t.rowPtr[r] <= t.rowPtr[r + 1];
         for (size_t k = 0; ok && k < t.colIdx.size(); ++k) ok = t.colIdx[k] < cols;
     } else {
-        ok = ok && t.values.size() == rows * cols * t.channels;
+        ok = ok && t.values.size() == rows * cols * static_cast<size_t>(t.stride());
     }
     if (!ok) throw InputError(damaged(file, "inconsistent matrix structure"));
     return out;

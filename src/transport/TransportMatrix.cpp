@@ -33,21 +33,36 @@ void forRowChunks(const TransportMatrix& t, size_t chunkRows, F&& f) {
     }
 }
 
-/// Calls f(col, values) for every stored entry of row r (values: `channels` floats).
+/// Calls f(col, v) for every stored entry of row r; v points at the entry's `stride()` floats.
 template <typename F>
 inline void forRow(const TransportMatrix& t, size_t r, F&& f) {
-    const int ch = t.channels;
+    const size_t st = static_cast<size_t>(t.stride());
     if (t.storage == TransportStorage::Sparse) {
         const uint64_t b = t.rowPtr[r], e = t.rowPtr[r + 1];
         const uint16_t* col = t.colIdx.data();
         const float* v = t.values.data();
-        for (uint64_t k = b; k < e; ++k) f(static_cast<size_t>(col[k]), v + k * ch);
+        for (uint64_t k = b; k < e; ++k) f(static_cast<size_t>(col[k]), v + k * st);
     } else {
         const size_t cols = t.cols();
-        const float* v = t.values.data() + r * cols * ch;
-        for (size_t c = 0; c < cols; ++c) f(c, v + c * ch);
+        const float* v = t.values.data() + r * cols * st;
+        for (size_t c = 0; c < cols; ++c) f(c, v + c * st);
     }
 }
+
+/// Reads channel c of an entry for a plane: one plane, or the mean of the two halves.
+struct PlaneReader {
+    int offset = 0, channels = 1;
+    bool mean = false;
+    PlaneReader(const TransportMatrix& t, int plane) : channels(t.channels) {
+        if (plane != TransportMatrix::kMeanPlane && (plane < 0 || plane >= t.planes))
+            throw std::invalid_argument("TransportMatrix: no plane " + std::to_string(plane));
+        mean = plane == TransportMatrix::kMeanPlane && t.planes == 2;
+        offset = plane > 0 ? plane * t.channels : 0;
+    }
+    float operator()(const float* v, int c) const {
+        return mean ? 0.5f * (v[c] + v[channels + c]) : v[offset + c];
+    }
+};
 
 enum class EKind { Gray, Rgb };
 
@@ -73,9 +88,10 @@ double TransportMatrix::density() const {
     if (rows() == 0 || cols() == 0) return 0;
     if (storage == TransportStorage::Dense) {
         size_t nz = 0;
-        for (size_t i = 0; i < values.size(); i += channels) {
+        const size_t st = static_cast<size_t>(stride());
+        for (size_t i = 0; i < values.size(); i += st) {
             bool any = false;
-            for (int c = 0; c < channels; ++c) any |= values[i + c] != 0.0f;
+            for (size_t c = 0; c < st; ++c) any |= values[i + c] != 0.0f;
             nz += any;
         }
         return static_cast<double>(nz) /
@@ -91,19 +107,20 @@ size_t TransportMatrix::bytes() const {
 }
 
 void TransportMatrix::applyLuminanceRows(const double* e, bool rgbE, double* Y, size_t r0,
-                                         size_t r1) const {
+                                         size_t r1, int plane) const {
+    const PlaneReader pv(*this, plane);
     for (size_t r = r0; r < r1; ++r) {
         double acc = 0;
         if (channels == 1) {
-            forRow(*this, r, [&](size_t c, const float* v) { acc += double(v[0]) * e[c]; });
+            forRow(*this, r, [&](size_t c, const float* v) { acc += double(pv(v, 0)) * e[c]; });
         } else if (!rgbE) {
             forRow(*this, r, [&](size_t c, const float* v) {
-                acc += (kLum[0] * v[0] + kLum[1] * v[1] + kLum[2] * v[2]) * e[c];
+                acc += (kLum[0] * pv(v, 0) + kLum[1] * pv(v, 1) + kLum[2] * pv(v, 2)) * e[c];
             });
         } else {
             forRow(*this, r, [&](size_t c, const float* v) {
-                acc += kLum[0] * v[0] * e[3 * c] + kLum[1] * v[1] * e[3 * c + 1] +
-                       kLum[2] * v[2] * e[3 * c + 2];
+                acc += kLum[0] * pv(v, 0) * e[3 * c] + kLum[1] * pv(v, 1) * e[3 * c + 1] +
+                       kLum[2] * pv(v, 2) * e[3 * c + 2];
             });
         }
         Y[r - r0] = acc;
@@ -111,29 +128,31 @@ void TransportMatrix::applyLuminanceRows(const double* e, bool rgbE, double* Y, 
 }
 
 void TransportMatrix::accumulateTransposeRows(const double* g, bool rgbE, double* acc, size_t r0,
-                                              size_t r1) const {
+                                              size_t r1, int plane) const {
+    const PlaneReader pv(*this, plane);
     for (size_t r = r0; r < r1; ++r) {
         const double gr = g[r - r0];
         if (gr == 0.0) continue;
         if (channels == 1) {
-            forRow(*this, r, [&](size_t c, const float* v) { acc[c] += double(v[0]) * gr; });
+            forRow(*this, r, [&](size_t c, const float* v) { acc[c] += double(pv(v, 0)) * gr; });
         } else if (!rgbE) {
             forRow(*this, r, [&](size_t c, const float* v) {
-                acc[c] += (kLum[0] * v[0] + kLum[1] * v[1] + kLum[2] * v[2]) * gr;
+                acc[c] += (kLum[0] * pv(v, 0) + kLum[1] * pv(v, 1) + kLum[2] * pv(v, 2)) * gr;
             });
         } else {
             forRow(*this, r, [&](size_t c, const float* v) {
-                for (int k = 0; k < 3; ++k) acc[3 * c + k] += kLum[k] * v[k] * gr;
+                for (int k = 0; k < 3; ++k) acc[3 * c + k] += kLum[k] * pv(v, k) * gr;
             });
         }
     }
 }
 
-void TransportMatrix::applyLuminance(std::span<const double> E, std::span<double> Y) const {
+void TransportMatrix::applyLuminance(std::span<const double> E, std::span<double> Y,
+                                     int plane) const {
     const bool rgbE = checkE(*this, E.size(), "TransportMatrix::applyLuminance") == EKind::Rgb;
     if (Y.size() != rows()) throw std::invalid_argument("applyLuminance: Y size != rows");
     forRowChunks(*this, 256, [&](size_t, size_t r0, size_t r1) {
-        applyLuminanceRows(E.data(), rgbE, Y.data() + r0, r0, r1);
+        applyLuminanceRows(E.data(), rgbE, Y.data() + r0, r0, r1, plane);
     });
 }
 
@@ -143,20 +162,21 @@ void TransportMatrix::applyRgb(std::span<const double> E, std::span<double> rgb)
     EKind kind = checkE(*this, E.size(), "TransportMatrix::applyRgb");
     if (rgb.size() != 3 * rows()) throw std::invalid_argument("applyRgb: output size != 3*rows");
     const double* e = E.data();
+    const PlaneReader pv(*this, kMeanPlane);
     forRowChunks(*this, 256, [&](size_t, size_t r0, size_t r1) {
         for (size_t r = r0; r < r1; ++r) {
             double a[3] = {0, 0, 0};
             forRow(*this, r, [&](size_t c, const float* v) {
                 for (int k = 0; k < 3; ++k)
-                    a[k] += double(v[k]) * (kind == EKind::Gray ? e[c] : e[3 * c + k]);
+                    a[k] += double(pv(v, k)) * (kind == EKind::Gray ? e[c] : e[3 * c + k]);
             });
             for (int k = 0; k < 3; ++k) rgb[3 * r + k] = a[k];
         }
     });
 }
 
-void TransportMatrix::applyTransposeLuminance(std::span<const double> g,
-                                              std::span<double> out) const {
+void TransportMatrix::applyTransposeLuminance(std::span<const double> g, std::span<double> out,
+                                              int plane) const {
     const bool rgbE =
         checkE(*this, out.size(), "TransportMatrix::applyTransposeLuminance") == EKind::Rgb;
     if (g.size() != rows()) throw std::invalid_argument("applyTranspose: g size != rows");
@@ -167,7 +187,7 @@ void TransportMatrix::applyTransposeLuminance(std::span<const double> g,
     const size_t n = out.size();
     std::vector<double> partial(nChunks * n, 0.0);
     forRowChunks(*this, chunkRows, [&](size_t k, size_t r0, size_t r1) {
-        accumulateTransposeRows(g.data() + r0, rgbE, partial.data() + k * n, r0, r1);
+        accumulateTransposeRows(g.data() + r0, rgbE, partial.data() + k * n, r0, r1, plane);
     });
     std::fill(out.begin(), out.end(), 0.0);
     for (size_t k = 0; k < nChunks; ++k)
@@ -176,12 +196,12 @@ void TransportMatrix::applyTransposeLuminance(std::span<const double> g,
 
 void TransportMatrix::toDense() {
     if (storage == TransportStorage::Dense) return;
-    const size_t cols_ = cols();
-    std::vector<float> dense(rows() * cols_ * channels, 0.0f);
+    const size_t cols_ = cols(), st = static_cast<size_t>(stride());
+    std::vector<float> dense(rows() * cols_ * st, 0.0f);
     for (size_t r = 0; r < rows(); ++r)
         for (uint64_t k = rowPtr[r]; k < rowPtr[r + 1]; ++k)
-            for (int c = 0; c < channels; ++c)
-                dense[(r * cols_ + colIdx[k]) * channels + c] = values[k * channels + c];
+            for (size_t c = 0; c < st; ++c)
+                dense[(r * cols_ + colIdx[k]) * st + c] = values[k * st + c];
     values = std::move(dense);
     rowPtr.clear();
     rowPtr.shrink_to_fit();
@@ -192,18 +212,18 @@ void TransportMatrix::toDense() {
 
 void TransportMatrix::toSparse() {
     if (storage == TransportStorage::Sparse) return;
-    const size_t cols_ = cols();
+    const size_t cols_ = cols(), st = static_cast<size_t>(stride());
     std::vector<uint64_t> ptr(rows() + 1, 0);
     std::vector<uint16_t> idx;
     std::vector<float> val;
     for (size_t r = 0; r < rows(); ++r) {
         for (size_t c = 0; c < cols_; ++c) {
-            const float* v = &values[(r * cols_ + c) * channels];
+            const float* v = &values[(r * cols_ + c) * st];
             bool any = false;
-            for (int k = 0; k < channels; ++k) any |= v[k] != 0.0f;
+            for (size_t k = 0; k < st; ++k) any |= v[k] != 0.0f;
             if (!any) continue;
             idx.push_back(static_cast<uint16_t>(c));
-            val.insert(val.end(), v, v + channels);
+            val.insert(val.end(), v, v + st);
         }
         ptr[r + 1] = idx.size();
     }
@@ -216,8 +236,8 @@ void TransportMatrix::toSparse() {
 void chooseStorage(TransportMatrix& t) {
     const double rows = static_cast<double>(t.rows()), cols = static_cast<double>(t.cols());
     const double nz = t.density() * rows * cols;
-    const double sparseBytes = nz * (2.0 + 4.0 * t.channels) + 8.0 * (rows + 1);
-    const double denseBytes = rows * cols * t.channels * 4.0;
+    const double sparseBytes = nz * (2.0 + 4.0 * t.stride()) + 8.0 * (rows + 1);
+    const double denseBytes = rows * cols * t.stride() * 4.0;
     if (sparseBytes <= denseBytes)
         t.toSparse();
     else
@@ -254,9 +274,10 @@ double streamingRead(const TransportMatrix& t) {
             const uint64_t b = t.rowPtr[r0], e = t.rowPtr[r1];
             s += sumWords(t.rowPtr.data() + r0, (r1 - r0 + 1) * sizeof(uint64_t));
             s += sumWords(t.colIdx.data() + b, (e - b) * sizeof(uint16_t));
-            s += sumWords(t.values.data() + b * t.channels, (e - b) * t.channels * sizeof(float));
+            const size_t st = static_cast<size_t>(t.stride());
+            s += sumWords(t.values.data() + b * st, (e - b) * st * sizeof(float));
         } else {
-            const size_t w = t.cols() * t.channels;
+            const size_t w = t.cols() * static_cast<size_t>(t.stride());
             s += sumWords(t.values.data() + r0 * w, (r1 - r0) * w * sizeof(float));
         }
         partial[chunk] = s;

@@ -9,15 +9,18 @@
 
 namespace sl {
 
-TransportSink::TransportSink(const EnvMapBasis& basis, int width, int height, int channels)
+TransportSink::TransportSink(const EnvMapBasis& basis, int width, int height, int channels,
+                             int planes)
     : basis_(basis),
       width_(width),
       height_(height),
       channels_(channels),
+      planes_(planes),
       cols_(static_cast<size_t>(width) * height),
       vals_(static_cast<size_t>(width) * height) {
     if (channels != 1 && channels != 3)
         throw std::invalid_argument("TransportSink: channels must be 1 or 3");
+    if (planes != 1 && planes != 2) throw std::invalid_argument("TransportSink: planes is 1 or 2");
     if (basis.texelCount() > 65536)
         throw std::invalid_argument("TransportSink: more than 65536 texels");
 }
@@ -25,18 +28,22 @@ TransportSink::TransportSink(const EnvMapBasis& basis, int width, int height, in
 void TransportSink::consume(const PixelPaths& px) {
     struct Entry {
         uint16_t col;
+        uint16_t plane;
         std::array<double, 3> v;
     };
     thread_local std::vector<Entry> entries;
     entries.clear();
+    const double planeScale = planes_;  // a half of the samples: weights were divided by spp
     for (const EscapedPath& p : px.paths) {
         TexelWeights tw = basis_.weights(p.direction);
         std::array<double, 3> w{p.weight.x, p.weight.y, p.weight.z};
         if (channels_ == 1) w = {luminance<double>(w[0], w[1], w[2]), 0, 0};
+        const auto plane = static_cast<uint16_t>(planes_ == 2 ? p.set : 0);
         for (int k = 0; k < 4; ++k) {
             if (tw.weight[k] == 0.0f) continue;
-            const double b = tw.weight[k];
-            entries.push_back({static_cast<uint16_t>(tw.index[k]), {w[0] * b, w[1] * b, w[2] * b}});
+            const double b = tw.weight[k] * planeScale;
+            entries.push_back(
+                {static_cast<uint16_t>(tw.index[k]), plane, {w[0] * b, w[1] * b, w[2] * b}});
         }
     }
     std::sort(entries.begin(), entries.end(),
@@ -46,12 +53,13 @@ void TransportSink::consume(const PixelPaths& px) {
     cols.clear();
     vals.clear();
     for (size_t i = 0; i < entries.size();) {
-        std::array<double, 3> sum{0, 0, 0};
+        std::array<std::array<double, 3>, 2> sum{};
         const uint16_t c = entries[i].col;
         for (; i < entries.size() && entries[i].col == c; ++i)
-            for (int k = 0; k < 3; ++k) sum[k] += entries[i].v[k];
+            for (int k = 0; k < 3; ++k) sum[entries[i].plane][k] += entries[i].v[k];
         cols.push_back(c);
-        for (int k = 0; k < channels_; ++k) vals.push_back(static_cast<float>(sum[k]));
+        for (int pl = 0; pl < planes_; ++pl)
+            for (int k = 0; k < channels_; ++k) vals.push_back(static_cast<float>(sum[pl][k]));
     }
 }
 
@@ -62,14 +70,16 @@ TransportMatrix TransportSink::finish(const TraceSummary& summary) {
     t.envWidth = basis_.width();
     t.envHeight = basis_.height();
     t.channels = channels_;
+    t.planes = planes_;
     t.storage = TransportStorage::Sparse;
     t.rowPtr.assign(t.rows() + 1, 0);
     for (size_t r = 0; r < t.rows(); ++r) t.rowPtr[r + 1] = t.rowPtr[r] + cols_[r].size();
     t.colIdx.resize(t.rowPtr.back());
-    t.values.resize(t.rowPtr.back() * channels_);
+    const size_t st = static_cast<size_t>(t.stride());
+    t.values.resize(t.rowPtr.back() * st);
     for (size_t r = 0; r < t.rows(); ++r) {
         std::copy(cols_[r].begin(), cols_[r].end(), t.colIdx.begin() + t.rowPtr[r]);
-        std::copy(vals_[r].begin(), vals_[r].end(), t.values.begin() + t.rowPtr[r] * channels_);
+        std::copy(vals_[r].begin(), vals_[r].end(), t.values.begin() + t.rowPtr[r] * st);
         std::vector<uint16_t>().swap(cols_[r]);
         std::vector<float>().swap(vals_[r]);
     }
@@ -79,7 +89,8 @@ TransportMatrix TransportSink::finish(const TraceSummary& summary) {
 
 PrecomputeResult precomputeTransport(const Scene& scene, const RenderOptions& options,
                                      int channels) {
-    TransportSink sink(scene.basis, scene.camera.width(), scene.camera.height(), channels);
+    TransportSink sink(scene.basis, scene.camera.width(), scene.camera.height(), channels,
+                       options.sampleSets);
     PrecomputeResult r;
     r.summary = PathTracer(scene).trace(options, sink);
     r.matrix = sink.finish(r.summary);

@@ -18,14 +18,16 @@ struct Scene;
 
 class TransportSink : public PathSink {
   public:
-    TransportSink(const EnvMapBasis& basis, int width, int height, int channels);
+    /// planes: 1 (T), or 2 (the halves T_a, T_b from sample sets 0 and 1; each scaled by 2 so
+    /// that it is an unbiased estimate on its own and T = (T_a + T_b)/2).
+    TransportSink(const EnvMapBasis& basis, int width, int height, int channels, int planes = 1);
     void consume(const PixelPaths& pixel) override;
     /// Assembles the CSR matrix (call once, after the trace).
     TransportMatrix finish(const TraceSummary& summary);
 
   private:
     const EnvMapBasis& basis_;
-    int width_, height_, channels_;
+    int width_, height_, channels_, planes_;
     std::vector<std::vector<uint16_t>> cols_;
     std::vector<std::vector<float>> vals_;
 };
@@ -36,7 +38,8 @@ struct PrecomputeResult {
 };
 
 /// Traces the scene once with a TransportSink (same tracer, same samples as `render`).
-/// channels: 1 (gray T) or 3 (RGB T). Storage is chosen from the measured density.
+/// channels: 1 (gray T) or 3 (RGB T). options.sampleSets == 2 stores the two halves (planes).
+/// Storage is chosen from the measured density.
 PrecomputeResult precomputeTransport(const Scene& scene, const RenderOptions& options,
                                      int channels);
 

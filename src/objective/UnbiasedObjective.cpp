@@ -1,0 +1,93 @@
+#include "objective/UnbiasedObjective.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "core/Error.h"
+
+namespace sl {
+
+UnbiasedObjective::UnbiasedObjective(int width, int height, std::vector<uint8_t> mask,
+                                     ObjectiveOptions options)
+    : width_(width), height_(height), mask_(std::move(mask)), opt_(options) {
+    // The ImageObjective constructor checks sizes, an empty mask and the options the same way.
+    ImageObjective check(width, height, mask_, options);
+    S_ = check.maskSize();
+}
+
+double UnbiasedObjective::energy(std::span<const double> Ya, std::span<const double> Yb) const {
+    double G = 0;
+    detail::forEachMaskedPair(width_, height_, mask_.data(),
+                              [&](size_t p, size_t q) { G += (Ya[q] - Ya[p]) * (Yb[q] - Yb[p]); });
+    return G;
+}
+
+LossParts UnbiasedObjective::evaluate(std::span<const double> Ya, std::span<const double> Yb,
+                                      std::span<const double> E, std::span<double> dLdYa,
+                                      std::span<double> dLdYb, std::span<double> dLdE) const {
+    const size_t n = static_cast<size_t>(width_) * static_cast<size_t>(height_);
+    if (Ya.size() != n || Yb.size() != n)
+        throw std::invalid_argument("UnbiasedObjective: half images must have width*height values");
+    if ((!dLdYa.empty() && dLdYa.size() != n) || (!dLdYb.empty() && dLdYb.size() != n) ||
+        (!dLdE.empty() && dLdE.size() != E.size()))
+        throw std::invalid_argument("UnbiasedObjective: gradient spans have the wrong size");
+    if (opt_.reg == RegTarget::EnvMap && E.empty())
+        throw std::invalid_argument(
+            "UnbiasedObjective: E is empty but the regulariser is mean(E^2)");
+    detail::checkFinite(Ya, "Ya", "evaluate");
+    detail::checkFinite(Yb, "Yb", "evaluate");
+    detail::checkFinite(E, "E", "evaluate");
+
+    LossParts r;
+    r.S = S_;
+    r.G = energy(Ya, Yb);
+    const double floor = 1e-12 * S_;
+    r.clamped = r.G < floor;
+    const double G = r.clamped ? floor : r.G;
+    r.lGrad = std::sqrt(S_ / G);
+    const bool want = !dLdYa.empty() && !dLdYb.empty();
+    if (want) {
+        std::fill(dLdYa.begin(), dLdYa.end(), 0.0);
+        std::fill(dLdYb.begin(), dLdYb.end(), 0.0);
+        if (!r.clamped) {
+            const double k = -0.5 * std::sqrt(S_) / (G * std::sqrt(G));  // dL/dG_u
+            detail::forEachMaskedPair(width_, height_, mask_.data(), [&](size_t p, size_t q) {
+                const double da = Ya[q] - Ya[p], db = Yb[q] - Yb[p];
+                dLdYa[q] += k * db;
+                dLdYa[p] -= k * db;
+                dLdYb[q] += k * da;
+                dLdYb[p] -= k * da;
+            });
+        }
+    }
+    const double lambda = opt_.lambda;
+    if (opt_.reg == RegTarget::EnvMap) {
+        double s = 0;
+        for (double e : E) s += e * e;
+        const double N = static_cast<double>(E.size());
+        r.lReg = s / N;
+        if (!dLdE.empty())
+            for (size_t i = 0; i < E.size(); ++i) dLdE[i] = 2.0 * lambda * E[i] / N;
+    } else {
+        double s = 0;
+        for (size_t i = 0; i < n; ++i) s += Ya[i] * Yb[i];
+        const double N = static_cast<double>(n);
+        r.lReg = s / N;
+        if (want) {
+            for (size_t i = 0; i < n; ++i) {
+                dLdYa[i] += lambda * Yb[i] / N;
+                dLdYb[i] += lambda * Ya[i] / N;
+            }
+        }
+        std::fill(dLdE.begin(), dLdE.end(), 0.0);
+    }
+    r.total = r.lGrad + lambda * r.lReg;
+    if (!std::isfinite(r.total))
+        throw std::range_error("UnbiasedObjective: the loss is not finite (" +
+                               std::to_string(r.total) + ")");
+    return r;
+}
+
+}  // namespace sl

@@ -1,0 +1,170 @@
+// The noise-unbiased objective: unbiasedness of the gradient energy on a synthetic T with
+// independent noise in its halves (and the bias of the paper's Σ|ΔY|), its exact gradient,
+// and the halves of a traced T.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "TestUtil.h"
+#include "core/Color.h"
+#include "core/Rng.h"
+#include "objective/TransportLoss.h"
+#include "render/Render.h"
+#include "scene/Scene.h"
+#include "transport/TransportFile.h"
+#include "transport/TransportSink.h"
+
+using namespace sl;
+
+namespace {
+
+double gauss(Pcg32& rng) {
+    double u1 = std::max(rng.nextDouble(), 1e-300), u2 = rng.nextDouble();
+    return std::sqrt(-2 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
+}
+
+/// A dense synthetic T (rows = w*h, cols) with halves T_true + noise_a, T_true + noise_b.
+TransportMatrix syntheticHalves(int w, int h, int cols, const std::vector<double>& tTrue,
+                                double sigma, Pcg32& rng) {
+    TransportMatrix t;
+    t.width = w;
+    t.height = h;
+    t.envWidth = cols;
+    t.envHeight = 1;
+    t.channels = 1;
+    t.planes = 2;
+    t.storage = TransportStorage::Dense;
+    t.objectMask.assign(size_t(w) * h, 1);
+    t.values.resize(tTrue.size() * 2);
+    for (size_t i = 0; i < tTrue.size(); ++i) {
+        t.values[2 * i] = static_cast<float>(tTrue[i] + sigma * gauss(rng));
+        t.values[2 * i + 1] = static_cast<float>(tTrue[i] + sigma * gauss(rng));
+    }
+    return t;
+}
+
+}  // namespace
+
+TEST(Unbiased, GradientEnergyIsUnbiasedWhileTheL1SumIsNot) {
+    const int w = 12, h = 10, cols = 6;
+    Pcg32 rng(42, 7);
+    std::vector<double> tTrue(size_t(w) * h * cols);
+    for (double& v : tTrue) v = rng.nextDouble() * 0.2;
+    std::vector<double> e(cols);
+    for (double& v : e) v = 0.2 + 0.8 * rng.nextDouble();
+    // Noise-free image and its exact energies.
+    std::vector<double> y(size_t(w) * h, 0.0);
+    for (size_t r = 0; r < y.size(); ++r)
+        for (int c = 0; c < cols; ++c) y[r] += tTrue[r * cols + c] * e[c];
+    std::vector<uint8_t> mask(y.size(), 1);
+    ObjectiveOptions oo;
+    UnbiasedObjective unb(w, h, mask, oo);
+    ImageObjective paper(w, h, mask, oo);
+    const double trueSq = unb.energy(y, y);        // Σ (ΔȲ)²
+    const double trueL1 = paper.evaluate(y, e).G;  // Σ |ΔȲ|
+    const int draws = 3000;
+    double sum = 0, sum2 = 0, l1 = 0, l12 = 0;
+    for (int d = 0; d < draws; ++d) {
+        TransportMatrix t = syntheticHalves(w, h, cols, tTrue, 0.05, rng);
+        TransportLoss loss(t, unb, false);
+        const double g = loss.evaluate(e, {}).G;
+        sum += g;
+        sum2 += g * g;
+        std::vector<double> ym(y.size());
+        t.applyLuminance(e, ym);  // the mean of the halves: what the paper's loss sees
+        const double gl1 = paper.evaluate(ym, e).G;
+        l1 += gl1;
+        l12 += gl1 * gl1;
+    }
+    const double mean = sum / draws, se = std::sqrt((sum2 / draws - mean * mean) / draws);
+    const double meanL1 = l1 / draws, seL1 = std::sqrt((l12 / draws - meanL1 * meanL1) / draws);
+    std::printf("[ measured ] unbiased: E[G_u] = %.5f +- %.5f vs noise-free %.5f (%.2f se)\n", mean,
+                se, trueSq, (mean - trueSq) / se);
+    std::printf("[ measured ] paper: E[sum|dY|] = %.4f +- %.4f vs noise-free %.4f (+%.0f se)\n",
+                meanL1, seL1, trueL1, (meanL1 - trueL1) / seL1);
+    EXPECT_LE(std::abs(mean - trueSq), 4 * se);
+    EXPECT_GT(meanL1 - trueL1, 10 * seL1);  // biased upward by the noise
+}
+
+TEST(Unbiased, GradientMatchesCentralDifferences) {
+    const int w = 9, h = 7, cols = 5;
+    Pcg32 rng(3, 9);
+    std::vector<double> tTrue(size_t(w) * h * cols);
+    for (double& v : tTrue) v = rng.nextDouble() * 0.3;
+    TransportMatrix t = syntheticHalves(w, h, cols, tTrue, 0.02, rng);
+    std::vector<uint8_t> mask(size_t(w) * h, 1);
+    mask[3] = mask[20] = 0;
+    for (RegTarget reg : {RegTarget::EnvMap, RegTarget::Image}) {
+        ObjectiveOptions oo;
+        oo.reg = reg;
+        oo.lambda = 2.5;
+        UnbiasedObjective unb(w, h, mask, oo);
+        TransportLoss loss(t, unb, false);
+        std::vector<double> e(cols), g(cols);
+        for (double& v : e) v = 0.1 + 0.8 * rng.nextDouble();
+        loss.evaluate(e, g);
+        for (int i = 0; i < cols; ++i) {
+            const double step = 1e-6;
+            std::vector<double> a = e, b = e;
+            a[i] += step;
+            b[i] -= step;
+            const double fd =
+                (loss.evaluate(a, {}).total - loss.evaluate(b, {}).total) / (2 * step);
+            EXPECT_NEAR(fd, g[i], 1e-7 * std::max(1.0, std::abs(g[i]))) << "texel " << i;
+        }
+    }
+}
+
+TEST(Unbiased, HalvesOfATracedTAverageToTheRender) {
+    SceneDesc d;
+    d.heightmap.pitch = 0.05;
+    d.material.params.alphaU = d.material.params.alphaV = 0.1f;
+    d.camera.width = d.camera.height = 20;
+    std::vector<float> hs(40 * 40);
+    for (int j = 0; j < 40; ++j)
+        for (int i = 0; i < 40; ++i)
+            hs[size_t(j) * 40 + i] = static_cast<float>(0.02 * std::sin(i * 0.4 + j * 0.2));
+    Scene s(d, 40, 40, hs);
+    RenderOptions o;
+    o.spp = 8;
+    o.sampleSets = 2;
+    PrecomputeResult p = precomputeTransport(s, o, 1);
+    EXPECT_EQ(p.matrix.planes, 2);
+    EnvMap env = EnvMap::constant(50, 25, 0.0f);
+    Pcg32 rng(1, 1);
+    for (float& v : env.texels) v = rng.nextFloat();
+    std::vector<double> e(env.texels.begin(), env.texels.end());
+    Image img = render(s, env, o).image;
+    std::vector<double> y(p.matrix.rows()), ya(y.size()), yb(y.size());
+    p.matrix.applyLuminance(e, y);
+    p.matrix.applyLuminance(e, ya, 0);
+    p.matrix.applyLuminance(e, yb, 1);
+    double maxDiff = 0, scale = 0, halfDiff = 0;
+    for (size_t i = 0; i < y.size(); ++i) {
+        const double ref =
+            luminance<double>(img.data[3 * i], img.data[3 * i + 1], img.data[3 * i + 2]);
+        maxDiff = std::max(maxDiff, std::abs(y[i] - ref));
+        scale = std::max(scale, std::abs(ref));
+        halfDiff = std::max(halfDiff, std::abs(0.5 * (ya[i] + yb[i]) - y[i]));
+    }
+    EXPECT_LE(maxDiff, 1e-5 * scale);
+    EXPECT_LE(halfDiff, 1e-6 * scale);
+    // The two halves differ (independent samples) but each is a full-scale estimate.
+    double sa = 0, sb = 0, sy = 0;
+    for (size_t i = 0; i < y.size(); ++i) sa += ya[i], sb += yb[i], sy += y[i];
+    EXPECT_NE(sa, sb);
+    EXPECT_NEAR(sa / sy, 1.0, 0.1);
+    EXPECT_NEAR(sb / sy, 1.0, 0.1);
+    // File round trip keeps the planes.
+    test::TempDir dir("halves");
+    writeTransportFile(dir / "h.tm", p.matrix, transportProvenance(s, o, 1));
+    TransportFile f = readTransportFile(dir / "h.tm");
+    EXPECT_EQ(f.matrix.planes, 2);
+    EXPECT_EQ(f.matrix.values, p.matrix.values);
+    // Different sampling (two sets) is a different fingerprint from the plain T.
+    RenderOptions plain = o;
+    plain.sampleSets = 1;
+    EXPECT_NE(transportProvenance(s, plain, 1).fingerprint,
+              transportProvenance(s, o, 1).fingerprint);
+}
