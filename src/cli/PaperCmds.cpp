@@ -1,0 +1,263 @@
+// scratchlight scratchmap / report: see cli/PaperCmds.h, objective/ScratchMap.h, app/Report.h.
+//
+// report --spec FIGURES.json (paths relative to the spec file):
+//   {"title": "...", "notes": ["..."], "settings": {...},
+//    "figures": [{"title": "...", "caption": "...", "loss_plot": false,
+//                 "runs": [{"dir": "OUTDIR", "title": "...", "caption": "...",
+//                           "state": "final" | "initial",
+//                           "images": [{"png": "FILE.png", "caption": "..."}],
+//                           "metrics": {...}, "settings": {...}}]}]}
+// A run needs "dir" (an optimize OUTDIR) or "images" (e.g. a `render` PNG) or both; its
+// "metrics"/"settings" are merged over what the OUTDIR provides.
+#include "cli/PaperCmds.h"
+
+#include <spdlog/spdlog.h>
+
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "app/Report.h"
+#include "cli/Common.h"
+#include "core/Error.h"
+#include "io/EnvMapIO.h"
+#include "io/HeightmapIO.h"
+#include "io/ImageIO.h"
+#include "io/SceneFile.h"
+#include "objective/ImageSpace.h"
+#include "objective/ScratchMap.h"
+#include "scene/EnvMapPresets.h"
+#include "scene/Scene.h"
+
+namespace sl::cli {
+
+namespace {
+
+using nlohmann::json;
+
+struct ScratchArgs {
+    std::string input, out = "scratchmap.png", imageMask;
+    ScratchMapOptions opt;
+};
+
+int runScratchMap(const ScratchArgs& a) {
+    std::filesystem::path in = a.input;
+    if (std::filesystem::path(a.out).extension() != ".png")
+        throw UsageError("-o '" + a.out + "' must end in .png");
+    if (!a.imageMask.empty() && std::filesystem::path(a.imageMask).extension() != ".png")
+        throw UsageError("--image-mask '" + a.imageMask + "' must end in .png");
+    const bool isScene = in.extension() == ".json";
+    if (!a.imageMask.empty() && !isScene)
+        throw UsageError("--image-mask needs a scene file (its camera), not a bare height map");
+    std::unique_ptr<Scene> scene;
+    HeightmapData hm;
+    if (isScene) {
+        scene = loadScene(in);
+    } else {
+        // The scratch map is invariant to an affine change of the heights, so an integer map
+        // needs no height range: it is read as [0, 1].
+        try {
+            hm = loadHeightmap(in, {});
+        } catch (const InputError& e) {
+            if (std::string(e.what()).find("height_range") == std::string::npos) throw;
+            HeightmapOptions o;
+            o.heightRange = std::array<double, 2>{0.0, 1.0};
+            hm = loadHeightmap(in, o);
+        }
+    }
+    const std::vector<float>& h = scene ? scene->heights : hm.heights;
+    const int W = scene ? scene->mapWidth : hm.width, H = scene ? scene->mapHeight : hm.height;
+    ScratchMap m = computeScratchMap(h, W, H, a.opt);
+    writeMaskPng(a.out, m.map, W, H);
+    std::printf(
+        "scratch map of %dx%d samples (kernel %d, patch %d, threshold %g): %d of %d patches "
+        "marked (%.1f%% of the map), detrended range %.6g, %.3f s\nwrote %s\n",
+        W, H, a.opt.kernel, a.opt.patch, a.opt.threshold, m.patchesMarked, m.patchesX * m.patchesY,
+        100.0 * m.markedFraction(), m.detrendedMax - m.detrendedMin, m.seconds, a.out.c_str());
+    if (!a.imageMask.empty()) {
+        PrimaryHits hits = tracePrimaryHits(*scene);
+        std::vector<uint8_t> img = projectToImage(hits, m.map);
+        size_t inside = 0;
+        for (uint8_t v : img) inside += v != 0;
+        writeMaskPng(a.imageMask, img, hits.width, hits.height);
+        std::printf("image-space mask %dx%d: %zu of %zu part pixels inside\nwrote %s\n", hits.width,
+                    hits.height, inside, hits.hitCount(), a.imageMask.c_str());
+    }
+    return kOk;
+}
+
+struct ReportArgs {
+    std::vector<std::string> dirs, notes;
+    std::string spec, out = "report.html", title = "scratchlight report";
+    bool combinedLoss = false, initial = false;
+};
+
+std::string str(const json& j, const char* key, const std::string& where) {
+    if (!j.contains(key)) return {};
+    if (!j[key].is_string())
+        throw inputError(where, std::string("\"") + key + "\" must be a string");
+    return j[key].get<std::string>();
+}
+
+void merge(json& into, const json& from) {
+    if (!from.is_object()) return;
+    if (!into.is_object()) into = json::object();
+    for (auto it = from.begin(); it != from.end(); ++it) into[it.key()] = *it;
+}
+
+ReportContent contentFromSpec(const std::filesystem::path& specFile) {
+    std::ifstream in(specFile);
+    if (!in) throw inputError(specFile.string(), "cannot read the report spec");
+    json s;
+    try {
+        s = json::parse(in);
+    } catch (const json::exception& e) {
+        throw inputError(specFile.string(), std::string("malformed JSON: ") + e.what());
+    }
+    const auto base = specFile.parent_path();
+    const std::string w = specFile.string();
+    ReportContent c;
+    if (s.contains("title")) c.title = str(s, "title", w);
+    if (s.contains("notes"))
+        for (const auto& n : s["notes"]) c.notes.push_back(n.get<std::string>());
+    if (s.contains("settings")) c.settings = s["settings"];
+    if (!s.contains("figures") || !s["figures"].is_array())
+        throw inputError(w, "needs a \"figures\" array", "See `scratchlight report --help`");
+    int fi = 0;
+    for (const auto& f : s["figures"]) {
+        const std::string fw = w + ": figures[" + std::to_string(fi++) + "]";
+        ReportFigure fig;
+        fig.title = str(f, "title", fw);
+        fig.caption = str(f, "caption", fw);
+        fig.combinedLossPlot = f.value("loss_plot", false);
+        int ri = 0;
+        for (const auto& r : f.value("runs", json::array())) {
+            const std::string rw = fw + ".runs[" + std::to_string(ri++) + "]";
+            ReportRun run;
+            const std::string state = r.value("state", std::string("final"));
+            if (state != "final" && state != "initial")
+                throw inputError(rw, "\"state\" must be \"final\" or \"initial\"");
+            if (r.contains("dir"))
+                run = reportRunFromOutDir(base / str(r, "dir", rw), str(r, "title", rw),
+                                          state == "final" ? RunState::Final : RunState::Initial);
+            else if (!r.contains("images"))
+                throw inputError(rw, "needs \"dir\" (an optimize OUTDIR) or \"images\"");
+            if (r.contains("title")) run.title = str(r, "title", rw);
+            run.caption = str(r, "caption", rw);
+            for (const auto& im : r.value("images", json::array()))
+                run.images.push_back({str(im, "caption", rw), base / str(im, "png", rw)});
+            if (r.contains("metrics")) merge(run.metrics, r["metrics"]);
+            if (r.contains("settings")) merge(run.settings, r["settings"]);
+            if (!run.loss.loss.empty()) run.loss.label = run.title;
+            fig.runs.push_back(std::move(run));
+        }
+        c.figures.push_back(std::move(fig));
+    }
+    return c;
+}
+
+int runReport(const ReportArgs& a) {
+    if (a.spec.empty() == a.dirs.empty())
+        throw UsageError("give either OUTDIR... or --spec FIGURES.json");
+    ReportContent c;
+    if (!a.spec.empty()) {
+        c = contentFromSpec(a.spec);
+    } else {
+        ReportFigure f;
+        f.title = "Runs";
+        f.combinedLossPlot = a.combinedLoss;
+        for (const auto& d : a.dirs)
+            f.runs.push_back(
+                reportRunFromOutDir(d, "", a.initial ? RunState::Initial : RunState::Final));
+        c.figures.push_back(std::move(f));
+        c.title = a.title;
+    }
+    if (!a.spec.empty() && a.title != "scratchlight report") c.title = a.title;
+    for (const auto& n : a.notes) c.notes.push_back(n);
+    writeReport(a.out, c);
+    size_t runs = 0;
+    for (const auto& f : c.figures) runs += f.runs.size();
+    std::printf("wrote %s (%zu figure(s), %zu run(s))\n", a.out.c_str(), c.figures.size(), runs);
+    return kOk;
+}
+
+struct PresetArgs {
+    std::string name = "studio", out = "studio.exr";
+    int width = 50, height = 25;
+};
+
+int runPreset(const PresetArgs& a) {
+    const auto png = siblingPath(a.out, ".exr", ".png");
+    EnvMap e = presetEnvMap(a.name, a.width, a.height);
+    writeEnvMap(a.out, e);
+    writePng(png, envMapPreview(e, 16));
+    std::printf("wrote %s (%dx%d) and %s\n", a.out.c_str(), a.width, a.height,
+                png.string().c_str());
+    return kOk;
+}
+
+}  // namespace
+
+void registerPaper(CLI::App& app, std::function<int()>& run) {
+    {
+        auto a = std::make_shared<ScratchArgs>();
+        CLI::App* c = app.add_subcommand(
+            "scratchmap",
+            "Cutting-scratch map (paper 5.1): detrend by a moving average, scale to [0,1], mark "
+            "patches whose max-min >= threshold");
+        c->add_option("input", a->input,
+                      "Height map (EXR/TIFF/PNG/.npy) or a scene file (JSON: its height map, and "
+                      "its camera for --image-mask)")
+            ->required();
+        c->add_option("--kernel", a->opt.kernel, "Moving-average window, samples")
+            ->capture_default_str()
+            ->check(CLI::Range(1, 1 << 20));
+        c->add_option("--patch", a->opt.patch, "Patch side, samples")
+            ->capture_default_str()
+            ->check(CLI::Range(1, 1 << 20));
+        c->add_option("--threshold", a->opt.threshold,
+                      "Max-min of a patch on the [0,1]-scaled detrended map that marks it")
+            ->capture_default_str()
+            ->check(CLI::Range(0.0, 1.0));
+        c->add_option("-o,--output", a->out, "Map in height-map space (8-bit PNG, 255 = marked)")
+            ->capture_default_str();
+        c->add_option("--image-mask", a->imageMask,
+                      "Also write the map projected into the scene camera's image (PNG), usable "
+                      "as `optimize --mask`");
+        c->callback([a, &run] { run = [a] { return runScratchMap(*a); }; });
+    }
+    {
+        auto a = std::make_shared<ReportArgs>();
+        CLI::App* c = app.add_subcommand(
+            "report", "Assemble a self-contained report.html from optimize OUTDIRs");
+        c->add_option("outdirs", a->dirs, "optimize OUTDIRs (one figure, one run each)");
+        c->add_option("--spec", a->spec,
+                      "JSON file grouping runs into figures with captions (see src/cli/"
+                      "PaperCmds.cpp for the format)");
+        c->add_option("-o,--output", a->out, "The HTML page")->capture_default_str();
+        c->add_option("--title", a->title, "Page title")->capture_default_str();
+        c->add_option("--note", a->notes, "A paragraph under the title (repeatable)");
+        c->add_flag("--combined-loss", a->combinedLoss, "One loss plot for all runs");
+        c->add_flag("--initial", a->initial, "Show the runs' initial state instead of the result");
+        c->callback([a, &run] { run = [a] { return runReport(*a); }; });
+    }
+    {
+        auto a = std::make_shared<PresetArgs>();
+        CLI::App* c =
+            app.add_subcommand("envmap-preset",
+                               "Write a built-in env map (e.g. studio) as EXR + PNG preview, for "
+                               "`optimize --init envmap:FILE` or `render --envmap`");
+        c->add_option("name", a->name, "Preset name")->capture_default_str();
+        c->add_option("--width", a->width, "Texels")
+            ->capture_default_str()
+            ->check(CLI::Range(1, 100000));
+        c->add_option("--height", a->height, "Texels")
+            ->capture_default_str()
+            ->check(CLI::Range(2, 100000));
+        c->add_option("-o,--output", a->out, "EXR file")->capture_default_str();
+        c->callback([a, &run] { run = [a] { return runPreset(*a); }; });
+    }
+}
+
+}  // namespace sl::cli

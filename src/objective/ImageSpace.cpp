@@ -1,0 +1,93 @@
+#include "objective/ImageSpace.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "core/Error.h"
+#include "io/ImageIO.h"
+#include "scene/Scene.h"
+
+namespace sl {
+
+size_t PrimaryHits::hitCount() const {
+    return static_cast<size_t>(
+        std::count_if(sample.begin(), sample.end(), [](int64_t s) { return s >= 0; }));
+}
+
+PrimaryHits tracePrimaryHits(const Scene& scene, int threads) {
+    const Camera& cam = scene.camera;
+    const Heightfield& surf = *scene.surface;
+    PrimaryHits r;
+    r.width = cam.width();
+    r.height = cam.height();
+    r.mapWidth = surf.width();
+    r.mapHeight = surf.height();
+    r.sample.assign(static_cast<size_t>(r.width) * r.height, -1);
+    const double p = surf.pitch();
+    const double ci = 0.5 * (r.mapWidth - 1), cj = 0.5 * (r.mapHeight - 1);
+    auto body = [&](int y) {
+        for (int x = 0; x < r.width; ++x) {
+            Ray ray = cam.generateRay(x + 0.5, y + 0.5);
+            SurfaceHit hit;
+            if (!surf.intersect(ray, 0.0f, hit)) continue;
+            auto i = static_cast<int64_t>(std::lround(hit.position.x / p + ci));
+            auto j = static_cast<int64_t>(std::lround(hit.position.z / p + cj));
+            i = std::clamp<int64_t>(i, 0, r.mapWidth - 1);
+            j = std::clamp<int64_t>(j, 0, r.mapHeight - 1);
+            r.sample[static_cast<size_t>(y) * r.width + x] = j * r.mapWidth + i;
+        }
+    };
+    tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+    arena.execute([&] { tbb::parallel_for(0, r.height, body); });
+    return r;
+}
+
+std::vector<uint8_t> projectToImage(const PrimaryHits& hits, std::span<const uint8_t> mapMask) {
+    const size_t n = static_cast<size_t>(hits.mapWidth) * hits.mapHeight;
+    if (mapMask.size() != n)
+        throw inputError("height-map mask",
+                         "has " + std::to_string(mapMask.size()) + " samples, the height map " +
+                             std::to_string(hits.mapWidth) + "x" + std::to_string(hits.mapHeight),
+                         "Give a mask of the height map's size (as gen-surface's -truth.png)");
+    std::vector<uint8_t> out(hits.sample.size(), 0);
+    for (size_t k = 0; k < out.size(); ++k) {
+        int64_t s = hits.sample[k];
+        if (s >= 0 && mapMask[static_cast<size_t>(s)] != 0) out[k] = 255;
+    }
+    return out;
+}
+
+std::vector<uint8_t> scratchMaskImage(const Scene& scene, const ScratchMapOptions& options,
+                                      int threads) {
+    ScratchMap m = computeScratchMap(scene.heights, scene.mapWidth, scene.mapHeight, options);
+    return projectToImage(tracePrimaryHits(scene, threads), m.map);
+}
+
+std::vector<uint8_t> loadHeightMapMask(const std::filesystem::path& file, int mapWidth,
+                                       int mapHeight) {
+    const Image img = readImage(file);
+    if (img.width != mapWidth || img.height != mapHeight)
+        throw inputError(file.string(),
+                         "mask is " + std::to_string(img.width) + "x" + std::to_string(img.height) +
+                             " pixels, the height map is " + std::to_string(mapWidth) + "x" +
+                             std::to_string(mapHeight),
+                         "A height-map-space mask (as gen-surface's <stem>-truth.png) has one "
+                         "pixel per height sample");
+    if (img.channels < 1) throw inputError(file.string(), "mask image has no channels");
+    std::vector<uint8_t> mask(img.pixelCount());
+    for (size_t k = 0; k < mask.size(); ++k)
+        mask[k] = img.data[k * static_cast<size_t>(img.channels)] > 0.5f ? 255 : 0;
+    return mask;
+}
+
+std::vector<uint8_t> projectMaskFile(const Scene& scene, const std::filesystem::path& file,
+                                     int threads) {
+    std::vector<uint8_t> m = loadHeightMapMask(file, scene.mapWidth, scene.mapHeight);
+    return projectToImage(tracePrimaryHits(scene, threads), m);
+}
+
+}  // namespace sl
