@@ -17,7 +17,7 @@ using test::runCli;
 namespace {
 
 class CliTransport : public ::testing::Test {
-protected:
+  protected:
     test::TempDir dir{"clitm"};
     std::string scene;
 
@@ -25,7 +25,8 @@ protected:
         std::vector<float> h(40 * 40);
         for (int j = 0; j < 40; ++j)
             for (int i = 0; i < 40; ++i)
-                h[size_t(j) * 40 + i] = static_cast<float>(0.02 * std::sin(i * 0.6) * std::cos(j * 0.45));
+                h[size_t(j) * 40 + i] =
+                    static_cast<float>(0.02 * std::sin(i * 0.6) * std::cos(j * 0.45));
         test::writeNpyF32(dir / "map.npy", 40, 40, h);
         scene = (dir / "scene.json").string();
         test::writeText(scene, R"({"heightmap": {"path": "map.npy", "pixel_pitch": 0.05},
@@ -185,4 +186,55 @@ TEST_F(CliTransport, LambdaSweepAndEveryOptimizer) {
     auto s = readJson(p("masked/summary.json"));
     EXPECT_EQ(s["reg"], "image");
     EXPECT_LE(s["mask_pixels"].get<int>(), 12 * 20);
+}
+
+TEST_F(CliTransport, HeldOutScoreAndUnbiasedObjective) {
+    // From the scene: T is traced, then a held-out T with another seed; both scores reported.
+    auto r = runCli("optimize " + scene + " --iterations 20 --heldout-every 5 -o " + p("paper"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("held-out"), std::string::npos) << r.output;
+    auto s = readJson(p("paper/summary.json"));
+    ASSERT_TRUE(s["heldout_loss"].is_number());
+    EXPECT_TRUE(s["heldout_paper_loss"].is_number());
+    EXPECT_EQ(s["heldout_loss"], s["heldout_paper_loss"]);  // the paper objective is eq. 2
+    EXPECT_NE(s["heldout"]["transport"]["seed"], s["transport"]["seed"]);
+    EXPECT_EQ(s["heldout"]["transport"]["planes"], 2);
+    {
+        std::ifstream csv(p("paper/loss.csv"));
+        std::string header, line, last;
+        std::getline(csv, header);
+        EXPECT_NE(header.find("heldout_loss"), std::string::npos);
+        int withHeld = 0;
+        while (std::getline(csv, line)) {
+            last = line;
+            if (line.back() != ',') ++withHeld;
+        }
+        EXPECT_EQ(withHeld, 5);  // iterations 0, 5, 10, 15, 20
+        EXPECT_NE(last.back(), ',');
+    }
+    // The unbiased objective from the scene traces T with two sample sets.
+    r = runCli("optimize " + scene + " --objective unbiased --iterations 20 -o " + p("unb"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    auto u = readJson(p("unb/summary.json"));
+    EXPECT_EQ(u["objective"], "unbiased");
+    EXPECT_EQ(u["transport"]["planes"], 2);
+    EXPECT_LT(u["final_loss"].get<double>(), u["initial_loss"].get<double>());
+    EXPECT_TRUE(u["heldout_loss"].is_number());
+    EXPECT_NE(u["heldout_loss"], u["heldout_paper_loss"]);
+    // A plain .tm cannot serve the unbiased objective; one with --halves can.
+    ASSERT_EQ(runCli("precompute " + scene + " -o " + p("g.tm")).exitCode, 0);
+    r = runCli("optimize " + p("g.tm") + " --objective unbiased -o " + p("x"));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.output.find("--halves"), std::string::npos) << r.output;
+    ASSERT_EQ(runCli("precompute " + scene + " --halves -o " + p("h.tm")).exitCode, 0);
+    r = runCli("optimize " + p("h.tm") + " --objective unbiased --iterations 5 -o " + p("y"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(readJson(p("y/summary.json"))["heldout_loss"].is_number());
+    // --heldout none skips it; a held-out .tm of the wrong kind is refused.
+    r = runCli("optimize " + p("g.tm") + " --heldout none --iterations 5 -o " + p("z"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(readJson(p("z/summary.json"))["heldout_loss"].is_null());
+    r = runCli("optimize " + p("g.tm") + " --heldout " + p("g.tm") + " -o " + p("w"));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.output.find("two halves"), std::string::npos) << r.output;
 }

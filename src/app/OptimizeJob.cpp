@@ -9,12 +9,19 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "app/Report.h"
 #include "core/Error.h"
 #include "io/AtomicFile.h"
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
+#include "io/SceneFile.h"
+#include "objective/ImageSpace.h"
+#include "objective/Metrics.h"
 #include "objective/TransportLoss.h"
+#include "objective/UnbiasedObjective.h"
 #include "optimize/InitialState.h"
+#include "optimize/SpecularInit.h"
+#include "scene/Scene.h"
 
 namespace sl {
 
@@ -51,6 +58,64 @@ json partsJson(const LossParts& p) {
             {"clamped", p.clamped}};
 }
 
+json heldJson(const HeldOutScore& h) {
+    return {{"own", partsJson(h.own)}, {"paper_eq2", partsJson(h.paper)}};
+}
+
+json transportJson(const TransportSource& src) {
+    const TransportMatrix& t = src.file.matrix;
+    const auto& prov = src.file.provenance;
+    return {{"file", src.path.string()},
+            {"fingerprint", prov.fingerprint},
+            {"spp", prov.spp},
+            {"seed", prov.seed},
+            {"max_depth", prov.maxDepth},
+            {"channels", t.channels},
+            {"planes", t.planes},
+            {"storage", t.storage == TransportStorage::Sparse ? "csr" : "dense"},
+            {"nnz", t.nnz()},
+            {"density", t.density()},
+            {"bytes", t.bytes()},
+            {"image", {t.width, t.height}},
+            {"envmap", {t.envWidth, t.envHeight}},
+            {"cache_hit", src.cacheHit},
+            {"seconds", src.secondsTotal}};
+}
+
+/// The scene a transport matrix was traced from (its recorded scene file, or `scene`), checked
+/// against T's image size: needed for the scratch mask, the specular initial state and --truth.
+std::unique_ptr<Scene> sceneForTransport(const TransportFile& f, std::filesystem::path scene) {
+    if (scene.empty()) {
+        const auto in = nlohmann::json::parse(f.provenance.inputs);
+        if (!in.contains("scene_file"))
+            throw inputError("--mask scratch / --init specular / --truth",
+                             "need the scene, and the transport matrix does not record it",
+                             "pass the scene file instead of the .tm");
+        scene = in.at("scene_file").get<std::string>();
+    }
+    auto sc = loadScene(scene);
+    if (sc->camera.width() != f.matrix.width || sc->camera.height() != f.matrix.height)
+        throw inputError(scene.string(), "its camera does not match the transport matrix",
+                         "recompute the transport matrix");
+    return sc;
+}
+
+VisibilityMetrics metricsFor(const TransportMatrix& t, const std::vector<double>& image,
+                             const std::vector<uint8_t>& mask, const std::vector<double>& e,
+                             bool rgb, const std::vector<uint8_t>& truth) {
+    MetricsInput in;
+    in.width = t.width;
+    in.height = t.height;
+    in.channels = t.channels == 3 ? 3 : 1;
+    in.image = image;
+    in.objectMask = t.objectMask;
+    in.lossMask = mask;
+    in.envmap = e;
+    in.envChannels = rgb ? 3 : 1;
+    in.truthMask = truth;
+    return computeVisibilityMetrics(in);
+}
+
 /// The render a person looks at: RGB when T is RGB, else luminance.
 std::vector<double> renderImage(const TransportMatrix& t, const std::vector<double>& e) {
     std::vector<double> out(t.rows() * (t.channels == 3 ? 3 : 1));
@@ -79,7 +144,13 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
         if (!(l >= 0) || !std::isfinite(l))
             throw inputError("--lambda", "must be >= 0", "give e.g. --lambda 30 or 10,30,100");
 
+    if (o.objectiveKind != "paper" && o.objectiveKind != "unbiased")
+        throw inputError("--objective", "unknown objective '" + o.objectiveKind + "'",
+                         "use paper or unbiased");
+    const bool unbiased = o.objectiveKind == "unbiased";
+    if (o.heldOutEvery < 1) throw inputError("--heldout-every", "must be >= 1");
     OptimizeJobSummary job;
+    const auto cacheDir = std::filesystem::absolute(o.outDir).parent_path() / ".scratchlight-cache";
     if (isTransportFile(o.input)) {
         auto t0 = std::chrono::steady_clock::now();
         job.transport.file = readTransportFile(o.input);
@@ -89,48 +160,128 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
     } else {
         PrecomputeOptions p = o.precompute;
         p.rgb = o.rgb;
-        auto cacheDir = std::filesystem::absolute(o.outDir).parent_path() / ".scratchlight-cache";
+        if (unbiased) p.sampleSets = 2;
         job.transport = transportForScene(o.input, p, cacheDir);
     }
     const TransportMatrix& t = job.transport.file.matrix;
     if (o.rgb && t.channels != 3)
         throw inputError(o.input.string(), "is a gray transport matrix; --rgb needs an RGB one",
                          "precompute it with --rgb");
+    if (unbiased && t.planes != 2)
+        throw inputError(o.input.string(),
+                         "has no half-sample matrices; --objective unbiased needs them",
+                         "precompute it with --halves, or pass the scene file");
 
-    std::vector<uint8_t> mask = t.objectMask;
-    if (!o.mask.empty()) mask = intersectMasks(mask, loadImageMask(o.mask, t.width, t.height));
+    // The independent estimate every result is scored on.
+    if (o.heldOut != "none") {
+        if (isTransportFile(o.heldOut)) {
+            TransportSource h;
+            h.file = readTransportFile(o.heldOut);
+            h.path = o.heldOut;
+            const TransportMatrix& ht = h.file.matrix;
+            if (ht.width != t.width || ht.height != t.height || ht.envWidth != t.envWidth ||
+                ht.envHeight != t.envHeight || ht.planes != 2 || ht.channels != t.channels)
+                throw inputError(o.heldOut, "does not fit the training transport matrix",
+                                 "it needs the same image and env-map size, the same channels, "
+                                 "and two halves (precompute --halves)");
+            job.heldOut = std::move(h);
+        } else {
+            if (!o.heldOut.empty())
+                throw inputError("--heldout", "'" + o.heldOut + "' is not a .tm file",
+                                 "give a .tm file, none, or leave it out");
+            job.heldOut = heldOutFor(job.transport.file, o.heldOutSpp, cacheDir,
+                                     isTransportFile(o.input) ? std::filesystem::path{} : o.input);
+        }
+        if (job.heldOut->file.provenance.seed == job.transport.file.provenance.seed)
+            spdlog::warn("the held-out estimate uses the training seed: it is not independent");
+    }
+
+    // What needs the scene itself (not only T).
+    std::unique_ptr<Scene> scene;
+    if (o.mask == "scratch" || o.init == "specular" || !o.truth.empty())
+        scene = sceneForTransport(job.transport.file,
+                                  isTransportFile(o.input) ? std::filesystem::path{} : o.input);
+    std::vector<uint8_t> mask = t.objectMask, scratchCells;
+    if (o.mask == "scratch") {
+        mask = intersectMasks(mask, scratchMaskImage(*scene, o.scratch));
+        scratchCells =
+            computeScratchMap(scene->heights, scene->mapWidth, scene->mapHeight, o.scratch).map;
+    } else if (!o.mask.empty()) {
+        mask = intersectMasks(mask, loadImageMask(o.mask, t.width, t.height));
+    }
     for (uint8_t m : mask) job.maskPixels += m != 0;
+    if (job.maskPixels == 0)
+        throw inputError(
+            "--mask " + o.mask, "the mask is empty on the part",
+            o.mask == "scratch" ? "lower --scratch-threshold" : "draw a larger region");
+    std::vector<uint8_t> truth;
+    if (!o.truth.empty()) truth = projectMaskFile(*scene, o.truth);
 
-    const std::vector<double> e0 = initialEnvMap(o.init, t.envWidth, t.envHeight, o.rgb);
+    const std::vector<double> e0 =
+        o.init == "specular"
+            ? specularInitialEnvMap(*scene, job.transport.file.provenance.maxDepth, o.rgb)
+            : initialEnvMap(o.init, t.envWidth, t.envHeight, o.rgb);
+    std::vector<ReportRun> reportRuns;
     const bool sweep = o.lambdas.size() > 1;
     std::ostringstream sweepCsv;
-    sweepCsv << "lambda,optimizer,iterations,evaluations,initial_loss,final_loss,final_L_grad,"
-                "final_L_reg,seconds\n";
+    sweepCsv << "lambda,optimizer,objective,iterations,evaluations,initial_loss,final_loss,"
+                "final_L_grad,final_L_reg,heldout_loss,heldout_paper_loss,seconds\n";
 
     for (double lambda : o.lambdas) {
         ObjectiveOptions oo = o.objective;
         oo.lambda = lambda;
         ImageObjective objective(t.width, t.height, mask, oo);
-        TransportLoss loss(t, objective, o.rgb);
+        std::unique_ptr<UnbiasedObjective> unb;
+        if (unbiased) unb = std::make_unique<UnbiasedObjective>(t.width, t.height, mask, oo);
+        TransportLoss loss =
+            unbiased ? TransportLoss(t, *unb, o.rgb) : TransportLoss(t, objective, o.rgb);
+        std::unique_ptr<HeldOutScorer> scorer;
+        if (job.heldOut)
+            scorer = std::make_unique<HeldOutScorer>(job.heldOut->file.matrix, mask, oo, unbiased);
 
         OptimizeRun run;
         run.lambda = lambda;
         run.dir = sweep ? o.outDir / lambdaName(lambda) : o.outDir;
         std::vector<double> e = e0;
         run.initial = loss.evaluate(e, {});
+        if (scorer) run.heldInitial = scorer->score(e);
 
-        std::ostringstream csv;
-        csv << std::setprecision(10) << "iteration,evaluations,loss,L_grad,L_reg,seconds\n";
+        std::vector<std::string> rows;
         OptimizerOptions opt = o.optimizer;
         LossParts last;  // parts of the most recent evaluation, usually the reported iterate
         opt.callback = [&](const IterationRecord& r, std::span<const double> x) {
             LossParts p = r.loss == last.total ? last : loss.evaluate(x, {});
-            csv << r.iteration << ',' << r.evaluations << ',' << p.total << ',' << p.lGrad << ','
-                << p.lReg << ',' << r.seconds << '\n';
+            std::ostringstream row;
+            row << std::setprecision(10) << r.iteration << ',' << r.evaluations << ',' << p.total
+                << ',' << p.lGrad << ',' << p.lReg << ',' << r.seconds << ',';
+            if (scorer && r.iteration % o.heldOutEvery == 0) {
+                auto t0 = std::chrono::steady_clock::now();
+                HeldOutScore h = scorer->score(x);
+                run.secondsHeldOutScoring +=
+                    std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+                row << h.own.total << ',' << h.paper.total;
+            } else {
+                row << ',';
+            }
+            rows.push_back(row.str());
             return o.optimizer.callback ? o.optimizer.callback(r, x) : true;
         };
         run.optimizer = minimize(loss.problem(&last), e, opt);
         run.final = loss.evaluate(e, {});
+        if (scorer) {
+            run.heldFinal = scorer->score(e);
+            // The last row always carries the held-out score of the returned E.
+            if (!rows.empty() && rows.back().back() == ',') {
+                rows.back().pop_back();
+                std::ostringstream tail;
+                tail << std::setprecision(10) << ',' << run.heldFinal->own.total << ','
+                     << run.heldFinal->paper.total;
+                rows.back() += tail.str();
+            }
+        }
+        std::ostringstream csv;
+        csv << "iteration,evaluations,loss,L_grad,L_reg,seconds,heldout_loss,heldout_paper_loss\n";
+        for (const auto& row : rows) csv << row << '\n';
         spdlog::info("lambda {}: {}", lambda, run.optimizer.briefReport());
 
         std::filesystem::create_directories(run.dir);
@@ -145,10 +296,16 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
             writePng(run.dir / "initial.png", i0);
         }
         writeText(run.dir / "loss.csv", csv.str());
+        writePng(run.dir / "initial-envmap.png", envMapPreview(toEnvMap(e0, t, o.rgb), 16));
+        writeMaskPng(run.dir / "mask.png", mask, t.width, t.height);
+        if (!scratchCells.empty()) {
+            writeMaskPng(run.dir / "scratchmap.png", scratchCells, scene->mapWidth,
+                         scene->mapHeight);
+        }
 
-        const auto& prov = job.transport.file.provenance;
         json s;
         s["optimizer"] = run.optimizer.method;
+        s["objective"] = o.objectiveKind;
         s["lambda"] = lambda;
         s["reg"] = oo.reg == RegTarget::EnvMap ? "envmap" : "image";
         s["smooth_abs"] = oo.smoothAbs;
@@ -168,26 +325,61 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
         s["seconds_load_transport"] = job.transport.secondsTotal;
         s["transport_cache_hit"] = job.transport.cacheHit;
         s["seconds_optimize"] = run.optimizer.seconds;
-        s["transport"] = {{"file", job.transport.path.string()},
-                          {"fingerprint", prov.fingerprint},
-                          {"spp", prov.spp},
-                          {"seed", prov.seed},
-                          {"max_depth", prov.maxDepth},
-                          {"channels", t.channels},
-                          {"storage", t.storage == TransportStorage::Sparse ? "csr" : "dense"},
-                          {"nnz", t.nnz()},
-                          {"density", t.density()},
-                          {"bytes", t.bytes()},
-                          {"image", {t.width, t.height}},
-                          {"envmap", {t.envWidth, t.envHeight}}};
+        s["seconds_heldout_scoring"] = run.secondsHeldOutScoring;
+        if (run.heldFinal) {
+            s["heldout_loss"] = run.heldFinal->own.total;
+            s["heldout_L_grad"] = run.heldFinal->own.lGrad;
+            s["heldout_L_reg"] = run.heldFinal->own.lReg;
+            s["heldout_paper_loss"] = run.heldFinal->paper.total;
+            s["heldout"] = {{"initial", heldJson(*run.heldInitial)},
+                            {"final", heldJson(*run.heldFinal)},
+                            {"transport", transportJson(*job.heldOut)}};
+        } else {
+            s["heldout_loss"] = nullptr;
+        }
+        s["transport"] = transportJson(job.transport);
+        s["metrics"] = toJson(metricsFor(t, renderImage(t, e), mask, e, o.rgb, truth));
+        s["metrics_initial"] = toJson(metricsFor(t, renderImage(t, e0), mask, e0, o.rgb, truth));
+        if (!o.truth.empty()) s["truth"] = o.truth;
+        if (o.mask == "scratch")
+            s["scratch_map"] = {{"kernel", o.scratch.kernel},
+                                {"patch", o.scratch.patch},
+                                {"threshold", o.scratch.threshold}};
         writeText(run.dir / "summary.json", s.dump(2) + "\n");
+        {
+            ReportContent rc;
+            rc.title = "scratchlight optimize: " + run.dir.filename().string();
+            ReportFigure fig;
+            fig.title = "before and after";
+            std::ostringstream title;
+            title << "λ = " << lambda << ", " << run.optimizer.method << ", " << o.objectiveKind;
+            fig.runs.push_back(reportRunFromOutDir(run.dir, title.str()));
+            reportRuns.push_back(fig.runs.back());
+            rc.figures.push_back(std::move(fig));
+            writeReport(run.dir / "report.html", rc);
+        }
         sweepCsv << std::setprecision(10) << lambda << ',' << run.optimizer.method << ','
-                 << run.optimizer.iterations << ',' << run.optimizer.evaluations << ','
-                 << run.initial.total << ',' << run.final.total << ',' << run.final.lGrad << ','
-                 << run.final.lReg << ',' << run.optimizer.seconds << '\n';
+                 << o.objectiveKind << ',' << run.optimizer.iterations << ','
+                 << run.optimizer.evaluations << ',' << run.initial.total << ',' << run.final.total
+                 << ',' << run.final.lGrad << ',' << run.final.lReg << ',';
+        if (run.heldFinal)
+            sweepCsv << run.heldFinal->own.total << ',' << run.heldFinal->paper.total;
+        else
+            sweepCsv << ',';
+        sweepCsv << ',' << run.optimizer.seconds << '\n';
         job.runs.push_back(std::move(run));
     }
-    if (sweep) writeText(o.outDir / "sweep.csv", sweepCsv.str());
+    if (sweep) {
+        writeText(o.outDir / "sweep.csv", sweepCsv.str());
+        ReportContent rc;
+        rc.title = "scratchlight optimize: lambda sweep";
+        ReportFigure fig;
+        fig.title = "one run per lambda";
+        fig.runs = reportRuns;
+        fig.combinedLossPlot = true;
+        rc.figures.push_back(std::move(fig));
+        writeReport(o.outDir / "report.html", rc);
+    }
     return job;
 }
 

@@ -5,8 +5,12 @@
 //   envmap.exr   the optimized E on the env-map grid (data)      envmap.png  enlarged preview
 //   render.exr   T·E* (luminance, or RGB with an RGB T)          render.png  its sRGB preview
 //   initial.png  T·E0 under the initial env map
-//   loss.csv     iteration, evaluations, loss, L_grad, L_reg, seconds
-//   summary.json optimizer, lambda, iterations, initial/final loss and parts, timings, T's facts
+//   loss.csv     iteration, evaluations, loss, L_grad, L_reg, seconds, and every few iterations
+//                the held-out score (own objective and the paper's eq. 2)
+//   summary.json optimizer, lambda, iterations, initial/final loss and parts, timings, T's facts,
+//                held-out scores, visibility metrics (final and initial)
+//   report.html  one self-contained page: renders, env maps, loss curve, metrics, settings
+//   initial-envmap.png, mask.png (the loss mask), scratchmap.png (with --mask scratch)
 // A sweep also writes OUTDIR/sweep.csv (one row per λ).
 #pragma once
 
@@ -15,8 +19,10 @@
 #include <string>
 #include <vector>
 
+#include "app/HeldOut.h"
 #include "app/Transport.h"
 #include "objective/Objective.h"
+#include "objective/ScratchMap.h"
 #include "optimize/Optimizer.h"
 
 namespace sl {
@@ -25,10 +31,17 @@ struct OptimizeJobOptions {
     std::filesystem::path input;  // scene (.json) or transport matrix (.tm)
     std::filesystem::path outDir = "out/optimize";
     std::vector<double> lambdas{30.0};
-    ObjectiveOptions objective;  // lambda is taken from `lambdas`
-    std::string init = "const:0.5";
-    std::string mask;  // "" = object mask; a PNG/EXR file in image space
+    ObjectiveOptions objective;      // lambda is taken from `lambdas`
+    std::string init = "const:0.5";  // const:V | envmap:FILE | random:SEED | specular
+    std::string mask;           // "": object mask; "scratch": the paper's scratch map projected
+                                // into the image; a PNG/EXR file in image space
+    ScratchMapOptions scratch;  // for mask == "scratch"
+    std::string truth;          // ground-truth defect mask in height-map space (metrics)
     bool rgb = false;
+    std::string objectiveKind = "paper";  // paper (eq. 2) | unbiased (needs T's two halves)
+    std::string heldOut;                  // "": trace it from the scene (cached); "none"; a .tm
+    int heldOutSpp = 0;                   // 0: the training spp
+    int heldOutEvery = 10;                // held-out column of loss.csv every N iterations
     OptimizerOptions optimizer;
     PrecomputeOptions precompute;  // used when input is a scene
 };
@@ -38,10 +51,13 @@ struct OptimizeRun {
     std::filesystem::path dir;
     OptimizerSummary optimizer;
     LossParts initial, final;
+    std::optional<HeldOutScore> heldInitial, heldFinal;
+    double secondsHeldOutScoring = 0;  // inside the optimizer's time (callback)
 };
 
 struct OptimizeJobSummary {
     TransportSource transport;
+    std::optional<TransportSource> heldOut;
     size_t maskPixels = 0;
     std::vector<OptimizeRun> runs;
 };

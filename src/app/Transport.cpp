@@ -3,7 +3,9 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <nlohmann/json.hpp>
 
+#include "app/HeldOut.h"
 #include "core/Error.h"
 #include "io/SceneFile.h"
 #include "render/Render.h"
@@ -33,6 +35,7 @@ LoadedScene load(const std::filesystem::path& file, const PrecomputeOptions& o) 
     l.scene = loadScene(desc);
     l.render = renderOptionsFor(*l.scene);
     l.render.threads = o.threads;
+    l.render.sampleSets = o.sampleSets;
     l.render.progress = o.progress;
     l.provenance = transportProvenance(*l.scene, l.render, o.rgb ? 3 : 1);
     return l;
@@ -56,6 +59,40 @@ TransportSource trace(LoadedScene& l, bool rgb, const std::filesystem::path& out
 
 bool isTransportFile(const std::filesystem::path& input) {
     return input.extension() == ".tm";
+}
+
+TransportSource heldOutFor(const TransportFile& training, int spp,
+                           const std::filesystem::path& cacheDir,
+                           const std::filesystem::path& sceneOverride) {
+    using json = nlohmann::json;
+    const json in = json::parse(training.provenance.inputs);
+    std::filesystem::path scene = sceneOverride;
+    if (scene.empty()) {
+        if (!in.contains("scene_file"))
+            throw inputError("held-out estimate", "the transport matrix does not record its scene",
+                             "pass the scene file instead of the .tm, or --heldout none");
+        scene = in.at("scene_file").get<std::string>();
+    }
+    PrecomputeOptions o;
+    o.spp = spp > 0 ? spp : training.provenance.spp;
+    o.seed = training.provenance.seed + kHeldOutSeedOffset;
+    o.maxDepth = training.provenance.maxDepth;
+    o.rgb = training.matrix.channels == 3;
+    o.sampleSets = 2;
+    TransportSource s = transportForScene(scene, o, cacheDir);
+    // Same scene, camera, material and height map: only the sampling may differ.
+    auto strip = [](json j) {
+        for (const char* k : {"render", "planes", "scene_file"}) j.erase(k);
+        j["heightmap"].erase("file");
+        j["material"].erase("name");
+        return j;
+    };
+    if (strip(json::parse(s.file.provenance.inputs)) != strip(in))
+        throw inputError(scene.string(),
+                         "has changed since the transport matrix was computed (camera, material "
+                         "or height map differ)",
+                         "recompute the transport matrix, or pass --heldout none");
+    return s;
 }
 
 TransportSource precomputeToFile(const std::filesystem::path& scene,

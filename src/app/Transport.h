@@ -16,6 +16,7 @@ struct PrecomputeOptions {
     std::optional<int> spp, maxDepth;
     std::optional<uint64_t> seed;
     bool rgb = false;
+    int sampleSets = 1;  // 2: store the halves T_a, T_b (noise-unbiased objective, held-out)
     int threads = 0;
     std::function<void(double)> progress;
 };
@@ -39,6 +40,14 @@ TransportSource precomputeToFile(const std::filesystem::path& scene,
 TransportSource transportForScene(const std::filesystem::path& scene,
                                   const PrecomputeOptions& options,
                                   const std::filesystem::path& cacheDir);
+
+/// The held-out estimate for a training T: the same scene traced with another seed
+/// (training seed + kHeldOutSeedOffset), two sample sets, `spp` samples (0: the training spp),
+/// cached like transportForScene. The scene is the training T's recorded scene file (or
+/// `sceneOverride`); its inputs must match the training T's apart from the sampling.
+TransportSource heldOutFor(const TransportFile& training, int spp,
+                           const std::filesystem::path& cacheDir,
+                           const std::filesystem::path& sceneOverride = {});
 
 /// True if `input` names a transport-matrix file (by extension .tm).
 bool isTransportFile(const std::filesystem::path& input);

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <memory>
 
+#include "app/NoiseBench.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
 #include "io/AtomicFile.h"
@@ -208,11 +209,57 @@ int runTransportBench(const TransportBenchArgs& a) {
            << p.raysPerSecond() / r.raysPerSecond() << ','
            << (T.storage == TransportStorage::Sparse ? "csr" : "dense") << ',' << T.nnz() << ','
            << T.density() << ',' << T.bytes() << ',' << tRead << ',' << tApply << ',' << tIter
-           << ',' << tIter / tRead << ',' << tFused << ',' << tFused / tRead << ','
-           << a.iterations << ',' << tAdam << '\n';
+           << ',' << tIter / tRead << ',' << tFused << ',' << tFused / tRead << ',' << a.iterations
+           << ',' << tAdam << '\n';
     }
     file.commit();
     std::printf("wrote %s\n", a.csv.c_str());
+    return kOk;
+}
+
+struct NoiseArgs {
+    NoiseBenchOptions o;
+    std::string csv = "out/bench-noise/bench-noise.csv";
+};
+
+int runNoiseBenchCmd(NoiseArgs a) {
+    a.o.log = [](const std::string& m) { spdlog::info("{}", m); };
+    NoiseBenchResult r = runNoiseBench(a.o);
+    std::printf("%6s %-9s %12s %12s %12s %12s %14s %14s\n", "spp", "objective", "precompute s",
+                "optimize s", "train loss", "held-out", "held-out eq.2", "gap train-h/o");
+    for (const NoiseBenchRow& row : r.rows)
+        std::printf("%6d %-9s %12.3f %12.3f %12.5g %12.5g %14.5g %+13.2f%%\n", row.spp,
+                    row.objective.c_str(), row.precomputeSeconds, row.optimizeSeconds,
+                    row.trainLoss, row.heldOutLoss, row.heldOutPaper,
+                    100.0 * (row.trainLoss - row.heldOutLoss) / row.heldOutLoss);
+    // Each objective against its own result at the largest spp, on the shared estimate.
+    for (const char* kind : {"paper", "unbiased"}) {
+        const NoiseBenchRow* ref = nullptr;
+        for (const auto& row : r.rows)
+            if (row.objective == kind && (!ref || row.spp > ref->spp)) ref = &row;
+        std::printf("%-9s held-out score relative to its %d-spp result:", kind, ref->spp);
+        for (const auto& row : r.rows)
+            if (row.objective == kind)
+                std::printf("  %d spp %+.2f%%", row.spp,
+                            100.0 * (row.heldOutLoss - ref->heldOutLoss) / ref->heldOutLoss);
+        std::printf("\n");
+    }
+    std::printf("(shared held-out estimate: %d spp, traced in %.1f s; image %dx%d)\n", r.heldOutSpp,
+                r.heldOutSeconds, a.o.resolution, a.o.resolution);
+    std::filesystem::create_directories(std::filesystem::absolute(a.csv).parent_path());
+    AtomicOutput file(a.csv);
+    {
+        std::ofstream os(file.tempPath());
+        os << "spp,objective,precompute_s,optimize_s,total_s,train_loss,heldout_loss,"
+              "heldout_paper_loss,heldout_spp\n";
+        for (const NoiseBenchRow& row : r.rows)
+            os << row.spp << ',' << row.objective << ',' << row.precomputeSeconds << ','
+               << row.optimizeSeconds << ',' << row.seconds() << ',' << row.trainLoss << ','
+               << row.heldOutLoss << ',' << row.heldOutPaper << ',' << r.heldOutSpp << '\n';
+    }
+    file.commit();
+    std::printf("wrote %s (plot: /usr/bin/python3 scripts/plot_noise.py %s)\n", a.csv.c_str(),
+                a.csv.c_str());
     return kOk;
 }
 
@@ -258,6 +305,25 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     t->add_option("--threads", b->threads, "Worker threads (0: all)")->capture_default_str();
     t->add_option("--csv", b->csv, "CSV output")->capture_default_str();
     t->callback([b, &run] { run = [b] { return runTransportBench(*b); }; });
+
+    auto n = std::make_shared<NoiseArgs>();
+    CLI::App* nc = bench->add_subcommand(
+        "noise",
+        "Speed against quality: spp sweep, paper vs noise-unbiased objective, scored on "
+        "one shared high-spp independent estimate");
+    nc->add_option("scene", n->o.scene, "Scene file")->required();
+    nc->add_option("--resolution", n->o.resolution, "Image width and height")
+        ->check(CLI::Range(8, 4096))
+        ->capture_default_str();
+    nc->add_option("--spps", n->o.spps, "Training spp values (even)")
+        ->delimiter(',')
+        ->capture_default_str();
+    nc->add_option("--heldout-spp", n->o.heldOutSpp, "spp of the shared held-out estimate")
+        ->capture_default_str();
+    nc->add_option("--iterations", n->o.iterations, "Adam iterations")->capture_default_str();
+    nc->add_option("--threads", n->o.threads, "Worker threads (0: all)")->capture_default_str();
+    nc->add_option("--csv", n->csv, "CSV output")->capture_default_str();
+    nc->callback([n, &run] { run = [n] { return runNoiseBenchCmd(*n); }; });
 }
 
 }  // namespace sl::cli

@@ -3,6 +3,7 @@
 // scratchlight optimize (SCENE.json | part.tm) [--optimizer NAME] [--lambda L[,L...]] ...
 #include <spdlog/spdlog.h>
 
+#include <cmath>
 #include <memory>
 
 #include "app/OptimizeJob.h"
@@ -105,12 +106,19 @@ int runOptimize(OptimizeArgs a) {
     OptimizeJobSummary s = runOptimizeJob(a.job);
     printTransport(s.transport);
     std::printf("mask: %zu pixels\n", s.maskPixels);
-    std::printf("%10s %-12s %6s %6s %14s %14s %12s %10s\n", "lambda", "optimizer", "iters", "evals",
-                "initial loss", "final loss", "final L_grad", "seconds");
+    if (s.heldOut)
+        std::printf("held-out estimate: %s (%d spp, seed %llu)\n", s.heldOut->path.string().c_str(),
+                    s.heldOut->file.provenance.spp,
+                    static_cast<unsigned long long>(s.heldOut->file.provenance.seed));
+    std::printf("%10s %-12s %6s %6s %14s %14s %14s %14s %10s\n", "lambda", "optimizer", "iters",
+                "evals", "initial loss", "final loss", "held-out init", "held-out final",
+                "seconds");
     for (const OptimizeRun& r : s.runs)
-        std::printf("%10g %-12s %6d %6d %14.6g %14.6g %12.6g %10.4f\n", r.lambda,
+        std::printf("%10g %-12s %6d %6d %14.6g %14.6g %14.6g %14.6g %10.4f\n", r.lambda,
                     r.optimizer.method.c_str(), r.optimizer.iterations, r.optimizer.evaluations,
-                    r.initial.total, r.final.total, r.final.lGrad, r.optimizer.seconds);
+                    r.initial.total, r.final.total,
+                    r.heldInitial ? r.heldInitial->own.total : std::nan(""),
+                    r.heldFinal ? r.heldFinal->own.total : std::nan(""), r.optimizer.seconds);
     std::printf("wrote %s/\n", a.out.c_str());
     return kOk;
 }
@@ -125,6 +133,10 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         c->add_option("scene", a->scene, "Scene file (JSON)")->required();
         addTraceOptions(c, a->p);
         c->add_flag("--rgb", a->p.rgb, "Store RGB T (3 blocks) instead of luminance T");
+        c->add_flag_function(
+            "--halves", [a](std::int64_t) { a->p.sampleSets = 2; },
+            "Store the two half-sample matrices T_a, T_b (for --objective unbiased and held-out "
+            "estimates)");
         c->add_option("-o,--output", a->out, "Output transport-matrix file (.tm)")
             ->capture_default_str();
         c->callback([a, &run] { run = [a] { return runPrecompute(*a); }; });
@@ -157,11 +169,40 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         c->add_option("--reg", a->reg, "L2 regulariser on the env map or on the image")
             ->check(CLI::IsMember({"envmap", "image"}))
             ->capture_default_str();
-        c->add_option("--init", j.init, "Initial env map: const:V | envmap:FILE | random:SEED")
+        c->add_option("--init", j.init,
+                      "Initial env map: const:V | envmap:FILE | random:SEED | specular")
             ->capture_default_str();
-        c->add_option("--mask", j.mask, "Region mask (PNG/EXR, image space; white = inside)");
+        c->add_option("--mask", j.mask,
+                      "Region of the loss: scratch (the paper's scratch map) or a PNG/EXR in "
+                      "image space (white = inside); always within the object mask");
+        c->add_option("--scratch-kernel", j.scratch.kernel, "Scratch map: detrending kernel")
+            ->check(CLI::Range(1, 100000))
+            ->capture_default_str();
+        c->add_option("--scratch-patch", j.scratch.patch, "Scratch map: patch size")
+            ->check(CLI::Range(1, 100000))
+            ->capture_default_str();
+        c->add_option("--scratch-threshold", j.scratch.threshold,
+                      "Scratch map: max-min threshold of a patch (of the [0,1] detrended range)")
+            ->capture_default_str();
+        c->add_option("--truth", j.truth,
+                      "Ground-truth defect mask in height-map space (e.g. part-truth.png): "
+                      "adds the defect contrast to the metrics");
         c->add_flag("--rgb", j.rgb, "Optimize an RGB env map (needs/creates an RGB T)");
         c->add_flag("--smooth-abs", j.objective.smoothAbs, "Use sqrt(x²+ε²)−ε for |x|");
+        c->add_option("--objective", j.objectiveKind,
+                      "paper: eq. 2 on T; unbiased: products of differences of two independent "
+                      "half-sample images (noise-unbiased)")
+            ->check(CLI::IsMember({"paper", "unbiased"}))
+            ->capture_default_str();
+        c->add_option("--heldout", j.heldOut,
+                      "Held-out estimate: traced from the scene with another seed (default), a "
+                      ".tm with two halves, or none");
+        c->add_option("--heldout-spp", j.heldOutSpp, "Held-out spp (0: the training spp)")
+            ->check(CLI::Range(0, 1 << 20))
+            ->capture_default_str();
+        c->add_option("--heldout-every", j.heldOutEvery, "Held-out score every N iterations")
+            ->check(CLI::Range(1, 1000000))
+            ->capture_default_str();
         c->add_option("--iterations", j.optimizer.iterations, "Iterations / evaluation budget")
             ->check(CLI::Range(1, 1000000))
             ->capture_default_str();

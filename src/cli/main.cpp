@@ -6,6 +6,7 @@
 
 #include "cli/Commands.h"
 #include "cli/Common.h"
+#include "cli/PaperCmds.h"
 #include "core/Error.h"
 
 int main(int argc, char** argv) {
@@ -21,6 +22,7 @@ int main(int argc, char** argv) {
     registerGenSurface(app, run);
     registerTransport(app, run);
     registerBench(app, run);
+    registerPaper(app, run);
 
     try {
         app.parse(argc, argv);

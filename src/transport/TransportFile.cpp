@@ -74,12 +74,15 @@ TransportProvenance transportProvenance(const Scene& scene, const RenderOptions&
         {"content_hash", toHex(hash64(scene.heights.data(), scene.heights.size() * sizeof(float)))},
         {"file", scene.desc.heightmap.path.filename().string()}};
     in["render"] = {{"spp", opt.spp}, {"max_depth", opt.maxDepth}, {"seed", opt.seed}};
+    if (!scene.desc.file.empty())
+        in["scene_file"] = std::filesystem::absolute(scene.desc.file).lexically_normal().string();
     TransportProvenance p;
     p.inputs = in.dump();
     // The file name is informative only: the content hash identifies the height map.
     json keyed = in;
     keyed["heightmap"].erase("file");
     keyed["material"].erase("name");
+    keyed.erase("scene_file");
     std::string text = keyed.dump();
     p.fingerprint =
         toHex(hash64(text.data(), text.size(), 1)) + toHex(hash64(text.data(), text.size(), 2));
