@@ -1,0 +1,234 @@
+// scratchlight gradcheck SCENE.json [--methods exact,autodiff,fd,spsa] [--json FILE]
+// scratchlight bench gradients [SCENE.json] [-o DIR]
+// scratchlight export-mitsuba SCENE.json OUTDIR [--envmap FILE | --constant V]
+#include "cli/GradientCmds.h"
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+
+#include "app/GradCheck.h"
+#include "cli/Common.h"
+#include "core/Error.h"
+#include "io/AtomicFile.h"
+#include "io/MitsubaExport.h"
+#include "io/SceneFile.h"
+#include "scene/Scene.h"
+
+namespace sl::cli {
+
+namespace {
+
+struct SetupArgs {
+    int size = 32;
+    int spp = 8;
+};
+
+void addSetupOptions(CLI::App* c, GradientSetup& s, SetupArgs& a) {
+    c->add_option("--size", a.size,
+                  "Image N×N pixels (replaces the scene's camera size; 0 keeps it). Autodiff and "
+                  "finite differences need small images")
+        ->check(CLI::Range(0, 4096))
+        ->capture_default_str();
+    c->add_option("--spp", a.spp, "Samples per pixel (0 keeps render.spp)")
+        ->check(CLI::Range(0, 1 << 20))
+        ->capture_default_str();
+    c->add_option("--max-depth", s.maxDepth, "Mitsuba max_depth (overrides render.max_depth)")
+        ->check(CLI::Range(1, 64));
+    c->add_option("--seed", s.seed, "Random seed (overrides render.seed)");
+    c->add_option("--threads", s.threads, "Worker threads (0: all cores)")
+        ->check(CLI::Range(0, 4096));
+    c->add_option("--lambda", s.objective.lambda, "Regulariser weight λ")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    c->add_flag("--smooth-abs", s.objective.smoothAbs, "Use sqrt(x²+ε²)−ε for |x|");
+    c->add_option("--init", s.init,
+                  "E where the gradient is taken: const:V | envmap:FILE | random:SEED")
+        ->capture_default_str();
+}
+
+void applySetup(GradientSetup& s, const SetupArgs& a) {
+    if (a.size > 0) s.width = s.height = a.size;
+    if (a.spp > 0) s.spp = a.spp;
+}
+
+struct GradCheckArgs {
+    GradCheckOptions o;
+    SetupArgs setup;
+    std::string scene, json;
+};
+
+int runGradCheckCmd(GradCheckArgs a) {
+    a.o.setup.scene = a.scene;
+    applySetup(a.o.setup, a.setup);
+    if (a.o.methods.empty()) throw UsageError("--methods is empty");
+    const GradCheckReport r = runGradCheck(a.o);
+    std::fputs(r.table().c_str(), stdout);
+    if (!a.json.empty()) {
+        writeAtomically(a.json, [&](const std::filesystem::path& tmp) {
+            std::ofstream os(tmp, std::ios::binary);
+            os << r.json();
+            if (!os) throw inputError(a.json, "cannot be written", "check the directory");
+        });
+        std::printf("wrote %s\n", a.json.c_str());
+    }
+    return kOk;
+}
+
+struct BenchArgs {
+    BenchGradientsOptions o;
+    SetupArgs setup;
+    std::string scene = "scenes/default/scene.json", out = "out/bench-gradients";
+    std::string script = "scripts/plot_gradients.py";
+    bool noOptimize = false, noPlot = false;
+};
+
+int runBenchGradientsCmd(BenchArgs a) {
+    a.o.setup.scene = a.scene;
+    applySetup(a.o.setup, a.setup);
+    a.o.outDir = a.out;
+    a.o.optimizations = !a.noOptimize;
+    const BenchGradientsReport r = runBenchGradients(a.o);
+    std::fputs(r.gradients.table().c_str(), stdout);
+    if (a.o.optimizations) {
+        std::printf("\n%-24s %6s %10s %14s %9s\n", "optimization", "iters", "seconds", "final loss",
+                    "renders");
+        for (size_t i = 0; i < r.trace.size(); ++i) {
+            const BenchTracePoint& p = r.trace[i];
+            if (i + 1 < r.trace.size() && r.trace[i + 1].method == p.method) continue;
+            std::printf("%-24s %6d %10.3f %14.6g %9ld\n", p.method.c_str(), p.iteration, p.seconds,
+                        p.loss, p.renders);
+        }
+    }
+    std::printf("wrote %s", r.gradientsCsv.string().c_str());
+    if (!r.optimizationCsv.empty()) std::printf(" and %s", r.optimizationCsv.string().c_str());
+    std::printf("\n");
+    const std::string plot = "/usr/bin/python3 '" + a.script + "' '" + a.out + "'";
+    std::fflush(stdout);
+    if (a.noPlot) {
+        std::printf("plot with: %s\n", plot.c_str());
+    } else if (!std::filesystem::exists(a.script) || !std::filesystem::exists("/usr/bin/python3")) {
+        std::printf("no plot: %s or /usr/bin/python3 not found; plot with: %s\n", a.script.c_str(),
+                    plot.c_str());
+    } else if (std::system(plot.c_str()) != 0) {
+        throw std::runtime_error("the plot script failed: " + plot);
+    }
+    return kOk;
+}
+
+struct ExportArgs {
+    std::string scene, outDir, envmap;
+    std::optional<float> constant;
+};
+
+int runExportCmd(const ExportArgs& a) {
+    if (!a.envmap.empty() && a.constant) throw UsageError("give either --envmap or --constant");
+    auto scene = loadScene(std::filesystem::path(a.scene));
+    EnvMap env = chooseEnvMap(*scene, a.envmap, a.constant);
+    const MitsubaExport e = exportMitsuba(*scene, env, a.outDir);
+    std::printf("wrote %s, %s and %s\nrender with Mitsuba 3: mitsuba -m scalar_rgb %s\n",
+                e.xml.string().c_str(), e.ply.string().c_str(), e.envmap.string().c_str(),
+                e.xml.string().c_str());
+    for (const std::string& n : e.notes) std::printf("note: %s\n", n.c_str());
+    return kOk;
+}
+
+}  // namespace
+
+void registerGradients(CLI::App& app, std::function<int()>& run) {
+    {
+        auto a = std::make_shared<GradCheckArgs>();
+        CLI::App* c = app.add_subcommand(
+            "gradcheck",
+            "Gradients of the loss by every method against autodiff (ceres::Jet): seconds per "
+            "gradient, relative L2 error, cosine similarity");
+        c->add_option("scene", a->scene, "Scene file (JSON)")->required();
+        addSetupOptions(c, a->o.setup, a->setup);
+        c->add_option("--methods", a->o.methods,
+                      "Methods: exact, exact+precompute, autodiff, autodiff-T, fd, fd-forward, "
+                      "fd-fresh, spsa")
+            ->delimiter(',')
+            ->check(CLI::IsMember(gradCheckMethods()))
+            ->capture_default_str();
+        c->add_option("--h", a->o.fd.h, "Finite-difference step (E units)")
+            ->check(CLI::Range(1e-12, 0.49))
+            ->capture_default_str();
+        c->add_option("--spsa-c", a->o.spsa.c, "SPSA perturbation size c")
+            ->check(CLI::PositiveNumber)
+            ->capture_default_str();
+        c->add_option("--spsa-q", a->o.spsa.q, "SPSA estimates averaged per gradient")
+            ->check(CLI::Range(1, 1 << 20))
+            ->capture_default_str();
+        c->add_option("--repeats", a->o.repeats, "Repeats (medians of time and error)")
+            ->check(CLI::Range(1, 1000))
+            ->capture_default_str();
+        c->add_option("--json", a->json, "Also write the report as JSON");
+        c->callback([a, &run] { run = [a] { return runGradCheckCmd(*a); }; });
+    }
+    {
+        auto a = std::make_shared<ExportArgs>();
+        CLI::App* c = app.add_subcommand(
+            "export-mitsuba",
+            "Write the scene as a Mitsuba 3 scene (XML + PLY height field + EXR env map) for a "
+            "cross-renderer check");
+        c->add_option("scene", a->scene, "Scene file (JSON)")->required();
+        c->add_option("outdir", a->outDir, "Output directory")->required();
+        auto* e = c->add_option("--envmap", a->envmap, "Env map file (default: the scene's)");
+        auto* k = c->add_option("--constant", a->constant, "Constant env map value");
+        e->excludes(k);
+        c->callback([a, &run] { run = [a] { return runExportCmd(*a); }; });
+    }
+    {
+        CLI::App* bench = nullptr;
+        try {
+            bench = app.get_subcommand("bench");
+        } catch (const CLI::OptionNotFound&) {
+            bench = app.add_subcommand("bench", "Benchmarks (print a table, write CSV)");
+            bench->require_subcommand(1);
+        }
+        auto a = std::make_shared<BenchArgs>();
+        BenchGradientsOptions& o = a->o;
+        CLI::App* c = bench->add_subcommand(
+            "gradients",
+            "Seconds against gradient error for exact, autodiff, FD and SPSA, and loss against "
+            "wall-clock seconds for whole optimizations (CSV + plots)");
+        c->add_option("scene", a->scene, "Scene file (JSON)")->capture_default_str();
+        addSetupOptions(c, o.setup, a->setup);
+        c->add_option("--fd-steps", o.fdSteps, "Central-FD steps h (common random numbers)")
+            ->delimiter(',')
+            ->capture_default_str();
+        c->add_option("--fd-fresh-steps", o.fdFreshSteps, "Central-FD steps h with fresh seeds")
+            ->delimiter(',')
+            ->capture_default_str();
+        c->add_option("--spsa-q", o.spsaQ, "SPSA averaging counts q")
+            ->delimiter(',')
+            ->capture_default_str();
+        c->add_option("--spsa-c", o.spsaC, "SPSA perturbation sizes c of the q sweep")
+            ->delimiter(',')
+            ->capture_default_str();
+        c->add_option("--spsa-opt-c", o.spsa.c, "SPSA c of the whole optimizations")
+            ->check(CLI::PositiveNumber)
+            ->capture_default_str();
+        c->add_option("--repeats", o.repeats, "Repeats per measurement (medians)")
+            ->check(CLI::Range(1, 1000))
+            ->capture_default_str();
+        c->add_option("--iterations", o.iterations, "Adam iterations (exact, autodiff, fd-adam)")
+            ->check(CLI::Range(1, 1000000))
+            ->capture_default_str();
+        c->add_option("--spsa-iterations", o.spsaIterations, "SPSA iterations")
+            ->check(CLI::Range(1, 100000000))
+            ->capture_default_str();
+        c->add_option("--budget", o.budgetSeconds, "Wall-clock budget per optimization (s)")
+            ->check(CLI::PositiveNumber)
+            ->capture_default_str();
+        c->add_flag("--no-optimize", a->noOptimize, "Skip the whole optimizations");
+        c->add_option("-o,--output", a->out, "Output directory")->capture_default_str();
+        c->add_option("--plot-script", a->script, "The plotting script")->capture_default_str();
+        c->add_flag("--no-plot", a->noPlot, "Do not run the plotting script");
+        c->callback([a, &run] { run = [a] { return runBenchGradientsCmd(*a); }; });
+    }
+}
+
+}  // namespace sl::cli

@@ -1,0 +1,16 @@
+// Gradient validation and the cross-renderer export:
+//   scratchlight gradcheck SCENE.json [--methods exact,autodiff,fd,spsa] [--json FILE] ...
+//   scratchlight bench gradients [SCENE.json] [-o DIR] ...
+//   scratchlight export-mitsuba SCENE.json OUTDIR [--envmap FILE | --constant V]
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace sl::cli {
+
+/// Registers `gradcheck`, `export-mitsuba` and `bench gradients`. Call it after registerBench:
+/// `gradients` is added to the existing `bench` subcommand (created here if it does not exist).
+void registerGradients(CLI::App& app, std::function<int()>& run);
+
+}  // namespace sl::cli
