@@ -238,3 +238,36 @@ TEST_F(CliTransport, HeldOutScoreAndUnbiasedObjective) {
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_NE(r.output.find("two halves"), std::string::npos) << r.output;
 }
+
+TEST_F(CliTransport, BlackBoxOptimizersAndGradientCommands) {
+    // fd-adam and spsa render for every gradient: they need the scene, not a .tm.
+    auto r = runCli("optimize " + scene + " --optimizer spsa --iterations 6 -o " + p("spsa"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    auto s = readJson(p("spsa/summary.json"));
+    EXPECT_EQ(s["optimizer"], "spsa");
+    EXPECT_TRUE(s["heldout_loss"].is_number());
+    r = runCli("optimize " + scene + " --optimizer fd-adam --iterations 1 -o " + p("fd"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_EQ(readJson(p("fd/summary.json"))["optimizer"], "fd-adam");
+    ASSERT_EQ(runCli("precompute " + scene + " -o " + p("g.tm")).exitCode, 0);
+    r = runCli("optimize " + p("g.tm") + " --optimizer spsa -o " + p("x"));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.output.find("scene"), std::string::npos) << r.output;
+    // gradcheck prints one row per method and writes JSON.
+    r = runCli("gradcheck " + scene +
+               " --size 16 --spp 2 --methods exact,autodiff,fd --repeats 1 "
+               "--json " +
+               p("gc.json"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("exact"), std::string::npos);
+    EXPECT_NE(r.output.find("autodiff"), std::string::npos);
+    auto gc = readJson(p("gc.json"));
+    EXPECT_FALSE(gc.empty());
+    EXPECT_EQ(runCli("gradcheck " + scene + " --methods bogus").exitCode, 2);
+    EXPECT_EQ(runCli("bench gradients --help").exitCode, 0);
+    // export-mitsuba writes the scene, the mesh and the env map.
+    r = runCli("export-mitsuba " + scene + " " + p("mi") + " --envmap " + p("env.exr"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    for (const char* f : {"scene.xml", "heightfield.ply", "envmap.exr"})
+        EXPECT_TRUE(std::filesystem::exists(dir / "mi" / f)) << f;
+}

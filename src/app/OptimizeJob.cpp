@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -21,6 +22,7 @@
 #include "objective/UnbiasedObjective.h"
 #include "optimize/InitialState.h"
 #include "optimize/SpecularInit.h"
+#include "render/Render.h"
 #include "scene/Scene.h"
 
 namespace sl {
@@ -196,9 +198,16 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
             spdlog::warn("the held-out estimate uses the training seed: it is not independent");
     }
 
-    // What needs the scene itself (not only T).
+    // What needs the scene itself (not only T). fd-adam and spsa take their gradients through the
+    // renderer (a black box); T still serves the outputs, metrics and held-out scores.
+    const auto bb = blackBoxMethods();
+    const bool blackBox = std::find(bb.begin(), bb.end(), o.optimizer.method) != bb.end();
+    if (blackBox && isTransportFile(o.input))
+        throw inputError("--optimizer " + o.optimizer.method,
+                         "renders the scene for every gradient, so it needs the scene file",
+                         "pass SCENE.json instead of the .tm");
     std::unique_ptr<Scene> scene;
-    if (o.mask == "scratch" || o.init == "specular" || !o.truth.empty())
+    if (blackBox || o.mask == "scratch" || o.init == "specular" || !o.truth.empty())
         scene = sceneForTransport(job.transport.file,
                                   isTransportFile(o.input) ? std::filesystem::path{} : o.input);
     std::vector<uint8_t> mask = t.objectMask, scratchCells;
@@ -266,7 +275,17 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
             rows.push_back(row.str());
             return o.optimizer.callback ? o.optimizer.callback(r, x) : true;
         };
-        run.optimizer = minimize(loss.problem(&last), e, opt);
+        if (blackBox) {
+            RenderOptions ro = renderOptionsFor(*scene);
+            ro.spp = job.transport.file.provenance.spp;
+            ro.seed = job.transport.file.provenance.seed;
+            ro.maxDepth = job.transport.file.provenance.maxDepth;
+            ro.threads = o.precompute.threads;
+            RenderLoss renderLoss(*scene, ro, objective, o.rgb);
+            run.optimizer = minimizeBlackBox(renderLoss, e, opt, o.blackBox);
+        } else {
+            run.optimizer = minimize(loss.problem(&last), e, opt);
+        }
         run.final = loss.evaluate(e, {});
         if (scorer) {
             run.heldFinal = scorer->score(e);
@@ -297,7 +316,11 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
         }
         writeText(run.dir / "loss.csv", csv.str());
         writePng(run.dir / "initial-envmap.png", envMapPreview(toEnvMap(e0, t, o.rgb), 16));
-        writeMaskPng(run.dir / "mask.png", mask, t.width, t.height);
+        {
+            std::vector<uint8_t> visible(mask.size());  // masks hold 0/1; the PNG 0/255
+            for (size_t i = 0; i < mask.size(); ++i) visible[i] = mask[i] ? 255 : 0;
+            writeMaskPng(run.dir / "mask.png", visible, t.width, t.height);
+        }
         if (!scratchCells.empty()) {
             writeMaskPng(run.dir / "scratchmap.png", scratchCells, scene->mapWidth,
                          scene->mapHeight);

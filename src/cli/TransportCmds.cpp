@@ -13,6 +13,7 @@
 #include "core/Error.h"
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
+#include "optimize/BlackBox.h"
 
 namespace sl::cli {
 
@@ -160,8 +161,20 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
             "optimize", "Optimize the env map so the part's scratches show (paper eq. 1-3)");
         c->add_option("input", a->input, "Scene file (.json, T is traced and cached) or .tm")
             ->required();
-        c->add_option("--optimizer", j.optimizer.method, "Optimizer")
-            ->check(CLI::IsMember(optimizerMethods()))
+        std::vector<std::string> methods = optimizerMethods();
+        for (const auto& m : blackBoxMethods()) methods.push_back(m);
+        c->add_option("--optimizer", j.optimizer.method,
+                      "Optimizer; fd-adam and spsa take gradients through the renderer")
+            ->check(CLI::IsMember(methods))
+            ->capture_default_str();
+        c->add_option("--fd-h", j.blackBox.fd.h, "fd-adam: finite-difference step")
+            ->check(CLI::PositiveNumber)
+            ->capture_default_str();
+        c->add_option("--spsa-q", j.blackBox.spsa.q, "spsa: estimates averaged per step")
+            ->check(CLI::Range(1, 100000))
+            ->capture_default_str();
+        c->add_option("--spsa-c", j.blackBox.spsa.c, "spsa: perturbation size")
+            ->check(CLI::PositiveNumber)
             ->capture_default_str();
         c->add_option("--lambda", j.lambdas, "Regulariser weight(s); several run a sweep")
             ->delimiter(',')

@@ -6,6 +6,7 @@
 
 #include "cli/Commands.h"
 #include "cli/Common.h"
+#include "cli/GradientCmds.h"
 #include "cli/PaperCmds.h"
 #include "core/Error.h"
 
@@ -22,6 +23,7 @@ int main(int argc, char** argv) {
     registerGenSurface(app, run);
     registerTransport(app, run);
     registerBench(app, run);
+    registerGradients(app, run);
     registerPaper(app, run);
 
     try {
