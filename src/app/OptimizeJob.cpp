@@ -84,24 +84,6 @@ json transportJson(const TransportSource& src) {
             {"seconds", src.secondsTotal}};
 }
 
-/// The scene a transport matrix was traced from (its recorded scene file, or `scene`), checked
-/// against T's image size: needed for the scratch mask, the specular initial state and --truth.
-std::unique_ptr<Scene> sceneForTransport(const TransportFile& f, std::filesystem::path scene) {
-    if (scene.empty()) {
-        const auto in = nlohmann::json::parse(f.provenance.inputs);
-        if (!in.contains("scene_file"))
-            throw inputError("--mask scratch / --init specular / --truth",
-                             "need the scene, and the transport matrix does not record it",
-                             "pass the scene file instead of the .tm");
-        scene = in.at("scene_file").get<std::string>();
-    }
-    auto sc = loadScene(scene);
-    if (sc->camera.width() != f.matrix.width || sc->camera.height() != f.matrix.height)
-        throw inputError(scene.string(), "its camera does not match the transport matrix",
-                         "recompute the transport matrix");
-    return sc;
-}
-
 VisibilityMetrics metricsFor(const TransportMatrix& t, const std::vector<double>& image,
                              const std::vector<uint8_t>& mask, const std::vector<double>& e,
                              bool rgb, const std::vector<uint8_t>& truth) {
@@ -153,7 +135,21 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
     if (o.heldOutEvery < 1) throw inputError("--heldout-every", "must be >= 1");
     OptimizeJobSummary job;
     const auto cacheDir = std::filesystem::absolute(o.outDir).parent_path() / ".scratchlight-cache";
-    if (isTransportFile(o.input)) {
+    // fd-adam and spsa take their gradients through the renderer (a black box); T still serves
+    // the outputs, metrics and held-out scores.
+    const auto bb = blackBoxMethods();
+    const bool blackBox = std::find(bb.begin(), bb.end(), o.optimizer.method) != bb.end();
+    const bool tmInput = isTransportFile(o.input);
+    if (blackBox && tmInput)
+        throw inputError("--optimizer " + o.optimizer.method,
+                         "renders the scene for every gradient, so it needs the scene file",
+                         "pass SCENE.json instead of the .tm");
+    // One loaded scene serves T, the held-out T and what needs the scene itself.
+    std::unique_ptr<Scene> scene;
+    const bool needScene = blackBox || o.mask == "scratch" || o.init == "specular" ||
+                           !o.truth.empty() || o.heldOut.empty();
+    if (!tmInput) scene = loadScene(o.input);
+    if (tmInput) {
         auto t0 = std::chrono::steady_clock::now();
         job.transport.file = readTransportFile(o.input);
         job.transport.path = o.input;
@@ -163,7 +159,12 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
         PrecomputeOptions p = o.precompute;
         p.rgb = o.rgb;
         if (unbiased) p.sampleSets = 2;
-        job.transport = transportForScene(o.input, p, cacheDir);
+        job.transport = transportForScene(*scene, p, cacheDir);
+    }
+    if (!scene && needScene) {
+        std::string purpose = o.heldOut.empty() ? "the held-out estimate (or --heldout none)"
+                                                : "--mask scratch / --init specular / --truth";
+        scene = sceneOfTransport(job.transport.file, purpose);
     }
     const TransportMatrix& t = job.transport.file.matrix;
     if (o.rgb && t.channels != 3)
@@ -191,25 +192,12 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
             if (!o.heldOut.empty())
                 throw inputError("--heldout", "'" + o.heldOut + "' is not a .tm file",
                                  "give a .tm file, none, or leave it out");
-            job.heldOut = heldOutFor(job.transport.file, o.heldOutSpp, cacheDir,
-                                     isTransportFile(o.input) ? std::filesystem::path{} : o.input);
+            job.heldOut = heldOutFor(job.transport.file, *scene, o.heldOutSpp, cacheDir);
         }
         if (job.heldOut->file.provenance.seed == job.transport.file.provenance.seed)
             spdlog::warn("the held-out estimate uses the training seed: it is not independent");
     }
 
-    // What needs the scene itself (not only T). fd-adam and spsa take their gradients through the
-    // renderer (a black box); T still serves the outputs, metrics and held-out scores.
-    const auto bb = blackBoxMethods();
-    const bool blackBox = std::find(bb.begin(), bb.end(), o.optimizer.method) != bb.end();
-    if (blackBox && isTransportFile(o.input))
-        throw inputError("--optimizer " + o.optimizer.method,
-                         "renders the scene for every gradient, so it needs the scene file",
-                         "pass SCENE.json instead of the .tm");
-    std::unique_ptr<Scene> scene;
-    if (blackBox || o.mask == "scratch" || o.init == "specular" || !o.truth.empty())
-        scene = sceneForTransport(job.transport.file,
-                                  isTransportFile(o.input) ? std::filesystem::path{} : o.input);
     std::vector<uint8_t> mask = t.objectMask, scratchCells;
     if (o.mask == "scratch") {
         mask = intersectMasks(mask, scratchMaskImage(*scene, o.scratch));

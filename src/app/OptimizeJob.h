@@ -43,9 +43,9 @@ struct OptimizeJobOptions {
     std::string heldOut;                  // "": trace it from the scene (cached); "none"; a .tm
     int heldOutSpp = 0;                   // 0: the training spp
     int heldOutEvery = 10;                // held-out column of loss.csv every N iterations
-    OptimizerOptions optimizer;    // method: an optimizer of sl::minimize, or fd-adam / spsa
-    BlackBoxOptions blackBox;      // fd-adam / spsa: gradients through the renderer
-    PrecomputeOptions precompute;  // used when input is a scene
+    OptimizerOptions optimizer;           // method: an optimizer of sl::minimize, or fd-adam / spsa
+    BlackBoxOptions blackBox;             // fd-adam / spsa: gradients through the renderer
+    PrecomputeOptions precompute;         // used when input is a scene
 };
 
 struct OptimizeRun {

@@ -20,36 +20,16 @@ double since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-struct LoadedScene {
-    std::unique_ptr<Scene> scene;
-    RenderOptions render;
-    TransportProvenance provenance;
-};
-
-LoadedScene load(const std::filesystem::path& file, const PrecomputeOptions& o) {
-    SceneDesc desc = readSceneFile(file);
-    if (o.spp) desc.render.spp = *o.spp;
-    if (o.maxDepth) desc.render.maxDepth = *o.maxDepth;
-    if (o.seed) desc.render.seed = *o.seed;
-    LoadedScene l;
-    l.scene = loadScene(desc);
-    l.render = renderOptionsFor(*l.scene);
-    l.render.threads = o.threads;
-    l.render.sampleSets = o.sampleSets;
-    l.render.progress = o.progress;
-    l.provenance = transportProvenance(*l.scene, l.render, o.rgb ? 3 : 1);
-    return l;
-}
-
-TransportSource trace(LoadedScene& l, bool rgb, const std::filesystem::path& out,
+TransportSource trace(const Scene& scene, const RenderOptions& ro, const TransportProvenance& prov,
+                      bool rgb, const std::filesystem::path& out,
                       std::chrono::steady_clock::time_point t0) {
-    PrecomputeResult r = precomputeTransport(*l.scene, l.render, rgb ? 3 : 1);
+    PrecomputeResult r = precomputeTransport(scene, ro, rgb ? 3 : 1);
     TransportSource s;
     s.secondsTrace = r.summary.seconds;
     s.trace = r.summary;
-    writeTransportFile(out, r.matrix, l.provenance);
+    writeTransportFile(out, r.matrix, prov);
     s.file.matrix = std::move(r.matrix);
-    s.file.provenance = l.provenance;
+    s.file.provenance = prov;
     s.path = out;
     s.secondsTotal = since(t0);
     return s;
@@ -61,18 +41,64 @@ bool isTransportFile(const std::filesystem::path& input) {
     return input.extension() == ".tm";
 }
 
-TransportSource heldOutFor(const TransportFile& training, int spp,
-                           const std::filesystem::path& cacheDir,
-                           const std::filesystem::path& sceneOverride) {
-    using json = nlohmann::json;
-    const json in = json::parse(training.provenance.inputs);
-    std::filesystem::path scene = sceneOverride;
-    if (scene.empty()) {
-        if (!in.contains("scene_file"))
-            throw inputError("held-out estimate", "the transport matrix does not record its scene",
-                             "pass the scene file instead of the .tm, or --heldout none");
-        scene = in.at("scene_file").get<std::string>();
+RenderOptions traceOptions(const Scene& scene, const PrecomputeOptions& o) {
+    RenderOptions r = renderOptionsFor(scene);
+    if (o.spp) r.spp = *o.spp;
+    if (o.maxDepth) r.maxDepth = *o.maxDepth;
+    if (o.seed) r.seed = *o.seed;
+    r.threads = o.threads;
+    r.sampleSets = o.sampleSets;
+    r.progress = o.progress;
+    return r;
+}
+
+TransportSource precomputeToFile(const std::filesystem::path& file,
+                                 const PrecomputeOptions& options,
+                                 const std::filesystem::path& out) {
+    auto t0 = std::chrono::steady_clock::now();
+    auto scene = loadScene(file);
+    const RenderOptions ro = traceOptions(*scene, options);
+    return trace(*scene, ro, transportProvenance(*scene, ro, options.rgb ? 3 : 1), options.rgb, out,
+                 t0);
+}
+
+TransportSource transportForScene(const Scene& scene, const PrecomputeOptions& options,
+                                  const std::filesystem::path& cacheDir) {
+    auto t0 = std::chrono::steady_clock::now();
+    const RenderOptions ro = traceOptions(scene, options);
+    const TransportProvenance prov = transportProvenance(scene, ro, options.rgb ? 3 : 1);
+    const auto cached = cacheDir / ("transport-" + prov.fingerprint + ".tm");
+    if (std::filesystem::exists(cached)) {
+        try {
+            TransportSource s;
+            s.file = readTransportFile(cached, prov.fingerprint);
+            s.path = cached;
+            s.cacheHit = true;
+            s.secondsTotal = since(t0);
+            spdlog::info("transport matrix from cache {}", cached.string());
+            return s;
+        } catch (const InputError& e) {
+            spdlog::warn("ignoring cached transport matrix: {}", e.what());
+        }
     }
+    return trace(scene, ro, prov, options.rgb, cached, t0);
+}
+
+std::unique_ptr<Scene> sceneOfTransport(const TransportFile& f, const std::string& purpose) {
+    const auto in = nlohmann::json::parse(f.provenance.inputs);
+    if (!in.contains("scene_file"))
+        throw inputError(purpose, "needs the scene, and the transport matrix does not record it",
+                         "pass the scene file instead of the .tm");
+    auto sc = loadScene(std::filesystem::path(in.at("scene_file").get<std::string>()));
+    if (sc->camera.width() != f.matrix.width || sc->camera.height() != f.matrix.height)
+        throw inputError(sc->desc.file.string(), "its camera does not match the transport matrix",
+                         "recompute the transport matrix");
+    return sc;
+}
+
+TransportSource heldOutFor(const TransportFile& training, const Scene& scene, int spp,
+                           const std::filesystem::path& cacheDir) {
+    using json = nlohmann::json;
     PrecomputeOptions o;
     o.spp = spp > 0 ? spp : training.provenance.spp;
     o.seed = training.provenance.seed + kHeldOutSeedOffset;
@@ -87,42 +113,13 @@ TransportSource heldOutFor(const TransportFile& training, int spp,
         j["material"].erase("name");
         return j;
     };
-    if (strip(json::parse(s.file.provenance.inputs)) != strip(in))
-        throw inputError(scene.string(),
+    if (strip(json::parse(s.file.provenance.inputs)) !=
+        strip(json::parse(training.provenance.inputs)))
+        throw inputError(scene.desc.file.string(),
                          "has changed since the transport matrix was computed (camera, material "
                          "or height map differ)",
                          "recompute the transport matrix, or pass --heldout none");
     return s;
-}
-
-TransportSource precomputeToFile(const std::filesystem::path& scene,
-                                 const PrecomputeOptions& options,
-                                 const std::filesystem::path& out) {
-    auto t0 = std::chrono::steady_clock::now();
-    LoadedScene l = load(scene, options);
-    return trace(l, options.rgb, out, t0);
-}
-
-TransportSource transportForScene(const std::filesystem::path& scene,
-                                  const PrecomputeOptions& options,
-                                  const std::filesystem::path& cacheDir) {
-    auto t0 = std::chrono::steady_clock::now();
-    LoadedScene l = load(scene, options);
-    const auto cached = cacheDir / ("transport-" + l.provenance.fingerprint + ".tm");
-    if (std::filesystem::exists(cached)) {
-        try {
-            TransportSource s;
-            s.file = readTransportFile(cached, l.provenance.fingerprint);
-            s.path = cached;
-            s.cacheHit = true;
-            s.secondsTotal = since(t0);
-            spdlog::info("transport matrix from cache {}", cached.string());
-            return s;
-        } catch (const InputError& e) {
-            spdlog::warn("ignoring cached transport matrix: {}", e.what());
-        }
-    }
-    return trace(l, options.rgb, cached, t0);
 }
 
 }  // namespace sl

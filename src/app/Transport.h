@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -11,6 +12,8 @@
 #include "transport/TransportFile.h"
 
 namespace sl {
+
+struct Scene;
 
 struct PrecomputeOptions {
     std::optional<int> spp, maxDepth;
@@ -30,24 +33,30 @@ struct TransportSource {
     TraceSummary trace;          // the trace's summary (empty on a cache hit)
 };
 
+/// The RenderOptions a precompute of `scene` uses: the scene's `render` section with the
+/// options' overrides.
+RenderOptions traceOptions(const Scene& scene, const PrecomputeOptions& options);
+
 /// Traces `scene` into T and writes it to `out` (atomic). Returns what was built.
 TransportSource precomputeToFile(const std::filesystem::path& scene,
                                  const PrecomputeOptions& options,
                                  const std::filesystem::path& out);
 
-/// T for a scene, from cacheDir/transport-<fingerprint>.tm when it is there and valid,
+/// T for a loaded scene, from cacheDir/transport-<fingerprint>.tm when it is there and valid,
 /// otherwise traced and stored there.
-TransportSource transportForScene(const std::filesystem::path& scene,
-                                  const PrecomputeOptions& options,
+TransportSource transportForScene(const Scene& scene, const PrecomputeOptions& options,
                                   const std::filesystem::path& cacheDir);
 
-/// The held-out estimate for a training T: the same scene traced with another seed
+/// The scene a transport matrix records (its "scene_file"), checked against T's image size.
+/// `purpose` names what needs it, for the error message when the file records none.
+std::unique_ptr<Scene> sceneOfTransport(const TransportFile& t, const std::string& purpose);
+
+/// The held-out estimate for a training T of `scene`: the same scene traced with another seed
 /// (training seed + kHeldOutSeedOffset), two sample sets, `spp` samples (0: the training spp),
-/// cached like transportForScene. The scene is the training T's recorded scene file (or
-/// `sceneOverride`); its inputs must match the training T's apart from the sampling.
-TransportSource heldOutFor(const TransportFile& training, int spp,
-                           const std::filesystem::path& cacheDir,
-                           const std::filesystem::path& sceneOverride = {});
+/// cached like transportForScene. The scene's inputs must match the training T's apart from
+/// the sampling.
+TransportSource heldOutFor(const TransportFile& training, const Scene& scene, int spp,
+                           const std::filesystem::path& cacheDir);
 
 /// True if `input` names a transport-matrix file (by extension .tm).
 bool isTransportFile(const std::filesystem::path& input);

@@ -39,17 +39,7 @@ ThroughputRow benchBareEmbree(const Scene& scene, const RenderOptions& opt) {
                     const auto [ox, oy] = sampleOffset(s, spp, 1, u1, u2);
                     Ray ray = cam.generateRay(x + ox, y + oy);
                     for (int depth = 0; depth < opt.maxDepth; ++depth) {
-                        RTCRayHit rh{};
-                        rh.ray.org_x = ray.origin.x;
-                        rh.ray.org_y = ray.origin.y;
-                        rh.ray.org_z = ray.origin.z;
-                        rh.ray.dir_x = ray.direction.x;
-                        rh.ray.dir_y = ray.direction.y;
-                        rh.ray.dir_z = ray.direction.z;
-                        rh.ray.tnear = 0.0f;
-                        rh.ray.tfar = std::numeric_limits<float>::infinity();
-                        rh.ray.mask = 0xFFFFFFFFu;
-                        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                        RTCRayHit rh = makeRayHit(ray, 0.0f);
                         rtcIntersect1(rs, &ctx, &rh);
                         ++count;
                         if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || depth + 1 >= opt.maxDepth)

@@ -115,21 +115,7 @@ Heightfield::~Heightfield() {
 bool Heightfield::intersect(const Ray& ray, float tnear, SurfaceHit& hit) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    RTCRayHit rh;
-    rh.ray.org_x = ray.origin.x;
-    rh.ray.org_y = ray.origin.y;
-    rh.ray.org_z = ray.origin.z;
-    rh.ray.dir_x = ray.direction.x;
-    rh.ray.dir_y = ray.direction.y;
-    rh.ray.dir_z = ray.direction.z;
-    rh.ray.tnear = tnear;
-    rh.ray.tfar = std::numeric_limits<float>::infinity();
-    rh.ray.time = 0;
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.ray.id = 0;
-    rh.ray.flags = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    RTCRayHit rh = makeRayHit(ray, tnear);
     rtcIntersect1(scene_, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
     hit.t = rh.ray.tfar;

@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <span>
 
@@ -54,6 +55,23 @@ inline Frame shadingFrame(const Vec3f& n) {
 inline Vec3f offsetRayOrigin(const Vec3f& p, const Vec3f& n) {
     float m = std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z), 1.0f});
     return p + n * (m * 1e-5f);
+}
+
+/// An Embree query for `ray` over (tnear, inf), no hit yet.
+inline RTCRayHit makeRayHit(const Ray& ray, float tnear) {
+    RTCRayHit rh{};
+    rh.ray.org_x = ray.origin.x;
+    rh.ray.org_y = ray.origin.y;
+    rh.ray.org_z = ray.origin.z;
+    rh.ray.dir_x = ray.direction.x;
+    rh.ray.dir_y = ray.direction.y;
+    rh.ray.dir_z = ray.direction.z;
+    rh.ray.tnear = tnear;
+    rh.ray.tfar = std::numeric_limits<float>::infinity();
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    return rh;
 }
 
 class Heightfield {
