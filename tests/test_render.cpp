@@ -10,6 +10,7 @@
 #include "core/Rng.h"
 #include "io/HeightmapIO.h"
 #include "io/ImageIO.h"
+#include "io/SceneFile.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
 
@@ -259,4 +260,33 @@ TEST(Render, EveryHeightMapFormatGivesTheSameRender) {
     }
     EXPECT_EQ(renders[0].data, renders[1].data);
     EXPECT_EQ(renders[0].data, renders[2].data);
+}
+
+TEST(Render, NoCameraRaySlipsThroughTheSurface) {
+    // Every camera sample of a pixel well inside the part's outline must hit the height field.
+    // Embree's default (non-watertight) grid intersection let about 1 in 10^5 rays through the
+    // cracks between triangles: 1627 of 20100 interior pixels at 256², 1024 spp.
+    SceneDesc d = readSceneFile(SL_SOURCE_DIR "/scenes/default/scene.json");
+    d.camera.width = d.camera.height = 128;
+    auto s = loadScene(d);
+    RenderOptions o = opts(512, 1);
+    struct NullSink : PathSink {
+        void consume(const PixelPaths&) override {}
+    } sink;
+    TraceSummary t = PathTracer(*s).trace(o, sink);
+    const int W = 128;
+    int interior = 0, missed = 0;
+    for (int y = 2; y < W - 2; ++y)
+        for (int x = 2; x < W - 2; ++x) {
+            bool inside = true;
+            for (int dy = -2; dy <= 2; ++dy)
+                for (int dx = -2; dx <= 2; ++dx) inside &= t.coverage[(y + dy) * W + x + dx] > 0;
+            if (!inside) continue;
+            ++interior;
+            missed += t.coverage[y * W + x] < 1.0f;
+        }
+    std::printf("[ measured ] %d interior pixels, %d with a camera sample through the surface\n",
+                interior, missed);
+    EXPECT_GT(interior, 3000);
+    EXPECT_EQ(missed, 0);
 }
