@@ -282,3 +282,11 @@ TEST(TransportLoss, FusedPassEqualsTwoPassesForAnyThreadCount) {
         }
     }
 }
+
+TEST(TransportFile, FingerprintCoversTheTracerRevision) {
+    auto s = smallScene();
+    TransportProvenance p = transportProvenance(*s, opts(4), 1);
+    EXPECT_NE(p.inputs.find("\"tracer_revision\":" + std::to_string(kTracerRevision)),
+              std::string::npos)
+        << p.inputs;
+}

@@ -19,6 +19,11 @@ namespace sl {
 
 struct Scene;
 
+/// Revision of what the tracer computes for given inputs. Transport-matrix fingerprints include
+/// it, so cached matrices from an older tracer are recomputed. Bump it whenever the same scene,
+/// spp and seed would trace differently (2: watertight intersection).
+inline constexpr int kTracerRevision = 2;
+
 struct RenderOptions {
     int spp = 64;
     int maxDepth = 4;

@@ -46,6 +46,7 @@ TransportProvenance transportProvenance(const Scene& scene, const RenderOptions&
     const ConductorParams& m = scene.bsdf.params();
     json in;
     in["format"] = "scratchlight transport v1";
+    in["tracer_revision"] = kTracerRevision;
     in["convention"] = kTransportConvention;
     in["channels"] = channels;
     in["planes"] = opt.sampleSets;  // 2: two independent sample sets, the halves T_a, T_b
