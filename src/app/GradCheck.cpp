@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -326,14 +325,6 @@ struct Tracer {
     }
 };
 
-void writeCsv(const std::filesystem::path& file, const std::string& text) {
-    writeAtomically(file, [&](const std::filesystem::path& tmp) {
-        std::ofstream os(tmp, std::ios::binary);
-        os << text;
-        if (!os) throw inputError(file.string(), "cannot be written", "check the directory");
-    });
-}
-
 std::string csvQuote(const std::string& s) {
     return "\"" + s + "\"";
 }
@@ -378,7 +369,7 @@ BenchGradientsReport runBenchGradients(const BenchGradientsOptions& o) {
         csv << r.method << "," << csvQuote(r.settings) << buf;
     }
     rep.gradientsCsv = o.outDir / "gradients.csv";
-    writeCsv(rep.gradientsCsv, csv.str());
+    writeTextAtomically(rep.gradientsCsv, csv.str());
 
     if (o.optimizations) {
         const Lab& L = *lab;
@@ -441,7 +432,7 @@ BenchGradientsReport runBenchGradients(const BenchGradientsOptions& o) {
             oc << csvQuote(p.method) << buf;
         }
         rep.optimizationCsv = o.outDir / "optimization.csv";
-        writeCsv(rep.optimizationCsv, oc.str());
+        writeTextAtomically(rep.optimizationCsv, oc.str());
     }
     return rep;
 }

@@ -371,13 +371,7 @@ std::string renderReportHtml(const ReportContent& c) {
 }
 
 void writeReport(const std::filesystem::path& path, const ReportContent& content) {
-    const std::string html = renderReportHtml(content);
-    writeAtomically(path, [&](const std::filesystem::path& tmp) {
-        std::ofstream out(tmp, std::ios::binary);
-        out << html;
-        out.close();
-        if (!out) throw inputError(path.string(), "cannot write the report");
-    });
+    writeTextAtomically(path, renderReportHtml(content));
 }
 
 }  // namespace sl

@@ -4,8 +4,8 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
-#include <fstream>
 #include <memory>
+#include <sstream>
 
 #include "app/NoiseBench.h"
 #include "cli/Commands.h"
@@ -100,9 +100,8 @@ int runBench(const BenchArgs& a) {
     std::printf("(%dx%d image, %d spp, median of %d interleaved runs; ratio = renderer/bare)\n",
                 a.resolution, a.resolution, a.spp, a.repeats);
 
-    AtomicOutput file(a.csv);
+    std::ostringstream os;
     {
-        std::ofstream os(file.tempPath());
         os << "height_map,generate_s,build_s,vertex_bytes,embree_bytes,embree_peak_bytes,"
               "image,spp,renderer_rays,renderer_s,renderer_rays_per_s,bare_rays,bare_s,"
               "bare_rays_per_s,ratio\n";
@@ -114,7 +113,7 @@ int runBench(const BenchArgs& a) {
                << ',' << r.bare.seconds << ',' << r.bare.raysPerSecond() << ','
                << r.renderer.raysPerSecond() / r.bare.raysPerSecond() << '\n';
     }
-    file.commit();
+    writeTextAtomically(a.csv, os.str());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
@@ -197,9 +196,8 @@ int runTransportBench(const TransportBenchArgs& a) {
     std::printf("(medians: tracing of %d interleaved runs, products of %d runs)\n", a.repeats,
                 reps);
 
-    AtomicOutput file(a.csv);
+    std::ostringstream os;
     {
-        std::ofstream os(file.tempPath());
         os << "scene,width,height,spp,renderer_rays_per_s,precompute_rays_per_s,precompute_ratio,"
               "storage,nnz,density,bytes,streaming_read_s,apply_s,iteration_two_pass_s,"
               "iteration_two_pass_ratio,iteration_fused_s,iteration_fused_ratio,adam_iterations,"
@@ -212,7 +210,7 @@ int runTransportBench(const TransportBenchArgs& a) {
            << ',' << tIter / tRead << ',' << tFused << ',' << tFused / tRead << ',' << a.iterations
            << ',' << tAdam << '\n';
     }
-    file.commit();
+    writeTextAtomically(a.csv, os.str());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
@@ -246,10 +244,8 @@ int runNoiseBenchCmd(NoiseArgs a) {
     }
     std::printf("(shared held-out estimate: %d spp, traced in %.1f s; image %dx%d)\n", r.heldOutSpp,
                 r.heldOutSeconds, a.o.resolution, a.o.resolution);
-    std::filesystem::create_directories(std::filesystem::absolute(a.csv).parent_path());
-    AtomicOutput file(a.csv);
+    std::ostringstream os;
     {
-        std::ofstream os(file.tempPath());
         os << "spp,objective,precompute_s,optimize_s,total_s,train_loss,heldout_loss,"
               "heldout_paper_loss,heldout_spp\n";
         for (const NoiseBenchRow& row : r.rows)
@@ -257,7 +253,7 @@ int runNoiseBenchCmd(NoiseArgs a) {
                << row.optimizeSeconds << ',' << row.seconds() << ',' << row.trainLoss << ','
                << row.heldOutLoss << ',' << row.heldOutPaper << ',' << r.heldOutSpp << '\n';
     }
-    file.commit();
+    writeTextAtomically(a.csv, os.str());
     std::printf("wrote %s (plot: /usr/bin/python3 scripts/plot_noise.py %s)\n", a.csv.c_str(),
                 a.csv.c_str());
     return kOk;

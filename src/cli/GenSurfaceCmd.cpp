@@ -5,7 +5,6 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -67,13 +66,7 @@ int runGen(GenArgs a) {
                          {"material", "Al"}};
         j["envmap"] = {{"width", 50}, {"height", 25}};
         j["render"] = {{"spp", 64}, {"max_depth", 4}, {"seed", 0}};
-        AtomicOutput file(scenePath);
-        {
-            std::ofstream os(file.tempPath());
-            os << j.dump(2) << "\n";
-            if (!os) throw inputError(scenePath.string(), "cannot write the scene file");
-        }
-        file.commit();
+        writeTextAtomically(scenePath, j.dump(2) + "\n");
         std::printf("wrote %s\n", scenePath.string().c_str());
     }
     std::printf("%s\nwrote %s (%dx%d, pitch %g mm, heights %.6g..%.6g mm) and %s\n",

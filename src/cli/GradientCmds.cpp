@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 
 #include "app/GradCheck.h"
@@ -67,11 +66,7 @@ int runGradCheckCmd(GradCheckArgs a) {
     const GradCheckReport r = runGradCheck(a.o);
     std::fputs(r.table().c_str(), stdout);
     if (!a.json.empty()) {
-        writeAtomically(a.json, [&](const std::filesystem::path& tmp) {
-            std::ofstream os(tmp, std::ios::binary);
-            os << r.json();
-            if (!os) throw inputError(a.json, "cannot be written", "check the directory");
-        });
+        writeTextAtomically(a.json, r.json());
         std::printf("wrote %s\n", a.json.c_str());
     }
     return kOk;

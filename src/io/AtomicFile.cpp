@@ -1,6 +1,7 @@
 #include "io/AtomicFile.h"
 
 #include <atomic>
+#include <fstream>
 #include <string>
 #include <system_error>
 
@@ -132,6 +133,17 @@ void writeAtomically(const fs::path& file, const std::function<void(const fs::pa
     AtomicOutput out(file);
     write(out.tempPath());
     out.commit();
+}
+
+void writeTextAtomically(const fs::path& file, std::string_view text) {
+    writeAtomically(file, [&](const fs::path& tmp) {
+        std::ofstream os(tmp, std::ios::binary);
+        os.write(text.data(), static_cast<std::streamsize>(text.size()));
+        os.flush();
+        if (!os)
+            throw inputError(file.string(), "cannot be written",
+                             "check that the directory is writable and the disk has space");
+    });
 }
 
 }  // namespace sl

@@ -15,6 +15,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <string_view>
 #include <vector>
 
 namespace sl {
@@ -52,5 +53,9 @@ class AtomicOutput {
 /// Convenience: AtomicOutput out(file); write(out.tempPath()); out.commit().
 void writeAtomically(const std::filesystem::path& file,
                      const std::function<void(const std::filesystem::path& temp)>& write);
+
+/// Writes `text` (CSV, JSON, HTML, ...) to `file` atomically; a failed write (stream error,
+/// disk full) throws InputError naming the file and leaves nothing behind.
+void writeTextAtomically(const std::filesystem::path& file, std::string_view text);
 
 }  // namespace sl
