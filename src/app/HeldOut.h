@@ -18,6 +18,8 @@
 
 namespace sl {
 
+class TransportLoss;
+
 inline constexpr uint64_t kHeldOutSeedOffset = 0x9E3779B97F4A7C15ULL;
 
 struct HeldOutScore {
@@ -28,15 +30,17 @@ struct HeldOutScore {
 class HeldOutScorer {
   public:
     /// heldOut must have two planes. unbiased: the optimized objective is the unbiased one.
+    /// rgb: E has 3 values per texel.
     HeldOutScorer(const TransportMatrix& heldOut, const std::vector<uint8_t>& trainingMask,
-                  const ObjectiveOptions& options, bool unbiased);
+                  const ObjectiveOptions& options, bool unbiased, bool rgb);
+    ~HeldOutScorer();
     HeldOutScore score(std::span<const double> E) const;
 
   private:
-    const TransportMatrix& t_;
     bool unbiased_;
     std::unique_ptr<ImageObjective> paper_;
     std::unique_ptr<UnbiasedObjective> unb_;
+    std::unique_ptr<TransportLoss> paperLoss_, unbLoss_;  // built once, reused by score()
 };
 
 }  // namespace sl

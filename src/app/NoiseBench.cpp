@@ -63,7 +63,7 @@ NoiseBenchResult runNoiseBench(const NoiseBenchOptions& o) {
             OptimizerOptions opt;
             opt.iterations = o.iterations;
             OptimizerSummary sum = minimize(loss.problem(), e, opt);
-            HeldOutScore h = HeldOutScorer(held, t.objectMask, oo, unbiased).score(e);
+            HeldOutScore h = HeldOutScorer(held, t.objectMask, oo, unbiased, false).score(e);
             NoiseBenchRow row;
             row.spp = spp;
             row.objective = kind;

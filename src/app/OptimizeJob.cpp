@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <fstream>
 #include <iomanip>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -30,15 +29,6 @@ namespace sl {
 namespace {
 
 using json = nlohmann::ordered_json;
-
-void writeText(const std::filesystem::path& file, const std::string& text) {
-    writeAtomically(file, [&](const std::filesystem::path& tmp) {
-        std::ofstream os(tmp, std::ios::binary);
-        os << text;
-        os.flush();
-        if (!os) throw inputError(file.string(), "cannot write");
-    });
-}
 
 std::string lambdaName(double lambda) {
     std::ostringstream s;
@@ -218,6 +208,9 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
         o.init == "specular"
             ? specularInitialEnvMap(*scene, job.transport.file.provenance.maxDepth, o.rgb)
             : initialEnvMap(o.init, t.envWidth, t.envHeight, o.rgb);
+    // E0's render and metrics do not depend on λ: computed once for every run.
+    const std::vector<double> image0 = renderImage(t, e0);
+    const VisibilityMetrics metricsInitial = metricsFor(t, image0, mask, e0, o.rgb, truth);
     std::vector<ReportRun> reportRuns;
     const bool sweep = o.lambdas.size() > 1;
     std::ostringstream sweepCsv;
@@ -234,7 +227,8 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
             unbiased ? TransportLoss(t, *unb, o.rgb) : TransportLoss(t, objective, o.rgb);
         std::unique_ptr<HeldOutScorer> scorer;
         if (job.heldOut)
-            scorer = std::make_unique<HeldOutScorer>(job.heldOut->file.matrix, mask, oo, unbiased);
+            scorer = std::make_unique<HeldOutScorer>(job.heldOut->file.matrix, mask, oo, unbiased,
+                                                     o.rgb);
 
         OptimizeRun run;
         run.lambda = lambda;
@@ -295,14 +289,14 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
         writeEnvMap(run.dir / "envmap.exr", toEnvMap(e, t, o.rgb));
         writePng(run.dir / "envmap.png", envMapPreview(toEnvMap(e, t, o.rgb), 16));
         const int ch = t.channels == 3 ? 3 : 1;
-        writeRender(run.dir / "render.exr", renderImage(t, e), t.width, t.height, ch);
+        const std::vector<double> imageFinal = renderImage(t, e);
+        writeRender(run.dir / "render.exr", imageFinal, t.width, t.height, ch);
         {
-            std::vector<double> img0 = renderImage(t, e0);
             Image i0(t.width, t.height, ch);
-            for (size_t i = 0; i < img0.size(); ++i) i0.data[i] = static_cast<float>(img0[i]);
+            for (size_t i = 0; i < image0.size(); ++i) i0.data[i] = static_cast<float>(image0[i]);
             writePng(run.dir / "initial.png", i0);
         }
-        writeText(run.dir / "loss.csv", csv.str());
+        writeTextAtomically(run.dir / "loss.csv", csv.str());
         writePng(run.dir / "initial-envmap.png", envMapPreview(toEnvMap(e0, t, o.rgb), 16));
         {
             std::vector<uint8_t> visible(mask.size());  // masks hold 0/1; the PNG 0/255
@@ -349,14 +343,14 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
             s["heldout_loss"] = nullptr;
         }
         s["transport"] = transportJson(job.transport);
-        s["metrics"] = toJson(metricsFor(t, renderImage(t, e), mask, e, o.rgb, truth));
-        s["metrics_initial"] = toJson(metricsFor(t, renderImage(t, e0), mask, e0, o.rgb, truth));
+        s["metrics"] = toJson(metricsFor(t, imageFinal, mask, e, o.rgb, truth));
+        s["metrics_initial"] = toJson(metricsInitial);
         if (!o.truth.empty()) s["truth"] = o.truth;
         if (o.mask == "scratch")
             s["scratch_map"] = {{"kernel", o.scratch.kernel},
                                 {"patch", o.scratch.patch},
                                 {"threshold", o.scratch.threshold}};
-        writeText(run.dir / "summary.json", s.dump(2) + "\n");
+        writeTextAtomically(run.dir / "summary.json", s.dump(2) + "\n");
         {
             ReportContent rc;
             rc.title = "scratchlight optimize: " + run.dir.filename().string();
@@ -381,7 +375,7 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
         job.runs.push_back(std::move(run));
     }
     if (sweep) {
-        writeText(o.outDir / "sweep.csv", sweepCsv.str());
+        writeTextAtomically(o.outDir / "sweep.csv", sweepCsv.str());
         ReportContent rc;
         rc.title = "scratchlight optimize: lambda sweep";
         ReportFigure fig;
