@@ -99,6 +99,14 @@ std::unique_ptr<Scene> sceneOfTransport(const TransportFile& f, const std::strin
 TransportSource heldOutFor(const TransportFile& training, const Scene& scene, int spp,
                            const std::filesystem::path& cacheDir) {
     using json = nlohmann::json;
+    const json trainingInputs = json::parse(training.provenance.inputs);
+    if (trainingInputs.value("tracer_revision", 1) != kTracerRevision)
+        throw inputError("transport matrix " + training.provenance.fingerprint,
+                         "was traced by an older scratchlight tracer (revision " +
+                             std::to_string(trainingInputs.value("tracer_revision", 1)) +
+                             ", this one is " + std::to_string(kTracerRevision) +
+                             "), so an estimate traced now would not be comparable",
+                         "recompute it with `scratchlight precompute`, or pass --heldout none");
     PrecomputeOptions o;
     o.spp = spp > 0 ? spp : training.provenance.spp;
     o.seed = training.provenance.seed + kHeldOutSeedOffset;
@@ -113,8 +121,7 @@ TransportSource heldOutFor(const TransportFile& training, const Scene& scene, in
         j["material"].erase("name");
         return j;
     };
-    if (strip(json::parse(s.file.provenance.inputs)) !=
-        strip(json::parse(training.provenance.inputs)))
+    if (strip(json::parse(s.file.provenance.inputs)) != strip(trainingInputs))
         throw inputError(scene.desc.file.string(),
                          "has changed since the transport matrix was computed (camera, material "
                          "or height map differ)",
