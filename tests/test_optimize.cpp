@@ -11,7 +11,11 @@
 #include <string>
 #include <vector>
 
+#include "TestUtil.h"
+#include "core/Color.h"
 #include "core/Error.h"
+#include "io/EnvMapIO.h"
+#include "optimize/InitialState.h"
 #include "optimize/Optimizer.h"
 
 using namespace sl;
@@ -488,4 +492,30 @@ TEST(Optimize, ReportsDescribeTheRun) {
     EXPECT_GE(std::count(full.begin(), full.end(), '\n'), 8);
     EXPECT_NE(full.find("Termination"), std::string::npos);
     EXPECT_NE(full.find(s.termination), std::string::npos);
+}
+
+TEST(InitialState, OneChannelEnvMapLoadsBackUnchangedAndColourGoesThroughLStar) {
+    // A run's envmap.exr is one channel: it must come back as the same E (no L* curve), while
+    // a colour map becomes gray by CIE L*/100 (the paper's rule for photos).
+    test::TempDir dir("initial-state");
+    const int W = 50, H = 25;
+    EnvMap gray = EnvMap::constant(W, H, 0.0f, 1);
+    for (size_t i = 0; i < gray.texels.size(); ++i)
+        gray.texels[i] = static_cast<float>(i * 37 % 101) / 100.0f;
+    writeEnvMap(dir.path() / "gray.exr", gray);
+    std::vector<double> e =
+        initialEnvMap("envmap:" + (dir.path() / "gray.exr").string(), W, H, false);
+    ASSERT_EQ(e.size(), gray.texels.size());
+    for (size_t i = 0; i < e.size(); ++i) EXPECT_EQ(e[i], static_cast<double>(gray.texels[i]));
+    std::vector<double> e3 =
+        initialEnvMap("envmap:" + (dir.path() / "gray.exr").string(), W, H, true);
+    ASSERT_EQ(e3.size(), 3 * gray.texels.size());
+    EXPECT_EQ(e3[3 * 7 + 2], static_cast<double>(gray.texels[7]));
+
+    EnvMap rgb = EnvMap::constant(W, H, 0.18f, 3);
+    writeEnvMap(dir.path() / "rgb.exr", rgb);
+    std::vector<double> l =
+        initialEnvMap("envmap:" + (dir.path() / "rgb.exr").string(), W, H, false);
+    EXPECT_NEAR(l[0], lightnessLStar01(0.18, 0.18, 0.18), 1e-6);
+    EXPECT_NEAR(l[0], 0.4950, 1e-3);  // L*(Y = 0.18) = 49.50
 }

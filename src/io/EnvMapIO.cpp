@@ -183,8 +183,13 @@ EnvMap resampleEquirect(const Image& src, int width, int height, int channels,
 
 EnvMap loadEnvMap(const std::filesystem::path& file, int width, int height, int channels) {
     const std::string where = file.string();
-    checkGrid(where, width, height, channels);
+    if (channels != 0) checkGrid(where, width, height, channels);
     const Image img = readImage(file);
+    if (channels == 0) {
+        checkSource(where, img);
+        channels = img.channels >= 3 ? 3 : 1;
+        checkGrid(where, width, height, channels);
+    }
     if (img.width == width && img.height == height) {
         // Already on the texel grid: convert channels only.
         checkSource(where, img);

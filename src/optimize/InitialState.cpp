@@ -49,11 +49,16 @@ std::vector<double> initialEnvMap(const std::string& spec, int width, int height
     }
     if (kind == "envmap") {
         if (arg.empty()) bad(spec, "no file given");
-        EnvMap m = loadEnvMap(arg, width, height, 3);
+        // A gray file (what `optimize` writes as envmap.exr) is E itself, so a result loads back
+        // unchanged; a colour map becomes gray by CIE L*/100 as in the paper (or stays RGB).
+        EnvMap m = loadEnvMap(arg, width, height, 0);
         std::vector<double> e(n);
         for (size_t t = 0; t < texels; ++t) {
-            const float* c = &m.texels[3 * t];
-            if (rgb) {
+            const float* c = &m.texels[t * static_cast<size_t>(m.channels)];
+            if (m.channels == 1) {
+                const double v = std::clamp<double>(c[0], 0.0, 1.0);
+                for (int k = 0; k < (rgb ? 3 : 1); ++k) e[(rgb ? 3 * t : t) + k] = v;
+            } else if (rgb) {
                 for (int k = 0; k < 3; ++k) e[3 * t + k] = std::clamp<double>(c[k], 0.0, 1.0);
             } else {
                 e[t] = std::clamp(lightnessLStar01(c[0], c[1], c[2]), 0.0, 1.0);

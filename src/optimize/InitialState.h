@@ -1,8 +1,9 @@
 // Initial env maps for the optimizers (`optimize --init`):
 //   const:V        every texel V (the paper's default: 0.5)
-//   envmap:FILE    an equirectangular image, area-resampled to the env-map grid; gray by CIE L*
-//                  (LUV lightness)/100 of each texel, as the paper does (RGB kept with rgb=true);
-//                  values clamped to [0, 1]
+//   envmap:FILE    an equirectangular image, area-resampled to the env-map grid; a colour image
+//                  becomes gray by CIE L* (LUV lightness)/100 of each texel, as the paper does
+//                  (RGB kept with rgb=true); a one-channel image is E itself (so the envmap.exr
+//                  that `optimize` writes loads back unchanged); values clamped to [0, 1]
 //   random:SEED    uniform in [0, 1], from PCG32(SEED)
 #pragma once
 
