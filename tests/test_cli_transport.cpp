@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <sstream>
 #include <nlohmann/json.hpp>
 
 #include "TestUtil.h"
@@ -270,4 +271,48 @@ TEST_F(CliTransport, BlackBoxOptimizersAndGradientCommands) {
     ASSERT_EQ(r.exitCode, 0) << r.output;
     for (const char* f : {"scene.xml", "heightfield.ply", "envmap.exr"})
         EXPECT_TRUE(std::filesystem::exists(dir / "mi" / f)) << f;
+}
+
+TEST_F(CliTransport, BenchNoiseWritesOneRowPerRunAndMediansPerGroup) {
+    const std::string csv = p("bn/noise.csv");
+    auto r = runCli("bench noise " + scene +
+                    " --resolution 16 --spps 2,4 --heldout-spp 8 --seeds 2 "
+                    "--optimizers adam:5,lbfgs:40 --csv " +
+                    csv);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("vs top spp"), std::string::npos) << r.output;
+    auto lines = [](const std::string& file) {
+        std::ifstream in(file);
+        std::vector<std::string> out;
+        for (std::string l; std::getline(in, l);) out.push_back(l);
+        return out;
+    };
+    const auto runs = lines(csv), groups = lines(p("bn/noise-median.csv"));
+    // 2 spp × 2 seeds × 2 objectives × 2 optimizers, and 2 × 2 × 2 groups (plus headers).
+    ASSERT_EQ(runs.size(), 17u);
+    ASSERT_EQ(groups.size(), 9u);
+    EXPECT_EQ(runs[0].rfind("spp,seed,objective,optimizer,", 0), 0u) << runs[0];
+    for (size_t i = 1; i < groups.size(); ++i) {
+        std::vector<std::string> f;
+        std::stringstream ss(groups[i]);
+        for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+        ASSERT_EQ(f.size(), 14u) << groups[i];
+        EXPECT_EQ(f[3], "2") << groups[i];                      // runs: one per seed
+        if (f[0] == "4") {  // the top spp is its own reference
+            EXPECT_EQ(f[10], "0") << groups[i];
+        }
+        EXPECT_LE(std::stod(f[11]), std::stod(f[10]));          // min <= median <= max
+        EXPECT_GE(std::stod(f[12]), std::stod(f[10]));
+    }
+
+    // Bad optimizer list: exit 1, names the option, writes nothing.
+    const std::string csv2 = p("bn2/noise.csv");
+    r = runCli("bench noise " + scene + " --resolution 16 --spps 2 --heldout-spp 8 --seeds 1 " +
+               "--optimizers adam:5,newton --csv " + csv2);
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("--optimizers"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(csv2));
+    r = runCli("bench noise " + scene + " --spps 3 --csv " + csv2);
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("--spps"), std::string::npos) << r.output;
 }

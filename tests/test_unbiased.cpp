@@ -8,6 +8,8 @@
 
 #include "TestUtil.h"
 #include "core/Color.h"
+#include "app/NoiseBench.h"
+#include "core/Error.h"
 #include "core/Rng.h"
 #include "objective/TransportLoss.h"
 #include "render/Render.h"
@@ -167,4 +169,54 @@ TEST(Unbiased, HalvesOfATracedTAverageToTheRender) {
     plain.sampleSets = 1;
     EXPECT_NE(transportProvenance(s, plain, 1).fingerprint,
               transportProvenance(s, o, 1).fingerprint);
+}
+
+TEST(NoiseBench, MediansAndRelativeScoresPerGroup) {
+    // Three seeds at spp 4 and 16 for one objective/optimizer: medians and ratios by hand.
+    std::vector<NoiseBenchRow> rows;
+    auto add = [&](int spp, double held, double train, double secs) {
+        NoiseBenchRow r;
+        r.spp = spp;
+        r.objective = "unbiased";
+        r.optimizer = "lbfgs";
+        r.heldOutLoss = held;
+        r.trainLoss = train;
+        r.optimizeSeconds = secs;
+        r.converged = spp == 16;
+        rows.push_back(r);
+    };
+    add(16, 10.0, 10.0, 1.0);
+    add(16, 12.0, 12.0, 3.0);
+    add(16, 11.0, 11.0, 2.0);
+    add(4, 13.2, 11.0, 0.5);
+    add(4, 12.1, 11.0, 0.5);
+    add(4, 14.3, 13.0, 0.5);
+    const auto g = summarizeNoiseBench(rows);
+    ASSERT_EQ(g.size(), 2u);
+    const NoiseBenchGroup& low = g[0].spp == 4 ? g[0] : g[1];
+    const NoiseBenchGroup& top = g[0].spp == 4 ? g[1] : g[0];
+    EXPECT_EQ(top.runs, 3);
+    EXPECT_EQ(top.converged, 3);
+    EXPECT_EQ(low.converged, 0);
+    EXPECT_DOUBLE_EQ(top.heldOutLoss, 11.0);
+    EXPECT_DOUBLE_EQ(top.seconds, 2.0);
+    EXPECT_DOUBLE_EQ(top.relToTop, 0.0);
+    EXPECT_DOUBLE_EQ(top.relToTopMin, -1.0 / 11.0);
+    EXPECT_DOUBLE_EQ(top.relToTopMax, 1.0 / 11.0);
+    EXPECT_DOUBLE_EQ(low.heldOutLoss, 13.2);
+    EXPECT_NEAR(low.relToTop, 0.2, 1e-12);
+    EXPECT_NEAR(low.relToTopMin, 0.1, 1e-12);
+    EXPECT_NEAR(low.relToTopMax, 0.3, 1e-12);
+    EXPECT_NEAR(low.trainGap, -1.1 / 12.1, 1e-12);  // median of −2.2/13.2, −1.1/12.1, −1.3/14.3
+}
+
+TEST(NoiseBench, OptimizerListParsesBudgetsAndRejectsBadItems) {
+    auto o = parseNoiseBenchOptimizers("adam,lbfgs:300,mma");
+    ASSERT_EQ(o.size(), 3u);
+    EXPECT_EQ(o[0].method, "adam");
+    EXPECT_EQ(o[0].budget, 100);
+    EXPECT_EQ(o[1].budget, 300);
+    EXPECT_EQ(o[2].budget, 2000);
+    for (const char* bad : {"", "adam,", "newton", "adam:0", "adam:x", "lbfgs:12q"})
+        EXPECT_THROW(parseNoiseBenchOptimizers(bad), InputError) << bad;
 }

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "core/Error.h"
+#include "core/Stats.h"
 #include "io/AtomicFile.h"
 #include "io/SceneFile.h"
 #include "objective/Autodiff.h"
@@ -26,13 +27,6 @@ using Clock = std::chrono::steady_clock;
 
 double since(Clock::time_point t0) {
     return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-double median(std::vector<double> v) {
-    if (v.empty()) return std::nan("");
-    std::sort(v.begin(), v.end());
-    const size_t m = v.size() / 2;
-    return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
 }
 
 std::string fmt(double v) {

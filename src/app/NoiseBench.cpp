@@ -1,12 +1,16 @@
 #include "app/NoiseBench.h"
 
 #include <chrono>
+#include <map>
+#include <tuple>
 
 #include "app/HeldOut.h"
 #include "core/Error.h"
+#include "core/Stats.h"
 #include "io/SceneFile.h"
 #include "objective/TransportLoss.h"
 #include "optimize/InitialState.h"
+#include "optimize/Optimizer.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
 #include "transport/TransportSink.h"
@@ -14,17 +18,102 @@
 namespace sl {
 
 namespace {
+
 double since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
+
+[[noreturn]] void badOptimizers(const std::string& spec, const std::string& why) {
+    throw inputError("--optimizers " + spec, why,
+                     "give METHOD[:BUDGET] items separated by commas, e.g. adam:100,lbfgs:2000");
+}
+
 }  // namespace
+
+std::vector<NoiseBenchOptimizer> parseNoiseBenchOptimizers(const std::string& spec) {
+    std::vector<NoiseBenchOptimizer> out;
+    size_t start = 0;
+    while (start <= spec.size()) {
+        const size_t comma = std::min(spec.find(',', start), spec.size());
+        const std::string item = spec.substr(start, comma - start);
+        start = comma + 1;
+        if (item.empty()) badOptimizers(spec, "an item is empty");
+        const size_t colon = item.find(':');
+        NoiseBenchOptimizer o;
+        o.method = item.substr(0, colon);
+        bool known = false;
+        for (const std::string& m : optimizerMethods()) known = known || m == o.method;
+        if (!known) badOptimizers(spec, "'" + o.method + "' is not an optimizer");
+        o.budget = o.method == "adam" ? 100 : 2000;
+        if (colon != std::string::npos) {
+            const std::string b = item.substr(colon + 1);
+            try {
+                size_t used = 0;
+                o.budget = std::stoi(b, &used);
+                if (used != b.size()) throw std::invalid_argument(b);
+            } catch (const std::exception&) {
+                badOptimizers(spec, "budget '" + b + "' is not a whole number");
+            }
+            if (o.budget < 1) badOptimizers(spec, "budget '" + b + "' must be >= 1");
+        }
+        out.push_back(o);
+        if (comma == spec.size()) break;
+    }
+    return out;
+}
+
+std::vector<NoiseBenchGroup> summarizeNoiseBench(const std::vector<NoiseBenchRow>& rows) {
+    using Key = std::tuple<std::string, std::string, int>;  // objective, optimizer, spp
+    std::map<Key, std::vector<const NoiseBenchRow*>> byKey;
+    for (const NoiseBenchRow& r : rows) byKey[{r.objective, r.optimizer, r.spp}].push_back(&r);
+    std::vector<NoiseBenchGroup> groups;
+    for (const auto& [key, members] : byKey) {
+        NoiseBenchGroup g;
+        std::tie(g.objective, g.optimizer, g.spp) = key;
+        g.runs = static_cast<int>(members.size());
+        std::vector<double> secs, train, held, paper, gap;
+        for (const NoiseBenchRow* r : members) {
+            g.converged += r->converged ? 1 : 0;
+            secs.push_back(r->seconds());
+            train.push_back(r->trainLoss);
+            held.push_back(r->heldOutLoss);
+            paper.push_back(r->heldOutPaper);
+            gap.push_back((r->trainLoss - r->heldOutLoss) / r->heldOutLoss);
+        }
+        g.seconds = median(secs);
+        g.trainLoss = median(train);
+        g.heldOutLoss = median(held);
+        g.heldOutPaper = median(paper);
+        g.trainGap = median(gap);
+        groups.push_back(g);
+    }
+    // Relative to the same objective and optimizer at the largest spp (map order: spp last).
+    for (NoiseBenchGroup& g : groups) {
+        const NoiseBenchGroup* top = nullptr;
+        for (const NoiseBenchGroup& h : groups)
+            if (h.objective == g.objective && h.optimizer == g.optimizer &&
+                (!top || h.spp > top->spp))
+                top = &h;
+        g.relToTop = (g.heldOutLoss - top->heldOutLoss) / top->heldOutLoss;
+        g.relToTopMin = g.relToTopMax = g.relToTop;
+        for (const NoiseBenchRow* r : byKey[{g.objective, g.optimizer, g.spp}]) {
+            const double rel = (r->heldOutLoss - top->heldOutLoss) / top->heldOutLoss;
+            g.relToTopMin = std::min(g.relToTopMin, rel);
+            g.relToTopMax = std::max(g.relToTopMax, rel);
+        }
+    }
+    return groups;
+}
 
 NoiseBenchResult runNoiseBench(const NoiseBenchOptions& o) {
     for (int spp : o.spps)
         if (spp < 2 || spp % 2)
             throw inputError("--spps", "every spp must be even and >= 2 (two sample sets)");
+    if (o.spps.empty()) throw inputError("--spps", "no spp given");
     if (o.heldOutSpp < 2 || o.heldOutSpp % 2)
         throw inputError("--heldout-spp", "must be even and >= 2");
+    if (o.seeds < 1) throw inputError("--seeds", "must be >= 1");
+    if (o.optimizers.empty()) throw inputError("--optimizers", "no optimizer given");
     auto log = [&](const std::string& m) {
         if (o.log) o.log(m);
     };
@@ -42,39 +131,56 @@ NoiseBenchResult runNoiseBench(const NoiseBenchOptions& o) {
     ho.seed = base.seed + kHeldOutSeedOffset;
     auto t0 = std::chrono::steady_clock::now();
     log("tracing the shared held-out estimate at " + std::to_string(o.heldOutSpp) + " spp");
-    TransportMatrix held = precomputeTransport(*scene, ho, 1).matrix;
+    const TransportMatrix held = precomputeTransport(*scene, ho, 1).matrix;
     res.heldOutSeconds = since(t0);
 
+    const ObjectiveOptions oo;  // the paper's λ = 30 on E
     for (int spp : o.spps) {
-        RenderOptions ro = base;
-        ro.spp = spp;
-        t0 = std::chrono::steady_clock::now();
-        TransportMatrix t = precomputeTransport(*scene, ro, 1).matrix;
-        const double pre = since(t0);
-        log("spp " + std::to_string(spp) + ": T traced in " + std::to_string(pre) + " s");
-        for (const char* kind : {"paper", "unbiased"}) {
-            const bool unbiased = std::string(kind) == "unbiased";
-            ObjectiveOptions oo;  // the paper's λ = 30 on E
-            ImageObjective paper(t.width, t.height, t.objectMask, oo);
-            UnbiasedObjective unb(t.width, t.height, t.objectMask, oo);
-            TransportLoss loss =
-                unbiased ? TransportLoss(t, unb, false) : TransportLoss(t, paper, false);
-            std::vector<double> e = initialEnvMap("const:0.5", t.envWidth, t.envHeight, false);
-            OptimizerOptions opt;
-            opt.iterations = o.iterations;
-            OptimizerSummary sum = minimize(loss.problem(), e, opt);
-            HeldOutScore h = HeldOutScorer(held, t.objectMask, oo, unbiased, false).score(e);
-            NoiseBenchRow row;
-            row.spp = spp;
-            row.objective = kind;
-            row.precomputeSeconds = pre;
-            row.optimizeSeconds = sum.seconds;
-            row.trainLoss = sum.finalLoss;
-            row.heldOutLoss = h.own.total;
-            row.heldOutPaper = h.paper.total;
-            res.rows.push_back(row);
+        for (int s = 0; s < o.seeds; ++s) {
+            RenderOptions ro = base;
+            ro.spp = spp;
+            ro.seed = base.seed + static_cast<uint64_t>(s);
+            t0 = std::chrono::steady_clock::now();
+            const TransportMatrix t = precomputeTransport(*scene, ro, 1).matrix;
+            const double pre = since(t0);
+            log("spp " + std::to_string(spp) + ", seed " + std::to_string(ro.seed) +
+                ": T traced in " + std::to_string(pre) + " s");
+            for (const char* kind : {"paper", "unbiased"}) {
+                const bool unbiased = std::string(kind) == "unbiased";
+                ImageObjective paper(t.width, t.height, t.objectMask, oo);
+                UnbiasedObjective unb(t.width, t.height, t.objectMask, oo);
+                TransportLoss loss =
+                    unbiased ? TransportLoss(t, unb, false) : TransportLoss(t, paper, false);
+                const HeldOutScorer scorer(held, t.objectMask, oo, unbiased, false);
+                for (const NoiseBenchOptimizer& m : o.optimizers) {
+                    std::vector<double> e =
+                        initialEnvMap("const:0.5", t.envWidth, t.envHeight, false);
+                    OptimizerOptions opt;
+                    opt.method = m.method;
+                    opt.iterations = m.budget;
+                    const OptimizerSummary sum = minimize(loss.problem(), e, opt);
+                    const HeldOutScore h = scorer.score(e);
+                    NoiseBenchRow row;
+                    row.spp = spp;
+                    row.seed = ro.seed;
+                    row.objective = kind;
+                    row.optimizer = m.method;
+                    row.iterations = sum.iterations;
+                    // The budget counts steps (adam, ceres-lbfgs) or evaluations (NLopt).
+                    const bool steps = m.method == "adam" || m.method == "ceres-lbfgs";
+                    row.converged =
+                        (steps ? sum.iterations : sum.evaluations) < m.budget && !sum.failed;
+                    row.precomputeSeconds = pre;
+                    row.optimizeSeconds = sum.seconds;
+                    row.trainLoss = sum.finalLoss;
+                    row.heldOutLoss = h.own.total;
+                    row.heldOutPaper = h.paper.total;
+                    res.rows.push_back(row);
+                }
+            }
         }
     }
+    res.groups = summarizeNoiseBench(res.rows);
     return res;
 }
 

@@ -217,45 +217,52 @@ int runTransportBench(const TransportBenchArgs& a) {
 
 struct NoiseArgs {
     NoiseBenchOptions o;
+    std::string optimizers = "adam:100,lbfgs:2000";
     std::string csv = "out/bench-noise/bench-noise.csv";
+    std::string groupsCsv() const {
+        const auto dot = csv.rfind(".csv");
+        return (dot == std::string::npos ? csv : csv.substr(0, dot)) + "-median.csv";
+    }
 };
 
 int runNoiseBenchCmd(NoiseArgs a) {
+    a.o.optimizers = parseNoiseBenchOptimizers(a.optimizers);
     a.o.log = [](const std::string& m) { spdlog::info("{}", m); };
     NoiseBenchResult r = runNoiseBench(a.o);
-    std::printf("%6s %-9s %12s %12s %12s %12s %14s %14s\n", "spp", "objective", "precompute s",
-                "optimize s", "train loss", "held-out", "held-out eq.2", "gap train-h/o");
-    for (const NoiseBenchRow& row : r.rows)
-        std::printf("%6d %-9s %12.3f %12.3f %12.5g %12.5g %14.5g %+13.2f%%\n", row.spp,
-                    row.objective.c_str(), row.precomputeSeconds, row.optimizeSeconds,
-                    row.trainLoss, row.heldOutLoss, row.heldOutPaper,
-                    100.0 * (row.trainLoss - row.heldOutLoss) / row.heldOutLoss);
-    // Each objective against its own result at the largest spp, on the shared estimate.
-    for (const char* kind : {"paper", "unbiased"}) {
-        const NoiseBenchRow* ref = nullptr;
-        for (const auto& row : r.rows)
-            if (row.objective == kind && (!ref || row.spp > ref->spp)) ref = &row;
-        std::printf("%-9s held-out score relative to its %d-spp result:", kind, ref->spp);
-        for (const auto& row : r.rows)
-            if (row.objective == kind)
-                std::printf("  %d spp %+.2f%%", row.spp,
-                            100.0 * (row.heldOutLoss - ref->heldOutLoss) / ref->heldOutLoss);
-        std::printf("\n");
-    }
-    std::printf("(shared held-out estimate: %d spp, traced in %.1f s; image %dx%d)\n", r.heldOutSpp,
-                r.heldOutSeconds, a.o.resolution, a.o.resolution);
+    std::printf("medians over %d training seed(s); held-out = E* scored on the shared estimate\n",
+                a.o.seeds);
+    std::printf("%6s %-9s %-12s %5s %10s %11s %11s %14s %10s %26s\n", "spp", "objective",
+                "optimizer", "conv", "seconds", "train loss", "held-out", "held-out eq.2",
+                "gap tr-ho", "vs top spp (min..max)");
+    for (const NoiseBenchGroup& g : r.groups)
+        std::printf("%6d %-9s %-12s %2d/%-2d %10.3f %11.5g %11.5g %14.5g %+9.2f%% %+8.2f%% "
+                    "(%+.2f..%+.2f)\n",
+                    g.spp, g.objective.c_str(), g.optimizer.c_str(), g.converged, g.runs,
+                    g.seconds, g.trainLoss, g.heldOutLoss, g.heldOutPaper, 100.0 * g.trainGap,
+                    100.0 * g.relToTop, 100.0 * g.relToTopMin, 100.0 * g.relToTopMax);
+    std::printf("(shared held-out estimate: %d spp, traced in %.1f s; image %dx%d; seconds = "
+                "precompute + optimize)\n",
+                r.heldOutSpp, r.heldOutSeconds, a.o.resolution, a.o.resolution);
     std::ostringstream os;
-    {
-        os << "spp,objective,precompute_s,optimize_s,total_s,train_loss,heldout_loss,"
-              "heldout_paper_loss,heldout_spp\n";
-        for (const NoiseBenchRow& row : r.rows)
-            os << row.spp << ',' << row.objective << ',' << row.precomputeSeconds << ','
-               << row.optimizeSeconds << ',' << row.seconds() << ',' << row.trainLoss << ','
-               << row.heldOutLoss << ',' << row.heldOutPaper << ',' << r.heldOutSpp << '\n';
-    }
+    os << "spp,seed,objective,optimizer,iterations,converged,precompute_s,optimize_s,total_s,"
+          "train_loss,heldout_loss,heldout_paper_loss,heldout_spp\n";
+    for (const NoiseBenchRow& row : r.rows)
+        os << row.spp << ',' << row.seed << ',' << row.objective << ',' << row.optimizer << ','
+           << row.iterations << ',' << (row.converged ? 1 : 0) << ',' << row.precomputeSeconds
+           << ',' << row.optimizeSeconds << ',' << row.seconds() << ',' << row.trainLoss << ','
+           << row.heldOutLoss << ',' << row.heldOutPaper << ',' << r.heldOutSpp << '\n';
+    std::ostringstream og;
+    og << "spp,objective,optimizer,runs,converged,total_s,train_loss,heldout_loss,"
+          "heldout_paper_loss,train_gap,rel_to_top,rel_to_top_min,rel_to_top_max,heldout_spp\n";
+    for (const NoiseBenchGroup& g : r.groups)
+        og << g.spp << ',' << g.objective << ',' << g.optimizer << ',' << g.runs << ','
+           << g.converged << ',' << g.seconds << ',' << g.trainLoss << ',' << g.heldOutLoss << ','
+           << g.heldOutPaper << ',' << g.trainGap << ',' << g.relToTop << ',' << g.relToTopMin
+           << ',' << g.relToTopMax << ',' << r.heldOutSpp << '\n';
     writeTextAtomically(a.csv, os.str());
-    std::printf("wrote %s (plot: /usr/bin/python3 scripts/plot_noise.py %s)\n", a.csv.c_str(),
-                a.csv.c_str());
+    writeTextAtomically(a.groupsCsv(), og.str());
+    std::printf("wrote %s and %s (plot: /usr/bin/python3 scripts/plot_noise.py %s)\n",
+                a.csv.c_str(), a.groupsCsv().c_str(), a.csv.c_str());
     return kOk;
 }
 
@@ -316,7 +323,13 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     nc->add_option("--heldout-spp", n->o.heldOutSpp, "spp of the shared held-out estimate")
         ->capture_default_str();
-    nc->add_option("--iterations", n->o.iterations, "Adam iterations")->capture_default_str();
+    nc->add_option("--seeds", n->o.seeds, "Training seeds per spp (medians over them)")
+        ->check(CLI::Range(1, 100))
+        ->capture_default_str();
+    nc->add_option("--optimizers", n->optimizers,
+                   "METHOD[:BUDGET],... (budget: adam steps, NLopt evaluations, Ceres "
+                   "iterations)")
+        ->capture_default_str();
     nc->add_option("--threads", n->o.threads, "Worker threads (0: all)")->capture_default_str();
     nc->add_option("--csv", n->csv, "CSV output")->capture_default_str();
     nc->callback([n, &run] { run = [n] { return runNoiseBenchCmd(*n); }; });
