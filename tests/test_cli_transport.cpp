@@ -4,8 +4,8 @@
 
 #include <cmath>
 #include <fstream>
-#include <sstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "TestUtil.h"
 #include "core/Image.h"
@@ -297,11 +297,11 @@ TEST_F(CliTransport, BenchNoiseWritesOneRowPerRunAndMediansPerGroup) {
         std::stringstream ss(groups[i]);
         for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
         ASSERT_EQ(f.size(), 14u) << groups[i];
-        EXPECT_EQ(f[3], "2") << groups[i];                      // runs: one per seed
-        if (f[0] == "4") {  // the top spp is its own reference
+        EXPECT_EQ(f[3], "2") << groups[i];  // runs: one per seed
+        if (f[0] == "4") {                  // the top spp is its own reference
             EXPECT_EQ(f[10], "0") << groups[i];
         }
-        EXPECT_LE(std::stod(f[11]), std::stod(f[10]));          // min <= median <= max
+        EXPECT_LE(std::stod(f[11]), std::stod(f[10]));  // min <= median <= max
         EXPECT_GE(std::stod(f[12]), std::stod(f[10]));
     }
 

@@ -7,8 +7,8 @@
 #include <numbers>
 
 #include "TestUtil.h"
-#include "core/Color.h"
 #include "app/NoiseBench.h"
+#include "core/Color.h"
 #include "core/Error.h"
 #include "core/Rng.h"
 #include "objective/TransportLoss.h"

@@ -235,14 +235,16 @@ int runNoiseBenchCmd(NoiseArgs a) {
                 "optimizer", "conv", "seconds", "train loss", "held-out", "held-out eq.2",
                 "gap tr-ho", "vs top spp (min..max)");
     for (const NoiseBenchGroup& g : r.groups)
-        std::printf("%6d %-9s %-12s %2d/%-2d %10.3f %11.5g %11.5g %14.5g %+9.2f%% %+8.2f%% "
-                    "(%+.2f..%+.2f)\n",
-                    g.spp, g.objective.c_str(), g.optimizer.c_str(), g.converged, g.runs,
-                    g.seconds, g.trainLoss, g.heldOutLoss, g.heldOutPaper, 100.0 * g.trainGap,
-                    100.0 * g.relToTop, 100.0 * g.relToTopMin, 100.0 * g.relToTopMax);
-    std::printf("(shared held-out estimate: %d spp, traced in %.1f s; image %dx%d; seconds = "
-                "precompute + optimize)\n",
-                r.heldOutSpp, r.heldOutSeconds, a.o.resolution, a.o.resolution);
+        std::printf(
+            "%6d %-9s %-12s %2d/%-2d %10.3f %11.5g %11.5g %14.5g %+9.2f%% %+8.2f%% "
+            "(%+.2f..%+.2f)\n",
+            g.spp, g.objective.c_str(), g.optimizer.c_str(), g.converged, g.runs, g.seconds,
+            g.trainLoss, g.heldOutLoss, g.heldOutPaper, 100.0 * g.trainGap, 100.0 * g.relToTop,
+            100.0 * g.relToTopMin, 100.0 * g.relToTopMax);
+    std::printf(
+        "(shared held-out estimate: %d spp, traced in %.1f s; image %dx%d; seconds = "
+        "precompute + optimize)\n",
+        r.heldOutSpp, r.heldOutSeconds, a.o.resolution, a.o.resolution);
     std::ostringstream os;
     os << "spp,seed,objective,optimizer,iterations,converged,precompute_s,optimize_s,total_s,"
           "train_loss,heldout_loss,heldout_paper_loss,heldout_spp\n";
