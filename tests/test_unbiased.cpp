@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "TestUtil.h"
@@ -219,4 +220,62 @@ TEST(NoiseBench, OptimizerListParsesBudgetsAndRejectsBadItems) {
     EXPECT_EQ(o[2].budget, 2000);
     for (const char* bad : {"", "adam,", "newton", "adam:0", "adam:x", "lbfgs:12q"})
         EXPECT_THROW(parseNoiseBenchOptimizers(bad), InputError) << bad;
+}
+
+TEST(Unbiased, NegativeEnergyGivesAFiniteC1LossThatStillPushesTowardMoreGradient) {
+    // Y_b = c·Y_a gives G_u = c·Σ(ΔY_a)², so c sweeps G_u through 0 and the floor.
+    const int w = 6, h = 5;
+    std::vector<uint8_t> mask(size_t(w) * h, 1);
+    ObjectiveOptions oo;
+    oo.lambda = 0;
+    UnbiasedObjective unb(w, h, mask, oo);
+    Pcg32 rng(7, 1);
+    std::vector<double> ya(size_t(w) * h), e(4, 0.5);
+    for (double& v : ya) v = rng.nextDouble();
+    const double g1 = unb.energy(ya, ya), S = unb.maskSize(), floor = 1e-12 * S;
+    auto at = [&](double c) {
+        std::vector<double> yb(ya.size());
+        for (size_t i = 0; i < ya.size(); ++i) yb[i] = c * ya[i];
+        return unb.evaluate(ya, yb, e);
+    };
+    // Continuous at the floor, from both sides.
+    const double atFloor = std::sqrt(S / floor);
+    const LossParts above = at(floor / g1 * (1 + 1e-9)), below = at(floor / g1 * (1 - 1e-9));
+    EXPECT_FALSE(above.clamped);
+    EXPECT_TRUE(below.clamped);
+    EXPECT_NEAR(above.total / atFloor, 1.0, 1e-8);
+    EXPECT_NEAR(below.total / atFloor, 1.0, 1e-8);
+    // Finite and strictly decreasing in G_u below the floor, through 0 and negative values.
+    double prev = std::numeric_limits<double>::infinity();
+    for (double c : {-1.0, -1e-3, -1e-9, 0.0, 1e-15}) {
+        const LossParts r = at(c);
+        EXPECT_TRUE(r.clamped) << c;
+        EXPECT_TRUE(std::isfinite(r.total)) << c;
+        EXPECT_LT(r.total, prev) << c;
+        prev = r.total;
+    }
+    EXPECT_GT(prev, atFloor);
+    // In the clamped region the gradient is the tangent's: it matches central differences and
+    // is not zero, and a small step along −gradient raises G_u.
+    std::vector<double> yb(ya.size()), da(ya.size()), db(ya.size());
+    for (size_t i = 0; i < ya.size(); ++i) yb[i] = -0.5 * ya[i] + 0.1 * rng.nextDouble();
+    std::vector<double> de(e.size());
+    const LossParts r = unb.evaluate(ya, yb, e, da, db, de);
+    ASSERT_TRUE(r.clamped);
+    double norm = 0;
+    for (size_t i = 0; i < ya.size(); ++i) {
+        const double step = 1e-4;
+        std::vector<double> a = ya, b = ya;
+        a[i] += step;
+        b[i] -= step;
+        const double fd =
+            (unb.evaluate(a, yb, e).total - unb.evaluate(b, yb, e).total) / (2 * step);
+        EXPECT_NEAR(fd, da[i], 1e-7 * std::abs(da[i]) + 1e-6) << i;
+        norm += da[i] * da[i];
+    }
+    ASSERT_GT(norm, 0);
+    std::vector<double> ya2 = ya;
+    const double t = 1e-3 / std::sqrt(norm);
+    for (size_t i = 0; i < ya.size(); ++i) ya2[i] -= t * da[i];
+    EXPECT_GT(unb.energy(ya2, yb), r.G);
 }

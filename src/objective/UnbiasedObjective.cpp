@@ -43,24 +43,26 @@ LossParts UnbiasedObjective::evaluate(std::span<const double> Ya, std::span<cons
     LossParts r;
     r.S = S_;
     r.G = energy(Ya, Yb);
+    // Above the floor: sqrt(S/G). Below it (G_u <= 0 is possible): the tangent line at the
+    // floor, so the loss stays finite, C¹ and strictly decreasing in G_u, and its gradient
+    // still points toward more gradient energy (see the header).
     const double floor = 1e-12 * S_;
     r.clamped = r.G < floor;
     const double G = r.clamped ? floor : r.G;
-    r.lGrad = std::sqrt(S_ / G);
+    const double dLdG = -0.5 * std::sqrt(S_) / (G * std::sqrt(G));
+    r.lGrad = std::sqrt(S_ / G) + (r.clamped ? dLdG * (r.G - floor) : 0.0);
     const bool want = !dLdYa.empty() && !dLdYb.empty();
     if (want) {
         std::fill(dLdYa.begin(), dLdYa.end(), 0.0);
         std::fill(dLdYb.begin(), dLdYb.end(), 0.0);
-        if (!r.clamped) {
-            const double k = -0.5 * std::sqrt(S_) / (G * std::sqrt(G));  // dL/dG_u
-            detail::forEachMaskedPair(width_, height_, mask_.data(), [&](size_t p, size_t q) {
-                const double da = Ya[q] - Ya[p], db = Yb[q] - Yb[p];
-                dLdYa[q] += k * db;
-                dLdYa[p] -= k * db;
-                dLdYb[q] += k * da;
-                dLdYb[p] -= k * da;
-            });
-        }
+        const double k = dLdG;
+        detail::forEachMaskedPair(width_, height_, mask_.data(), [&](size_t p, size_t q) {
+            const double da = Ya[q] - Ya[p], db = Yb[q] - Yb[p];
+            dLdYa[q] += k * db;
+            dLdYa[p] -= k * db;
+            dLdYb[q] += k * da;
+            dLdYb[p] -= k * da;
+        });
     }
     const double lambda = opt_.lambda;
     if (opt_.reg == RegTarget::EnvMap) {

@@ -14,10 +14,13 @@
 //                                     the unbiased estimate of Σ Ȳ²/(W·H))
 //   Loss     = L_grad,u + λ·L_reg
 //
-// G_u can be ≤ 0 (noise can make the product of two differences negative). Below the floor
-// G_min = 1e-12·S the loss is sqrt(S/G_min), its L_grad gradient is 0 and `clamped` is set —
-// the same defined behaviour as ImageObjective's G → 0. In practice G_u is far above the floor
-// as soon as the image has any structure.
+// G_u can be ≤ 0 (noise can make the product of two differences negative; at a few spp on a
+// small mask it happens even at E0). Below the floor G_min = 1e-12·S, L_grad continues along
+// its tangent at G_min: L_grad = sqrt(S/G_min) − ½·sqrt(S)·G_min^(−3/2)·(G_u − G_min), and
+// `clamped` is set. The loss is then finite, C¹ and strictly decreasing in G_u everywhere, so
+// an optimizer that starts (or lands) there is pushed back toward positive gradient energy;
+// a zero gradient there would leave only the regulariser, which drives E to black. In
+// practice G_u is far above the floor as soon as the image has any structure.
 #pragma once
 
 #include <cstdint>
