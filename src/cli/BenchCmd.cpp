@@ -314,8 +314,9 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     auto n = std::make_shared<NoiseArgs>();
     CLI::App* nc = bench->add_subcommand(
         "noise",
-        "Speed against quality: spp sweep, paper vs noise-unbiased objective, scored on "
-        "one shared high-spp independent estimate");
+        "Speed against quality: spp sweep over training seeds, paper vs noise-unbiased "
+        "objective, each optimizer's budget, scored on one shared high-spp independent "
+        "estimate");
     nc->add_option("scene", n->o.scene, "Scene file")->required();
     nc->add_option("--resolution", n->o.resolution, "Image width and height")
         ->check(CLI::Range(8, 4096))
