@@ -2,6 +2,7 @@
 // visibility metrics, colour measures, the HTML report.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -16,7 +17,9 @@
 #include "io/ImageIO.h"
 #include "objective/ImageSpace.h"
 #include "objective/Metrics.h"
+#include "optimize/InitialState.h"
 #include "optimize/SpecularInit.h"
+#include "scene/EnvMapPresets.h"
 #include "scene/Scene.h"
 
 using namespace sl;
@@ -353,4 +356,26 @@ TEST(PaperCli, ScratchmapAndReportCommands) {
                   .exitCode,
               1);
     EXPECT_FALSE(std::filesystem::exists(dir / "x.html"));
+}
+
+TEST(PaperCli, EnvMapPresetIsAnRgbImageThatInitialisesThroughLStar) {
+    // A preset stands in for a photographed environment: written as RGB, so `--init envmap:`
+    // applies the paper's CIE L*/100 (a one-channel file would be taken as E itself).
+    test::TempDir dir("preset");
+    const auto exr = dir / "studio.exr";
+    auto r = test::runCli("envmap-preset studio -o " + exr.string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const Image img = readImage(exr);
+    ASSERT_EQ(img.channels, 3);
+    ASSERT_EQ(img.width, 50);
+    ASSERT_EQ(img.height, 25);
+    const EnvMap studio = studioEnvMap(50, 25);
+    const std::vector<double> e = initialEnvMap("envmap:" + exr.string(), 50, 25, false);
+    for (size_t t = 0; t < studio.texelCount(); ++t) {
+        const float v = studio.texels[t];
+        ASSERT_EQ(img.data[3 * t], v);
+        ASSERT_EQ(img.data[3 * t + 1], v);
+        ASSERT_EQ(img.data[3 * t + 2], v);
+        EXPECT_NEAR(e[t], std::clamp(lightnessLStar01(v, v, v), 0.0, 1.0), 1e-6) << t;
+    }
 }

@@ -189,7 +189,14 @@ struct PresetArgs {
 
 int runPreset(const PresetArgs& a) {
     const auto png = siblingPath(a.out, ".exr", ".png");
-    EnvMap e = presetEnvMap(a.name, a.width, a.height);
+    // Written as an RGB image: a preset stands in for a photographed environment, so
+    // `--init envmap:FILE` turns it gray by CIE L*/100 as the paper does with photos (a
+    // one-channel file would be taken as E itself).
+    const EnvMap gray = presetEnvMap(a.name, a.width, a.height);
+    EnvMap e = EnvMap::constant(gray.width, gray.height, 0.0f, 3);
+    for (size_t t = 0; t < gray.texelCount(); ++t)
+        for (size_t c = 0; c < 3; ++c)
+            e.texels[3 * t + c] = gray.texels[t * static_cast<size_t>(gray.channels)];
     writeEnvMap(a.out, e);
     writePng(png, envMapPreview(e, 16));
     std::printf("wrote %s (%dx%d) and %s\n", a.out.c_str(), a.width, a.height,
