@@ -34,7 +34,8 @@ struct LossParts {
     double lReg = 0;       // mean(E²) or mean(Y²), without λ
     double G = 0;          // masked sum of absolute differences
     double S = 0;          // mask size
-    bool clamped = false;  // G was below the floor (see Objective.cpp), gradient of L_grad is 0
+    bool clamped = false;  // G was below the floor: eq. 2 (Objective.cpp) then has a zero L_grad
+                           // gradient; the unbiased loss follows its tangent (UnbiasedObjective.h)
 };
 
 class ImageObjective {
