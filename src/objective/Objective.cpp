@@ -170,6 +170,17 @@ void ImageObjective::checkSizes(size_t nY, size_t nE, const char* who) const {
     }
 }
 
+double ImageObjective::envMapRegulariser(std::span<const double> E, std::span<double> dLdE) const {
+    double reg = 0.0;
+    for (double e : E) reg += e * e;
+    const double n = static_cast<double>(E.size());
+    if (!dLdE.empty()) {
+        const double k = 2.0 * opt_.lambda / n;
+        for (size_t i = 0; i < E.size(); ++i) dLdE[i] = k * E[i];
+    }
+    return reg / n;
+}
+
 LossParts ImageObjective::evaluate(std::span<const double> Y, std::span<const double> E,
                                    std::span<double> dLdY, std::span<double> dLdE) const {
     checkSizes(Y.size(), E.size(), "evaluate");
@@ -202,13 +213,7 @@ LossParts ImageObjective::evaluate(std::span<const double> Y, std::span<const do
     const double lambda = opt_.lambda;
     double reg = 0.0;
     if (opt_.reg == RegTarget::EnvMap) {
-        for (double e : E) reg += e * e;
-        const double n = static_cast<double>(E.size());
-        r.lReg = reg / n;
-        if (!dLdE.empty()) {
-            const double k = 2.0 * lambda / n;
-            for (size_t i = 0; i < E.size(); ++i) dLdE[i] = k * E[i];
-        }
+        r.lReg = envMapRegulariser(E, dLdE);
     } else {
         for (double y : Y) reg += y * y;
         const double n = static_cast<double>(Y.size());

@@ -76,6 +76,10 @@ class ImageObjective {
     /// i.e. −S/G², or 0 when G < gFloor() (clamped).
     double lGradScale(double G) const { return G < gFloor() ? 0.0 : -S_ / (G * G); }
 
+    /// The env-map regulariser mean(E²) (RegTarget::EnvMap); fills dLdE = 2λ·E/N when it is
+    /// non-empty (size N). Shared by every objective that regularises E.
+    double envMapRegulariser(std::span<const double> E, std::span<double> dLdE) const;
+
     /// dLoss/dY of the image regulariser is imageRegScale()·Y: 2λ/(W·H) for RegTarget::Image,
     /// 0 for RegTarget::EnvMap.
     double imageRegScale() const {

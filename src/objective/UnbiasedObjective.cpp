@@ -11,15 +11,11 @@ namespace sl {
 
 UnbiasedObjective::UnbiasedObjective(int width, int height, std::vector<uint8_t> mask,
                                      ObjectiveOptions options)
-    : width_(width), height_(height), mask_(std::move(mask)), opt_(options) {
-    // The ImageObjective constructor checks sizes, an empty mask and the options the same way.
-    ImageObjective check(width, height, mask_, options);
-    S_ = check.maskSize();
-}
+    : base_(width, height, std::move(mask), options) {}
 
 double UnbiasedObjective::energy(std::span<const double> Ya, std::span<const double> Yb) const {
     double G = 0;
-    detail::forEachMaskedPair(width_, height_, mask_.data(),
+    detail::forEachMaskedPair(width(), height(), mask().data(),
                               [&](size_t p, size_t q) { G += (Ya[q] - Ya[p]) * (Yb[q] - Yb[p]); });
     return G;
 }
@@ -27,13 +23,15 @@ double UnbiasedObjective::energy(std::span<const double> Ya, std::span<const dou
 LossParts UnbiasedObjective::evaluate(std::span<const double> Ya, std::span<const double> Yb,
                                       std::span<const double> E, std::span<double> dLdYa,
                                       std::span<double> dLdYb, std::span<double> dLdE) const {
-    const size_t n = static_cast<size_t>(width_) * static_cast<size_t>(height_);
+    const size_t n = static_cast<size_t>(width()) * static_cast<size_t>(height());
     if (Ya.size() != n || Yb.size() != n)
         throw std::invalid_argument("UnbiasedObjective: half images must have width*height values");
     if ((!dLdYa.empty() && dLdYa.size() != n) || (!dLdYb.empty() && dLdYb.size() != n) ||
         (!dLdE.empty() && dLdE.size() != E.size()))
         throw std::invalid_argument("UnbiasedObjective: gradient spans have the wrong size");
-    if (opt_.reg == RegTarget::EnvMap && E.empty())
+    const ObjectiveOptions& opt = options();
+    const double S = maskSize();
+    if (opt.reg == RegTarget::EnvMap && E.empty())
         throw std::invalid_argument(
             "UnbiasedObjective: E is empty but the regulariser is mean(E^2)");
     detail::checkFinite(Ya, "Ya", "evaluate");
@@ -41,37 +39,31 @@ LossParts UnbiasedObjective::evaluate(std::span<const double> Ya, std::span<cons
     detail::checkFinite(E, "E", "evaluate");
 
     LossParts r;
-    r.S = S_;
+    r.S = S;
     r.G = energy(Ya, Yb);
     // Above the floor: sqrt(S/G). Below it (G_u <= 0 is possible): the tangent line at the
     // floor, so the loss stays finite, C¹ and strictly decreasing in G_u, and its gradient
     // still points toward more gradient energy (see the header).
-    const double floor = 1e-12 * S_;
+    const double floor = base_.gFloor();
     r.clamped = r.G < floor;
     const double G = r.clamped ? floor : r.G;
-    const double dLdG = -0.5 * std::sqrt(S_) / (G * std::sqrt(G));
-    r.lGrad = std::sqrt(S_ / G) + (r.clamped ? dLdG * (r.G - floor) : 0.0);
+    const double dLdG = -0.5 * std::sqrt(S) / (G * std::sqrt(G));
+    r.lGrad = std::sqrt(S / G) + (r.clamped ? dLdG * (r.G - floor) : 0.0);
     const bool want = !dLdYa.empty() && !dLdYb.empty();
     if (want) {
         std::fill(dLdYa.begin(), dLdYa.end(), 0.0);
         std::fill(dLdYb.begin(), dLdYb.end(), 0.0);
-        const double k = dLdG;
-        detail::forEachMaskedPair(width_, height_, mask_.data(), [&](size_t p, size_t q) {
+        detail::forEachMaskedPair(width(), height(), mask().data(), [&](size_t p, size_t q) {
             const double da = Ya[q] - Ya[p], db = Yb[q] - Yb[p];
-            dLdYa[q] += k * db;
-            dLdYa[p] -= k * db;
-            dLdYb[q] += k * da;
-            dLdYb[p] -= k * da;
+            dLdYa[q] += dLdG * db;
+            dLdYa[p] -= dLdG * db;
+            dLdYb[q] += dLdG * da;
+            dLdYb[p] -= dLdG * da;
         });
     }
-    const double lambda = opt_.lambda;
-    if (opt_.reg == RegTarget::EnvMap) {
-        double s = 0;
-        for (double e : E) s += e * e;
-        const double N = static_cast<double>(E.size());
-        r.lReg = s / N;
-        if (!dLdE.empty())
-            for (size_t i = 0; i < E.size(); ++i) dLdE[i] = 2.0 * lambda * E[i] / N;
+    const double lambda = opt.lambda;
+    if (opt.reg == RegTarget::EnvMap) {
+        r.lReg = base_.envMapRegulariser(E, dLdE);
     } else {
         double s = 0;
         for (size_t i = 0; i < n; ++i) s += Ya[i] * Yb[i];

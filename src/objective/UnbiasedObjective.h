@@ -45,17 +45,16 @@ class UnbiasedObjective {
     /// G_u alone (for tests and scoring).
     double energy(std::span<const double> Ya, std::span<const double> Yb) const;
 
-    int width() const { return width_; }
-    int height() const { return height_; }
-    const std::vector<uint8_t>& mask() const { return mask_; }
-    const ObjectiveOptions& options() const { return opt_; }
-    double maskSize() const { return S_; }
+    int width() const { return base_.width(); }
+    int height() const { return base_.height(); }
+    const std::vector<uint8_t>& mask() const { return base_.mask(); }
+    const ObjectiveOptions& options() const { return base_.options(); }
+    double maskSize() const { return base_.maskSize(); }
 
   private:
-    int width_, height_;
-    std::vector<uint8_t> mask_;
-    ObjectiveOptions opt_;
-    double S_ = 0;
+    // Eq. 2's objective on the same mask and options: it checks them, holds them, and
+    // provides the floor G_min and the env-map regulariser.
+    ImageObjective base_;
 };
 
 }  // namespace sl
