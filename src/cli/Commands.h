@@ -10,5 +10,6 @@ void registerRender(CLI::App& app, std::function<int()>& run);
 void registerGenSurface(CLI::App& app, std::function<int()>& run);
 void registerBench(CLI::App& app, std::function<int()>& run);
 void registerTransport(CLI::App& app, std::function<int()>& run);
+void registerJudge(CLI::App& app, std::function<int()>& run);
 
 }  // namespace sl::cli

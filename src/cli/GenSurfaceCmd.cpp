@@ -21,6 +21,8 @@ namespace {
 struct GenArgs {
     std::string out = "part.exr", scene, process = "ballend";
     int width = 1024, height = 1024;
+    bool noPocket = false;
+    int imageSize = 0, spp = 64, maxDepth = 4;  // the scene file's camera and render section
     SurfaceSpec spec;
 };
 
@@ -31,6 +33,7 @@ int runGen(GenArgs a) {
         throw UsageError("output '" + a.out + "' must end in .exr (float32) or .png (16-bit)");
     a.spec.width = a.width;
     a.spec.height = a.height;
+    if (a.noPocket) a.spec.pocketEdge = false;
     a.spec.process = a.process == "facemill" ? SurfaceSpec::Process::FaceMillFeed
                                              : SurfaceSpec::Process::BallEndRaster;
     GeneratedSurface g = generateSurface(a.spec);
@@ -47,7 +50,16 @@ int runGen(GenArgs a) {
         writePng16(out, hm);
     }
     std::filesystem::path truth = out.parent_path() / (out.stem().string() + "-truth.png");
+    // The legend of the truth labels (judge --truth reads it to name the regions).
+    nlohmann::ordered_json legend;
+    legend["labels"] = nlohmann::ordered_json::array();
+    legend["labels"].push_back({{"value", kTruthDefect}, {"name", "defect"}});
+    if (std::count(g.truth.begin(), g.truth.end(), kTruthChatter) > 0)
+        legend["labels"].push_back({{"value", kTruthChatter}, {"name", "chatter"}});
+    std::filesystem::path legendPath = truth;
+    legendPath.replace_extension(".json");
     writeMaskPng(truth, g.truth, g.width, g.height);
+    writeTextAtomically(legendPath, legend.dump(2) + "\n");
 
     if (!a.scene.empty()) {
         std::filesystem::path scenePath = a.scene;
@@ -64,8 +76,9 @@ int runGen(GenArgs a) {
                          {"distribution", "ggx"},
                          {"alpha", 0.05},
                          {"material", "Al"}};
+        if (a.imageSize > 0) j["camera"] = {{"width", a.imageSize}, {"height", a.imageSize}};
         j["envmap"] = {{"width", 50}, {"height", 25}};
-        j["render"] = {{"spp", 64}, {"max_depth", 4}, {"seed", 0}};
+        j["render"] = {{"spp", a.spp}, {"max_depth", a.maxDepth}, {"seed", 0}};
         writeTextAtomically(scenePath, j.dump(2) + "\n");
         std::printf("wrote %s\n", scenePath.string().c_str());
     }
@@ -97,7 +110,23 @@ void registerGenSurface(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     c->add_option("--scratches", a->spec.scratchCount, "Number of random scratches")
         ->capture_default_str();
+    c->add_option("--chatter", a->spec.chatterAmplitude, "Chatter amplitude in mm (0: none)")
+        ->capture_default_str();
+    c->add_option("--chatter-start", a->spec.chatterStartFraction,
+                  "Chatter only from this fraction of the width in +x (0.5: the right half, "
+                  "labelled 128 in the truth)")
+        ->capture_default_str();
+    c->add_flag("--no-pocket", a->noPocket, "Leave out the pocket edge (step)");
     c->add_option("--seed", a->spec.seed, "Random seed")->capture_default_str();
+    c->add_option("--image-size", a->imageSize,
+                  "Scene file: camera image width and height in pixels (default: the scene's)")
+        ->check(CLI::Range(1, 16384));
+    c->add_option("--spp", a->spp, "Scene file: render.spp")
+        ->check(CLI::Range(1, 1 << 20))
+        ->capture_default_str();
+    c->add_option("--max-depth", a->maxDepth, "Scene file: render.max_depth")
+        ->check(CLI::Range(1, 64))
+        ->capture_default_str();
     c->add_option("--scene", a->scene, "Also write a scene file (JSON) that renders the map");
     c->callback([a, &run] { run = [a] { return runGen(*a); }; });
 }

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
     registerRender(app, run);
     registerGenSurface(app, run);
     registerTransport(app, run);
+    registerJudge(app, run);
     registerBench(app, run);
     registerGradients(app, run);
     registerPaper(app, run);

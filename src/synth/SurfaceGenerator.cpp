@@ -137,6 +137,10 @@ void validate(const SurfaceSpec& s) {
     requireFinite(s.chatterAmplitude, "chatterAmplitude");
     require(s.chatterAmplitude >= 0, "chatterAmplitude",
             "must be >= 0 mm, got " + num(s.chatterAmplitude), "Use 0 to disable chatter");
+    requireFinite(s.chatterStartFraction, "chatterStartFraction");
+    require(s.chatterStartFraction >= 0 && s.chatterStartFraction < 1, "chatterStartFraction",
+            "must be in [0, 1), got " + num(s.chatterStartFraction),
+            "Use 0 for chatter everywhere, 0.5 for the right half");
     if (s.chatterAmplitude > 0) {
         requireFinite(s.chatterWavelength, "chatterWavelength");
         require(s.chatterWavelength > 0, "chatterWavelength",
@@ -601,6 +605,8 @@ GeneratedSurface generateSurface(const SurfaceSpec& spec) {
 
     // --- compose, row-parallel (every sample is a pure function of the spec) ---
     const size_t N = static_cast<size_t>(W) * H;
+    const int chatterStart = static_cast<int>(std::ceil(spec.chatterStartFraction * W));
+    const bool labelChatter = spec.chatterStartFraction > 0 && spec.chatterAmplitude > 0;
     out.heights.assign(N, 0.0f);
     out.truth.assign(N, 0);
     tbb::parallel_for(tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& r) {
@@ -614,7 +620,7 @@ GeneratedSurface generateSurface(const SurfaceSpec& spec) {
                 double t = x * tm.cosA + z * tm.sinA;
                 double p = -x * tm.sinA + z * tm.cosA;
                 double sw = 0, cw = 0;
-                if (tm.A > 0) {
+                if (tm.A > 0 && i >= chatterStart) {
                     sw = std::sin(tm.omega * t);
                     cw = std::cos(tm.omega * t);
                 }
@@ -648,7 +654,9 @@ GeneratedSurface generateSurface(const SurfaceSpec& spec) {
             for (int i = 0; i < W; ++i) {
                 auto k = static_cast<size_t>(i);
                 dst[i] = static_cast<float>(row[k] + pocket[k]);
-                tr[i] = cut[k] ? uint8_t{255} : uint8_t{0};
+                tr[i] = cut[k]                              ? kTruthDefect
+                        : labelChatter && i >= chatterStart ? kTruthChatter
+                                                            : uint8_t{0};
             }
         }
     });
@@ -677,6 +685,12 @@ GeneratedSurface generateSurface(const SurfaceSpec& spec) {
                       1e3 * out.scallop);
         marks = buf;
     }
+    std::string chatterWhere;
+    if (labelChatter) {
+        std::snprintf(buf, sizeof buf, " on the last %.3g%% of the width in +x",
+                      100.0 * (1.0 - spec.chatterStartFraction));
+        chatterWhere = buf;
+    }
     std::string pocketText = "no pocket edge";
     if (std::isfinite(out.pocketEdgeX)) {
         std::snprintf(buf, sizeof buf, "pocket step %.4g mm (r=%.4g mm) at x=%.4g mm",
@@ -684,11 +698,11 @@ GeneratedSurface generateSurface(const SurfaceSpec& spec) {
         pocketText = buf;
     }
     std::snprintf(buf, sizeof buf,
-                  "synthetic %dx%d @ %.4g mm (%.4g x %.4g mm): %s; chatter %.3g um / %.4g mm; "
+                  "synthetic %dx%d @ %.4g mm (%.4g x %.4g mm): %s; chatter %.3g um / %.4g mm%s; "
                   "roughness %.3g um rms; %zu scratch(es), %zu gouge(s); %s; seed %llu",
                   W, H, pitch, extX, extZ, marks.c_str(), 1e3 * spec.chatterAmplitude,
-                  spec.chatterWavelength, 1e3 * spec.roughnessRms, out.scratches.size(),
-                  out.gouges.size(), pocketText.c_str(),
+                  spec.chatterWavelength, chatterWhere.c_str(), 1e3 * spec.roughnessRms,
+                  out.scratches.size(), out.gouges.size(), pocketText.c_str(),
                   static_cast<unsigned long long>(spec.seed));
     out.description = buf;
     return out;

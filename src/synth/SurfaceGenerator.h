@@ -41,9 +41,12 @@
 //     `cornerRadius` (convex at the top, concave at the bottom), with a vertical drop in
 //     between when pocketDepth > 2·cornerRadius. Subtracted from the surface.
 //
-// Truth mask: 255 where a defect was cut: scratch cells within the groove (distance to the
-// segment < width/2, and the tapered depth ≥ 10% of the scratch's depth), gouge cells that the
-// gouge lowered by ≥ 10% of its depth. Everything else, including the pocket edge, is 0.
+// Truth labels (one value per kind; gen-surface writes them as <stem>-truth.png with a JSON
+// legend <stem>-truth.json): kTruthDefect (255) where a defect was cut: scratch cells within the
+// groove (distance to the segment < width/2, and the tapered depth ≥ 10% of the scratch's depth),
+// gouge cells that the gouge lowered by ≥ 10% of its depth; kTruthChatter (128) on the other
+// samples of a confined chatter region (chatterStartFraction > 0). Everything else, including the
+// pocket edge, is 0.
 #pragma once
 
 #include <cstdint>
@@ -51,6 +54,9 @@
 #include <vector>
 
 namespace sl {
+
+inline constexpr uint8_t kTruthDefect = 255;   // scratch or gouge
+inline constexpr uint8_t kTruthChatter = 128;  // confined chatter region (not a cut defect)
 
 /// One scratch: a groove along the segment (x0,z0)–(x1,z1), mm, in the map's centred frame.
 struct ScratchSpec {
@@ -79,8 +85,11 @@ struct SurfaceSpec {
     bool ballFeedMarks = true;   // ball-end: model the tooth positions (feed scallops)
     double insertNoseRadius = 0.8;  // mm: face-mill insert nose radius r_n
     double rasterAngleDeg = 0.0;    // direction of the tool paths in the x-z plane, from +x to +z
-    double chatterAmplitude = 0.0005;    // mm, periodic waviness along the path (chatter)
-    double chatterWavelength = 0.4;      // mm
+    double chatterAmplitude = 0.0005;  // mm, periodic waviness along the path (chatter)
+    double chatterWavelength = 0.4;    // mm
+    // Chatter only where x ≥ this fraction of the map's width from its −x edge (0: everywhere,
+    // 0.5: the right half). When > 0 the chatter region is labelled in the truth (kTruthChatter).
+    double chatterStartFraction = 0.0;
     double roughnessRms = 0.0002;        // mm, small random roughness (fixed seed)
     double roughnessCorrelation = 0.02;  // mm, lattice spacing of the roughness (≥ pitch used)
     // Random scratches, used when `scratches` is empty: depth uniform in [0.5, 1]·scratchDepth,
@@ -107,7 +116,7 @@ struct GeneratedSurface {
     int width = 0, height = 0;
     double pitch = 0;
     std::vector<float> heights;  // row-major, row 0 first, mm
-    std::vector<uint8_t> truth;  // same size: 255 where a defect (scratch/gouge) was cut, else 0
+    std::vector<uint8_t> truth;  // same size: kTruthDefect, kTruthChatter or 0 (see above)
     std::string description;     // one line: what was generated, incl. the predicted scallop
     double scallop = 0;          // predicted cusp height of the tool marks, mm (see description)
     std::vector<ScratchSpec> scratches;  // the scratches actually cut (explicit or random)

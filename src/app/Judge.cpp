@@ -1,0 +1,198 @@
+#include "app/Judge.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "core/Color.h"
+#include "core/Error.h"
+#include "objective/ImageSpace.h"
+#include "objective/TransportLoss.h"
+#include "objective/UnbiasedObjective.h"
+#include "scene/EnvMap.h"
+#include "scene/Scene.h"
+
+namespace sl {
+
+TransportSource judgeEstimate(const Scene& scene, const JudgeOptions& o) {
+    if (o.spp < 2 || o.spp % 2 != 0)
+        throw inputError("judge spp", "must be an even number >= 2, got " + std::to_string(o.spp),
+                         "use e.g. 1024");
+    PrecomputeOptions p;
+    p.spp = o.spp;
+    p.seed = o.seed;
+    p.maxDepth = o.maxDepth;
+    p.rgb = o.rgb;
+    p.sampleSets = 2;
+    p.threads = o.threads;
+    p.progress = o.progress;
+    return transportForScene(scene, p, o.cacheDir);
+}
+
+LabelMask projectTruth(const Scene& scene, const std::filesystem::path& truth, int threads) {
+    LabelMask m = readLabelMask(truth, scene.mapWidth, scene.mapHeight);
+    const PrimaryHits hits = tracePrimaryHits(scene, threads);
+    LabelMask out;
+    out.width = hits.width;
+    out.height = hits.height;
+    out.legend = m.legend;
+    out.labels.assign(hits.sample.size(), 0);
+    for (size_t p = 0; p < hits.sample.size(); ++p)
+        if (hits.sample[p] >= 0) out.labels[p] = m.labels[static_cast<size_t>(hits.sample[p])];
+    return out;
+}
+
+Judge::Judge(const Scene& scene, const JudgeOptions& options) : options_(options) {
+    estimate_ = judgeEstimate(scene, options);
+    if (!options.truth.empty()) {
+        LabelMask m = projectTruth(scene, options.truth, options.threads);
+        labels_ = std::move(m.labels);
+        legend_ = std::move(m.legend);
+    }
+}
+
+Judge::Judge(TransportSource estimate, const JudgeOptions& options, std::vector<uint8_t> labels,
+             std::vector<RegionLabel> legend)
+    : estimate_(std::move(estimate)),
+      options_(options),
+      labels_(std::move(labels)),
+      legend_(std::move(legend)) {
+    const TransportMatrix& t = estimate_.file.matrix;
+    if (t.planes != 2)
+        throw inputError(estimate_.path.string(), "the judge needs two independent sample sets",
+                         "precompute it with --halves");
+    if (!labels_.empty() && labels_.size() != t.rows())
+        throw std::invalid_argument("Judge: labels do not match the image size");
+}
+
+std::vector<double> Judge::envVector(const EnvMap& env) const {
+    const TransportMatrix& t = estimate_.file.matrix;
+    if (env.width != t.envWidth || env.height != t.envHeight)
+        throw std::invalid_argument("Judge::envVector: env map is not on the judge's grid");
+    const size_t n = env.texelCount();
+    std::vector<double> e;
+    if (env.channels == 1) {
+        e.assign(env.texels.begin(), env.texels.end());
+    } else if (options_.rgb) {
+        e.assign(env.texels.begin(), env.texels.end());
+    } else {
+        e.resize(n);
+        for (size_t i = 0; i < n; ++i)
+            e[i] = luminance(double(env.texels[3 * i]), double(env.texels[3 * i + 1]),
+                             double(env.texels[3 * i + 2]));
+    }
+    return e;
+}
+
+std::vector<double> Judge::meanImage(std::span<const double> E) const {
+    const TransportMatrix& t = estimate_.file.matrix;
+    std::vector<double> y(t.rows());
+    t.applyLuminance(E, y);
+    return y;
+}
+
+JudgeScore Judge::score(std::span<const double> E, const std::string& name) const {
+    const TransportMatrix& t = estimate_.file.matrix;
+    const bool rgb = E.size() == 3 * t.cols();
+    JudgeScore s;
+    s.name = name;
+    const std::vector<uint8_t>& mask = partMask();
+    ImageObjective eq2(t.width, t.height, mask, options_.objective);
+    UnbiasedObjective unb(t.width, t.height, mask, options_.objective);
+    s.eq2 = TransportLoss(t, eq2, rgb).evaluate(E, {});
+    s.unbiased = TransportLoss(t, unb, rgb).evaluate(E, {});
+    double sum = 0;
+    size_t dark = 0;
+    for (double v : E) {
+        sum += v;
+        dark += v < kDarkTexel;
+    }
+    s.meanE = E.empty() ? 0 : sum / static_cast<double>(E.size());
+    s.sparsity = E.empty() ? 0 : static_cast<double>(dark) / static_cast<double>(E.size());
+    if (!labels_.empty()) {
+        std::vector<double> ya(t.rows()), yb(t.rows());
+        t.applyLuminance(E, ya, 0);
+        t.applyLuminance(E, yb, 1);
+        s.visibility = defectVisibility(t.width, t.height, ya, yb, mask, labels_, legend_);
+    }
+    return s;
+}
+
+namespace {
+
+nlohmann::ordered_json number(double v) {
+    return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
+}
+
+nlohmann::ordered_json parts(const LossParts& p) {
+    return {{"loss", number(p.total)},
+            {"L_grad", number(p.lGrad)},
+            {"L_reg", number(p.lReg)},
+            {"G", number(p.G)},
+            {"clamped", p.clamped}};
+}
+
+}  // namespace
+
+nlohmann::ordered_json toJson(const JudgeScore& s) {
+    nlohmann::ordered_json j;
+    j["name"] = s.name;
+    j["eq2"] = number(s.eq2.total);
+    j["unbiased"] = number(s.unbiased.total);
+    j["mean_E"] = s.meanE;
+    j["sparsity"] = s.sparsity;
+    nlohmann::ordered_json v = nlohmann::ordered_json::array();
+    for (const RegionVisibility& r : s.visibility)
+        v.push_back({{"name", r.label.name},
+                     {"value", r.label.value},
+                     {"pixels", r.pixels},
+                     {"visibility", number(r.visibility)},
+                     {"rms_gradient", number(r.rmsGradient)},
+                     {"clean_rms_gradient", number(r.cleanRmsGradient)},
+                     {"weber", number(r.weber)}});
+    j["visibility"] = v;
+    j["eq2_parts"] = parts(s.eq2);
+    j["unbiased_parts"] = parts(s.unbiased);
+    return j;
+}
+
+std::string formatJudgeTable(const std::vector<JudgeScore>& scores) {
+    std::vector<std::string> regions;
+    for (const JudgeScore& s : scores)
+        for (const RegionVisibility& r : s.visibility)
+            if (std::find(regions.begin(), regions.end(), r.label.name) == regions.end())
+                regions.push_back(r.label.name);
+    size_t nameWidth = 5;
+    for (const JudgeScore& s : scores) nameWidth = std::max(nameWidth, s.name.size());
+    std::ostringstream out;
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "%-*s %10s %10s %8s %9s", static_cast<int>(nameWidth), "light",
+                  "eq2", "U", "mean E", "dark<1e-3");
+    out << buf;
+    for (const std::string& r : regions) {
+        std::snprintf(buf, sizeof buf, " %14s %8s", ("vis " + r).substr(0, 14).c_str(), "weber");
+        out << buf;
+    }
+    out << '\n';
+    for (const JudgeScore& s : scores) {
+        std::snprintf(buf, sizeof buf, "%-*s %10.4f %10.4f %8.4f %8.1f%%",
+                      static_cast<int>(nameWidth), s.name.c_str(), s.eq2.total, s.unbiased.total,
+                      s.meanE, 100.0 * s.sparsity);
+        out << buf;
+        for (const std::string& r : regions) {
+            const RegionVisibility* v = nullptr;
+            for (const RegionVisibility& x : s.visibility)
+                if (x.label.name == r) v = &x;
+            if (v)
+                std::snprintf(buf, sizeof buf, " %14.3f %8.3f", v->visibility, v->weber);
+            else
+                std::snprintf(buf, sizeof buf, " %14s %8s", "-", "-");
+            out << buf;
+        }
+        out << '\n';
+    }
+    return out.str();
+}
+
+}  // namespace sl

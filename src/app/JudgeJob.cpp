@@ -1,0 +1,132 @@
+#include "app/JudgeJob.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "core/Error.h"
+#include "core/Image.h"
+#include "io/AtomicFile.h"
+#include "io/EnvMapIO.h"
+#include "io/ImageIO.h"
+#include "io/SceneFile.h"
+#include "scene/EnvMapPresets.h"
+#include "scene/Scene.h"
+
+namespace sl {
+
+namespace {
+
+std::filesystem::path envFileOf(const std::filesystem::path& light) {
+    if (std::filesystem::is_directory(light)) {
+        auto f = light / "envmap.exr";
+        if (!std::filesystem::exists(f))
+            throw inputError(light.string(), "is a directory without envmap.exr",
+                             "give an env-map file or an optimize output directory");
+        return f;
+    }
+    return light;
+}
+
+std::string nameOf(const std::filesystem::path& light) {
+    auto p = light;
+    if (p.filename().empty()) p = p.parent_path();
+    return std::filesystem::is_directory(p) ? p.filename().string() : p.stem().string();
+}
+
+}  // namespace
+
+void writeSideBySide(const std::filesystem::path& stem,
+                     const std::vector<std::vector<double>>& images, int w, int h,
+                     const std::vector<uint8_t>& partMask) {
+    const int n = static_cast<int>(images.size());
+    if (n == 0) return;
+    const int gap = 4, W = n * w + (n - 1) * gap;
+    Image lin(W, h, 1), shown(W, h, 1);
+    for (int k = 0; k < n; ++k) {
+        std::vector<double> part;
+        for (size_t p = 0; p < images[k].size(); ++p)
+            if (partMask.empty() || partMask[p]) part.push_back(images[k][p]);
+        double scale = 1.0;
+        if (!part.empty()) {
+            auto q = part.begin() +
+                     static_cast<std::ptrdiff_t>(0.99 * static_cast<double>(part.size() - 1));
+            std::nth_element(part.begin(), q, part.end());
+            if (*q > 0) scale = 0.8 / *q;
+        }
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const size_t src = static_cast<size_t>(y) * w + x;
+                const size_t dst = static_cast<size_t>(y) * W + k * (w + gap) + x;
+                lin.data[dst] = static_cast<float>(images[k][src]);
+                shown.data[dst] = static_cast<float>(images[k][src] * scale);
+            }
+    }
+    auto exr = stem, png = stem;
+    exr += ".exr";
+    png += ".png";
+    writeExr(exr, lin);
+    writePng(png, shown);
+}
+
+JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
+    if (o.lights.empty() && !o.references)
+        throw inputError("judge", "no light to score", "give env-map files or keep the references");
+    auto scene = loadScene(o.scene);
+    const int ew = scene->desc.envmap.width, eh = scene->desc.envmap.height;
+    // Load every light before tracing, so a bad file fails fast.
+    std::vector<std::pair<std::string, EnvMap>> lights;
+    for (const auto& l : o.lights)
+        lights.emplace_back(nameOf(l), loadEnvMap(envFileOf(l), ew, eh, 0));
+    if (o.references) {
+        lights.emplace_back("uniform-0.5", EnvMap::constant(ew, eh, 0.5f));
+        lights.emplace_back("studio", studioEnvMap(ew, eh));
+    }
+    JudgeOptions jo = o.judge;
+    if (jo.cacheDir.empty())
+        jo.cacheDir = std::filesystem::absolute(o.outDir).parent_path() / ".scratchlight-cache";
+    Judge judge(*scene, jo);
+    const TransportMatrix& t = judge.estimate().file.matrix;
+
+    JudgeJobSummary sum;
+    sum.estimate = judge.estimate();
+    std::vector<std::vector<double>> images;
+    for (const auto& [name, env] : lights) {
+        const std::vector<double> e = judge.envVector(env);
+        sum.scores.push_back(judge.score(e, name));
+        images.push_back(judge.meanImage(e));
+    }
+
+    std::filesystem::create_directories(o.outDir);
+    nlohmann::ordered_json j;
+    j["scene"] = o.scene.string();
+    j["estimate"] = {{"spp", jo.spp},
+                     {"seed", jo.seed},
+                     {"max_depth", sum.estimate.file.provenance.maxDepth},
+                     {"fingerprint", sum.estimate.file.provenance.fingerprint},
+                     {"cache_hit", sum.estimate.cacheHit},
+                     {"image", {t.width, t.height}}};
+    j["lambda"] = jo.objective.lambda;
+    if (!jo.truth.empty()) j["truth"] = jo.truth.string();
+    j["lights"] = nlohmann::ordered_json::array();
+    for (const JudgeScore& s : sum.scores) j["lights"].push_back(toJson(s));
+    writeTextAtomically(o.outDir / "judge.json", j.dump(2) + "\n");
+
+    std::ostringstream csv;
+    csv.precision(10);
+    csv << "light,eq2,unbiased,mean_E,sparsity";
+    const auto& first = sum.scores.front().visibility;
+    for (const auto& r : first) csv << ",visibility_" << r.label.name << ",weber_" << r.label.name;
+    csv << '\n';
+    for (const JudgeScore& s : sum.scores) {
+        csv << s.name << ',' << s.eq2.total << ',' << s.unbiased.total << ',' << s.meanE << ','
+            << s.sparsity;
+        for (const auto& r : s.visibility) csv << ',' << r.visibility << ',' << r.weber;
+        csv << '\n';
+    }
+    writeTextAtomically(o.outDir / "judge.csv", csv.str());
+    writeSideBySide(o.outDir / "renders", images, t.width, t.height, judge.partMask());
+    return sum;
+}
+
+}  // namespace sl

@@ -1,0 +1,42 @@
+// The `judge` job: scores env-map files (and the built-in references) on the judge's
+// independent estimate of a scene, and writes what a person looks at.
+//
+// OUTDIR holds:
+//   judge.json    one entry per light (app/Judge.h toJson) plus the estimate's facts
+//   judge.csv     one row per light: name, eq2, unbiased, mean_E, sparsity, per-region
+//                 visibility and Weber contrast
+//   renders.exr   the mean renders side by side (linear luminance, one panel per light, in
+//                 table order)
+//   renders.png   the same, each panel exposed on its own (99th percentile of the part → 0.8)
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "app/Judge.h"
+
+namespace sl {
+
+struct JudgeJobOptions {
+    std::filesystem::path scene;
+    /// Env-map files (EXR/HDR/PNG…), or optimize output directories (their envmap.exr).
+    std::vector<std::filesystem::path> lights;
+    bool references = true;  // also score uniform 0.5 and the studio preset
+    JudgeOptions judge;      // cacheDir "" = <parent of outDir>/.scratchlight-cache
+    std::filesystem::path outDir = "out/judge";
+};
+
+struct JudgeJobSummary {
+    TransportSource estimate;
+    std::vector<JudgeScore> scores;  // lights in the order given, then the references
+};
+
+JudgeJobSummary runJudgeJob(const JudgeJobOptions& options);
+
+/// Writes `images` (each width×height luminance) side by side as EXR and PNG (`stem`.exr/.png).
+void writeSideBySide(const std::filesystem::path& stem,
+                     const std::vector<std::vector<double>>& images, int width, int height,
+                     const std::vector<uint8_t>& partMask);
+
+}  // namespace sl

@@ -1,0 +1,87 @@
+// scratchlight judge SCENE.json [ENV.exr | OUTDIR ...] [--spp 1024] [--truth TRUTH.png]
+//                   [--lambda 30] [--json FILE] [--no-references] [-o DIR]
+// Scores env maps on the judge's independent estimate (app/Judge.h) and prints a table.
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+#include "app/JudgeJob.h"
+#include "cli/Commands.h"
+#include "cli/Common.h"
+#include "io/AtomicFile.h"
+
+namespace sl::cli {
+
+namespace {
+
+struct JudgeArgs {
+    std::string scene, json;
+    std::vector<std::string> lights;
+    bool noReferences = false;
+    JudgeJobOptions o;
+};
+
+int runJudge(const JudgeArgs& a) {
+    JudgeJobOptions o = a.o;
+    o.scene = a.scene;
+    o.references = !a.noReferences;
+    for (const auto& l : a.lights) o.lights.emplace_back(l);
+    o.judge.progress = progressBar("judge estimate");
+    JudgeJobSummary s = runJudgeJob(o);
+    const auto& est = s.estimate;
+    std::printf("judge estimate: %d spp in two halves, seed %llu, %s (%s)\n", o.judge.spp,
+                static_cast<unsigned long long>(o.judge.seed),
+                est.cacheHit ? "from the cache" : "traced", est.path.string().c_str());
+    std::printf("%s", formatJudgeTable(s.scores).c_str());
+    std::printf(
+        "lower eq2 and U are better; visibility: RMS gradient in the region over the "
+        "defect-free surface's\n");
+    if (!a.json.empty()) {
+        std::filesystem::path src = o.outDir / "judge.json";
+        std::filesystem::path dst = a.json;
+        if (std::filesystem::absolute(dst) != std::filesystem::absolute(src)) {
+            std::ifstream in(src);
+            std::stringstream text;
+            text << in.rdbuf();
+            writeTextAtomically(dst, text.str());
+        }
+    }
+    std::printf("wrote %s/ (judge.json, judge.csv, renders.exr, renders.png)\n",
+                o.outDir.string().c_str());
+    return kOk;
+}
+
+}  // namespace
+
+void registerJudge(CLI::App& app, std::function<int()>& run) {
+    auto a = std::make_shared<JudgeArgs>();
+    CLI::App* c = app.add_subcommand(
+        "judge", "Score env maps on an independent high-spp estimate (eq. 2, U, visibility)");
+    c->add_option("scene", a->scene, "Scene file (.json)")->required();
+    c->add_option("lights", a->lights,
+                  "Env-map files, or optimize output directories (their envmap.exr)");
+    c->add_option("--spp", a->o.judge.spp, "Samples per pixel of the estimate (two halves)")
+        ->check(CLI::Range(2, 1 << 20))
+        ->capture_default_str();
+    c->add_option("--seed", a->o.judge.seed, "The judge's seed (another judge: another seed)")
+        ->capture_default_str();
+    c->add_option("--max-depth", a->o.judge.maxDepth, "Mitsuba max_depth (default: the scene's)")
+        ->check(CLI::Range(1, 64));
+    c->add_option("--truth", a->o.judge.truth,
+                  "Truth label mask in height-map space (gen-surface's <stem>-truth.png; "
+                  "its <stem>-truth.json names the regions)");
+    c->add_option("--lambda", a->o.judge.objective.lambda, "λ of eq. 2 and U")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    c->add_flag("--rgb", a->o.judge.rgb, "Score RGB env maps in colour (an RGB estimate)");
+    c->add_flag("--no-references", a->noReferences,
+                "Leave out the built-in references (uniform 0.5, studio)");
+    c->add_option("--json", a->json, "Also write the scores to this JSON file");
+    c->add_option("--threads", a->o.judge.threads, "Worker threads (0: all cores)")
+        ->check(CLI::Range(0, 4096));
+    c->add_option("-o,--output", a->o.outDir, "Output directory")->capture_default_str();
+    c->callback([a, &run] { run = [a] { return runJudge(*a); }; });
+}
+
+}  // namespace sl::cli

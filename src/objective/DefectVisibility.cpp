@@ -1,0 +1,123 @@
+#include "objective/DefectVisibility.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace sl {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+/// Chebyshev dilation of a binary image by r pixels (separable max filter).
+std::vector<uint8_t> dilate(const std::vector<uint8_t>& in, int w, int h, int r) {
+    std::vector<uint8_t> tmp(in.size(), 0), out(in.size(), 0);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            uint8_t m = 0;
+            for (int d = std::max(0, x - r); d <= std::min(w - 1, x + r) && !m; ++d)
+                m = in[static_cast<size_t>(y) * w + d];
+            tmp[static_cast<size_t>(y) * w + x] = m;
+        }
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            uint8_t m = 0;
+            for (int d = std::max(0, y - r); d <= std::min(h - 1, y + r) && !m; ++d)
+                m = tmp[static_cast<size_t>(d) * w + x];
+            out[static_cast<size_t>(y) * w + x] = m;
+        }
+    return out;
+}
+
+/// Mean of ΔY_a·ΔY_b over the x and y neighbour pairs with both pixels in `in`.
+double meanGradientProduct(int w, int h, std::span<const double> Ya, std::span<const double> Yb,
+                           const std::vector<uint8_t>& in) {
+    double sum = 0;
+    size_t pairs = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const size_t p = static_cast<size_t>(y) * w + x;
+            if (!in[p]) continue;
+            if (x + 1 < w && in[p + 1]) {
+                sum += (Ya[p + 1] - Ya[p]) * (Yb[p + 1] - Yb[p]);
+                ++pairs;
+            }
+            if (y + 1 < h && in[p + w]) {
+                sum += (Ya[p + w] - Ya[p]) * (Yb[p + w] - Yb[p]);
+                ++pairs;
+            }
+        }
+    return pairs ? sum / static_cast<double>(pairs) : kNaN;
+}
+
+double meanOver(std::span<const double> Ya, std::span<const double> Yb,
+                const std::vector<uint8_t>& in) {
+    double sum = 0;
+    size_t n = 0;
+    for (size_t p = 0; p < in.size(); ++p)
+        if (in[p]) {
+            sum += 0.5 * (Ya[p] + Yb[p]);
+            ++n;
+        }
+    return n ? sum / static_cast<double>(n) : kNaN;
+}
+
+double rms(double meanSquare) {
+    return std::isnan(meanSquare) ? kNaN : std::sqrt(std::max(meanSquare, 0.0));
+}
+
+}  // namespace
+
+std::vector<RegionVisibility> defectVisibility(int w, int h, std::span<const double> Ya,
+                                               std::span<const double> Yb,
+                                               std::span<const uint8_t> partMask,
+                                               std::span<const uint8_t> labels,
+                                               const std::vector<RegionLabel>& legend) {
+    const size_t n = static_cast<size_t>(w) * h;
+    if (Ya.size() != n || Yb.size() != n || partMask.size() != n || labels.size() != n)
+        throw std::invalid_argument("defectVisibility: image sizes differ");
+
+    std::vector<RegionLabel> regions = legend;
+    std::vector<uint8_t> any(n, 0);
+    bool present[256] = {};
+    for (size_t p = 0; p < n; ++p) {
+        any[p] = labels[p] != 0;
+        if (partMask[p] && labels[p]) present[labels[p]] = true;
+    }
+    for (int v = 1; v < 256; ++v) {
+        const bool listed = std::any_of(regions.begin(), regions.end(),
+                                        [&](const RegionLabel& r) { return r.value == v; });
+        if (present[v] && !listed)
+            regions.push_back({static_cast<uint8_t>(v), "label-" + std::to_string(v)});
+    }
+
+    const std::vector<uint8_t> near = dilate(any, w, h, kCleanMargin);
+    std::vector<uint8_t> clean(n, 0);
+    for (size_t p = 0; p < n; ++p) clean[p] = partMask[p] && !near[p];
+    const double cleanRms = rms(meanGradientProduct(w, h, Ya, Yb, clean));
+
+    std::vector<RegionVisibility> out;
+    for (const RegionLabel& r : regions) {
+        RegionVisibility v;
+        v.label = r;
+        std::vector<uint8_t> in(n, 0);
+        for (size_t p = 0; p < n; ++p) {
+            in[p] = partMask[p] && labels[p] == r.value;
+            v.pixels += in[p];
+        }
+        v.cleanRmsGradient = cleanRms;
+        v.rmsGradient = rms(meanGradientProduct(w, h, Ya, Yb, in));
+        v.visibility = cleanRms > 0 ? v.rmsGradient / cleanRms : kNaN;
+        const std::vector<uint8_t> ring = dilate(in, w, h, kWeberRing);
+        std::vector<uint8_t> background(n, 0);
+        for (size_t p = 0; p < n; ++p) background[p] = ring[p] && partMask[p] && !any[p];
+        const double mIn = meanOver(Ya, Yb, in), mBg = meanOver(Ya, Yb, background);
+        v.weber = mBg > 0 ? (mIn - mBg) / mBg : kNaN;
+        out.push_back(v);
+    }
+    return out;
+}
+
+}  // namespace sl

@@ -1,0 +1,49 @@
+// Defect visibility on two independent half-sample images (the judge's per-region scores).
+//
+// Given Y_a, Y_b (two unbiased estimates of the same image from disjoint samples) and a label
+// image (one value per defect kind, 0 = no defect), for every label v:
+//
+//   R_v      = part pixels labelled v;   F = part pixels farther than kCleanMargin pixels
+//              (Chebyshev) from every labelled pixel: the defect-free surface
+//   g²(X)    = Σ_{pairs p,q ⊂ X} (Y_a,q − Y_a,p)·(Y_b,q − Y_b,p) / #pairs(X)   (x and y neighbours)
+//              an unbiased estimate of the mean squared noise-free gradient in X
+//   rms(X)   = sqrt(max(g²(X), 0))
+//   visibility_v = rms(R_v) / rms(F)       1.0: the defect is no more salient than the texture
+//   weber_v  = (mean Ȳ over R_v − mean Ȳ over B_v) / mean Ȳ over B_v,  Ȳ = (Y_a + Y_b)/2,
+//              B_v = the unlabelled part pixels within kWeberRing pixels of R_v (its local
+//              background)
+//
+// Values that cannot be formed (no pairs, zero denominators) are NaN (JSON null).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "io/LabelMask.h"
+
+namespace sl {
+
+inline constexpr int kCleanMargin = 2;  // px between a defect and the "defect-free" surface
+inline constexpr int kWeberRing = 4;    // px of local background around a region
+
+struct RegionVisibility {
+    RegionLabel label;
+    size_t pixels = 0;            // part pixels with this label
+    double rmsGradient = 0;       // rms(R_v), luminance per pixel
+    double cleanRmsGradient = 0;  // rms(F)
+    double visibility = 0;        // rms(R_v) / rms(F)
+    double weber = 0;             // Weber contrast against the local background
+};
+
+/// Per-label visibility. labels: width*height label image (image space); partMask: nonzero
+/// on the part. Labels present in `labels` but missing from `legend` are scored as
+/// "label-<v>"; legend entries with no pixel are reported with pixels = 0 and NaN scores.
+std::vector<RegionVisibility> defectVisibility(int width, int height, std::span<const double> Ya,
+                                               std::span<const double> Yb,
+                                               std::span<const uint8_t> partMask,
+                                               std::span<const uint8_t> labels,
+                                               const std::vector<RegionLabel>& legend);
+
+}  // namespace sl
