@@ -44,7 +44,8 @@ LabelMask projectTruth(const Scene& scene, const std::filesystem::path& truth, i
 }
 
 Judge::Judge(const Scene& scene, const JudgeOptions& options) : options_(options) {
-    estimate_ = judgeEstimate(scene, options);
+    owned_ = judgeEstimate(scene, options);
+    estimate_ = &*owned_;
     if (!options.truth.empty()) {
         LabelMask m = projectTruth(scene, options.truth, options.threads);
         labels_ = std::move(m.labels);
@@ -52,22 +53,22 @@ Judge::Judge(const Scene& scene, const JudgeOptions& options) : options_(options
     }
 }
 
-Judge::Judge(TransportSource estimate, const JudgeOptions& options, std::vector<uint8_t> labels,
-             std::vector<RegionLabel> legend)
-    : estimate_(std::move(estimate)),
+Judge::Judge(const TransportSource& estimate, const JudgeOptions& options,
+             std::vector<uint8_t> labels, std::vector<RegionLabel> legend)
+    : estimate_(&estimate),
       options_(options),
       labels_(std::move(labels)),
       legend_(std::move(legend)) {
-    const TransportMatrix& t = estimate_.file.matrix;
+    const TransportMatrix& t = estimate_->file.matrix;
     if (t.planes != 2)
-        throw inputError(estimate_.path.string(), "the judge needs two independent sample sets",
+        throw inputError(estimate_->path.string(), "the judge needs two independent sample sets",
                          "precompute it with --halves");
     if (!labels_.empty() && labels_.size() != t.rows())
         throw std::invalid_argument("Judge: labels do not match the image size");
 }
 
 std::vector<double> Judge::envVector(const EnvMap& env) const {
-    const TransportMatrix& t = estimate_.file.matrix;
+    const TransportMatrix& t = estimate_->file.matrix;
     if (env.width != t.envWidth || env.height != t.envHeight)
         throw std::invalid_argument("Judge::envVector: env map is not on the judge's grid");
     const size_t n = env.texelCount();
@@ -86,14 +87,14 @@ std::vector<double> Judge::envVector(const EnvMap& env) const {
 }
 
 std::vector<double> Judge::meanImage(std::span<const double> E) const {
-    const TransportMatrix& t = estimate_.file.matrix;
+    const TransportMatrix& t = estimate_->file.matrix;
     std::vector<double> y(t.rows());
     t.applyLuminance(E, y);
     return y;
 }
 
 JudgeScore Judge::score(std::span<const double> E, const std::string& name) const {
-    const TransportMatrix& t = estimate_.file.matrix;
+    const TransportMatrix& t = estimate_->file.matrix;
     const bool rgb = E.size() == 3 * t.cols();
     JudgeScore s;
     s.name = name;

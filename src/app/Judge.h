@@ -64,10 +64,12 @@ class Judge {
     /// Traces (or reads from options.cacheDir) the judge's estimate of `scene`, and projects
     /// options.truth into the image. Throws InputError for a mismatched truth mask.
     Judge(const Scene& scene, const JudgeOptions& options);
-    /// A judge on a given two-plane estimate (optimize --heldout FILE.tm, tests). `labels`:
-    /// image-space labels (width*height) or empty.
-    Judge(TransportSource estimate, const JudgeOptions& options, std::vector<uint8_t> labels = {},
-          std::vector<RegionLabel> legend = {});
+    Judge(const Judge&) = delete;
+    Judge& operator=(const Judge&) = delete;
+    /// A judge on a given two-plane estimate that outlives it (optimize's held-out estimate,
+    /// tests). `labels`: image-space labels (width*height) or empty.
+    Judge(const TransportSource& estimate, const JudgeOptions& options,
+          std::vector<uint8_t> labels = {}, std::vector<RegionLabel> legend = {});
 
     /// Scores E (gray: one value per texel; RGB: three, needs options.rgb).
     JudgeScore score(std::span<const double> E, const std::string& name = {}) const;
@@ -77,13 +79,14 @@ class Judge {
     /// RGB judge, else by their luminance (exact for a gray conductor).
     std::vector<double> envVector(const EnvMap& env) const;
 
-    const TransportSource& estimate() const { return estimate_; }
-    const std::vector<uint8_t>& partMask() const { return estimate_.file.matrix.objectMask; }
+    const TransportSource& estimate() const { return *estimate_; }
+    const std::vector<uint8_t>& partMask() const { return estimate_->file.matrix.objectMask; }
     const std::vector<uint8_t>& labels() const { return labels_; }
     const JudgeOptions& options() const { return options_; }
 
   private:
-    TransportSource estimate_;
+    std::optional<TransportSource> owned_;
+    const TransportSource* estimate_ = nullptr;
     JudgeOptions options_;
     std::vector<uint8_t> labels_;
     std::vector<RegionLabel> legend_;

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "app/Report.h"
+#include "app/Search.h"
 #include "core/Error.h"
 #include "io/AtomicFile.h"
 #include "io/EnvMapIO.h"
@@ -112,16 +113,34 @@ void writeRender(const std::filesystem::path& exr, const std::vector<double>& im
     writePng(png, img);
 }
 
+void resolveMethodPreset(OptimizeJobOptions& o) {
+    if (o.optimizer.method == kPaperLoopMethod) {
+        // The paper's loop on T: eq. 2, Adam, a fresh sample set (estimate of T) every step.
+        o.objectiveKind = "paper";
+        o.optimizer.method = "adam";
+        if (o.planes <= 1) o.planes = kPaperLoopPlanes;
+        o.methodLabel = kPaperLoopMethod;
+    }
+    if (o.planes < 1) o.planes = 1;
+}
+
+OptimizeJobSummary runResolved(const OptimizeJobOptions& o);
+
 OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
     if (o.lambdas.empty()) throw inputError("--lambda", "no value given");
     for (double l : o.lambdas)
         if (!(l >= 0) || !std::isfinite(l))
             throw inputError("--lambda", "must be >= 0", "give e.g. --lambda 30 or 10,30,100");
 
-    if (o.objectiveKind != "paper" && o.objectiveKind != "unbiased")
-        throw inputError("--objective", "unknown objective '" + o.objectiveKind + "'",
-                         "use paper or unbiased");
-    const bool unbiased = o.objectiveKind == "unbiased";
+    OptimizeJobOptions resolved = o;
+    resolveMethodPreset(resolved);
+    return runResolved(resolved);
+}
+
+OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
+    const bool unbiased =
+        parseObjectiveKind(o.objectiveKind, "--objective") == ObjectiveKind::Unbiased;
+    if (o.planes < 1) throw inputError("--planes", "must be >= 1");
     if (o.heldOutEvery < 1) throw inputError("--heldout-every", "must be >= 1");
     OptimizeJobSummary job;
     const auto cacheDir = std::filesystem::absolute(o.outDir).parent_path() / ".scratchlight-cache";
@@ -136,8 +155,10 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
                          "pass SCENE.json instead of the .tm");
     // One loaded scene serves T, the held-out T and what needs the scene itself.
     std::unique_ptr<Scene> scene;
-    const bool needScene = blackBox || o.mask == "scratch" || o.init == "specular" ||
-                           !o.truth.empty() || o.heldOut.empty();
+    const bool specularStart = o.init == "specular" || std::find(o.starts.begin(), o.starts.end(),
+                                                                 "specular") != o.starts.end();
+    const bool needScene =
+        blackBox || o.mask == "scratch" || specularStart || !o.truth.empty() || o.heldOut.empty();
     if (!tmInput) scene = loadScene(o.input);
     if (tmInput) {
         auto t0 = std::chrono::steady_clock::now();
@@ -149,8 +170,14 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
         PrecomputeOptions p = o.precompute;
         p.rgb = o.rgb;
         if (unbiased) p.sampleSets = 2;
-        job.transport = transportForScene(*scene, p, cacheDir);
+        std::vector<TransportSource> set = transportSetForScene(*scene, p, o.planes, cacheDir);
+        job.transport = std::move(set.front());
+        for (size_t k = 1; k < set.size(); ++k) job.extraPlanes.push_back(std::move(set[k]));
     }
+    if (tmInput && o.planes > 1)
+        throw inputError("--planes " + std::to_string(o.planes),
+                         "needs independent estimates of T traced from the scene",
+                         "pass SCENE.json instead of the .tm, or --planes 1");
     if (!scene && needScene) {
         std::string purpose = o.heldOut.empty() ? "the held-out estimate (or --heldout none)"
                                                 : "--mask scratch / --init specular / --truth";
@@ -182,10 +209,13 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
             if (!o.heldOut.empty())
                 throw inputError("--heldout", "'" + o.heldOut + "' is not a .tm file",
                                  "give a .tm file, none, or leave it out");
-            job.heldOut = heldOutFor(job.transport.file, *scene, o.heldOutSpp, cacheDir);
+            job.heldOut = judgeEstimateFor(job.transport.file, *scene, o.heldOutSpp, cacheDir);
         }
-        if (job.heldOut->file.provenance.seed == job.transport.file.provenance.seed)
-            spdlog::warn("the held-out estimate uses the training seed: it is not independent");
+        const uint64_t hs = job.heldOut->file.provenance.seed,
+                       ts = job.transport.file.provenance.seed;
+        if (hs >= ts && hs < ts + static_cast<uint64_t>(o.planes))
+            throw inputError("--seed", "the training seed range overlaps the judge's seed",
+                             "use another --seed");
     }
 
     std::vector<uint8_t> mask = t.objectMask, scratchCells;
@@ -204,10 +234,13 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
     std::vector<uint8_t> truth;
     if (!o.truth.empty()) truth = projectMaskFile(*scene, o.truth);
 
-    const std::vector<double> e0 =
-        o.init == "specular"
-            ? specularInitialEnvMap(*scene, job.transport.file.provenance.maxDepth, o.rgb)
-            : initialEnvMap(o.init, t.envWidth, t.envHeight, o.rgb);
+    const std::vector<std::string> starts =
+        o.starts.empty() ? std::vector<std::string>{o.init} : o.starts;
+    const int maxDepth = job.transport.file.provenance.maxDepth;
+    // E0: the first start (the report's "before").
+    const std::vector<double> e0 = startEnvMap(starts.front(), t, o.rgb, scene.get(), maxDepth);
+    LabelMask truthLabels;  // the judge's regions
+    if (job.heldOut && !o.truth.empty()) truthLabels = projectTruth(*scene, o.truth);
     // E0's render and metrics do not depend on λ: computed once for every run.
     const std::vector<double> image0 = renderImage(t, e0);
     const VisibilityMetrics metricsInitial = metricsFor(t, image0, mask, e0, o.rgb, truth);
@@ -217,6 +250,8 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
     sweepCsv << "lambda,optimizer,objective,iterations,evaluations,initial_loss,final_loss,"
                 "final_L_grad,final_L_reg,heldout_loss,heldout_paper_loss,seconds\n";
 
+    std::vector<const TransportMatrix*> set{&t};
+    for (const TransportSource& x : job.extraPlanes) set.push_back(&x.file.matrix);
     for (double lambda : o.lambdas) {
         ObjectiveOptions oo = o.objective;
         oo.lambda = lambda;
@@ -238,14 +273,22 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
         if (scorer) run.heldInitial = scorer->score(e);
 
         std::vector<std::string> rows;
-        OptimizerOptions opt = o.optimizer;
-        LossParts last;  // parts of the most recent evaluation, usually the reported iterate
-        opt.callback = [&](const IterationRecord& r, std::span<const double> x) {
-            LossParts p = r.loss == last.total ? last : loss.evaluate(x, {});
+        auto callback = [&](const IterationRecord& r, std::span<const double> x) {
+            // Every row: the optimizer's own loss (with planes, on the estimate of that step;
+            // with continuation, at that stage's λ). Every heldOutEvery rows also the parts on
+            // T at λ and the held-out scores.
+            const bool full = r.iteration % o.heldOutEvery == 0;
             std::ostringstream row;
-            row << std::setprecision(10) << r.iteration << ',' << r.evaluations << ',' << p.total
-                << ',' << p.lGrad << ',' << p.lReg << ',' << r.seconds << ',';
-            if (scorer && r.iteration % o.heldOutEvery == 0) {
+            row << std::setprecision(10) << r.iteration << ',' << r.evaluations << ',' << r.loss
+                << ',';
+            if (full) {
+                const LossParts p = loss.evaluate(x, {});
+                row << p.lGrad << ',' << p.lReg;
+            } else {
+                row << ',';
+            }
+            row << ',' << r.seconds << ',';
+            if (scorer && full) {
                 auto t0 = std::chrono::steady_clock::now();
                 HeldOutScore h = scorer->score(x);
                 run.secondsHeldOutScoring +=
@@ -258,6 +301,8 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
             return o.optimizer.callback ? o.optimizer.callback(r, x) : true;
         };
         if (blackBox) {
+            OptimizerOptions opt = o.optimizer;
+            opt.callback = callback;
             RenderOptions ro = renderOptionsFor(*scene);
             ro.spp = job.transport.file.provenance.spp;
             ro.seed = job.transport.file.provenance.seed;
@@ -266,8 +311,28 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
             RenderLoss renderLoss(*scene, ro, objective, o.rgb);
             run.optimizer = minimizeBlackBox(renderLoss, e, opt, o.blackBox);
         } else {
-            run.optimizer = minimize(loss.problem(&last), e, opt);
+            SearchInputs in;
+            in.set = set;
+            in.mask = mask;
+            in.objective = oo;
+            in.rgb = o.rgb;
+            in.scene = scene.get();
+            in.maxDepth = maxDepth;
+            in.callback = callback;
+            SearchOptions so;
+            so.objective = unbiased ? ObjectiveKind::Unbiased : ObjectiveKind::Paper;
+            so.optimizer = o.optimizer;
+            so.optimizer.callback = nullptr;
+            so.planes = o.planes;
+            so.starts = starts;
+            so.continuation = o.continuation;
+            SearchResult sr = search(in, so);
+            e = sr.e;
+            run.optimizer = sr.optimizer;
+            run.start = sr.start;
+            run.startLosses = sr.startLosses;
         }
+        if (!o.methodLabel.empty()) run.optimizer.method = o.methodLabel;
         run.final = loss.evaluate(e, {});
         if (scorer) {
             run.heldFinal = scorer->score(e);
@@ -279,6 +344,13 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
                      << run.heldFinal->paper.total;
                 rows.back() += tail.str();
             }
+        }
+        if (job.heldOut) {  // the judge on the held-out estimate, at this run's λ
+            JudgeOptions jo;
+            jo.objective = oo;
+            jo.rgb = o.rgb;
+            const Judge judge(*job.heldOut, jo, truthLabels.labels, truthLabels.legend);
+            run.judged = judge.score(e, run.dir.filename().string());
         }
         std::ostringstream csv;
         csv << "iteration,evaluations,loss,L_grad,L_reg,seconds,heldout_loss,heldout_paper_loss\n";
@@ -310,6 +382,10 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
 
         json s;
         s["optimizer"] = run.optimizer.method;
+        s["planes"] = o.planes;
+        s["starts"] = starts;
+        s["start"] = run.start;
+        s["continuation"] = o.continuation;
         s["objective"] = o.objectiveKind;
         s["lambda"] = lambda;
         s["reg"] = oo.reg == RegTarget::EnvMap ? "envmap" : "image";
@@ -343,6 +419,7 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
             s["heldout_loss"] = nullptr;
         }
         s["transport"] = transportJson(job.transport);
+        if (run.judged) s["judge"] = toJson(*run.judged);
         s["metrics"] = toJson(metricsFor(t, imageFinal, mask, e, o.rgb, truth));
         s["metrics_initial"] = toJson(metricsInitial);
         if (!o.truth.empty()) s["truth"] = o.truth;

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "app/HeldOut.h"
+#include "app/Judge.h"
 #include "app/Transport.h"
 #include "objective/Objective.h"
 #include "objective/ScratchMap.h"
@@ -40,13 +41,24 @@ struct OptimizeJobOptions {
     std::string truth;          // ground-truth defect mask in height-map space (metrics)
     bool rgb = false;
     std::string objectiveKind = "paper";  // paper (eq. 2) | unbiased (needs T's two halves)
-    std::string heldOut;                  // "": trace it from the scene (cached); "none"; a .tm
-    int heldOutSpp = 0;                   // 0: the training spp
-    int heldOutEvery = 10;                // held-out column of loss.csv every N iterations
-    OptimizerOptions optimizer;           // method: an optimizer of sl::minimize, or fd-adam / spsa
-    BlackBoxOptions blackBox;             // fd-adam / spsa: gradients through the renderer
-    PrecomputeOptions precompute;         // used when input is a scene
+    std::string heldOut;  // "": the judge's estimate traced from the scene (cached); "none"; a .tm
+    int heldOutSpp = 0;   // 0: the judge's default (app/Judge.h)
+    int heldOutEvery = 10;         // held-out column of loss.csv every N iterations
+    OptimizerOptions optimizer;    // method: an optimizer of sl::minimize, or fd-adam / spsa
+    BlackBoxOptions blackBox;      // fd-adam / spsa: gradients through the renderer
+    PrecomputeOptions precompute;  // used when input is a scene
+    // The search (app/Search.h). planes: independent estimates of T cycled per step;
+    // starts: multistart (empty: {init}); continuation: λ factors before λ.
+    int planes = 1;
+    std::vector<std::string> starts;
+    std::vector<double> continuation;
+    std::string methodLabel;  // set by method presets (paper-loop): the name reported
 };
+
+/// `--optimizer paper-loop`: the paper's loop emulated on T (eq. 2, Adam lr 0.02 × 100, a fresh
+/// estimate of T every step, cycled over kPaperLoopPlanes estimates unless planes is given).
+inline constexpr const char* kPaperLoopMethod = "paper-loop";
+inline constexpr int kPaperLoopPlanes = 8;
 
 struct OptimizeRun {
     double lambda = 0;
@@ -55,11 +67,15 @@ struct OptimizeRun {
     LossParts initial, final;
     std::optional<HeldOutScore> heldInitial, heldFinal;
     double secondsHeldOutScoring = 0;  // inside the optimizer's time (callback)
+    std::string start;                 // the start that won (multistart)
+    std::vector<std::pair<std::string, double>> startLosses;
+    std::optional<JudgeScore> judged;  // the judge's scores of E* (with the held-out estimate)
 };
 
 struct OptimizeJobSummary {
     TransportSource transport;
-    std::optional<TransportSource> heldOut;
+    std::vector<TransportSource> extraPlanes;  // estimates 1..planes−1 of T
+    std::optional<TransportSource> heldOut;    // the judge's estimate
     size_t maskPixels = 0;
     std::vector<OptimizeRun> runs;
 };

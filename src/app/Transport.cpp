@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/HeldOut.h"
+#include "app/Judge.h"
 #include "core/Error.h"
 #include "io/SceneFile.h"
 #include "render/Render.h"
@@ -27,7 +28,7 @@ TransportSource trace(const Scene& scene, const RenderOptions& ro, const Transpo
     TransportSource s;
     s.secondsTrace = r.summary.seconds;
     s.trace = r.summary;
-    writeTransportFile(out, r.matrix, prov);
+    if (!out.empty()) writeTransportFile(out, r.matrix, prov);
     s.file.matrix = std::move(r.matrix);
     s.file.provenance = prov;
     s.path = out;
@@ -36,6 +37,20 @@ TransportSource trace(const Scene& scene, const RenderOptions& ro, const Transpo
 }
 
 }  // namespace
+
+std::vector<TransportSource> transportSetForScene(const Scene& scene,
+                                                  const PrecomputeOptions& options, int count,
+                                                  const std::filesystem::path& cacheDir) {
+    if (count < 1) throw inputError("planes", "must be >= 1, got " + std::to_string(count));
+    const uint64_t base = options.seed ? *options.seed : scene.desc.render.seed;
+    std::vector<TransportSource> set;
+    for (int k = 0; k < count; ++k) {
+        PrecomputeOptions o = options;
+        o.seed = base + static_cast<uint64_t>(k);
+        set.push_back(transportForScene(scene, o, cacheDir));
+    }
+    return set;
+}
 
 bool isTransportFile(const std::filesystem::path& input) {
     return input.extension() == ".tm";
@@ -67,6 +82,7 @@ TransportSource transportForScene(const Scene& scene, const PrecomputeOptions& o
     auto t0 = std::chrono::steady_clock::now();
     const RenderOptions ro = traceOptions(scene, options);
     const TransportProvenance prov = transportProvenance(scene, ro, options.rgb ? 3 : 1);
+    if (cacheDir.empty()) return trace(scene, ro, prov, options.rgb, {}, t0);
     const auto cached = cacheDir / ("transport-" + prov.fingerprint + ".tm");
     if (std::filesystem::exists(cached)) {
         try {
@@ -96,8 +112,8 @@ std::unique_ptr<Scene> sceneOfTransport(const TransportFile& f, const std::strin
     return sc;
 }
 
-TransportSource heldOutFor(const TransportFile& training, const Scene& scene, int spp,
-                           const std::filesystem::path& cacheDir) {
+TransportSource judgeEstimateFor(const TransportFile& training, const Scene& scene, int spp,
+                                 const std::filesystem::path& cacheDir) {
     using json = nlohmann::json;
     const json trainingInputs = json::parse(training.provenance.inputs);
     if (trainingInputs.value("tracer_revision", 1) != kTracerRevision)
@@ -108,8 +124,8 @@ TransportSource heldOutFor(const TransportFile& training, const Scene& scene, in
                              "), so an estimate traced now would not be comparable",
                          "recompute it with `scratchlight precompute`, or pass --heldout none");
     PrecomputeOptions o;
-    o.spp = spp > 0 ? spp : training.provenance.spp;
-    o.seed = training.provenance.seed + kHeldOutSeedOffset;
+    o.spp = spp > 0 ? spp : kJudgeDefaultSpp;
+    o.seed = kJudgeSeed;
     o.maxDepth = training.provenance.maxDepth;
     o.rgb = training.matrix.channels == 3;
     o.sampleSets = 2;

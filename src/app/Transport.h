@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "render/PathTracer.h"
 #include "transport/TransportFile.h"
@@ -43,20 +44,27 @@ TransportSource precomputeToFile(const std::filesystem::path& scene,
                                  const std::filesystem::path& out);
 
 /// T for a loaded scene, from cacheDir/transport-<fingerprint>.tm when it is there and valid,
-/// otherwise traced and stored there.
+/// otherwise traced and stored there (cacheDir empty: traced, not stored).
 TransportSource transportForScene(const Scene& scene, const PrecomputeOptions& options,
                                   const std::filesystem::path& cacheDir);
+
+/// `count` independent estimates of T: the same trace with seeds seed + k, k = 0..count−1
+/// (seed: options.seed or the scene's render.seed), each cached like transportForScene. The
+/// sample-set planes the stochastic optimizers cycle through (estimate 0 is the usual T).
+std::vector<TransportSource> transportSetForScene(const Scene& scene,
+                                                  const PrecomputeOptions& options, int count,
+                                                  const std::filesystem::path& cacheDir);
 
 /// The scene a transport matrix records (its "scene_file"), checked against T's image size.
 /// `purpose` names what needs it, for the error message when the file records none.
 std::unique_ptr<Scene> sceneOfTransport(const TransportFile& t, const std::string& purpose);
 
-/// The held-out estimate for a training T of `scene`: the same scene traced with another seed
-/// (training seed + kHeldOutSeedOffset), two sample sets, `spp` samples (0: the training spp),
-/// cached like transportForScene. The scene's inputs must match the training T's apart from
-/// the sampling.
-TransportSource heldOutFor(const TransportFile& training, const Scene& scene, int spp,
-                           const std::filesystem::path& cacheDir);
+/// The judge's estimate (app/Judge.h) for a training T of `scene`: the same scene and path
+/// length traced with the judge's seed, two sample sets, `spp` samples (0: the judge's
+/// default), cached like transportForScene. The scene's inputs must match the training T's
+/// apart from the sampling.
+TransportSource judgeEstimateFor(const TransportFile& training, const Scene& scene, int spp,
+                                 const std::filesystem::path& cacheDir);
 
 /// True if `input` names a transport-matrix file (by extension .tm).
 bool isTransportFile(const std::filesystem::path& input);

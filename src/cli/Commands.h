@@ -11,5 +11,6 @@ void registerGenSurface(CLI::App& app, std::function<int()>& run);
 void registerBench(CLI::App& app, std::function<int()>& run);
 void registerTransport(CLI::App& app, std::function<int()>& run);
 void registerJudge(CLI::App& app, std::function<int()>& run);
+void registerRace(CLI::App& app, std::function<int()>& run);  // after registerBench
 
 }  // namespace sl::cli

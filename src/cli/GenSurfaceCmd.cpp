@@ -8,6 +8,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 
+#include "app/PartFiles.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
 #include "core/Error.h"
@@ -38,50 +39,15 @@ int runGen(GenArgs a) {
                                              : SurfaceSpec::Process::BallEndRaster;
     GeneratedSurface g = generateSurface(a.spec);
 
-    Image hm(g.width, g.height, 1);
-    auto [mn, mx] = std::minmax_element(g.heights.begin(), g.heights.end());
-    double lo = *mn, hi = *mx > *mn ? *mx : *mn + 1e-6;
-    if (ext == ".exr") {
-        hm.data = g.heights;
-        writeExr(out, hm);
-    } else {
-        for (size_t i = 0; i < g.heights.size(); ++i)
-            hm.data[i] = static_cast<float>((g.heights[i] - lo) / (hi - lo));
-        writePng16(out, hm);
-    }
-    std::filesystem::path truth = out.parent_path() / (out.stem().string() + "-truth.png");
-    // The legend of the truth labels (judge --truth reads it to name the regions).
-    nlohmann::ordered_json legend;
-    legend["labels"] = nlohmann::ordered_json::array();
-    legend["labels"].push_back({{"value", kTruthDefect}, {"name", "defect"}});
-    if (std::count(g.truth.begin(), g.truth.end(), kTruthChatter) > 0)
-        legend["labels"].push_back({{"value", kTruthChatter}, {"name", "chatter"}});
-    std::filesystem::path legendPath = truth;
-    legendPath.replace_extension(".json");
-    writeMaskPng(truth, g.truth, g.width, g.height);
-    writeTextAtomically(legendPath, legend.dump(2) + "\n");
-
-    if (!a.scene.empty()) {
-        std::filesystem::path scenePath = a.scene;
-        nlohmann::ordered_json hmj;
-        hmj["path"] = std::filesystem::relative(std::filesystem::absolute(out),
-                                                std::filesystem::absolute(scenePath).parent_path())
-                          .generic_string();
-        hmj["pixel_pitch"] = g.pitch;
-        if (ext == ".png") hmj["height_range"] = {lo, hi};
-        nlohmann::ordered_json j;
-        j["description"] = g.description;
-        j["heightmap"] = hmj;
-        j["material"] = {{"type", "roughconductor"},
-                         {"distribution", "ggx"},
-                         {"alpha", 0.05},
-                         {"material", "Al"}};
-        if (a.imageSize > 0) j["camera"] = {{"width", a.imageSize}, {"height", a.imageSize}};
-        j["envmap"] = {{"width", 50}, {"height", 25}};
-        j["render"] = {{"spp", a.spp}, {"max_depth", a.maxDepth}, {"seed", 0}};
-        writeTextAtomically(scenePath, j.dump(2) + "\n");
-        std::printf("wrote %s\n", scenePath.string().c_str());
-    }
+    PartFileOptions po;
+    po.scene = a.scene;
+    po.imageSize = a.imageSize;
+    po.spp = a.spp;
+    po.maxDepth = a.maxDepth;
+    const PartFiles f = writePartFiles(g, out, po);
+    const double lo = f.lo, hi = f.hi;
+    const std::filesystem::path truth = f.truth;
+    if (!a.scene.empty()) std::printf("wrote %s\n", a.scene.c_str());
     std::printf("%s\nwrote %s (%dx%d, pitch %g mm, heights %.6g..%.6g mm) and %s\n",
                 g.description.c_str(), out.string().c_str(), g.width, g.height, g.pitch, lo, hi,
                 truth.string().c_str());

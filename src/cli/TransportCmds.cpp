@@ -96,10 +96,21 @@ int runRelight(const RelightArgs& a) {
 
 struct OptimizeArgs {
     OptimizeJobOptions job;
-    std::string input, out = "out/optimize", reg = "envmap";
+    std::string input, out = "out/optimize", reg = "envmap", preset;
 };
 
 int runOptimize(OptimizeArgs a) {
+    if (a.preset == "paper") {
+        a.job.optimizer.method = kPaperLoopMethod;
+        a.job.optimizer.iterations = 100;
+        a.job.optimizer.learningRate = 0.02;
+        a.job.lambdas = {30.0};
+        a.job.init = "const:0.5";
+        a.job.starts.clear();
+        a.job.continuation.clear();
+        a.job.planes = 100;
+        a.reg = "envmap";
+    }
     a.job.input = a.input;
     a.job.outDir = a.out;
     a.job.objective.reg = a.reg == "image" ? RegTarget::Image : RegTarget::EnvMap;
@@ -108,8 +119,8 @@ int runOptimize(OptimizeArgs a) {
     printTransport(s.transport);
     std::printf("mask: %zu pixels\n", s.maskPixels);
     if (s.heldOut)
-        std::printf("held-out estimate: %s (%d spp, seed %llu)\n", s.heldOut->path.string().c_str(),
-                    s.heldOut->file.provenance.spp,
+        std::printf("judge estimate (held out): %s (%d spp, seed %llu)\n",
+                    s.heldOut->path.string().c_str(), s.heldOut->file.provenance.spp,
                     static_cast<unsigned long long>(s.heldOut->file.provenance.seed));
     std::printf("%10s %-12s %6s %6s %14s %14s %14s %14s %10s\n", "lambda", "optimizer", "iters",
                 "evals", "initial loss", "final loss", "held-out init", "held-out final",
@@ -120,6 +131,12 @@ int runOptimize(OptimizeArgs a) {
                     r.initial.total, r.final.total,
                     r.heldInitial ? r.heldInitial->own.total : std::nan(""),
                     r.heldFinal ? r.heldFinal->own.total : std::nan(""), r.optimizer.seconds);
+    for (const OptimizeRun& r : s.runs)
+        if (r.judged)
+            std::printf("judge (lambda %g): eq2 %.4f, U %.4f, mean E %.4f, %.0f%% texels dark%s\n",
+                        r.lambda, r.judged->eq2.total, r.judged->unbiased.total, r.judged->meanE,
+                        100.0 * r.judged->sparsity,
+                        r.start.empty() ? "" : (", best start " + r.start).c_str());
     std::printf("wrote %s/\n", a.out.c_str());
     return kOk;
 }
@@ -163,8 +180,11 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
             ->required();
         std::vector<std::string> methods = optimizerMethods();
         for (const auto& m : blackBoxMethods()) methods.push_back(m);
+        methods.push_back(kPaperLoopMethod);
         c->add_option("--optimizer", j.optimizer.method,
-                      "Optimizer; fd-adam and spsa take gradients through the renderer")
+                      "Optimizer; fd-adam and spsa take gradients through the renderer; "
+                      "paper-loop: the paper's loop on T (eq. 2, Adam, a fresh estimate of T "
+                      "every step)")
             ->check(CLI::IsMember(methods))
             ->capture_default_str();
         c->add_option("--fd-h", j.blackBox.fd.h, "fd-adam: finite-difference step")
@@ -219,9 +239,30 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         c->add_option("--iterations", j.optimizer.iterations, "Iterations / evaluation budget")
             ->check(CLI::Range(1, 1000000))
             ->capture_default_str();
+        c->add_option("--ftol", j.optimizer.relativeFunctionTolerance,
+                      "NLopt/Ceres: stop when the loss changes by less than this fraction (0: off)")
+            ->check(CLI::NonNegativeNumber)
+            ->capture_default_str();
         c->add_option("--lr", j.optimizer.learningRate, "Adam learning rate")
             ->check(CLI::PositiveNumber)
             ->capture_default_str();
+        c->add_option("--planes", j.planes,
+                      "Independent estimates of T (seeds seed+k) cycled by the optimizer, one "
+                      "per step (stochastic, as the paper's loop)")
+            ->check(CLI::Range(1, 1000))
+            ->capture_default_str();
+        c->add_option("--starts", j.starts,
+                      "Multistart: optimize from each and keep the lowest training loss "
+                      "(const:V, random:SEED, envmap:FILE, specular, studio)")
+            ->delimiter(',');
+        c->add_option("--continuation", j.continuation,
+                      "λ factors optimized in turn before λ itself (e.g. 4,2)")
+            ->delimiter(',');
+        c->add_option("--preset", a->preset,
+                      "paper: the paper's experiment exactly (eq. 2, lambda 30, E0 = 0.5, Adam lr "
+                      "0.02 x 100, a fresh sample set of the scene's spp every iteration: 100 "
+                      "estimates of T); fixes those settings")
+            ->check(CLI::IsMember({"paper"}));
         addTraceOptions(c, j.precompute);
         c->add_option("-o,--output", a->out, "Output directory")->capture_default_str();
         c->callback([a, &run] { run = [a] { return runOptimize(*a); }; });

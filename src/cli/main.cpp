@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
     registerTransport(app, run);
     registerJudge(app, run);
     registerBench(app, run);
+    registerRace(app, run);
     registerGradients(app, run);
     registerPaper(app, run);
 

@@ -36,14 +36,12 @@ TransportLoss::TransportLoss(const TransportMatrix& t, const UnbiasedObjective& 
 }
 
 LossParts TransportLoss::evaluateUnbiased(std::span<const double> E, std::span<double> grad) const {
-    t_.applyLuminance(E, y_, 0);
-    t_.applyLuminance(E, yb_, 1);
+    t_.applyLuminanceHalves(E, y_, yb_);
     if (grad.empty()) return unb_->evaluate(y_, yb_, E);
-    std::vector<double> dLdE(dimension_), gb(dimension_);
+    std::vector<double> dLdE(dimension_);
     LossParts parts = unb_->evaluate(y_, yb_, E, dLdY_, dLdYb_, dLdE);
-    t_.applyTransposeLuminance(dLdY_, grad, 0);
-    t_.applyTransposeLuminance(dLdYb_, gb, 1);
-    for (size_t i = 0; i < dimension_; ++i) grad[i] += gb[i] + dLdE[i];
+    t_.applyTransposeLuminanceHalves(dLdY_, dLdYb_, grad);
+    for (size_t i = 0; i < dimension_; ++i) grad[i] += dLdE[i];
     return parts;
 }
 
@@ -151,6 +149,46 @@ Problem TransportLoss::problem(LossParts* last, bool fused) const {
     p.upper = 1.0;
     p.evaluate = [this, last, fused](std::span<const double> x, std::span<double> g) {
         LossParts parts = fused ? evaluateFused(x, g) : evaluate(x, g);
+        if (last) *last = parts;
+        return parts.total;
+    };
+    return p;
+}
+
+CyclingLoss::CyclingLoss(std::vector<const TransportLoss*> losses) : losses_(std::move(losses)) {
+    if (losses_.empty()) throw std::invalid_argument("CyclingLoss: no loss");
+    for (const TransportLoss* l : losses_)
+        if (!l || l->dimension() != losses_.front()->dimension())
+            throw std::invalid_argument("CyclingLoss: losses of different dimensions");
+}
+
+LossParts CyclingLoss::evaluate(std::span<const double> E, std::span<double> grad) {
+    if (!grad.empty()) {
+        const TransportLoss& l = *losses_[next_];
+        next_ = (next_ + 1) % losses_.size();
+        return l.evaluateFused(E, grad);
+    }
+    LossParts mean;
+    const double w = 1.0 / static_cast<double>(losses_.size());
+    for (const TransportLoss* l : losses_) {
+        const LossParts p = l->evaluate(E, {});
+        mean.total += w * p.total;
+        mean.lGrad += w * p.lGrad;
+        mean.lReg += w * p.lReg;
+        mean.G += w * p.G;
+        mean.S = p.S;
+        mean.clamped = mean.clamped || p.clamped;
+    }
+    return mean;
+}
+
+Problem CyclingLoss::problem(LossParts* last) {
+    Problem p;
+    p.dimension = dimension();
+    p.lower = 0.0;
+    p.upper = 1.0;
+    p.evaluate = [this, last](std::span<const double> x, std::span<double> g) {
+        LossParts parts = evaluate(x, g);
         if (last) *last = parts;
         return parts.total;
     };

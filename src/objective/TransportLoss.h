@@ -49,4 +49,23 @@ class TransportLoss {
     LossParts evaluateUnbiased(std::span<const double> E, std::span<double> grad) const;
 };
 
+/// A stochastic loss over K independent estimates of T (the same objective on each): every
+/// evaluation WITH a gradient uses the next estimate in turn (k = n mod K), so a step-wise
+/// optimizer (Adam) sees a fresh sample set every iteration, as the paper's loop that renders
+/// anew each iteration. An evaluation WITHOUT a gradient returns the mean over all K, a stable
+/// value for reports. With K = 1 it is the loss itself.
+class CyclingLoss {
+  public:
+    explicit CyclingLoss(std::vector<const TransportLoss*> losses);
+    size_t dimension() const { return losses_.front()->dimension(); }
+    size_t count() const { return losses_.size(); }
+    /// Loss parts; fills grad (and advances to the next estimate) when grad is non-empty.
+    LossParts evaluate(std::span<const double> E, std::span<double> grad);
+    Problem problem(LossParts* last = nullptr);
+
+  private:
+    std::vector<const TransportLoss*> losses_;
+    size_t next_ = 0;
+};
+
 }  // namespace sl

@@ -16,6 +16,23 @@ namespace {
 }
 }  // namespace
 
+std::vector<double> initialEnvMapFrom(const EnvMap& m, bool rgb) {
+    const size_t texels = m.texelCount(), n = texels * (rgb ? 3 : 1);
+    std::vector<double> e(n);
+    for (size_t t = 0; t < texels; ++t) {
+        const float* c = &m.texels[t * static_cast<size_t>(m.channels)];
+        if (m.channels == 1) {
+            const double v = std::clamp<double>(c[0], 0.0, 1.0);
+            for (int k = 0; k < (rgb ? 3 : 1); ++k) e[(rgb ? 3 * t : t) + k] = v;
+        } else if (rgb) {
+            for (int k = 0; k < 3; ++k) e[3 * t + k] = std::clamp<double>(c[k], 0.0, 1.0);
+        } else {
+            e[t] = std::clamp(lightnessLStar01(c[0], c[1], c[2]), 0.0, 1.0);
+        }
+    }
+    return e;
+}
+
 std::vector<double> initialEnvMap(const std::string& spec, int width, int height, bool rgb) {
     const size_t texels = static_cast<size_t>(width) * height, n = texels * (rgb ? 3 : 1);
     const auto colon = spec.find(':');
@@ -51,20 +68,7 @@ std::vector<double> initialEnvMap(const std::string& spec, int width, int height
         if (arg.empty()) bad(spec, "no file given");
         // A gray file (what `optimize` writes as envmap.exr) is E itself, so a result loads back
         // unchanged; a colour map becomes gray by CIE L*/100 as in the paper (or stays RGB).
-        EnvMap m = loadEnvMap(arg, width, height, 0);
-        std::vector<double> e(n);
-        for (size_t t = 0; t < texels; ++t) {
-            const float* c = &m.texels[t * static_cast<size_t>(m.channels)];
-            if (m.channels == 1) {
-                const double v = std::clamp<double>(c[0], 0.0, 1.0);
-                for (int k = 0; k < (rgb ? 3 : 1); ++k) e[(rgb ? 3 * t : t) + k] = v;
-            } else if (rgb) {
-                for (int k = 0; k < 3; ++k) e[3 * t + k] = std::clamp<double>(c[k], 0.0, 1.0);
-            } else {
-                e[t] = std::clamp(lightnessLStar01(c[0], c[1], c[2]), 0.0, 1.0);
-            }
-        }
-        return e;
+        return initialEnvMapFrom(loadEnvMap(arg, width, height, 0), rgb);
     }
     bad(spec, "unknown kind '" + kind + "'");
 }

@@ -10,10 +10,16 @@
 #include <string>
 #include <vector>
 
+#include "scene/EnvMap.h"
+
 namespace sl {
 
 /// E0 for an env map of width×height texels, 1 value per texel (gray) or 3 (rgb, interleaved).
 /// Throws InputError naming `--init` and the accepted forms for a malformed spec.
 std::vector<double> initialEnvMap(const std::string& spec, int width, int height, bool rgb);
+
+/// E0 from an env map as `envmap:FILE` takes a loaded file: a one-channel map is E itself, a
+/// colour map becomes gray by CIE L*/100 (or stays RGB with rgb); clamped to [0, 1].
+std::vector<double> initialEnvMapFrom(const EnvMap& map, bool rgb);
 
 }  // namespace sl

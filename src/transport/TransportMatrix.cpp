@@ -194,6 +194,70 @@ void TransportMatrix::applyTransposeLuminance(std::span<const double> g, std::sp
         for (size_t i = 0; i < n; ++i) out[i] += partial[k * n + i];
 }
 
+void TransportMatrix::applyLuminanceHalves(std::span<const double> E, std::span<double> Ya,
+                                           std::span<double> Yb) const {
+    if (planes != 2) throw std::invalid_argument("applyLuminanceHalves: T has no halves");
+    const bool rgbE =
+        checkE(*this, E.size(), "TransportMatrix::applyLuminanceHalves") == EKind::Rgb;
+    if (Ya.size() != rows() || Yb.size() != rows())
+        throw std::invalid_argument("applyLuminanceHalves: Y size != rows");
+    if (channels != 1 || storage != TransportStorage::Sparse) {
+        applyLuminance(E, Ya, 0);
+        applyLuminance(E, Yb, 1);
+        return;
+    }
+    (void)rgbE;  // gray T: E is gray
+    const double* e = E.data();
+    const uint16_t* col = colIdx.data();
+    const float* v = values.data();
+    forRowChunks(*this, 256, [&](size_t, size_t r0, size_t r1) {
+        for (size_t r = r0; r < r1; ++r) {
+            double a = 0, b = 0;
+            for (uint64_t k = rowPtr[r], end = rowPtr[r + 1]; k < end; ++k) {
+                const double ek = e[col[k]];
+                a += double(v[2 * k]) * ek;
+                b += double(v[2 * k + 1]) * ek;
+            }
+            Ya[r] = a;
+            Yb[r] = b;
+        }
+    });
+}
+
+void TransportMatrix::applyTransposeLuminanceHalves(std::span<const double> ga,
+                                                    std::span<const double> gb,
+                                                    std::span<double> out) const {
+    if (planes != 2) throw std::invalid_argument("applyTransposeLuminanceHalves: no halves");
+    checkE(*this, out.size(), "TransportMatrix::applyTransposeLuminanceHalves");
+    if (ga.size() != rows() || gb.size() != rows())
+        throw std::invalid_argument("applyTransposeLuminanceHalves: g size != rows");
+    if (channels != 1 || storage != TransportStorage::Sparse) {
+        std::vector<double> tmp(out.size());
+        applyTransposeLuminance(ga, out, 0);
+        applyTransposeLuminance(gb, tmp, 1);
+        for (size_t i = 0; i < out.size(); ++i) out[i] += tmp[i];
+        return;
+    }
+    const size_t chunkRows = std::max<size_t>(1024, (rows() + 63) / 64);
+    const size_t nChunks = (rows() + chunkRows - 1) / chunkRows;
+    const size_t n = out.size();
+    std::vector<double> partial(nChunks * n, 0.0);
+    const uint16_t* col = colIdx.data();
+    const float* v = values.data();
+    forRowChunks(*this, chunkRows, [&](size_t c, size_t r0, size_t r1) {
+        double* acc = partial.data() + c * n;
+        for (size_t r = r0; r < r1; ++r) {
+            const double a = ga[r], b = gb[r];
+            if (a == 0.0 && b == 0.0) continue;
+            for (uint64_t k = rowPtr[r], end = rowPtr[r + 1]; k < end; ++k)
+                acc[col[k]] += double(v[2 * k]) * a + double(v[2 * k + 1]) * b;
+        }
+    });
+    std::fill(out.begin(), out.end(), 0.0);
+    for (size_t k = 0; k < nChunks; ++k)
+        for (size_t i = 0; i < n; ++i) out[i] += partial[k * n + i];
+}
+
 void TransportMatrix::toDense() {
     if (storage == TransportStorage::Dense) return;
     const size_t cols_ = cols(), st = static_cast<size_t>(stride());

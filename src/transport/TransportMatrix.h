@@ -60,6 +60,14 @@ struct TransportMatrix {
     void applyTransposeLuminance(std::span<const double> g, std::span<double> out,
                                  int plane = kMeanPlane) const;
 
+    /// For halves (planes == 2): Ya = lum(T_a·E), Yb = lum(T_b·E) in ONE pass over T, and
+    /// out = T_aᵀ·ga + T_bᵀ·gb (luminance-weighted per channel for an RGB E) in one pass: the
+    /// noise-unbiased objective's products at the cost of one streaming read each.
+    void applyLuminanceHalves(std::span<const double> E, std::span<double> Ya,
+                              std::span<double> Yb) const;
+    void applyTransposeLuminanceHalves(std::span<const double> ga, std::span<const double> gb,
+                                       std::span<double> out) const;
+
     /// Sequential kernels over rows [r0, r1), the building blocks of the products (and of fused
     /// kernels). Arrays are indexed relative to r0: Y[r − r0], g[r − r0]. rgbE: E holds 3
     /// values per texel (needs channels == 3). accumulateTransposeRows ADDS into out.

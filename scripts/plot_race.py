@@ -1,0 +1,49 @@
+#!/usr/bin/env python3
+"""Pareto plot of `scratchlight bench race`: seconds (precompute + search) against the judge's
+U, one point per configuration (median over seeds), one panel per part.
+Usage: plot_race.py race.csv race.png"""
+import csv
+import sys
+from collections import defaultdict
+from statistics import median
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def main(src, dst):
+    runs = defaultdict(list)
+    parts = []
+    for r in csv.DictReader(open(src)):
+        if r["part"] not in parts:
+            parts.append(r["part"])
+        runs[(r["part"], r["config"])].append((float(r["seconds"]), float(r["unbiased"])))
+    fig, axes = plt.subplots(1, len(parts), figsize=(5.5 * len(parts), 4.5), squeeze=False)
+    for ax, part in zip(axes[0], parts):
+        pts = []
+        for (p, cfg), v in runs.items():
+            if p != part:
+                continue
+            s, u = median(x[0] for x in v), median(x[1] for x in v)
+            pts.append((s, u, cfg))
+            ax.scatter(s, u, s=30, color="black" if cfg == "paper-loop" else "C0")
+            ax.annotate(cfg, (s, u), fontsize=7, xytext=(3, 3), textcoords="offset points")
+        front, best = [], float("inf")
+        for s, u, _ in sorted(pts):
+            if u < best:
+                front.append((s, u))
+                best = u
+        ax.plot([f[0] for f in front], [f[1] for f in front], "C1--", lw=1, label="Pareto front")
+        ax.set_xscale("log")
+        ax.set_xlabel("seconds (precompute + search, median over seeds)")
+        ax.set_ylabel("judge U at 1024 spp (lower is better)")
+        ax.set_title(part)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(dst, dpi=110)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], sys.argv[2])

@@ -1,0 +1,29 @@
+// Writing a generated part to disk: its height map, truth labels with their legend, and a
+// scene file that renders it (what `gen-surface` writes, and the parts `bench race` makes).
+#pragma once
+
+#include <filesystem>
+
+#include "synth/SurfaceGenerator.h"
+
+namespace sl {
+
+struct PartFileOptions {
+    std::filesystem::path scene;  // also write a scene file here ("" = none)
+    int imageSize = 0;            // scene camera width = height in pixels (0: the scene default)
+    int spp = 64;                 // scene render.spp
+    int maxDepth = 4;             // scene render.max_depth
+};
+
+struct PartFiles {
+    std::filesystem::path heightmap, truth, legend, scene;
+    double lo = 0, hi = 0;  // height range, mm
+};
+
+/// heightmap: .exr (float32 mm) or .png (16-bit over [lo, hi], recorded in the scene file).
+/// Truth: <stem>-truth.png (labels, synth/SurfaceGenerator.h) and <stem>-truth.json (legend).
+/// Throws InputError for another extension.
+PartFiles writePartFiles(const GeneratedSurface& g, const std::filesystem::path& heightmap,
+                         const PartFileOptions& options);
+
+}  // namespace sl

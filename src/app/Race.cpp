@@ -1,0 +1,256 @@
+#include "app/Race.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include "app/Judge.h"
+#include "app/PartFiles.h"
+#include "app/Transport.h"
+#include "core/Error.h"
+#include "core/Stats.h"
+#include "io/AtomicFile.h"
+#include "io/SceneFile.h"
+#include "objective/ImageSpace.h"
+#include "scene/Scene.h"
+
+namespace sl {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+double since(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+RaceConfig config(const std::string& name, ObjectiveKind objective, const std::string& method,
+                  int iterations, int spp, int planes = 1,
+                  std::vector<std::string> starts = {"const:0.5"},
+                  std::vector<double> continuation = {}) {
+    RaceConfig c;
+    c.name = name;
+    c.spp = spp;
+    c.search.objective = objective;
+    c.search.optimizer.method = method;
+    c.search.optimizer.iterations = iterations;
+    c.search.planes = planes;
+    c.search.starts = std::move(starts);
+    c.search.continuation = std::move(continuation);
+    return c;
+}
+
+SurfaceSpec partSpec(const std::string& name) {
+    SurfaceSpec s;
+    s.width = s.height = 512;
+    s.pitch = 0.01;
+    s.seed = 1;
+    if (name == "ballend-chatter") {
+        s.chatterStartFraction = 0.5;
+        s.pocketEdge = false;
+    } else if (name == "facemill-scratches") {
+        s.process = SurfaceSpec::Process::FaceMillFeed;
+        s.toolRadius = 4.0;
+        s.stepover = 3.0;
+        s.chatterAmplitude = 0.0;
+        s.scratchCount = 6;
+        s.gougeCount = 0;
+        s.pocketEdge = false;
+    } else if (name == "pocket") {
+        s.chatterAmplitude = 0.0;
+        s.stepover = 0.3;
+        s.rasterAngleDeg = 30.0;
+    } else {
+        throw inputError("race part", "unknown part '" + name + "'",
+                         "use ballend-chatter, facemill-scratches or pocket");
+    }
+    return s;
+}
+
+double regionVisibility(const JudgeScore& s, const std::string& name) {
+    for (const auto& r : s.visibility)
+        if (r.label.name == name) return r.visibility;
+    return kNaN;
+}
+
+RaceRow medianRow(const std::vector<const RaceRow*>& rows) {
+    RaceRow m = *rows.front();
+    m.seed = -1;
+    auto med = [&](double RaceRow::*f) {
+        std::vector<double> v;
+        for (const RaceRow* r : rows)
+            if (!std::isnan(r->*f)) v.push_back(r->*f);
+        return v.empty() ? kNaN : median(v);
+    };
+    for (double RaceRow::*f :
+         {&RaceRow::secondsPrecompute, &RaceRow::secondsSearch, &RaceRow::seconds, &RaceRow::eq2,
+          &RaceRow::unbiased, &RaceRow::meanE, &RaceRow::sparsity, &RaceRow::visDefect,
+          &RaceRow::visChatter, &RaceRow::trainLoss, &RaceRow::heldOwn, &RaceRow::ratioU,
+          &RaceRow::ratioEq2, &RaceRow::ratioSeconds})
+        m.*f = med(f);
+    std::vector<double> ev;
+    for (const RaceRow* r : rows) ev.push_back(r->evaluations);
+    m.evaluations = static_cast<int>(median(ev));
+    return m;
+}
+
+}  // namespace
+
+std::vector<std::string> raceParts() {
+    return {"ballend-chatter", "facemill-scratches", "pocket"};
+}
+
+std::vector<RaceConfig> defaultRaceConfigs() {
+    using K = ObjectiveKind;
+    std::vector<RaceConfig> c;
+    c.push_back(config("paper-loop", K::Paper, "adam", 100, 16, 8));
+    c.push_back(config("paper-adam", K::Paper, "adam", 100, 16));
+    c.push_back(config("paper-lbfgs-16", K::Paper, "lbfgs", 2000, 16));
+    c.push_back(config("unbiased-adam-planes8", K::Unbiased, "adam", 300, 16, 8));
+    c.push_back(config("unbiased-lbfgs-16", K::Unbiased, "lbfgs", 2000, 16));
+    c.push_back(config("unbiased-lbfgs-32", K::Unbiased, "lbfgs", 2000, 32));
+    c.push_back(
+        config("unbiased-lbfgs-16-specular", K::Unbiased, "lbfgs", 2000, 16, 1, {"specular"}));
+    c.push_back(config("unbiased-lbfgs-16-multistart", K::Unbiased, "lbfgs", 2000, 16, 1,
+                       {"const:0.5", "specular", "studio"}));
+    c.push_back(config("unbiased-lbfgs-16-continuation", K::Unbiased, "lbfgs", 2000, 16, 1,
+                       {"const:0.5"}, {4.0, 2.0}));
+    c.push_back(config("unbiased-mlsl-16", K::Unbiased, "mlsl", 1500, 16));
+    return c;
+}
+
+RaceSummary runRace(const RaceOptions& o) {
+    if (o.seeds < 1) throw inputError("race seeds", "must be >= 1");
+    if (o.configs.empty()) throw inputError("race configs", "none given");
+    auto log = [&](const std::string& s) {
+        if (o.log) o.log(s);
+    };
+    const auto cacheDir = std::filesystem::absolute(o.workDir) / ".scratchlight-cache";
+    RaceSummary sum;
+    for (const std::string& partName : o.parts) {
+        const auto dir = o.workDir / partName;
+        std::filesystem::create_directories(dir);
+        PartFileOptions pf;
+        pf.scene = dir / "scene.json";
+        pf.imageSize = 256;
+        pf.spp = 16;
+        pf.maxDepth = 3;
+        const GeneratedSurface g = generateSurface(partSpec(partName));
+        const PartFiles files = writePartFiles(g, dir / "part.exr", pf);
+        auto scene = loadScene(files.scene);
+        JudgeOptions jo;
+        jo.spp = o.judgeSpp;
+        jo.objective.lambda = o.lambda;
+        jo.truth = files.truth;
+        jo.cacheDir = cacheDir;
+        log(partName + ": judge estimate (" + std::to_string(o.judgeSpp) + " spp)");
+        const Judge judge(*scene, jo);
+        const std::vector<uint8_t>& mask = judge.estimate().file.matrix.objectMask;
+
+        for (int seed = 0; seed < o.seeds; ++seed) {
+            std::vector<RaceRow> rows;
+            for (const RaceConfig& c : o.configs) {
+                const bool unb = c.search.objective == ObjectiveKind::Unbiased;
+                PrecomputeOptions p;
+                p.spp = c.spp;
+                p.seed = static_cast<uint64_t>(seed) * 1000;
+                p.sampleSets = unb ? 2 : 1;
+                auto t0 = std::chrono::steady_clock::now();
+                const std::vector<TransportSource> set =
+                    transportSetForScene(*scene, p, c.search.planes, {});
+                RaceRow r;
+                r.part = partName;
+                r.config = c.name;
+                r.seed = seed;
+                r.secondsPrecompute = since(t0);
+                SearchInputs in;
+                for (const auto& s : set) in.set.push_back(&s.file.matrix);
+                in.mask = intersectMasks(set.front().file.matrix.objectMask, mask);
+                in.objective.lambda = o.lambda;
+                in.scene = scene.get();
+                in.maxDepth = set.front().file.provenance.maxDepth;
+                auto t1 = std::chrono::steady_clock::now();
+                const SearchResult sr = search(in, c.search);
+                r.secondsSearch = since(t1);
+                r.seconds = r.secondsPrecompute + r.secondsSearch;
+                r.evaluations = sr.optimizer.evaluations;
+                const JudgeScore js = judge.score(sr.e, c.name);
+                r.eq2 = js.eq2.total;
+                r.unbiased = js.unbiased.total;
+                r.meanE = js.meanE;
+                r.sparsity = js.sparsity;
+                r.visDefect = regionVisibility(js, "defect");
+                r.visChatter = regionVisibility(js, "chatter");
+                r.trainLoss = sr.training.total;
+                r.heldOwn = unb ? r.unbiased : r.eq2;
+                char buf[256];
+                std::snprintf(buf, sizeof buf, "%s seed %d %-30s %6.2f s  eq2 %8.4f  U %8.4f",
+                              partName.c_str(), seed, c.name.c_str(), r.seconds, r.eq2, r.unbiased);
+                log(buf);
+                rows.push_back(r);
+            }
+            const RaceRow& base = rows.front();  // paper-loop (the first config)
+            for (RaceRow& r : rows) {
+                r.ratioU = r.unbiased / base.unbiased;
+                r.ratioEq2 = r.eq2 / base.eq2;
+                r.ratioSeconds = r.seconds / base.seconds;
+                sum.rows.push_back(r);
+            }
+        }
+    }
+    std::map<std::pair<std::string, std::string>, std::vector<const RaceRow*>> byPart;
+    std::map<std::string, std::vector<const RaceRow*>> byConfig;
+    for (const RaceRow& r : sum.rows) {
+        byPart[{r.part, r.config}].push_back(&r);
+        byConfig[r.config].push_back(&r);
+    }
+    for (const std::string& part : o.parts)
+        for (const RaceConfig& c : o.configs)
+            sum.medians.push_back(medianRow(byPart[{part, c.name}]));
+    for (const RaceConfig& c : o.configs) {
+        RaceRow m = medianRow(byConfig[c.name]);
+        m.part = "all";
+        sum.overall.push_back(m);
+    }
+    return sum;
+}
+
+void writeRaceCsv(const std::filesystem::path& file, const std::vector<RaceRow>& rows) {
+    std::ostringstream s;
+    s.precision(10);
+    s << "part,config,seed,seconds_precompute,seconds_search,seconds,evaluations,eq2,unbiased,"
+         "mean_E,sparsity,visibility_defect,visibility_chatter,train_loss,heldout_own,"
+         "ratio_U,ratio_eq2,ratio_seconds\n";
+    for (const RaceRow& r : rows)
+        s << r.part << ',' << r.config << ',' << r.seed << ',' << r.secondsPrecompute << ','
+          << r.secondsSearch << ',' << r.seconds << ',' << r.evaluations << ',' << r.eq2 << ','
+          << r.unbiased << ',' << r.meanE << ',' << r.sparsity << ',' << r.visDefect << ','
+          << r.visChatter << ',' << r.trainLoss << ',' << r.heldOwn << ',' << r.ratioU << ','
+          << r.ratioEq2 << ',' << r.ratioSeconds << '\n';
+    writeTextAtomically(file, s.str());
+}
+
+std::string formatRaceTable(const std::vector<RaceRow>& rows) {
+    std::ostringstream out;
+    char buf[512];
+    std::snprintf(buf, sizeof buf, "%-18s %-31s %7s %6s %8s %8s %7s %7s %7s %6s %6s %7s\n", "part",
+                  "config", "seconds", "evals", "eq2", "U", "U/pl", "eq2/pl", "t/pl", "vis-d",
+                  "vis-c", "gap");
+    out << buf;
+    for (const RaceRow& r : rows) {
+        std::snprintf(buf, sizeof buf,
+                      "%-18s %-31s %7.3f %6d %8.4f %8.4f %7.3f %7.3f %7.3f %6.2f %6.2f %+6.1f%%\n",
+                      r.part.c_str(), r.config.c_str(), r.seconds, r.evaluations, r.eq2, r.unbiased,
+                      r.ratioU, r.ratioEq2, r.ratioSeconds, r.visDefect, r.visChatter,
+                      100.0 * (r.heldOwn / r.trainLoss - 1.0));
+        out << buf;
+    }
+    return out.str();
+}
+
+}  // namespace sl

@@ -1,0 +1,137 @@
+#include "app/Search.h"
+
+#include <chrono>
+#include <limits>
+#include <memory>
+
+#include "core/Error.h"
+#include "objective/TransportLoss.h"
+#include "objective/UnbiasedObjective.h"
+#include "optimize/InitialState.h"
+#include "optimize/SpecularInit.h"
+#include "scene/EnvMapPresets.h"
+
+namespace sl {
+
+ObjectiveKind parseObjectiveKind(const std::string& name, const std::string& where) {
+    if (name == "paper") return ObjectiveKind::Paper;
+    if (name == "unbiased") return ObjectiveKind::Unbiased;
+    throw inputError(where, "unknown objective '" + name + "'", "use paper or unbiased");
+}
+
+const char* objectiveKindName(ObjectiveKind kind) {
+    return kind == ObjectiveKind::Paper ? "paper" : "unbiased";
+}
+
+std::vector<double> startEnvMap(const std::string& spec, const TransportMatrix& t, bool rgb,
+                                const Scene* scene, int maxDepth) {
+    if (spec == "specular") {
+        if (!scene) throw inputError("start 'specular'", "needs the scene", "pass the scene file");
+        return specularInitialEnvMap(*scene, maxDepth, rgb);
+    }
+    if (spec == "studio") return initialEnvMapFrom(studioEnvMap(t.envWidth, t.envHeight), rgb);
+    return initialEnvMap(spec, t.envWidth, t.envHeight, rgb);
+}
+
+namespace {
+
+/// The losses of one stage (one λ) on every estimate.
+struct StageLosses {
+    std::vector<std::unique_ptr<ImageObjective>> paper;
+    std::vector<std::unique_ptr<UnbiasedObjective>> unbiased;
+    std::vector<std::unique_ptr<TransportLoss>> losses;
+    std::unique_ptr<CyclingLoss> cycling;
+
+    StageLosses(const SearchInputs& in, ObjectiveKind kind, const ObjectiveOptions& oo,
+                size_t count) {
+        std::vector<const TransportLoss*> ptrs;
+        for (size_t k = 0; k < count; ++k) {
+            const TransportMatrix& t = *in.set[k];
+            if (kind == ObjectiveKind::Paper) {
+                paper.push_back(std::make_unique<ImageObjective>(t.width, t.height, in.mask, oo));
+                losses.push_back(std::make_unique<TransportLoss>(t, *paper.back(), in.rgb));
+            } else {
+                unbiased.push_back(
+                    std::make_unique<UnbiasedObjective>(t.width, t.height, in.mask, oo));
+                losses.push_back(std::make_unique<TransportLoss>(t, *unbiased.back(), in.rgb));
+            }
+            ptrs.push_back(losses.back().get());
+        }
+        cycling = std::make_unique<CyclingLoss>(ptrs);
+    }
+    Problem problem(LossParts* last) {
+        return losses.size() == 1 ? losses.front()->problem(last) : cycling->problem(last);
+    }
+    LossParts value(std::span<const double> e) { return cycling->evaluate(e, {}); }
+};
+
+}  // namespace
+
+SearchResult search(const SearchInputs& in, const SearchOptions& o) {
+    if (o.planes < 1) throw inputError("planes", "must be >= 1", "use 1 for one T");
+    if (in.set.size() < static_cast<size_t>(o.planes))
+        throw std::invalid_argument("search: fewer estimates of T than planes");
+    if (o.starts.empty()) throw inputError("starts", "no start given", "use e.g. const:0.5");
+    for (double f : o.continuation)
+        if (!(f > 0) || !std::isfinite(f))
+            throw inputError("continuation", "λ factors must be > 0", "use e.g. 4,2");
+    const auto t0 = std::chrono::steady_clock::now();
+    const TransportMatrix& t = *in.set.front();
+    const auto count = static_cast<size_t>(o.planes);
+
+    // The final stage's losses judge the starts; earlier stages are built per run.
+    StageLosses finalStage(in, o.objective, in.objective, count);
+    std::vector<double> stages = o.continuation;
+    stages.push_back(1.0);
+
+    SearchResult best;
+    best.training.total = std::numeric_limits<double>::infinity();
+    int iterationBase = 0, evaluations = 0, iterations = 0;
+    bool stopped = false;
+    for (const std::string& start : o.starts) {
+        if (stopped) break;
+        std::vector<double> e = startEnvMap(start, t, in.rgb, in.scene, in.maxDepth);
+        OptimizerSummary last;
+        for (double factor : stages) {
+            ObjectiveOptions oo = in.objective;
+            oo.lambda = in.objective.lambda * factor;
+            std::unique_ptr<StageLosses> own;
+            StageLosses* stage = &finalStage;
+            if (factor != 1.0) {
+                own = std::make_unique<StageLosses>(in, o.objective, oo, count);
+                stage = own.get();
+            }
+            OptimizerOptions opt = o.optimizer;
+            const int base = iterationBase;
+            opt.callback = [&](const IterationRecord& r, std::span<const double> x) {
+                if (!in.callback) return true;
+                IterationRecord shifted = r;
+                shifted.iteration += base;
+                const bool go = in.callback(shifted, x);
+                if (!go) stopped = true;
+                return go;
+            };
+            last = minimize(stage->problem(nullptr), e, opt);
+            iterationBase += last.iterations + 1;
+            iterations += last.iterations;
+            evaluations += last.evaluations;
+            if (stopped) break;
+        }
+        const LossParts value = finalStage.value(e);
+        best.startLosses.emplace_back(start, value.total);
+        if (value.total < best.training.total) {
+            best.training = value;
+            best.e = e;
+            best.start = start;
+            best.optimizer = last;
+        }
+    }
+    best.optimizer.iterations = iterations;
+    best.optimizer.evaluations = evaluations;
+    best.optimizer.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    best.optimizer.finalLoss = best.training.total;
+    return best;
+}
+
+}  // namespace sl

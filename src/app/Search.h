@@ -1,0 +1,72 @@
+// One search for E* on transport matrices: which objective, which optimizer, on how many
+// independent estimates of T, from which starts, through which λ continuation. `optimize`
+// runs one search per λ; `bench race` runs many and the judge scores them.
+//
+//   planes        K ≥ 1 independent estimates of T (app/Transport.h transportSetForScene). With
+//                 K > 1 every gradient evaluation uses the next estimate (objective/
+//                 TransportLoss.h CyclingLoss): a fresh sample set per step, as the paper's loop.
+//   starts        every start is optimized in turn and the lowest training loss wins
+//                 (multistart). const:V | random:SEED | envmap:FILE | specular (the paper's
+//                 §5.2 state) | studio (the built-in studio map by L*/100).
+//   continuation  λ factors run in turn before λ itself, each stage starting where the last
+//                 ended (e.g. {4, 2}: λ·4, then λ·2, then λ).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "objective/Objective.h"
+#include "optimize/Optimizer.h"
+#include "transport/TransportMatrix.h"
+
+namespace sl {
+
+struct Scene;
+
+enum class ObjectiveKind { Paper, Unbiased };
+
+/// "paper" | "unbiased" (throws InputError naming `where` otherwise), and back.
+ObjectiveKind parseObjectiveKind(const std::string& name, const std::string& where = "objective");
+const char* objectiveKindName(ObjectiveKind kind);
+
+struct SearchOptions {
+    ObjectiveKind objective = ObjectiveKind::Paper;
+    OptimizerOptions optimizer;  // method, budget, Adam's step (callback: see SearchInputs)
+    int planes = 1;
+    std::vector<std::string> starts{"const:0.5"};
+    std::vector<double> continuation;
+};
+
+struct SearchInputs {
+    /// The estimates of T (at least options.planes; set[0] is the main T). The unbiased
+    /// objective needs two planes in each.
+    std::vector<const TransportMatrix*> set;
+    std::vector<uint8_t> mask;     // the loss mask (image space, nonzero inside)
+    ObjectiveOptions objective;    // λ and the regulariser
+    bool rgb = false;              // E has 3 values per texel
+    const Scene* scene = nullptr;  // the `specular` start needs it
+    int maxDepth = 0;              // ... and the path length of T
+    /// Sees every iteration of every start and stage (IterationRecord::iteration counts on
+    /// across them); returning false stops the search.
+    std::function<bool(const IterationRecord&, std::span<const double> x)> callback;
+};
+
+struct SearchResult {
+    std::vector<double> e;       // E* (the best start's)
+    OptimizerSummary optimizer;  // the best start's last stage; iterations and evaluations
+                                 // summed over every start and stage, seconds the whole search
+    std::string start;           // the best start
+    LossParts training;          // loss of E* on the training estimate(s) (mean over K)
+    std::vector<std::pair<std::string, double>> startLosses;  // every start's training loss
+};
+
+/// E0 of a start spec on T's env-map grid (see above). Throws InputError naming the spec.
+std::vector<double> startEnvMap(const std::string& spec, const TransportMatrix& t, bool rgb,
+                                const Scene* scene, int maxDepth);
+
+SearchResult search(const SearchInputs& inputs, const SearchOptions& options);
+
+}  // namespace sl

@@ -1,0 +1,114 @@
+// scratchlight bench race [--parts a,b,c] [--seeds 3] [--configs NAME,...] [-o DIR]
+// The race that chooses optimize's defaults (app/Race.h): prints the median table, writes
+// race.csv (every run), race-median.csv and a Pareto plot (seconds vs U) race.png.
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <memory>
+
+#include "app/Race.h"
+#include "cli/Commands.h"
+#include "cli/Common.h"
+
+extern char** environ;
+
+namespace sl::cli {
+
+namespace {
+
+struct RaceArgs {
+    RaceOptions o;
+    std::vector<std::string> configs;
+    std::string out = "out/race";
+};
+
+/// Runs python3 SCRIPT ARGS... (argument vector, no shell); true on exit status 0.
+bool runPython(const std::filesystem::path& script, const std::vector<std::string>& args) {
+    std::vector<std::string> argv{"python3", script.string()};
+    argv.insert(argv.end(), args.begin(), args.end());
+    std::vector<char*> cargv;
+    for (auto& a : argv) cargv.push_back(a.data());
+    cargv.push_back(nullptr);
+    pid_t pid = 0;
+    if (posix_spawnp(&pid,
+                     std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3",
+                     nullptr, nullptr, cargv.data(), environ) != 0)
+        return false;
+    int status = 0;
+    if (waitpid(pid, &status, 0) < 0) return false;
+    return WIFEXITED(status) && WEXITSTATUS(status) == 0;
+}
+
+/// scripts/NAME beside the source tree this binary was built from, or beside the binary.
+std::filesystem::path scriptPath(const std::string& name) {
+    std::error_code ec;
+    auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+    for (auto dir = exe.parent_path(); !ec && !dir.empty() && dir != dir.root_path();
+         dir = dir.parent_path())
+        if (std::filesystem::exists(dir / "scripts" / name)) return dir / "scripts" / name;
+    return std::filesystem::path("scripts") / name;
+}
+
+int runRaceCmd(RaceArgs a) {
+    if (!a.configs.empty()) {
+        std::vector<RaceConfig> all = defaultRaceConfigs(), chosen;
+        for (const auto& name : a.configs) {
+            auto it = std::find_if(all.begin(), all.end(),
+                                   [&](const RaceConfig& c) { return c.name == name; });
+            if (it == all.end())
+                throw UsageError("--configs: unknown configuration '" + name + "'");
+            chosen.push_back(*it);
+        }
+        if (chosen.front().name != "paper-loop")
+            chosen.insert(chosen.begin(), all.front());  // the baseline of every ratio
+        a.o.configs = chosen;
+    }
+    a.o.workDir = a.out;
+    a.o.log = [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); };
+    RaceSummary s = runRace(a.o);
+    std::printf(
+        "medians over %d seed(s); ratios to paper-loop on the same part and seed; gap: "
+        "judge score of the own objective over the training loss\n",
+        a.o.seeds);
+    std::printf("%s\n", formatRaceTable(s.medians).c_str());
+    std::printf("%s", formatRaceTable(s.overall).c_str());
+    const auto dir = std::filesystem::path(a.out);
+    writeRaceCsv(dir / "race.csv", s.rows);
+    std::vector<RaceRow> med = s.medians;
+    med.insert(med.end(), s.overall.begin(), s.overall.end());
+    writeRaceCsv(dir / "race-median.csv", med);
+    const auto png = dir / "race.png";
+    if (!runPython(scriptPath("plot_race.py"), {(dir / "race.csv").string(), png.string()}))
+        std::fprintf(stderr, "warning: the plot failed (python3 with matplotlib needed)\n");
+    std::printf("wrote %s, %s and %s\n", (dir / "race.csv").c_str(),
+                (dir / "race-median.csv").c_str(), png.c_str());
+    return kOk;
+}
+
+}  // namespace
+
+void registerRace(CLI::App& app, std::function<int()>& run) {
+    CLI::App* bench = app.get_subcommand("bench");
+    auto a = std::make_shared<RaceArgs>();
+    CLI::App* c = bench->add_subcommand(
+        "race", "Race optimizer configurations on generated parts, scored by the judge");
+    c->add_option("--parts", a->o.parts, "Parts: ballend-chatter, facemill-scratches, pocket")
+        ->delimiter(',')
+        ->capture_default_str();
+    c->add_option("--seeds", a->o.seeds, "Training seeds per part")
+        ->check(CLI::Range(1, 100))
+        ->capture_default_str();
+    c->add_option("--configs", a->configs, "Configurations (default: all; paper-loop always)")
+        ->delimiter(',');
+    c->add_option("--judge-spp", a->o.judgeSpp, "spp of the judge's estimate")
+        ->check(CLI::Range(2, 1 << 20))
+        ->capture_default_str();
+    c->add_option("-o,--output", a->out, "Output directory (parts, cache, CSV, plot)")
+        ->capture_default_str();
+    c->callback([a, &run] { run = [a] { return runRaceCmd(*a); }; });
+}
+
+}  // namespace sl::cli

@@ -1,0 +1,303 @@
+// The judge and the search: an analytic mirror case, agreement across judge seeds, per-region
+// visibility on images with known gradients, truth-mask checks, the halves kernels, the
+// cycling (stochastic) loss and multistart.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "TestUtil.h"
+#include "app/Judge.h"
+#include "app/Race.h"
+#include "app/Search.h"
+#include "core/Error.h"
+#include "core/Rng.h"
+#include "io/ImageIO.h"
+#include "io/LabelMask.h"
+#include "objective/DefectVisibility.h"
+#include "objective/TransportLoss.h"
+#include "render/Render.h"
+#include "scene/Scene.h"
+#include "synth/SurfaceGenerator.h"
+#include "transport/TransportSink.h"
+
+using namespace sl;
+
+namespace {
+
+std::unique_ptr<Scene> wavyScene(int res, int n = 48) {
+    SceneDesc d;
+    d.heightmap.pitch = 0.05;
+    d.material.params.alphaU = d.material.params.alphaV = 0.1f;
+    d.camera.width = d.camera.height = res;
+    d.render.maxDepth = 3;
+    std::vector<float> h(size_t(n) * n);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+            h[size_t(j) * n + i] =
+                static_cast<float>(0.03 * std::sin(i * 0.5) * std::cos(j * 0.37));
+    return std::make_unique<Scene>(d, n, n, std::move(h));
+}
+
+std::vector<double> randomVec(size_t n, uint64_t seed, double scale = 1.0) {
+    Pcg32 rng(seed, 3);
+    std::vector<double> v(n);
+    for (double& x : v) x = scale * rng.nextDouble();
+    return v;
+}
+
+}  // namespace
+
+// A flat perfect mirror seen by an orthographic camera reflects every camera ray into one
+// direction, the centre of texel (row, col): the judge's mean image is that texel's value in
+// every part pixel, so its scores are known in closed form.
+TEST(Judge, FlatMirrorUnderAKnownEnvMap) {
+    const int W = 50, H = 25, row = 8, col = 10;
+    const double theta = row * std::numbers::pi / (H - 1),
+                 phi = 2 * std::numbers::pi * (col + 0.5) / W;
+    const Vec3d r{std::sin(phi) * std::sin(theta), std::cos(theta),
+                  -std::cos(phi) * std::sin(theta)};
+    SceneDesc d;
+    d.heightmap.pitch = 0.05;
+    d.material.params.ior = ComplexIor{Rgb{0.0f}, Rgb{1.0f}};  // "none": F == 1
+    d.material.params.smooth = true;
+    d.camera.type = CameraDesc::Type::Orthographic;
+    d.camera.origin = Vec3d{-r.x, r.y, -r.z} * 20.0;  // looking along the mirrored direction
+    d.camera.target = Vec3d{0, 0, 0};
+    d.camera.up = Vec3d{0, 1, 0};
+    d.camera.widthMm = 0.5;
+    d.camera.width = d.camera.height = 16;
+    d.render.maxDepth = 2;
+    Scene scene(d, 160, 160, std::vector<float>(160 * 160, 0.0f));
+
+    JudgeOptions o;
+    o.spp = 8;
+    Judge judge(scene, o);
+    std::vector<double> e = randomVec(size_t(W) * H, 5);
+    e[size_t(row) * W + col] = 0.625;
+    const std::vector<double> y = judge.meanImage(e);
+    size_t part = 0;
+    for (size_t p = 0; p < y.size(); ++p) {
+        if (!judge.partMask()[p]) continue;
+        ++part;
+        EXPECT_NEAR(y[p], 0.625, 2e-4);
+    }
+    EXPECT_EQ(part, y.size());
+    const JudgeScore s = judge.score(e, "mirror");
+    double meanE = 0, sq = 0;
+    size_t dark = 0;
+    for (double v : e) {
+        meanE += v / static_cast<double>(e.size());
+        sq += v * v / static_cast<double>(e.size());
+        dark += v < kDarkTexel;
+    }
+    EXPECT_DOUBLE_EQ(s.meanE, meanE);
+    EXPECT_DOUBLE_EQ(s.sparsity, static_cast<double>(dark) / static_cast<double>(e.size()));
+    EXPECT_NEAR(s.eq2.lReg, sq, 1e-12);
+    EXPECT_NEAR(s.unbiased.lReg, sq, 1e-12);
+    // A uniform image has no gradient: both losses sit at their floor.
+    EXPECT_LT(s.eq2.G, 1e-3 * s.eq2.S);
+    EXPECT_TRUE(s.unbiased.clamped || s.unbiased.G < 1e-6 * s.unbiased.S);
+}
+
+// Two judges with different seeds agree on U within 2 % at 1024 spp.
+TEST(Judge, AgreesWithItselfAcrossSeeds) {
+    auto scene = wavyScene(48);
+    JudgeOptions a, b;
+    a.spp = b.spp = 1024;
+    b.seed = kJudgeSeed + 1;
+    Judge ja(*scene, a), jb(*scene, b);
+    for (uint64_t k = 0; k < 3; ++k) {
+        const std::vector<double> e = randomVec(1250, 10 + k);
+        const double ua = ja.score(e).unbiased.total, ub = jb.score(e).unbiased.total;
+        EXPECT_NEAR(ua / ub, 1.0, 0.02) << "light " << k;
+    }
+}
+
+TEST(DefectVisibility, KnownGradientsGiveTheirRatio) {
+    const int w = 40, h = 30;
+    std::vector<double> y(size_t(w) * h);
+    std::vector<uint8_t> part(y.size(), 1), labels(y.size(), 0);
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i) {
+            const bool in = i >= 5 && i < 15 && j >= 5 && j < 15;
+            labels[size_t(j) * w + i] = in ? 255 : 0;
+            y[size_t(j) * w + i] = (in ? 0.03 : 0.01) * (i + j) + (in ? 0.5 : 1.0);
+        }
+    auto v = defectVisibility(w, h, y, y, part, labels, {{255, "scratch"}});
+    ASSERT_EQ(v.size(), 1u);
+    EXPECT_EQ(v[0].label.name, "scratch");
+    EXPECT_EQ(v[0].pixels, 100u);
+    EXPECT_NEAR(v[0].rmsGradient, 0.03, 1e-12);
+    EXPECT_NEAR(v[0].cleanRmsGradient, 0.01, 1e-12);
+    EXPECT_NEAR(v[0].visibility, 3.0, 1e-9);
+    EXPECT_LT(v[0].weber, 0.0);  // darker than its surroundings
+    // An unlisted label gets its own region; a listed label without pixels reports NaN.
+    labels[size_t(25) * w + 30] = 7;
+    v = defectVisibility(w, h, y, y, part, labels, {{255, "scratch"}, {128, "chatter"}});
+    ASSERT_EQ(v.size(), 3u);
+    EXPECT_EQ(v[1].pixels, 0u);
+    EXPECT_TRUE(std::isnan(v[1].visibility));
+    EXPECT_EQ(v[2].label.name, "label-7");
+}
+
+// Independent noise in the two halves does not raise the visibility estimate on average.
+TEST(DefectVisibility, NoiseInTheHalvesIsUnbiased) {
+    const int w = 200, h = 200;
+    std::vector<double> ya(size_t(w) * h), yb(ya.size());
+    std::vector<uint8_t> part(ya.size(), 1), labels(ya.size(), 0);
+    Pcg32 rng(99, 1);
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i) {
+            const size_t p = size_t(j) * w + i;
+            labels[p] = i < 100 ? 255 : 0;
+            const double clean = (i < 100 ? 0.02 : 0.01) * (i + j);
+            ya[p] = clean + 0.05 * (rng.nextDouble() - 0.5);
+            yb[p] = clean + 0.05 * (rng.nextDouble() - 0.5);
+        }
+    auto v = defectVisibility(w, h, ya, yb, part, labels, {{255, "defect"}});
+    EXPECT_NEAR(v[0].visibility, 2.0, 0.1);
+}
+
+TEST(LabelMask, RejectsAMaskOfTheWrongSizeAndReadsTheLegend) {
+    test::TempDir dir("labels");
+    std::vector<uint8_t> m(12 * 10, 0);
+    m[5] = 255;
+    m[17] = 128;
+    writeMaskPng(dir / "t-truth.png", m, 12, 10);
+    try {
+        readLabelMask(dir / "t-truth.png", 16, 16);
+        FAIL() << "a 12x10 mask was accepted for a 16x16 height map";
+    } catch (const InputError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("t-truth.png"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("12x10"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("16x16"), std::string::npos) << msg;
+    }
+    LabelMask l = readLabelMask(dir / "t-truth.png", 12, 10);
+    EXPECT_EQ(l.labels[5], 255);
+    EXPECT_EQ(l.labels[17], 128);
+    ASSERT_EQ(l.legend.size(), 2u);  // no legend file: every value present
+    test::writeText(dir / "t-truth.json", R"({"labels": [{"value": 128, "name": "chatter"}]})");
+    l = readLabelMask(dir / "t-truth.png", 12, 10);
+    ASSERT_EQ(l.legend.size(), 1u);
+    EXPECT_EQ(l.legend[0].name, "chatter");
+    test::writeText(dir / "t-truth.json", R"({"labels": [{"value": 0, "name": "x"}]})");
+    EXPECT_THROW(readLabelMask(dir / "t-truth.png", 12, 10), InputError);
+}
+
+TEST(Judge, ProjectsTruthAndRejectsAMismatchedOne) {
+    auto scene = wavyScene(16);
+    test::TempDir dir("judge-truth");
+    std::vector<uint8_t> m(48 * 48, 255);
+    writeMaskPng(dir / "ok.png", m, 48, 48);
+    writeMaskPng(dir / "bad.png", m, 40, 48);
+    JudgeOptions o;
+    o.spp = 4;
+    o.truth = dir / "bad.png";
+    EXPECT_THROW(Judge(*scene, o), InputError);
+    o.truth = dir / "ok.png";
+    Judge j(*scene, o);
+    for (size_t p = 0; p < j.labels().size(); ++p)
+        if (j.partMask()[p]) EXPECT_EQ(j.labels()[p], 255);
+}
+
+TEST(Transport, HalvesKernelsEqualTheSeparateProducts) {
+    auto scene = wavyScene(20);
+    RenderOptions ro;
+    ro.spp = 8;
+    ro.maxDepth = 3;
+    ro.sampleSets = 2;
+    TransportMatrix t = precomputeTransport(*scene, ro, 1).matrix;
+    ASSERT_EQ(t.planes, 2);
+    const auto e = randomVec(t.cols(), 1);
+    std::vector<double> ya(t.rows()), yb(t.rows()), a(t.rows()), b(t.rows());
+    t.applyLuminanceHalves(e, ya, yb);
+    t.applyLuminance(e, a, 0);
+    t.applyLuminance(e, b, 1);
+    for (size_t r = 0; r < t.rows(); ++r) {
+        EXPECT_NEAR(ya[r], a[r], 1e-12 * (1 + std::abs(a[r])));
+        EXPECT_NEAR(yb[r], b[r], 1e-12 * (1 + std::abs(b[r])));
+    }
+    const auto ga = randomVec(t.rows(), 2), gb = randomVec(t.rows(), 3);
+    std::vector<double> out(t.cols()), sa(t.cols()), sb(t.cols());
+    t.applyTransposeLuminanceHalves(ga, gb, out);
+    t.applyTransposeLuminance(ga, sa, 0);
+    t.applyTransposeLuminance(gb, sb, 1);
+    for (size_t c = 0; c < t.cols(); ++c)
+        EXPECT_NEAR(out[c], sa[c] + sb[c], 1e-10 * (1 + std::abs(sa[c] + sb[c])));
+}
+
+TEST(Search, CyclingLossUsesTheNextEstimateForEveryGradient) {
+    auto scene = wavyScene(16);
+    RenderOptions ro;
+    ro.spp = 4;
+    ro.maxDepth = 3;
+    std::vector<TransportMatrix> ts;
+    for (uint64_t s = 0; s < 3; ++s) {
+        ro.seed = s;
+        ts.push_back(precomputeTransport(*scene, ro, 1).matrix);
+    }
+    ImageObjective obj(16, 16, ts[0].objectMask, ObjectiveOptions{});
+    std::vector<std::unique_ptr<TransportLoss>> losses;
+    std::vector<const TransportLoss*> ptrs;
+    for (const auto& t : ts) {
+        losses.push_back(std::make_unique<TransportLoss>(t, obj, false));
+        ptrs.push_back(losses.back().get());
+    }
+    CyclingLoss cyc(ptrs);
+    const auto e = randomVec(1250, 4);
+    std::vector<double> g(1250);
+    for (int n = 0; n < 6; ++n) {
+        const double v = cyc.evaluate(e, g).total;
+        EXPECT_DOUBLE_EQ(v, losses[size_t(n % 3)]->evaluate(e, {}).total) << "evaluation " << n;
+    }
+    double mean = 0;
+    for (const auto& l : losses) mean += l->evaluate(e, {}).total / 3.0;
+    EXPECT_NEAR(cyc.evaluate(e, {}).total, mean, 1e-12 * mean);
+}
+
+TEST(Search, MultistartKeepsTheLowestTrainingLoss) {
+    auto scene = wavyScene(16);
+    RenderOptions ro;
+    ro.spp = 4;
+    ro.maxDepth = 3;
+    TransportMatrix t = precomputeTransport(*scene, ro, 1).matrix;
+    SearchInputs in;
+    in.set = {&t};
+    in.mask = t.objectMask;
+    SearchOptions o;
+    o.optimizer.method = "adam";
+    o.optimizer.iterations = 5;
+    o.starts = {"const:0.5", "random:1", "const:0.2"};
+    const SearchResult r = search(in, o);
+    ASSERT_EQ(r.startLosses.size(), 3u);
+    double best = 1e300;
+    std::string bestName;
+    for (const auto& [name, loss] : r.startLosses)
+        if (loss < best) best = loss, bestName = name;
+    EXPECT_EQ(r.start, bestName);
+    EXPECT_DOUBLE_EQ(r.training.total, best);
+    // Each start alone reproduces its entry.
+    for (const auto& [name, loss] : r.startLosses) {
+        SearchOptions one = o;
+        one.starts = {name};
+        EXPECT_DOUBLE_EQ(search(in, one).training.total, loss) << name;
+    }
+}
+
+TEST(Synth, ConfinedChatterIsLabelledOnItsSideOnly) {
+    SurfaceSpec s;
+    s.width = s.height = 64;
+    s.pitch = 0.02;
+    s.chatterStartFraction = 0.5;
+    s.pocketEdge = false;
+    s.scratchCount = 0;
+    s.gougeCount = 0;
+    const GeneratedSurface g = generateSurface(s);
+    for (int j = 0; j < 64; ++j)
+        for (int i = 0; i < 64; ++i)
+            EXPECT_EQ(g.truth[size_t(j) * 64 + i], i >= 32 ? kTruthChatter : 0) << i << "," << j;
+    s.chatterStartFraction = 1.5;
+    EXPECT_THROW(generateSurface(s), InputError);
+}
