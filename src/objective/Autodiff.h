@@ -62,7 +62,6 @@ class PathRecording : public PathSink {
     int texelCount() const { return basis_.texelCount(); }
     size_t pixelCount() const { return paths_.size(); }
     size_t pathCount() const;
-    const std::vector<Path>& pixelPaths(size_t pixel) const { return paths_[pixel]; }
 
     /// The luminance image Y(E) through the recorded paths, in scalar type S.
     template <typename S>

@@ -131,17 +131,4 @@ bool Heightfield::intersect(const Ray& ray, float tnear, SurfaceHit& hit) const 
     return true;
 }
 
-Vec3f Heightfield::samplePosition(int row, int col, float h) const {
-    return {static_cast<float>((col - 0.5 * (width_ - 1)) * pitch_), h,
-            static_cast<float>((row - 0.5 * (height_ - 1)) * pitch_)};
-}
-
-std::array<int, 2> Heightfield::cellAt(const Vec3f& p) const {
-    double fi = p.x / pitch_ + 0.5 * (width_ - 1);
-    double fj = p.z / pitch_ + 0.5 * (height_ - 1);
-    int i = std::clamp(static_cast<int>(std::floor(fi)), 0, width_ - 2);
-    int j = std::clamp(static_cast<int>(std::floor(fj)), 0, height_ - 2);
-    return {j, i};
-}
-
 }  // namespace sl
