@@ -3,13 +3,13 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "core/Error.h"
+#include "core/Stopwatch.h"
 
 namespace sl {
 
@@ -48,7 +48,7 @@ Heightfield::Heightfield(int width, int height, double pitch, std::span<const fl
     memory_[0] = 0;
     memory_[1] = 0;
 
-    auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch clock;
     device_ = rtcNewDevice(nullptr);
     if (!device_) throw std::runtime_error("Embree: could not create a device");
     rtcSetDeviceMemoryMonitorFunction(device_, memoryMonitor, memory_.get());
@@ -105,8 +105,7 @@ Heightfield::Heightfield(int width, int height, double pitch, std::span<const fl
     rtcReleaseGeometry(geom);
     rtcCommitScene(scene_);
     if (rtcGetDeviceError(device_) != RTC_ERROR_NONE) embreeFail(device_, "building the BVH");
-    stats_.buildSeconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    stats_.buildSeconds = clock.seconds();
     stats_.embreeBytes = static_cast<size_t>(std::max<int64_t>(0, memory_[0].load()));
     stats_.embreePeakBytes = static_cast<size_t>(std::max<int64_t>(0, memory_[1].load()));
 }
