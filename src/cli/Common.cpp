@@ -41,7 +41,7 @@ EnvMap chooseEnvMap(const Scene& scene, const std::string& envmapFile,
     const EnvMapDesc& e = scene.desc.envmap;
     if (!e.path.empty()) return loadEnvMap(e.path, w, h, 3);
     if (e.constant) return EnvMap::constant(w, h, *e.constant);
-    return presetEnvMap(e.preset.empty() ? "studio" : e.preset, w, h);
+    return presetEnvMap(e.preset.empty() ? EnvMapDesc::kDefaultPreset : e.preset, w, h);
 }
 
 std::filesystem::path siblingPath(const std::filesystem::path& out, const std::string& ext,
