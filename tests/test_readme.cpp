@@ -1,8 +1,10 @@
 // The README's "Scene file" table is the parser's own list of fields and defaults
 // (io/SceneFile.h sceneFileFields()), and each default is defined once: the parser applies the
-// defaults of the scene structs, and the renderer's options agree with the scene's render section.
+// defaults of the scene structs, and the renderer's options agree with the scene's render section;
+// the Layout section names every folder.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -88,4 +90,16 @@ TEST(Readme, RendererDefaultsAreTheSceneFilesRenderSection) {
     EXPECT_EQ(o.spp, r.spp);
     EXPECT_EQ(o.maxDepth, r.maxDepth);
     EXPECT_EQ(o.seed, r.seed);
+}
+
+TEST(Readme, LayoutListsEveryFolder) {
+    const std::string layout = readmeSection("## Layout");
+    ASSERT_FALSE(layout.empty()) << "README.md has no \"## Layout\" section";
+    for (const auto& e : std::filesystem::directory_iterator(SL_SOURCE_DIR "/src"))
+        if (e.is_directory()) {
+            const std::string name = "src/" + e.path().filename().string() + "/";
+            EXPECT_NE(layout.find(name), std::string::npos) << name << " is missing from Layout";
+        }
+    for (const char* top : {"tests/", "scripts/", "scenes/", "docs/"})
+        EXPECT_NE(layout.find(top), std::string::npos) << top << " is missing from Layout";
 }

@@ -1,7 +1,7 @@
 // Autodiff: the render-to-loss chain written once, templated on the scalar type, and its gradient
 // by forward-mode automatic differentiation (ceres::Jet, chunked over texels). It is the
 // reference the exact gradient (Tᵀ·dL/dY), finite differences and SPSA are measured against
-// (DESIGN.md "Black-box baselines and validation"). Gray env maps (one value per texel).
+// (docs/DESIGN.md "Black-box baselines and validation"). Gray env maps (one value per texel).
 //
 // Two chains, both templated on the scalar S (double, ceres::Jet<double, N>, ...):
 //
