@@ -153,3 +153,15 @@ TEST_F(CliTest, FailedRenderKeepsExistingOutput) {
     EXPECT_EQ(sa, "precious");
     EXPECT_EQ(sb, "precious too");
 }
+
+TEST_F(CliTest, BenchScratchmapPrintsATableAndWritesCsv) {
+    const std::string csv = (dir / "sub dir" / "it's.csv").string();
+    auto r = runCli("bench scratchmap --sizes 64,100 --repeats 1 --csv \"" + csv + "\"");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("100x100"), std::string::npos) << r.output;
+    std::ifstream in(csv);
+    int lines = 0;
+    for (std::string l; std::getline(in, l);) ++lines;
+    EXPECT_EQ(lines, 3);
+    EXPECT_EQ(runCli("bench scratchmap --sizes 0").exitCode, 2);
+}

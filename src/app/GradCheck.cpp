@@ -1,7 +1,6 @@
 #include "app/GradCheck.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -10,6 +9,8 @@
 
 #include "core/Error.h"
 #include "core/Stats.h"
+#include "core/Stopwatch.h"
+#include "core/Text.h"
 #include "io/AtomicFile.h"
 #include "io/SceneFile.h"
 #include "objective/Autodiff.h"
@@ -22,18 +23,6 @@
 namespace sl {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double since(Clock::time_point t0) {
-    return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-std::string fmt(double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.6g", v);
-    return buf;
-}
 
 /// Everything the measurements share: the scene, T, the recorded paths, the objective, E0 and
 /// the reference gradient.
@@ -67,9 +56,9 @@ std::unique_ptr<Lab> makeLab(const GradientSetup& s, int repeats) {
     lab->render.threads = s.threads;
     std::vector<double> times;
     for (int r = 0; r < std::max(1, repeats); ++r) {
-        const auto t0 = Clock::now();
+        const Stopwatch clock;
         PrecomputeResult p = precomputeTransport(*lab->scene, lab->render, 1);
-        times.push_back(since(t0));
+        times.push_back(clock.seconds());
         lab->t = std::move(p.matrix);
     }
     lab->secondsPrecompute = median(times);
@@ -95,9 +84,9 @@ GradCheckRow measure(const Lab& lab, const std::string& method, const std::strin
     std::vector<double> secs, errs, coss;
     for (int r = 0; r < repeats; ++r) {
         long renders = 0;
-        const auto t0 = Clock::now();
+        const Stopwatch clock;
         const std::vector<double> g = gradient(r, renders);
-        secs.push_back(since(t0));
+        secs.push_back(clock.seconds());
         const GradientError e = compareGradients(g, lab.reference.gradient);
         errs.push_back(e.relativeL2);
         coss.push_back(e.cosine);
@@ -143,7 +132,7 @@ GradCheckRow measureFd(const Lab& lab, int repeats, FdOptions fd, const std::str
     fd.texels.clear();
     if (fd.threads == 0) fd.threads = lab.threads;
     const std::string settings = std::string(fd.central ? "central" : "forward") +
-                                 ", h=" + fmt(fd.h) +
+                                 ", h=" + formatNumber(fd.h) +
                                  (fd.commonRandomNumbers ? ", CRN" : ", fresh seeds");
     GradCheckRow row = measure(lab, method, settings, repeats, [&](int r, long& renders) {
         GradientEstimate g =
@@ -158,7 +147,7 @@ GradCheckRow measureFd(const Lab& lab, int repeats, FdOptions fd, const std::str
 
 GradCheckRow measureSpsa(const Lab& lab, int repeats, const SpsaOptions& sp, int q) {
     Pcg32 rng(sp.seed, 0x2545f4914f6cdd1dULL);
-    const std::string settings = "q=" + std::to_string(q) + ", c=" + fmt(sp.c) +
+    const std::string settings = "q=" + std::to_string(q) + ", c=" + formatNumber(sp.c) +
                                  (sp.commonRandomNumbers ? ", CRN" : ", fresh seeds");
     GradCheckRow row = measure(lab, "spsa", settings, repeats, [&](int r, long& renders) {
         GradientEstimate g =
@@ -305,7 +294,7 @@ struct Tracer {
 
     std::function<bool(const IterationRecord&, std::span<const double>)> callback() {
         return [this](const IterationRecord& r, std::span<const double> x) {
-            const auto t0 = Clock::now();
+            const Stopwatch clock;
             BenchTracePoint p;
             p.method = method;
             p.iteration = r.iteration;
@@ -313,7 +302,7 @@ struct Tracer {
             p.loss = exact.evaluate(x, {}).total;
             p.renders = blackBox ? r.evaluations : 0;
             out.push_back(p);
-            overhead += since(t0);
+            overhead += clock.seconds();
             return p.seconds < budget;
         };
     }

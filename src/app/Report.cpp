@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/Error.h"
+#include "core/Text.h"
 #include "io/AtomicFile.h"
 
 namespace sl {
@@ -15,33 +16,6 @@ namespace sl {
 using nlohmann::json;
 
 namespace {
-
-std::string esc(const std::string& s) {
-    std::string o;
-    o.reserve(s.size());
-    for (char c : s) {
-        switch (c) {
-            case '&':
-                o += "&amp;";
-                break;
-            case '<':
-                o += "&lt;";
-                break;
-            case '>':
-                o += "&gt;";
-                break;
-            case '"':
-                o += "&quot;";
-                break;
-            case '\'':
-                o += "&#39;";
-                break;
-            default:
-                o += c;
-        }
-    }
-    return o;
-}
 
 std::string readBytes(const std::filesystem::path& file, const std::string& what) {
     std::ifstream in(file, std::ios::binary);
@@ -104,13 +78,14 @@ std::string table(const std::vector<std::string>& columns, const std::vector<jso
     if (order.empty()) return {};
     std::ostringstream h;
     h << "<table class=\"" << cls << "\"><thead><tr><th></th>";
-    for (const auto& c : columns) h << "<th>" << esc(c) << "</th>";
+    for (const auto& c : columns) h << "<th>" << escapeXml(c) << "</th>";
     h << "</tr></thead><tbody>\n";
     for (const auto& k : order) {
-        h << "<tr><th>" << esc(k) << "</th>";
+        h << "<tr><th>" << escapeXml(k) << "</th>";
         for (const auto& f : flat) {
             auto it = f.find(k);
-            h << "<td>" << esc(it == f.end() ? std::string("") : fmtJson(it->second)) << "</td>";
+            h << "<td>" << escapeXml(it == f.end() ? std::string("") : fmtJson(it->second))
+              << "</td>";
         }
         h << "</tr>\n";
     }
@@ -238,11 +213,12 @@ std::string lossCurveSvg(const std::vector<LossSeries>& series, int width, int h
         const double v = a + (b - a) * k / 4.0, yy = T + (1.0 - k / 4.0) * ph;
         o << "<line x1=\"" << L - 3 << "\" x2=\"" << L << "\" y1=\"" << yy << "\" y2=\"" << yy
           << "\" stroke=\"#888\"/><text x=\"" << L - 5 << "\" y=\"" << yy + 3
-          << "\" text-anchor=\"end\">" << esc(fmtNum(logY ? std::pow(10.0, v) : v)) << "</text>";
+          << "\" text-anchor=\"end\">" << escapeXml(fmtNum(logY ? std::pow(10.0, v) : v))
+          << "</text>";
         const double xv = x0 + (x1 - x0) * k / 4.0, xx = L + pw * k / 4.0;
         o << "<line x1=\"" << xx << "\" x2=\"" << xx << "\" y1=\"" << T + ph << "\" y2=\""
           << T + ph + 3 << "\" stroke=\"#888\"/><text x=\"" << xx << "\" y=\"" << T + ph + 14
-          << "\" text-anchor=\"middle\">" << esc(fmtNum(std::round(xv))) << "</text>";
+          << "\" text-anchor=\"middle\">" << escapeXml(fmtNum(std::round(xv))) << "</text>";
     }
     o << "<text x=\"" << L + pw / 2 << "\" y=\"" << height - 4
       << "\" text-anchor=\"middle\">iteration</text>";
@@ -259,7 +235,7 @@ std::string lossCurveSvg(const std::vector<LossSeries>& series, int width, int h
         o << "\"/>";
         if (series.size() > 1 || !s.label.empty())
             o << "<text x=\"" << L + pw - 4 << "\" y=\"" << T + 12 + 12 * static_cast<double>(si)
-              << "\" text-anchor=\"end\" fill=\"" << c << "\">" << esc(s.label) << "</text>";
+              << "\" text-anchor=\"end\" fill=\"" << c << "\">" << escapeXml(s.label) << "</text>";
     }
     o << "</svg>";
     return o.str();
@@ -313,30 +289,30 @@ ReportRun reportRunFromOutDir(const std::filesystem::path& dir, const std::strin
 std::string renderReportHtml(const ReportContent& c) {
     std::ostringstream h;
     h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>"
-      << esc(c.title) << "</title>\n<style>" << kStyle << "</style></head><body>\n";
-    h << "<h1>" << esc(c.title) << "</h1>\n";
-    for (const auto& n : c.notes) h << "<p class=\"note\">" << esc(n) << "</p>\n";
+      << escapeXml(c.title) << "</title>\n<style>" << kStyle << "</style></head><body>\n";
+    h << "<h1>" << escapeXml(c.title) << "</h1>\n";
+    for (const auto& n : c.notes) h << "<p class=\"note\">" << escapeXml(n) << "</p>\n";
     if (c.settings.is_object() && !c.settings.empty())
         h << "<h2>Settings</h2>\n" << table({"value"}, {c.settings}, "settings");
     int fig = 0;
     for (const auto& f : c.figures) {
         ++fig;
-        h << "<section class=\"figure\" id=\"figure-" << fig << "\"><h2>" << esc(f.title)
+        h << "<section class=\"figure\" id=\"figure-" << fig << "\"><h2>" << escapeXml(f.title)
           << "</h2>\n";
-        if (!f.caption.empty()) h << "<p class=\"caption\">" << esc(f.caption) << "</p>\n";
+        if (!f.caption.empty()) h << "<p class=\"caption\">" << escapeXml(f.caption) << "</p>\n";
         h << "<div class=\"runs\">\n";
         std::vector<std::string> cols;
         std::vector<json> metrics, settings;
         std::vector<LossSeries> curves;
         for (const auto& r : f.runs) {
-            h << "<figure class=\"run\"><h3>" << esc(r.title) << "</h3>";
-            if (!r.caption.empty()) h << "<figcaption>" << esc(r.caption) << "</figcaption>";
+            h << "<figure class=\"run\"><h3>" << escapeXml(r.title) << "</h3>";
+            if (!r.caption.empty()) h << "<figcaption>" << escapeXml(r.caption) << "</figcaption>";
             h << "<div class=\"imgs\">";
             for (const auto& im : r.images) {
                 const std::string png = readBytes(im.png, "image for the report");
-                h << "<figure><img alt=\"" << esc(im.caption) << "\" src=\"data:image/png;base64,"
-                  << base64Encode(png) << "\"><figcaption>" << esc(im.caption)
-                  << "</figcaption></figure>";
+                h << "<figure><img alt=\"" << escapeXml(im.caption)
+                  << "\" src=\"data:image/png;base64," << base64Encode(png) << "\"><figcaption>"
+                  << escapeXml(im.caption) << "</figcaption></figure>";
             }
             h << "</div>";
             if (!r.loss.loss.empty() && !f.combinedLossPlot)

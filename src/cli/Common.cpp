@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <mutex>
 
+#include "app/Plot.h"
 #include "core/Error.h"
 #include "io/EnvMapIO.h"
 #include "scene/EnvMapPresets.h"
@@ -40,7 +41,7 @@ EnvMap chooseEnvMap(const Scene& scene, const std::string& envmapFile,
     const EnvMapDesc& e = scene.desc.envmap;
     if (!e.path.empty()) return loadEnvMap(e.path, w, h, 3);
     if (e.constant) return EnvMap::constant(w, h, *e.constant);
-    return presetEnvMap(e.preset.empty() ? "studio" : e.preset, w, h);
+    return presetEnvMap(e.preset.empty() ? EnvMapDesc::kDefaultPreset : e.preset, w, h);
 }
 
 std::filesystem::path siblingPath(const std::filesystem::path& out, const std::string& ext,
@@ -50,6 +51,21 @@ std::filesystem::path siblingPath(const std::filesystem::path& out, const std::s
     std::filesystem::path p = out;
     p.replace_extension(siblingExt);
     return p;
+}
+
+int runPlot(const std::string& script, const std::vector<std::string>& args, bool run) {
+    std::fflush(stdout);
+    const PlotOutcome p = runPlotScript(script, args, run);
+    const std::string command = shellQuoted(p.command);
+    if (!run) {
+        std::printf("plot with: %s\n", command.c_str());
+    } else if (!p.ran) {
+        std::printf("no plot: %s; plot with: %s\n", p.message.c_str(), command.c_str());
+    } else if (p.exitCode != 0) {
+        throw std::runtime_error("the plot script failed (exit code " + std::to_string(p.exitCode) +
+                                 "): " + command);
+    }
+    return kOk;
 }
 
 }  // namespace sl::cli

@@ -5,6 +5,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "scene/EnvMap.h"
 
@@ -34,5 +35,10 @@ EnvMap chooseEnvMap(const Scene& scene, const std::string& envmapFile,
 /// extension `siblingExt` (e.g. the PNG preview next to an EXR).
 std::filesystem::path siblingPath(const std::filesystem::path& out, const std::string& ext,
                                   const std::string& siblingExt);
+
+/// Runs the plotting script `script` (a name under scripts/, found beside the executable, or a
+/// path) with python3 and `args` when `run`; otherwise prints the command that would. Prints
+/// "no plot: ..." when the script or python3 is missing; a failing script is a runtime error.
+int runPlot(const std::string& script, const std::vector<std::string>& args, bool run);
 
 }  // namespace sl::cli

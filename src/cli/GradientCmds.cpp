@@ -4,7 +4,6 @@
 #include "cli/GradientCmds.h"
 
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <memory>
 
@@ -76,7 +75,7 @@ struct BenchArgs {
     BenchGradientsOptions o;
     SetupArgs setup;
     std::string scene = "scenes/default/scene.json", out = "out/bench-gradients";
-    std::string script = "scripts/plot_gradients.py";
+    std::string script = "plot_gradients.py";
     bool noOptimize = false, noPlot = false;
 };
 
@@ -100,17 +99,7 @@ int runBenchGradientsCmd(BenchArgs a) {
     std::printf("wrote %s", r.gradientsCsv.string().c_str());
     if (!r.optimizationCsv.empty()) std::printf(" and %s", r.optimizationCsv.string().c_str());
     std::printf("\n");
-    const std::string plot = "/usr/bin/python3 '" + a.script + "' '" + a.out + "'";
-    std::fflush(stdout);
-    if (a.noPlot) {
-        std::printf("plot with: %s\n", plot.c_str());
-    } else if (!std::filesystem::exists(a.script) || !std::filesystem::exists("/usr/bin/python3")) {
-        std::printf("no plot: %s or /usr/bin/python3 not found; plot with: %s\n", a.script.c_str(),
-                    plot.c_str());
-    } else if (std::system(plot.c_str()) != 0) {
-        throw std::runtime_error("the plot script failed: " + plot);
-    }
-    return kOk;
+    return runPlot(a.script, {a.out}, !a.noPlot);
 }
 
 struct ExportArgs {
@@ -220,7 +209,10 @@ void registerGradients(CLI::App& app, std::function<int()>& run) {
             ->capture_default_str();
         c->add_flag("--no-optimize", a->noOptimize, "Skip the whole optimizations");
         c->add_option("-o,--output", a->out, "Output directory")->capture_default_str();
-        c->add_option("--plot-script", a->script, "The plotting script")->capture_default_str();
+        c->add_option("--plot-script", a->script,
+                      "The plotting script: a path, or a name found beside the executable "
+                      "(../scripts, ../share/scratchlight/scripts)")
+            ->capture_default_str();
         c->add_flag("--no-plot", a->noPlot, "Do not run the plotting script");
         c->callback([a, &run] { run = [a] { return runBenchGradientsCmd(*a); }; });
     }

@@ -30,10 +30,6 @@ class Hasher {
         return *this;
     }
     Hasher& add(std::string_view s) { return add(s.data(), s.size()); }
-    template <typename T>
-    Hasher& addValue(const T& v) {
-        return add(&v, sizeof v);
-    }
     uint64_t digest() const { return mix64(h_ ^ length_); }
 
   private:

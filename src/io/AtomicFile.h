@@ -1,6 +1,6 @@
 // AtomicOutput: write a file under a temporary name in the destination directory and rename it
-// into place only when the write has fully succeeded (DESIGN.md "Files": "Write every output to
-// a temporary name and rename it into place").
+// into place only when the write has fully succeeded (docs/DESIGN.md "Files": every output is
+// written under a temporary name and renamed into place).
 //
 //   AtomicOutput out(finalPath);          // creates missing parent directories
 //   writeSomething(out.tempPath());       // may throw: ~AtomicOutput removes the temporary

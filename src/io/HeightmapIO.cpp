@@ -11,6 +11,7 @@
 #include <system_error>
 
 #include "core/Error.h"
+#include "core/Text.h"
 #include "io/ImageIO.h"
 #include "io/Npy.h"
 
@@ -22,11 +23,6 @@ namespace {
 
 const char* const kFixFloat =
     "Save heights as float32 (EXR, TIFF or .npy) or uint16 (PNG, TIFF) and try again";
-
-std::string lower(std::string s) {
-    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return s;
-}
 
 std::string typeName(OIIO::TypeDesc t) {
     if (t == OIIO::TypeDesc::HALF) return "float16";

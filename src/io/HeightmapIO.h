@@ -1,5 +1,6 @@
-// HeightmapIO: loading height maps (DESIGN.md "Conventions": sample (row j, column i) of a
-// W×H map sits at x = (i − (W−1)/2)·p, z = (j − (H−1)/2)·p; row 0 is the file's first row).
+// HeightmapIO: loading height maps (the world frame of scene/Heightfield.h: sample (row j,
+// column i) of a W×H map sits at x = (i − (W−1)/2)·p, z = (j − (H−1)/2)·p; row 0 is the file's
+// first row).
 //
 // Formats and how values become heights (scene units, millimetres by default):
 //   * float maps — OpenEXR and TIFF float32/float16 (float64 TIFF is read as float32), .npy

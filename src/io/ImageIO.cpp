@@ -13,6 +13,7 @@
 
 #include "core/Color.h"
 #include "core/Error.h"
+#include "core/Text.h"
 #include "io/AtomicFile.h"
 
 namespace sl {
@@ -24,11 +25,6 @@ namespace {
 const char* const kImageFix =
     "Check that the file is a complete image in a format OpenImageIO reads (EXR, PNG, JPEG, "
     "TIFF, HDR, ...)";
-
-std::string lower(std::string s) {
-    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return s;
-}
 
 void checkReadableFile(const fs::path& file) {
     const std::string where = file.string();

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "core/Error.h"
+#include "core/Text.h"
 #include "io/AtomicFile.h"
 #include "io/ImageIO.h"
 #include "scene/Materials.h"
@@ -22,37 +23,18 @@ static_assert(std::endian::native == std::endian::little,
 
 namespace {
 
+/// Numbers in the XML: nine significant digits, so floats round-trip.
 std::string num(double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.9g", v);
-    return buf;
+    return formatNumber(v, 9);
 }
 
 std::string triple(double a, double b, double c) {
     return num(a) + ", " + num(b) + ", " + num(c);
 }
 
-std::string xmlEscape(const std::string& s) {
-    std::string out;
-    for (char c : s) {
-        switch (c) {
-            case '&':
-                out += "&amp;";
-                break;
-            case '<':
-                out += "&lt;";
-                break;
-            case '>':
-                out += "&gt;";
-                break;
-            case '"':
-                out += "&quot;";
-                break;
-            default:
-                out += c;
-        }
-    }
-    // "--" is not allowed inside XML comments.
+/// Text inside an XML comment: escaped, and without "--" (not allowed there).
+std::string xmlComment(const std::string& s) {
+    std::string out = escapeXml(s);
     for (size_t p; (p = out.find("--")) != std::string::npos;) out.replace(p, 2, "- -");
     return out;
 }
@@ -129,8 +111,8 @@ std::string mitsubaSceneXml(const Scene& scene, const std::string& plyName,
     const RenderDesc& r = scene.desc.render;
     std::ostringstream x;
     x << "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n"
-      << "<!-- Exported by scratchlight export-mitsuba from " << xmlEscape(scene.desc.file.string())
-      << ".\n"
+      << "<!-- Exported by scratchlight export-mitsuba from "
+      << xmlComment(scene.desc.file.string()) << ".\n"
       << "     Render with an RGB variant: mitsuba -m scalar_rgb scene.xml\n"
       << "     Conventions: README \"Conventions\"; this export: src/io/MitsubaExport.h. -->\n"
       << "<scene version=\"3.0.0\">\n";
@@ -169,10 +151,10 @@ std::string mitsubaSceneXml(const Scene& scene, const std::string& plyName,
       << "        </film>\n"
       << "    </sensor>\n";
     x << "    <emitter type=\"envmap\">\n"
-      << "        <string name=\"filename\" value=\"" << xmlEscape(envmapName) << "\"/>\n"
+      << "        <string name=\"filename\" value=\"" << escapeXml(envmapName) << "\"/>\n"
       << "    </emitter>\n";
     x << "    <shape type=\"ply\">\n"
-      << "        <string name=\"filename\" value=\"" << xmlEscape(plyName) << "\"/>\n"
+      << "        <string name=\"filename\" value=\"" << escapeXml(plyName) << "\"/>\n"
       << "        <boolean name=\"face_normals\" value=\"true\"/>\n";
     const std::string& name = scene.desc.material.name;
     std::string source = name;
@@ -181,7 +163,7 @@ std::string mitsubaSceneXml(const Scene& scene, const std::string& plyName,
     } catch (const InputError&) {
         // custom eta/k: no named source
     }
-    x << "        <!-- material " << xmlEscape(source) << " -->\n";
+    x << "        <!-- material " << xmlComment(source) << " -->\n";
     if (m.smooth) {
         x << "        <bsdf type=\"conductor\">\n";
     } else {

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "core/Error.h"
+#include "core/Text.h"
 #include "io/HeightmapIO.h"
 #include "scene/Materials.h"
 
@@ -15,6 +16,10 @@ namespace sl {
 namespace {
 
 using json = nlohmann::json;
+
+const char* cameraTypeName(CameraDesc::Type t) {
+    return t == CameraDesc::Type::Perspective ? "perspective" : "orthographic";
+}
 
 /// Reads the fields of one JSON object, remembering which were used, so that anything left
 /// over is reported as an unknown field (with the list of valid ones).
@@ -143,9 +148,10 @@ void parseMaterial(Fields& f, MaterialDesc& m) {
     m.type = f.choice("type", m.type, {"roughconductor", "conductor"});
     ConductorParams& p = m.params;
     p.smooth = m.type == "conductor";
-    std::string dist = f.choice("distribution", "ggx", {"ggx", "beckmann"});
+    std::string dist =
+        f.choice("distribution", microfacetName(p.distribution), {"ggx", "beckmann"});
     p.distribution = dist == "ggx" ? Microfacet::GGX : Microfacet::Beckmann;
-    double alpha = f.positive("alpha", 0.05);
+    double alpha = f.positive("alpha", p.alphaU);
     p.alphaU = static_cast<float>(f.positive("alpha_u", alpha));
     p.alphaV = static_cast<float>(f.positive("alpha_v", alpha));
     auto eta = f.rgb("eta"), k = f.rgb("k");
@@ -167,9 +173,10 @@ void parseMaterial(Fields& f, MaterialDesc& m) {
 }
 
 void parseCamera(Fields& f, CameraSpec& c) {
-    c.type = f.choice("type", "perspective", {"perspective", "orthographic"}) == "perspective"
-                 ? CameraDesc::Type::Perspective
-                 : CameraDesc::Type::Orthographic;
+    c.type =
+        f.choice("type", cameraTypeName(c.type), {"perspective", "orthographic"}) == "perspective"
+            ? CameraDesc::Type::Perspective
+            : CameraDesc::Type::Orthographic;
     c.origin = f.vec3("origin");
     c.target = f.vec3("target");
     c.up = f.vec3("up");
@@ -268,6 +275,57 @@ std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
 
 std::unique_ptr<Scene> loadScene(const std::filesystem::path& file) {
     return loadScene(readSceneFile(file));
+}
+
+std::vector<SceneFileField> sceneFileFields() {
+    const SceneDesc d;  // the defaults the parser starts from
+    const ConductorParams& m = d.material.params;
+    auto num = [](double v) { return formatNumber(v); };
+    auto code = [](const std::string& s) { return "`" + s + "`"; };
+    auto pair = [&](double a, double b) { return num(a) + " × " + num(b); };
+    return {
+        {"heightmap.path", "required",
+         "EXR or TIFF (float32/float16/uint16), PNG (16- or 8-bit), NumPy `.npy` "
+         "(float32/float64/uint16, C order)"},
+        {"heightmap.pixel_pitch", num(d.heightmap.pitch), "sample spacing in scene units (mm)"},
+        {"heightmap.height_range", "required for integer maps",
+         "`[min, max]`: the integer range normalised to [0,1] maps linearly onto it; not allowed "
+         "for float maps"},
+        {"heightmap.height_scale", num(d.heightmap.heightScale),
+         "float maps: heights are multiplied by it"},
+        {"material.type", code(d.material.type),
+         "or `conductor` (smooth mirror) — Mitsuba 3's plugins"},
+        {"material.distribution", code(microfacetName(m.distribution)),
+         "or `beckmann` (visible-normal sampling, as Mitsuba)"},
+        {"material.alpha", m.alphaU == m.alphaV ? num(m.alphaU) : pair(m.alphaU, m.alphaV),
+         "roughness α; `alpha_u` (along +x, the map's columns) and `alpha_v` (along z) for "
+         "anisotropy"},
+        {"material.material", code(d.material.name),
+         "`none` (η=0, k=1: a perfect mirror), `Al`, `Cr`, `Fe`, `Cu`, `Au`, `Ag`; or explicit "
+         "`eta` and `k` (a number or `[r, g, b]`)"},
+        {"camera.type", code(cameraTypeName(d.camera.type)),
+         "or `orthographic` (with `width_mm`, default " + num(CameraSpec::kWidthMmFactor) +
+             " × the part's larger extent)"},
+        {"camera.origin/target/up", "automatic",
+         "omitted: looks at the part's centre from 45° above (+z side), framing all of it"},
+        {"camera.fov", num(d.camera.fovDeg), "degrees along the image's horizontal axis"},
+        {"camera.width/height", pair(d.camera.width, d.camera.height), "image size"},
+        {"envmap.width/height", pair(d.envmap.width, d.envmap.height), "env-map texels"},
+        {"envmap.path/constant/preset", code(EnvMapDesc::kDefaultPreset) + " preset",
+         "the env map `render` uses when its command line names none"},
+        {"render.spp", num(d.render.spp), "samples per pixel (stratified, box filter)"},
+        {"render.max_depth", num(d.render.maxDepth),
+         "Mitsuba's `max_depth`: 2 = one reflection, 3 = up to two"},
+        {"render.seed", num(static_cast<double>(d.render.seed)), "random seed"},
+        {"description", "\"\"", "free text"},
+    };
+}
+
+std::string sceneFileTable() {
+    std::string t = "| field | default | meaning |\n|---|---|---|\n";
+    for (const SceneFileField& f : sceneFileFields())
+        t += "| `" + f.field + "` | " + f.defaultValue + " | " + f.meaning + " |\n";
+    return t;
 }
 
 }  // namespace sl

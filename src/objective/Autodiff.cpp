@@ -6,13 +6,13 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
 
 #include "core/Color.h"
+#include "core/Stopwatch.h"
 #include "render/PathTracer.h"
 #include "scene/Scene.h"
 
@@ -54,7 +54,7 @@ using Jet = ceres::Jet<double, kAutodiffChunk>;
 /// that chunk's texels, and gathers the gradient.
 template <typename F>
 AutodiffGradient autodiffChunks(std::span<const double> E, int threads, F&& evalChunk) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch clock;
     const size_t n = E.size();
     const size_t chunks = (n + kAutodiffChunk - 1) / kAutodiffChunk;
     AutodiffGradient g;
@@ -79,7 +79,7 @@ AutodiffGradient autodiffChunks(std::span<const double> E, int threads, F&& eval
         if (!std::isfinite(v))
             throw std::range_error(
                 "autodiff: the gradient is not finite (a NaN or Inf in the chain)");
-    g.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    g.seconds = clock.seconds();
     return g;
 }
 

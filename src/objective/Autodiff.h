@@ -1,7 +1,7 @@
 // Autodiff: the render-to-loss chain written once, templated on the scalar type, and its gradient
 // by forward-mode automatic differentiation (ceres::Jet, chunked over texels). It is the
 // reference the exact gradient (Tᵀ·dL/dY), finite differences and SPSA are measured against
-// (DESIGN.md "Black-box baselines and validation"). Gray env maps (one value per texel).
+// (docs/DESIGN.md "Black-box baselines and validation"). Gray env maps (one value per texel).
 //
 // Two chains, both templated on the scalar S (double, ceres::Jet<double, N>, ...):
 //
@@ -62,7 +62,6 @@ class PathRecording : public PathSink {
     int texelCount() const { return basis_.texelCount(); }
     size_t pixelCount() const { return paths_.size(); }
     size_t pathCount() const;
-    const std::vector<Path>& pixelPaths(size_t pixel) const { return paths_[pixel]; }
 
     /// The luminance image Y(E) through the recorded paths, in scalar type S.
     template <typename S>

@@ -3,12 +3,12 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
 
 #include "core/Error.h"
+#include "core/Stopwatch.h"
 
 namespace sl {
 
@@ -113,7 +113,7 @@ std::vector<double> detrendHeights(std::span<const float> heights, int width, in
 
 ScratchMap computeScratchMap(std::span<const float> heights, int width, int height,
                              const ScratchMapOptions& o) {
-    auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch clock;
     checkOptions(o);
     checkSize(heights, width, height);
     const size_t n = static_cast<size_t>(width) * height;
@@ -152,7 +152,7 @@ ScratchMap computeScratchMap(std::span<const float> heights, int width, int heig
                                 std::min(W, tx * P + P) - tx * P, uint8_t{255});
             }
     }
-    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    r.seconds = clock.seconds();
     return r;
 }
 

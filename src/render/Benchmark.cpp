@@ -5,9 +5,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include <chrono>
-
 #include "core/Rng.h"
+#include "core/Stopwatch.h"
 #include "render/Render.h"
 #include "scene/EnvMapPresets.h"
 #include "scene/Scene.h"
@@ -25,7 +24,7 @@ ThroughputRow benchBareEmbree(const Scene& scene, const RenderOptions& opt) {
     const int W = cam.width(), H = cam.height(), spp = opt.spp;
     RTCScene rs = scene.surface->rtcScene();
     tbb::combinable<uint64_t> rays;
-    auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch clock;
     auto body = [&](const tbb::blocked_range<int>& rowsRange) {
         uint64_t& count = rays.local();
         RTCIntersectContext ctx;
@@ -56,7 +55,7 @@ ThroughputRow benchBareEmbree(const Scene& scene, const RenderOptions& opt) {
     };
     tbb::task_arena arena(opt.threads > 0 ? opt.threads : tbb::task_arena::automatic);
     arena.execute([&] { tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), body); });
-    double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    double secs = clock.seconds();
     return {"bare Embree rtcIntersect1 (camera + mirror bounces)", rays.combine(std::plus<>()),
             secs};
 }

@@ -20,6 +20,7 @@ struct Ray {
     Vec3f origin, direction;
 };
 
+/// The defaults here are the scene file's (io/SceneFile.h) and defaultCameraFor's.
 struct CameraDesc {
     enum class Type { Perspective, Orthographic } type = Type::Perspective;
     Vec3d origin{0, 40, 40}, target{0, 0, 0}, up{0, 1, 0};
@@ -48,6 +49,7 @@ class Camera {
 /// The camera used when a scene omits one: looks at the part's centre from 45° above (from +z,
 /// up = +Y), far enough that the bounding sphere of the part fits the horizontal field of view.
 CameraDesc defaultCameraFor(double extentX, double extentZ, double heightMin, double heightMax,
-                            double fovDeg = 35.0, int width = 512, int height = 512);
+                            double fovDeg = CameraDesc{}.fovDeg, int width = CameraDesc{}.width,
+                            int height = CameraDesc{}.height);
 
 }  // namespace sl

@@ -26,7 +26,9 @@
 //   smooth               true: `conductor`; false: `roughconductor`
 //   distribution         roughconductor `distribution` ("ggx" | "beckmann"). NOTE: Mitsuba's
 //                        default is beckmann; ours is GGX, so an exporter must always write it.
-//   alphaU, alphaV       `alpha_u`, `alpha_v` (or `alpha` when equal); Mitsuba default 0.1
+//   alphaU, alphaV       `alpha_u`, `alpha_v` (or `alpha` when equal). NOTE: ours default to
+//                        kDefaultAlpha = 0.05 (the scene file's default), Mitsuba's to 0.1, so
+//                        an exporter must always write them.
 //   ior                  `eta`, `k` (RGB, relative to the outside medium); default eta 0, k 1 =
 //                        Mitsuba's material "none", a perfect mirror (F == 1 exactly)
 //   specularReflectance  `specular_reflectance`, default 1
@@ -91,12 +93,15 @@ class MicrofacetDistribution {
     float alphaU_, alphaV_;
 };
 
+/// Default roughness α (both directions): the scene file's `material.alpha` default.
+inline constexpr float kDefaultAlpha = 0.05f;
+
 struct ConductorParams {
     bool smooth = false;  // true: Mitsuba `conductor` (Dirac mirror)
     Microfacet distribution = Microfacet::GGX;
-    float alphaU = 0.1f, alphaV = 0.1f;  // roughness along local x (s) and local y (t)
-    ComplexIor ior;                      // default = "none": eta 0, k 1 -> perfect mirror (F == 1)
-    Rgb specularReflectance{1.f};        // Mitsuba's specular_reflectance multiplier, default 1
+    float alphaU = kDefaultAlpha, alphaV = kDefaultAlpha;  // along local x (s) and local y (t)
+    ComplexIor ior;                // default = "none": eta 0, k 1 -> perfect mirror (F == 1)
+    Rgb specularReflectance{1.f};  // Mitsuba's specular_reflectance multiplier, default 1
 };
 
 /// One BSDF sample. weight = f * cos(theta_o) / pdf, as Mitsuba's BSDF::sample() returns it.

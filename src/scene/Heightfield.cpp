@@ -3,13 +3,13 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "core/Error.h"
+#include "core/Stopwatch.h"
 
 namespace sl {
 
@@ -48,7 +48,7 @@ Heightfield::Heightfield(int width, int height, double pitch, std::span<const fl
     memory_[0] = 0;
     memory_[1] = 0;
 
-    auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch clock;
     device_ = rtcNewDevice(nullptr);
     if (!device_) throw std::runtime_error("Embree: could not create a device");
     rtcSetDeviceMemoryMonitorFunction(device_, memoryMonitor, memory_.get());
@@ -105,8 +105,7 @@ Heightfield::Heightfield(int width, int height, double pitch, std::span<const fl
     rtcReleaseGeometry(geom);
     rtcCommitScene(scene_);
     if (rtcGetDeviceError(device_) != RTC_ERROR_NONE) embreeFail(device_, "building the BVH");
-    stats_.buildSeconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    stats_.buildSeconds = clock.seconds();
     stats_.embreeBytes = static_cast<size_t>(std::max<int64_t>(0, memory_[0].load()));
     stats_.embreePeakBytes = static_cast<size_t>(std::max<int64_t>(0, memory_[1].load()));
 }
@@ -129,19 +128,6 @@ bool Heightfield::intersect(const Ray& ray, float tnear, SurfaceHit& hit) const 
     if (n.y < 0) n = -n;  // a height field always faces +Y
     hit.normal = n;
     return true;
-}
-
-Vec3f Heightfield::samplePosition(int row, int col, float h) const {
-    return {static_cast<float>((col - 0.5 * (width_ - 1)) * pitch_), h,
-            static_cast<float>((row - 0.5 * (height_ - 1)) * pitch_)};
-}
-
-std::array<int, 2> Heightfield::cellAt(const Vec3f& p) const {
-    double fi = p.x / pitch_ + 0.5 * (width_ - 1);
-    double fj = p.z / pitch_ + 0.5 * (height_ - 1);
-    int i = std::clamp(static_cast<int>(std::floor(fi)), 0, width_ - 2);
-    int j = std::clamp(static_cast<int>(std::floor(fj)), 0, height_ - 2);
-    return {j, i};
 }
 
 }  // namespace sl

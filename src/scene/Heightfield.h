@@ -95,11 +95,6 @@ class Heightfield {
     const HeightfieldStats& stats() const { return stats_; }
     RTCScene rtcScene() const { return scene_; }
 
-    /// World position of sample (row, col).
-    Vec3f samplePosition(int row, int col, float h) const;
-    /// Cell (row, col) of the map under world point p (clamped to the map).
-    std::array<int, 2> cellAt(const Vec3f& p) const;
-
   private:
     int width_, height_;
     double pitch_;

@@ -12,7 +12,8 @@ CameraDesc resolveCamera(const CameraSpec& spec, const Heightfield& s) {
     if (spec.origin) c.origin = *spec.origin;
     if (spec.target) c.target = *spec.target;
     if (spec.up) c.up = *spec.up;
-    c.widthMm = spec.widthMm.value_or(1.05 * std::max(s.extentX(), s.extentZ()));
+    c.widthMm =
+        spec.widthMm.value_or(CameraSpec::kWidthMmFactor * std::max(s.extentX(), s.extentZ()));
     return c;
 }
 

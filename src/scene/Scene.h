@@ -1,5 +1,6 @@
 // Scene: everything the path tracer needs, built from a SceneDesc (the parsed scene file,
-// see io/SceneFile.h for the JSON fields and their defaults).
+// see io/SceneFile.h for the JSON fields). The defaults of these structs are the scene file's:
+// the parser applies them and sceneFileFields() lists them.
 #pragma once
 
 #include <array>
@@ -14,6 +15,7 @@
 #include "scene/Conductor.h"
 #include "scene/EnvMapBasis.h"
 #include "scene/Heightfield.h"
+#include "scene/RenderDesc.h"
 
 namespace sl {
 
@@ -28,13 +30,9 @@ struct EnvMapDesc {
     int width = 50, height = 25;
     std::filesystem::path path;     // optional default env map for `render`
     std::optional<float> constant;  // optional constant value (used when no path)
-    std::string preset;             // optional built-in map ("studio"), see io/EnvMapPresets.h
-};
-
-struct RenderDesc {
-    int spp = 64;
-    int maxDepth = 4;
-    uint64_t seed = 0;
+    std::string preset;             // optional built-in map, see scene/EnvMapPresets.h
+    /// The env map `render` uses when the scene names none.
+    static constexpr const char* kDefaultPreset = "studio";
 };
 
 struct MaterialDesc {
@@ -47,9 +45,11 @@ struct MaterialDesc {
 struct CameraSpec {
     CameraDesc::Type type = CameraDesc::Type::Perspective;
     std::optional<Vec3d> origin, target, up;
-    double fovDeg = 35.0;
-    std::optional<double> widthMm;  // orthographic; default: 1.05 × the part's larger extent
-    int width = 512, height = 512;
+    double fovDeg = CameraDesc{}.fovDeg;
+    /// Orthographic view width; default: kWidthMmFactor × the part's larger extent.
+    std::optional<double> widthMm;
+    static constexpr double kWidthMmFactor = 1.05;
+    int width = CameraDesc{}.width, height = CameraDesc{}.height;
 };
 
 /// Resolve a CameraSpec against the part it looks at.
