@@ -91,7 +91,7 @@ TEST(Judge, FlatMirrorUnderAKnownEnvMap) {
         sq += v * v / static_cast<double>(e.size());
         dark += v < kDarkTexel;
     }
-    EXPECT_DOUBLE_EQ(s.meanE, meanE);
+    EXPECT_NEAR(s.meanE, meanE, 1e-14);
     EXPECT_DOUBLE_EQ(s.sparsity, static_cast<double>(dark) / static_cast<double>(e.size()));
     EXPECT_NEAR(s.eq2.lReg, sq, 1e-12);
     EXPECT_NEAR(s.unbiased.lReg, sq, 1e-12);
@@ -191,7 +191,7 @@ TEST(Judge, ProjectsTruthAndRejectsAMismatchedOne) {
     test::TempDir dir("judge-truth");
     std::vector<uint8_t> m(48 * 48, 255);
     writeMaskPng(dir / "ok.png", m, 48, 48);
-    writeMaskPng(dir / "bad.png", m, 40, 48);
+    writeMaskPng(dir / "bad.png", std::vector<uint8_t>(40 * 48, 255), 40, 48);
     JudgeOptions o;
     o.spp = 4;
     o.truth = dir / "bad.png";
@@ -199,7 +199,9 @@ TEST(Judge, ProjectsTruthAndRejectsAMismatchedOne) {
     o.truth = dir / "ok.png";
     Judge j(*scene, o);
     for (size_t p = 0; p < j.labels().size(); ++p)
-        if (j.partMask()[p]) EXPECT_EQ(j.labels()[p], 255);
+        if (j.partMask()[p]) {
+            EXPECT_EQ(j.labels()[p], 255);
+        }
 }
 
 TEST(Transport, HalvesKernelsEqualTheSeparateProducts) {

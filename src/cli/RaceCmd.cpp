@@ -1,19 +1,14 @@
 // scratchlight bench race [--parts a,b,c] [--seeds 3] [--configs NAME,...] [-o DIR]
 // The race that chooses optimize's defaults (app/Race.h): prints the median table, writes
 // race.csv (every run), race-median.csv and a Pareto plot (seconds vs U) race.png.
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cstdio>
 #include <memory>
 
+#include "app/Plot.h"
 #include "app/Race.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
-
-extern char** environ;
 
 namespace sl::cli {
 
@@ -24,33 +19,6 @@ struct RaceArgs {
     std::vector<std::string> configs;
     std::string out = "out/race";
 };
-
-/// Runs python3 SCRIPT ARGS... (argument vector, no shell); true on exit status 0.
-bool runPython(const std::filesystem::path& script, const std::vector<std::string>& args) {
-    std::vector<std::string> argv{"python3", script.string()};
-    argv.insert(argv.end(), args.begin(), args.end());
-    std::vector<char*> cargv;
-    for (auto& a : argv) cargv.push_back(a.data());
-    cargv.push_back(nullptr);
-    pid_t pid = 0;
-    if (posix_spawnp(&pid,
-                     std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3",
-                     nullptr, nullptr, cargv.data(), environ) != 0)
-        return false;
-    int status = 0;
-    if (waitpid(pid, &status, 0) < 0) return false;
-    return WIFEXITED(status) && WEXITSTATUS(status) == 0;
-}
-
-/// scripts/NAME beside the source tree this binary was built from, or beside the binary.
-std::filesystem::path scriptPath(const std::string& name) {
-    std::error_code ec;
-    auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-    for (auto dir = exe.parent_path(); !ec && !dir.empty() && dir != dir.root_path();
-         dir = dir.parent_path())
-        if (std::filesystem::exists(dir / "scripts" / name)) return dir / "scripts" / name;
-    return std::filesystem::path("scripts") / name;
-}
 
 int runRaceCmd(RaceArgs a) {
     if (!a.configs.empty()) {
@@ -81,8 +49,12 @@ int runRaceCmd(RaceArgs a) {
     med.insert(med.end(), s.overall.begin(), s.overall.end());
     writeRaceCsv(dir / "race-median.csv", med);
     const auto png = dir / "race.png";
-    if (!runPython(scriptPath("plot_race.py"), {(dir / "race.csv").string(), png.string()}))
-        std::fprintf(stderr, "warning: the plot failed (python3 with matplotlib needed)\n");
+    const PlotOutcome plot =
+        runPlotScript("plot_race.py", {(dir / "race.csv").string(), png.string()});
+    if (!plot.ran || plot.exitCode != 0)
+        std::fprintf(stderr, "warning: the plot failed (%s); plot with: %s\n",
+                     plot.message.empty() ? "python3 with matplotlib needed" : plot.message.c_str(),
+                     shellQuoted(plot.command).c_str());
     std::printf("wrote %s, %s and %s\n", (dir / "race.csv").c_str(),
                 (dir / "race-median.csv").c_str(), png.c_str());
     return kOk;
