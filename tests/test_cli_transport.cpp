@@ -169,8 +169,8 @@ TEST_F(CliTransport, LambdaSweepAndEveryOptimizer) {
     };
     EXPECT_GT(mean(p("sw/lambda-0/envmap.exr")), mean(p("sw/lambda-30/envmap.exr")));
     for (const char* opt : {"lbfgs", "mma", "ccsaq", "mlsl", "ceres-lbfgs"}) {
-        r = runCli("optimize " + p("g.tm") + " --optimizer " + opt + " --iterations 40 -o " +
-                   p(std::string("o-") + opt));
+        r = runCli("optimize " + p("g.tm") + " --optimizer " + opt +
+                   " --init const:0.5 --iterations 40 -o " + p(std::string("o-") + opt));
         ASSERT_EQ(r.exitCode, 0) << opt << ": " << r.output;
         auto s = readJson(p(std::string("o-") + opt + "/summary.json"));
         EXPECT_EQ(s["optimizer"], opt);
@@ -191,7 +191,10 @@ TEST_F(CliTransport, LambdaSweepAndEveryOptimizer) {
 
 TEST_F(CliTransport, HeldOutScoreAndUnbiasedObjective) {
     // From the scene: T is traced, then a held-out T with another seed; both scores reported.
-    auto r = runCli("optimize " + scene + " --iterations 20 --heldout-every 5 -o " + p("paper"));
+    auto r = runCli("optimize " + scene +
+                    " --objective paper --optimizer adam --init const:0.5 --iterations 20 "
+                    "--heldout-every 5 -o " +
+                    p("paper"));
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("held-out"), std::string::npos) << r.output;
     auto s = readJson(p("paper/summary.json"));

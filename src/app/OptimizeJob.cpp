@@ -114,14 +114,28 @@ void writeRender(const std::filesystem::path& exr, const std::vector<double>& im
 }
 
 void resolveMethodPreset(OptimizeJobOptions& o) {
+    const OptimizeDefaults d = optimizeDefaults();
+    if (o.optimizer.method.empty()) o.optimizer.method = d.method;
     if (o.optimizer.method == kPaperLoopMethod) {
         // The paper's loop on T: eq. 2, Adam, a fresh sample set (estimate of T) every step.
         o.objectiveKind = "paper";
         o.optimizer.method = "adam";
         if (o.planes <= 1) o.planes = kPaperLoopPlanes;
         o.methodLabel = kPaperLoopMethod;
+        if (o.starts.empty() && o.init.empty()) o.init = "const:0.5";  // the paper's E0
+        o.paperLoop = true;
     }
+    if (o.starts.empty() && o.init.empty()) o.starts = d.starts;
+    if (o.optimizer.iterations == 0) o.optimizer.iterations = defaultBudget(o.optimizer.method);
     if (o.planes < 1) o.planes = 1;
+}
+
+OptimizeDefaults optimizeDefaults() {
+    return {};
+}
+
+int defaultBudget(const std::string& method) {
+    return method == "adam" || method == "fd-adam" || method == "spsa" ? 100 : 2000;
 }
 
 OptimizeJobSummary runResolved(const OptimizeJobOptions& o);
@@ -138,8 +152,11 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
 }
 
 OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
-    const bool unbiased =
-        parseObjectiveKind(o.objectiveKind, "--objective") == ObjectiveKind::Unbiased;
+    // The objective: as given; by default the noise-unbiased one, except for a .tm without
+    // halves, which only the paper's eq. 2 can use (decided once T is read).
+    bool unbiased = o.objectiveKind.empty() ? !isTransportFile(o.input)
+                                            : parseObjectiveKind(o.objectiveKind, "--objective") ==
+                                                  ObjectiveKind::Unbiased;
     if (o.planes < 1) throw inputError("--planes", "must be >= 1");
     if (o.heldOutEvery < 1) throw inputError("--heldout-every", "must be >= 1");
     OptimizeJobSummary job;
@@ -166,10 +183,14 @@ OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
         job.transport.path = o.input;
         job.transport.secondsTotal =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        if (o.objectiveKind.empty()) unbiased = job.transport.file.matrix.planes == 2;
     } else {
         PrecomputeOptions p = o.precompute;
         p.rgb = o.rgb;
         if (unbiased) p.sampleSets = 2;
+        // eq. 2 rewards noise: without --spp it trains at no fewer than kPaperMinSpp.
+        if (!unbiased && !p.spp && !o.paperLoop)
+            p.spp = std::max(scene->desc.render.spp, optimizeDefaults().paperMinSpp);
         std::vector<TransportSource> set = transportSetForScene(*scene, p, o.planes, cacheDir);
         job.transport = std::move(set.front());
         for (size_t k = 1; k < set.size(); ++k) job.extraPlanes.push_back(std::move(set[k]));
@@ -184,6 +205,7 @@ OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
         scene = sceneOfTransport(job.transport.file, purpose);
     }
     const TransportMatrix& t = job.transport.file.matrix;
+    const std::string objectiveName = unbiased ? "unbiased" : "paper";
     if (o.rgb && t.channels != 3)
         throw inputError(o.input.string(), "is a gray transport matrix; --rgb needs an RGB one",
                          "precompute it with --rgb");
@@ -386,7 +408,7 @@ OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
         s["starts"] = starts;
         s["start"] = run.start;
         s["continuation"] = o.continuation;
-        s["objective"] = o.objectiveKind;
+        s["objective"] = objectiveName;
         s["lambda"] = lambda;
         s["reg"] = oo.reg == RegTarget::EnvMap ? "envmap" : "image";
         s["smooth_abs"] = oo.smoothAbs;
@@ -434,14 +456,14 @@ OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
             ReportFigure fig;
             fig.title = "before and after";
             std::ostringstream title;
-            title << "λ = " << lambda << ", " << run.optimizer.method << ", " << o.objectiveKind;
+            title << "λ = " << lambda << ", " << run.optimizer.method << ", " << objectiveName;
             fig.runs.push_back(reportRunFromOutDir(run.dir, title.str()));
             reportRuns.push_back(fig.runs.back());
             rc.figures.push_back(std::move(fig));
             writeReport(run.dir / "report.html", rc);
         }
         sweepCsv << std::setprecision(10) << lambda << ',' << run.optimizer.method << ','
-                 << o.objectiveKind << ',' << run.optimizer.iterations << ','
+                 << objectiveName << ',' << run.optimizer.iterations << ','
                  << run.optimizer.evaluations << ',' << run.initial.total << ',' << run.final.total
                  << ',' << run.final.lGrad << ',' << run.final.lReg << ',';
         if (run.heldFinal)

@@ -106,6 +106,7 @@ int runOptimize(OptimizeArgs a) {
         a.job.optimizer.learningRate = 0.02;
         a.job.lambdas = {30.0};
         a.job.init = "const:0.5";
+        a.job.objectiveKind = "paper";
         a.job.starts.clear();
         a.job.continuation.clear();
         a.job.planes = 100;
@@ -182,11 +183,11 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         for (const auto& m : blackBoxMethods()) methods.push_back(m);
         methods.push_back(kPaperLoopMethod);
         c->add_option("--optimizer", j.optimizer.method,
-                      "Optimizer; fd-adam and spsa take gradients through the renderer; "
-                      "paper-loop: the paper's loop on T (eq. 2, Adam, a fresh estimate of T "
-                      "every step)")
-            ->check(CLI::IsMember(methods))
-            ->capture_default_str();
+                      "Optimizer (default: " + std::string(optimizeDefaults().method) +
+                          "); fd-adam and spsa take gradients through the renderer; "
+                          "paper-loop: the paper's loop on T (eq. 2, Adam, a fresh estimate of T "
+                          "every step)")
+            ->check(CLI::IsMember(methods));
         c->add_option("--fd-h", j.blackBox.fd.h, "fd-adam: finite-difference step")
             ->check(CLI::PositiveNumber)
             ->capture_default_str();
@@ -203,8 +204,8 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
             ->check(CLI::IsMember({"envmap", "image"}))
             ->capture_default_str();
         c->add_option("--init", j.init,
-                      "Initial env map: const:V | envmap:FILE | random:SEED | specular")
-            ->capture_default_str();
+                      "Initial env map: const:V | envmap:FILE | random:SEED | specular | studio "
+                      "(default: specular)");
         c->add_option("--mask", j.mask,
                       "Region of the loss: scratch (the paper's scratch map) or a PNG/EXR in "
                       "image space (white = inside); always within the object mask");
@@ -223,22 +224,24 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         c->add_flag("--rgb", j.rgb, "Optimize an RGB env map (needs/creates an RGB T)");
         c->add_flag("--smooth-abs", j.objective.smoothAbs, "Use sqrt(x²+ε²)−ε for |x|");
         c->add_option("--objective", j.objectiveKind,
-                      "paper: eq. 2 on T; unbiased: products of differences of two independent "
-                      "half-sample images (noise-unbiased)")
-            ->check(CLI::IsMember({"paper", "unbiased"}))
-            ->capture_default_str();
+                      "paper: eq. 2 on T (trained at >= 256 spp unless --spp); unbiased (default; "
+                      "paper for a .tm without halves): products of differences of two "
+                      "independent half-sample images (noise-unbiased)")
+            ->check(CLI::IsMember({"paper", "unbiased"}));
         c->add_option("--heldout", j.heldOut,
-                      "Held-out estimate: traced from the scene with another seed (default), a "
-                      ".tm with two halves, or none");
-        c->add_option("--heldout-spp", j.heldOutSpp, "Held-out spp (0: the training spp)")
+                      "Held-out estimate: the judge's, traced from the scene with its own seed "
+                      "and cached (default), a .tm with two halves, or none");
+        c->add_option("--heldout-spp", j.heldOutSpp,
+                      "spp of the judge's held-out estimate (0: the judge's 1024)")
             ->check(CLI::Range(0, 1 << 20))
             ->capture_default_str();
         c->add_option("--heldout-every", j.heldOutEvery, "Held-out score every N iterations")
             ->check(CLI::Range(1, 1000000))
             ->capture_default_str();
-        c->add_option("--iterations", j.optimizer.iterations, "Iterations / evaluation budget")
-            ->check(CLI::Range(1, 1000000))
-            ->capture_default_str();
+        c->add_option("--iterations", j.optimizer.iterations,
+                      "Iterations / evaluation budget (default: 100 Adam steps, 2000 NLopt/Ceres "
+                      "evaluations)")
+            ->check(CLI::Range(1, 1000000));
         c->add_option("--ftol", j.optimizer.relativeFunctionTolerance,
                       "NLopt/Ceres: stop when the loss changes by less than this fraction (0: off)")
             ->check(CLI::NonNegativeNumber)
