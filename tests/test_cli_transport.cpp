@@ -111,7 +111,9 @@ TEST_F(CliTransport, RefusesDamagedAndWrongFiles) {
 }
 
 TEST_F(CliTransport, OptimizeFromSceneCachesTAndWritesItsOutputs) {
-    auto r = runCli("optimize " + scene + " --iterations 20 -o " + p("run"));
+    auto r = runCli("optimize " + scene +
+                    " --optimizer adam --objective paper --init const:0.5 --iterations 20 -o " +
+                    p("run"));
     ASSERT_EQ(r.exitCode, 0) << r.output;
     for (const char* f : {"envmap.exr", "envmap.png", "render.exr", "render.png", "initial.png",
                           "loss.csv", "summary.json"})
@@ -141,14 +143,18 @@ TEST_F(CliTransport, OptimizeFromSceneCachesTAndWritesItsOutputs) {
         EXPECT_LE(v, 1.0f);
     }
     // Second run: T comes from the cache, no ray is traced, same result.
-    r = runCli("optimize " + scene + " --iterations 20 -o " + p("run2"));
+    r = runCli("optimize " + scene +
+               " --optimizer adam --objective paper --init const:0.5 --iterations 20 -o " +
+               p("run2"));
     ASSERT_EQ(r.exitCode, 0) << r.output;
     auto s2 = readJson(p("run2/summary.json"));
     EXPECT_TRUE(s2["transport_cache_hit"].get<bool>());
     EXPECT_EQ(s2["seconds_precompute"].get<double>(), 0.0);
     EXPECT_EQ(s2["final_loss"], s["final_loss"]);
     // Another seed is another T (not the cached one).
-    r = runCli("optimize " + scene + " --seed 6 --iterations 5 -o " + p("run3"));
+    r = runCli("optimize " + scene +
+               " --optimizer adam --objective paper --init const:0.5 --seed 6 --iterations 5 -o " +
+               p("run3"));
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_FALSE(readJson(p("run3/summary.json"))["transport_cache_hit"].get<bool>());
 }
