@@ -13,7 +13,7 @@
 #include "core/Error.h"
 #include "core/Rng.h"
 #include "io/ImageIO.h"
-#include "io/LabelMask.h"
+#include "io/MaskIO.h"
 #include "objective/DefectVisibility.h"
 #include "objective/TransportLoss.h"
 #include "render/Render.h"

@@ -18,6 +18,7 @@
 #include "core/Error.h"
 #include "core/Image.h"
 #include "io/ImageIO.h"
+#include "io/MaskIO.h"
 #include "objective/Objective.h"
 
 namespace sl {

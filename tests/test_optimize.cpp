@@ -15,7 +15,7 @@
 #include "core/Color.h"
 #include "core/Error.h"
 #include "io/EnvMapIO.h"
-#include "optimize/InitialState.h"
+#include "app/InitialState.h"
 #include "optimize/Optimizer.h"
 
 using namespace sl;

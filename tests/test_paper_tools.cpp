@@ -11,13 +11,14 @@
 #include <vector>
 
 #include "TestUtil.h"
+#include "app/InitialState.h"
 #include "app/Report.h"
+#include "app/Truth.h"
 #include "core/Color.h"
 #include "core/Error.h"
 #include "io/ImageIO.h"
 #include "objective/ImageSpace.h"
 #include "objective/Metrics.h"
-#include "optimize/InitialState.h"
 #include "optimize/SpecularInit.h"
 #include "scene/EnvMapPresets.h"
 #include "scene/Scene.h"

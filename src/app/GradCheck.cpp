@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "app/InitialState.h"
 #include "core/Error.h"
 #include "core/Stats.h"
 #include "core/Stopwatch.h"
@@ -15,7 +16,6 @@
 #include "io/SceneFile.h"
 #include "objective/Autodiff.h"
 #include "objective/TransportLoss.h"
-#include "optimize/InitialState.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
 #include "transport/TransportSink.h"
@@ -49,7 +49,7 @@ std::unique_ptr<Lab> makeLab(const GradientSetup& s, int repeats) {
     if (s.maxDepth) d.render.maxDepth = *s.maxDepth;
     if (s.seed) d.render.seed = *s.seed;
     if (d.render.spp < 1)
-        throw inputError("--spp", "is " + std::to_string(d.render.spp), "use a count >= 1");
+        throw inputError(option("spp"), "is " + std::to_string(d.render.spp), "use a count >= 1");
     lab->scene = loadScene(d);
     lab->threads = s.threads;
     lab->render = renderOptionsFor(*lab->scene);
@@ -196,10 +196,11 @@ GradCheckReport runGradCheck(const GradCheckOptions& o) {
         if (std::find(valid.begin(), valid.end(), m) == valid.end()) {
             std::string list;
             for (const auto& v : valid) list += (list.empty() ? "" : ", ") + v;
-            throw inputError("--methods", "unknown method '" + m + "'", "use some of: " + list);
+            throw inputError(option("methods"), "unknown method '" + m + "'",
+                             "use some of: " + list);
         }
     if (o.repeats < 1)
-        throw inputError("--repeats", "is " + std::to_string(o.repeats), "use a count >= 1");
+        throw inputError(option("repeats"), "is " + std::to_string(o.repeats), "use a count >= 1");
     const auto lab = makeLab(o.setup, o.repeats);
     GradCheckReport rep = reportHeader(*lab, o.setup);
     for (const std::string& m : o.methods) {
@@ -316,7 +317,7 @@ std::string csvQuote(const std::string& s) {
 
 BenchGradientsReport runBenchGradients(const BenchGradientsOptions& o) {
     if (o.repeats < 1)
-        throw inputError("--repeats", "is " + std::to_string(o.repeats), "use a count >= 1");
+        throw inputError(option("repeats"), "is " + std::to_string(o.repeats), "use a count >= 1");
     const auto lab = makeLab(o.setup, o.repeats);
     BenchGradientsReport rep;
     GradCheckReport& g = rep.gradients;

@@ -5,9 +5,9 @@
 #include <cstdio>
 #include <sstream>
 
+#include "app/Truth.h"
 #include "core/Color.h"
 #include "core/Error.h"
-#include "objective/ImageSpace.h"
 #include "objective/TransportLoss.h"
 #include "objective/UnbiasedObjective.h"
 #include "scene/EnvMap.h"
@@ -30,19 +30,6 @@ TransportSource judgeEstimate(const Scene& scene, const JudgeOptions& o) {
     return transportForScene(scene, p, o.cacheDir);
 }
 
-LabelMask projectTruth(const Scene& scene, const std::filesystem::path& truth, int threads) {
-    LabelMask m = readLabelMask(truth, scene.mapWidth, scene.mapHeight);
-    const PrimaryHits hits = tracePrimaryHits(scene, threads);
-    LabelMask out;
-    out.width = hits.width;
-    out.height = hits.height;
-    out.legend = m.legend;
-    out.labels.assign(hits.sample.size(), 0);
-    for (size_t p = 0; p < hits.sample.size(); ++p)
-        if (hits.sample[p] >= 0) out.labels[p] = m.labels[static_cast<size_t>(hits.sample[p])];
-    return out;
-}
-
 Judge::Judge(const Scene& scene, const JudgeOptions& options) : options_(options) {
     owned_ = judgeEstimate(scene, options);
     estimate_ = &*owned_;
@@ -62,7 +49,7 @@ Judge::Judge(const TransportSource& estimate, const JudgeOptions& options,
     const TransportMatrix& t = estimate_->file.matrix;
     if (t.planes != 2)
         throw inputError(estimate_->path.string(), "the judge needs two independent sample sets",
-                         "precompute it with --halves");
+                         "precompute it with " + option("halves"));
     if (!labels_.empty() && labels_.size() != t.rows())
         throw std::invalid_argument("Judge: labels do not match the image size");
 }

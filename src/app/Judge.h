@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "app/Transport.h"
-#include "io/LabelMask.h"
+#include "io/MaskIO.h"
 #include "objective/DefectVisibility.h"
 #include "objective/Objective.h"
 
@@ -94,9 +94,6 @@ class Judge {
 
 /// The judge's estimate for a scene (cached by fingerprint in cacheDir, traced otherwise).
 TransportSource judgeEstimate(const Scene& scene, const JudgeOptions& options);
-
-/// Image-space labels of a truth mask file (height-map space) for `scene`.
-LabelMask projectTruth(const Scene& scene, const std::filesystem::path& truth, int threads = 0);
 
 /// The score as JSON: name, eq2, unbiased, mean_E, sparsity, visibility (per region: name,
 /// value, pixels, visibility, rms_gradient, clean_rms_gradient, weber), eq2_parts, unbiased_parts.

@@ -5,11 +5,11 @@
 #include <tuple>
 
 #include "app/HeldOut.h"
+#include "app/InitialState.h"
 #include "core/Error.h"
 #include "core/Stats.h"
 #include "io/SceneFile.h"
 #include "objective/TransportLoss.h"
-#include "optimize/InitialState.h"
 #include "optimize/Optimizer.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
@@ -24,7 +24,7 @@ double since(std::chrono::steady_clock::time_point t0) {
 }
 
 [[noreturn]] void badOptimizers(const std::string& spec, const std::string& why) {
-    throw inputError("--optimizers " + spec, why,
+    throw inputError(option("optimizers") + " " + spec, why,
                      "give METHOD[:BUDGET] items separated by commas, e.g. adam:100,lbfgs:2000");
 }
 
@@ -108,12 +108,12 @@ std::vector<NoiseBenchGroup> summarizeNoiseBench(const std::vector<NoiseBenchRow
 NoiseBenchResult runNoiseBench(const NoiseBenchOptions& o) {
     for (int spp : o.spps)
         if (spp < 2 || spp % 2)
-            throw inputError("--spps", "every spp must be even and >= 2 (two sample sets)");
-    if (o.spps.empty()) throw inputError("--spps", "no spp given");
+            throw inputError(option("spps"), "every spp must be even and >= 2 (two sample sets)");
+    if (o.spps.empty()) throw inputError(option("spps"), "no spp given");
     if (o.heldOutSpp < 2 || o.heldOutSpp % 2)
-        throw inputError("--heldout-spp", "must be even and >= 2");
-    if (o.seeds < 1) throw inputError("--seeds", "must be >= 1");
-    if (o.optimizers.empty()) throw inputError("--optimizers", "no optimizer given");
+        throw inputError(option("heldout-spp"), "must be even and >= 2");
+    if (o.seeds < 1) throw inputError(option("seeds"), "must be >= 1");
+    if (o.optimizers.empty()) throw inputError(option("optimizers"), "no optimizer given");
     auto log = [&](const std::string& m) {
         if (o.log) o.log(m);
     };

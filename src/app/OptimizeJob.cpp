@@ -9,18 +9,20 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "app/InitialState.h"
 #include "app/Report.h"
 #include "app/Search.h"
+#include "app/Truth.h"
 #include "core/Error.h"
 #include "io/AtomicFile.h"
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
+#include "io/MaskIO.h"
 #include "io/SceneFile.h"
 #include "objective/ImageSpace.h"
 #include "objective/Metrics.h"
 #include "objective/TransportLoss.h"
 #include "objective/UnbiasedObjective.h"
-#include "optimize/InitialState.h"
 #include "optimize/SpecularInit.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
@@ -141,10 +143,11 @@ int defaultBudget(const std::string& method) {
 OptimizeJobSummary runResolved(const OptimizeJobOptions& o);
 
 OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
-    if (o.lambdas.empty()) throw inputError("--lambda", "no value given");
+    if (o.lambdas.empty()) throw inputError(option("lambda"), "no value given");
     for (double l : o.lambdas)
         if (!(l >= 0) || !std::isfinite(l))
-            throw inputError("--lambda", "must be >= 0", "give e.g. --lambda 30 or 10,30,100");
+            throw inputError(option("lambda"), "must be >= 0",
+                             "give e.g. 30, or 10,30,100 for a sweep");
 
     OptimizeJobOptions resolved = o;
     resolveMethodPreset(resolved);
@@ -154,11 +157,12 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
 OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
     // The objective: as given; by default the noise-unbiased one, except for a .tm without
     // halves, which only the paper's eq. 2 can use (decided once T is read).
-    bool unbiased = o.objectiveKind.empty() ? !isTransportFile(o.input)
-                                            : parseObjectiveKind(o.objectiveKind, "--objective") ==
-                                                  ObjectiveKind::Unbiased;
-    if (o.planes < 1) throw inputError("--planes", "must be >= 1");
-    if (o.heldOutEvery < 1) throw inputError("--heldout-every", "must be >= 1");
+    bool unbiased =
+        o.objectiveKind.empty()
+            ? !isTransportFile(o.input)
+            : parseObjectiveKind(o.objectiveKind, option("objective")) == ObjectiveKind::Unbiased;
+    if (o.planes < 1) throw inputError(option("planes"), "must be >= 1");
+    if (o.heldOutEvery < 1) throw inputError(option("heldout-every"), "must be >= 1");
     OptimizeJobSummary job;
     const auto cacheDir = std::filesystem::absolute(o.outDir).parent_path() / ".scratchlight-cache";
     // fd-adam and spsa take their gradients through the renderer (a black box); T still serves
@@ -167,7 +171,7 @@ OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
     const bool blackBox = std::find(bb.begin(), bb.end(), o.optimizer.method) != bb.end();
     const bool tmInput = isTransportFile(o.input);
     if (blackBox && tmInput)
-        throw inputError("--optimizer " + o.optimizer.method,
+        throw inputError(option("optimizer") + " " + o.optimizer.method,
                          "renders the scene for every gradient, so it needs the scene file",
                          "pass SCENE.json instead of the .tm");
     // One loaded scene serves T, the held-out T and what needs the scene itself.
@@ -196,23 +200,27 @@ OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
         for (size_t k = 1; k < set.size(); ++k) job.extraPlanes.push_back(std::move(set[k]));
     }
     if (tmInput && o.planes > 1)
-        throw inputError("--planes " + std::to_string(o.planes),
+        throw inputError(option("planes") + " " + std::to_string(o.planes),
                          "needs independent estimates of T traced from the scene",
-                         "pass SCENE.json instead of the .tm, or --planes 1");
+                         "pass SCENE.json instead of the .tm, or " + option("planes") + " 1");
     if (!scene && needScene) {
-        std::string purpose = o.heldOut.empty() ? "the held-out estimate (or --heldout none)"
-                                                : "--mask scratch / --init specular / --truth";
+        std::string purpose = o.heldOut.empty()
+                                  ? "the held-out estimate (or " + option("heldout") + " none)"
+                                  : option("mask") + " scratch / " + option("init") +
+                                        " specular / " + option("truth");
         scene = sceneOfTransport(job.transport.file, purpose);
     }
     const TransportMatrix& t = job.transport.file.matrix;
     const std::string objectiveName = unbiased ? "unbiased" : "paper";
     if (o.rgb && t.channels != 3)
-        throw inputError(o.input.string(), "is a gray transport matrix; --rgb needs an RGB one",
-                         "precompute it with --rgb");
-    if (unbiased && t.planes != 2)
         throw inputError(o.input.string(),
-                         "has no half-sample matrices; --objective unbiased needs them",
-                         "precompute it with --halves, or pass the scene file");
+                         "is a gray transport matrix; " + option("rgb") + " needs an RGB one",
+                         "precompute it with " + option("rgb"));
+    if (unbiased && t.planes != 2)
+        throw inputError(
+            o.input.string(),
+            "has no half-sample matrices; " + option("objective") + " unbiased needs them",
+            "precompute it with " + option("halves") + ", or pass the scene file");
 
     // The independent estimate every result is scored on.
     if (o.heldOut != "none") {
@@ -225,19 +233,20 @@ OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
                 ht.envHeight != t.envHeight || ht.planes != 2 || ht.channels != t.channels)
                 throw inputError(o.heldOut, "does not fit the training transport matrix",
                                  "it needs the same image and env-map size, the same channels, "
-                                 "and two halves (precompute --halves)");
+                                 "and two halves (precompute " +
+                                     option("halves") + ")");
             job.heldOut = std::move(h);
         } else {
             if (!o.heldOut.empty())
-                throw inputError("--heldout", "'" + o.heldOut + "' is not a .tm file",
+                throw inputError(option("heldout"), "'" + o.heldOut + "' is not a .tm file",
                                  "give a .tm file, none, or leave it out");
             job.heldOut = judgeEstimateFor(job.transport.file, *scene, o.heldOutSpp, cacheDir);
         }
         const uint64_t hs = job.heldOut->file.provenance.seed,
                        ts = job.transport.file.provenance.seed;
         if (hs >= ts && hs < ts + static_cast<uint64_t>(o.planes))
-            throw inputError("--seed", "the training seed range overlaps the judge's seed",
-                             "use another --seed");
+            throw inputError(option("seed"), "the training seed range overlaps the judge's seed",
+                             "use another " + option("seed"));
     }
 
     std::vector<uint8_t> mask = t.objectMask, scratchCells;
@@ -251,8 +260,8 @@ OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
     for (uint8_t m : mask) job.maskPixels += m != 0;
     if (job.maskPixels == 0)
         throw inputError(
-            "--mask " + o.mask, "the mask is empty on the part",
-            o.mask == "scratch" ? "lower --scratch-threshold" : "draw a larger region");
+            option("mask") + " " + o.mask, "the mask is empty on the part",
+            o.mask == "scratch" ? "lower " + option("scratch-threshold") : "draw a larger region");
     std::vector<uint8_t> truth;
     if (!o.truth.empty()) truth = projectMaskFile(*scene, o.truth);
 
@@ -260,7 +269,8 @@ OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
         o.starts.empty() ? std::vector<std::string>{o.init} : o.starts;
     const int maxDepth = job.transport.file.provenance.maxDepth;
     // E0: the first start (the report's "before").
-    const std::vector<double> e0 = startEnvMap(starts.front(), t, o.rgb, scene.get(), maxDepth);
+    const std::vector<double> e0 =
+        initialEnvMap(starts.front(), t.envWidth, t.envHeight, o.rgb, scene.get(), maxDepth);
     LabelMask truthLabels;  // the judge's regions
     if (job.heldOut && !o.truth.empty()) truthLabels = projectTruth(*scene, o.truth);
     // E0's render and metrics do not depend on λ: computed once for every run.

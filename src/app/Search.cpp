@@ -4,12 +4,10 @@
 #include <limits>
 #include <memory>
 
+#include "app/InitialState.h"
 #include "core/Error.h"
 #include "objective/TransportLoss.h"
 #include "objective/UnbiasedObjective.h"
-#include "optimize/InitialState.h"
-#include "optimize/SpecularInit.h"
-#include "scene/EnvMapPresets.h"
 
 namespace sl {
 
@@ -21,16 +19,6 @@ ObjectiveKind parseObjectiveKind(const std::string& name, const std::string& whe
 
 const char* objectiveKindName(ObjectiveKind kind) {
     return kind == ObjectiveKind::Paper ? "paper" : "unbiased";
-}
-
-std::vector<double> startEnvMap(const std::string& spec, const TransportMatrix& t, bool rgb,
-                                const Scene* scene, int maxDepth) {
-    if (spec == "specular") {
-        if (!scene) throw inputError("start 'specular'", "needs the scene", "pass the scene file");
-        return specularInitialEnvMap(*scene, maxDepth, rgb);
-    }
-    if (spec == "studio") return initialEnvMapFrom(studioEnvMap(t.envWidth, t.envHeight), rgb);
-    return initialEnvMap(spec, t.envWidth, t.envHeight, rgb);
 }
 
 namespace {
@@ -90,7 +78,8 @@ SearchResult search(const SearchInputs& in, const SearchOptions& o) {
     bool stopped = false;
     for (const std::string& start : o.starts) {
         if (stopped) break;
-        std::vector<double> e = startEnvMap(start, t, in.rgb, in.scene, in.maxDepth);
+        std::vector<double> e =
+            initialEnvMap(start, t.envWidth, t.envHeight, in.rgb, in.scene, in.maxDepth);
         OptimizerSummary last;
         for (double factor : stages) {
             ObjectiveOptions oo = in.objective;

@@ -6,8 +6,7 @@
 //                 K > 1 every gradient evaluation uses the next estimate (objective/
 //                 TransportLoss.h CyclingLoss): a fresh sample set per step, as the paper's loop.
 //   starts        every start is optimized in turn and the lowest training loss wins
-//                 (multistart). const:V | random:SEED | envmap:FILE | specular (the paper's
-//                 §5.2 state) | studio (the built-in studio map by L*/100).
+//                 (multistart); the specs of app/InitialState.h.
 //   continuation  λ factors run in turn before λ itself, each stage starting where the last
 //                 ended (e.g. {4, 2}: λ·4, then λ·2, then λ).
 #pragma once
@@ -62,10 +61,6 @@ struct SearchResult {
     LossParts training;          // loss of E* on the training estimate(s) (mean over K)
     std::vector<std::pair<std::string, double>> startLosses;  // every start's training loss
 };
-
-/// E0 of a start spec on T's env-map grid (see above). Throws InputError naming the spec.
-std::vector<double> startEnvMap(const std::string& spec, const TransportMatrix& t, bool rgb,
-                                const Scene* scene, int maxDepth);
 
 SearchResult search(const SearchInputs& inputs, const SearchOptions& options);
 

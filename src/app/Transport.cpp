@@ -117,12 +117,13 @@ TransportSource judgeEstimateFor(const TransportFile& training, const Scene& sce
     using json = nlohmann::json;
     const json trainingInputs = json::parse(training.provenance.inputs);
     if (trainingInputs.value("tracer_revision", 1) != kTracerRevision)
-        throw inputError("transport matrix " + training.provenance.fingerprint,
-                         "was traced by an older scratchlight tracer (revision " +
-                             std::to_string(trainingInputs.value("tracer_revision", 1)) +
-                             ", this one is " + std::to_string(kTracerRevision) +
-                             "), so an estimate traced now would not be comparable",
-                         "recompute it with `scratchlight precompute`, or pass --heldout none");
+        throw inputError(
+            "transport matrix " + training.provenance.fingerprint,
+            "was traced by an older scratchlight tracer (revision " +
+                std::to_string(trainingInputs.value("tracer_revision", 1)) + ", this one is " +
+                std::to_string(kTracerRevision) +
+                "), so an estimate traced now would not be comparable",
+            "recompute it with `scratchlight precompute`, or pass " + option("heldout") + " none");
     PrecomputeOptions o;
     o.spp = spp > 0 ? spp : kJudgeDefaultSpp;
     o.seed = kJudgeSeed;
@@ -141,7 +142,7 @@ TransportSource judgeEstimateFor(const TransportFile& training, const Scene& sce
         throw inputError(scene.desc.file.string(),
                          "has changed since the transport matrix was computed (camera, material "
                          "or height map differ)",
-                         "recompute the transport matrix, or pass --heldout none");
+                         "recompute the transport matrix, or pass " + option("heldout") + " none");
     return s;
 }
 

@@ -4,13 +4,14 @@
 #include <sstream>
 #include <vector>
 
+#include "app/InitialState.h"
 #include "app/RenderBench.h"
 #include "core/Error.h"
 #include "core/Stats.h"
 #include "core/Stopwatch.h"
 #include "io/SceneFile.h"
 #include "objective/TransportLoss.h"
-#include "optimize/InitialState.h"
+#include "optimize/Optimizer.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
 #include "transport/TransportSink.h"

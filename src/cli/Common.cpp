@@ -68,4 +68,30 @@ int runPlot(const std::string& script, const std::vector<std::string>& args, boo
     return kOk;
 }
 
+namespace {
+
+bool hasFlag(const CLI::App& app, const std::string& flag) {
+    if (app.get_option_no_throw(flag)) return true;
+    for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
+        if (hasFlag(*sub, flag)) return true;
+    return false;
+}
+
+}  // namespace
+
+std::string withFlags(const CLI::App& app, const std::string& message) {
+    static const std::string open = "option '";
+    std::string out;
+    size_t pos = 0;
+    for (size_t at; (at = message.find(open, pos)) != std::string::npos;) {
+        const size_t nameStart = at + open.size(), end = message.find('\'', nameStart);
+        if (end == std::string::npos) break;
+        const std::string flag = "--" + message.substr(nameStart, end - nameStart);
+        out += message.substr(pos, at - pos);
+        out += hasFlag(app, flag) ? flag : message.substr(at, end + 1 - at);
+        pos = end + 1;
+    }
+    return out + message.substr(pos);
+}
+
 }  // namespace sl::cli

@@ -1,6 +1,7 @@
 // Shared helpers of the CLI commands (argument plumbing only; the work is in the library).
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -22,6 +23,10 @@ enum Exit : int { kOk = 0, kRuntimeError = 1, kUsageError = 2 };
 struct UsageError : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
+
+/// The library names its options as "option 'NAME'" (core/Error.h option()); the command line
+/// shows each as its flag --NAME where some command of `app` has that flag.
+std::string withFlags(const CLI::App& app, const std::string& message);
 
 /// Progress bar on stderr when it is a terminal (nothing otherwise).
 std::function<void(double)> progressBar(const std::string& label);

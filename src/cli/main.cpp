@@ -43,11 +43,8 @@ int main(int argc, char** argv) {
     } catch (const UsageError& e) {
         std::fprintf(stderr, "error: %s (see --help)\n", e.what());
         return kUsageError;
-    } catch (const sl::InputError& e) {
-        std::fprintf(stderr, "error: %s\n", e.what());
-        return kRuntimeError;
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "error: %s\n", e.what());
+    } catch (const std::exception& e) {  // InputError and every other failure
+        std::fprintf(stderr, "error: %s\n", withFlags(app, e.what()).c_str());
         return kRuntimeError;
     }
 }

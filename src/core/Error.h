@@ -13,6 +13,14 @@ class InputError : public std::runtime_error {
     using std::runtime_error::runtime_error;
 };
 
+/// How the library names one of its options in a message: "option 'NAME'" (NAME in the
+/// lower-case, dash-separated form of the options struct's field). The library never names a
+/// command-line flag; the command line shows "option 'NAME'" as its flag --NAME where it has
+/// one (cli/Common.h withFlags).
+inline std::string option(const std::string& name) {
+    return "option '" + name + "'";
+}
+
 /// Builds "<where>: <problem>. <fix>" in one place so messages are uniform.
 inline InputError inputError(const std::string& where, const std::string& problem,
                              const std::string& fix = {}) {

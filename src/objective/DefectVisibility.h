@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "io/LabelMask.h"
+#include "core/RegionLabel.h"
 
 namespace sl {
 

@@ -8,7 +8,6 @@
 #include <string>
 
 #include "core/Error.h"
-#include "io/ImageIO.h"
 #include "scene/Scene.h"
 
 namespace sl {
@@ -47,16 +46,23 @@ PrimaryHits tracePrimaryHits(const Scene& scene, int threads) {
 }
 
 std::vector<uint8_t> projectToImage(const PrimaryHits& hits, std::span<const uint8_t> mapMask) {
+    std::vector<uint8_t> out = projectLabelsToImage(hits, mapMask);
+    for (uint8_t& v : out) v = v != 0 ? 255 : 0;
+    return out;
+}
+
+std::vector<uint8_t> projectLabelsToImage(const PrimaryHits& hits,
+                                          std::span<const uint8_t> mapLabels) {
     const size_t n = static_cast<size_t>(hits.mapWidth) * hits.mapHeight;
-    if (mapMask.size() != n)
+    if (mapLabels.size() != n)
         throw inputError("height-map mask",
-                         "has " + std::to_string(mapMask.size()) + " samples, the height map " +
+                         "has " + std::to_string(mapLabels.size()) + " samples, the height map " +
                              std::to_string(hits.mapWidth) + "x" + std::to_string(hits.mapHeight),
                          "Give a mask of the height map's size (as gen-surface's -truth.png)");
     std::vector<uint8_t> out(hits.sample.size(), 0);
     for (size_t k = 0; k < out.size(); ++k) {
         int64_t s = hits.sample[k];
-        if (s >= 0 && mapMask[static_cast<size_t>(s)] != 0) out[k] = 255;
+        if (s >= 0) out[k] = mapLabels[static_cast<size_t>(s)];
     }
     return out;
 }
@@ -65,29 +71,6 @@ std::vector<uint8_t> scratchMaskImage(const Scene& scene, const ScratchMapOption
                                       int threads) {
     ScratchMap m = computeScratchMap(scene.heights, scene.mapWidth, scene.mapHeight, options);
     return projectToImage(tracePrimaryHits(scene, threads), m.map);
-}
-
-std::vector<uint8_t> loadHeightMapMask(const std::filesystem::path& file, int mapWidth,
-                                       int mapHeight) {
-    const Image img = readImage(file);
-    if (img.width != mapWidth || img.height != mapHeight)
-        throw inputError(file.string(),
-                         "mask is " + std::to_string(img.width) + "x" + std::to_string(img.height) +
-                             " pixels, the height map is " + std::to_string(mapWidth) + "x" +
-                             std::to_string(mapHeight),
-                         "A height-map-space mask (as gen-surface's <stem>-truth.png) has one "
-                         "pixel per height sample");
-    if (img.channels < 1) throw inputError(file.string(), "mask image has no channels");
-    std::vector<uint8_t> mask(img.pixelCount());
-    for (size_t k = 0; k < mask.size(); ++k)
-        mask[k] = img.data[k * static_cast<size_t>(img.channels)] > 0.5f ? 255 : 0;
-    return mask;
-}
-
-std::vector<uint8_t> projectMaskFile(const Scene& scene, const std::filesystem::path& file,
-                                     int threads) {
-    std::vector<uint8_t> m = loadHeightMapMask(file, scene.mapWidth, scene.mapHeight);
-    return projectToImage(tracePrimaryHits(scene, threads), m);
 }
 
 }  // namespace sl

@@ -37,20 +37,13 @@ PrimaryHits tracePrimaryHits(const Scene& scene, int threads = 0);
 /// Throws InputError if mapMask's size does not match the height map.
 std::vector<uint8_t> projectToImage(const PrimaryHits& hits, std::span<const uint8_t> mapMask);
 
-/// `--mask scratch`: computeScratchMap(scene.heights, options) projected into the image
+/// The same lookup keeping the map's values (label images: one value per region).
+std::vector<uint8_t> projectLabelsToImage(const PrimaryHits& hits,
+                                          std::span<const uint8_t> mapLabels);
+
+/// optimize's `scratch` mask: computeScratchMap(scene.heights, options) projected into the image
 /// (255/0, width*height). Intersect it with the object mask before using it as a loss mask.
 std::vector<uint8_t> scratchMaskImage(const Scene& scene, const ScratchMapOptions& options = {},
                                       int threads = 0);
-
-/// A mask file in HEIGHT-MAP space: mapWidth×mapHeight pixels, inside = first channel > 0.5
-/// after readImage's decoding (the rule of objective/Objective.h loadImageMask), 255/0. Unlike
-/// loadImageMask an empty mask is allowed (a surface without defects). Throws InputError naming
-/// the file (unreadable, wrong size).
-std::vector<uint8_t> loadHeightMapMask(const std::filesystem::path& file, int mapWidth,
-                                       int mapHeight);
-
-/// loadHeightMapMask (e.g. gen-surface's <stem>-truth.png, `--truth`) projected into the image.
-std::vector<uint8_t> projectMaskFile(const Scene& scene, const std::filesystem::path& file,
-                                     int threads = 0);
 
 }  // namespace sl

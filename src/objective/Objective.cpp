@@ -67,7 +67,6 @@
 #include <string>
 
 #include "core/Error.h"
-#include "io/ImageIO.h"
 
 namespace sl {
 
@@ -256,33 +255,6 @@ double ImageObjective::accumulateSignsRows(const double* Y, double* s, int y0, i
                                            int firstRow) const {
     return accumulateG(width_, height_, mask_, Y, s, opt_.smoothAbs, opt_.smoothEps, y0, y1,
                        static_cast<size_t>(firstRow) * static_cast<size_t>(width_));
-}
-
-std::vector<uint8_t> loadImageMask(const std::filesystem::path& file, int width, int height) {
-    const Image img = readImage(file);
-    if (img.width != width || img.height != height) {
-        throw inputError(file.string(),
-                         "mask is " + sizeStr(img.width, img.height) + " pixels, the image is " +
-                             sizeStr(width, height),
-                         "Use a mask drawn on (or resized to) the rendered image's size");
-    }
-    if (img.channels < 1) throw inputError(file.string(), "mask image has no channels");
-    std::vector<uint8_t> mask(img.pixelCount());
-    size_t inside = 0;
-    for (int y = 0; y < height; ++y) {
-        for (int x = 0; x < width; ++x) {
-            const bool in = img.at(x, y, 0) > 0.5f;
-            mask[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)] =
-                in ? 255 : 0;
-            inside += in;
-        }
-    }
-    if (inside == 0) {
-        throw inputError(file.string(),
-                         "mask is empty (no pixel with first channel > 0.5 after decoding)",
-                         "Paint the region of interest white (inside) on black (outside)");
-    }
-    return mask;
 }
 
 std::vector<uint8_t> intersectMasks(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {

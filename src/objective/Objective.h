@@ -105,11 +105,6 @@ class ImageObjective {
     void checkSizes(size_t nY, size_t nE, const char* who) const;
 };
 
-/// A region mask from a PNG/EXR in image space, checked against the image size. Inside = first
-/// channel > 0.5 after readImage's decoding (a white-ish PNG pixel, 1.0 in an EXR); the result
-/// holds 255 inside, 0 outside. Throws InputError naming the file.
-std::vector<uint8_t> loadImageMask(const std::filesystem::path& file, int width, int height);
-
 /// Intersection of two masks (both width*height).
 std::vector<uint8_t> intersectMasks(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b);
 

@@ -77,13 +77,13 @@ void forEachDetrendedRow(std::span<const float> heights, int W, int H, int kerne
 
 void checkOptions(const ScratchMapOptions& o) {
     if (o.kernel < 1)
-        throw inputError("--kernel", "must be >= 1 (got " + std::to_string(o.kernel) + ")",
+        throw inputError(option("kernel"), "must be >= 1 (got " + std::to_string(o.kernel) + ")",
                          "The paper uses 21");
     if (o.patch < 1)
-        throw inputError("--patch", "must be >= 1 (got " + std::to_string(o.patch) + ")",
+        throw inputError(option("patch"), "must be >= 1 (got " + std::to_string(o.patch) + ")",
                          "The paper uses 40");
     if (!(o.threshold >= 0.0 && o.threshold <= 1.0))
-        throw inputError("--threshold",
+        throw inputError(option("threshold"),
                          "must be in [0, 1] (got " + std::to_string(o.threshold) + ")",
                          "It applies to the detrended map scaled to [0, 1]; the paper uses 0.03");
 }

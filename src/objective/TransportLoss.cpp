@@ -8,12 +8,15 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/Error.h"
+
 namespace sl {
 
 TransportLoss::TransportLoss(const TransportMatrix& t, const ImageObjective& objective, bool rgb)
     : t_(t), obj_(&objective), dimension_(t.cols() * (rgb ? 3 : 1)), y_(t.rows()), dLdY_(t.rows()) {
     if (rgb && t.channels != 3)
-        throw std::invalid_argument("an RGB env map needs an RGB transport matrix (--rgb)");
+        throw std::invalid_argument("an RGB env map needs an RGB transport matrix (" +
+                                    option("rgb") + ")");
     if (static_cast<size_t>(objective.width()) * objective.height() != t.rows())
         throw std::invalid_argument("objective image size != transport matrix rows");
 }
@@ -27,7 +30,8 @@ TransportLoss::TransportLoss(const TransportMatrix& t, const UnbiasedObjective& 
       yb_(t.rows()),
       dLdYb_(t.rows()) {
     if (rgb && t.channels != 3)
-        throw std::invalid_argument("an RGB env map needs an RGB transport matrix (--rgb)");
+        throw std::invalid_argument("an RGB env map needs an RGB transport matrix (" +
+                                    option("rgb") + ")");
     if (t.planes != 2)
         throw std::invalid_argument(
             "the unbiased objective needs the two halves of T (precompute with two sample sets)");

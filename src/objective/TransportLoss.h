@@ -5,9 +5,9 @@
 #include <span>
 #include <vector>
 
+#include "core/Problem.h"
 #include "objective/Objective.h"
 #include "objective/UnbiasedObjective.h"
-#include "optimize/Optimizer.h"
 #include "transport/TransportMatrix.h"
 
 namespace sl {

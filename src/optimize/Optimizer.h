@@ -8,14 +8,9 @@
 #include <string>
 #include <vector>
 
-namespace sl {
+#include "core/Problem.h"
 
-/// f(x, grad): the objective at x; fills grad (same size as x) when grad is non-empty.
-struct Problem {
-    size_t dimension = 0;
-    std::function<double(std::span<const double> x, std::span<double> grad)> evaluate;
-    double lower = 0.0, upper = 1.0;
-};
+namespace sl {
 
 struct IterationRecord {
     int iteration = 0;    // 0 = the initial point

@@ -14,7 +14,7 @@ namespace sl {
 std::vector<double> specularInitialEnvMap(const Scene& scene, int maxDepth, bool rgb) {
     if (maxDepth < 2)
         throw inputError(
-            "--init specular",
+            option("init") + " specular",
             "max_depth " + std::to_string(maxDepth) + " lets no camera ray reach the env map",
             "Use render.max_depth >= 2 (2 = one reflection)");
     const Camera& cam = scene.camera;
@@ -59,12 +59,13 @@ std::vector<double> specularInitialEnvMap(const Scene& scene, int maxDepth, bool
     const double mx = *std::max_element(hist.begin(), hist.end());
     if (!(mx > 0.0)) {
         if (cameraHits == 0)
-            throw inputError("--init specular", "no camera ray (pixel centre) hits the part",
+            throw inputError(option("init") + " specular",
+                             "no camera ray (pixel centre) hits the part",
                              "Check the scene's camera: it must look at the height map");
-        throw inputError("--init specular",
+        throw inputError(option("init") + " specular",
                          "no camera ray escapes after its reflections (" +
                              std::to_string(cameraHits) + " hit the part)",
-                         "Raise render.max_depth, or use another --init");
+                         "Raise render.max_depth, or use another " + option("init"));
     }
     std::vector<double> e(texels * (rgb ? 3 : 1));
     for (size_t t = 0; t < texels; ++t) {

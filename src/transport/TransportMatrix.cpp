@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "core/Color.h"
+#include "core/Error.h"
 
 namespace sl {
 
@@ -72,7 +73,8 @@ EKind checkE(const TransportMatrix& t, size_t size, const char* what) {
         if (t.channels != 3)
             throw std::invalid_argument(std::string(what) +
                                         ": an RGB env map needs an RGB transport matrix "
-                                        "(precompute with --rgb)");
+                                        "(precompute with " +
+                                        option("rgb") + ")");
         return EKind::Rgb;
     }
     throw std::invalid_argument(std::string(what) + ": env-map size does not match T's columns");
@@ -158,7 +160,8 @@ void TransportMatrix::applyLuminance(std::span<const double> E, std::span<double
 
 void TransportMatrix::applyRgb(std::span<const double> E, std::span<double> rgb) const {
     if (channels != 3)
-        throw std::invalid_argument("applyRgb: needs an RGB transport matrix (--rgb)");
+        throw std::invalid_argument("applyRgb: needs an RGB transport matrix (" + option("rgb") +
+                                    ")");
     EKind kind = checkE(*this, E.size(), "TransportMatrix::applyRgb");
     if (rgb.size() != 3 * rows()) throw std::invalid_argument("applyRgb: output size != 3*rows");
     const double* e = E.data();

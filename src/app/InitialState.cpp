@@ -1,4 +1,4 @@
-#include "optimize/InitialState.h"
+#include "app/InitialState.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,12 +7,15 @@
 #include "core/Error.h"
 #include "core/Rng.h"
 #include "io/EnvMapIO.h"
+#include "optimize/SpecularInit.h"
+#include "scene/EnvMapPresets.h"
 
 namespace sl {
 
 namespace {
 [[noreturn]] void bad(const std::string& spec, const std::string& why) {
-    throw inputError("--init " + spec, why, "use const:V, envmap:FILE or random:SEED");
+    throw inputError(option("init") + " " + spec, why,
+                     "use const:V, envmap:FILE, random:SEED, studio or specular");
 }
 }  // namespace
 
@@ -33,7 +36,15 @@ std::vector<double> initialEnvMapFrom(const EnvMap& m, bool rgb) {
     return e;
 }
 
+std::vector<double> initialEnvMap(const std::string& spec, int width, int height, bool rgb,
+                                  const Scene* scene, int maxDepth) {
+    if (spec != "specular") return initialEnvMap(spec, width, height, rgb);
+    if (!scene) bad(spec, "needs the scene");
+    return specularInitialEnvMap(*scene, maxDepth, rgb);
+}
+
 std::vector<double> initialEnvMap(const std::string& spec, int width, int height, bool rgb) {
+    if (spec == "studio") return initialEnvMapFrom(studioEnvMap(width, height), rgb);
     const size_t texels = static_cast<size_t>(width) * height, n = texels * (rgb ? 3 : 1);
     const auto colon = spec.find(':');
     if (colon == std::string::npos) bad(spec, "missing ':'");

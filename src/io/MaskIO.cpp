@@ -1,15 +1,21 @@
-#include "io/LabelMask.h"
+#include "io/MaskIO.h"
 
 #include <OpenImageIO/imageio.h>
 
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "core/Error.h"
+#include "io/ImageIO.h"
 
 namespace sl {
 
 namespace {
+
+std::string sizeText(int w, int h) {
+    return std::to_string(w) + "x" + std::to_string(h);
+}
 
 std::vector<RegionLabel> readLegend(const std::filesystem::path& file) {
     const std::string where = file.string();
@@ -82,6 +88,50 @@ LabelMask readLabelMask(const std::filesystem::path& file, int mapWidth, int map
                     {static_cast<uint8_t>(v), v == 255 ? "defect" : "label-" + std::to_string(v)});
     }
     return m;
+}
+
+std::vector<uint8_t> loadImageMask(const std::filesystem::path& file, int width, int height) {
+    const Image img = readImage(file);
+    if (img.width != width || img.height != height) {
+        throw inputError(file.string(),
+                         "mask is " + sizeText(img.width, img.height) + " pixels, the image is " +
+                             sizeText(width, height),
+                         "Use a mask drawn on (or resized to) the rendered image's size");
+    }
+    if (img.channels < 1) throw inputError(file.string(), "mask image has no channels");
+    std::vector<uint8_t> mask(img.pixelCount());
+    size_t inside = 0;
+    for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+            const bool in = img.at(x, y, 0) > 0.5f;
+            mask[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)] =
+                in ? 255 : 0;
+            inside += in;
+        }
+    }
+    if (inside == 0) {
+        throw inputError(file.string(),
+                         "mask is empty (no pixel with first channel > 0.5 after decoding)",
+                         "Paint the region of interest white (inside) on black (outside)");
+    }
+    return mask;
+}
+
+std::vector<uint8_t> loadHeightMapMask(const std::filesystem::path& file, int mapWidth,
+                                       int mapHeight) {
+    const Image img = readImage(file);
+    if (img.width != mapWidth || img.height != mapHeight)
+        throw inputError(file.string(),
+                         "mask is " + std::to_string(img.width) + "x" + std::to_string(img.height) +
+                             " pixels, the height map is " + std::to_string(mapWidth) + "x" +
+                             std::to_string(mapHeight),
+                         "A height-map-space mask (as gen-surface's <stem>-truth.png) has one "
+                         "pixel per height sample");
+    if (img.channels < 1) throw inputError(file.string(), "mask image has no channels");
+    std::vector<uint8_t> mask(img.pixelCount());
+    for (size_t k = 0; k < mask.size(); ++k)
+        mask[k] = img.data[k * static_cast<size_t>(img.channels)] > 0.5f ? 255 : 0;
+    return mask;
 }
 
 }  // namespace sl
