@@ -1,11 +1,11 @@
 #include "app/NoiseBench.h"
 
-#include <chrono>
 #include <map>
 #include <tuple>
 
 #include "app/HeldOut.h"
 #include "app/InitialState.h"
+#include "core/Stopwatch.h"
 #include "core/Error.h"
 #include "core/Stats.h"
 #include "io/SceneFile.h"
@@ -19,9 +19,6 @@ namespace sl {
 
 namespace {
 
-double since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 [[noreturn]] void badOptimizers(const std::string& spec, const std::string& why) {
     throw inputError(option("optimizers") + " " + spec, why,
@@ -129,10 +126,10 @@ NoiseBenchResult runNoiseBench(const NoiseBenchOptions& o) {
     RenderOptions ho = base;
     ho.spp = o.heldOutSpp;
     ho.seed = base.seed + kHeldOutSeedOffset;
-    auto t0 = std::chrono::steady_clock::now();
+    Stopwatch clock;
     log("tracing the shared held-out estimate at " + std::to_string(o.heldOutSpp) + " spp");
     const TransportMatrix held = precomputeTransport(*scene, ho, 1).matrix;
-    res.heldOutSeconds = since(t0);
+    res.heldOutSeconds = clock.seconds();
 
     const ObjectiveOptions oo;  // the paper's λ = 30 on E
     for (int spp : o.spps) {
@@ -140,9 +137,9 @@ NoiseBenchResult runNoiseBench(const NoiseBenchOptions& o) {
             RenderOptions ro = base;
             ro.spp = spp;
             ro.seed = base.seed + static_cast<uint64_t>(s);
-            t0 = std::chrono::steady_clock::now();
+            clock.restart();
             const TransportMatrix t = precomputeTransport(*scene, ro, 1).matrix;
-            const double pre = since(t0);
+            const double pre = clock.seconds();
             log("spp " + std::to_string(spp) + ", seed " + std::to_string(ro.seed) +
                 ": T traced in " + std::to_string(pre) + " s");
             for (const char* kind : {"paper", "unbiased"}) {

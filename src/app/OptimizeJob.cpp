@@ -3,7 +3,6 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <iomanip>
 #include <nlohmann/json.hpp>
@@ -13,6 +12,7 @@
 #include "app/Report.h"
 #include "app/Search.h"
 #include "app/Truth.h"
+#include "core/Stopwatch.h"
 #include "core/Error.h"
 #include "io/AtomicFile.h"
 #include "io/EnvMapIO.h"
@@ -182,11 +182,10 @@ OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
         blackBox || o.mask == "scratch" || specularStart || !o.truth.empty() || o.heldOut.empty();
     if (!tmInput) scene = loadScene(o.input);
     if (tmInput) {
-        auto t0 = std::chrono::steady_clock::now();
+        const Stopwatch clock;
         job.transport.file = readTransportFile(o.input);
         job.transport.path = o.input;
-        job.transport.secondsTotal =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        job.transport.secondsTotal = clock.seconds();
         if (o.objectiveKind.empty()) unbiased = job.transport.file.matrix.planes == 2;
     } else {
         PrecomputeOptions p = o.precompute;
@@ -321,10 +320,9 @@ OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
             }
             row << ',' << r.seconds << ',';
             if (scorer && full) {
-                auto t0 = std::chrono::steady_clock::now();
+                const Stopwatch clock;
                 HeldOutScore h = scorer->score(x);
-                run.secondsHeldOutScoring +=
-                    std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+                run.secondsHeldOutScoring += clock.seconds();
                 row << h.own.total << ',' << h.paper.total;
             } else {
                 row << ',';

@@ -1,7 +1,6 @@
 #include "app/Race.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -12,6 +11,7 @@
 #include "app/Judge.h"
 #include "app/PartFiles.h"
 #include "app/Transport.h"
+#include "core/Stopwatch.h"
 #include "core/Error.h"
 #include "core/Stats.h"
 #include "io/AtomicFile.h"
@@ -24,10 +24,6 @@ namespace sl {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-double since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 RaceConfig config(const std::string& name, ObjectiveKind objective, const std::string& method,
                   int iterations, int spp, int planes = 1,
@@ -160,23 +156,23 @@ RaceSummary runRace(const RaceOptions& o) {
                 p.spp = c.spp;
                 p.seed = static_cast<uint64_t>(seed) * 1000;
                 p.sampleSets = unb ? 2 : 1;
-                auto t0 = std::chrono::steady_clock::now();
+                const Stopwatch precompute;
                 const std::vector<TransportSource> set =
                     transportSetForScene(*scene, p, c.search.planes, {});
                 RaceRow r;
                 r.part = partName;
                 r.config = c.name;
                 r.seed = seed;
-                r.secondsPrecompute = since(t0);
+                r.secondsPrecompute = precompute.seconds();
                 SearchInputs in;
                 for (const auto& s : set) in.set.push_back(&s.file.matrix);
                 in.mask = intersectMasks(set.front().file.matrix.objectMask, mask);
                 in.objective.lambda = o.lambda;
                 in.scene = scene.get();
                 in.maxDepth = set.front().file.provenance.maxDepth;
-                auto t1 = std::chrono::steady_clock::now();
+                const Stopwatch searching;
                 const SearchResult sr = search(in, c.search);
-                r.secondsSearch = since(t1);
+                r.secondsSearch = searching.seconds();
                 r.seconds = r.secondsPrecompute + r.secondsSearch;
                 r.evaluations = sr.optimizer.evaluations;
                 const JudgeScore js = judge.score(sr.e, c.name);

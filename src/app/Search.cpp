@@ -1,10 +1,10 @@
 #include "app/Search.h"
 
-#include <chrono>
 #include <limits>
 #include <memory>
 
 #include "app/InitialState.h"
+#include "core/Stopwatch.h"
 #include "core/Error.h"
 #include "objective/TransportLoss.h"
 #include "objective/UnbiasedObjective.h"
@@ -63,7 +63,7 @@ SearchResult search(const SearchInputs& in, const SearchOptions& o) {
     for (double f : o.continuation)
         if (!(f > 0) || !std::isfinite(f))
             throw inputError("continuation", "λ factors must be > 0", "use e.g. 4,2");
-    const auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch clock;
     const TransportMatrix& t = *in.set.front();
     const auto count = static_cast<size_t>(o.planes);
 
@@ -117,8 +117,7 @@ SearchResult search(const SearchInputs& in, const SearchOptions& o) {
     }
     best.optimizer.iterations = iterations;
     best.optimizer.evaluations = evaluations;
-    best.optimizer.seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    best.optimizer.seconds = clock.seconds();
     best.optimizer.finalLoss = best.training.total;
     return best;
 }

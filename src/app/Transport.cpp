@@ -2,11 +2,11 @@
 
 #include <spdlog/spdlog.h>
 
-#include <chrono>
 #include <nlohmann/json.hpp>
 
 #include "app/HeldOut.h"
 #include "app/Judge.h"
+#include "core/Stopwatch.h"
 #include "core/Error.h"
 #include "io/SceneFile.h"
 #include "render/Render.h"
@@ -17,13 +17,10 @@ namespace sl {
 
 namespace {
 
-double since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 TransportSource trace(const Scene& scene, const RenderOptions& ro, const TransportProvenance& prov,
                       bool rgb, const std::filesystem::path& out,
-                      std::chrono::steady_clock::time_point t0) {
+                      const Stopwatch& clock) {
     PrecomputeResult r = precomputeTransport(scene, ro, rgb ? 3 : 1);
     TransportSource s;
     s.secondsTrace = r.summary.seconds;
@@ -32,7 +29,7 @@ TransportSource trace(const Scene& scene, const RenderOptions& ro, const Transpo
     s.file.matrix = std::move(r.matrix);
     s.file.provenance = prov;
     s.path = out;
-    s.secondsTotal = since(t0);
+    s.secondsTotal = clock.seconds();
     return s;
 }
 
@@ -70,19 +67,19 @@ RenderOptions traceOptions(const Scene& scene, const PrecomputeOptions& o) {
 TransportSource precomputeToFile(const std::filesystem::path& file,
                                  const PrecomputeOptions& options,
                                  const std::filesystem::path& out) {
-    auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch clock;
     auto scene = loadScene(file);
     const RenderOptions ro = traceOptions(*scene, options);
     return trace(*scene, ro, transportProvenance(*scene, ro, options.rgb ? 3 : 1), options.rgb, out,
-                 t0);
+                 clock);
 }
 
 TransportSource transportForScene(const Scene& scene, const PrecomputeOptions& options,
                                   const std::filesystem::path& cacheDir) {
-    auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch clock;
     const RenderOptions ro = traceOptions(scene, options);
     const TransportProvenance prov = transportProvenance(scene, ro, options.rgb ? 3 : 1);
-    if (cacheDir.empty()) return trace(scene, ro, prov, options.rgb, {}, t0);
+    if (cacheDir.empty()) return trace(scene, ro, prov, options.rgb, {}, clock);
     const auto cached = cacheDir / ("transport-" + prov.fingerprint + ".tm");
     if (std::filesystem::exists(cached)) {
         try {
@@ -90,14 +87,14 @@ TransportSource transportForScene(const Scene& scene, const PrecomputeOptions& o
             s.file = readTransportFile(cached, prov.fingerprint);
             s.path = cached;
             s.cacheHit = true;
-            s.secondsTotal = since(t0);
+            s.secondsTotal = clock.seconds();
             spdlog::info("transport matrix from cache {}", cached.string());
             return s;
         } catch (const InputError& e) {
             spdlog::warn("ignoring cached transport matrix: {}", e.what());
         }
     }
-    return trace(scene, ro, prov, options.rgb, cached, t0);
+    return trace(scene, ro, prov, options.rgb, cached, clock);
 }
 
 std::unique_ptr<Scene> sceneOfTransport(const TransportFile& f, const std::string& purpose) {

@@ -5,11 +5,12 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
 
+#include "core/Text.h"
+#include "core/Stopwatch.h"
 #include "core/Color.h"
 #include "core/Error.h"
 #include "render/Render.h"
@@ -25,15 +26,6 @@ class NullSink : public PathSink {
     void consume(const PixelPaths&) override {}
 };
 
-std::string fmt(double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.6g", v);
-    return buf;
-}
-
-double secondsSince(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 /// Runs f(j) for j in [0, n) on `threads` workers (0: all cores), one task per j.
 template <typename F>
@@ -124,12 +116,12 @@ LossParts RenderLoss::evaluate(std::span<const double> E, uint64_t seed, int thr
 
 GradientEstimate finiteDifferenceGradient(const RenderLoss& loss, std::span<const double> E,
                                           const FdOptions& o, uint64_t stream) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch clock;
     const size_t n = loss.dimension();
     checkPoint(E, n, "finiteDifferenceGradient");
     if (!(o.h > 0) || !std::isfinite(o.h) || o.h >= 0.5)
         throw std::invalid_argument("finiteDifferenceGradient: h must be in (0, 0.5), is " +
-                                    fmt(o.h));
+                                    formatNumber(o.h));
     std::vector<uint32_t> texels = o.texels;
     if (texels.empty()) {
         texels.resize(n);
@@ -177,9 +169,9 @@ GradientEstimate finiteDifferenceGradient(const RenderLoss& loss, std::span<cons
             points.push_back({i, b});
         }
         if (!(q.step > 0))
-            throw std::invalid_argument("finiteDifferenceGradient: step h = " + fmt(o.h) +
+            throw std::invalid_argument("finiteDifferenceGradient: step h = " + formatNumber(o.h) +
                                         " vanishes in float32 at E[" + std::to_string(i) +
-                                        "] = " + fmt(e) + "; use a larger h");
+                                        "] = " + formatNumber(e) + "; use a larger h");
         quotients[k] = q;
     }
 
@@ -203,18 +195,18 @@ GradientEstimate finiteDifferenceGradient(const RenderLoss& loss, std::span<cons
     }
     g.loss = values[0];
     g.evaluations = static_cast<int>(points.size());
-    g.seconds = secondsSince(t0);
+    g.seconds = clock.seconds();
     return g;
 }
 
 GradientEstimate spsaGradient(const RenderLoss& loss, std::span<const double> E, double c, int q,
                               Pcg32& rng, bool commonRandomNumbers, uint64_t stream, int threads,
                               std::vector<double>* estimates) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch clock;
     const size_t n = loss.dimension();
     checkPoint(E, n, "spsaGradient");
     if (!(c > 0) || !std::isfinite(c))
-        throw std::invalid_argument("spsaGradient: c must be > 0, is " + fmt(c));
+        throw std::invalid_argument("spsaGradient: c must be > 0, is " + formatNumber(c));
     if (q < 1) throw std::invalid_argument("spsaGradient: q must be >= 1");
     const size_t nq = static_cast<size_t>(q);
 
@@ -257,7 +249,7 @@ GradientEstimate spsaGradient(const RenderLoss& loss, std::span<const double> E,
     }
     g.loss = lossSum / static_cast<double>(nq);
     g.evaluations = static_cast<int>(2 * nq);
-    g.seconds = secondsSince(t0);
+    g.seconds = clock.seconds();
     return g;
 }
 
@@ -273,7 +265,7 @@ void validateCommon(const RenderLoss& loss, const std::vector<double>& E,
         throw inputError("optimizer option 'iterations'", "is " + std::to_string(o.iterations),
                          "use a count >= 1");
     if (!(o.learningRate > 0) || !std::isfinite(o.learningRate))
-        throw inputError("optimizer option 'learningRate'", "is " + fmt(o.learningRate),
+        throw inputError("optimizer option 'learningRate'", "is " + formatNumber(o.learningRate),
                          "use a finite value > 0 (default 0.02)");
     if (E.size() != loss.dimension())
         throw inputError("optimizer start point",
@@ -288,13 +280,13 @@ void validateCommon(const RenderLoss& loss, const std::vector<double>& E,
 
 std::string fdSettings(const FdOptions& fd) {
     return std::string("finite differences: ") + (fd.central ? "central" : "forward") + ", h " +
-           fmt(fd.h) + ", " + (fd.commonRandomNumbers ? "common random numbers" : "fresh seeds");
+           formatNumber(fd.h) + ", " + (fd.commonRandomNumbers ? "common random numbers" : "fresh seeds");
 }
 
 OptimizerSummary minimizeFdAdam(const RenderLoss& loss, std::vector<double>& E,
                                 const OptimizerOptions& options, const FdOptions& fd) {
     if (!(fd.h > 0) || !std::isfinite(fd.h) || fd.h >= 0.5)
-        throw inputError("finite-difference option 'h'", "is " + fmt(fd.h),
+        throw inputError("finite-difference option 'h'", "is " + formatNumber(fd.h),
                          "use a step in (0, 0.5), e.g. 1e-3");
     const long renders0 = loss.renders();
     std::vector<long> rendersAfter;  // renders after the k-th problem evaluation
@@ -338,7 +330,7 @@ OptimizerSummary minimizeFdAdam(const RenderLoss& loss, std::vector<double>& E,
 OptimizerSummary minimizeSpsa(const RenderLoss& loss, std::vector<double>& E,
                               const OptimizerOptions& options, const SpsaOptions& sp) {
     auto bad = [](const std::string& field, double v, const std::string& fix) {
-        return inputError("SPSA option '" + field + "'", "is " + fmt(v), fix);
+        return inputError("SPSA option '" + field + "'", "is " + formatNumber(v), fix);
     };
     if (!(sp.c > 0) || !std::isfinite(sp.c)) throw bad("c", sp.c, "use a value > 0, e.g. 0.02");
     if (sp.q < 1) throw bad("q", sp.q, "use a count >= 1");
@@ -351,7 +343,7 @@ OptimizerSummary minimizeSpsa(const RenderLoss& loss, std::vector<double>& E,
     if (sp.a <= 0 && sp.calibrationEstimates < 1)
         throw bad("calibrationEstimates", sp.calibrationEstimates, "use a count >= 1");
 
-    const auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch clock;
     const long renders0 = loss.renders();
     const size_t n = E.size();
     for (double& e : E) e = std::clamp(e, 0.0, 1.0);
@@ -371,7 +363,7 @@ OptimizerSummary minimizeSpsa(const RenderLoss& loss, std::vector<double>& E,
         r.iteration = iteration;
         r.evaluations = static_cast<int>(loss.renders() - renders0);
         r.loss = value;
-        r.seconds = secondsSince(t0);
+        r.seconds = clock.seconds();
         s.history.push_back(r);
         lastX = x;
         return !options.callback || options.callback(r, x);
@@ -393,8 +385,8 @@ OptimizerSummary minimizeSpsa(const RenderLoss& loss, std::vector<double>& E,
         a = meanAbs > 0 ? options.learningRate * std::pow(A + 1.0, sp.alpha) / meanAbs
                         : options.learningRate;
     }
-    s.settings = "a " + fmt(a) + (sp.a <= 0 ? " (calibrated)" : "") + ", c " + fmt(sp.c) + ", A " +
-                 fmt(A) + ", alpha " + fmt(sp.alpha) + ", gamma " + fmt(sp.gamma) + ", q " +
+    s.settings = "a " + formatNumber(a) + (sp.a <= 0 ? " (calibrated)" : "") + ", c " + formatNumber(sp.c) + ", A " +
+                 formatNumber(A) + ", alpha " + formatNumber(sp.alpha) + ", gamma " + formatNumber(sp.gamma) + ", q " +
                  std::to_string(sp.q) + ", " +
                  (sp.commonRandomNumbers ? "common random numbers" : "fresh seeds") +
                  ", E projected to [0, 1]; evaluations = renders";
@@ -422,7 +414,7 @@ OptimizerSummary minimizeSpsa(const RenderLoss& loss, std::vector<double>& E,
     s.evaluations = static_cast<int>(loss.renders() - renders0);
     s.initialLoss = s.history.front().loss;
     s.finalLoss = s.history.back().loss;
-    s.seconds = secondsSince(t0);
+    s.seconds = clock.seconds();
     return s;
 }
 

@@ -141,7 +141,7 @@ void minimizeCeres(Run& run, std::vector<double>& x) {
         "Ceres GradientProblemSolver, LBFGS (rank 20), Wolfe line search; "
         "x = lower + w sin^2(z), start nudged by <= 1e-6 w; max_num_iterations = " +
         std::to_string(o.iterations) + ", function_tolerance " +
-        formatDouble(o.relativeFunctionTolerance);
+        formatNumber(o.relativeFunctionTolerance);
 
     {
         std::vector<double> g(n);

@@ -95,7 +95,7 @@ std::string resultText(nlopt::result r, const OptimizerOptions& o) {
             return "stop value reached";
         case nlopt::FTOL_REACHED:
             return "relative function tolerance reached (" +
-                   formatDouble(o.relativeFunctionTolerance) + ")";
+                   formatNumber(o.relativeFunctionTolerance) + ")";
         case nlopt::XTOL_REACHED:
             return "x tolerance reached (x stopped changing)";
         case nlopt::MAXEVAL_REACHED:
@@ -134,13 +134,13 @@ void minimizeNlopt(Run& run, std::vector<double>& x) {
         local.set_xtol_rel(1e-6);
         opt.set_local_optimizer(local);
         if (o.population > 0) opt.set_population(static_cast<unsigned>(o.population));
-        s.settings += "; local LD_LBFGS ftol_rel " + formatDouble(localFtol) +
+        s.settings += "; local LD_LBFGS ftol_rel " + formatNumber(localFtol) +
                       ", xtol_rel 1e-06; population " +
                       (o.population > 0 ? std::to_string(o.population) : std::string("4")) +
                       "; seed " + std::to_string(o.seed);
     } else {
         opt.set_ftol_rel(o.relativeFunctionTolerance);
-        s.settings += "; ftol_rel " + formatDouble(o.relativeFunctionTolerance);
+        s.settings += "; ftol_rel " + formatNumber(o.relativeFunctionTolerance);
     }
     nlopt::srand(static_cast<unsigned long>(o.seed));
 

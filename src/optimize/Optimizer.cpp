@@ -54,14 +54,8 @@ namespace sl {
 
 namespace detail {
 
-std::string formatDouble(double v, int precision) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.*g", precision, v);
-    return buf;
-}
-
 Run::Run(const Problem& problem, const OptimizerOptions& options)
-    : problem_(problem), options_(options), start_(std::chrono::steady_clock::now()) {
+    : problem_(problem), options_(options) {
     summary.method = options.method;
     summary.dimension = problem.dimension;
     summary.lower = problem.lower;
@@ -69,7 +63,7 @@ Run::Run(const Problem& problem, const OptimizerOptions& options)
 }
 
 double Run::seconds() const {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    return clock_.seconds();
 }
 
 bool Run::progressed() const {
@@ -97,11 +91,11 @@ double Run::evaluate(std::span<const double> x, std::span<double> grad, bool reu
                                  ", iteration " + std::to_string(lastIteration() + 1) +
                                  "; stopping (no NaN leaves the optimizer)");
     };
-    if (!std::isfinite(loss)) fail("returned a non-finite loss (" + formatDouble(loss) + ")");
+    if (!std::isfinite(loss)) fail("returned a non-finite loss (" + formatNumber(loss) + ")");
     for (size_t i = 0; i < grad.size(); ++i)
         if (!std::isfinite(grad[i]))
             fail("returned a non-finite gradient (grad[" + std::to_string(i) +
-                 "] = " + formatDouble(grad[i]) + ")");
+                 "] = " + formatNumber(grad[i]) + ")");
 
     CacheEntry& c = cache_[cacheNext_];
     cacheNext_ = (cacheNext_ + 1) % cache_.size();
@@ -148,7 +142,6 @@ std::string methodList() {
 }
 
 void validate(const Problem& problem, const std::vector<double>& x, const OptimizerOptions& o) {
-    using detail::formatDouble;
     if (std::find(kMethods.begin(), kMethods.end(), o.method) == kMethods.end())
         throw inputError("optimizer method", "unknown method '" + o.method + "'",
                          "use one of: " + methodList());
@@ -158,27 +151,27 @@ void validate(const Problem& problem, const std::vector<double>& x, const Optimi
         throw bad("optimizer option 'iterations'", "is " + std::to_string(o.iterations),
                   "use a count >= 1");
     if (!(o.learningRate > 0) || !std::isfinite(o.learningRate))
-        throw bad("optimizer option 'learningRate'", "is " + formatDouble(o.learningRate),
+        throw bad("optimizer option 'learningRate'", "is " + formatNumber(o.learningRate),
                   "use a finite value > 0 (the paper: 0.02)");
     if (!(o.beta1 >= 0 && o.beta1 < 1))
-        throw bad("optimizer option 'beta1'", "is " + formatDouble(o.beta1),
+        throw bad("optimizer option 'beta1'", "is " + formatNumber(o.beta1),
                   "use 0 <= beta1 < 1 (default 0.9)");
     if (!(o.beta2 >= 0 && o.beta2 < 1))
-        throw bad("optimizer option 'beta2'", "is " + formatDouble(o.beta2),
+        throw bad("optimizer option 'beta2'", "is " + formatNumber(o.beta2),
                   "use 0 <= beta2 < 1 (default 0.999)");
     if (!(o.epsilon > 0) || !std::isfinite(o.epsilon))
-        throw bad("optimizer option 'epsilon'", "is " + formatDouble(o.epsilon),
+        throw bad("optimizer option 'epsilon'", "is " + formatNumber(o.epsilon),
                   "use a finite value > 0 (default 1e-8)");
     if (!(o.relativeFunctionTolerance >= 0) || !std::isfinite(o.relativeFunctionTolerance))
         throw bad("optimizer option 'relativeFunctionTolerance'",
-                  "is " + formatDouble(o.relativeFunctionTolerance), "use a value >= 0 (0 = off)");
+                  "is " + formatNumber(o.relativeFunctionTolerance), "use a value >= 0 (0 = off)");
     if (o.population < 0)
         throw bad("optimizer option 'population'", "is " + std::to_string(o.population),
                   "use a count >= 0 (0 = NLopt's default)");
     if (!std::isfinite(problem.lower) || !std::isfinite(problem.upper) ||
         !(problem.lower < problem.upper))
         throw bad("optimizer bounds",
-                  "[" + formatDouble(problem.lower) + ", " + formatDouble(problem.upper) +
+                  "[" + formatNumber(problem.lower) + ", " + formatNumber(problem.upper) +
                       "] is not a box",
                   "use finite lower < upper (the env map: [0, 1])");
     if (problem.dimension == 0)
@@ -197,7 +190,7 @@ void validate(const Problem& problem, const std::vector<double>& x, const Optimi
     for (size_t i = 0; i < x.size(); ++i)
         if (!std::isfinite(x[i]))
             throw bad("optimizer start point",
-                      "x[" + std::to_string(i) + "] is " + formatDouble(x[i]),
+                      "x[" + std::to_string(i) + "] is " + formatNumber(x[i]),
                       "start from finite values");
 }
 
@@ -205,10 +198,10 @@ void minimizeAdam(detail::Run& run, std::vector<double>& x) {
     const OptimizerOptions& o = run.options();
     const double lo = run.problem().lower, hi = run.problem().upper;
     const size_t n = x.size();
-    run.summary.settings = "lr " + detail::formatDouble(o.learningRate) + ", beta1 " +
-                           detail::formatDouble(o.beta1) + ", beta2 " +
-                           detail::formatDouble(o.beta2) + ", epsilon " +
-                           detail::formatDouble(o.epsilon) + ", x clamped after every step";
+    run.summary.settings = "lr " + formatNumber(o.learningRate) + ", beta1 " +
+                           formatNumber(o.beta1) + ", beta2 " +
+                           formatNumber(o.beta2) + ", epsilon " +
+                           formatNumber(o.epsilon) + ", x clamped after every step";
     std::vector<double> g(n), m(n, 0.0), v(n, 0.0);
     for (int t = 1; t <= o.iterations; ++t) {
         const double loss = run.evaluate(x, g, false);  // at x_{t-1}
@@ -282,7 +275,7 @@ std::string OptimizerSummary::fullReport() const {
     if (!settings.empty()) line("Settings", settings);
     line("Parameters", std::to_string(dimension));
     std::ostringstream bounds;
-    bounds << '[' << detail::formatDouble(lower) << ", " << detail::formatDouble(upper) << ']';
+    bounds << '[' << formatNumber(lower) << ", " << formatNumber(upper) << ']';
     line("Bounds", bounds.str());
     s << "\nLoss\n";
     line("  Initial", sci(initialLoss));

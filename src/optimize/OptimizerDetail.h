@@ -4,11 +4,12 @@
 #pragma once
 
 #include <array>
-#include <chrono>
 #include <span>
 #include <string>
 #include <vector>
 
+#include "core/Stopwatch.h"
+#include "core/Text.h"
 #include "optimize/Optimizer.h"
 
 namespace sl::detail {
@@ -64,7 +65,7 @@ class Run {
 
     const Problem& problem_;
     const OptimizerOptions& options_;
-    std::chrono::steady_clock::time_point start_;
+    Stopwatch clock_;
     int evaluations_ = 0;
     std::array<CacheEntry, 4> cache_;
     size_t cacheNext_ = 0;
@@ -76,8 +77,6 @@ inline double clampTo(double v, double lo, double hi) {
     return v < lo ? lo : (v > hi ? hi : v);
 }
 
-/// "%.6g"-style formatting without iostreams.
-std::string formatDouble(double v, int precision = 6);
 
 // The methods. Each starts from x (clamped, validated; nothing recorded yet), records the
 // initial point and every iteration through run, leaves the returned point in x and sets

@@ -6,12 +6,12 @@
 #include <tbb/task_arena.h>
 
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <mutex>
 #include <stdexcept>
 
 #include "core/Rng.h"
+#include "core/Stopwatch.h"
 #include "scene/Scene.h"
 
 namespace sl {
@@ -60,7 +60,7 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
     tbb::combinable<Counters> counters;
     std::atomic<int> rowsDone{0};
     std::mutex progressMutex;
-    auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch clock;
 
     auto body = [&](const tbb::blocked_range<int>& rows) {
         std::vector<EscapedPath> paths;
@@ -118,7 +118,7 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
     tbb::task_arena arena(threads);
     arena.execute([&] { tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), body); });
 
-    sum.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    sum.seconds = clock.seconds();
     counters.combine_each([&](const Counters& c) {
         sum.rays += c.rays;
         sum.cameraRays += c.camera;

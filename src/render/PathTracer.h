@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "render/PathSink.h"
+#include "scene/RenderDesc.h"
 
 namespace sl {
 
@@ -25,9 +26,10 @@ struct Scene;
 inline constexpr int kTracerRevision = 2;
 
 struct RenderOptions {
-    int spp = 64;
-    int maxDepth = 4;
-    uint64_t seed = 0;
+    // Defaults: the scene file's render section (scene/RenderDesc.h), defined there once.
+    int spp = RenderDesc{}.spp;
+    int maxDepth = RenderDesc{}.maxDepth;
+    uint64_t seed = RenderDesc{}.seed;
     int threads = 0;  // 0: all cores
     /// 1, or 2: the spp samples form two independent sample sets of spp/2 (samples
     /// [0, spp/2) and [spp/2, spp)), each stratified over the whole pixel on its own, so that

@@ -1,6 +1,6 @@
 // The scene file's `render` section (io/SceneFile.h). Its defaults are the only definition of
 // the default sample count, path length and seed; the renderer's RenderOptions
-// (render/PathTracer.h) should start from them too (tests/test_readme.cpp checks they agree).
+// (render/PathTracer.h) start from them.
 #pragma once
 
 #include <cstdint>

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "core/Error.h"
+#include "core/Text.h"
 #include "core/Rng.h"
 
 namespace sl {
@@ -26,11 +27,6 @@ constexpr uint64_t kGougeStream = 0x676f756765303031ULL;
 constexpr uint64_t kRoughStream = 0x726f756768303031ULL;
 constexpr uint64_t kPathStream = 0x7061746873303031ULL;
 
-std::string num(double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.6g", v);
-    return buf;
-}
 
 void require(bool ok, const std::string& field, const std::string& problem,
              const std::string& fix) {
@@ -38,7 +34,7 @@ void require(bool ok, const std::string& field, const std::string& problem,
 }
 
 void requireFinite(double v, const std::string& field) {
-    require(std::isfinite(v), field, "must be a finite number, got " + num(v),
+    require(std::isfinite(v), field, "must be a finite number, got " + formatNumber(v),
             "Set it to a finite value in mm (or degrees for angles)");
 }
 
@@ -99,61 +95,61 @@ void validate(const SurfaceSpec& s) {
             "Use a map of at least 2x2 samples");
     require(
         static_cast<double>(s.width) * s.height <= 2.0e9, "width",
-        "width*height = " + num(static_cast<double>(s.width) * s.height) + " samples is too large",
+        "width*height = " + formatNumber(static_cast<double>(s.width) * s.height) + " samples is too large",
         "Keep width*height at or below 2e9");
     requireFinite(s.pitch, "pitch");
-    require(s.pitch > 0, "pitch", "must be > 0 mm, got " + num(s.pitch),
+    require(s.pitch > 0, "pitch", "must be > 0 mm, got " + formatNumber(s.pitch),
             "Set the sample spacing in mm, e.g. 0.01");
     requireFinite(s.toolRadius, "toolRadius");
-    require(s.toolRadius > 0, "toolRadius", "must be > 0 mm, got " + num(s.toolRadius),
+    require(s.toolRadius > 0, "toolRadius", "must be > 0 mm, got " + formatNumber(s.toolRadius),
             "Set the ball (or face-mill cutter) radius in mm");
     requireFinite(s.stepover, "stepover");
-    require(s.stepover > 0, "stepover", "must be > 0 mm, got " + num(s.stepover),
+    require(s.stepover > 0, "stepover", "must be > 0 mm, got " + formatNumber(s.stepover),
             "Set the spacing of the tool paths in mm");
     require(s.stepover < 2 * s.toolRadius, "stepover",
-            "must be < 2*toolRadius = " + num(2 * s.toolRadius) + " mm, got " + num(s.stepover),
+            "must be < 2*toolRadius = " + formatNumber(2 * s.toolRadius) + " mm, got " + formatNumber(s.stepover),
             "Paths further apart than the tool's diameter leave uncut material");
     requireFinite(s.pathOffset, "pathOffset");
     requireFinite(s.rasterAngleDeg, "rasterAngleDeg");
     requireFinite(s.feedPerTooth, "feedPerTooth");
-    require(s.feedPerTooth >= 0, "feedPerTooth", "must be >= 0 mm, got " + num(s.feedPerTooth),
+    require(s.feedPerTooth >= 0, "feedPerTooth", "must be >= 0 mm, got " + formatNumber(s.feedPerTooth),
             "Set the feed per tooth in mm (0 disables ball-end feed marks)");
     if (s.process == SurfaceSpec::Process::BallEndRaster && s.ballFeedMarks) {
         double hs = 0.5 * s.stepover, hf = 0.5 * s.feedPerTooth;
         require(hs * hs + hf * hf < s.toolRadius * s.toolRadius, "feedPerTooth",
-                "with stepover " + num(s.stepover) + " mm the ball of radius " + num(s.toolRadius) +
-                    " mm leaves uncut material at feed " + num(s.feedPerTooth) + " mm",
+                "with stepover " + formatNumber(s.stepover) + " mm the ball of radius " + formatNumber(s.toolRadius) +
+                    " mm leaves uncut material at feed " + formatNumber(s.feedPerTooth) + " mm",
                 "Reduce feedPerTooth or stepover, or set ballFeedMarks = false");
     }
     if (s.process == SurfaceSpec::Process::FaceMillFeed) {
         requireFinite(s.insertNoseRadius, "insertNoseRadius");
         require(s.insertNoseRadius > 0, "insertNoseRadius",
-                "must be > 0 mm, got " + num(s.insertNoseRadius), "Typical inserts: 0.4-1.2 mm");
+                "must be > 0 mm, got " + formatNumber(s.insertNoseRadius), "Typical inserts: 0.4-1.2 mm");
         require(s.feedPerTooth > 0 && s.feedPerTooth < 2 * s.insertNoseRadius, "feedPerTooth",
-                "must be in (0, 2*insertNoseRadius = " + num(2 * s.insertNoseRadius) +
-                    ") mm for a face mill, got " + num(s.feedPerTooth),
+                "must be in (0, 2*insertNoseRadius = " + formatNumber(2 * s.insertNoseRadius) +
+                    ") mm for a face mill, got " + formatNumber(s.feedPerTooth),
                 "Typical finishing feeds: 0.05-0.2 mm per tooth");
     }
     requireFinite(s.chatterAmplitude, "chatterAmplitude");
     require(s.chatterAmplitude >= 0, "chatterAmplitude",
-            "must be >= 0 mm, got " + num(s.chatterAmplitude), "Use 0 to disable chatter");
+            "must be >= 0 mm, got " + formatNumber(s.chatterAmplitude), "Use 0 to disable chatter");
     requireFinite(s.chatterStartFraction, "chatterStartFraction");
     require(s.chatterStartFraction >= 0 && s.chatterStartFraction < 1, "chatterStartFraction",
-            "must be in [0, 1), got " + num(s.chatterStartFraction),
+            "must be in [0, 1), got " + formatNumber(s.chatterStartFraction),
             "Use 0 for chatter everywhere, 0.5 for the right half");
     if (s.chatterAmplitude > 0) {
         requireFinite(s.chatterWavelength, "chatterWavelength");
         require(s.chatterWavelength > 0, "chatterWavelength",
-                "must be > 0 mm when chatterAmplitude > 0, got " + num(s.chatterWavelength),
+                "must be > 0 mm when chatterAmplitude > 0, got " + formatNumber(s.chatterWavelength),
                 "Set the chatter wavelength in mm, or chatterAmplitude = 0");
     }
     requireFinite(s.roughnessRms, "roughnessRms");
-    require(s.roughnessRms >= 0, "roughnessRms", "must be >= 0 mm, got " + num(s.roughnessRms),
+    require(s.roughnessRms >= 0, "roughnessRms", "must be >= 0 mm, got " + formatNumber(s.roughnessRms),
             "Use 0 to disable roughness");
     if (s.roughnessRms > 0) {
         requireFinite(s.roughnessCorrelation, "roughnessCorrelation");
         require(s.roughnessCorrelation > 0, "roughnessCorrelation",
-                "must be > 0 mm when roughnessRms > 0, got " + num(s.roughnessCorrelation),
+                "must be > 0 mm when roughnessRms > 0, got " + formatNumber(s.roughnessCorrelation),
                 "Set the correlation length in mm, e.g. 0.02");
     }
     if (s.scratches.empty()) {
@@ -163,21 +159,21 @@ void validate(const SurfaceSpec& s) {
         if (s.scratchCount > 0) {
             requireFinite(s.scratchDepth, "scratchDepth");
             require(s.scratchDepth >= 0, "scratchDepth",
-                    "must be >= 0 mm, got " + num(s.scratchDepth), "Scratch depths are in mm");
+                    "must be >= 0 mm, got " + formatNumber(s.scratchDepth), "Scratch depths are in mm");
             requireFinite(s.scratchWidth, "scratchWidth");
             require(s.scratchWidth > 0, "scratchWidth",
-                    "must be > 0 mm, got " + num(s.scratchWidth), "Scratch widths are in mm");
+                    "must be > 0 mm, got " + formatNumber(s.scratchWidth), "Scratch widths are in mm");
         }
     }
     for (size_t n = 0; n < s.scratches.size(); ++n) {
         const ScratchSpec& c = s.scratches[n];
         std::string f = "scratches[" + std::to_string(n) + "]";
         for (double v : {c.x0, c.z0, c.x1, c.z1, c.width, c.depth, c.burr}) requireFinite(v, f);
-        require(c.width > 0, f + ".width", "must be > 0 mm, got " + num(c.width),
+        require(c.width > 0, f + ".width", "must be > 0 mm, got " + formatNumber(c.width),
                 "Scratch widths are in mm");
-        require(c.depth >= 0, f + ".depth", "must be >= 0 mm, got " + num(c.depth),
+        require(c.depth >= 0, f + ".depth", "must be >= 0 mm, got " + formatNumber(c.depth),
                 "Scratch depths are in mm, positive into the part");
-        require(c.burr >= 0, f + ".burr", "must be >= 0, got " + num(c.burr),
+        require(c.burr >= 0, f + ".burr", "must be >= 0, got " + formatNumber(c.burr),
                 "The burr is a fraction of the depth");
         require(std::hypot(c.x1 - c.x0, c.z1 - c.z0) > 0, f, "the endpoints coincide",
                 "Give a segment of positive length");
@@ -188,10 +184,10 @@ void validate(const SurfaceSpec& s) {
                 "Use 0 for no gouges");
         if (s.gougeCount > 0) {
             requireFinite(s.gougeDepth, "gougeDepth");
-            require(s.gougeDepth >= 0, "gougeDepth", "must be >= 0 mm, got " + num(s.gougeDepth),
+            require(s.gougeDepth >= 0, "gougeDepth", "must be >= 0 mm, got " + formatNumber(s.gougeDepth),
                     "Gouge depths are in mm");
             requireFinite(s.gougeLength, "gougeLength");
-            require(s.gougeLength > 0, "gougeLength", "must be > 0 mm, got " + num(s.gougeLength),
+            require(s.gougeLength > 0, "gougeLength", "must be > 0 mm, got " + formatNumber(s.gougeLength),
                     "Gouge lengths are in mm");
         }
     }
@@ -199,21 +195,21 @@ void validate(const SurfaceSpec& s) {
         const GougeSpec& g = s.gouges[n];
         std::string f = "gouges[" + std::to_string(n) + "]";
         for (double v : {g.x0, g.z0, g.x1, g.z1, g.depth}) requireFinite(v, f);
-        require(g.depth >= 0, f + ".depth", "must be >= 0 mm, got " + num(g.depth),
+        require(g.depth >= 0, f + ".depth", "must be >= 0 mm, got " + formatNumber(g.depth),
                 "Gouge depths are in mm, positive into the part");
         require(std::hypot(g.x1 - g.x0, g.z1 - g.z0) > 0, f, "the endpoints coincide",
                 "Give a segment of positive length");
     }
     if (s.pocketEdge) {
         requireFinite(s.pocketDepth, "pocketDepth");
-        require(s.pocketDepth >= 0, "pocketDepth", "must be >= 0 mm, got " + num(s.pocketDepth),
+        require(s.pocketDepth >= 0, "pocketDepth", "must be >= 0 mm, got " + formatNumber(s.pocketDepth),
                 "The pocket floor is pocketDepth below the top");
         requireFinite(s.pocketWallFraction, "pocketWallFraction");
         require(s.pocketWallFraction > 0 && s.pocketWallFraction < 1, "pocketWallFraction",
-                "must be in (0, 1), got " + num(s.pocketWallFraction),
+                "must be in (0, 1), got " + formatNumber(s.pocketWallFraction),
                 "It is the fraction of the map width (in +x) that is pocket floor");
         requireFinite(s.cornerRadius, "cornerRadius");
-        require(s.cornerRadius >= 0, "cornerRadius", "must be >= 0 mm, got " + num(s.cornerRadius),
+        require(s.cornerRadius >= 0, "cornerRadius", "must be >= 0 mm, got " + formatNumber(s.cornerRadius),
                 "Use 0 for a sharp step");
     }
 }
@@ -434,11 +430,11 @@ struct Roughness {
 
 double scallopHeight(double stepover, double ballRadius) {
     if (!(std::isfinite(ballRadius) && ballRadius > 0))
-        throw inputError("scallopHeight: ballRadius", "must be > 0 mm, got " + num(ballRadius));
+        throw inputError("scallopHeight: ballRadius", "must be > 0 mm, got " + formatNumber(ballRadius));
     if (!(std::isfinite(stepover) && stepover >= 0 && stepover <= 2 * ballRadius))
         throw inputError(
             "scallopHeight: stepover",
-            "must be in [0, 2*ballRadius = " + num(2 * ballRadius) + "] mm, got " + num(stepover));
+            "must be in [0, 2*ballRadius = " + formatNumber(2 * ballRadius) + "] mm, got " + formatNumber(stepover));
     double a = 0.5 * stepover;
     return sphereRise(ballRadius, a * a);
 }
@@ -488,7 +484,7 @@ GeneratedSurface generateSurface(const SurfaceSpec& spec) {
         }
         double count = (hi - lo) / tm.s;
         require(count < 5.0e7, "stepover",
-                "gives " + num(count) + " tool paths across the map, too many",
+                "gives " + formatNumber(count) + " tool paths across the map, too many",
                 "Use a stepover of at least 1/5e7 of the map's diagonal");
         tm.kMin = static_cast<int64_t>(std::floor((lo - tm.off) / tm.s)) - 1;
         tm.kMax = static_cast<int64_t>(std::ceil((hi - tm.off) / tm.s)) + 1;
