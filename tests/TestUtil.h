@@ -1,6 +1,7 @@
 // Helpers shared by tests: temporary directories, tiny file writers, running the CLI.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
@@ -30,6 +31,17 @@ class TempDir {
   private:
     std::filesystem::path path_;
 };
+
+/// An n×n height map of gentle bumps, 0.03·sin(0.5 i)·cos(0.37 j) (scene units): a small
+/// surface whose transport matrix has structure in every row.
+inline std::vector<float> bumpyHeightMap(int n) {
+    std::vector<float> h(size_t(n) * n);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+            h[size_t(j) * n + i] =
+                static_cast<float>(0.03 * std::sin(i * 0.5) * std::cos(j * 0.37));
+    return h;
+}
 
 inline void writeText(const std::filesystem::path& p, const std::string& text) {
     std::ofstream(p, std::ios::binary) << text;

@@ -31,12 +31,7 @@ std::unique_ptr<Scene> wavyScene(int res, int n = 48) {
     d.material.params.alphaU = d.material.params.alphaV = 0.1f;
     d.camera.width = d.camera.height = res;
     d.render.maxDepth = 3;
-    std::vector<float> h(size_t(n) * n);
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i)
-            h[size_t(j) * n + i] =
-                static_cast<float>(0.03 * std::sin(i * 0.5) * std::cos(j * 0.37));
-    return std::make_unique<Scene>(d, n, n, std::move(h));
+    return std::make_unique<Scene>(d, n, n, test::bumpyHeightMap(n));
 }
 
 std::vector<double> randomVec(size_t n, uint64_t seed, double scale = 1.0) {

@@ -29,12 +29,7 @@ std::unique_ptr<Scene> smallScene(int res = 24) {
     d.camera.width = res;
     d.camera.height = res;
     const int n = 48;
-    std::vector<float> h(size_t(n) * n);
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i)
-            h[size_t(j) * n + i] =
-                static_cast<float>(0.03 * std::sin(i * 0.5) * std::cos(j * 0.37));
-    return std::make_unique<Scene>(d, n, n, std::move(h));
+    return std::make_unique<Scene>(d, n, n, test::bumpyHeightMap(n));
 }
 
 RenderOptions opts(int spp = 8) {

@@ -1,11 +1,8 @@
-// Held-out scoring (DESIGN.md "Noise is the trap"): every optimization is also scored on an
-// independent estimate — a second transport matrix from disjoint samples (another seed), traced
-// with two sample sets so that both the paper's eq. 2 and the noise-unbiased objective can be
-// evaluated on it.
-//
-// CONVENTION: the held-out seed is the training seed + kHeldOutSeedOffset; its spp defaults to
-// the training spp. The held-out objectives use the training mask intersected with the
-// held-out T's object mask.
+// Held-out scoring (docs/DESIGN.md "Noise is the trap"): every optimization is also scored on
+// an independent estimate — for `optimize`, the judge's (app/Judge.h: its own seed, 1024 spp by
+// default, two sample sets), so that both the paper's eq. 2 and the noise-unbiased objective
+// can be evaluated on it. The held-out objectives use the training mask intersected with the
+// held-out T's object mask (the judge's own scores use the part mask).
 #pragma once
 
 #include <cstdint>
@@ -19,8 +16,6 @@
 namespace sl {
 
 class TransportLoss;
-
-inline constexpr uint64_t kHeldOutSeedOffset = 0x9E3779B97F4A7C15ULL;
 
 struct HeldOutScore {
     LossParts own;    // the objective that was optimized

@@ -8,7 +8,6 @@
 #include "app/Truth.h"
 #include "core/Color.h"
 #include "core/Error.h"
-#include "objective/TransportLoss.h"
 #include "objective/UnbiasedObjective.h"
 #include "scene/EnvMap.h"
 #include "scene/Scene.h"
@@ -33,6 +32,7 @@ TransportSource judgeEstimate(const Scene& scene, const JudgeOptions& o) {
 Judge::Judge(const Scene& scene, const JudgeOptions& options) : options_(options) {
     owned_ = judgeEstimate(scene, options);
     estimate_ = &*owned_;
+    buildObjectives();
     if (!options.truth.empty()) {
         LabelMask m = projectTruth(scene, options.truth, options.threads);
         labels_ = std::move(m.labels);
@@ -52,6 +52,16 @@ Judge::Judge(const TransportSource& estimate, const JudgeOptions& options,
                          "precompute it with " + option("halves"));
     if (!labels_.empty() && labels_.size() != t.rows())
         throw std::invalid_argument("Judge: labels do not match the image size");
+    buildObjectives();
+}
+
+Judge::~Judge() = default;
+
+void Judge::buildObjectives() {
+    const TransportMatrix& t = estimate_->file.matrix;
+    eq2_ = std::make_unique<ImageObjective>(t.width, t.height, partMask(), options_.objective);
+    unbiased_ =
+        std::make_unique<UnbiasedObjective>(t.width, t.height, partMask(), options_.objective);
 }
 
 std::vector<double> Judge::envVector(const EnvMap& env) const {
@@ -85,11 +95,14 @@ JudgeScore Judge::score(std::span<const double> E, const std::string& name) cons
     const bool rgb = E.size() == 3 * t.cols();
     JudgeScore s;
     s.name = name;
-    const std::vector<uint8_t>& mask = partMask();
-    ImageObjective eq2(t.width, t.height, mask, options_.objective);
-    UnbiasedObjective unb(t.width, t.height, mask, options_.objective);
-    s.eq2 = TransportLoss(t, eq2, rgb).evaluate(E, {});
-    s.unbiased = TransportLoss(t, unb, rgb).evaluate(E, {});
+    if (E.size() != t.cols() && !rgb)
+        throw std::invalid_argument("Judge::score: E does not fit the judge's env-map grid");
+    // One pass for the mean image (eq. 2) and one for both halves (U and the visibility).
+    std::vector<double> y(t.rows()), ya(t.rows()), yb(t.rows());
+    t.applyLuminance(E, y);
+    t.applyLuminanceHalves(E, ya, yb);
+    s.eq2 = eq2_->evaluate(y, E);
+    s.unbiased = unbiased_->evaluate(ya, yb, E);
     double sum = 0;
     size_t dark = 0;
     for (double v : E) {
@@ -98,12 +111,8 @@ JudgeScore Judge::score(std::span<const double> E, const std::string& name) cons
     }
     s.meanE = E.empty() ? 0 : sum / static_cast<double>(E.size());
     s.sparsity = E.empty() ? 0 : static_cast<double>(dark) / static_cast<double>(E.size());
-    if (!labels_.empty()) {
-        std::vector<double> ya(t.rows()), yb(t.rows());
-        t.applyLuminance(E, ya, 0);
-        t.applyLuminance(E, yb, 1);
-        s.visibility = defectVisibility(t.width, t.height, ya, yb, mask, labels_, legend_);
-    }
+    if (!labels_.empty())
+        s.visibility = defectVisibility(t.width, t.height, ya, yb, partMask(), labels_, legend_);
     return s;
 }
 

@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <span>
@@ -35,6 +36,7 @@ namespace sl {
 
 struct Scene;
 struct EnvMap;
+class UnbiasedObjective;
 
 inline constexpr uint64_t kJudgeSeed = 0x6A75646765ULL << 24;  // "judge"
 inline constexpr int kJudgeDefaultSpp = 1024;
@@ -64,6 +66,7 @@ class Judge {
     /// Traces (or reads from options.cacheDir) the judge's estimate of `scene`, and projects
     /// options.truth into the image. Throws InputError for a mismatched truth mask.
     Judge(const Scene& scene, const JudgeOptions& options);
+    ~Judge();
     Judge(const Judge&) = delete;
     Judge& operator=(const Judge&) = delete;
     /// A judge on a given two-plane estimate that outlives it (optimize's held-out estimate,
@@ -90,6 +93,10 @@ class Judge {
     JudgeOptions options_;
     std::vector<uint8_t> labels_;
     std::vector<RegionLabel> legend_;
+    std::unique_ptr<ImageObjective> eq2_;          // eq. 2 on the part mask, built once
+    std::unique_ptr<UnbiasedObjective> unbiased_;  // U on the part mask, built once
+
+    void buildObjectives();
 };
 
 /// The judge's estimate for a scene (cached by fingerprint in cacheDir, traced otherwise).

@@ -110,7 +110,8 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
     if (!jo.truth.empty()) j["truth"] = jo.truth.string();
     j["lights"] = nlohmann::ordered_json::array();
     for (const JudgeScore& s : sum.scores) j["lights"].push_back(toJson(s));
-    writeTextAtomically(o.outDir / "judge.json", j.dump(2) + "\n");
+    sum.json = j.dump(2) + "\n";
+    writeTextAtomically(o.outDir / "judge.json", sum.json);
 
     std::ostringstream csv;
     csv.precision(10);

@@ -30,6 +30,7 @@ struct JudgeJobOptions {
 struct JudgeJobSummary {
     TransportSource estimate;
     std::vector<JudgeScore> scores;  // lights in the order given, then the references
+    std::string json;                // the text of judge.json
 };
 
 JudgeJobSummary runJudgeJob(const JudgeJobOptions& options);

@@ -12,8 +12,8 @@
 #include "app/Report.h"
 #include "app/Search.h"
 #include "app/Truth.h"
-#include "core/Stopwatch.h"
 #include "core/Error.h"
+#include "core/Stopwatch.h"
 #include "io/AtomicFile.h"
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
@@ -115,21 +115,47 @@ void writeRender(const std::filesystem::path& exr, const std::vector<double>& im
     writePng(png, img);
 }
 
-void resolveMethodPreset(OptimizeJobOptions& o) {
+namespace {
+
+/// Fills what was left to the defaults (method, budget, starts, planes) and expands the
+/// paper-loop method into the settings it stands for.
+void resolveDefaults(OptimizeJobOptions& o) {
     const OptimizeDefaults d = optimizeDefaults();
     if (o.optimizer.method.empty()) o.optimizer.method = d.method;
     if (o.optimizer.method == kPaperLoopMethod) {
         // The paper's loop on T: eq. 2, Adam, a fresh sample set (estimate of T) every step.
         o.objectiveKind = "paper";
         o.optimizer.method = "adam";
-        if (o.planes <= 1) o.planes = kPaperLoopPlanes;
+        if (o.planes == 0) o.planes = kPaperLoopPlanes;
         o.methodLabel = kPaperLoopMethod;
         if (o.starts.empty() && o.init.empty()) o.init = "const:0.5";  // the paper's E0
-        o.paperLoop = true;
     }
     if (o.starts.empty() && o.init.empty()) o.starts = d.starts;
     if (o.optimizer.iterations == 0) o.optimizer.iterations = defaultBudget(o.optimizer.method);
-    if (o.planes < 1) o.planes = 1;
+    if (o.planes == 0) o.planes = 1;
+}
+
+OptimizeJobSummary runResolved(const OptimizeJobOptions& o);
+
+}  // namespace
+
+std::vector<std::string> optimizePresets() {
+    return {"paper"};
+}
+
+void applyOptimizePreset(const std::string& name, OptimizeJobOptions& o) {
+    if (name != "paper")
+        throw inputError(option("preset"), "unknown preset '" + name + "'", "use paper");
+    o.optimizer.method = kPaperLoopMethod;
+    o.optimizer.iterations = 100;
+    o.optimizer.learningRate = 0.02;
+    o.lambdas = {30.0};
+    o.objective.reg = RegTarget::EnvMap;
+    o.init = "const:0.5";
+    o.objectiveKind = "paper";
+    o.starts.clear();
+    o.continuation.clear();
+    o.planes = 100;
 }
 
 OptimizeDefaults optimizeDefaults() {
@@ -140,8 +166,6 @@ int defaultBudget(const std::string& method) {
     return method == "adam" || method == "fd-adam" || method == "spsa" ? 100 : 2000;
 }
 
-OptimizeJobSummary runResolved(const OptimizeJobOptions& o);
-
 OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
     if (o.lambdas.empty()) throw inputError(option("lambda"), "no value given");
     for (double l : o.lambdas)
@@ -150,9 +174,11 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
                              "give e.g. 30, or 10,30,100 for a sweep");
 
     OptimizeJobOptions resolved = o;
-    resolveMethodPreset(resolved);
+    resolveDefaults(resolved);
     return runResolved(resolved);
 }
+
+namespace {
 
 OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
     // The objective: as given; by default the noise-unbiased one, except for a .tm without
@@ -192,7 +218,7 @@ OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
         p.rgb = o.rgb;
         if (unbiased) p.sampleSets = 2;
         // eq. 2 rewards noise: without --spp it trains at no fewer than kPaperMinSpp.
-        if (!unbiased && !p.spp && !o.paperLoop)
+        if (!unbiased && !p.spp && o.methodLabel != kPaperLoopMethod)
             p.spp = std::max(scene->desc.render.spp, optimizeDefaults().paperMinSpp);
         std::vector<TransportSource> set = transportSetForScene(*scene, p, o.planes, cacheDir);
         job.transport = std::move(set.front());
@@ -494,5 +520,7 @@ OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
     }
     return job;
 }
+
+}  // namespace
 
 }  // namespace sl

@@ -61,11 +61,10 @@ struct OptimizeJobOptions {
     PrecomputeOptions precompute;  // used when input is a scene
     // The search (app/Search.h). planes: independent estimates of T cycled per step;
     // starts: multistart (empty: {init}); continuation: λ factors before λ.
-    int planes = 1;
+    int planes = 0;  // 0: the method's (1; paper-loop kPaperLoopPlanes)
     std::vector<std::string> starts;
     std::vector<double> continuation;
     std::string methodLabel;  // set by method presets (paper-loop): the name reported
-    bool paperLoop = false;   // set by the paper-loop preset: trains at the scene's spp
 };
 
 /// optimize's defaults, chosen by `scratchlight bench race` (README "Defaults, chosen by a
@@ -80,6 +79,12 @@ struct OptimizeDefaults {
     int paperMinSpp = 256;
 };
 OptimizeDefaults optimizeDefaults();
+/// Presets: settings fixed together. "paper": the paper's experiment exactly (eq. 2, λ 30 on
+/// mean(E²), E0 = 0.5, Adam lr 0.02 × 100, a fresh sample set of the scene's spp every
+/// iteration: 100 estimates of T). Throws InputError naming option 'preset' for another name.
+std::vector<std::string> optimizePresets();
+void applyOptimizePreset(const std::string& name, OptimizeJobOptions& options);
+
 /// Budget when none is given: adam, fd-adam, spsa 100 steps; NLopt/Ceres methods 2000.
 int defaultBudget(const std::string& method);
 

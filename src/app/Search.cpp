@@ -4,8 +4,8 @@
 #include <memory>
 
 #include "app/InitialState.h"
-#include "core/Stopwatch.h"
 #include "core/Error.h"
+#include "core/Stopwatch.h"
 #include "objective/TransportLoss.h"
 #include "objective/UnbiasedObjective.h"
 

@@ -6,8 +6,8 @@
 
 #include "app/HeldOut.h"
 #include "app/Judge.h"
-#include "core/Stopwatch.h"
 #include "core/Error.h"
+#include "core/Stopwatch.h"
 #include "io/SceneFile.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
@@ -17,10 +17,8 @@ namespace sl {
 
 namespace {
 
-
 TransportSource trace(const Scene& scene, const RenderOptions& ro, const TransportProvenance& prov,
-                      bool rgb, const std::filesystem::path& out,
-                      const Stopwatch& clock) {
+                      bool rgb, const std::filesystem::path& out, const Stopwatch& clock) {
     PrecomputeResult r = precomputeTransport(scene, ro, rgb ? 3 : 1);
     TransportSource s;
     s.secondsTrace = r.summary.seconds;

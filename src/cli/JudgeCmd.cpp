@@ -2,9 +2,7 @@
 //                   [--lambda 30] [--json FILE] [--no-references] [-o DIR]
 // Scores env maps on the judge's independent estimate (app/Judge.h) and prints a table.
 #include <cstdio>
-#include <fstream>
 #include <memory>
-#include <sstream>
 
 #include "app/JudgeJob.h"
 #include "cli/Commands.h"
@@ -37,16 +35,7 @@ int runJudge(const JudgeArgs& a) {
     std::printf(
         "lower eq2 and U are better; visibility: RMS gradient in the region over the "
         "defect-free surface's\n");
-    if (!a.json.empty()) {
-        std::filesystem::path src = o.outDir / "judge.json";
-        std::filesystem::path dst = a.json;
-        if (std::filesystem::absolute(dst) != std::filesystem::absolute(src)) {
-            std::ifstream in(src);
-            std::stringstream text;
-            text << in.rdbuf();
-            writeTextAtomically(dst, text.str());
-        }
-    }
+    if (!a.json.empty()) writeTextAtomically(a.json, s.json);
     std::printf("wrote %s/ (judge.json, judge.csv, renders.exr, renders.png)\n",
                 o.outDir.string().c_str());
     return kOk;

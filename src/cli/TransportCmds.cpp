@@ -100,21 +100,10 @@ struct OptimizeArgs {
 };
 
 int runOptimize(OptimizeArgs a) {
-    if (a.preset == "paper") {
-        a.job.optimizer.method = kPaperLoopMethod;
-        a.job.optimizer.iterations = 100;
-        a.job.optimizer.learningRate = 0.02;
-        a.job.lambdas = {30.0};
-        a.job.init = "const:0.5";
-        a.job.objectiveKind = "paper";
-        a.job.starts.clear();
-        a.job.continuation.clear();
-        a.job.planes = 100;
-        a.reg = "envmap";
-    }
     a.job.input = a.input;
     a.job.outDir = a.out;
     a.job.objective.reg = a.reg == "image" ? RegTarget::Image : RegTarget::EnvMap;
+    if (!a.preset.empty()) applyOptimizePreset(a.preset, a.job);
     a.job.precompute.progress = progressBar("precompute");
     OptimizeJobSummary s = runOptimizeJob(a.job);
     printTransport(s.transport);
@@ -251,9 +240,8 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
             ->capture_default_str();
         c->add_option("--planes", j.planes,
                       "Independent estimates of T (seeds seed+k) cycled by the optimizer, one "
-                      "per step (stochastic, as the paper's loop)")
-            ->check(CLI::Range(1, 1000))
-            ->capture_default_str();
+                      "per step (stochastic, as the paper's loop; default 1, paper-loop 8)")
+            ->check(CLI::Range(1, 1000));
         c->add_option("--starts", j.starts,
                       "Multistart: optimize from each and keep the lowest training loss "
                       "(const:V, random:SEED, envmap:FILE, specular, studio)")
@@ -265,7 +253,7 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
                       "paper: the paper's experiment exactly (eq. 2, lambda 30, E0 = 0.5, Adam lr "
                       "0.02 x 100, a fresh sample set of the scene's spp every iteration: 100 "
                       "estimates of T); fixes those settings")
-            ->check(CLI::IsMember({"paper"}));
+            ->check(CLI::IsMember(optimizePresets()));
         addTraceOptions(c, j.precompute);
         c->add_option("-o,--output", a->out, "Output directory")->capture_default_str();
         c->callback([a, &run] { run = [a] { return runOptimize(*a); }; });

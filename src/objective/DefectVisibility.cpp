@@ -11,23 +11,24 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-/// Chebyshev dilation of a binary image by r pixels (separable max filter).
+/// Max filter of radius r along one axis: `count` lines of `length` pixels, consecutive pixels
+/// `step` apart, consecutive lines `lineStep` apart.
+void maxAlong(const std::vector<uint8_t>& in, std::vector<uint8_t>& out, size_t count,
+              size_t lineStep, int length, size_t step, int r) {
+    for (size_t l = 0; l < count; ++l)
+        for (int i = 0; i < length; ++i) {
+            uint8_t m = 0;
+            for (int d = std::max(0, i - r); d <= std::min(length - 1, i + r) && !m; ++d)
+                m = in[l * lineStep + static_cast<size_t>(d) * step];
+            out[l * lineStep + static_cast<size_t>(i) * step] = m;
+        }
+}
+
+/// Chebyshev dilation of a binary image by r pixels (separable: rows, then columns).
 std::vector<uint8_t> dilate(const std::vector<uint8_t>& in, int w, int h, int r) {
-    std::vector<uint8_t> tmp(in.size(), 0), out(in.size(), 0);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            uint8_t m = 0;
-            for (int d = std::max(0, x - r); d <= std::min(w - 1, x + r) && !m; ++d)
-                m = in[static_cast<size_t>(y) * w + d];
-            tmp[static_cast<size_t>(y) * w + x] = m;
-        }
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            uint8_t m = 0;
-            for (int d = std::max(0, y - r); d <= std::min(h - 1, y + r) && !m; ++d)
-                m = tmp[static_cast<size_t>(d) * w + x];
-            out[static_cast<size_t>(y) * w + x] = m;
-        }
+    std::vector<uint8_t> rows(in.size()), out(in.size());
+    maxAlong(in, rows, static_cast<size_t>(h), static_cast<size_t>(w), w, 1, r);
+    maxAlong(rows, out, static_cast<size_t>(w), 1, h, static_cast<size_t>(w), r);
     return out;
 }
 

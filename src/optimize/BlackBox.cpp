@@ -9,10 +9,10 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "core/Text.h"
-#include "core/Stopwatch.h"
 #include "core/Color.h"
 #include "core/Error.h"
+#include "core/Stopwatch.h"
+#include "core/Text.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
 
@@ -25,7 +25,6 @@ class NullSink : public PathSink {
   public:
     void consume(const PixelPaths&) override {}
 };
-
 
 /// Runs f(j) for j in [0, n) on `threads` workers (0: all cores), one task per j.
 template <typename F>
@@ -280,7 +279,8 @@ void validateCommon(const RenderLoss& loss, const std::vector<double>& E,
 
 std::string fdSettings(const FdOptions& fd) {
     return std::string("finite differences: ") + (fd.central ? "central" : "forward") + ", h " +
-           formatNumber(fd.h) + ", " + (fd.commonRandomNumbers ? "common random numbers" : "fresh seeds");
+           formatNumber(fd.h) + ", " +
+           (fd.commonRandomNumbers ? "common random numbers" : "fresh seeds");
 }
 
 OptimizerSummary minimizeFdAdam(const RenderLoss& loss, std::vector<double>& E,
@@ -385,8 +385,9 @@ OptimizerSummary minimizeSpsa(const RenderLoss& loss, std::vector<double>& E,
         a = meanAbs > 0 ? options.learningRate * std::pow(A + 1.0, sp.alpha) / meanAbs
                         : options.learningRate;
     }
-    s.settings = "a " + formatNumber(a) + (sp.a <= 0 ? " (calibrated)" : "") + ", c " + formatNumber(sp.c) + ", A " +
-                 formatNumber(A) + ", alpha " + formatNumber(sp.alpha) + ", gamma " + formatNumber(sp.gamma) + ", q " +
+    s.settings = "a " + formatNumber(a) + (sp.a <= 0 ? " (calibrated)" : "") + ", c " +
+                 formatNumber(sp.c) + ", A " + formatNumber(A) + ", alpha " +
+                 formatNumber(sp.alpha) + ", gamma " + formatNumber(sp.gamma) + ", q " +
                  std::to_string(sp.q) + ", " +
                  (sp.commonRandomNumbers ? "common random numbers" : "fresh seeds") +
                  ", E projected to [0, 1]; evaluations = renders";

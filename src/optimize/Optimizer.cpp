@@ -199,9 +199,8 @@ void minimizeAdam(detail::Run& run, std::vector<double>& x) {
     const double lo = run.problem().lower, hi = run.problem().upper;
     const size_t n = x.size();
     run.summary.settings = "lr " + formatNumber(o.learningRate) + ", beta1 " +
-                           formatNumber(o.beta1) + ", beta2 " +
-                           formatNumber(o.beta2) + ", epsilon " +
-                           formatNumber(o.epsilon) + ", x clamped after every step";
+                           formatNumber(o.beta1) + ", beta2 " + formatNumber(o.beta2) +
+                           ", epsilon " + formatNumber(o.epsilon) + ", x clamped after every step";
     std::vector<double> g(n), m(n, 0.0), v(n, 0.0);
     for (int t = 1; t <= o.iterations; ++t) {
         const double loss = run.evaluate(x, g, false);  // at x_{t-1}

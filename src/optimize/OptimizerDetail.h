@@ -77,7 +77,6 @@ inline double clampTo(double v, double lo, double hi) {
     return v < lo ? lo : (v > hi ? hi : v);
 }
 
-
 // The methods. Each starts from x (clamped, validated; nothing recorded yet), records the
 // initial point and every iteration through run, leaves the returned point in x and sets
 // run.summary.termination / failed / settings. Run::finish() is called by minimize().

@@ -12,8 +12,8 @@
 #include <string>
 
 #include "core/Error.h"
-#include "core/Text.h"
 #include "core/Rng.h"
+#include "core/Text.h"
 
 namespace sl {
 namespace {
@@ -26,7 +26,6 @@ constexpr uint64_t kScratchStream = 0x7363726174636831ULL;
 constexpr uint64_t kGougeStream = 0x676f756765303031ULL;
 constexpr uint64_t kRoughStream = 0x726f756768303031ULL;
 constexpr uint64_t kPathStream = 0x7061746873303031ULL;
-
 
 void require(bool ok, const std::string& field, const std::string& problem,
              const std::string& fix) {
@@ -93,10 +92,10 @@ void validate(const SurfaceSpec& s) {
             "Use a map of at least 2x2 samples");
     require(s.height >= 2, "height", "must be at least 2 samples, got " + std::to_string(s.height),
             "Use a map of at least 2x2 samples");
-    require(
-        static_cast<double>(s.width) * s.height <= 2.0e9, "width",
-        "width*height = " + formatNumber(static_cast<double>(s.width) * s.height) + " samples is too large",
-        "Keep width*height at or below 2e9");
+    require(static_cast<double>(s.width) * s.height <= 2.0e9, "width",
+            "width*height = " + formatNumber(static_cast<double>(s.width) * s.height) +
+                " samples is too large",
+            "Keep width*height at or below 2e9");
     requireFinite(s.pitch, "pitch");
     require(s.pitch > 0, "pitch", "must be > 0 mm, got " + formatNumber(s.pitch),
             "Set the sample spacing in mm, e.g. 0.01");
@@ -107,24 +106,28 @@ void validate(const SurfaceSpec& s) {
     require(s.stepover > 0, "stepover", "must be > 0 mm, got " + formatNumber(s.stepover),
             "Set the spacing of the tool paths in mm");
     require(s.stepover < 2 * s.toolRadius, "stepover",
-            "must be < 2*toolRadius = " + formatNumber(2 * s.toolRadius) + " mm, got " + formatNumber(s.stepover),
+            "must be < 2*toolRadius = " + formatNumber(2 * s.toolRadius) + " mm, got " +
+                formatNumber(s.stepover),
             "Paths further apart than the tool's diameter leave uncut material");
     requireFinite(s.pathOffset, "pathOffset");
     requireFinite(s.rasterAngleDeg, "rasterAngleDeg");
     requireFinite(s.feedPerTooth, "feedPerTooth");
-    require(s.feedPerTooth >= 0, "feedPerTooth", "must be >= 0 mm, got " + formatNumber(s.feedPerTooth),
+    require(s.feedPerTooth >= 0, "feedPerTooth",
+            "must be >= 0 mm, got " + formatNumber(s.feedPerTooth),
             "Set the feed per tooth in mm (0 disables ball-end feed marks)");
     if (s.process == SurfaceSpec::Process::BallEndRaster && s.ballFeedMarks) {
         double hs = 0.5 * s.stepover, hf = 0.5 * s.feedPerTooth;
         require(hs * hs + hf * hf < s.toolRadius * s.toolRadius, "feedPerTooth",
-                "with stepover " + formatNumber(s.stepover) + " mm the ball of radius " + formatNumber(s.toolRadius) +
-                    " mm leaves uncut material at feed " + formatNumber(s.feedPerTooth) + " mm",
+                "with stepover " + formatNumber(s.stepover) + " mm the ball of radius " +
+                    formatNumber(s.toolRadius) + " mm leaves uncut material at feed " +
+                    formatNumber(s.feedPerTooth) + " mm",
                 "Reduce feedPerTooth or stepover, or set ballFeedMarks = false");
     }
     if (s.process == SurfaceSpec::Process::FaceMillFeed) {
         requireFinite(s.insertNoseRadius, "insertNoseRadius");
         require(s.insertNoseRadius > 0, "insertNoseRadius",
-                "must be > 0 mm, got " + formatNumber(s.insertNoseRadius), "Typical inserts: 0.4-1.2 mm");
+                "must be > 0 mm, got " + formatNumber(s.insertNoseRadius),
+                "Typical inserts: 0.4-1.2 mm");
         require(s.feedPerTooth > 0 && s.feedPerTooth < 2 * s.insertNoseRadius, "feedPerTooth",
                 "must be in (0, 2*insertNoseRadius = " + formatNumber(2 * s.insertNoseRadius) +
                     ") mm for a face mill, got " + formatNumber(s.feedPerTooth),
@@ -139,13 +142,14 @@ void validate(const SurfaceSpec& s) {
             "Use 0 for chatter everywhere, 0.5 for the right half");
     if (s.chatterAmplitude > 0) {
         requireFinite(s.chatterWavelength, "chatterWavelength");
-        require(s.chatterWavelength > 0, "chatterWavelength",
-                "must be > 0 mm when chatterAmplitude > 0, got " + formatNumber(s.chatterWavelength),
-                "Set the chatter wavelength in mm, or chatterAmplitude = 0");
+        require(
+            s.chatterWavelength > 0, "chatterWavelength",
+            "must be > 0 mm when chatterAmplitude > 0, got " + formatNumber(s.chatterWavelength),
+            "Set the chatter wavelength in mm, or chatterAmplitude = 0");
     }
     requireFinite(s.roughnessRms, "roughnessRms");
-    require(s.roughnessRms >= 0, "roughnessRms", "must be >= 0 mm, got " + formatNumber(s.roughnessRms),
-            "Use 0 to disable roughness");
+    require(s.roughnessRms >= 0, "roughnessRms",
+            "must be >= 0 mm, got " + formatNumber(s.roughnessRms), "Use 0 to disable roughness");
     if (s.roughnessRms > 0) {
         requireFinite(s.roughnessCorrelation, "roughnessCorrelation");
         require(s.roughnessCorrelation > 0, "roughnessCorrelation",
@@ -159,10 +163,12 @@ void validate(const SurfaceSpec& s) {
         if (s.scratchCount > 0) {
             requireFinite(s.scratchDepth, "scratchDepth");
             require(s.scratchDepth >= 0, "scratchDepth",
-                    "must be >= 0 mm, got " + formatNumber(s.scratchDepth), "Scratch depths are in mm");
+                    "must be >= 0 mm, got " + formatNumber(s.scratchDepth),
+                    "Scratch depths are in mm");
             requireFinite(s.scratchWidth, "scratchWidth");
             require(s.scratchWidth > 0, "scratchWidth",
-                    "must be > 0 mm, got " + formatNumber(s.scratchWidth), "Scratch widths are in mm");
+                    "must be > 0 mm, got " + formatNumber(s.scratchWidth),
+                    "Scratch widths are in mm");
         }
     }
     for (size_t n = 0; n < s.scratches.size(); ++n) {
@@ -184,10 +190,11 @@ void validate(const SurfaceSpec& s) {
                 "Use 0 for no gouges");
         if (s.gougeCount > 0) {
             requireFinite(s.gougeDepth, "gougeDepth");
-            require(s.gougeDepth >= 0, "gougeDepth", "must be >= 0 mm, got " + formatNumber(s.gougeDepth),
-                    "Gouge depths are in mm");
+            require(s.gougeDepth >= 0, "gougeDepth",
+                    "must be >= 0 mm, got " + formatNumber(s.gougeDepth), "Gouge depths are in mm");
             requireFinite(s.gougeLength, "gougeLength");
-            require(s.gougeLength > 0, "gougeLength", "must be > 0 mm, got " + formatNumber(s.gougeLength),
+            require(s.gougeLength > 0, "gougeLength",
+                    "must be > 0 mm, got " + formatNumber(s.gougeLength),
                     "Gouge lengths are in mm");
         }
     }
@@ -202,15 +209,16 @@ void validate(const SurfaceSpec& s) {
     }
     if (s.pocketEdge) {
         requireFinite(s.pocketDepth, "pocketDepth");
-        require(s.pocketDepth >= 0, "pocketDepth", "must be >= 0 mm, got " + formatNumber(s.pocketDepth),
+        require(s.pocketDepth >= 0, "pocketDepth",
+                "must be >= 0 mm, got " + formatNumber(s.pocketDepth),
                 "The pocket floor is pocketDepth below the top");
         requireFinite(s.pocketWallFraction, "pocketWallFraction");
         require(s.pocketWallFraction > 0 && s.pocketWallFraction < 1, "pocketWallFraction",
                 "must be in (0, 1), got " + formatNumber(s.pocketWallFraction),
                 "It is the fraction of the map width (in +x) that is pocket floor");
         requireFinite(s.cornerRadius, "cornerRadius");
-        require(s.cornerRadius >= 0, "cornerRadius", "must be >= 0 mm, got " + formatNumber(s.cornerRadius),
-                "Use 0 for a sharp step");
+        require(s.cornerRadius >= 0, "cornerRadius",
+                "must be >= 0 mm, got " + formatNumber(s.cornerRadius), "Use 0 for a sharp step");
     }
 }
 
@@ -430,11 +438,12 @@ struct Roughness {
 
 double scallopHeight(double stepover, double ballRadius) {
     if (!(std::isfinite(ballRadius) && ballRadius > 0))
-        throw inputError("scallopHeight: ballRadius", "must be > 0 mm, got " + formatNumber(ballRadius));
+        throw inputError("scallopHeight: ballRadius",
+                         "must be > 0 mm, got " + formatNumber(ballRadius));
     if (!(std::isfinite(stepover) && stepover >= 0 && stepover <= 2 * ballRadius))
-        throw inputError(
-            "scallopHeight: stepover",
-            "must be in [0, 2*ballRadius = " + formatNumber(2 * ballRadius) + "] mm, got " + formatNumber(stepover));
+        throw inputError("scallopHeight: stepover",
+                         "must be in [0, 2*ballRadius = " + formatNumber(2 * ballRadius) +
+                             "] mm, got " + formatNumber(stepover));
     double a = 0.5 * stepover;
     return sphereRise(ballRadius, a * a);
 }

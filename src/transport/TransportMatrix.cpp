@@ -200,8 +200,7 @@ void TransportMatrix::applyTransposeLuminance(std::span<const double> g, std::sp
 void TransportMatrix::applyLuminanceHalves(std::span<const double> E, std::span<double> Ya,
                                            std::span<double> Yb) const {
     if (planes != 2) throw std::invalid_argument("applyLuminanceHalves: T has no halves");
-    const bool rgbE =
-        checkE(*this, E.size(), "TransportMatrix::applyLuminanceHalves") == EKind::Rgb;
+    checkE(*this, E.size(), "TransportMatrix::applyLuminanceHalves");
     if (Ya.size() != rows() || Yb.size() != rows())
         throw std::invalid_argument("applyLuminanceHalves: Y size != rows");
     if (channels != 1 || storage != TransportStorage::Sparse) {
@@ -209,7 +208,7 @@ void TransportMatrix::applyLuminanceHalves(std::span<const double> E, std::span<
         applyLuminance(E, Yb, 1);
         return;
     }
-    (void)rgbE;  // gray T: E is gray
+    // A gray T (checkE refuses an RGB E for it): E holds one value per texel.
     const double* e = E.data();
     const uint16_t* col = colIdx.data();
     const float* v = values.data();
