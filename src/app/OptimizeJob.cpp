@@ -293,9 +293,12 @@ OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
     const std::vector<std::string> starts =
         o.starts.empty() ? std::vector<std::string>{o.init} : o.starts;
     const int maxDepth = job.transport.file.provenance.maxDepth;
-    // E0: the first start (the report's "before").
-    const std::vector<double> e0 =
-        initialEnvMap(starts.front(), t.envWidth, t.envHeight, o.rgb, scene.get(), maxDepth);
+    // Every start's E0, once for every λ; the first is the report's "before".
+    std::vector<std::vector<double>> startValues;
+    for (const std::string& spec : starts)
+        startValues.push_back(
+            initialEnvMap(spec, t.envWidth, t.envHeight, o.rgb, scene.get(), maxDepth));
+    const std::vector<double>& e0 = startValues.front();
     LabelMask truthLabels;  // the judge's regions
     if (job.heldOut && !o.truth.empty()) truthLabels = projectTruth(*scene, o.truth);
     // E0's render and metrics do not depend on λ: computed once for every run.
@@ -374,6 +377,7 @@ OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
             in.rgb = o.rgb;
             in.scene = scene.get();
             in.maxDepth = maxDepth;
+            in.startValues = startValues;
             in.callback = callback;
             SearchOptions so;
             so.objective = unbiased ? ObjectiveKind::Unbiased : ObjectiveKind::Paper;

@@ -47,7 +47,10 @@ struct StageLosses {
         }
         cycling = std::make_unique<CyclingLoss>(ptrs);
     }
+    /// The problem of one run; every run starts its cycle at the first estimate, so a start's
+    /// result does not depend on the starts before it.
     Problem problem(LossParts* last) {
+        cycling->restart();
         return losses.size() == 1 ? losses.front()->problem(last) : cycling->problem(last);
     }
     LossParts value(std::span<const double> e) { return cycling->evaluate(e, {}); }
@@ -56,13 +59,14 @@ struct StageLosses {
 }  // namespace
 
 SearchResult search(const SearchInputs& in, const SearchOptions& o) {
-    if (o.planes < 1) throw inputError("planes", "must be >= 1", "use 1 for one T");
+    if (o.planes < 1) throw inputError(option("planes"), "must be >= 1", "use 1 for one T");
     if (in.set.size() < static_cast<size_t>(o.planes))
         throw std::invalid_argument("search: fewer estimates of T than planes");
-    if (o.starts.empty()) throw inputError("starts", "no start given", "use e.g. const:0.5");
+    if (o.starts.empty())
+        throw inputError(option("starts"), "no start given", "use e.g. const:0.5");
     for (double f : o.continuation)
         if (!(f > 0) || !std::isfinite(f))
-            throw inputError("continuation", "λ factors must be > 0", "use e.g. 4,2");
+            throw inputError(option("continuation"), "λ factors must be > 0", "use e.g. 4,2");
     const Stopwatch clock;
     const TransportMatrix& t = *in.set.front();
     const auto count = static_cast<size_t>(o.planes);
@@ -76,10 +80,14 @@ SearchResult search(const SearchInputs& in, const SearchOptions& o) {
     best.training.total = std::numeric_limits<double>::infinity();
     int iterationBase = 0, evaluations = 0, iterations = 0;
     bool stopped = false;
-    for (const std::string& start : o.starts) {
-        if (stopped) break;
+    if (!in.startValues.empty() && in.startValues.size() != o.starts.size())
+        throw std::invalid_argument("search: startValues do not match the starts");
+    for (size_t k = 0; k < o.starts.size() && !stopped; ++k) {
+        const std::string& start = o.starts[k];
         std::vector<double> e =
-            initialEnvMap(start, t.envWidth, t.envHeight, in.rgb, in.scene, in.maxDepth);
+            in.startValues.empty()
+                ? initialEnvMap(start, t.envWidth, t.envHeight, in.rgb, in.scene, in.maxDepth)
+                : in.startValues[k];
         OptimizerSummary last;
         for (double factor : stages) {
             ObjectiveOptions oo = in.objective;

@@ -48,6 +48,9 @@ struct SearchInputs {
     bool rgb = false;              // E has 3 values per texel
     const Scene* scene = nullptr;  // the `specular` start needs it
     int maxDepth = 0;              // ... and the path length of T
+    /// E0 of every start in options.starts' order, when the caller has them already (empty:
+    /// resolved here from the specs).
+    std::vector<std::vector<double>> startValues;
     /// Sees every iteration of every start and stage (IterationRecord::iteration counts on
     /// across them); returning false stops the search.
     std::function<bool(const IterationRecord&, std::span<const double> x)> callback;

@@ -62,6 +62,8 @@ class CyclingLoss {
     /// Loss parts; fills grad (and advances to the next estimate) when grad is non-empty.
     LossParts evaluate(std::span<const double> E, std::span<double> grad);
     Problem problem(LossParts* last = nullptr);
+    /// The next gradient evaluation uses the first estimate again.
+    void restart() { next_ = 0; }
 
   private:
     std::vector<const TransportLoss*> losses_;
