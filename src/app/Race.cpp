@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "app/Judge.h"
+#include "app/OptimizeJob.h"
 #include "app/PartFiles.h"
 #include "app/Transport.h"
 #include "core/Error.h"
@@ -16,7 +17,6 @@
 #include "core/Stopwatch.h"
 #include "io/AtomicFile.h"
 #include "io/SceneFile.h"
-#include "objective/ImageSpace.h"
 #include "scene/Scene.h"
 
 namespace sl {
@@ -62,7 +62,7 @@ SurfaceSpec partSpec(const std::string& name) {
         s.stepover = 0.3;
         s.rasterAngleDeg = 30.0;
     } else {
-        throw inputError("race part", "unknown part '" + name + "'",
+        throw inputError(option("parts"), "unknown part '" + name + "'",
                          "use ballend-chatter, facemill-scratches or pocket");
     }
     return s;
@@ -110,8 +110,12 @@ std::vector<RaceConfig> defaultRaceConfigs() {
     c.push_back(config("unbiased-adam-planes8", K::Unbiased, "adam", 300, 16, 8));
     c.push_back(config("unbiased-lbfgs-16", K::Unbiased, "lbfgs", 2000, 16));
     c.push_back(config("unbiased-lbfgs-32", K::Unbiased, "lbfgs", 2000, 32));
-    c.push_back(
-        config("unbiased-lbfgs-16-specular", K::Unbiased, "lbfgs", 2000, 16, 1, {"specular"}));
+    // optimize's defaults (app/OptimizeJob.h optimizeDefaults), for each objective.
+    const OptimizeDefaults d = optimizeDefaults();
+    c.push_back(config("default-unbiased", K::Unbiased, d.method, defaultBudget(d.method), 16, 1,
+                       d.starts));
+    c.push_back(config("default-paper", K::Paper, d.method, defaultBudget(d.method),
+                       d.paperMinSpp, 1, d.starts));
     c.push_back(config("unbiased-lbfgs-16-multistart", K::Unbiased, "lbfgs", 2000, 16, 1,
                        {"const:0.5", "specular", "studio"}));
     c.push_back(config("unbiased-lbfgs-16-continuation", K::Unbiased, "lbfgs", 2000, 16, 1,
@@ -121,8 +125,8 @@ std::vector<RaceConfig> defaultRaceConfigs() {
 }
 
 RaceSummary runRace(const RaceOptions& o) {
-    if (o.seeds < 1) throw inputError("race seeds", "must be >= 1");
-    if (o.configs.empty()) throw inputError("race configs", "none given");
+    if (o.seeds < 1) throw inputError(option("seeds"), "must be >= 1");
+    if (o.configs.empty()) throw inputError(option("configs"), "none given");
     auto log = [&](const std::string& s) {
         if (o.log) o.log(s);
     };
@@ -146,7 +150,6 @@ RaceSummary runRace(const RaceOptions& o) {
         jo.cacheDir = cacheDir;
         log(partName + ": judge estimate (" + std::to_string(o.judgeSpp) + " spp)");
         const Judge judge(*scene, jo);
-        const std::vector<uint8_t>& mask = judge.estimate().file.matrix.objectMask;
 
         for (int seed = 0; seed < o.seeds; ++seed) {
             std::vector<RaceRow> rows;
@@ -166,7 +169,7 @@ RaceSummary runRace(const RaceOptions& o) {
                 r.secondsPrecompute = precompute.seconds();
                 SearchInputs in;
                 for (const auto& s : set) in.set.push_back(&s.file.matrix);
-                in.mask = intersectMasks(set.front().file.matrix.objectMask, mask);
+                in.mask = set.front().file.matrix.objectMask;  // as optimize: T's part mask
                 in.objective.lambda = o.lambda;
                 in.scene = scene.get();
                 in.maxDepth = set.front().file.provenance.maxDepth;
