@@ -217,7 +217,7 @@ OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
         PrecomputeOptions p = o.precompute;
         p.rgb = o.rgb;
         if (unbiased) p.sampleSets = 2;
-        // eq. 2 rewards noise: without --spp it trains at no fewer than kPaperMinSpp.
+        // eq. 2 rewards noise: without a given spp it trains at no fewer than paperMinSpp.
         if (!unbiased && !p.spp && o.methodLabel != kPaperLoopMethod)
             p.spp = std::max(scene->desc.render.spp, optimizeDefaults().paperMinSpp);
         std::vector<TransportSource> set = transportSetForScene(*scene, p, o.planes, cacheDir);

@@ -213,7 +213,7 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         c->add_flag("--rgb", j.rgb, "Optimize an RGB env map (needs/creates an RGB T)");
         c->add_flag("--smooth-abs", j.objective.smoothAbs, "Use sqrt(x²+ε²)−ε for |x|");
         c->add_option("--objective", j.objectiveKind,
-                      "paper: eq. 2 on T (trained at >= 256 spp unless --spp); unbiased (default; "
+                      "paper: eq. 2 on T (trained at >= 512 spp unless --spp); unbiased (default; "
                       "paper for a .tm without halves): products of differences of two "
                       "independent half-sample images (noise-unbiased)")
             ->check(CLI::IsMember({"paper", "unbiased"}));
