@@ -16,9 +16,13 @@
 
 namespace sl {
 
-/// A region mask from a PNG/EXR in image space, checked against the image size. Inside = first
-/// channel > 0.5 after readImage's decoding (a white-ish PNG pixel, 1.0 in an EXR); the result
-/// holds 255 inside, 0 outside. Throws InputError naming the file (also when it is empty).
+/// A region mask from a PNG/EXR in image space, checked against the image size. Read with
+/// readImage (linear float, any OIIO format; an 8-bit PNG without a colour-space tag is
+/// sRGB-decoded, one written by writeMaskPng is tagged linear and read verbatim), so inside means
+/// a byte ≥ 188 under sRGB decoding, ≥ 128 if linear, 1.0 in an EXR; other channels are ignored.
+/// Inside = first channel > 0.5 after readImage's decoding (a white-ish PNG pixel, 1.0 in an EXR);
+/// the result holds 255 inside, 0 outside. Throws InputError naming the file (also when it is
+/// empty).
 std::vector<uint8_t> loadImageMask(const std::filesystem::path& file, int width, int height);
 
 /// A mask file in HEIGHT-MAP space: mapWidth×mapHeight pixels, inside = first channel > 0.5

@@ -53,12 +53,7 @@
 // huge inputs) throws std::range_error: no NaN leaves silently. On a throw, the output spans
 // hold unspecified values. An empty mask, a mask of the wrong size, a non-positive size or bad
 // options (λ < 0 or not finite, smooth ε ≤ 0) are InputErrors from the constructor.
-//
-// Masks from files (loadImageMask): read with sl::readImage (linear float, any OIIO format; an
-// 8-bit PNG without a colour-space tag is sRGB-decoded, one written by writeMaskPng is tagged
-// linear and read verbatim). Inside = first channel > 0.5 after decoding, i.e. a white-ish PNG
-// pixel (byte ≥ 188 under sRGB decoding, ≥ 128 if linear), 1.0 in an EXR. Other channels
-// (colour, alpha) are ignored.
+
 #include "objective/Objective.h"
 
 #include <algorithm>
