@@ -31,12 +31,14 @@ def main():
                  "is it the output directory of `scratchlight optimize`?")
     with open(os.path.join(a.outdir, "summary.json")) as f:
         s = json.load(f)
-    it, loss, lgrad = [], [], []
+    it, loss, git, lgrad = [], [], [], []
     with open(os.path.join(a.outdir, "loss.csv")) as f:
         for row in csv.DictReader(f):
             it.append(int(row["iteration"]))
             loss.append(float(row["loss"]))
-            lgrad.append(float(row["L_grad"]))
+            if row["L_grad"]:  # written every --heldout-every rows
+                git.append(int(row["iteration"]))
+                lgrad.append(float(row["L_grad"]))
 
     fig = plt.figure(figsize=(16, 4.6))
     gs = fig.add_gridspec(1, 4, width_ratios=[1, 1, 1.6, 1.2])
@@ -54,7 +56,7 @@ def main():
     ax.axis("off")
     ax = fig.add_subplot(gs[0, 3])
     ax.plot(it, loss, label="loss")
-    ax.plot(it, lgrad, label="L_grad", linestyle="--")
+    ax.plot(git, lgrad, label="L_grad", linestyle="--", marker=".")
     ax.set_yscale("log")
     ax.set_xlabel("iteration")
     ax.set_title(f"{s['optimizer']}, lambda = {s['lambda']:g}")

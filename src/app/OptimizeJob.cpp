@@ -450,7 +450,7 @@ OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
         s["lambda"] = lambda;
         s["reg"] = oo.reg == RegTarget::EnvMap ? "envmap" : "image";
         s["smooth_abs"] = oo.smoothAbs;
-        s["init"] = o.init;
+        s["init"] = starts.front();  // E0 of the report (the first start)
         s["rgb"] = o.rgb;
         s["mask"] = o.mask.empty() ? "object" : o.mask;
         s["mask_pixels"] = job.maskPixels;
