@@ -15,7 +15,7 @@
 #include "objective/TransportLoss.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
-#include "transport/TransportFile.h"
+#include "io/TransportFile.h"
 #include "transport/TransportSink.h"
 
 using namespace sl;

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "render/PathTracer.h"
-#include "transport/TransportFile.h"
+#include "io/TransportFile.h"
 
 namespace sl {
 

@@ -1,4 +1,4 @@
-#include "transport/TransportFile.h"
+#include "io/TransportFile.h"
 
 #include <bit>
 #include <cstring>
