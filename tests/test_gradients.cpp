@@ -201,7 +201,7 @@ TEST(Gradients, BlackBoxOptimizersDecreaseTheLoss) {
     for (const std::string method : {"spsa", "fd-adam"}) {
         std::vector<double> E(f.E.size(), 0.5);
         OptimizerOptions o;
-        o.method = method;
+        o.method = parseOptimizerMethod(method);
         o.iterations = method == "spsa" ? 40 : 3;
         int calls = 0;
         o.callback = [&](const IterationRecord& r, std::span<const double> x) {
@@ -223,7 +223,7 @@ TEST(Gradients, BlackBoxOptimizersDecreaseTheLoss) {
     }
     std::vector<double> E(f.E.size(), 0.5);
     OptimizerOptions bad;
-    bad.method = "adam";
+    bad.method = OptimizerMethod::Adam;
     EXPECT_THROW(minimizeBlackBox(box, E, bad, {}), InputError);
 }
 

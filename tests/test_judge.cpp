@@ -264,9 +264,10 @@ TEST(Search, MultistartKeepsTheLowestTrainingLoss) {
     in.set = {&t};
     in.mask = t.objectMask;
     SearchOptions o;
-    o.optimizer.method = "adam";
+    o.optimizer.method = OptimizerMethod::Adam;
     o.optimizer.iterations = 5;
-    o.starts = {"const:0.5", "random:1", "const:0.2"};
+    o.starts = {parseInitialState("const:0.5"), parseInitialState("random:1"),
+                parseInitialState("const:0.2")};
     const SearchResult r = search(in, o);
     ASSERT_EQ(r.startLosses.size(), 3u);
     double best = 1e300;
@@ -278,7 +279,7 @@ TEST(Search, MultistartKeepsTheLowestTrainingLoss) {
     // Each start alone reproduces its entry.
     for (const auto& [name, loss] : r.startLosses) {
         SearchOptions one = o;
-        one.starts = {name};
+        one.starts = {parseInitialState(name)};
         EXPECT_DOUBLE_EQ(search(in, one).training.total, loss) << name;
     }
 }

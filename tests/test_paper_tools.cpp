@@ -371,7 +371,8 @@ TEST(PaperCli, EnvMapPresetIsAnRgbImageThatInitialisesThroughLStar) {
     ASSERT_EQ(img.width, 50);
     ASSERT_EQ(img.height, 25);
     const EnvMap studio = studioEnvMap(50, 25);
-    const std::vector<double> e = initialEnvMap("envmap:" + exr.string(), 50, 25, false);
+    const std::vector<double> e =
+        initialEnvMap(parseInitialState("envmap:" + exr.string()), 50, 25, false);
     for (size_t t = 0; t < studio.texelCount(); ++t) {
         const float v = studio.texels[t];
         ASSERT_EQ(img.data[3 * t], v);

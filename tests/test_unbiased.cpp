@@ -12,10 +12,10 @@
 #include "core/Color.h"
 #include "core/Error.h"
 #include "core/Rng.h"
+#include "io/TransportFile.h"
 #include "objective/TransportLoss.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
-#include "io/TransportFile.h"
 #include "transport/TransportSink.h"
 
 using namespace sl;
@@ -214,7 +214,7 @@ TEST(NoiseBench, MediansAndRelativeScoresPerGroup) {
 TEST(NoiseBench, OptimizerListParsesBudgetsAndRejectsBadItems) {
     auto o = parseNoiseBenchOptimizers("adam,lbfgs:300,mma");
     ASSERT_EQ(o.size(), 3u);
-    EXPECT_EQ(o[0].method, "adam");
+    EXPECT_EQ(std::string(methodName(o[0].method)), "adam");
     EXPECT_EQ(o[0].budget, 100);
     EXPECT_EQ(o[1].budget, 300);
     EXPECT_EQ(o[2].budget, 2000);

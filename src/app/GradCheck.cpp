@@ -364,7 +364,7 @@ BenchGradientsReport runBenchGradients(const BenchGradientsOptions& o) {
             body(E, tr.callback());
         };
         OptimizerOptions adam;
-        adam.method = "adam";
+        adam.method = OptimizerMethod::Adam;
         adam.iterations = o.iterations;
         adam.learningRate = o.learningRate;
         run("exact (Adam)", [&](std::vector<double>& E, auto cb) {
@@ -387,7 +387,7 @@ BenchGradientsReport runBenchGradients(const BenchGradientsOptions& o) {
         });
         run("fd-adam (h=1e-3, CRN)", [&](std::vector<double>& E, auto cb) {
             OptimizerOptions a = adam;
-            a.method = "fd-adam";
+            a.method = OptimizerMethod::FdAdam;
             a.callback = cb;
             BlackBoxOptions bb;
             bb.fd.h = 1e-3;
@@ -397,7 +397,7 @@ BenchGradientsReport runBenchGradients(const BenchGradientsOptions& o) {
         for (int q : {1, 8}) {
             run("spsa (q=" + std::to_string(q) + ", CRN)", [&](std::vector<double>& E, auto cb) {
                 OptimizerOptions a = adam;
-                a.method = "spsa";
+                a.method = OptimizerMethod::Spsa;
                 a.iterations = o.spsaIterations;
                 a.callback = cb;
                 BlackBoxOptions bb;

@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "app/InitialState.h"
 #include "objective/Objective.h"
 #include "optimize/BlackBox.h"
 
@@ -38,7 +39,7 @@ struct GradientSetup {
     std::optional<uint64_t> seed;
     int threads = 0;  // 0: all cores
     ObjectiveOptions objective;
-    std::string init = "const:0.5";  // E0, as `optimize --init`
+    InitialState init;  // E0 (const:0.5), as optimize's option 'init'
 };
 
 struct GradCheckOptions {

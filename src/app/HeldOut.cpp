@@ -2,9 +2,42 @@
 
 #include <stdexcept>
 
+#include "core/Error.h"
+#include "core/Registry.h"
 #include "objective/TransportLoss.h"
 
 namespace sl {
+
+namespace {
+
+constexpr HeldOutModeRow kModes[] = {
+    {HeldOutMode::Judge, "judge",
+     "the judge's estimate, traced from the scene with its own seed and cached (default)"},
+    {HeldOutMode::File, "FILE.tm", "a transport matrix with two halves that fits the training T"},
+    {HeldOutMode::None, "none", "no held-out scores"},
+};
+
+}  // namespace
+
+std::span<const HeldOutModeRow> heldOutModeTable() {
+    return kModes;
+}
+
+HeldOutSource parseHeldOutSource(std::string_view text, const std::string& where) {
+    HeldOutSource s;
+    if (const HeldOutModeRow* r = findRegistryRow(heldOutModeTable(), text);
+        r && r->value != HeldOutMode::File) {
+        s.mode = r->value;
+        return s;
+    }
+    const std::filesystem::path p{std::string(text)};
+    if (p.extension() != ".tm")
+        throw inputError(where, "'" + std::string(text) + "' is not a .tm file",
+                         "give judge, none, or a .tm file with two halves");
+    s.mode = HeldOutMode::File;
+    s.file = p;
+    return s;
+}
 
 HeldOutScorer::HeldOutScorer(const TransportMatrix& heldOut,
                              const std::vector<uint8_t>& trainingMask,

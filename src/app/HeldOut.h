@@ -6,8 +6,11 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <span>
+#include <string>
+#include <string_view>
 
 #include "objective/Objective.h"
 #include "objective/UnbiasedObjective.h"
@@ -16,6 +19,26 @@
 namespace sl {
 
 class TransportLoss;
+
+/// Where the held-out estimate comes from: one table (core/Registry.h) of the choices.
+enum class HeldOutMode {
+    Judge,  // the judge's estimate, traced from the scene with its own seed and cached
+    File,   // a .tm with two halves, fitting the training T
+    None    // no held-out scores
+};
+struct HeldOutModeRow {
+    HeldOutMode value;
+    const char* name;  // what the option takes ("FILE.tm": a path)
+    const char* help;
+};
+std::span<const HeldOutModeRow> heldOutModeTable();
+
+struct HeldOutSource {
+    HeldOutMode mode = HeldOutMode::Judge;
+    std::filesystem::path file;  // File
+};
+/// "judge", "none" or a path ending in .tm; InputError naming `where` otherwise.
+HeldOutSource parseHeldOutSource(std::string_view text, const std::string& where);
 
 struct HeldOutScore {
     LossParts own;    // the objective that was optimized

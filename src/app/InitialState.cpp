@@ -5,6 +5,7 @@
 
 #include "core/Color.h"
 #include "core/Error.h"
+#include "core/Registry.h"
 #include "core/Rng.h"
 #include "io/EnvMapIO.h"
 #include "optimize/SpecularInit.h"
@@ -13,11 +14,82 @@
 namespace sl {
 
 namespace {
-[[noreturn]] void bad(const std::string& spec, const std::string& why) {
-    throw inputError(option("init") + " " + spec, why,
-                     "use const:V, envmap:FILE, random:SEED, studio or specular");
+
+// clang-format off
+constexpr InitialKindRow kKinds[] = {
+    {InitialKind::Constant, "const", "V", "every texel V in [0, 1] (the paper: 0.5)"},
+    {InitialKind::EnvMapFile, "envmap", "FILE",
+     "an equirectangular image, area-resampled; colour becomes gray by L*/100"},
+    {InitialKind::Random, "random", "SEED", "uniform in [0, 1] from PCG32(SEED)"},
+    {InitialKind::Studio, "studio", "", "the built-in studio map, by L*/100"},
+    {InitialKind::Specular, "specular", "", "the paper's specular state (traces the scene)"},
+};
+// clang-format on
+
+[[noreturn]] void bad(const std::string& where, std::string_view spec, const std::string& why) {
+    throw inputError(where + " " + std::string(spec), why, "use " + initialSpecForms());
 }
+
 }  // namespace
+
+std::span<const InitialKindRow> initialKindTable() {
+    return kKinds;
+}
+
+std::string initialSpecForms() {
+    std::string s;
+    for (const InitialKindRow& r : kKinds) {
+        if (!s.empty()) s += " | ";
+        s += r.name;
+        if (*r.argument) s += std::string(":") + r.argument;
+    }
+    return s;
+}
+
+InitialState parseInitialState(std::string_view spec, const std::string& where) {
+    const auto colon = spec.find(':');
+    const std::string_view kind = spec.substr(0, colon);
+    const std::string arg(colon == std::string_view::npos ? "" : spec.substr(colon + 1));
+    const InitialKindRow* row = findRegistryRow(initialKindTable(), kind);
+    if (!row) bad(where, spec, "unknown kind '" + std::string(kind) + "'");
+    if (*row->argument && colon == std::string_view::npos) bad(where, spec, "missing ':'");
+    if (!*row->argument && colon != std::string_view::npos)
+        bad(where, spec, std::string(row->name) + " takes no argument");
+    InitialState s;
+    s.kind = row->value;
+    s.spec = std::string(spec);
+    switch (s.kind) {
+        case InitialKind::Constant:
+            try {
+                size_t used = 0;
+                s.value = std::stod(arg, &used);
+                if (used != arg.size()) throw std::invalid_argument(arg);
+            } catch (const std::exception&) {
+                bad(where, spec, "'" + arg + "' is not a number");
+            }
+            if (!(s.value >= 0.0 && s.value <= 1.0))
+                bad(where, spec, "the value must be in [0, 1]");
+            break;
+        case InitialKind::Random:
+            try {
+                size_t used = 0;
+                if (!arg.empty() && arg[0] == '-') throw std::invalid_argument(arg);
+                s.seed = std::stoull(arg, &used);
+                if (used != arg.size()) throw std::invalid_argument(arg);
+            } catch (const std::exception&) {
+                bad(where, spec, "'" + arg + "' is not a non-negative whole number");
+            }
+            break;
+        case InitialKind::EnvMapFile:
+            if (arg.empty()) bad(where, spec, "no file given");
+            s.file = arg;
+            break;
+        case InitialKind::Studio:
+        case InitialKind::Specular:
+            break;
+    }
+    return s;
+}
 
 std::vector<double> initialEnvMapFrom(const EnvMap& m, bool rgb) {
     const size_t texels = m.texelCount(), n = texels * (rgb ? 3 : 1);
@@ -36,52 +108,35 @@ std::vector<double> initialEnvMapFrom(const EnvMap& m, bool rgb) {
     return e;
 }
 
-std::vector<double> initialEnvMap(const std::string& spec, int width, int height, bool rgb,
+std::vector<double> initialEnvMap(const InitialState& start, int width, int height, bool rgb,
                                   const Scene* scene, int maxDepth) {
-    if (spec != "specular") return initialEnvMap(spec, width, height, rgb);
-    if (!scene) bad(spec, "needs the scene");
+    if (start.kind != InitialKind::Specular) return initialEnvMap(start, width, height, rgb);
+    if (!scene) bad(option("init"), start.spec, "needs the scene");
     return specularInitialEnvMap(*scene, maxDepth, rgb);
 }
 
-std::vector<double> initialEnvMap(const std::string& spec, int width, int height, bool rgb) {
-    if (spec == "studio") return initialEnvMapFrom(studioEnvMap(width, height), rgb);
+std::vector<double> initialEnvMap(const InitialState& start, int width, int height, bool rgb) {
     const size_t texels = static_cast<size_t>(width) * height, n = texels * (rgb ? 3 : 1);
-    const auto colon = spec.find(':');
-    if (colon == std::string::npos) bad(spec, "missing ':'");
-    const std::string kind = spec.substr(0, colon), arg = spec.substr(colon + 1);
-    if (kind == "const") {
-        double v = 0;
-        try {
-            size_t used = 0;
-            v = std::stod(arg, &used);
-            if (used != arg.size()) throw std::invalid_argument(arg);
-        } catch (const std::exception&) {
-            bad(spec, "'" + arg + "' is not a number");
+    switch (start.kind) {
+        case InitialKind::Constant:
+            return std::vector<double>(n, start.value);
+        case InitialKind::Random: {
+            Pcg32 rng(mix64(start.seed), 0x5eed);
+            std::vector<double> e(n);
+            for (double& v : e) v = rng.nextDouble();
+            return e;
         }
-        if (!(v >= 0.0 && v <= 1.0)) bad(spec, "the value must be in [0, 1]");
-        return std::vector<double>(n, v);
+        case InitialKind::EnvMapFile:
+            // A gray file (what `optimize` writes as envmap.exr) is E itself, so a result loads
+            // back unchanged; a colour map becomes gray by CIE L*/100 as in the paper (or stays
+            // RGB).
+            return initialEnvMapFrom(loadEnvMap(start.file, width, height, 0), rgb);
+        case InitialKind::Studio:
+            return initialEnvMapFrom(studioEnvMap(width, height), rgb);
+        case InitialKind::Specular:
+            break;
     }
-    if (kind == "random") {
-        uint64_t seed = 0;
-        try {
-            size_t used = 0;
-            seed = std::stoull(arg, &used);
-            if (used != arg.size()) throw std::invalid_argument(arg);
-        } catch (const std::exception&) {
-            bad(spec, "'" + arg + "' is not a non-negative whole number");
-        }
-        Pcg32 rng(mix64(seed), 0x5eed);
-        std::vector<double> e(n);
-        for (double& v : e) v = rng.nextDouble();
-        return e;
-    }
-    if (kind == "envmap") {
-        if (arg.empty()) bad(spec, "no file given");
-        // A gray file (what `optimize` writes as envmap.exr) is E itself, so a result loads back
-        // unchanged; a colour map becomes gray by CIE L*/100 as in the paper (or stays RGB).
-        return initialEnvMapFrom(loadEnvMap(arg, width, height, 0), rgb);
-    }
-    bad(spec, "unknown kind '" + kind + "'");
+    bad(option("init"), start.spec, "needs the scene");
 }
 
 }  // namespace sl

@@ -7,25 +7,55 @@
 //   random:SEED    uniform in [0, 1], from PCG32(SEED)
 //   studio         the built-in studio map (scene/EnvMapPresets.h), by L*/100 like a photo
 //   specular       the paper's §5.2 state (optimize/SpecularInit.h): needs the scene
+// The kinds are one registry (core/Registry.h); a spec is parsed once into an InitialState.
 #pragma once
 
+#include <cstdint>
+#include <filesystem>
+#include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
+#include "core/Error.h"
 #include "scene/EnvMap.h"
 
 namespace sl {
 
 struct Scene;
 
-/// E0 for an env map of width×height texels, 1 value per texel (gray) or 3 (rgb, interleaved),
-/// for every spec above but `specular`. Throws InputError naming option 'init' and the accepted
-/// forms for a malformed spec.
-std::vector<double> initialEnvMap(const std::string& spec, int width, int height, bool rgb);
+enum class InitialKind { Constant, EnvMapFile, Random, Studio, Specular };
 
-/// Every spec above, `specular` included (it traces `scene` with T's path length maxDepth;
+struct InitialKindRow {
+    InitialKind value;
+    const char* name;
+    const char* argument;  // after "name:" ("" = none)
+    const char* help;
+};
+std::span<const InitialKindRow> initialKindTable();
+/// "const:V | envmap:FILE | random:SEED | studio | specular", from the table.
+std::string initialSpecForms();
+
+/// One parsed start.
+struct InitialState {
+    InitialKind kind = InitialKind::Constant;
+    double value = 0.5;              // const
+    uint64_t seed = 0;               // random
+    std::filesystem::path file;      // envmap
+    std::string spec = "const:0.5";  // as written (its name in reports and summaries)
+};
+
+/// Parses one spec; InputError naming `where` (the option it came from) and the accepted forms
+/// for a malformed one. A constant must lie in [0, 1]; a seed is a non-negative whole number.
+InitialState parseInitialState(std::string_view spec, const std::string& where = option("init"));
+
+/// E0 for an env map of width×height texels, 1 value per texel (gray) or 3 (rgb, interleaved),
+/// for every kind but `specular` (InputError naming option 'init' for that one).
+std::vector<double> initialEnvMap(const InitialState& start, int width, int height, bool rgb);
+
+/// Every kind, `specular` included (it traces `scene` with T's path length maxDepth;
 /// InputError when scene is null).
-std::vector<double> initialEnvMap(const std::string& spec, int width, int height, bool rgb,
+std::vector<double> initialEnvMap(const InitialState& start, int width, int height, bool rgb,
                                   const Scene* scene, int maxDepth);
 
 /// E0 from an env map as `envmap:FILE` takes a loaded file: a one-channel map is E itself, a

@@ -6,6 +6,7 @@
 #include "app/HeldOut.h"
 #include "app/InitialState.h"
 #include "core/Error.h"
+#include "core/Registry.h"
 #include "core/Stats.h"
 #include "core/Stopwatch.h"
 #include "io/SceneFile.h"
@@ -39,11 +40,12 @@ std::vector<NoiseBenchOptimizer> parseNoiseBenchOptimizers(const std::string& sp
         if (item.empty()) badOptimizers(spec, "an item is empty");
         const size_t colon = item.find(':');
         NoiseBenchOptimizer o;
-        o.method = item.substr(0, colon);
-        bool known = false;
-        for (const std::string& m : optimizerMethods()) known = known || m == o.method;
-        if (!known) badOptimizers(spec, "'" + o.method + "' is not an optimizer");
-        o.budget = o.method == "adam" ? 100 : 2000;
+        const std::string name = item.substr(0, colon);
+        const OptimizerMethodRow* row = findRegistryRow(optimizerMethodTable(), name);
+        if (!row || row->gradient != GradientSource::Exact || row->runs != row->value)
+            badOptimizers(spec, "'" + name + "' is not an optimizer that runs on T");
+        o.method = row->value;
+        o.budget = row->defaultBudget;
         if (colon != std::string::npos) {
             const std::string b = item.substr(colon + 1);
             try {
@@ -153,7 +155,7 @@ NoiseBenchResult runNoiseBench(const NoiseBenchOptions& o) {
                 const HeldOutScorer scorer(held, t.objectMask, oo, unbiased, false);
                 for (const NoiseBenchOptimizer& m : o.optimizers) {
                     std::vector<double> e =
-                        initialEnvMap("const:0.5", t.envWidth, t.envHeight, false);
+                        initialEnvMap(InitialState{}, t.envWidth, t.envHeight, false);  // 0.5
                     OptimizerOptions opt;
                     opt.method = m.method;
                     opt.iterations = m.budget;
@@ -163,10 +165,9 @@ NoiseBenchResult runNoiseBench(const NoiseBenchOptions& o) {
                     row.spp = spp;
                     row.seed = ro.seed;
                     row.objective = kind;
-                    row.optimizer = m.method;
+                    row.optimizer = methodName(m.method);
                     row.iterations = sum.iterations;
-                    // The budget counts steps (adam, ceres-lbfgs) or evaluations (NLopt).
-                    const bool steps = m.method == "adam" || m.method == "ceres-lbfgs";
+                    const bool steps = methodRow(m.method).budget == BudgetUnit::Steps;
                     row.converged =
                         (steps ? sum.iterations : sum.evaluations) < m.budget && !sum.failed;
                     row.precomputeSeconds = pre;

@@ -15,15 +15,17 @@
 #include <string>
 #include <vector>
 
+#include "optimize/Methods.h"
+
 namespace sl {
 
 struct NoiseBenchOptimizer {
-    std::string method;  // any optimize method that runs on T (adam, lbfgs, mma, ...)
-    int budget = 100;    // OptimizerOptions::iterations
+    OptimizerMethod method = OptimizerMethod::Adam;  // a method minimize() runs on T
+    int budget = 100;                                // OptimizerOptions::iterations
 };
 
-/// Parses "adam:100,lbfgs:2000" (the budget is optional: 100 for adam, 2000 otherwise).
-/// Throws InputError naming `--optimizers`.
+/// Parses "adam:100,lbfgs:2000" (the budget is optional: the method's default budget).
+/// Throws InputError naming option 'optimizers'.
 std::vector<NoiseBenchOptimizer> parseNoiseBenchOptimizers(const std::string& spec);
 
 struct NoiseBenchOptions {
@@ -32,7 +34,8 @@ struct NoiseBenchOptions {
     std::vector<int> spps{4, 16, 64, 256, 1024};
     int heldOutSpp = 4096;
     int seeds = 3;  // training seeds: render.seed + 0 … seeds − 1
-    std::vector<NoiseBenchOptimizer> optimizers{{"adam", 100}, {"lbfgs", 2000}};
+    std::vector<NoiseBenchOptimizer> optimizers{{OptimizerMethod::Adam, 100},
+                                                {OptimizerMethod::Lbfgs, 2000}};
     int threads = 0;
     std::function<void(const std::string&)> log;
 };

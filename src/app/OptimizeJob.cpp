@@ -19,6 +19,7 @@
 #include "io/ImageIO.h"
 #include "io/MaskIO.h"
 #include "io/SceneFile.h"
+#include "io/TransportFile.h"
 #include "objective/ImageSpace.h"
 #include "objective/Metrics.h"
 #include "objective/TransportLoss.h"
@@ -117,414 +118,481 @@ void writeRender(const std::filesystem::path& exr, const std::vector<double>& im
 
 namespace {
 
-/// Fills what was left to the defaults (method, budget, starts, planes) and expands the
-/// paper-loop method into the settings it stands for.
-void resolveDefaults(OptimizeJobOptions& o) {
-    const OptimizeDefaults d = optimizeDefaults();
-    if (o.optimizer.method.empty()) o.optimizer.method = d.method;
-    if (o.optimizer.method == kPaperLoopMethod) {
-        // The paper's loop on T: eq. 2, Adam, a fresh sample set (estimate of T) every step.
-        o.objectiveKind = "paper";
-        o.optimizer.method = "adam";
-        if (o.planes == 0) o.planes = kPaperLoopPlanes;
-        o.methodLabel = kPaperLoopMethod;
-        if (o.starts.empty() && o.init.empty()) o.init = "const:0.5";  // the paper's E0
-    }
-    if (o.starts.empty() && o.init.empty()) o.starts = d.starts;
-    if (o.optimizer.iterations == 0) o.optimizer.iterations = defaultBudget(o.optimizer.method);
-    if (o.planes == 0) o.planes = 1;
-}
-
-OptimizeJobSummary runResolved(const OptimizeJobOptions& o);
+constexpr OptimizePresetRow kPresets[] = {
+    {OptimizePreset::Paper, "paper",
+     "the paper's experiment exactly (eq. 2, lambda 30, E0 = 0.5, Adam lr 0.02 x 100, a fresh "
+     "sample set of the scene's spp every iteration: 100 estimates of T)"},
+};
 
 }  // namespace
 
-std::vector<std::string> optimizePresets() {
-    return {"paper"};
+std::span<const OptimizePresetRow> optimizePresetTable() {
+    return kPresets;
 }
 
-void applyOptimizePreset(const std::string& name, OptimizeJobOptions& o) {
-    if (name != "paper")
-        throw inputError(option("preset"), "unknown preset '" + name + "'", "use paper");
-    o.optimizer.method = kPaperLoopMethod;
-    o.optimizer.iterations = 100;
-    o.optimizer.learningRate = 0.02;
-    o.lambdas = {30.0};
-    o.objective.reg = RegTarget::EnvMap;
-    o.init = "const:0.5";
-    o.objectiveKind = "paper";
-    o.starts.clear();
-    o.continuation.clear();
-    o.planes = 100;
+void applyOptimizePreset(OptimizePreset preset, OptimizeJobOptions& o) {
+    switch (preset) {
+        case OptimizePreset::Paper:
+            o.optimizer.method = OptimizerMethod::PaperLoop;
+            o.optimizer.iterations = 100;
+            o.optimizer.learningRate = 0.02;
+            o.lambdas = {30.0};
+            o.objective.reg = RegTarget::EnvMap;
+            o.starts = {parseInitialState("const:0.5")};
+            o.objectiveKind = ObjectiveKind::Paper;
+            o.continuation.clear();
+            o.planes = 100;
+            break;
+    }
 }
 
 OptimizeDefaults optimizeDefaults() {
     return {};
 }
 
-int defaultBudget(const std::string& method) {
-    return method == "adam" || method == "fd-adam" || method == "spsa" ? 100 : 2000;
-}
-
-OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& o) {
-    if (o.lambdas.empty()) throw inputError(option("lambda"), "no value given");
-    for (double l : o.lambdas)
-        if (!(l >= 0) || !std::isfinite(l))
-            throw inputError(option("lambda"), "must be >= 0",
-                             "give e.g. 30, or 10,30,100 for a sweep");
-
-    OptimizeJobOptions resolved = o;
-    resolveDefaults(resolved);
-    return runResolved(resolved);
+OptimizerOptions optimizeJobOptimizerOptions() {
+    OptimizerOptions o;
+    o.method = optimizeDefaults().method;
+    o.iterations = 0;
+    return o;
 }
 
 namespace {
 
-OptimizeJobSummary runResolved(const OptimizeJobOptions& o) {
-    // The objective: as given; by default the noise-unbiased one, except for a .tm without
-    // halves, which only the paper's eq. 2 can use (decided once T is read).
-    bool unbiased =
-        o.objectiveKind.empty()
-            ? !isTransportFile(o.input)
-            : parseObjectiveKind(o.objectiveKind, option("objective")) == ObjectiveKind::Unbiased;
-    if (o.planes < 1) throw inputError(option("planes"), "must be >= 1");
-    if (o.heldOutEvery < 1) throw inputError(option("heldout-every"), "must be >= 1");
-    OptimizeJobSummary job;
-    const auto cacheDir = std::filesystem::absolute(o.outDir).parent_path() / ".scratchlight-cache";
-    // fd-adam and spsa take their gradients through the renderer (a black box); T still serves
-    // the outputs, metrics and held-out scores.
-    const auto bb = blackBoxMethods();
-    const bool blackBox = std::find(bb.begin(), bb.end(), o.optimizer.method) != bb.end();
-    const bool tmInput = isTransportFile(o.input);
-    if (blackBox && tmInput)
-        throw inputError(option("optimizer") + " " + o.optimizer.method,
+// ---- The stages of the job, in the order runOptimizeJob calls them. ----
+
+/// Stage 0: the options with every default filled in (budget, starts, planes) and checked; a
+/// method that stands for a set-up (paper-loop) expanded into it.
+struct Plan {
+    OptimizeJobOptions o;
+    OptimizerMethod requested = OptimizerMethod::Lbfgs;  // the name the results carry
+    bool blackBox = false;                               // gradients through the renderer
+    bool tmInput = false;
+    std::filesystem::path cacheDir;
+};
+
+Plan plan(const OptimizeJobOptions& options) {
+    if (options.lambdas.empty()) throw inputError(option("lambda"), "no value given");
+    for (double l : options.lambdas)
+        if (!(l >= 0) || !std::isfinite(l))
+            throw inputError(option("lambda"), "must be >= 0",
+                             "give e.g. 30, or 10,30,100 for a sweep");
+    if (options.planes < 0) throw inputError(option("planes"), "must be >= 1");
+    if (options.heldOutEvery < 1) throw inputError(option("heldout-every"), "must be >= 1");
+    Plan p;
+    p.o = options;
+    OptimizeJobOptions& o = p.o;
+    p.requested = o.optimizer.method;
+    const OptimizerMethodRow& row = methodRow(p.requested);
+    if (p.requested == OptimizerMethod::PaperLoop) {
+        // The paper's loop on T: eq. 2, Adam, a fresh sample set (estimate of T) every step,
+        // from the paper's E0.
+        o.objectiveKind = ObjectiveKind::Paper;
+        if (o.starts.empty()) o.starts = {parseInitialState("const:0.5")};
+    }
+    o.optimizer.method = row.runs;
+    if (o.starts.empty())
+        for (const std::string& spec : optimizeDefaults().starts)
+            o.starts.push_back(parseInitialState(spec));
+    if (o.optimizer.iterations == 0) o.optimizer.iterations = row.defaultBudget;
+    if (o.planes == 0) o.planes = row.defaultPlanes;
+    p.blackBox = row.gradient == GradientSource::Renderer;
+    p.tmInput = isTransportFile(o.input);
+    if (p.blackBox && p.tmInput)
+        throw inputError(option("optimizer") + " " + row.name,
                          "renders the scene for every gradient, so it needs the scene file",
                          "pass SCENE.json instead of the .tm");
-    // One loaded scene serves T, the held-out T and what needs the scene itself.
-    std::unique_ptr<Scene> scene;
-    const bool specularStart = o.init == "specular" || std::find(o.starts.begin(), o.starts.end(),
-                                                                 "specular") != o.starts.end();
-    const bool needScene =
-        blackBox || o.mask == "scratch" || specularStart || !o.truth.empty() || o.heldOut.empty();
-    if (!tmInput) scene = loadScene(o.input);
-    if (tmInput) {
+    if (p.tmInput && o.planes > 1)
+        throw inputError(option("planes") + " " + std::to_string(o.planes),
+                         "needs independent estimates of T traced from the scene",
+                         "pass SCENE.json instead of the .tm, or " + option("planes") + " 1");
+    p.cacheDir = std::filesystem::absolute(o.outDir).parent_path() / ".scratchlight-cache";
+    return p;
+}
+
+/// What every λ run of the job shares.
+struct Inputs {
+    std::unique_ptr<Scene> scene;  // loaded once; from T's provenance for a .tm when needed
+    bool unbiased = true;
+    std::vector<const TransportMatrix*> set;  // the training estimates of T
+    LossMask mask;
+    std::vector<uint8_t> truth;                    // the truth mask in the image (metrics), 255/0
+    LabelMask truthLabels;                         // ... and its labelled regions (the judge)
+    std::vector<std::vector<double>> startValues;  // E0 of every start
+    std::vector<double> image0;                    // T·E0 of the first start
+    VisibilityMetrics metricsInitial;
+};
+
+/// Stage 1: the scene and the training estimates of T (traced or cached, or the .tm).
+void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
+    const OptimizeJobOptions& o = p.o;
+    // The objective: as given; by default the noise-unbiased one, except for a .tm without
+    // halves, which only the paper's eq. 2 can use.
+    in.unbiased = o.objectiveKind ? *o.objectiveKind == ObjectiveKind::Unbiased : !p.tmInput;
+    if (p.tmInput) {
         const Stopwatch clock;
         job.transport.file = readTransportFile(o.input);
         job.transport.path = o.input;
         job.transport.secondsTotal = clock.seconds();
-        if (o.objectiveKind.empty()) unbiased = job.transport.file.matrix.planes == 2;
+        if (!o.objectiveKind) in.unbiased = job.transport.file.matrix.planes == 2;
     } else {
-        PrecomputeOptions p = o.precompute;
-        p.rgb = o.rgb;
-        if (unbiased) p.sampleSets = 2;
-        // eq. 2 rewards noise: without a given spp it trains at no fewer than paperMinSpp.
-        if (!unbiased && !p.spp && o.methodLabel != kPaperLoopMethod)
-            p.spp = std::max(scene->desc.render.spp, optimizeDefaults().paperMinSpp);
-        std::vector<TransportSource> set = transportSetForScene(*scene, p, o.planes, cacheDir);
+        in.scene = loadScene(o.input);
+        PrecomputeOptions pre = o.precompute;
+        pre.rgb = o.rgb;
+        if (in.unbiased) pre.sampleSets = 2;
+        // eq. 2 rewards noise: without a given spp it trains at no fewer than paperMinSpp (the
+        // paper's own loop keeps the scene's spp).
+        if (!in.unbiased && !pre.spp && p.requested != OptimizerMethod::PaperLoop)
+            pre.spp = std::max(in.scene->desc.render.spp, optimizeDefaults().paperMinSpp);
+        std::vector<TransportSource> set =
+            transportSetForScene(*in.scene, pre, o.planes, p.cacheDir);
         job.transport = std::move(set.front());
         for (size_t k = 1; k < set.size(); ++k) job.extraPlanes.push_back(std::move(set[k]));
     }
-    if (tmInput && o.planes > 1)
-        throw inputError(option("planes") + " " + std::to_string(o.planes),
-                         "needs independent estimates of T traced from the scene",
-                         "pass SCENE.json instead of the .tm, or " + option("planes") + " 1");
-    if (!scene && needScene) {
-        std::string purpose = o.heldOut.empty()
-                                  ? "the held-out estimate (or " + option("heldout") + " none)"
-                                  : option("mask") + " scratch / " + option("init") +
-                                        " specular / " + option("truth");
-        scene = sceneOfTransport(job.transport.file, purpose);
-    }
     const TransportMatrix& t = job.transport.file.matrix;
-    const std::string objectiveName = unbiased ? "unbiased" : "paper";
     if (o.rgb && t.channels != 3)
         throw inputError(o.input.string(),
                          "is a gray transport matrix; " + option("rgb") + " needs an RGB one",
                          "precompute it with " + option("rgb"));
-    if (unbiased && t.planes != 2)
+    if (in.unbiased && t.planes != 2)
         throw inputError(
             o.input.string(),
             "has no half-sample matrices; " + option("objective") + " unbiased needs them",
             "precompute it with " + option("halves") + ", or pass the scene file");
+    // What needs the scene itself: for a .tm, read from T's provenance.
+    bool specularStart = false;
+    for (const InitialState& s : o.starts) specularStart |= s.kind == InitialKind::Specular;
+    const bool needScene = p.blackBox || o.mask.kind == LossMaskKind::Scratch || specularStart ||
+                           !o.truth.empty() || o.heldOut.mode == HeldOutMode::Judge;
+    if (!in.scene && needScene) {
+        const std::string purpose =
+            o.heldOut.mode == HeldOutMode::Judge
+                ? "the held-out estimate (or " + option("heldout") + " none)"
+                : option("mask") + " scratch / " + option("init") + " specular / " +
+                      option("truth");
+        in.scene = sceneOfTransport(job.transport.file, purpose);
+    }
+    in.set = {&t};
+    for (const TransportSource& x : job.extraPlanes) in.set.push_back(&x.file.matrix);
+}
 
-    // The independent estimate every result is scored on.
-    if (o.heldOut != "none") {
-        if (isTransportFile(o.heldOut)) {
+/// Stage 2: the independent estimate every result is scored on.
+void loadHeldOut(const Plan& p, const Inputs& in, OptimizeJobSummary& job) {
+    const OptimizeJobOptions& o = p.o;
+    const TransportMatrix& t = job.transport.file.matrix;
+    switch (o.heldOut.mode) {
+        case HeldOutMode::None:
+            return;
+        case HeldOutMode::File: {
             TransportSource h;
-            h.file = readTransportFile(o.heldOut);
-            h.path = o.heldOut;
+            h.file = readTransportFile(o.heldOut.file);
+            h.path = o.heldOut.file;
             const TransportMatrix& ht = h.file.matrix;
             if (ht.width != t.width || ht.height != t.height || ht.envWidth != t.envWidth ||
                 ht.envHeight != t.envHeight || ht.planes != 2 || ht.channels != t.channels)
-                throw inputError(o.heldOut, "does not fit the training transport matrix",
+                throw inputError(o.heldOut.file.string(),
+                                 "does not fit the training transport matrix",
                                  "it needs the same image and env-map size, the same channels, "
                                  "and two halves (precompute " +
                                      option("halves") + ")");
             job.heldOut = std::move(h);
-        } else {
-            if (!o.heldOut.empty())
-                throw inputError(option("heldout"), "'" + o.heldOut + "' is not a .tm file",
-                                 "give a .tm file, none, or leave it out");
-            job.heldOut = judgeEstimateFor(job.transport.file, *scene, o.heldOutSpp, cacheDir);
+            break;
         }
-        const uint64_t hs = job.heldOut->file.provenance.seed,
-                       ts = job.transport.file.provenance.seed;
-        if (hs >= ts && hs < ts + static_cast<uint64_t>(o.planes))
-            throw inputError(option("seed"), "the training seed range overlaps the judge's seed",
-                             "use another " + option("seed"));
+        case HeldOutMode::Judge:
+            job.heldOut = judgeEstimateFor(job.transport.file, *in.scene, o.heldOutSpp, p.cacheDir);
+            break;
     }
+    const uint64_t hs = job.heldOut->file.provenance.seed, ts = job.transport.file.provenance.seed;
+    if (hs >= ts && hs < ts + static_cast<uint64_t>(o.planes))
+        throw inputError(option("seed"), "the training seed range overlaps the judge's seed",
+                         "use another " + option("seed"));
+}
 
-    std::vector<uint8_t> mask = t.objectMask, scratchCells;
-    if (o.mask == "scratch") {
-        mask = intersectMasks(mask, scratchMaskImage(*scene, o.scratch));
-        scratchCells =
-            computeScratchMap(scene->heights, scene->mapWidth, scene->mapHeight, o.scratch).map;
-    } else if (!o.mask.empty()) {
-        mask = intersectMasks(mask, loadImageMask(o.mask, t.width, t.height));
+/// Stage 3: the loss mask, the truth, every start's E0 and what E0 shows (the same for every λ).
+void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
+    const OptimizeJobOptions& o = p.o;
+    const TransportMatrix& t = job.transport.file.matrix;
+    in.mask = lossMask(o.mask, t, in.scene.get(), o.scratch);
+    job.maskPixels = in.mask.count;
+    if (!o.truth.empty()) {
+        in.truth = projectMaskFile(*in.scene, o.truth);
+        if (job.heldOut) in.truthLabels = projectTruth(*in.scene, o.truth);
     }
-    for (uint8_t m : mask) job.maskPixels += m != 0;
-    if (job.maskPixels == 0)
-        throw inputError(
-            option("mask") + " " + o.mask, "the mask is empty on the part",
-            o.mask == "scratch" ? "lower " + option("scratch-threshold") : "draw a larger region");
-    std::vector<uint8_t> truth;
-    if (!o.truth.empty()) truth = projectMaskFile(*scene, o.truth);
-
-    const std::vector<std::string> starts =
-        o.starts.empty() ? std::vector<std::string>{o.init} : o.starts;
     const int maxDepth = job.transport.file.provenance.maxDepth;
-    // Every start's E0, once for every λ; the first is the report's "before".
-    std::vector<std::vector<double>> startValues;
-    for (const std::string& spec : starts)
-        startValues.push_back(
-            initialEnvMap(spec, t.envWidth, t.envHeight, o.rgb, scene.get(), maxDepth));
-    const std::vector<double>& e0 = startValues.front();
-    LabelMask truthLabels;  // the judge's regions
-    if (job.heldOut && !o.truth.empty()) truthLabels = projectTruth(*scene, o.truth);
-    // E0's render and metrics do not depend on λ: computed once for every run.
-    const std::vector<double> image0 = renderImage(t, e0);
-    const VisibilityMetrics metricsInitial = metricsFor(t, image0, mask, e0, o.rgb, truth);
-    std::vector<ReportRun> reportRuns;
-    const bool sweep = o.lambdas.size() > 1;
-    std::ostringstream sweepCsv;
-    sweepCsv << "lambda,optimizer,objective,iterations,evaluations,initial_loss,final_loss,"
-                "final_L_grad,final_L_reg,heldout_loss,heldout_paper_loss,seconds\n";
+    for (const InitialState& s : o.starts)
+        in.startValues.push_back(
+            initialEnvMap(s, t.envWidth, t.envHeight, o.rgb, in.scene.get(), maxDepth));
+    in.image0 = renderImage(t, in.startValues.front());
+    in.metricsInitial =
+        metricsFor(t, in.image0, in.mask.pixels, in.startValues.front(), o.rgb, in.truth);
+}
 
-    std::vector<const TransportMatrix*> set{&t};
-    for (const TransportSource& x : job.extraPlanes) set.push_back(&x.file.matrix);
-    for (double lambda : o.lambdas) {
-        ObjectiveOptions oo = o.objective;
-        oo.lambda = lambda;
-        ImageObjective objective(t.width, t.height, mask, oo);
-        std::unique_ptr<UnbiasedObjective> unb;
-        if (unbiased) unb = std::make_unique<UnbiasedObjective>(t.width, t.height, mask, oo);
-        TransportLoss loss =
-            unbiased ? TransportLoss(t, *unb, o.rgb) : TransportLoss(t, objective, o.rgb);
-        std::unique_ptr<HeldOutScorer> scorer;
-        if (job.heldOut)
-            scorer = std::make_unique<HeldOutScorer>(job.heldOut->file.matrix, mask, oo, unbiased,
-                                                     o.rgb);
+/// One λ's optimization: E* and loss.csv's rows.
+struct LambdaResult {
+    OptimizeRun run;
+    std::vector<double> e;
+    std::vector<std::string> rows;
+};
 
-        OptimizeRun run;
-        run.lambda = lambda;
-        run.dir = sweep ? o.outDir / lambdaName(lambda) : o.outDir;
-        std::vector<double> e = e0;
-        run.initial = loss.evaluate(e, {});
-        if (scorer) run.heldInitial = scorer->score(e);
+/// Stage 4: one λ run (the search on T, or the black box through the renderer), its held-out
+/// scores and the judge's.
+LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
+                            double lambda) {
+    const OptimizeJobOptions& o = p.o;
+    const TransportMatrix& t = job.transport.file.matrix;
+    ObjectiveOptions oo = o.objective;
+    oo.lambda = lambda;
+    const std::vector<uint8_t>& mask = in.mask.pixels;
+    ImageObjective objective(t.width, t.height, mask, oo);
+    std::unique_ptr<UnbiasedObjective> unb;
+    if (in.unbiased) unb = std::make_unique<UnbiasedObjective>(t.width, t.height, mask, oo);
+    TransportLoss loss =
+        in.unbiased ? TransportLoss(t, *unb, o.rgb) : TransportLoss(t, objective, o.rgb);
+    std::unique_ptr<HeldOutScorer> scorer;
+    if (job.heldOut)
+        scorer =
+            std::make_unique<HeldOutScorer>(job.heldOut->file.matrix, mask, oo, in.unbiased, o.rgb);
 
-        std::vector<std::string> rows;
-        auto callback = [&](const IterationRecord& r, std::span<const double> x) {
-            // Every row: the optimizer's own loss (with planes, on the estimate of that step;
-            // with continuation, at that stage's λ). Every heldOutEvery rows also the parts on
-            // T at λ and the held-out scores.
-            const bool full = r.iteration % o.heldOutEvery == 0;
-            std::ostringstream row;
-            row << std::setprecision(10) << r.iteration << ',' << r.evaluations << ',' << r.loss
-                << ',';
-            if (full) {
-                const LossParts p = loss.evaluate(x, {});
-                row << p.lGrad << ',' << p.lReg;
-            } else {
-                row << ',';
-            }
-            row << ',' << r.seconds << ',';
-            if (scorer && full) {
-                const Stopwatch clock;
-                HeldOutScore h = scorer->score(x);
-                run.secondsHeldOutScoring += clock.seconds();
-                row << h.own.total << ',' << h.paper.total;
-            } else {
-                row << ',';
-            }
-            rows.push_back(row.str());
-            return o.optimizer.callback ? o.optimizer.callback(r, x) : true;
-        };
-        if (blackBox) {
-            OptimizerOptions opt = o.optimizer;
-            opt.callback = callback;
-            RenderOptions ro = renderOptionsFor(*scene);
-            ro.spp = job.transport.file.provenance.spp;
-            ro.seed = job.transport.file.provenance.seed;
-            ro.maxDepth = job.transport.file.provenance.maxDepth;
-            ro.threads = o.precompute.threads;
-            RenderLoss renderLoss(*scene, ro, objective, o.rgb);
-            run.optimizer = minimizeBlackBox(renderLoss, e, opt, o.blackBox);
+    LambdaResult res;
+    OptimizeRun& run = res.run;
+    run.lambda = lambda;
+    run.dir = o.lambdas.size() > 1 ? o.outDir / lambdaName(lambda) : o.outDir;
+    res.e = in.startValues.front();
+    run.initial = loss.evaluate(res.e, {});
+    if (scorer) run.heldInitial = scorer->score(res.e);
+
+    auto callback = [&](const IterationRecord& r, std::span<const double> x) {
+        // Every row: the optimizer's own loss (with planes, on the estimate of that step; with
+        // continuation, at that stage's λ). Every heldOutEvery rows also the parts on T at λ
+        // and the held-out scores.
+        const bool full = r.iteration % o.heldOutEvery == 0;
+        std::ostringstream row;
+        row << std::setprecision(10) << r.iteration << ',' << r.evaluations << ',' << r.loss << ',';
+        if (full) {
+            const LossParts parts = loss.evaluate(x, {});
+            row << parts.lGrad << ',' << parts.lReg;
         } else {
-            SearchInputs in;
-            in.set = set;
-            in.mask = mask;
-            in.objective = oo;
-            in.rgb = o.rgb;
-            in.scene = scene.get();
-            in.maxDepth = maxDepth;
-            in.startValues = startValues;
-            in.callback = callback;
-            SearchOptions so;
-            so.objective = unbiased ? ObjectiveKind::Unbiased : ObjectiveKind::Paper;
-            so.optimizer = o.optimizer;
-            so.optimizer.callback = nullptr;
-            so.planes = o.planes;
-            so.starts = starts;
-            so.continuation = o.continuation;
-            SearchResult sr = search(in, so);
-            e = sr.e;
-            run.optimizer = sr.optimizer;
-            run.start = sr.start;
-            run.startLosses = sr.startLosses;
+            row << ',';
         }
-        if (!o.methodLabel.empty()) run.optimizer.method = o.methodLabel;
-        run.final = loss.evaluate(e, {});
-        if (scorer) {
-            run.heldFinal = scorer->score(e);
-            // The last row always carries the held-out score of the returned E.
-            if (!rows.empty() && rows.back().back() == ',') {
-                rows.back().pop_back();
-                std::ostringstream tail;
-                tail << std::setprecision(10) << ',' << run.heldFinal->own.total << ','
-                     << run.heldFinal->paper.total;
-                rows.back() += tail.str();
-            }
-        }
-        if (job.heldOut) {  // the judge on the held-out estimate, at this run's λ
-            JudgeOptions jo;
-            jo.objective = oo;
-            jo.rgb = o.rgb;
-            const Judge judge(*job.heldOut, jo, truthLabels.labels, truthLabels.legend);
-            run.judged = judge.score(e, run.dir.filename().string());
-        }
-        std::ostringstream csv;
-        csv << "iteration,evaluations,loss,L_grad,L_reg,seconds,heldout_loss,heldout_paper_loss\n";
-        for (const auto& row : rows) csv << row << '\n';
-        spdlog::info("lambda {}: {}", lambda, run.optimizer.briefReport());
-
-        std::filesystem::create_directories(run.dir);
-        writeEnvMap(run.dir / "envmap.exr", toEnvMap(e, t, o.rgb));
-        writePng(run.dir / "envmap.png", envMapPreview(toEnvMap(e, t, o.rgb), 16));
-        const int ch = t.channels == 3 ? 3 : 1;
-        const std::vector<double> imageFinal = renderImage(t, e);
-        writeRender(run.dir / "render.exr", imageFinal, t.width, t.height, ch);
-        {
-            Image i0(t.width, t.height, ch);
-            for (size_t i = 0; i < image0.size(); ++i) i0.data[i] = static_cast<float>(image0[i]);
-            writePng(run.dir / "initial.png", i0);
-        }
-        writeTextAtomically(run.dir / "loss.csv", csv.str());
-        writePng(run.dir / "initial-envmap.png", envMapPreview(toEnvMap(e0, t, o.rgb), 16));
-        {
-            std::vector<uint8_t> visible(mask.size());  // masks hold 0/1; the PNG 0/255
-            for (size_t i = 0; i < mask.size(); ++i) visible[i] = mask[i] ? 255 : 0;
-            writeMaskPng(run.dir / "mask.png", visible, t.width, t.height);
-        }
-        if (!scratchCells.empty()) {
-            writeMaskPng(run.dir / "scratchmap.png", scratchCells, scene->mapWidth,
-                         scene->mapHeight);
-        }
-
-        json s;
-        s["optimizer"] = run.optimizer.method;
-        s["planes"] = o.planes;
-        s["starts"] = starts;
-        s["start"] = run.start;
-        s["continuation"] = o.continuation;
-        s["objective"] = objectiveName;
-        s["lambda"] = lambda;
-        s["reg"] = oo.reg == RegTarget::EnvMap ? "envmap" : "image";
-        s["smooth_abs"] = oo.smoothAbs;
-        s["init"] = starts.front();  // E0 of the report (the first start)
-        s["rgb"] = o.rgb;
-        s["mask"] = o.mask.empty() ? "object" : o.mask;
-        s["mask_pixels"] = job.maskPixels;
-        s["iterations"] = run.optimizer.iterations;
-        s["evaluations"] = run.optimizer.evaluations;
-        s["termination"] = run.optimizer.termination;
-        s["initial_loss"] = run.initial.total;
-        s["final_loss"] = run.final.total;
-        s["initial"] = partsJson(run.initial);
-        s["final"] = partsJson(run.final);
-        s["seconds_precompute"] =
-            job.transport.cacheHit || isTransportFile(o.input) ? 0.0 : job.transport.secondsTotal;
-        s["seconds_load_transport"] = job.transport.secondsTotal;
-        s["transport_cache_hit"] = job.transport.cacheHit;
-        s["seconds_optimize"] = run.optimizer.seconds;
-        s["seconds_heldout_scoring"] = run.secondsHeldOutScoring;
-        if (run.heldFinal) {
-            s["heldout_loss"] = run.heldFinal->own.total;
-            s["heldout_L_grad"] = run.heldFinal->own.lGrad;
-            s["heldout_L_reg"] = run.heldFinal->own.lReg;
-            s["heldout_paper_loss"] = run.heldFinal->paper.total;
-            s["heldout"] = {{"initial", heldJson(*run.heldInitial)},
-                            {"final", heldJson(*run.heldFinal)},
-                            {"transport", transportJson(*job.heldOut)}};
+        row << ',' << r.seconds << ',';
+        if (scorer && full) {
+            const Stopwatch clock;
+            HeldOutScore h = scorer->score(x);
+            run.secondsHeldOutScoring += clock.seconds();
+            row << h.own.total << ',' << h.paper.total;
         } else {
-            s["heldout_loss"] = nullptr;
+            row << ',';
         }
-        s["transport"] = transportJson(job.transport);
-        if (run.judged) s["judge"] = toJson(*run.judged);
-        s["metrics"] = toJson(metricsFor(t, imageFinal, mask, e, o.rgb, truth));
-        s["metrics_initial"] = toJson(metricsInitial);
-        if (!o.truth.empty()) s["truth"] = o.truth;
-        if (o.mask == "scratch")
-            s["scratch_map"] = {{"kernel", o.scratch.kernel},
-                                {"patch", o.scratch.patch},
-                                {"threshold", o.scratch.threshold}};
-        writeTextAtomically(run.dir / "summary.json", s.dump(2) + "\n");
-        {
-            ReportContent rc;
-            rc.title = "scratchlight optimize: " + run.dir.filename().string();
-            ReportFigure fig;
-            fig.title = "before and after";
-            std::ostringstream title;
-            title << "λ = " << lambda << ", " << run.optimizer.method << ", " << objectiveName;
-            fig.runs.push_back(reportRunFromOutDir(run.dir, title.str()));
-            reportRuns.push_back(fig.runs.back());
-            rc.figures.push_back(std::move(fig));
-            writeReport(run.dir / "report.html", rc);
+        res.rows.push_back(row.str());
+        return o.optimizer.callback ? o.optimizer.callback(r, x) : true;
+    };
+    if (p.blackBox) {
+        OptimizerOptions opt = o.optimizer;
+        opt.callback = callback;
+        RenderOptions ro = renderOptionsFor(*in.scene);
+        ro.spp = job.transport.file.provenance.spp;
+        ro.seed = job.transport.file.provenance.seed;
+        ro.maxDepth = job.transport.file.provenance.maxDepth;
+        ro.threads = o.precompute.threads;
+        RenderLoss renderLoss(*in.scene, ro, objective, o.rgb);
+        run.optimizer = minimizeBlackBox(renderLoss, res.e, opt, o.blackBox);
+    } else {
+        SearchInputs si;
+        si.set = in.set;
+        si.mask = mask;
+        si.objective = oo;
+        si.rgb = o.rgb;
+        si.scene = in.scene.get();
+        si.maxDepth = job.transport.file.provenance.maxDepth;
+        si.startValues = in.startValues;
+        si.callback = callback;
+        SearchOptions so;
+        so.objective = in.unbiased ? ObjectiveKind::Unbiased : ObjectiveKind::Paper;
+        so.optimizer = o.optimizer;
+        so.optimizer.callback = nullptr;
+        so.planes = o.planes;
+        so.starts = o.starts;
+        so.continuation = o.continuation;
+        SearchResult sr = search(si, so);
+        res.e = sr.e;
+        run.optimizer = sr.optimizer;
+        run.start = sr.start;
+        run.startLosses = sr.startLosses;
+    }
+    run.optimizer.method = methodName(p.requested);
+    run.final = loss.evaluate(res.e, {});
+    if (scorer) {
+        run.heldFinal = scorer->score(res.e);
+        // The last row always carries the held-out score of the returned E.
+        if (!res.rows.empty() && res.rows.back().back() == ',') {
+            res.rows.back().pop_back();
+            std::ostringstream tail;
+            tail << std::setprecision(10) << ',' << run.heldFinal->own.total << ','
+                 << run.heldFinal->paper.total;
+            res.rows.back() += tail.str();
         }
-        sweepCsv << std::setprecision(10) << lambda << ',' << run.optimizer.method << ','
-                 << objectiveName << ',' << run.optimizer.iterations << ','
-                 << run.optimizer.evaluations << ',' << run.initial.total << ',' << run.final.total
-                 << ',' << run.final.lGrad << ',' << run.final.lReg << ',';
+    }
+    if (job.heldOut) {  // the judge on the held-out estimate, at this run's λ
+        JudgeOptions jo;
+        jo.objective = oo;
+        jo.rgb = o.rgb;
+        const Judge judge(*job.heldOut, jo, in.truthLabels.labels, in.truthLabels.legend);
+        run.judged = judge.score(res.e, run.dir.filename().string());
+    }
+    spdlog::info("lambda {}: {}", lambda, run.optimizer.briefReport());
+    return res;
+}
+
+/// summary.json of one run.
+json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
+                    const LambdaResult& r, const VisibilityMetrics& metricsFinal) {
+    const OptimizeJobOptions& o = p.o;
+    const OptimizeRun& run = r.run;
+    std::vector<std::string> starts;
+    for (const InitialState& s : o.starts) starts.push_back(s.spec);
+    json s;
+    s["optimizer"] = run.optimizer.method;
+    s["planes"] = o.planes;
+    s["starts"] = starts;
+    s["start"] = run.start;
+    s["continuation"] = o.continuation;
+    s["objective"] = in.unbiased ? "unbiased" : "paper";
+    s["lambda"] = run.lambda;
+    s["reg"] = o.objective.reg == RegTarget::EnvMap ? "envmap" : "image";
+    s["smooth_abs"] = o.objective.smoothAbs;
+    s["init"] = starts.front();  // E0 of the report (the first start)
+    s["rgb"] = o.rgb;
+    s["mask"] = o.mask.name();
+    s["mask_pixels"] = job.maskPixels;
+    s["iterations"] = run.optimizer.iterations;
+    s["evaluations"] = run.optimizer.evaluations;
+    s["termination"] = run.optimizer.termination;
+    s["initial_loss"] = run.initial.total;
+    s["final_loss"] = run.final.total;
+    s["initial"] = partsJson(run.initial);
+    s["final"] = partsJson(run.final);
+    s["seconds_precompute"] =
+        job.transport.cacheHit || p.tmInput ? 0.0 : job.transport.secondsTotal;
+    s["seconds_load_transport"] = job.transport.secondsTotal;
+    s["transport_cache_hit"] = job.transport.cacheHit;
+    s["seconds_optimize"] = run.optimizer.seconds;
+    s["seconds_heldout_scoring"] = run.secondsHeldOutScoring;
+    if (run.heldFinal) {
+        s["heldout_loss"] = run.heldFinal->own.total;
+        s["heldout_L_grad"] = run.heldFinal->own.lGrad;
+        s["heldout_L_reg"] = run.heldFinal->own.lReg;
+        s["heldout_paper_loss"] = run.heldFinal->paper.total;
+        s["heldout"] = {{"initial", heldJson(*run.heldInitial)},
+                        {"final", heldJson(*run.heldFinal)},
+                        {"transport", transportJson(*job.heldOut)}};
+    } else {
+        s["heldout_loss"] = nullptr;
+    }
+    s["transport"] = transportJson(job.transport);
+    if (run.judged) s["judge"] = toJson(*run.judged);
+    s["metrics"] = toJson(metricsFinal);
+    s["metrics_initial"] = toJson(in.metricsInitial);
+    if (!o.truth.empty()) s["truth"] = o.truth.string();
+    if (o.mask.kind == LossMaskKind::Scratch)
+        s["scratch_map"] = {{"kernel", o.scratch.kernel},
+                            {"patch", o.scratch.patch},
+                            {"threshold", o.scratch.threshold}};
+    return s;
+}
+
+/// Stage 5: one run's files (the header of OptimizeJob.h lists them); returns its report entry.
+ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
+                          const LambdaResult& r) {
+    const OptimizeJobOptions& o = p.o;
+    const OptimizeRun& run = r.run;
+    const TransportMatrix& t = job.transport.file.matrix;
+    const std::vector<uint8_t>& mask = in.mask.pixels;
+    std::filesystem::create_directories(run.dir);
+    writeEnvMap(run.dir / "envmap.exr", toEnvMap(r.e, t, o.rgb));
+    writePng(run.dir / "envmap.png", envMapPreview(toEnvMap(r.e, t, o.rgb), 16));
+    const int ch = t.channels == 3 ? 3 : 1;
+    const std::vector<double> imageFinal = renderImage(t, r.e);
+    writeRender(run.dir / "render.exr", imageFinal, t.width, t.height, ch);
+    {
+        Image i0(t.width, t.height, ch);
+        for (size_t i = 0; i < in.image0.size(); ++i) i0.data[i] = static_cast<float>(in.image0[i]);
+        writePng(run.dir / "initial.png", i0);
+    }
+    std::ostringstream csv;
+    csv << "iteration,evaluations,loss,L_grad,L_reg,seconds,heldout_loss,heldout_paper_loss\n";
+    for (const auto& row : r.rows) csv << row << '\n';
+    writeTextAtomically(run.dir / "loss.csv", csv.str());
+    writePng(run.dir / "initial-envmap.png",
+             envMapPreview(toEnvMap(in.startValues.front(), t, o.rgb), 16));
+    {
+        std::vector<uint8_t> visible(mask.size());  // masks hold 0/1; the PNG 0/255
+        for (size_t i = 0; i < mask.size(); ++i) visible[i] = mask[i] ? 255 : 0;
+        writeMaskPng(run.dir / "mask.png", visible, t.width, t.height);
+    }
+    if (!in.mask.scratchCells.empty())
+        writeMaskPng(run.dir / "scratchmap.png", in.mask.scratchCells, in.scene->mapWidth,
+                     in.scene->mapHeight);
+    const VisibilityMetrics metricsFinal = metricsFor(t, imageFinal, mask, r.e, o.rgb, in.truth);
+    writeTextAtomically(run.dir / "summary.json",
+                        runSummaryJson(p, in, job, r, metricsFinal).dump(2) + "\n");
+    ReportContent rc;
+    rc.title = "scratchlight optimize: " + run.dir.filename().string();
+    ReportFigure fig;
+    fig.title = "before and after";
+    std::ostringstream title;
+    title << "λ = " << run.lambda << ", " << run.optimizer.method << ", "
+          << (in.unbiased ? "unbiased" : "paper");
+    fig.runs.push_back(reportRunFromOutDir(run.dir, title.str()));
+    rc.figures.push_back(fig);
+    writeReport(run.dir / "report.html", rc);
+    return fig.runs.back();
+}
+
+/// Stage 6: a sweep's sweep.csv and its report of every λ.
+void writeSweep(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
+                const std::vector<ReportRun>& reportRuns) {
+    std::ostringstream csv;
+    csv << "lambda,optimizer,objective,iterations,evaluations,initial_loss,final_loss,"
+           "final_L_grad,final_L_reg,heldout_loss,heldout_paper_loss,seconds\n";
+    for (const OptimizeRun& run : job.runs) {
+        csv << std::setprecision(10) << run.lambda << ',' << run.optimizer.method << ','
+            << (in.unbiased ? "unbiased" : "paper") << ',' << run.optimizer.iterations << ','
+            << run.optimizer.evaluations << ',' << run.initial.total << ',' << run.final.total
+            << ',' << run.final.lGrad << ',' << run.final.lReg << ',';
         if (run.heldFinal)
-            sweepCsv << run.heldFinal->own.total << ',' << run.heldFinal->paper.total;
+            csv << run.heldFinal->own.total << ',' << run.heldFinal->paper.total;
         else
-            sweepCsv << ',';
-        sweepCsv << ',' << run.optimizer.seconds << '\n';
-        job.runs.push_back(std::move(run));
+            csv << ',';
+        csv << ',' << run.optimizer.seconds << '\n';
     }
-    if (sweep) {
-        writeTextAtomically(o.outDir / "sweep.csv", sweepCsv.str());
-        ReportContent rc;
-        rc.title = "scratchlight optimize: lambda sweep";
-        ReportFigure fig;
-        fig.title = "one run per lambda";
-        fig.runs = reportRuns;
-        fig.combinedLossPlot = true;
-        rc.figures.push_back(std::move(fig));
-        writeReport(o.outDir / "report.html", rc);
-    }
-    return job;
+    writeTextAtomically(p.o.outDir / "sweep.csv", csv.str());
+    ReportContent rc;
+    rc.title = "scratchlight optimize: lambda sweep";
+    ReportFigure fig;
+    fig.title = "one run per lambda";
+    fig.runs = reportRuns;
+    fig.combinedLossPlot = true;
+    rc.figures.push_back(std::move(fig));
+    writeReport(p.o.outDir / "report.html", rc);
 }
 
 }  // namespace
+
+OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
+    const Plan p = plan(options);
+    OptimizeJobSummary job;
+    Inputs in;
+    loadTraining(p, in, job);
+    loadHeldOut(p, in, job);
+    prepareRuns(p, in, job);
+    std::vector<ReportRun> reportRuns;
+    for (double lambda : p.o.lambdas) {
+        LambdaResult r = optimizeLambda(p, in, job, lambda);
+        reportRuns.push_back(writeRunOutputs(p, in, job, r));
+        job.runs.push_back(std::move(r.run));
+    }
+    if (p.o.lambdas.size() > 1) writeSweep(p, in, job, reportRuns);
+    return job;
+}
 
 }  // namespace sl

@@ -25,9 +25,9 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-RaceConfig config(const std::string& name, ObjectiveKind objective, const std::string& method,
+RaceConfig config(const std::string& name, ObjectiveKind objective, OptimizerMethod method,
                   int iterations, int spp, int planes = 1,
-                  std::vector<std::string> starts = {"const:0.5"},
+                  const std::vector<std::string>& starts = {"const:0.5"},
                   std::vector<double> continuation = {}) {
     RaceConfig c;
     c.name = name;
@@ -36,7 +36,8 @@ RaceConfig config(const std::string& name, ObjectiveKind objective, const std::s
     c.search.optimizer.method = method;
     c.search.optimizer.iterations = iterations;
     c.search.planes = planes;
-    c.search.starts = std::move(starts);
+    c.search.starts.clear();
+    for (const std::string& spec : starts) c.search.starts.push_back(parseInitialState(spec));
     c.search.continuation = std::move(continuation);
     return c;
 }
@@ -103,24 +104,26 @@ std::vector<std::string> raceParts() {
 
 std::vector<RaceConfig> defaultRaceConfigs() {
     using K = ObjectiveKind;
+    using M = OptimizerMethod;
     std::vector<RaceConfig> c;
-    c.push_back(config("paper-loop", K::Paper, "adam", 100, 16, 8));
-    c.push_back(config("paper-adam", K::Paper, "adam", 100, 16));
-    c.push_back(config("paper-lbfgs-16", K::Paper, "lbfgs", 2000, 16));
-    c.push_back(config("unbiased-adam-planes8", K::Unbiased, "adam", 300, 16, 8));
-    c.push_back(config("unbiased-lbfgs-16", K::Unbiased, "lbfgs", 2000, 16));
-    c.push_back(config("unbiased-lbfgs-32", K::Unbiased, "lbfgs", 2000, 32));
+    const OptimizerMethodRow& loop = methodRow(M::PaperLoop);
+    c.push_back(config(loop.name, K::Paper, loop.runs, loop.defaultBudget, 16, loop.defaultPlanes));
+    c.push_back(config("paper-adam", K::Paper, M::Adam, 100, 16));
+    c.push_back(config("paper-lbfgs-16", K::Paper, M::Lbfgs, 2000, 16));
+    c.push_back(config("unbiased-adam-planes8", K::Unbiased, M::Adam, 300, 16, 8));
+    c.push_back(config("unbiased-lbfgs-16", K::Unbiased, M::Lbfgs, 2000, 16));
+    c.push_back(config("unbiased-lbfgs-32", K::Unbiased, M::Lbfgs, 2000, 32));
     // optimize's defaults (app/OptimizeJob.h optimizeDefaults), for each objective.
     const OptimizeDefaults d = optimizeDefaults();
-    c.push_back(config("default-unbiased", K::Unbiased, d.method, defaultBudget(d.method), 16, 1,
-                       d.starts));
-    c.push_back(config("default-paper", K::Paper, d.method, defaultBudget(d.method),
+    c.push_back(config("default-unbiased", K::Unbiased, d.method, methodRow(d.method).defaultBudget,
+                       16, 1, d.starts));
+    c.push_back(config("default-paper", K::Paper, d.method, methodRow(d.method).defaultBudget,
                        d.paperMinSpp, 1, d.starts));
-    c.push_back(config("unbiased-lbfgs-16-multistart", K::Unbiased, "lbfgs", 2000, 16, 1,
+    c.push_back(config("unbiased-lbfgs-16-multistart", K::Unbiased, M::Lbfgs, 2000, 16, 1,
                        {"const:0.5", "specular", "studio"}));
-    c.push_back(config("unbiased-lbfgs-16-continuation", K::Unbiased, "lbfgs", 2000, 16, 1,
+    c.push_back(config("unbiased-lbfgs-16-continuation", K::Unbiased, M::Lbfgs, 2000, 16, 1,
                        {"const:0.5"}, {4.0, 2.0}));
-    c.push_back(config("unbiased-mlsl-16", K::Unbiased, "mlsl", 1500, 16));
+    c.push_back(config("unbiased-mlsl-16", K::Unbiased, M::Mlsl, 1500, 16));
     return c;
 }
 

@@ -350,4 +350,74 @@ void writeReport(const std::filesystem::path& path, const ReportContent& content
     writeTextAtomically(path, renderReportHtml(content));
 }
 
+namespace {
+
+std::string str(const json& j, const char* key, const std::string& where) {
+    if (!j.contains(key)) return {};
+    if (!j[key].is_string())
+        throw inputError(where, std::string("\"") + key + "\" must be a string");
+    return j[key].get<std::string>();
+}
+
+void merge(json& into, const json& from) {
+    if (!from.is_object()) return;
+    if (!into.is_object()) into = json::object();
+    for (auto it = from.begin(); it != from.end(); ++it) into[it.key()] = *it;
+}
+
+}  // namespace
+
+ReportContent readReportSpec(const std::filesystem::path& specFile) {
+    std::ifstream in(specFile);
+    if (!in) throw inputError(specFile.string(), "cannot read the report spec");
+    json s;
+    try {
+        s = json::parse(in);
+    } catch (const json::exception& e) {
+        throw inputError(specFile.string(), std::string("malformed JSON: ") + e.what());
+    }
+    const auto base = specFile.parent_path();
+    const std::string w = specFile.string();
+    ReportContent c;
+    if (s.contains("title")) c.title = str(s, "title", w);
+    if (s.contains("notes"))
+        for (const auto& n : s["notes"]) c.notes.push_back(n.get<std::string>());
+    if (s.contains("settings")) c.settings = s["settings"];
+    if (!s.contains("figures") || !s["figures"].is_array())
+        throw inputError(
+            w, "needs a \"figures\" array",
+            "e.g. {\"figures\": [{\"title\": \"...\", \"runs\": [{\"dir\": \"OUTDIR\"}]}]}");
+    int fi = 0;
+    for (const auto& f : s["figures"]) {
+        const std::string fw = w + ": figures[" + std::to_string(fi++) + "]";
+        ReportFigure fig;
+        fig.title = str(f, "title", fw);
+        fig.caption = str(f, "caption", fw);
+        fig.combinedLossPlot = f.value("loss_plot", false);
+        int ri = 0;
+        for (const auto& r : f.value("runs", json::array())) {
+            const std::string rw = fw + ".runs[" + std::to_string(ri++) + "]";
+            ReportRun run;
+            const std::string state = r.value("state", std::string("final"));
+            if (state != "final" && state != "initial")
+                throw inputError(rw, "\"state\" must be \"final\" or \"initial\"");
+            if (r.contains("dir"))
+                run = reportRunFromOutDir(base / str(r, "dir", rw), str(r, "title", rw),
+                                          state == "final" ? RunState::Final : RunState::Initial);
+            else if (!r.contains("images"))
+                throw inputError(rw, "needs \"dir\" (an optimize OUTDIR) or \"images\"");
+            if (r.contains("title")) run.title = str(r, "title", rw);
+            run.caption = str(r, "caption", rw);
+            for (const auto& im : r.value("images", json::array()))
+                run.images.push_back({str(im, "caption", rw), base / str(im, "png", rw)});
+            if (r.contains("metrics")) merge(run.metrics, r["metrics"]);
+            if (r.contains("settings")) merge(run.settings, r["settings"]);
+            if (!run.loss.loss.empty()) run.loss.label = run.title;
+            fig.runs.push_back(std::move(run));
+        }
+        c.figures.push_back(std::move(fig));
+    }
+    return c;
+}
+
 }  // namespace sl

@@ -73,6 +73,11 @@ std::string renderReportHtml(const ReportContent& content);
 /// renderReportHtml written atomically to `path`.
 void writeReport(const std::filesystem::path& path, const ReportContent& content);
 
+/// A report from a figures spec (JSON; `scratchlight report --help` shows its form): runs by
+/// optimize OUTDIR or by images, paths relative to the spec's folder. Throws InputError naming
+/// the spec file and the entry.
+ReportContent readReportSpec(const std::filesystem::path& specFile);
+
 /// Inline SVG of loss curves (linear y; log y when all losses > 0 and span > 100×).
 std::string lossCurveSvg(const std::vector<LossSeries>& series, int width = 420, int height = 260);
 

@@ -11,16 +11,6 @@
 
 namespace sl {
 
-ObjectiveKind parseObjectiveKind(const std::string& name, const std::string& where) {
-    if (name == "paper") return ObjectiveKind::Paper;
-    if (name == "unbiased") return ObjectiveKind::Unbiased;
-    throw inputError(where, "unknown objective '" + name + "'", "use paper or unbiased");
-}
-
-const char* objectiveKindName(ObjectiveKind kind) {
-    return kind == ObjectiveKind::Paper ? "paper" : "unbiased";
-}
-
 namespace {
 
 /// The losses of one stage (one λ) on every estimate.
@@ -83,7 +73,7 @@ SearchResult search(const SearchInputs& in, const SearchOptions& o) {
     if (!in.startValues.empty() && in.startValues.size() != o.starts.size())
         throw std::invalid_argument("search: startValues do not match the starts");
     for (size_t k = 0; k < o.starts.size() && !stopped; ++k) {
-        const std::string& start = o.starts[k];
+        const InitialState& start = o.starts[k];
         std::vector<double> e =
             in.startValues.empty()
                 ? initialEnvMap(start, t.envWidth, t.envHeight, in.rgb, in.scene, in.maxDepth)
@@ -115,11 +105,11 @@ SearchResult search(const SearchInputs& in, const SearchOptions& o) {
             if (stopped) break;
         }
         const LossParts value = finalStage.value(e);
-        best.startLosses.emplace_back(start, value.total);
+        best.startLosses.emplace_back(start.spec, value.total);
         if (value.total < best.training.total) {
             best.training = value;
             best.e = e;
-            best.start = start;
+            best.start = start.spec;
             best.optimizer = last;
         }
     }

@@ -17,7 +17,9 @@
 #include <string>
 #include <vector>
 
+#include "app/InitialState.h"
 #include "objective/Objective.h"
+#include "objective/ObjectiveKind.h"
 #include "optimize/Optimizer.h"
 #include "transport/TransportMatrix.h"
 
@@ -25,17 +27,11 @@ namespace sl {
 
 struct Scene;
 
-enum class ObjectiveKind { Paper, Unbiased };
-
-/// "paper" | "unbiased" (throws InputError naming `where` otherwise), and back.
-ObjectiveKind parseObjectiveKind(const std::string& name, const std::string& where = "objective");
-const char* objectiveKindName(ObjectiveKind kind);
-
 struct SearchOptions {
     ObjectiveKind objective = ObjectiveKind::Paper;
     OptimizerOptions optimizer;  // method, budget, Adam's step (callback: see SearchInputs)
     int planes = 1;
-    std::vector<std::string> starts{"const:0.5"};
+    std::vector<InitialState> starts{InitialState{}};  // default: const:0.5
     std::vector<double> continuation;
 };
 

@@ -72,7 +72,7 @@ TransportBenchResult runTransportBench(const TransportBenchOptions& a) {
     ObjectiveOptions oo;
     ImageObjective obj(T.width, T.height, T.objectMask, oo);
     TransportLoss loss(T, obj, false);
-    std::vector<double> e = initialEnvMap("const:0.5", T.envWidth, T.envHeight, false);
+    std::vector<double> e = initialEnvMap(InitialState{}, T.envWidth, T.envHeight, false);
     std::vector<double> g(loss.dimension());
     r.productRepeats = std::max(5, 4 * a.repeats + 1);
     const int reps = r.productRepeats;

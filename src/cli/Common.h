@@ -5,9 +5,12 @@
 #include <filesystem>
 #include <functional>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
+#include "core/Error.h"
+#include "core/Registry.h"
 #include "scene/EnvMap.h"
 
 namespace sl {
@@ -45,5 +48,34 @@ std::filesystem::path siblingPath(const std::filesystem::path& out, const std::s
 /// path) with python3 and `args` when `run`; otherwise prints the command that would. Prints
 /// "no plot: ..." when the script or python3 is missing; a failing script is a runtime error.
 int runPlot(const std::string& script, const std::vector<std::string>& args, bool run);
+
+/// An option whose values are the names of a registry's rows (core/Registry.h): `--help` lists
+/// every row with its help text, a name outside the table is a usage error listing them, and
+/// the value is parsed into the row's enum (into `target`, plain or std::optional) once, here.
+template <class Row, class Target>
+CLI::Option* addChoice(CLI::App* c, const std::string& flag, Target& target,
+                       std::span<const Row> table, std::string description) {
+    std::vector<std::string> names;
+    for (const Row& r : table) {
+        names.emplace_back(r.name);
+        description += std::string("\n    ") + r.name + ": " + r.help;
+    }
+    return c
+        ->add_option_function<std::string>(
+            flag,
+            [&target, table](const std::string& v) { target = findRegistryRow(table, v)->value; },
+            description)
+        ->check(CLI::IsMember(names));
+}
+
+/// An option parsed once by the library's parser `parse(text, where)` (where = the flag); its
+/// InputError leaves parsing and exits 1 with the message, as every input error (main.cpp).
+template <class Target, class Parse>
+CLI::Option* addParsed(CLI::App* c, const std::string& flag, Target& target, Parse parse,
+                       const std::string& description) {
+    return c->add_option_function<std::string>(
+        flag, [&target, parse, flag](const std::string& v) { target = parse(v, flag); },
+        description);
+}
 
 }  // namespace sl::cli

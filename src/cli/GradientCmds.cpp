@@ -42,9 +42,9 @@ void addSetupOptions(CLI::App* c, GradientSetup& s, SetupArgs& a) {
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
     c->add_flag("--smooth-abs", s.objective.smoothAbs, "Use sqrt(x²+ε²)−ε for |x|");
-    c->add_option("--init", s.init,
-                  "E where the gradient is taken: const:V | envmap:FILE | random:SEED")
-        ->capture_default_str();
+    addParsed(c, "--init", s.init, parseInitialState,
+              "E where the gradient is taken: const:V | envmap:FILE | random:SEED (default "
+              "const:0.5)");
 }
 
 void applySetup(GradientSetup& s, const SetupArgs& a) {

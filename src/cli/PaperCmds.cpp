@@ -13,9 +13,7 @@
 
 #include <spdlog/spdlog.h>
 
-#include <fstream>
 #include <memory>
-#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "app/Report.h"
@@ -33,8 +31,6 @@
 namespace sl::cli {
 
 namespace {
-
-using nlohmann::json;
 
 struct ScratchArgs {
     std::string input, out = "scratchmap.png", imageMask;
@@ -93,76 +89,12 @@ struct ReportArgs {
     bool combinedLoss = false, initial = false;
 };
 
-std::string str(const json& j, const char* key, const std::string& where) {
-    if (!j.contains(key)) return {};
-    if (!j[key].is_string())
-        throw inputError(where, std::string("\"") + key + "\" must be a string");
-    return j[key].get<std::string>();
-}
-
-void merge(json& into, const json& from) {
-    if (!from.is_object()) return;
-    if (!into.is_object()) into = json::object();
-    for (auto it = from.begin(); it != from.end(); ++it) into[it.key()] = *it;
-}
-
-ReportContent contentFromSpec(const std::filesystem::path& specFile) {
-    std::ifstream in(specFile);
-    if (!in) throw inputError(specFile.string(), "cannot read the report spec");
-    json s;
-    try {
-        s = json::parse(in);
-    } catch (const json::exception& e) {
-        throw inputError(specFile.string(), std::string("malformed JSON: ") + e.what());
-    }
-    const auto base = specFile.parent_path();
-    const std::string w = specFile.string();
-    ReportContent c;
-    if (s.contains("title")) c.title = str(s, "title", w);
-    if (s.contains("notes"))
-        for (const auto& n : s["notes"]) c.notes.push_back(n.get<std::string>());
-    if (s.contains("settings")) c.settings = s["settings"];
-    if (!s.contains("figures") || !s["figures"].is_array())
-        throw inputError(w, "needs a \"figures\" array", "See `scratchlight report --help`");
-    int fi = 0;
-    for (const auto& f : s["figures"]) {
-        const std::string fw = w + ": figures[" + std::to_string(fi++) + "]";
-        ReportFigure fig;
-        fig.title = str(f, "title", fw);
-        fig.caption = str(f, "caption", fw);
-        fig.combinedLossPlot = f.value("loss_plot", false);
-        int ri = 0;
-        for (const auto& r : f.value("runs", json::array())) {
-            const std::string rw = fw + ".runs[" + std::to_string(ri++) + "]";
-            ReportRun run;
-            const std::string state = r.value("state", std::string("final"));
-            if (state != "final" && state != "initial")
-                throw inputError(rw, "\"state\" must be \"final\" or \"initial\"");
-            if (r.contains("dir"))
-                run = reportRunFromOutDir(base / str(r, "dir", rw), str(r, "title", rw),
-                                          state == "final" ? RunState::Final : RunState::Initial);
-            else if (!r.contains("images"))
-                throw inputError(rw, "needs \"dir\" (an optimize OUTDIR) or \"images\"");
-            if (r.contains("title")) run.title = str(r, "title", rw);
-            run.caption = str(r, "caption", rw);
-            for (const auto& im : r.value("images", json::array()))
-                run.images.push_back({str(im, "caption", rw), base / str(im, "png", rw)});
-            if (r.contains("metrics")) merge(run.metrics, r["metrics"]);
-            if (r.contains("settings")) merge(run.settings, r["settings"]);
-            if (!run.loss.loss.empty()) run.loss.label = run.title;
-            fig.runs.push_back(std::move(run));
-        }
-        c.figures.push_back(std::move(fig));
-    }
-    return c;
-}
-
 int runReport(const ReportArgs& a) {
     if (a.spec.empty() == a.dirs.empty())
         throw UsageError("give either OUTDIR... or --spec FIGURES.json");
     ReportContent c;
     if (!a.spec.empty()) {
-        c = contentFromSpec(a.spec);
+        c = readReportSpec(a.spec);
     } else {
         ReportFigure f;
         f.title = "Runs";

@@ -14,6 +14,7 @@
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
 #include "optimize/BlackBox.h"
+#include "optimize/Methods.h"
 
 namespace sl::cli {
 
@@ -96,14 +97,15 @@ int runRelight(const RelightArgs& a) {
 
 struct OptimizeArgs {
     OptimizeJobOptions job;
-    std::string input, out = "out/optimize", reg = "envmap", preset;
+    std::string input, out = "out/optimize", reg = "envmap";
+    std::optional<OptimizePreset> preset;
 };
 
 int runOptimize(OptimizeArgs a) {
     a.job.input = a.input;
     a.job.outDir = a.out;
     a.job.objective.reg = a.reg == "image" ? RegTarget::Image : RegTarget::EnvMap;
-    if (!a.preset.empty()) applyOptimizePreset(a.preset, a.job);
+    if (a.preset) applyOptimizePreset(*a.preset, a.job);
     a.job.precompute.progress = progressBar("precompute");
     OptimizeJobSummary s = runOptimizeJob(a.job);
     printTransport(s.transport);
@@ -168,15 +170,9 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
             "optimize", "Optimize the env map so the part's scratches show (paper eq. 1-3)");
         c->add_option("input", a->input, "Scene file (.json, T is traced and cached) or .tm")
             ->required();
-        std::vector<std::string> methods = optimizerMethods();
-        for (const auto& m : blackBoxMethods()) methods.push_back(m);
-        methods.push_back(kPaperLoopMethod);
-        c->add_option("--optimizer", j.optimizer.method,
-                      "Optimizer (default: " + std::string(optimizeDefaults().method) +
-                          "); fd-adam and spsa take gradients through the renderer; "
-                          "paper-loop: the paper's loop on T (eq. 2, Adam, a fresh estimate of T "
-                          "every step)")
-            ->check(CLI::IsMember(methods));
+        addChoice(c, "--optimizer", j.optimizer.method, optimizerMethodTable(),
+                  std::string("Optimizer (default: ") + methodName(optimizeDefaults().method) +
+                      "; budget: --iterations)");
         c->add_option("--fd-h", j.blackBox.fd.h, "fd-adam: finite-difference step")
             ->check(CLI::PositiveNumber)
             ->capture_default_str();
@@ -192,12 +188,18 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         c->add_option("--reg", a->reg, "L2 regulariser on the env map or on the image")
             ->check(CLI::IsMember({"envmap", "image"}))
             ->capture_default_str();
-        c->add_option("--init", j.init,
-                      "Initial env map: const:V | envmap:FILE | random:SEED | specular | studio "
-                      "(default: specular)");
-        c->add_option("--mask", j.mask,
-                      "Region of the loss: scratch (the paper's scratch map) or a PNG/EXR in "
-                      "image space (white = inside); always within the object mask");
+        auto* init = addParsed(
+            c, "--init", j.starts,
+            [](const std::string& v, const std::string& flag) {
+                return std::vector<InitialState>{parseInitialState(v, flag)};
+            },
+            "Initial env map: " + initialSpecForms() +
+                " (default: " + optimizeDefaults().starts.front() + ")");
+        addParsed(
+            c, "--mask", j.mask,
+            [](const std::string& v, const std::string&) { return parseLossMask(v); },
+            "Region of the loss, always within the part: object (default), scratch (the paper's "
+            "scratch map) or a PNG/EXR in image space (white = inside)");
         c->add_option("--scratch-kernel", j.scratch.kernel, "Scratch map: detrending kernel")
             ->check(CLI::Range(1, 100000))
             ->capture_default_str();
@@ -212,14 +214,14 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
                       "adds the defect contrast to the metrics");
         c->add_flag("--rgb", j.rgb, "Optimize an RGB env map (needs/creates an RGB T)");
         c->add_flag("--smooth-abs", j.objective.smoothAbs, "Use sqrt(x²+ε²)−ε for |x|");
-        c->add_option("--objective", j.objectiveKind,
-                      "paper: eq. 2 on T (trained at >= 512 spp unless --spp); unbiased (default; "
-                      "paper for a .tm without halves): products of differences of two "
-                      "independent half-sample images (noise-unbiased)")
-            ->check(CLI::IsMember({"paper", "unbiased"}));
-        c->add_option("--heldout", j.heldOut,
-                      "Held-out estimate: the judge's, traced from the scene with its own seed "
-                      "and cached (default), a .tm with two halves, or none");
+        addChoice(c, "--objective", j.objectiveKind, objectiveKindTable(),
+                  "Objective (default: unbiased; paper for a .tm without halves; paper trains at "
+                  ">= " +
+                      std::to_string(optimizeDefaults().paperMinSpp) + " spp unless --spp)");
+        std::string heldOutHelp = "Held-out estimate every result is scored on:";
+        for (const HeldOutModeRow& r : heldOutModeTable())
+            heldOutHelp += std::string("\n    ") + r.name + ": " + r.help;
+        addParsed(c, "--heldout", j.heldOut, parseHeldOutSource, heldOutHelp);
         c->add_option("--heldout-spp", j.heldOutSpp,
                       "spp of the judge's held-out estimate (0: the judge's 1024)")
             ->check(CLI::Range(0, 1 << 20))
@@ -227,9 +229,11 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         c->add_option("--heldout-every", j.heldOutEvery, "Held-out score every N iterations")
             ->check(CLI::Range(1, 1000000))
             ->capture_default_str();
-        c->add_option("--iterations", j.optimizer.iterations,
-                      "Iterations / evaluation budget (default: 100 Adam steps, 2000 NLopt/Ceres "
-                      "evaluations)")
+        std::string budgetHelp = "Budget (default: the method's); one iteration is:";
+        for (const OptimizerMethodRow& r : optimizerMethodTable())
+            budgetHelp += std::string("\n    ") + r.name + ": " + r.iteration + " (default " +
+                          std::to_string(r.defaultBudget) + ")";
+        c->add_option("--iterations", j.optimizer.iterations, budgetHelp)
             ->check(CLI::Range(1, 1000000));
         c->add_option("--ftol", j.optimizer.relativeFunctionTolerance,
                       "NLopt/Ceres: stop when the loss changes by less than this fraction (0: off)")
@@ -240,20 +244,26 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
             ->capture_default_str();
         c->add_option("--planes", j.planes,
                       "Independent estimates of T (seeds seed+k) cycled by the optimizer, one "
-                      "per step (stochastic, as the paper's loop; default 1, paper-loop 8)")
+                      "per step (stochastic, as the paper's loop; default: the method's, 1, "
+                      "paper-loop " +
+                          std::to_string(methodRow(OptimizerMethod::PaperLoop).defaultPlanes) + ")")
             ->check(CLI::Range(1, 1000));
-        c->add_option("--starts", j.starts,
-                      "Multistart: optimize from each and keep the lowest training loss "
-                      "(const:V, random:SEED, envmap:FILE, specular, studio)")
-            ->delimiter(',');
+        c->add_option_function<std::vector<std::string>>(
+             "--starts",
+             [&j](const std::vector<std::string>& specs) {
+                 j.starts.clear();
+                 for (const std::string& spec : specs)
+                     j.starts.push_back(parseInitialState(spec, "--starts"));
+             },
+             "Multistart: optimize from each and keep the lowest training loss (" +
+                 initialSpecForms() + ")")
+            ->delimiter(',')
+            ->excludes(init);
         c->add_option("--continuation", j.continuation,
                       "λ factors optimized in turn before λ itself (e.g. 4,2)")
             ->delimiter(',');
-        c->add_option("--preset", a->preset,
-                      "paper: the paper's experiment exactly (eq. 2, lambda 30, E0 = 0.5, Adam lr "
-                      "0.02 x 100, a fresh sample set of the scene's spp every iteration: 100 "
-                      "estimates of T); fixes those settings")
-            ->check(CLI::IsMember(optimizePresets()));
+        addChoice(c, "--preset", a->preset, optimizePresetTable(),
+                  "Settings fixed together (they override the options they fix)");
         addTraceOptions(c, j.precompute);
         c->add_option("-o,--output", a->out, "Output directory")->capture_default_str();
         c->callback([a, &run] { run = [a] { return runOptimize(*a); }; });

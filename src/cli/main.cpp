@@ -37,6 +37,9 @@ int main(int argc, char** argv) {
     } catch (const CLI::ParseError& e) {
         app.exit(e);
         return kUsageError;
+    } catch (const sl::InputError& e) {  // a value the library's parser refused (cli/Common.h)
+        std::fprintf(stderr, "error: %s\n", withFlags(app, e.what()).c_str());
+        return kRuntimeError;
     }
     try {
         return run ? run() : kUsageError;

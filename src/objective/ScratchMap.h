@@ -47,8 +47,8 @@ struct ScratchMap {
 };
 
 /// Computes the scratch map of a width×height height map (row-major, row 0 first).
-/// Throws InputError for bad options (naming --kernel/--patch/--threshold), a size mismatch,
-/// a map smaller than 1×1 or a non-finite height (naming its row and column).
+/// Throws InputError for bad options (naming option 'kernel', 'patch' or 'threshold'), a size
+/// mismatch, a map smaller than 1×1 or a non-finite height (naming its row and column).
 ScratchMap computeScratchMap(std::span<const float> heights, int width, int height,
                              const ScratchMapOptions& options = {});
 

@@ -1,5 +1,5 @@
 // TransportLoss: the objective as a function of the env map E through a transport matrix,
-// with its exact gradient  dLoss/dE = Tᵀ·dLoss/dY + dReg/dE  (DESIGN.md "The one idea").
+// with its exact gradient  dLoss/dE = Tᵀ·dLoss/dY + dReg/dE  (docs/DESIGN.md "The one idea").
 #pragma once
 
 #include <span>

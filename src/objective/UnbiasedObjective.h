@@ -1,4 +1,4 @@
-// The noise-unbiased objective (`--objective unbiased`; DESIGN.md "Noise is the trap").
+// The noise-unbiased objective (objective `unbiased`; docs/DESIGN.md "Noise is the trap").
 //
 // Monte Carlo noise raises Σ|ΔY| by itself, so the paper's S/G rewards noise. With two
 // independent, unbiased half-sample images Y_a and Y_b of the same pixels (T = (T_a + T_b)/2),
@@ -10,7 +10,7 @@
 //
 //   L_grad,u = sqrt(S / G_u)          the reciprocal root-mean-square luminance gradient
 //                                     (eq. 2 is the reciprocal mean absolute gradient, S/G)
-//   L_reg    = mean(E²)               (--reg envmap), or Σ_p Y_a,p·Y_b,p / (W·H) (--reg image:
+//   L_reg    = mean(E²)               (reg envmap), or Σ_p Y_a,p·Y_b,p / (W·H) (reg image:
 //                                     the unbiased estimate of Σ Ȳ²/(W·H))
 //   Loss     = L_grad,u + λ·L_reg
 //

@@ -252,10 +252,6 @@ GradientEstimate spsaGradient(const RenderLoss& loss, std::span<const double> E,
     return g;
 }
 
-std::vector<std::string> blackBoxMethods() {
-    return {"fd-adam", "spsa"};
-}
-
 namespace {
 
 void validateCommon(const RenderLoss& loss, const std::vector<double>& E,
@@ -311,7 +307,7 @@ OptimizerSummary minimizeFdAdam(const RenderLoss& loss, std::vector<double>& E,
         return evaluations <= 0 ? 0 : static_cast<int>(rendersAfter[evaluations - 1]);
     };
     OptimizerOptions o = options;
-    o.method = "adam";
+    o.method = OptimizerMethod::Adam;
     if (options.callback) {
         o.callback = [&](const IterationRecord& r, std::span<const double> x) {
             IterationRecord rr = r;
@@ -321,7 +317,7 @@ OptimizerSummary minimizeFdAdam(const RenderLoss& loss, std::vector<double>& E,
     }
     OptimizerSummary s = minimize(p, E, o);
     for (IterationRecord& r : s.history) r.evaluations = rendersAt(r.evaluations);
-    s.method = "fd-adam";
+    s.method = methodName(OptimizerMethod::FdAdam);
     s.evaluations = static_cast<int>(loss.renders() - renders0);
     s.settings = fdSettings(fd) + "; Adam " + s.settings + "; evaluations = renders";
     return s;
@@ -348,7 +344,7 @@ OptimizerSummary minimizeSpsa(const RenderLoss& loss, std::vector<double>& E,
     const size_t n = E.size();
     for (double& e : E) e = std::clamp(e, 0.0, 1.0);
     OptimizerSummary s;
-    s.method = "spsa";
+    s.method = methodName(OptimizerMethod::Spsa);
     s.dimension = n;
     s.lower = 0;
     s.upper = 1;
@@ -424,11 +420,17 @@ OptimizerSummary minimizeSpsa(const RenderLoss& loss, std::vector<double>& E,
 OptimizerSummary minimizeBlackBox(const RenderLoss& loss, std::vector<double>& E,
                                   const OptimizerOptions& options,
                                   const BlackBoxOptions& blackBox) {
-    if (options.method != "fd-adam" && options.method != "spsa")
-        throw inputError("optimizer method", "'" + options.method + "' is not a black-box method",
-                         "use fd-adam or spsa");
+    if (methodRow(options.method).gradient != GradientSource::Renderer) {
+        std::string list;
+        for (const std::string& m : blackBoxMethods()) list += (list.empty() ? "" : ", ") + m;
+        throw inputError(
+            "optimizer method",
+            std::string("'") + methodName(options.method) + "' is not a black-box method",
+            "use one of: " + list);
+    }
     validateCommon(loss, E, options);
-    if (options.method == "fd-adam") return minimizeFdAdam(loss, E, options, blackBox.fd);
+    if (options.method == OptimizerMethod::FdAdam)
+        return minimizeFdAdam(loss, E, options, blackBox.fd);
     return minimizeSpsa(loss, E, options, blackBox.spsa);
 }
 

@@ -1,7 +1,7 @@
 // Black-box gradients: the renderer as a function E → loss, differentiated by finite differences
 // (forward / central, per texel) and by SPSA (Spall), and the optimizers that use them
 // (`fd-adam`, `spsa`). They are the baselines the exact gradient Tᵀ·dL/dY replaces
-// (DESIGN.md "Black-box baselines and validation").
+// (docs/DESIGN.md "Black-box baselines and validation").
 //
 // THE BLACK BOX (RenderLoss): E (doubles in [0, 1]) → the renderer's float32 env map →
 // render(scene, env, options with a seed) → luminance Y of the RGB image → ImageObjective::
@@ -132,9 +132,6 @@ struct BlackBoxOptions {
     FdOptions fd;      // fd-adam
     SpsaOptions spsa;  // spsa
 };
-
-/// "fd-adam", "spsa".
-std::vector<std::string> blackBoxMethods();
 
 /// Minimizes the black-box loss over [0, 1]^N from E (in/out), method = options.method:
 ///   fd-adam  sl::minimize's Adam (options.learningRate, beta1, beta2, epsilon, iterations,

@@ -115,10 +115,21 @@ void minimizeNlopt(Run& run, std::vector<double>& x) {
     const unsigned n = static_cast<unsigned>(run.dimension());
     OptimizerSummary& s = run.summary;
 
+    const bool mlsl = o.method == OptimizerMethod::Mlsl;
     nlopt::algorithm algorithm = nlopt::LD_LBFGS;
-    if (o.method == "mma") algorithm = nlopt::LD_MMA;
-    if (o.method == "ccsaq") algorithm = nlopt::LD_CCSAQ;
-    if (o.method == "mlsl") algorithm = nlopt::G_MLSL_LDS;
+    switch (o.method) {
+        case OptimizerMethod::Mma:
+            algorithm = nlopt::LD_MMA;
+            break;
+        case OptimizerMethod::Ccsaq:
+            algorithm = nlopt::LD_CCSAQ;
+            break;
+        case OptimizerMethod::Mlsl:
+            algorithm = nlopt::G_MLSL_LDS;
+            break;
+        default:  // lbfgs (minimize() sends only NLopt's methods here)
+            break;
+    }
 
     nlopt::opt opt(algorithm, n);
     opt.set_lower_bounds(run.problem().lower);
@@ -126,7 +137,7 @@ void minimizeNlopt(Run& run, std::vector<double>& x) {
     opt.set_maxeval(o.iterations);
     s.settings = std::string("NLopt ") + opt.get_algorithm_name() +
                  "; maxeval = iterations = " + std::to_string(o.iterations);
-    if (o.method == "mlsl") {
+    if (mlsl) {
         nlopt::opt local(nlopt::LD_LBFGS, n);
         const double localFtol =
             o.relativeFunctionTolerance > 0 ? o.relativeFunctionTolerance : 1e-8;
@@ -172,9 +183,8 @@ void minimizeNlopt(Run& run, std::vector<double>& x) {
                        " of NLopt's requests repeated an evaluated point (not re-evaluated)";
     } catch (const nlopt::roundoff_limited&) {
         if (run.progressed())
-            outcome = o.method == "mlsl"
-                          ? "a local search hit roundoff, which ends MLSL (not an error)"
-                          : "converged to roundoff (NLopt roundoff-limited after progress)";
+            outcome = mlsl ? "a local search hit roundoff, which ends MLSL (not an error)"
+                           : "converged to roundoff (NLopt roundoff-limited after progress)";
         else {
             outcome = "roundoff-limited before any progress (does the gradient match the loss?)";
             s.failed = true;
@@ -188,18 +198,17 @@ void minimizeNlopt(Run& run, std::vector<double>& x) {
         throw;
     } catch (const std::invalid_argument& e) {
         if (!c.error && !c.stoppedByCallback)
-            throw std::runtime_error("minimize (method '" + o.method +
+            throw std::runtime_error("minimize (method '" + s.method +
                                      "'): NLopt rejected its arguments: " + e.what());
     } catch (const std::runtime_error& e) {  // NLOPT_FAILURE
         if (!c.error && !c.stoppedByCallback) {
             const std::string what = e.what();
             outcome = "NLopt failure";
             if (what != "nlopt failure") outcome += ": " + what;
-            if (o.method == "lbfgs" || o.method == "mlsl")
-                outcome +=
-                    std::string(o.method == "mlsl" ? " in a local L-BFGS search (ends MLSL)" : "") +
-                    "; L-BFGS found no decrease along its direction: a gradient that does "
-                    "not match the loss, or a kink (try the objective's smooth |x|)";
+            if (o.method == OptimizerMethod::Lbfgs || mlsl)
+                outcome += std::string(mlsl ? " in a local L-BFGS search (ends MLSL)" : "") +
+                           "; L-BFGS found no decrease along its direction: a gradient that does "
+                           "not match the loss, or a kink (try the objective's smooth |x|)";
             s.failed = true;
         }
     }

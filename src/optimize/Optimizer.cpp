@@ -56,7 +56,7 @@ namespace detail {
 
 Run::Run(const Problem& problem, const OptimizerOptions& options)
     : problem_(problem), options_(options) {
-    summary.method = options.method;
+    summary.method = methodName(options.method);
     summary.dimension = problem.dimension;
     summary.lower = problem.lower;
     summary.upper = problem.upper;
@@ -86,7 +86,7 @@ double Run::evaluate(std::span<const double> x, std::span<double> grad, bool reu
     ++evaluations_;
 
     auto fail = [&](const std::string& what) {
-        throw std::runtime_error("minimize (method '" + options_.method + "'): the objective " +
+        throw std::runtime_error("minimize (method '" + summary.method + "'): the objective " +
                                  what + " at evaluation " + std::to_string(evaluations_) +
                                  ", iteration " + std::to_string(lastIteration() + 1) +
                                  "; stopping (no NaN leaves the optimizer)");
@@ -133,18 +133,15 @@ void Run::finish(std::span<const double> x) {
 
 namespace {
 
-const std::vector<std::string> kMethods = {"adam", "lbfgs", "mma", "ccsaq", "mlsl", "ceres-lbfgs"};
-
-std::string methodList() {
-    std::string s;
-    for (const auto& m : kMethods) s += (s.empty() ? "" : ", ") + m;
-    return s;
-}
-
 void validate(const Problem& problem, const std::vector<double>& x, const OptimizerOptions& o) {
-    if (std::find(kMethods.begin(), kMethods.end(), o.method) == kMethods.end())
-        throw inputError("optimizer method", "unknown method '" + o.method + "'",
-                         "use one of: " + methodList());
+    const OptimizerMethodRow& row = methodRow(o.method);
+    if (row.gradient != GradientSource::Exact || row.runs != o.method) {
+        std::string list;
+        for (const std::string& m : optimizerMethods()) list += (list.empty() ? "" : ", ") + m;
+        throw inputError("optimizer method",
+                         std::string("'") + row.name + "' is not a method minimize() runs",
+                         "use one of: " + list);
+    }
     auto bad = [](const std::string& field, const std::string& problemText,
                   const std::string& fix) { return inputError(field, problemText, fix); };
     if (o.iterations < 1)
@@ -235,22 +232,30 @@ std::string sci(double v) {
 
 }  // namespace
 
-std::vector<std::string> optimizerMethods() {
-    return kMethods;
-}
-
 OptimizerSummary minimize(const Problem& problem, std::vector<double>& x,
                           const OptimizerOptions& options) {
     validate(problem, x, options);
     for (double& xi : x) xi = detail::clampTo(xi, problem.lower, problem.upper);
 
     detail::Run run(problem, options);
-    if (options.method == "adam")
-        minimizeAdam(run, x);
-    else if (options.method == "ceres-lbfgs")
-        detail::minimizeCeres(run, x);
-    else
-        detail::minimizeNlopt(run, x);
+    switch (options.method) {
+        case OptimizerMethod::Adam:
+            minimizeAdam(run, x);
+            break;
+        case OptimizerMethod::CeresLbfgs:
+            detail::minimizeCeres(run, x);
+            break;
+        case OptimizerMethod::Lbfgs:
+        case OptimizerMethod::Mma:
+        case OptimizerMethod::Ccsaq:
+        case OptimizerMethod::Mlsl:
+            detail::minimizeNlopt(run, x);
+            break;
+        case OptimizerMethod::FdAdam:
+        case OptimizerMethod::Spsa:
+        case OptimizerMethod::PaperLoop:
+            break;  // refused by validate()
+    }
     run.finish(x);
     return run.summary;
 }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/Problem.h"
+#include "optimize/Methods.h"
 
 namespace sl {
 
@@ -20,8 +21,8 @@ struct IterationRecord {
 };
 
 struct OptimizerOptions {
-    std::string method = "adam";  // adam | lbfgs | mma | ccsaq | mlsl | ceres-lbfgs
-    int iterations = 100;         // Adam steps; NLopt/Ceres: see Optimizer.cpp
+    OptimizerMethod method = OptimizerMethod::Adam;  // a method minimize() runs (Methods.h)
+    int iterations = 100;  // the budget: what one iteration is, per method, in Methods.h
     // Adam (the paper's setting, as Mitsuba 3's optimizer: bias-corrected, x clamped after
     // every step).
     double learningRate = 0.02;
@@ -40,7 +41,7 @@ struct OptimizerOptions {
 };
 
 struct OptimizerSummary {
-    std::string method;
+    std::string method;  // the method's name (or the name of a set-up that ran it)
     int iterations = 0;
     int evaluations = 0;
     double initialLoss = 0, finalLoss = 0;
@@ -58,9 +59,6 @@ struct OptimizerSummary {
     std::string briefReport() const;  // one line
     std::string fullReport() const;   // a short page
 };
-
-/// Names of the available methods.
-std::vector<std::string> optimizerMethods();
 
 /// Minimizes problem from x (in/out; clamped to the bounds first). Throws InputError for an
 /// unknown method or bad options (naming the option), std::runtime_error naming the method and

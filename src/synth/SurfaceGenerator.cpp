@@ -448,21 +448,29 @@ double scallopHeight(double stepover, double ballRadius) {
     return sphereRise(ballRadius, a * a);
 }
 
-GeneratedSurface generateSurface(const SurfaceSpec& spec) {
-    validate(spec);
-    const int W = spec.width, H = spec.height;
-    const double pitch = spec.pitch;
-    const double cx = 0.5 * (W - 1), cz = 0.5 * (H - 1);
-    const double extX = (W - 1) * pitch, extZ = (H - 1) * pitch;
-    const bool ball = spec.process == SurfaceSpec::Process::BallEndRaster;
+namespace {
+
+/// The common geometry of the stages below.
+struct Frame {
+    int W = 0, H = 0;
+    double pitch = 0, cx = 0, cz = 0, extX = 0, extZ = 0;
+    bool ball = false;
+    explicit Frame(const SurfaceSpec& spec)
+        : W(spec.width),
+          H(spec.height),
+          pitch(spec.pitch),
+          cx(0.5 * (spec.width - 1)),
+          cz(0.5 * (spec.height - 1)),
+          extX((spec.width - 1) * spec.pitch),
+          extZ((spec.height - 1) * spec.pitch),
+          ball(spec.process == SurfaceSpec::Process::BallEndRaster) {}
+};
+
+/// Stage 1: the tool paths that can shape the map, with their chatter and tooth phases.
+ToolMarks toolMarks(const SurfaceSpec& spec, const Frame& fr) {
+    const bool ball = fr.ball;
+    const double extX = fr.extX, extZ = fr.extZ;
     const double angle = spec.rasterAngleDeg * kPi / 180.0;
-
-    GeneratedSurface out;
-    out.width = W;
-    out.height = H;
-    out.pitch = pitch;
-
-    // --- tool marks ---
     ToolMarks tm;
     tm.R = spec.toolRadius;
     tm.R2 = tm.R * tm.R;
@@ -509,10 +517,14 @@ GeneratedSurface generateSurface(const SurfaceSpec& spec) {
             tm.toothPhase[i] = tm.f * hashUniform(spec.seed, kPathStream, 2 * k + 1);
         }
     }
-    out.scallop = ball ? scallopHeight(spec.stepover, spec.toolRadius)
-                       : scallopHeight(spec.feedPerTooth, spec.insertNoseRadius);
+    return tm;
+}
 
-    // --- pocket edge (per column) ---
+/// Stage 2: the pocket step's height per column (zero without a pocket edge); sets the edge's
+/// position and half width in `out`.
+std::vector<double> pocketColumns(const SurfaceSpec& spec, const Frame& fr, GeneratedSurface& out) {
+    const int W = fr.W;
+    const double cx = fr.cx, pitch = fr.pitch, extX = fr.extX;
     std::vector<double> pocket(static_cast<size_t>(W), 0.0);
     out.pocketEdgeX = std::numeric_limits<double>::quiet_NaN();
     out.pocketEdgeHalfWidth = std::numeric_limits<double>::quiet_NaN();
@@ -524,7 +536,14 @@ GeneratedSurface generateSurface(const SurfaceSpec& spec) {
                                                            spec.pocketDepth, spec.cornerRadius);
     }
 
-    // --- defects ---
+    return pocket;
+}
+
+/// Stage 3: the scratches, given or drawn (stratified) from the seed; their specs into `out`.
+std::vector<Scratch> placeScratches(const SurfaceSpec& spec, const Frame& fr,
+                                    GeneratedSurface& out) {
+    const int W = fr.W, H = fr.H;
+    const double pitch = fr.pitch, extX = fr.extX, extZ = fr.extZ;
     std::vector<Scratch> scratches;
     if (!spec.scratches.empty()) {
         out.scratches = spec.scratches;
@@ -563,6 +582,15 @@ GeneratedSurface generateSurface(const SurfaceSpec& spec) {
         scratches.push_back(sc);
     }
 
+    return scratches;
+}
+
+/// Stage 4: the gouges (tool digs), given or drawn from the seed off the pocket edge.
+std::vector<Gouge> placeGouges(const SurfaceSpec& spec, const Frame& fr, const ToolMarks& tm,
+                               GeneratedSurface& out) {
+    const int W = fr.W, H = fr.H;
+    const double pitch = fr.pitch, extX = fr.extX, extZ = fr.extZ;
+    const bool ball = fr.ball;
     std::vector<Gouge> gouges;
     const double gougeRadius = ball ? spec.toolRadius : spec.insertNoseRadius;
     if (!spec.gouges.empty()) {
@@ -604,11 +632,17 @@ GeneratedSurface generateSurface(const SurfaceSpec& spec) {
         gouges.push_back({makeSegment(g.x0, g.z0, g.x1, g.z1, reach, pitch, W, H), g, gougeRadius});
     }
 
-    // --- roughness ---
-    Roughness rough;
-    rough.build(spec);
+    return gouges;
+}
 
-    // --- compose, row-parallel (every sample is a pure function of the spec) ---
+/// Stage 5: every sample's height and truth label, row-parallel (each a pure function of the
+/// spec).
+void compose(const SurfaceSpec& spec, const Frame& fr, const ToolMarks& tm,
+             const std::vector<double>& pocket, const std::vector<Scratch>& scratches,
+             const std::vector<Gouge>& gouges, const Roughness& rough, GeneratedSurface& out) {
+    const int W = fr.W, H = fr.H;
+    const double pitch = fr.pitch, cx = fr.cx, cz = fr.cz;
+    const bool ball = fr.ball;
     const size_t N = static_cast<size_t>(W) * H;
     const int chatterStart = static_cast<int>(std::ceil(spec.chatterStartFraction * W));
     const bool labelChatter = spec.chatterStartFraction > 0 && spec.chatterAmplitude > 0;
@@ -665,8 +699,15 @@ GeneratedSurface generateSurface(const SurfaceSpec& spec) {
             }
         }
     });
+}
 
-    // --- description ---
+/// Stage 6: the one-line description of what was generated.
+std::string describe(const SurfaceSpec& spec, const Frame& fr, const ToolMarks& tm,
+                     const GeneratedSurface& out) {
+    const int W = fr.W, H = fr.H;
+    const double pitch = fr.pitch, extX = fr.extX, extZ = fr.extZ;
+    const bool ball = fr.ball;
+    const bool labelChatter = spec.chatterStartFraction > 0 && spec.chatterAmplitude > 0;
     char buf[768];
     const double R = spec.toolRadius, s = spec.stepover;
     std::string marks;
@@ -709,7 +750,28 @@ GeneratedSurface generateSurface(const SurfaceSpec& spec) {
                   spec.chatterWavelength, chatterWhere.c_str(), 1e3 * spec.roughnessRms,
                   out.scratches.size(), out.gouges.size(), pocketText.c_str(),
                   static_cast<unsigned long long>(spec.seed));
-    out.description = buf;
+    return buf;
+}
+
+}  // namespace
+
+GeneratedSurface generateSurface(const SurfaceSpec& spec) {
+    validate(spec);
+    const Frame fr(spec);
+    GeneratedSurface out;
+    out.width = spec.width;
+    out.height = spec.height;
+    out.pitch = spec.pitch;
+    const ToolMarks tm = toolMarks(spec, fr);
+    out.scallop = fr.ball ? scallopHeight(spec.stepover, spec.toolRadius)
+                          : scallopHeight(spec.feedPerTooth, spec.insertNoseRadius);
+    const std::vector<double> pocket = pocketColumns(spec, fr, out);
+    const std::vector<Scratch> scratches = placeScratches(spec, fr, out);
+    const std::vector<Gouge> gouges = placeGouges(spec, fr, tm, out);
+    Roughness rough;
+    rough.build(spec);
+    compose(spec, fr, tm, pocket, scratches, gouges, rough, out);
+    out.description = describe(spec, fr, tm, out);
     return out;
 }
 

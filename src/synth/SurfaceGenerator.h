@@ -1,7 +1,7 @@
 // Synthetic NC-machined surfaces with a ground-truth defect mask: the default demo scene and
 // the test fixture of the scratch-map / visibility code.
 //
-// CONVENTION (frame, as DESIGN.md "Conventions"): units are millimetres. The map has W columns
+// CONVENTION (frame, as docs/DESIGN.md "Conventions"): units are millimetres. The map has W columns
 // and H rows at `pitch` mm; sample (row j, column i) sits at
 //     x = (i − (W−1)/2)·pitch,   z = (j − (H−1)/2)·pitch,   y = heights[j·W + i]
 // so the surface faces +Y, row 0 is at −z and column 0 at −x. Directions in the x–z plane are

@@ -1,5 +1,6 @@
 // TransportMatrix T: for a fixed scene, camera and set of samples, the image is linear in the
-// env map, I = T·E (DESIGN.md "The one idea"). One row per pixel, one column per env-map texel.
+// env map, I = T·E (docs/DESIGN.md "The one idea"). One row per pixel, one column per env-map
+// texel.
 //
 //   channels == 1 ("gray T"): each entry is the luminance Y of the paths' RGB throughput times
 //                 the texel's bilinear weight, so Y(I) = T·E for a gray E.

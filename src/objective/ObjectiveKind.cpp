@@ -1,0 +1,29 @@
+#include "objective/ObjectiveKind.h"
+
+#include "core/Registry.h"
+
+namespace sl {
+
+namespace {
+
+constexpr ObjectiveKindRow kKinds[] = {
+    {ObjectiveKind::Paper, "paper", "the paper's eq. 2 on one estimate of T (rewards noise)", 1},
+    {ObjectiveKind::Unbiased, "unbiased",
+     "products of differences of two independent half-sample images (noise-unbiased)", 2},
+};
+
+}  // namespace
+
+std::span<const ObjectiveKindRow> objectiveKindTable() {
+    return kKinds;
+}
+
+ObjectiveKind parseObjectiveKind(std::string_view name, const std::string& where) {
+    return parseRegistryName(objectiveKindTable(), name, where).value;
+}
+
+const char* objectiveKindName(ObjectiveKind kind) {
+    return registryRow(objectiveKindTable(), kind).name;
+}
+
+}  // namespace sl

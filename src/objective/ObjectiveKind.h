@@ -1,0 +1,29 @@
+// The objectives the optimizers minimize: one table (core/Registry.h), the only list of them.
+//   paper     the paper's eq. 2 on one estimate of T (objective/Objective.h ImageObjective):
+//             its |ΔI| terms include the noise of the estimate, so it rewards noise
+//   unbiased  products of differences of two independent half-sample images
+//             (objective/UnbiasedObjective.h): an unbiased estimate of the noise-free eq.-2
+//             gradient term; needs T's two halves
+#pragma once
+
+#include <span>
+#include <string>
+#include <string_view>
+
+namespace sl {
+
+enum class ObjectiveKind { Paper, Unbiased };
+
+struct ObjectiveKindRow {
+    ObjectiveKind value;
+    const char* name;
+    const char* help;
+    int planes;  // sample sets of T it needs (the unbiased objective: two halves)
+};
+
+std::span<const ObjectiveKindRow> objectiveKindTable();
+/// The kind named `name`; InputError naming `where` and listing the table otherwise.
+ObjectiveKind parseObjectiveKind(std::string_view name, const std::string& where = "objective");
+const char* objectiveKindName(ObjectiveKind kind);
+
+}  // namespace sl
