@@ -32,6 +32,8 @@ constexpr OptimizerMethodRow kMethods[] = {
     {M::PaperLoop, "paper-loop",
      "the paper's loop on T: eq. 2, Adam from 0.5, a fresh estimate of T every step",
      G::Exact, "one Adam step on the next estimate of T", kSteps, 100, M::Adam, 8},
+    {M::Tnewton, "tnewton", "NLopt's preconditioned truncated Newton with restarts",
+     G::Exact, "one evaluation (NLopt's maxeval)", kEvals, 2000, M::Tnewton, 1},
 };
 // clang-format on
 

@@ -15,7 +15,18 @@
 
 namespace sl {
 
-enum class OptimizerMethod { Adam, Lbfgs, Mma, Ccsaq, Mlsl, CeresLbfgs, FdAdam, Spsa, PaperLoop };
+enum class OptimizerMethod {
+    Adam,
+    Lbfgs,
+    Mma,
+    Ccsaq,
+    Mlsl,
+    CeresLbfgs,
+    FdAdam,
+    Spsa,
+    PaperLoop,
+    Tnewton
+};
 
 /// Where a method's gradient comes from.
 enum class GradientSource {

@@ -127,6 +127,9 @@ void minimizeNlopt(Run& run, std::vector<double>& x) {
         case OptimizerMethod::Mlsl:
             algorithm = nlopt::G_MLSL_LDS;
             break;
+        case OptimizerMethod::Tnewton:
+            algorithm = nlopt::LD_TNEWTON_PRECOND_RESTART;
+            break;
         default:  // lbfgs (minimize() sends only NLopt's methods here)
             break;
     }

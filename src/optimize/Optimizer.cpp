@@ -249,6 +249,7 @@ OptimizerSummary minimize(const Problem& problem, std::vector<double>& x,
         case OptimizerMethod::Mma:
         case OptimizerMethod::Ccsaq:
         case OptimizerMethod::Mlsl:
+        case OptimizerMethod::Tnewton:
             detail::minimizeNlopt(run, x);
             break;
         case OptimizerMethod::FdAdam:
