@@ -1,15 +1,17 @@
 // The README's "Scene file" table is the parser's own list of fields and defaults
 // (io/SceneFile.h sceneFileFields()), and each default is defined once: the parser applies the
 // defaults of the scene structs, and the renderer's options agree with the scene's render section;
-// the Layout section names every folder.
+// the Layout section names every folder; the optimizer table names every registered method.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <string>
 
 #include "io/SceneFile.h"
+#include "optimize/Methods.h"
 #include "render/PathTracer.h"
 #include "scene/Scene.h"
 
@@ -102,4 +104,23 @@ TEST(Readme, LayoutListsEveryFolder) {
         }
     for (const char* top : {"tests/", "scripts/", "scenes/", "docs/"})
         EXPECT_NE(layout.find(top), std::string::npos) << top << " is missing from Layout";
+}
+
+TEST(Readme, OptimizerTableNamesEveryRegisteredMethod) {
+    const std::string section = readmeSection("### Optimizers (`--optimizer`)");
+    ASSERT_FALSE(section.empty()) << "README.md has no \"### Optimizers\" section";
+    std::set<std::string> named;  // `name` in the table's first column
+    std::istringstream in(firstTable(section));
+    for (std::string line; std::getline(in, line);) {
+        if (line.rfind("| `", 0) != 0) continue;
+        const std::string first = line.substr(0, line.find(" |", 2));
+        for (size_t a = first.find('`'); a != std::string::npos; a = first.find('`', a + 1)) {
+            const size_t b = first.find('`', a + 1);
+            named.insert(first.substr(a + 1, b - a - 1));
+            a = b;
+        }
+    }
+    std::set<std::string> registered;
+    for (const OptimizerMethodRow& r : optimizerMethodTable()) registered.insert(r.name);
+    EXPECT_EQ(named, registered) << "README.md's optimizer table differs from optimize/Methods.cpp";
 }
