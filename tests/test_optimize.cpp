@@ -273,7 +273,8 @@ TEST(Optimize, CallbackSeesEveryIterationAndCanStop) {
             EXPECT_LE(seen.back().evaluations, s.evaluations);
         }
         EXPECT_EQ(seen.back().iteration, s.iterations);
-        EXPECT_EQ(seen.back().loss, s.finalLoss);
+        // The returned x is the best recorded iterate (the last unless an earlier was lower).
+        EXPECT_EQ(s.history[static_cast<size_t>(s.returnedIteration)].loss, s.finalLoss);
         if (method != "adam") {  // NLopt/Ceres: the loss never increases along the history
             for (size_t i = 1; i < seen.size(); ++i) EXPECT_LE(seen[i].loss, seen[i - 1].loss);
         }
@@ -354,7 +355,10 @@ TEST(Optimize, RejectsUnknownMethodAndBadOptions) {
     expectError("x[1] is nan", [](Options&) {}, p, {0.1, NAN, 0.3, 0.4, 0.5, 0.6});
 }
 
-TEST(Optimize, NonFiniteObjectiveStopsWithError) {
+// A non-finite loss or gradient stops every method. At the start there is no finite state:
+// an error naming the method and the iteration. Later the method returns the best finite
+// iterate it recorded, marked failed, and says why.
+TEST(Optimize, NonFiniteObjectiveStopsWithTheBestFiniteState) {
     const Quadratic q;
     for (const std::string& method : optimizerMethods()) {
         for (int badAt : {1, 4}) {  // the initial point, and a later evaluation
@@ -373,20 +377,62 @@ TEST(Optimize, NonFiniteObjectiveStopsWithError) {
                     }
                     return f;
                 };
-                std::vector<double> x(p.dimension, 0.5);
-                try {
-                    minimize(p, x, Options(method, 200));
-                    ADD_FAILURE() << "no error";
-                } catch (const InputError& e) {
-                    ADD_FAILURE() << "not an input error: " << e.what();
-                } catch (const std::runtime_error& e) {
-                    const std::string msg = e.what();
+                auto expectMessage = [&](const std::string& msg) {
                     EXPECT_NE(msg.find("'" + method + "'"), std::string::npos) << msg;
                     EXPECT_NE(msg.find("iteration"), std::string::npos) << msg;
                     EXPECT_NE(msg.find(inGradient ? "gradient" : "loss (nan)"), std::string::npos)
                         << msg;
+                };
+                std::vector<double> x(p.dimension, 0.5);
+                try {
+                    const OptimizerSummary s = minimize(p, x, Options(method, 200));
+                    EXPECT_GT(badAt, 1) << "the start was not finite, yet a result came back";
+                    EXPECT_TRUE(s.failed);
+                    expectMessage(s.termination);
+                    EXPECT_TRUE(std::isfinite(s.finalLoss));
+                    EXPECT_LE(s.finalLoss, s.initialLoss);
+                    EXPECT_DOUBLE_EQ(s.finalLoss, q.problem().evaluate(x, {}));
+                    for (double v : x) EXPECT_TRUE(std::isfinite(v));
+                } catch (const InputError& e) {
+                    ADD_FAILURE() << "not an input error: " << e.what();
+                } catch (const std::runtime_error& e) {
+                    EXPECT_EQ(badAt, 1) << e.what();
+                    expectMessage(e.what());
                 }
             }
+        }
+    }
+}
+
+// Adam is not a descent method: at a huge λ its steps overshoot and the loss climbs. Every
+// method returns the lowest-loss iterate it recorded, and says so when that is not the last.
+TEST(Optimize, EveryMethodReturnsTheBestIterateItSaw) {
+    Problem p;
+    p.dimension = 2;
+    p.evaluate = [](std::span<const double> x, std::span<double> g) {
+        // A narrow valley at x = (0.3, 0.6) with a huge curvature: lr 0.2 overshoots.
+        const double a = 1e6;
+        if (!g.empty()) {
+            g[0] = 2 * a * (x[0] - 0.3);
+            g[1] = 2 * a * (x[1] - 0.6);
+        }
+        return a * ((x[0] - 0.3) * (x[0] - 0.3) + (x[1] - 0.6) * (x[1] - 0.6));
+    };
+    for (const std::string& method : optimizerMethods()) {
+        SCOPED_TRACE(method);
+        Options o(method, 40);
+        o.learningRate = 0.2;
+        std::vector<double> x{0.35, 0.55};
+        const OptimizerSummary s = minimize(p, x, o);
+        double lowest = s.history.front().loss;
+        for (const IterationRecord& r : s.history) lowest = std::min(lowest, r.loss);
+        EXPECT_DOUBLE_EQ(s.finalLoss, lowest) << s.briefReport();
+        EXPECT_DOUBLE_EQ(s.finalLoss, p.evaluate(x, {}));
+        const bool last = s.returnedIteration == s.history.back().iteration;
+        EXPECT_EQ(last, s.termination.find("returned iteration") == std::string::npos)
+            << s.termination;
+        if (method == "adam") {
+            EXPECT_FALSE(last) << "Adam did not climb: " << s.briefReport();
         }
     }
 }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -14,6 +15,7 @@
 #include "app/Truth.h"
 #include "core/Error.h"
 #include "core/Stopwatch.h"
+#include "core/Text.h"
 #include "io/AtomicFile.h"
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
@@ -322,9 +324,43 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     for (const InitialState& s : o.starts)
         in.startValues.push_back(
             initialEnvMap(s, t.envWidth, t.envHeight, o.rgb, in.scene.get(), maxDepth));
+    // A start whose image has no contrast on the part (E = 0: all black) is a plateau of every
+    // objective (G = 0, gradient 0): no optimizer can leave it.
+    for (size_t k = 0; k < o.starts.size(); ++k) {
+        const std::vector<double> image = renderImage(t, in.startValues[k]);
+        const size_t ch = image.size() / t.rows();
+        double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+        for (size_t pix = 0; pix < t.rows(); ++pix)
+            if (in.mask.pixels[pix])
+                for (size_t c = 0; c < ch; ++c) {
+                    lo = std::min(lo, image[pix * ch + c]);
+                    hi = std::max(hi, image[pix * ch + c]);
+                }
+        if (!(hi > lo))
+            throw inputError(
+                option(o.starts.size() > 1 ? "starts" : "init") + " " + o.starts[k].spec,
+                "lights the part without any contrast (every pixel " + formatNumber(hi) +
+                    "): the objective's G is 0 and its gradient "
+                    "0 there, so no optimizer can leave it",
+                "start from a light that shows the part, e.g. const:0.5 or specular");
+    }
     in.image0 = renderImage(t, in.startValues.front());
     in.metricsInitial =
         metricsFor(t, in.image0, in.mask.pixels, in.startValues.front(), o.rgb, in.truth);
+}
+
+/// What a person must know about a result before trusting it.
+std::vector<std::string> resultWarnings(const OptimizeRun& run, const std::vector<double>& e) {
+    std::vector<std::string> w;
+    if (run.optimizer.failed) w.push_back("the optimizer failed: " + run.optimizer.termination);
+    if (!(run.final.total < run.initial.total))
+        w.push_back("no improvement on the start (loss " + formatNumber(run.initial.total) +
+                    " -> " + formatNumber(run.final.total) + ")");
+    if (std::all_of(e.begin(), e.end(), [](double v) { return v <= 0; }))
+        w.push_back("the light is all black (every texel 0): lower lambda");
+    if (run.final.clamped)
+        w.push_back("the image has no contrast on the mask (the objective's G is at its floor)");
+    return w;
 }
 
 /// One λ's optimization: E* and loss.csv's rows.
@@ -440,6 +476,8 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
         run.judged = judge.score(res.e, run.dir.filename().string());
     }
     spdlog::info("lambda {}: {}", lambda, run.optimizer.briefReport());
+    run.warnings = resultWarnings(run, res.e);
+    for (const std::string& w : run.warnings) spdlog::warn("lambda {}: {}", lambda, w);
     return res;
 }
 
@@ -467,6 +505,9 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     s["iterations"] = run.optimizer.iterations;
     s["evaluations"] = run.optimizer.evaluations;
     s["termination"] = run.optimizer.termination;
+    s["returned_iteration"] = run.optimizer.returnedIteration;
+    s["improved"] = run.final.total < run.initial.total;
+    s["warnings"] = run.warnings;
     s["initial_loss"] = run.initial.total;
     s["final_loss"] = run.final.total;
     s["initial"] = partsJson(run.initial);

@@ -99,6 +99,9 @@ struct OptimizeRun {
     std::string start;                 // the start that won (multistart)
     std::vector<std::pair<std::string, double>> startLosses;
     std::optional<JudgeScore> judged;  // the judge's scores of E* (with the held-out estimate)
+    /// What to know before trusting E*: a failed optimizer, no improvement on the start, an
+    /// all-black light, an image without contrast (also in summary.json and the log).
+    std::vector<std::string> warnings;
 };
 
 struct OptimizeJobSummary {

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 
 #include "core/Color.h"
@@ -348,7 +349,8 @@ OptimizerSummary minimizeSpsa(const RenderLoss& loss, std::vector<double>& E,
     s.dimension = n;
     s.lower = 0;
     s.upper = 1;
-    std::vector<double> lastX;
+    std::vector<double> lastX, bestX;  // bestX: the lowest estimate between the exact ends
+    double bestEstimate = std::numeric_limits<double>::infinity();
     auto record = [&](int iteration, double value, const std::vector<double>& x) {
         if (!std::isfinite(value))
             throw std::runtime_error(
@@ -362,6 +364,10 @@ OptimizerSummary minimizeSpsa(const RenderLoss& loss, std::vector<double>& E,
         r.seconds = clock.seconds();
         s.history.push_back(r);
         lastX = x;
+        if (iteration > 0 && value < bestEstimate) {
+            bestEstimate = value;
+            bestX = x;
+        }
         return !options.callback || options.callback(r, x);
     };
 
@@ -370,6 +376,7 @@ OptimizerSummary minimizeSpsa(const RenderLoss& loss, std::vector<double>& E,
     uint64_t stream = 0;
     const uint64_t base = loss.baseSeed();
 
+    const std::vector<double> firstX = E;
     bool stopped = !record(0, loss.evaluate(E, base, sp.threads).total, E);
     double a = sp.a;
     if (!stopped && a <= 0) {
@@ -408,9 +415,30 @@ OptimizerSummary minimizeSpsa(const RenderLoss& loss, std::vector<double>& E,
         s.termination = "iteration limit reached (" + std::to_string(options.iterations) + ")";
     }
     s.iterations = s.history.back().iteration;
-    s.evaluations = static_cast<int>(loss.renders() - renders0);
     s.initialLoss = s.history.front().loss;
     s.finalLoss = s.history.back().loss;
+    s.returnedIteration = s.iterations;
+    // The best iterate: the exact ends, or the iterate whose free estimate was lowest, scored
+    // exactly (one more render) when that estimate undercuts both.
+    const double lastExact = s.finalLoss;
+    if (!bestX.empty() && bestEstimate < std::min(s.initialLoss, s.finalLoss)) {
+        const double exact = loss.evaluate(bestX, base, sp.threads).total;
+        if (std::isfinite(exact) && exact < s.finalLoss) {
+            E = bestX;
+            s.finalLoss = exact;
+            for (const IterationRecord& r : s.history)
+                if (r.loss == bestEstimate) s.returnedIteration = r.iteration;
+        }
+    }
+    if (s.initialLoss < s.finalLoss) {
+        E = firstX;
+        s.finalLoss = s.initialLoss;
+        s.returnedIteration = 0;
+    }
+    if (s.returnedIteration != s.iterations)
+        s.termination += "; returned iteration " + std::to_string(s.returnedIteration) +
+                         ", the lowest loss seen (the last was " + formatNumber(lastExact) + ")";
+    s.evaluations = static_cast<int>(loss.renders() - renders0);
     s.seconds = clock.seconds();
     return s;
 }

@@ -86,10 +86,10 @@ double Run::evaluate(std::span<const double> x, std::span<double> grad, bool reu
     ++evaluations_;
 
     auto fail = [&](const std::string& what) {
-        throw std::runtime_error("minimize (method '" + summary.method + "'): the objective " +
-                                 what + " at evaluation " + std::to_string(evaluations_) +
-                                 ", iteration " + std::to_string(lastIteration() + 1) +
-                                 "; stopping (no NaN leaves the optimizer)");
+        throw NonFinite("minimize (method '" + summary.method + "'): the objective " + what +
+                        " at evaluation " + std::to_string(evaluations_) + ", iteration " +
+                        std::to_string(lastIteration() + 1) +
+                        "; stopping (no NaN leaves the optimizer)");
     };
     if (!std::isfinite(loss)) fail("returned a non-finite loss (" + formatNumber(loss) + ")");
     for (size_t i = 0; i < grad.size(); ++i)
@@ -115,10 +115,15 @@ bool Run::record(double loss, std::span<const double> x) {
     r.seconds = seconds();
     summary.history.push_back(r);
     lastRecordedX_.assign(x.begin(), x.end());
+    if (bestIteration_ < 0 || loss < bestLoss_) {
+        bestLoss_ = loss;
+        bestIteration_ = r.iteration;
+        bestX_.assign(x.begin(), x.end());
+    }
     return !options_.callback || options_.callback(r, x);
 }
 
-void Run::finish(std::span<const double> x) {
+void Run::finish(std::vector<double>& x) {
     if (summary.history.empty() || !std::equal(x.begin(), x.end(), lastRecordedX_.begin()))
         record(evaluate(x, {}, true), x);
     const auto& h = summary.history;
@@ -126,6 +131,30 @@ void Run::finish(std::span<const double> x) {
     summary.evaluations = evaluations_;
     summary.initialLoss = h.front().loss;
     summary.finalLoss = h.back().loss;
+    summary.returnedIteration = h.back().iteration;
+    if (bestLoss_ < h.back().loss) {
+        x = bestX_;
+        summary.finalLoss = bestLoss_;
+        summary.returnedIteration = bestIteration_;
+        summary.termination += "; returned iteration " + std::to_string(bestIteration_) +
+                               ", the lowest loss seen (the last was " +
+                               formatNumber(h.back().loss) + ")";
+    }
+    summary.seconds = seconds();
+}
+
+void Run::finishAfterNonFinite(const NonFinite& stop, std::vector<double>& x) {
+    if (bestIteration_ < 0) throw std::runtime_error(stop.what());
+    x = bestX_;
+    const auto& h = summary.history;
+    summary.iterations = h.back().iteration;
+    summary.evaluations = evaluations_;
+    summary.initialLoss = h.front().loss;
+    summary.finalLoss = bestLoss_;
+    summary.returnedIteration = bestIteration_;
+    summary.failed = true;
+    summary.termination = std::string(stop.what()) + "; returned iteration " +
+                          std::to_string(bestIteration_) + ", the best finite iterate";
     summary.seconds = seconds();
 }
 
@@ -238,24 +267,29 @@ OptimizerSummary minimize(const Problem& problem, std::vector<double>& x,
     for (double& xi : x) xi = detail::clampTo(xi, problem.lower, problem.upper);
 
     detail::Run run(problem, options);
-    switch (options.method) {
-        case OptimizerMethod::Adam:
-            minimizeAdam(run, x);
-            break;
-        case OptimizerMethod::CeresLbfgs:
-            detail::minimizeCeres(run, x);
-            break;
-        case OptimizerMethod::Lbfgs:
-        case OptimizerMethod::Mma:
-        case OptimizerMethod::Ccsaq:
-        case OptimizerMethod::Mlsl:
-        case OptimizerMethod::Tnewton:
-            detail::minimizeNlopt(run, x);
-            break;
-        case OptimizerMethod::FdAdam:
-        case OptimizerMethod::Spsa:
-        case OptimizerMethod::PaperLoop:
-            break;  // refused by validate()
+    try {
+        switch (options.method) {
+            case OptimizerMethod::Adam:
+                minimizeAdam(run, x);
+                break;
+            case OptimizerMethod::CeresLbfgs:
+                detail::minimizeCeres(run, x);
+                break;
+            case OptimizerMethod::Lbfgs:
+            case OptimizerMethod::Mma:
+            case OptimizerMethod::Ccsaq:
+            case OptimizerMethod::Mlsl:
+            case OptimizerMethod::Tnewton:
+                detail::minimizeNlopt(run, x);
+                break;
+            case OptimizerMethod::FdAdam:
+            case OptimizerMethod::Spsa:
+            case OptimizerMethod::PaperLoop:
+                break;  // refused by validate()
+        }
+    } catch (const detail::NonFinite& stop) {
+        run.finishAfterNonFinite(stop, x);
+        return run.summary;
     }
     run.finish(x);
     return run.summary;

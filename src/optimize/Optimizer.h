@@ -53,8 +53,12 @@ struct OptimizerSummary {
     size_t dimension = 0;
     double lower = 0, upper = 1;
     std::string settings;  // the method's settings, one line, for fullReport()
-    /// history[0] is the initial point; history.back() is the returned x (finalLoss).
+    /// history[0] is the initial point, then one record per iteration. The returned x is the
+    /// best recorded iterate: the record with iteration returnedIteration (finalLoss its loss),
+    /// the last one unless an earlier one was lower (Adam can climb, e.g. at a huge λ).
     std::vector<IterationRecord> history;
+    int returnedIteration = 0;
+    bool improved() const { return finalLoss < initialLoss; }
 
     std::string briefReport() const;  // one line
     std::string fullReport() const;   // a short page

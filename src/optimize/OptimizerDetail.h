@@ -5,6 +5,7 @@
 
 #include <array>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -42,9 +43,13 @@ class Run {
     bool record(double loss, std::span<const double> x);
 
     /// Makes history.back() describe x (recording it, evaluated with reuse, if it is not the
-    /// last recorded point; the callback's answer is then ignored) and fills the summary's
-    /// totals.
-    void finish(std::span<const double> x);
+    /// last recorded point; the callback's answer is then ignored), then returns the best
+    /// recorded iterate in x when one was lower than the last, and fills the summary's totals.
+    void finish(std::vector<double>& x);
+
+    /// After a NonFinite stop: x = the best recorded iterate, the summary says why it stopped.
+    /// Rethrows when nothing finite was recorded (the start itself is not finite).
+    void finishAfterNonFinite(const struct NonFinite& stop, std::vector<double>& x);
 
     int evaluations() const { return evaluations_; }
     int lastIteration() const {
@@ -70,6 +75,16 @@ class Run {
     std::array<CacheEntry, 4> cache_;
     size_t cacheNext_ = 0;
     std::vector<double> lastRecordedX_;
+    double bestLoss_ = 0;
+    int bestIteration_ = -1;
+    std::vector<double> bestX_;
+};
+
+/// Thrown by Run::evaluate when the objective returns a non-finite loss or gradient; minimize()
+/// catches it and returns the best finite iterate (a std::runtime_error for callers of the
+/// methods that do not).
+struct NonFinite : std::runtime_error {
+    using std::runtime_error::runtime_error;
 };
 
 /// Clamps v to [lo, hi].
