@@ -10,6 +10,7 @@
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
 #include "io/SceneFile.h"
+#include "io/StagedDirectory.h"
 #include "scene/EnvMapPresets.h"
 #include "scene/Scene.h"
 
@@ -72,6 +73,9 @@ void writeSideBySide(const std::filesystem::path& stem,
 JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
     if (o.lights.empty() && !o.references)
         throw inputError("judge", "no light to score", "give env-map files or keep the references");
+    // OUTDIR is checked before any work and replaced as a unit (io/StagedDirectory.h).
+    StagedDirectory out(o.outDir);
+    const std::filesystem::path dir = out.path();
     auto scene = loadScene(o.scene);
     const int ew = scene->desc.envmap.width, eh = scene->desc.envmap.height;
     // Load every light before tracing, so a bad file fails fast.
@@ -97,7 +101,6 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
         images.push_back(judge.meanImage(e));
     }
 
-    std::filesystem::create_directories(o.outDir);
     nlohmann::ordered_json j;
     j["scene"] = o.scene.string();
     j["estimate"] = {{"spp", jo.spp},
@@ -111,7 +114,7 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
     j["lights"] = nlohmann::ordered_json::array();
     for (const JudgeScore& s : sum.scores) j["lights"].push_back(toJson(s));
     sum.json = j.dump(2) + "\n";
-    writeTextAtomically(o.outDir / "judge.json", sum.json);
+    writeTextAtomically(dir / "judge.json", sum.json);
 
     std::ostringstream csv;
     csv.precision(10);
@@ -125,8 +128,9 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
         for (const auto& r : s.visibility) csv << ',' << r.visibility << ',' << r.weber;
         csv << '\n';
     }
-    writeTextAtomically(o.outDir / "judge.csv", csv.str());
-    writeSideBySide(o.outDir / "renders", images, t.width, t.height, judge.partMask());
+    writeTextAtomically(dir / "judge.csv", csv.str());
+    writeSideBySide(dir / "renders", images, t.width, t.height, judge.partMask());
+    out.commit();
     return sum;
 }
 

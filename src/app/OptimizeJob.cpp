@@ -14,6 +14,7 @@
 #include "app/Search.h"
 #include "app/Truth.h"
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "core/Stopwatch.h"
 #include "core/Text.h"
 #include "io/AtomicFile.h"
@@ -21,6 +22,7 @@
 #include "io/ImageIO.h"
 #include "io/MaskIO.h"
 #include "io/SceneFile.h"
+#include "io/StagedDirectory.h"
 #include "io/TransportFile.h"
 #include "objective/ImageSpace.h"
 #include "objective/Metrics.h"
@@ -171,6 +173,11 @@ struct Plan {
     bool blackBox = false;                               // gradients through the renderer
     bool tmInput = false;
     std::filesystem::path cacheDir;
+    std::filesystem::path writeDir;  // where OUTDIR is staged (io/StagedDirectory.h)
+    /// Where a path under OUTDIR is written while staged.
+    std::filesystem::path staged(const std::filesystem::path& underOutDir) const {
+        return writeDir / underOutDir.lexically_relative(o.outDir);
+    }
 };
 
 Plan plan(const OptimizeJobOptions& options) {
@@ -352,6 +359,9 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
 /// What a person must know about a result before trusting it.
 std::vector<std::string> resultWarnings(const OptimizeRun& run, const std::vector<double>& e) {
     std::vector<std::string> w;
+    if (run.interrupted)
+        w.push_back("interrupted at iteration " + std::to_string(run.optimizer.iterations) +
+                    ": the light is the best iterate so far");
     if (run.optimizer.failed) w.push_back("the optimizer failed: " + run.optimizer.termination);
     if (!(run.final.total < run.initial.total))
         w.push_back("no improvement on the start (loss " + formatNumber(run.initial.total) +
@@ -420,6 +430,11 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
             row << ',';
         }
         res.rows.push_back(row.str());
+        // Ctrl-C: stop at this iteration; the optimizer returns its best iterate.
+        if (interruptRequested()) {
+            run.interrupted = true;
+            return false;
+        }
         return o.optimizer.callback ? o.optimizer.callback(r, x) : true;
     };
     if (p.blackBox) {
@@ -508,6 +523,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     s["returned_iteration"] = run.optimizer.returnedIteration;
     s["improved"] = run.final.total < run.initial.total;
     s["warnings"] = run.warnings;
+    s["interrupted"] = run.interrupted;
     s["initial_loss"] = run.initial.total;
     s["final_loss"] = run.final.total;
     s["initial"] = partsJson(run.initial);
@@ -548,33 +564,34 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
     const OptimizeRun& run = r.run;
     const TransportMatrix& t = job.transport.file.matrix;
     const std::vector<uint8_t>& mask = in.mask.pixels;
-    std::filesystem::create_directories(run.dir);
-    writeEnvMap(run.dir / "envmap.exr", toEnvMap(r.e, t, o.rgb));
-    writePng(run.dir / "envmap.png", envMapPreview(toEnvMap(r.e, t, o.rgb), 16));
+    const std::filesystem::path dir = p.staged(run.dir);
+    std::filesystem::create_directories(dir);
+    writeEnvMap(dir / "envmap.exr", toEnvMap(r.e, t, o.rgb));
+    writePng(dir / "envmap.png", envMapPreview(toEnvMap(r.e, t, o.rgb), 16));
     const int ch = t.channels == 3 ? 3 : 1;
     const std::vector<double> imageFinal = renderImage(t, r.e);
-    writeRender(run.dir / "render.exr", imageFinal, t.width, t.height, ch);
+    writeRender(dir / "render.exr", imageFinal, t.width, t.height, ch);
     {
         Image i0(t.width, t.height, ch);
         for (size_t i = 0; i < in.image0.size(); ++i) i0.data[i] = static_cast<float>(in.image0[i]);
-        writePng(run.dir / "initial.png", i0);
+        writePng(dir / "initial.png", i0);
     }
     std::ostringstream csv;
     csv << "iteration,evaluations,loss,L_grad,L_reg,seconds,heldout_loss,heldout_paper_loss\n";
     for (const auto& row : r.rows) csv << row << '\n';
-    writeTextAtomically(run.dir / "loss.csv", csv.str());
-    writePng(run.dir / "initial-envmap.png",
+    writeTextAtomically(dir / "loss.csv", csv.str());
+    writePng(dir / "initial-envmap.png",
              envMapPreview(toEnvMap(in.startValues.front(), t, o.rgb), 16));
     {
         std::vector<uint8_t> visible(mask.size());  // masks hold 0/1; the PNG 0/255
         for (size_t i = 0; i < mask.size(); ++i) visible[i] = mask[i] ? 255 : 0;
-        writeMaskPng(run.dir / "mask.png", visible, t.width, t.height);
+        writeMaskPng(dir / "mask.png", visible, t.width, t.height);
     }
     if (!in.mask.scratchCells.empty())
-        writeMaskPng(run.dir / "scratchmap.png", in.mask.scratchCells, in.scene->mapWidth,
+        writeMaskPng(dir / "scratchmap.png", in.mask.scratchCells, in.scene->mapWidth,
                      in.scene->mapHeight);
     const VisibilityMetrics metricsFinal = metricsFor(t, imageFinal, mask, r.e, o.rgb, in.truth);
-    writeTextAtomically(run.dir / "summary.json",
+    writeTextAtomically(dir / "summary.json",
                         runSummaryJson(p, in, job, r, metricsFinal).dump(2) + "\n");
     ReportContent rc;
     rc.title = "scratchlight optimize: " + run.dir.filename().string();
@@ -583,9 +600,9 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
     std::ostringstream title;
     title << "λ = " << run.lambda << ", " << run.optimizer.method << ", "
           << (in.unbiased ? "unbiased" : "paper");
-    fig.runs.push_back(reportRunFromOutDir(run.dir, title.str()));
+    fig.runs.push_back(reportRunFromOutDir(dir, title.str()));
     rc.figures.push_back(fig);
-    writeReport(run.dir / "report.html", rc);
+    writeReport(dir / "report.html", rc);
     return fig.runs.back();
 }
 
@@ -606,7 +623,7 @@ void writeSweep(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
             csv << ',';
         csv << ',' << run.optimizer.seconds << '\n';
     }
-    writeTextAtomically(p.o.outDir / "sweep.csv", csv.str());
+    writeTextAtomically(p.writeDir / "sweep.csv", csv.str());
     ReportContent rc;
     rc.title = "scratchlight optimize: lambda sweep";
     ReportFigure fig;
@@ -614,13 +631,18 @@ void writeSweep(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
     fig.runs = reportRuns;
     fig.combinedLossPlot = true;
     rc.figures.push_back(std::move(fig));
-    writeReport(p.o.outDir / "report.html", rc);
+    writeReport(p.writeDir / "report.html", rc);
 }
 
 }  // namespace
 
 OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
-    const Plan p = plan(options);
+    Plan p = plan(options);
+    // OUTDIR is checked before any work and written as a unit: a failure or Ctrl-C leaves the
+    // previous results as they were.
+    StagedDirectory out(p.o.outDir);
+    p.o.outDir = out.target();
+    p.writeDir = out.path();
     OptimizeJobSummary job;
     Inputs in;
     loadTraining(p, in, job);
@@ -631,8 +653,13 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
         LambdaResult r = optimizeLambda(p, in, job, lambda);
         reportRuns.push_back(writeRunOutputs(p, in, job, r));
         job.runs.push_back(std::move(r.run));
+        if (job.runs.back().interrupted) {  // the λs after it are not run
+            job.interrupted = true;
+            break;
+        }
     }
     if (p.o.lambdas.size() > 1) writeSweep(p, in, job, reportRuns);
+    out.commit();
     return job;
 }
 

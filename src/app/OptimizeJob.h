@@ -12,6 +12,11 @@
 //   report.html  one self-contained page: renders, env maps, loss curve, metrics, settings
 //   initial-envmap.png, mask.png (the loss mask), scratchmap.png (with the scratch mask)
 // A sweep also writes OUTDIR/sweep.csv (one row per λ).
+//
+// OUTDIR is checked before any work and replaced as a unit (io/StagedDirectory.h): a failure
+// leaves the previous results untouched. An interrupt (core/Interrupt.h) stops the running
+// optimizer at its next iteration; its best iterate is written with "interrupted": true and the
+// λs after it are not run.
 #pragma once
 
 #include <filesystem>
@@ -102,6 +107,8 @@ struct OptimizeRun {
     /// What to know before trusting E*: a failed optimizer, no improvement on the start, an
     /// all-black light, an image without contrast (also in summary.json and the log).
     std::vector<std::string> warnings;
+    /// Stopped by an interrupt request (core/Interrupt.h): E* is the best iterate so far.
+    bool interrupted = false;
 };
 
 struct OptimizeJobSummary {
@@ -110,6 +117,7 @@ struct OptimizeJobSummary {
     std::optional<TransportSource> heldOut;    // the judge's estimate
     size_t maskPixels = 0;
     std::vector<OptimizeRun> runs;
+    bool interrupted = false;  // a run was interrupted; the λs after it were not run
 };
 
 OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options);

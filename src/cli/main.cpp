@@ -1,5 +1,9 @@
 // scratchlight: the command line, a thin shell over the library.
-// Exit codes: 0 ok, 1 runtime error (bad input file, I/O, ...), 2 usage error.
+// Exit codes: 0 ok, 1 runtime error (bad input file, I/O, ...), 2 usage error, 128 + signal
+// when interrupted (130 Ctrl-C, 143 SIGTERM; core/Interrupt.h says what is kept).
+#include <signal.h>
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
@@ -9,6 +13,31 @@
 #include "cli/GradientCmds.h"
 #include "cli/PaperCmds.h"
 #include "core/Error.h"
+#include "core/Interrupt.h"
+
+namespace {
+
+/// The first SIGINT/SIGTERM asks the work to stop at its next safe point; a second one exits at
+/// once. Only async-signal-safe calls here.
+extern "C" void onSignal(int signal) {
+    if (sl::interruptRequested()) ::_exit(128 + signal);
+    sl::requestInterrupt(signal);
+    static const char msg[] =
+        "\ninterrupted: stopping at the next safe point (an optimizer keeps its best so far; "
+        "again to quit at once)\n";
+    [[maybe_unused]] const ssize_t n = ::write(STDERR_FILENO, msg, sizeof msg - 1);
+}
+
+void installSignalHandlers() {
+    struct sigaction sa {};
+    sa.sa_handler = onSignal;
+    sigemptyset(&sa.sa_mask);
+    sa.sa_flags = SA_RESTART;
+    sigaction(SIGINT, &sa, nullptr);
+    sigaction(SIGTERM, &sa, nullptr);
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
     using namespace sl::cli;
@@ -41,8 +70,13 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "error: %s\n", withFlags(app, e.what()).c_str());
         return kRuntimeError;
     }
+    installSignalHandlers();
     try {
-        return run ? run() : kUsageError;
+        const int rc = run ? run() : kUsageError;
+        return sl::interruptRequested() ? 128 + sl::interruptSignal() : rc;
+    } catch (const sl::Interrupted&) {
+        std::fprintf(stderr, "interrupted: nothing was written\n");
+        return 128 + sl::interruptSignal();
     } catch (const UsageError& e) {
         std::fprintf(stderr, "error: %s (see --help)\n", e.what());
         return kUsageError;

@@ -75,6 +75,7 @@ RenderLoss::RenderLoss(const Scene& scene, RenderOptions options, const ImageObj
       rgb_(rgb),
       dimension_(static_cast<size_t>(scene.basis.texelCount()) * (rgb ? 3 : 1)) {
     options_.progress = {};
+    options_.interruptible = false;  // Ctrl-C stops the optimizer between steps instead
     if (objective.width() != scene.camera.width() || objective.height() != scene.camera.height())
         throw std::invalid_argument(
             "RenderLoss: the objective's image size (" + std::to_string(objective.width()) + "x" +

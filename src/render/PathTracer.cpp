@@ -10,6 +10,7 @@
 #include <mutex>
 #include <stdexcept>
 
+#include "core/Interrupt.h"
 #include "core/Rng.h"
 #include "core/Stopwatch.h"
 #include "scene/Scene.h"
@@ -67,6 +68,7 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
         paths.reserve(static_cast<size_t>(spp));
         Counters& c = counters.local();
         for (int y = rows.begin(); y < rows.end(); ++y) {
+            if (opt.interruptible) throwIfInterrupted();  // Ctrl-C: stop here, keep nothing
             for (int x = 0; x < W; ++x) {
                 const uint32_t pixel = static_cast<uint32_t>(y * W + x);
                 paths.clear();

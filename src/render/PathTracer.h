@@ -36,6 +36,10 @@ struct RenderOptions {
     /// either half alone is an unbiased estimate (used for the noise-unbiased objective).
     int sampleSets = 1;
     std::function<void(double)> progress;  // fraction done, called from any thread, serialised
+    /// An interrupt request (core/Interrupt.h) stops the trace at the next row by throwing
+    /// Interrupted. Off for the renders inside a black-box optimizer step: the optimizer stops
+    /// at its next iteration instead, keeping its best iterate.
+    bool interruptible = true;
 };
 
 struct TraceSummary {

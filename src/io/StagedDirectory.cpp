@@ -1,0 +1,96 @@
+#include "io/StagedDirectory.h"
+
+#include <fcntl.h>
+#include <stdio.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <system_error>
+
+#include "core/Error.h"
+
+namespace sl {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+bool replaceable(const fs::path& dir) {
+    std::error_code ec;
+    if (fs::is_empty(dir, ec) && !ec) return true;
+    for (const char* f : {StagedDirectory::kMarker, "summary.json", "judge.json"})
+        if (fs::exists(dir / f, ec)) return true;
+    return false;
+}
+
+}  // namespace
+
+StagedDirectory::StagedDirectory(fs::path target) : target_(std::move(target)) {
+    const std::string where = "output directory " + target_.string();
+    if (target_.empty()) throw inputError("output directory", "is empty", "give a directory");
+    fs::path abs = fs::absolute(target_).lexically_normal();
+    if (!abs.has_filename()) abs = abs.parent_path();  // "out/" → "out"
+    std::error_code ec;
+    if (fs::exists(abs, ec)) {
+        if (!fs::is_directory(abs, ec))
+            throw inputError(where, "is a file",
+                             "give a directory (new, or one scratchlight wrote)");
+        if (!replaceable(abs))
+            throw inputError(where,
+                             "exists and holds files scratchlight did not write; it would be "
+                             "replaced as a whole",
+                             "give a new or empty directory, or one scratchlight wrote before");
+    }
+    const fs::path parent = abs.parent_path();
+    fs::create_directories(parent, ec);
+    if (ec || !fs::is_directory(parent))
+        throw inputError(where, "cannot create its parent directory " + parent.string(),
+                         ec ? ec.message() : "a file is in the way");
+    if (::access(parent.c_str(), W_OK | X_OK) != 0)
+        throw inputError(where, "its parent directory " + parent.string() + " is not writable",
+                         "choose a writable location");
+    target_ = abs;
+    // Built in steps: GCC 12 misreads "literal" + std::string chains under -Wrestrict (GCC bug
+    // 105329).
+    std::string name = ".";
+    name += abs.filename().string();
+    name += ".staging-";
+    name += std::to_string(::getpid());
+    staging_ = parent / name;
+    fs::remove_all(staging_, ec);  // a leftover of a killed run with the same pid
+    if (!fs::create_directory(staging_, ec) || ec)
+        throw inputError(where, "cannot create the staging directory " + staging_.string(),
+                         ec ? ec.message() : "");
+    std::ofstream marker(staging_ / kMarker);
+    marker << "written by scratchlight; the directory is replaced as a whole by the next run\n";
+    if (!marker.good())
+        throw inputError(where, "cannot write in the staging directory " + staging_.string());
+}
+
+StagedDirectory::~StagedDirectory() {
+    if (committed_) return;
+    std::error_code ec;
+    fs::remove_all(staging_, ec);
+}
+
+void StagedDirectory::commit() {
+    if (committed_) throw std::logic_error("StagedDirectory::commit called twice");
+    std::error_code ec;
+    const bool existed = fs::exists(target_, ec);
+    int rc = 0;
+    if (existed)
+        rc = ::renameat2(AT_FDCWD, staging_.c_str(), AT_FDCWD, target_.c_str(), RENAME_EXCHANGE);
+    else
+        rc = ::rename(staging_.c_str(), target_.c_str());
+    if (rc != 0)
+        throw inputError(
+            "output directory " + target_.string(),
+            std::string("cannot move the new results into place: ") + std::strerror(errno),
+            "the previous results are unchanged; check the file system");
+    committed_ = true;
+    if (existed) fs::remove_all(staging_, ec);  // the old results, now at the staging name
+}
+
+}  // namespace sl

@@ -1,0 +1,46 @@
+// StagedDirectory: an output directory replaced as a unit. Everything is written into a sibling
+// staging directory; commit() swaps it with the old one in one step (Linux renameat2
+// RENAME_EXCHANGE, or a plain rename when there was none) and then removes the old results. A
+// failure or interruption before commit() removes the staging directory and leaves the previous
+// results exactly as they were: never a mix of old and new, never a stray temporary.
+//
+//   StagedDirectory out(outDir);   // checks the location first, before any work
+//   write(out.path() / "a.exr");   // ... every file of the run
+//   out.commit();                  // outDir now holds exactly the new files
+//
+// Safety: a directory is replaced only if it is empty, or one this class wrote before (it holds
+// the marker file `.scratchlight-output`), or an output of an older scratchlight (it holds a
+// summary.json or judge.json). Anything else (e.g. `-o .` or a folder of the user's) is refused
+// before the work starts, so no command can wipe files it did not write.
+#pragma once
+
+#include <filesystem>
+
+namespace sl {
+
+class StagedDirectory {
+  public:
+    /// The marker file each committed directory holds.
+    static constexpr const char* kMarker = ".scratchlight-output";
+
+    /// Checks that `target` can be (re)placed: not a file, not a directory of someone else's,
+    /// its parent creatable and writable; creates the staging directory
+    /// `<parent>/.<name>.staging-<pid>`. Throws InputError naming `target` and the fix.
+    explicit StagedDirectory(std::filesystem::path target);
+    ~StagedDirectory();  // removes the staging directory unless committed
+    StagedDirectory(const StagedDirectory&) = delete;
+    StagedDirectory& operator=(const StagedDirectory&) = delete;
+
+    const std::filesystem::path& path() const { return staging_; }  // write here
+    const std::filesystem::path& target() const { return target_; }
+
+    /// Swaps the staged directory into place and removes the old results. Throws InputError
+    /// naming the target when the swap fails (the old results then stay in place).
+    void commit();
+
+  private:
+    std::filesystem::path target_, staging_;
+    bool committed_ = false;
+};
+
+}  // namespace sl
