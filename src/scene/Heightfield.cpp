@@ -45,6 +45,15 @@ Heightfield::Heightfield(int width, int height, double pitch, std::span<const fl
                          "give the sample spacing in scene units (mm)");
     if (heights.size() != static_cast<size_t>(width) * height)
         throw std::invalid_argument("Heightfield: heights.size() != width*height");
+    for (size_t k = 0; k < heights.size(); ++k)
+        if (!std::isfinite(heights[k]))
+            throw inputError("heightmap",
+                             "sample at row " + std::to_string(k / static_cast<size_t>(width)) +
+                                 ", column " + std::to_string(k % static_cast<size_t>(width)) +
+                                 " is " + (std::isnan(heights[k]) ? "NaN" : "infinite") +
+                                 " (a hole?)",
+                             "fill the holes (e.g. with the neighbours' heights) and save the map "
+                             "again");
     memory_[0] = 0;
     memory_[1] = 0;
 
