@@ -8,6 +8,7 @@ Reads DIR/gradients.csv (one row per method and setting) and, if present, DIR/op
   DIR/speed-vs-error.png   seconds per gradient against relative L2 error vs autodiff (log-log)
   DIR/loss-vs-time.png     loss against wall-clock seconds for whole optimizations
 """
+from atomic_save import savefig  # scripts/atomic_save.py, beside this script
 import csv
 import os
 import re
@@ -78,7 +79,7 @@ def speed_vs_error(rows, out):
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8, loc="best")
     fig.tight_layout()
-    fig.savefig(out, dpi=130)
+    savefig(fig, out, dpi=130)
     plt.close(fig)
 
 
@@ -99,7 +100,7 @@ def loss_vs_time(rows, out):
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(out, dpi=130)
+    savefig(fig, out, dpi=130)
     plt.close(fig)
 
 

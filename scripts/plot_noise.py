@@ -8,6 +8,7 @@ One line per objective and optimizer through the medians over training seeds, ba
 smallest to the largest seed's score, points labelled with the training spp.
 Uses Debian's python3-matplotlib.
 """
+from atomic_save import savefig  # scripts/atomic_save.py, beside this script
 import argparse
 import csv
 import os
@@ -72,7 +73,7 @@ def main():
     fig.suptitle(f"bench noise: held-out estimate at {rows[0]['heldout_spp']} spp; "
                  f"medians over {seeds} training seed(s), bars = min..max; labels = training spp")
     fig.tight_layout()
-    fig.savefig(out, dpi=80)
+    savefig(fig, out, dpi=80)
     print(f"wrote {out}")
 
 

@@ -6,6 +6,7 @@ Reads OUTDIR/{initial.png, render.png, envmap.png, loss.csv, summary.json} and w
 OUTDIR/overview.png: the render before and after, the optimized env map, and the loss curve.
 Uses Debian's python3-matplotlib (run with /usr/bin/python3).
 """
+from atomic_save import savefig  # scripts/atomic_save.py, beside this script
 import argparse
 import csv
 import json
@@ -66,7 +67,7 @@ def main():
                  f"{s['final_loss']:.4g} in {s['seconds_optimize']:.3f} s")
     fig.tight_layout()
     out = os.path.join(a.outdir, "overview.png")
-    fig.savefig(out, dpi=80)
+    savefig(fig, out, dpi=80)
     print(f"wrote {out}")
 
 

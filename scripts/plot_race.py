@@ -2,6 +2,7 @@
 """Pareto plot of `scratchlight bench race`: seconds (precompute + search) against the judge's
 U, one point per configuration (median over seeds), one panel per part.
 Usage: plot_race.py race.csv race.png"""
+from atomic_save import savefig  # scripts/atomic_save.py, beside this script
 import csv
 import sys
 from collections import defaultdict
@@ -42,7 +43,7 @@ def main(src, dst):
         ax.set_title(part)
         ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(dst, dpi=110)
+    savefig(fig, dst, dpi=110)
 
 
 if __name__ == "__main__":
