@@ -185,3 +185,24 @@ TEST(Interrupt, SignalsStopCleanly) {
     after.erase(std::remove(after.begin(), after.end(), "pre.log"), after.end());
     EXPECT_EQ(after, before);
 }
+
+// Out of memory names the size asked for (cli/Memory.cpp), exits 1 and writes nothing.
+TEST(OutOfMemory, SaysTheSizeAskedFor) {
+#if defined(__SANITIZE_ADDRESS__)
+    GTEST_SKIP() << "AddressSanitizer needs more address space than the limit leaves";
+#endif
+    test::TempDir dir("oom");
+    const fs::path out = dir.path() / "huge.exr";
+    const std::string cmd = "bash -c 'ulimit -v 1000000; " + std::string(SL_CLI_PATH) +
+                            " gen-surface " + out.string() + " --width 20000 --height 20000' 2>&1";
+    FILE* f = popen(cmd.c_str(), "r");
+    ASSERT_TRUE(f);
+    std::string output;
+    char buf[4096];
+    for (size_t n; (n = fread(buf, 1, sizeof buf, f)) > 0;) output.append(buf, n);
+    const int status = pclose(f);
+    EXPECT_EQ(WEXITSTATUS(status), 1) << output;
+    EXPECT_NE(output.find("out of memory: an allocation of 1.6 GB failed"), std::string::npos)
+        << output;
+    EXPECT_EQ(entries(dir.path()), std::vector<std::string>{});
+}

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <atomic>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -18,6 +19,10 @@ struct Scene;
 }
 
 namespace sl::cli {
+
+/// The size of the allocation that failed when std::bad_alloc was thrown by operator new
+/// (0: unknown; Memory.cpp).
+extern std::atomic<size_t> gFailedAllocationBytes;
 
 /// Exit codes of every command.
 enum Exit : int { kOk = 0, kRuntimeError = 1, kUsageError = 2 };

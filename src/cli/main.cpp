@@ -77,6 +77,16 @@ int main(int argc, char** argv) {
     } catch (const sl::Interrupted&) {
         std::fprintf(stderr, "interrupted: nothing was written\n");
         return 128 + sl::interruptSignal();
+    } catch (const std::bad_alloc&) {
+        const size_t n = gFailedAllocationBytes.load();
+        const double gb = static_cast<double>(::sysconf(_SC_PHYS_PAGES)) *
+                          static_cast<double>(::sysconf(_SC_PAGE_SIZE)) / 1e9;
+        std::fprintf(stderr,
+                     "error: out of memory: an allocation of %.3g GB failed (this machine has "
+                     "%.3g GB); use a smaller image (camera width/height), fewer spp, or a "
+                     "smaller height map\n",
+                     static_cast<double>(n) / 1e9, gb);
+        return kRuntimeError;
     } catch (const UsageError& e) {
         std::fprintf(stderr, "error: %s (see --help)\n", e.what());
         return kUsageError;
