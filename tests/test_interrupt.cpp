@@ -206,3 +206,32 @@ TEST(OutOfMemory, SaysTheSizeAskedFor) {
         << output;
     EXPECT_EQ(entries(dir.path()), std::vector<std::string>{});
 }
+
+// A full disk (a file-size limit here) while `optimize` writes: exit 1 with the file named, the
+// previous results exactly as they were, nothing stray beside them.
+TEST(StagedDirectory, FullDiskLeavesThePreviousResults) {
+    test::TempDir dir("full-disk");
+    const fs::path scene = fs::path(SL_SOURCE_DIR) / "scenes/default/scene.json";
+    const fs::path tm = dir.path() / "g.tm", out = dir.path() / "out";
+    ASSERT_EQ(test::runCli("precompute " + scene.string() + " --spp 2 -o " + tm.string()).exitCode,
+              0);
+    const std::string args =
+        " optimize " + tm.string() + " --heldout none --iterations 20 -o " + out.string();
+    ASSERT_EQ(test::runCli(args).exitCode, 0);
+    const std::string before = readText(out / "summary.json");
+    const auto names = entries(out);
+    const std::string cmd =
+        "bash -c 'ulimit -f 100; " + std::string(SL_CLI_PATH) + args + " --lambda 7' 2>&1";
+    FILE* f = popen(cmd.c_str(), "r");
+    ASSERT_TRUE(f);
+    std::string output;
+    char buf[4096];
+    for (size_t n; (n = fread(buf, 1, sizeof buf, f)) > 0;) output.append(buf, n);
+    const int status = pclose(f);
+    EXPECT_EQ(WEXITSTATUS(status), 1) << output;
+    EXPECT_NE(output.find(out.string()), std::string::npos) << output;
+    EXPECT_NE(output.find("unchanged"), std::string::npos) << output;
+    EXPECT_EQ(readText(out / "summary.json"), before);
+    EXPECT_EQ(entries(out), names);
+    EXPECT_EQ(entries(dir.path()), (std::vector<std::string>{"g.tm", "out"}));
+}

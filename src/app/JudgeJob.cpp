@@ -76,60 +76,65 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
     // OUTDIR is checked before any work and replaced as a unit (io/StagedDirectory.h).
     StagedDirectory out(o.outDir);
     const std::filesystem::path dir = out.path();
-    auto scene = loadScene(o.scene);
-    const int ew = scene->desc.envmap.width, eh = scene->desc.envmap.height;
-    // Load every light before tracing, so a bad file fails fast.
-    std::vector<std::pair<std::string, EnvMap>> lights;
-    for (const auto& l : o.lights)
-        lights.emplace_back(nameOf(l), loadEnvMap(envFileOf(l), ew, eh, 0));
-    if (o.references) {
-        lights.emplace_back("uniform-0.5", EnvMap::constant(ew, eh, 0.5f));
-        lights.emplace_back("studio", studioEnvMap(ew, eh));
-    }
-    JudgeOptions jo = o.judge;
-    if (jo.cacheDir.empty())
-        jo.cacheDir = std::filesystem::absolute(o.outDir).parent_path() / ".scratchlight-cache";
-    Judge judge(*scene, jo);
-    const TransportMatrix& t = judge.estimate().file.matrix;
-
     JudgeJobSummary sum;
-    sum.estimate = judge.estimate();
-    std::vector<std::vector<double>> images;
-    for (const auto& [name, env] : lights) {
-        const std::vector<double> e = judge.envVector(env);
-        sum.scores.push_back(judge.score(e, name));
-        images.push_back(judge.meanImage(e));
-    }
+    try {
+        auto scene = loadScene(o.scene);
+        const int ew = scene->desc.envmap.width, eh = scene->desc.envmap.height;
+        // Load every light before tracing, so a bad file fails fast.
+        std::vector<std::pair<std::string, EnvMap>> lights;
+        for (const auto& l : o.lights)
+            lights.emplace_back(nameOf(l), loadEnvMap(envFileOf(l), ew, eh, 0));
+        if (o.references) {
+            lights.emplace_back("uniform-0.5", EnvMap::constant(ew, eh, 0.5f));
+            lights.emplace_back("studio", studioEnvMap(ew, eh));
+        }
+        JudgeOptions jo = o.judge;
+        if (jo.cacheDir.empty())
+            jo.cacheDir = std::filesystem::absolute(o.outDir).parent_path() / ".scratchlight-cache";
+        Judge judge(*scene, jo);
+        const TransportMatrix& t = judge.estimate().file.matrix;
 
-    nlohmann::ordered_json j;
-    j["scene"] = o.scene.string();
-    j["estimate"] = {{"spp", jo.spp},
-                     {"seed", jo.seed},
-                     {"max_depth", sum.estimate.file.provenance.maxDepth},
-                     {"fingerprint", sum.estimate.file.provenance.fingerprint},
-                     {"cache_hit", sum.estimate.cacheHit},
-                     {"image", {t.width, t.height}}};
-    j["lambda"] = jo.objective.lambda;
-    if (!jo.truth.empty()) j["truth"] = jo.truth.string();
-    j["lights"] = nlohmann::ordered_json::array();
-    for (const JudgeScore& s : sum.scores) j["lights"].push_back(toJson(s));
-    sum.json = j.dump(2) + "\n";
-    writeTextAtomically(dir / "judge.json", sum.json);
+        sum.estimate = judge.estimate();
+        std::vector<std::vector<double>> images;
+        for (const auto& [name, env] : lights) {
+            const std::vector<double> e = judge.envVector(env);
+            sum.scores.push_back(judge.score(e, name));
+            images.push_back(judge.meanImage(e));
+        }
 
-    std::ostringstream csv;
-    csv.precision(10);
-    csv << "light,eq2,unbiased,mean_E,sparsity";
-    const auto& first = sum.scores.front().visibility;
-    for (const auto& r : first) csv << ",visibility_" << r.label.name << ",weber_" << r.label.name;
-    csv << '\n';
-    for (const JudgeScore& s : sum.scores) {
-        csv << s.name << ',' << s.eq2.total << ',' << s.unbiased.total << ',' << s.meanE << ','
-            << s.sparsity;
-        for (const auto& r : s.visibility) csv << ',' << r.visibility << ',' << r.weber;
+        nlohmann::ordered_json j;
+        j["scene"] = o.scene.string();
+        j["estimate"] = {{"spp", jo.spp},
+                         {"seed", jo.seed},
+                         {"max_depth", sum.estimate.file.provenance.maxDepth},
+                         {"fingerprint", sum.estimate.file.provenance.fingerprint},
+                         {"cache_hit", sum.estimate.cacheHit},
+                         {"image", {t.width, t.height}}};
+        j["lambda"] = jo.objective.lambda;
+        if (!jo.truth.empty()) j["truth"] = jo.truth.string();
+        j["lights"] = nlohmann::ordered_json::array();
+        for (const JudgeScore& s : sum.scores) j["lights"].push_back(toJson(s));
+        sum.json = j.dump(2) + "\n";
+        writeTextAtomically(dir / "judge.json", sum.json);
+
+        std::ostringstream csv;
+        csv.precision(10);
+        csv << "light,eq2,unbiased,mean_E,sparsity";
+        const auto& first = sum.scores.front().visibility;
+        for (const auto& r : first)
+            csv << ",visibility_" << r.label.name << ",weber_" << r.label.name;
         csv << '\n';
+        for (const JudgeScore& s : sum.scores) {
+            csv << s.name << ',' << s.eq2.total << ',' << s.unbiased.total << ',' << s.meanE << ','
+                << s.sparsity;
+            for (const auto& r : s.visibility) csv << ',' << r.visibility << ',' << r.weber;
+            csv << '\n';
+        }
+        writeTextAtomically(dir / "judge.csv", csv.str());
+        writeSideBySide(dir / "renders", images, t.width, t.height, judge.partMask());
+    } catch (const InputError& e) {
+        throw InputError(out.explain(e.what()));
     }
-    writeTextAtomically(dir / "judge.csv", csv.str());
-    writeSideBySide(dir / "renders", images, t.width, t.height, judge.partMask());
     out.commit();
     return sum;
 }

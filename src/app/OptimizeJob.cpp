@@ -176,7 +176,7 @@ struct Plan {
     std::filesystem::path writeDir;  // where OUTDIR is staged (io/StagedDirectory.h)
     /// Where a path under OUTDIR is written while staged.
     std::filesystem::path staged(const std::filesystem::path& underOutDir) const {
-        return writeDir / underOutDir.lexically_relative(o.outDir);
+        return (writeDir / underOutDir.lexically_relative(o.outDir)).lexically_normal();
     }
 };
 
@@ -644,21 +644,25 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
     p.o.outDir = out.target();
     p.writeDir = out.path();
     OptimizeJobSummary job;
-    Inputs in;
-    loadTraining(p, in, job);
-    loadHeldOut(p, in, job);
-    prepareRuns(p, in, job);
-    std::vector<ReportRun> reportRuns;
-    for (double lambda : p.o.lambdas) {
-        LambdaResult r = optimizeLambda(p, in, job, lambda);
-        reportRuns.push_back(writeRunOutputs(p, in, job, r));
-        job.runs.push_back(std::move(r.run));
-        if (job.runs.back().interrupted) {  // the λs after it are not run
-            job.interrupted = true;
-            break;
+    try {
+        Inputs in;
+        loadTraining(p, in, job);
+        loadHeldOut(p, in, job);
+        prepareRuns(p, in, job);
+        std::vector<ReportRun> reportRuns;
+        for (double lambda : p.o.lambdas) {
+            LambdaResult r = optimizeLambda(p, in, job, lambda);
+            reportRuns.push_back(writeRunOutputs(p, in, job, r));
+            job.runs.push_back(std::move(r.run));
+            if (job.runs.back().interrupted) {  // the λs after it are not run
+                job.interrupted = true;
+                break;
+            }
         }
+        if (p.o.lambdas.size() > 1) writeSweep(p, in, job, reportRuns);
+    } catch (const InputError& e) {
+        throw InputError(out.explain(e.what()));
     }
-    if (p.o.lambdas.size() > 1) writeSweep(p, in, job, reportRuns);
     out.commit();
     return job;
 }

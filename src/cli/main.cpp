@@ -35,6 +35,9 @@ void installSignalHandlers() {
     sa.sa_flags = SA_RESTART;
     sigaction(SIGINT, &sa, nullptr);
     sigaction(SIGTERM, &sa, nullptr);
+    // A file-size limit (ulimit -f) makes the write fail with EFBIG, reported as an error with
+    // the file's name, instead of killing the process halfway.
+    signal(SIGXFSZ, SIG_IGN);
 }
 
 }  // namespace

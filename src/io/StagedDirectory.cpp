@@ -93,4 +93,20 @@ void StagedDirectory::commit() {
     if (existed) fs::remove_all(staging_, ec);  // the old results, now at the staging name
 }
 
+std::string StagedDirectory::explain(const std::string& message) const {
+    std::string m = message;
+    const std::string from = staging_.string(), to = target_.string();
+    bool staged = false;
+    for (size_t p = 0; (p = m.find(from, p)) != std::string::npos; p += to.size()) {
+        m.replace(p, from.size(), to);
+        staged = true;
+    }
+    if (!staged) return m;
+    for (size_t p = 0; (p = m.find("/./", p)) != std::string::npos;) m.erase(p, 2);  // "/./" → "/"
+    m += " (the previous results in ";  // appended in steps: GCC 12 -Wrestrict (bug 105329)
+    m += to;
+    m += " are unchanged)";
+    return m;
+}
+
 }  // namespace sl

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 
 namespace sl {
 
@@ -37,6 +38,11 @@ class StagedDirectory {
     /// Swaps the staged directory into place and removes the old results. Throws InputError
     /// naming the target when the swap fails (the old results then stay in place).
     void commit();
+
+    /// A message about a file in the staging directory, said about the target instead (the
+    /// staging directory is gone by the time the user reads it), noting that the previous
+    /// results are unchanged; other messages as they are.
+    std::string explain(const std::string& message) const;
 
   private:
     std::filesystem::path target_, staging_;
