@@ -14,6 +14,7 @@
 #include "core/Rng.h"
 #include "io/TransportFile.h"
 #include "objective/TransportLoss.h"
+#include "objective/UnbiasedObjective.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
 #include "transport/TransportSink.h"

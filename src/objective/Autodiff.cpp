@@ -113,6 +113,21 @@ AutodiffGradient autodiffThroughMatrix(const TransportMatrix& t, const ImageObje
     });
 }
 
+AutodiffGradient autodiffThroughHalves(const TransportMatrix& t, const DefectObjective& objective,
+                                       std::span<const double> E, int threads) {
+    if (t.channels != 1 || t.planes != 2)
+        throw std::invalid_argument(
+            "autodiffThroughHalves: needs a gray transport matrix with two planes");
+    if (E.size() != t.cols())
+        throw std::invalid_argument("autodiffThroughHalves: E has " + std::to_string(E.size()) +
+                                    " values, T " + std::to_string(t.cols()) + " columns");
+    if (static_cast<size_t>(objective.width()) * objective.height() != t.rows())
+        throw std::invalid_argument("autodiffThroughHalves: objective image size != T's rows");
+    return autodiffChunks(E, threads, [&](std::span<const Jet> ej) {
+        return lossThroughHalves<Jet>(t, objective, ej);
+    });
+}
+
 GradientError compareGradients(std::span<const double> g, std::span<const double> ref) {
     if (g.size() != ref.size())
         throw std::invalid_argument("compareGradients: sizes differ (" + std::to_string(g.size()) +

@@ -30,6 +30,7 @@
 #include <span>
 #include <vector>
 
+#include "objective/DefectObjective.h"
 #include "objective/Objective.h"
 #include "render/PathSink.h"
 #include "scene/EnvMapBasis.h"
@@ -89,6 +90,12 @@ template <typename S>
 S lossThroughMatrix(const TransportMatrix& t, const ImageObjective& objective,
                     std::span<const S> E);
 
+/// Loss(E) of the defects objective through the halves of a gray T (channels 1, planes 2):
+/// Y_a = T_a·E, Y_b = T_b·E with T's float entries promoted to S, then objective.value<S>.
+template <typename S>
+S lossThroughHalves(const TransportMatrix& t, const DefectObjective& objective,
+                    std::span<const S> E);
+
 struct AutodiffGradient {
     double loss = 0;
     std::vector<double> gradient;  // dLoss/dE, one value per texel
@@ -101,6 +108,8 @@ struct AutodiffGradient {
 AutodiffGradient autodiffThroughPaths(const PathRecording& paths, const ImageObjective& objective,
                                       std::span<const double> E, int threads = 0);
 AutodiffGradient autodiffThroughMatrix(const TransportMatrix& t, const ImageObjective& objective,
+                                       std::span<const double> E, int threads = 0);
+AutodiffGradient autodiffThroughHalves(const TransportMatrix& t, const DefectObjective& objective,
                                        std::span<const double> E, int threads = 0);
 
 /// Gradient comparison: relative L2 error ‖g − ref‖/‖ref‖ and cosine similarity g·ref/(‖g‖‖ref‖)
@@ -155,6 +164,31 @@ S lossThroughMatrix(const TransportMatrix& t, const ImageObjective& objective,
         Y[r] = acc;
     }
     return objective.value<S>(std::span<const S>(Y), E);
+}
+
+template <typename S>
+S lossThroughHalves(const TransportMatrix& t, const DefectObjective& objective,
+                    std::span<const S> E) {
+    std::vector<S> Ya(t.rows(), S(0.0)), Yb(t.rows(), S(0.0));
+    const size_t cols = t.cols();
+    for (size_t r = 0; r < t.rows(); ++r) {
+        S a(0.0), b(0.0);
+        if (t.storage == TransportStorage::Sparse) {
+            for (uint64_t e = t.rowPtr[r]; e < t.rowPtr[r + 1]; ++e) {
+                a += S(static_cast<double>(t.values[2 * e])) * E[t.colIdx[e]];
+                b += S(static_cast<double>(t.values[2 * e + 1])) * E[t.colIdx[e]];
+            }
+        } else {
+            const float* row = t.values.data() + 2 * r * cols;
+            for (size_t c = 0; c < cols; ++c) {
+                a += S(static_cast<double>(row[2 * c])) * E[c];
+                b += S(static_cast<double>(row[2 * c + 1])) * E[c];
+            }
+        }
+        Ya[r] = a;
+        Yb[r] = b;
+    }
+    return objective.value<S>(std::span<const S>(Ya), std::span<const S>(Yb), E);
 }
 
 }  // namespace sl

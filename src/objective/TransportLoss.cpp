@@ -21,7 +21,8 @@ TransportLoss::TransportLoss(const TransportMatrix& t, const ImageObjective& obj
         throw std::invalid_argument("objective image size != transport matrix rows");
 }
 
-TransportLoss::TransportLoss(const TransportMatrix& t, const UnbiasedObjective& objective, bool rgb)
+TransportLoss::TransportLoss(const TransportMatrix& t, const HalfImageObjective& objective,
+                             bool rgb)
     : t_(t),
       unb_(&objective),
       dimension_(t.cols() * (rgb ? 3 : 1)),
@@ -34,8 +35,8 @@ TransportLoss::TransportLoss(const TransportMatrix& t, const UnbiasedObjective& 
                                     option("rgb") + ")");
     if (t.planes != 2)
         throw std::invalid_argument(
-            "the unbiased objective needs the two halves of T (precompute with two sample sets)");
-    if (static_cast<size_t>(objective.width()) * objective.height() != t.rows())
+            "this objective needs the two halves of T (precompute with two sample sets)");
+    if (static_cast<size_t>(objective.imageWidth()) * objective.imageHeight() != t.rows())
         throw std::invalid_argument("objective image size != transport matrix rows");
 }
 

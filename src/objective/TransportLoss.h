@@ -6,8 +6,8 @@
 #include <vector>
 
 #include "core/Problem.h"
+#include "objective/HalfImageObjective.h"
 #include "objective/Objective.h"
-#include "objective/UnbiasedObjective.h"
 #include "transport/TransportMatrix.h"
 
 namespace sl {
@@ -16,9 +16,9 @@ class TransportLoss {
   public:
     /// rgb: E has 3 values per texel (needs an RGB T); otherwise one (gray).
     TransportLoss(const TransportMatrix& t, const ImageObjective& objective, bool rgb);
-    /// The noise-unbiased objective on the halves of T (t.planes must be 2):
-    /// Y_a = T_a·E, Y_b = T_b·E, gradient T_aᵀ·dL/dY_a + T_bᵀ·dL/dY_b + dReg/dE.
-    TransportLoss(const TransportMatrix& t, const UnbiasedObjective& objective, bool rgb);
+    /// An objective on the halves of T (t.planes must be 2; the unbiased or the defects one):
+    /// Y_a = T_a·E, Y_b = T_b·E, gradient T_aᵀ·dL/dY_a + T_bᵀ·dL/dY_b + dL/dE.
+    TransportLoss(const TransportMatrix& t, const HalfImageObjective& objective, bool rgb);
 
     size_t dimension() const { return dimension_; }
     /// Loss parts at E; fills grad (size dimension()) when it is non-empty.
@@ -37,12 +37,12 @@ class TransportLoss {
     Problem problem(LossParts* last = nullptr, bool fused = true) const;
 
     const TransportMatrix& matrix() const { return t_; }
-    bool unbiased() const { return unb_ != nullptr; }
+    bool onHalves() const { return unb_ != nullptr; }
 
   private:
     const TransportMatrix& t_;
     const ImageObjective* obj_ = nullptr;
-    const UnbiasedObjective* unb_ = nullptr;
+    const HalfImageObjective* unb_ = nullptr;
     size_t dimension_;
     mutable std::vector<double> y_, dLdY_, yb_, dLdYb_;
 

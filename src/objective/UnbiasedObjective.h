@@ -27,11 +27,12 @@
 #include <span>
 #include <vector>
 
+#include "objective/HalfImageObjective.h"
 #include "objective/Objective.h"
 
 namespace sl {
 
-class UnbiasedObjective {
+class UnbiasedObjective final : public HalfImageObjective {
   public:
     /// Same mask and options rules as ImageObjective (smoothAbs is not used: no |x| here).
     UnbiasedObjective(int width, int height, std::vector<uint8_t> mask, ObjectiveOptions options);
@@ -40,7 +41,9 @@ class UnbiasedObjective {
     /// spans are non-empty: dLdYa, dLdYb (width*height), dLdE (E.size()).
     LossParts evaluate(std::span<const double> Ya, std::span<const double> Yb,
                        std::span<const double> E, std::span<double> dLdYa = {},
-                       std::span<double> dLdYb = {}, std::span<double> dLdE = {}) const;
+                       std::span<double> dLdYb = {}, std::span<double> dLdE = {}) const override;
+    int imageWidth() const override { return width(); }
+    int imageHeight() const override { return height(); }
 
     /// G_u alone (for tests and scoring).
     double energy(std::span<const double> Ya, std::span<const double> Yb) const;

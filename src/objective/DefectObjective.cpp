@@ -1,0 +1,155 @@
+#include "objective/DefectObjective.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "core/Error.h"
+
+namespace sl {
+
+namespace {
+
+double pairCount(int W, int H, const std::vector<uint8_t>& mask) {
+    double n = 0;
+    detail::forEachMaskedPair(W, H, mask.data(), [&](size_t, size_t) { n += 1; });
+    return n;
+}
+
+/// The part pixels farther than `margin` pixels (Chebyshev) from every defect pixel.
+std::vector<uint8_t> defaultReference(int W, int H, const std::vector<uint8_t>& part,
+                                      const std::vector<uint8_t>& defects, int margin) {
+    std::vector<uint8_t> near(part.size(), 0);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            if (!defects[static_cast<size_t>(y) * W + x]) continue;
+            for (int v = std::max(0, y - margin); v <= std::min(H - 1, y + margin); ++v)
+                for (int u = std::max(0, x - margin); u <= std::min(W - 1, x + margin); ++u)
+                    near[static_cast<size_t>(v) * W + u] = 1;
+        }
+    std::vector<uint8_t> r(part.size());
+    for (size_t p = 0; p < r.size(); ++p) r[p] = part[p] && !near[p] ? 1 : 0;
+    return r;
+}
+
+}  // namespace
+
+DefectObjective::DefectObjective(int width, int height, std::vector<uint8_t> part,
+                                 std::vector<uint8_t> defects, std::vector<uint8_t> reference,
+                                 ObjectiveOptions options, DefectObjectiveOptions defect)
+    : base_(width, height, std::move(part), options), d_(defect) {
+    const size_t n = static_cast<size_t>(width) * static_cast<size_t>(height);
+    if (defects.size() != n)
+        throw inputError(option("defects"),
+                         "the defect mask has " + std::to_string(defects.size()) +
+                             " pixels, the image " + std::to_string(n),
+                         "give a mask of the image's size");
+    if (!reference.empty() && reference.size() != n)
+        throw inputError(option("reference"),
+                         "the reference mask has " + std::to_string(reference.size()) +
+                             " pixels, the image " + std::to_string(n),
+                         "give a mask of the image's size");
+    if (options.reg != RegTarget::EnvMap)
+        throw inputError(option("reg"), "the defects objective regularises the env map only",
+                         "use reg envmap");
+    if (!(d_.whiteMean > 0) || !std::isfinite(d_.whiteMean))
+        throw std::invalid_argument("DefectObjective: whiteMean must be > 0");
+    if (!(d_.low >= 0 && d_.low < d_.high) || !std::isfinite(d_.high))
+        throw std::invalid_argument("DefectObjective: need 0 <= low < high");
+    const std::vector<uint8_t>& p = mask();
+    defects_.resize(n);
+    for (size_t k = 0; k < n; ++k) defects_[k] = p[k] && defects[k] ? 1 : 0;
+    if (reference.empty()) {
+        reference_ = defaultReference(width, height, p, defects_, 2);
+    } else {
+        reference_.resize(n);
+        for (size_t k = 0; k < n; ++k) reference_[k] = p[k] && reference[k] && !defects_[k];
+    }
+    pairsD_ = pairCount(width, height, defects_);
+    pairsR_ = pairCount(width, height, reference_);
+    if (pairsD_ == 0)
+        throw inputError(option("defects"), "no two neighbouring defect pixels on the part",
+                         "check that the defect mask covers defects the camera sees");
+    if (pairsR_ == 0)
+        throw inputError(option("reference"),
+                         "no two neighbouring defect-free pixels on the part (the defects cover "
+                         "it all)",
+                         "give a defect mask that leaves some clean surface, or a reference mask");
+    for (uint8_t v : p) partPixels_ += v != 0;
+}
+
+LossParts DefectObjective::evaluate(std::span<const double> Ya, std::span<const double> Yb,
+                                    std::span<const double> E, std::span<double> dLdYa,
+                                    std::span<double> dLdYb, std::span<double> dLdE) const {
+    const int W = width(), H = height();
+    const size_t n = static_cast<size_t>(W) * static_cast<size_t>(H);
+    if (Ya.size() != n || Yb.size() != n)
+        throw std::invalid_argument("DefectObjective: half images must have width*height values");
+    if ((!dLdYa.empty() && dLdYa.size() != n) || (!dLdYb.empty() && dLdYb.size() != n) ||
+        (!dLdE.empty() && dLdE.size() != E.size()) || E.empty())
+        throw std::invalid_argument("DefectObjective: spans have the wrong size");
+    detail::checkFinite(Ya, "Ya", "evaluate");
+    detail::checkFinite(Yb, "Yb", "evaluate");
+    detail::checkFinite(E, "E", "evaluate");
+
+    auto energy = [&](const std::vector<uint8_t>& region, double pairs) {
+        double g = 0;
+        detail::forEachMaskedPair(W, H, region.data(), [&](size_t p, size_t q) {
+            g += (Ya[q] - Ya[p]) * (Yb[q] - Yb[p]);
+        });
+        return g / pairs;
+    };
+    LossParts r;
+    r.G = energy(defects_, pairsD_);
+    r.S = energy(reference_, pairsR_);
+    r.clamped = r.G < floor() || r.S < floor();
+    const double phiD = detail::defectLogFloor(r.G, floor()),
+                 phiR = detail::defectLogFloor(r.S, floor());
+    const double dPhiD = 1.0 / std::max(r.G, floor()), dPhiR = 1.0 / std::max(r.S, floor());
+    r.lGrad = phiR - phiD;
+
+    const std::vector<uint8_t>& part = mask();
+    double m = 0, clip = 0;
+    for (size_t p = 0; p < n; ++p) {
+        if (!part[p]) continue;
+        const double y = (Ya[p] + Yb[p]) * 0.5;
+        m += y;
+        clip += y > 1 ? (y - 1) * (y - 1) : 0.0;
+    }
+    m /= partPixels_;
+    clip /= partPixels_;
+    const double w = d_.whiteMean, k = d_.exposureWeight;
+    const double under = std::max(0.0, (d_.low * w - m) / w),
+                 over = std::max(0.0, (m - d_.high * w) / w);
+    const double exposure = k * (under * under + over * over + clip);
+    r.lReg = base_.envMapRegulariser(E, dLdE);
+    r.total = r.lGrad + exposure + options().lambda * r.lReg;
+
+    if (dLdYa.empty() || dLdYb.empty()) return r;
+    std::fill(dLdYa.begin(), dLdYa.end(), 0.0);
+    std::fill(dLdYb.begin(), dLdYb.end(), 0.0);
+    auto addEnergy = [&](const std::vector<uint8_t>& region, double scale) {
+        detail::forEachMaskedPair(W, H, region.data(), [&](size_t p, size_t q) {
+            const double da = Ya[q] - Ya[p], db = Yb[q] - Yb[p];
+            dLdYa[q] += scale * db;
+            dLdYa[p] -= scale * db;
+            dLdYb[q] += scale * da;
+            dLdYb[p] -= scale * da;
+        });
+    };
+    addEnergy(reference_, dPhiR / pairsR_);
+    addEnergy(defects_, -dPhiD / pairsD_);
+    // d/dm of the band terms, then dm/dY = 1/(2·|P|) per half; the clip term per pixel.
+    const double dm = k * (-2.0 * under / w + 2.0 * over / w) / (2.0 * partPixels_);
+    for (size_t p = 0; p < n; ++p) {
+        if (!part[p]) continue;
+        const double y = (Ya[p] + Yb[p]) * 0.5;
+        const double dy = dm + (y > 1 ? k * 2.0 * (y - 1) * 0.5 / partPixels_ : 0.0);
+        dLdYa[p] += dy;
+        dLdYb[p] += dy;
+    }
+    return r;
+}
+
+}  // namespace sl

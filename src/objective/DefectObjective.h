@@ -1,0 +1,82 @@
+// The defect-aware objective (objective `defects`): make the defects' image gradient large
+// relative to the defect-free surface's, on two independent half-sample images (as the unbiased
+// objective), while the image stays usefully exposed.
+//
+// Regions (image space, all within the part mask P): D, the defect pixels; R, the reference
+// (default: the part pixels farther than kCleanMargin pixels from every defect pixel, the judge's
+// "defect-free surface"; objective/DefectVisibility.h). Pairs are right and lower neighbours with
+// both pixels in the region. With Y_a, Y_b the half images and Ȳ = (Y_a + Y_b)/2:
+//
+//   g(X)  = Σ_{pairs p,q ⊂ X} (Y_a,q − Y_a,p)(Y_b,q − Y_b,p) / #pairs(X)
+//           unbiased for the mean squared noise-free gradient in X (the judge's g²)
+//   L_vis = φ(g(R)) − φ(g(D))  = −log(visibility²) where both g are above the floor
+//   φ(g)  = log g for g ≥ g0, else its tangent log g0 + (g − g0)/g0: finite, C¹ and increasing
+//           for any g (a noisy g can be ≤ 0); g0 = 1e-6·w² (an rms gradient of 1/1000 of the
+//           white-furnace brightness w, below anything visible)
+//   m     = mean Ȳ over P;  w = the white-furnace mean (mean over P of T·1, given)
+//   L_exp = κ·[ (max(0, lo·w − m)/w)² + (max(0, m − hi·w)/w)² + mean_P max(0, Ȳ − 1)² ]
+//           keeps the mean brightness within [lo, hi] of the furnace value and off clipping
+//   Loss  = L_vis + L_exp + λ·mean(E²)
+//
+// L_vis is invariant to scaling E; L_exp and λ fix the scale (with λ > 0 the optimum sits near
+// the band's lower edge). The gradient dLoss/dY_a, dLoss/dY_b is exact; value<S>() computes the
+// same loss in any scalar type for the autodiff check (objective/Autodiff.h).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "objective/HalfImageObjective.h"
+#include "objective/Objective.h"
+
+namespace sl {
+
+struct DefectObjectiveOptions {
+    double whiteMean = 0;          // mean over the part of T·1 (the white furnace), > 0
+    double low = 0.2, high = 0.8;  // the brightness band, as fractions of whiteMean
+    double exposureWeight = 10;    // κ
+};
+
+class DefectObjective final : public HalfImageObjective {
+  public:
+    /// part: the loss mask (nonzero inside); defects: nonzero on defect pixels; reference: the
+    /// defect-free region (empty: the default above). All width*height. Throws InputError when
+    /// a region has no pixel pair or a size is wrong (naming option 'defects' / 'reference').
+    DefectObjective(int width, int height, std::vector<uint8_t> part, std::vector<uint8_t> defects,
+                    std::vector<uint8_t> reference, ObjectiveOptions options,
+                    DefectObjectiveOptions defect);
+
+    /// Loss at the half images and E; fills the gradients when the spans are non-empty.
+    /// LossParts: lGrad = L_vis, lReg = mean(E²), G = g(D), S = g(R), clamped when either g is
+    /// below the floor; total includes L_exp.
+    LossParts evaluate(std::span<const double> Ya, std::span<const double> Yb,
+                       std::span<const double> E, std::span<double> dLdYa = {},
+                       std::span<double> dLdYb = {}, std::span<double> dLdE = {}) const override;
+    int imageWidth() const override { return width(); }
+    int imageHeight() const override { return height(); }
+
+    /// The same loss in scalar type S (double, ceres::Jet): the autodiff reference.
+    template <typename S>
+    S value(std::span<const S> Ya, std::span<const S> Yb, std::span<const S> E) const;
+
+    int width() const { return base_.width(); }
+    int height() const { return base_.height(); }
+    const std::vector<uint8_t>& mask() const { return base_.mask(); }
+    const std::vector<uint8_t>& defects() const { return defects_; }
+    const std::vector<uint8_t>& reference() const { return reference_; }
+    const ObjectiveOptions& options() const { return base_.options(); }
+
+    /// g0 of the header: 1e-6·whiteMean².
+    double floor() const { return 1e-6 * d_.whiteMean * d_.whiteMean; }
+
+  private:
+    ImageObjective base_;  // the part mask, options, the env-map regulariser
+    std::vector<uint8_t> defects_, reference_;
+    double pairsD_ = 0, pairsR_ = 0, partPixels_ = 0;
+    DefectObjectiveOptions d_;
+};
+
+}  // namespace sl
+
+#include "objective/DefectObjective_impl.h"

@@ -1,0 +1,163 @@
+// The defect-aware objective (objective/DefectObjective.h): its exact gradient through T's
+// halves against forward-mode autodiff, the analytic groove case (light across a groove shows it,
+// light along it does not), and clear errors for bad masks.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <vector>
+
+#include "TestUtil.h"
+#include "core/Error.h"
+#include "core/Rng.h"
+#include "objective/Autodiff.h"
+#include "objective/DefectObjective.h"
+#include "objective/TransportLoss.h"
+#include "scene/Scene.h"
+#include "transport/TransportSink.h"
+
+using namespace sl;
+
+namespace {
+
+TransportMatrix halves(const Scene& scene, int spp) {
+    RenderOptions o;
+    o.spp = spp;
+    o.maxDepth = 3;
+    o.sampleSets = 2;
+    return precomputeTransport(scene, o, 1).matrix;
+}
+
+/// Mean over the part of T·1: the white-furnace brightness.
+double whiteMean(const TransportMatrix& t) {
+    std::vector<double> one(t.cols(), 1.0), y(t.rows());
+    t.applyLuminance(one, y);
+    double s = 0, n = 0;
+    for (size_t p = 0; p < y.size(); ++p)
+        if (t.objectMask[p]) s += y[p], n += 1;
+    return s / n;
+}
+
+/// Columns [x0, x1) of the image as the defect region.
+std::vector<uint8_t> stripe(const TransportMatrix& t, int x0, int x1) {
+    std::vector<uint8_t> m(t.rows(), 0);
+    for (int y = 0; y < t.height; ++y)
+        for (int x = x0; x < x1; ++x) m[static_cast<size_t>(y) * t.width + x] = 1;
+    return m;
+}
+
+}  // namespace
+
+TEST(DefectObjective, ExactGradientMatchesAutodiff) {
+    SceneDesc d;
+    d.heightmap.pitch = 0.05;
+    d.camera.origin = {0, 2, 2};
+    d.camera.width = d.camera.height = 20;
+    d.render.maxDepth = 3;
+    const Scene scene(d, 32, 32, test::bumpyHeightMap(32));
+    const TransportMatrix t = halves(scene, 8);
+    DefectObjectiveOptions dopt;
+    dopt.whiteMean = whiteMean(t);
+    ObjectiveOptions oo;
+    oo.lambda = 3;
+    const DefectObjective obj(t.width, t.height, t.objectMask, stripe(t, 8, 12), {}, oo, dopt);
+    const TransportLoss loss(t, obj, false);
+    Pcg32 rng(7, 1);
+    // A mid light, a dark one (the band's lower edge is active) and a bright one (clipping).
+    for (double scale : {0.5, 0.02, 3.0}) {
+        SCOPED_TRACE(scale);
+        std::vector<double> E(t.cols());
+        for (double& e : E) e = scale * (0.2 + 0.8 * rng.nextDouble());
+        std::vector<double> g(t.cols());
+        const LossParts p = loss.evaluate(E, g);
+        const AutodiffGradient ad = autodiffThroughHalves(t, obj, E);
+        EXPECT_NEAR(p.total, ad.loss, 1e-12 * std::abs(ad.loss));
+        EXPECT_LT(compareGradients(g, ad.gradient).relativeL2, 1e-9);
+    }
+}
+
+// A V-groove along z on a gently textured plane, seen from straight above: a light from the
+// side (across the groove, elevation twice the wall slope) lights one wall and not the other;
+// the same light turned to come along the groove lights neither. The objective prefers the
+// first by a wide margin.
+TEST(DefectObjective, LightAcrossAGrooveBeatsLightAlongIt) {
+    const int n = 96;
+    const double pitch = 0.0125, halfWidth = 0.1, depth = 0.03;  // walls at atan(0.3) = 16.7°
+    std::vector<float> h(static_cast<size_t>(n) * n);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const double x = (i - 0.5 * (n - 1)) * pitch, z = (j - 0.5 * (n - 1)) * pitch;
+            const double groove =
+                std::abs(x) < halfWidth ? -depth * (1 - std::abs(x) / halfWidth) : 0.0;
+            const double texture = 0.002 * std::sin(2 * std::numbers::pi * x / 0.15) *
+                                   std::sin(2 * std::numbers::pi * z / 0.15);
+            h[static_cast<size_t>(j) * n + i] = static_cast<float>(groove + texture);
+        }
+    SceneDesc d;
+    d.heightmap.pitch = pitch;
+    d.material.params.alphaU = d.material.params.alphaV = 0.15f;
+    d.camera.type = CameraDesc::Type::Orthographic;
+    d.camera.origin = {0, 20, 0};
+    d.camera.target = {0, 0, 0};
+    d.camera.up = {0, 0, -1};
+    d.camera.widthMm = 1.0;
+    d.camera.width = d.camera.height = 40;
+    d.render.maxDepth = 2;
+    const Scene scene(d, n, n, h);
+    const TransportMatrix t = halves(scene, 32);
+    // The defect region: the columns over the groove (|x| < halfWidth).
+    std::vector<uint8_t> groove(t.rows(), 0);
+    for (int y = 0; y < t.height; ++y)
+        for (int x = 0; x < t.width; ++x) {
+            const double wx = ((x + 0.5) / t.width - 0.5) * 1.0;
+            if (std::abs(wx) < 0.8 * halfWidth) groove[static_cast<size_t>(y) * t.width + x] = 1;
+        }
+    DefectObjectiveOptions dopt;
+    dopt.whiteMean = whiteMean(t);
+    ObjectiveOptions oo;
+    oo.lambda = 0;
+    const DefectObjective obj(t.width, t.height, t.objectMask, groove, {}, oo, dopt);
+    const TransportLoss loss(t, obj, false);
+    // A small lamp at 33° from the zenith (rows 4–5 of 25), azimuth +x (column 12: u = 0.25)
+    // or −z (column 0/49: u ≈ 0), as env-map texels (scene/EnvMapBasis.h).
+    auto lamp = [&](int col) {
+        std::vector<double> E(t.cols(), 0.0);
+        for (int row = 4; row <= 5; ++row)
+            for (int dc = -1; dc <= 1; ++dc)
+                E[static_cast<size_t>(row) * t.envWidth + (col + dc + t.envWidth) % t.envWidth] =
+                    1.0;
+        return E;
+    };
+    const LossParts across = loss.evaluate(lamp(12), {}), along = loss.evaluate(lamp(0), {});
+    std::printf("L_vis across %.3f (g_D %.3g, g_R %.3g), along %.3f (g_D %.3g, g_R %.3g)\n",
+                across.lGrad, across.G, across.S, along.lGrad, along.G, along.S);
+    EXPECT_FALSE(across.clamped);
+    // L_vis = −log(visibility²): across must show the groove e times more (in g) at least.
+    EXPECT_LT(across.lGrad, along.lGrad - 1.0)
+        << "across " << across.lGrad << " along " << along.lGrad;
+}
+
+TEST(DefectObjective, BadMasksGetClearErrors) {
+    const int W = 8, H = 8;
+    const std::vector<uint8_t> part(W * H, 1);
+    DefectObjectiveOptions dopt;
+    dopt.whiteMean = 1;
+    auto expectError = [&](const std::string& what, std::vector<uint8_t> defects,
+                           std::vector<uint8_t> reference) {
+        try {
+            DefectObjective(W, H, part, std::move(defects), std::move(reference), {}, dopt);
+            ADD_FAILURE() << what << " accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+        }
+    };
+    expectError(option("defects"), std::vector<uint8_t>(W * H, 0), {});    // empty
+    expectError(option("reference"), std::vector<uint8_t>(W * H, 1), {});  // all defect
+    expectError(option("defects"), std::vector<uint8_t>(10, 1), {});       // wrong size
+    std::vector<uint8_t> some(W * H, 0);
+    some[9] = some[10] = 1;
+    expectError(option("reference"), some, std::vector<uint8_t>(3, 1));  // wrong size
+    DefectObjective ok(W, H, part, some, {}, {}, dopt);
+    EXPECT_EQ(ok.defects()[9], 1);
+}
