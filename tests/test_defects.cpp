@@ -5,7 +5,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <numbers>
+#include <sstream>
 #include <vector>
 
 #include "TestUtil.h"
@@ -160,4 +162,31 @@ TEST(DefectObjective, BadMasksGetClearErrors) {
     expectError(option("reference"), some, std::vector<uint8_t>(3, 1));  // wrong size
     DefectObjective ok(W, H, part, some, {}, {}, dopt);
     EXPECT_EQ(ok.defects()[9], 1);
+}
+
+// `optimize --objective defects` on a generated part: trains on the truth mask, reports the
+// objective; without a defect mask it says which option to give.
+TEST(DefectObjective, OptimizeRunsItOnAGeneratedPart) {
+    test::TempDir dir("defects-cli");
+    const std::string part = (dir.path() / "part.exr").string(),
+                      scene = (dir.path() / "scene.json").string(),
+                      truth = (dir.path() / "part-truth.png").string();
+    ASSERT_EQ(test::runCli("gen-surface " + part +
+                           " --width 160 --height 160 --scratches 3 "
+                           "--chatter-start 0.5 --scene " +
+                           scene + " --image-size 40 --spp 8 --max-depth 3")
+                  .exitCode,
+              0);
+    const auto out = dir.path() / "out";
+    auto r = test::runCli("optimize " + scene + " --objective defects --truth " + truth +
+                          " --heldout none --iterations 200 -o " + out.string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    std::ifstream in(out / "summary.json");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    EXPECT_NE(ss.str().find("\"objective\": \"defects\""), std::string::npos);
+    r = test::runCli("optimize " + scene + " --objective defects --heldout none -o " +
+                     (dir.path() / "out2").string());
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.output.find("--defects"), std::string::npos) << r.output;
 }

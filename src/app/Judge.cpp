@@ -111,6 +111,15 @@ JudgeScore Judge::score(std::span<const double> E, const std::string& name) cons
     }
     s.meanE = E.empty() ? 0 : sum / static_cast<double>(E.size());
     s.sparsity = E.empty() ? 0 : static_cast<double>(dark) / static_cast<double>(E.size());
+    double white = 0, lit = 0;
+    {
+        const std::vector<double> one(E.size(), 1.0);
+        std::vector<double> w(t.rows());
+        t.applyLuminance(one, w);
+        for (size_t p = 0; p < y.size(); ++p)
+            if (partMask()[p]) lit += y[p], white += w[p];
+    }
+    s.brightness = white > 0 ? lit / white : 0.0;
     if (!labels_.empty())
         s.visibility = defectVisibility(t.width, t.height, ya, yb, partMask(), labels_, legend_);
     return s;
@@ -139,6 +148,7 @@ nlohmann::ordered_json toJson(const JudgeScore& s) {
     j["unbiased"] = number(s.unbiased.total);
     j["mean_E"] = s.meanE;
     j["sparsity"] = s.sparsity;
+    j["brightness"] = number(s.brightness);
     nlohmann::ordered_json v = nlohmann::ordered_json::array();
     for (const RegionVisibility& r : s.visibility)
         v.push_back({{"name", r.label.name},

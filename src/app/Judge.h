@@ -58,6 +58,9 @@ struct JudgeScore {
     std::string name;
     LossParts eq2, unbiased;
     double meanE = 0, sparsity = 0;
+    /// Mean luminance over the part relative to the white furnace (E = 1): 1 = as bright as a
+    /// white sky can make it (a well-exposed inspection image sits between 0.05 and 0.8).
+    double brightness = 0;
     std::vector<RegionVisibility> visibility;  // one per truth region (empty without truth)
 };
 

@@ -15,6 +15,7 @@
 #include "app/Truth.h"
 #include "core/Error.h"
 #include "core/Interrupt.h"
+#include "core/Registry.h"
 #include "core/Stopwatch.h"
 #include "core/Text.h"
 #include "io/AtomicFile.h"
@@ -222,7 +223,9 @@ Plan plan(const OptimizeJobOptions& options) {
 /// What every λ run of the job shares.
 struct Inputs {
     std::unique_ptr<Scene> scene;  // loaded once; from T's provenance for a .tm when needed
-    bool unbiased = true;
+    ObjectiveKind kind = ObjectiveKind::Unbiased;
+    bool onHalves() const { return registryRow(objectiveKindTable(), kind).planes == 2; }
+    std::vector<uint8_t> defects, reference;  // the defects objective's regions (image)
     std::vector<const TransportMatrix*> set;  // the training estimates of T
     LossMask mask;
     std::vector<uint8_t> truth;                    // the truth mask in the image (metrics), 255/0
@@ -237,21 +240,24 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     const OptimizeJobOptions& o = p.o;
     // The objective: as given; by default the noise-unbiased one, except for a .tm without
     // halves, which only the paper's eq. 2 can use.
-    in.unbiased = o.objectiveKind ? *o.objectiveKind == ObjectiveKind::Unbiased : !p.tmInput;
+    in.kind = o.objectiveKind ? *o.objectiveKind
+                              : (p.tmInput ? ObjectiveKind::Paper : ObjectiveKind::Unbiased);
     if (p.tmInput) {
         const Stopwatch clock;
         job.transport.file = readTransportFile(o.input);
         job.transport.path = o.input;
         job.transport.secondsTotal = clock.seconds();
-        if (!o.objectiveKind) in.unbiased = job.transport.file.matrix.planes == 2;
+        if (!o.objectiveKind && job.transport.file.matrix.planes == 2)
+            in.kind = ObjectiveKind::Unbiased;
     } else {
         in.scene = loadScene(o.input);
         PrecomputeOptions pre = o.precompute;
         pre.rgb = o.rgb;
-        if (in.unbiased) pre.sampleSets = 2;
+        if (in.onHalves()) pre.sampleSets = 2;
         // eq. 2 rewards noise: without a given spp it trains at no fewer than paperMinSpp (the
         // paper's own loop keeps the scene's spp).
-        if (!in.unbiased && !pre.spp && p.requested != OptimizerMethod::PaperLoop)
+        if (in.kind == ObjectiveKind::Paper && !pre.spp &&
+            p.requested != OptimizerMethod::PaperLoop)
             pre.spp = std::max(in.scene->desc.render.spp, optimizeDefaults().paperMinSpp);
         std::vector<TransportSource> set =
             transportSetForScene(*in.scene, pre, o.planes, p.cacheDir);
@@ -263,16 +269,17 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
         throw inputError(o.input.string(),
                          "is a gray transport matrix; " + option("rgb") + " needs an RGB one",
                          "precompute it with " + option("rgb"));
-    if (in.unbiased && t.planes != 2)
-        throw inputError(
-            o.input.string(),
-            "has no half-sample matrices; " + option("objective") + " unbiased needs them",
-            "precompute it with " + option("halves") + ", or pass the scene file");
+    if (in.onHalves() && t.planes != 2)
+        throw inputError(o.input.string(),
+                         "has no half-sample matrices; " + option("objective") + " " +
+                             objectiveKindName(in.kind) + " needs them",
+                         "precompute it with " + option("halves") + ", or pass the scene file");
     // What needs the scene itself: for a .tm, read from T's provenance.
     bool specularStart = false;
     for (const InitialState& s : o.starts) specularStart |= s.kind == InitialKind::Specular;
     const bool needScene = p.blackBox || o.mask.kind == LossMaskKind::Scratch || specularStart ||
-                           !o.truth.empty() || o.heldOut.mode == HeldOutMode::Judge;
+                           in.kind == ObjectiveKind::Defects || !o.truth.empty() ||
+                           o.heldOut.mode == HeldOutMode::Judge;
     if (!in.scene && needScene) {
         const std::string purpose =
             o.heldOut.mode == HeldOutMode::Judge
@@ -323,6 +330,17 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     const TransportMatrix& t = job.transport.file.matrix;
     in.mask = lossMask(o.mask, t, in.scene.get(), o.scratch);
     job.maskPixels = in.mask.count;
+    if (in.kind == ObjectiveKind::Defects) {
+        const std::filesystem::path& d = o.defects.empty() ? o.truth : o.defects;
+        if (d.empty())
+            throw inputError(option("objective") + " defects", "needs a defect mask",
+                             "give " + option("defects") +
+                                 " MASK.png (height-map space, e.g. "
+                                 "gen-surface's part-truth.png) or " +
+                                 option("truth"));
+        in.defects = projectMaskFile(*in.scene, d);
+        if (!o.reference.empty()) in.reference = projectMaskFile(*in.scene, o.reference);
+    }
     if (!o.truth.empty()) {
         in.truth = projectMaskFile(*in.scene, o.truth);
         if (job.heldOut) in.truthLabels = projectTruth(*in.scene, o.truth);
@@ -389,15 +407,23 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
     ObjectiveOptions oo = o.objective;
     oo.lambda = lambda;
     const std::vector<uint8_t>& mask = in.mask.pixels;
-    ImageObjective objective(t.width, t.height, mask, oo);
-    std::unique_ptr<UnbiasedObjective> unb;
-    if (in.unbiased) unb = std::make_unique<UnbiasedObjective>(t.width, t.height, mask, oo);
-    TransportLoss loss =
-        in.unbiased ? TransportLoss(t, *unb, o.rgb) : TransportLoss(t, objective, o.rgb);
+    ImageObjective objective(t.width, t.height, mask, oo);  // the black box's (eq. 2)
+    SearchInputs si;
+    si.set = in.set;
+    si.mask = mask;
+    si.objective = oo;
+    si.rgb = o.rgb;
+    si.scene = in.scene.get();
+    si.maxDepth = job.transport.file.provenance.maxDepth;
+    si.startValues = in.startValues;
+    si.defects = in.defects;
+    si.reference = in.reference;
+    const ObjectiveOnT own = objectiveOnT(in.kind, t, si, oo);
+    const TransportLoss& loss = *own.loss;
     std::unique_ptr<HeldOutScorer> scorer;
     if (job.heldOut)
-        scorer =
-            std::make_unique<HeldOutScorer>(job.heldOut->file.matrix, mask, oo, in.unbiased, o.rgb);
+        scorer = std::make_unique<HeldOutScorer>(job.heldOut->file.matrix, mask, oo, in.onHalves(),
+                                                 o.rgb);
 
     LambdaResult res;
     OptimizeRun& run = res.run;
@@ -448,17 +474,9 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
         RenderLoss renderLoss(*in.scene, ro, objective, o.rgb);
         run.optimizer = minimizeBlackBox(renderLoss, res.e, opt, o.blackBox);
     } else {
-        SearchInputs si;
-        si.set = in.set;
-        si.mask = mask;
-        si.objective = oo;
-        si.rgb = o.rgb;
-        si.scene = in.scene.get();
-        si.maxDepth = job.transport.file.provenance.maxDepth;
-        si.startValues = in.startValues;
         si.callback = callback;
         SearchOptions so;
-        so.objective = in.unbiased ? ObjectiveKind::Unbiased : ObjectiveKind::Paper;
+        so.objective = in.kind;
         so.optimizer = o.optimizer;
         so.optimizer.callback = nullptr;
         so.planes = o.planes;
@@ -509,7 +527,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     s["starts"] = starts;
     s["start"] = run.start;
     s["continuation"] = o.continuation;
-    s["objective"] = in.unbiased ? "unbiased" : "paper";
+    s["objective"] = objectiveKindName(in.kind);
     s["lambda"] = run.lambda;
     s["reg"] = o.objective.reg == RegTarget::EnvMap ? "envmap" : "image";
     s["smooth_abs"] = o.objective.smoothAbs;
@@ -599,7 +617,7 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
     fig.title = "before and after";
     std::ostringstream title;
     title << "λ = " << run.lambda << ", " << run.optimizer.method << ", "
-          << (in.unbiased ? "unbiased" : "paper");
+          << objectiveKindName(in.kind);
     fig.runs.push_back(reportRunFromOutDir(dir, title.str()));
     rc.figures.push_back(fig);
     writeReport(dir / "report.html", rc);
@@ -614,7 +632,7 @@ void writeSweep(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
            "final_L_grad,final_L_reg,heldout_loss,heldout_paper_loss,seconds\n";
     for (const OptimizeRun& run : job.runs) {
         csv << std::setprecision(10) << run.lambda << ',' << run.optimizer.method << ','
-            << (in.unbiased ? "unbiased" : "paper") << ',' << run.optimizer.iterations << ','
+            << objectiveKindName(in.kind) << ',' << run.optimizer.iterations << ','
             << run.optimizer.evaluations << ',' << run.initial.total << ',' << run.final.total
             << ',' << run.final.lGrad << ',' << run.final.lReg << ',';
         if (run.heldFinal)

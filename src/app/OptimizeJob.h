@@ -68,6 +68,9 @@ struct OptimizeJobOptions {
     LossMaskSpec mask;            // the loss's region (app/LossMask.h)
     ScratchMapOptions scratch;    // for the scratch mask
     std::filesystem::path truth;  // ground-truth defect mask in height-map space (metrics)
+    /// The defects objective's regions, masks in height-map space (app/Truth.h): the defects
+    /// (empty: `truth`) and the defect-free reference (empty: the part away from the defects).
+    std::filesystem::path defects, reference;
     bool rgb = false;
     HeldOutSource heldOut;  // default: the judge's estimate traced from the scene (cached)
     int heldOutSpp = 0;     // 0: the judge's default (app/Judge.h)

@@ -6,34 +6,51 @@
 #include "app/InitialState.h"
 #include "core/Error.h"
 #include "core/Stopwatch.h"
+#include "objective/DefectObjective.h"
 #include "objective/TransportLoss.h"
 #include "objective/UnbiasedObjective.h"
 
 namespace sl {
 
+ObjectiveOnT objectiveOnT(ObjectiveKind kind, const TransportMatrix& t, const SearchInputs& in,
+                          const ObjectiveOptions& oo) {
+    ObjectiveOnT r;
+    switch (kind) {
+        case ObjectiveKind::Paper: {
+            auto paper = std::make_unique<ImageObjective>(t.width, t.height, in.mask, oo);
+            r.loss = std::make_unique<TransportLoss>(t, *paper, in.rgb);
+            r.paper = std::move(paper);
+            break;
+        }
+        case ObjectiveKind::Unbiased:
+            r.halves = std::make_unique<UnbiasedObjective>(t.width, t.height, in.mask, oo);
+            r.loss = std::make_unique<TransportLoss>(t, *r.halves, in.rgb);
+            break;
+        case ObjectiveKind::Defects: {
+            DefectObjectiveOptions d;
+            d.whiteMean = whiteFurnaceMean(t, in.mask);
+            r.halves = std::make_unique<DefectObjective>(t.width, t.height, in.mask, in.defects,
+                                                         in.reference, oo, d);
+            r.loss = std::make_unique<TransportLoss>(t, *r.halves, in.rgb);
+            break;
+        }
+    }
+    return r;
+}
+
 namespace {
 
 /// The losses of one stage (one λ) on every estimate.
 struct StageLosses {
-    std::vector<std::unique_ptr<ImageObjective>> paper;
-    std::vector<std::unique_ptr<UnbiasedObjective>> unbiased;
-    std::vector<std::unique_ptr<TransportLoss>> losses;
+    std::vector<ObjectiveOnT> parts;
     std::unique_ptr<CyclingLoss> cycling;
 
     StageLosses(const SearchInputs& in, ObjectiveKind kind, const ObjectiveOptions& oo,
                 size_t count) {
         std::vector<const TransportLoss*> ptrs;
         for (size_t k = 0; k < count; ++k) {
-            const TransportMatrix& t = *in.set[k];
-            if (kind == ObjectiveKind::Paper) {
-                paper.push_back(std::make_unique<ImageObjective>(t.width, t.height, in.mask, oo));
-                losses.push_back(std::make_unique<TransportLoss>(t, *paper.back(), in.rgb));
-            } else {
-                unbiased.push_back(
-                    std::make_unique<UnbiasedObjective>(t.width, t.height, in.mask, oo));
-                losses.push_back(std::make_unique<TransportLoss>(t, *unbiased.back(), in.rgb));
-            }
-            ptrs.push_back(losses.back().get());
+            parts.push_back(objectiveOnT(kind, *in.set[k], in, oo));
+            ptrs.push_back(parts.back().loss.get());
         }
         cycling = std::make_unique<CyclingLoss>(ptrs);
     }
@@ -41,7 +58,7 @@ struct StageLosses {
     /// result does not depend on the starts before it.
     Problem problem(LossParts* last) {
         cycling->restart();
-        return losses.size() == 1 ? losses.front()->problem(last) : cycling->problem(last);
+        return parts.size() == 1 ? parts.front().loss->problem(last) : cycling->problem(last);
     }
     LossParts value(std::span<const double> e) { return cycling->evaluate(e, {}); }
 };

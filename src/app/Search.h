@@ -13,13 +13,16 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "app/InitialState.h"
+#include "objective/HalfImageObjective.h"
 #include "objective/Objective.h"
 #include "objective/ObjectiveKind.h"
+#include "objective/TransportLoss.h"
 #include "optimize/Optimizer.h"
 #include "transport/TransportMatrix.h"
 
@@ -39,8 +42,11 @@ struct SearchInputs {
     /// The estimates of T (at least options.planes; set[0] is the main T). The unbiased
     /// objective needs two planes in each.
     std::vector<const TransportMatrix*> set;
-    std::vector<uint8_t> mask;     // the loss mask (image space, nonzero inside)
-    ObjectiveOptions objective;    // λ and the regulariser
+    std::vector<uint8_t> mask;   // the loss mask (image space, nonzero inside)
+    ObjectiveOptions objective;  // λ and the regulariser
+    /// The defects objective's regions (image space, nonzero inside): the defects and the
+    /// reference (empty: the defect-free part, objective/DefectObjective.h).
+    std::vector<uint8_t> defects, reference;
     bool rgb = false;              // E has 3 values per texel
     const Scene* scene = nullptr;  // the `specular` start needs it
     int maxDepth = 0;              // ... and the path length of T
@@ -62,5 +68,15 @@ struct SearchResult {
 };
 
 SearchResult search(const SearchInputs& inputs, const SearchOptions& options);
+
+/// One objective of `kind` on one estimate of T and its loss through T (the objective must
+/// outlive the loss: both are owned here). inputs: the mask, rgb and the defects' regions.
+struct ObjectiveOnT {
+    std::unique_ptr<ImageObjective> paper;       // paper
+    std::unique_ptr<HalfImageObjective> halves;  // unbiased, defects
+    std::unique_ptr<TransportLoss> loss;
+};
+ObjectiveOnT objectiveOnT(ObjectiveKind kind, const TransportMatrix& t, const SearchInputs& inputs,
+                          const ObjectiveOptions& objective);
 
 }  // namespace sl

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "render/PathTracer.h"
 #include "io/TransportFile.h"
+#include "render/PathTracer.h"
 
 namespace sl {
 

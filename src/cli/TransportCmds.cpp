@@ -212,6 +212,12 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         c->add_option("--truth", j.truth,
                       "Ground-truth defect mask in height-map space (e.g. part-truth.png): "
                       "adds the defect contrast to the metrics");
+        c->add_option("--defects", j.defects,
+                      "--objective defects: the defect mask in height-map space (default: "
+                      "--truth)");
+        c->add_option("--reference", j.reference,
+                      "--objective defects: the defect-free reference region in height-map space "
+                      "(default: the part away from the defects)");
         c->add_flag("--rgb", j.rgb, "Optimize an RGB env map (needs/creates an RGB T)");
         c->add_flag("--smooth-abs", j.objective.smoothAbs, "Use sqrt(x²+ε²)−ε for |x|");
         addChoice(c, "--objective", j.objectiveKind, objectiveKindTable(),

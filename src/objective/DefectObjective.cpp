@@ -103,10 +103,10 @@ LossParts DefectObjective::evaluate(std::span<const double> Ya, std::span<const 
     LossParts r;
     r.G = energy(defects_, pairsD_);
     r.S = energy(reference_, pairsR_);
-    r.clamped = r.G < floor() || r.S < floor();
+    r.clamped = r.G < floor();  // the defects show no gradient (the reference may well)
     const double phiD = detail::defectLogFloor(r.G, floor()),
-                 phiR = detail::defectLogFloor(r.S, floor());
-    const double dPhiD = 1.0 / std::max(r.G, floor()), dPhiR = 1.0 / std::max(r.S, floor());
+                 phiR = std::log(std::max(r.S, floor()));
+    const double dPhiD = 1.0 / std::max(r.G, floor()), dPhiR = r.S >= floor() ? 1.0 / r.S : 0.0;
     r.lGrad = phiR - phiD;
 
     const std::vector<uint8_t>& part = mask();
@@ -150,6 +150,16 @@ LossParts DefectObjective::evaluate(std::span<const double> Ya, std::span<const 
         dLdYb[p] += dy;
     }
     return r;
+}
+
+double whiteFurnaceMean(const TransportMatrix& t, const std::vector<uint8_t>& mask) {
+    const std::vector<double> one(t.cols(), 1.0);
+    std::vector<double> y(t.rows());
+    t.applyLuminance(one, y);
+    double sum = 0, n = 0;
+    for (size_t p = 0; p < y.size(); ++p)
+        if (mask[p]) sum += y[p], n += 1;
+    return n > 0 ? sum / n : 0.0;
 }
 
 }  // namespace sl

@@ -9,10 +9,13 @@
 //
 //   g(X)  = Σ_{pairs p,q ⊂ X} (Y_a,q − Y_a,p)(Y_b,q − Y_b,p) / #pairs(X)
 //           unbiased for the mean squared noise-free gradient in X (the judge's g²)
-//   L_vis = φ(g(R)) − φ(g(D))  = −log(visibility²) where both g are above the floor
+//   L_vis = ψ(g(R)) − φ(g(D))  = −log(visibility²) where both g are above the floor
 //   φ(g)  = log g for g ≥ g0, else its tangent log g0 + (g − g0)/g0: finite, C¹ and increasing
-//           for any g (a noisy g can be ≤ 0); g0 = 1e-6·w² (an rms gradient of 1/1000 of the
-//           white-furnace brightness w, below anything visible)
+//           for any g (a noisy g can be ≤ 0), so a light that hides the defects is pushed back
+//   ψ(g)  = log max(g, g0): flat below the floor, so noise that makes the reference's estimate
+//           negative earns nothing (a tangent there would reward it without bound)
+//   g0    = 1e-6·w² (an rms gradient of 1/1000 of the white-furnace brightness w, below
+//           anything visible)
 //   m     = mean Ȳ over P;  w = the white-furnace mean (mean over P of T·1, given)
 //   L_exp = κ·[ (max(0, lo·w − m)/w)² + (max(0, m − hi·w)/w)² + mean_P max(0, Ȳ − 1)² ]
 //           keeps the mean brightness within [lo, hi] of the furnace value and off clipping
@@ -29,6 +32,7 @@
 
 #include "objective/HalfImageObjective.h"
 #include "objective/Objective.h"
+#include "transport/TransportMatrix.h"
 
 namespace sl {
 
@@ -48,8 +52,8 @@ class DefectObjective final : public HalfImageObjective {
                     DefectObjectiveOptions defect);
 
     /// Loss at the half images and E; fills the gradients when the spans are non-empty.
-    /// LossParts: lGrad = L_vis, lReg = mean(E²), G = g(D), S = g(R), clamped when either g is
-    /// below the floor; total includes L_exp.
+    /// LossParts: lGrad = L_vis, lReg = mean(E²), G = g(D), S = g(R), clamped when g(D) is
+    /// below the floor (the defects show nothing); total includes L_exp.
     LossParts evaluate(std::span<const double> Ya, std::span<const double> Yb,
                        std::span<const double> E, std::span<double> dLdYa = {},
                        std::span<double> dLdYb = {}, std::span<double> dLdE = {}) const override;
@@ -76,6 +80,9 @@ class DefectObjective final : public HalfImageObjective {
     double pairsD_ = 0, pairsR_ = 0, partPixels_ = 0;
     DefectObjectiveOptions d_;
 };
+
+/// The white-furnace brightness w: the mean over `mask` of the luminance of T·1 (E = 1).
+double whiteFurnaceMean(const TransportMatrix& t, const std::vector<uint8_t>& mask);
 
 }  // namespace sl
 

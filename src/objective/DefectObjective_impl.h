@@ -30,7 +30,9 @@ S DefectObjective::value(std::span<const S> Ya, std::span<const S> Yb, std::span
                               [&](size_t p, size_t q) { gR += (Ya[q] - Ya[p]) * (Yb[q] - Yb[p]); });
     gD /= pairsD_;
     gR /= pairsR_;
-    S loss = detail::defectLogFloor(gR, floor()) - detail::defectLogFloor(gD, floor());
+    using std::log;
+    S loss = (detail::realPart(gR) >= floor() ? S(log(gR)) : S(std::log(floor()))) -
+             detail::defectLogFloor(gD, floor());
     S m(0.0), clip(0.0);
     const std::vector<uint8_t>& part = mask();
     for (size_t p = 0; p < part.size(); ++p) {

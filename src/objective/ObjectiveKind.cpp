@@ -10,6 +10,10 @@ constexpr ObjectiveKindRow kKinds[] = {
     {ObjectiveKind::Paper, "paper", "the paper's eq. 2 on one estimate of T (rewards noise)", 1},
     {ObjectiveKind::Unbiased, "unbiased",
      "products of differences of two independent half-sample images (noise-unbiased)", 2},
+    {ObjectiveKind::Defects, "defects",
+     "the defects' gradient over the defect-free surface's (noise-unbiased), kept exposed; "
+     "needs a defect mask",
+     2},
 };
 
 }  // namespace

@@ -4,6 +4,9 @@
 //   unbiased  products of differences of two independent half-sample images
 //             (objective/UnbiasedObjective.h): an unbiased estimate of the noise-free eq.-2
 //             gradient term; needs T's two halves
+//   defects   the defect region's gradient energy over the defect-free surface's, unbiased,
+//             with an exposure band (objective/DefectObjective.h); needs the halves and a
+//             defect mask
 #pragma once
 
 #include <span>
@@ -12,7 +15,7 @@
 
 namespace sl {
 
-enum class ObjectiveKind { Paper, Unbiased };
+enum class ObjectiveKind { Paper, Unbiased, Defects };
 
 struct ObjectiveKindRow {
     ObjectiveKind value;
