@@ -68,6 +68,22 @@ int waitExit(pid_t pid) {
     return WIFEXITED(status) ? WEXITSTATUS(status) : 1000 + WTERMSIG(status);
 }
 
+/// Waits until process `pid` catches SIGINT (its handler is installed; /proc/PID/status SigCgt),
+/// so a signal sent next is handled, not fatal, however slowly the process starts.
+bool waitForHandler(pid_t pid, double seconds) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    const std::string status = "/proc/" + std::to_string(pid) + "/status";
+    while (std::chrono::steady_clock::now() < end) {
+        std::istringstream in(readText(status));
+        for (std::string line; std::getline(in, line);)
+            if (line.rfind("SigCgt:", 0) == 0 &&
+                (std::stoull(line.substr(7), nullptr, 16) >> (SIGINT - 1)) & 1)
+                return true;
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return false;
+}
+
 /// Waits until `path` exists (or `seconds` pass).
 bool waitForPath(const fs::path& path, double seconds) {
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
@@ -177,7 +193,8 @@ TEST(Interrupt, SignalsStopCleanly) {
     const auto before = entries(dir.path());
     const pid_t pid =
         spawnCli({"precompute", scene.string(), "--spp", "2000", "-o", big.string()}, log);
-    std::this_thread::sleep_for(std::chrono::milliseconds(800));
+    ASSERT_TRUE(waitForHandler(pid, 60));
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));  // tracing by now
     kill(pid, SIGINT);
     EXPECT_EQ(waitExit(pid), 130) << readText(log);
     EXPECT_FALSE(fs::exists(big));

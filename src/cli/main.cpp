@@ -44,6 +44,7 @@ void installSignalHandlers() {
 
 int main(int argc, char** argv) {
     using namespace sl::cli;
+    installSignalHandlers();  // first: a Ctrl-C during start-up is already cooperative
     CLI::App app{
         "scratchlight: find the environment light under which the scratches and tool marks of a "
         "machined metal part show best."};
@@ -73,7 +74,6 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "error: %s\n", withFlags(app, e.what()).c_str());
         return kRuntimeError;
     }
-    installSignalHandlers();
     try {
         const int rc = run ? run() : kUsageError;
         return sl::interruptRequested() ? 128 + sl::interruptSignal() : rc;
