@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/Error.h"
+#include "core/Hash.h"
 #include "synth/SurfaceGenerator.h"
 
 namespace {
@@ -503,4 +504,47 @@ TEST(Synth, ValidationNamesTheField) {
     s = base;
     s.pitch = 0;
     EXPECT_NE(errorOf(s).find("SurfaceSpec.pitch"), std::string::npos);
+}
+
+namespace {
+
+/// One hash of a generated surface's heights (float bits), truth labels and description.
+std::string surfaceHash(const GeneratedSurface& g) {
+    sl::Hasher h;
+    h.add(g.heights.data(), g.heights.size() * sizeof(float));
+    h.add(g.truth.data(), g.truth.size());
+    h.add(g.description);
+    return sl::toHex(h.digest());
+}
+
+}  // namespace
+
+// Surfaces of the settings that existed before the test parts (processes flatend/turned and
+// the new defect kinds) are pinned bit for bit: new features are opt-in and change none of them.
+TEST(Synth, SettingsOfBeforeTheTestPartsAreBitIdentical) {
+    SurfaceSpec s;
+    s.width = 200;
+    s.height = 150;
+    EXPECT_EQ(surfaceHash(sl::generateSurface(s)), "c08779db5dd0f867");
+    s.process = SurfaceSpec::Process::FaceMillFeed;
+    s.chatterStartFraction = 0.5;
+    EXPECT_EQ(surfaceHash(sl::generateSurface(s)), "443ad8f4cb577b06");
+    SurfaceSpec r;
+    r.width = 160;
+    r.height = 170;
+    r.pitch = 0.02;
+    r.rasterAngleDeg = 30;
+    r.seed = 7;
+    r.scratchCount = 9;
+    r.gougeCount = 2;
+    r.chatterStartFraction = 0.3;
+    r.ballFeedMarks = false;
+    EXPECT_EQ(surfaceHash(sl::generateSurface(r)), "63845a497b3622e7");
+    r.process = SurfaceSpec::Process::FaceMillFeed;
+    r.toolRadius = 4.0;
+    r.stepover = 3.0;
+    r.scratches = {{-0.5, -0.4, 0.6, 0.3, 0.05, 0.006, ScratchSpec::Shape::Round, 0.5}};
+    r.gouges = {{-0.3, 0.2, 0.4, 0.25, 0.01}};
+    r.pocketEdge = false;
+    EXPECT_EQ(surfaceHash(sl::generateSurface(r)), "b2c798c3b9534898");
 }
