@@ -1174,3 +1174,78 @@ TEST(GenSurface, PartFilesLegendNamesEveryLabelOfTheTruth) {
         }
     }
 }
+
+TEST(GenSurface, WithoutNewOptionsTheCommandWritesTheSurfaceOfBefore) {
+    sl::test::TempDir dir("gensurface-default");
+    auto r = sl::test::runCli("gen-surface " + (dir / "d.exr").string() + " --width 300");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    SurfaceSpec s;
+    s.width = 300;
+    GeneratedSurface g = sl::generateSurface(s);
+    EXPECT_EQ(surfaceHash(g), "833d26d53e61bc46");  // as made before the test parts existed
+    sl::Image hm = sl::readImage(dir / "d.exr");
+    EXPECT_EQ(hm.data, g.heights);
+    EXPECT_EQ(sl::readLabelMask(dir / "d-truth.png", 300, 1024).labels, g.truth);
+    r = sl::test::runCli("gen-surface " + (dir / "f.exr").string() +
+                         " --width 300 --process facemill --chatter-start 0.5");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    s.process = SurfaceSpec::Process::FaceMillFeed;
+    s.chatterStartFraction = 0.5;
+    g = sl::generateSurface(s);
+    EXPECT_EQ(surfaceHash(g), "74b7f74d4c453215");  // as made before the test parts existed
+    EXPECT_EQ(sl::readImage(dir / "f.exr").data, g.heights);
+    sl::LabelMask m = sl::readLabelMask(dir / "f-truth.png", 300, 1024);
+    EXPECT_EQ(m.labels, g.truth);
+    ASSERT_EQ(m.legend.size(), 2u);
+    EXPECT_EQ(m.legend[1].name, "chatter");
+}
+
+TEST(GenSurface, PartAndProcessOptions) {
+    sl::test::TempDir dir("gensurface-part");
+    // A named part with options overriding it: the library's spec with the same overrides.
+    auto r = sl::test::runCli("gen-surface " + (dir / "t.exr").string() +
+                              " --part flatend --width 400 --height 300 --dents 6 --seed 3"
+                              " --noise 0.0001 --spikes 4");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    SurfaceSpec s = sl::testPartSpec(sl::TestPart::FlatEnd);
+    s.width = 400;
+    s.height = 300;
+    s.dentCount = 6;
+    s.seed = 3;
+    s.noiseRms = 0.0001;
+    s.spikeCount = 4;
+    GeneratedSurface g = sl::generateSurface(s);
+    EXPECT_EQ(sl::readImage(dir / "t.exr").data, g.heights);
+    EXPECT_EQ(sl::readLabelMask(dir / "t-truth.png", 400, 300).labels, g.truth);
+    EXPECT_NE(r.output.find("6 dent(s)"), std::string::npos) << r.output;
+    // A process's own tool defaults, overridable.
+    r = sl::test::runCli("gen-surface " + (dir / "u.exr").string() +
+                         " --process turned --width 200 --height 200 --feed 0.12 --no-pocket"
+                         " --chatter-bands 1 --tool-change-step 0.002 --tool-change-at 0.5");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    s = sl::processDefaults(SurfaceSpec::Process::Turned);
+    s.width = s.height = 200;
+    s.feedPerTooth = 0.12;
+    s.pocketEdge = false;
+    s.chatterBands = 1;
+    s.toolChangeStep = 0.002;
+    s.toolChangeAt = 0.5;
+    g = sl::generateSurface(s);
+    EXPECT_EQ(sl::readImage(dir / "u.exr").data, g.heights);
+    sl::LabelMask m = sl::readLabelMask(dir / "u-truth.png", 200, 200);
+    EXPECT_EQ(m.labels, g.truth);
+    EXPECT_EQ(m.legend.size(), 3u);  // defect (always), tool-change-step, chatter-band
+    // --part and --process exclude each other; unknown names are usage errors; a burr without
+    // its pocket edge is an input error naming the field.
+    EXPECT_EQ(sl::test::runCli("gen-surface " + (dir / "v.exr").string() +
+                               " --part turned --process ballend")
+                  .exitCode,
+              2);
+    EXPECT_EQ(sl::test::runCli("gen-surface " + (dir / "v.exr").string() + " --part nope").exitCode,
+              2);
+    r = sl::test::runCli("gen-surface " + (dir / "v.exr").string() +
+                         " --width 64 --height 64 --burr 0.004 --no-pocket");
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.output.find("pocketBurrHeight"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "v.exr"));
+}
