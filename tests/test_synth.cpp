@@ -4,12 +4,19 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <numbers>
 #include <string>
 #include <vector>
 
+#include "TestUtil.h"
+#include "app/PartFiles.h"
 #include "core/Error.h"
+#include "core/Hash.h"
+#include "core/Registry.h"
+#include "io/ImageIO.h"
+#include "io/MaskIO.h"
 #include "synth/SurfaceGenerator.h"
 
 namespace {
@@ -503,4 +510,742 @@ TEST(Synth, ValidationNamesTheField) {
     s = base;
     s.pitch = 0;
     EXPECT_NE(errorOf(s).find("SurfaceSpec.pitch"), std::string::npos);
+}
+
+namespace {
+
+/// One hash of a generated surface's heights (float bits), truth labels and description.
+std::string surfaceHash(const GeneratedSurface& g) {
+    sl::Hasher h;
+    h.add(g.heights.data(), g.heights.size() * sizeof(float));
+    h.add(g.truth.data(), g.truth.size());
+    h.add(g.description);
+    return sl::toHex(h.digest());
+}
+
+}  // namespace
+
+// Surfaces of the settings that existed before the test parts (processes flatend/turned and
+// the new defect kinds) are pinned bit for bit: new features are opt-in and change none of them.
+TEST(Synth, SettingsOfBeforeTheTestPartsAreBitIdentical) {
+    SurfaceSpec s;
+    s.width = 200;
+    s.height = 150;
+    EXPECT_EQ(surfaceHash(sl::generateSurface(s)), "c08779db5dd0f867");
+    s.process = SurfaceSpec::Process::FaceMillFeed;
+    s.chatterStartFraction = 0.5;
+    EXPECT_EQ(surfaceHash(sl::generateSurface(s)), "443ad8f4cb577b06");
+    SurfaceSpec r;
+    r.width = 160;
+    r.height = 170;
+    r.pitch = 0.02;
+    r.rasterAngleDeg = 30;
+    r.seed = 7;
+    r.scratchCount = 9;
+    r.gougeCount = 2;
+    r.chatterStartFraction = 0.3;
+    r.ballFeedMarks = false;
+    EXPECT_EQ(surfaceHash(sl::generateSurface(r)), "63845a497b3622e7");
+    r.process = SurfaceSpec::Process::FaceMillFeed;
+    r.toolRadius = 4.0;
+    r.stepover = 3.0;
+    r.scratches = {{-0.5, -0.4, 0.6, 0.3, 0.05, 0.006, ScratchSpec::Shape::Round, 0.5}};
+    r.gouges = {{-0.3, 0.2, 0.4, 0.25, 0.01}};
+    r.pocketEdge = false;
+    EXPECT_EQ(surfaceHash(sl::generateSurface(r)), "b2c798c3b9534898");
+}
+
+// ---------------------------------------------------------------------------------------------
+// The labelled test parts: flat-end and turned processes, the new defect kinds, measurement
+// noise, the legend and gen-surface's options.
+
+namespace {
+
+/// A clean flat-end pocket floor: passes along x, no chatter, roughness or defects.
+SurfaceSpec cleanFlatEnd() {
+    SurfaceSpec s = cleanBallEnd();
+    s.process = SurfaceSpec::Process::FlatEndPocket;
+    s.toolRadius = 0.5;
+    s.toolCornerRadius = 0.1;
+    s.stepover = 0.84;  // the flats (0.8 mm) leave 0.02 mm of each corner arc: a ridge
+    s.feedPerTooth = 0;
+    s.pathOffset = 0.5 * s.pitch;  // pass k = 0 on row 128, the ridge to pass 1 on row 212
+    return s;
+}
+
+/// A clean face-turned map: the spiral's centre on sample (128, 128) of a 257² map.
+SurfaceSpec cleanTurned() {
+    SurfaceSpec s = cleanBallEnd();
+    s.width = s.height = 257;
+    s.process = SurfaceSpec::Process::Turned;
+    s.insertNoseRadius = 0.8;
+    s.feedPerTooth = 0.1;
+    return s;
+}
+
+/// The kinds' values in g's truth, each with its count.
+std::vector<std::pair<int, size_t>> labelCounts(const GeneratedSurface& g) {
+    std::vector<size_t> n(256, 0);
+    for (uint8_t t : g.truth) ++n[t];
+    std::vector<std::pair<int, size_t>> out;
+    for (int v = 1; v < 256; ++v)
+        if (n[static_cast<size_t>(v)] > 0) out.emplace_back(v, n[static_cast<size_t>(v)]);
+    return out;
+}
+
+size_t countLabel(const GeneratedSurface& g, uint8_t v) {
+    return static_cast<size_t>(std::count(g.truth.begin(), g.truth.end(), v));
+}
+
+/// Every sample labelled `value` in g differs from g0 (the same spec without the kind) by at
+/// least `minChange` mm; g0 has no such label; samples that g did not change keep g0's label.
+void expectLabelOnlyWhereChanged(const GeneratedSurface& g, const GeneratedSurface& g0,
+                                 uint8_t value, double minChange) {
+    ASSERT_EQ(g.heights.size(), g0.heights.size());
+    size_t labelled = 0;
+    for (size_t k = 0; k < g.heights.size(); ++k) {
+        const double change = std::abs(static_cast<double>(g.heights[k]) - g0.heights[k]);
+        EXPECT_NE(g0.truth[k], value) << k;
+        if (g.truth[k] == value) {
+            ++labelled;
+            EXPECT_GE(change, minChange) << "sample " << k;
+        }
+        if (change == 0) {
+            EXPECT_EQ(g.truth[k], g0.truth[k]) << k;
+        }
+    }
+    EXPECT_GT(labelled, 0u) << "label " << int(value) << " absent";
+}
+
+double xOf(const GeneratedSurface& g, int i) {
+    return (i - 0.5 * (g.width - 1)) * g.pitch;
+}
+double zOf(const GeneratedSurface& g, int j) {
+    return (j - 0.5 * (g.height - 1)) * g.pitch;
+}
+
+}  // namespace
+
+TEST(Synth, FlatEndRidgeHeightIsTheCornerArcsCusp) {
+    // s ≤ 2(R − r_c): the flats overlap, no ridge.
+    EXPECT_EQ(sl::flatEndRidgeHeight(1.6, 1.0, 0.2), 0.0);
+    EXPECT_EQ(sl::flatEndRidgeHeight(0.5, 1.0, 0.2), 0.0);
+    for (double rc : {0.05, 0.2, 0.5}) {
+        for (double e : {0.001, 0.01, 0.04}) {  // how far each pass's corner arc reaches in
+            double R = 1.0, s = 2 * (R - rc + e);
+            double h = sl::flatEndRidgeHeight(s, R, rc);
+            // The ridge point (e, h) lies on the corner circle: (r_c − h)² + e² = r_c².
+            EXPECT_NEAR((rc - h) * (rc - h) + e * e, rc * rc, 1e-12);
+            if (e <= 0.2 * rc) {
+                EXPECT_NEAR(h, e * e / (2 * rc), 0.02 * h);  // ≈ e²/(2 r_c)
+            }
+        }
+    }
+    // A sharp ball (r_c = R) is the ball-end scallop.
+    EXPECT_DOUBLE_EQ(sl::flatEndRidgeHeight(0.4, 3.0, 3.0), sl::scallopHeight(0.4, 3.0));
+    EXPECT_THROW(sl::flatEndRidgeHeight(0.5, 1.0, 0.0), sl::InputError);
+    EXPECT_THROW(sl::flatEndRidgeHeight(0.5, 1.0, 1.5), sl::InputError);
+    EXPECT_THROW(sl::flatEndRidgeHeight(2.5, 1.0, 0.2), sl::InputError);
+}
+
+TEST(Synth, FlatEndFloorIsFlatWithRidgesOfTheFormula) {
+    SurfaceSpec s = cleanFlatEnd();
+    GeneratedSurface g = sl::generateSurface(s);
+    const double ridge = sl::flatEndRidgeHeight(s.stepover, s.toolRadius, s.toolCornerRadius);
+    EXPECT_NEAR(ridge, 0.1 - std::sqrt(0.01 - 0.0004), 1e-15);  // 2.02 µm
+    EXPECT_NEAR(g.scallop, ridge, 1e-15);
+    auto [lo, hi] = minMax(g);
+    EXPECT_EQ(lo, 0.0f);
+    EXPECT_NEAR(hi, ridge, 1e-6 * ridge);
+    EXPECT_NEAR(g.at(31, 212), ridge, 1e-6 * ridge);  // the ridge's crest, midway between passes
+    for (int j = 0; j < g.height; ++j) {
+        double q = std::remainder(zOf(g, j) - s.pathOffset, s.stepover);  // to the nearest pass
+        double a = s.toolRadius - s.toolCornerRadius;
+        double expected = std::abs(q) <= a ? 0.0 : sl::scallopHeight(2 * (std::abs(q) - a), 0.1);
+        for (int i = 0; i < g.width; i += 51) EXPECT_NEAR(g.at(i, j), expected, 1e-9) << i << j;
+    }
+}
+
+TEST(Synth, FlatEndFeedMarksOnTheFloorMatchTheCornerRadiusFormula) {
+    SurfaceSpec s = cleanFlatEnd();
+    s.feedPerTooth = 0.05;
+    s.pitch = 0.001;  // fine: sampled crests within pitch/2 of the true ones
+    s.width = 600;
+    s.height = 64;
+    s.pathOffset = 0.5 * s.pitch;  // pass 0's centre line on row 32
+    GeneratedSurface g = sl::generateSurface(s);
+    const double rc = s.toolCornerRadius, f = s.feedPerTooth;
+    const double mark = sl::scallopHeight(f, rc);  // r_c − √(r_c² − (f/2)²) ≈ f²/(8 r_c)
+    EXPECT_NEAR(g.feedMark, mark, 1e-15);
+    EXPECT_NEAR(mark, f * f / (8 * rc), 0.02 * mark);
+    std::vector<double> line(static_cast<size_t>(g.width));
+    for (int i = 0; i < g.width; ++i) line[static_cast<size_t>(i)] = g.at(i, 32);
+    auto [l0, l1] = std::minmax_element(line.begin(), line.end());
+    // Along the centre line δ changes at the rate of t, so the sampled crest is within the
+    // height change over pitch/2 at δ = f/2: slope (f/2)/√(r_c² − f²/4).
+    const double slack = 0.5 * s.pitch * (0.5 * f) / std::sqrt(rc * rc - 0.25 * f * f);
+    EXPECT_LE(*l1, mark * (1 + 1e-9));
+    EXPECT_GE(*l1, mark - slack);
+    EXPECT_LE(*l0, slack);
+    EXPECT_GE(*l0, 0.0);
+    // Crests f apart (the teeth's spacing).
+    std::vector<int> crests = localMaxima(line);
+    ASSERT_GE(crests.size(), 8u);
+    double mean =
+        (crests.back() - crests.front()) * s.pitch / static_cast<double>(crests.size() - 1);
+    EXPECT_NEAR(mean, f, 0.02 * f);
+    // Everywhere on the floor the marks stay below the centre line's crest.
+    for (float h : g.heights) EXPECT_LE(h, mark * (1 + 1e-9));
+}
+
+TEST(Synth, TurnedGroovesMatchTheNoseRadiusFormula) {
+    SurfaceSpec s = cleanTurned();
+    GeneratedSurface g = sl::generateSurface(s);
+    const double rn = s.insertNoseRadius, f = s.feedPerTooth;
+    const double cusp = sl::scallopHeight(f, rn);  // r_n − √(r_n² − (f/2)²) ≈ f²/(8 r_n)
+    EXPECT_NEAR(g.scallop, cusp, 1e-15);
+    EXPECT_NEAR(cusp, f * f / (8 * rn), 0.01 * cusp);
+    auto [lo, hi] = minMax(g);
+    const double slack = 0.5 * s.pitch * (0.5 * f) / std::sqrt(rn * rn - 0.25 * f * f);
+    EXPECT_LE(hi, cusp * (1 + 1e-6));
+    EXPECT_GE(hi, cusp - slack);
+    EXPECT_GE(lo, 0.0f);
+    EXPECT_LE(lo, slack);
+    // Along a ray from the centre (row 128, +x) the grooves are f apart.
+    std::vector<double> ray;
+    for (int i = 128; i < g.width; ++i) ray.push_back(g.at(i, 128));
+    std::vector<int> crests = localMaxima(ray);
+    ASSERT_GE(crests.size(), 4u);
+    for (size_t k = 1; k < crests.size(); ++k)
+        EXPECT_NEAR((crests[k] - crests[k - 1]) * s.pitch, f, 1.01 * s.pitch);
+    // Rings: the height depends on the radius (and the spiral's slow phase), not the angle:
+    // samples at the same radius on the four axes differ by the spiral's advance f·Δθ/2π.
+    for (int d = 10; d < 120; d += 7) {
+        double e = g.at(128 + d, 128), n = g.at(128, 128 + d);  // θ = 0 and θ = 90°
+        double rise = std::abs(e - n);
+        EXPECT_LE(rise, cusp);  // bounded by the groove, whatever the phase
+    }
+    // Centre far off the map: a section of straight grooves along z (constant down a column).
+    s.turnCentreX = 1000.0;
+    GeneratedSurface gs = sl::generateSurface(s);
+    for (int i = 0; i < gs.width; i += 9)
+        for (int j = 0; j < gs.height; j += 16)
+            EXPECT_NEAR(gs.at(i, j), gs.at(i, 128), 0.05 * cusp) << i << "," << j;
+    std::vector<double> row(static_cast<size_t>(gs.width));
+    for (int i = 0; i < gs.width; ++i) row[static_cast<size_t>(i)] = gs.at(i, 128);
+    std::vector<int> c2 = localMaxima(row);
+    ASSERT_GE(c2.size(), 8u);
+    double mean = (c2.back() - c2.front()) * s.pitch / static_cast<double>(c2.size() - 1);
+    EXPECT_NEAR(mean, f, 0.02 * f);
+}
+
+TEST(Synth, NewProcessesAreDeterministicAndThreadIndependent) {
+    for (sl::TestPart part : {sl::TestPart::FlatEnd, sl::TestPart::Turned}) {
+        SurfaceSpec s = sl::testPartSpec(part);
+        s.width = 300;
+        s.height = 200;
+        s.noiseRms = 0.0001;
+        s.spikeCount = 5;
+        GeneratedSurface a = sl::generateSurface(s);
+        GeneratedSurface b = sl::generateSurface(s);
+        EXPECT_EQ(a.heights, b.heights);
+        EXPECT_EQ(a.truth, b.truth);
+        EXPECT_EQ(a.description, b.description);
+        {
+            tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+            GeneratedSurface c = sl::generateSurface(s);
+            EXPECT_EQ(a.heights, c.heights);
+            EXPECT_EQ(a.truth, c.truth);
+        }
+        s.seed = 2;
+        GeneratedSurface d = sl::generateSurface(s);
+        size_t differing = 0;
+        for (size_t k = 0; k < a.heights.size(); ++k) differing += a.heights[k] != d.heights[k];
+        EXPECT_GT(differing, a.heights.size() / 2);
+        EXPECT_NE(a.truth, d.truth);  // defects moved
+    }
+}
+
+TEST(Synth, ProcessDefaultsOfTheOldProcessesAreTheOldSpec) {
+    SurfaceSpec s;
+    s.width = 200;
+    s.height = 150;
+    for (SurfaceSpec::Process p :
+         {SurfaceSpec::Process::BallEndRaster, SurfaceSpec::Process::FaceMillFeed}) {
+        SurfaceSpec d = sl::processDefaults(p);
+        d.width = 200;
+        d.height = 150;
+        s.process = p;
+        EXPECT_EQ(surfaceHash(sl::generateSurface(d)), surfaceHash(sl::generateSurface(s)));
+    }
+    // Every process has a row, every row a valid default spec.
+    std::vector<int> seen;
+    for (const sl::ProcessRow& r : sl::processTable()) {
+        seen.push_back(static_cast<int>(r.value));
+        SurfaceSpec d = sl::processDefaults(r.value);
+        d.width = d.height = 64;
+        EXPECT_EQ(errorOf(d), "") << r.name;
+        EXPECT_EQ(&sl::parseRegistryName(sl::processTable(), r.name, "test"), &r);
+    }
+    EXPECT_EQ(seen, (std::vector<int>{0, 1, 2, 3}));
+}
+
+TEST(Synth, DentIsLabelledWhereItLowersTheSurface) {
+    SurfaceSpec s = cleanBallEnd();
+    s.roughnessRms = 0.0002;
+    s.chatterAmplitude = 0.0005;
+    s.dents = {{0.1025, -0.0475, 0.005, 0.5}};  // on sample (148, 118)
+    GeneratedSurface g = sl::generateSurface(s);
+    SurfaceSpec s0 = s;
+    s0.dents.clear();
+    GeneratedSurface g0 = sl::generateSurface(s0);
+    expectLabelOnlyWhereChanged(g, g0, sl::kTruthDent, 0.1 * 0.005 - 1e-7);
+    // The bottom is the dent's depth below the undented surface; nothing changed beyond its
+    // rim r = √(2 R d − d²), and only lowered.
+    EXPECT_NEAR(g0.at(148, 118) - g.at(148, 118), 0.005, 1e-7);
+    const double rim = std::sqrt(0.005 * (2 * 0.5 - 0.005));
+    for (int j = 0; j < g.height; ++j)
+        for (int i = 0; i < g.width; ++i) {
+            double change = g.at(i, j) - g0.at(i, j);
+            EXPECT_LE(change, 0.0);
+            if (change != 0) {
+                EXPECT_LT(std::hypot(xOf(g, i) - 0.1025, zOf(g, j) + 0.0475), rim);
+            }
+        }
+    // Random dents: the count asked for, each labelled.
+    s.dents.clear();
+    s.dentCount = 4;
+    GeneratedSurface r = sl::generateSurface(s);
+    ASSERT_EQ(r.dents.size(), 4u);
+    for (const sl::DentSpec& d : r.dents)
+        EXPECT_EQ(r.truth[static_cast<size_t>(row(r, d.z)) * r.width + col(r, d.x)],
+                  sl::kTruthDent);
+}
+
+TEST(Synth, PocketBurrIsLabelledWhereItRaisesTheEdge) {
+    SurfaceSpec s = cleanBallEnd();
+    s.pocketEdge = true;
+    s.roughnessRms = 0.0002;
+    s.pocketBurrHeight = 0.004;
+    GeneratedSurface g = sl::generateSurface(s);
+    SurfaceSpec s0 = s;
+    s0.pocketBurrHeight = 0;
+    GeneratedSurface g0 = sl::generateSurface(s0);
+    // Labelled where raised by ≥ 10% of the local height (≥ 0.5·H along the edge).
+    expectLabelOnlyWhereChanged(g, g0, sl::kTruthBurr, 0.1 * 0.5 * 0.004 - 1e-7);
+    const double xTop = g.pocketEdgeX - g.pocketEdgeHalfWidth;
+    double maxRaise = 0;
+    for (int j = 0; j < g.height; ++j) {
+        double rowMax = 0;
+        for (int i = 0; i < g.width; ++i) {
+            double change = g.at(i, j) - g0.at(i, j);
+            EXPECT_GE(change, -1e-9);
+            if (change > 0) {
+                EXPECT_LT(std::abs(xOf(g, i) - xTop), 0.5 * s.pocketBurrWidth);
+            }
+            rowMax = std::max(rowMax, change);
+        }
+        // Along the edge the burr's height varies in [0.5, 1]·H (sampled near its crest).
+        EXPECT_GE(rowMax, 0.5 * 0.004 * 0.9);
+        EXPECT_LE(rowMax, 0.004 + 1e-7);
+        maxRaise = std::max(maxRaise, rowMax);
+    }
+    EXPECT_GT(maxRaise, 0.75 * 0.004);
+    // A burr needs an edge to sit on.
+    s.pocketEdge = false;
+    EXPECT_NE(errorOf(s).find("pocketBurrHeight"), std::string::npos);
+}
+
+TEST(Synth, ScratchLipsLabelledBurrOnlyWhenAskedAndWhereRaised) {
+    SurfaceSpec s = cleanBallEnd();
+    s.scratches = {{-0.35, -0.2, 0.45, 0.3, 0.04, 0.004, ScratchSpec::Shape::V, 0.3}};
+    GeneratedSurface plain = sl::generateSurface(s);
+    EXPECT_EQ(countLabel(plain, sl::kTruthBurr), 0u);
+    s.labelScratchLips = true;
+    GeneratedSurface g = sl::generateSurface(s);
+    EXPECT_EQ(g.heights, plain.heights);  // labelling changes no height
+    SurfaceSpec s0 = s;
+    s0.scratches.clear();
+    s0.scratchCount = 0;
+    GeneratedSurface g0 = sl::generateSurface(s0);
+    // Lips: raised by ≥ 10% of the lip's height burr·depth (where the scratch is at ≥ 10% of
+    // its depth); the groove keeps 255.
+    expectLabelOnlyWhereChanged(g, g0, sl::kTruthBurr, 0.1 * 0.1 * 0.3 * 0.004 - 1e-7);
+    for (size_t k = 0; k < g.truth.size(); ++k) {
+        if (g.truth[k] == sl::kTruthBurr) {
+            EXPECT_GT(g.heights[k], g0.heights[k]);
+        }
+        EXPECT_EQ(g.truth[k] == sl::kTruthDefect, plain.truth[k] == sl::kTruthDefect);
+    }
+}
+
+TEST(Synth, ToolChangeStepShiftsOneSideAndLabelsItsRamp) {
+    for (SurfaceSpec base : {cleanBallEnd(), cleanTurned()}) {
+        base.roughnessRms = 0.0002;
+        SurfaceSpec s = base;
+        const bool turned = s.process == SurfaceSpec::Process::Turned;
+        s.toolChangeStep = 0.003;
+        s.toolChangeAt = turned ? 0.4 : -0.2;
+        GeneratedSurface g = sl::generateSurface(s);
+        GeneratedSurface g0 = sl::generateSurface(base);
+        expectLabelOnlyWhereChanged(g, g0, sl::kTruthToolChange, 0.1 * 0.003 - 1e-7);
+        const double w = std::max(s.toolChangeWidth, 2 * s.pitch);
+        for (int j = 0; j < g.height; ++j)
+            for (int i = 0; i < g.width; ++i) {
+                double c = turned ? std::hypot(xOf(g, i), zOf(g, j)) : zOf(g, j);
+                double change = g.at(i, j) - g0.at(i, j);
+                uint8_t t = g.truth[static_cast<size_t>(j) * g.width + i];
+                if (c < s.toolChangeAt - 0.5 * w) {
+                    EXPECT_EQ(change, 0.0);
+                }
+                if (c > s.toolChangeAt + 0.5 * w) {
+                    EXPECT_NEAR(change, -0.003, 1e-7);  // the plateau: shifted, not labelled
+                    EXPECT_NE(t, sl::kTruthToolChange);
+                }
+                if (t == sl::kTruthToolChange) {
+                    EXPECT_LT(std::abs(c - s.toolChangeAt), 0.5 * w);
+                }
+            }
+    }
+}
+
+TEST(Synth, ChatterBandsConfineChatterAndAreLabelled) {
+    for (SurfaceSpec base : {cleanBallEnd(), cleanTurned()}) {
+        SurfaceSpec s = base;
+        const bool turned = s.process == SurfaceSpec::Process::Turned;
+        s.chatterBands = 2;
+        s.chatterBandWidth = 0.2;
+        s.chatterBandAmplitude = 0.001;
+        GeneratedSurface g = sl::generateSurface(s);
+        GeneratedSurface g0 = sl::generateSurface(base);
+        ASSERT_EQ(g.chatterBands.size(), 2u);
+        // Labelled on every sample of a band, which the chatter changed; unchanged elsewhere.
+        expectLabelOnlyWhereChanged(g, g0, sl::kTruthChatterBand, 1e-12);
+        for (int j = 0; j < g.height; ++j)
+            for (int i = 0; i < g.width; ++i) {
+                double c = turned ? std::hypot(xOf(g, i), zOf(g, j)) : zOf(g, j);
+                bool inBand = false;
+                for (double b : g.chatterBands) inBand = inBand || std::abs(c - b) < 0.1;
+                size_t k = static_cast<size_t>(j) * g.width + i;
+                EXPECT_EQ(g.truth[k] == sl::kTruthChatterBand, inBand) << i << "," << j;
+                if (!inBand) {
+                    EXPECT_EQ(g.heights[k], g0.heights[k]);
+                }
+                if (inBand) {
+                    EXPECT_LE(std::abs(g.heights[k] - g0.heights[k]), 2 * 0.001 + 1e-9);
+                }
+            }
+    }
+    // Ball-end: on a path centre inside a band the height is the band's sinusoid, ±A_band.
+    SurfaceSpec s = cleanBallEnd();
+    s.pathOffset = 0.5 * s.pitch;
+    s.chatterBands = 1;
+    s.chatterBandWidth = 2.0;  // wider than the map's range of p: the band covers it all
+    GeneratedSurface g = sl::generateSurface(s);
+    std::vector<double> line(static_cast<size_t>(g.width));
+    for (int i = 0; i < g.width; ++i) line[static_cast<size_t>(i)] = g.at(i, 128);
+    auto [l0, l1] = std::minmax_element(line.begin(), line.end());
+    EXPECT_NEAR(*l1 - *l0, 2 * s.chatterBandAmplitude, 0.01 * s.chatterBandAmplitude);
+}
+
+TEST(Synth, ScratchSpreadSetsDirectionDepthAndWidth) {
+    SurfaceSpec s;
+    s.width = 256;
+    s.height = 256;
+    s.scratchCount = 12;
+    s.scratchDirectionDeg = 30;
+    s.scratchDirectionSpreadDeg = 0;
+    s.scratchDepthMin = 0.2;
+    s.scratchWidthMin = 0.4;
+    GeneratedSurface g = sl::generateSurface(s);
+    ASSERT_EQ(g.scratches.size(), 12u);
+    double dmin = 1, dmax = 0, wmin = 1, wmax = 0;
+    for (const ScratchSpec& c : g.scratches) {
+        double a = std::atan2(c.z1 - c.z0, c.x1 - c.x0) * 180 / std::numbers::pi;
+        EXPECT_NEAR(a, 30.0, 1e-9);
+        dmin = std::min(dmin, c.depth);
+        dmax = std::max(dmax, c.depth);
+        wmin = std::min(wmin, c.width);
+        wmax = std::max(wmax, c.width);
+    }
+    EXPECT_GE(dmin, 0.2 * s.scratchDepth);
+    EXPECT_LE(dmax, s.scratchDepth);
+    EXPECT_LT(dmin, 0.5 * s.scratchDepth);  // reaches below the default's floor of 0.5
+    EXPECT_GE(wmin, 0.4 * s.scratchWidth);
+    EXPECT_LE(wmax, s.scratchWidth);
+    EXPECT_LT(wmin, 0.75 * s.scratchWidth);
+    s.scratchDirectionSpreadDeg = 40;
+    GeneratedSurface g2 = sl::generateSurface(s);
+    double amin = 90, amax = -90;
+    for (const ScratchSpec& c : g2.scratches) {
+        double a = std::atan2(c.z1 - c.z0, c.x1 - c.x0) * 180 / std::numbers::pi;
+        amin = std::min(amin, a);
+        amax = std::max(amax, a);
+    }
+    EXPECT_GE(amin, 10.0 - 1e-9);
+    EXPECT_LE(amax, 50.0 + 1e-9);
+    EXPECT_GT(amax - amin, 10.0);
+}
+
+TEST(Synth, OverlappingLabelsTakeTheHigherValue) {
+    SurfaceSpec s = cleanBallEnd();
+    s.chatterAmplitude = 0.0005;
+    s.chatterStartFraction = 0.5;  // 128 on the right half
+    s.chatterBands = 1;            // 144 across all of it (wider than the map)
+    s.chatterBandWidth = 2.5;
+    s.toolChangeStep = 0.003;  // 192 along z = 0.3
+    s.toolChangeAt = 0.3;
+    s.dents = {{0.3, 0.3, 0.005, 0.5}};                 // 224 on the step line
+    s.scratches = {{0.2, 0.3, 0.5, 0.3, 0.04, 0.004}};  // 255 through the dent
+    GeneratedSurface g = sl::generateSurface(s);
+    EXPECT_EQ(g.truth[static_cast<size_t>(row(g, 0.3)) * g.width + col(g, 0.3)],
+              sl::kTruthDefect);  // scratch > dent
+    EXPECT_EQ(g.truth[static_cast<size_t>(row(g, 0.3)) * g.width + col(g, 0.6)],
+              sl::kTruthToolChange);  // step > band
+    EXPECT_EQ(g.truth[static_cast<size_t>(row(g, -0.2)) * g.width + col(g, 0.4)],
+              sl::kTruthChatterBand);                 // band > 128
+    EXPECT_EQ(countLabel(g, sl::kTruthChatter), 0u);  // the band covers the chatter region
+    EXPECT_GT(countLabel(g, sl::kTruthDent), 0u);     // outside the groove
+}
+
+TEST(Synth, MeasurementNoiseIsWhiteSpikesAreSingleSamplesNeitherIsLabelled) {
+    SurfaceSpec s = cleanBallEnd();
+    s.scratchCount = 3;
+    GeneratedSurface g0 = sl::generateSurface(s);
+    s.noiseRms = 0.0001;
+    GeneratedSurface g = sl::generateSurface(s);
+    EXPECT_EQ(g.truth, g0.truth);
+    double sum = 0, sum2 = 0, lag = 0;
+    const size_t n = g.heights.size();
+    for (size_t k = 0; k < n; ++k) {
+        double d = static_cast<double>(g.heights[k]) - g0.heights[k];
+        sum += d;
+        sum2 += d * d;
+        if (k + 1 < n) lag += d * (static_cast<double>(g.heights[k + 1]) - g0.heights[k + 1]);
+    }
+    double rms = std::sqrt(sum2 / static_cast<double>(n));
+    EXPECT_NEAR(rms, s.noiseRms, 0.02 * s.noiseRms);
+    EXPECT_NEAR(sum / static_cast<double>(n), 0.0, 0.02 * s.noiseRms);
+    EXPECT_LT(std::abs(lag / sum2), 0.02);  // white: neighbours uncorrelated
+    s.noiseRms = 0;
+    s.spikeCount = 7;
+    s.spikeHeight = 0.005;
+    GeneratedSurface gs = sl::generateSurface(s);
+    EXPECT_EQ(gs.truth, g0.truth);
+    ASSERT_EQ(gs.spikes.size(), 7u);
+    size_t changed = 0;
+    for (size_t k = 0; k < n; ++k) changed += gs.heights[k] != g0.heights[k];
+    EXPECT_LE(changed, 7u);
+    EXPECT_GE(changed, 6u);  // two spikes may share a sample
+    for (const sl::Spike& sp : gs.spikes) {
+        EXPECT_GE(std::abs(sp.height), 0.5 * s.spikeHeight);
+        EXPECT_LE(std::abs(sp.height), s.spikeHeight);
+    }
+    for (float h : gs.heights) ASSERT_TRUE(std::isfinite(h));  // no dropouts
+}
+
+TEST(Synth, LegendNamesEveryLabelPresent) {
+    // The kinds: unique values ≥ 128 (a half-scale binarisation counts every one as a defect),
+    // unique names, highest value first.
+    std::vector<int> values;
+    std::vector<std::string> names;
+    for (const sl::TruthKind& k : sl::truthKinds()) {
+        values.push_back(k.value);
+        names.emplace_back(k.name);
+        EXPECT_GE(k.value, 128);
+    }
+    EXPECT_TRUE(std::is_sorted(values.rbegin(), values.rend()));
+    EXPECT_EQ(std::adjacent_find(values.begin(), values.end()), values.end());
+    EXPECT_EQ(names, (std::vector<std::string>{"defect", "dent", "tool-change-step", "burr",
+                                               "chatter-band", "chatter"}));
+    // As always: "defect" even when absent, "chatter" only when present.
+    std::vector<uint8_t> empty(16, 0);
+    auto legend = sl::truthLegend(empty);
+    ASSERT_EQ(legend.size(), 1u);
+    EXPECT_EQ(legend[0].value, sl::kTruthDefect);
+    EXPECT_EQ(legend[0].name, "defect");
+    // Every test part holds every kind, and its legend names each value present.
+    for (const sl::TestPartRow& r : sl::testPartTable()) {
+        GeneratedSurface g = sl::generateSurface(sl::testPartSpec(r.value));
+        auto counts = labelCounts(g);
+        legend = sl::truthLegend(g.truth);
+        ASSERT_EQ(counts.size(), 6u) << r.name;
+        ASSERT_EQ(legend.size(), 6u) << r.name;
+        for (auto [v, n] : counts) {
+            bool named = false;
+            for (const sl::RegionLabel& l : legend) named = named || l.value == v;
+            EXPECT_TRUE(named) << r.name << " " << v;
+            EXPECT_GT(n, 50u) << r.name << " " << v;
+        }
+    }
+}
+
+TEST(Synth, ValidationNamesTheNewFields) {
+    auto expectField = [](SurfaceSpec s, const std::string& field) {
+        std::string msg = errorOf(s);
+        EXPECT_NE(msg.find(field), std::string::npos) << "expected '" << field << "' in: " << msg;
+    };
+    SurfaceSpec base;
+    base.width = 16;
+    base.height = 16;
+    SurfaceSpec s = sl::processDefaults(SurfaceSpec::Process::FlatEndPocket);
+    s.width = s.height = 16;
+    EXPECT_EQ(errorOf(s), "");
+    s.toolCornerRadius = 0;
+    expectField(s, "toolCornerRadius");
+    s.toolCornerRadius = 1.5;  // > toolRadius
+    expectField(s, "toolCornerRadius");
+    s.toolCornerRadius = 0.2;
+    s.feedPerTooth = 0.5;  // ≥ 2·r_c
+    expectField(s, "feedPerTooth");
+    s = sl::processDefaults(SurfaceSpec::Process::Turned);
+    s.width = s.height = 16;
+    EXPECT_EQ(errorOf(s), "");
+    s.feedPerTooth = 0;
+    expectField(s, "feedPerTooth");
+    s.feedPerTooth = 0.1;
+    s.turnCentreX = std::nan("");
+    expectField(s, "turnCentreX");
+    s = base;
+    s.chatterBands = 2;
+    s.chatterBandWidth = 0;
+    expectField(s, "chatterBandWidth");
+    s.chatterBandWidth = 0.5;
+    s.chatterBandAmplitude = -1;
+    expectField(s, "chatterBandAmplitude");
+    s = base;
+    s.scratchDepthMin = 1.5;
+    expectField(s, "scratchDepthMin");
+    s = base;
+    s.scratchWidthMin = 0;
+    expectField(s, "scratchWidthMin");
+    s = base;
+    s.scratchDirectionSpreadDeg = 200;
+    expectField(s, "scratchDirectionSpreadDeg");
+    s = base;
+    s.dentCount = 2;
+    s.dentRadius = 0;
+    expectField(s, "dentRadius");
+    s = base;
+    s.dents = {{0, 0, 0.6, 0.5}};  // deeper than the indenter's radius
+    expectField(s, "dents[0].depth");
+    s = base;
+    s.pocketBurrHeight = -0.001;
+    expectField(s, "pocketBurrHeight");
+    s = base;
+    s.toolChangeStep = std::numeric_limits<double>::infinity();
+    expectField(s, "toolChangeStep");
+    s = base;
+    s.noiseRms = -1;
+    expectField(s, "noiseRms");
+    s = base;
+    s.spikeCount = -1;
+    expectField(s, "spikeCount");
+}
+
+TEST(GenSurface, PartFilesLegendNamesEveryLabelOfTheTruth) {
+    sl::test::TempDir dir("gensurface-legend");
+    for (sl::TestPart part : {sl::TestPart::Turned, sl::TestPart::BallEnd}) {
+        SurfaceSpec s = sl::testPartSpec(part);
+        if (part == sl::TestPart::BallEnd) {  // a part with fewer kinds: only those present
+            s.width = s.height = 300;
+            s.dentCount = 0;
+            s.toolChangeStep = 0;
+            s.chatterStartFraction = 0;
+        }
+        GeneratedSurface g = sl::generateSurface(s);
+        const sl::PartFiles f = sl::writePartFiles(g, dir / "p.exr", {});
+        sl::LabelMask m = sl::readLabelMask(f.truth, g.width, g.height);
+        EXPECT_EQ(m.labels, g.truth);
+        std::vector<int> present, named;
+        for (auto [v, n] : labelCounts(g)) present.push_back(v);
+        for (const sl::RegionLabel& l : m.legend)
+            if (l.value != sl::kTruthDefect || countLabel(g, l.value) > 0) named.push_back(l.value);
+        std::sort(named.begin(), named.end());
+        EXPECT_EQ(named, present);
+        for (const sl::RegionLabel& l : m.legend) {
+            bool known = false;
+            for (const sl::TruthKind& k : sl::truthKinds())
+                known = known || (k.value == l.value && l.name == k.name);
+            EXPECT_TRUE(known) << int(l.value) << " " << l.name;
+        }
+        if (part == sl::TestPart::Turned) {
+            EXPECT_EQ(m.legend.size(), 6u);
+        }
+    }
+}
+
+TEST(GenSurface, WithoutNewOptionsTheCommandWritesTheSurfaceOfBefore) {
+    sl::test::TempDir dir("gensurface-default");
+    auto r = sl::test::runCli("gen-surface " + (dir / "d.exr").string() + " --width 300");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    SurfaceSpec s;
+    s.width = 300;
+    GeneratedSurface g = sl::generateSurface(s);
+    EXPECT_EQ(surfaceHash(g), "833d26d53e61bc46");  // as made before the test parts existed
+    sl::Image hm = sl::readImage(dir / "d.exr");
+    EXPECT_EQ(hm.data, g.heights);
+    EXPECT_EQ(sl::readLabelMask(dir / "d-truth.png", 300, 1024).labels, g.truth);
+    r = sl::test::runCli("gen-surface " + (dir / "f.exr").string() +
+                         " --width 300 --process facemill --chatter-start 0.5");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    s.process = SurfaceSpec::Process::FaceMillFeed;
+    s.chatterStartFraction = 0.5;
+    g = sl::generateSurface(s);
+    EXPECT_EQ(surfaceHash(g), "74b7f74d4c453215");  // as made before the test parts existed
+    EXPECT_EQ(sl::readImage(dir / "f.exr").data, g.heights);
+    sl::LabelMask m = sl::readLabelMask(dir / "f-truth.png", 300, 1024);
+    EXPECT_EQ(m.labels, g.truth);
+    ASSERT_EQ(m.legend.size(), 2u);
+    EXPECT_EQ(m.legend[1].name, "chatter");
+}
+
+TEST(GenSurface, PartAndProcessOptions) {
+    sl::test::TempDir dir("gensurface-part");
+    // A named part with options overriding it: the library's spec with the same overrides.
+    auto r = sl::test::runCli("gen-surface " + (dir / "t.exr").string() +
+                              " --part flatend --width 400 --height 300 --dents 6 --seed 3"
+                              " --noise 0.0001 --spikes 4");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    SurfaceSpec s = sl::testPartSpec(sl::TestPart::FlatEnd);
+    s.width = 400;
+    s.height = 300;
+    s.dentCount = 6;
+    s.seed = 3;
+    s.noiseRms = 0.0001;
+    s.spikeCount = 4;
+    GeneratedSurface g = sl::generateSurface(s);
+    EXPECT_EQ(sl::readImage(dir / "t.exr").data, g.heights);
+    EXPECT_EQ(sl::readLabelMask(dir / "t-truth.png", 400, 300).labels, g.truth);
+    EXPECT_NE(r.output.find("6 dent(s)"), std::string::npos) << r.output;
+    // A process's own tool defaults, overridable.
+    r = sl::test::runCli("gen-surface " + (dir / "u.exr").string() +
+                         " --process turned --width 200 --height 200 --feed 0.12 --no-pocket"
+                         " --chatter-bands 1 --tool-change-step 0.002 --tool-change-at 0.5");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    s = sl::processDefaults(SurfaceSpec::Process::Turned);
+    s.width = s.height = 200;
+    s.feedPerTooth = 0.12;
+    s.pocketEdge = false;
+    s.chatterBands = 1;
+    s.toolChangeStep = 0.002;
+    s.toolChangeAt = 0.5;
+    g = sl::generateSurface(s);
+    EXPECT_EQ(sl::readImage(dir / "u.exr").data, g.heights);
+    sl::LabelMask m = sl::readLabelMask(dir / "u-truth.png", 200, 200);
+    EXPECT_EQ(m.labels, g.truth);
+    EXPECT_EQ(m.legend.size(), 3u);  // defect (always), tool-change-step, chatter-band
+    // --part and --process exclude each other; unknown names are usage errors; a burr without
+    // its pocket edge is an input error naming the field.
+    EXPECT_EQ(sl::test::runCli("gen-surface " + (dir / "v.exr").string() +
+                               " --part turned --process ballend")
+                  .exitCode,
+              2);
+    EXPECT_EQ(sl::test::runCli("gen-surface " + (dir / "v.exr").string() + " --part nope").exitCode,
+              2);
+    r = sl::test::runCli("gen-surface " + (dir / "v.exr").string() +
+                         " --width 64 --height 64 --burr 0.004 --no-pocket");
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.output.find("pocketBurrHeight"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "v.exr"));
 }

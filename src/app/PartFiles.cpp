@@ -31,12 +31,12 @@ PartFiles writePartFiles(const GeneratedSurface& g, const std::filesystem::path&
     }
     f.truth = out.parent_path() / (out.stem().string() + "-truth.png");
     f.legend = out.parent_path() / (out.stem().string() + "-truth.json");
-    // The legend of the truth labels (judge --truth reads it to name the regions).
+    // The legend of the truth labels (judge --truth reads it to name the regions): every label
+    // present (synth/SurfaceGenerator.h truthLegend).
     nlohmann::ordered_json legend;
     legend["labels"] = nlohmann::ordered_json::array();
-    legend["labels"].push_back({{"value", kTruthDefect}, {"name", "defect"}});
-    if (std::count(g.truth.begin(), g.truth.end(), kTruthChatter) > 0)
-        legend["labels"].push_back({{"value", kTruthChatter}, {"name", "chatter"}});
+    for (const RegionLabel& l : truthLegend(g.truth))
+        legend["labels"].push_back({{"value", l.value}, {"name", l.name}});
     writeMaskPng(f.truth, g.truth, g.width, g.height);
     writeTextAtomically(f.legend, legend.dump(2) + "\n");
 

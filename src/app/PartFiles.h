@@ -21,7 +21,8 @@ struct PartFiles {
 };
 
 /// heightmap: .exr (float32 mm) or .png (16-bit over [lo, hi], recorded in the scene file).
-/// Truth: <stem>-truth.png (labels, synth/SurfaceGenerator.h) and <stem>-truth.json (legend).
+/// Truth: <stem>-truth.png (labels, synth/SurfaceGenerator.h) and <stem>-truth.json (legend:
+/// truthLegend, every label present).
 /// Throws InputError for another extension.
 PartFiles writePartFiles(const GeneratedSurface& g, const std::filesystem::path& heightmap,
                          const PartFileOptions& options);

@@ -1,12 +1,20 @@
-// scratchlight gen-surface OUT.exr|OUT.png [--size N] [--pitch P] [--process ballend|facemill]
-//                         [--seed S] [--scene SCENE.json]
-// Writes a synthetic NC-machined height map, its ground-truth defect mask (<stem>-truth.png,
-// height-map space) and optionally a scene file that renders it.
+// scratchlight gen-surface OUT.exr|OUT.png [--part NAME | --process NAME] [--width N --height N]
+//                         [--pitch P] [tool, defect and noise options] [--seed S]
+//                         [--scene SCENE.json]
+// Writes a synthetic NC-machined height map, its ground-truth labels (<stem>-truth.png,
+// height-map space, with the legend <stem>-truth.json) and optionally a scene file that renders
+// it. The spec starts from the named test part (--part) or the process's defaults
+// (synth/SurfaceGenerator.h processDefaults); every option given on the command line overrides
+// it, so without new options the surface is the one gen-surface has always made.
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <utility>
+#include <vector>
 
 #include "app/PartFiles.h"
 #include "cli/Commands.h"
@@ -20,11 +28,15 @@ namespace sl::cli {
 
 namespace {
 struct GenArgs {
-    std::string out = "part.exr", scene, process = "ballend";
-    int width = 1024, height = 1024;
+    std::string out = "part.exr", scene;
+    SurfaceSpec::Process process = SurfaceSpec::Process::BallEndRaster;
+    std::optional<TestPart> part;
     bool noPocket = false;
     int imageSize = 0, spp = 64, maxDepth = 4;  // the scene file's camera and render section
-    SurfaceSpec spec;
+    SurfaceSpec spec;                           // what the options wrote (defaults: SurfaceSpec{})
+    // The spec options: each copies its field into the part's or process's spec when given.
+    std::vector<std::pair<CLI::Option*, std::function<void(SurfaceSpec&, const SurfaceSpec&)>>>
+        given;
 };
 
 int runGen(GenArgs a) {
@@ -32,12 +44,11 @@ int runGen(GenArgs a) {
     std::string ext = out.extension().string();
     if (ext != ".exr" && ext != ".png")
         throw UsageError("output '" + a.out + "' must end in .exr (float32) or .png (16-bit)");
-    a.spec.width = a.width;
-    a.spec.height = a.height;
-    if (a.noPocket) a.spec.pocketEdge = false;
-    a.spec.process = a.process == "facemill" ? SurfaceSpec::Process::FaceMillFeed
-                                             : SurfaceSpec::Process::BallEndRaster;
-    GeneratedSurface g = generateSurface(a.spec);
+    SurfaceSpec spec = a.part ? testPartSpec(*a.part) : processDefaults(a.process);
+    for (const auto& [option, apply] : a.given)
+        if (option->count() > 0) apply(spec, a.spec);
+    if (a.noPocket) spec.pocketEdge = false;
+    GeneratedSurface g = generateSurface(spec);
 
     PartFileOptions po;
     po.scene = a.scene;
@@ -53,37 +64,93 @@ int runGen(GenArgs a) {
                 truth.string().c_str());
     return kOk;
 }
+
+/// An option that sets one SurfaceSpec field (shown with SurfaceSpec{}'s default).
+template <class T>
+CLI::Option* addSpec(CLI::App* c, GenArgs& a, const std::string& flag, T SurfaceSpec::*field,
+                     const std::string& help) {
+    CLI::Option* o = c->add_option(flag, a.spec.*field, help)->capture_default_str();
+    a.given.emplace_back(
+        o, [field](SurfaceSpec& dst, const SurfaceSpec& src) { dst.*field = src.*field; });
+    return o;
+}
 }  // namespace
 
 void registerGenSurface(CLI::App& app, std::function<int()>& run) {
     auto a = std::make_shared<GenArgs>();
+    GenArgs& g = *a;
     CLI::App* c = app.add_subcommand(
-        "gen-surface", "Generate a synthetic NC-machined height map and its ground-truth mask");
+        "gen-surface", "Generate a synthetic NC-machined height map and its ground-truth labels");
     c->add_option("output", a->out, "Height map to write: .exr (float32 mm) or .png (16-bit)")
         ->capture_default_str();
-    c->add_option("--width", a->width, "Samples per row")
-        ->check(CLI::Range(2, 32767))
-        ->capture_default_str();
-    c->add_option("--height", a->height, "Rows")
-        ->check(CLI::Range(2, 32767))
-        ->capture_default_str();
-    c->add_option("--pitch", a->spec.pitch, "Sample spacing in mm")->capture_default_str();
-    c->add_option("--process", a->process, "Machining process")
-        ->check(CLI::IsMember({"ballend", "facemill"}))
-        ->capture_default_str();
-    c->add_option("--tool-radius", a->spec.toolRadius, "Tool radius in mm")->capture_default_str();
-    c->add_option("--stepover", a->spec.stepover, "Ball-end path spacing in mm")
-        ->capture_default_str();
-    c->add_option("--scratches", a->spec.scratchCount, "Number of random scratches")
-        ->capture_default_str();
-    c->add_option("--chatter", a->spec.chatterAmplitude, "Chatter amplitude in mm (0: none)")
-        ->capture_default_str();
-    c->add_option("--chatter-start", a->spec.chatterStartFraction,
-                  "Chatter only from this fraction of the width in +x (0.5: the right half, "
-                  "labelled 128 in the truth)")
-        ->capture_default_str();
+    CLI::Option* process =
+        addChoice(c, "--process", a->process, processTable(),
+                  "Machining process (default ballend; its tool defaults apply unless given)");
+    addChoice(c, "--part", a->part, testPartTable(),
+              "A labelled test part (1024x1024 at 0.01 mm, every defect kind); the options "
+              "given override its settings")
+        ->excludes(process);
+    addSpec(c, g, "--width", &SurfaceSpec::width, "Samples per row")->check(CLI::Range(2, 32767));
+    addSpec(c, g, "--height", &SurfaceSpec::height, "Rows")->check(CLI::Range(2, 32767));
+    addSpec(c, g, "--pitch", &SurfaceSpec::pitch, "Sample spacing in mm");
+    addSpec(c, g, "--tool-radius", &SurfaceSpec::toolRadius,
+            "Tool radius in mm (ball, face-mill cutter or flat end mill)");
+    addSpec(c, g, "--stepover", &SurfaceSpec::stepover, "Path or pass spacing in mm");
+    addSpec(c, g, "--feed", &SurfaceSpec::feedPerTooth,
+            "Feed per tooth in mm (per revolution for turned; flatend: 0 = no feed marks)");
+    addSpec(c, g, "--nose-radius", &SurfaceSpec::insertNoseRadius,
+            "Insert nose radius in mm (facemill, turned)");
+    addSpec(c, g, "--tool-corner-radius", &SurfaceSpec::toolCornerRadius,
+            "Flat end mill corner radius in mm");
+    addSpec(c, g, "--raster-angle", &SurfaceSpec::rasterAngleDeg,
+            "Direction of the tool paths, degrees from +x toward +z");
+    addSpec(c, g, "--turn-centre-x", &SurfaceSpec::turnCentreX,
+            "Turned: x of the spiral's centre in mm (map centre 0)");
+    addSpec(c, g, "--turn-centre-z", &SurfaceSpec::turnCentreZ,
+            "Turned: z of the spiral's centre in mm (map centre 0)");
+    addSpec(c, g, "--scratches", &SurfaceSpec::scratchCount, "Number of random scratches");
+    addSpec(c, g, "--scratch-depth", &SurfaceSpec::scratchDepth, "Deepest scratch in mm");
+    addSpec(c, g, "--scratch-depth-min", &SurfaceSpec::scratchDepthMin,
+            "Shallowest scratch as a fraction of --scratch-depth");
+    addSpec(c, g, "--scratch-width", &SurfaceSpec::scratchWidth, "Widest scratch in mm");
+    addSpec(c, g, "--scratch-width-min", &SurfaceSpec::scratchWidthMin,
+            "Narrowest scratch as a fraction of --scratch-width");
+    addSpec(c, g, "--scratch-direction", &SurfaceSpec::scratchDirectionDeg,
+            "Mean scratch direction, degrees from +x toward +z");
+    addSpec(c, g, "--scratch-direction-spread", &SurfaceSpec::scratchDirectionSpreadDeg,
+            "Scratch directions spread over this many degrees (180: any direction)");
+    CLI::Option* lips = c->add_flag("--label-scratch-lips", a->spec.labelScratchLips,
+                                    "Label the scratches' raised lips as burr (160)");
+    a->given.emplace_back(lips, [](SurfaceSpec& dst, const SurfaceSpec& src) {
+        dst.labelScratchLips = src.labelScratchLips;
+    });
+    addSpec(c, g, "--gouges", &SurfaceSpec::gougeCount, "Number of random gouges (label 255)");
+    addSpec(c, g, "--dents", &SurfaceSpec::dentCount, "Number of random dents (label 224)");
+    addSpec(c, g, "--dent-depth", &SurfaceSpec::dentDepth, "Deepest dent in mm");
+    addSpec(c, g, "--dent-radius", &SurfaceSpec::dentRadius, "Dent indenter radius in mm");
+    addSpec(c, g, "--burr", &SurfaceSpec::pocketBurrHeight,
+            "Burr height on the pocket edge in mm (0: none; label 160)");
+    addSpec(c, g, "--tool-change-step", &SurfaceSpec::toolChangeStep,
+            "Tool-change step in mm, lower beyond --tool-change-at (0: none; label 192)");
+    addSpec(c, g, "--tool-change-at", &SurfaceSpec::toolChangeAt,
+            "Across-path position (turned: radius) of the tool-change step in mm");
+    addSpec(c, g, "--chatter", &SurfaceSpec::chatterAmplitude, "Chatter amplitude in mm (0: none)");
+    addSpec(c, g, "--chatter-start", &SurfaceSpec::chatterStartFraction,
+            "Chatter only from this fraction of the width in +x (0.5: the right half, "
+            "labelled 128 in the truth)");
+    addSpec(c, g, "--chatter-bands", &SurfaceSpec::chatterBands,
+            "Number of chatter bands along the paths (rings for turned; label 144)");
+    addSpec(c, g, "--chatter-band-width", &SurfaceSpec::chatterBandWidth,
+            "Width of a chatter band across the paths in mm");
+    addSpec(c, g, "--chatter-band-amplitude", &SurfaceSpec::chatterBandAmplitude,
+            "Chatter amplitude inside the bands in mm");
+    addSpec(c, g, "--noise", &SurfaceSpec::noiseRms,
+            "Measurement noise: white noise RMS in mm (0: none; not labelled)");
+    addSpec(c, g, "--spikes", &SurfaceSpec::spikeCount,
+            "Measurement noise: single-sample spikes (not labelled)");
+    addSpec(c, g, "--spike-height", &SurfaceSpec::spikeHeight, "Largest spike in mm");
     c->add_flag("--no-pocket", a->noPocket, "Leave out the pocket edge (step)");
-    c->add_option("--seed", a->spec.seed, "Random seed")->capture_default_str();
+    addSpec(c, g, "--seed", &SurfaceSpec::seed, "Random seed");
     c->add_option("--image-size", a->imageSize,
                   "Scene file: camera image width and height in pixels (default: the scene's)")
         ->check(CLI::Range(1, 16384));

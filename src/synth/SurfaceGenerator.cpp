@@ -26,6 +26,12 @@ constexpr uint64_t kScratchStream = 0x7363726174636831ULL;
 constexpr uint64_t kGougeStream = 0x676f756765303031ULL;
 constexpr uint64_t kRoughStream = 0x726f756768303031ULL;
 constexpr uint64_t kPathStream = 0x7061746873303031ULL;
+constexpr uint64_t kDentStream = 0x64656e7473303031ULL;
+constexpr uint64_t kBandStream = 0x62616e6473303031ULL;
+constexpr uint64_t kBurrStream = 0x6275727273303031ULL;
+constexpr uint64_t kTurnStream = 0x7475726e73303031ULL;
+constexpr uint64_t kNoiseStream = 0x6e6f697365303031ULL;
+constexpr uint64_t kSpikeStream = 0x7370696b65303031ULL;
 
 void require(bool ok, const std::string& field, const std::string& problem,
              const std::string& fix) {
@@ -133,6 +139,35 @@ void validate(const SurfaceSpec& s) {
                     ") mm for a face mill, got " + formatNumber(s.feedPerTooth),
                 "Typical finishing feeds: 0.05-0.2 mm per tooth");
     }
+    if (s.process == SurfaceSpec::Process::FlatEndPocket) {
+        requireFinite(s.toolCornerRadius, "toolCornerRadius");
+        require(s.toolCornerRadius > 0 && s.toolCornerRadius <= s.toolRadius, "toolCornerRadius",
+                "must be in (0, toolRadius = " + formatNumber(s.toolRadius) + "] mm, got " +
+                    formatNumber(s.toolCornerRadius),
+                "Typical corner radii: 0.1-0.5 mm");
+        require(s.feedPerTooth < 2 * s.toolCornerRadius, "feedPerTooth",
+                "must be < 2*toolCornerRadius = " + formatNumber(2 * s.toolCornerRadius) +
+                    " mm for a flat end mill, got " + formatNumber(s.feedPerTooth),
+                "Typical finishing feeds: 0.02-0.1 mm per tooth (0: no feed marks)");
+        double hs = 0.5 * s.stepover;
+        require(std::hypot(hs, s.feedPerTooth) < s.toolRadius, "feedPerTooth",
+                "with stepover " + formatNumber(s.stepover) + " mm the flat end mill of radius " +
+                    formatNumber(s.toolRadius) + " mm leaves uncut material at feed " +
+                    formatNumber(s.feedPerTooth) + " mm",
+                "Reduce feedPerTooth or stepover");
+    }
+    if (s.process == SurfaceSpec::Process::Turned) {
+        requireFinite(s.insertNoseRadius, "insertNoseRadius");
+        require(s.insertNoseRadius > 0, "insertNoseRadius",
+                "must be > 0 mm, got " + formatNumber(s.insertNoseRadius),
+                "Typical turning inserts: 0.2-1.6 mm");
+        require(s.feedPerTooth > 0 && s.feedPerTooth < 2 * s.insertNoseRadius, "feedPerTooth",
+                "must be in (0, 2*insertNoseRadius = " + formatNumber(2 * s.insertNoseRadius) +
+                    ") mm per revolution for turning, got " + formatNumber(s.feedPerTooth),
+                "Typical finishing feeds: 0.05-0.2 mm per revolution");
+        requireFinite(s.turnCentreX, "turnCentreX");
+        requireFinite(s.turnCentreZ, "turnCentreZ");
+    }
     requireFinite(s.chatterAmplitude, "chatterAmplitude");
     require(s.chatterAmplitude >= 0, "chatterAmplitude",
             "must be >= 0 mm, got " + formatNumber(s.chatterAmplitude), "Use 0 to disable chatter");
@@ -140,7 +175,20 @@ void validate(const SurfaceSpec& s) {
     require(s.chatterStartFraction >= 0 && s.chatterStartFraction < 1, "chatterStartFraction",
             "must be in [0, 1), got " + formatNumber(s.chatterStartFraction),
             "Use 0 for chatter everywhere, 0.5 for the right half");
-    if (s.chatterAmplitude > 0) {
+    require(s.chatterBands >= 0 && s.chatterBands <= 10000, "chatterBands",
+            "must be in [0, 10000], got " + std::to_string(s.chatterBands),
+            "Use 0 for no chatter bands");
+    if (s.chatterBands > 0) {
+        requireFinite(s.chatterBandWidth, "chatterBandWidth");
+        require(s.chatterBandWidth > 0, "chatterBandWidth",
+                "must be > 0 mm, got " + formatNumber(s.chatterBandWidth),
+                "Set the width of a chatter band across the paths in mm, e.g. 0.8");
+        requireFinite(s.chatterBandAmplitude, "chatterBandAmplitude");
+        require(s.chatterBandAmplitude > 0, "chatterBandAmplitude",
+                "must be > 0 mm, got " + formatNumber(s.chatterBandAmplitude),
+                "Set the chatter amplitude inside the bands in mm, or chatterBands = 0");
+    }
+    if (s.chatterAmplitude > 0 || s.chatterBands > 0) {
         requireFinite(s.chatterWavelength, "chatterWavelength");
         require(
             s.chatterWavelength > 0, "chatterWavelength",
@@ -157,6 +205,22 @@ void validate(const SurfaceSpec& s) {
                 "Set the correlation length in mm, e.g. 0.02");
     }
     if (s.scratches.empty()) {
+        for (auto [v, field] :
+             {std::pair{s.scratchDepthMin, "scratchDepthMin"},
+              std::pair{s.scratchWidthMin, "scratchWidthMin"},
+              std::pair{s.scratchDirectionDeg, "scratchDirectionDeg"},
+              std::pair{s.scratchDirectionSpreadDeg, "scratchDirectionSpreadDeg"}})
+            requireFinite(v, field);
+        require(s.scratchDepthMin >= 0 && s.scratchDepthMin <= 1, "scratchDepthMin",
+                "must be in [0, 1], got " + formatNumber(s.scratchDepthMin),
+                "It is the shallowest random scratch as a fraction of scratchDepth");
+        require(s.scratchWidthMin > 0 && s.scratchWidthMin <= 1, "scratchWidthMin",
+                "must be in (0, 1], got " + formatNumber(s.scratchWidthMin),
+                "It is the narrowest random scratch as a fraction of scratchWidth");
+        require(s.scratchDirectionSpreadDeg >= 0 && s.scratchDirectionSpreadDeg <= 180,
+                "scratchDirectionSpreadDeg",
+                "must be in [0, 180] degrees, got " + formatNumber(s.scratchDirectionSpreadDeg),
+                "Use 180 for any direction, 0 for all along scratchDirectionDeg");
         require(s.scratchCount >= 0 && s.scratchCount <= 100000, "scratchCount",
                 "must be in [0, 100000], got " + std::to_string(s.scratchCount),
                 "Use 0 for no scratches");
@@ -207,6 +271,57 @@ void validate(const SurfaceSpec& s) {
         require(std::hypot(g.x1 - g.x0, g.z1 - g.z0) > 0, f, "the endpoints coincide",
                 "Give a segment of positive length");
     }
+    if (s.dents.empty()) {
+        require(s.dentCount >= 0 && s.dentCount <= 100000, "dentCount",
+                "must be in [0, 100000], got " + std::to_string(s.dentCount), "Use 0 for no dents");
+        if (s.dentCount > 0) {
+            requireFinite(s.dentDepth, "dentDepth");
+            requireFinite(s.dentRadius, "dentRadius");
+            require(s.dentRadius > 0, "dentRadius",
+                    "must be > 0 mm, got " + formatNumber(s.dentRadius),
+                    "The indenter's radius in mm, e.g. 0.5");
+            require(s.dentDepth >= 0 && s.dentDepth <= s.dentRadius, "dentDepth",
+                    "must be in [0, dentRadius = " + formatNumber(s.dentRadius) + "] mm, got " +
+                        formatNumber(s.dentDepth),
+                    "Dent depths are in mm, e.g. 0.005");
+        }
+    }
+    for (size_t n = 0; n < s.dents.size(); ++n) {
+        const DentSpec& d = s.dents[n];
+        std::string f = "dents[" + std::to_string(n) + "]";
+        for (double v : {d.x, d.z, d.depth, d.radius}) requireFinite(v, f);
+        require(d.radius > 0, f + ".radius", "must be > 0 mm, got " + formatNumber(d.radius),
+                "The indenter's radius in mm");
+        require(d.depth >= 0 && d.depth <= d.radius, f + ".depth",
+                "must be in [0, radius] mm, got " + formatNumber(d.depth),
+                "Dent depths are in mm, positive into the part");
+    }
+    requireFinite(s.pocketBurrHeight, "pocketBurrHeight");
+    require(s.pocketBurrHeight >= 0, "pocketBurrHeight",
+            "must be >= 0 mm, got " + formatNumber(s.pocketBurrHeight), "Use 0 for no burr");
+    if (s.pocketBurrHeight > 0) {
+        require(s.pocketEdge && s.pocketDepth > 0, "pocketBurrHeight",
+                "a burr sits on the pocket edge, and there is none",
+                "Keep the pocket edge (pocketEdge = true, pocketDepth > 0) or set it to 0");
+        requireFinite(s.pocketBurrWidth, "pocketBurrWidth");
+        require(s.pocketBurrWidth > 0, "pocketBurrWidth",
+                "must be > 0 mm, got " + formatNumber(s.pocketBurrWidth),
+                "The burr's width across the edge in mm, e.g. 0.04");
+    }
+    requireFinite(s.toolChangeStep, "toolChangeStep");
+    if (s.toolChangeStep != 0) {
+        requireFinite(s.toolChangeAt, "toolChangeAt");
+        requireFinite(s.toolChangeWidth, "toolChangeWidth");
+        require(s.toolChangeWidth >= 0, "toolChangeWidth",
+                "must be >= 0 mm, got " + formatNumber(s.toolChangeWidth),
+                "The width of the step's ramp in mm (at least 2 samples are used)");
+    }
+    requireFinite(s.noiseRms, "noiseRms");
+    require(s.noiseRms >= 0, "noiseRms", "must be >= 0 mm, got " + formatNumber(s.noiseRms),
+            "Use 0 for no measurement noise");
+    require(s.spikeCount >= 0 && s.spikeCount <= 1000000, "spikeCount",
+            "must be in [0, 1000000], got " + std::to_string(s.spikeCount), "Use 0 for no spikes");
+    if (s.spikeCount > 0) requireFinite(s.spikeHeight, "spikeHeight");
     if (s.pocketEdge) {
         requireFinite(s.pocketDepth, "pocketDepth");
         require(s.pocketDepth >= 0, "pocketDepth",
@@ -226,19 +341,23 @@ void validate(const SurfaceSpec& s) {
 // Tool marks.
 
 struct ToolMarks {
-    double R = 0, R2 = 0;  // ball radius (ball-end) or cutter radius (face mill)
-    double rn = 0;         // insert nose radius (face mill)
+    SurfaceSpec::Process process = SurfaceSpec::Process::BallEndRaster;
+    double R = 0, R2 = 0;   // ball radius (ball-end) or cutter radius (face mill, flat end)
+    double rn = 0;          // insert nose radius (face mill, turned)
+    double rc = 0, af = 0;  // flat end: corner radius and radius of the flat, R − r_c
     double s = 0, off = 0, f = 0;
     bool feedMarks = false;
     double cosA = 1, sinA = 0;
     double A = 0, omega = 0;
-    int64_t kMin = 0, kMax = 0;  // path table range
+    double maxA = 0;  // the largest chatter amplitude anywhere (bands included)
+    double xc = 0, zc = 0, turnPhase = 0, turnChatterPhase = 0;  // turned
+    int64_t kMin = 0, kMax = 0;                                  // path table range
     std::vector<double> chatCos, chatSin, toothPhase;
 
     size_t idx(int64_t k) const { return static_cast<size_t>(std::clamp(k, kMin, kMax) - kMin); }
 
-    // Ball-end raster: MIN over the paths that can reach the point.
-    double ballEnd(double t, double p, double sw, double cw) const {
+    // Ball-end raster: MIN over the paths that can reach the point (chatter amplitude amp).
+    double ballEnd(double t, double p, double sw, double cw, double amp) const {
         double best = kInf;
         auto k0 = static_cast<int64_t>(std::floor((p - off) / s + 0.5));
         for (int dir = 1; dir >= -1; dir -= 2) {
@@ -246,7 +365,7 @@ struct ToolMarks {
                 double d = p - (off + static_cast<double>(k) * s);
                 double d2 = d * d;
                 if (d2 >= R2) break;
-                if (sphereRise(R, d2) - A >= best) break;  // farther paths only rise
+                if (sphereRise(R, d2) - amp >= best) break;  // farther paths only rise
                 size_t n = idx(k);
                 double r2 = d2;
                 if (feedMarks) {
@@ -255,7 +374,7 @@ struct ToolMarks {
                     r2 += dt * dt;
                 }
                 if (r2 >= R2) continue;
-                double h = sphereRise(R, r2) + A * (sw * chatCos[n] + cw * chatSin[n]);
+                double h = sphereRise(R, r2) + amp * (sw * chatCos[n] + cw * chatSin[n]);
                 best = std::min(best, h);
             }
         }
@@ -263,7 +382,7 @@ struct ToolMarks {
     }
 
     // Face mill: the last pass covering the point wins; nearest leading-edge tooth arc.
-    double faceMill(double t, double p, double sw, double cw) const {
+    double faceMill(double t, double p, double sw, double cw, double amp) const {
         // Largest k with p_k < p + R, i.e. the last pass whose swath (|p − p_k| < R) holds p.
         auto k = static_cast<int64_t>(std::ceil((p + R - off) / s)) - 1;
         double q = p - (off + static_cast<double>(k) * s);
@@ -280,7 +399,57 @@ struct ToolMarks {
             if (delta >= rn) continue;
             best = std::min(best, sphereRise(rn, delta * delta));
         }
-        return best + A * (sw * chatCos[n] + cw * chatSin[n]);
+        return best + amp * (sw * chatCos[n] + cw * chatSin[n]);
+    }
+
+    // Flat end mill: MIN over the passes whose tool reaches the point. Without feed marks the
+    // pass's profile (flat, then the corner arc); with them the torus swept by the leading
+    // teeth's corners (circle of radius af about each tooth centre, tube radius rc).
+    double flatEnd(double t, double p, double sw, double cw, double amp) const {
+        double best = kInf;
+        auto kLo = static_cast<int64_t>(std::ceil((p - R - off) / s));
+        auto kHi = static_cast<int64_t>(std::floor((p + R - off) / s));
+        for (int64_t k = kLo; k <= kHi; ++k) {
+            double q = p - (off + static_cast<double>(k) * s);
+            double aq = std::abs(q);
+            if (aq >= R) continue;
+            size_t n = idx(k);
+            double h = rc;  // above the corner: not cut by this pass
+            if (!feedMarks) {
+                h = aq <= af ? 0.0 : sphereRise(rc, (aq - af) * (aq - af));
+            } else {
+                // The leading corner arc crosses the point where hypot(dx, q) = af.
+                double dxStar = aq < af ? std::sqrt(af * af - q * q) : 0.0;
+                auto m0 = static_cast<int64_t>(std::floor((t - dxStar - toothPhase[n]) / f));
+                for (int64_t m = m0 - 1; m <= m0 + 2; ++m) {
+                    double dx = t - (static_cast<double>(m) * f + toothPhase[n]);
+                    if (dx < 0) continue;  // only the leading half cuts (tilted spindle)
+                    double delta = std::abs(std::hypot(dx, q) - af);
+                    if (delta >= rc) continue;
+                    h = std::min(h, sphereRise(rc, delta * delta));
+                }
+            }
+            best = std::min(best, h + amp * (sw * chatCos[n] + cw * chatSin[n]));
+        }
+        return std::isfinite(best) ? best : rc;  // unreachable after validation
+    }
+
+    // Turned: the nose profile about the spiral's nearest turns; r = distance to the centre,
+    // theta = angle about it (radians). Chatter along the spiral when `chatter`.
+    double turned(double r, double theta, double amp, bool chatter) const {
+        double th = theta / (2.0 * kPi) + turnPhase;
+        auto n0 = static_cast<int64_t>(std::nearbyint(r / f - th));
+        double best = kInf;
+        for (int64_t n = n0 - 1; n <= n0 + 1; ++n) {
+            double rho = f * (static_cast<double>(n) + th);
+            double d = r - rho;
+            if (d * d >= rn * rn) continue;
+            double h = sphereRise(rn, d * d);
+            if (chatter && amp > 0)
+                h += amp * std::sin(omega * kPi * rho * rho / f + turnChatterPhase);
+            best = std::min(best, h);
+        }
+        return std::isfinite(best) ? best : rn;  // unreachable after validation (f < 2·rn)
     }
 };
 
@@ -324,8 +493,9 @@ struct Gouge {
     double radius;
 };
 
-/// Scratch height offset at (x, z); sets `cut` when inside the groove (truth).
-double scratchOffset(const Scratch& c, double x, double z, bool& cut) {
+/// Scratch height offset at (x, z); sets `cut` when inside the groove (truth), `lip` where the
+/// lip is ≥ 10% of its height.
+double scratchOffset(const Scratch& c, double x, double z, bool& cut, bool& lip) {
     const Segment& g = c.seg;
     double px = x - g.ax, pz = z - g.az;
     double along = px * g.ux + pz * g.uz;
@@ -342,6 +512,7 @@ double scratchOffset(const Scratch& c, double x, double z, bool& cut) {
     }
     double v = (u - 1.5) * 2.0;  // lip centred at 0.75·w, half-width 0.25·w
     double b = 1.0 - v * v;
+    if (fade >= 0.1 && b * b >= 0.1) lip = true;
     return c.spec.burr * D * b * b;
 }
 
@@ -436,6 +607,21 @@ struct Roughness {
 
 }  // namespace
 
+double flatEndRidgeHeight(double stepover, double toolRadius, double cornerRadius) {
+    if (!(std::isfinite(toolRadius) && toolRadius > 0))
+        throw inputError("flatEndRidgeHeight: toolRadius",
+                         "must be > 0 mm, got " + formatNumber(toolRadius));
+    if (!(std::isfinite(cornerRadius) && cornerRadius > 0 && cornerRadius <= toolRadius))
+        throw inputError("flatEndRidgeHeight: cornerRadius",
+                         "must be in (0, toolRadius] mm, got " + formatNumber(cornerRadius));
+    if (!(std::isfinite(stepover) && stepover >= 0 && stepover <= 2 * toolRadius))
+        throw inputError("flatEndRidgeHeight: stepover",
+                         "must be in [0, 2*toolRadius = " + formatNumber(2 * toolRadius) +
+                             "] mm, got " + formatNumber(stepover));
+    double e = 0.5 * stepover - (toolRadius - cornerRadius);
+    return e > 0 ? sphereRise(cornerRadius, e * e) : 0.0;
+}
+
 double scallopHeight(double stepover, double ballRadius) {
     if (!(std::isfinite(ballRadius) && ballRadius > 0))
         throw inputError("scallopHeight: ballRadius",
@@ -463,7 +649,9 @@ struct Frame {
           cz(0.5 * (spec.height - 1)),
           extX((spec.width - 1) * spec.pitch),
           extZ((spec.height - 1) * spec.pitch),
-          ball(spec.process == SurfaceSpec::Process::BallEndRaster) {}
+          ball(spec.process == SurfaceSpec::Process::BallEndRaster),
+          process(spec.process) {}
+    SurfaceSpec::Process process;
 };
 
 /// Stage 1: the tool paths that can shape the map, with their chatter and tooth phases.
@@ -483,6 +671,28 @@ ToolMarks toolMarks(const SurfaceSpec& spec, const Frame& fr) {
     tm.sinA = std::sin(angle);
     tm.A = spec.chatterAmplitude;
     tm.omega = tm.A > 0 ? 2.0 * kPi / spec.chatterWavelength : 0.0;
+    tm.maxA = tm.A;
+    tm.process = spec.process;
+    if (spec.chatterBands > 0) {
+        tm.maxA = std::max(tm.A, spec.chatterBandAmplitude);
+        tm.omega = 2.0 * kPi / spec.chatterWavelength;
+    }
+    if (spec.process == SurfaceSpec::Process::FlatEndPocket) {
+        tm.rc = spec.toolCornerRadius;
+        tm.af = tm.R - tm.rc;
+        tm.feedMarks = spec.feedPerTooth > 0;
+    }
+    if (spec.process == SurfaceSpec::Process::Turned) {
+        // No path table: one spiral, its phase and the chatter's phase from the seed.
+        tm.xc = spec.turnCentreX;
+        tm.zc = spec.turnCentreZ;
+        tm.turnPhase = hashUniform(spec.seed, kTurnStream, 0);
+        tm.turnChatterPhase = 2.0 * kPi * hashUniform(spec.seed, kTurnStream, 1);
+        tm.chatCos.assign(1, 1.0);
+        tm.chatSin.assign(1, 0.0);
+        tm.toothPhase.assign(1, 0.0);
+        return tm;
+    }
     {
         // Paths that can shape a sample: ball-end, those within D* of it, where the ball has
         // risen by more than the worst cusp plus twice the chatter (the search stops there);
@@ -491,10 +701,13 @@ ToolMarks toolMarks(const SurfaceSpec& spec, const Frame& fr) {
         double lo, hi;
         if (ball) {
             double hs = 0.5 * tm.s, hf = tm.feedMarks ? 0.5 * tm.f : 0.0;
-            double need = sphereRise(tm.R, hs * hs + hf * hf) + 2 * tm.A;
+            double need = sphereRise(tm.R, hs * hs + hf * hf) + 2 * tm.maxA;
             double reach = need >= tm.R ? tm.R : std::sqrt(need * (2 * tm.R - need));
             lo = -halfDiag - reach - 2 * tm.s;
             hi = halfDiag + reach + 2 * tm.s;
+        } else if (spec.process == SurfaceSpec::Process::FlatEndPocket) {
+            lo = -halfDiag - tm.R - 2 * tm.s;
+            hi = halfDiag + tm.R + 2 * tm.s;
         } else {
             lo = -halfDiag + tm.R - 2 * tm.s;
             hi = halfDiag + tm.R + 2 * tm.s;
@@ -564,10 +777,17 @@ std::vector<Scratch> placeScratches(const SurfaceSpec& spec, const Frame& fr,
             double mx = (ux - 0.5) * 0.8 * extX;
             double mz = (uz - 0.5) * 0.8 * extZ;
             double len = (0.15 + 0.35 * rng.nextDouble()) * shorter;
-            double th = kPi * rng.nextDouble();
+            const double uth = rng.nextDouble();
+            // Spread 180°: any direction (the draw of before the spread existed, bit for bit).
+            const double th =
+                spec.scratchDirectionSpreadDeg >= 180
+                    ? kPi * uth
+                    : (spec.scratchDirectionDeg + spec.scratchDirectionSpreadDeg * (uth - 0.5)) *
+                          kPi / 180.0;
+            const double dMin = spec.scratchDepthMin, wMin = spec.scratchWidthMin;
             ScratchSpec c;
-            c.depth = spec.scratchDepth * (0.5 + 0.5 * rng.nextDouble());
-            c.width = spec.scratchWidth * (0.75 + 0.25 * rng.nextDouble());
+            c.depth = spec.scratchDepth * (dMin + (1.0 - dMin) * rng.nextDouble());
+            c.width = spec.scratchWidth * (wMin + (1.0 - wMin) * rng.nextDouble());
             c.shape = rng.nextDouble() < 0.5 ? ScratchSpec::Shape::V : ScratchSpec::Shape::Round;
             c.x0 = mx - 0.5 * len * std::cos(th);
             c.z0 = mz - 0.5 * len * std::sin(th);
@@ -592,7 +812,10 @@ std::vector<Gouge> placeGouges(const SurfaceSpec& spec, const Frame& fr, const T
     const double pitch = fr.pitch, extX = fr.extX, extZ = fr.extZ;
     const bool ball = fr.ball;
     std::vector<Gouge> gouges;
-    const double gougeRadius = ball ? spec.toolRadius : spec.insertNoseRadius;
+    const double gougeRadius = ball ? spec.toolRadius
+                               : fr.process == SurfaceSpec::Process::FlatEndPocket
+                                   ? spec.toolCornerRadius
+                                   : spec.insertNoseRadius;
     if (!spec.gouges.empty()) {
         out.gouges = spec.gouges;
     } else {
@@ -627,7 +850,7 @@ std::vector<Gouge> placeGouges(const SurfaceSpec& spec, const Frame& fr, const T
     for (const GougeSpec& g : out.gouges) {
         // The crater ends where the sphere has risen above the lowest tool mark (−chatter):
         // rise(r) = D + A, i.e. r² = e·(2R − e) with e = D + A.
-        double e = std::min(g.depth + tm.A, gougeRadius);
+        double e = std::min(g.depth + tm.maxA, gougeRadius);
         double reach = std::min(std::sqrt(e * (2 * gougeRadius - e)) + 2 * pitch, gougeRadius);
         gouges.push_back({makeSegment(g.x0, g.z0, g.x1, g.z1, reach, pitch, W, H), g, gougeRadius});
     }
@@ -635,70 +858,300 @@ std::vector<Gouge> placeGouges(const SurfaceSpec& spec, const Frame& fr, const T
     return gouges;
 }
 
+/// A dent's bounding box in samples and its reach² (where the sphere has risen by its depth).
+struct Dent {
+    DentSpec spec;
+    double reach2 = 0;
+    int i0 = 0, i1 = -1, j0 = 0, j1 = -1;
+};
+
+/// Dent height offset (≤ 0) at (x, z); sets `hit` where it lowers by ≥ 10% of the depth.
+double dentOffset(const Dent& d, double x, double z, bool& hit) {
+    double dx = x - d.spec.x, dz = z - d.spec.z;
+    double r2 = dx * dx + dz * dz;
+    if (r2 >= d.reach2) return 0.0;
+    double lower = d.spec.depth - sphereRise(d.spec.radius, r2);
+    if (lower <= 0) return 0.0;
+    if (lower >= 0.1 * d.spec.depth) hit = true;
+    return -lower;
+}
+
+/// Stage 4b: the dents, given or drawn from the seed (uniform over the inner 80% of the map,
+/// off the pocket edge).
+std::vector<Dent> placeDents(const SurfaceSpec& spec, const Frame& fr, GeneratedSurface& out) {
+    if (!spec.dents.empty()) {
+        out.dents = spec.dents;
+    } else if (spec.dentCount > 0) {
+        Pcg32 rng(mix64(spec.seed ^ kDentStream), kDentStream);
+        const double R = spec.dentRadius, D = spec.dentDepth;
+        const double keepOut = std::isfinite(out.pocketEdgeX)
+                                   ? out.pocketEdgeHalfWidth + std::sqrt(D * (2 * R - D)) + 0.1
+                                   : -1.0;
+        for (int n = 0; n < spec.dentCount; ++n) {
+            DentSpec d;
+            for (int attempt = 0; attempt < 64; ++attempt) {
+                d.x = (rng.nextDouble() - 0.5) * 0.8 * fr.extX;
+                d.z = (rng.nextDouble() - 0.5) * 0.8 * fr.extZ;
+                if (!(std::abs(d.x - out.pocketEdgeX) < keepOut)) break;
+            }
+            d.depth = D * (0.5 + 0.5 * rng.nextDouble());
+            d.radius = R;
+            out.dents.push_back(d);
+        }
+    }
+    std::vector<Dent> dents;
+    for (const DentSpec& d : out.dents) {
+        Dent dt;
+        dt.spec = d;
+        dt.reach2 = d.depth * (2 * d.radius - d.depth);
+        double reach = std::sqrt(dt.reach2) + fr.pitch;
+        auto lo = [&](double v, double c, int n) {
+            return static_cast<int>(std::clamp(std::floor(v / fr.pitch + c), 0.0, n - 1.0));
+        };
+        auto hi = [&](double v, double c, int n) {
+            return static_cast<int>(std::clamp(std::ceil(v / fr.pitch + c), -1.0, n - 1.0));
+        };
+        if (d.x + reach < -0.5 * fr.extX || d.x - reach > 0.5 * fr.extX ||
+            d.z + reach < -0.5 * fr.extZ || d.z - reach > 0.5 * fr.extZ)
+            continue;  // off the map
+        dt.i0 = lo(d.x - reach, fr.cx, fr.W);
+        dt.i1 = hi(d.x + reach, fr.cx, fr.W);
+        dt.j0 = lo(d.z - reach, fr.cz, fr.H);
+        dt.j1 = hi(d.z + reach, fr.cz, fr.H);
+        dents.push_back(dt);
+    }
+    return dents;
+}
+
+/// The range of the across-path coordinate c over the map: p for milling, the distance to the
+/// turning centre for Turned.
+std::pair<double, double> acrossRange(const Frame& fr, const ToolMarks& tm) {
+    const double hx = 0.5 * fr.extX, hz = 0.5 * fr.extZ;
+    if (fr.process == SurfaceSpec::Process::Turned) {
+        double nx = std::max(0.0, std::abs(tm.xc) - hx), nz = std::max(0.0, std::abs(tm.zc) - hz);
+        return {std::hypot(nx, nz), std::hypot(std::abs(tm.xc) + hx, std::abs(tm.zc) + hz)};
+    }
+    double h = std::abs(tm.sinA) * hx + std::abs(tm.cosA) * hz;
+    return {-h, h};
+}
+
+/// Stage 4c: the chatter bands' centres (across-path coordinate), uniform over the map's range.
+std::vector<double> placeChatterBands(const SurfaceSpec& spec, const Frame& fr,
+                                      const ToolMarks& tm) {
+    std::vector<double> bands;
+    if (spec.chatterBands <= 0) return bands;
+    Pcg32 rng(mix64(spec.seed ^ kBandStream), kBandStream);
+    auto [lo, hi] = acrossRange(fr, tm);
+    const double w = spec.chatterBandWidth;
+    for (int n = 0; n < spec.chatterBands; ++n) {
+        const double u = rng.nextDouble();
+        // A band wider than the map's range is centred on it.
+        bands.push_back(hi - lo > w ? lo + 0.5 * w + u * (hi - lo - w) : 0.5 * (lo + hi));
+    }
+    return bands;
+}
+
+/// The pocket-edge burr: its profile across the edge per column and its height along it per
+/// row (both 0 without a burr).
+struct Burr {
+    std::vector<double> across, along;
+};
+
+/// Stage 4d: the burr on the pocket's top edge (see the header).
+Burr placeBurr(const SurfaceSpec& spec, const Frame& fr, const GeneratedSurface& out) {
+    Burr b;
+    if (!(spec.pocketBurrHeight > 0) || !std::isfinite(out.pocketEdgeX)) return b;
+    b.across.assign(static_cast<size_t>(fr.W), 0.0);
+    b.along.assign(static_cast<size_t>(fr.H), 0.0);
+    const double xTop = out.pocketEdgeX - out.pocketEdgeHalfWidth;
+    const double half = 0.5 * spec.pocketBurrWidth;
+    for (int i = 0; i < fr.W; ++i) {
+        double u = ((i - fr.cx) * fr.pitch - xTop) / half;
+        double v = 1.0 - u * u;
+        b.across[static_cast<size_t>(i)] = std::abs(u) < 1.0 ? v * v : 0.0;
+    }
+    constexpr double kSpacing = 0.25;  // mm between the random values along the edge
+    for (int j = 0; j < fr.H; ++j) {
+        double a = (j * fr.pitch) / kSpacing;  // from the map's −z edge
+        double fl = std::floor(a);
+        auto k = static_cast<int64_t>(fl);
+        double v0 = hashUniform(spec.seed, kBurrStream, k);
+        double v1 = hashUniform(spec.seed, kBurrStream, k + 1);
+        double g = 0.5 + 0.5 * (v0 + (v1 - v0) * smoothstep01(a - fl));
+        b.along[static_cast<size_t>(j)] = spec.pocketBurrHeight * g;
+    }
+    return b;
+}
+
+/// The stages' results that compose puts together.
+struct Features {
+    std::vector<double> pocket;
+    std::vector<Scratch> scratches;
+    std::vector<Gouge> gouges;
+    std::vector<Dent> dents;
+    std::vector<double> bands;
+    Burr burr;
+};
+
 /// Stage 5: every sample's height and truth label, row-parallel (each a pure function of the
-/// spec).
-void compose(const SurfaceSpec& spec, const Frame& fr, const ToolMarks& tm,
-             const std::vector<double>& pocket, const std::vector<Scratch>& scratches,
-             const std::vector<Gouge>& gouges, const Roughness& rough, GeneratedSurface& out) {
+/// spec). Labels combine by max: the higher value wins (see the header).
+void compose(const SurfaceSpec& spec, const Frame& fr, const ToolMarks& tm, const Features& ft,
+             const Roughness& rough, GeneratedSurface& out) {
     const int W = fr.W, H = fr.H;
     const double pitch = fr.pitch, cx = fr.cx, cz = fr.cz;
-    const bool ball = fr.ball;
     const size_t N = static_cast<size_t>(W) * H;
     const int chatterStart = static_cast<int>(std::ceil(spec.chatterStartFraction * W));
     const bool labelChatter = spec.chatterStartFraction > 0 && spec.chatterAmplitude > 0;
+    const bool turned = fr.process == SurfaceSpec::Process::Turned;
+    const double bandHalf = 0.5 * spec.chatterBandWidth;
+    const bool stepOn = spec.toolChangeStep != 0;
+    const double stepW = std::max(spec.toolChangeWidth, 2 * pitch);
+    const bool burrOn = !ft.burr.across.empty();
+    const uint64_t noiseKey = mix64(spec.seed ^ kNoiseStream);
     out.heights.assign(N, 0.0f);
     out.truth.assign(N, 0);
     tbb::parallel_for(tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& r) {
-        std::vector<double> row(static_cast<size_t>(W));
-        std::vector<uint8_t> cut(static_cast<size_t>(W));
+        std::vector<double> row(static_cast<size_t>(W)), across(static_cast<size_t>(W));
+        std::vector<uint8_t> lab(static_cast<size_t>(W));
+        auto mark = [&](int i, uint8_t v) {
+            uint8_t& l = lab[static_cast<size_t>(i)];
+            l = std::max(l, v);
+        };
         for (int j = r.begin(); j < r.end(); ++j) {
             const double z = (j - cz) * pitch;
-            std::fill(cut.begin(), cut.end(), uint8_t{0});
+            std::fill(lab.begin(), lab.end(), uint8_t{0});
             for (int i = 0; i < W; ++i) {
                 double x = (i - cx) * pitch;
                 double t = x * tm.cosA + z * tm.sinA;
                 double p = -x * tm.sinA + z * tm.cosA;
+                double c = p, rad = 0, theta = 0;
+                if (turned) {
+                    double dx = x - tm.xc, dz = z - tm.zc;
+                    rad = std::hypot(dx, dz);
+                    theta = std::atan2(dz, dx);
+                    c = rad;
+                }
+                across[static_cast<size_t>(i)] = c;
+                double amp = tm.A;
+                bool active = i >= chatterStart;
+                for (double b : ft.bands)
+                    if (std::abs(c - b) < bandHalf) {
+                        amp = spec.chatterBandAmplitude;
+                        active = true;
+                        mark(i, kTruthChatterBand);
+                        break;
+                    }
                 double sw = 0, cw = 0;
-                if (tm.A > 0 && i >= chatterStart) {
+                if (amp > 0 && active && !turned) {
                     sw = std::sin(tm.omega * t);
                     cw = std::cos(tm.omega * t);
                 }
-                row[static_cast<size_t>(i)] =
-                    ball ? tm.ballEnd(t, p, sw, cw) : tm.faceMill(t, p, sw, cw);
+                double h = 0;
+                switch (fr.process) {
+                    case SurfaceSpec::Process::BallEndRaster:
+                        h = tm.ballEnd(t, p, sw, cw, amp);
+                        break;
+                    case SurfaceSpec::Process::FaceMillFeed:
+                        h = tm.faceMill(t, p, sw, cw, amp);
+                        break;
+                    case SurfaceSpec::Process::FlatEndPocket:
+                        h = tm.flatEnd(t, p, sw, cw, amp);
+                        break;
+                    case SurfaceSpec::Process::Turned:
+                        h = tm.turned(rad, theta, amp, active);
+                        break;
+                }
+                row[static_cast<size_t>(i)] = h;
             }
-            for (const Gouge& g : gouges) {
+            for (const Gouge& g : ft.gouges) {
                 if (j < g.seg.j0 || j > g.seg.j1) continue;
                 for (int i = g.seg.i0; i <= g.seg.i1; ++i) {
                     double hg = gougeSurface(g, (i - cx) * pitch, z);
                     double& h = row[static_cast<size_t>(i)];
                     if (hg < h) {
-                        if (h - hg >= 0.1 * g.spec.depth && g.spec.depth > 0)
-                            cut[static_cast<size_t>(i)] = 1;
+                        if (h - hg >= 0.1 * g.spec.depth && g.spec.depth > 0) mark(i, kTruthDefect);
                         h = hg;
                     }
                 }
             }
             if (rough.rms > 0)
                 for (int i = 0; i < W; ++i) row[static_cast<size_t>(i)] += rough.at(i, j);
-            for (const Scratch& c : scratches) {
+            for (const Scratch& c : ft.scratches) {
                 if (j < c.seg.j0 || j > c.seg.j1) continue;
                 for (int i = c.seg.i0; i <= c.seg.i1; ++i) {
-                    bool inGroove = false;
-                    row[static_cast<size_t>(i)] += scratchOffset(c, (i - cx) * pitch, z, inGroove);
-                    if (inGroove && c.spec.depth > 0) cut[static_cast<size_t>(i)] = 1;
+                    bool inGroove = false, lip = false;
+                    row[static_cast<size_t>(i)] +=
+                        scratchOffset(c, (i - cx) * pitch, z, inGroove, lip);
+                    if (inGroove && c.spec.depth > 0) mark(i, kTruthDefect);
+                    if (lip && spec.labelScratchLips && c.spec.depth > 0 && c.spec.burr > 0)
+                        mark(i, kTruthBurr);
+                }
+            }
+            for (const Dent& d : ft.dents) {
+                if (j < d.j0 || j > d.j1) continue;
+                for (int i = d.i0; i <= d.i1; ++i) {
+                    bool hit = false;
+                    row[static_cast<size_t>(i)] += dentOffset(d, (i - cx) * pitch, z, hit);
+                    if (hit) mark(i, kTruthDent);
+                }
+            }
+            if (burrOn) {
+                const double hb = ft.burr.along[static_cast<size_t>(j)];
+                for (int i = 0; i < W; ++i) {
+                    const double b = ft.burr.across[static_cast<size_t>(i)];
+                    if (b <= 0) continue;
+                    row[static_cast<size_t>(i)] += hb * b;
+                    if (b >= 0.1) mark(i, kTruthBurr);
+                }
+            }
+            if (stepOn) {
+                for (int i = 0; i < W; ++i) {
+                    double d = across[static_cast<size_t>(i)] - spec.toolChangeAt;
+                    double ramp = smoothstep01(d / stepW + 0.5);
+                    if (ramp <= 0) continue;
+                    row[static_cast<size_t>(i)] -= spec.toolChangeStep * ramp;
+                    if (std::abs(d) < 0.5 * stepW && ramp >= 0.1) mark(i, kTruthToolChange);
                 }
             }
             float* dst = out.heights.data() + static_cast<size_t>(j) * W;
             uint8_t* tr = out.truth.data() + static_cast<size_t>(j) * W;
+            if (spec.noiseRms > 0) {
+                Pcg32 rng(noiseKey, static_cast<uint64_t>(j));
+                for (int i = 0; i < W; ++i) {
+                    auto k = static_cast<size_t>(i);
+                    dst[i] =
+                        static_cast<float>(row[k] + ft.pocket[k] + spec.noiseRms * gaussian(rng));
+                }
+            } else {
+                for (int i = 0; i < W; ++i) {
+                    auto k = static_cast<size_t>(i);
+                    dst[i] = static_cast<float>(row[k] + ft.pocket[k]);
+                }
+            }
             for (int i = 0; i < W; ++i) {
                 auto k = static_cast<size_t>(i);
-                dst[i] = static_cast<float>(row[k] + pocket[k]);
-                tr[i] = cut[k]                              ? kTruthDefect
-                        : labelChatter && i >= chatterStart ? kTruthChatter
-                                                            : uint8_t{0};
+                const uint8_t region =
+                    labelChatter && i >= chatterStart ? kTruthChatter : uint8_t{0};
+                tr[i] = std::max(lab[k], region);
             }
         }
     });
+}
+
+/// Stage 6b: measurement spikes at random samples (after everything).
+void addSpikes(const SurfaceSpec& spec, GeneratedSurface& out) {
+    if (spec.spikeCount <= 0) return;
+    Pcg32 rng(mix64(spec.seed ^ kSpikeStream), kSpikeStream);
+    for (int n = 0; n < spec.spikeCount; ++n) {
+        Spike sp;
+        sp.i = std::min(out.width - 1, static_cast<int>(rng.nextDouble() * out.width));
+        sp.j = std::min(out.height - 1, static_cast<int>(rng.nextDouble() * out.height));
+        double sign = rng.nextDouble() < 0.5 ? -1.0 : 1.0;
+        sp.height = sign * spec.spikeHeight * (0.5 + 0.5 * rng.nextDouble());
+        float& h = out.heights[static_cast<size_t>(sp.j) * out.width + sp.i];
+        h = static_cast<float>(h + sp.height);
+        out.spikes.push_back(sp);
+    }
 }
 
 /// Stage 6: the one-line description of what was generated.
@@ -708,7 +1161,7 @@ std::string describe(const SurfaceSpec& spec, const Frame& fr, const ToolMarks& 
     const double pitch = fr.pitch, extX = fr.extX, extZ = fr.extZ;
     const bool ball = fr.ball;
     const bool labelChatter = spec.chatterStartFraction > 0 && spec.chatterAmplitude > 0;
-    char buf[768];
+    char buf[1024];
     const double R = spec.toolRadius, s = spec.stepover;
     std::string marks;
     if (ball) {
@@ -723,11 +1176,31 @@ std::string describe(const SurfaceSpec& spec, const Frame& fr, const ToolMarks& 
                           1e3 * scallopHeight(tm.f, R));
             marks += buf;
         }
-    } else {
+    } else if (fr.process == SurfaceSpec::Process::FaceMillFeed) {
         std::snprintf(buf, sizeof buf,
                       "face mill R=%.4g mm, pass spacing %.4g mm at %.4g deg, feed %.4g mm/tooth, "
                       "nose r=%.4g mm: feed-mark height %.4g um on the pass centre line",
                       R, s, spec.rasterAngleDeg, spec.feedPerTooth, spec.insertNoseRadius,
+                      1e3 * out.scallop);
+        marks = buf;
+    } else if (fr.process == SurfaceSpec::Process::FlatEndPocket) {
+        std::snprintf(buf, sizeof buf,
+                      "flat end mill R=%.4g mm, corner r=%.4g mm, stepover %.4g mm at %.4g deg: "
+                      "step-over ridge %.4g um",
+                      R, spec.toolCornerRadius, s, spec.rasterAngleDeg, 1e3 * out.scallop);
+        marks = buf;
+        if (tm.feedMarks) {
+            std::snprintf(buf, sizeof buf, ", feed %.4g mm/tooth (floor marks %.4g um)",
+                          spec.feedPerTooth, 1e3 * out.feedMark);
+            marks += buf;
+        } else {
+            marks += ", no feed marks";
+        }
+    } else {
+        std::snprintf(buf, sizeof buf,
+                      "face turning about (%.4g, %.4g) mm, nose r=%.4g mm, feed %.4g mm/rev: "
+                      "groove cusp %.4g um",
+                      spec.turnCentreX, spec.turnCentreZ, spec.insertNoseRadius, spec.feedPerTooth,
                       1e3 * out.scallop);
         marks = buf;
     }
@@ -743,12 +1216,42 @@ std::string describe(const SurfaceSpec& spec, const Frame& fr, const ToolMarks& 
                       spec.pocketDepth, spec.cornerRadius, out.pocketEdgeX);
         pocketText = buf;
     }
+    // The opt-in kinds, named only when present (so earlier settings read as they always did).
+    std::string extras;
+    if (!out.chatterBands.empty()) {
+        std::snprintf(buf, sizeof buf, "; %zu chatter band(s) %.3g um, %.4g mm wide",
+                      out.chatterBands.size(), 1e3 * spec.chatterBandAmplitude,
+                      spec.chatterBandWidth);
+        extras += buf;
+    }
+    if (!out.dents.empty()) {
+        std::snprintf(buf, sizeof buf, "; %zu dent(s)", out.dents.size());
+        extras += buf;
+    }
+    if (spec.pocketBurrHeight > 0) {
+        std::snprintf(buf, sizeof buf, "; burr %.3g um on the pocket edge",
+                      1e3 * spec.pocketBurrHeight);
+        extras += buf;
+    }
+    if (spec.labelScratchLips) extras += "; scratch lips labelled burr";
+    if (spec.toolChangeStep != 0) {
+        std::snprintf(buf, sizeof buf, "; tool-change step %.3g um at %s %.4g mm",
+                      1e3 * spec.toolChangeStep,
+                      fr.process == SurfaceSpec::Process::Turned ? "radius" : "across-path p",
+                      spec.toolChangeAt);
+        extras += buf;
+    }
+    if (spec.noiseRms > 0 || spec.spikeCount > 0) {
+        std::snprintf(buf, sizeof buf, "; measurement noise %.3g um rms, %d spike(s) of %.3g um",
+                      1e3 * spec.noiseRms, spec.spikeCount, 1e3 * spec.spikeHeight);
+        extras += buf;
+    }
     std::snprintf(buf, sizeof buf,
                   "synthetic %dx%d @ %.4g mm (%.4g x %.4g mm): %s; chatter %.3g um / %.4g mm%s; "
-                  "roughness %.3g um rms; %zu scratch(es), %zu gouge(s); %s; seed %llu",
+                  "roughness %.3g um rms; %zu scratch(es), %zu gouge(s); %s%s; seed %llu",
                   W, H, pitch, extX, extZ, marks.c_str(), 1e3 * spec.chatterAmplitude,
                   spec.chatterWavelength, chatterWhere.c_str(), 1e3 * spec.roughnessRms,
-                  out.scratches.size(), out.gouges.size(), pocketText.c_str(),
+                  out.scratches.size(), out.gouges.size(), pocketText.c_str(), extras.c_str(),
                   static_cast<unsigned long long>(spec.seed));
     return buf;
 }
@@ -763,16 +1266,157 @@ GeneratedSurface generateSurface(const SurfaceSpec& spec) {
     out.height = spec.height;
     out.pitch = spec.pitch;
     const ToolMarks tm = toolMarks(spec, fr);
-    out.scallop = fr.ball ? scallopHeight(spec.stepover, spec.toolRadius)
-                          : scallopHeight(spec.feedPerTooth, spec.insertNoseRadius);
-    const std::vector<double> pocket = pocketColumns(spec, fr, out);
-    const std::vector<Scratch> scratches = placeScratches(spec, fr, out);
-    const std::vector<Gouge> gouges = placeGouges(spec, fr, tm, out);
+    switch (spec.process) {
+        case SurfaceSpec::Process::BallEndRaster:
+            out.scallop = scallopHeight(spec.stepover, spec.toolRadius);
+            out.feedMark = tm.feedMarks ? scallopHeight(spec.feedPerTooth, spec.toolRadius) : 0.0;
+            break;
+        case SurfaceSpec::Process::FaceMillFeed:
+            out.scallop = scallopHeight(spec.feedPerTooth, spec.insertNoseRadius);
+            out.feedMark = out.scallop;
+            break;
+        case SurfaceSpec::Process::FlatEndPocket:
+            out.scallop = flatEndRidgeHeight(spec.stepover, spec.toolRadius, spec.toolCornerRadius);
+            out.feedMark = scallopHeight(spec.feedPerTooth, spec.toolCornerRadius);
+            break;
+        case SurfaceSpec::Process::Turned:
+            out.scallop = scallopHeight(spec.feedPerTooth, spec.insertNoseRadius);
+            out.feedMark = out.scallop;
+            break;
+    }
+    Features ft;
+    ft.pocket = pocketColumns(spec, fr, out);
+    ft.scratches = placeScratches(spec, fr, out);
+    ft.gouges = placeGouges(spec, fr, tm, out);
+    ft.dents = placeDents(spec, fr, out);
+    ft.bands = placeChatterBands(spec, fr, tm);
+    out.chatterBands = ft.bands;
+    ft.burr = placeBurr(spec, fr, out);
     Roughness rough;
     rough.build(spec);
-    compose(spec, fr, tm, pocket, scratches, gouges, rough, out);
+    compose(spec, fr, tm, ft, rough, out);
+    addSpikes(spec, out);
     out.description = describe(spec, fr, tm, out);
     return out;
+}
+
+namespace {
+
+constexpr TruthKind kTruthKinds[] = {
+    {kTruthDefect, "defect", "scratch grooves and gouges"},
+    {kTruthDent, "dent", "spherical dents"},
+    {kTruthToolChange, "tool-change-step", "the ramp of a tool-change step"},
+    {kTruthBurr, "burr", "the pocket-edge burr and labelled scratch lips"},
+    {kTruthChatterBand, "chatter-band", "chatter bands"},
+    {kTruthChatter, "chatter", "the confined chatter region"},
+};
+
+constexpr ProcessRow kProcesses[] = {
+    {SurfaceSpec::Process::BallEndRaster, "ballend",
+     "ball-end raster paths: scallops between paths, feed marks along them"},
+    {SurfaceSpec::Process::FaceMillFeed, "facemill",
+     "face mill passes: crescent feed marks of the inserts' nose radius"},
+    {SurfaceSpec::Process::FlatEndPocket, "flatend",
+     "flat end mill pocket floor: step-over ridges of the corner radius, floor feed marks"},
+    {SurfaceSpec::Process::Turned, "turned",
+     "face turning: a spiral groove of the nose radius about a centre"},
+};
+
+constexpr TestPartRow kTestParts[] = {
+    {TestPart::BallEnd, "ballend", "ball-end raster with every defect kind"},
+    {TestPart::FaceMill, "facemill",
+     "face mill (R 4 mm, passes 3 mm apart) with every defect kind"},
+    {TestPart::FlatEnd, "flatend", "flat end mill pocket floor with every defect kind"},
+    {TestPart::Turned, "turned", "face-turned section with every defect kind"},
+};
+
+}  // namespace
+
+std::span<const TruthKind> truthKinds() {
+    return kTruthKinds;
+}
+
+std::vector<RegionLabel> truthLegend(const std::vector<uint8_t>& truth) {
+    bool present[256] = {};
+    for (uint8_t v : truth) present[v] = true;
+    std::vector<RegionLabel> legend;
+    for (const TruthKind& k : kTruthKinds)
+        if (k.value == kTruthDefect || present[k.value]) legend.push_back({k.value, k.name});
+    for (int v = 255; v >= 1; --v) {
+        if (!present[v]) continue;
+        bool known = false;
+        for (const TruthKind& k : kTruthKinds) known = known || k.value == v;
+        if (!known) legend.push_back({static_cast<uint8_t>(v), "label-" + std::to_string(v)});
+    }
+    return legend;
+}
+
+std::span<const ProcessRow> processTable() {
+    return kProcesses;
+}
+
+SurfaceSpec processDefaults(SurfaceSpec::Process process) {
+    SurfaceSpec s;
+    s.process = process;
+    switch (process) {
+        case SurfaceSpec::Process::BallEndRaster:
+        case SurfaceSpec::Process::FaceMillFeed:
+            break;
+        case SurfaceSpec::Process::FlatEndPocket:
+            s.toolRadius = 1.0;
+            s.toolCornerRadius = 0.2;
+            s.stepover = 1.7;
+            s.feedPerTooth = 0.05;
+            break;
+        case SurfaceSpec::Process::Turned:
+            s.insertNoseRadius = 0.8;
+            s.feedPerTooth = 0.1;
+            break;
+    }
+    return s;
+}
+
+std::span<const TestPartRow> testPartTable() {
+    return kTestParts;
+}
+
+SurfaceSpec testPartSpec(TestPart part) {
+    SurfaceSpec::Process process = SurfaceSpec::Process::BallEndRaster;
+    switch (part) {
+        case TestPart::BallEnd:
+            process = SurfaceSpec::Process::BallEndRaster;
+            break;
+        case TestPart::FaceMill:
+            process = SurfaceSpec::Process::FaceMillFeed;
+            break;
+        case TestPart::FlatEnd:
+            process = SurfaceSpec::Process::FlatEndPocket;
+            break;
+        case TestPart::Turned:
+            process = SurfaceSpec::Process::Turned;
+            break;
+    }
+    SurfaceSpec s = processDefaults(process);
+    if (part == TestPart::FaceMill) {
+        s.toolRadius = 4.0;
+        s.stepover = 3.0;
+    }
+    s.width = s.height = 1024;
+    s.pitch = 0.01;
+    s.seed = 1;
+    s.scratchCount = 5;
+    s.scratchDepthMin = 0.3;
+    s.scratchWidthMin = 0.5;
+    s.labelScratchLips = true;
+    s.gougeCount = 1;
+    s.dentCount = 3;
+    s.pocketBurrHeight = 0.004;
+    s.toolChangeStep = 0.003;
+    s.toolChangeAt = part == TestPart::Turned ? 3.0 : -2.0;
+    s.chatterStartFraction = 0.6;
+    s.chatterBands = 2;
+    s.chatterBandAmplitude = 0.0015;
+    return s;
 }
 
 }  // namespace sl
