@@ -68,6 +68,17 @@ int waitExit(pid_t pid) {
     return WIFEXITED(status) ? WEXITSTATUS(status) : 1000 + WTERMSIG(status);
 }
 
+/// Runs a shell command line; its exit code and output (stdout and stderr as the line routes).
+std::pair<int, std::string> runShell(const std::string& cmd) {
+    FILE* f = popen(cmd.c_str(), "r");
+    if (!f) return {-1, "popen failed"};
+    std::string output;
+    char buf[4096];
+    for (size_t n; (n = fread(buf, 1, sizeof buf, f)) > 0;) output.append(buf, n);
+    const int status = pclose(f);
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
 /// Waits until process `pid` catches SIGINT (its handler is installed; /proc/PID/status SigCgt),
 /// so a signal sent next is handled, not fatal, however slowly the process starts.
 bool waitForHandler(pid_t pid, double seconds) {
@@ -212,13 +223,8 @@ TEST(OutOfMemory, SaysTheSizeAskedFor) {
     const fs::path out = dir.path() / "huge.exr";
     const std::string cmd = "bash -c 'ulimit -v 1000000; " + std::string(SL_CLI_PATH) +
                             " gen-surface " + out.string() + " --width 20000 --height 20000' 2>&1";
-    FILE* f = popen(cmd.c_str(), "r");
-    ASSERT_TRUE(f);
-    std::string output;
-    char buf[4096];
-    for (size_t n; (n = fread(buf, 1, sizeof buf, f)) > 0;) output.append(buf, n);
-    const int status = pclose(f);
-    EXPECT_EQ(WEXITSTATUS(status), 1) << output;
+    const auto [code, output] = runShell(cmd);
+    EXPECT_EQ(code, 1) << output;
     EXPECT_NE(output.find("out of memory: an allocation of 1.6 GB failed"), std::string::npos)
         << output;
     EXPECT_EQ(entries(dir.path()), std::vector<std::string>{});
@@ -239,13 +245,8 @@ TEST(StagedDirectory, FullDiskLeavesThePreviousResults) {
     const auto names = entries(out);
     const std::string cmd =
         "bash -c 'ulimit -f 100; " + std::string(SL_CLI_PATH) + args + " --lambda 7' 2>&1";
-    FILE* f = popen(cmd.c_str(), "r");
-    ASSERT_TRUE(f);
-    std::string output;
-    char buf[4096];
-    for (size_t n; (n = fread(buf, 1, sizeof buf, f)) > 0;) output.append(buf, n);
-    const int status = pclose(f);
-    EXPECT_EQ(WEXITSTATUS(status), 1) << output;
+    const auto [code, output] = runShell(cmd);
+    EXPECT_EQ(code, 1) << output;
     EXPECT_NE(output.find(out.string()), std::string::npos) << output;
     EXPECT_NE(output.find("unchanged"), std::string::npos) << output;
     EXPECT_EQ(readText(out / "summary.json"), before);
