@@ -6,6 +6,7 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <new>
 #include <string>
@@ -15,6 +16,7 @@
 #include "core/Error.h"
 #include "core/Text.h"
 #include "io/AtomicFile.h"
+#include "io/ImageFile.h"
 
 namespace sl {
 
@@ -201,14 +203,11 @@ void writeWithOiio(const fs::path& file, OIIO::ImageSpec spec, OIIO::TypeDesc ty
 Image readImage(const fs::path& file) {
     const std::string where = file.string();
     checkReadableFile(file);
-    auto in = OIIO::ImageInput::open(file.string());
-    if (!in) throw inputError(where, "cannot read the image (" + OIIO::geterror() + ")", kImageFix);
+    auto in = detail::openImageFile(file, kImageFix);
     const OIIO::ImageSpec& spec = in->spec();
     if (spec.deep) throw inputError(where, "deep images are not supported", "Flatten the image");
     if (spec.depth > 1) throw inputError(where, "volume images are not supported");
-    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
-        throw inputError(where, "the image is empty (" + std::to_string(spec.width) + "x" +
-                                    std::to_string(spec.height) + ")");
+    detail::checkImageSize(file, spec);
     const size_t n = static_cast<size_t>(spec.width) * static_cast<size_t>(spec.height) *
                      static_cast<size_t>(spec.nchannels);
     const Encoding enc = encodingOf(spec, in->format_name(), where);
@@ -229,8 +228,14 @@ Image readImage(const fs::path& file) {
     const OIIO::TypeDesc readAs = u8    ? OIIO::TypeDesc::UINT8
                                   : u16 ? OIIO::TypeDesc::UINT16
                                         : OIIO::TypeDesc::FLOAT;
-    if (!in->read_image(0, 0, 0, spec.nchannels, readAs, img.data.data()))
-        throw inputError(where, "cannot read the pixels (" + in->geterror() + ")", kImageFix);
+    // Integer values are stored packed at the front of the float buffer and widened below.
+    const size_t rowBytes =
+        static_cast<size_t>(spec.width) * static_cast<size_t>(spec.nchannels) * readAs.size();
+    unsigned char* bytes = reinterpret_cast<unsigned char*>(img.data.data());
+    detail::readBands(*in, file, readAs, kImageFix, [&](int y0, int y1, const void* values) {
+        std::memcpy(bytes + static_cast<size_t>(y0) * rowBytes, values,
+                    static_cast<size_t>(y1 - y0) * rowBytes);
+    });
     in->close();
 
     if (u8) {
