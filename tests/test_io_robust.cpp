@@ -121,6 +121,25 @@ TEST(RobustIO, TruncatedTiffHeightMapIsRefused) {
     expectRefused([&] { loadHeightmap(grayRgb, ranged); }, {"gray-rgb.tif", "truncated"});
 }
 
+// The readers refuse a header that claims more pixels than its file can hold (io/ImageFile.h);
+// constant images, which compress best, still load.
+TEST(RobustIO, HighlyCompressedImagesStillLoad) {
+    test::TempDir dir("robust");
+    const int n = 2048;
+    writeMaskPng(dir / "flat.png", std::vector<uint8_t>(size_t(n) * n, 200), n, n);
+    writeExr(dir / "flat.exr", Image(n, n, 3, 0.25f));
+    for (const char* name : {"flat.png", "flat.exr"}) {
+        SCOPED_TRACE(name);
+        const Image img = readImage(dir / name);
+        EXPECT_LT(fs::file_size(dir / name) * 500, img.data.size() * sizeof(float));  // > 500:1
+        EXPECT_EQ(img.width, n);
+        EXPECT_EQ(img.height, n);
+    }
+    HeightmapOptions ranged;
+    ranged.heightRange = std::array<double, 2>{0.0, 1.0};
+    EXPECT_EQ(loadHeightmap(dir / "flat.png", ranged).heights.size(), size_t(n) * n);
+}
+
 TEST(RobustIO, EnvMapWithNegativeOrNonFinitePixelsIsRefused) {
     test::TempDir dir("robust");
     for (auto [w, h] : {std::pair{8, 4}, std::pair{16, 8}}) {  // on the grid; resampled

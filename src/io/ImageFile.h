@@ -26,12 +26,12 @@
 
 namespace sl::detail {
 
-/// Decoded float bytes per file byte above which an image's header is not believed (deflate's
-/// limit is 1032:1 on bytes, so 4128:1 for 8-bit samples read as float; LZW's about 1400:1,
-/// so 5600:1): 8192.
+/// Decoded float bytes per file byte above which an image's header is not believed: 8192.
+/// Deflate packs at most 1032 bytes into one (PNG, EXR ZIP, TIFF deflate), so 4128 float bytes
+/// for 8-bit samples; TIFF LZW about 1400 (5600 as float); RLE, PackBits and JPEG less.
 inline constexpr uint64_t kMaxDecodedPerFileByte = 8192;
-/// Images below this many decoded float bytes pass the ratio check whatever their file size.
-inline constexpr uint64_t kMinDecodedLimit = uint64_t(16) << 20;
+/// Images up to this many decoded float bytes pass the ratio check whatever their file size.
+inline constexpr uint64_t kMinDecodedLimit = uint64_t(1) << 20;
 
 /// Opens `file` with the OpenImageIO reader its extension names, after checking that it is a
 /// readable regular file (and, for OpenEXR, its header). Throws InputError naming the file,
