@@ -51,6 +51,8 @@ const std::map<std::string, std::string> kExpected = {
     // A damaged EXR named .exr was tried by every OpenImageIO reader (DICOM, FITS, RAW, ...),
     // whose caches filled the fuzzer's 2 GB; its capDate attribute claims 1.7 GB.
     {"heightmap/exr-tried-by-every-reader.bin", "damaged OpenEXR header"},
+    // libpng allocated the 1.8 GB a tEXt chunk's length claimed in a 154-byte 4x4 PNG.
+    {"heightmap/png-text-chunk-length.bin", "damaged PNG: chunk 'tEXt' claims 1819475990 bytes"},
     // OpenEXR allocated the 1.7 GB an attribute's size field claimed in a 211-byte file.
     {"envmap/exr-attribute-size.bin", "damaged OpenEXR header"},
     // A 5242846x1 EXR in 222 bytes: OpenImageIO converted through a 256-row (5 GB) buffer.

@@ -173,6 +173,35 @@ void checkExrHeader(const fs::path& file) {
     ExrHeaderWalker(file).walk();
 }
 
+void checkPngChunks(const fs::path& file) {
+    const std::string where = file.string();
+    const char* const fix = "The file is not a complete PNG file; write it again";
+    std::error_code ec;
+    const uint64_t size = fs::file_size(file, ec);
+    std::ifstream in(file, std::ios::binary);
+    if (!in || ec) throw inputError(where, "cannot open the file", "Check permissions");
+    unsigned char sig[8];
+    if (!in.read(reinterpret_cast<char*>(sig), 8) || std::memcmp(sig, "\x89PNG\r\n\x1a\n", 8) != 0)
+        throw inputError(where, "not a PNG file (no PNG signature)", fix);
+    for (uint64_t pos = 8;;) {
+        unsigned char head[8];
+        if (size - pos < 12 || !in.read(reinterpret_cast<char*>(head), 8))
+            throw inputError(where, "damaged PNG: the file ends before its IEND chunk", fix);
+        const uint64_t length = uint64_t(head[0]) << 24 | uint64_t(head[1]) << 16 |
+                                uint64_t(head[2]) << 8 | uint64_t(head[3]);
+        const std::string type(reinterpret_cast<const char*>(head + 4), 4);
+        if (length > size - pos - 12)
+            throw inputError(where,
+                             "damaged PNG: chunk '" + type + "' claims " + std::to_string(length) +
+                                 " bytes, the file has " + std::to_string(size - pos - 12) +
+                                 " left",
+                             fix);
+        if (type == "IEND") return;
+        pos += 12 + length;
+        in.seekg(static_cast<std::streamoff>(pos));
+    }
+}
+
 std::unique_ptr<OIIO::ImageInput> openImageFile(const fs::path& file, const std::string& fix) {
     const std::string where = file.string();
     std::error_code ec;
@@ -195,6 +224,7 @@ std::unique_ptr<OIIO::ImageInput> openImageFile(const fs::path& file, const std:
     }
     const std::string format = in->format_name();
     if (format == "openexr") checkExrHeader(file);
+    if (format == "png") checkPngChunks(file);
     OIIO::ImageSpec spec;
     if (!in->open(where, spec)) {
         std::string err = in->geterror();

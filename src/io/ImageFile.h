@@ -8,6 +8,8 @@
 //     attribute must fit in the file and the data window must be a box whose chunk-offset
 //     table fits in the file. (OpenEXR 3.1 allocates what a header field claims before it reads
 //     it: a 300-byte file could ask for gigabytes.)
+//   * A PNG file's chunks are walked by checkPngChunks: each must fit in the file (libpng
+//     allocated the 1.8 GB a tEXt chunk's length claimed in a 154-byte file).
 //   * The image's size is checked against the file's: no supported compression packs more than
 //     kMaxDecodedPerFileByte decoded bytes (as float) into one byte of file, so a header that
 //     claims more is damaged, and nothing is allocated for it.
@@ -61,5 +63,10 @@ void readBands(OIIO::ImageInput& in, const std::filesystem::path& file, OIIO::Ty
 
 /// Walks an OpenEXR file's headers (exposed for tests). Throws InputError naming the file.
 void checkExrHeader(const std::filesystem::path& file);
+
+/// Walks a PNG file's chunks up to IEND: every chunk must fit in the file (libpng allocates what
+/// a chunk's length field claims, up to 2 GB, before reading it). Throws InputError naming the
+/// file.
+void checkPngChunks(const std::filesystem::path& file);
 
 }  // namespace sl::detail
