@@ -24,7 +24,8 @@ class Hasher {
             h_ = mix64(h_ ^ w) + 0x9e3779b97f4a7c15ULL;
         }
         uint64_t tail = 0;
-        std::memcpy(&tail, p + i, bytes - i);
+        // memcpy needs valid pointers even for 0 bytes (an empty vector's data() may be null).
+        if (bytes > i) std::memcpy(&tail, p + i, bytes - i);
         h_ = mix64(h_ ^ tail ^ (static_cast<uint64_t>(bytes) << 56));
         length_ += bytes;
         return *this;

@@ -1,6 +1,7 @@
 #include "io/AtomicFile.h"
 
 #include <atomic>
+#include <cerrno>
 #include <fstream>
 #include <string>
 #include <system_error>
@@ -29,16 +30,19 @@ long processId() {
 #endif
 }
 
-/// Best effort: push the file's data to disk before the rename makes it visible.
-void syncFile(const fs::path& p) {
+/// Pushes the file's data to disk before the rename makes it visible. Returns false when the
+/// file system reports that data was lost (EIO, ENOSPC, EDQUOT: delayed allocation fails only
+/// now on some file systems); other failures (fsync unsupported) count as success.
+bool syncFile(const fs::path& p) {
 #ifdef SL_HAVE_POSIX
     int fd = ::open(p.c_str(), O_RDONLY);
-    if (fd >= 0) {
-        (void)::fsync(fd);
-        (void)::close(fd);
-    }
+    if (fd < 0) return true;
+    const bool lost = ::fsync(fd) != 0 && (errno == EIO || errno == ENOSPC || errno == EDQUOT);
+    (void)::close(fd);
+    return !lost;
 #else
     (void)p;
+    return true;
 #endif
 }
 
@@ -117,7 +121,11 @@ void AtomicOutput::commit() {
         throw inputError(where, "the writer produced no file (expected " + temp_.string() + ")",
                          "Check free disk space and permissions");
     }
-    syncFile(temp_);
+    if (!syncFile(temp_)) {
+        abandon();
+        throw inputError(where, "the file system lost the written data (disk full or I/O error)",
+                         "Check free disk space and try again");
+    }
     fs::rename(temp_, final_, ec);
     if (ec) {
         abandon();
@@ -135,15 +143,21 @@ void writeAtomically(const fs::path& file, const std::function<void(const fs::pa
     out.commit();
 }
 
+void writeBytesChecked(const fs::path& path, const void* data, size_t size, const fs::path& file) {
+    std::ofstream os(path, std::ios::binary | std::ios::trunc);
+    os.write(static_cast<const char*>(data), static_cast<std::streamsize>(size));
+    os.close();  // flushes; a failed flush or close sets failbit
+    if (!os)
+        throw inputError(file.string(), "cannot be written (disk full or not writable?)",
+                         "check that the directory is writable and the disk has space");
+}
+
 void writeTextAtomically(const fs::path& file, std::string_view text) {
-    writeAtomically(file, [&](const fs::path& tmp) {
-        std::ofstream os(tmp, std::ios::binary);
-        os.write(text.data(), static_cast<std::streamsize>(text.size()));
-        os.flush();
-        if (!os)
-            throw inputError(file.string(), "cannot be written",
-                             "check that the directory is writable and the disk has space");
-    });
+    writeBytesAtomically(file, text.data(), text.size());
+}
+
+void writeBytesAtomically(const fs::path& file, const void* data, size_t size) {
+    writeAtomically(file, [&](const fs::path& tmp) { writeBytesChecked(tmp, data, size, file); });
 }
 
 }  // namespace sl

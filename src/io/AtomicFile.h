@@ -13,6 +13,7 @@
 // file system and libraries that infer the format from the extension (OpenImageIO) still do.
 #pragma once
 
+#include <cstddef>
 #include <filesystem>
 #include <functional>
 #include <string_view>
@@ -57,5 +58,14 @@ void writeAtomically(const std::filesystem::path& file,
 /// Writes `text` (CSV, JSON, HTML, ...) to `file` atomically; a failed write (stream error,
 /// disk full) throws InputError naming the file and leaves nothing behind.
 void writeTextAtomically(const std::filesystem::path& file, std::string_view text);
+
+/// The same for bytes (an image encoded in memory, ...).
+void writeBytesAtomically(const std::filesystem::path& file, const void* data, size_t size);
+
+/// Writes `size` bytes to `path` (a temporary) and closes it, checking every step; throws
+/// InputError naming `file` (what the user asked for) when a write, the flush or the close
+/// fails (disk full, file-size limit, I/O error).
+void writeBytesChecked(const std::filesystem::path& path, const void* data, size_t size,
+                       const std::filesystem::path& file);
 
 }  // namespace sl

@@ -6,6 +6,7 @@
 
 #include "core/Color.h"
 #include "core/Error.h"
+#include "core/Text.h"
 #include "io/ImageIO.h"
 
 namespace sl {
@@ -113,6 +114,22 @@ void checkSource(const std::string& where, const Image& src) {
     }
 }
 
+/// A file's pixels are radiance: refuses the first negative colour value (alpha is ignored).
+void checkNonNegative(const std::string& where, const Image& src) {
+    const size_t c = static_cast<size_t>(src.channels);
+    const size_t colour = src.channels >= 3 ? 3 : 1;
+    for (size_t k = 0; k < src.data.size(); ++k) {
+        if (k % c >= colour || !(src.data[k] < 0.0f)) continue;
+        const size_t p = k / c, w = static_cast<size_t>(src.width);
+        throw inputError(where,
+                         "env map value is negative (" + formatNumber(src.data[k]) + ") at row " +
+                             std::to_string(p / w) + ", column " + std::to_string(p % w) +
+                             ", channel " + std::to_string(k % c) +
+                             "; an environment map holds radiance, which is never negative",
+                         "Clamp the image's negative values to 0 and save it again");
+    }
+}
+
 /// Pixel (x, y) of src converted to `channels` output channels, in double.
 inline void convertPixel(const Image& src, const float* px, int channels, double out[3]) {
     if (src.channels >= 3) {
@@ -185,14 +202,14 @@ EnvMap loadEnvMap(const std::filesystem::path& file, int width, int height, int 
     const std::string where = file.string();
     if (channels != 0) checkGrid(where, width, height, channels);
     const Image img = readImage(file);
+    checkSource(where, img);
+    checkNonNegative(where, img);
     if (channels == 0) {
-        checkSource(where, img);
         channels = img.channels >= 3 ? 3 : 1;
         checkGrid(where, width, height, channels);
     }
     if (img.width == width && img.height == height) {
         // Already on the texel grid: convert channels only.
-        checkSource(where, img);
         EnvMap env = EnvMap::constant(width, height, 0.0f, channels);
         for (size_t p = 0; p < img.pixelCount(); ++p) {
             double v[3];

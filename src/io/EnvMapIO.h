@@ -36,7 +36,9 @@ EnvMap resampleEquirect(const Image& src, int width, int height, int channels,
 /// with resampleEquirect. Exception: a file that already has exactly width×height pixels is
 /// taken as texels on the grid (what writeEnvMap writes and how Mitsuba reads it), so a saved
 /// map loads back unchanged; only its channels are converted. channels == 0: as in the file
-/// (1 for gray or gray+alpha, 3 for RGB or RGBA).
+/// (1 for gray or gray+alpha, 3 for RGB or RGBA). A file with a NaN, infinite or negative colour
+/// value is refused (InputError naming the file and the first such pixel): radiance is finite
+/// and never negative.
 EnvMap loadEnvMap(const std::filesystem::path& file, int width, int height, int channels);
 
 /// Solid angle of every texel's cell, row-major (width*height values), summing to 4π.

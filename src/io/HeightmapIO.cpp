@@ -12,6 +12,7 @@
 
 #include "core/Error.h"
 #include "core/Text.h"
+#include "io/ImageFile.h"
 #include "io/ImageIO.h"
 #include "io/Npy.h"
 
@@ -23,6 +24,9 @@ namespace {
 
 const char* const kFixFloat =
     "Save heights as float32 (EXR, TIFF or .npy) or uint16 (PNG, TIFF) and try again";
+const char* const kFixDamaged =
+    "Check that the file is a complete EXR, TIFF, PNG or .npy file (the format its name "
+    "says); save it again";
 
 std::string typeName(OIIO::TypeDesc t) {
     if (t == OIIO::TypeDesc::HALF) return "float16";
@@ -187,15 +191,13 @@ void takeGrayChannel(const std::string& where, const T* strip, size_t pixels, in
 
 HeightmapData loadWithOiio(const fs::path& file, const HeightmapOptions& opt) {
     const std::string where = file.string();
-    auto in = OIIO::ImageInput::open(file.string());
-    if (!in)
-        throw inputError(where, "cannot read the height map (" + OIIO::geterror() + ")",
-                         "Check that the file is a complete EXR, TIFF, PNG or .npy file");
+    auto in = detail::openImageFile(file, kFixDamaged);
     const OIIO::ImageSpec& spec = in->spec();
     const std::string fmtName = formatShortName(in->format_name());
     if (spec.deep || spec.depth > 1)
         throw inputError(where, "deep or volume images cannot be height maps", kFixFloat);
     checkSize(where, spec.width, spec.height);
+    detail::checkImageSize(file, spec);
 
     const OIIO::TypeDesc native = spec.format;
     const bool isFloat = native == OIIO::TypeDesc::HALF || native == OIIO::TypeDesc::FLOAT ||
@@ -223,53 +225,23 @@ HeightmapData loadWithOiio(const fs::path& file, const HeightmapOptions& opt) {
     const OIIO::TypeDesc readAs = isInt ? OIIO::TypeDesc::UINT16 : OIIO::TypeDesc::FLOAT;
     const int nch = spec.nchannels;
 
-    if (nch == 1) {
-        if (!in->read_image(0, 0, 0, 1, readAs, d.heights.data()))
-            throw inputError(where, "cannot read the pixels (" + in->geterror() + ")",
-                             "The file is damaged or truncated; save it again");
-    } else {
-        // Strips of rows: all channels into a small buffer, channel 0 into the heights.
-        // Tiled files are read by bands of whole tile rows (OIIO 2.4's read_scanlines crashes
-        // with SIGFPE on tiled files).
-        const bool tiled = spec.tile_width > 0;
-        int rowsPerStrip = std::max(
-            1, static_cast<int>((size_t(1) << 22) /
-                                (static_cast<size_t>(spec.width) * static_cast<size_t>(nch))));
-        if (tiled)
-            rowsPerStrip =
-                (rowsPerStrip + spec.tile_height - 1) / spec.tile_height * spec.tile_height;
-        const size_t stripValues = static_cast<size_t>(rowsPerStrip) *
-                                   static_cast<size_t>(spec.width) * static_cast<size_t>(nch);
-        std::vector<float> fbuf;
-        std::vector<uint16_t> ibuf;
-        if (isInt)
-            ibuf.resize(stripValues);
+    // Bands of rows (io/ImageFile.h readBands), channel 0 into the heights; uint16 codes are
+    // stored packed at the front of the float buffer and widened below.
+    unsigned char* bytes = reinterpret_cast<unsigned char*>(d.heights.data());
+    const size_t w = static_cast<size_t>(spec.width);
+    detail::readBands(*in, file, readAs, kFixDamaged, [&](int y0, int y1, const void* values) {
+        const size_t px = static_cast<size_t>(y1 - y0) * w, off = static_cast<size_t>(y0) * w;
+        if (nch == 1)
+            std::memcpy(bytes + off * readAs.size(), values, px * readAs.size());
+        else if (isInt)
+            takeGrayChannel<uint16_t>(where, static_cast<const uint16_t*>(values), px, nch,
+                                      spec.alpha_channel, uint16_t(65535), y0, spec.width,
+                                      bytes + off * sizeof(uint16_t));
         else
-            fbuf.resize(stripValues);
-        // uint16 codes are stored packed at the front of the float buffer, widened below.
-        unsigned char* bytes = reinterpret_cast<unsigned char*>(d.heights.data());
-        for (int y0 = 0; y0 < spec.height; y0 += rowsPerStrip) {
-            const int y1 = std::min(spec.height, y0 + rowsPerStrip);
-            void* buf = isInt ? static_cast<void*>(ibuf.data()) : static_cast<void*>(fbuf.data());
-            const bool ok =
-                tiled ? in->read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y + y0, spec.y + y1,
-                                       spec.z, spec.z + 1, 0, nch, readAs, buf)
-                      : in->read_scanlines(0, 0, spec.y + y0, spec.y + y1, spec.z, 0, nch, readAs,
-                                           buf);
-            if (!ok)
-                throw inputError(where, "cannot read the pixels (" + in->geterror() + ")",
-                                 "The file is damaged or truncated; save it again");
-            const size_t px = static_cast<size_t>(y1 - y0) * static_cast<size_t>(spec.width);
-            const size_t off = static_cast<size_t>(y0) * static_cast<size_t>(spec.width);
-            if (isInt)
-                takeGrayChannel<uint16_t>(where, ibuf.data(), px, nch, spec.alpha_channel,
-                                          uint16_t(65535), y0, spec.width,
-                                          bytes + off * sizeof(uint16_t));
-            else
-                takeGrayChannel<float>(where, fbuf.data(), px, nch, spec.alpha_channel, 1.0f, y0,
-                                       spec.width, bytes + off * sizeof(float));
-        }
-    }
+            takeGrayChannel<float>(where, static_cast<const float*>(values), px, nch,
+                                   spec.alpha_channel, 1.0f, y0, spec.width,
+                                   bytes + off * sizeof(float));
+    });
     in->close();
 
     if (isInt) {

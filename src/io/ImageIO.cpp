@@ -1,11 +1,18 @@
 #include "io/ImageIO.h"
 
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfIO.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <new>
 #include <string>
@@ -15,6 +22,7 @@
 #include "core/Error.h"
 #include "core/Text.h"
 #include "io/AtomicFile.h"
+#include "io/ImageFile.h"
 
 namespace sl {
 
@@ -173,27 +181,52 @@ std::vector<std::string> channelNames(int channels) {
     }
 }
 
+/// An OpenEXR output stream into memory.
+class MemoryStream : public Imf::OStream {
+  public:
+    explicit MemoryStream(const std::string& name) : Imf::OStream(name.c_str()) {}
+    void write(const char c[], int n) override {
+        const size_t count = static_cast<size_t>(n);
+        if (pos_ + count > bytes.size()) bytes.resize(pos_ + count);
+        std::memcpy(bytes.data() + pos_, c, count);
+        pos_ += count;
+    }
+    uint64_t tellp() override { return pos_; }
+    void seekp(uint64_t pos) override {
+        pos_ = static_cast<size_t>(pos);
+        if (pos_ > bytes.size()) bytes.resize(pos_);
+    }
+    std::vector<char> bytes;
+
+  private:
+    size_t pos_ = 0;
+};
+
+/// Encodes the image in memory (OpenImageIO's writers do not all report failed writes: its PNG
+/// writer's close() returns true after a write failed), then writes the bytes to the temporary
+/// file with every write checked (io/AtomicFile.h writeBytesAtomically): a full disk is an
+/// InputError, the temporary is removed, and nothing is renamed into place.
 void writeWithOiio(const fs::path& file, OIIO::ImageSpec spec, OIIO::TypeDesc type,
                    const void* pixels) {
     const std::string where = file.string();
-    AtomicOutput out(file);
-    const std::string temp = out.tempPath().string();
-    auto o = OIIO::ImageOutput::create(temp);
+    auto o = OIIO::ImageOutput::create(file.extension().string().substr(1));
     if (!o)
         throw inputError(where, "no image writer for this file type (" + OIIO::geterror() + ")",
                          "Use an .exr or .png file name");
-    if (!o->open(temp, spec))
-        throw inputError(where, "cannot create the file (" + o->geterror() + ")",
-                         "Check that the directory is writable and the disk is not full");
-    if (!o->write_image(type, pixels)) {
+    std::vector<unsigned char> encoded;
+    OIIO::Filesystem::IOVecOutput memory(encoded);
+    if (!o->supports("ioproxy") || !o->set_ioproxy(&memory))
+        throw inputError(where, "internal error: the " + std::string(o->format_name()) +
+                                    " writer cannot write to memory");
+    bool ok = o->open(where, spec) && o->write_image(type, pixels);
+    ok = o->close() && ok && !o->has_error();
+    if (!ok) {
         std::string err = o->geterror();
-        o->close();
-        throw inputError(where, "writing failed (" + err + ")", "Check free disk space");
+        if (err.empty()) err = OIIO::geterror();
+        throw inputError(where, "cannot encode the image (" + err + ")");
     }
-    if (!o->close())
-        throw inputError(where, "writing failed (" + o->geterror() + ")", "Check free disk space");
     o.reset();
-    out.commit();
+    writeBytesAtomically(file, encoded.data(), encoded.size());
 }
 
 }  // namespace
@@ -201,14 +234,11 @@ void writeWithOiio(const fs::path& file, OIIO::ImageSpec spec, OIIO::TypeDesc ty
 Image readImage(const fs::path& file) {
     const std::string where = file.string();
     checkReadableFile(file);
-    auto in = OIIO::ImageInput::open(file.string());
-    if (!in) throw inputError(where, "cannot read the image (" + OIIO::geterror() + ")", kImageFix);
+    auto in = detail::openImageFile(file, kImageFix);
     const OIIO::ImageSpec& spec = in->spec();
     if (spec.deep) throw inputError(where, "deep images are not supported", "Flatten the image");
     if (spec.depth > 1) throw inputError(where, "volume images are not supported");
-    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
-        throw inputError(where, "the image is empty (" + std::to_string(spec.width) + "x" +
-                                    std::to_string(spec.height) + ")");
+    detail::checkImageSize(file, spec);
     const size_t n = static_cast<size_t>(spec.width) * static_cast<size_t>(spec.height) *
                      static_cast<size_t>(spec.nchannels);
     const Encoding enc = encodingOf(spec, in->format_name(), where);
@@ -229,8 +259,14 @@ Image readImage(const fs::path& file) {
     const OIIO::TypeDesc readAs = u8    ? OIIO::TypeDesc::UINT8
                                   : u16 ? OIIO::TypeDesc::UINT16
                                         : OIIO::TypeDesc::FLOAT;
-    if (!in->read_image(0, 0, 0, spec.nchannels, readAs, img.data.data()))
-        throw inputError(where, "cannot read the pixels (" + in->geterror() + ")", kImageFix);
+    // Integer values are stored packed at the front of the float buffer and widened below.
+    const size_t rowBytes =
+        static_cast<size_t>(spec.width) * static_cast<size_t>(spec.nchannels) * readAs.size();
+    unsigned char* bytes = reinterpret_cast<unsigned char*>(img.data.data());
+    detail::readBands(*in, file, readAs, kImageFix, [&](int y0, int y1, const void* values) {
+        std::memcpy(bytes + static_cast<size_t>(y0) * rowBytes, values,
+                    static_cast<size_t>(y1 - y0) * rowBytes);
+    });
     in->close();
 
     if (u8) {
@@ -251,12 +287,35 @@ void writeExr(const fs::path& file, const Image& img) {
     validateImage(file, img, {1, 3, 4});
     for (size_t k = 0; k < img.data.size(); ++k)
         if (!std::isfinite(img.data[k])) throwBadValue(file, img, k, img.data[k]);
-    OIIO::ImageSpec spec(img.width, img.height, img.channels, OIIO::TypeDesc::FLOAT);
-    spec.channelnames = channelNames(img.channels);
-    spec.alpha_channel = img.channels == 4 ? 3 : -1;
-    spec.attribute("compression", "zip");
-    spec.attribute("oiio:ColorSpace", "Linear");
-    writeWithOiio(file, spec, OIIO::TypeDesc::FLOAT, img.data.data());
+    // Written with OpenEXR itself: OpenImageIO 2.4 stamps every EXR with the time of writing
+    // (capDate), so equal images made different files. The header is OpenImageIO's otherwise:
+    // ZIP at level 4, increasing Y, float32 channels.
+    std::vector<char> encoded;
+    try {
+        Imf::Header header(img.width, img.height);
+        header.compression() = Imf::ZIP_COMPRESSION;
+        header.zipCompressionLevel() = 4;
+        const std::vector<std::string> names = channelNames(img.channels);
+        Imf::FrameBuffer frame;
+        const size_t xStride = sizeof(float) * static_cast<size_t>(img.channels);
+        for (size_t c = 0; c < names.size(); ++c) {
+            header.channels().insert(names[c], Imf::Channel(Imf::FLOAT));
+            // OpenEXR's slices take a writable pointer; it only reads from it here.
+            char* base = reinterpret_cast<char*>(const_cast<float*>(img.data.data()) + c);
+            frame.insert(names[c], Imf::Slice(Imf::FLOAT, base, xStride,
+                                              xStride * static_cast<size_t>(img.width)));
+        }
+        MemoryStream out(file.string());
+        {
+            Imf::OutputFile exr(out, header);
+            exr.setFrameBuffer(frame);
+            exr.writePixels(img.height);
+        }  // the destructor writes the chunk offsets
+        encoded = std::move(out.bytes);
+    } catch (const std::exception& e) {
+        throw inputError(file.string(), std::string("cannot encode the image (") + e.what() + ")");
+    }
+    writeBytesAtomically(file, encoded.data(), encoded.size());
 }
 
 void writePng(const fs::path& file, const Image& img, float exposure) {

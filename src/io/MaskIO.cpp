@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/Error.h"
+#include "io/ImageFile.h"
 #include "io/ImageIO.h"
 
 namespace sl {
@@ -37,7 +38,7 @@ std::vector<RegionLabel> readLegend(const std::filesystem::path& file) {
             !e.contains("name") || !e["name"].is_string())
             throw inputError(where + ": labels[" + std::to_string(legend.size()) + "]",
                              "needs an integer \"value\" and a string \"name\"");
-        const int v = e["value"].get<int>();
+        const long long v = e["value"].get<long long>();
         if (v < 1 || v > 255)
             throw inputError(
                 where + ": labels[" + std::to_string(legend.size()) + "].value",
@@ -53,9 +54,9 @@ LabelMask readLabelMask(const std::filesystem::path& file, int mapWidth, int map
     const std::string where = file.string();
     if (!std::filesystem::is_regular_file(file))
         throw inputError(where, "no such file", "give the truth mask gen-surface wrote");
-    auto in = OIIO::ImageInput::open(where);
-    if (!in) throw inputError(where, "cannot read the image (" + OIIO::geterror() + ")");
+    auto in = detail::openImageFile(file, "Give the truth mask gen-surface wrote");
     const OIIO::ImageSpec& spec = in->spec();
+    detail::checkImageSize(file, spec);
     if (spec.width != mapWidth || spec.height != mapHeight)
         throw inputError(where,
                          "mask is " + std::to_string(spec.width) + "x" +
@@ -67,13 +68,17 @@ LabelMask readLabelMask(const std::filesystem::path& file, int mapWidth, int map
     m.width = spec.width;
     m.height = spec.height;
     const size_t n = static_cast<size_t>(spec.width) * spec.height;
-    std::vector<uint8_t> all(n * static_cast<size_t>(spec.nchannels));
-    // UINT8 reads integer files raw (16-bit scaled to 8 bits); no colour decoding.
-    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UINT8, all.data()))
-        throw inputError(where, "cannot read the pixels (" + in->geterror() + ")");
-    in->close();
     m.labels.resize(n);
-    for (size_t p = 0; p < n; ++p) m.labels[p] = all[p * static_cast<size_t>(spec.nchannels)];
+    // UINT8 reads integer files raw (16-bit scaled to 8 bits); no colour decoding. Channel 0.
+    const size_t nch = static_cast<size_t>(spec.nchannels), w = static_cast<size_t>(spec.width);
+    detail::readBands(*in, file, OIIO::TypeDesc::UINT8, "Give the truth mask gen-surface wrote",
+                      [&](int y0, int y1, const void* values) {
+                          const auto* v = static_cast<const uint8_t*>(values);
+                          const size_t off = static_cast<size_t>(y0) * w;
+                          for (size_t p = 0; p < static_cast<size_t>(y1 - y0) * w; ++p)
+                              m.labels[off + p] = v[p * nch];
+                      });
+    in->close();
 
     std::filesystem::path legend = file;
     legend.replace_extension(".json");

@@ -100,6 +100,7 @@ void writeHeightfieldPly(const std::filesystem::path& file, int W, int H, double
                 }
             }
         flush();
+        os.close();  // flushes; a failed flush or close sets failbit
         if (!os) throw inputError(file.string(), "write failed", "check the disk space");
     });
 }
@@ -210,11 +211,7 @@ MitsubaExport exportMitsuba(const Scene& scene, const EnvMap& env,
     writeExr(e.envmap, rgb);
     const std::string xml =
         mitsubaSceneXml(scene, e.ply.filename().string(), e.envmap.filename().string());
-    writeAtomically(e.xml, [&](const std::filesystem::path& tmp) {
-        std::ofstream os(tmp, std::ios::binary);
-        os << xml;
-        if (!os) throw inputError(e.xml.string(), "write failed", "check the directory");
-    });
+    writeTextAtomically(e.xml, xml);
     e.notes.push_back(
         "render with an RGB variant (scalar_rgb, llvm_ad_rgb, cuda_ad_rgb): eta/k are RGB values");
     e.notes.push_back(

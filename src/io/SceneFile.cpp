@@ -10,6 +10,7 @@
 #include "core/Text.h"
 #include "io/HeightmapIO.h"
 #include "scene/Materials.h"
+#include "transport/TransportMatrix.h"
 
 namespace sl {
 
@@ -191,6 +192,14 @@ void parseCamera(Fields& f, CameraSpec& c) {
 void parseEnvmap(Fields& f, const std::filesystem::path& baseDir, EnvMapDesc& e) {
     e.width = f.integer("width", e.width, 2, 4096);
     e.height = f.integer("height", e.height, 3, 2048);
+    // Checked here, not first by precompute: every command can trace the scene's T.
+    if (static_cast<long long>(e.width) * e.height > kMaxTransportTexels)
+        f.fail("width/height",
+               std::to_string(e.width) + "x" + std::to_string(e.height) + " = " +
+                   std::to_string(static_cast<long long>(e.width) * e.height) +
+                   " texels is more than the limit of " + std::to_string(kMaxTransportTexels) +
+                   " (a transport matrix's 16-bit column indices)",
+               "use a smaller env-map grid, e.g. the default 50x25 or at most 362x181");
     std::string path = f.string("path", "");
     if (!path.empty())
         e.path = std::filesystem::path(path).is_absolute() ? std::filesystem::path(path)
@@ -225,7 +234,7 @@ SceneDesc parseScene(const std::string& text, const std::filesystem::path& baseD
     json j;
     try {
         j = json::parse(text);
-    } catch (const json::parse_error& e) {
+    } catch (const json::exception& e) {  // parse_error, or out_of_range for a number like 1e999
         throw inputError(where, std::string("not valid JSON: ") + e.what(),
                          "fix the syntax (a JSON validator shows the spot)");
     }

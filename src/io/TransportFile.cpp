@@ -1,6 +1,9 @@
 #include "io/TransportFile.h"
 
+#include <algorithm>
 #include <bit>
+#include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -33,8 +36,8 @@ struct Section {
     size_t bytes;
 };
 
-std::string damaged(const std::filesystem::path& f, const std::string& what) {
-    return f.string() + ": damaged transport-matrix file (" + what +
+std::string damaged(const std::string& where, const std::string& what) {
+    return where + ": damaged transport-matrix file (" + what +
            "). Delete it and recompute it with `scratchlight precompute`";
 }
 
@@ -139,7 +142,7 @@ void writeTransportFile(const std::filesystem::path& file, const TransportMatrix
         os.write(reinterpret_cast<const char*>(&headerHash), 8);
         for (const Section& s : sections)
             os.write(static_cast<const char*>(s.data), static_cast<std::streamsize>(s.bytes));
-        os.flush();
+        os.close();  // flushes; a failed flush or close sets failbit
         if (!os) throw inputError(file.string(), "writing failed (disk full?)");
     });
 }
@@ -147,110 +150,192 @@ void writeTransportFile(const std::filesystem::path& file, const TransportMatrix
 TransportFile readTransportFile(const std::filesystem::path& file,
                                 const std::string& expectedFingerprint) {
     std::ifstream in(file, std::ios::binary);
-    if (!in)
+    std::error_code ec;
+    const auto fileSize = std::filesystem::file_size(file, ec);
+    if (!in || ec)
         throw inputError(file.string(), "cannot open the transport-matrix file",
                          "check the path, or create it with `scratchlight precompute`");
-    const auto fileSize = std::filesystem::file_size(file);
+    return readTransport(in, fileSize, file.string(), expectedFingerprint);
+}
+
+TransportFile readTransport(std::istream& in, uint64_t fileSize, const std::string& where,
+                            const std::string& expectedFingerprint) {
+    const std::streamoff base = in.tellg() < 0 ? 0 : static_cast<std::streamoff>(in.tellg());
     char magic[8] = {};
     uint32_t version = 0, len = 0;
     in.read(magic, 8);
     in.read(reinterpret_cast<char*>(&version), 4);
     in.read(reinterpret_cast<char*>(&len), 4);
-    if (!in || std::memcmp(magic, kMagic, 8) != 0)
-        throw inputError(file.string(), "not a scratchlight transport-matrix file",
+    if (!in || fileSize < 16 || std::memcmp(magic, kMagic, 8) != 0)
+        throw inputError(where, "not a scratchlight transport-matrix file",
                          "give a .tm file written by `scratchlight precompute`");
     if (version != kVersion)
-        throw inputError(file.string(),
+        throw inputError(where,
                          "transport-matrix format version " + std::to_string(version) +
                              " is not supported (this build reads version " +
                              std::to_string(kVersion) + ")",
                          "recompute it with this version's `scratchlight precompute`");
-    if (16ull + len + 8 > fileSize) throw InputError(damaged(file, "truncated header"));
+    if (16ull + len + 8 > fileSize) throw InputError(damaged(where, "truncated header"));
     std::string header(len, '\0');
     uint64_t headerHash = 0;
     in.read(header.data(), len);
     in.read(reinterpret_cast<char*>(&headerHash), 8);
     if (!in || hash64(header.data(), header.size()) != headerHash)
-        throw InputError(damaged(file, "header checksum mismatch"));
+        throw InputError(damaged(where, "header checksum mismatch"));
 
+    // The header, every field checked for presence, type and range before it is used.
     TransportFile out;
     TransportMatrix& t = out.matrix;
-    json h;
+    const uint64_t payloadStart = 16ull + len + 8, payloadBytes = fileSize - payloadStart;
+    struct SectionRef {
+        std::string name, hash;
+        uint64_t offset = 0, bytes = 0;
+    };
+    std::vector<SectionRef> sections;
+    uint64_t nnz = 0;
     try {
-        h = json::parse(header);
-        t.width = h.at("width").get<int>();
-        t.height = h.at("height").get<int>();
-        t.envWidth = h.at("env_width").get<int>();
-        t.envHeight = h.at("env_height").get<int>();
-        t.channels = h.at("channels").get<int>();
-        t.planes = h.value("planes", 1);
-        t.storage = h.at("storage").get<std::string>() == "csr" ? TransportStorage::Sparse
-                                                                : TransportStorage::Dense;
-        out.provenance.fingerprint = h.at("fingerprint").get<std::string>();
+        const json h = json::parse(header);
+        if (!h.is_object()) throw InputError(damaged(where, "the header is not a JSON object"));
+        auto integer = [&](const json& obj, const char* key, int64_t lo, int64_t hi) {
+            const json& v = obj.at(key);
+            if (!v.is_number_integer() ||
+                (v.is_number_unsigned() && v.get<uint64_t>() > uint64_t(hi)) ||
+                v.get<int64_t>() < lo || v.get<int64_t>() > hi)
+                throw InputError(damaged(where, "header field '" + std::string(key) + "' is " +
+                                                    v.dump() + ", expected a whole number in [" +
+                                                    std::to_string(lo) + ", " + std::to_string(hi) +
+                                                    "]"));
+            return v.get<int64_t>();
+        };
+        auto text = [&](const json& obj, const char* key) {
+            const json& v = obj.at(key);
+            if (!v.is_string())
+                throw InputError(
+                    damaged(where, "header field '" + std::string(key) + "' is not a string"));
+            return v.get<std::string>();
+        };
+        // Image and env-map sizes as the scene file allows them (camera.width/height,
+        // envmap.width/height).
+        t.width = static_cast<int>(integer(h, "width", 1, 16384));
+        t.height = static_cast<int>(integer(h, "height", 1, 16384));
+        t.envWidth = static_cast<int>(integer(h, "env_width", 2, 4096));
+        t.envHeight = static_cast<int>(integer(h, "env_height", 3, 2048));
+        if (t.cols() > static_cast<size_t>(kMaxTransportTexels))
+            throw InputError(damaged(where, "env map of " + std::to_string(t.cols()) +
+                                                " texels, more than the limit " +
+                                                std::to_string(kMaxTransportTexels)));
+        t.channels = static_cast<int>(integer(h, "channels", 1, 3));
+        t.planes = h.contains("planes") ? static_cast<int>(integer(h, "planes", 1, 2)) : 1;
+        if (t.channels == 2) throw InputError(damaged(where, "channels is 2 (1 or 3 exist)"));
+        const std::string storage = text(h, "storage");
+        if (storage != "csr" && storage != "dense")
+            throw InputError(damaged(where, "unknown storage '" + storage + "'"));
+        t.storage = storage == "csr" ? TransportStorage::Sparse : TransportStorage::Dense;
+        nnz = static_cast<uint64_t>(integer(h, "nnz", 0, INT64_MAX));
+        out.provenance.fingerprint = text(h, "fingerprint");
         out.provenance.inputs = h.at("inputs").dump();
-        out.provenance.spp = h.at("spp").get<int>();
-        out.provenance.maxDepth = h.at("max_depth").get<int>();
-        out.provenance.seed = h.at("seed").get<uint64_t>();
-        if (h.at("convention").get<std::string>() != kTransportConvention)
-            throw inputError(file.string(), "made with a different env-map convention",
+        out.provenance.spp = static_cast<int>(integer(h, "spp", 0, INT32_MAX));
+        out.provenance.maxDepth = static_cast<int>(integer(h, "max_depth", 0, INT32_MAX));
+        const json& seed = h.at("seed");
+        if (!seed.is_number_unsigned() && !(seed.is_number_integer() && seed.get<int64_t>() >= 0))
+            throw InputError(damaged(where, "header field 'seed' is not a whole number >= 0"));
+        out.provenance.seed = seed.get<uint64_t>();
+        if (text(h, "convention") != kTransportConvention)
+            throw inputError(where, "made with a different env-map convention",
                              "recompute it with `scratchlight precompute`");
+        const json& list = h.at("sections");
+        if (!list.is_array()) throw InputError(damaged(where, "'sections' is not a list"));
+        for (const json& s : list) {
+            if (!s.is_object()) throw InputError(damaged(where, "a section is not an object"));
+            SectionRef r;
+            r.name = text(s, "name");
+            r.hash = text(s, "hash");
+            r.offset = static_cast<uint64_t>(integer(s, "offset", 0, INT64_MAX));
+            r.bytes = static_cast<uint64_t>(integer(s, "bytes", 0, INT64_MAX));
+            sections.push_back(std::move(r));
+        }
     } catch (const json::exception& e) {
-        throw InputError(damaged(file, std::string("bad header: ") + e.what()));
+        throw InputError(damaged(where, std::string("bad header: ") + e.what()));
     }
     if (!expectedFingerprint.empty() && expectedFingerprint != out.provenance.fingerprint)
-        throw inputError(file.string(),
+        throw inputError(where,
                          "stale transport matrix: it was made from other inputs (scene, height "
                          "map, spp, seed or max_depth) than the ones given",
                          "recompute it with `scratchlight precompute`");
-    if (t.width < 1 || t.height < 1 || t.envWidth < 2 || t.envHeight < 3 ||
-        (t.channels != 1 && t.channels != 3) || (t.planes != 1 && t.planes != 2))
-        throw InputError(damaged(file, "bad dimensions"));
 
-    const uint64_t payloadStart = 16ull + len + 8;
-    size_t expectedEnd = payloadStart;
-    for (const json& s : h.at("sections")) {
-        const std::string name = s.at("name").get<std::string>();
-        const uint64_t offset = s.at("offset").get<uint64_t>(),
-                       bytes = s.at("bytes").get<uint64_t>();
-        if (payloadStart + offset + bytes > fileSize)
-            throw InputError(damaged(file, "truncated section " + name));
+    // The sections: each one once, each within the file (so nothing larger than the file is
+    // allocated), their hashes matching, and together reaching exactly the end of the file.
+    const std::vector<std::string> expected =
+        t.storage == TransportStorage::Sparse
+            ? std::vector<std::string>{"object_mask", "row_ptr", "col_idx", "values"}
+            : std::vector<std::string>{"object_mask", "values"};
+    std::vector<bool> seen(expected.size(), false);
+    uint64_t end = 0;
+    for (const SectionRef& s : sections) {
+        const auto it = std::find(expected.begin(), expected.end(), s.name);
+        if (it == expected.end())
+            throw InputError(damaged(
+                where, "unexpected section '" + s.name + "' for " +
+                           (t.storage == TransportStorage::Sparse ? "csr" : "dense") + " storage"));
+        const size_t idx = static_cast<size_t>(it - expected.begin());
+        if (seen[idx]) throw InputError(damaged(where, "section '" + s.name + "' appears twice"));
+        seen[idx] = true;
+        if (s.offset > payloadBytes || s.bytes > payloadBytes - s.offset)
+            throw InputError(damaged(where, "truncated section " + s.name));
         auto readInto = [&](auto& vec) {
             using T = typename std::decay_t<decltype(vec)>::value_type;
-            if (bytes % sizeof(T)) throw InputError(damaged(file, "bad size of " + name));
-            vec.resize(bytes / sizeof(T));
-            in.seekg(static_cast<std::streamoff>(payloadStart + offset));
-            in.read(reinterpret_cast<char*>(vec.data()), static_cast<std::streamsize>(bytes));
-            if (!in) throw InputError(damaged(file, "cannot read section " + name));
-            if (toHex(hash64(vec.data(), bytes)) != s.at("hash").get<std::string>())
-                throw InputError(damaged(file, "checksum mismatch in section " + name));
+            if (s.bytes % sizeof(T)) throw InputError(damaged(where, "bad size of " + s.name));
+            vec.resize(s.bytes / sizeof(T));
+            in.seekg(base + static_cast<std::streamoff>(payloadStart + s.offset));
+            in.read(reinterpret_cast<char*>(vec.data()), static_cast<std::streamsize>(s.bytes));
+            if (!in) throw InputError(damaged(where, "cannot read section " + s.name));
+            if (toHex(hash64(vec.data(), s.bytes)) != s.hash)
+                throw InputError(damaged(where, "checksum mismatch in section " + s.name));
         };
-        if (name == "object_mask")
+        if (s.name == "object_mask")
             readInto(t.objectMask);
-        else if (name == "row_ptr")
+        else if (s.name == "row_ptr")
             readInto(t.rowPtr);
-        else if (name == "col_idx")
+        else if (s.name == "col_idx")
             readInto(t.colIdx);
-        else if (name == "values")
-            readInto(t.values);
         else
-            throw InputError(damaged(file, "unknown section " + name));
-        expectedEnd = std::max<size_t>(expectedEnd, payloadStart + offset + bytes);
+            readInto(t.values);
+        end = std::max(end, s.offset + s.bytes);
     }
-    if (expectedEnd != fileSize) throw InputError(damaged(file, "unexpected trailing bytes"));
+    for (size_t k = 0; k < expected.size(); ++k)
+        if (!seen[k]) throw InputError(damaged(where, "section '" + expected[k] + "' is missing"));
+    if (end != payloadBytes) throw InputError(damaged(where, "unexpected trailing bytes"));
 
-    // Structural consistency.
+    // Structural consistency (no overflow: rows <= 2^28, cols <= 2^16, stride <= 6).
     const size_t rows = t.rows(), cols = t.cols();
-    bool ok = t.objectMask.size() == rows;
+    const size_t stride = static_cast<size_t>(t.stride());
+    if (t.objectMask.size() != rows)
+        throw InputError(damaged(where, "the object mask has " +
+                                            std::to_string(t.objectMask.size()) + " entries for " +
+                                            std::to_string(rows) + " pixels"));
+    for (uint8_t m : t.objectMask)
+        if (m > 1)
+            throw InputError(damaged(where, "the object mask holds a value other than 0, 1"));
+    bool ok;
     if (t.storage == TransportStorage::Sparse) {
-        ok = ok && t.rowPtr.size() == rows + 1 && t.rowPtr.front() == 0 &&
-             t.rowPtr.back() == t.colIdx.size() &&
-             t.values.size() == t.colIdx.size() * static_cast<size_t>(t.stride());
+        ok = t.rowPtr.size() == rows + 1 && t.rowPtr.front() == 0 &&
+             t.rowPtr.back() == t.colIdx.size() && t.values.size() == t.colIdx.size() * stride;
         for (size_t r = 0; ok && r < rows; ++r) ok = t.rowPtr[r] <= t.rowPtr[r + 1];
         for (size_t k = 0; ok && k < t.colIdx.size(); ++k) ok = t.colIdx[k] < cols;
     } else {
-        ok = ok && t.values.size() == rows * cols * static_cast<size_t>(t.stride());
+        ok = t.values.size() == rows * cols * stride;
     }
-    if (!ok) throw InputError(damaged(file, "inconsistent matrix structure"));
+    if (!ok) throw InputError(damaged(where, "inconsistent matrix structure"));
+    if (nnz != t.nnz())
+        throw InputError(damaged(where, "the header says " + std::to_string(nnz) +
+                                            " non-zeros, the matrix holds " +
+                                            std::to_string(t.nnz())));
+    // Entries are path throughputs times bilinear weights: finite and >= 0.
+    for (size_t k = 0; k < t.values.size(); ++k)
+        if (!(t.values[k] >= 0.0f) || !std::isfinite(t.values[k]))
+            throw InputError(damaged(where, "value " + std::to_string(k) + " is " +
+                                                std::to_string(t.values[k]) +
+                                                " (entries of T are finite and >= 0)"));
     return out;
 }
 

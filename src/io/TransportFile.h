@@ -12,7 +12,9 @@
 // temporary name and renamed into place.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
+#include <istream>
 #include <string>
 
 #include "render/PathTracer.h"
@@ -49,7 +51,13 @@ struct TransportFile {
 
 /// Reads and verifies a .tm file. If expectedFingerprint is non-empty and differs, throws
 /// InputError saying the file is stale. Damage, truncation, wrong version: InputError.
+/// (Opens the file and calls readTransport.)
 TransportFile readTransportFile(const std::filesystem::path& file,
                                 const std::string& expectedFingerprint = {});
+
+/// The same on a stream holding the `size` bytes of a .tm file from its current position (an
+/// in-memory file, a fuzzer's input); `where` names the source in errors.
+TransportFile readTransport(std::istream& in, uint64_t size, const std::string& where,
+                            const std::string& expectedFingerprint = {});
 
 }  // namespace sl

@@ -16,9 +16,9 @@
 //                 two separate matrices (whose patterns overlap). Products take a `plane`:
 //                 0 = T_a, 1 = T_b, kMeanPlane = T.
 //
-// Storage: CSR with 16-bit column indices (texels <= 65535) and float32 values (rows were
-// accumulated in double), or dense row-major float32 — whichever takes fewer bytes for the
-// measured density (see chooseStorage). Products accumulate in double.
+// Storage: CSR with 16-bit column indices (at most kMaxTransportTexels texels) and float32 values
+// (rows were accumulated in double), or dense row-major float32 — whichever takes fewer bytes for
+// the measured density (see chooseStorage). Products accumulate in double.
 #pragma once
 
 #include <cstdint>
@@ -29,6 +29,10 @@
 namespace sl {
 
 enum class TransportStorage { Sparse, Dense };
+
+/// The most env-map texels a transport matrix has columns for: CSR column indices are 16-bit.
+/// The scene file's envmap.width × envmap.height is held to it (io/SceneFile.h).
+inline constexpr int kMaxTransportTexels = 65536;
 
 struct TransportMatrix {
     int width = 0, height = 0;        // image

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "core/Color.h"
+#include "core/Error.h"
 #include "scene/Scene.h"
 
 namespace sl {
@@ -21,8 +22,13 @@ TransportSink::TransportSink(const EnvMapBasis& basis, int width, int height, in
     if (channels != 1 && channels != 3)
         throw std::invalid_argument("TransportSink: channels must be 1 or 3");
     if (planes != 1 && planes != 2) throw std::invalid_argument("TransportSink: planes is 1 or 2");
-    if (basis.texelCount() > 65536)
-        throw std::invalid_argument("TransportSink: more than 65536 texels");
+    if (basis.texelCount() > kMaxTransportTexels)
+        throw inputError("envmap.width/height",
+                         std::to_string(basis.width()) + "x" + std::to_string(basis.height()) +
+                             " = " + std::to_string(basis.texelCount()) +
+                             " texels, more than a transport matrix's limit of " +
+                             std::to_string(kMaxTransportTexels),
+                         "use a smaller env-map grid (default 50x25)");
 }
 
 void TransportSink::consume(const PixelPaths& px) {

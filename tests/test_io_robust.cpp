@@ -1,0 +1,307 @@
+// Readers that refuse bad data and writers that never leave a bad file (issue 14, "Hard cases
+// and bad input"): truncated TIFF height maps, negative or non-finite env maps, an env-map grid
+// larger than a transport matrix holds, image writes into a full file system, and EXR files
+// without a timestamp (equal images, equal bytes).
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <limits>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "TestUtil.h"
+#include "core/Error.h"
+#include "core/Image.h"
+#include "io/EnvMapIO.h"
+#include "io/HeightmapIO.h"
+#include "io/ImageIO.h"
+#include "io/SceneFile.h"
+#include "render/PathTracer.h"
+#include "scene/Scene.h"
+#include "transport/TransportSink.h"
+
+namespace fs = std::filesystem;
+using namespace sl;
+
+namespace {
+
+/// Runs f and expects an InputError whose message holds every one of `parts`.
+void expectRefused(const std::function<void()>& f, const std::vector<std::string>& parts) {
+    try {
+        f();
+        ADD_FAILURE() << "accepted";
+    } catch (const InputError& e) {
+        const std::string msg = e.what();
+        for (const std::string& p : parts)
+            EXPECT_NE(msg.find(p), std::string::npos) << "'" << p << "' not in: " << msg;
+    }
+}
+
+std::vector<std::string> entries(const fs::path& dir) {
+    std::vector<std::string> out;
+    for (const auto& e : fs::directory_iterator(dir)) out.push_back(e.path().filename());
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+std::string bytesOf(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), {}};
+}
+
+/// Writes pixels of C type T with OpenImageIO (formats our writers do not write).
+template <typename T>
+void writeOiio(const fs::path& p, int w, int h, int c, OIIO::TypeDesc type,
+               const std::vector<T>& px, const std::string& compression, int tile = 0) {
+    auto out = OIIO::ImageOutput::create(p.string());
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(w, h, c, type);
+    spec.attribute("compression", compression);
+    spec.attribute("tiff:RowsPerStrip", 8);
+    if (tile) spec.tile_width = spec.tile_height = tile;
+    ASSERT_TRUE(out->open(p.string(), spec));
+    ASSERT_TRUE(out->write_image(OIIO::BaseTypeFromC<T>::value, px.data()));
+    ASSERT_TRUE(out->close());
+}
+
+void truncateTo(const fs::path& p, double fraction) {
+    fs::resize_file(p, static_cast<uintmax_t>(static_cast<double>(fs::file_size(p)) * fraction));
+}
+
+}  // namespace
+
+// OpenImageIO's read_image() of a strip TIFF that ends early returns true with the missing rows
+// left at 0 (only has_error() tells); such a map loaded as a part with a cliff at height 0.
+TEST(RobustIO, TruncatedTiffHeightMapIsRefused) {
+    test::TempDir dir("robust");
+    const int w = 64, h = 64;
+    std::vector<uint16_t> codes(w * h);
+    std::vector<float> heights(w * h);
+    for (int i = 0; i < w * h; ++i) {
+        codes[i] = static_cast<uint16_t>(1000 + (i * 37) % 50000);
+        heights[i] = 0.001f * static_cast<float>(i % 17);
+    }
+    HeightmapOptions ranged;
+    ranged.heightRange = std::array<double, 2>{0.0, 0.05};
+    for (const std::string comp : {"none", "lzw", "zip", "packbits"})
+        for (int tile : {0, 16}) {
+            SCOPED_TRACE(comp + (tile ? " tiled" : " strips"));
+            const fs::path u16 = dir / ("u16-" + comp + std::to_string(tile) + ".tif");
+            writeOiio(u16, w, h, 1, OIIO::TypeDesc::UINT16, codes, comp, tile);
+            EXPECT_EQ(loadHeightmap(u16, ranged).heights.size(), size_t(w * h));  // whole: fine
+            truncateTo(u16, 0.6);
+            expectRefused([&] { loadHeightmap(u16, ranged); },
+                          {u16.filename().string(), "damaged or truncated"});
+            expectRefused([&] { readImage(u16); }, {u16.filename().string(), "truncated"});
+
+            const fs::path f32 = dir / ("f32-" + comp + std::to_string(tile) + ".tif");
+            writeOiio(f32, w, h, 1, OIIO::TypeDesc::FLOAT, heights, comp, tile);
+            truncateTo(f32, 0.6);
+            expectRefused([&] { loadHeightmap(f32, {}); },
+                          {f32.filename().string(), "damaged or truncated"});
+        }
+    // A gray map stored as RGB is read band by band: truncated, refused as well.
+    std::vector<uint16_t> rgb(w * h * 3);
+    for (int i = 0; i < w * h; ++i) rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = codes[i];
+    const fs::path grayRgb = dir / "gray-rgb.tif";
+    writeOiio(grayRgb, w, h, 3, OIIO::TypeDesc::UINT16, rgb, "lzw");
+    truncateTo(grayRgb, 0.5);
+    expectRefused([&] { loadHeightmap(grayRgb, ranged); }, {"gray-rgb.tif", "truncated"});
+}
+
+// The readers refuse a header that claims more pixels than its file can hold (io/ImageFile.h);
+// constant images, which compress best, still load.
+TEST(RobustIO, HighlyCompressedImagesStillLoad) {
+    test::TempDir dir("robust");
+    const int n = 2048;
+    writeMaskPng(dir / "flat.png", std::vector<uint8_t>(size_t(n) * n, 200), n, n);
+    writeExr(dir / "flat.exr", Image(n, n, 3, 0.25f));
+    for (const char* name : {"flat.png", "flat.exr"}) {
+        SCOPED_TRACE(name);
+        const Image img = readImage(dir / name);
+        EXPECT_LT(fs::file_size(dir / name) * 500, img.data.size() * sizeof(float));  // > 500:1
+        EXPECT_EQ(img.width, n);
+        EXPECT_EQ(img.height, n);
+    }
+    HeightmapOptions ranged;
+    ranged.heightRange = std::array<double, 2>{0.0, 1.0};
+    EXPECT_EQ(loadHeightmap(dir / "flat.png", ranged).heights.size(), size_t(n) * n);
+}
+
+TEST(RobustIO, EnvMapWithNegativeOrNonFinitePixelsIsRefused) {
+    test::TempDir dir("robust");
+    for (auto [w, h] : {std::pair{8, 4}, std::pair{16, 8}}) {  // on the grid; resampled
+        SCOPED_TRACE(std::to_string(w) + "x" + std::to_string(h));
+        std::vector<float> px(static_cast<size_t>(w * h * 3), 0.5f);
+        px[(1 * w + 2) * 3 + 1] = -0.25f;  // row 1, column 2, green
+        writeOiio(dir / "neg.exr", w, h, 3, OIIO::TypeDesc::FLOAT, px, "zip");
+        for (int channels : {0, 1, 3})
+            expectRefused([&] { loadEnvMap(dir / "neg.exr", 8, 4, channels); },
+                          {"neg.exr", "negative (-0.25)", "row 1, column 2, channel 1"});
+        px[(1 * w + 2) * 3 + 1] = std::numeric_limits<float>::quiet_NaN();
+        writeOiio(dir / "nan.exr", w, h, 3, OIIO::TypeDesc::FLOAT, px, "zip");
+        expectRefused([&] { loadEnvMap(dir / "nan.exr", 8, 4, 0); },
+                      {"nan.exr", "NaN", "row 1, column 2"});
+        px[(1 * w + 2) * 3 + 1] = std::numeric_limits<float>::infinity();
+        writeOiio(dir / "inf.exr", w, h, 3, OIIO::TypeDesc::FLOAT, px, "zip");
+        expectRefused([&] { loadEnvMap(dir / "inf.exr", 8, 4, 1); },
+                      {"inf.exr", "infinite", "row 1, column 2"});
+    }
+    // A negative alpha is not light: ignored, as the resampler ignores alpha.
+    std::vector<float> rgba(8 * 4 * 4, 0.5f);
+    rgba[3] = -1.0f;
+    writeOiio(dir / "alpha.exr", 8, 4, 4, OIIO::TypeDesc::FLOAT, rgba, "zip");
+    EXPECT_EQ(loadEnvMap(dir / "alpha.exr", 8, 4, 3).texels, std::vector<float>(8 * 4 * 3, 0.5f));
+}
+
+// 4096x2048 passed the scene check and precompute died ("TransportSink: more than 65536
+// texels"); now the scene file refuses it, naming the field and the limit.
+TEST(RobustIO, OversizeEnvMapGridIsRefusedByTheSceneCheck) {
+    const auto scene = [](int w, int h) {
+        return R"({"heightmap": {"path": "h.exr"}, "envmap": {"width": )" + std::to_string(w) +
+               R"(, "height": )" + std::to_string(h) + "}}";
+    };
+    expectRefused(
+        [&] { parseScene(scene(4096, 2048), "/tmp", "big.json"); },
+        {"big.json", "envmap.width/height", "4096x2048", "8388608 texels", "limit of 65536"});
+    expectRefused([&] { parseScene(scene(257, 256), "/tmp", "big.json"); },
+                  {"envmap.width/height", "65536"});
+    EXPECT_EQ(parseScene(scene(256, 256), "/tmp", "ok.json").envmap.width, 256);
+
+    // A scene built in code is refused by the transport sink the same way, as an InputError.
+    SceneDesc d;
+    d.envmap.width = 300;
+    d.envmap.height = 300;
+    Scene s(d, 4, 4, test::bumpyHeightMap(4));
+    RenderOptions o;
+    o.spp = 1;
+    expectRefused([&] { precomputeTransport(s, o, 1); },
+                  {"envmap.width/height", "300x300", "65536"});
+}
+
+namespace {
+
+/// Runs in a death test's child (forked, and re-executed: no thread pool of the parent, such as
+/// OpenEXR's, is left waiting in the child): sets the file-size limit to `limitBytes` with
+/// SIGXFSZ ignored, so that a write past it fails with EFBIG instead of killing the process (what
+/// a full disk does to a writer, without root or a small file system), runs `write` and exits
+/// 0 if it threw an InputError holding `expected`, 1 if it returned, 2 if the message differed,
+/// 3 for any other exception.
+[[noreturn]] void writeUnderFileSizeLimit(rlim_t limitBytes, const std::function<void()>& write,
+                                          const std::string& expected) {
+    ::signal(SIGXFSZ, SIG_IGN);
+    const rlimit lim{limitBytes, limitBytes};
+    if (::setrlimit(RLIMIT_FSIZE, &lim) != 0) ::_exit(4);
+    int code = 1;
+    try {
+        write();
+    } catch (const InputError& e) {
+        code = std::string(e.what()).find(expected) != std::string::npos ? 0 : 2;
+        std::fprintf(stderr, "%s\n", e.what());
+    } catch (...) {
+        code = 3;
+    }
+    std::fflush(stderr);
+    ::_exit(code);
+}
+
+/// Noise compresses badly: the files are far larger than the 4 KB limit below.
+Image noisyImage(int w, int h, int c) {
+    Image img(w, h, c);
+    uint32_t x = 12345;
+    for (float& v : img.data) {
+        x = x * 1664525u + 1013904223u;
+        v = static_cast<float>(x >> 8) / static_cast<float>(1u << 24);
+    }
+    return img;
+}
+
+}  // namespace
+
+// OpenImageIO's PNG writer ignores failed writes (its close() returns true): a full disk left a
+// truncated PNG renamed into place. Every image write is now checked, the temporary removed,
+// and an existing file kept.
+TEST(RobustIO, ImageWriteIntoAFullFileSystemFailsAndLeavesNothing) {
+    GTEST_FLAG_SET(death_test_style, "threadsafe");
+    // One directory for the test and its children (each child re-runs the test up to its
+    // EXPECT_EXIT): named by the test process, removed by it alone.
+    const bool child = !GTEST_FLAG_GET(internal_run_death_test).empty();
+    const fs::path path = fs::temp_directory_path() /
+                          ("sl-test-fullfs-" + std::to_string(child ? ::getppid() : ::getpid()));
+    struct Dir {
+        fs::path path_;
+        bool owner;
+        const fs::path& path() const { return path_; }
+        fs::path operator/(const std::string& name) const { return path_ / name; }
+        ~Dir() {
+            std::error_code ec;
+            if (owner) fs::remove_all(path_, ec);
+        }
+    } dir{path, !child};
+    if (!child) fs::remove_all(path);
+    fs::create_directories(path);
+    const Image img = noisyImage(256, 256, 3);
+    const std::string msg = "cannot be written";
+    const auto full = [&](const std::function<void()>& write) {
+        writeUnderFileSizeLimit(4096, write, msg);
+    };
+    EXPECT_EXIT(full([&] { writePng(dir / "preview.png", img); }), testing::ExitedWithCode(0),
+                "preview.png: cannot be written");
+    EXPECT_EXIT(full([&] { writePng16(dir / "data.png", img); }), testing::ExitedWithCode(0),
+                "data.png");
+    EXPECT_EXIT(full([&] { writeExr(dir / "render.exr", img); }), testing::ExitedWithCode(0),
+                "render.exr");
+    EXPECT_EXIT(full([&] { writeEnvMap(dir / "env.exr", EnvMap::constant(64, 32, 0.5f, 3)); }),
+                testing::ExitedWithCode(1), "");  // 64x32 constant: smaller than the limit
+    std::filesystem::remove(dir / "env.exr");
+    EXPECT_TRUE(entries(dir.path()).empty()) << entries(dir.path()).front();
+
+    // An existing file is neither replaced nor truncated by the failed write.
+    writePng(dir / "keep.png", Image(2, 2, 3, 0.5f));
+    const std::string before = bytesOf(dir / "keep.png");
+    EXPECT_EXIT(full([&] { writePng(dir / "keep.png", img); }), testing::ExitedWithCode(0),
+                "keep.png");
+    EXPECT_EQ(bytesOf(dir / "keep.png"), before);
+    EXPECT_EQ(entries(dir.path()), std::vector<std::string>{"keep.png"});
+
+    // Below the limit the same write succeeds in the child.
+    EXPECT_EXIT(writeUnderFileSizeLimit(
+                    1 << 20, [&] { writePng(dir / "small.png", img); }, msg),
+                testing::ExitedWithCode(1), "");
+    EXPECT_EQ(readImage(dir / "small.png").width, 256);
+}
+
+// OpenImageIO stamps every EXR with the time of writing (capDate) unless told otherwise: equal
+// results were different files.
+TEST(RobustIO, EqualExrOutputsAreByteIdentical) {
+    test::TempDir dir("robust");
+    const Image img = noisyImage(32, 16, 3);
+    writeExr(dir / "a.exr", img);
+    EnvMap env = EnvMap::constant(8, 4, 0.25f, 1);
+    writeEnvMap(dir / "env-a.exr", env);
+    // Into the next second, so that a timestamp would differ.
+    const auto now = std::chrono::system_clock::now().time_since_epoch();
+    std::this_thread::sleep_for(std::chrono::seconds(1) -
+                                (now - std::chrono::floor<std::chrono::seconds>(now)) +
+                                std::chrono::milliseconds(20));
+    writeExr(dir / "b.exr", img);
+    writeEnvMap(dir / "env-b.exr", env);
+    EXPECT_EQ(bytesOf(dir / "a.exr"), bytesOf(dir / "b.exr"));
+    EXPECT_EQ(bytesOf(dir / "env-a.exr"), bytesOf(dir / "env-b.exr"));
+    auto in = OIIO::ImageInput::open((dir / "a.exr").string());
+    ASSERT_TRUE(in);
+    EXPECT_EQ(in->spec().find_attribute("DateTime"), nullptr);
+    EXPECT_EQ(readImage(dir / "a.exr").data, img.data);
+}
