@@ -53,6 +53,10 @@ const std::map<std::string, std::string> kExpected = {
     {"heightmap/exr-tried-by-every-reader.bin", "damaged OpenEXR header"},
     // libpng allocated the 1.8 GB a tEXt chunk's length claimed in a 154-byte 4x4 PNG.
     {"heightmap/png-text-chunk-length.bin", "damaged PNG: chunk 'tEXt' claims 1819475990 bytes"},
+    // The EXR header walker's first version allocated a channel list's claimed size (1.9 GB)
+    // before checking it against the file.
+    {"heightmap/exr-channel-list-size.bin", "the file ends inside attribute 'channels'"},
+    {"envmap/exr-channel-list-size.bin", "the file ends inside attribute 'channels'"},
     // OpenEXR allocated the 1.7 GB an attribute's size field claimed in a 211-byte file.
     {"envmap/exr-attribute-size.bin", "damaged OpenEXR header"},
     // A 5242846x1 EXR in 222 bytes: OpenImageIO converted through a 256-row (5 GB) buffer.

@@ -32,6 +32,7 @@ class ExrHeaderWalker {
         std::error_code ec;
         size_ = fs::file_size(file, ec);
         if (!in_ || ec) throw inputError(where_, "cannot open the file", "Check permissions");
+        maxSamples_ = std::max(kMinDecodedLimit, size_ * kMaxDecodedPerFileByte) / sizeof(float);
     }
 
     void walk() {
@@ -61,6 +62,22 @@ class ExrHeaderWalker {
                 fail("the dataWindow [" + std::to_string(p.box[0]) + ", " +
                      std::to_string(p.box[1]) + "] - [" + std::to_string(p.box[2]) + ", " +
                      std::to_string(p.box[3]) + "] is empty");
+            // What OpenEXR allocates when it opens the part: buffers for a whole chunk (a tile,
+            // or up to 256 scanlines whatever the image's height), held to the same limit as
+            // the image's pixels (checkImageSize, which runs only after the open).
+            if (p.compression >= kExrLinesPerChunk.size())
+                fail("unknown compression " + std::to_string(p.compression));
+            const bool tiledPart = tiled || p.haveTiles;
+            const uint64_t chunkW = static_cast<uint64_t>(tiledPart ? std::max(w, p.tileX) : w),
+                           chunkH = static_cast<uint64_t>(
+                               tiledPart ? std::max(h, p.tileY)
+                                         : std::max<int64_t>(h, kExrLinesPerChunk[p.compression]));
+            const uint64_t channels = std::max<uint64_t>(p.channels, 1);
+            if (chunkW > maxSamples_ || chunkH > maxSamples_ ||
+                chunkW * chunkH > maxSamples_ / channels)
+                fail("the image (" + std::to_string(w) + "x" + std::to_string(h) + ", " +
+                     std::to_string(channels) + " channels) is more than a " +
+                     std::to_string(size_) + "-byte file can hold");
             if (p.chunkCount >= 0) {
                 chunks += static_cast<uint64_t>(p.chunkCount);
             } else if (tiled || p.haveTiles) {
@@ -68,8 +85,6 @@ class ExrHeaderWalker {
                 chunks += static_cast<uint64_t>((w + p.tileX - 1) / p.tileX) *
                           static_cast<uint64_t>((h + p.tileY - 1) / p.tileY);
             } else {
-                if (p.compression >= kExrLinesPerChunk.size())
-                    fail("unknown compression " + std::to_string(p.compression));
                 const int64_t lines = kExrLinesPerChunk[p.compression];
                 chunks += static_cast<uint64_t>((h + lines - 1) / lines);
             }
@@ -90,6 +105,7 @@ class ExrHeaderWalker {
         size_t compression = 0;
         int64_t tileX = 0, tileY = 0;
         int64_t chunkCount = -1;
+        uint64_t channels = 0;
     };
 
     [[noreturn]] void fail(const std::string& problem) const {
@@ -149,6 +165,21 @@ class ExrHeaderWalker {
                 p.tileX = le32(t);
                 p.tileY = le32(t + 4);
                 p.haveTiles = true;
+            } else if (name == "channels" && type == "chlist") {
+                // Entries: name '\0', pixel type (int), pLinear, 3 reserved, x and y sampling
+                // (ints); a '\0' ends the list.
+                if (static_cast<uint64_t>(size) > size_ - pos_)
+                    fail("the file ends inside " + what);
+                std::vector<char> list(static_cast<size_t>(size));
+                read(list.data(), list.size(), what);
+                for (size_t k = 0; k < list.size() && list[k] != '\0';) {
+                    const size_t end =
+                        std::find(list.begin() + static_cast<std::ptrdiff_t>(k), list.end(), '\0') -
+                        list.begin();
+                    k = end + 1 + 16;
+                    if (k > list.size()) fail("the channel list is cut short");
+                    ++p.channels;
+                }
             } else if (name == "chunkCount" && type == "int" && size == 4) {
                 unsigned char c[4];
                 read(c, 4, what);
@@ -163,7 +194,7 @@ class ExrHeaderWalker {
 
     std::string where_;
     std::ifstream in_;
-    uint64_t size_ = 0, pos_ = 0;
+    uint64_t size_ = 0, pos_ = 0, maxSamples_ = 0;
     size_t maxName_ = 31;
 };
 

@@ -5,9 +5,10 @@
 //     refused. (OpenImageIO's own open() would then try every reader it has, so a damaged .exr
 //     could be parsed as DICOM, FITS, RAW, ... by any of some thirty format plugins.)
 //   * An OpenEXR file's header is walked by checkExrHeader before OpenEXR reads it: every
-//     attribute must fit in the file and the data window must be a box whose chunk-offset
-//     table fits in the file. (OpenEXR 3.1 allocates what a header field claims before it reads
-//     it: a 300-byte file could ask for gigabytes.)
+//     attribute must fit in the file, the data window must be a box whose chunk-offset table
+//     fits in the file, and a chunk (a tile, or up to 256 scanlines however few rows the image
+//     has) must pass the size check below. (OpenEXR 3.1 allocates what a header field claims
+//     before it reads it: a 300-byte file could ask for gigabytes.)
 //   * A PNG file's chunks are walked by checkPngChunks: each must fit in the file (libpng
 //     allocated the 1.8 GB a tEXt chunk's length claimed in a 154-byte file).
 //   * The image's size is checked against the file's: no supported compression packs more than
