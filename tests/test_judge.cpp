@@ -127,6 +127,16 @@ TEST(DefectVisibility, KnownGradientsGiveTheirRatio) {
     EXPECT_NEAR(v[0].cleanRmsGradient, 0.01, 1e-12);
     EXPECT_NEAR(v[0].visibility, 3.0, 1e-9);
     EXPECT_LT(v[0].weber, 0.0);  // darker than its surroundings
+    double mean = 0;
+    for (double x : y) mean += x;
+    mean /= static_cast<double>(y.size());
+    EXPECT_NEAR(v[0].contrast, 0.03 / mean, 1e-12);
+    // Brightening the image 10x changes neither contrast nor visibility.
+    std::vector<double> y10(y);
+    for (double& x : y10) x *= 10;
+    const auto v10 = defectVisibility(w, h, y10, y10, part, labels, {{255, "scratch"}});
+    EXPECT_NEAR(v10[0].contrast, v[0].contrast, 1e-12);
+    EXPECT_NEAR(v10[0].visibility, v[0].visibility, 1e-9);
     // An unlisted label gets its own region; a listed label without pixels reports NaN.
     labels[size_t(25) * w + 30] = 7;
     v = defectVisibility(w, h, y, y, part, labels, {{255, "scratch"}, {128, "chatter"}});

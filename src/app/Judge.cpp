@@ -157,6 +157,7 @@ nlohmann::ordered_json toJson(const JudgeScore& s) {
                      {"visibility", number(r.visibility)},
                      {"rms_gradient", number(r.rmsGradient)},
                      {"clean_rms_gradient", number(r.cleanRmsGradient)},
+                     {"contrast", number(r.contrast)},
                      {"weber", number(r.weber)}});
     j["visibility"] = v;
     j["eq2_parts"] = parts(s.eq2);
@@ -174,25 +175,25 @@ std::string formatJudgeTable(const std::vector<JudgeScore>& scores) {
     for (const JudgeScore& s : scores) nameWidth = std::max(nameWidth, s.name.size());
     std::ostringstream out;
     char buf[256];
-    std::snprintf(buf, sizeof buf, "%-*s %10s %10s %8s %9s", static_cast<int>(nameWidth), "light",
-                  "eq2", "U", "mean E", "dark<1e-3");
+    std::snprintf(buf, sizeof buf, "%-*s %10s %10s %8s %9s %7s", static_cast<int>(nameWidth),
+                  "light", "eq2", "U", "mean E", "dark<1e-3", "bright");
     out << buf;
     for (const std::string& r : regions) {
-        std::snprintf(buf, sizeof buf, " %14s %8s", ("vis " + r).substr(0, 14).c_str(), "weber");
+        std::snprintf(buf, sizeof buf, " %14s %8s", ("vis " + r).substr(0, 14).c_str(), "contrast");
         out << buf;
     }
     out << '\n';
     for (const JudgeScore& s : scores) {
-        std::snprintf(buf, sizeof buf, "%-*s %10.4f %10.4f %8.4f %8.1f%%",
+        std::snprintf(buf, sizeof buf, "%-*s %10.4f %10.4f %8.4f %8.1f%% %7.3f",
                       static_cast<int>(nameWidth), s.name.c_str(), s.eq2.total, s.unbiased.total,
-                      s.meanE, 100.0 * s.sparsity);
+                      s.meanE, 100.0 * s.sparsity, s.brightness);
         out << buf;
         for (const std::string& r : regions) {
             const RegionVisibility* v = nullptr;
             for (const RegionVisibility& x : s.visibility)
                 if (x.label.name == r) v = &x;
             if (v)
-                std::snprintf(buf, sizeof buf, " %14.3f %8.3f", v->visibility, v->weber);
+                std::snprintf(buf, sizeof buf, " %14.3f %8.4f", v->visibility, v->contrast);
             else
                 std::snprintf(buf, sizeof buf, " %14s %8s", "-", "-");
             out << buf;

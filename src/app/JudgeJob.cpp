@@ -119,15 +119,17 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
 
         std::ostringstream csv;
         csv.precision(10);
-        csv << "light,eq2,unbiased,mean_E,sparsity";
+        csv << "light,eq2,unbiased,mean_E,sparsity,brightness";
         const auto& first = sum.scores.front().visibility;
         for (const auto& r : first)
-            csv << ",visibility_" << r.label.name << ",weber_" << r.label.name;
+            csv << ",visibility_" << r.label.name << ",contrast_" << r.label.name << ",weber_"
+                << r.label.name;
         csv << '\n';
         for (const JudgeScore& s : sum.scores) {
             csv << s.name << ',' << s.eq2.total << ',' << s.unbiased.total << ',' << s.meanE << ','
-                << s.sparsity;
-            for (const auto& r : s.visibility) csv << ',' << r.visibility << ',' << r.weber;
+                << s.sparsity << ',' << s.brightness;
+            for (const auto& r : s.visibility)
+                csv << ',' << r.visibility << ',' << r.contrast << ',' << r.weber;
             csv << '\n';
         }
         writeTextAtomically(dir / "judge.csv", csv.str());

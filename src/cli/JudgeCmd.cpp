@@ -33,8 +33,9 @@ int runJudge(const JudgeArgs& a) {
                 est.cacheHit ? "from the cache" : "traced", est.path.string().c_str());
     std::printf("%s", formatJudgeTable(s.scores).c_str());
     std::printf(
-        "lower eq2 and U are better; visibility: RMS gradient in the region over the "
-        "defect-free surface's\n");
+        "lower eq2 and U are better; bright: mean brightness over the white furnace's; "
+        "visibility: RMS gradient in the region over the defect-free surface's; contrast: "
+        "the region's RMS gradient over the mean brightness (the eye needs about 0.01)\n");
     if (!a.json.empty()) writeTextAtomically(a.json, s.json);
     std::printf("wrote %s/ (judge.json, judge.csv, renders.exr, renders.png)\n",
                 o.outDir.string().c_str());

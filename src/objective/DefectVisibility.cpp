@@ -98,6 +98,9 @@ std::vector<RegionVisibility> defectVisibility(int w, int h, std::span<const dou
     std::vector<uint8_t> clean(n, 0);
     for (size_t p = 0; p < n; ++p) clean[p] = partMask[p] && !near[p];
     const double cleanRms = rms(meanGradientProduct(w, h, Ya, Yb, clean));
+    std::vector<uint8_t> part(n, 0);
+    for (size_t p = 0; p < n; ++p) part[p] = partMask[p] != 0;
+    const double partMean = meanOver(Ya, Yb, part);
 
     std::vector<RegionVisibility> out;
     for (const RegionLabel& r : regions) {
@@ -111,6 +114,7 @@ std::vector<RegionVisibility> defectVisibility(int w, int h, std::span<const dou
         v.cleanRmsGradient = cleanRms;
         v.rmsGradient = rms(meanGradientProduct(w, h, Ya, Yb, in));
         v.visibility = cleanRms > 0 ? v.rmsGradient / cleanRms : kNaN;
+        v.contrast = partMean > 0 ? v.rmsGradient / partMean : kNaN;
         const std::vector<uint8_t> ring = dilate(in, w, h, kWeberRing);
         std::vector<uint8_t> background(n, 0);
         for (size_t p = 0; p < n; ++p) background[p] = ring[p] && partMask[p] && !any[p];

@@ -9,6 +9,9 @@
 //              an unbiased estimate of the mean squared noise-free gradient in X
 //   rms(X)   = sqrt(max(g²(X), 0))
 //   visibility_v = rms(R_v) / rms(F)       1.0: the defect is no more salient than the texture
+//   contrast_v   = rms(R_v) / mean Ȳ over the part: the region's gradient relative to the
+//              image's brightness (a ratio of two tiny gradients can make visibility_v large
+//              under a light that shows nothing: under uniform light contrast_v is ~1e-3)
 //   weber_v  = (mean Ȳ over R_v − mean Ȳ over B_v) / mean Ȳ over B_v,  Ȳ = (Y_a + Y_b)/2,
 //              B_v = the unlabelled part pixels within kWeberRing pixels of R_v (its local
 //              background)
@@ -34,6 +37,7 @@ struct RegionVisibility {
     double rmsGradient = 0;       // rms(R_v), luminance per pixel
     double cleanRmsGradient = 0;  // rms(F)
     double visibility = 0;        // rms(R_v) / rms(F)
+    double contrast = 0;          // rms(R_v) / mean brightness of the part
     double weber = 0;             // Weber contrast against the local background
 };
 
