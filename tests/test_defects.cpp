@@ -11,8 +11,10 @@
 #include <vector>
 
 #include "TestUtil.h"
+#include "app/Truth.h"
 #include "core/Error.h"
 #include "core/Rng.h"
+#include "io/MaskIO.h"
 #include "objective/Autodiff.h"
 #include "objective/DefectObjective.h"
 #include "objective/TransportLoss.h"
@@ -189,4 +191,52 @@ TEST(DefectObjective, OptimizeRunsItOnAGeneratedPart) {
                      (dir.path() / "out2").string());
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_NE(r.output.find("--defects"), std::string::npos) << r.output;
+}
+
+// Regions by label (the region-comparison mode): "FILE:LABEL,..." picks the listed labels of a
+// truth file by name or value; "none"/0 is the unlabelled surface; other paths stay whole.
+TEST(RegionSpec, PicksLabelsOfATruthFile) {
+    EXPECT_EQ(parseRegionSpec("m.png", "defects").labels.size(), 0u);
+    EXPECT_EQ(parseRegionSpec("dir:with:colons/m.png", "defects").file, "dir:with:colons/m.png");
+    const RegionSpec r = parseRegionSpec("a/t.png:chatter,255", "defects");
+    EXPECT_EQ(r.file, "a/t.png");
+    ASSERT_EQ(r.labels.size(), 2u);
+    EXPECT_EQ(r.labels[0], "chatter");
+    EXPECT_EQ(r.text(), "a/t.png:chatter,255");
+    EXPECT_THROW(parseRegionSpec("t.png:chatter,", "defects"), InputError);
+
+    test::TempDir dir("regions");
+    const std::string part = (dir.path() / "p.exr").string();
+    ASSERT_EQ(test::runCli("gen-surface " + part + " --width 64 --height 48 --scratches 2 " +
+                           "--gouges 0 --chatter-start 0.5")
+                  .exitCode,
+              0);
+    const std::string truth = (dir.path() / "p-truth.png").string();
+    const LabelMask m = readLabelMask(truth, 64, 48);
+    size_t chatter = 0, none = 0, scratch = 0;
+    for (uint8_t v : m.labels) {
+        chatter += v == 128;
+        none += v == 0;
+        scratch += v == 255;
+    }
+    ASSERT_GT(chatter, 0u);
+    ASSERT_GT(scratch, 0u);
+    auto count = [](const std::vector<uint8_t>& x) {
+        size_t n = 0;
+        for (uint8_t v : x) n += v == 255;
+        return n;
+    };
+    EXPECT_EQ(count(regionInHeightMap(parseRegionSpec(truth + ":chatter", "d"), 64, 48)), chatter);
+    EXPECT_EQ(count(regionInHeightMap(parseRegionSpec(truth + ":128", "d"), 64, 48)), chatter);
+    EXPECT_EQ(count(regionInHeightMap(parseRegionSpec(truth + ":none", "d"), 64, 48)), none);
+    EXPECT_EQ(count(regionInHeightMap(parseRegionSpec(truth + ":chatter,defect", "d"), 64, 48)),
+              chatter + scratch);
+    try {
+        regionInHeightMap(parseRegionSpec(truth + ":bogus", "d"), 64, 48);
+        ADD_FAILURE() << "an unknown label was accepted";
+    } catch (const InputError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("p-truth.png"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("chatter (128)"), std::string::npos) << msg;
+    }
 }

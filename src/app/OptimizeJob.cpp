@@ -331,15 +331,15 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     in.mask = lossMask(o.mask, t, in.scene.get(), o.scratch);
     job.maskPixels = in.mask.count;
     if (in.kind == ObjectiveKind::Defects) {
-        const std::filesystem::path& d = o.defects.empty() ? o.truth : o.defects;
+        const RegionSpec d = o.defects.empty() ? RegionSpec{o.truth, {}} : o.defects;
         if (d.empty())
             throw inputError(option("objective") + " defects", "needs a defect mask",
                              "give " + option("defects") +
                                  " MASK.png (height-map space, e.g. "
                                  "gen-surface's part-truth.png) or " +
                                  option("truth"));
-        in.defects = projectMaskFile(*in.scene, d);
-        if (!o.reference.empty()) in.reference = projectMaskFile(*in.scene, o.reference);
+        in.defects = projectRegion(*in.scene, d);
+        if (!o.reference.empty()) in.reference = projectRegion(*in.scene, o.reference);
     }
     if (!o.truth.empty()) {
         in.truth = projectMaskFile(*in.scene, o.truth);
@@ -535,6 +535,11 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     s["rgb"] = o.rgb;
     s["mask"] = o.mask.name();
     s["mask_pixels"] = job.maskPixels;
+    if (in.kind == ObjectiveKind::Defects) {
+        s["defects"] = o.defects.empty() ? o.truth.string() : o.defects.text();
+        s["reference"] =
+            o.reference.empty() ? "the part away from the defects" : o.reference.text();
+    }
     s["iterations"] = run.optimizer.iterations;
     s["evaluations"] = run.optimizer.evaluations;
     s["termination"] = run.optimizer.termination;

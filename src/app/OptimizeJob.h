@@ -30,6 +30,7 @@
 #include "app/Judge.h"
 #include "app/LossMask.h"
 #include "app/Transport.h"
+#include "app/Truth.h"
 #include "objective/Objective.h"
 #include "objective/ObjectiveKind.h"
 #include "objective/ScratchMap.h"
@@ -68,9 +69,11 @@ struct OptimizeJobOptions {
     LossMaskSpec mask;            // the loss's region (app/LossMask.h)
     ScratchMapOptions scratch;    // for the scratch mask
     std::filesystem::path truth;  // ground-truth defect mask in height-map space (metrics)
-    /// The defects objective's regions, masks in height-map space (app/Truth.h): the defects
+    /// The defects objective's regions in height-map space (app/Truth.h RegionSpec): the defects
     /// (empty: `truth`) and the defect-free reference (empty: the part away from the defects).
-    std::filesystem::path defects, reference;
+    /// Region A against region B (e.g. the chatter half against the clean half) is the same
+    /// objective with A as `defects` and B as `reference`.
+    RegionSpec defects, reference;
     bool rgb = false;
     HeldOutSource heldOut;  // default: the judge's estimate traced from the scene (cached)
     int heldOutSpp = 0;     // 0: the judge's default (app/Judge.h)

@@ -1,5 +1,10 @@
 #include "app/Truth.h"
 
+#include <algorithm>
+#include <cctype>
+
+#include "core/Error.h"
+#include "core/Text.h"
 #include "objective/ImageSpace.h"
 #include "scene/Scene.h"
 
@@ -20,6 +25,87 @@ LabelMask projectTruth(const Scene& scene, const std::filesystem::path& truth, i
     out.legend = std::move(m.legend);
     out.labels = projectLabelsToImage(hits, m.labels);
     return out;
+}
+
+namespace {
+
+bool hasImageExtension(const std::filesystem::path& p) {
+    const std::string e = lower(p.extension().string());
+    return e == ".png" || e == ".tif" || e == ".tiff" || e == ".exr" || e == ".npy";
+}
+
+std::vector<std::string> splitList(std::string_view s) {
+    std::vector<std::string> out;
+    size_t start = 0;
+    while (start <= s.size()) {
+        const size_t comma = std::min(s.find(',', start), s.size());
+        out.emplace_back(s.substr(start, comma - start));
+        start = comma + 1;
+    }
+    return out;
+}
+
+}  // namespace
+
+std::string RegionSpec::text() const {
+    std::string t = file.string();
+    for (size_t k = 0; k < labels.size(); ++k) {
+        t += k ? "," : ":";
+        t += labels[k];
+    }
+    return t;
+}
+
+RegionSpec parseRegionSpec(std::string_view text, std::string_view optionName) {
+    RegionSpec r;
+    const size_t colon = text.rfind(':');
+    if (colon != std::string_view::npos &&
+        hasImageExtension(std::filesystem::path(std::string(text.substr(0, colon))))) {
+        r.file = std::string(text.substr(0, colon));
+        r.labels = splitList(text.substr(colon + 1));
+        for (const std::string& l : r.labels)
+            if (l.empty())
+                throw inputError(option(std::string(optionName)) + " '" + std::string(text) + "'",
+                                 "an empty label in the list after ':'",
+                                 "write FILE:LABEL[,LABEL...] with legend names or values, e.g. "
+                                 "part-truth.png:chatter");
+        return r;
+    }
+    r.file = std::string(text);
+    return r;
+}
+
+std::vector<uint8_t> regionInHeightMap(const RegionSpec& region, int mapWidth, int mapHeight) {
+    if (region.labels.empty()) return loadHeightMapMask(region.file, mapWidth, mapHeight);
+    const LabelMask m = readLabelMask(region.file, mapWidth, mapHeight);
+    bool wanted[256] = {};
+    for (const std::string& l : region.labels) {
+        int value = -1;
+        if (std::all_of(l.begin(), l.end(), [](unsigned char c) { return std::isdigit(c); }) &&
+            l.size() <= 3)
+            value = std::stoi(l);
+        else if (lower(l) == "none")
+            value = 0;
+        else
+            for (const RegionLabel& r : m.legend)
+                if (r.name == l) value = r.value;
+        if (value < 0 || value > 255) {
+            std::string names = "none (0)";
+            for (const RegionLabel& r : m.legend)
+                names += ", " + r.name + " (" + std::to_string(r.value) + ")";
+            throw inputError(region.file.string(), "has no label '" + l + "'",
+                             "Its labels are " + names);
+        }
+        wanted[value] = true;
+    }
+    std::vector<uint8_t> out(m.labels.size(), 0);
+    for (size_t p = 0; p < out.size(); ++p) out[p] = wanted[m.labels[p]] ? 255 : 0;
+    return out;
+}
+
+std::vector<uint8_t> projectRegion(const Scene& scene, const RegionSpec& region, int threads) {
+    const std::vector<uint8_t> m = regionInHeightMap(region, scene.mapWidth, scene.mapHeight);
+    return projectToImage(tracePrimaryHits(scene, threads), m);
 }
 
 }  // namespace sl

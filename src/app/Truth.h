@@ -4,6 +4,8 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "io/MaskIO.h"
@@ -18,5 +20,32 @@ std::vector<uint8_t> projectMaskFile(const Scene& scene, const std::filesystem::
 
 /// readLabelMask projected into the image: the labels keep their values, the legend its names.
 LabelMask projectTruth(const Scene& scene, const std::filesystem::path& truth, int threads = 0);
+
+/// A region drawn in height-map space, given as "FILE" (a mask: nonzero inside) or
+/// "FILE:LABEL[,LABEL...]" (the pixels of a truth label file, e.g. gen-surface's
+/// part-truth.png, whose label is one of those listed: by legend name or by value; 0 or
+/// "none" is the unlabelled surface). With labels, FILE is read with its legend
+/// (readLabelMask). How `optimize --objective defects` takes its regions, and so the
+/// region-comparison mode: region A (e.g. "part-truth.png:chatter") against region B (e.g.
+/// "part-truth.png:none").
+struct RegionSpec {
+    std::filesystem::path file;       // empty: no region given
+    std::vector<std::string> labels;  // empty: the whole mask
+    bool empty() const { return file.empty(); }
+    std::string text() const;  // as it was written
+};
+
+/// Parses a RegionSpec ("" gives an empty one). Only splits at the last ':' when what follows
+/// is a list of labels and FILE has an image extension, so other paths are left whole. Throws
+/// InputError naming `optionName` for an empty label list.
+RegionSpec parseRegionSpec(std::string_view text, std::string_view optionName);
+
+/// The region in height-map space (255/0): the mask, or the pixels whose label is listed.
+/// Throws InputError naming the file for a label its legend does not have, or when the file
+/// cannot be read or has the wrong size.
+std::vector<uint8_t> regionInHeightMap(const RegionSpec& region, int mapWidth, int mapHeight);
+
+/// regionInHeightMap projected into the scene's image through the centre rays (255/0).
+std::vector<uint8_t> projectRegion(const Scene& scene, const RegionSpec& region, int threads = 0);
 
 }  // namespace sl

@@ -212,12 +212,13 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         c->add_option("--truth", j.truth,
                       "Ground-truth defect mask in height-map space (e.g. part-truth.png): "
                       "adds the defect contrast to the metrics");
-        c->add_option("--defects", j.defects,
-                      "--objective defects: the defect mask in height-map space (default: "
-                      "--truth)");
-        c->add_option("--reference", j.reference,
-                      "--objective defects: the defect-free reference region in height-map space "
-                      "(default: the part away from the defects)");
+        addParsed(c, "--defects", j.defects, parseRegionSpec,
+                  "--objective defects: the defect region in height-map space: MASK.png, or "
+                  "TRUTH.png:LABEL[,LABEL...] (legend names or values; default: --truth)");
+        addParsed(c, "--reference", j.reference, parseRegionSpec,
+                  "--objective defects: the reference region, as --defects (default: the part "
+                  "away from the defects). Region comparison: --defects part-truth.png:chatter "
+                  "--reference part-truth.png:none");
         c->add_flag("--rgb", j.rgb, "Optimize an RGB env map (needs/creates an RGB T)");
         c->add_flag("--smooth-abs", j.objective.smoothAbs, "Use sqrt(x²+ε²)−ε for |x|");
         addChoice(c, "--objective", j.objectiveKind, objectiveKindTable(),
