@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <numbers>
+#include <sstream>
 
 #include "TestUtil.h"
 #include "app/Judge.h"
@@ -308,4 +310,45 @@ TEST(Synth, ConfinedChatterIsLabelledOnItsSideOnly) {
             EXPECT_EQ(g.truth[size_t(j) * 64 + i], i >= 32 ? kTruthChatter : 0) << i << "," << j;
     s.chatterStartFraction = 1.5;
     EXPECT_THROW(generateSurface(s), InputError);
+}
+
+// `judge` from the command line: scores the lights given and the references, writes the report
+// with each light's render outlined in its regions' colours; a light file that does not exist
+// is refused before any work, and the previous results stay.
+TEST(JudgeCommand, WritesTheReportWithOutlinedRegions) {
+    test::TempDir dir("judge-cli");
+    const std::string part = (dir.path() / "part.exr").string(),
+                      scene = (dir.path() / "scene.json").string(),
+                      truth = (dir.path() / "part-truth.png").string();
+    ASSERT_EQ(test::runCli("gen-surface " + part +
+                           " --width 128 --height 128 --scratches 2 --gouges 0 "
+                           "--chatter-start 0.5 --scene " +
+                           scene + " --image-size 48 --spp 4 --max-depth 3")
+                  .exitCode,
+              0);
+    const std::filesystem::path out = dir.path() / "judged";
+    auto r = test::runCli("judge " + scene + " --truth " + truth + " --spp 16 -o " + out.string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("contrast"), std::string::npos) << r.output;
+    std::ifstream is(out / "report.html");
+    std::stringstream html;
+    html << is.rdbuf();
+    for (const char* s : {"uniform-0.5", "studio", "visibility.defect", "contrast.chatter",
+                          "defect red", "chatter blue"})
+        EXPECT_NE(html.str().find(s), std::string::npos) << s;
+    // The truth's scratch boundary is drawn in red on the render; the labels are projected the
+    // same way the judge scores them.
+    const Image img = readImage(out / "light-1.png");
+    ASSERT_EQ(img.channels, 3);
+    int red = 0;
+    for (size_t p = 0; p < img.pixelCount(); ++p)
+        red +=
+            img.data[3 * p] > 0.99f && img.data[3 * p + 1] < 0.01f && img.data[3 * p + 2] < 0.01f;
+    EXPECT_GT(red, 0);
+    // A missing light: an error naming it, exit 1, the previous results untouched.
+    r = test::runCli("judge " + scene + " " + (dir.path() / "nope.exr").string() + " -o " +
+                     out.string());
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.output.find("nope.exr"), std::string::npos) << r.output;
+    EXPECT_TRUE(std::filesystem::exists(out / "report.html"));
 }

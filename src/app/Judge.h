@@ -88,6 +88,7 @@ class Judge {
     const TransportSource& estimate() const { return *estimate_; }
     const std::vector<uint8_t>& partMask() const { return estimate_->file.matrix.objectMask; }
     const std::vector<uint8_t>& labels() const { return labels_; }
+    const std::vector<RegionLabel>& legend() const { return legend_; }
     const JudgeOptions& options() const { return options_; }
 
   private:

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "app/Report.h"
 #include "core/Error.h"
 #include "core/Image.h"
 #include "io/AtomicFile.h"
@@ -33,6 +34,127 @@ std::string nameOf(const std::filesystem::path& light) {
     auto p = light;
     if (p.filename().empty()) p = p.parent_path();
     return std::filesystem::is_directory(p) ? p.filename().string() : p.stem().string();
+}
+
+// Outline colours of the truth regions in the report, by label value (linear RGB), and their
+// names in the caption. Values not listed are white.
+struct OutlineColour {
+    uint8_t value;
+    float r, g, b;
+    const char* name;
+};
+constexpr OutlineColour kOutlines[] = {
+    {255, 1.0f, 0.0f, 0.0f, "red"},     {224, 1.0f, 0.45f, 0.0f, "orange"},
+    {192, 1.0f, 0.0f, 1.0f, "magenta"}, {160, 1.0f, 1.0f, 0.0f, "yellow"},
+    {144, 0.0f, 1.0f, 1.0f, "cyan"},    {128, 0.1f, 0.3f, 1.0f, "blue"},
+};
+
+const OutlineColour& outlineOf(uint8_t v) {
+    static constexpr OutlineColour white{0, 1.0f, 1.0f, 1.0f, "white"};
+    for (const OutlineColour& c : kOutlines)
+        if (c.value == v) return c;
+    return white;
+}
+
+/// The render exposed as the side-by-side PNG (99th percentile of the part -> 0.8), gray, with
+/// the boundary pixels of every labelled region (a pixel of the region with a 4-neighbour
+/// outside it) drawn in the region's colour.
+Image outlinedRender(const std::vector<double>& y, int w, int h, const std::vector<uint8_t>& part,
+                     const std::vector<uint8_t>& labels) {
+    std::vector<double> in;
+    for (size_t p = 0; p < y.size(); ++p)
+        if (part.empty() || part[p]) in.push_back(y[p]);
+    double scale = 1.0;
+    if (!in.empty()) {
+        auto q =
+            in.begin() + static_cast<std::ptrdiff_t>(0.99 * static_cast<double>(in.size() - 1));
+        std::nth_element(in.begin(), q, in.end());
+        if (*q > 0) scale = 0.8 / *q;
+    }
+    Image img(w, h, 3);
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i) {
+            const size_t p = static_cast<size_t>(j) * w + i;
+            const float v = static_cast<float>(y[p] * scale);
+            float rgb[3] = {v, v, v};
+            const uint8_t l = labels.empty() ? 0 : labels[p];
+            if (l) {
+                auto other = [&](int x, int z) {
+                    return x < 0 || z < 0 || x >= w || z >= h ||
+                           labels[static_cast<size_t>(z) * w + x] != l;
+                };
+                if (other(i - 1, j) || other(i + 1, j) || other(i, j - 1) || other(i, j + 1)) {
+                    const OutlineColour& c = outlineOf(l);
+                    rgb[0] = c.r;
+                    rgb[1] = c.g;
+                    rgb[2] = c.b;
+                }
+            }
+            for (int c = 0; c < 3; ++c) img.at(i, j, c) = rgb[c];
+        }
+    return img;
+}
+
+/// report.html: every light side by side (its render with the truth regions outlined, its env
+/// map) with its scores, and the per-region visibility and contrast as rows.
+void writeJudgeReport(const std::filesystem::path& dir, const JudgeJobOptions& o,
+                      const Judge& judge, const std::vector<std::pair<std::string, EnvMap>>& lights,
+                      const std::vector<std::vector<double>>& images,
+                      const std::vector<JudgeScore>& scores) {
+    const TransportMatrix& t = judge.estimate().file.matrix;
+    ReportContent rc;
+    rc.title = "scratchlight judge: " + o.scene.filename().string();
+    rc.notes.push_back(
+        "Every light scored on the judge's own estimate (" + std::to_string(o.judge.spp) +
+        " spp in two independent halves, seed " + std::to_string(o.judge.seed) +
+        "), not on the samples any optimizer saw. Visibility: the region's RMS image gradient "
+        "(noise-unbiased, from the two halves) over the defect-free surface's; 1 means the "
+        "region is no more salient than the machining texture. Contrast: the region's RMS "
+        "gradient over the part's mean brightness (about 0.01 is the least the eye sees). "
+        "Brightness: the part's mean over the white furnace's (E = 1).");
+    if (!judge.legend().empty()) {
+        std::string legend = "Regions outlined (truth " + o.judge.truth.filename().string() + "):";
+        for (const RegionLabel& r : judge.legend()) {
+            legend += " ";
+            legend += r.name;
+            legend += " ";
+            legend += outlineOf(r.value).name;
+            legend += ";";
+        }
+        legend.back() = '.';
+        rc.notes.push_back(legend);
+    }
+    ReportFigure fig;
+    fig.title = "Lights side by side";
+    fig.caption = "Each render is exposed on its own (99th percentile of the part at 0.8).";
+    for (size_t k = 0; k < lights.size(); ++k) {
+        const std::string stem = "light-" + std::to_string(k);
+        writePng(dir / (stem + ".png"),
+                 outlinedRender(images[k], t.width, t.height, judge.partMask(), judge.labels()));
+        writePng(dir / (stem + "-render.png"),
+                 outlinedRender(images[k], t.width, t.height, judge.partMask(), {}));
+        writePng(dir / (stem + "-envmap.png"), envMapPreview(lights[k].second, 4));
+        const JudgeScore& s = scores[k];
+        ReportRun run;
+        run.title = s.name;
+        run.images = {{"render", dir / (stem + "-render.png")},
+                      {"regions outlined", dir / (stem + ".png")},
+                      {"env map", dir / (stem + "-envmap.png")}};
+        nlohmann::json m = {{"brightness", s.brightness},
+                            {"eq2", s.eq2.total},
+                            {"U", s.unbiased.total},
+                            {"mean_E", s.meanE}};
+        for (const RegionVisibility& r : s.visibility) {
+            m["visibility"][r.label.name] =
+                std::isnan(r.visibility) ? nlohmann::json() : nlohmann::json(r.visibility);
+            m["contrast"][r.label.name] =
+                std::isnan(r.contrast) ? nlohmann::json() : nlohmann::json(r.contrast);
+        }
+        run.metrics = m;
+        fig.runs.push_back(std::move(run));
+    }
+    rc.figures.push_back(std::move(fig));
+    writeReport(dir / "report.html", rc);
 }
 
 }  // namespace
@@ -134,6 +256,7 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
         }
         writeTextAtomically(dir / "judge.csv", csv.str());
         writeSideBySide(dir / "renders", images, t.width, t.height, judge.partMask());
+        writeJudgeReport(dir, o, judge, lights, images, sum.scores);
     } catch (const InputError& e) {
         throw InputError(out.explain(e.what()));
     }

@@ -3,11 +3,15 @@
 //
 // OUTDIR holds:
 //   judge.json    one entry per light (app/Judge.h toJson) plus the estimate's facts
-//   judge.csv     one row per light: name, eq2, unbiased, mean_E, sparsity, per-region
-//                 visibility and Weber contrast
+//   judge.csv     one row per light: name, eq2, unbiased, mean_E, sparsity, brightness,
+//                 per-region visibility, contrast and Weber contrast
 //   renders.exr   the mean renders side by side (linear luminance, one panel per light, in
 //                 table order)
 //   renders.png   the same, each panel exposed on its own (99th percentile of the part → 0.8)
+//   report.html   a page a browser opens: per light its render with the truth regions
+//                 outlined (light-<k>.png; plain: light-<k>-render.png), its env map
+//                 (light-<k>-envmap.png) and its scores,
+//                 per-region visibility and contrast side by side
 #pragma once
 
 #include <filesystem>

@@ -37,7 +37,7 @@ int runJudge(const JudgeArgs& a) {
         "visibility: RMS gradient in the region over the defect-free surface's; contrast: "
         "the region's RMS gradient over the mean brightness (the eye needs about 0.01)\n");
     if (!a.json.empty()) writeTextAtomically(a.json, s.json);
-    std::printf("wrote %s/ (judge.json, judge.csv, renders.exr, renders.png)\n",
+    std::printf("wrote %s/ (report.html, judge.json, judge.csv, renders.exr, renders.png)\n",
                 o.outDir.string().c_str());
     return kOk;
 }
