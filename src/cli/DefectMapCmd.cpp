@@ -102,6 +102,8 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--edge-window", m.edgeWindow,
                   "auto: samples of the edge residual's running mean (odd)")
         ->capture_default_str();
+    c->add_option("--edge-weight", m.edgeWeight, "auto: weight of the edge residual in the score")
+        ->capture_default_str();
     c->add_option("--seed-sigma", m.seedSigma, "auto: hysteresis seed threshold (robust sigmas)")
         ->capture_default_str();
     c->add_option("--grow-sigma", m.growSigma, "auto: hysteresis grow threshold (robust sigmas)")
@@ -115,6 +117,13 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     c->add_option("--energy-ratio", m.energyRatio,
                   "auto: local amplitude over its median that marks a texture change")
+        ->capture_default_str();
+    c->add_option("--texture-energy", m.textureEnergy,
+                  "auto: also mark where the texture's own local amplitude is energy-ratio x its "
+                  "median (true/false)")
+        ->capture_default_str();
+    c->add_option("--texture-energy-ratio", m.textureEnergyRatio,
+                  "auto: the ratio of --texture-energy")
         ->capture_default_str();
     c->add_option("--kernel", m.paper.kernel, "paper: moving-average window, samples")
         ->capture_default_str();

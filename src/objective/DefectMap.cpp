@@ -85,11 +85,17 @@ void checkOptions(const DefectMapOptions& o) {
     if (!(o.growSigma > 0.0 && o.growSigma <= o.seedSigma))
         throw inputError(option("grow-sigma"),
                          "must be in (0, seed-sigma] (got " + std::to_string(o.growSigma) + ")");
+    if (!(o.edgeWeight >= 0.0))
+        throw inputError(option("edge-weight"),
+                         "must be >= 0 (got " + std::to_string(o.edgeWeight) + ")");
     if (o.border < 0)
         throw inputError(option("border"), "must be >= 0 (got " + std::to_string(o.border) + ")");
     if (o.minRegion < 1)
         throw inputError(option("min-region"),
                          "must be >= 1 (got " + std::to_string(o.minRegion) + ")");
+    if (!(o.textureEnergyRatio > 1.0))
+        throw inputError(option("texture-energy-ratio"),
+                         "must be > 1 (got " + std::to_string(o.textureEnergyRatio) + ")");
     if (!(o.energyRatio > 1.0))
         throw inputError(option("energy-ratio"),
                          "must be > 1 (got " + std::to_string(o.energyRatio) + ")");
@@ -496,7 +502,8 @@ std::vector<float> notchPass(const std::vector<float>& d, int W, int H, const De
 /// Steps 1–2: returns h − macro − texture; `macroOut` (if given) receives the macro shape.
 std::vector<float> textureResidual(std::span<const float> h, int W, int H,
                                    const DefectMapOptions& o, DefectMap* info,
-                                   std::vector<float>* macroOut = nullptr) {
+                                   std::vector<float>* macroOut = nullptr,
+                                   std::vector<float>* textureOut = nullptr) {
     const size_t n = h.size();
     std::vector<float> macro(h.begin(), h.end()), d(n), texture;
     for (int pass = 0; pass < o.passes; ++pass) {
@@ -507,6 +514,7 @@ std::vector<float> textureResidual(std::span<const float> h, int W, int H,
         for (size_t k = 0; k < n; ++k) d[k] = h[k] - macro[k];
         texture = notchPass(d, W, H, o, info);
     }
+    if (textureOut) *textureOut = texture;
     for (size_t k = 0; k < n; ++k) texture[k] = d[k] - texture[k];
     if (macroOut) *macroOut = std::move(macro);
     return texture;
@@ -590,7 +598,9 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
     centred = {};
     std::vector<float> macro;
 
-    std::vector<float> R = textureResidual(heights, W, H, o, &r, &macro);
+    std::vector<float> texture;
+    std::vector<float> R = textureResidual(
+        heights, W, H, o, &r, &macro, o.energyWindow > 0 && o.textureEnergy ? &texture : nullptr);
     std::vector<float> A = separableMedian(R, W, H, o.levelWindow);
     for (size_t k = 0; k < n; ++k) A[k] = R[k] - A[k];
     for (size_t k = 0; k < n; ++k) R[k] += macro[k];
@@ -604,7 +614,8 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
     if (sa > 0.0 && sn > 0.0) {
         std::vector<float> S(n);
         tbb::parallel_for(size_t{0}, n, [&](size_t k) {
-            S[k] = static_cast<float>(std::max(std::abs(A[k]) / sa, std::abs(N[k]) / sn));
+            S[k] = static_cast<float>(
+                std::max(std::abs(A[k]) / sa, o.edgeWeight * std::abs(N[k]) / sn));
         });
         if (o.border > 0)
             tbb::parallel_for(0, H, [&](int y) {
@@ -616,29 +627,33 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
     }
     N = {};
     if (o.energyWindow > 0) {
-        for (float& v : A) v = std::abs(v);
-        // on the 2×2-pooled |A| (window halved): a quarter of the work
-        int W2 = 0, H2 = 0;
-        const std::vector<float> pooled = pool2(A.data(), W, H, W2, H2);
-        A = {};
-        const std::vector<float> E2 =
-            separableMedian(pooled, W2, H2, std::max(3, (o.energyWindow / 2) | 1));
-        std::vector<float> E(n);
-        for (int y = 0; y < H; ++y)
-            for (int x = 0; x < W; ++x)
-                E[static_cast<size_t>(y) * W + x] = E2[static_cast<size_t>(y / 2) * W2 + x / 2];
-        const double medE = std::max(medianAbs(E2), floorSigma);
+        // step 8 on |A| and, with textureEnergy, on |T|
         auto inside = [&](size_t k) {
             const int x = static_cast<int>(k % static_cast<size_t>(W));
             const int y = static_cast<int>(k / static_cast<size_t>(W));
             return x >= o.border && x < W - o.border && y >= o.border && y < H - o.border;
         };
-        if (medE > 0.0)
-            for (size_t k = 0; k < n; ++k)
-                if (E[k] >= o.energyRatio * medE && inside(k)) {
+        auto markTextureChange = [&](std::vector<float>& v, double ratio) {
+            for (float& x : v) x = std::abs(x);
+            // on the 2×2-pooled values (window halved): a quarter of the work
+            int W2 = 0, H2 = 0;
+            const std::vector<float> pooled = pool2(v.data(), W, H, W2, H2);
+            v = {};
+            const std::vector<float> E2 =
+                separableMedian(pooled, W2, H2, std::max(3, (o.energyWindow / 2) | 1));
+            const double medE = std::max(medianAbs(E2), floorSigma);
+            if (!(medE > 0.0)) return;
+            for (size_t k = 0; k < n; ++k) {
+                const int x = static_cast<int>(k % static_cast<size_t>(W));
+                const int y = static_cast<int>(k / static_cast<size_t>(W));
+                if (E2[static_cast<size_t>(y / 2) * W2 + x / 2] >= ratio * medE && inside(k)) {
                     if (!r.map[k]) ++r.markedEnergy;
                     r.map[k] = 255;
                 }
+            }
+        };
+        markTextureChange(A, o.energyRatio);
+        if (o.textureEnergy) markTextureChange(texture, o.textureEnergyRatio);
     }
     r.seconds = clock.seconds();
     return r;
