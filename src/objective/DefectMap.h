@@ -101,7 +101,7 @@ struct DefectMapOptions {
     double seedSigma = 5.0;     // hysteresis: seeds at S >= seedSigma (> 0)
     double growSigma = 2.5;     // hysteresis: grown into S >= growSigma (0 < grow <= seed)
     int border = 32;            // samples at the map's edges never marked (>= 0)
-    int minRegion = 4;          // connected regions smaller than this are dropped (>= 1)
+    int minRegion = 12;         // connected regions smaller than this are dropped (>= 1)
     int energyWindow = 41;      // samples of the local amplitude's running median (odd, >= 3;
                                 // 0 switches step 7 off)
     bool textureEnergy = true;  // step 8 also on |T| (a band of stronger tool-path texture)
