@@ -132,6 +132,14 @@ struct DefectMap {
 DefectMap detectDefects(std::span<const float> heights, int width, int height,
                         const DefectMapOptions& options = {});
 
+// In image space (e.g. a defect mask for the optimizer): with a Scene `scene`,
+//   const DefectMap m = detectDefects(scene.heights, scene.mapWidth, scene.mapHeight);
+//   const std::vector<uint8_t> mask = projectToImage(tracePrimaryHits(scene), m.map);
+// (objective/ImageSpace.h; 255 where the pixel's centre ray sees a marked sample), then
+// intersect with the object mask as for any loss mask. m.map is empty of marks (all 0) on a
+// surface without anomalies: check markedCount() before using it as a region.
+
+
 /// Steps 1–2 alone: h minus its periodic texture (width*height), for figures and tests.
 std::vector<float> removeTexture(std::span<const float> heights, int width, int height,
                                  const DefectMapOptions& options = {});
