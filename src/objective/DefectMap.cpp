@@ -499,7 +499,8 @@ std::vector<float> notchPass(const std::vector<float>& d, int W, int H, const De
     return inverse(s, p, W, H);
 }
 
-/// Steps 1–2: returns h − macro − texture; `macroOut` (if given) receives the macro shape.
+/// Steps 1–3: returns R = h − macro − texture; `macroOut` and `textureOut` (if given) receive
+/// the macro shape and the texture T.
 std::vector<float> textureResidual(std::span<const float> h, int W, int H,
                                    const DefectMapOptions& o, DefectMap* info,
                                    std::vector<float>* macroOut = nullptr,

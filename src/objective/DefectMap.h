@@ -139,8 +139,8 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
 // intersect with the object mask as for any loss mask. m.map is empty of marks (all 0) on a
 // surface without anomalies: check markedCount() before using it as a region.
 
-
-/// Steps 1–2 alone: h minus its periodic texture (width*height), for figures and tests.
+/// Steps 1–3 alone: R = h − macro shape − periodic texture (width*height), for figures and
+/// tests.
 std::vector<float> removeTexture(std::span<const float> heights, int width, int height,
                                  const DefectMapOptions& options = {});
 
