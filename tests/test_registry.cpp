@@ -19,6 +19,7 @@
 #include "core/Error.h"
 #include "core/Registry.h"
 #include "io/TransportFile.h"
+#include "objective/DefectMap.h"
 #include "objective/ObjectiveKind.h"
 #include "optimize/Methods.h"
 #include "scene/Scene.h"
@@ -68,6 +69,7 @@ TEST(Registry, EveryTableIsWellFormed) {
     expectWellFormed(heldOutModeTable());
     expectWellFormed(lossMaskKindTable());
     expectWellFormed(optimizePresetTable());
+    expectWellFormed(defectMethodTable());
 }
 
 TEST(Registry, OptimizerMethodsSayWhoRunsThemAndTheirBudget) {

@@ -1,5 +1,5 @@
-// scratchlight bench render | transport | scratchmap | noise: parse the options, run the
-// benchmark in the library (app/RenderBench.h, app/TransportBench.h, app/ScratchMapBench.h,
+// scratchlight bench render | transport | scratchmap | defectmap | noise: parse the options, run
+// the benchmark in the library (app/RenderBench.h, app/TransportBench.h, app/ScratchMapBench.h,
 // app/NoiseBench.h), print its table and write its CSV.
 #include <spdlog/spdlog.h>
 
@@ -7,6 +7,7 @@
 #include <memory>
 #include <sstream>
 
+#include "app/DefectMapBench.h"
 #include "app/NoiseBench.h"
 #include "app/Plot.h"
 #include "app/RenderBench.h"
@@ -83,6 +84,29 @@ int runTransportBenchCmd(TransportBenchArgs a) {
                 ("Adam, " + std::to_string(a.o.iterations) + " iterations").c_str(), r.adam);
     std::printf("(medians: tracing of %d interleaved runs, products of %d runs)\n", a.o.repeats,
                 r.productRepeats);
+    writeTextAtomically(a.csv, r.csv());
+    std::printf("wrote %s\n", a.csv.c_str());
+    return kOk;
+}
+
+struct DefectMapBenchArgs {
+    DefectMapBenchOptions o;
+    std::string csv = "bench-defectmap.csv";
+};
+
+int runDefectMapBenchCmd(const DefectMapBenchArgs& a) {
+    const DefectMapBenchResult r = runDefectMapBench(a.o);
+    std::printf("%-12s %11s %12s %8s %9s %10s %9s %7s\n", "height map", "auto (s)", "paper (s)",
+                "ratio", "marked", "paper mk", "precision", "recall");
+    for (const DefectMapBenchRow& row : r.rows)
+        std::printf("%-12s %11.3f %12.3f %8.1f %8.2f%% %9.1f%% %9.3f %7.3f\n",
+                    (std::to_string(row.size) + "x" + std::to_string(row.size)).c_str(),
+                    row.secondsAuto, row.secondsPaper, row.ratio, 100.0 * row.markedAuto,
+                    100.0 * row.markedPaper, row.precision, row.recall);
+    std::printf(
+        "(ball-end test part at NxN, seed 1; median of %d runs; ratio = auto / paper in "
+        "the same run)\n",
+        a.o.repeats);
     writeTextAtomically(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
@@ -224,6 +248,21 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     sm->add_option("--csv", m->csv, "CSV output")->capture_default_str();
     sm->callback([m, &run] { run = [m] { return runScratchMapBenchCmd(*m); }; });
+
+    auto dm = std::make_shared<DefectMapBenchArgs>();
+    CLI::App* dmc = bench->add_subcommand(
+        "defectmap",
+        "Seconds of the defect map (auto) next to the paper's scratch map on the NxN ball-end "
+        "test part");
+    dmc->add_option("--sizes", dm->o.sizes, "Height-map sizes (N for NxN)")
+        ->delimiter(',')
+        ->check(CLI::Range(2, 100000))
+        ->capture_default_str();
+    dmc->add_option("--repeats", dm->o.repeats, "Runs per size (median)")
+        ->check(CLI::Range(1, 50))
+        ->capture_default_str();
+    dmc->add_option("--csv", dm->csv, "CSV output")->capture_default_str();
+    dmc->callback([dm, &run] { run = [dm] { return runDefectMapBenchCmd(*dm); }; });
 
     auto n = std::make_shared<NoiseArgs>();
     CLI::App* nc = bench->add_subcommand(

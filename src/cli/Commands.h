@@ -12,5 +12,6 @@ void registerBench(CLI::App& app, std::function<int()>& run);
 void registerTransport(CLI::App& app, std::function<int()>& run);
 void registerJudge(CLI::App& app, std::function<int()>& run);
 void registerRace(CLI::App& app, std::function<int()>& run);  // after registerBench
+void registerDefectMap(CLI::App& app, std::function<int()>& run);
 
 }  // namespace sl::cli

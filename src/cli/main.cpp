@@ -60,6 +60,7 @@ int main(int argc, char** argv) {
     registerRace(app, run);
     registerGradients(app, run);
     registerPaper(app, run);
+    registerDefectMap(app, run);
 
     try {
         app.parse(argc, argv);

@@ -1,0 +1,136 @@
+// scratchlight defectmap (HEIGHTMAP | SCENE.json) [--method auto|paper] [-o map.png]
+//                        [--image-out MASK.png] [--truth TRUTH.png] [--csv FILE] [tuning ...]
+// Parses the options and prints the result; the work is app/DefectMapJob.h and
+// objective/DefectMap.h.
+#include <cstdio>
+#include <memory>
+
+#include "app/DefectMapJob.h"
+#include "cli/Commands.h"
+#include "cli/Common.h"
+
+namespace sl::cli {
+
+namespace {
+
+int runDefectMap(const DefectMapJobOptions& o) {
+    const DefectMapJobSummary s = runDefectMapJob(o);
+    const DefectMap& m = s.map;
+    std::printf("defect map (%s) of %dx%d samples: %zu marked (%.2f%% of the map), %.3f s\n",
+                defectMethodName(m.method), s.width, s.height, m.markedCount(),
+                100.0 * m.markedFraction(), m.seconds);
+    if (m.method == DefectMethod::Auto)
+        std::printf(
+            "  FFT %dx%d, %zu of %zu spectrum bins notched as texture; sigma level %.4g, edge "
+            "%.4g (height units); %zu marked by level/edge, %zu more by texture change\n",
+            m.fftWidth, m.fftHeight, m.notchedBins, m.spectrumBins, m.sigmaLevel, m.sigmaEdge,
+            m.markedScore, m.markedEnergy);
+    if (s.score) {
+        const DefectScore& sc = *s.score;
+        std::printf("%-18s %5s %10s %10s %10s %9s %7s %7s\n", "kind", "value", "truth", "hits",
+                    "marked", "precision", "recall", "F1");
+        auto row = [](const DefectScoreRow& r) {
+            std::printf("%-18s %5d %10zu %10zu %10zu %9.3f %7.3f %7.3f\n", r.name.c_str(),
+                        static_cast<int>(r.value), r.truth, r.hits, r.marked, r.precision, r.recall,
+                        r.f1);
+        };
+        row(sc.overall);
+        for (const DefectScoreRow& r : sc.kinds) row(r);
+    }
+    if (s.imageWidth > 0)
+        std::printf("image-space map %dx%d: %zu of %zu part pixels marked\n", s.imageWidth,
+                    s.imageHeight, s.imageMarked, s.imagePartPixels);
+    for (const auto& f : s.written) std::printf("wrote %s\n", f.string().c_str());
+    return kOk;
+}
+
+}  // namespace
+
+void registerDefectMap(CLI::App& app, std::function<int()>& run) {
+    auto a = std::make_shared<DefectMapJobOptions>();
+    CLI::App* c = app.add_subcommand(
+        "defectmap",
+        "Defect map without labels: model the machining texture, mark what it cannot explain "
+        "(height-map space; projected into the image with a scene)");
+    c->add_option_function<std::string>(
+         "input", [a](const std::string& v) { a->input = v; },
+         "Height map (EXR/TIFF/PNG/.npy) or a scene file (JSON: its height map, and its camera "
+         "for --image-out)")
+        ->required();
+    addChoice(c, "--method", a->map.method, defectMethodTable(), "Method (default auto)");
+    c->add_option_function<std::string>(
+         "-o,--output", [a](const std::string& v) { a->output = v; },
+         "Map in height-map space (8-bit PNG, 255 = defect)")
+        ->default_str("defectmap.png");
+    c->add_option_function<std::string>(
+        "--image-out", [a](const std::string& v) { a->imageOutput = v; },
+        "Also write the map projected into the scene camera's image (PNG; needs SCENE.json)");
+    c->add_option_function<std::string>(
+        "--truth", [a](const std::string& v) { a->truth = v; },
+        "Truth label PNG in height-map space (gen-surface's OUT-truth.png): prints precision/"
+        "recall/F1 per kind and writes them as CSV");
+    c->add_option_function<std::string>(
+        "--csv", [a](const std::string& v) { a->csv = v; },
+        "CSV of the score (default: <output stem>-score.csv beside the map)");
+    c->add_option("--negatives", a->negatives,
+                  "Truth values scored as defect-free (a mark there is a false positive)")
+        ->delimiter(',')
+        ->capture_default_str();
+    DefectMapOptions& m = a->map;
+    c->add_option("--notch-ratio", m.notchRatio,
+                  "auto: a spectrum bin above this x its "
+                  "background is texture")
+        ->capture_default_str();
+    c->add_option("--spectrum-window", m.spectrumWindow,
+                  "auto: bins of the spectral background's running medians (odd)")
+        ->capture_default_str();
+    c->add_option("--notch-spread", m.notchSpread,
+                  "auto: bins around a notched bin that join it when above --notch-grow x B")
+        ->capture_default_str();
+    c->add_option("--notch-grow", m.notchGrow, "auto: see --notch-spread")->capture_default_str();
+    c->add_option("--keep-low-bins", m.keepLowBins, "auto: bins around DC never notched")
+        ->capture_default_str();
+    c->add_option("--macro-window", m.macroWindow,
+                  "auto: samples of the macro shape's running median (odd)")
+        ->capture_default_str();
+    c->add_option("--passes", m.passes, "auto: macro-shape + notch passes")->capture_default_str();
+    c->add_option("--pad", m.pad, "auto: samples of mirror padding per side")
+        ->capture_default_str();
+    c->add_option("--level-window", m.levelWindow,
+                  "auto: samples of the local level's running median (odd)")
+        ->capture_default_str();
+    c->add_option("--edge-window", m.edgeWindow,
+                  "auto: samples of the edge residual's running mean (odd)")
+        ->capture_default_str();
+    c->add_option("--edge-weight", m.edgeWeight, "auto: weight of the edge residual in the score")
+        ->capture_default_str();
+    c->add_option("--seed-sigma", m.seedSigma, "auto: hysteresis seed threshold (robust sigmas)")
+        ->capture_default_str();
+    c->add_option("--grow-sigma", m.growSigma, "auto: hysteresis grow threshold (robust sigmas)")
+        ->capture_default_str();
+    c->add_option("--border", m.border, "auto: samples at the map's edges never marked")
+        ->capture_default_str();
+    c->add_option("--min-region", m.minRegion, "auto: smallest region kept (samples)")
+        ->capture_default_str();
+    c->add_option("--energy-window", m.energyWindow,
+                  "auto: samples of the texture-change detector's running median (odd; 0: off)")
+        ->capture_default_str();
+    c->add_option("--energy-ratio", m.energyRatio,
+                  "auto: local amplitude over its median that marks a texture change")
+        ->capture_default_str();
+    c->add_option("--texture-energy", m.textureEnergy,
+                  "auto: also mark where the texture's own local amplitude is energy-ratio x its "
+                  "median (true/false)")
+        ->capture_default_str();
+    c->add_option("--texture-energy-ratio", m.textureEnergyRatio,
+                  "auto: the ratio of --texture-energy")
+        ->capture_default_str();
+    c->add_option("--kernel", m.paper.kernel, "paper: moving-average window, samples")
+        ->capture_default_str();
+    c->add_option("--patch", m.paper.patch, "paper: patch side, samples")->capture_default_str();
+    c->add_option("--threshold", m.paper.threshold, "paper: patch range threshold in [0, 1]")
+        ->capture_default_str();
+    c->callback([a, &run] { run = [a] { return runDefectMap(*a); }; });
+}
+
+}  // namespace sl::cli

@@ -1,0 +1,180 @@
+// The defect map: which samples of a height map are anomalies (scratches, gouges, dents, burrs,
+// steps, chatter bands) rather than the regular machining texture, found WITHOUT labels. The
+// result lives in height-map space (255 marked, 0 not), as the truth masks of gen-surface do.
+//
+// Methods (one table, core/Registry.h; `defectMethodTable()`):
+//   auto   (default) model the nominal surface as macro shape + periodic tool-path texture and
+//          mark what that model cannot explain (below);
+//   paper  the paper's scratch map, objective/ScratchMap.h computeScratchMap with
+//          DefectMapOptions::paper (patches whose detrended range is large).
+//
+// `auto`, step by step (h the heights, W×H, row-major; float storage, double sums). Each
+// parameter is a field of DefectMapOptions, documented once, there.
+//  1. Macro shape: M = the separable running median of h over `macroWindow` samples, along x
+//     (rows) then along z (columns); windows shrink at the borders. A median keeps monotone
+//     shapes (a pocket wall, a step) and drops what is narrower than half the window (the tool
+//     marks, scratches, dents, burrs). d = h − M.
+//  2. Pad: d is extended by `pad` samples on every side to the next size whose only prime
+//     factors are 2, 3 and 5, the extension a mirror image of the map cross-faded from the far
+//     border's mirror to the near border's, so the FFT's periodic extension has no jump.
+//  3. Texture (spectral notch): F = the 2-D FFT of the padded d (real-to-complex, Eigen's
+//     kissfft). The background of each bin is B = max(med_x, med_z, med_r) of |F|: running
+//     medians of `spectrumWindow` bins along each frequency axis (periodic along k_z, clamped
+//     along k_x) and, with `radial`, along the ray from DC through the bin (Hermitian symmetry
+//     across k_x = 0), all on |F| pooled 2×2 with half the window, read back at the bin's cell.
+//     An isolated peak (a lattice component of the tool path, a ring's arc) stands above all
+//     three; a straight feature of the map (scratch, groove, step, wall, burr line) puts its
+//     energy on a ray through DC and is its own background along it, as is a long line along
+//     an axis (a feature along the other axis over the whole map). A bin with
+//     |F| > notchRatio·B outside the radius `keepLowBins` around DC is texture, and so is a bin
+//     within `notchSpread` bins (box) of one with |F| > notchGrow·B (the leakage around a
+//     peak). Texture bins are shrunk to B, phase kept. T = the inverse FFT of F minus the shrunk
+//     spectrum, cropped: the periodic texture. R = d − T. With passes > 1, step 1 is repeated on
+//     h − T and steps 2–3 on the new d.
+//  4. Level: A = R − the separable running median of R over `levelWindow` samples (x, then z).
+//  5. Edges: N = (M + R) − its separable quadratic Savitzky–Golay fit over `edgeWindow` samples
+//     (x, then z; borders mirrored): a step or a narrow groove, but not a curved wall whose
+//     curvature changes little over the window.
+//  6. Scale: σ_A, σ_N = 1.4826 × the median of |A|, |N| (over ≤ 4M samples at a fixed stride),
+//     each at least 1e-3 × 1.4826 × the median of |h − mean h| (so rounding on a noise-free
+//     texture is no anomaly). The score is S = max(|A|/σ_A, edgeWeight·|N|/σ_N), 0 within
+//     `border` samples
+//     of the map's edges (there the notch's periodic model meets the padding and is unreliable).
+//  7. Hysteresis: samples with S ≥ `seedSigma` seed the map; it grows into 8-connected samples
+//     with S ≥ `growSigma`. Connected regions of fewer than `minRegion` samples are dropped.
+//  8. Texture-change regions (chatter bands): E = the separable running median of |A| over
+//     `energyWindow` samples (on |A| pooled 2×2 with half the window, read back at the sample's
+//     cell): a robust local amplitude of what the texture model left. Samples with
+//     E ≥ energyRatio × median(E), outside the border, are marked too (a scratch or a dent fills
+//     less than half a window and does not raise E). With `textureEnergy` the same on |T| with
+//     `textureEnergyRatio`: where the tool-path texture itself is locally much stronger (a band
+//     of chatter at the texture's own frequencies, which the notch took into T).
+// Every threshold is relative to σ or to median(E), so the map is invariant to h → a·h + b
+// (a ≠ 0) up to rounding; a constant map marks nothing. A confined region of different texture
+// (gen-surface's chatter half, 40 % of a part) is NOT meant to be marked: it is a state of
+// the process over a large region, not a local anomaly, and comparing regions is the defects
+// objective's job. It stays unmarked while its amplitude stays under the ratios of step 8 (the
+// test parts' 0.5 µm chatter does, mostly: the README gives the share marked); a stronger one
+// is marked as a texture change. Parallel over rows and columns with TBB; the result does not
+// depend on the thread count. Memory: about 12 float copies of the map.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/RegionLabel.h"
+#include "objective/ScratchMap.h"
+
+namespace sl {
+
+enum class DefectMethod { Auto, Paper };
+
+struct DefectMethodRow {
+    DefectMethod value;
+    const char* name;
+    const char* help;
+};
+
+std::span<const DefectMethodRow> defectMethodTable();
+/// The method named `name`; InputError naming `where` and listing the table otherwise.
+DefectMethod parseDefectMethod(std::string_view name, const std::string& where = "method");
+const char* defectMethodName(DefectMethod method);
+
+struct DefectMapOptions {
+    DefectMethod method = DefectMethod::Auto;
+    // auto (see the steps above)
+    int macroWindow = 61;       // samples of the macro shape's running median (odd, >= 3)
+    int passes = 1;             // macro + notch passes (>= 1)
+    int pad = 100;              // samples of mirror extension on each side (>= 0)
+    int spectrumWindow = 121;   // bins of the spectral background's running medians (odd, >= 3)
+    bool radial = true;         // the background includes the radial median (see step 3)
+    double notchRatio = 4.0;    // |F| > notchRatio·B is texture (> 1)
+    int notchSpread = 4;        // bins around a notched bin that may join it (>= 0)
+    double notchGrow = 1.5;     // ... when |F| > notchGrow·B (0 < grow <= notchRatio)
+    int keepLowBins = 2;        // bins around DC never notched (>= 0)
+    int levelWindow = 31;       // samples of the level's running median (odd, >= 3)
+    int edgeWindow = 7;         // samples of the edge residual's quadratic fit (odd, >= 5)
+    double edgeWeight = 1.0;    // the edge residual's weight in the score (>= 0; 0: off)
+    double seedSigma = 5.0;     // hysteresis: seeds at S >= seedSigma (> 0)
+    double growSigma = 2.5;     // hysteresis: grown into S >= growSigma (0 < grow <= seed)
+    int border = 32;            // samples at the map's edges never marked (>= 0)
+    int minRegion = 12;         // connected regions smaller than this are dropped (>= 1)
+    int energyWindow = 41;      // samples of the local amplitude's running median (odd, >= 3;
+                                // 0 switches step 7 off)
+    bool textureEnergy = true;  // step 8 also on |T| (a band of stronger tool-path texture)
+    double textureEnergyRatio = 4.0;  // ... with this ratio (> 1)
+    double energyRatio = 2.0;         // E >= energyRatio·median(E) is a texture change (> 1)
+    ScratchMapOptions paper;          // the `paper` method's options
+};
+
+struct DefectMap {
+    int width = 0, height = 0;  // of the height map
+    std::vector<uint8_t> map;   // width*height, row-major: 255 marked, 0 not
+    DefectMethod method = DefectMethod::Auto;
+    // auto only: σ_A and σ_N (height units), the bins notched, samples marked by the level/edge
+    // score and by the texture-change step, padded FFT size
+    double sigmaLevel = 0, sigmaEdge = 0;
+    size_t notchedBins = 0, spectrumBins = 0;
+    size_t markedScore = 0, markedEnergy = 0;
+    int fftWidth = 0, fftHeight = 0;
+    double seconds = 0;
+
+    size_t markedCount() const;
+    double markedFraction() const;  // marked samples / all samples
+};
+
+/// The defect map of a width×height height map (row-major, row 0 first). Throws InputError
+/// for bad options (naming the option), a size mismatch, a map smaller than 2×2 or a
+/// non-finite height (naming its row and column).
+DefectMap detectDefects(std::span<const float> heights, int width, int height,
+                        const DefectMapOptions& options = {});
+
+// In image space (e.g. a defect mask for the optimizer): with a Scene `scene`,
+//   const DefectMap m = detectDefects(scene.heights, scene.mapWidth, scene.mapHeight);
+//   const std::vector<uint8_t> mask = projectToImage(tracePrimaryHits(scene), m.map);
+// (objective/ImageSpace.h; 255 where the pixel's centre ray sees a marked sample), then
+// intersect with the object mask as for any loss mask. m.map is empty of marks (all 0) on a
+// surface without anomalies: check markedCount() before using it as a region.
+
+/// Steps 1–3 alone: R = h − macro shape − periodic texture (width*height), for figures and
+/// tests.
+std::vector<float> removeTexture(std::span<const float> heights, int width, int height,
+                                 const DefectMapOptions& options = {});
+
+// ---- Scoring a map against a truth label mask (io/MaskIO.h readLabelMask) ----------------
+//
+// DEFINITIONS (pixels = height-map samples; "marked" = map != 0):
+//   overall:  truth = samples whose label is nonzero and not in `negatives`;
+//             precision = |marked ∩ truth| / |marked|, recall = |marked ∩ truth| / |truth|.
+//   kind v:   recall_v = |marked ∩ {label = v}| / |{label = v}|;
+//             precision_v = |marked ∩ {label = v}| / |marked ∩ ({label = v} ∪ {label = 0} ∪
+//             {label ∈ negatives})|: the marks on other kinds are neither right nor wrong for v.
+//             On a part that holds only kind v this is the plain precision.
+//   F1 = 2PR/(P+R) (0 when P + R = 0); a ratio with a zero denominator is NaN.
+// Labels in `negatives` (e.g. 128, a chatter region the map is not meant to mark) are counted
+// as defect-free: a mark there is a false positive.
+struct DefectScoreRow {
+    uint8_t value = 0;  // 0 for the overall row
+    std::string name;   // "all" for the overall row
+    size_t truth = 0;   // samples of the kind (overall: of every kind but the negatives)
+    size_t hits = 0;    // marked among them
+    size_t marked = 0;  // the precision's denominator
+    double precision = 0, recall = 0, f1 = 0;
+};
+
+struct DefectScore {
+    DefectScoreRow overall;
+    std::vector<DefectScoreRow> kinds;  // legend order, negatives included (their recall is
+                                        // the share of them marked)
+    size_t marked = 0, samples = 0;
+};
+
+/// Scores `map` against `labels` (same size). Throws InputError on a size mismatch.
+DefectScore scoreDefectMap(std::span<const uint8_t> map, std::span<const uint8_t> labels,
+                           std::span<const RegionLabel> legend,
+                           std::span<const uint8_t> negatives = {});
+
+}  // namespace sl

@@ -1,0 +1,276 @@
+// Defect map (objective/DefectMap.h, app/DefectMapJob.h, `scratchlight defectmap`): a periodic
+// texture alone marks (almost) nothing, a groove on it is found, invariance to h → a·h + b, the
+// scoring definitions on a hand-made case, bad input, the registry and the command's files.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "TestUtil.h"
+#include "core/Error.h"
+#include "io/ImageIO.h"
+#include "objective/DefectMap.h"
+#include "objective/ScratchMap.h"
+
+using namespace sl;
+using namespace sl::test;
+
+namespace {
+
+constexpr int kN = 192;
+
+// A ball-end-like texture: scallops |sin| across z (period 16), feed marks along x (period 7),
+// plus white noise of RMS `noise` (fixed seed).
+std::vector<float> texture(int n, double noise = 0.02) {
+    std::mt19937 rng(11);
+    std::normal_distribution<double> nd(0.0, noise);
+    std::vector<float> h(static_cast<size_t>(n) * n);
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x)
+            h[static_cast<size_t>(y) * n + x] =
+                static_cast<float>(1.0 - std::abs(std::sin(M_PI * y / 16.0)) +
+                                   0.15 * std::sin(2 * M_PI * x / 7.0) + nd(rng));
+    return h;
+}
+
+// Samples within half a width of the segment (x0,y0)–(x1,y1): a V groove `depth` deep.
+std::vector<uint8_t> cutGroove(std::vector<float>& h, int n, double x0, double y0, double x1,
+                               double y1, double width, double depth) {
+    std::vector<uint8_t> truth(h.size(), 0);
+    const double dx = x1 - x0, dy = y1 - y0, len2 = dx * dx + dy * dy;
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            double t = ((x - x0) * dx + (y - y0) * dy) / len2;
+            t = std::clamp(t, 0.0, 1.0);
+            const double d = std::hypot(x - (x0 + t * dx), y - (y0 + t * dy));
+            if (d < width / 2) {
+                h[static_cast<size_t>(y) * n + x] -=
+                    static_cast<float>(depth * (1 - 2 * d / width));
+                truth[static_cast<size_t>(y) * n + x] = 255;
+            }
+        }
+    return truth;
+}
+
+}  // namespace
+
+TEST(DefectMap, PeriodicTextureAloneMarksAlmostNothing) {
+    const std::vector<float> h = texture(kN);
+    const DefectMap m = detectDefects(h, kN, kN);
+    EXPECT_EQ(m.map.size(), h.size());
+    EXPECT_LT(m.markedFraction(), 1e-3) << m.markedCount() << " marked";
+    EXPECT_GT(m.notchedBins, 0u);
+    // the texture model explains most of the texture: in the interior the residual's RMS is
+    // under a quarter of the texture's (≈ 0.35)
+    const std::vector<float> r = removeTexture(h, kN, kN);
+    double s2 = 0, t2 = 0, tm = 0;
+    int c = 0;
+    for (int y = 40; y < kN - 40; ++y)
+        for (int x = 40; x < kN - 40; ++x, ++c) {
+            const size_t k = static_cast<size_t>(y) * kN + x;
+            s2 += static_cast<double>(r[k]) * r[k];
+            t2 += static_cast<double>(h[k]) * h[k];
+            tm += h[k];
+        }
+    const double textureRms = std::sqrt(t2 / c - (tm / c) * (tm / c));
+    EXPECT_GT(textureRms, 0.3);
+    EXPECT_LT(std::sqrt(s2 / c), 0.25 * textureRms);
+}
+
+TEST(DefectMap, GrooveOnPeriodicTextureIsFound) {
+    std::vector<float> h = texture(kN);
+    const std::vector<uint8_t> truth = cutGroove(h, kN, 50, 60, 150, 130, 4.0, 0.4);
+    const DefectMap m = detectDefects(h, kN, kN);
+    const std::vector<RegionLabel> legend{{255, "defect"}};
+    const DefectScore s = scoreDefectMap(m.map, truth, legend);
+    EXPECT_GE(s.overall.recall, 0.8);
+    EXPECT_GE(s.overall.precision, 0.7);
+}
+
+TEST(DefectMap, InvariantToHeightOffsetAndScale) {
+    std::vector<float> h = texture(kN);
+    cutGroove(h, kN, 50, 60, 150, 130, 4.0, 0.4);
+    const DefectMap m = detectDefects(h, kN, kN);
+    for (const auto& [a, b] : {std::pair{3.0, 7.0}, std::pair{-0.5, 0.25}, std::pair{1e-3, -2.0}}) {
+        std::vector<float> g(h.size());
+        for (size_t k = 0; k < h.size(); ++k) g[k] = static_cast<float>(a * h[k] + b);
+        const DefectMap mg = detectDefects(g, kN, kN);
+        size_t differ = 0;
+        for (size_t k = 0; k < h.size(); ++k) differ += (m.map[k] != 0) != (mg.map[k] != 0);
+        EXPECT_LE(differ, h.size() / 1000) << "a = " << a << ", b = " << b;
+        EXPECT_NEAR(mg.sigmaLevel, std::abs(a) * m.sigmaLevel, 1e-3 * std::abs(a) * m.sigmaLevel);
+    }
+}
+
+TEST(DefectMap, ConstantAndTinyMapsMarkNothing) {
+    const std::vector<float> flat(64 * 48, 2.5f);
+    EXPECT_EQ(detectDefects(flat, 64, 48).markedCount(), 0u);
+    const std::vector<float> tiny{0.f, 1.f, 2.f, 3.f};
+    EXPECT_EQ(detectDefects(tiny, 2, 2).map.size(), 4u);
+}
+
+TEST(DefectMap, PaperMethodIsTheScratchMap) {
+    std::vector<float> h = texture(100);
+    DefectMapOptions o;
+    o.method = DefectMethod::Paper;
+    o.paper.threshold = 0.5;
+    const DefectMap m = detectDefects(h, 100, 100, o);
+    const ScratchMap ref = computeScratchMap(h, 100, 100, o.paper);
+    EXPECT_EQ(m.map, ref.map);
+    EXPECT_EQ(m.method, DefectMethod::Paper);
+}
+
+TEST(DefectMap, BadInputIsRefusedNamingTheProblem) {
+    std::vector<float> h = texture(32);
+    auto expectError = [](auto&& f, const std::string& needle) {
+        try {
+            f();
+            ADD_FAILURE() << "no error for " << needle;
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+        }
+    };
+    expectError([&] { detectDefects(h, 32, 31); }, "expected 32x31");
+    expectError([&] { detectDefects(std::vector<float>{1.f}, 1, 1); }, "at least 2x2");
+    std::vector<float> holes = h;
+    holes[5 * 32 + 7] = std::nanf("");
+    expectError([&] { detectDefects(holes, 32, 32); }, "row 5, column 7");
+    DefectMapOptions o;
+    o.spectrumWindow = 8;
+    expectError([&] { detectDefects(h, 32, 32, o); }, "option 'spectrum-window'");
+    o = {};
+    o.growSigma = o.seedSigma + 1;
+    expectError([&] { detectDefects(h, 32, 32, o); }, "option 'grow-sigma'");
+    o = {};
+    o.notchRatio = 1.0;
+    expectError([&] { detectDefects(h, 32, 32, o); }, "option 'notch-ratio'");
+    o = {};
+    o.edgeWindow = 3;
+    expectError([&] { detectDefects(h, 32, 32, o); }, "option 'edge-window'");
+    expectError([&] { scoreDefectMap(std::vector<uint8_t>(4), std::vector<uint8_t>(5), {}); },
+                "defect score");
+}
+
+TEST(DefectMap, ScoreDefinitionsOnAHandMadeCase) {
+    // labels: 4 samples of 255, 2 of 224, 3 of 128 (negative), 7 unlabelled
+    const std::vector<uint8_t> labels{255, 255, 255, 255, 224, 224, 128, 128,
+                                      128, 0,   0,   0,   0,   0,   0,   0};
+    const std::vector<uint8_t> map{255, 255, 255, 0, 255, 0, 255, 0,  //
+                                   0,   255, 255, 0, 0,   0, 0,   0};
+    const std::vector<RegionLabel> legend{{255, "defect"}, {224, "dent"}, {128, "chatter"}};
+    const std::vector<uint8_t> negatives{128};
+    const DefectScore s = scoreDefectMap(map, labels, legend, negatives);
+    EXPECT_EQ(s.marked, 7u);
+    // overall: truth = 255 and 224 (6), hits 4, marked 7
+    EXPECT_EQ(s.overall.truth, 6u);
+    EXPECT_EQ(s.overall.hits, 4u);
+    EXPECT_DOUBLE_EQ(s.overall.precision, 4.0 / 7.0);
+    EXPECT_DOUBLE_EQ(s.overall.recall, 4.0 / 6.0);
+    EXPECT_DOUBLE_EQ(s.overall.f1, 2 * (4.0 / 7) * (4.0 / 6) / (4.0 / 7 + 4.0 / 6));
+    ASSERT_EQ(s.kinds.size(), 3u);
+    // 255: hits 3; precision over marks on 255, unlabelled (2) and negatives (1): 3/6
+    EXPECT_EQ(s.kinds[0].hits, 3u);
+    EXPECT_EQ(s.kinds[0].marked, 6u);
+    EXPECT_DOUBLE_EQ(s.kinds[0].recall, 0.75);
+    EXPECT_DOUBLE_EQ(s.kinds[0].precision, 0.5);
+    // 224: hits 1 of 2; precision 1 / (1 + 2 + 1)
+    EXPECT_DOUBLE_EQ(s.kinds[1].recall, 0.5);
+    EXPECT_DOUBLE_EQ(s.kinds[1].precision, 0.25);
+    // the negative kind: its recall is the share of it marked
+    EXPECT_DOUBLE_EQ(s.kinds[2].recall, 1.0 / 3.0);
+    // no marks: precision NaN, F1 0
+    const DefectScore none = scoreDefectMap(std::vector<uint8_t>(16, 0), labels, legend);
+    EXPECT_TRUE(std::isnan(none.overall.precision));
+    EXPECT_EQ(none.overall.f1, 0.0);
+}
+
+TEST(DefectMap, MethodRegistry) {
+    EXPECT_EQ(parseDefectMethod("auto"), DefectMethod::Auto);
+    EXPECT_EQ(parseDefectMethod("paper"), DefectMethod::Paper);
+    EXPECT_STREQ(defectMethodName(DefectMethod::Auto), "auto");
+    try {
+        parseDefectMethod("fancy", "option 'method'");
+        ADD_FAILURE();
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("auto, paper"), std::string::npos) << e.what();
+    }
+}
+
+TEST(DefectMapCli, WritesTheMapAndTheScore) {
+    TempDir dir("defectmap");
+    std::vector<float> h = texture(kN);
+    std::vector<uint8_t> truth = cutGroove(h, kN, 50, 60, 150, 130, 4.0, 0.4);
+    writeNpyF32(dir / "part.npy", kN, kN, h);
+    writeMaskPng(dir / "part-truth.png", truth, kN, kN);
+    const std::string out = (dir / "map.png").string();
+    auto r = runCli("defectmap \"" + (dir / "part.npy").string() + "\" -o \"" + out +
+                    "\" --truth \"" + (dir / "part-truth.png").string() + "\"");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("precision"), std::string::npos) << r.output;
+    EXPECT_TRUE(std::filesystem::exists(out));
+    const Image img = readImage(out);
+    EXPECT_EQ(img.width, kN);
+    EXPECT_EQ(img.height, kN);
+    std::ifstream csv(dir / "map-score.csv");
+    std::string header, all;
+    std::getline(csv, header);
+    std::getline(csv, all);
+    EXPECT_EQ(header, "kind,value,truth,hits,marked,precision,recall,f1");
+    EXPECT_EQ(all.rfind("all,0,", 0), 0u) << all;
+
+    // the paper method through the same command
+    r = runCli("defectmap \"" + (dir / "part.npy").string() + "\" --method paper -o \"" +
+               (dir / "paper.png").string() + "\"");
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(std::filesystem::exists(dir / "paper.png"));
+}
+
+TEST(DefectMapCli, BadInputLeavesNoOutput) {
+    TempDir dir("defectmap-bad");
+    std::vector<float> h = texture(64);
+    writeNpyF32(dir / "part.npy", 64, 64, h);
+    writeMaskPng(dir / "small-truth.png", std::vector<uint8_t>(32 * 32, 0), 32, 32);
+    const std::string out = (dir / "map.png").string();
+    auto r = runCli("defectmap \"" + (dir / "absent.exr").string() + "\" -o \"" + out + "\"");
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("absent.exr"), std::string::npos) << r.output;
+    r = runCli("defectmap \"" + (dir / "part.npy").string() + "\" -o \"" + out + "\" --truth \"" +
+               (dir / "small-truth.png").string() + "\"");
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("small-truth.png"), std::string::npos) << r.output;
+    r = runCli("defectmap \"" + (dir / "part.npy").string() + "\" -o \"" + out +
+               "\" --image-out \"" + (dir / "img.png").string() + "\"");
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("scene"), std::string::npos) << r.output;
+    r = runCli("defectmap \"" + (dir / "part.npy").string() + "\" -o \"" +
+               (dir / "map.exr").string() + "\"");
+    EXPECT_NE(r.exitCode, 0) << r.output;
+    r = runCli("defectmap \"" + (dir / "part.npy").string() + "\" --method fancy");
+    EXPECT_EQ(r.exitCode, 2) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(out));
+    EXPECT_FALSE(std::filesystem::exists(dir / "img.png"));
+    EXPECT_FALSE(std::filesystem::exists(dir / "map.exr"));
+}
+
+TEST(DefectMapCli, SceneProjectsTheMapIntoTheImage) {
+    TempDir dir("defectmap-scene");
+    std::vector<float> h = texture(96, 0.01);
+    for (float& v : h) v *= 0.01f;
+    writeNpyF32(dir / "map.npy", 96, 96, h);
+    writeText(
+        dir / "scene.json",
+        R"({"heightmap": {"path": "map.npy", "pixel_pitch": 0.1}, "camera": {"width": 24, "height": 20}})");
+    auto r = runCli("defectmap \"" + (dir / "scene.json").string() + "\" -o \"" +
+                    (dir / "map.png").string() + "\" --image-out \"" + (dir / "img.png").string() +
+                    "\"");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const Image img = readImage(dir / "img.png");
+    EXPECT_EQ(img.width, 24);
+    EXPECT_EQ(img.height, 20);
+    EXPECT_NE(r.output.find("image-space map 24x20"), std::string::npos) << r.output;
+}
