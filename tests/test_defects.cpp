@@ -204,7 +204,7 @@ TEST(DefectObjective, BadMasksGetClearErrors) {
 }
 
 // `optimize --objective defects` on a generated part: trains on the truth mask, reports the
-// objective; without a defect mask it says which option to give.
+// objective; without a defect mask it finds one (auto); a bad region is refused.
 TEST(DefectObjective, OptimizeRunsItOnAGeneratedPart) {
     test::TempDir dir("defects-cli");
     const std::string part = (dir.path() / "part.exr").string(),
@@ -224,10 +224,21 @@ TEST(DefectObjective, OptimizeRunsItOnAGeneratedPart) {
     std::stringstream ss;
     ss << in.rdbuf();
     EXPECT_NE(ss.str().find("\"objective\": \"defects\""), std::string::npos);
-    r = test::runCli("optimize " + scene + " --objective defects --heldout none -o " +
+    // Without a mask or a truth: the defect map found without labels (auto).
+    r = test::runCli("optimize " + scene +
+                     " --objective defects --heldout none --iterations 50 -o " +
                      (dir.path() / "out2").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    std::ifstream in2(dir.path() / "out2" / "summary.json");
+    std::stringstream ss2;
+    ss2 << in2.rdbuf();
+    EXPECT_NE(ss2.str().find("\"defects\": \"auto\""), std::string::npos) << ss2.str();
+    // A label the truth does not have: an error naming the file, exit 1.
+    r = test::runCli("optimize " + scene + " --objective defects --heldout none --defects " +
+                     truth + ":nosuchkind -o " + (dir.path() / "out3").string());
     EXPECT_EQ(r.exitCode, 1);
-    EXPECT_NE(r.output.find("--defects"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("part-truth.png"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir.path() / "out3"));
 }
 
 // Regions by label (the region-comparison mode): "FILE:LABEL,..." picks the listed labels of a
@@ -241,6 +252,9 @@ TEST(RegionSpec, PicksLabelsOfATruthFile) {
     EXPECT_EQ(r.labels[0], "chatter");
     EXPECT_EQ(r.text(), "a/t.png:chatter,255");
     EXPECT_THROW(parseRegionSpec("t.png:chatter,", "defects"), InputError);
+    EXPECT_TRUE(parseRegionSpec("auto", "defects").automatic);
+    EXPECT_EQ(parseRegionSpec("auto", "defects").text(), "auto");
+    EXPECT_FALSE(parseRegionSpec("auto.png", "defects").automatic);
 
     test::TempDir dir("regions");
     const std::string part = (dir.path() / "p.exr").string();

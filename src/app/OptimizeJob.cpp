@@ -324,6 +324,16 @@ void loadHeldOut(const Plan& p, const Inputs& in, OptimizeJobSummary& job) {
                          "use another " + option("seed"));
 }
 
+/// The defects objective's defect region: `defects`, else the truth, else the defect map found
+/// without labels (auto).
+RegionSpec defectRegion(const OptimizeJobOptions& o) {
+    if (!o.defects.empty()) return o.defects;
+    if (!o.truth.empty()) return RegionSpec{o.truth, {}, false};
+    RegionSpec r;
+    r.automatic = true;
+    return r;
+}
+
 /// Stage 3: the loss mask, the truth, every start's E0 and what E0 shows (the same for every λ).
 void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     const OptimizeJobOptions& o = p.o;
@@ -331,15 +341,16 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     in.mask = lossMask(o.mask, t, in.scene.get(), o.scratch);
     job.maskPixels = in.mask.count;
     if (in.kind == ObjectiveKind::Defects) {
-        const RegionSpec d = o.defects.empty() ? RegionSpec{o.truth, {}} : o.defects;
-        if (d.empty())
-            throw inputError(option("objective") + " defects", "needs a defect mask",
-                             "give " + option("defects") +
-                                 " MASK.png (height-map space, e.g. "
-                                 "gen-surface's part-truth.png) or " +
-                                 option("truth"));
-        in.defects = projectRegion(*in.scene, d);
-        if (!o.reference.empty()) in.reference = projectRegion(*in.scene, o.reference);
+        in.defects = projectRegion(*in.scene, defectRegion(o));
+        if (o.reference.automatic) {
+            // The part the defect map finds clean and that is not a defect region pixel.
+            const std::vector<uint8_t> marked = projectRegion(*in.scene, o.reference);
+            in.reference.assign(marked.size(), 0);
+            for (size_t q = 0; q < marked.size(); ++q)
+                in.reference[q] = !marked[q] && !in.defects[q] ? 255 : 0;
+        } else if (!o.reference.empty()) {
+            in.reference = projectRegion(*in.scene, o.reference);
+        }
     }
     if (!o.truth.empty()) {
         in.truth = projectMaskFile(*in.scene, o.truth);
@@ -536,7 +547,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     s["mask"] = o.mask.name();
     s["mask_pixels"] = job.maskPixels;
     if (in.kind == ObjectiveKind::Defects) {
-        s["defects"] = o.defects.empty() ? o.truth.string() : o.defects.text();
+        s["defects"] = defectRegion(o).text();
         s["reference"] =
             o.reference.empty() ? "the part away from the defects" : o.reference.text();
     }

@@ -70,7 +70,9 @@ struct OptimizeJobOptions {
     ScratchMapOptions scratch;    // for the scratch mask
     std::filesystem::path truth;  // ground-truth defect mask in height-map space (metrics)
     /// The defects objective's regions in height-map space (app/Truth.h RegionSpec): the defects
-    /// (empty: `truth`) and the defect-free reference (empty: the part away from the defects).
+    /// (empty: `truth`, else auto: the defect map of the scene's height map) and the
+    /// defect-free reference (empty: the part away from the defects; auto: the part the defect
+    /// map leaves unmarked, outside the defects).
     /// Region A against region B (e.g. the chatter half against the clean half) is the same
     /// objective with A as `defects` and B as `reference`.
     RegionSpec defects, reference;

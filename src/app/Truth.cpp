@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cctype>
+#include <stdexcept>
 
 #include "core/Error.h"
 #include "core/Text.h"
+#include "objective/DefectMap.h"
 #include "objective/ImageSpace.h"
 #include "scene/Scene.h"
 
@@ -48,6 +50,7 @@ std::vector<std::string> splitList(std::string_view s) {
 }  // namespace
 
 std::string RegionSpec::text() const {
+    if (automatic) return "auto";
     std::string t = file.string();
     for (size_t k = 0; k < labels.size(); ++k) {
         t += k ? "," : ":";
@@ -58,6 +61,10 @@ std::string RegionSpec::text() const {
 
 RegionSpec parseRegionSpec(std::string_view text, std::string_view optionName) {
     RegionSpec r;
+    if (text == "auto") {
+        r.automatic = true;
+        return r;
+    }
     const size_t colon = text.rfind(':');
     if (colon != std::string_view::npos &&
         hasImageExtension(std::filesystem::path(std::string(text.substr(0, colon))))) {
@@ -75,7 +82,13 @@ RegionSpec parseRegionSpec(std::string_view text, std::string_view optionName) {
     return r;
 }
 
-std::vector<uint8_t> regionInHeightMap(const RegionSpec& region, int mapWidth, int mapHeight) {
+std::vector<uint8_t> regionInHeightMap(const RegionSpec& region, int mapWidth, int mapHeight,
+                                       std::span<const float> heights) {
+    if (region.automatic) {
+        if (heights.size() != static_cast<size_t>(mapWidth) * static_cast<size_t>(mapHeight))
+            throw std::invalid_argument("regionInHeightMap: auto needs the height map");
+        return detectDefects(heights, mapWidth, mapHeight).map;
+    }
     if (region.labels.empty()) return loadHeightMapMask(region.file, mapWidth, mapHeight);
     const LabelMask m = readLabelMask(region.file, mapWidth, mapHeight);
     bool wanted[256] = {};
@@ -104,7 +117,8 @@ std::vector<uint8_t> regionInHeightMap(const RegionSpec& region, int mapWidth, i
 }
 
 std::vector<uint8_t> projectRegion(const Scene& scene, const RegionSpec& region, int threads) {
-    const std::vector<uint8_t> m = regionInHeightMap(region, scene.mapWidth, scene.mapHeight);
+    const std::vector<uint8_t> m =
+        regionInHeightMap(region, scene.mapWidth, scene.mapHeight, scene.heights);
     return projectToImage(tracePrimaryHits(scene, threads), m);
 }
 

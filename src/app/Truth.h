@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -22,6 +23,8 @@ std::vector<uint8_t> projectMaskFile(const Scene& scene, const std::filesystem::
 LabelMask projectTruth(const Scene& scene, const std::filesystem::path& truth, int threads = 0);
 
 /// A region drawn in height-map space, given as "FILE" (a mask: nonzero inside) or
+/// "auto" (the defect map of the scene's own height map, found without labels:
+/// objective/DefectMap.h with its default method and options), or
 /// "FILE:LABEL[,LABEL...]" (the pixels of a truth label file, e.g. gen-surface's
 /// part-truth.png, whose label is one of those listed: by legend name or by value; 0 or
 /// "none" is the unlabelled surface). With labels, FILE is read with its legend
@@ -31,7 +34,8 @@ LabelMask projectTruth(const Scene& scene, const std::filesystem::path& truth, i
 struct RegionSpec {
     std::filesystem::path file;       // empty: no region given
     std::vector<std::string> labels;  // empty: the whole mask
-    bool empty() const { return file.empty(); }
+    bool automatic = false;           // "auto": the scene's defect map (objective/DefectMap.h)
+    bool empty() const { return file.empty() && !automatic; }
     std::string text() const;  // as it was written
 };
 
@@ -40,10 +44,12 @@ struct RegionSpec {
 /// InputError naming `optionName` for an empty label list.
 RegionSpec parseRegionSpec(std::string_view text, std::string_view optionName);
 
-/// The region in height-map space (255/0): the mask, or the pixels whose label is listed.
-/// Throws InputError naming the file for a label its legend does not have, or when the file
-/// cannot be read or has the wrong size.
-std::vector<uint8_t> regionInHeightMap(const RegionSpec& region, int mapWidth, int mapHeight);
+/// The region in height-map space (255/0): the mask, the pixels whose label is listed, or (auto)
+/// the defect map of `heights` (mapWidth×mapHeight; needed only for auto). Throws InputError
+/// naming the file for a label its legend does not have, or when the file cannot be read or has
+/// the wrong size.
+std::vector<uint8_t> regionInHeightMap(const RegionSpec& region, int mapWidth, int mapHeight,
+                                       std::span<const float> heights = {});
 
 /// regionInHeightMap projected into the scene's image through the centre rays (255/0).
 std::vector<uint8_t> projectRegion(const Scene& scene, const RegionSpec& region, int threads = 0);
