@@ -36,6 +36,17 @@ std::string nameOf(const std::filesystem::path& light) {
     return std::filesystem::is_directory(p) ? p.filename().string() : p.stem().string();
 }
 
+/// The exposure of a preview: the 99th percentile of the part's pixels maps to 0.8.
+double exposureScale(const std::vector<double>& y, const std::vector<uint8_t>& part) {
+    std::vector<double> in;
+    for (size_t p = 0; p < y.size(); ++p)
+        if (part.empty() || part[p]) in.push_back(y[p]);
+    if (in.empty()) return 1.0;
+    auto q = in.begin() + static_cast<std::ptrdiff_t>(0.99 * static_cast<double>(in.size() - 1));
+    std::nth_element(in.begin(), q, in.end());
+    return *q > 0 ? 0.8 / *q : 1.0;
+}
+
 // Outline colours of the truth regions in the report, by label value (linear RGB), and their
 // names in the caption. Values not listed are white.
 struct OutlineColour {
@@ -61,16 +72,7 @@ const OutlineColour& outlineOf(uint8_t v) {
 /// outside it) drawn in the region's colour.
 Image outlinedRender(const std::vector<double>& y, int w, int h, const std::vector<uint8_t>& part,
                      const std::vector<uint8_t>& labels) {
-    std::vector<double> in;
-    for (size_t p = 0; p < y.size(); ++p)
-        if (part.empty() || part[p]) in.push_back(y[p]);
-    double scale = 1.0;
-    if (!in.empty()) {
-        auto q =
-            in.begin() + static_cast<std::ptrdiff_t>(0.99 * static_cast<double>(in.size() - 1));
-        std::nth_element(in.begin(), q, in.end());
-        if (*q > 0) scale = 0.8 / *q;
-    }
+    const double scale = exposureScale(y, part);
     Image img(w, h, 3);
     for (int j = 0; j < h; ++j)
         for (int i = 0; i < w; ++i) {
@@ -167,16 +169,7 @@ void writeSideBySide(const std::filesystem::path& stem,
     const int gap = 4, W = n * w + (n - 1) * gap;
     Image lin(W, h, 1), shown(W, h, 1);
     for (int k = 0; k < n; ++k) {
-        std::vector<double> part;
-        for (size_t p = 0; p < images[k].size(); ++p)
-            if (partMask.empty() || partMask[p]) part.push_back(images[k][p]);
-        double scale = 1.0;
-        if (!part.empty()) {
-            auto q = part.begin() +
-                     static_cast<std::ptrdiff_t>(0.99 * static_cast<double>(part.size() - 1));
-            std::nth_element(part.begin(), q, part.end());
-            if (*q > 0) scale = 0.8 / *q;
-        }
+        const double scale = exposureScale(images[k], partMask);
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x) {
                 const size_t src = static_cast<size_t>(y) * w + x;
