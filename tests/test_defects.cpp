@@ -15,6 +15,7 @@
 #include "app/Truth.h"
 #include "core/Error.h"
 #include "core/Rng.h"
+#include "io/ImageIO.h"
 #include "io/MaskIO.h"
 #include "objective/Autodiff.h"
 #include "objective/DefectObjective.h"
@@ -224,6 +225,13 @@ TEST(DefectObjective, OptimizeRunsItOnAGeneratedPart) {
     std::stringstream ss;
     ss << in.rdbuf();
     EXPECT_NE(ss.str().find("\"objective\": \"defects\""), std::string::npos);
+    // regions.png: the render with the defect region's boundary in red.
+    const Image regions = readImage(out / "regions.png");
+    ASSERT_EQ(regions.channels, 3);
+    int red = 0;
+    for (size_t q = 0; q < regions.pixelCount(); ++q)
+        red += regions.data[3 * q] > 0.99f && regions.data[3 * q + 1] < 0.01f;
+    EXPECT_GT(red, 0);
     // Without a mask or a truth: the defect map found without labels (auto).
     r = test::runCli("optimize " + scene +
                      " --objective defects --heldout none --iterations 50 -o " +

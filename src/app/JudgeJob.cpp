@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "app/Preview.h"
 #include "app/Report.h"
 #include "core/Error.h"
 #include "core/Image.h"
@@ -34,67 +35,6 @@ std::string nameOf(const std::filesystem::path& light) {
     auto p = light;
     if (p.filename().empty()) p = p.parent_path();
     return std::filesystem::is_directory(p) ? p.filename().string() : p.stem().string();
-}
-
-/// The exposure of a preview: the 99th percentile of the part's pixels maps to 0.8.
-double exposureScale(const std::vector<double>& y, const std::vector<uint8_t>& part) {
-    std::vector<double> in;
-    for (size_t p = 0; p < y.size(); ++p)
-        if (part.empty() || part[p]) in.push_back(y[p]);
-    if (in.empty()) return 1.0;
-    auto q = in.begin() + static_cast<std::ptrdiff_t>(0.99 * static_cast<double>(in.size() - 1));
-    std::nth_element(in.begin(), q, in.end());
-    return *q > 0 ? 0.8 / *q : 1.0;
-}
-
-// Outline colours of the truth regions in the report, by label value (linear RGB), and their
-// names in the caption. Values not listed are white.
-struct OutlineColour {
-    uint8_t value;
-    float r, g, b;
-    const char* name;
-};
-constexpr OutlineColour kOutlines[] = {
-    {255, 1.0f, 0.0f, 0.0f, "red"},     {224, 1.0f, 0.45f, 0.0f, "orange"},
-    {192, 1.0f, 0.0f, 1.0f, "magenta"}, {160, 1.0f, 1.0f, 0.0f, "yellow"},
-    {144, 0.0f, 1.0f, 1.0f, "cyan"},    {128, 0.1f, 0.3f, 1.0f, "blue"},
-};
-
-const OutlineColour& outlineOf(uint8_t v) {
-    static constexpr OutlineColour white{0, 1.0f, 1.0f, 1.0f, "white"};
-    for (const OutlineColour& c : kOutlines)
-        if (c.value == v) return c;
-    return white;
-}
-
-/// The render exposed as the side-by-side PNG (99th percentile of the part -> 0.8), gray, with
-/// the boundary pixels of every labelled region (a pixel of the region with a 4-neighbour
-/// outside it) drawn in the region's colour.
-Image outlinedRender(const std::vector<double>& y, int w, int h, const std::vector<uint8_t>& part,
-                     const std::vector<uint8_t>& labels) {
-    const double scale = exposureScale(y, part);
-    Image img(w, h, 3);
-    for (int j = 0; j < h; ++j)
-        for (int i = 0; i < w; ++i) {
-            const size_t p = static_cast<size_t>(j) * w + i;
-            const float v = static_cast<float>(y[p] * scale);
-            float rgb[3] = {v, v, v};
-            const uint8_t l = labels.empty() ? 0 : labels[p];
-            if (l) {
-                auto other = [&](int x, int z) {
-                    return x < 0 || z < 0 || x >= w || z >= h ||
-                           labels[static_cast<size_t>(z) * w + x] != l;
-                };
-                if (other(i - 1, j) || other(i + 1, j) || other(i, j - 1) || other(i, j + 1)) {
-                    const OutlineColour& c = outlineOf(l);
-                    rgb[0] = c.r;
-                    rgb[1] = c.g;
-                    rgb[2] = c.b;
-                }
-            }
-            for (int c = 0; c < 3; ++c) img.at(i, j, c) = rgb[c];
-        }
-    return img;
 }
 
 /// report.html: every light side by side (its render with the truth regions outlined, its env

@@ -10,9 +10,11 @@
 #include <sstream>
 
 #include "app/InitialState.h"
+#include "app/Preview.h"
 #include "app/Report.h"
 #include "app/Search.h"
 #include "app/Truth.h"
+#include "core/Color.h"
 #include "core/Error.h"
 #include "core/Interrupt.h"
 #include "core/Registry.h"
@@ -620,6 +622,20 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
         std::vector<uint8_t> visible(mask.size());  // masks hold 0/1; the PNG 0/255
         for (size_t i = 0; i < mask.size(); ++i) visible[i] = mask[i] ? 255 : 0;
         writeMaskPng(dir / "mask.png", visible, t.width, t.height);
+    }
+    if (in.kind == ObjectiveKind::Defects) {
+        // regions.png: the render with the defect region outlined red and, when one was given,
+        // the reference region blue (app/Preview.h).
+        std::vector<double> y(t.rows());
+        for (size_t q = 0; q < y.size(); ++q)
+            y[q] = ch == 3 ? luminance(Rgb{static_cast<float>(imageFinal[3 * q]),
+                                           static_cast<float>(imageFinal[3 * q + 1]),
+                                           static_cast<float>(imageFinal[3 * q + 2])})
+                           : imageFinal[q];
+        std::vector<uint8_t> labels(t.rows(), 0);
+        for (size_t q = 0; q < labels.size(); ++q)
+            labels[q] = in.defects[q] ? 255 : (!in.reference.empty() && in.reference[q] ? 128 : 0);
+        writePng(dir / "regions.png", outlinedRender(y, t.width, t.height, mask, labels));
     }
     if (!in.mask.scratchCells.empty())
         writeMaskPng(dir / "scratchmap.png", in.mask.scratchCells, in.scene->mapWidth,

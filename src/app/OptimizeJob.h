@@ -10,7 +10,9 @@
 //   summary.json optimizer, lambda, iterations, initial/final loss and parts, timings, T's facts,
 //                held-out scores, visibility metrics (final and initial)
 //   report.html  one self-contained page: renders, env maps, loss curve, metrics, settings
-//   initial-envmap.png, mask.png (the loss mask), scratchmap.png (with the scratch mask)
+//   initial-envmap.png, mask.png (the loss mask), scratchmap.png (with the scratch mask),
+//   regions.png (objective defects: the render with the defect region outlined red and a given
+//   reference region blue)
 // A sweep also writes OUTDIR/sweep.csv (one row per λ).
 //
 // OUTDIR is checked before any work and replaced as a unit (io/StagedDirectory.h): a failure

@@ -277,6 +277,7 @@ ReportRun reportRunFromOutDir(const std::filesystem::path& dir, const std::strin
         add("initial.png", "render under E₀");
         add("initial-envmap.png", "env map E₀");
     }
+    add("regions.png", "defects objective: defect region red, reference blue");
     add("scratchmap.png", "scratch map");
     add("mask.png", "loss mask");
     if (fin && std::filesystem::exists(dir / "loss.csv")) {

@@ -1,0 +1,32 @@
+// Previews a person looks at: a render exposed for a PNG, and the same with labelled regions
+// outlined in one colour per label (the judge's report, optimize's regions.png).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/Image.h"
+
+namespace sl {
+
+/// The exposure of a preview: the 99th percentile of the part's pixels (all pixels when `part`
+/// is empty) maps to 0.8; 1 when that is not positive.
+double exposureScale(const std::vector<double>& y, const std::vector<uint8_t>& part);
+
+/// The outline colour of a label value (linear RGB) and its name for captions: 255 red,
+/// 224 orange, 192 magenta, 160 yellow, 144 cyan, 128 blue (gen-surface's truth values,
+/// synth/SurfaceGenerator.h), any other value white.
+struct OutlineColour {
+    uint8_t value;
+    float r, g, b;
+    const char* name;
+};
+const OutlineColour& outlineOf(uint8_t value);
+
+/// A w×h luminance render as an RGB preview (exposureScale), gray, with the boundary pixels of
+/// every labelled region (a pixel of the region with a 4-neighbour outside it; `labels` empty:
+/// none) drawn in the region's colour.
+Image outlinedRender(const std::vector<double>& y, int w, int h, const std::vector<uint8_t>& part,
+                     const std::vector<uint8_t>& labels);
+
+}  // namespace sl
