@@ -104,6 +104,9 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     c->add_option("--edge-weight", m.edgeWeight, "auto: weight of the edge residual in the score")
         ->capture_default_str();
+    c->add_option("--edge-axes", m.edgeAxes,
+                  "auto: one edge residual per axis, each in its own robust sigma (true/false)")
+        ->capture_default_str();
     c->add_option("--seed-sigma", m.seedSigma, "auto: hysteresis seed threshold (robust sigmas)")
         ->capture_default_str();
     c->add_option("--grow-sigma", m.growSigma, "auto: hysteresis grow threshold (robust sigmas)")

@@ -253,7 +253,9 @@ std::vector<float> pool2(const float* img, int W, int H, int& W2, int& H2) {
 
 /// Separable quadratic Savitzky–Golay smoothing of a W×H image over w (odd) samples along x,
 /// then along z: the local least-squares quadratic's value at the centre. Borders: mirrored.
-std::vector<float> separableQuadratic(const std::vector<float>& img, int W, int H, int w) {
+/// alongX / alongZ false skips that pass.
+std::vector<float> separableQuadratic(const std::vector<float>& img, int W, int H, int w,
+                                      bool alongX = true, bool alongZ = true) {
     const int m = w / 2;
     std::vector<double> c(static_cast<size_t>(w));
     const double den = (2.0 * m + 1) * (4.0 * m * m + 4.0 * m - 3.0);
@@ -269,10 +271,14 @@ std::vector<float> separableQuadratic(const std::vector<float>& img, int W, int 
             y[static_cast<size_t>(i) * stride] = static_cast<float>(acc);
         }
     };
-    tbb::parallel_for(0, H, [&](int y) {
-        const size_t o = static_cast<size_t>(y) * W;
-        line(img.data() + o, W, 1, tmp.data() + o);
-    });
+    if (alongX)
+        tbb::parallel_for(0, H, [&](int y) {
+            const size_t o = static_cast<size_t>(y) * W;
+            line(img.data() + o, W, 1, tmp.data() + o);
+        });
+    else
+        tmp = img;
+    if (!alongZ) return tmp;
     tbb::parallel_for(
         0, W, [&](int x) { line(tmp.data() + x, H, static_cast<size_t>(W), out.data() + x); });
     return out;
@@ -617,18 +623,26 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
     std::vector<float> A = separableMedian(R, W, H, o.levelWindow);
     for (size_t k = 0; k < n; ++k) A[k] = R[k] - A[k];
     for (size_t k = 0; k < n; ++k) R[k] += macro[k];
-    std::vector<float> N = separableQuadratic(R, W, H, o.edgeWindow);
+    // the edge residual: both axes at once, or (edgeAxes) one per axis, each with its own σ
+    std::vector<float> N = separableQuadratic(R, W, H, o.edgeWindow, true, !o.edgeAxes);
     for (size_t k = 0; k < n; ++k) N[k] = R[k] - N[k];
+    std::vector<float> Nz;
+    if (o.edgeAxes) {
+        Nz = separableQuadratic(R, W, H, o.edgeWindow, false, true);
+        for (size_t k = 0; k < n; ++k) Nz[k] = R[k] - Nz[k];
+    }
     R = {};
     macro = {};
     r.sigmaLevel = 1.4826 * medianAbs(A);
     r.sigmaEdge = 1.4826 * medianAbs(N);
     const double sa = std::max(r.sigmaLevel, floorSigma), sn = std::max(r.sigmaEdge, floorSigma);
-    if (sa > 0.0 && sn > 0.0) {
+    const double snz = o.edgeAxes ? std::max(1.4826 * medianAbs(Nz), floorSigma) : 1.0;
+    if (sa > 0.0 && sn > 0.0 && snz > 0.0) {
         std::vector<float> S(n);
         tbb::parallel_for(size_t{0}, n, [&](size_t k) {
-            S[k] = static_cast<float>(
-                std::max(std::abs(A[k]) / sa, o.edgeWeight * std::abs(N[k]) / sn));
+            double e = std::abs(N[k]) / sn;
+            if (o.edgeAxes) e = std::max(e, std::abs(Nz[k]) / snz);
+            S[k] = static_cast<float>(std::max(std::abs(A[k]) / sa, o.edgeWeight * e));
         });
         if (o.border > 0)
             tbb::parallel_for(0, H, [&](int y) {
@@ -639,6 +653,7 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
         r.markedScore = hysteresis(S, W, H, o.seedSigma, o.growSigma, o.minRegion, r.map);
     }
     N = {};
+    Nz = {};
     if (o.energyWindow > 0) {
         // step 8 on |A| and, with textureEnergy, on |T|
         auto inside = [&](size_t k) {

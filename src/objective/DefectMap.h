@@ -34,11 +34,16 @@
 //  4. Level: A = R − the separable running median of R over `levelWindow` samples (x, then z).
 //  5. Edges: N = (M + R) − its separable quadratic Savitzky–Golay fit over `edgeWindow` samples
 //     (x, then z; borders mirrored): a step or a narrow groove, but not a curved wall whose
-//     curvature changes little over the window.
+//     curvature changes little over the window. With `edgeAxes`, two residuals instead:
+//     N_x = (M + R) − its fit along x alone, N_z = the same along z alone. What the texture
+//     model leaves of a directional texture (the flat-end floor's feed marks, 5 samples apart
+//     along the feed) raises the residual along the axis it varies on; a step parallel to the
+//     marks varies on the other axis and is scored against that axis's quieter σ.
 //  6. Scale: σ_A, σ_N = 1.4826 × the median of |A|, |N| (over ≤ 4M samples at a fixed stride),
 //     each at least 1e-3 × 1.4826 × the median of |h − mean h| (so rounding on a noise-free
-//     texture is no anomaly). The score is S = max(|A|/σ_A, edgeWeight·|N|/σ_N), 0 within
-//     `border` samples
+//     texture is no anomaly); with `edgeAxes` σ_Nx and σ_Nz the same of |N_x| and |N_z|. The
+//     score is S = max(|A|/σ_A, edgeWeight·|N|/σ_N) (with `edgeAxes`, edgeWeight times the
+//     larger of |N_x|/σ_Nx and |N_z|/σ_Nz in place of |N|/σ_N), 0 within `border` samples
 //     of the map's edges (there the notch's periodic model meets the padding and is unreliable).
 //  7. Hysteresis: samples with S ≥ `seedSigma` seed the map; it grows into 8-connected samples
 //     with S ≥ `growSigma`. Connected regions of fewer than `minRegion` samples are dropped.
@@ -98,6 +103,7 @@ struct DefectMapOptions {
     int levelWindow = 31;       // samples of the level's running median (odd, >= 3)
     int edgeWindow = 7;         // samples of the edge residual's quadratic fit (odd, >= 5)
     double edgeWeight = 1.0;    // the edge residual's weight in the score (>= 0; 0: off)
+    bool edgeAxes = true;       // one edge residual per axis, each with its own σ (step 5)
     double seedSigma = 5.0;     // hysteresis: seeds at S >= seedSigma (> 0)
     double growSigma = 2.5;     // hysteresis: grown into S >= growSigma (0 < grow <= seed)
     int border = 32;            // samples at the map's edges never marked (>= 0)
@@ -114,8 +120,8 @@ struct DefectMap {
     int width = 0, height = 0;  // of the height map
     std::vector<uint8_t> map;   // width*height, row-major: 255 marked, 0 not
     DefectMethod method = DefectMethod::Auto;
-    // auto only: σ_A and σ_N (height units), the bins notched, samples marked by the level/edge
-    // score and by the texture-change step, padded FFT size
+    // auto only: σ_A and σ_N (with edgeAxes σ_Nx; height units), the bins notched, samples
+    // marked by the level/edge score and by the texture-change step, padded FFT size
     double sigmaLevel = 0, sigmaEdge = 0;
     size_t notchedBins = 0, spectrumBins = 0;
     size_t markedScore = 0, markedEnergy = 0;
