@@ -247,6 +247,19 @@ TEST(DefectObjective, OptimizeRunsItOnAGeneratedPart) {
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_NE(r.output.find("part-truth.png"), std::string::npos) << r.output;
     EXPECT_FALSE(std::filesystem::exists(dir.path() / "out3"));
+    // A clean part: the defect map marks nothing, and auto says so.
+    const std::string clean = (dir.path() / "clean.exr").string(),
+                      cleanScene = (dir.path() / "clean.json").string();
+    ASSERT_EQ(test::runCli("gen-surface " + clean +
+                           " --width 160 --height 160 --scratches 0 --gouges 0 --chatter 0 "
+                           "--no-pocket --scene " +
+                           cleanScene + " --image-size 40 --spp 4 --max-depth 3")
+                  .exitCode,
+              0);
+    r = test::runCli("optimize " + cleanScene + " --objective defects --heldout none -o " +
+                     (dir.path() / "out4").string());
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.output.find("--defects auto: the defect map"), std::string::npos) << r.output;
 }
 
 // Regions by label (the region-comparison mode): "FILE:LABEL,..." picks the listed labels of a

@@ -343,7 +343,14 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     in.mask = lossMask(o.mask, t, in.scene.get(), o.scratch);
     job.maskPixels = in.mask.count;
     if (in.kind == ObjectiveKind::Defects) {
-        in.defects = projectRegion(*in.scene, defectRegion(o));
+        const RegionSpec defects = defectRegion(o);
+        in.defects = projectRegion(*in.scene, defects);
+        if (defects.automatic &&
+            std::none_of(in.defects.begin(), in.defects.end(), [](uint8_t v) { return v != 0; }))
+            throw inputError(option("defects") + " auto",
+                             "the defect map of the height map marks nothing the camera sees",
+                             "give a defect mask with " + option("defects") + " or a truth with " +
+                                 option("truth"));
         if (o.reference.automatic) {
             // The part the defect map finds clean and that is not a defect region pixel.
             const std::vector<uint8_t> marked = projectRegion(*in.scene, o.reference);
