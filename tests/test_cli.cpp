@@ -66,6 +66,26 @@ TEST_F(CliTest, HelpAndUsageErrors) {
     EXPECT_EQ(r.exitCode, 2) << r.output;
 }
 
+// --version names the build and its libraries; an unknown command is named, with the nearest
+// command when there is one, and a usage exit code.
+TEST_F(CliTest, VersionAndUnknownCommands) {
+    auto r = runCli("--version");
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    for (const char* s : {"scratchlight 0.", "(commit ", "Embree 3.", "OpenImageIO 2.", "NLopt 2.",
+                          "Ceres 2.", "Eigen 3."})
+        EXPECT_NE(r.output.find(s), std::string::npos) << s << " in " << r.output;
+    r = runCli("optimise x.json");
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.output.find("unknown command 'optimise'; did you mean 'optimize'?"),
+              std::string::npos)
+        << r.output;
+    r = runCli("frobnicate");
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.output.find("unknown command 'frobnicate'"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("did you mean"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("defectmap"), std::string::npos) << r.output;  // the list
+}
+
 TEST_F(CliTest, RendersAndWritesExrAndPng) {
     writeGoodMap();
     auto r = runCli(

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
 #include <vector>
@@ -225,6 +226,13 @@ TEST(DefectObjective, OptimizeRunsItOnAGeneratedPart) {
     std::stringstream ss;
     ss << in.rdbuf();
     EXPECT_NE(ss.str().find("\"objective\": \"defects\""), std::string::npos);
+    // Every summary says which build wrote it, how it was asked for and when.
+    const auto summary = nlohmann::json::parse(ss.str());
+    EXPECT_FALSE(summary["scratchlight"]["version"].get<std::string>().empty());
+    EXPECT_FALSE(summary["scratchlight"]["commit"].get<std::string>().empty());
+    EXPECT_NE(summary["scratchlight"]["command"].get<std::string>().find("--objective defects"),
+              std::string::npos);
+    EXPECT_EQ(summary["scratchlight"]["date"].get<std::string>().size(), 20u);
     // regions.png: the render with the defect region's boundary in red.
     const Image regions = readImage(out / "regions.png");
     ASSERT_EQ(regions.channels, 3);

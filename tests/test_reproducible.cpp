@@ -2,7 +2,7 @@
 // (README "Limits"): sample s of pixel p is seeded by (seed, p, s), never by thread
 // (src/core/Rng.h), sums are reduced in a fixed order, and EXR files carry no timestamp.
 // Only what describes the run itself may differ: wall-clock seconds, whether T came from the
-// cache and where it is stored, and the output directory's name.
+// cache and where it is stored, the output directory's name, the command line and the date.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -32,7 +32,7 @@ nlohmann::json withoutRunFacts(nlohmann::json j) {
         nlohmann::json out = nlohmann::json::object();
         for (auto& [k, v] : j.items()) {
             if (k.rfind("seconds", 0) == 0 || k.find("cache_hit") != std::string::npos ||
-                k == "name" || k == "file")
+                k == "name" || k == "file" || k == "date" || k == "command")
                 continue;
             out[k] = withoutRunFacts(v);
         }

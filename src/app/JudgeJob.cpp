@@ -6,6 +6,7 @@
 
 #include "app/Preview.h"
 #include "app/Report.h"
+#include "app/Version.h"
 #include "core/Error.h"
 #include "core/Image.h"
 #include "io/AtomicFile.h"
@@ -158,6 +159,7 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
         }
 
         nlohmann::ordered_json j;
+        j["scratchlight"] = runProvenance(o.commandLine);
         j["scene"] = o.scene.string();
         j["estimate"] = {{"spp", jo.spp},
                          {"seed", jo.seed},

@@ -29,6 +29,7 @@ struct JudgeJobOptions {
     bool references = true;  // also score uniform 0.5 and the studio preset
     JudgeOptions judge;      // cacheDir "" = <parent of outDir>/.scratchlight-cache
     std::filesystem::path outDir = "out/judge";
+    std::string commandLine;  // how the run was asked for: recorded in judge.json, not parsed
 };
 
 struct JudgeJobSummary {

@@ -14,6 +14,7 @@
 #include "app/Report.h"
 #include "app/Search.h"
 #include "app/Truth.h"
+#include "app/Version.h"
 #include "core/Color.h"
 #include "core/Error.h"
 #include "core/Interrupt.h"
@@ -542,6 +543,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     std::vector<std::string> starts;
     for (const InitialState& s : o.starts) starts.push_back(s.spec);
     json s;
+    s["scratchlight"] = runProvenance(o.commandLine);
     s["optimizer"] = run.optimizer.method;
     s["planes"] = o.planes;
     s["starts"] = starts;

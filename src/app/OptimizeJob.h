@@ -78,6 +78,7 @@ struct OptimizeJobOptions {
     /// Region A against region B (e.g. the chatter half against the clean half) is the same
     /// objective with A as `defects` and B as `reference`.
     RegionSpec defects, reference;
+    std::string commandLine;  // how the run was asked for: recorded in summary.json, not parsed
     bool rgb = false;
     HeldOutSource heldOut;  // default: the judge's estimate traced from the scene (cached)
     int heldOutSpp = 0;     // 0: the judge's default (app/Judge.h)

@@ -20,6 +20,12 @@ struct Scene;
 
 namespace sl::cli {
 
+/// The command line as typed (main.cpp sets it; jobs record it in their summaries).
+inline std::string& invokedCommandLine() {
+    static std::string line;
+    return line;
+}
+
 /// The size of the allocation that failed when std::bad_alloc was thrown by operator new
 /// (0: unknown; Memory.cpp).
 extern std::atomic<size_t> gFailedAllocationBytes;

@@ -26,6 +26,7 @@ int runJudge(const JudgeArgs& a) {
     o.references = !a.noReferences;
     for (const auto& l : a.lights) o.lights.emplace_back(l);
     o.judge.progress = progressBar("judge estimate");
+    o.commandLine = invokedCommandLine();
     JudgeJobSummary s = runJudgeJob(o);
     const auto& est = s.estimate;
     std::printf("judge estimate: %d spp in two halves, seed %llu, %s (%s)\n", o.judge.spp,

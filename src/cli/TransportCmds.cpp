@@ -107,6 +107,7 @@ int runOptimize(OptimizeArgs a) {
     a.job.objective.reg = a.reg == "image" ? RegTarget::Image : RegTarget::EnvMap;
     if (a.preset) applyOptimizePreset(*a.preset, a.job);
     a.job.precompute.progress = progressBar("precompute");
+    a.job.commandLine = invokedCommandLine();
     OptimizeJobSummary s = runOptimizeJob(a.job);
     printTransport(s.transport);
     std::printf("mask: %zu pixels\n", s.maskPixels);

@@ -5,9 +5,13 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <string>
+#include <vector>
 
+#include "app/Version.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
 #include "cli/GradientCmds.h"
@@ -40,16 +44,60 @@ void installSignalHandlers() {
     signal(SIGXFSZ, SIG_IGN);
 }
 
+/// Levenshtein distance, for "did you mean".
+size_t editDistance(const std::string& a, const std::string& b) {
+    std::vector<size_t> row(b.size() + 1);
+    for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (size_t i = 1; i <= a.size(); ++i) {
+        size_t diag = row[0];
+        row[0] = i;
+        for (size_t j = 1; j <= b.size(); ++j) {
+            const size_t up = row[j];
+            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] != b[j - 1] ? 1 : 0)});
+            diag = up;
+        }
+    }
+    return row[b.size()];
+}
+
+/// An unknown command word gets its name, the nearest command and the list, not CLI11's "A
+/// subcommand is required". Returns false when `word` is a command.
+bool reportUnknownCommand(const CLI::App& app, const std::string& word) {
+    std::string nearest, names;
+    size_t best = std::string::npos;
+    for (const CLI::App* c : app.get_subcommands({})) {
+        if (c->get_name() == word) return false;
+        names += names.empty() ? "" : ", ";
+        names += c->get_name();
+        const size_t d = editDistance(word, c->get_name());
+        if (d < best) {
+            best = d;
+            nearest = c->get_name();
+        }
+    }
+    std::fprintf(stderr, "error: unknown command '%s'", word.c_str());
+    if (best <= std::max<size_t>(2, word.size() / 3))
+        std::fprintf(stderr, "; did you mean '%s'?", nearest.c_str());
+    std::fprintf(stderr, "\ncommands: %s (scratchlight --help)\n", names.c_str());
+    return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
     using namespace sl::cli;
     installSignalHandlers();  // first: a Ctrl-C during start-up is already cooperative
+    for (int k = 0; k < argc; ++k) {
+        if (k) invokedCommandLine() += ' ';
+        invokedCommandLine() += argv[k];
+    }
     CLI::App app{
         "scratchlight: find the environment light under which the scratches and tool marks of a "
         "machined metal part show best."};
     app.require_subcommand(1);
     app.set_help_all_flag("--help-all", "Show the help of every command");
+    app.set_version_flag("--version", sl::versionText(),
+                         "Print the version, its commit and the libraries' versions");
 
     std::function<int()> run;
     registerRender(app, run);
@@ -62,8 +110,11 @@ int main(int argc, char** argv) {
     registerPaper(app, run);
     registerDefectMap(app, run);
 
+    if (argc > 1 && argv[1][0] != '-' && reportUnknownCommand(app, argv[1])) return kUsageError;
     try {
         app.parse(argc, argv);
+    } catch (const CLI::CallForVersion& e) {
+        return app.exit(e);
     } catch (const CLI::CallForHelp& e) {
         return app.exit(e);
     } catch (const CLI::CallForAllHelp& e) {
