@@ -240,6 +240,7 @@ std::unique_ptr<OIIO::ImageInput> openImageFile(const fs::path& file, const std:
         throw inputError(where, "file not found",
                          "Check the path (relative paths are resolved against the scene file's "
                          "directory)");
+    if (fs::is_directory(file, ec)) throw inputError(where, "is a directory, not an image file");
     if (!fs::is_regular_file(file, ec))
         throw inputError(where, "not a regular file", "Give the path of an image file");
     const std::string ext = lower(file.extension().string());

@@ -34,16 +34,6 @@ const char* const kImageFix =
     "Check that the file is a complete image in a format OpenImageIO reads (EXR, PNG, JPEG, "
     "TIFF, HDR, ...)";
 
-void checkReadableFile(const fs::path& file) {
-    const std::string where = file.string();
-    std::error_code ec;
-    if (!fs::exists(file, ec))
-        throw inputError(where, "file not found",
-                         "Check the path (relative paths are resolved against the scene file's "
-                         "directory)");
-    if (fs::is_directory(file, ec)) throw inputError(where, "is a directory, not an image file");
-}
-
 enum class Transfer { Linear, Srgb, Gamma };
 
 struct Encoding {
@@ -233,7 +223,6 @@ void writeWithOiio(const fs::path& file, OIIO::ImageSpec spec, OIIO::TypeDesc ty
 
 Image readImage(const fs::path& file) {
     const std::string where = file.string();
-    checkReadableFile(file);
     auto in = detail::openImageFile(file, kImageFix);
     const OIIO::ImageSpec& spec = in->spec();
     if (spec.deep) throw inputError(where, "deep images are not supported", "Flatten the image");
