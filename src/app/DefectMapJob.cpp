@@ -45,14 +45,9 @@ DefectMapJobSummary runDefectMapJob(const DefectMapJobOptions& o) {
     } else {
         // the map is invariant to an affine change of the heights: an integer map without a
         // height range is read as [0, 1]
-        try {
-            hm = loadHeightmap(o.input, {});
-        } catch (const InputError& e) {
-            if (std::string(e.what()).find("height_range") == std::string::npos) throw;
-            HeightmapOptions ho;
-            ho.heightRange = std::array<double, 2>{0.0, 1.0};
-            hm = loadHeightmap(o.input, ho);
-        }
+        HeightmapOptions ho;
+        ho.defaultIntegerRange = std::array<double, 2>{0.0, 1.0};
+        hm = loadHeightmap(o.input, ho);
     }
     const std::vector<float>& h = scene ? scene->heights : hm.heights;
     DefectMapJobSummary s;

@@ -53,14 +53,9 @@ int runScratchMap(const ScratchArgs& a) {
     } else {
         // The scratch map is invariant to an affine change of the heights, so an integer map
         // needs no height range: it is read as [0, 1].
-        try {
-            hm = loadHeightmap(in, {});
-        } catch (const InputError& e) {
-            if (std::string(e.what()).find("height_range") == std::string::npos) throw;
-            HeightmapOptions o;
-            o.heightRange = std::array<double, 2>{0.0, 1.0};
-            hm = loadHeightmap(in, o);
-        }
+        HeightmapOptions o;
+        o.defaultIntegerRange = std::array<double, 2>{0.0, 1.0};
+        hm = loadHeightmap(in, o);
     }
     const std::vector<float>& h = scene ? scene->heights : hm.heights;
     const int W = scene ? scene->mapWidth : hm.width, H = scene ? scene->mapHeight : hm.height;

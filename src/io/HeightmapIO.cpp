@@ -69,7 +69,8 @@ Mapping mappingFor(const std::string& where, const HeightmapOptions& opt, bool i
     Mapping m;
     m.integer = integer;
     if (integer) {
-        if (!opt.heightRange)
+        const auto range = opt.heightRange ? opt.heightRange : opt.defaultIntegerRange;
+        if (!range)
             throw inputError(where,
                              "integer height map needs heightmap.height_range: [min, max] in "
                              "scene units (this map is " +
@@ -83,8 +84,8 @@ Mapping mappingFor(const std::string& where, const HeightmapOptions& opt, bool i
                              "map is " +
                                  format,
                              "Remove height_scale and put the scale into height_range");
-        m.lo = (*opt.heightRange)[0];
-        m.hi = (*opt.heightRange)[1];
+        m.lo = (*range)[0];
+        m.hi = (*range)[1];
     } else {
         if (opt.heightRange)
             throw inputError(where,

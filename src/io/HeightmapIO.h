@@ -28,7 +28,11 @@ namespace sl {
 
 struct HeightmapOptions {
     std::optional<std::array<double, 2>> heightRange;  // integer maps: [min, max], scene units
-    double heightScale = 1.0;                          // float maps: multiplier
+    /// Integer maps without heightRange use this range instead of being refused. For what
+    /// depends only on the map's shape, invariant to an affine change of the heights (the
+    /// scratch and defect maps read an integer map as [0, 1]); unset for anything rendered.
+    std::optional<std::array<double, 2>> defaultIntegerRange;
+    double heightScale = 1.0;  // float maps: multiplier
 };
 
 struct HeightmapData {
