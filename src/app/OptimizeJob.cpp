@@ -637,10 +637,9 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
         // the reference region blue (app/Preview.h).
         std::vector<double> y(t.rows());
         for (size_t q = 0; q < y.size(); ++q)
-            y[q] = ch == 3 ? luminance(Rgb{static_cast<float>(imageFinal[3 * q]),
-                                           static_cast<float>(imageFinal[3 * q + 1]),
-                                           static_cast<float>(imageFinal[3 * q + 2])})
-                           : imageFinal[q];
+            y[q] = ch == 3
+                       ? luminance(imageFinal[3 * q], imageFinal[3 * q + 1], imageFinal[3 * q + 2])
+                       : imageFinal[q];
         std::vector<uint8_t> labels(t.rows(), 0);
         for (size_t q = 0; q < labels.size(); ++q)
             labels[q] = in.defects[q] ? 255 : (!in.reference.empty() && in.reference[q] ? 128 : 0);
