@@ -8,6 +8,7 @@
 #include <limits>
 #include <numbers>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "TestUtil.h"
@@ -40,6 +41,29 @@ SurfaceSpec cleanBallEnd() {
     s.gougeCount = 0;
     s.pocketEdge = false;
     return s;
+}
+
+/// `s` generated twice and on one thread gives the same heights, truth (and description); with
+/// seed 2 over half the heights change (roughness and chatter phases change everywhere).
+/// Returns the surfaces of the spec's seed and of seed 2.
+std::pair<GeneratedSurface, GeneratedSurface> expectDeterministic(SurfaceSpec s) {
+    GeneratedSurface a = sl::generateSurface(s);
+    GeneratedSurface b = sl::generateSurface(s);
+    EXPECT_EQ(a.heights, b.heights);
+    EXPECT_EQ(a.truth, b.truth);
+    EXPECT_EQ(a.description, b.description);
+    {
+        tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+        GeneratedSurface c = sl::generateSurface(s);
+        EXPECT_EQ(a.heights, c.heights);
+        EXPECT_EQ(a.truth, c.truth);
+    }
+    s.seed = 2;
+    GeneratedSurface d = sl::generateSurface(s);
+    size_t differing = 0;
+    for (size_t k = 0; k < a.heights.size(); ++k) differing += a.heights[k] != d.heights[k];
+    EXPECT_GT(differing, a.heights.size() / 2);
+    return {std::move(a), std::move(d)};
 }
 
 int col(const GeneratedSurface& g, double x) {
@@ -231,23 +255,8 @@ TEST(Synth, DeterministicFromSeedAndThreadCount) {
     s.width = 256;
     s.height = 192;
     s.pitch = 0.02;
-    GeneratedSurface a = sl::generateSurface(s);
-    GeneratedSurface b = sl::generateSurface(s);
-    EXPECT_EQ(a.heights, b.heights);
-    EXPECT_EQ(a.truth, b.truth);
-    EXPECT_EQ(a.description, b.description);
-    {
-        tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
-        GeneratedSurface c = sl::generateSurface(s);
-        EXPECT_EQ(a.heights, c.heights);
-        EXPECT_EQ(a.truth, c.truth);
-    }
-    s.seed = 2;
-    GeneratedSurface d = sl::generateSurface(s);
+    const auto [a, d] = expectDeterministic(s);
     EXPECT_NE(a.heights, d.heights);
-    size_t differing = 0;
-    for (size_t k = 0; k < a.heights.size(); ++k) differing += a.heights[k] != d.heights[k];
-    EXPECT_GT(differing, a.heights.size() / 2);  // roughness and chatter phases change everywhere
 }
 
 TEST(Synth, RoughnessHasRequestedRms) {
@@ -746,22 +755,7 @@ TEST(Synth, NewProcessesAreDeterministicAndThreadIndependent) {
         s.height = 200;
         s.noiseRms = 0.0001;
         s.spikeCount = 5;
-        GeneratedSurface a = sl::generateSurface(s);
-        GeneratedSurface b = sl::generateSurface(s);
-        EXPECT_EQ(a.heights, b.heights);
-        EXPECT_EQ(a.truth, b.truth);
-        EXPECT_EQ(a.description, b.description);
-        {
-            tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
-            GeneratedSurface c = sl::generateSurface(s);
-            EXPECT_EQ(a.heights, c.heights);
-            EXPECT_EQ(a.truth, c.truth);
-        }
-        s.seed = 2;
-        GeneratedSurface d = sl::generateSurface(s);
-        size_t differing = 0;
-        for (size_t k = 0; k < a.heights.size(); ++k) differing += a.heights[k] != d.heights[k];
-        EXPECT_GT(differing, a.heights.size() / 2);
+        const auto [a, d] = expectDeterministic(s);
         EXPECT_NE(a.truth, d.truth);  // defects moved
     }
 }
