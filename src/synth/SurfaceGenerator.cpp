@@ -129,16 +129,19 @@ void validate(const SurfaceSpec& s) {
                     formatNumber(s.feedPerTooth) + " mm",
                 "Reduce feedPerTooth or stepover, or set ballFeedMarks = false");
     }
-    if (s.process == SurfaceSpec::Process::FaceMillFeed) {
+    // An insert of nose radius r cuts crescents only for a feed in (0, 2r) per tooth or turn.
+    auto requireInsert = [&](const std::string& inserts, const std::string& feedIs,
+                             const std::string& typicalFeeds) {
         requireFinite(s.insertNoseRadius, "insertNoseRadius");
         require(s.insertNoseRadius > 0, "insertNoseRadius",
-                "must be > 0 mm, got " + formatNumber(s.insertNoseRadius),
-                "Typical inserts: 0.4-1.2 mm");
+                "must be > 0 mm, got " + formatNumber(s.insertNoseRadius), "Typical " + inserts);
         require(s.feedPerTooth > 0 && s.feedPerTooth < 2 * s.insertNoseRadius, "feedPerTooth",
                 "must be in (0, 2*insertNoseRadius = " + formatNumber(2 * s.insertNoseRadius) +
-                    ") mm for a face mill, got " + formatNumber(s.feedPerTooth),
-                "Typical finishing feeds: 0.05-0.2 mm per tooth");
-    }
+                    ") mm " + feedIs + ", got " + formatNumber(s.feedPerTooth),
+                "Typical finishing feeds: " + typicalFeeds);
+    };
+    if (s.process == SurfaceSpec::Process::FaceMillFeed)
+        requireInsert("inserts: 0.4-1.2 mm", "for a face mill", "0.05-0.2 mm per tooth");
     if (s.process == SurfaceSpec::Process::FlatEndPocket) {
         requireFinite(s.toolCornerRadius, "toolCornerRadius");
         require(s.toolCornerRadius > 0 && s.toolCornerRadius <= s.toolRadius, "toolCornerRadius",
@@ -157,14 +160,8 @@ void validate(const SurfaceSpec& s) {
                 "Reduce feedPerTooth or stepover");
     }
     if (s.process == SurfaceSpec::Process::Turned) {
-        requireFinite(s.insertNoseRadius, "insertNoseRadius");
-        require(s.insertNoseRadius > 0, "insertNoseRadius",
-                "must be > 0 mm, got " + formatNumber(s.insertNoseRadius),
-                "Typical turning inserts: 0.2-1.6 mm");
-        require(s.feedPerTooth > 0 && s.feedPerTooth < 2 * s.insertNoseRadius, "feedPerTooth",
-                "must be in (0, 2*insertNoseRadius = " + formatNumber(2 * s.insertNoseRadius) +
-                    ") mm per revolution for turning, got " + formatNumber(s.feedPerTooth),
-                "Typical finishing feeds: 0.05-0.2 mm per revolution");
+        requireInsert("turning inserts: 0.2-1.6 mm", "per revolution for turning",
+                      "0.05-0.2 mm per revolution");
         requireFinite(s.turnCentreX, "turnCentreX");
         requireFinite(s.turnCentreZ, "turnCentreZ");
     }
