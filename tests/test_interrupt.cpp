@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -195,6 +196,15 @@ TEST(Interrupt, SignalsStopCleanly) {
             stagingName += std::to_string(pid);
             const fs::path staging = dir.path() / stagingName;
             ASSERT_TRUE(waitForPath(staging, 30)) << readText(log);
+            // loss.csv grows while the optimizer runs (its first row is flushed at once).
+            bool liveRows = false;
+            for (int k = 0; k < 300 && !liveRows; ++k) {
+                const std::string csv = readText(staging / "loss.csv");
+                liveRows = std::count(csv.begin(), csv.end(), '\n') >= 2;
+                if (!liveRows) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+            }
+            EXPECT_TRUE(liveRows) << "no row in the staged loss.csv while optimizing\n"
+                                  << readText(log);
             std::this_thread::sleep_for(std::chrono::milliseconds(delayMs));
             kill(pid, sig);
             EXPECT_EQ(waitExit(pid), code) << readText(log);

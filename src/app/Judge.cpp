@@ -25,7 +25,7 @@ TransportSource judgeEstimate(const Scene& scene, const JudgeOptions& o) {
     p.rgb = o.rgb;
     p.sampleSets = 2;
     p.threads = o.threads;
-    p.progress = o.progress;
+    p.label = "judge estimate";
     return transportForScene(scene, p, o.cacheDir);
 }
 

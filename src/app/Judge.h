@@ -51,7 +51,6 @@ struct JudgeOptions {
     std::filesystem::path truth;     // label mask in height-map space (optional)
     std::filesystem::path cacheDir;  // where the estimate is cached ("" = not stored)
     int threads = 0;
-    std::function<void(double)> progress;
 };
 
 struct JudgeScore {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <iomanip>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -18,6 +19,7 @@
 #include "core/Color.h"
 #include "core/Error.h"
 #include "core/Interrupt.h"
+#include "core/Progress.h"
 #include "core/Registry.h"
 #include "core/Stopwatch.h"
 #include "core/Text.h"
@@ -412,6 +414,9 @@ std::vector<std::string> resultWarnings(const OptimizeRun& run, const std::vecto
     return w;
 }
 
+constexpr const char* kLossCsvHeader =
+    "iteration,evaluations,loss,L_grad,L_reg,seconds,heldout_loss,heldout_paper_loss";
+
 /// One λ's optimization: E* and loss.csv's rows.
 struct LambdaResult {
     OptimizeRun run;
@@ -454,6 +459,23 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
     run.initial = loss.evaluate(res.e, {});
     if (scorer) run.heldInitial = scorer->score(res.e);
 
+    // loss.csv as it goes: the staged copy grows a row per iteration (flushed about once a
+    // second); the final file replaces it with the returned E's held-out score on its last row.
+    const std::filesystem::path liveCsv = p.staged(run.dir) / "loss.csv";
+    std::filesystem::create_directories(liveCsv.parent_path());
+    std::ofstream live(liveCsv);
+    live << kLossCsvHeader << '\n' << std::flush;
+    spdlog::info("lambda {}: loss.csv as it goes: {}", lambda, liveCsv.string());
+    Stopwatch sinceFlush;
+    // Progress over the whole budget: every start, every continuation stage.
+    const double budget = static_cast<double>(o.optimizer.iterations) *
+                          static_cast<double>(p.blackBox ? 1 : o.starts.size()) *
+                          static_cast<double>(p.blackBox ? 1 : o.continuation.size() + 1);
+    ProgressTask task(o.lambdas.size() > 1 ? "optimize (lambda " + formatNumber(lambda) + ")"
+                                           : std::string("optimize"),
+                      budget);
+    double lastHeld = std::nan("");
+
     auto callback = [&](const IterationRecord& r, std::span<const double> x) {
         // Every row: the optimizer's own loss (with planes, on the estimate of that step; with
         // continuation, at that stage's λ). Every heldOutEvery rows also the parts on T at λ
@@ -473,10 +495,20 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
             HeldOutScore h = scorer->score(x);
             run.secondsHeldOutScoring += clock.seconds();
             row << h.own.total << ',' << h.paper.total;
+            lastHeld = h.own.total;
         } else {
             row << ',';
         }
         res.rows.push_back(row.str());
+        live << res.rows.back() << '\n';
+        if (res.rows.size() == 1 || sinceFlush.seconds() >= 1.0) {
+            live.flush();
+            sinceFlush.restart();
+        }
+        task.set(r.iteration);
+        task.detail("loss " + formatNumber(r.loss, 4) +
+                    (std::isnan(lastHeld) ? "" : ", held out " + formatNumber(lastHeld, 4)));
+        spdlog::debug("iteration {}: loss {}", r.iteration, r.loss);
         // Ctrl-C: stop at this iteration; the optimizer returns its best iterate.
         if (interruptRequested()) {
             run.interrupted = true;
@@ -510,6 +542,7 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
         run.startLosses = sr.startLosses;
     }
     run.optimizer.method = methodName(p.requested);
+    live.close();
     run.final = loss.evaluate(res.e, {});
     if (scorer) {
         run.heldFinal = scorer->score(res.e);
@@ -622,7 +655,7 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
         writePng(dir / "initial.png", i0);
     }
     std::ostringstream csv;
-    csv << "iteration,evaluations,loss,L_grad,L_reg,seconds,heldout_loss,heldout_paper_loss\n";
+    csv << kLossCsvHeader << '\n';
     for (const auto& row : r.rows) csv << row << '\n';
     writeTextAtomically(dir / "loss.csv", csv.str());
     writePng(dir / "initial-envmap.png",
@@ -704,9 +737,17 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
     OptimizeJobSummary job;
     try {
         Inputs in;
+        // Context first, as each piece is known (the results follow the work).
         loadTraining(p, in, job);
+        spdlog::info("{}", describeTransport(job.transport));
         loadHeldOut(p, in, job);
+        if (job.heldOut)
+            spdlog::info(
+                "judge estimate (held out): {} ({} spp, seed {})",
+                job.heldOut->path.empty() ? std::string("not stored") : job.heldOut->path.string(),
+                job.heldOut->file.provenance.spp, job.heldOut->file.provenance.seed);
         prepareRuns(p, in, job);
+        spdlog::info("mask: {} pixels; writing {}", job.maskPixels, p.o.outDir.string());
         std::vector<ReportRun> reportRuns;
         for (double lambda : p.o.lambdas) {
             LambdaResult r = optimizeLambda(p, in, job, lambda);

@@ -7,6 +7,7 @@
 #include "app/HeldOut.h"
 #include "app/Judge.h"
 #include "core/Error.h"
+#include "core/Progress.h"
 #include "core/Stopwatch.h"
 #include "io/SceneFile.h"
 #include "render/Render.h"
@@ -18,8 +19,15 @@ namespace sl {
 namespace {
 
 TransportSource trace(const Scene& scene, const RenderOptions& ro, const TransportProvenance& prov,
-                      bool rgb, const std::filesystem::path& out, const Stopwatch& clock) {
-    PrecomputeResult r = precomputeTransport(scene, ro, rgb ? 3 : 1);
+                      bool rgb, const std::string& label, const std::filesystem::path& out,
+                      const Stopwatch& clock) {
+    ProgressTask task(label + " (" + std::to_string(scene.camera.width()) + "x" +
+                          std::to_string(scene.camera.height()) + " px, " + std::to_string(ro.spp) +
+                          " spp)",
+                      1);
+    RenderOptions withProgress = ro;
+    withProgress.progress = task.fraction();
+    PrecomputeResult r = precomputeTransport(scene, withProgress, rgb ? 3 : 1);
     TransportSource s;
     s.secondsTrace = r.summary.seconds;
     s.trace = r.summary;
@@ -47,6 +55,25 @@ std::vector<TransportSource> transportSetForScene(const Scene& scene,
     return set;
 }
 
+std::string describeTransport(const TransportSource& s) {
+    const TransportMatrix& t = s.file.matrix;
+    char buf[512];
+    std::snprintf(
+        buf, sizeof buf,
+        "transport matrix %dx%d px x %dx%d texels, %s T, %s, nnz %zu (density %.4f), %.1f MB",
+        t.width, t.height, t.envWidth, t.envHeight, t.channels == 3 ? "RGB" : "gray",
+        t.storage == TransportStorage::Sparse ? "CSR" : "dense", t.nnz(), t.density(),
+        static_cast<double>(t.bytes()) / 1e6);
+    std::string out = buf;
+    if (s.trace.rays) {
+        std::snprintf(buf, sizeof buf, "\ntraced %llu rays in %.3f s (%.2f Mrays/s), total %.3f s",
+                      static_cast<unsigned long long>(s.trace.rays), s.trace.seconds,
+                      s.trace.raysPerSecond() / 1e6, s.secondsTotal);
+        out += buf;
+    }
+    return out;
+}
+
 bool isTransportFile(const std::filesystem::path& input) {
     return input.extension() == ".tm";
 }
@@ -58,7 +85,6 @@ RenderOptions traceOptions(const Scene& scene, const PrecomputeOptions& o) {
     if (o.seed) r.seed = *o.seed;
     r.threads = o.threads;
     r.sampleSets = o.sampleSets;
-    r.progress = o.progress;
     return r;
 }
 
@@ -68,8 +94,8 @@ TransportSource precomputeToFile(const std::filesystem::path& file,
     const Stopwatch clock;
     auto scene = loadScene(file);
     const RenderOptions ro = traceOptions(*scene, options);
-    return trace(*scene, ro, transportProvenance(*scene, ro, options.rgb ? 3 : 1), options.rgb, out,
-                 clock);
+    return trace(*scene, ro, transportProvenance(*scene, ro, options.rgb ? 3 : 1), options.rgb,
+                 options.label, out, clock);
 }
 
 TransportSource transportForScene(const Scene& scene, const PrecomputeOptions& options,
@@ -77,7 +103,7 @@ TransportSource transportForScene(const Scene& scene, const PrecomputeOptions& o
     const Stopwatch clock;
     const RenderOptions ro = traceOptions(scene, options);
     const TransportProvenance prov = transportProvenance(scene, ro, options.rgb ? 3 : 1);
-    if (cacheDir.empty()) return trace(scene, ro, prov, options.rgb, {}, clock);
+    if (cacheDir.empty()) return trace(scene, ro, prov, options.rgb, options.label, {}, clock);
     const auto cached = cacheDir / ("transport-" + prov.fingerprint + ".tm");
     if (std::filesystem::exists(cached)) {
         try {
@@ -92,7 +118,7 @@ TransportSource transportForScene(const Scene& scene, const PrecomputeOptions& o
             spdlog::warn("ignoring cached transport matrix: {}", e.what());
         }
     }
-    return trace(scene, ro, prov, options.rgb, cached, clock);
+    return trace(scene, ro, prov, options.rgb, options.label, cached, clock);
 }
 
 std::unique_ptr<Scene> sceneOfTransport(const TransportFile& f, const std::string& purpose) {
@@ -125,6 +151,7 @@ TransportSource judgeEstimateFor(const TransportFile& training, const Scene& sce
     o.maxDepth = training.provenance.maxDepth;
     o.rgb = training.matrix.channels == 3;
     o.sampleSets = 2;
+    o.label = "judge estimate (held out)";
     TransportSource s = transportForScene(scene, o, cacheDir);
     // Same scene, camera, material and height map: only the sampling may differ.
     auto strip = [](json j) {

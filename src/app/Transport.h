@@ -22,7 +22,8 @@ struct PrecomputeOptions {
     bool rgb = false;
     int sampleSets = 1;  // 2: store the halves T_a, T_b (noise-unbiased objective, held-out)
     int threads = 0;
-    std::function<void(double)> progress;
+    /// What the trace's progress (core/Progress.h) is called; the image size and spp follow.
+    std::string label = "precompute";
 };
 
 struct TransportSource {
@@ -65,6 +66,10 @@ std::unique_ptr<Scene> sceneOfTransport(const TransportFile& t, const std::strin
 /// apart from the sampling.
 TransportSource judgeEstimateFor(const TransportFile& training, const Scene& scene, int spp,
                                  const std::filesystem::path& cacheDir);
+
+/// "transport matrix 512x512 px x 50x25 texels, gray T, CSR, nnz ... MB", and on a second line
+/// the trace's rays and seconds when it was traced (not on a cache hit or a file read).
+std::string describeTransport(const TransportSource& source);
 
 /// True if `input` names a transport-matrix file (by extension .tm).
 bool isTransportFile(const std::filesystem::path& input);

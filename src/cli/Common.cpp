@@ -13,21 +13,6 @@
 
 namespace sl::cli {
 
-std::function<void(double)> progressBar(const std::string& label) {
-    if (!isatty(STDERR_FILENO)) return {};
-    return [label, last = std::make_shared<int>(-1)](double f) {
-        int pct = static_cast<int>(f * 100.0);
-        if (pct == *last) return;
-        *last = pct;
-        constexpr int kWidth = 40;
-        int filled = pct * kWidth / 100;
-        std::fprintf(stderr, "\r%s [%s%s] %3d%%", label.c_str(), std::string(filled, '#').c_str(),
-                     std::string(kWidth - filled, ' ').c_str(), pct);
-        if (pct >= 100) std::fprintf(stderr, "\n");
-        std::fflush(stderr);
-    };
-}
-
 EnvMap chooseEnvMap(const Scene& scene, const std::string& envmapFile,
                     std::optional<float> constant) {
     const int w = scene.basis.width(), h = scene.basis.height();

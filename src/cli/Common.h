@@ -42,9 +42,6 @@ struct UsageError : std::runtime_error {
 /// shows each as its flag --NAME where some command of `app` has that flag.
 std::string withFlags(const CLI::App& app, const std::string& message);
 
-/// Progress bar on stderr when it is a terminal (nothing otherwise).
-std::function<void(double)> progressBar(const std::string& label);
-
 /// The env map for a scene: --envmap FILE, --constant V, else the scene's envmap section,
 /// else the "studio" preset. RGB files stay RGB; constants and presets are gray.
 EnvMap chooseEnvMap(const Scene& scene, const std::string& envmapFile,

@@ -25,7 +25,6 @@ int runJudge(const JudgeArgs& a) {
     o.scene = a.scene;
     o.references = !a.noReferences;
     for (const auto& l : a.lights) o.lights.emplace_back(l);
-    o.judge.progress = progressBar("judge estimate");
     o.commandLine = invokedCommandLine();
     JudgeJobSummary s = runJudgeJob(o);
     const auto& est = s.estimate;

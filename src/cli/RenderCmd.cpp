@@ -6,6 +6,7 @@
 
 #include "cli/Commands.h"
 #include "cli/Common.h"
+#include "core/Progress.h"
 #include "io/ImageIO.h"
 #include "io/SceneFile.h"
 #include "render/Render.h"
@@ -38,7 +39,8 @@ int runRender(const RenderArgs& a) {
 
     RenderOptions opt = renderOptionsFor(*scene);
     opt.threads = a.threads;
-    opt.progress = progressBar("render");
+    ProgressTask task("render", 1);
+    opt.progress = task.fraction();
     RenderResult r = render(*scene, env, opt);
     writeExr(a.out, r.image);
     writePng(pngPath, r.image, a.exposure);

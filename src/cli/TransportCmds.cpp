@@ -30,19 +30,6 @@ void addTraceOptions(CLI::App* c, PrecomputeOptions& p) {
         ->check(CLI::Range(0, 4096));
 }
 
-void printTransport(const TransportSource& s) {
-    const TransportMatrix& t = s.file.matrix;
-    std::printf(
-        "transport matrix %dx%d px x %dx%d texels, %s T, %s, nnz %zu (density %.4f), %.1f MB\n",
-        t.width, t.height, t.envWidth, t.envHeight, t.channels == 3 ? "RGB" : "gray",
-        t.storage == TransportStorage::Sparse ? "CSR" : "dense", t.nnz(), t.density(),
-        static_cast<double>(t.bytes()) / 1e6);
-    if (s.trace.rays)
-        std::printf("traced %llu rays in %.3f s (%.2f Mrays/s), total %.3f s\n",
-                    static_cast<unsigned long long>(s.trace.rays), s.trace.seconds,
-                    s.trace.raysPerSecond() / 1e6, s.secondsTotal);
-}
-
 struct PrecomputeArgs {
     std::string scene, out = "part.tm";
     PrecomputeOptions p;
@@ -51,10 +38,8 @@ struct PrecomputeArgs {
 int runPrecompute(const PrecomputeArgs& a) {
     if (std::filesystem::path(a.out).extension() != ".tm")
         throw UsageError("output '" + a.out + "' must end in .tm");
-    PrecomputeOptions p = a.p;
-    p.progress = progressBar("precompute");
-    TransportSource s = precomputeToFile(a.scene, p, a.out);
-    printTransport(s);
+    TransportSource s = precomputeToFile(a.scene, a.p, a.out);
+    std::printf("%s\n", describeTransport(s).c_str());
     std::printf("wrote %s (fingerprint %s)\n", a.out.c_str(),
                 s.file.provenance.fingerprint.c_str());
     return kOk;
@@ -106,15 +91,8 @@ int runOptimize(OptimizeArgs a) {
     a.job.outDir = a.out;
     a.job.objective.reg = a.reg == "image" ? RegTarget::Image : RegTarget::EnvMap;
     if (a.preset) applyOptimizePreset(*a.preset, a.job);
-    a.job.precompute.progress = progressBar("precompute");
     a.job.commandLine = invokedCommandLine();
     OptimizeJobSummary s = runOptimizeJob(a.job);
-    printTransport(s.transport);
-    std::printf("mask: %zu pixels\n", s.maskPixels);
-    if (s.heldOut)
-        std::printf("judge estimate (held out): %s (%d spp, seed %llu)\n",
-                    s.heldOut->path.string().c_str(), s.heldOut->file.provenance.spp,
-                    static_cast<unsigned long long>(s.heldOut->file.provenance.seed));
     std::printf("%10s %-12s %6s %6s %14s %14s %14s %14s %10s\n", "lambda", "optimizer", "iters",
                 "evals", "initial loss", "final loss", "held-out init", "held-out final",
                 "seconds");

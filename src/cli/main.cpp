@@ -2,6 +2,7 @@
 // Exit codes: 0 ok, 1 runtime error (bad input file, I/O, ...), 2 usage error, 128 + signal
 // when interrupted (130 Ctrl-C, 143 SIGTERM; core/Interrupt.h says what is kept).
 #include <signal.h>
+#include <spdlog/spdlog.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -11,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "app/Console.h"
 #include "app/Version.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
@@ -98,6 +100,18 @@ int main(int argc, char** argv) {
     app.set_help_all_flag("--help-all", "Show the help of every command");
     app.set_version_flag("--version", sl::versionText(),
                          "Print the version, its commit and the libraries' versions");
+    // How a command talks (app/Console.h); given before or after the command's name.
+    bool quiet = false;
+    int verbose = 0;
+    double progressEvery = sl::ConsoleOptions{}.plainEvery;
+    app.fallthrough();
+    app.add_flag("-q,--quiet", quiet,
+                 "Only results, warnings and errors: no progress, no context lines");
+    app.add_flag("-v,--verbose", verbose, "Also debug lines (e.g. every optimizer iteration)");
+    app.add_option("--progress-every", progressEvery,
+                   "Seconds between progress lines when the output is not a terminal")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
 
     std::function<int()> run;
     registerRender(app, run);
@@ -126,6 +140,24 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "error: %s\n", withFlags(app, e.what()).c_str());
         return kRuntimeError;
     }
+    // Output: progress and log lines through one console (app/Console.h). Lines, not blocks,
+    // reach a pipe as they are printed (`| tee log` shows the run as it goes).
+    std::setvbuf(stdout, nullptr, _IOLBF, 0);
+    sl::ConsoleOptions co;
+    co.terminal = ::isatty(STDERR_FILENO) != 0;
+    co.plainEvery = progressEvery;
+    sl::Console console(co);
+    spdlog::default_logger()->sinks() = {console.logSink()};
+    spdlog::set_level(quiet         ? spdlog::level::warn
+                      : verbose > 0 ? spdlog::level::debug
+                                    : spdlog::level::info);
+    struct ListenerScope {
+        explicit ListenerScope(sl::ProgressListener* l) { sl::setProgressListener(l); }
+        ~ListenerScope() {
+            sl::setProgressListener(nullptr);
+            spdlog::default_logger()->sinks().clear();
+        }
+    } listenerScope(quiet ? nullptr : &console);
     try {
         const int rc = run ? run() : kUsageError;
         return sl::interruptRequested() ? 128 + sl::interruptSignal() : rc;

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "core/Error.h"
+#include "core/Progress.h"
 #include "core/Text.h"
 #include "io/HeightmapIO.h"
 #include "scene/Materials.h"
@@ -275,6 +276,8 @@ SceneDesc readSceneFile(const std::filesystem::path& file) {
 }
 
 std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
+    // A 5000² map takes seconds to read and build (core/Progress.h shows the elapsed time).
+    const ProgressTask task("loading " + desc.heightmap.path.filename().string());
     HeightmapOptions opt;
     opt.heightRange = desc.heightmap.heightRange;
     opt.heightScale = desc.heightmap.heightScale;

@@ -5,9 +5,11 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <mutex>
+#include <numeric>
 #include <stdexcept>
 
 #include "core/Interrupt.h"
@@ -34,6 +36,13 @@ namespace {
 struct Counters {
     uint64_t rays = 0, camera = 0, escaped = 0;
 };
+
+/// The row stride of trace()'s schedule: the integer nearest 0.618·H that is coprime to H.
+int rowStride(int H) {
+    int s = std::max(1, static_cast<int>(std::lround(0.6180339887 * H)));
+    while (std::gcd(s, H) != 1) ++s;
+    return s;
+}
 
 }  // namespace
 
@@ -63,11 +72,17 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
     std::mutex progressMutex;
     const Stopwatch clock;
 
+    // Rows are traced in a stride order (row k is y = k·stride mod H, stride coprime to H, near
+    // 0.618·H), so every stretch of the schedule mixes rows that see the part with rows that
+    // do not: the rows done grow linearly in time and the progress' ETA holds. Each pixel's
+    // samples depend only on (seed, pixel, sample), so the order changes no result.
+    const int stride = rowStride(H);
     auto body = [&](const tbb::blocked_range<int>& rows) {
         std::vector<EscapedPath> paths;
         paths.reserve(static_cast<size_t>(spp));
         Counters& c = counters.local();
-        for (int y = rows.begin(); y < rows.end(); ++y) {
+        for (int k = rows.begin(); k < rows.end(); ++k) {
+            const int y = static_cast<int>((static_cast<int64_t>(k) * stride) % H);
             if (opt.interruptible) throwIfInterrupted();  // Ctrl-C: stop here, keep nothing
             for (int x = 0; x < W; ++x) {
                 const uint32_t pixel = static_cast<uint32_t>(y * W + x);
