@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "core/Error.h"
+#include "core/Progress.h"
 #include "core/Stats.h"
 #include "synth/SurfaceGenerator.h"
 
@@ -18,6 +19,7 @@ DefectMapBenchResult runDefectMapBench(const DefectMapBenchOptions& o) {
     autoOptions.method = DefectMethod::Auto;
     DefectMapOptions paperOptions = o.map;
     paperOptions.method = DefectMethod::Paper;
+    ProgressTask task("bench defectmap", static_cast<double>(o.sizes.size()) * o.repeats);
     for (int n : o.sizes) {
         SurfaceSpec spec = testPartSpec(TestPart::BallEnd);
         spec.width = spec.height = n;
@@ -30,6 +32,7 @@ DefectMapBenchResult runDefectMapBench(const DefectMapBenchOptions& o) {
             const DefectMap p = detectDefects(part.heights, n, n, paperOptions);
             tAuto.push_back(a.seconds);
             tPaper.push_back(p.seconds);
+            task.advance();
             row.markedAuto = a.markedFraction();
             row.markedPaper = p.markedFraction();
             if (r == 0) {

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/Error.h"
+#include "core/Progress.h"
 #include "core/Stopwatch.h"
 #include "io/AtomicFile.h"
 #include "io/HeightmapIO.h"
@@ -56,7 +57,11 @@ DefectMapJobSummary runDefectMapJob(const DefectMapJobOptions& o) {
     std::optional<LabelMask> truth;
     if (!o.truth.empty()) truth = readLabelMask(o.truth, s.width, s.height);
 
-    s.map = detectDefects(h, s.width, s.height, o.map);
+    {
+        const ProgressTask task("defect map (" + std::to_string(s.width) + "x" +
+                                std::to_string(s.height) + ")");
+        s.map = detectDefects(h, s.width, s.height, o.map);
+    }
     if (truth) s.score = scoreDefectMap(s.map.map, truth->labels, truth->legend, o.negatives);
     std::vector<uint8_t> image;
     if (!o.imageOutput.empty()) {

@@ -9,6 +9,7 @@
 
 #include "app/InitialState.h"
 #include "core/Error.h"
+#include "core/Progress.h"
 #include "core/Stats.h"
 #include "core/Stopwatch.h"
 #include "core/Text.h"
@@ -203,7 +204,9 @@ GradCheckReport runGradCheck(const GradCheckOptions& o) {
         throw inputError(option("repeats"), "is " + std::to_string(o.repeats), "use a count >= 1");
     const auto lab = makeLab(o.setup, o.repeats);
     GradCheckReport rep = reportHeader(*lab, o.setup);
+    ProgressTask task("gradcheck", static_cast<double>(o.methods.size()));
     for (const std::string& m : o.methods) {
+        task.detail(m);
         if (m == "exact" || m == "exact+precompute") {
             rep.rows.push_back(measureExact(*lab, o.repeats, m == "exact+precompute"));
         } else if (m == "autodiff" || m == "autodiff-T") {
@@ -216,6 +219,7 @@ GradCheckReport runGradCheck(const GradCheckOptions& o) {
             fd.commonRandomNumbers = m != "fd-fresh";
             rep.rows.push_back(measureFd(*lab, o.repeats, fd, m));
         }
+        task.advance();
     }
     return rep;
 }
@@ -322,25 +326,32 @@ BenchGradientsReport runBenchGradients(const BenchGradientsOptions& o) {
     BenchGradientsReport rep;
     GradCheckReport& g = rep.gradients;
     g = reportHeader(*lab, o.setup);
-    g.rows.push_back(measureExact(*lab, o.repeats, false));
-    g.rows.push_back(measureExact(*lab, o.repeats, true));
-    g.rows.push_back(measureAutodiff(*lab, o.repeats, false));
-    g.rows.push_back(measureAutodiff(*lab, o.repeats, true));
+    ProgressTask task("bench gradients",
+                      static_cast<double>(4 + o.fdSteps.size() + o.fdFreshSteps.size() +
+                                          o.spsaC.size() * o.spsaQ.size()));
+    auto add = [&](GradCheckRow row) {
+        g.rows.push_back(std::move(row));
+        task.advance();
+    };
+    add(measureExact(*lab, o.repeats, false));
+    add(measureExact(*lab, o.repeats, true));
+    add(measureAutodiff(*lab, o.repeats, false));
+    add(measureAutodiff(*lab, o.repeats, true));
     for (double h : o.fdSteps) {
         FdOptions fd;
         fd.h = h;
-        g.rows.push_back(measureFd(*lab, o.repeats, fd, "fd"));
+        add(measureFd(*lab, o.repeats, fd, "fd"));
     }
     for (double h : o.fdFreshSteps) {
         FdOptions fd;
         fd.h = h;
         fd.commonRandomNumbers = false;
-        g.rows.push_back(measureFd(*lab, o.repeats, fd, "fd-fresh"));
+        add(measureFd(*lab, o.repeats, fd, "fd-fresh"));
     }
     for (double c : o.spsaC) {
         SpsaOptions sp = o.spsa;
         sp.c = c;
-        for (int q : o.spsaQ) g.rows.push_back(measureSpsa(*lab, o.repeats, sp, q));
+        for (int q : o.spsaQ) add(measureSpsa(*lab, o.repeats, sp, q));
     }
 
     std::ostringstream csv;

@@ -6,6 +6,7 @@
 #include "app/HeldOut.h"
 #include "app/InitialState.h"
 #include "core/Error.h"
+#include "core/Progress.h"
 #include "core/Registry.h"
 #include "core/Stats.h"
 #include "core/Stopwatch.h"
@@ -136,6 +137,8 @@ NoiseBenchResult runNoiseBench(const NoiseBenchOptions& o) {
     res.heldOutSeconds = clock.seconds();
 
     const ObjectiveOptions oo;  // the paper's λ = 30 on E
+    ProgressTask task("bench noise",
+                      static_cast<double>(o.spps.size() * o.optimizers.size()) * o.seeds * 2);
     for (int spp : o.spps) {
         for (int s = 0; s < o.seeds; ++s) {
             RenderOptions ro = base;
@@ -160,6 +163,7 @@ NoiseBenchResult runNoiseBench(const NoiseBenchOptions& o) {
                     opt.method = m.method;
                     opt.iterations = m.budget;
                     const OptimizerSummary sum = minimize(loss.problem(), e, opt);
+                    task.advance();
                     const HeldOutScore h = scorer.score(e);
                     NoiseBenchRow row;
                     row.spp = spp;

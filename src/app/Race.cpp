@@ -13,6 +13,7 @@
 #include "app/PartFiles.h"
 #include "app/Transport.h"
 #include "core/Error.h"
+#include "core/Progress.h"
 #include "core/Stats.h"
 #include "core/Stopwatch.h"
 #include "io/AtomicFile.h"
@@ -135,6 +136,7 @@ RaceSummary runRace(const RaceOptions& o) {
     };
     const auto cacheDir = std::filesystem::absolute(o.workDir) / ".scratchlight-cache";
     RaceSummary sum;
+    ProgressTask task("race", static_cast<double>(o.parts.size() * o.configs.size()) * o.seeds);
     for (const std::string& partName : o.parts) {
         const auto dir = o.workDir / partName;
         std::filesystem::create_directories(dir);
@@ -194,6 +196,7 @@ RaceSummary runRace(const RaceOptions& o) {
                 std::snprintf(buf, sizeof buf, "%s seed %d %-30s %6.2f s  eq2 %8.4f  U %8.4f",
                               partName.c_str(), seed, c.name.c_str(), r.seconds, r.eq2, r.unbiased);
                 log(buf);
+                task.advance();
                 rows.push_back(r);
             }
             const RaceRow& base = rows.front();  // paper-loop (the first config)

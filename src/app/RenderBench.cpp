@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "core/Error.h"
+#include "core/Progress.h"
 #include "core/Stats.h"
 #include "core/Stopwatch.h"
 #include "io/SceneFile.h"
@@ -62,11 +63,13 @@ RenderBenchResult runRenderBench(const RenderBenchOptions& o) {
     RenderBenchResult result;
     result.options = o;
     result.options.log = nullptr;
+    ProgressTask task("bench render", static_cast<double>(o.sizes.size() + !o.scene.empty()));
     if (!o.scene.empty()) {
         SceneDesc d = readSceneFile(o.scene);
         d.camera.width = d.camera.height = o.resolution;
         auto scene = loadScene(d);
         result.rows.push_back(measure(*scene, o.scene.filename().string(), 0, o));
+        task.advance();
     }
     for (int n : o.sizes) {
         SurfaceSpec spec;
@@ -81,6 +84,7 @@ RenderBenchResult runRenderBench(const RenderBenchOptions& o) {
         d.camera.width = d.camera.height = o.resolution;
         Scene scene(d, g.width, g.height, std::move(g.heights));
         result.rows.push_back(measure(scene, std::to_string(n) + "x" + std::to_string(n), gen, o));
+        task.advance();
         if (o.log) o.log("measured " + std::to_string(n) + "x" + std::to_string(n));
     }
     return result;

@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "core/Error.h"
+#include "core/Progress.h"
 #include "core/Stats.h"
 
 namespace sl {
@@ -24,6 +25,7 @@ ScratchMapBenchResult runScratchMapBench(const ScratchMapBenchOptions& o) {
     if (o.repeats < 1) throw inputError("repeats", "is " + std::to_string(o.repeats), "use >= 1");
     ScratchMapBenchResult result;
     result.options = o;
+    ProgressTask task("bench scratchmap", static_cast<double>(o.sizes.size()) * o.repeats);
     for (int n : o.sizes) {
         const std::vector<float> h = scratchMapBenchHeights(n);
         ScratchMapBenchRow row;
@@ -32,6 +34,7 @@ ScratchMapBenchResult runScratchMapBench(const ScratchMapBenchOptions& o) {
         for (int r = 0; r < o.repeats; ++r) {
             const ScratchMap m = computeScratchMap(h, n, n, o.map);
             seconds.push_back(m.seconds);
+            task.advance();
             row.patches = m.patchesX * m.patchesY;
             row.patchesMarked = m.patchesMarked;
             row.markedFraction = m.markedFraction();

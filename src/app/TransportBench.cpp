@@ -7,6 +7,7 @@
 #include "app/InitialState.h"
 #include "app/RenderBench.h"
 #include "core/Error.h"
+#include "core/Progress.h"
 #include "core/Stats.h"
 #include "core/Stopwatch.h"
 #include "io/SceneFile.h"
@@ -51,12 +52,17 @@ TransportBenchResult runTransportBench(const TransportBenchOptions& a) {
     // 1. Tracing: renderer (radiance sink) and precompute (transport sink), interleaved.
     std::vector<ThroughputRow> ren, pre;
     TransportMatrix T;
-    for (int i = 0; i < a.repeats; ++i) {
-        ren.push_back(benchRenderer(*scene, opt));
-        PrecomputeResult p = precomputeTransport(*scene, opt, 1);
-        pre.push_back(
-            {"precompute (path tracer + transport sink)", p.summary.rays, p.summary.seconds});
-        if (i == 0) T = std::move(p.matrix);
+    {
+        ProgressTask task("bench transport: tracing", 2.0 * a.repeats);
+        for (int i = 0; i < a.repeats; ++i) {
+            ren.push_back(benchRenderer(*scene, opt));
+            task.advance();
+            PrecomputeResult p = precomputeTransport(*scene, opt, 1);
+            pre.push_back(
+                {"precompute (path tracer + transport sink)", p.summary.rays, p.summary.seconds});
+            task.advance();
+            if (i == 0) T = std::move(p.matrix);
+        }
     }
     r.renderer = medianThroughput(ren);
     r.precompute = medianThroughput(pre);
@@ -77,6 +83,7 @@ TransportBenchResult runTransportBench(const TransportBenchOptions& a) {
     r.productRepeats = std::max(5, 4 * a.repeats + 1);
     const int reps = r.productRepeats;
     volatile double sink = 0;
+    const ProgressTask products("bench transport: products and Adam on T");
     r.streamingRead = medianSeconds(reps, [&] { sink = sink + streamingRead(T); });
     r.iterationTwoPass = medianSeconds(reps, [&] { sink = sink + loss.evaluate(e, g).total; });
     r.iterationFused = medianSeconds(reps, [&] { sink = sink + loss.evaluateFused(e, g).total; });

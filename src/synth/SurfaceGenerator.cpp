@@ -12,6 +12,7 @@
 #include <string>
 
 #include "core/Error.h"
+#include "core/Progress.h"
 #include "core/Rng.h"
 #include "core/Text.h"
 
@@ -1257,6 +1258,8 @@ std::string describe(const SurfaceSpec& spec, const Frame& fr, const ToolMarks& 
 
 GeneratedSurface generateSurface(const SurfaceSpec& spec) {
     validate(spec);
+    const ProgressTask task("generating " + std::to_string(spec.width) + "x" +
+                            std::to_string(spec.height) + " surface");
     const Frame fr(spec);
     GeneratedSurface out;
     out.width = spec.width;
