@@ -59,7 +59,7 @@ TEST_F(CliTest, HelpAndUsageErrors) {
     EXPECT_EQ(runCli("render").exitCode, 2);
     EXPECT_EQ(runCli("render x.json --no-such-option").exitCode, 2);
     EXPECT_EQ(runCli("render x.json --spp 0").exitCode, 2);
-    EXPECT_EQ(runCli("render x.json --envmap a.exr --constant 1").exitCode, 2);
+    EXPECT_EQ(runCli("render x.json --envmap a.exr --constant 1").exitCode, 2);  // no such flag
     writeGoodMap();
     auto r = runCli("render " + scene(R"({"heightmap": {"path": "map.npy"}})") + " -o " +
                     (dir / "out.tif").string());
@@ -91,7 +91,7 @@ TEST_F(CliTest, RendersAndWritesExrAndPng) {
     auto r = runCli(
         "render " +
         scene(R"({"heightmap": {"path": "map.npy", "pixel_pitch": 0.1}, )" + smallCamera + "}") +
-        " --spp 2 --constant 0.5 -o " + out());
+        " --spp 2 --envmap const:0.5 -o " + out());
     ASSERT_EQ(r.exitCode, 0) << r.output;
     Image exr = readImage(out());
     EXPECT_EQ(exr.width, 16);
@@ -176,7 +176,7 @@ TEST_F(CliTest, FailedRenderKeepsExistingOutput) {
 
 TEST_F(CliTest, BenchScratchmapPrintsATableAndWritesCsv) {
     const std::string csv = (dir / "sub dir" / "it's.csv").string();
-    auto r = runCli("bench scratchmap --sizes 64,100 --repeats 1 --csv \"" + csv + "\"");
+    auto r = runCli("bench scratchmap --sizes 64,100 --repeats 1 -o \"" + csv + "\"");
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("100x100"), std::string::npos) << r.output;
     std::ifstream in(csv);

@@ -83,7 +83,7 @@ TEST_F(CliTransport, RefusesDamagedAndWrongFiles) {
     }
     bytes[bytes.size() / 2] ^= 1;
     test::writeText(p("bad.tm"), bytes);
-    auto r = runCli("relight " + p("bad.tm") + " --constant 1 -o " + p("x.exr"));
+    auto r = runCli("relight " + p("bad.tm") + " --envmap const:1 -o " + p("x.exr"));
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_NE(r.output.find("damaged"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("precompute"), std::string::npos) << r.output;
@@ -266,7 +266,7 @@ TEST_F(CliTransport, BlackBoxOptimizersAndGradientCommands) {
     // gradcheck prints one row per method and writes JSON.
     r = runCli("gradcheck " + scene +
                " --size 16 --spp 2 --methods exact,autodiff,fd --repeats 1 "
-               "--json " +
+               "-o " +
                p("gc.json"));
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("exact"), std::string::npos);
@@ -276,7 +276,7 @@ TEST_F(CliTransport, BlackBoxOptimizersAndGradientCommands) {
     EXPECT_EQ(runCli("gradcheck " + scene + " --methods bogus").exitCode, 2);
     EXPECT_EQ(runCli("bench gradients --help").exitCode, 0);
     // export-mitsuba writes the scene, the mesh and the env map.
-    r = runCli("export-mitsuba " + scene + " " + p("mi") + " --envmap " + p("env.exr"));
+    r = runCli("export-mitsuba " + scene + " -o " + p("mi") + " --envmap " + p("env.exr"));
     ASSERT_EQ(r.exitCode, 0) << r.output;
     for (const char* f : {"scene.xml", "heightfield.ply", "envmap.exr"})
         EXPECT_TRUE(std::filesystem::exists(dir / "mi" / f)) << f;
@@ -285,8 +285,8 @@ TEST_F(CliTransport, BlackBoxOptimizersAndGradientCommands) {
 TEST_F(CliTransport, BenchNoiseWritesOneRowPerRunAndMediansPerGroup) {
     const std::string csv = p("bn/noise.csv");
     auto r = runCli("bench noise " + scene +
-                    " --resolution 16 --spps 2,4 --heldout-spp 8 --seeds 2 "
-                    "--optimizers adam:5,lbfgs:40 --csv " +
+                    " --size 16 --spps 2,4 --heldout-spp 8 --seeds 2 "
+                    "--optimizers adam:5,lbfgs:40 -o " +
                     csv);
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("vs top spp"), std::string::npos) << r.output;
@@ -316,12 +316,12 @@ TEST_F(CliTransport, BenchNoiseWritesOneRowPerRunAndMediansPerGroup) {
 
     // Bad optimizer list: exit 1, names the option, writes nothing.
     const std::string csv2 = p("bn2/noise.csv");
-    r = runCli("bench noise " + scene + " --resolution 16 --spps 2 --heldout-spp 8 --seeds 1 " +
-               "--optimizers adam:5,newton --csv " + csv2);
+    r = runCli("bench noise " + scene + " --size 16 --spps 2 --heldout-spp 8 --seeds 1 " +
+               "--optimizers adam:5,newton -o " + csv2);
     EXPECT_EQ(r.exitCode, 1) << r.output;
     EXPECT_NE(r.output.find("--optimizers"), std::string::npos) << r.output;
     EXPECT_FALSE(std::filesystem::exists(csv2));
-    r = runCli("bench noise " + scene + " --spps 3 --csv " + csv2);
+    r = runCli("bench noise " + scene + " --spps 3 -o " + csv2);
     EXPECT_EQ(r.exitCode, 1) << r.output;
     EXPECT_NE(r.output.find("--spps"), std::string::npos) << r.output;
 }

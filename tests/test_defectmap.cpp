@@ -278,7 +278,7 @@ TEST(DefectMapCli, BadInputLeavesNoOutput) {
     EXPECT_EQ(r.exitCode, 1) << r.output;
     EXPECT_NE(r.output.find("small-truth.png"), std::string::npos) << r.output;
     r = runCli("defectmap \"" + (dir / "part.npy").string() + "\" -o \"" + out +
-               "\" --image-out \"" + (dir / "img.png").string() + "\"");
+               "\" --image-output \"" + (dir / "img.png").string() + "\"");
     EXPECT_EQ(r.exitCode, 1) << r.output;
     EXPECT_NE(r.output.find("scene"), std::string::npos) << r.output;
     r = runCli("defectmap \"" + (dir / "part.npy").string() + "\" -o \"" +
@@ -300,8 +300,8 @@ TEST(DefectMapCli, SceneProjectsTheMapIntoTheImage) {
         dir / "scene.json",
         R"({"heightmap": {"path": "map.npy", "pixel_pitch": 0.1}, "camera": {"width": 24, "height": 20}})");
     auto r = runCli("defectmap \"" + (dir / "scene.json").string() + "\" -o \"" +
-                    (dir / "map.png").string() + "\" --image-out \"" + (dir / "img.png").string() +
-                    "\"");
+                    (dir / "map.png").string() + "\" --image-output \"" +
+                    (dir / "img.png").string() + "\"");
     ASSERT_EQ(r.exitCode, 0) << r.output;
     const Image img = readImage(dir / "img.png");
     EXPECT_EQ(img.width, 24);

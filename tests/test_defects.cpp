@@ -212,7 +212,7 @@ TEST(DefectObjective, OptimizeRunsItOnAGeneratedPart) {
     const std::string part = (dir.path() / "part.exr").string(),
                       scene = (dir.path() / "scene.json").string(),
                       truth = (dir.path() / "part-truth.png").string();
-    ASSERT_EQ(test::runCli("gen-surface " + part +
+    ASSERT_EQ(test::runCli("gen-surface -o " + part +
                            " --width 160 --height 160 --scratches 3 "
                            "--chatter-start 0.5 --scene " +
                            scene + " --image-size 40 --spp 8 --max-depth 3")
@@ -258,7 +258,7 @@ TEST(DefectObjective, OptimizeRunsItOnAGeneratedPart) {
     // A clean part: the defect map marks nothing, and auto says so.
     const std::string clean = (dir.path() / "clean.exr").string(),
                       cleanScene = (dir.path() / "clean.json").string();
-    ASSERT_EQ(test::runCli("gen-surface " + clean +
+    ASSERT_EQ(test::runCli("gen-surface -o " + clean +
                            " --width 160 --height 160 --scratches 0 --gouges 0 --chatter 0 "
                            "--no-pocket --scene " +
                            cleanScene + " --image-size 40 --spp 4 --max-depth 3")
@@ -287,7 +287,7 @@ TEST(RegionSpec, PicksLabelsOfATruthFile) {
 
     test::TempDir dir("regions");
     const std::string part = (dir.path() / "p.exr").string();
-    ASSERT_EQ(test::runCli("gen-surface " + part + " --width 64 --height 48 --scratches 2 " +
+    ASSERT_EQ(test::runCli("gen-surface -o " + part + " --width 64 --height 48 --scratches 2 " +
                            "--gouges 0 --chatter-start 0.5")
                   .exitCode,
               0);

@@ -241,7 +241,8 @@ TEST(OutOfMemory, SaysTheSizeAskedFor) {
     test::TempDir dir("oom");
     const fs::path out = dir.path() / "huge.exr";
     const std::string cmd = "bash -c 'ulimit -v 1000000; " + std::string(SL_CLI_PATH) +
-                            " gen-surface " + out.string() + " --width 20000 --height 20000' 2>&1";
+                            " gen-surface -o " + out.string() +
+                            " --width 20000 --height 20000' 2>&1";
     const auto [code, output] = runShell(cmd);
     EXPECT_EQ(code, 1) << output;
     EXPECT_NE(output.find("out of memory: an allocation of 1.6 GB failed"), std::string::npos)

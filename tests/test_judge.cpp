@@ -320,7 +320,7 @@ TEST(JudgeCommand, WritesTheReportWithOutlinedRegions) {
     const std::string part = (dir.path() / "part.exr").string(),
                       scene = (dir.path() / "scene.json").string(),
                       truth = (dir.path() / "part-truth.png").string();
-    ASSERT_EQ(test::runCli("gen-surface " + part +
+    ASSERT_EQ(test::runCli("gen-surface -o " + part +
                            " --width 128 --height 128 --scratches 2 --gouges 0 "
                            "--chatter-start 0.5 --scene " +
                            scene + " --image-size 48 --spp 4 --max-depth 3")

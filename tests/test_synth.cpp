@@ -1171,7 +1171,7 @@ TEST(GenSurface, PartFilesLegendNamesEveryLabelOfTheTruth) {
 
 TEST(GenSurface, WithoutNewOptionsTheCommandWritesTheSurfaceOfBefore) {
     sl::test::TempDir dir("gensurface-default");
-    auto r = sl::test::runCli("gen-surface " + (dir / "d.exr").string() + " --width 300");
+    auto r = sl::test::runCli("gen-surface -o " + (dir / "d.exr").string() + " --width 300");
     ASSERT_EQ(r.exitCode, 0) << r.output;
     SurfaceSpec s;
     s.width = 300;
@@ -1180,7 +1180,7 @@ TEST(GenSurface, WithoutNewOptionsTheCommandWritesTheSurfaceOfBefore) {
     sl::Image hm = sl::readImage(dir / "d.exr");
     EXPECT_EQ(hm.data, g.heights);
     EXPECT_EQ(sl::readLabelMask(dir / "d-truth.png", 300, 1024).labels, g.truth);
-    r = sl::test::runCli("gen-surface " + (dir / "f.exr").string() +
+    r = sl::test::runCli("gen-surface -o " + (dir / "f.exr").string() +
                          " --width 300 --process facemill --chatter-start 0.5");
     ASSERT_EQ(r.exitCode, 0) << r.output;
     s.process = SurfaceSpec::Process::FaceMillFeed;
@@ -1197,7 +1197,7 @@ TEST(GenSurface, WithoutNewOptionsTheCommandWritesTheSurfaceOfBefore) {
 TEST(GenSurface, PartAndProcessOptions) {
     sl::test::TempDir dir("gensurface-part");
     // A named part with options overriding it: the library's spec with the same overrides.
-    auto r = sl::test::runCli("gen-surface " + (dir / "t.exr").string() +
+    auto r = sl::test::runCli("gen-surface -o " + (dir / "t.exr").string() +
                               " --part flatend --width 400 --height 300 --dents 6 --seed 3"
                               " --noise 0.0001 --spikes 4");
     ASSERT_EQ(r.exitCode, 0) << r.output;
@@ -1213,7 +1213,7 @@ TEST(GenSurface, PartAndProcessOptions) {
     EXPECT_EQ(sl::readLabelMask(dir / "t-truth.png", 400, 300).labels, g.truth);
     EXPECT_NE(r.output.find("6 dent(s)"), std::string::npos) << r.output;
     // A process's own tool defaults, overridable.
-    r = sl::test::runCli("gen-surface " + (dir / "u.exr").string() +
+    r = sl::test::runCli("gen-surface -o " + (dir / "u.exr").string() +
                          " --process turned --width 200 --height 200 --feed 0.12 --no-pocket"
                          " --chatter-bands 1 --tool-change-step 0.002 --tool-change-at 0.5");
     ASSERT_EQ(r.exitCode, 0) << r.output;
@@ -1231,13 +1231,14 @@ TEST(GenSurface, PartAndProcessOptions) {
     EXPECT_EQ(m.legend.size(), 3u);  // defect (always), tool-change-step, chatter-band
     // --part and --process exclude each other; unknown names are usage errors; a burr without
     // its pocket edge is an input error naming the field.
-    EXPECT_EQ(sl::test::runCli("gen-surface " + (dir / "v.exr").string() +
+    EXPECT_EQ(sl::test::runCli("gen-surface -o " + (dir / "v.exr").string() +
                                " --part turned --process ballend")
                   .exitCode,
               2);
-    EXPECT_EQ(sl::test::runCli("gen-surface " + (dir / "v.exr").string() + " --part nope").exitCode,
-              2);
-    r = sl::test::runCli("gen-surface " + (dir / "v.exr").string() +
+    EXPECT_EQ(
+        sl::test::runCli("gen-surface -o " + (dir / "v.exr").string() + " --part nope").exitCode,
+        2);
+    r = sl::test::runCli("gen-surface -o " + (dir / "v.exr").string() +
                          " --width 64 --height 64 --burr 0.004 --no-pocket");
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_NE(r.output.find("pocketBurrHeight"), std::string::npos) << r.output;

@@ -10,10 +10,10 @@
 #include "core/Color.h"
 #include "core/Error.h"
 #include "core/Rng.h"
+#include "io/TransportFile.h"
 #include "objective/TransportLoss.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
-#include "io/TransportFile.h"
 #include "transport/TransportSink.h"
 
 using namespace sl;

@@ -32,17 +32,17 @@ DefectMapJobSummary runDefectMapJob(const DefectMapJobOptions& o) {
     checkPng(o.output, option("output"));
     const bool isScene = o.input.extension() == ".json";
     if (!o.imageOutput.empty()) {
-        checkPng(o.imageOutput, option("image-out"));
+        checkPng(o.imageOutput, option("image-output"));
         if (!isScene)
             throw inputError(
-                option("image-out"),
+                option("image-output"),
                 "needs a scene file (its camera), not a bare height map '" + o.input.string() + "'",
                 "Give SCENE.json as the input");
     }
     std::unique_ptr<Scene> scene;
     HeightmapData hm;
     if (isScene) {
-        scene = loadScene(o.input);
+        scene = loadScene(o.input, o.sceneOverrides);
     } else {
         // the map is invariant to an affine change of the heights: an integer map without a
         // height range is read as [0, 1]

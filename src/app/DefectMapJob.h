@@ -20,6 +20,7 @@ namespace sl {
 
 struct DefectMapJobOptions {
     std::filesystem::path input;  // height map (EXR/TIFF/PNG/.npy) or scene file (.json)
+    std::vector<std::string> sceneOverrides;         // -D key=value on the scene (io/SceneFile.h)
     std::filesystem::path output = "defectmap.png";  // height-map-space mask, 255/0 PNG
     std::filesystem::path imageOutput;  // projected mask (PNG); needs a scene; empty: none
     std::filesystem::path truth;        // truth label PNG in height-map space; empty: no score

@@ -43,7 +43,7 @@ struct Lab {
 
 std::unique_ptr<Lab> makeLab(const GradientSetup& s, int repeats) {
     auto lab = std::make_unique<Lab>();
-    SceneDesc d = readSceneFile(s.scene);
+    SceneDesc d = readSceneFile(s.scene, s.sceneOverrides);
     if (s.width) d.camera.width = *s.width;
     if (s.height) d.camera.height = *s.height;
     if (s.spp) d.render.spp = *s.spp;

@@ -34,7 +34,8 @@ namespace sl {
 /// What the scene is rendered with (overrides of the scene file) and where the gradient is taken.
 struct GradientSetup {
     std::filesystem::path scene;
-    std::optional<int> width, height;  // camera.width/height overrides
+    std::vector<std::string> sceneOverrides;  // -D key=value on the scene (io/SceneFile.h)
+    std::optional<int> width, height;         // camera.width/height overrides
     std::optional<int> spp, maxDepth;
     std::optional<uint64_t> seed;
     int threads = 0;  // 0: all cores

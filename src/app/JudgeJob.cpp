@@ -134,7 +134,7 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
     const std::filesystem::path dir = out.path();
     JudgeJobSummary sum;
     try {
-        auto scene = loadScene(o.scene);
+        auto scene = loadScene(o.scene, o.sceneOverrides);
         const int ew = scene->desc.envmap.width, eh = scene->desc.envmap.height;
         // Load every light before tracing, so a bad file fails fast.
         std::vector<std::pair<std::string, EnvMap>> lights;

@@ -24,6 +24,7 @@ namespace sl {
 
 struct JudgeJobOptions {
     std::filesystem::path scene;
+    std::vector<std::string> sceneOverrides;  // -D key=value on the scene (io/SceneFile.h)
     /// Env-map files (EXR/HDR/PNG…), or optimize output directories (their envmap.exr).
     std::vector<std::filesystem::path> lights;
     bool references = true;  // also score uniform 0.5 and the studio preset

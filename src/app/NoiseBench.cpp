@@ -119,7 +119,7 @@ NoiseBenchResult runNoiseBench(const NoiseBenchOptions& o) {
     auto log = [&](const std::string& m) {
         if (o.log) o.log(m);
     };
-    SceneDesc d = readSceneFile(o.scene);
+    SceneDesc d = readSceneFile(o.scene, o.sceneOverrides);
     d.camera.width = d.camera.height = o.resolution;
     auto scene = loadScene(d);
     RenderOptions base = renderOptionsFor(*scene);

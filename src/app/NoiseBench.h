@@ -30,6 +30,7 @@ std::vector<NoiseBenchOptimizer> parseNoiseBenchOptimizers(const std::string& sp
 
 struct NoiseBenchOptions {
     std::filesystem::path scene;
+    std::vector<std::string> sceneOverrides;  // -D key=value on the scene (io/SceneFile.h)
     int resolution = 256;
     std::vector<int> spps{4, 16, 64, 256, 1024};
     int heldOutSpp = 4096;

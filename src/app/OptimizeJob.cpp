@@ -213,6 +213,12 @@ Plan plan(const OptimizeJobOptions& options) {
     if (o.planes == 0) o.planes = row.defaultPlanes;
     p.blackBox = row.gradient == GradientSource::Renderer;
     p.tmInput = isTransportFile(o.input);
+    if (p.tmInput && !o.sceneOverrides.empty())
+        throw inputError(o.input.string(),
+                         "is a traced transport matrix: scene overrides (" + option("D") + ", " +
+                             option("width") + ", " + option("height") + ", " + option("size") +
+                             ") cannot change it",
+                         "pass the scene file with the overrides instead of the .tm");
     if (p.blackBox && p.tmInput)
         throw inputError(option("optimizer") + " " + row.name,
                          "renders the scene for every gradient, so it needs the scene file",
@@ -255,7 +261,7 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
         if (!o.objectiveKind && job.transport.file.matrix.planes == 2)
             in.kind = ObjectiveKind::Unbiased;
     } else {
-        in.scene = loadScene(o.input);
+        in.scene = loadScene(o.input, o.sceneOverrides);
         PrecomputeOptions pre = o.precompute;
         pre.rgb = o.rgb;
         if (in.onHalves()) pre.sampleSets = 2;

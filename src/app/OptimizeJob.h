@@ -59,7 +59,8 @@ OptimizeDefaults optimizeDefaults();
 OptimizerOptions optimizeJobOptimizerOptions();
 
 struct OptimizeJobOptions {
-    std::filesystem::path input;  // scene (.json) or transport matrix (.tm)
+    std::filesystem::path input;              // scene (.json) or transport matrix (.tm)
+    std::vector<std::string> sceneOverrides;  // -D key=value on the scene (io/SceneFile.h)
     std::filesystem::path outDir = "out/optimize";
     std::vector<double> lambdas{30.0};
     ObjectiveOptions objective;  // lambda is taken from `lambdas`

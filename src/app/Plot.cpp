@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <system_error>
 
+#include "core/Error.h"
+
 extern char** environ;
 
 namespace sl {
@@ -28,6 +30,16 @@ std::vector<fs::path> scriptDirs() {
     dirs.emplace_back(SL_SCRIPTS_DIR);
 #endif
     return dirs;
+}
+
+fs::path bundledDefaultScene() {
+    const fs::path rel = fs::path("scenes") / "default" / "scene.json";
+    std::error_code ec;
+    for (const fs::path& d : scriptDirs())  // <root>/scripts: the scene is <root>/scenes/...
+        if (fs::is_regular_file(d.parent_path() / rel, ec)) return d.parent_path() / rel;
+    throw inputError("the bundled default scene (" + rel.string() + ")",
+                     "was not found beside the executable nor in the source tree",
+                     "pass a scene file");
 }
 
 fs::path findScript(const std::string& name) {

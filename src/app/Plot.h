@@ -14,6 +14,12 @@ namespace sl {
 /// tree's scripts/ recorded at configure time.
 std::vector<std::filesystem::path> scriptDirs();
 
+/// The bundled default scene (scenes/default/scene.json), found like the scripts: beside the
+/// executable's folder (the source tree), under share/scratchlight (installed), then in the
+/// source tree recorded at configure time; so a default works from any directory. Throws
+/// InputError when none exists.
+std::filesystem::path bundledDefaultScene();
+
 /// The first scriptDirs()/name that exists; empty if none does.
 std::filesystem::path findScript(const std::string& name);
 

@@ -55,7 +55,7 @@ RenderBenchResult runRenderBench(const RenderBenchOptions& o) {
     if (o.repeats < 1) throw inputError("repeats", "is " + std::to_string(o.repeats), "use >= 1");
     if (o.spp < 1) throw inputError("spp", "is " + std::to_string(o.spp), "use >= 1");
     if (o.resolution < 1)
-        throw inputError("resolution", "is " + std::to_string(o.resolution), "use >= 1");
+        throw inputError(option("size"), "is " + std::to_string(o.resolution), "use >= 1");
     for (int n : o.sizes)
         if (n < 2)
             throw inputError("sizes", "contains " + std::to_string(n),
@@ -65,7 +65,7 @@ RenderBenchResult runRenderBench(const RenderBenchOptions& o) {
     result.options.log = nullptr;
     ProgressTask task("bench render", static_cast<double>(o.sizes.size() + !o.scene.empty()));
     if (!o.scene.empty()) {
-        SceneDesc d = readSceneFile(o.scene);
+        SceneDesc d = readSceneFile(o.scene, o.sceneOverrides);
         d.camera.width = d.camera.height = o.resolution;
         auto scene = loadScene(d);
         result.rows.push_back(measure(*scene, o.scene.filename().string(), 0, o));

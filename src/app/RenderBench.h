@@ -14,7 +14,8 @@
 namespace sl {
 
 struct RenderBenchOptions {
-    std::filesystem::path scene;         // also measure this scene (optional)
+    std::filesystem::path scene;              // also measure this scene (optional)
+    std::vector<std::string> sceneOverrides;  // -D key=value on the scene (io/SceneFile.h)
     std::vector<int> sizes{1024, 5000};  // synthetic N×N height maps (a 10 mm part at every N)
     int resolution = 256, spp = 16;      // image N×N, samples per pixel
     int threads = 0;                     // 0: all cores

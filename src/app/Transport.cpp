@@ -89,10 +89,10 @@ RenderOptions traceOptions(const Scene& scene, const PrecomputeOptions& o) {
 }
 
 TransportSource precomputeToFile(const std::filesystem::path& file,
-                                 const PrecomputeOptions& options,
-                                 const std::filesystem::path& out) {
+                                 const PrecomputeOptions& options, const std::filesystem::path& out,
+                                 const std::vector<std::string>& sceneOverrides) {
     const Stopwatch clock;
-    auto scene = loadScene(file);
+    auto scene = loadScene(file, sceneOverrides);
     const RenderOptions ro = traceOptions(*scene, options);
     return trace(*scene, ro, transportProvenance(*scene, ro, options.rgb ? 3 : 1), options.rgb,
                  options.label, out, clock);
@@ -126,7 +126,8 @@ std::unique_ptr<Scene> sceneOfTransport(const TransportFile& f, const std::strin
     if (!in.contains("scene_file"))
         throw inputError(purpose, "needs the scene, and the transport matrix does not record it",
                          "pass the scene file instead of the .tm");
-    auto sc = loadScene(std::filesystem::path(in.at("scene_file").get<std::string>()));
+    auto sc = loadScene(std::filesystem::path(in.at("scene_file").get<std::string>()),
+                        in.value("scene_overrides", std::vector<std::string>{}));
     if (sc->camera.width() != f.matrix.width || sc->camera.height() != f.matrix.height)
         throw inputError(sc->desc.file.string(), "its camera does not match the transport matrix",
                          "recompute the transport matrix");
@@ -155,7 +156,7 @@ TransportSource judgeEstimateFor(const TransportFile& training, const Scene& sce
     TransportSource s = transportForScene(scene, o, cacheDir);
     // Same scene, camera, material and height map: only the sampling may differ.
     auto strip = [](json j) {
-        for (const char* k : {"render", "planes", "scene_file"}) j.erase(k);
+        for (const char* k : {"render", "planes", "scene_file", "scene_overrides"}) j.erase(k);
         j["heightmap"].erase("file");
         j["material"].erase("name");
         return j;

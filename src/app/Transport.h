@@ -41,8 +41,8 @@ RenderOptions traceOptions(const Scene& scene, const PrecomputeOptions& options)
 
 /// Traces `scene` into T and writes it to `out` (atomic). Returns what was built.
 TransportSource precomputeToFile(const std::filesystem::path& scene,
-                                 const PrecomputeOptions& options,
-                                 const std::filesystem::path& out);
+                                 const PrecomputeOptions& options, const std::filesystem::path& out,
+                                 const std::vector<std::string>& sceneOverrides = {});
 
 /// T for a loaded scene, from cacheDir/transport-<fingerprint>.tm when it is there and valid,
 /// otherwise traced and stored there (cacheDir empty: traced, not stored).

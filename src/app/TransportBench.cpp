@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "app/InitialState.h"
+#include "app/Plot.h"
 #include "app/RenderBench.h"
 #include "core/Error.h"
 #include "core/Progress.h"
@@ -39,7 +40,8 @@ TransportBenchResult runTransportBench(const TransportBenchOptions& a) {
     if (a.repeats < 1) throw inputError("repeats", "is " + std::to_string(a.repeats), "use >= 1");
     if (a.iterations < 1)
         throw inputError("iterations", "is " + std::to_string(a.iterations), "use >= 1");
-    SceneDesc d = readSceneFile(a.scene);
+    SceneDesc d =
+        readSceneFile(a.scene.empty() ? bundledDefaultScene() : a.scene, a.sceneOverrides);
     d.camera.width = d.camera.height = a.resolution;
     d.render.spp = a.spp;
     auto scene = loadScene(d);

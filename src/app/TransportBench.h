@@ -7,17 +7,19 @@
 #include <cstddef>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "render/Benchmark.h"
 
 namespace sl {
 
 struct TransportBenchOptions {
-    std::filesystem::path scene = "scenes/default/scene.json";
-    int resolution = 512, spp = 64;  // image N×N, samples per pixel
-    int iterations = 100;            // Adam iterations of the whole-run measurement
-    int repeats = 3;                 // interleaved tracing runs (median); products: 4·repeats+1
-    int threads = 0;                 // 0: all cores
+    std::filesystem::path scene;              // empty: the bundled default scene (app/Plot.h)
+    std::vector<std::string> sceneOverrides;  // -D key=value on the scene (io/SceneFile.h)
+    int resolution = 512, spp = 64;           // image N×N, samples per pixel
+    int iterations = 100;                     // Adam iterations of the whole-run measurement
+    int repeats = 3;  // interleaved tracing runs (median); products: 4·repeats+1
+    int threads = 0;  // 0: all cores
 };
 
 struct TransportBenchResult {

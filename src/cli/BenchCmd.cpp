@@ -55,13 +55,14 @@ int runRenderBenchCmd(RenderBenchArgs a) {
 
 struct TransportBenchArgs {
     TransportBenchOptions o;
-    std::string scene = "scenes/default/scene.json", csv = "bench-transport.csv";
+    std::string scene, csv = "bench-transport.csv";
 };
 
 int runTransportBenchCmd(TransportBenchArgs a) {
     a.o.scene = a.scene;
     const TransportBenchResult r = runTransportBench(a.o);
-    std::printf("scene %s at %dx%d, %d spp, max_depth %d\n", a.scene.c_str(), r.width, r.height,
+    std::printf("scene %s at %dx%d, %d spp, max_depth %d\n",
+                a.scene.empty() ? "scenes/default (bundled)" : a.scene.c_str(), r.width, r.height,
                 a.o.spp, r.maxDepth);
     std::printf("  %-44s %12.2f Mrays/s\n", r.renderer.workload.c_str(),
                 r.renderer.raysPerSecond() / 1e6);
@@ -195,10 +196,11 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     CLI::App* c = bench->add_subcommand(
         "render", "Renderer rays/s vs bare Embree closest-hit rays/s; height-field build cost");
     c->add_option("scene", a->scene, "Also measure this scene (optional)");
+    addSceneOverrides(c, a->o.sceneOverrides, false);
     c->add_option("--sizes", a->o.sizes, "Synthetic height-map sizes (N for NxN)")
         ->delimiter(',')
         ->capture_default_str();
-    c->add_option("--resolution", a->o.resolution, "Image width and height")
+    c->add_option("--size", a->o.resolution, "Image width and height")
         ->check(CLI::Range(8, 4096))
         ->capture_default_str();
     c->add_option("--spp", a->o.spp, "Samples per pixel")
@@ -208,14 +210,15 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
         ->check(CLI::Range(1, 50))
         ->capture_default_str();
     c->add_option("--threads", a->o.threads, "Worker threads (0: all)")->capture_default_str();
-    c->add_option("--csv", a->csv, "CSV output")->capture_default_str();
+    c->add_option("-o,--output", a->csv, "CSV output")->capture_default_str();
     c->callback([a, &run] { run = [a] { return runRenderBenchCmd(*a); }; });
 
     auto b = std::make_shared<TransportBenchArgs>();
     CLI::App* t = bench->add_subcommand(
         "transport", "Precompute vs render rays/s; Adam on T; one iteration vs a read of T");
-    t->add_option("scene", b->scene, "Scene file")->capture_default_str();
-    t->add_option("--resolution", b->o.resolution, "Image width and height")
+    t->add_option("scene", b->scene, "Scene file (default: the bundled scenes/default)");
+    addSceneOverrides(t, b->o.sceneOverrides, false);
+    t->add_option("--size", b->o.resolution, "Image width and height")
         ->check(CLI::Range(8, 4096))
         ->capture_default_str();
     t->add_option("--spp", b->o.spp, "Samples per pixel")
@@ -228,7 +231,7 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
         ->check(CLI::Range(1, 50))
         ->capture_default_str();
     t->add_option("--threads", b->o.threads, "Worker threads (0: all)")->capture_default_str();
-    t->add_option("--csv", b->csv, "CSV output")->capture_default_str();
+    t->add_option("-o,--output", b->csv, "CSV output")->capture_default_str();
     t->callback([b, &run] { run = [b] { return runTransportBenchCmd(*b); }; });
 
     auto m = std::make_shared<ScratchMapBenchArgs>();
@@ -246,7 +249,7 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     sm->add_option("--repeats", m->o.repeats, "Runs per size (median)")
         ->check(CLI::Range(1, 50))
         ->capture_default_str();
-    sm->add_option("--csv", m->csv, "CSV output")->capture_default_str();
+    sm->add_option("-o,--output", m->csv, "CSV output")->capture_default_str();
     sm->callback([m, &run] { run = [m] { return runScratchMapBenchCmd(*m); }; });
 
     auto dm = std::make_shared<DefectMapBenchArgs>();
@@ -261,7 +264,7 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     dmc->add_option("--repeats", dm->o.repeats, "Runs per size (median)")
         ->check(CLI::Range(1, 50))
         ->capture_default_str();
-    dmc->add_option("--csv", dm->csv, "CSV output")->capture_default_str();
+    dmc->add_option("-o,--output", dm->csv, "CSV output")->capture_default_str();
     dmc->callback([dm, &run] { run = [dm] { return runDefectMapBenchCmd(*dm); }; });
 
     auto n = std::make_shared<NoiseArgs>();
@@ -271,7 +274,8 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
         "objective, each optimizer's budget, scored on one shared high-spp independent "
         "estimate");
     nc->add_option("scene", n->o.scene, "Scene file")->required();
-    nc->add_option("--resolution", n->o.resolution, "Image width and height")
+    addSceneOverrides(nc, n->o.sceneOverrides, false);
+    nc->add_option("--size", n->o.resolution, "Image width and height")
         ->check(CLI::Range(8, 4096))
         ->capture_default_str();
     nc->add_option("--spps", n->o.spps, "Training spp values (even)")
@@ -287,7 +291,7 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
                    "iterations)")
         ->capture_default_str();
     nc->add_option("--threads", n->o.threads, "Worker threads (0: all)")->capture_default_str();
-    nc->add_option("--csv", n->csv, "CSV output")->capture_default_str();
+    nc->add_option("-o,--output", n->csv, "CSV output")->capture_default_str();
     nc->add_flag("--plot", n->plot, "Also run scripts/plot_noise.py on the CSV");
     nc->callback([n, &run] { run = [n] { return runNoiseBenchCmd(*n); }; });
 }

@@ -2,6 +2,8 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <mutex>
 
@@ -13,20 +15,80 @@
 
 namespace sl::cli {
 
-EnvMap chooseEnvMap(const Scene& scene, const std::string& envmapFile,
-                    std::optional<float> constant) {
-    const int w = scene.basis.width(), h = scene.basis.height();
-    if (!envmapFile.empty() && constant)
-        throw UsageError("give either --envmap or --constant, not both");
-    if (!envmapFile.empty()) return loadEnvMap(envmapFile, w, h, 3);
-    if (constant) {
-        if (!(*constant >= 0)) throw UsageError("--constant must be >= 0");
-        return EnvMap::constant(w, h, *constant);
+std::string lightSpecForms() {
+    std::string s = "FILE (EXR/HDR/PNG/JPEG, equirectangular) | const:V (V >= 0)";
+    for (const std::string& n : presetNames()) s += " | " + n;
+    return s;
+}
+
+EnvMap lightFromSpec(const std::string& spec, int w, int h, int channels) {
+    if (spec.rfind("const:", 0) == 0) {
+        const std::string v = spec.substr(6);
+        double value = -1;
+        try {
+            size_t used = 0;
+            value = std::stod(v, &used);
+            if (used != v.size()) value = -1;
+        } catch (const std::exception&) {
+        }
+        if (!(value >= 0) || !std::isfinite(value))
+            throw UsageError("--envmap " + spec + ": '" + v + "' is not a number >= 0 (use " +
+                             lightSpecForms() + ")");
+        return EnvMap::constant(w, h, static_cast<float>(value), channels);
     }
+    if (spec.rfind("envmap:", 0) == 0) return loadEnvMap(spec.substr(7), w, h, channels);
+    const auto& presets = presetNames();
+    if (std::find(presets.begin(), presets.end(), spec) != presets.end() &&
+        !std::filesystem::exists(spec)) {
+        EnvMap m = presetEnvMap(spec, w, h);
+        if (channels == 3 && m.channels == 1) {
+            EnvMap rgb = EnvMap::constant(w, h, 0.0f, 3);
+            for (size_t t = 0; t < m.texelCount(); ++t)
+                for (int k = 0; k < 3; ++k) rgb.texels[3 * t + k] = m.texels[t];
+            return rgb;
+        }
+        return m;
+    }
+    return loadEnvMap(spec, w, h, channels);
+}
+
+EnvMap chooseEnvMap(const Scene& scene, const std::string& spec) {
+    const int w = scene.basis.width(), h = scene.basis.height();
+    if (!spec.empty()) return lightFromSpec(spec, w, h, 3);
     const EnvMapDesc& e = scene.desc.envmap;
     if (!e.path.empty()) return loadEnvMap(e.path, w, h, 3);
     if (e.constant) return EnvMap::constant(w, h, *e.constant);
     return presetEnvMap(e.preset.empty() ? EnvMapDesc::kDefaultPreset : e.preset, w, h);
+}
+
+void addSceneOverrides(CLI::App* c, std::vector<std::string>& overrides, bool image) {
+    c->add_option_function<std::vector<std::string>>(
+         "-D",
+         [&overrides](const std::vector<std::string>& v) {
+             overrides.insert(overrides.end(), v.begin(), v.end());
+         },
+         "Scene override key=value (repeatable), e.g. -D material.alpha=0.1 -D render.spp=16")
+        ->type_name("KEY=VALUE")
+        ->allow_extra_args(false);
+    if (!image) return;
+    auto camera = [&overrides](const char* field) {
+        return [&overrides, field](int v) {
+            overrides.push_back(std::string("camera.") + field + "=" + std::to_string(v));
+        };
+    };
+    c->add_option_function<int>("--width", camera("width"), "Image width in pixels (camera.width)")
+        ->check(CLI::Range(1, 16384));
+    c->add_option_function<int>("--height", camera("height"),
+                                "Image height in pixels (camera.height)")
+        ->check(CLI::Range(1, 16384));
+    c->add_option_function<int>(
+         "--size",
+         [&overrides](int v) {
+             overrides.push_back("camera.width=" + std::to_string(v));
+             overrides.push_back("camera.height=" + std::to_string(v));
+         },
+         "Image width and height in pixels (a square image)")
+        ->check(CLI::Range(1, 16384));
 }
 
 std::filesystem::path siblingPath(const std::filesystem::path& out, const std::string& ext,
@@ -71,7 +133,8 @@ std::string withFlags(const CLI::App& app, const std::string& message) {
     for (size_t at; (at = message.find(open, pos)) != std::string::npos;) {
         const size_t nameStart = at + open.size(), end = message.find('\'', nameStart);
         if (end == std::string::npos) break;
-        const std::string flag = "--" + message.substr(nameStart, end - nameStart);
+        const std::string name = message.substr(nameStart, end - nameStart);
+        const std::string flag = (name.size() == 1 ? "-" : "--") + name;  // -D, --width
         out += message.substr(pos, at - pos);
         out += hasFlag(app, flag) ? flag : message.substr(at, end + 1 - at);
         pos = end + 1;

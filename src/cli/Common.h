@@ -42,10 +42,21 @@ struct UsageError : std::runtime_error {
 /// shows each as its flag --NAME where some command of `app` has that flag.
 std::string withFlags(const CLI::App& app, const std::string& message);
 
-/// The env map for a scene: --envmap FILE, --constant V, else the scene's envmap section,
-/// else the "studio" preset. RGB files stay RGB; constants and presets are gray.
-EnvMap chooseEnvMap(const Scene& scene, const std::string& envmapFile,
-                    std::optional<float> constant);
+/// The light a command renders under, --envmap SPEC (one grammar for every command that takes
+/// a light): FILE (or envmap:FILE) an equirectangular image resampled to the grid, RGB kept
+/// when `channels` is 3; const:V every texel V >= 0; a preset name (e.g. studio).
+EnvMap lightFromSpec(const std::string& spec, int width, int height, int channels);
+/// The same grammar for `--envmap`'s help text.
+std::string lightSpecForms();
+
+/// The env map for a scene: --envmap SPEC, else the scene's envmap section, else the "studio"
+/// preset.
+EnvMap chooseEnvMap(const Scene& scene, const std::string& spec);
+
+/// A command that reads a scene file takes scene overrides: -D key=value (repeatable, as
+/// Mitsuba's; io/SceneFile.h) and, when it renders (`image`), --width/--height and --size N
+/// (both) for the image, which are camera.width/height overrides.
+void addSceneOverrides(CLI::App* c, std::vector<std::string>& overrides, bool image);
 
 /// Checks an output path ends in `ext` (usage error otherwise) and returns the sibling with
 /// extension `siblingExt` (e.g. the PNG preview next to an EXR).

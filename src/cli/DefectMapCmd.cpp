@@ -1,5 +1,6 @@
 // scratchlight defectmap (HEIGHTMAP | SCENE.json) [--method auto|paper] [-o map.png]
-//                        [--image-out MASK.png] [--truth TRUTH.png] [--csv FILE] [tuning ...]
+//                        [--image-output MASK.png] [--truth TRUTH.png] [--score-output FILE]
+//                        [tuning ...]
 // Parses the options and prints the result; the work is app/DefectMapJob.h and
 // objective/DefectMap.h.
 #include <cstdio>
@@ -55,7 +56,7 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option_function<std::string>(
          "input", [a](const std::string& v) { a->input = v; },
          "Height map (EXR/TIFF/PNG/.npy) or a scene file (JSON: its height map, and its camera "
-         "for --image-out)")
+         "for --image-output)")
         ->required();
     addChoice(c, "--method", a->map.method, defectMethodTable(), "Method (default auto)");
     c->add_option_function<std::string>(
@@ -63,14 +64,14 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
          "Map in height-map space (8-bit PNG, 255 = defect)")
         ->default_str("defectmap.png");
     c->add_option_function<std::string>(
-        "--image-out", [a](const std::string& v) { a->imageOutput = v; },
+        "--image-output", [a](const std::string& v) { a->imageOutput = v; },
         "Also write the map projected into the scene camera's image (PNG; needs SCENE.json)");
     c->add_option_function<std::string>(
         "--truth", [a](const std::string& v) { a->truth = v; },
         "Truth label PNG in height-map space (gen-surface's OUT-truth.png): prints precision/"
         "recall/F1 per kind and writes them as CSV");
     c->add_option_function<std::string>(
-        "--csv", [a](const std::string& v) { a->csv = v; },
+        "--score-output", [a](const std::string& v) { a->csv = v; },
         "CSV of the score (default: <output stem>-score.csv beside the map)");
     c->add_option("--negatives", a->negatives,
                   "Truth values scored as defect-free (a mark there is a false positive)")

@@ -81,7 +81,7 @@ void registerGenSurface(CLI::App& app, std::function<int()>& run) {
     GenArgs& g = *a;
     CLI::App* c = app.add_subcommand(
         "gen-surface", "Generate a synthetic NC-machined height map and its ground-truth labels");
-    c->add_option("output", a->out, "Height map to write: .exr (float32 mm) or .png (16-bit)")
+    c->add_option("-o,--output", a->out, "Height map to write: .exr (float32 mm) or .png (16-bit)")
         ->capture_default_str();
     CLI::Option* process =
         addChoice(c, "--process", a->process, processTable(),

@@ -1,6 +1,6 @@
-// scratchlight gradcheck SCENE.json [--methods exact,autodiff,fd,spsa] [--json FILE]
+// scratchlight gradcheck SCENE.json [--methods exact,autodiff,fd,spsa] [-o REPORT.json]
 // scratchlight bench gradients [SCENE.json] [-o DIR]
-// scratchlight export-mitsuba SCENE.json OUTDIR [--envmap FILE | --constant V]
+// scratchlight export-mitsuba SCENE.json [--envmap SPEC] [-o OUTDIR]
 #include "cli/GradientCmds.h"
 
 #include <cstdio>
@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "app/GradCheck.h"
+#include "app/Plot.h"
 #include "cli/Common.h"
 #include "core/Error.h"
 #include "io/AtomicFile.h"
@@ -25,11 +26,16 @@ struct SetupArgs {
 };
 
 void addSetupOptions(CLI::App* c, GradientSetup& s, SetupArgs& a) {
+    addSceneOverrides(c, s.sceneOverrides, false);
     c->add_option("--size", a.size,
                   "Image N×N pixels (replaces the scene's camera size; 0 keeps it). Autodiff and "
                   "finite differences need small images")
         ->check(CLI::Range(0, 4096))
         ->capture_default_str();
+    c->add_option("--width", s.width, "Image width in pixels (overrides --size)")
+        ->check(CLI::Range(1, 4096));
+    c->add_option("--height", s.height, "Image height in pixels (overrides --size)")
+        ->check(CLI::Range(1, 4096));
     c->add_option("--spp", a.spp, "Samples per pixel (0 keeps render.spp)")
         ->check(CLI::Range(0, 1 << 20))
         ->capture_default_str();
@@ -48,14 +54,17 @@ void addSetupOptions(CLI::App* c, GradientSetup& s, SetupArgs& a) {
 }
 
 void applySetup(GradientSetup& s, const SetupArgs& a) {
-    if (a.size > 0) s.width = s.height = a.size;
+    if (a.size > 0) {
+        if (!s.width) s.width = a.size;
+        if (!s.height) s.height = a.size;
+    }
     if (a.spp > 0) s.spp = a.spp;
 }
 
 struct GradCheckArgs {
     GradCheckOptions o;
     SetupArgs setup;
-    std::string scene, json;
+    std::string scene, out;
 };
 
 int runGradCheckCmd(GradCheckArgs a) {
@@ -64,9 +73,9 @@ int runGradCheckCmd(GradCheckArgs a) {
     if (a.o.methods.empty()) throw UsageError("--methods is empty");
     const GradCheckReport r = runGradCheck(a.o);
     std::fputs(r.table().c_str(), stdout);
-    if (!a.json.empty()) {
-        writeTextAtomically(a.json, r.json());
-        std::printf("wrote %s\n", a.json.c_str());
+    if (!a.out.empty()) {
+        writeTextAtomically(a.out, r.json());
+        std::printf("wrote %s\n", a.out.c_str());
     }
     return kOk;
 }
@@ -74,13 +83,13 @@ int runGradCheckCmd(GradCheckArgs a) {
 struct BenchArgs {
     BenchGradientsOptions o;
     SetupArgs setup;
-    std::string scene = "scenes/default/scene.json", out = "out/bench-gradients";
+    std::string scene, out = "out/bench-gradients";
     std::string script = "plot_gradients.py";
     bool noOptimize = false, noPlot = false;
 };
 
 int runBenchGradientsCmd(BenchArgs a) {
-    a.o.setup.scene = a.scene;
+    a.o.setup.scene = a.scene.empty() ? bundledDefaultScene() : std::filesystem::path(a.scene);
     applySetup(a.o.setup, a.setup);
     a.o.outDir = a.out;
     a.o.optimizations = !a.noOptimize;
@@ -103,14 +112,13 @@ int runBenchGradientsCmd(BenchArgs a) {
 }
 
 struct ExportArgs {
-    std::string scene, outDir, envmap;
-    std::optional<float> constant;
+    std::string scene, outDir = "mitsuba", envmap;
+    std::vector<std::string> overrides;
 };
 
 int runExportCmd(const ExportArgs& a) {
-    if (!a.envmap.empty() && a.constant) throw UsageError("give either --envmap or --constant");
-    auto scene = loadScene(std::filesystem::path(a.scene));
-    EnvMap env = chooseEnvMap(*scene, a.envmap, a.constant);
+    auto scene = loadScene(std::filesystem::path(a.scene), a.overrides);
+    EnvMap env = chooseEnvMap(*scene, a.envmap);
     const MitsubaExport e = exportMitsuba(*scene, env, a.outDir);
     std::printf("wrote %s, %s and %s\nrender with Mitsuba 3: mitsuba -m scalar_rgb %s\n",
                 e.xml.string().c_str(), e.ply.string().c_str(), e.envmap.string().c_str(),
@@ -136,7 +144,7 @@ void registerGradients(CLI::App& app, std::function<int()>& run) {
             ->delimiter(',')
             ->check(CLI::IsMember(gradCheckMethods()))
             ->capture_default_str();
-        c->add_option("--h", a->o.fd.h, "Finite-difference step (E units)")
+        c->add_option("--fd-step", a->o.fd.h, "Finite-difference step h (E units)")
             ->check(CLI::Range(1e-12, 0.49))
             ->capture_default_str();
         c->add_option("--spsa-c", a->o.spsa.c, "SPSA perturbation size c")
@@ -148,7 +156,7 @@ void registerGradients(CLI::App& app, std::function<int()>& run) {
         c->add_option("--repeats", a->o.repeats, "Repeats (medians of time and error)")
             ->check(CLI::Range(1, 1000))
             ->capture_default_str();
-        c->add_option("--json", a->json, "Also write the report as JSON");
+        c->add_option("-o,--output", a->out, "Also write the report to this JSON file");
         c->callback([a, &run] { run = [a] { return runGradCheckCmd(*a); }; });
     }
     {
@@ -158,10 +166,11 @@ void registerGradients(CLI::App& app, std::function<int()>& run) {
             "Write the scene as a Mitsuba 3 scene (XML + PLY height field + EXR env map) for a "
             "cross-renderer check");
         c->add_option("scene", a->scene, "Scene file (JSON)")->required();
-        c->add_option("outdir", a->outDir, "Output directory")->required();
-        auto* e = c->add_option("--envmap", a->envmap, "Env map file (default: the scene's)");
-        auto* k = c->add_option("--constant", a->constant, "Constant env map value");
-        e->excludes(k);
+        c->add_option("--envmap", a->envmap,
+                      "The light: " + lightSpecForms() +
+                          " (default: the scene's envmap section, else studio)");
+        addSceneOverrides(c, a->overrides, true);
+        c->add_option("-o,--output", a->outDir, "Output directory")->capture_default_str();
         c->callback([a, &run] { run = [a] { return runExportCmd(*a); }; });
     }
     {
@@ -178,12 +187,12 @@ void registerGradients(CLI::App& app, std::function<int()>& run) {
             "gradients",
             "Seconds against gradient error for exact, autodiff, FD and SPSA, and loss against "
             "wall-clock seconds for whole optimizations (CSV + plots)");
-        c->add_option("scene", a->scene, "Scene file (JSON)")->capture_default_str();
+        c->add_option("scene", a->scene, "Scene file (default: the bundled scenes/default)");
         addSetupOptions(c, o.setup, a->setup);
-        c->add_option("--fd-steps", o.fdSteps, "Central-FD steps h (common random numbers)")
+        c->add_option("--fd-step", o.fdSteps, "Central-FD steps h (common random numbers)")
             ->delimiter(',')
             ->capture_default_str();
-        c->add_option("--fd-fresh-steps", o.fdFreshSteps, "Central-FD steps h with fresh seeds")
+        c->add_option("--fd-fresh-step", o.fdFreshSteps, "Central-FD steps h with fresh seeds")
             ->delimiter(',')
             ->capture_default_str();
         c->add_option("--spsa-q", o.spsaQ, "SPSA averaging counts q")

@@ -1,5 +1,5 @@
 // scratchlight judge SCENE.json [ENV.exr | OUTDIR ...] [--spp 1024] [--truth TRUTH.png]
-//                   [--lambda 30] [--json FILE] [--no-references] [-o DIR]
+//                   [--lambda 30] [--no-references] [-o DIR]
 // Scores env maps on the judge's independent estimate (app/Judge.h) and prints a table.
 #include <cstdio>
 #include <memory>
@@ -7,14 +7,13 @@
 #include "app/JudgeJob.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
-#include "io/AtomicFile.h"
 
 namespace sl::cli {
 
 namespace {
 
 struct JudgeArgs {
-    std::string scene, json;
+    std::string scene;
     std::vector<std::string> lights;
     bool noReferences = false;
     JudgeJobOptions o;
@@ -36,7 +35,6 @@ int runJudge(const JudgeArgs& a) {
         "lower eq2 and U are better; bright: mean brightness over the white furnace's; "
         "visibility: RMS gradient in the region over the defect-free surface's; contrast: "
         "the region's RMS gradient over the mean brightness (the eye needs about 0.01)\n");
-    if (!a.json.empty()) writeTextAtomically(a.json, s.json);
     std::printf("wrote %s/ (report.html, judge.json, judge.csv, renders.exr, renders.png)\n",
                 o.outDir.string().c_str());
     return kOk;
@@ -67,7 +65,7 @@ void registerJudge(CLI::App& app, std::function<int()>& run) {
     c->add_flag("--rgb", a->o.judge.rgb, "Score RGB env maps in colour (an RGB estimate)");
     c->add_flag("--no-references", a->noReferences,
                 "Leave out the built-in references (uniform 0.5, studio)");
-    c->add_option("--json", a->json, "Also write the scores to this JSON file");
+    addSceneOverrides(c, a->o.sceneOverrides, true);
     c->add_option("--threads", a->o.judge.threads, "Worker threads (0: all cores)")
         ->check(CLI::Range(0, 4096));
     c->add_option("-o,--output", a->o.outDir, "Output directory")->capture_default_str();

@@ -42,10 +42,10 @@ int runScratchMap(const ScratchArgs& a) {
     if (std::filesystem::path(a.out).extension() != ".png")
         throw UsageError("-o '" + a.out + "' must end in .png");
     if (!a.imageMask.empty() && std::filesystem::path(a.imageMask).extension() != ".png")
-        throw UsageError("--image-mask '" + a.imageMask + "' must end in .png");
+        throw UsageError("--image-output '" + a.imageMask + "' must end in .png");
     const bool isScene = in.extension() == ".json";
     if (!a.imageMask.empty() && !isScene)
-        throw UsageError("--image-mask needs a scene file (its camera), not a bare height map");
+        throw UsageError("--image-output needs a scene file (its camera), not a bare height map");
     std::unique_ptr<Scene> scene;
     HeightmapData hm;
     if (isScene) {
@@ -142,7 +142,7 @@ void registerPaper(CLI::App& app, std::function<int()>& run) {
             "patches whose max-min >= threshold");
         c->add_option("input", a->input,
                       "Height map (EXR/TIFF/PNG/.npy) or a scene file (JSON: its height map, and "
-                      "its camera for --image-mask)")
+                      "its camera for --image-output)")
             ->required();
         c->add_option("--kernel", a->opt.kernel, "Moving-average window, samples")
             ->capture_default_str()
@@ -156,7 +156,7 @@ void registerPaper(CLI::App& app, std::function<int()>& run) {
             ->check(CLI::Range(0.0, 1.0));
         c->add_option("-o,--output", a->out, "Map in height-map space (8-bit PNG, 255 = marked)")
             ->capture_default_str();
-        c->add_option("--image-mask", a->imageMask,
+        c->add_option("--image-output", a->imageMask,
                       "Also write the map projected into the scene camera's image (PNG), usable "
                       "as `optimize --mask`");
         c->callback([a, &run] { run = [a] { return runScratchMap(*a); }; });

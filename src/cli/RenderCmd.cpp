@@ -1,4 +1,4 @@
-// scratchlight render SCENE.json [--envmap FILE | --constant V] [--spp N] [--threads N] [-o
+// scratchlight render SCENE.json [--envmap SPEC] [--spp N] [--threads N] [-o
 // OUT.exr]
 #include <spdlog/spdlog.h>
 
@@ -17,7 +17,7 @@ namespace sl::cli {
 namespace {
 struct RenderArgs {
     std::string scene, envmap, out = "render.exr";
-    std::optional<float> constant;
+    std::vector<std::string> overrides;
     std::optional<int> spp, maxDepth;
     std::optional<uint64_t> seed;
     int threads = 0;
@@ -26,7 +26,7 @@ struct RenderArgs {
 
 int runRender(const RenderArgs& a) {
     const auto pngPath = siblingPath(a.out, ".exr", ".png");
-    SceneDesc desc = readSceneFile(a.scene);
+    SceneDesc desc = readSceneFile(a.scene, a.overrides);
     if (a.spp) desc.render.spp = *a.spp;
     if (a.maxDepth) desc.render.maxDepth = *a.maxDepth;
     if (a.seed) desc.render.seed = *a.seed;
@@ -35,7 +35,7 @@ int runRender(const RenderArgs& a) {
     spdlog::info("height map {}x{} ({}), Embree grid built in {:.3f} s, {:.1f} MB", scene->mapWidth,
                  scene->mapHeight, desc.heightmap.path.filename().string(), hs.buildSeconds,
                  static_cast<double>(hs.embreeBytes) / 1e6);
-    EnvMap env = chooseEnvMap(*scene, a.envmap, a.constant);
+    EnvMap env = chooseEnvMap(*scene, a.envmap);
 
     RenderOptions opt = renderOptionsFor(*scene);
     opt.threads = a.threads;
@@ -56,11 +56,11 @@ void registerRender(CLI::App& app, std::function<int()>& run) {
     auto a = std::make_shared<RenderArgs>();
     CLI::App* c = app.add_subcommand("render", "Render a scene under an environment map");
     c->add_option("scene", a->scene, "Scene file (JSON)")->required();
-    auto* env = c->add_option("--envmap", a->envmap,
-                              "Equirectangular env map (EXR/HDR/PNG/JPEG), resampled to the "
-                              "scene's envmap size");
-    auto* cst = c->add_option("--constant", a->constant, "Constant gray env map of this value");
-    env->excludes(cst);
+    c->add_option("--envmap", a->envmap,
+                  "The light: " + lightSpecForms() +
+                      " (default: the scene's envmap section, else studio); a file is resampled "
+                      "to the scene's env-map grid");
+    addSceneOverrides(c, a->overrides, true);
     c->add_option("--spp", a->spp, "Samples per pixel (overrides render.spp)")
         ->check(CLI::Range(1, 1 << 20));
     c->add_option("--max-depth", a->maxDepth, "Mitsuba max_depth (overrides render.max_depth)")

@@ -1,5 +1,5 @@
 // scratchlight precompute SCENE.json [--spp N] [--rgb] [-o part.tm]
-// scratchlight relight part.tm (--envmap FILE | --constant V) [-o OUT.exr]
+// scratchlight relight part.tm --envmap SPEC [-o OUT.exr]
 // scratchlight optimize (SCENE.json | part.tm) [--optimizer NAME] [--lambda L[,L...]] ...
 #include <spdlog/spdlog.h>
 
@@ -20,7 +20,8 @@ namespace sl::cli {
 
 namespace {
 
-void addTraceOptions(CLI::App* c, PrecomputeOptions& p) {
+void addTraceOptions(CLI::App* c, PrecomputeOptions& p, std::vector<std::string>& overrides) {
+    addSceneOverrides(c, overrides, true);
     c->add_option("--spp", p.spp, "Samples per pixel (overrides render.spp)")
         ->check(CLI::Range(1, 1 << 20));
     c->add_option("--max-depth", p.maxDepth, "Mitsuba max_depth (overrides render.max_depth)")
@@ -33,12 +34,13 @@ void addTraceOptions(CLI::App* c, PrecomputeOptions& p) {
 struct PrecomputeArgs {
     std::string scene, out = "part.tm";
     PrecomputeOptions p;
+    std::vector<std::string> overrides;
 };
 
 int runPrecompute(const PrecomputeArgs& a) {
     if (std::filesystem::path(a.out).extension() != ".tm")
         throw UsageError("output '" + a.out + "' must end in .tm");
-    TransportSource s = precomputeToFile(a.scene, a.p, a.out);
+    TransportSource s = precomputeToFile(a.scene, a.p, a.out, a.overrides);
     std::printf("%s\n", describeTransport(s).c_str());
     std::printf("wrote %s (fingerprint %s)\n", a.out.c_str(),
                 s.file.provenance.fingerprint.c_str());
@@ -47,27 +49,18 @@ int runPrecompute(const PrecomputeArgs& a) {
 
 struct RelightArgs {
     std::string tm, envmap, out = "relight.exr";
-    std::optional<float> constant;
 };
 
 int runRelight(const RelightArgs& a) {
     const auto png = siblingPath(a.out, ".exr", ".png");
-    if (a.envmap.empty() == !a.constant.has_value())
-        throw UsageError("give exactly one of --envmap FILE and --constant V");
     TransportFile f = readTransportFile(a.tm);
     const TransportMatrix& t = f.matrix;
-    std::vector<double> e;
-    if (a.constant) {
-        if (!(*a.constant >= 0)) throw UsageError("--constant must be >= 0");
-        e.assign(t.cols(), *a.constant);
-    } else {
-        EnvMap m = loadEnvMap(a.envmap, t.envWidth, t.envHeight, t.channels == 3 ? 3 : 1);
-        if (t.channels == 1)
-            spdlog::warn(
-                "gray transport matrix: the env map is used as its luminance; the "
-                "result equals a render only for gray maps (precompute with --rgb)");
-        e.assign(m.texels.begin(), m.texels.end());
-    }
+    const EnvMap m = lightFromSpec(a.envmap, t.envWidth, t.envHeight, t.channels == 3 ? 3 : 1);
+    if (t.channels == 1 && a.envmap.rfind("const:", 0) != 0)
+        spdlog::warn(
+            "gray transport matrix: the env map is used as its luminance; the result equals a "
+            "render only for gray maps (precompute with --rgb)");
+    const std::vector<double> e(m.texels.begin(), m.texels.end());
     const int ch = t.channels == 3 ? 3 : 1;
     std::vector<double> img(t.rows() * ch);
     if (ch == 3)
@@ -120,7 +113,7 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         CLI::App* c = app.add_subcommand(
             "precompute", "Trace the scene once into its light-transport matrix T (I = T·E)");
         c->add_option("scene", a->scene, "Scene file (JSON)")->required();
-        addTraceOptions(c, a->p);
+        addTraceOptions(c, a->p, a->overrides);
         c->add_flag("--rgb", a->p.rgb, "Store RGB T (3 blocks) instead of luminance T");
         c->add_flag_function(
             "--halves", [a](std::int64_t) { a->p.sampleSets = 2; },
@@ -135,9 +128,7 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         CLI::App* c = app.add_subcommand(
             "relight", "Render I = T·E from a transport matrix, without tracing a ray");
         c->add_option("transport", a->tm, "Transport-matrix file (.tm)")->required();
-        auto* e = c->add_option("--envmap", a->envmap, "Equirectangular env map");
-        auto* k = c->add_option("--constant", a->constant, "Constant env map value");
-        e->excludes(k);
+        c->add_option("--envmap", a->envmap, "The light: " + lightSpecForms())->required();
         c->add_option("-o,--output", a->out, "Output EXR; a PNG preview is written beside it")
             ->capture_default_str();
         c->callback([a, &run] { run = [a] { return runRelight(*a); }; });
@@ -152,7 +143,7 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         addChoice(c, "--optimizer", j.optimizer.method, optimizerMethodTable(),
                   std::string("Optimizer (default: ") + methodName(optimizeDefaults().method) +
                       "; budget: --iterations)");
-        c->add_option("--fd-h", j.blackBox.fd.h, "fd-adam: finite-difference step")
+        c->add_option("--fd-step", j.blackBox.fd.h, "fd-adam: finite-difference step h")
             ->check(CLI::PositiveNumber)
             ->capture_default_str();
         c->add_option("--spsa-q", j.blackBox.spsa.q, "spsa: estimates averaged per step")
@@ -252,7 +243,7 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
             ->delimiter(',');
         addChoice(c, "--preset", a->preset, optimizePresetTable(),
                   "Settings fixed together (they override the options they fix)");
-        addTraceOptions(c, j.precompute);
+        addTraceOptions(c, j.precompute, j.sceneOverrides);
         c->add_option("-o,--output", a->out, "Output directory")->capture_default_str();
         c->callback([a, &run] { run = [a] { return runOptimize(*a); }; });
     }

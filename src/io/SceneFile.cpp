@@ -263,15 +263,64 @@ SceneDesc parseScene(const std::string& text, const std::filesystem::path& baseD
     return d;
 }
 
-SceneDesc readSceneFile(const std::filesystem::path& file) {
+void applySceneOverride(json& scene, const std::string& override, const std::string& where) {
+    const size_t eq = override.find('=');
+    const std::string key = override.substr(0, eq);
+    if (eq == std::string::npos || key.empty() || key.front() == '.' || key.back() == '.' ||
+        key.find("..") != std::string::npos)
+        throw inputError("scene override '" + override + "'", "is not key=value",
+                         "write e.g. -D material.alpha=0.1 or -D camera.width=256");
+    if (!scene.is_object())
+        throw inputError(where, "is not a JSON object", "a scene file is {\"heightmap\": ...}");
+    const std::string text = override.substr(eq + 1);
+    json value = json::parse(text, nullptr, false);
+    if (value.is_discarded()) value = text;  // a bare word: a string
+    json* at = &scene;
+    std::string walked;
+    for (size_t start = 0;;) {
+        const size_t dot = key.find('.', start);
+        const std::string part = key.substr(start, dot == std::string::npos ? dot : dot - start);
+        walked += (walked.empty() ? "" : ".") + part;
+        if (dot == std::string::npos) {
+            (*at)[part] = value;
+            return;
+        }
+        json& next = (*at)[part];
+        if (next.is_null()) next = json::object();
+        if (!next.is_object())
+            throw inputError("scene override '" + override + "'",
+                             "'" + walked + "' is a value in " + where + ", not a section",
+                             "name a field inside a section, e.g. material.alpha");
+        at = &next;
+        start = dot + 1;
+    }
+}
+
+SceneDesc readSceneFile(const std::filesystem::path& file,
+                        const std::vector<std::string>& overrides) {
     std::ifstream in(file, std::ios::binary);
     if (!in)
         throw inputError(file.string(), "cannot open the scene file",
                          "check the path (scene files are JSON)");
     std::stringstream ss;
     ss << in.rdbuf();
-    SceneDesc d = parseScene(ss.str(), file.parent_path(), file.string());
+    std::string text = ss.str();
+    if (!overrides.empty()) {
+        json j = json::parse(text, nullptr, false);
+        if (!j.is_discarded()) {  // a malformed file is reported by parseScene, as always
+            for (const std::string& o : overrides) applySceneOverride(j, o, file.string());
+            text = j.dump();
+        }
+    }
+    std::string where = file.string();
+    if (!overrides.empty()) {
+        where += " (with";
+        for (const std::string& o : overrides) where += " -D " + o;
+        where += ")";
+    }
+    SceneDesc d = parseScene(text, file.parent_path(), where);
     d.file = file;
+    d.overrides = overrides;
     return d;
 }
 
@@ -285,8 +334,9 @@ std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
     return std::make_unique<Scene>(desc, map.width, map.height, std::move(map.heights));
 }
 
-std::unique_ptr<Scene> loadScene(const std::filesystem::path& file) {
-    return loadScene(readSceneFile(file));
+std::unique_ptr<Scene> loadScene(const std::filesystem::path& file,
+                                 const std::vector<std::string>& overrides) {
+    return loadScene(readSceneFile(file, overrides));
 }
 
 std::vector<SceneFileField> sceneFileFields() {

@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
 
@@ -15,14 +16,26 @@
 namespace sl {
 
 /// Parse and validate a scene file. Throws InputError naming the file and field.
-SceneDesc readSceneFile(const std::filesystem::path& file);
+/// `overrides` ("key.path=value", as Mitsuba's -D) replace or add fields of the file's JSON
+/// before it is parsed, so they are checked as the file's own fields are: the value is read as
+/// JSON (a number, true/false, [..], {..}, "..") and otherwise taken as a string; a key names
+/// a field by its sections (e.g. material.alpha, camera.width, render.spp). Relative paths in
+/// a value resolve against the scene file's folder, as in the file. The desc records them.
+SceneDesc readSceneFile(const std::filesystem::path& file,
+                        const std::vector<std::string>& overrides = {});
 /// Parse a scene from JSON text; relative paths resolve against baseDir.
 SceneDesc parseScene(const std::string& jsonText, const std::filesystem::path& baseDir,
                      const std::string& where = "scene");
 
 /// Load the height map a SceneDesc names and build the Scene (Embree surface included).
 std::unique_ptr<Scene> loadScene(const SceneDesc& desc);
-std::unique_ptr<Scene> loadScene(const std::filesystem::path& file);
+std::unique_ptr<Scene> loadScene(const std::filesystem::path& file,
+                                 const std::vector<std::string>& overrides = {});
+
+/// Applies one "key.path=value" override to a scene's JSON (readSceneFile's rules); `where`
+/// names the scene file for errors.
+void applySceneOverride(nlohmann::json& scene, const std::string& override,
+                        const std::string& where);
 
 /// One row of the scene file's reference.
 struct SceneFileField {

@@ -80,6 +80,8 @@ TransportProvenance transportProvenance(const Scene& scene, const RenderOptions&
     in["render"] = {{"spp", opt.spp}, {"max_depth", opt.maxDepth}, {"seed", opt.seed}};
     if (!scene.desc.file.empty())
         in["scene_file"] = std::filesystem::absolute(scene.desc.file).lexically_normal().string();
+    // The fields they change are recorded above; these let sceneOfTransport load the same scene.
+    if (!scene.desc.overrides.empty()) in["scene_overrides"] = scene.desc.overrides;
     TransportProvenance p;
     p.inputs = in.dump();
     // The file name is informative only: the content hash identifies the height map.
@@ -87,6 +89,7 @@ TransportProvenance transportProvenance(const Scene& scene, const RenderOptions&
     keyed["heightmap"].erase("file");
     keyed["material"].erase("name");
     keyed.erase("scene_file");
+    keyed.erase("scene_overrides");
     std::string text = keyed.dump();
     p.fingerprint =
         toHex(hash64(text.data(), text.size(), 1)) + toHex(hash64(text.data(), text.size(), 2));

@@ -26,6 +26,11 @@ EnvMap studioEnvMap(int width, int height) {
     return e;
 }
 
+const std::vector<std::string>& presetNames() {
+    static const std::vector<std::string> names{"studio"};
+    return names;
+}
+
 EnvMap presetEnvMap(const std::string& name, int width, int height) {
     if (name == "studio") return studioEnvMap(width, height);
     throw inputError("envmap.preset", "unknown preset \"" + name + "\"", "use one of: studio");

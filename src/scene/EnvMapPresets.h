@@ -6,12 +6,15 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "scene/EnvMap.h"
 
 namespace sl {
 
 EnvMap studioEnvMap(int width, int height);
+/// The preset names, "studio" first.
+const std::vector<std::string>& presetNames();
 /// By name; throws InputError listing the presets for an unknown name.
 EnvMap presetEnvMap(const std::string& name, int width, int height);
 

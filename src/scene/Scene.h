@@ -56,8 +56,9 @@ struct CameraSpec {
 CameraDesc resolveCamera(const CameraSpec& spec, const Heightfield& surface);
 
 struct SceneDesc {
-    std::filesystem::path file;  // the scene file (empty if built in code)
-    std::string canonicalJson;   // the scene as parsed, keys sorted (for fingerprints)
+    std::filesystem::path file;          // the scene file (empty if built in code)
+    std::vector<std::string> overrides;  // -D key=value applied to the file (io/SceneFile.h)
+    std::string canonicalJson;           // the scene as parsed, keys sorted (for fingerprints)
     HeightmapDesc heightmap;
     MaterialDesc material;
     CameraSpec camera;
