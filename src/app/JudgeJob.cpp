@@ -145,8 +145,7 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
             lights.emplace_back("studio", studioEnvMap(ew, eh));
         }
         JudgeOptions jo = o.judge;
-        if (jo.cacheDir.empty())
-            jo.cacheDir = std::filesystem::absolute(o.outDir).parent_path() / ".scratchlight-cache";
+        jo.cacheDir = cacheDirectory(o.cache);
         Judge judge(*scene, jo);
         const TransportMatrix& t = judge.estimate().file.matrix;
 

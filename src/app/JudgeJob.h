@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "app/Cache.h"
 #include "app/Judge.h"
 
 namespace sl {
@@ -28,7 +29,8 @@ struct JudgeJobOptions {
     /// Env-map files (EXR/HDR/PNG…), or optimize output directories (their envmap.exr).
     std::vector<std::filesystem::path> lights;
     bool references = true;  // also score uniform 0.5 and the studio preset
-    JudgeOptions judge;      // cacheDir "" = <parent of outDir>/.scratchlight-cache
+    JudgeOptions judge;      // its cacheDir is set from `cache`
+    CacheLocation cache;     // where the estimate is cached (app/Cache.h)
     std::filesystem::path outDir = "out/judge";
     std::string commandLine;  // how the run was asked for: recorded in judge.json, not parsed
 };

@@ -227,7 +227,7 @@ Plan plan(const OptimizeJobOptions& options) {
         throw inputError(option("planes") + " " + std::to_string(o.planes),
                          "needs independent estimates of T traced from the scene",
                          "pass SCENE.json instead of the .tm, or " + option("planes") + " 1");
-    p.cacheDir = std::filesystem::absolute(o.outDir).parent_path() / ".scratchlight-cache";
+    p.cacheDir = cacheDirectory(o.cache);
     return p;
 }
 
@@ -753,6 +753,8 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                 job.heldOut->path.empty() ? std::string("not stored") : job.heldOut->path.string(),
                 job.heldOut->file.provenance.spp, job.heldOut->file.provenance.seed);
         prepareRuns(p, in, job);
+        if (!p.cacheDir.empty() && (!p.tmInput || p.o.heldOut.mode == HeldOutMode::Judge))
+            spdlog::info("cache {}", describeCache(cacheContents(p.cacheDir)));
         spdlog::info("mask: {} pixels; writing {}", job.maskPixels, p.o.outDir.string());
         std::vector<ReportRun> reportRuns;
         for (double lambda : p.o.lambdas) {

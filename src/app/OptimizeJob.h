@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "app/Cache.h"
 #include "app/HeldOut.h"
 #include "app/InitialState.h"
 #include "app/Judge.h"
@@ -88,6 +89,7 @@ struct OptimizeJobOptions {
     OptimizerOptions optimizer = optimizeJobOptimizerOptions();
     BlackBoxOptions blackBox;      // fd-adam / spsa: gradients through the renderer
     PrecomputeOptions precompute;  // used when input is a scene
+    CacheLocation cache;           // where traced matrices are kept (app/Cache.h)
     // The search (app/Search.h). planes: independent estimates of T cycled per step (0: the
     // method's default); continuation: λ factors before λ.
     int planes = 0;

@@ -13,5 +13,6 @@ void registerTransport(CLI::App& app, std::function<int()>& run);
 void registerJudge(CLI::App& app, std::function<int()>& run);
 void registerRace(CLI::App& app, std::function<int()>& run);  // after registerBench
 void registerDefectMap(CLI::App& app, std::function<int()>& run);
+void registerCache(CLI::App& app, std::function<int()>& run);
 
 }  // namespace sl::cli

@@ -61,6 +61,17 @@ EnvMap chooseEnvMap(const Scene& scene, const std::string& spec) {
     return presetEnvMap(e.preset.empty() ? EnvMapDesc::kDefaultPreset : e.preset, w, h);
 }
 
+void addCacheOptions(CLI::App* c, CacheLocation& cache) {
+    auto* dir = c->add_option_function<std::string>(
+        "--cache", [&cache](const std::string& d) { cache.dir = d; },
+        "Folder of the transport-matrix cache (default: $SCRATCHLIGHT_CACHE, else "
+        "~/.cache/scratchlight; `scratchlight cache` shows it)");
+    auto* off = c->add_flag_function(
+        "--no-cache", [&cache](std::int64_t) { cache.disabled = true; },
+        "Trace every matrix; read and keep nothing in the cache");
+    dir->excludes(off);
+}
+
 void addSceneOverrides(CLI::App* c, std::vector<std::string>& overrides, bool image) {
     c->add_option_function<std::vector<std::string>>(
          "-D",

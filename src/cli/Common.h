@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "app/Cache.h"
 #include "core/Error.h"
 #include "core/Registry.h"
 #include "scene/EnvMap.h"
@@ -57,6 +58,9 @@ EnvMap chooseEnvMap(const Scene& scene, const std::string& spec);
 /// Mitsuba's; io/SceneFile.h) and, when it renders (`image`), --width/--height and --size N
 /// (both) for the image, which are camera.width/height overrides.
 void addSceneOverrides(CLI::App* c, std::vector<std::string>& overrides, bool image);
+
+/// --cache DIR and --no-cache of a command that keeps traced matrices (app/Cache.h).
+void addCacheOptions(CLI::App* c, CacheLocation& cache);
 
 /// Checks an output path ends in `ext` (usage error otherwise) and returns the sibling with
 /// extension `siblingExt` (e.g. the PNG preview next to an EXR).

@@ -66,6 +66,7 @@ void registerJudge(CLI::App& app, std::function<int()>& run) {
     c->add_flag("--no-references", a->noReferences,
                 "Leave out the built-in references (uniform 0.5, studio)");
     addSceneOverrides(c, a->o.sceneOverrides, true);
+    addCacheOptions(c, a->o.cache);
     c->add_option("--threads", a->o.judge.threads, "Worker threads (0: all cores)")
         ->check(CLI::Range(0, 4096));
     c->add_option("-o,--output", a->o.outDir, "Output directory")->capture_default_str();

@@ -244,6 +244,7 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         addChoice(c, "--preset", a->preset, optimizePresetTable(),
                   "Settings fixed together (they override the options they fix)");
         addTraceOptions(c, j.precompute, j.sceneOverrides);
+        addCacheOptions(c, j.cache);
         c->add_option("-o,--output", a->out, "Output directory")->capture_default_str();
         c->callback([a, &run] { run = [a] { return runOptimize(*a); }; });
     }

@@ -123,6 +123,7 @@ int main(int argc, char** argv) {
     registerGradients(app, run);
     registerPaper(app, run);
     registerDefectMap(app, run);
+    registerCache(app, run);
 
     if (argc > 1 && argv[1][0] != '-' && reportUnknownCommand(app, argv[1])) return kUsageError;
     try {

@@ -1,0 +1,98 @@
+// The transport-matrix cache (app/Cache.h): where it is, that optimize and judge use it and
+// say so, --cache/--no-cache, and `scratchlight cache [clear]`. This file also gives every
+// test process its own cache folder, so no test reads what another traced.
+#include <gtest/gtest.h>
+#include <stdlib.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include "TestUtil.h"
+#include "app/Cache.h"
+
+using namespace sl;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// One fresh cache per test process (ctest runs each test in its own), removed at exit; the
+/// CLI the tests start inherits it through the environment.
+struct ProcessCache {
+    test::TempDir dir{"cache"};
+    ProcessCache() { ::setenv("SCRATCHLIGHT_CACHE", dir.path().c_str(), 1); }
+};
+const ProcessCache gProcessCache;
+
+size_t countTm(const fs::path& dir) {
+    return cacheContents(dir).files;
+}
+
+}  // namespace
+
+TEST(Cache, LocationFollowsFlagThenEnvironmentThenXdg) {
+    CacheLocation given;
+    given.dir = "/some/where";
+    EXPECT_EQ(cacheDirectory(given), fs::path("/some/where"));
+    CacheLocation off;
+    off.disabled = true;
+    EXPECT_TRUE(cacheDirectory(off).empty());
+    EXPECT_EQ(cacheDirectory({}), gProcessCache.dir.path());  // $SCRATCHLIGHT_CACHE
+    const std::string saved = std::getenv("SCRATCHLIGHT_CACHE");
+    ::unsetenv("SCRATCHLIGHT_CACHE");
+    ::setenv("XDG_CACHE_HOME", "/xdg", 1);
+    EXPECT_EQ(cacheDirectory({}), fs::path("/xdg/scratchlight"));
+    ::unsetenv("XDG_CACHE_HOME");
+    ::setenv("HOME", "/home/inspector", 1);
+    EXPECT_EQ(cacheDirectory({}), fs::path("/home/inspector/.cache/scratchlight"));
+    ::setenv("SCRATCHLIGHT_CACHE", saved.c_str(), 1);
+}
+
+TEST(Cache, ClearRemovesOnlyTheCachesFiles) {
+    test::TempDir dir("cache-clear");
+    test::writeText(dir / "transport-0123abcd.tm", std::string(1000, 'x'));
+    test::writeText(dir / "transport-0123abcd.tm.tmp-1", "partial");
+    test::writeText(dir / "notes.txt", "the user's");
+    const CacheContents before = cacheContents(dir.path());
+    EXPECT_EQ(before.files, 2u);
+    EXPECT_EQ(before.bytes, 1007u);
+    const CacheContents removed = clearCache(dir.path());
+    EXPECT_EQ(removed.files, 2u);
+    EXPECT_TRUE(fs::exists(dir / "notes.txt"));
+    EXPECT_EQ(cacheContents(dir.path()).files, 0u);
+    EXPECT_EQ(cacheContents(dir / "missing").files, 0u);
+}
+
+TEST(Cache, OptimizeUsesItSaysSoAndTheCommandClearsIt) {
+    test::TempDir dir("cache-cli");
+    const std::string scene = std::string(SL_SOURCE_DIR) + "/scenes/default/scene.json";
+    const fs::path cache = dir / "c";
+    const std::string common =
+        " --size 32 --spp 4 --heldout-spp 8 --iterations 5 --cache " + cache.string() + " -o ";
+    auto r = test::runCli("optimize " + scene + common + (dir / "a").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    // Training T (two halves) and the judge's estimate.
+    EXPECT_EQ(countTm(cache), 2u) << r.output;
+    EXPECT_NE(r.output.find("cache " + cache.string() + ": 2 transport matrices"),
+              std::string::npos)
+        << r.output;
+    r = test::runCli("optimize " + scene + common + (dir / "b").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("transport matrix from cache"), std::string::npos) << r.output;
+
+    // --no-cache traces and keeps nothing.
+    r = test::runCli("optimize " + scene +
+                     " --size 32 --spp 4 --heldout-spp 8 --iterations 5 --no-cache -o " +
+                     (dir / "n").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_EQ(r.output.find("from cache"), std::string::npos) << r.output;
+    EXPECT_EQ(countTm(gProcessCache.dir.path()), 0u);
+
+    r = test::runCli("cache --cache " + cache.string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("2 transport matrices"), std::string::npos) << r.output;
+    r = test::runCli("cache clear --cache " + cache.string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("removed 2 transport matrices"), std::string::npos) << r.output;
+    EXPECT_EQ(countTm(cache), 0u);
+}
