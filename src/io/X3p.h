@@ -1,0 +1,16 @@
+// X3p: the reader of X3P files (ISO 25178-72; the XML of ISO 5436-2 and binary point data in a
+// zip). Which variant is read and what is refused: io/HeightmapIO.h. Use loadHeightmap, which
+// dispatches `.x3p` here and then fills invalid points and applies the height options.
+#pragma once
+
+#include <filesystem>
+
+#include "io/HeightmapIO.h"
+
+namespace sl {
+
+/// Reads an X3P file: heights in millimetres (NaN marks an invalid point), `pitch` in mm,
+/// `format` e.g. "x3p int16". Throws InputError naming the file and the offending field.
+HeightmapData readX3p(const std::filesystem::path& file);
+
+}  // namespace sl
