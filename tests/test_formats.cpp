@@ -17,6 +17,7 @@
 
 #include "TestUtil.h"
 #include "core/Error.h"
+#include "core/Md5.h"
 #include "io/HeightmapIO.h"
 #include "io/SceneFile.h"
 #include "scene/Heightfield.h"
@@ -63,6 +64,7 @@ struct X3pSpec {
     std::vector<double> values;  // sizeX*sizeY, X fastest
     std::vector<bool> valid;     // empty: no valid.bin
     bool withMainXml = true, withData = true;
+    std::string dataMd5;    // MD5ChecksumPointData ("auto": the data's)
     long truncateData = 0;  // bytes cut from data.bin
 };
 
@@ -93,6 +95,7 @@ std::string x3pXml(const X3pSpec& s) {
                       "</SizeY><SizeZ>" + std::to_string(s.sizeZ) +
                       "</SizeZ></MatrixDimension>\n  <DataLink><PointDataLink>bindata/data.bin"
                       "</PointDataLink>";
+    if (!s.dataMd5.empty()) xml += "<MD5ChecksumPointData>" + s.dataMd5 + "</MD5ChecksumPointData>";
     if (!s.valid.empty()) xml += "<ValidPointsLink>bindata/valid.bin</ValidPointsLink>";
     xml +=
         "</DataLink></Record3>\n <Record4><ChecksumFile>md5checksum.hex</ChecksumFile>"
@@ -114,7 +117,9 @@ void writeX3p(const fs::path& p, const X3pSpec& s) {
     }
     data.resize(data.size() - static_cast<size_t>(s.truncateData));
     std::map<std::string, std::string> members;
-    if (s.withMainXml) members["main.xml"] = x3pXml(s);
+    X3pSpec spec = s;
+    if (spec.dataMd5 == "auto") spec.dataMd5 = md5Hex(data.data(), data.size());
+    if (s.withMainXml) members["main.xml"] = x3pXml(spec);
     if (s.withData) members["bindata/data.bin"] = data;
     if (!s.valid.empty()) {
         std::string bits((s.valid.size() + 7) / 8, '\0');
@@ -405,6 +410,23 @@ TEST(FormatsX3p, UnsupportedVariantsAreRefusedNamingFileAndField) {
     expectRefused(dir / "text.x3p", {"zip"});
     writeZip(dir / "badxml.x3p", {{"main.xml", "<ISO5436_2><Record1>"}});
     expectRefused(dir / "badxml.x3p", {"main.xml", "XML"});
+}
+
+TEST(FormatsX3p, Md5ChecksumsAreVerified) {
+    EXPECT_EQ(md5Hex("", 0), "d41d8cd98f00b204e9800998ecf8427e");
+    EXPECT_EQ(md5Hex("abc", 3), "900150983cd24fb0d6963f7d28e17f72");
+    const std::string a56(56, 'a');  // the length field spills into a second padding block
+    EXPECT_EQ(md5Hex(a56.data(), a56.size()), "3b0c8ac703f828b04c6c197006d17218");
+
+    test::TempDir dir("x3p");
+    X3pSpec s;
+    s.values = ramp(4, 3);
+    s.dataMd5 = "auto";
+    writeX3p(dir / "ok.x3p", s);
+    EXPECT_EQ(loadHeightmap(dir / "ok.x3p", {}).width, 4);
+    s.dataMd5 = "0123456789abcdef0123456789abcdef";
+    writeX3p(dir / "bad.x3p", s);
+    expectRefused(dir / "bad.x3p", {"bindata/data.bin", "MD5", "MD5ChecksumPointData"});
 }
 
 // --- SDF ----------------------------------------------------------------------------------------

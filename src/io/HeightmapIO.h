@@ -24,10 +24,12 @@
 //         little-endian data (Record3/DataLink/PointDataLink, usually bindata/data.bin) X
 //         fastest, then Y. Invalid points: NaN (float types) and the optional valid-points
 //         mask (Record3/DataLink/ValidPointsLink, 1 bit per point, LSB first, 0 = invalid).
-//         The MD5 checksums are NOT verified (that would need an MD5 implementation; the zip's
-//         own CRC-32 of every member is checked by libzip). Refused: FCM/PRF feature types,
+//         MD5 checksums are verified when given (Record3/DataLink/MD5ChecksumPointData and
+//         MD5ChecksumValidPoints; main.xml against the Record4/ChecksumFile member when that
+//         member exists); libzip checks every member's CRC-32. Refused: FCM/PRF feature types,
 //         absolute CX/CY axes, SizeZ > 1, XML point lists (no PointDataLink), a missing member,
-//         other data types, a data member whose length is not SizeX·SizeY·bytes.
+//         other data types, a data member whose length is not SizeX·SizeY·bytes, a checksum
+//         mismatch.
 //       - SDF (.sdf, ISO 25178-71 / Surfstand "BCR"): ASCII (first line aBCR-1.0, aBCR-0.0 or
 //         aISO-1.0, then `Key = value` lines, `*`, NumPoints·NumProfiles whitespace-separated
 //         values, optionally `*` and a trailer) or binary (bBCR-1.0 / bISO-1.0: an 81-byte

@@ -16,6 +16,8 @@
 #include <vector>
 
 #include "core/Error.h"
+#include "core/Md5.h"
+#include "core/Text.h"
 
 namespace sl {
 
@@ -159,6 +161,34 @@ class X3pReader {
         return buf;
     }
 
+    /// Checks `bytes` (member `name`) against the MD5 digest in main.xml's `field`, if given.
+    void checkMd5(const std::vector<unsigned char>& bytes, const std::string& name,
+                  const char* field) const {
+        const std::string want = lower(text(field, false));
+        if (want.empty()) return;
+        const std::string got = md5Hex(bytes.data(), bytes.size());
+        if (got != want)
+            fail("member '" + name + "' does not match its MD5 checksum (" + field + " is " + want +
+                     ", the member's is " + got + ")",
+                 kFixDamaged);
+    }
+
+    /// main.xml against the checksum file Record4/ChecksumFile names ("<hex> *main.xml"), when
+    /// that member exists.
+    void checkXmlMd5() {
+        const std::string name = text("Record4/ChecksumFile", false);
+        if (name.empty() || zip_name_locate(zip_.get(), name.c_str(), 0) < 0) return;
+        const std::vector<unsigned char> sum =
+            member(name, "named by Record4/ChecksumFile", 0, 4096);
+        const std::string want =
+            lower(trim(std::string(sum.begin(), sum.end()).substr(0, 32).c_str()));
+        const std::string got = md5Hex(xml_.data(), xml_.size());
+        if (want != got)
+            fail("main.xml does not match its MD5 checksum in '" + name + "' (" + want +
+                     "; main.xml's is " + got + ")",
+                 kFixDamaged);
+    }
+
     void parseXml() {
         xml_ = member("main.xml", "every X3P file has one", 0, kMaxXmlBytes);
         const pugi::xml_parse_result r = doc_.load_buffer(xml_.data(), xml_.size());
@@ -233,15 +263,19 @@ class X3pReader {
                 "not supported)");
         dataName_ = text("Record3/DataLink/PointDataLink");
         validName_ = text("Record3/DataLink/ValidPointsLink", false);
+        checkXmlMd5();
     }
 
     HeightmapData readData() {
         const uint64_t n = static_cast<uint64_t>(w_) * static_cast<uint64_t>(h_);
         const std::vector<unsigned char> raw =
             member(dataName_, "named by Record3/DataLink/PointDataLink", n * bytes_);
+        checkMd5(raw, dataName_, "Record3/DataLink/MD5ChecksumPointData");
         std::vector<unsigned char> valid;
-        if (!validName_.empty())
+        if (!validName_.empty()) {
             valid = member(validName_, "named by Record3/DataLink/ValidPointsLink", (n + 7) / 8);
+            checkMd5(valid, validName_, "Record3/DataLink/MD5ChecksumValidPoints");
+        }
 
         HeightmapData d;
         d.width = static_cast<int>(w_);

@@ -1,6 +1,6 @@
-// X3p: the reader of X3P files (ISO 25178-72; the XML of ISO 5436-2 and binary point data in a
-// zip). Which variant is read and what is refused: io/HeightmapIO.h. Use loadHeightmap, which
-// dispatches `.x3p` here and then fills invalid points and applies the height options.
+// X3p: the reader of X3P files (ISO 25178-72; the XML of ISO 5436-2 and binary point
+// data in a zip). Which variant is read and what is refused: io/HeightmapIO.h. Use loadHeightmap,
+// which dispatches `.x3p` here and then fills invalid points and applies the height options.
 #pragma once
 
 #include <filesystem>
