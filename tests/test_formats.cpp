@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <string>
@@ -20,6 +21,7 @@
 #include "core/Md5.h"
 #include "io/HeightmapIO.h"
 #include "io/SceneFile.h"
+#include "io/X3p.h"
 #include "scene/Heightfield.h"
 #include "scene/Scene.h"
 
@@ -427,6 +429,46 @@ TEST(FormatsX3p, Md5ChecksumsAreVerified) {
     s.dataMd5 = "0123456789abcdef0123456789abcdef";
     writeX3p(dir / "bad.x3p", s);
     expectRefused(dir / "bad.x3p", {"bindata/data.bin", "MD5", "MD5ChecksumPointData"});
+}
+
+TEST(FormatsX3p, WriterRoundTripsHeightsAndPitch) {
+    test::TempDir dir("x3p");
+    const int w = 7, h = 5;
+    std::vector<float> mm(static_cast<size_t>(w * h));
+    for (size_t k = 0; k < mm.size(); ++k) mm[k] = 0.001f * static_cast<float>(k) - 0.0123f;
+    sl::writeX3p(dir / "w.x3p", w, h, mm, 0.0025);
+    const HeightmapData d = loadHeightmap(dir / "w.x3p", {});
+    EXPECT_EQ(d.width, w);
+    EXPECT_EQ(d.height, h);
+    EXPECT_EQ(d.format, "x3p float64");
+    ASSERT_TRUE(d.pitch.has_value());
+    EXPECT_NEAR(*d.pitch, 0.0025, 1e-15);
+    for (size_t k = 0; k < mm.size(); ++k) EXPECT_FLOAT_EQ(d.heights[k], mm[k]) << k;
+    // main.xml's checksum file is verified too: the writer's passes (above), a wrong one fails.
+    int err = 0;
+    zip_t* z = zip_open((dir / "w.x3p").c_str(), 0, &err);
+    ASSERT_NE(z, nullptr);
+    const std::string wrong = "00000000000000000000000000000000 *main.xml\n";
+    zip_source_t* src = zip_source_buffer(z, wrong.data(), wrong.size(), 0);
+    ASSERT_GE(zip_file_add(z, "md5checksum.hex", src, ZIP_FL_OVERWRITE), 0);
+    ASSERT_EQ(zip_close(z), 0);
+    expectRefused(dir / "w.x3p", {"main.xml", "md5checksum.hex"});
+    EXPECT_THROW(sl::writeX3p(dir / "x.x3p", 3, 3, mm, 0.01), InputError);
+}
+
+TEST(FormatsX3p, GenSurfaceWritesAnX3pAndASceneThatUsesItsPitch) {
+    test::TempDir dir("x3p");
+    const auto r = test::runCli("gen-surface " + (dir / "part.x3p").string() +
+                                " --width 40 --height 30 --pitch 0.02 --scene " +
+                                (dir / "part.json").string() + " --image-size 16");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    std::ifstream in(dir / "part.json");
+    const std::string json((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(json.find("pixel_pitch"), std::string::npos) << json;
+    auto scene = loadScene(dir / "part.json");
+    EXPECT_EQ(scene->mapWidth, 40);
+    EXPECT_EQ(scene->mapHeight, 30);
+    EXPECT_NEAR(scene->surface->pitch(), 0.02, 1e-12);
 }
 
 // --- SDF ----------------------------------------------------------------------------------------

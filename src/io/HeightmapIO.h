@@ -29,7 +29,7 @@
 //         member exists); libzip checks every member's CRC-32. Refused: FCM/PRF feature types,
 //         absolute CX/CY axes, SizeZ > 1, XML point lists (no PointDataLink), a missing member,
 //         other data types, a data member whose length is not SizeX·SizeY·bytes, a checksum
-//         mismatch.
+//         mismatch. (io/X3p.h writeX3p writes this variant, float64; `gen-surface OUT.x3p`.)
 //       - SDF (.sdf, ISO 25178-71 / Surfstand "BCR"): ASCII (first line aBCR-1.0, aBCR-0.0 or
 //         aISO-1.0, then `Key = value` lines, `*`, NumPoints·NumProfiles whitespace-separated
 //         values, optionally `*` and a trailer) or binary (bBCR-1.0 / bISO-1.0: an 81-byte

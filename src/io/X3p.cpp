@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -13,11 +14,13 @@
 #include <pugixml.hpp>
 #include <string>
 #include <system_error>
+#include <utility>
 #include <vector>
 
 #include "core/Error.h"
 #include "core/Md5.h"
 #include "core/Text.h"
+#include "io/AtomicFile.h"
 
 namespace sl {
 
@@ -331,10 +334,81 @@ class X3pReader {
     long long w_ = 0, h_ = 0;
 };
 
+std::string xmlNumber(double v) {
+    char b[40];
+    std::snprintf(b, sizeof b, "%.15g", v);
+    return b;
+}
+
 }  // namespace
 
 HeightmapData readX3p(const fs::path& file) {
     return X3pReader(file).read();
+}
+
+void writeX3p(const fs::path& file, int width, int height, const std::vector<float>& heightsMm,
+              double pitchMm) {
+    const std::string where = file.string();
+    if (width < 1 || height < 1 ||
+        heightsMm.size() != static_cast<size_t>(width) * static_cast<size_t>(height))
+        throw inputError(where, "cannot write an X3P file of " + std::to_string(heightsMm.size()) +
+                                    " heights as " + std::to_string(width) + "x" +
+                                    std::to_string(height));
+    if (!(std::isfinite(pitchMm) && pitchMm > 0))
+        throw inputError(where, "cannot write an X3P file with pitch " + std::to_string(pitchMm));
+    std::string data;
+    data.reserve(heightsMm.size() * 8);
+    for (float h : heightsMm) {
+        const uint64_t u = std::bit_cast<uint64_t>(static_cast<double>(h) / 1000.0);
+        for (int b = 0; b < 8; ++b) data.push_back(static_cast<char>((u >> (8 * b)) & 0xff));
+    }
+    const std::string inc = xmlNumber(pitchMm / 1000.0);
+    const std::string xml =
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+        "<p:ISO5436_2 xmlns:p=\"http://www.opengps.eu/2008/ISO5436_2\" "
+        "xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\">\n"
+        " <Record1>\n  <Revision>ISO5436 - 2000</Revision>\n  <FeatureType>SUR</FeatureType>\n"
+        "  <Axes>\n"
+        "   <CX><AxisType>I</AxisType><DataType>D</DataType><Increment>" +
+        inc +
+        "</Increment><Offset>0</Offset></CX>\n"
+        "   <CY><AxisType>I</AxisType><DataType>D</DataType><Increment>" +
+        inc +
+        "</Increment><Offset>0</Offset></CY>\n"
+        "   <CZ><AxisType>A</AxisType><DataType>D</DataType><Increment>1</Increment>"
+        "<Offset>0</Offset></CZ>\n"
+        "  </Axes>\n </Record1>\n"
+        " <Record3>\n  <MatrixDimension><SizeX>" +
+        std::to_string(width) + "</SizeX><SizeY>" + std::to_string(height) +
+        "</SizeY><SizeZ>1</SizeZ></MatrixDimension>\n"
+        "  <DataLink><PointDataLink>bindata/data.bin</PointDataLink><MD5ChecksumPointData>" +
+        md5Hex(data.data(), data.size()) +
+        "</MD5ChecksumPointData></DataLink>\n </Record3>\n"
+        " <Record4><ChecksumFile>md5checksum.hex</ChecksumFile></Record4>\n"
+        "</p:ISO5436_2>\n";
+    const std::string sum = md5Hex(xml.data(), xml.size()) + " *main.xml\n";
+
+    writeAtomically(file, [&](const fs::path& temp) {
+        int err = 0;
+        zip_t* z = zip_open(temp.c_str(), ZIP_CREATE | ZIP_TRUNCATE, &err);
+        if (!z) throw inputError(where, "cannot create the X3P archive");
+        std::unique_ptr<zip_t, ZipCloser> guard(z);
+        for (const auto& [name, bytes] :
+             {std::pair<const char*, const std::string*>{"main.xml", &xml},
+              {"bindata/data.bin", &data},
+              {"md5checksum.hex", &sum}}) {
+            zip_source_t* src = zip_source_buffer(z, bytes->data(), bytes->size(), 0);
+            if (!src || zip_file_add(z, name, src, ZIP_FL_OVERWRITE) < 0) {
+                if (src) zip_source_free(src);
+                throw inputError(where, std::string("cannot add ") + name +
+                                            " to the X3P archive: " + zip_strerror(z));
+            }
+        }
+        if (zip_close(z) != 0)
+            throw inputError(where,
+                             std::string("cannot write the X3P archive: ") + zip_strerror(z));
+        guard.release();  // zip_close freed it
+    });
 }
 
 }  // namespace sl
