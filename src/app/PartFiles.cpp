@@ -7,14 +7,17 @@
 #include "core/Image.h"
 #include "io/AtomicFile.h"
 #include "io/ImageIO.h"
+#include "io/X3p.h"
 
 namespace sl {
 
 PartFiles writePartFiles(const GeneratedSurface& g, const std::filesystem::path& out,
                          const PartFileOptions& o) {
     const std::string ext = out.extension().string();
-    if (ext != ".exr" && ext != ".png")
-        throw inputError(out.string(), "a height map must end in .exr (float32) or .png (16-bit)");
+    if (ext != ".exr" && ext != ".png" && ext != ".x3p")
+        throw inputError(out.string(),
+                         "a height map must end in .exr (float32), .png (16-bit) or .x3p (X3P, "
+                         "float64 metres)");
     PartFiles f;
     f.heightmap = out;
     Image hm(g.width, g.height, 1);
@@ -24,6 +27,8 @@ PartFiles writePartFiles(const GeneratedSurface& g, const std::filesystem::path&
     if (ext == ".exr") {
         hm.data = g.heights;
         writeExr(out, hm);
+    } else if (ext == ".x3p") {
+        writeX3p(out, g.width, g.height, g.heights, g.pitch);
     } else {
         for (size_t i = 0; i < g.heights.size(); ++i)
             hm.data[i] = static_cast<float>((g.heights[i] - f.lo) / (f.hi - f.lo));
@@ -46,7 +51,7 @@ PartFiles writePartFiles(const GeneratedSurface& g, const std::filesystem::path&
         hmj["path"] = std::filesystem::relative(std::filesystem::absolute(out),
                                                 std::filesystem::absolute(o.scene).parent_path())
                           .generic_string();
-        hmj["pixel_pitch"] = g.pitch;
+        if (ext != ".x3p") hmj["pixel_pitch"] = g.pitch;  // an X3P file carries its pitch
         if (ext == ".png") hmj["height_range"] = {f.lo, f.hi};
         nlohmann::ordered_json j;
         j["description"] = g.description;

@@ -20,7 +20,8 @@ struct PartFiles {
     double lo = 0, hi = 0;  // height range, mm
 };
 
-/// heightmap: .exr (float32 mm) or .png (16-bit over [lo, hi], recorded in the scene file).
+/// heightmap: .exr (float32 mm), .png (16-bit over [lo, hi], recorded in the scene file) or .x3p
+/// (X3P, float64 metres with its pitch; the scene file then gives no pixel_pitch).
 /// Truth: <stem>-truth.png (labels, synth/SurfaceGenerator.h) and <stem>-truth.json (legend:
 /// truthLegend, every label present).
 /// Throws InputError for another extension.

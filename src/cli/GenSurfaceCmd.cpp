@@ -1,4 +1,5 @@
-// scratchlight gen-surface OUT.exr|OUT.png [--part NAME | --process NAME] [--width N --height N]
+// scratchlight gen-surface OUT.exr|OUT.png|OUT.x3p [--part NAME | --process NAME] [--width N
+// --height N]
 //                         [--pitch P] [tool, defect and noise options] [--seed S]
 //                         [--scene SCENE.json]
 // Writes a synthetic NC-machined height map, its ground-truth labels (<stem>-truth.png,
@@ -42,8 +43,9 @@ struct GenArgs {
 int runGen(GenArgs a) {
     std::filesystem::path out = a.out;
     std::string ext = out.extension().string();
-    if (ext != ".exr" && ext != ".png")
-        throw UsageError("output '" + a.out + "' must end in .exr (float32) or .png (16-bit)");
+    if (ext != ".exr" && ext != ".png" && ext != ".x3p")
+        throw UsageError("output '" + a.out +
+                         "' must end in .exr (float32), .png (16-bit) or .x3p (X3P)");
     SurfaceSpec spec = a.part ? testPartSpec(*a.part) : processDefaults(a.process);
     for (const auto& [option, apply] : a.given)
         if (option->count() > 0) apply(spec, a.spec);
@@ -81,7 +83,9 @@ void registerGenSurface(CLI::App& app, std::function<int()>& run) {
     GenArgs& g = *a;
     CLI::App* c = app.add_subcommand(
         "gen-surface", "Generate a synthetic NC-machined height map and its ground-truth labels");
-    c->add_option("-o,--output", a->out, "Height map to write: .exr (float32 mm) or .png (16-bit)")
+    c->add_option("-o,--output", a->out,
+                  "Height map to write: .exr (float32 mm), .png (16-bit) or .x3p (X3P with its "
+                  "pitch)")
         ->capture_default_str();
     CLI::Option* process =
         addChoice(c, "--process", a->process, processTable(),

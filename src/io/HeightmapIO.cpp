@@ -15,6 +15,8 @@
 #include "io/ImageFile.h"
 #include "io/ImageIO.h"
 #include "io/Npy.h"
+#include "io/Sdf.h"
+#include "io/X3p.h"
 
 namespace sl {
 
@@ -134,6 +136,94 @@ void finishFloat(const std::string& where, HeightmapData& d, double scale) {
                              std::to_string(k % w) + " (the first such sample)",
                          "Replace NaN/Inf samples (e.g. numpy.nan_to_num) and save the map again");
     }
+}
+
+/// Fills the invalid (NaN) points of `d` layer by layer from the valid region: each pass gives
+/// every invalid point with a valid 4-neighbour the mean of those neighbours (computed for the
+/// whole layer before any of it counts as valid), so the result does not depend on the order
+/// of the points. Needs at least one valid point. Returns how many points were filled.
+size_t fillInvalid(HeightmapData& d) {
+    const size_t w = static_cast<size_t>(d.width), h = static_cast<size_t>(d.height);
+    std::vector<float>& z = d.heights;
+    // 0 valid, 1 invalid, 2 invalid and in the next layer
+    std::vector<uint8_t> state(z.size(), 0);
+    size_t invalid = 0;
+    for (size_t k = 0; k < z.size(); ++k)
+        if (std::isnan(z[k])) {
+            state[k] = 1;
+            ++invalid;
+        }
+    if (invalid == 0) return 0;
+    const auto neighbours = [&](size_t k, auto&& f) {
+        const size_t i = k % w, j = k / w;
+        if (i > 0) f(k - 1);
+        if (i + 1 < w) f(k + 1);
+        if (j > 0) f(k - w);
+        if (j + 1 < h) f(k + w);
+    };
+    std::vector<size_t> layer, next;
+    for (size_t k = 0; k < z.size(); ++k) {
+        if (state[k] != 1) continue;
+        bool touches = false;
+        neighbours(k, [&](size_t n) { touches |= state[n] == 0; });
+        if (touches) {
+            state[k] = 2;
+            layer.push_back(k);
+        }
+    }
+    std::vector<float> values;
+    while (!layer.empty()) {
+        values.assign(layer.size(), 0.0f);
+        for (size_t m = 0; m < layer.size(); ++m) {
+            double sum = 0.0;
+            int count = 0;
+            neighbours(layer[m], [&](size_t n) {
+                if (state[n] == 0) {
+                    sum += z[n];
+                    ++count;
+                }
+            });
+            values[m] = static_cast<float>(sum / count);
+        }
+        next.clear();
+        for (size_t m = 0; m < layer.size(); ++m) {
+            z[layer[m]] = values[m];
+            state[layer[m]] = 0;
+        }
+        for (size_t k : layer)
+            neighbours(k, [&](size_t n) {
+                if (state[n] == 1) {
+                    state[n] = 2;
+                    next.push_back(n);
+                }
+            });
+        layer.swap(next);
+    }
+    return invalid;
+}
+
+/// X3P and SDF: heights in mm with NaN for invalid points -> checked, filled, scaled heights.
+HeightmapData finishMetrology(const std::string& where, HeightmapData d,
+                              const HeightmapOptions& opt) {
+    checkSize(where, d.width, d.height);
+    const Mapping m = mappingFor(where, opt, false, d.format);
+    size_t invalid = 0;
+    for (float v : d.heights) invalid += std::isnan(v) ? 1 : 0;
+    const size_t n = d.heights.size();
+    if (invalid == n)
+        throw inputError(where, "every point of the height map is invalid (" + d.format + ")",
+                         "Export a measurement that has valid points");
+    if (invalid > n / 2)
+        throw inputError(where,
+                         std::to_string(invalid) + " of " + std::to_string(n) +
+                             " points are invalid (NaN or masked), more than half; the height "
+                             "map would be mostly invented",
+                         "Crop the measurement to its valid region and export it again");
+    d.invalidFilled = fillInvalid(d);
+    if (d.invalidFilled > 0)
+        d.format += ", " + std::to_string(d.invalidFilled) + " invalid points filled";
+    finishFloat(where, d, m.scale);
+    return d;
 }
 
 HeightmapData loadNpy(const fs::path& file, const HeightmapOptions& opt) {
@@ -266,8 +356,11 @@ HeightmapData loadHeightmap(const fs::path& file, const HeightmapOptions& opt) {
                          "file's directory)");
     if (!fs::is_regular_file(file, ec))
         throw inputError(where, "the height map path is not a regular file",
-                         "Point heightmap.path at an EXR, TIFF, PNG or .npy file");
-    if (lower(file.extension().string()) == ".npy") return loadNpy(file, opt);
+                         "Point heightmap.path at an EXR, TIFF, PNG, .npy, X3P or SDF file");
+    const std::string ext = lower(file.extension().string());
+    if (ext == ".npy") return loadNpy(file, opt);
+    if (ext == ".x3p") return finishMetrology(where, readX3p(file), opt);
+    if (ext == ".sdf") return finishMetrology(where, readSdf(file), opt);
     return loadWithOiio(file, opt);
 }
 

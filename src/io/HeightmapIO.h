@@ -1,6 +1,7 @@
 // HeightmapIO: loading height maps (the world frame of scene/Heightfield.h: sample (row j,
 // column i) of a W×H map sits at x = (i − (W−1)/2)·p, z = (j − (H−1)/2)·p; row 0 is the file's
-// first row).
+// first row). For X3P and SDF, row j is the file's profile j (Y index j, the first profile
+// stored is row 0) and column i is X index i (the first point of a profile is column 0).
 //
 // Formats and how values become heights (scene units, millimetres by default):
 //   * float maps — OpenEXR and TIFF float32/float16 (float64 TIFF is read as float32), .npy
@@ -11,14 +12,50 @@
 //     heightmap.height_scale must stay 1 (put the scale into height_range).
 //   * one channel; a multi-channel file is accepted only if every colour channel equals the
 //     first (gray stored as RGB) and any alpha channel is fully opaque.
+//   * surface-metrology maps (io/X3p.h, io/Sdf.h) — physical heights in metres, converted to
+//     millimetres: height = 1000 · z[m] · heightScale, whatever the stored type (like float
+//     maps, heightmap.height_range must not be given). They carry their sample spacing:
+//     HeightmapData::pitch (mm); the scene uses it when heightmap.pixel_pitch is not given
+//     (io/SceneFile.h). X and Y spacing must agree within 1e-6 (relative): samples are square.
+//       - X3P (.x3p, ISO 25178-72 / ISO 5436-2 XML in a zip): Record1/FeatureType SUR, CX and
+//         CY incremental (AxisType I, Increment in m), CZ absolute (AxisType A) with DataType
+//         I (int16), L (int32), F (float32) or D (float64), z = value · CZ/Increment (default 1)
+//         + CZ/Offset (default 0); Record3/MatrixDimension SizeX × SizeY with SizeZ 1; binary
+//         little-endian data (Record3/DataLink/PointDataLink, usually bindata/data.bin) X
+//         fastest, then Y. Invalid points: NaN (float types) and the optional valid-points
+//         mask (Record3/DataLink/ValidPointsLink, 1 bit per point, LSB first, 0 = invalid).
+//         MD5 checksums are verified when given (Record3/DataLink/MD5ChecksumPointData and
+//         MD5ChecksumValidPoints; main.xml against the Record4/ChecksumFile member when that
+//         member exists); libzip checks every member's CRC-32. Refused: FCM/PRF feature types,
+//         absolute CX/CY axes, SizeZ > 1, XML point lists (no PointDataLink), a missing member,
+//         other data types, a data member whose length is not SizeX·SizeY·bytes, a checksum
+//         mismatch. (io/X3p.h writeX3p writes this variant, float64; `gen-surface OUT.x3p`.)
+//       - SDF (.sdf, ISO 25178-71 / Surfstand "BCR"): ASCII (first line aBCR-1.0, aBCR-0.0 or
+//         aISO-1.0, then `Key = value` lines, `*`, NumPoints·NumProfiles whitespace-separated
+//         values, optionally `*` and a trailer) or binary (bBCR-1.0 / bISO-1.0: an 81-byte
+//         little-endian header — 8 version, 10 ManufacID, 12 CreateDate, 12 ModDate, uint16
+//         NumPoints, uint16 NumProfiles, float64 Xscale, Yscale, Zscale, Zresolution, uint8
+//         Compression, DataType, CheckType — then the values, then an optional trailer).
+//         Profile after profile, NumPoints values each. DataType (Gwyddion's codes): 0 uint8,
+//         1 uint16, 2 uint32, 3 float32, 4 int8, 5 int16, 6 int32, 7 float64; z = value ·
+//         Zscale; Xscale/Yscale are the spacing in m. Invalid points: NaN (float types; "nan"
+//         in ASCII) and Gwyddion's sentinels 65535 (uint16), 4294967295 (uint32), −32768
+//         (int16), −2147483648 (int32). Compression ≠ 0 is refused; CheckType is ignored (the
+//         checksum is not verified).
+//     Invalid points are filled, deterministically, layer by layer from the valid region: each
+//     pass gives every invalid point that has a valid 4-neighbour the mean of those neighbours,
+//     all at once, then counts them valid. HeightmapData::invalidFilled counts them (and the
+//     format string says so). Refused: no valid point, or more than half the points invalid.
 // Checks: file exists and decodes, at least 2×2 samples, every height finite (the error names
 // the first bad row and column).
 //
 // Memory: one float buffer of W·H values (plus a strip of rows for multi-channel files); a
-// single-channel file is decoded straight into it.
+// single-channel file is decoded straight into it. X3P and SDF also hold the file's data
+// (X3P: the uncompressed data member) while converting.
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -37,10 +74,18 @@ struct HeightmapOptions {
 
 struct HeightmapData {
     int width = 0, height = 0;
-    std::vector<float> heights;  // row-major, row 0 first (width * height values)
-    std::string format;          // e.g. "exr float32", "png uint16", "npy float64"
+    std::vector<float> heights;   // row-major, row 0 first (width * height values)
+    std::string format;           // e.g. "exr float32", "png uint16", "npy float64"
+    std::optional<double> pitch;  // X3P, SDF: the file's sample spacing (mm); unset otherwise
+    size_t invalidFilled = 0;     // X3P, SDF: invalid points filled (see above)
 };
 
 HeightmapData loadHeightmap(const std::filesystem::path& file, const HeightmapOptions& opt);
+
+namespace detail {
+/// Largest side and sample count an X3P or SDF header may claim (refused above).
+inline constexpr long long kMaxMetrologySide = 1000000;
+inline constexpr long long kMaxMetrologySamples = 400000000;
+}  // namespace detail
 
 }  // namespace sl

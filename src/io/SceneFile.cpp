@@ -1,5 +1,6 @@
 #include "io/SceneFile.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -127,11 +128,14 @@ class Fields {
 
 void parseHeightmap(Fields& f, const std::filesystem::path& baseDir, HeightmapDesc& h) {
     const json* p = f.get("path");
-    if (!p) f.fail("path", "is required", "name the height-map file (EXR, TIFF, PNG16 or .npy)");
+    if (!p)
+        f.fail("path", "is required",
+               "name the height-map file (EXR, TIFF, PNG16, .npy, X3P or SDF)");
     if (!p->is_string() || p->get<std::string>().empty())
         f.fail("path", "must be a non-empty string");
     std::filesystem::path path = p->get<std::string>();
     h.path = path.is_absolute() ? path : baseDir / path;
+    h.pitchGiven = f.get("pixel_pitch") != nullptr;
     h.pitch = f.positive("pixel_pitch", h.pitch);
     h.heightScale = f.number("height_scale", h.heightScale);
     if (!(h.heightScale != 0)) f.fail("height_scale", "must be non-zero");
@@ -331,7 +335,24 @@ std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
     opt.heightRange = desc.heightmap.heightRange;
     opt.heightScale = desc.heightmap.heightScale;
     HeightmapData map = loadHeightmap(desc.heightmap.path, opt);
-    return std::make_unique<Scene>(desc, map.width, map.height, std::move(map.heights));
+    SceneDesc d = desc;
+    // A height map that carries its pitch (X3P, SDF) sets it unless the scene gives one; a scene
+    // pitch that disagrees with the file's is refused rather than silently preferred.
+    if (map.pitch) {
+        const double filePitch = *map.pitch;
+        if (!desc.heightmap.pitchGiven) {
+            d.heightmap.pitch = filePitch;
+        } else if (std::abs(desc.heightmap.pitch - filePitch) >
+                   1e-6 * std::max(desc.heightmap.pitch, filePitch)) {
+            const std::string where =
+                desc.file.empty() ? desc.heightmap.path.string() : desc.file.string();
+            throw inputError(where, "heightmap.pixel_pitch " + formatNumber(desc.heightmap.pitch) +
+                                        " disagrees with the file's " + formatNumber(filePitch) +
+                                        " mm (" + desc.heightmap.path.string() +
+                                        "); remove pixel_pitch from the scene to use the file's");
+        }
+    }
+    return std::make_unique<Scene>(std::move(d), map.width, map.height, std::move(map.heights));
 }
 
 std::unique_ptr<Scene> loadScene(const std::filesystem::path& file,

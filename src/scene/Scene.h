@@ -20,8 +20,9 @@
 namespace sl {
 
 struct HeightmapDesc {
-    std::filesystem::path path;                        // resolved against the scene file
-    double pitch = 0.01;                               // mm between samples
+    std::filesystem::path path;  // resolved against the scene file
+    double pitch = 0.01;         // mm between samples
+    bool pitchGiven = false;     // the scene file gave pixel_pitch (else a file's own pitch wins)
     std::optional<std::array<double, 2>> heightRange;  // integer maps: [min, max] in mm
     double heightScale = 1.0;                          // float maps: multiplier
 };

@@ -1,0 +1,414 @@
+#include "io/X3p.h"
+
+#include <zip.h>
+
+#include <bit>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <new>
+#include <pugixml.hpp>
+#include <string>
+#include <system_error>
+#include <utility>
+#include <vector>
+
+#include "core/Error.h"
+#include "core/Md5.h"
+#include "core/Text.h"
+#include "io/AtomicFile.h"
+
+namespace sl {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* const kFixSave =
+    "Save the measurement again as an X3P surface (FeatureType SUR, incremental X and Y axes, "
+    "binary data), or export it as SDF, EXR or .npy";
+const char* const kFixDamaged = "The X3P file is damaged; export it again";
+
+/// Uncompressed bytes per compressed byte above which a zip member's declared size is not
+/// believed (deflate packs at most 1032; stored members have ratio 1).
+constexpr uint64_t kMaxInflateRatio = 1100;
+constexpr uint64_t kMaxXmlBytes = uint64_t(64) << 20;
+
+struct ZipCloser {
+    void operator()(zip_t* z) const { zip_discard(z); }
+};
+struct ZipFileCloser {
+    void operator()(zip_file_t* f) const { zip_fclose(f); }
+};
+
+std::string trim(const char* s) {
+    std::string t = s ? s : "";
+    const auto b = t.find_first_not_of(" \t\r\n");
+    if (b == std::string::npos) return {};
+    const auto e = t.find_last_not_of(" \t\r\n");
+    return t.substr(b, e - b + 1);
+}
+
+class X3pReader {
+  public:
+    explicit X3pReader(const fs::path& file) : file_(file), where_(file.string()) {}
+
+    HeightmapData read() {
+        open();
+        parseXml();
+        return readData();
+    }
+
+  private:
+    [[noreturn]] void fail(const std::string& problem, const std::string& fix = kFixSave) const {
+        throw inputError(where_, problem, fix);
+    }
+    /// main.xml's element at `path` (below the root), or nullptr.
+    pugi::xml_node node(const char* path) const { return root_.first_element_by_path(path); }
+    std::string text(const char* path, bool required = true) const {
+        const pugi::xml_node n = node(path);
+        if (!n) {
+            if (required) fail(std::string("main.xml has no ") + path);
+            return {};
+        }
+        return trim(n.child_value());
+    }
+    double number(const char* path, double def, bool required = false) const {
+        const std::string t = text(path, required);
+        if (t.empty()) {
+            if (required) fail(std::string("main.xml: ") + path + " is empty");
+            return def;
+        }
+        const char* b = t.data();
+        if (*b == '+') ++b;
+        double v = 0.0;
+        const auto r = std::from_chars(b, t.data() + t.size(), v);
+        if (r.ec != std::errc() || r.ptr != t.data() + t.size() || !std::isfinite(v))
+            fail(std::string("main.xml: ") + path + " = '" + t + "' is not a finite number",
+                 kFixDamaged);
+        return v;
+    }
+    long long count(const char* path) const {
+        const std::string t = text(path);
+        long long v = 0;
+        const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
+        if (r.ec != std::errc() || r.ptr != t.data() + t.size() || v < 1)
+            fail(std::string("main.xml: ") + path + " = '" + t + "' is not a positive integer",
+                 kFixDamaged);
+        return v;
+    }
+
+    void open() {
+        int err = 0;
+        zip_t* z = zip_open(file_.c_str(), ZIP_RDONLY, &err);
+        if (!z) {
+            zip_error_t ze;
+            zip_error_init_with_code(&ze, err);
+            const std::string msg = zip_error_strerror(&ze);
+            zip_error_fini(&ze);
+            fail("not a readable X3P file (an X3P file is a zip archive): " + msg,
+                 "Check that the file is a complete .x3p file; export it again");
+        }
+        zip_.reset(z);
+    }
+
+    /// The member `name` (`why` says where it is named), which must hold `expected` bytes
+    /// (0: any size up to `limit`).
+    std::vector<unsigned char> member(const std::string& name, const std::string& why,
+                                      uint64_t expected, uint64_t limit = 0) {
+        zip_stat_t st;
+        zip_stat_init(&st);
+        if (zip_stat(zip_.get(), name.c_str(), 0, &st) != 0)
+            fail("the archive has no member '" + name + "' (" + why + ")", kFixDamaged);
+        if (!(st.valid & ZIP_STAT_SIZE) || !(st.valid & ZIP_STAT_COMP_SIZE))
+            fail("the size of member '" + name + "' is unknown", kFixDamaged);
+        if (expected != 0 && st.size != expected)
+            fail("member '" + name + "' holds " + std::to_string(st.size) +
+                     " bytes; Record3/MatrixDimension and the data type say " +
+                     std::to_string(expected),
+                 kFixDamaged);
+        if (limit != 0 && st.size > limit)
+            fail("member '" + name + "' is " + std::to_string(st.size) + " bytes, more than the " +
+                     std::to_string(limit) + " accepted",
+                 kFixDamaged);
+        if (st.size / kMaxInflateRatio > st.comp_size + 1024)
+            fail("member '" + name + "' claims " + std::to_string(st.size) + " bytes from " +
+                     std::to_string(st.comp_size) + " compressed bytes",
+                 kFixDamaged);
+        std::vector<unsigned char> buf;
+        try {
+            buf.resize(static_cast<size_t>(st.size));
+        } catch (const std::bad_alloc&) {
+            fail("not enough memory for member '" + name + "' (" + std::to_string(st.size) +
+                 " bytes)");
+        }
+        std::unique_ptr<zip_file_t, ZipFileCloser> f(zip_fopen(zip_.get(), name.c_str(), 0));
+        if (!f) fail("cannot open member '" + name + "': " + zip_strerror(zip_.get()), kFixDamaged);
+        size_t got = 0;
+        while (got < buf.size()) {
+            const zip_int64_t n = zip_fread(f.get(), buf.data() + got, buf.size() - got);
+            if (n < 0)
+                fail("cannot read member '" + name + "': " + zip_file_strerror(f.get()),
+                     kFixDamaged);
+            if (n == 0) break;
+            got += static_cast<size_t>(n);
+        }
+        if (got != buf.size())
+            fail("member '" + name + "' ends after " + std::to_string(got) + " of " +
+                     std::to_string(buf.size()) + " bytes",
+                 kFixDamaged);
+        return buf;
+    }
+
+    /// Checks `bytes` (member `name`) against the MD5 digest in main.xml's `field`, if given.
+    void checkMd5(const std::vector<unsigned char>& bytes, const std::string& name,
+                  const char* field) const {
+        const std::string want = lower(text(field, false));
+        if (want.empty()) return;
+        const std::string got = md5Hex(bytes.data(), bytes.size());
+        if (got != want)
+            fail("member '" + name + "' does not match its MD5 checksum (" + field + " is " + want +
+                     ", the member's is " + got + ")",
+                 kFixDamaged);
+    }
+
+    /// main.xml against the checksum file Record4/ChecksumFile names ("<hex> *main.xml"), when
+    /// that member exists.
+    void checkXmlMd5() {
+        const std::string name = text("Record4/ChecksumFile", false);
+        if (name.empty() || zip_name_locate(zip_.get(), name.c_str(), 0) < 0) return;
+        const std::vector<unsigned char> sum =
+            member(name, "named by Record4/ChecksumFile", 0, 4096);
+        const std::string want =
+            lower(trim(std::string(sum.begin(), sum.end()).substr(0, 32).c_str()));
+        const std::string got = md5Hex(xml_.data(), xml_.size());
+        if (want != got)
+            fail("main.xml does not match its MD5 checksum in '" + name + "' (" + want +
+                     "; main.xml's is " + got + ")",
+                 kFixDamaged);
+    }
+
+    void parseXml() {
+        xml_ = member("main.xml", "every X3P file has one", 0, kMaxXmlBytes);
+        const pugi::xml_parse_result r = doc_.load_buffer(xml_.data(), xml_.size());
+        if (!r)
+            fail(std::string("main.xml is not valid XML: ") + r.description() + " at byte " +
+                     std::to_string(r.offset),
+                 kFixDamaged);
+        root_ = doc_.document_element();
+        const std::string rootName = root_.name();
+        const std::string suffix = "ISO5436_2";
+        if (rootName.size() < suffix.size() ||
+            rootName.compare(rootName.size() - suffix.size(), suffix.size(), suffix) != 0)
+            fail("main.xml's root element is <" + rootName + ">, not <ISO5436_2>", kFixDamaged);
+
+        const std::string feature = text("Record1/FeatureType");
+        if (feature != "SUR")
+            fail("Record1/FeatureType is '" + feature +
+                 "'; only SUR (an areal surface) is a height map (PRF profiles and FCM "
+                 "feature containers are not supported)");
+        for (const char* axis : {"Record1/Axes/CX/AxisType", "Record1/Axes/CY/AxisType"}) {
+            const std::string t = text(axis);
+            if (t != "I")
+                fail(std::string(axis) + " is '" + t +
+                     "'; only incremental X and Y axes (I, a regular grid) are supported, not "
+                     "absolute coordinates (A)");
+        }
+        const std::string zAxis = text("Record1/Axes/CZ/AxisType");
+        if (zAxis != "A")
+            fail("Record1/Axes/CZ/AxisType is '" + zAxis + "'; the Z axis must be absolute (A)");
+        const double ix = number("Record1/Axes/CX/Increment", 0.0, true);
+        const double iy = number("Record1/Axes/CY/Increment", 0.0, true);
+        if (!(ix > 0) || !(iy > 0))
+            fail("Record1/Axes/CX/Increment and CY/Increment must be > 0 (they are " +
+                 std::to_string(ix) + " and " + std::to_string(iy) + " m)");
+        if (std::abs(ix - iy) > 1e-6 * std::max(ix, iy))
+            fail("the X and Y sample spacings differ (CX/Increment " + std::to_string(ix) +
+                     " m, CY/Increment " + std::to_string(iy) +
+                     " m); the scene needs square samples",
+                 "Resample the measurement to equal X and Y spacing and export it again");
+        pitchMm_ = ix * 1000.0;
+
+        type_ = text("Record1/Axes/CZ/DataType");
+        code_ = type_.size() == 1 ? type_[0] : '?';
+        if (type_ == "I")
+            bytes_ = 2;
+        else if (type_ == "L" || type_ == "F")
+            bytes_ = 4;
+        else if (type_ == "D")
+            bytes_ = 8;
+        else
+            fail("Record1/Axes/CZ/DataType is '" + type_ +
+                 "'; supported are I (int16), L (int32), F (float32) and D (float64)");
+        zInc_ = number("Record1/Axes/CZ/Increment", 1.0);
+        zOff_ = number("Record1/Axes/CZ/Offset", 0.0);
+        if (zInc_ == 0.0) fail("Record1/Axes/CZ/Increment is 0", kFixDamaged);
+
+        w_ = count("Record3/MatrixDimension/SizeX");
+        h_ = count("Record3/MatrixDimension/SizeY");
+        const long long sz = count("Record3/MatrixDimension/SizeZ");
+        if (sz != 1)
+            fail("Record3/MatrixDimension/SizeZ is " + std::to_string(sz) +
+                 "; only one layer (SizeZ 1) is a height map");
+        if (w_ > detail::kMaxMetrologySide || h_ > detail::kMaxMetrologySide ||
+            w_ * h_ > detail::kMaxMetrologySamples)
+            fail("Record3/MatrixDimension " + std::to_string(w_) + " x " + std::to_string(h_) +
+                     " is larger than the " + std::to_string(detail::kMaxMetrologySamples) +
+                     " points accepted",
+                 "Crop or resample the measurement");
+        if (!node("Record3/DataLink/PointDataLink"))
+            fail(
+                "main.xml has no Record3/DataLink/PointDataLink (points listed in the XML are "
+                "not supported)");
+        dataName_ = text("Record3/DataLink/PointDataLink");
+        validName_ = text("Record3/DataLink/ValidPointsLink", false);
+        checkXmlMd5();
+    }
+
+    HeightmapData readData() {
+        const uint64_t n = static_cast<uint64_t>(w_) * static_cast<uint64_t>(h_);
+        const std::vector<unsigned char> raw =
+            member(dataName_, "named by Record3/DataLink/PointDataLink", n * bytes_);
+        checkMd5(raw, dataName_, "Record3/DataLink/MD5ChecksumPointData");
+        std::vector<unsigned char> valid;
+        if (!validName_.empty()) {
+            valid = member(validName_, "named by Record3/DataLink/ValidPointsLink", (n + 7) / 8);
+            checkMd5(valid, validName_, "Record3/DataLink/MD5ChecksumValidPoints");
+        }
+
+        HeightmapData d;
+        d.width = static_cast<int>(w_);
+        d.height = static_cast<int>(h_);
+        d.pitch = pitchMm_;
+        d.format = "x3p " + std::string(type_ == "I"   ? "int16"
+                                        : type_ == "L" ? "int32"
+                                        : type_ == "F" ? "float32"
+                                                       : "float64");
+        try {
+            d.heights.resize(static_cast<size_t>(n));
+        } catch (const std::bad_alloc&) {
+            fail("not enough memory for a " + std::to_string(w_) + "x" + std::to_string(h_) +
+                 " height map");
+        }
+        const double mm = 1000.0;
+        const unsigned char* p = raw.data();
+        for (size_t k = 0; k < d.heights.size(); ++k, p += bytes_) {
+            double v = 0.0;
+            if (code_ == 'I') {
+                uint16_t u = static_cast<uint16_t>(p[0] | (p[1] << 8));
+                v = std::bit_cast<int16_t>(u);
+            } else if (code_ == 'L') {
+                uint32_t u = 0;
+                for (int b = 3; b >= 0; --b) u = (u << 8) | p[b];
+                v = std::bit_cast<int32_t>(u);
+            } else if (code_ == 'F') {
+                uint32_t u = 0;
+                for (int b = 3; b >= 0; --b) u = (u << 8) | p[b];
+                v = std::bit_cast<float>(u);
+            } else {
+                uint64_t u = 0;
+                for (int b = 7; b >= 0; --b) u = (u << 8) | p[b];
+                v = std::bit_cast<double>(u);
+            }
+            const bool masked = !valid.empty() && !((valid[k / 8] >> (k % 8)) & 1);
+            d.heights[k] = masked || std::isnan(v) ? std::numeric_limits<float>::quiet_NaN()
+                                                   : static_cast<float>((v * zInc_ + zOff_) * mm);
+        }
+        return d;
+    }
+
+    fs::path file_;
+    std::string where_;
+    std::unique_ptr<zip_t, ZipCloser> zip_;
+    std::vector<unsigned char> xml_;
+    pugi::xml_document doc_;
+    pugi::xml_node root_;
+    double pitchMm_ = 0.0, zInc_ = 1.0, zOff_ = 0.0;
+    std::string type_, dataName_, validName_;
+    char code_ = '?';
+    uint64_t bytes_ = 0;
+    long long w_ = 0, h_ = 0;
+};
+
+std::string xmlNumber(double v) {
+    char b[40];
+    std::snprintf(b, sizeof b, "%.15g", v);
+    return b;
+}
+
+}  // namespace
+
+HeightmapData readX3p(const fs::path& file) {
+    return X3pReader(file).read();
+}
+
+void writeX3p(const fs::path& file, int width, int height, const std::vector<float>& heightsMm,
+              double pitchMm) {
+    const std::string where = file.string();
+    if (width < 1 || height < 1 ||
+        heightsMm.size() != static_cast<size_t>(width) * static_cast<size_t>(height))
+        throw inputError(where, "cannot write an X3P file of " + std::to_string(heightsMm.size()) +
+                                    " heights as " + std::to_string(width) + "x" +
+                                    std::to_string(height));
+    if (!(std::isfinite(pitchMm) && pitchMm > 0))
+        throw inputError(where, "cannot write an X3P file with pitch " + std::to_string(pitchMm));
+    std::string data;
+    data.reserve(heightsMm.size() * 8);
+    for (float h : heightsMm) {
+        const uint64_t u = std::bit_cast<uint64_t>(static_cast<double>(h) / 1000.0);
+        for (int b = 0; b < 8; ++b) data.push_back(static_cast<char>((u >> (8 * b)) & 0xff));
+    }
+    const std::string inc = xmlNumber(pitchMm / 1000.0);
+    const std::string xml =
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+        "<p:ISO5436_2 xmlns:p=\"http://www.opengps.eu/2008/ISO5436_2\" "
+        "xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\">\n"
+        " <Record1>\n  <Revision>ISO5436 - 2000</Revision>\n  <FeatureType>SUR</FeatureType>\n"
+        "  <Axes>\n"
+        "   <CX><AxisType>I</AxisType><DataType>D</DataType><Increment>" +
+        inc +
+        "</Increment><Offset>0</Offset></CX>\n"
+        "   <CY><AxisType>I</AxisType><DataType>D</DataType><Increment>" +
+        inc +
+        "</Increment><Offset>0</Offset></CY>\n"
+        "   <CZ><AxisType>A</AxisType><DataType>D</DataType><Increment>1</Increment>"
+        "<Offset>0</Offset></CZ>\n"
+        "  </Axes>\n </Record1>\n"
+        " <Record3>\n  <MatrixDimension><SizeX>" +
+        std::to_string(width) + "</SizeX><SizeY>" + std::to_string(height) +
+        "</SizeY><SizeZ>1</SizeZ></MatrixDimension>\n"
+        "  <DataLink><PointDataLink>bindata/data.bin</PointDataLink><MD5ChecksumPointData>" +
+        md5Hex(data.data(), data.size()) +
+        "</MD5ChecksumPointData></DataLink>\n </Record3>\n"
+        " <Record4><ChecksumFile>md5checksum.hex</ChecksumFile></Record4>\n"
+        "</p:ISO5436_2>\n";
+    const std::string sum = md5Hex(xml.data(), xml.size()) + " *main.xml\n";
+
+    writeAtomically(file, [&](const fs::path& temp) {
+        int err = 0;
+        zip_t* z = zip_open(temp.c_str(), ZIP_CREATE | ZIP_TRUNCATE, &err);
+        if (!z) throw inputError(where, "cannot create the X3P archive");
+        std::unique_ptr<zip_t, ZipCloser> guard(z);
+        for (const auto& [name, bytes] :
+             {std::pair<const char*, const std::string*>{"main.xml", &xml},
+              {"bindata/data.bin", &data},
+              {"md5checksum.hex", &sum}}) {
+            zip_source_t* src = zip_source_buffer(z, bytes->data(), bytes->size(), 0);
+            if (!src || zip_file_add(z, name, src, ZIP_FL_OVERWRITE) < 0) {
+                if (src) zip_source_free(src);
+                throw inputError(where, std::string("cannot add ") + name +
+                                            " to the X3P archive: " + zip_strerror(z));
+            }
+        }
+        if (zip_close(z) != 0)
+            throw inputError(where,
+                             std::string("cannot write the X3P archive: ") + zip_strerror(z));
+        guard.release();  // zip_close freed it
+    });
+}
+
+}  // namespace sl

@@ -1,0 +1,642 @@
+// Tests for the surface-metrology height-map readers (io/X3p.h, io/Sdf.h through
+// io/HeightmapIO.h loadHeightmap) and the scene's use of a file's own pixel pitch. The files are
+// written here: X3P with libzip, SDF by hand (ASCII and binary).
+#include <gtest/gtest.h>
+#include <zip.h>
+
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "TestUtil.h"
+#include "core/Error.h"
+#include "core/Md5.h"
+#include "io/HeightmapIO.h"
+#include "io/SceneFile.h"
+#include "io/X3p.h"
+#include "scene/Heightfield.h"
+#include "scene/Scene.h"
+
+namespace fs = std::filesystem;
+using namespace sl;
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+template <typename T>
+void putLE(std::string& out, T v) {
+    using U = std::conditional_t<
+        sizeof(T) == 1, uint8_t,
+        std::conditional_t<sizeof(T) == 2, uint16_t,
+                           std::conditional_t<sizeof(T) == 4, uint32_t, uint64_t>>>;
+    U u = std::bit_cast<U>(v);
+    for (size_t b = 0; b < sizeof(T); ++b) out.push_back(static_cast<char>((u >> (8 * b)) & 0xff));
+}
+
+/// Writes a zip with the given members (name -> bytes).
+void writeZip(const fs::path& p, const std::map<std::string, std::string>& members) {
+    int err = 0;
+    zip_t* z = zip_open(p.c_str(), ZIP_CREATE | ZIP_TRUNCATE, &err);
+    ASSERT_NE(z, nullptr);
+    for (const auto& [name, bytes] : members) {
+        zip_source_t* s = zip_source_buffer(z, bytes.data(), bytes.size(), 0);
+        ASSERT_NE(s, nullptr);
+        ASSERT_GE(zip_file_add(z, name.c_str(), s, ZIP_FL_OVERWRITE), 0);
+    }
+    ASSERT_EQ(zip_close(z), 0);
+}
+
+/// What an X3P test file says; the defaults are a valid 4x3 float64 surface, 5 µm pitch.
+struct X3pSpec {
+    std::string feature = "SUR";
+    std::string cxType = "I", cyType = "I";
+    std::string zType = "D";
+    double incX = 5e-6, incY = 5e-6;
+    std::string zIncrement, zOffset;  // empty: element left out
+    int sizeX = 4, sizeY = 3, sizeZ = 1;
+    std::vector<double> values;  // sizeX*sizeY, X fastest
+    std::vector<bool> valid;     // empty: no valid.bin
+    bool withMainXml = true, withData = true;
+    std::string dataMd5;    // MD5ChecksumPointData ("auto": the data's)
+    long truncateData = 0;  // bytes cut from data.bin
+};
+
+std::string x3pXml(const X3pSpec& s) {
+    auto num = [](double v) {
+        char b[64];
+        std::snprintf(b, sizeof b, "%.17g", v);
+        return std::string(b);
+    };
+    std::string cz = "<CZ><AxisType>A</AxisType><DataType>" + s.zType + "</DataType>";
+    if (!s.zIncrement.empty()) cz += "<Increment>" + s.zIncrement + "</Increment>";
+    if (!s.zOffset.empty()) cz += "<Offset>" + s.zOffset + "</Offset>";
+    cz += "</CZ>";
+    std::string xml = R"(<?xml version="1.0" encoding="UTF-8"?>
+<p:ISO5436_2 xmlns:p="http://www.opengps.eu/2008/ISO5436_2">
+ <Record1><Revision>ISO5436 - 2000</Revision><FeatureType>)" +
+                      s.feature + R"(</FeatureType>
+  <Axes>
+   <CX><AxisType>)" + s.cxType +
+                      "</AxisType><DataType>D</DataType><Increment>" + num(s.incX) +
+                      "</Increment><Offset>0</Offset></CX>\n   <CY><AxisType>" + s.cyType +
+                      "</AxisType><DataType>D</DataType><Increment>" + num(s.incY) +
+                      "</Increment><Offset>0</Offset></CY>\n   " + cz + R"(
+  </Axes></Record1>
+ <Record2><Date>2024-01-01T00:00:00+00:00</Date></Record2>
+ <Record3><MatrixDimension><SizeX>)" +
+                      std::to_string(s.sizeX) + "</SizeX><SizeY>" + std::to_string(s.sizeY) +
+                      "</SizeY><SizeZ>" + std::to_string(s.sizeZ) +
+                      "</SizeZ></MatrixDimension>\n  <DataLink><PointDataLink>bindata/data.bin"
+                      "</PointDataLink>";
+    if (!s.dataMd5.empty()) xml += "<MD5ChecksumPointData>" + s.dataMd5 + "</MD5ChecksumPointData>";
+    if (!s.valid.empty()) xml += "<ValidPointsLink>bindata/valid.bin</ValidPointsLink>";
+    xml +=
+        "</DataLink></Record3>\n <Record4><ChecksumFile>md5checksum.hex</ChecksumFile>"
+        "</Record4>\n</p:ISO5436_2>\n";
+    return xml;
+}
+
+void writeX3p(const fs::path& p, const X3pSpec& s) {
+    std::string data;
+    for (double v : s.values) {
+        if (s.zType == "I")
+            putLE(data, static_cast<int16_t>(v));
+        else if (s.zType == "L")
+            putLE(data, static_cast<int32_t>(v));
+        else if (s.zType == "F")
+            putLE(data, static_cast<float>(v));
+        else
+            putLE(data, v);
+    }
+    data.resize(data.size() - static_cast<size_t>(s.truncateData));
+    std::map<std::string, std::string> members;
+    X3pSpec spec = s;
+    if (spec.dataMd5 == "auto") spec.dataMd5 = md5Hex(data.data(), data.size());
+    if (s.withMainXml) members["main.xml"] = x3pXml(spec);
+    if (s.withData) members["bindata/data.bin"] = data;
+    if (!s.valid.empty()) {
+        std::string bits((s.valid.size() + 7) / 8, '\0');
+        for (size_t k = 0; k < s.valid.size(); ++k)
+            if (s.valid[k]) bits[k / 8] = static_cast<char>(bits[k / 8] | (1 << (k % 8)));
+        members["bindata/valid.bin"] = bits;
+    }
+    writeZip(p, members);
+}
+
+/// An asymmetric 4x3 map: value = 10·row + column (+ base).
+std::vector<double> ramp(int w, int h, double base = 0.0) {
+    std::vector<double> v;
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i) v.push_back(base + 10.0 * j + i);
+    return v;
+}
+
+/// Expects loadHeightmap(file, opt) to throw InputError naming the file and every part.
+void expectRefused(const fs::path& file, const std::vector<std::string>& parts,
+                   const HeightmapOptions& opt = {}) {
+    try {
+        loadHeightmap(file, opt);
+        ADD_FAILURE() << file << " was accepted";
+    } catch (const InputError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find(file.string()), std::string::npos) << msg;
+        for (const auto& p : parts) EXPECT_NE(msg.find(p), std::string::npos) << p << " | " << msg;
+    }
+}
+
+/// SDF header fields.
+struct SdfSpec {
+    std::string version = "BCR-1.0";
+    int points = 4, profiles = 3;
+    double xs = 5e-6, ys = 5e-6, zs = 1e-6;
+    int compression = 0, dataType = 5;
+    std::vector<double> values;
+    long truncate = 0;
+    bool trailer = true;
+};
+
+void writeSdfBinary(const fs::path& p, const SdfSpec& s) {
+    std::string out = "b" + s.version;
+    out += std::string("TestMaker ", 10);
+    out += std::string("010120241200", 12);
+    out += std::string("010120241200", 12);
+    putLE(out, static_cast<uint16_t>(s.points));
+    putLE(out, static_cast<uint16_t>(s.profiles));
+    putLE(out, s.xs);
+    putLE(out, s.ys);
+    putLE(out, s.zs);
+    putLE(out, 1e-9);
+    out.push_back(static_cast<char>(s.compression));
+    out.push_back(static_cast<char>(s.dataType));
+    out.push_back(0);
+    EXPECT_EQ(out.size(), 81u);
+    for (double v : s.values) {
+        switch (s.dataType) {
+            case 1:
+                putLE(out, static_cast<uint16_t>(v));
+                break;
+            case 3:
+                putLE(out, static_cast<float>(v));
+                break;
+            case 5:
+                putLE(out, static_cast<int16_t>(v));
+                break;
+            case 6:
+                putLE(out, static_cast<int32_t>(v));
+                break;
+            case 7:
+                putLE(out, v);
+                break;
+            default:
+                FAIL() << "type " << s.dataType;
+        }
+    }
+    out.resize(out.size() - static_cast<size_t>(s.truncate));
+    if (s.trailer) out += "*\nOperator = test\n";
+    test::writeText(p, out);
+}
+
+void writeSdfAscii(const fs::path& p, const SdfSpec& s, const std::string& dataText = {}) {
+    std::string out = "a" + s.version + "\r\nManufacID   = TestMaker\r\n" +
+                      "CreateDate  = 010120241200\r\nModDate     = 010120241200\r\n" +
+                      "NumPoints   = " + std::to_string(s.points) + "\r\n" +
+                      "NumProfiles = " + std::to_string(s.profiles) + "\r\n";
+    char b[200];
+    std::snprintf(b, sizeof b,
+                  "Xscale      = %.17g\r\nYscale      = %.17g\r\nZscale      = %.17g\r\n", s.xs,
+                  s.ys, s.zs);
+    out += b;
+    out += "Zresolution = -1\r\nCompression = " + std::to_string(s.compression) +
+           "\r\nDataType    = " + std::to_string(s.dataType) + "\r\nCheckType   = 0\r\n*\r\n";
+    if (!dataText.empty()) {
+        out += dataText;
+    } else {
+        for (int j = 0; j < s.profiles; ++j) {
+            for (int i = 0; i < s.points; ++i) {
+                const double v = s.values[static_cast<size_t>(j * s.points + i)];
+                if (std::isnan(v))
+                    out += "NaN ";
+                else {
+                    std::snprintf(b, sizeof b, "%.17g ", v);
+                    out += b;
+                }
+            }
+            out += "\r\n";
+        }
+        out += "*\r\nOperator = test\r\n";
+    }
+    test::writeText(p, out);
+}
+
+/// Expects d to hold expected[k]·scale (mm), row 0 first.
+void expectHeights(const HeightmapData& d, int w, int h, const std::vector<double>& mm,
+                   double tol = 1e-7) {
+    ASSERT_EQ(d.width, w);
+    ASSERT_EQ(d.height, h);
+    ASSERT_EQ(d.heights.size(), mm.size());
+    for (size_t k = 0; k < mm.size(); ++k)
+        EXPECT_NEAR(d.heights[k], mm[k], tol * std::max(1.0, std::abs(mm[k]))) << "sample " << k;
+}
+
+}  // namespace
+
+// --- X3P ----------------------------------------------------------------------------------------
+
+TEST(FormatsX3p, Int16WithIncrementAndOffsetPitchAndOrientation) {
+    test::TempDir dir("x3p");
+    X3pSpec s;
+    s.zType = "I";
+    s.zIncrement = "1e-6";  // 1 µm per code
+    s.zOffset = "2e-6";
+    s.values = ramp(4, 3, -5.0);
+    writeX3p(dir / "a.x3p", s);
+    const HeightmapData d = loadHeightmap(dir / "a.x3p", {});
+    std::vector<double> mm;
+    for (double v : s.values) mm.push_back((v * 1e-6 + 2e-6) * 1000.0);
+    expectHeights(d, 4, 3, mm);
+    // row 0 is the first profile (Y index 0), column 0 the first X: value 10·row + column - 5
+    EXPECT_NEAR(d.heights[0], (-5 + 2) * 1e-3, 1e-9);
+    EXPECT_NEAR(d.heights[1], (-4 + 2) * 1e-3, 1e-9);
+    EXPECT_NEAR(d.heights[4], (5 + 2) * 1e-3, 1e-9);
+    ASSERT_TRUE(d.pitch.has_value());
+    EXPECT_NEAR(*d.pitch, 0.005, 1e-15);
+    EXPECT_EQ(d.invalidFilled, 0u);
+    EXPECT_EQ(d.format, "x3p int16");
+}
+
+TEST(FormatsX3p, Float32Float64Int32Values) {
+    test::TempDir dir("x3p");
+    for (const char* type : {"F", "D", "L"}) {
+        X3pSpec s;
+        s.zType = type;
+        s.sizeX = 3;
+        s.sizeY = 2;
+        if (std::string(type) == "L") {
+            s.values = {-100000, 0, 7, 100000, 42, -1};
+            s.zIncrement = "1e-9";  // nm codes
+        } else {
+            s.values = {1.5e-6, -2.25e-6, 0.0, 3e-5, 1e-7, -4e-6};  // metres
+        }
+        const fs::path f = dir / (std::string("v") + type + ".x3p");
+        writeX3p(f, s);
+        const HeightmapData d = loadHeightmap(f, {});
+        std::vector<double> mm;
+        for (double v : s.values) mm.push_back(v * (std::string(type) == "L" ? 1e-9 : 1.0) * 1e3);
+        SCOPED_TRACE(type);
+        expectHeights(d, 3, 2, mm, 1e-6);
+    }
+}
+
+TEST(FormatsX3p, HeightScaleMultipliesAndUpperCaseExtensionLoads) {
+    test::TempDir dir("x3p");
+    X3pSpec s;
+    s.values = ramp(4, 3, 1.0);
+    for (double& v : s.values) v *= 1e-6;
+    writeX3p(dir / "A.X3P", s);
+    HeightmapOptions opt;
+    opt.heightScale = 2.0;
+    const HeightmapData d = loadHeightmap(dir / "A.X3P", opt);
+    EXPECT_NEAR(d.heights[5], 2.0 * s.values[5] * 1e3, 1e-9);
+    HeightmapOptions range;
+    range.heightRange = std::array<double, 2>{0.0, 1.0};
+    expectRefused(dir / "A.X3P", {"height_range"}, range);
+}
+
+TEST(FormatsX3p, NanAndValidMaskPointsAreFilledAndCounted) {
+    test::TempDir dir("x3p");
+    X3pSpec s;
+    s.values = ramp(4, 3);
+    for (double& v : s.values) v *= 1e-6;
+    s.values[5] = kNaN;  // row 1, column 1: neighbours 1, 10, 12, 21 (µm)
+    s.valid.assign(12, true);
+    s.valid[11] = false;  // row 2, column 3: neighbours 7 and 22 (µm)
+    writeX3p(dir / "n.x3p", s);
+    const HeightmapData d = loadHeightmap(dir / "n.x3p", {});
+    EXPECT_EQ(d.invalidFilled, 2u);
+    EXPECT_NE(d.format.find("2 invalid points filled"), std::string::npos) << d.format;
+    EXPECT_NEAR(d.heights[5], (1 + 10 + 12 + 21) / 4.0 * 1e-3, 1e-9);
+    EXPECT_NEAR(d.heights[11], (13 + 22) / 2.0 * 1e-3, 1e-9);
+    for (float v : d.heights) EXPECT_TRUE(std::isfinite(v));
+
+    // int16 with a mask: masked codes are ignored whatever they hold.
+    X3pSpec m;
+    m.zType = "I";
+    m.zIncrement = "1e-6";
+    m.values = {0, 30000, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20};
+    m.valid.assign(12, true);
+    m.valid[1] = false;  // row 0, column 1: neighbours 0, 2, 8 -> 10/3 µm
+    writeX3p(dir / "m.x3p", m);
+    const HeightmapData dm = loadHeightmap(dir / "m.x3p", {});
+    EXPECT_EQ(dm.invalidFilled, 1u);
+    EXPECT_NEAR(dm.heights[1], (0 + 2 + 8) / 3.0 * 1e-3, 1e-8);
+
+    // A hole two layers deep is filled from its rim inwards.
+    X3pSpec h;
+    h.sizeX = 5;
+    h.sizeY = 5;
+    h.values.assign(25, 1e-6);
+    for (int j = 1; j <= 3; ++j)
+        for (int i = 1; i <= 3; ++i) h.values[static_cast<size_t>(j * 5 + i)] = kNaN;
+    writeX3p(dir / "h.x3p", h);
+    const HeightmapData dh = loadHeightmap(dir / "h.x3p", {});
+    EXPECT_EQ(dh.invalidFilled, 9u);
+    for (float v : dh.heights) EXPECT_NEAR(v, 1e-3, 1e-9);
+}
+
+TEST(FormatsX3p, MostlyOrAllInvalidIsRefused) {
+    test::TempDir dir("x3p");
+    X3pSpec s;
+    s.values = ramp(4, 3);
+    for (size_t k = 0; k < 7; ++k) s.values[k] = kNaN;
+    writeX3p(dir / "half.x3p", s);
+    expectRefused(dir / "half.x3p", {"7 of 12 points are invalid"});
+    s.values.assign(12, kNaN);
+    writeX3p(dir / "none.x3p", s);
+    expectRefused(dir / "none.x3p", {"every point"});
+}
+
+TEST(FormatsX3p, UnsupportedVariantsAreRefusedNamingFileAndField) {
+    test::TempDir dir("x3p");
+    const auto refuse = [&](const std::string& name, X3pSpec s,
+                            const std::vector<std::string>& parts) {
+        if (s.values.empty()) s.values = ramp(s.sizeX, s.sizeY);
+        writeX3p(dir / name, s);
+        SCOPED_TRACE(name);
+        expectRefused(dir / name, parts);
+    };
+    X3pSpec absX;
+    absX.cxType = "A";
+    refuse("absx.x3p", absX, {"Record1/Axes/CX/AxisType", "incremental"});
+    X3pSpec absY;
+    absY.cyType = "A";
+    refuse("absy.x3p", absY, {"Record1/Axes/CY/AxisType"});
+    X3pSpec layers;
+    layers.sizeZ = 2;
+    refuse("layers.x3p", layers, {"SizeZ", "2"});
+    X3pSpec prf;
+    prf.feature = "PRF";
+    refuse("prf.x3p", prf, {"Record1/FeatureType", "PRF"});
+    X3pSpec fcm;
+    fcm.feature = "FCM";
+    refuse("fcm.x3p", fcm, {"Record1/FeatureType", "FCM"});
+    X3pSpec type;
+    type.zType = "Q";
+    refuse("type.x3p", type, {"Record1/Axes/CZ/DataType", "'Q'"});
+    X3pSpec truncated;
+    truncated.truncateData = 3;
+    refuse("trunc.x3p", truncated, {"bindata/data.bin", "93 bytes", "96"});
+    X3pSpec noXml;
+    noXml.withMainXml = false;
+    refuse("noxml.x3p", noXml, {"main.xml"});
+    X3pSpec noData;
+    noData.withData = false;
+    refuse("nodata.x3p", noData, {"bindata/data.bin", "PointDataLink"});
+    X3pSpec rect;
+    rect.incY = 6e-6;
+    refuse("rect.x3p", rect, {"square", "CY/Increment"});
+    X3pSpec huge;
+    huge.sizeX = 2000000;
+    huge.values = ramp(4, 3);
+    refuse("huge.x3p", huge, {"MatrixDimension"});
+
+    test::writeText(dir / "text.x3p", "this is not a zip file at all\n");
+    expectRefused(dir / "text.x3p", {"zip"});
+    writeZip(dir / "badxml.x3p", {{"main.xml", "<ISO5436_2><Record1>"}});
+    expectRefused(dir / "badxml.x3p", {"main.xml", "XML"});
+}
+
+TEST(FormatsX3p, Md5ChecksumsAreVerified) {
+    EXPECT_EQ(md5Hex("", 0), "d41d8cd98f00b204e9800998ecf8427e");
+    EXPECT_EQ(md5Hex("abc", 3), "900150983cd24fb0d6963f7d28e17f72");
+    const std::string a56(56, 'a');  // the length field spills into a second padding block
+    EXPECT_EQ(md5Hex(a56.data(), a56.size()), "3b0c8ac703f828b04c6c197006d17218");
+
+    test::TempDir dir("x3p");
+    X3pSpec s;
+    s.values = ramp(4, 3);
+    s.dataMd5 = "auto";
+    writeX3p(dir / "ok.x3p", s);
+    EXPECT_EQ(loadHeightmap(dir / "ok.x3p", {}).width, 4);
+    s.dataMd5 = "0123456789abcdef0123456789abcdef";
+    writeX3p(dir / "bad.x3p", s);
+    expectRefused(dir / "bad.x3p", {"bindata/data.bin", "MD5", "MD5ChecksumPointData"});
+}
+
+TEST(FormatsX3p, WriterRoundTripsHeightsAndPitch) {
+    test::TempDir dir("x3p");
+    const int w = 7, h = 5;
+    std::vector<float> mm(static_cast<size_t>(w * h));
+    for (size_t k = 0; k < mm.size(); ++k) mm[k] = 0.001f * static_cast<float>(k) - 0.0123f;
+    sl::writeX3p(dir / "w.x3p", w, h, mm, 0.0025);
+    const HeightmapData d = loadHeightmap(dir / "w.x3p", {});
+    EXPECT_EQ(d.width, w);
+    EXPECT_EQ(d.height, h);
+    EXPECT_EQ(d.format, "x3p float64");
+    ASSERT_TRUE(d.pitch.has_value());
+    EXPECT_NEAR(*d.pitch, 0.0025, 1e-15);
+    for (size_t k = 0; k < mm.size(); ++k) EXPECT_FLOAT_EQ(d.heights[k], mm[k]) << k;
+    // main.xml's checksum file is verified too: the writer's passes (above), a wrong one fails.
+    int err = 0;
+    zip_t* z = zip_open((dir / "w.x3p").c_str(), 0, &err);
+    ASSERT_NE(z, nullptr);
+    const std::string wrong = "00000000000000000000000000000000 *main.xml\n";
+    zip_source_t* src = zip_source_buffer(z, wrong.data(), wrong.size(), 0);
+    ASSERT_GE(zip_file_add(z, "md5checksum.hex", src, ZIP_FL_OVERWRITE), 0);
+    ASSERT_EQ(zip_close(z), 0);
+    expectRefused(dir / "w.x3p", {"main.xml", "md5checksum.hex"});
+    EXPECT_THROW(sl::writeX3p(dir / "x.x3p", 3, 3, mm, 0.01), InputError);
+}
+
+TEST(FormatsX3p, GenSurfaceWritesAnX3pAndASceneThatUsesItsPitch) {
+    test::TempDir dir("x3p");
+    const auto r = test::runCli("gen-surface -o " + (dir / "part.x3p").string() +
+                                " --width 40 --height 30 --pitch 0.02 --scene " +
+                                (dir / "part.json").string() + " --image-size 16");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    std::ifstream in(dir / "part.json");
+    const std::string json((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(json.find("pixel_pitch"), std::string::npos) << json;
+    auto scene = loadScene(dir / "part.json");
+    EXPECT_EQ(scene->mapWidth, 40);
+    EXPECT_EQ(scene->mapHeight, 30);
+    EXPECT_NEAR(scene->surface->pitch(), 0.02, 1e-12);
+}
+
+// --- SDF ----------------------------------------------------------------------------------------
+
+TEST(FormatsSdf, BinaryTypesValuesPitchAndOrientation) {
+    test::TempDir dir("sdf");
+    for (int type : {5, 6, 3, 7, 1}) {
+        SdfSpec s;
+        s.dataType = type;
+        s.values = ramp(4, 3, type == 1 ? 0.0 : -5.0);
+        if (type == 3 || type == 7)
+            for (double& v : s.values) v *= 0.25;  // fractional values for float types
+        const fs::path f = dir / (std::to_string(type) + "b.sdf");
+        writeSdfBinary(f, s);
+        const HeightmapData d = loadHeightmap(f, {});
+        SCOPED_TRACE(type);
+        std::vector<double> mm;
+        for (double v : s.values) mm.push_back(v * 1e-6 * 1e3);
+        expectHeights(d, 4, 3, mm, 1e-6);
+        ASSERT_TRUE(d.pitch.has_value());
+        EXPECT_NEAR(*d.pitch, 0.005, 1e-15);
+        EXPECT_EQ(d.format.rfind("sdf binary", 0), 0u) << d.format;
+    }
+}
+
+TEST(FormatsSdf, AsciiValuesPitchAndOrientation) {
+    test::TempDir dir("sdf");
+    SdfSpec s;
+    s.dataType = 5;
+    s.values = ramp(4, 3, -5.0);
+    writeSdfAscii(dir / "a.sdf", s);
+    const HeightmapData d = loadHeightmap(dir / "a.sdf", {});
+    std::vector<double> mm;
+    for (double v : s.values) mm.push_back(v * 1e-3);
+    expectHeights(d, 4, 3, mm);
+    EXPECT_NEAR(*d.pitch, 0.005, 1e-15);
+    EXPECT_NEAR(d.heights[1] - d.heights[0], 1e-3, 1e-9);  // along a profile: column
+    EXPECT_NEAR(d.heights[4] - d.heights[0], 1e-2, 1e-9);  // next profile: row
+
+    SdfSpec f;
+    f.dataType = 7;
+    f.zs = 1.0;
+    f.values = ramp(4, 3);
+    for (double& v : f.values) v *= 1.25e-7;
+    writeSdfAscii(dir / "f.sdf", f);
+    std::vector<double> fm;
+    for (double v : f.values) fm.push_back(v * 1e3);
+    expectHeights(loadHeightmap(dir / "f.sdf", {}), 4, 3, fm, 1e-6);
+}
+
+TEST(FormatsSdf, InvalidPointsAreFilledAndCounted) {
+    test::TempDir dir("sdf");
+    SdfSpec s;
+    s.dataType = 5;
+    s.values = ramp(4, 3);
+    s.values[5] = -32768;  // int16 sentinel
+    writeSdfBinary(dir / "s.sdf", s);
+    const HeightmapData d = loadHeightmap(dir / "s.sdf", {});
+    EXPECT_EQ(d.invalidFilled, 1u);
+    EXPECT_NEAR(d.heights[5], (1 + 10 + 12 + 21) / 4.0 * 1e-3, 1e-8);
+
+    SdfSpec f;
+    f.dataType = 3;
+    f.values = ramp(4, 3);
+    f.values[0] = kNaN;  // corner: neighbours 1 and 10 (µm)
+    writeSdfAscii(dir / "n.sdf", f);
+    const HeightmapData dn = loadHeightmap(dir / "n.sdf", {});
+    EXPECT_EQ(dn.invalidFilled, 1u);
+    EXPECT_NEAR(dn.heights[0], 5.5e-3, 1e-8);
+    writeSdfBinary(dir / "nb.sdf", f);
+    EXPECT_EQ(loadHeightmap(dir / "nb.sdf", {}).invalidFilled, 1u);
+}
+
+TEST(FormatsSdf, UnsupportedAndDamagedFilesAreRefusedNamingFileAndField) {
+    test::TempDir dir("sdf");
+    SdfSpec c;
+    c.compression = 1;
+    c.values = ramp(4, 3);
+    writeSdfBinary(dir / "c.sdf", c);
+    expectRefused(dir / "c.sdf", {"Compression = 1", "unsupported"});
+    writeSdfAscii(dir / "ca.sdf", c);
+    expectRefused(dir / "ca.sdf", {"Compression = 1", "unsupported"});
+
+    SdfSpec t;
+    t.values = ramp(4, 3);
+    t.truncate = 5;
+    t.trailer = false;  // (a trailer's bytes would pass for data)
+    writeSdfBinary(dir / "t.sdf", t);
+    expectRefused(dir / "t.sdf", {"truncated", "24 bytes", "has 19"});
+    writeSdfAscii(dir / "ta.sdf", t, "1 2 3 4\n5 6 7\n" + std::string(20, ' '));
+    expectRefused(dir / "ta.sdf", {"truncated", "7 values"});
+    writeSdfAscii(dir / "more.sdf", t, "1 2 3 4 5 6 7 8 9 10 11 12 13\n*\n");
+    expectRefused(dir / "more.sdf", {"more values"});
+    writeSdfAscii(dir / "word.sdf", t, "1 2 3 x 5 6 7 8 9 10 11 12\n");
+    expectRefused(dir / "word.sdf", {"value 3", "'x'"});
+
+    SdfSpec dt;
+    dt.dataType = 9;
+    dt.values = {};
+    writeSdfBinary(dir / "dt.sdf", dt);
+    expectRefused(dir / "dt.sdf", {"DataType = 9"});
+
+    SdfSpec rect;
+    rect.ys = 1e-5;
+    rect.values = ramp(4, 3);
+    writeSdfBinary(dir / "rect.sdf", rect);
+    expectRefused(dir / "rect.sdf", {"square", "Yscale"});
+
+    test::writeText(dir / "junk.sdf", "hello world, not an sdf file\n");
+    expectRefused(dir / "junk.sdf", {"SDF version"});
+    test::writeText(dir / "short.sdf", "bBCR-1.0 too short");
+    expectRefused(dir / "short.sdf", {"81-byte"});
+    test::writeText(dir / "nostar.sdf", "aBCR-1.0\nNumPoints = 2\n");
+    expectRefused(dir / "nostar.sdf", {"'*'"});
+    test::writeText(dir / "nokey.sdf", "aBCR-1.0\nNumPoints = 2\nNumProfiles = 2\n*\n1 2 3 4\n");
+    expectRefused(dir / "nokey.sdf", {"Xscale"});
+}
+
+// --- scenes -------------------------------------------------------------------------------------
+
+TEST(FormatsScene, PitchComesFromTheFileUnlessTheSceneGivesOne) {
+    test::TempDir dir("scene");
+    X3pSpec s;
+    s.sizeX = 8;
+    s.sizeY = 6;
+    s.values.assign(48, 0.0);
+    for (size_t k = 0; k < s.values.size(); ++k) s.values[k] = 1e-6 * double(k % 5);
+    writeX3p(dir / "part.x3p", s);
+    const std::string cam = R"("camera": {"width": 16, "height": 12})";
+
+    test::writeText(dir / "file.json", R"({"heightmap": {"path": "part.x3p"}, )" + cam + "}");
+    auto scene = loadScene(dir / "file.json");
+    EXPECT_NEAR(scene->desc.heightmap.pitch, 0.005, 1e-15);
+    EXPECT_NEAR(scene->surface->pitch(), 0.005, 1e-15);
+    EXPECT_EQ(scene->mapWidth, 8);
+    EXPECT_EQ(scene->mapHeight, 6);
+
+    test::writeText(dir / "same.json",
+                    R"({"heightmap": {"path": "part.x3p", "pixel_pitch": 0.005}, )" + cam + "}");
+    EXPECT_NEAR(loadScene(dir / "same.json")->surface->pitch(), 0.005, 1e-15);
+
+    test::writeText(dir / "other.json",
+                    R"({"heightmap": {"path": "part.x3p", "pixel_pitch": 0.01}, )" + cam + "}");
+    try {
+        loadScene(dir / "other.json");
+        ADD_FAILURE() << "a disagreeing pixel_pitch was accepted";
+    } catch (const InputError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find((dir / "other.json").string()), std::string::npos) << msg;
+        EXPECT_NE(msg.find("heightmap.pixel_pitch 0.01 disagrees with the file's 0.005 mm"),
+                  std::string::npos)
+            << msg;
+        EXPECT_NE(msg.find("remove pixel_pitch"), std::string::npos) << msg;
+    }
+
+    // A map without its own pitch keeps the scene's default.
+    std::vector<float> flat(48, 0.0f);
+    test::writeNpyF32(dir / "part.npy", 6, 8, flat);
+    test::writeText(dir / "npy.json", R"({"heightmap": {"path": "part.npy"}, )" + cam + "}");
+    EXPECT_NEAR(loadScene(dir / "npy.json")->surface->pitch(), 0.01, 1e-15);
+
+    // SDF too.
+    SdfSpec sd;
+    sd.points = 8;
+    sd.profiles = 6;
+    sd.xs = sd.ys = 2e-6;
+    sd.values.assign(48, 3.0);
+    writeSdfBinary(dir / "part.sdf", sd);
+    test::writeText(dir / "sdf.json", R"({"heightmap": {"path": "part.sdf"}, )" + cam + "}");
+    EXPECT_NEAR(loadScene(dir / "sdf.json")->surface->pitch(), 0.002, 1e-15);
+}
