@@ -747,13 +747,21 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
         if (regions)
             h << " &nbsp; <label><input type=\"checkbox\" id=\"show-regions\" checked> outline "
                  "the defect regions</label>";
+        // Full size (1:1); a render narrower than 400 pixels is shown enlarged by a whole factor.
+        int width = 0;
+        if (s.contains("transport") && s["transport"].contains("image") &&
+            s["transport"]["image"].is_array() && !s["transport"]["image"].empty())
+            width = s["transport"]["image"][0].get<int>();
+        std::string size;
+        if (width > 0 && width < 400)
+            size = " style=\"width:" + std::to_string(400 / width * width) + "px\"";
         h << " &nbsp; click the render for a 4× crop</div>\n<div class=\"viewer\"><div "
-             "class=\"ab\" id=\"ab\"><img id=\"ab-bottom\" alt=\"after: optimized light\" src=\""
-          << dataUri(dir / "view-optimized.png")
-          << "\"><img id=\"ab-top\" class=\"top\" alt=\"before: your lamp\" src=\""
+             "class=\"ab\" id=\"ab\"><img id=\"ab-bottom\" alt=\"after: optimized light\""
+          << size << " src=\"" << dataUri(dir / "view-optimized.png")
+          << "\"><img id=\"ab-top\" class=\"top\" alt=\"before: your lamp\"" << size << " src=\""
           << dataUri(dir / "view-lamp.png") << "\">";
         if (regions)
-            h << "<img class=\"regions\" alt=\"defect regions outlined\" src=\""
+            h << "<img class=\"regions\" alt=\"defect regions outlined\"" << size << " src=\""
               << dataUri(dir / "view-regions.png") << "\">";
         h << "<div class=\"bar\" id=\"ab-bar\"></div><span class=\"tag\" style=\"left:6px\">"
           << escapeXml(lampName)
