@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Figures of one `scratchlight optimize` output directory (the report's figures).
 
-usage: scripts/plot_optimize.py OUTDIR [--title TEXT] [--quiet]
+usage: scripts/plot_optimize.py OUTDIR [--title TEXT] [--print]
 Reads OUTDIR/{summary.json, loss.csv, plot-data.json, view-*.png (or initial.png, render.png)}
 and writes, each atomically:
   OUTDIR/plot-envmap.png  the optimized env map as a lat-long plot (azimuth 0-360 deg on x,
@@ -9,7 +9,7 @@ and writes, each atomically:
                           brightest directions labelled) and a polar plot of the upper hemisphere
   OUTDIR/plot-loss.png    the loss on a log axis (when every value is > 0) with the held-out loss
   OUTDIR/overview.png     the renders under your lamp and under E*, the env map and the loss
-`optimize` runs this itself for report.html (src/app/Plot.h). The env-map convention is not
+`optimize` runs this itself for report.html (src/app/Plot.h); it prints nothing unless --print. The env-map convention is not
 restated here: plot-data.json carries each texel column's azimuth and row's elevation as
 scene/EnvMapBasis.h defines them. Exit code 3: matplotlib is missing (use Debian's
 /usr/bin/python3 with python3-matplotlib). PNGs carry no software/date metadata, so they are
@@ -187,7 +187,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("outdir")
     ap.add_argument("--title", default="")
-    ap.add_argument("--quiet", action="store_true")
+    ap.add_argument("--print", action="store_true", help="name the files written")
     a = ap.parse_args()
     need = ["loss.csv", "summary.json"]
     missing = [f for f in need if not os.path.exists(os.path.join(a.outdir, f))]
@@ -253,7 +253,7 @@ def main():
     out = os.path.join(a.outdir, "overview.png")
     save(fig, out, dpi=80)
     wrote.append(out)
-    if not a.quiet:
+    if a.print:
         for w in wrote:
             print(f"wrote {w}")
 

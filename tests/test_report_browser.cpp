@@ -65,7 +65,7 @@ TEST(ReportBrowser, OptimizeReportOpensInHeadlessChromium) {
               0);
     const fs::path out = dir.path() / "out";
     const auto r = test::runCli("optimize " + scene + " --truth " + truth +
-                                " --heldout-spp 64 --iterations 40 -o " + out.string());
+                                " --heldout-spp 64 --heldout-every 10 --iterations 40 -o " + out.string());
     ASSERT_EQ(r.exitCode, 0) << r.output;
 
     // The comparisons behind the headline are recorded.

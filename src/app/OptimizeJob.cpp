@@ -926,7 +926,7 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
         figureProblem = "figures not asked for";
     } else {
         std::fflush(stdout);
-        const PlotOutcome plot = runPlotScript("plot_optimize.py", {dir.string(), "--quiet"});
+        const PlotOutcome plot = runPlotScript("plot_optimize.py", {dir.string()});
         if (!plot.ran)
             figureProblem = plot.message;
         else if (plot.exitCode == 3)
