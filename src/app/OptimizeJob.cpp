@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "app/InitialState.h"
+#include "app/Plot.h"
 #include "app/Preview.h"
 #include "app/Report.h"
 #include "app/Search.h"
@@ -36,6 +37,8 @@
 #include "objective/UnbiasedObjective.h"
 #include "optimize/SpecularInit.h"
 #include "render/Render.h"
+#include "scene/EnvMapBasis.h"
+#include "scene/EnvMapPresets.h"
 #include "scene/Scene.h"
 
 namespace sl {
@@ -112,6 +115,34 @@ std::vector<double> renderImage(const TransportMatrix& t, const std::vector<doub
     else
         t.applyLuminance(e, out);
     return out;
+}
+
+/// Luminance of a render (RGB or already luminance).
+std::vector<double> luminanceOf(const std::vector<double>& image, size_t pixels) {
+    if (image.size() == pixels) return image;
+    std::vector<double> y(pixels);
+    for (size_t q = 0; q < pixels; ++q)
+        y[q] = luminance(image[3 * q], image[3 * q + 1], image[3 * q + 2]);
+    return y;
+}
+
+/// A render exposed on its own as a camera would (app/Preview.h exposureScale on the part).
+void writeExposedPng(const std::filesystem::path& png, const std::vector<double>& image,
+                     const TransportMatrix& t) {
+    const int ch = image.size() == t.rows() ? 1 : 3;
+    const double scale = exposureScale(luminanceOf(image, t.rows()), t.objectMask);
+    Image img(t.width, t.height, ch);
+    for (size_t i = 0; i < image.size(); ++i) img.data[i] = static_cast<float>(image[i] * scale);
+    writePng(png, img);
+}
+
+/// A direction as the env-map plot shows it: azimuth in [0°, 360°) = u·360° and elevation
+/// 90° − v·180° (u, v of EnvMapBasis::directionToUv: azimuth 0° toward −z, 90° toward +x;
+/// elevation 90° = +Y).
+json directionJson(const Vec3d& d) {
+    const auto uv = EnvMapBasis::directionToUv(d);
+    const double u = uv[0] < 0 ? uv[0] + 1.0 : uv[0] + 0.0;  // + 0.0: no "-0" in the JSON
+    return {{"azimuth_deg", u * 360.0}, {"elevation_deg", 90.0 - uv[1] * 180.0}};
 }
 
 }  // namespace
@@ -240,10 +271,16 @@ struct Inputs {
     std::vector<const TransportMatrix*> set;  // the training estimates of T
     LossMask mask;
     std::vector<uint8_t> truth;                    // the truth mask in the image (metrics), 255/0
-    LabelMask truthLabels;                         // ... and its labelled regions (the judge)
     std::vector<std::vector<double>> startValues;  // E0 of every start
     std::vector<double> image0;                    // T·E0 of the first start
     VisibilityMetrics metricsInitial;
+    // The comparisons (prepareComparisons): the user's lamp and the paper's light on T, and the
+    // regions the judge scores and the report outlines (truth, else defects, else a drawn mask).
+    std::string lampName;
+    std::vector<double> lampE, paperE;
+    std::vector<uint8_t> regionLabels;  // image space, 0 = none
+    std::vector<RegionLabel> regionLegend;
+    std::string regionSource;  // where the regions come from ("" = none)
 };
 
 /// Stage 1: the scene and the training estimates of T (traced or cached, or the .tm).
@@ -370,10 +407,7 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
             in.reference = projectRegion(*in.scene, o.reference);
         }
     }
-    if (!o.truth.empty()) {
-        in.truth = projectMaskFile(*in.scene, o.truth);
-        if (job.heldOut) in.truthLabels = projectTruth(*in.scene, o.truth);
-    }
+    if (!o.truth.empty()) in.truth = projectMaskFile(*in.scene, o.truth);
     const int maxDepth = job.transport.file.provenance.maxDepth;
     for (const InitialState& s : o.starts)
         in.startValues.push_back(
@@ -403,6 +437,70 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
         metricsFor(t, in.image0, in.mask.pixels, in.startValues.front(), o.rgb, in.truth);
 }
 
+/// The paper's light on our T: eq. 2 at the paper's λ 30 on mean(E²), Adam lr 0.02 × 100 from
+/// E0 = 0.5 (applyOptimizePreset's "paper" settings), on the training estimate T itself rather
+/// than 100 fresh estimates, so it costs well under a second.
+std::vector<double> paperLight(const Plan& p, const Inputs& in, const TransportMatrix& t) {
+    OptimizeJobOptions paper;
+    applyOptimizePreset(OptimizePreset::Paper, paper);
+    SearchInputs si;
+    si.set = {&t};
+    si.mask = in.mask.pixels;
+    si.objective = paper.objective;
+    si.objective.lambda = paper.lambdas.front();
+    si.rgb = p.o.rgb;
+    SearchOptions so;
+    so.objective = ObjectiveKind::Paper;
+    so.optimizer = paper.optimizer;
+    so.optimizer.method = OptimizerMethod::Adam;
+    so.optimizer.callback = nullptr;
+    so.planes = 1;
+    so.starts = paper.starts;
+    return search(si, so).e;
+}
+
+/// Stage 3b: what E* is compared with (the user's lamp, the paper's light) and the regions the
+/// judge scores and the report outlines.
+void prepareComparisons(const Plan& p, Inputs& in, const OptimizeJobSummary& job) {
+    const OptimizeJobOptions& o = p.o;
+    const TransportMatrix& t = job.transport.file.matrix;
+    const EnvMap lamp = o.compare.empty()
+                            ? studioEnvMap(t.envWidth, t.envHeight)
+                            : loadEnvMap(o.compare, t.envWidth, t.envHeight, o.rgb ? 3 : 0);
+    in.lampName = o.compare.empty() ? std::string("studio preset") : o.compare.filename().string();
+    // As the judge reads a light (Judge::envVector): RGB maps by their luminance on a gray T.
+    const size_t n = lamp.texelCount();
+    if (lamp.channels == 1 && o.rgb) {
+        in.lampE.resize(3 * n);
+        for (size_t i = 0; i < 3 * n; ++i) in.lampE[i] = lamp.texels[i / 3];
+    } else if (lamp.channels == 3 && !o.rgb) {
+        in.lampE.resize(n);
+        for (size_t i = 0; i < n; ++i)
+            in.lampE[i] = luminance(double(lamp.texels[3 * i]), double(lamp.texels[3 * i + 1]),
+                                    double(lamp.texels[3 * i + 2]));
+    } else {
+        in.lampE.assign(lamp.texels.begin(), lamp.texels.end());
+    }
+    in.paperE = paperLight(p, in, t);
+    if (!o.truth.empty()) {
+        const LabelMask truth = projectTruth(*in.scene, o.truth);
+        in.regionLabels = truth.labels;
+        in.regionLegend = truth.legend;
+        in.regionSource = "truth " + o.truth.filename().string();
+    } else if (!in.defects.empty()) {
+        in.regionLabels.assign(in.defects.size(), 0);
+        for (size_t q = 0; q < in.defects.size(); ++q) in.regionLabels[q] = in.defects[q] ? 255 : 0;
+        in.regionLegend = {RegionLabel{255, "defects"}};
+        in.regionSource = "defect region " + defectRegion(o).text();
+    } else if (o.mask.kind != LossMaskKind::Object) {
+        in.regionLabels.assign(in.mask.pixels.size(), 0);
+        for (size_t q = 0; q < in.mask.pixels.size(); ++q)
+            in.regionLabels[q] = in.mask.pixels[q] ? 255 : 0;
+        in.regionLegend = {RegionLabel{255, "mask"}};
+        in.regionSource = "loss mask " + o.mask.name();
+    }
+}
+
 /// What a person must know about a result before trusting it.
 std::vector<std::string> resultWarnings(const OptimizeRun& run, const std::vector<double>& e) {
     std::vector<std::string> w;
@@ -428,6 +526,7 @@ struct LambdaResult {
     OptimizeRun run;
     std::vector<double> e;
     std::vector<std::string> rows;
+    LossParts lampTraining, paperTraining;  // the lamp's and the paper's light on T at λ
 };
 
 /// Stage 4: one λ run (the search on T, or the black box through the renderer), its held-out
@@ -561,17 +660,100 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
             res.rows.back() += tail.str();
         }
     }
+    res.lampTraining = loss.evaluate(in.lampE, {});
+    res.paperTraining = loss.evaluate(in.paperE, {});
     if (job.heldOut) {  // the judge on the held-out estimate, at this run's λ
         JudgeOptions jo;
         jo.objective = oo;
         jo.rgb = o.rgb;
-        const Judge judge(*job.heldOut, jo, in.truthLabels.labels, in.truthLabels.legend);
+        const Judge judge(*job.heldOut, jo, in.regionLabels, in.regionLegend);
         run.judged = judge.score(res.e, run.dir.filename().string());
+        run.judgedLamp = judge.score(in.lampE, "lamp");
+        run.judgedPaper = judge.score(in.paperE, "paper");
     }
     spdlog::info("lambda {}: {}", lambda, run.optimizer.briefReport());
     run.warnings = resultWarnings(run, res.e);
     for (const std::string& w : run.warnings) spdlog::warn("lambda {}: {}", lambda, w);
     return res;
+}
+
+/// Luminance of E per texel (gray E as it is).
+std::vector<double> envLuminance(const std::vector<double>& e, bool rgb) {
+    if (!rgb) return e;
+    std::vector<double> y(e.size() / 3);
+    for (size_t i = 0; i < y.size(); ++i) y[i] = luminance(e[3 * i], e[3 * i + 1], e[3 * i + 2]);
+    return y;
+}
+
+/// Where the light of E* comes from, for the report: the direction toward the camera, the
+/// mirror direction a flat part reflects into the camera, and the brightest local maxima of E*
+/// (up to 3, on the EnvMapBasis grid, wrapping in azimuth).
+json envDirectionsJson(const Inputs& in, const TransportMatrix& t, const std::vector<double>& e,
+                       bool rgb) {
+    json j;
+    if (in.scene) {
+        const CameraDesc& c = in.scene->camera.desc();
+        const Vec3d toCamera = normalize(c.origin - c.target);
+        j["camera"] = directionJson(toCamera);
+        j["mirror"] = directionJson(Vec3d{-toCamera.x, toCamera.y, -toCamera.z});
+    }
+    const std::vector<double> y = envLuminance(e, rgb);
+    const int w = t.envWidth, h = t.envHeight;
+    auto at = [&](int row, int col) {
+        return y[static_cast<size_t>(row) * w + static_cast<size_t>((col % w + w) % w)];
+    };
+    std::vector<std::pair<double, std::pair<int, int>>> peaks;
+    for (int row = 0; row < h; ++row)
+        for (int col = 0; col < w; ++col) {
+            const double v = at(row, col);
+            bool peak = v > kDarkTexel;
+            for (int dr = -1; dr <= 1 && peak; ++dr)
+                for (int dc = -1; dc <= 1 && peak; ++dc)
+                    if ((dr || dc) && row + dr >= 0 && row + dr < h) {
+                        const double u = at(row + dr, col + dc);
+                        // Plateaus: the first texel in scan order stands for them.
+                        peak = u < v || (u == v && (dr > 0 || (dr == 0 && dc > 0)));
+                    }
+            if (peak) peaks.push_back({v, {row, col}});
+        }
+    std::stable_sort(peaks.begin(), peaks.end(),
+                     [](const auto& a, const auto& b) { return a.first > b.first; });
+    const EnvMapBasis basis(w, h);
+    json brightest = json::array();
+    for (size_t k = 0; k < peaks.size() && k < 3; ++k) {
+        json d = directionJson(basis.texelDirection(peaks[k].second.first, peaks[k].second.second));
+        d["value"] = peaks[k].first;
+        brightest.push_back(d);
+    }
+    j["brightest"] = brightest;
+    return j;
+}
+
+/// plot-data.json: the lights' texel luminances and the grid's directions, what
+/// scripts/plot_optimize.py draws the env-map plot from (it restates no convention).
+json plotDataJson(const Inputs& in, const TransportMatrix& t, const std::vector<double>& e,
+                  bool rgb) {
+    const EnvMapBasis basis(t.envWidth, t.envHeight);
+    json az = json::array(), el = json::array();
+    for (int col = 0; col < t.envWidth; ++col)
+        az.push_back(directionJson(basis.texelDirection(t.envHeight / 2, col))["azimuth_deg"]);
+    for (int row = 0; row < t.envHeight; ++row)
+        el.push_back(directionJson(basis.texelDirection(row, 0))["elevation_deg"]);
+    json j;
+    j["convention"] =
+        "scene/EnvMapBasis.h: u = atan2(d.x, -d.z)/2pi, v = acos(d.y)/pi; azimuth = u*360 deg "
+        "(0 toward -z, 90 toward +x), elevation = 90 - v*180 deg (+90 = +Y, 0 = horizon); rows "
+        "at theta = j*pi/(H-1), columns at u = (i+1/2)/W, bilinear, wrapping in u";
+    j["width"] = t.envWidth;
+    j["height"] = t.envHeight;
+    j["azimuth_deg"] = az;
+    j["elevation_deg"] = el;
+    j["lights"] = {{"optimized", envLuminance(e, rgb)},
+                   {"lamp", envLuminance(in.lampE, rgb)},
+                   {"paper", envLuminance(in.paperE, rgb)},
+                   {"initial", envLuminance(in.startValues.front(), rgb)}};
+    j["lamp_name"] = in.lampName;
+    return j;
 }
 
 /// summary.json of one run.
@@ -631,6 +813,37 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     }
     s["transport"] = transportJson(job.transport);
     if (run.judged) s["judge"] = toJson(*run.judged);
+    {
+        // The report's headline (app/Report.h optimizeHeadline): E* against the user's lamp
+        // and the paper's light, on T and (with the held-out estimate) by the judge.
+        json cmp;
+        cmp["objective"] = objectiveKindName(in.kind);
+        cmp["regions"] = in.regionSource;
+        json lamp = {{"name", in.lampName},
+                     {"preset", o.compare.empty() ? json("studio") : json(nullptr)},
+                     {"file", o.compare.empty() ? json(nullptr) : json(o.compare.string())},
+                     {"render", "compare-lamp.png"},
+                     {"training", partsJson(r.lampTraining)}};
+        json paper = {{"name", "paper's light"},
+                      {"method",
+                       "the paper's method run on this T: eq. 2, lambda 30 on mean(E^2), Adam lr "
+                       "0.02 x 100 from E0 = 0.5"},
+                      {"render", "compare-paper.png"},
+                      {"envmap", "compare-paper-envmap.exr"},
+                      {"training", partsJson(r.paperTraining)}};
+        json optimized = {{"render", "render.png"}, {"training", partsJson(run.final)}};
+        if (run.judged) {
+            lamp["judge"] = toJson(*run.judgedLamp);
+            paper["judge"] = toJson(*run.judgedPaper);
+            optimized["judge"] = toJson(*run.judged);
+            cmp["judge_spp"] = job.heldOut->file.provenance.spp;
+        }
+        cmp["lamp"] = lamp;
+        cmp["paper"] = paper;
+        cmp["optimized"] = optimized;
+        s["compare"] = cmp;
+    }
+    s["envmap_directions"] = envDirectionsJson(in, job.transport.file.matrix, r.e, o.rgb);
     s["metrics"] = toJson(metricsFinal);
     s["metrics_initial"] = toJson(in.metricsInitial);
     if (!o.truth.empty()) s["truth"] = o.truth.string();
@@ -687,20 +900,53 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
     if (!in.mask.scratchCells.empty())
         writeMaskPng(dir / "scratchmap.png", in.mask.scratchCells, in.scene->mapWidth,
                      in.scene->mapHeight);
+    // The comparisons: the user's lamp and the paper's light under T, and what the report shows
+    // (each render exposed on its own, the regions' outlines as a transparent layer).
+    const std::vector<double> imageLamp = renderImage(t, in.lampE);
+    const std::vector<double> imagePaper = renderImage(t, in.paperE);
+    writeRender(dir / "compare-lamp.exr", imageLamp, t.width, t.height, ch);
+    writeRender(dir / "compare-paper.exr", imagePaper, t.width, t.height, ch);
+    writeEnvMap(dir / "compare-paper-envmap.exr", toEnvMap(in.paperE, t, o.rgb));
+    writeExposedPng(dir / "view-lamp.png", imageLamp, t);
+    writeExposedPng(dir / "view-optimized.png", imageFinal, t);
+    writeExposedPng(dir / "view-paper.png", imagePaper, t);
+    if (!in.regionLabels.empty()) {
+        const Image outlined = outlinedRender(std::vector<double>(t.rows(), 0.0), t.width, t.height,
+                                              {}, in.regionLabels);
+        Image layer(t.width, t.height, 4);
+        for (size_t q = 0; q < t.rows(); ++q) {
+            const bool edge = outlined.data[3 * q] > 0 || outlined.data[3 * q + 1] > 0 ||
+                              outlined.data[3 * q + 2] > 0;
+            for (int c = 0; c < 3; ++c) layer.data[4 * q + c] = outlined.data[3 * q + c];
+            layer.data[4 * q + 3] = edge ? 1.0f : 0.0f;
+        }
+        writePng(dir / "view-regions.png", layer);
+    }
+    writeTextAtomically(dir / "plot-data.json", plotDataJson(in, t, r.e, o.rgb).dump() + "\n");
     const VisibilityMetrics metricsFinal = metricsFor(t, imageFinal, mask, r.e, o.rgb, in.truth);
     writeTextAtomically(dir / "summary.json",
                         runSummaryJson(p, in, job, r, metricsFinal).dump(2) + "\n");
-    ReportContent rc;
-    rc.title = "scratchlight optimize: " + run.dir.filename().string();
-    ReportFigure fig;
-    fig.title = "before and after";
+    // The figures (scripts/plot_optimize.py); without python3 or matplotlib the report says why.
+    std::string figureProblem;
+    if (!o.figures) {
+        figureProblem = "figures not asked for";
+    } else {
+        std::fflush(stdout);
+        const PlotOutcome plot = runPlotScript("plot_optimize.py", {dir.string()});
+        if (!plot.ran)
+            figureProblem = plot.message;
+        else if (plot.exitCode == 3)
+            figureProblem = "python3 has no matplotlib (install python3-matplotlib)";
+        else if (plot.exitCode != 0)
+            figureProblem = "plot_optimize.py failed (exit code " + std::to_string(plot.exitCode) +
+                            "): " + shellQuoted(plot.command);
+        if (!figureProblem.empty()) spdlog::warn("figures not made: {}", figureProblem);
+    }
+    writeTextAtomically(dir / "report.html", renderOptimizeReportHtml(dir, figureProblem));
     std::ostringstream title;
     title << "λ = " << run.lambda << ", " << run.optimizer.method << ", "
           << objectiveKindName(in.kind);
-    fig.runs.push_back(reportRunFromOutDir(dir, title.str()));
-    rc.figures.push_back(fig);
-    writeReport(dir / "report.html", rc);
-    return fig.runs.back();
+    return reportRunFromOutDir(dir, title.str());
 }
 
 /// Stage 6: a sweep's sweep.csv and its report of every λ.
@@ -753,6 +999,7 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                 job.heldOut->path.empty() ? std::string("not stored") : job.heldOut->path.string(),
                 job.heldOut->file.provenance.spp, job.heldOut->file.provenance.seed);
         prepareRuns(p, in, job);
+        prepareComparisons(p, in, job);
         if (!p.cacheDir.empty() && (!p.tmInput || p.o.heldOut.mode == HeldOutMode::Judge))
             spdlog::info("cache {}", describeCache(cacheContents(p.cacheDir)));
         spdlog::info("mask: {} pixels; writing {}", job.maskPixels, p.o.outDir.string());

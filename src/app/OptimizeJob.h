@@ -9,10 +9,26 @@
 //                the held-out score (own objective and the paper's eq. 2)
 //   summary.json optimizer, lambda, iterations, initial/final loss and parts, timings, T's facts,
 //                held-out scores, visibility metrics (final and initial)
-//   report.html  one self-contained page: renders, env maps, loss curve, metrics, settings
+//   report.html  one self-contained page for the inspector (app/Report.h
+//                renderOptimizeReportHtml): (1) a headline in words, how much better E* shows
+//                the defects than the user's lamp and the paper's light, with the judge's
+//                numbers; (2) full-size renders under the lamp and E* with an A/B slider, the
+//                defect regions outlined and 4× crops; (3) the env map as a plot with axes;
+//                (4) the loss on a log axis with the held-out loss; (5) the three lights' metrics
 //   initial-envmap.png, mask.png (the loss mask), scratchmap.png (with the scratch mask),
 //   regions.png (objective defects: the render with the defect region outlined red and a given
 //   reference region blue)
+// The comparisons (summary.json "compare": lamp, paper, optimized; each with its training loss
+// and, with the held-out estimate, the judge's scores):
+//   compare-lamp.{exr,png}    T·E under the user's lamp (--compare ENV; default: studio preset)
+//   compare-paper.{exr,png}   T·E under the paper's light: the paper's method (eq. 2, λ 30, Adam
+//                             lr 0.02 × 100 from E0 = 0.5) run on this T; compare-paper-envmap.exr
+//   view-lamp.png, view-optimized.png, view-paper.png  the same, each exposed on its own
+//   view-regions.png          the defect regions' outlines (truth, else the defects objective's
+//                             region, else a drawn loss mask) on a transparent layer
+//   plot-data.json            the lights' texel luminances and the grid's directions
+//   plot-envmap.png, plot-loss.png, overview.png  scripts/plot_optimize.py's figures (absent,
+//                             and the report says why, without python3/matplotlib)
 // A sweep also writes OUTDIR/sweep.csv (one row per λ).
 //
 // OUTDIR is checked before any work and replaced as a unit (io/StagedDirectory.h): a failure
@@ -73,6 +89,10 @@ struct OptimizeJobOptions {
     LossMaskSpec mask;            // the loss's region (app/LossMask.h)
     ScratchMapOptions scratch;    // for the scratch mask
     std::filesystem::path truth;  // ground-truth defect mask in height-map space (metrics)
+    /// The user's current lamp, the report's "before": an env-map file (empty: the built-in
+    /// "studio" preset, scene/EnvMapPresets.h), scored beside E* and the paper's light.
+    std::filesystem::path compare;
+    bool figures = true;  // the report's figures by scripts/plot_optimize.py (app/Plot.h)
     /// The defects objective's regions in height-map space (app/Truth.h RegionSpec): the defects
     /// (empty: `truth`, else auto: the defect map of the scene's height map) and the
     /// defect-free reference (empty: the part away from the defects; auto: the part the defect
@@ -118,6 +138,9 @@ struct OptimizeRun {
     std::string start;                 // the start that won (multistart)
     std::vector<std::pair<std::string, double>> startLosses;
     std::optional<JudgeScore> judged;  // the judge's scores of E* (with the held-out estimate)
+    /// ... and of the user's lamp and of the paper's light (eq. 2, Adam from E0 = 0.5 on the
+    /// same T), on the same estimate at the same λ.
+    std::optional<JudgeScore> judgedLamp, judgedPaper;
     /// What to know before trusting E*: a failed optimizer, no improvement on the start, an
     /// all-black light, an image without contrast (also in summary.json and the log).
     std::vector<std::string> warnings;

@@ -1,5 +1,5 @@
-// report.html: one self-contained page (no external file, script, font or style: images are
-// inline base64 PNG data URIs, loss curves inline SVG drawn here) that shows runs side by side.
+// report.html: one self-contained page (no external file, font or style: images are inline
+// base64 PNG data URIs, loss curves inline SVG drawn here) that shows runs side by side.
 //
 // Structure: ReportContent = title, notes, global settings, and figures; a figure = title,
 // caption and runs shown side by side, then a metrics table and a settings table (one column per
@@ -7,8 +7,17 @@
 // images (before/after renders, env map, ...), an optional loss curve, metrics and settings
 // (JSON objects, nested objects flattened to "a.b" rows; null shown as "—").
 //
-// `optimize` makes a one-figure, one-run report of its OUTDIR (reportRunFromOutDir);
-// `scratchlight report` assembles many OUTDIRs into figures (scripts/reproduce-paper).
+// `scratchlight report` assembles many OUTDIRs into figures (scripts/reproduce-paper), and a
+// λ sweep's OUTDIR/report.html shows its runs so (reportRunFromOutDir); `judge` uses it too.
+//
+// `optimize`'s own page for one run (renderOptimizeReportHtml) is built for the inspector
+// instead, in five sections: #headline (in words: how many times as visible the defects are
+// under E* as under the user's lamp and the paper's light, by the judge; said plainly when it is
+// not better), #renders (full-size renders under the lamp and E*, an A/B slider, the defect
+// regions' outline, 4× crops where clicked), #envmap (matplotlib's lat-long and hemisphere
+// plots), #loss (log axis, held-out loss), #metrics (the three lights side by side). It is one
+// file with one inline script, which also fills <pre id="selfcheck"> on load for
+// scripts/check-report --selfcheck (headless Chromium).
 #pragma once
 
 #include <filesystem>
@@ -63,6 +72,19 @@ enum class RunState {
 /// summary.json is missing or malformed.
 ReportRun reportRunFromOutDir(const std::filesystem::path& outDir, const std::string& title = "",
                               RunState state = RunState::Final);
+
+/// optimize's own page for one OUTDIR (or one λ of a sweep), built for the inspector: a
+/// headline in words (docs/DESIGN.md "The optimize report"), full-size before/after renders with
+/// an A/B slider, a 1:1 crop and the defect outline, the env map as a plot with axes, the loss
+/// curve, and the metrics of the lamp, the paper's light and E* side by side. Reads the files
+/// OptimizeJob.h lists; `figureProblem`: why the matplotlib figures were not made ("" = they
+/// were; a missing figure file is then named instead). Throws InputError naming a bad file.
+std::string renderOptimizeReportHtml(const std::filesystem::path& outDir,
+                                     const std::string& figureProblem = "");
+
+/// The headline sentence of an optimize summary.json (its "compare" section): how much better
+/// (or not) E* is than the user's lamp and the paper's light, with the numbers behind it.
+std::string optimizeHeadline(const nlohmann::json& summary);
 
 /// Reads a loss.csv (header with "iteration" and "loss" columns). Throws InputError.
 LossSeries readLossCsv(const std::filesystem::path& file);

@@ -165,6 +165,9 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
             },
             "Initial env map: " + initialSpecForms() +
                 " (default: " + optimizeDefaults().starts.front() + ")");
+        c->add_option("--compare", j.compare,
+                      "The lamp you use now (an env-map file), the report's \"before\" "
+                      "(default: the studio preset)");
         addParsed(
             c, "--mask", j.mask,
             [](const std::string& v, const std::string&) { return parseLossMask(v); },
