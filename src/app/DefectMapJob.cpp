@@ -44,6 +44,11 @@ DefectMapJobSummary runDefectMapJob(const DefectMapJobOptions& o) {
     if (isScene) {
         scene = loadScene(o.input, o.sceneOverrides);
     } else {
+        if (!o.sceneOverrides.empty())
+            throw inputError(o.input.string(),
+                             "is a bare height map: scene overrides apply to a "
+                             "scene file",
+                             "give SCENE.json, or leave out the overrides");
         // the map is invariant to an affine change of the heights: an integer map without a
         // height range is read as [0, 1]
         HeightmapOptions ho;

@@ -51,6 +51,14 @@ InitialState parseInitialState(std::string_view spec, const std::string& where) 
     const std::string_view kind = spec.substr(0, colon);
     const std::string arg(colon == std::string_view::npos ? "" : spec.substr(colon + 1));
     const InitialKindRow* row = findRegistryRow(initialKindTable(), kind);
+    if (!row && colon == std::string_view::npos &&
+        spec.find_first_of("./") != std::string_view::npos) {
+        InitialState s;  // a bare path (it has a '.' or a '/'): envmap:FILE
+        s.kind = InitialKind::EnvMapFile;
+        s.file = std::string(spec);
+        s.spec = "envmap:" + std::string(spec);
+        return s;
+    }
     if (!row) bad(where, spec, "unknown kind '" + std::string(kind) + "'");
     if (*row->argument && colon == std::string_view::npos) bad(where, spec, "missing ':'");
     if (!*row->argument && colon != std::string_view::npos)

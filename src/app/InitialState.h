@@ -1,6 +1,7 @@
 // Initial env maps for the optimizers (optimize's option 'init' and 'starts'):
 //   const:V        every texel V (the paper's default: 0.5)
-//   envmap:FILE    an equirectangular image, area-resampled to the env-map grid; a colour image
+//   envmap:FILE    an equirectangular image, area-resampled to the env-map grid (a bare FILE
+//                  with a '.' or '/' in it means the same); a colour image
 //                  becomes gray by CIE L* (LUV lightness)/100 of each texel, as the paper does
 //                  (RGB kept with rgb=true); a one-channel image is E itself (so the envmap.exr
 //                  that `optimize` writes loads back unchanged); values clamped to [0, 1]

@@ -241,8 +241,10 @@ std::string lossCurveSvg(const std::vector<LossSeries>& series, int width, int h
     return o.str();
 }
 
-ReportRun reportRunFromOutDir(const std::filesystem::path& dir, const std::string& title,
-                              RunState state) {
+namespace {
+
+/// An optimize OUTDIR's summary.json; InputError naming it when missing or malformed.
+json readOptimizeSummary(const std::filesystem::path& dir) {
     const auto summaryPath = dir / "summary.json";
     json s;
     try {
@@ -251,6 +253,14 @@ ReportRun reportRunFromOutDir(const std::filesystem::path& dir, const std::strin
         throw inputError(summaryPath.string(), std::string("malformed JSON: ") + e.what());
     }
     if (!s.is_object()) throw inputError(summaryPath.string(), "not a JSON object");
+    return s;
+}
+
+}  // namespace
+
+ReportRun reportRunFromOutDir(const std::filesystem::path& dir, const std::string& title,
+                              RunState state) {
+    const json s = readOptimizeSummary(dir);
     ReportRun r;
     r.title = title.empty() ? dir.filename().string() : title;
     if (r.title.empty()) r.title = dir.string();
@@ -675,16 +685,13 @@ std::string optimizeHeadline(const json& s) {
     return out;
 }
 
+std::string optimizeHeadlineOf(const std::filesystem::path& outDir) {
+    return optimizeHeadline(readOptimizeSummary(outDir));
+}
+
 std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
                                      const std::string& figureProblem) {
-    const auto summaryPath = dir / "summary.json";
-    json s;
-    try {
-        s = json::parse(readBytes(summaryPath, "the optimize summary"));
-    } catch (const json::exception& e) {
-        throw inputError(summaryPath.string(), std::string("malformed JSON: ") + e.what());
-    }
-    if (!s.is_object()) throw inputError(summaryPath.string(), "not a JSON object");
+    const json s = readOptimizeSummary(dir);
     const json cmp = s.value("compare", json::object());
     const json lamp = cmp.value("lamp", json::object()), paper = cmp.value("paper", json::object()),
                opt = cmp.value("optimized", json::object());

@@ -85,6 +85,8 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& outDir,
 /// The headline sentence of an optimize summary.json (its "compare" section): how much better
 /// (or not) E* is than the user's lamp and the paper's light, with the numbers behind it.
 std::string optimizeHeadline(const nlohmann::json& summary);
+/// The same from an optimize OUTDIR (its summary.json; InputError when missing or malformed).
+std::string optimizeHeadlineOf(const std::filesystem::path& outDir);
 
 /// Reads a loss.csv (header with "iteration" and "loss" columns). Throws InputError.
 LossSeries readLossCsv(const std::filesystem::path& file);

@@ -58,6 +58,7 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
          "Height map (EXR/TIFF/PNG/.npy) or a scene file (JSON: its height map, and its camera "
          "for --image-output)")
         ->required();
+    addSceneOverrides(c, a->sceneOverrides, false);
     addChoice(c, "--method", a->map.method, defectMethodTable(), "Method (default auto)");
     c->add_option_function<std::string>(
          "-o,--output", [a](const std::string& v) { a->output = v; },

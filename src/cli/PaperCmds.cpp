@@ -34,6 +34,7 @@ namespace {
 
 struct ScratchArgs {
     std::string input, out = "scratchmap.png", imageMask;
+    std::vector<std::string> overrides;
     ScratchMapOptions opt;
 };
 
@@ -49,8 +50,11 @@ int runScratchMap(const ScratchArgs& a) {
     std::unique_ptr<Scene> scene;
     HeightmapData hm;
     if (isScene) {
-        scene = loadScene(in);
+        scene = loadScene(in, a.overrides);
     } else {
+        if (!a.overrides.empty())
+            throw UsageError("-D overrides a scene file's fields; '" + a.input +
+                             "' is a bare height map");
         // The scratch map is invariant to an affine change of the heights, so an integer map
         // needs no height range: it is read as [0, 1].
         HeightmapOptions o;
@@ -144,6 +148,7 @@ void registerPaper(CLI::App& app, std::function<int()>& run) {
                       "Height map (EXR/TIFF/PNG/.npy) or a scene file (JSON: its height map, and "
                       "its camera for --image-output)")
             ->required();
+        addSceneOverrides(c, a->overrides, false);
         c->add_option("--kernel", a->opt.kernel, "Moving-average window, samples")
             ->capture_default_str()
             ->check(CLI::Range(1, 1 << 20));
@@ -181,7 +186,7 @@ void registerPaper(CLI::App& app, std::function<int()>& run) {
         CLI::App* c =
             app.add_subcommand("envmap-preset",
                                "Write a built-in env map (e.g. studio) as EXR + PNG preview, for "
-                               "`optimize --init envmap:FILE` or `render --envmap`");
+                               "`optimize --init FILE` or `render --envmap FILE`");
         c->add_option("name", a->name, "Preset name")->capture_default_str();
         c->add_option("--width", a->width, "Texels")
             ->capture_default_str()

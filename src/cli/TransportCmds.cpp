@@ -7,10 +7,12 @@
 #include <memory>
 
 #include "app/OptimizeJob.h"
+#include "app/Report.h"
 #include "app/Transport.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
 #include "core/Error.h"
+#include "core/Text.h"
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
 #include "optimize/BlackBox.h"
@@ -101,7 +103,13 @@ int runOptimize(OptimizeArgs a) {
                         r.lambda, r.judged->eq2.total, r.judged->unbiased.total, r.judged->meanE,
                         100.0 * r.judged->sparsity,
                         r.start.empty() ? "" : (", best start " + r.start).c_str());
-    std::printf("wrote %s/\n", a.out.c_str());
+    // The report's first sentence (app/Report.h), here too.
+    for (const OptimizeRun& r : s.runs) {
+        std::string prefix;
+        if (s.runs.size() > 1) prefix = "lambda " + formatNumber(r.lambda) + ": ";
+        std::printf("%s%s\n", prefix.c_str(), optimizeHeadlineOf(r.dir).c_str());
+    }
+    std::printf("wrote %s/ (open %s/report.html)\n", a.out.c_str(), a.out.c_str());
     return kOk;
 }
 
