@@ -78,7 +78,7 @@ TEST(ReportBrowser, OptimizeReportOpensInHeadlessChromium) {
         ASSERT_TRUE(cmp[light].contains("judge"));
         EXPECT_FALSE(cmp[light]["judge"]["visibility"].empty());
     }
-    EXPECT_EQ(cmp["lamp"]["preset"], "studio");
+    EXPECT_EQ(cmp["lamp"]["spec"], "studio");
     for (const char* f : {"compare-lamp.png", "compare-paper.png", "view-lamp.png",
                           "view-optimized.png", "view-regions.png", "plot-data.json"})
         EXPECT_TRUE(fs::exists(out / f)) << f;

@@ -464,10 +464,11 @@ std::vector<double> paperLight(const Plan& p, const Inputs& in, const TransportM
 void prepareComparisons(const Plan& p, Inputs& in, const OptimizeJobSummary& job) {
     const OptimizeJobOptions& o = p.o;
     const TransportMatrix& t = job.transport.file.matrix;
-    const EnvMap lamp = o.compare.empty()
-                            ? studioEnvMap(t.envWidth, t.envHeight)
-                            : loadEnvMap(o.compare, t.envWidth, t.envHeight, o.rgb ? 3 : 0);
-    in.lampName = o.compare.empty() ? std::string("studio preset") : o.compare.filename().string();
+    const EnvMap lamp = o.compare.empty() ? studioEnvMap(t.envWidth, t.envHeight)
+                                          : lightFromSpec(o.compare, t.envWidth, t.envHeight,
+                                                          o.rgb ? 3 : 0, option("compare"));
+    in.lampName = o.compare.empty() ? std::string("studio preset")
+                                    : std::filesystem::path(o.compare).filename().string();
     // As the judge reads a light (Judge::envVector): RGB maps by their luminance on a gray T.
     const size_t n = lamp.texelCount();
     if (lamp.channels == 1 && o.rgb) {
@@ -820,8 +821,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
         cmp["objective"] = objectiveKindName(in.kind);
         cmp["regions"] = in.regionSource;
         json lamp = {{"name", in.lampName},
-                     {"preset", o.compare.empty() ? json("studio") : json(nullptr)},
-                     {"file", o.compare.empty() ? json(nullptr) : json(o.compare.string())},
+                     {"spec", o.compare.empty() ? std::string("studio") : o.compare},
                      {"render", "compare-lamp.png"},
                      {"training", partsJson(r.lampTraining)}};
         json paper = {{"name", "paper's light"},

@@ -89,9 +89,10 @@ struct OptimizeJobOptions {
     LossMaskSpec mask;            // the loss's region (app/LossMask.h)
     ScratchMapOptions scratch;    // for the scratch mask
     std::filesystem::path truth;  // ground-truth defect mask in height-map space (metrics)
-    /// The user's current lamp, the report's "before": an env-map file (empty: the built-in
-    /// "studio" preset, scene/EnvMapPresets.h), scored beside E* and the paper's light.
-    std::filesystem::path compare;
+    /// The user's current lamp, the report's "before": a light spec (io/EnvMapIO.h
+    /// lightFromSpec: a file, const:V or a preset; empty: the "studio" preset), scored beside
+    /// E* and the paper's light.
+    std::string compare;
     bool figures = true;  // the report's figures by scripts/plot_optimize.py (app/Plot.h)
     /// The defects objective's regions in height-map space (app/Truth.h RegionSpec): the defects
     /// (empty: `truth`, else auto: the defect map of the scene's height map) and the

@@ -15,46 +15,9 @@
 
 namespace sl::cli {
 
-std::string lightSpecForms() {
-    std::string s = "FILE (EXR/HDR/PNG/JPEG, equirectangular) | const:V (V >= 0)";
-    for (const std::string& n : presetNames()) s += " | " + n;
-    return s;
-}
-
-EnvMap lightFromSpec(const std::string& spec, int w, int h, int channels) {
-    if (spec.rfind("const:", 0) == 0) {
-        const std::string v = spec.substr(6);
-        double value = -1;
-        try {
-            size_t used = 0;
-            value = std::stod(v, &used);
-            if (used != v.size()) value = -1;
-        } catch (const std::exception&) {
-        }
-        if (!(value >= 0) || !std::isfinite(value))
-            throw UsageError("--envmap " + spec + ": '" + v + "' is not a number >= 0 (use " +
-                             lightSpecForms() + ")");
-        return EnvMap::constant(w, h, static_cast<float>(value), channels);
-    }
-    if (spec.rfind("envmap:", 0) == 0) return loadEnvMap(spec.substr(7), w, h, channels);
-    const auto& presets = presetNames();
-    if (std::find(presets.begin(), presets.end(), spec) != presets.end() &&
-        !std::filesystem::exists(spec)) {
-        EnvMap m = presetEnvMap(spec, w, h);
-        if (channels == 3 && m.channels == 1) {
-            EnvMap rgb = EnvMap::constant(w, h, 0.0f, 3);
-            for (size_t t = 0; t < m.texelCount(); ++t)
-                for (int k = 0; k < 3; ++k) rgb.texels[3 * t + k] = m.texels[t];
-            return rgb;
-        }
-        return m;
-    }
-    return loadEnvMap(spec, w, h, channels);
-}
-
 EnvMap chooseEnvMap(const Scene& scene, const std::string& spec) {
     const int w = scene.basis.width(), h = scene.basis.height();
-    if (!spec.empty()) return lightFromSpec(spec, w, h, 3);
+    if (!spec.empty()) return lightFromSpec(spec, w, h, 3, option("envmap"));
     const EnvMapDesc& e = scene.desc.envmap;
     if (!e.path.empty()) return loadEnvMap(e.path, w, h, 3);
     if (e.constant) return EnvMap::constant(w, h, *e.constant);

@@ -43,15 +43,8 @@ struct UsageError : std::runtime_error {
 /// shows each as its flag --NAME where some command of `app` has that flag.
 std::string withFlags(const CLI::App& app, const std::string& message);
 
-/// The light a command renders under, --envmap SPEC (one grammar for every command that takes
-/// a light): FILE (or envmap:FILE) an equirectangular image resampled to the grid, RGB kept
-/// when `channels` is 3; const:V every texel V >= 0; a preset name (e.g. studio).
-EnvMap lightFromSpec(const std::string& spec, int width, int height, int channels);
-/// The same grammar for `--envmap`'s help text.
-std::string lightSpecForms();
-
-/// The env map for a scene: --envmap SPEC, else the scene's envmap section, else the "studio"
-/// preset.
+/// The env map for a scene: --envmap SPEC (io/EnvMapIO.h lightFromSpec), else the scene's envmap
+/// section, else the "studio" preset.
 EnvMap chooseEnvMap(const Scene& scene, const std::string& spec);
 
 /// A command that reads a scene file takes scene overrides: -D key=value (repeatable, as

@@ -12,6 +12,7 @@
 #include "cli/Common.h"
 #include "core/Error.h"
 #include "io/AtomicFile.h"
+#include "io/EnvMapIO.h"
 #include "io/MitsubaExport.h"
 #include "io/SceneFile.h"
 #include "scene/Scene.h"

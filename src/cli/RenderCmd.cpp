@@ -7,6 +7,7 @@
 #include "cli/Commands.h"
 #include "cli/Common.h"
 #include "core/Progress.h"
+#include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
 #include "io/SceneFile.h"
 #include "render/Render.h"

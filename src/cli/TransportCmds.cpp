@@ -57,7 +57,8 @@ int runRelight(const RelightArgs& a) {
     const auto png = siblingPath(a.out, ".exr", ".png");
     TransportFile f = readTransportFile(a.tm);
     const TransportMatrix& t = f.matrix;
-    const EnvMap m = lightFromSpec(a.envmap, t.envWidth, t.envHeight, t.channels == 3 ? 3 : 1);
+    const EnvMap m =
+        lightFromSpec(a.envmap, t.envWidth, t.envHeight, t.channels == 3 ? 3 : 1, option("envmap"));
     if (t.channels == 1 && a.envmap.rfind("const:", 0) != 0)
         spdlog::warn(
             "gray transport matrix: the env map is used as its luminance; the result equals a "
@@ -174,8 +175,8 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
             "Initial env map: " + initialSpecForms() +
                 " (default: " + optimizeDefaults().starts.front() + ")");
         c->add_option("--compare", j.compare,
-                      "The lamp you use now (an env-map file), the report's \"before\" "
-                      "(default: the studio preset)");
+                      "The lamp you use now, the report's \"before\": " + lightSpecForms() +
+                          " (default: studio)");
         addParsed(
             c, "--mask", j.mask,
             [](const std::string& v, const std::string&) { return parseLossMask(v); },

@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <numbers>
 
 #include "core/Color.h"
 #include "core/Error.h"
 #include "core/Text.h"
 #include "io/ImageIO.h"
+#include "scene/EnvMapPresets.h"
 
 namespace sl {
 
@@ -256,6 +258,42 @@ Image envMapPreview(const EnvMap& env, int scale) {
             for (size_t c = 0; c < C; ++c) img.data[d + c] = env.texels[s + c];
         }
     return img;
+}
+
+std::string lightSpecForms() {
+    std::string s = "FILE (EXR/HDR/PNG/JPEG, equirectangular) | const:V (V >= 0)";
+    for (const std::string& n : presetNames()) s += " | " + n;
+    return s;
+}
+
+EnvMap lightFromSpec(const std::string& spec, int w, int h, int channels,
+                     const std::string& where) {
+    if (spec.rfind("const:", 0) == 0) {
+        const std::string v = spec.substr(6);
+        double value = -1;
+        try {
+            size_t used = 0;
+            value = std::stod(v, &used);
+            if (used != v.size()) value = -1;
+        } catch (const std::exception&) {
+        }
+        if (!(value >= 0) || !std::isfinite(value))
+            throw inputError(where + " " + spec, "'" + v + "' is not a number >= 0",
+                             "use " + lightSpecForms());
+        return EnvMap::constant(w, h, static_cast<float>(value), channels == 3 ? 3 : 1);
+    }
+    if (spec.rfind("envmap:", 0) == 0) return loadEnvMap(spec.substr(7), w, h, channels);
+    const auto& presets = presetNames();
+    if (std::find(presets.begin(), presets.end(), spec) != presets.end() &&
+        !std::filesystem::exists(spec)) {
+        EnvMap m = presetEnvMap(spec, w, h);
+        if (channels != 3 || m.channels != 1) return m;
+        EnvMap rgb = EnvMap::constant(w, h, 0.0f, 3);
+        for (size_t t = 0; t < m.texelCount(); ++t)
+            for (int k = 0; k < 3; ++k) rgb.texels[3 * t + k] = m.texels[t];
+        return rgb;
+    }
+    return loadEnvMap(spec, w, h, channels);
 }
 
 }  // namespace sl

@@ -41,6 +41,16 @@ EnvMap resampleEquirect(const Image& src, int width, int height, int channels,
 /// and never negative.
 EnvMap loadEnvMap(const std::filesystem::path& file, int width, int height, int channels);
 
+/// A light spec, one grammar for every option that takes a light (`where` names it in errors):
+///   FILE or envmap:FILE   loadEnvMap(FILE, width, height, channels)
+///   const:V               every texel V >= 0 (gray; `channels` 3 gives three equal values)
+///   a preset name         scene/EnvMapPresets.h (e.g. studio), unless a file of that name exists
+/// channels as loadEnvMap (0: as stored; constants and presets are then gray).
+EnvMap lightFromSpec(const std::string& spec, int width, int height, int channels,
+                     const std::string& where);
+/// "FILE (EXR/HDR/PNG/JPEG, equirectangular) | const:V (V >= 0) | studio", from the presets.
+std::string lightSpecForms();
+
 /// Solid angle of every texel's cell, row-major (width*height values), summing to 4π.
 std::vector<double> envCellSolidAngles(int width, int height);
 

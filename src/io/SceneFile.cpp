@@ -369,11 +369,13 @@ std::vector<SceneFileField> sceneFileFields() {
     return {
         {"heightmap.path", "required",
          "EXR or TIFF (float32/float16/uint16), PNG (16- or 8-bit), NumPy `.npy` "
-         "(float32/float64/uint16, C order)"},
-        {"heightmap.pixel_pitch", num(d.heightmap.pitch), "sample spacing in scene units (mm)"},
+         "(float32/float64/uint16, C order), X3P (ISO 25178-72), SDF (ISO 25178-71, ASCII or "
+         "binary)"},
+        {"heightmap.pixel_pitch", num(d.heightmap.pitch),
+         "sample spacing in scene units (mm); X3P and SDF carry their own (leave it out)"},
         {"heightmap.height_range", "required for integer maps",
          "`[min, max]`: the integer range normalised to [0,1] maps linearly onto it; not allowed "
-         "for float maps"},
+         "for float, X3P and SDF maps"},
         {"heightmap.height_scale", num(d.heightmap.heightScale),
          "float maps: heights are multiplied by it"},
         {"material.type", code(d.material.type),
