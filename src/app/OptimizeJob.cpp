@@ -932,6 +932,7 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
         figureProblem = "figures not asked for";
     } else {
         std::fflush(stdout);
+        const ProgressTask task("figures (matplotlib)");
         const PlotOutcome plot = runPlotScript("plot_optimize.py", {dir.string()});
         if (!plot.ran)
             figureProblem = plot.message;
