@@ -95,7 +95,8 @@ TEST(CliGrammar, EveryCommandFollowsOneGrammar) {
                                                         {"--fd-steps", "--fd-step"},
                                                         {"--constant", "--envmap const:V"},
                                                         {"--image-mask", "--image-output"},
-                                                        {"--image-out", "--image-output"}};
+                                                        {"--image-out", "--image-output"},
+                                                        {"--judge-spp", "--heldout-spp"}};
     // gen-surface keeps --image-size: the image size it writes into the scene file, beside its
     // --width/--height of the height map it makes (it renders nothing).
     // Commands that write no file.

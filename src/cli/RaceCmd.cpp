@@ -75,7 +75,7 @@ void registerRace(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     c->add_option("--configs", a->configs, "Configurations (default: all; paper-loop always)")
         ->delimiter(',');
-    c->add_option("--judge-spp", a->o.judgeSpp, "spp of the judge's estimate")
+    c->add_option("--heldout-spp", a->o.judgeSpp, "spp of the judge's held-out estimate")
         ->check(CLI::Range(2, 1 << 20))
         ->capture_default_str();
     c->add_option("-o,--output", a->out, "Output directory (parts, cache, CSV, plot)")
