@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <random>
 #include <string>
 #include <vector>
@@ -41,6 +42,12 @@ inline std::vector<float> bumpyHeightMap(int n) {
             h[size_t(j) * n + i] =
                 static_cast<float>(0.03 * std::sin(i * 0.5) * std::cos(j * 0.37));
     return h;
+}
+
+/// A file's bytes ("" when it cannot be read).
+inline std::string readFile(const std::filesystem::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
 inline void writeText(const std::filesystem::path& p, const std::string& text) {

@@ -27,13 +27,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string readText(const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
-
 void writeFile(const fs::path& p, const std::string& text) {
     std::ofstream(p) << text;
 }
@@ -86,7 +79,7 @@ bool waitForHandler(pid_t pid, double seconds) {
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
     const std::string status = "/proc/" + std::to_string(pid) + "/status";
     while (std::chrono::steady_clock::now() < end) {
-        std::istringstream in(readText(status));
+        std::istringstream in(test::readFile(status));
         for (std::string line; std::getline(in, line);)
             if (line.rfind("SigCgt:", 0) == 0 &&
                 (std::stoull(line.substr(7), nullptr, 16) >> (SIGINT - 1)) & 1)
@@ -118,19 +111,19 @@ TEST(StagedDirectory, ReplacesAsAUnitOrLeavesTheOldResults) {
         EXPECT_FALSE(fs::exists(out));  // nothing before commit
         s.commit();
     }
-    EXPECT_EQ(readText(out / "a.txt"), "first");
+    EXPECT_EQ(test::readFile(out / "a.txt"), "first");
     {  // a failed run (no commit): the old results stay, the staging is gone
         StagedDirectory s(out);
         writeFile(s.path() / "a.txt", "second");
     }
-    EXPECT_EQ(readText(out / "a.txt"), "first");
+    EXPECT_EQ(test::readFile(out / "a.txt"), "first");
     EXPECT_EQ(entries(dir.path()), std::vector<std::string>{"out"});
     {  // a successful one: exactly the new files
         StagedDirectory s(out);
         writeFile(s.path() / "a.txt", "third");
         s.commit();
     }
-    EXPECT_EQ(readText(out / "a.txt"), "third");
+    EXPECT_EQ(test::readFile(out / "a.txt"), "third");
     EXPECT_FALSE(fs::exists(out / "old-only.txt"));
     EXPECT_EQ(entries(dir.path()), std::vector<std::string>{"out"});
 }
@@ -150,7 +143,7 @@ TEST(StagedDirectory, RefusesWhatItMustNotReplace) {
             EXPECT_NE(std::string(e.what()).find(bad.string()), std::string::npos) << e.what();
         }
     }
-    EXPECT_EQ(readText(mine / "thesis.tex"), "precious");
+    EXPECT_EQ(test::readFile(mine / "thesis.tex"), "precious");
     StagedDirectory ok(dir.path() / "empty-or-new");  // new: fine
 }
 
@@ -163,7 +156,7 @@ TEST(StagedDirectory, OptimizeChecksTheOutputBeforeTheWork) {
         test::runCli("optimize " + (dir.path() / "missing.json").string() + " -o " + mine.string());
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_NE(r.output.find("did not write"), std::string::npos) << r.output;
-    EXPECT_EQ(readText(mine / "notes.txt"), "keep");
+    EXPECT_EQ(test::readFile(mine / "notes.txt"), "keep");
 }
 
 // Ctrl-C during a long optimization: the optimizer stops at its next iteration, the best light
@@ -195,20 +188,20 @@ TEST(Interrupt, SignalsStopCleanly) {
             stagingName += ".staging-";
             stagingName += std::to_string(pid);
             const fs::path staging = dir.path() / stagingName;
-            ASSERT_TRUE(waitForPath(staging, 30)) << readText(log);
+            ASSERT_TRUE(waitForPath(staging, 30)) << test::readFile(log);
             // loss.csv grows while the optimizer runs (its first row is flushed at once).
             bool liveRows = false;
             for (int k = 0; k < 300 && !liveRows; ++k) {
-                const std::string csv = readText(staging / "loss.csv");
+                const std::string csv = test::readFile(staging / "loss.csv");
                 liveRows = std::count(csv.begin(), csv.end(), '\n') >= 2;
                 if (!liveRows) std::this_thread::sleep_for(std::chrono::milliseconds(100));
             }
             EXPECT_TRUE(liveRows) << "no row in the staged loss.csv while optimizing\n"
-                                  << readText(log);
+                                  << test::readFile(log);
             std::this_thread::sleep_for(std::chrono::milliseconds(delayMs));
             kill(pid, sig);
-            EXPECT_EQ(waitExit(pid), code) << readText(log);
-            s = nlohmann::json::parse(readText(out / "summary.json"));
+            EXPECT_EQ(waitExit(pid), code) << test::readFile(log);
+            s = nlohmann::json::parse(test::readFile(out / "summary.json"));
             EXPECT_TRUE(s["interrupted"].get<bool>());
             if (s["iterations"].get<int>() > 0) break;
         }
@@ -226,7 +219,7 @@ TEST(Interrupt, SignalsStopCleanly) {
     ASSERT_TRUE(waitForHandler(pid, 60));
     std::this_thread::sleep_for(std::chrono::milliseconds(500));  // tracing by now
     kill(pid, SIGINT);
-    EXPECT_EQ(waitExit(pid), 130) << readText(log);
+    EXPECT_EQ(waitExit(pid), 130) << test::readFile(log);
     EXPECT_FALSE(fs::exists(big));
     auto after = entries(dir.path());
     after.erase(std::remove(after.begin(), after.end(), "pre.log"), after.end());
@@ -261,7 +254,7 @@ TEST(StagedDirectory, FullDiskLeavesThePreviousResults) {
     const std::string args =
         " optimize " + tm.string() + " --heldout none --iterations 20 -o " + out.string();
     ASSERT_EQ(test::runCli(args).exitCode, 0);
-    const std::string before = readText(out / "summary.json");
+    const std::string before = test::readFile(out / "summary.json");
     const auto names = entries(out);
     const std::string cmd =
         "bash -c 'ulimit -f 100; " + std::string(SL_CLI_PATH) + args + " --lambda 7' 2>&1";
@@ -269,7 +262,7 @@ TEST(StagedDirectory, FullDiskLeavesThePreviousResults) {
     EXPECT_EQ(code, 1) << output;
     EXPECT_NE(output.find(out.string()), std::string::npos) << output;
     EXPECT_NE(output.find("unchanged"), std::string::npos) << output;
-    EXPECT_EQ(readText(out / "summary.json"), before);
+    EXPECT_EQ(test::readFile(out / "summary.json"), before);
     EXPECT_EQ(entries(out), names);
     EXPECT_EQ(entries(dir.path()), (std::vector<std::string>{"g.tm", "out"}));
 }

@@ -44,6 +44,30 @@ void sleepMs(int ms) {
     std::this_thread::sleep_for(std::chrono::milliseconds(ms));
 }
 
+/// What a console with options `o` prints (every stream to one temporary file) while `body`
+/// runs with it as the progress listener.
+template <class Body>
+std::string printed(ConsoleOptions o, Body&& body) {
+    std::FILE* out = std::tmpfile();
+    if (!out) return "tmpfile failed";
+    o.progress = o.info = o.warnings = out;
+    {
+        Console console(o);
+        Listening l(&console);
+        body(console, out);
+    }
+    const std::string s = contents(out);
+    std::fclose(out);
+    return s;
+}
+
+ConsoleOptions piped(double every) {
+    ConsoleOptions o;
+    o.terminal = false;
+    o.plainEvery = every;
+    return o;
+}
+
 }  // namespace
 
 TEST(Progress, DurationsReadAsAPersonWrites) {
@@ -80,15 +104,8 @@ TEST(Progress, WithoutAListenerATaskIsSilent) {
 }
 
 TEST(Progress, PipedPrintsPlainLinesEveryIntervalAndTheEnd) {
-    std::FILE* out = std::tmpfile();
-    ASSERT_NE(out, nullptr);
-    {
-        ConsoleOptions o;
-        o.terminal = false;
-        o.plainEvery = 0.15;
-        o.progress = o.info = o.warnings = out;
-        Console console(o);
-        Listening l(&console);
+    const ConsoleOptions o = piped(0.15);
+    const std::string s = printed(o, [&](Console&, std::FILE*) {
         {
             ProgressTask quick("quick", 1);  // shorter than the interval: never shown
             quick.set(1);
@@ -98,9 +115,7 @@ TEST(Progress, PipedPrintsPlainLinesEveryIntervalAndTheEnd) {
             t.advance(10);
             sleepMs(60);
         }
-    }
-    const std::string s = contents(out);
-    std::fclose(out);
+    });
     EXPECT_EQ(count(s, "quick"), 0u) << s;
     EXPECT_GE(count(s, "tracing: "), 3u) << s;  // ~0.6 s at 0.15 s: a few lines, then the end
     EXPECT_NE(s.find("ETA"), std::string::npos) << s;
@@ -109,16 +124,11 @@ TEST(Progress, PipedPrintsPlainLinesEveryIntervalAndTheEnd) {
 }
 
 TEST(Progress, TerminalBarFitsTheWidthAndLogLinesDoNotTearIt) {
-    std::FILE* out = std::tmpfile();
-    ASSERT_NE(out, nullptr);
-    {
-        ConsoleOptions o;
-        o.terminal = true;
-        o.showAfter = 0;
-        o.width = 60;
-        o.progress = o.info = o.warnings = out;
-        Console console(o);
-        Listening l(&console);
+    ConsoleOptions o;
+    o.terminal = true;
+    o.showAfter = 0;
+    o.width = 60;
+    const std::string s = printed(o, [&](Console& console, std::FILE* out) {
         ProgressTask t("a rather long label for a narrow terminal", 1000);
         t.detail("loss 1.234567, held out 2.345678");
         for (int k = 0; k < 5; ++k) {
@@ -127,9 +137,7 @@ TEST(Progress, TerminalBarFitsTheWidthAndLogLinesDoNotTearIt) {
         }
         console.line(out, "a log line");
         sleepMs(150);
-    }
-    const std::string s = contents(out);
-    std::fclose(out);
+    });
     EXPECT_NE(s.find('['), std::string::npos) << s;
     // Every drawn bar (between a \r and the erase-to-end) fits in 59 columns.
     for (size_t at = s.find('\r'); at != std::string::npos; at = s.find('\r', at + 1)) {
@@ -143,15 +151,8 @@ TEST(Progress, TerminalBarFitsTheWidthAndLogLinesDoNotTearIt) {
 }
 
 TEST(Progress, ATaskEndedByAnExceptionSaysStopped) {
-    std::FILE* out = std::tmpfile();
-    ASSERT_NE(out, nullptr);
-    {
-        ConsoleOptions o;
-        o.terminal = false;
-        o.plainEvery = 0.05;
-        o.progress = o.info = o.warnings = out;
-        Console console(o);
-        Listening l(&console);
+    const ConsoleOptions o = piped(0.05);
+    const std::string s = printed(o, [&](Console&, std::FILE*) {
         try {
             ProgressTask t("failing", 10);
             t.advance(4);
@@ -159,22 +160,13 @@ TEST(Progress, ATaskEndedByAnExceptionSaysStopped) {
             throw std::runtime_error("bad input");
         } catch (const std::runtime_error&) {
         }
-    }
-    const std::string s = contents(out);
-    std::fclose(out);
+    });
     EXPECT_NE(s.find("failing: stopped at 40% after"), std::string::npos) << s;
 }
 
 TEST(Progress, NestedTasksShowTheInnermostThenResume) {
-    std::FILE* out = std::tmpfile();
-    ASSERT_NE(out, nullptr);
-    {
-        ConsoleOptions o;
-        o.terminal = false;
-        o.plainEvery = 0.1;
-        o.progress = o.info = o.warnings = out;
-        Console console(o);
-        Listening l(&console);
+    const ConsoleOptions o = piped(0.1);
+    const std::string s = printed(o, [&](Console&, std::FILE*) {
         ProgressTask outer("outer", 2);
         {
             ProgressTask inner("inner", 1);
@@ -182,9 +174,7 @@ TEST(Progress, NestedTasksShowTheInnermostThenResume) {
             inner.set(1);
         }
         outer.advance(2);
-    }
-    const std::string s = contents(out);
-    std::fclose(out);
+    });
     EXPECT_NE(s.find("inner: "), std::string::npos) << s;
     EXPECT_NE(s.find("inner: done in"), std::string::npos) << s;
     EXPECT_LT(s.find("inner: done in"), s.find("outer: done in")) << s;

@@ -29,13 +29,6 @@ using namespace sl;
 
 namespace {
 
-std::string readText(const std::filesystem::path& p) {
-    std::ifstream in(p);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
-
 /// Names unique and non-empty, help present, each name parses to its own row.
 template <class Row>
 void expectWellFormed(std::span<const Row> table) {
@@ -151,12 +144,12 @@ TEST(OptimizeJob, ResolvesItsDefaultsFromTheRegistries) {
         EXPECT_LE(r.optimizer.evaluations, methodRow(optimizeDefaults().method).defaultBudget + 1);
         EXPECT_LE(r.final.total, r.initial.total);
         EXPECT_FALSE(r.heldFinal.has_value());
-        const auto summary = nlohmann::json::parse(readText(r.dir / "summary.json"));
+        const auto summary = nlohmann::json::parse(test::readFile(r.dir / "summary.json"));
         EXPECT_EQ(summary["objective"], "paper");
         EXPECT_EQ(summary["mask"], "object");
         EXPECT_EQ(summary["init"], "const:0.5");
     }
-    const std::string sweep = readText(o.outDir / "sweep.csv");
+    const std::string sweep = test::readFile(o.outDir / "sweep.csv");
     EXPECT_EQ(std::count(sweep.begin(), sweep.end(), '\n'), 3);
 
     OptimizeJobOptions loop = o;

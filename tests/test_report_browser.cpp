@@ -22,13 +22,6 @@ using namespace sl;
 
 namespace {
 
-std::string readText(const fs::path& p) {
-    std::ifstream is(p, std::ios::binary);
-    std::ostringstream ss;
-    ss << is.rdbuf();
-    return ss.str();
-}
-
 // Runs a shell command line, returning its exit code and its output (stdout and stderr).
 test::RunResult runShell(const std::string& line) {
     test::RunResult r;
@@ -70,7 +63,7 @@ TEST(ReportBrowser, OptimizeReportOpensInHeadlessChromium) {
     ASSERT_EQ(r.exitCode, 0) << r.output;
 
     // The comparisons behind the headline are recorded.
-    const auto summary = nlohmann::json::parse(readText(out / "summary.json"));
+    const auto summary = nlohmann::json::parse(test::readFile(out / "summary.json"));
     ASSERT_TRUE(summary.contains("compare")) << summary.dump(2);
     const auto& cmp = summary["compare"];
     for (const char* light : {"lamp", "paper", "optimized"}) {
@@ -82,7 +75,7 @@ TEST(ReportBrowser, OptimizeReportOpensInHeadlessChromium) {
     for (const char* f : {"compare-lamp.png", "compare-paper.png", "view-lamp.png",
                           "view-optimized.png", "view-regions.png", "plot-data.json"})
         EXPECT_TRUE(fs::exists(out / f)) << f;
-    const std::string html = readText(out / "report.html");
+    const std::string html = test::readFile(out / "report.html");
     EXPECT_NE(html.find(escapeXml(optimizeHeadline(summary))), std::string::npos);
     EXPECT_NE(html.find("Under the optimized light the defects are"), std::string::npos);
 

@@ -19,13 +19,6 @@ using namespace sl;
 
 namespace {
 
-std::string readBytes(const fs::path& p) {
-    std::ifstream is(p, std::ios::binary);
-    std::ostringstream ss;
-    ss << is.rdbuf();
-    return ss.str();
-}
-
 // summary.json without what measures the run rather than its result.
 nlohmann::json withoutRunFacts(nlohmann::json j) {
     if (j.is_object()) {
@@ -95,7 +88,7 @@ TEST(Reproducible, OptimizeOutputsAreTheSameForAnyThreadCountAndRun) {
         for (const auto& f : files) {
             SCOPED_TRACE("run " + std::to_string(r) + ", " + f);
             ASSERT_TRUE(fs::exists(outs[r] / f));
-            const std::string a = readBytes(outs[0] / f), b = readBytes(outs[r] / f);
+            const std::string a = test::readFile(outs[0] / f), b = test::readFile(outs[r] / f);
             if (f == "summary.json") {
                 EXPECT_EQ(withoutRunFacts(nlohmann::json::parse(a)),
                           withoutRunFacts(nlohmann::json::parse(b)));
