@@ -89,13 +89,17 @@ TEST(Registry, InitialStatesParseOnceWithTheirArguments) {
     EXPECT_EQ(c.spec, "const:0.25");
     EXPECT_EQ(parseInitialState("random:7").seed, 7u);
     EXPECT_EQ(parseInitialState("envmap:a b.exr").file, std::filesystem::path("a b.exr"));
+    // A bare path (a '.' or '/' in it) is envmap:FILE; a bare word is still an unknown kind.
+    EXPECT_EQ(parseInitialState("lamps/booth.exr").kind, InitialKind::EnvMapFile);
+    EXPECT_EQ(parseInitialState("lamps/booth.exr").spec, "envmap:lamps/booth.exr");
+    EXPECT_THROW(parseInitialState("specullar"), InputError);
     EXPECT_EQ(parseInitialState("specular").kind, InitialKind::Specular);
     for (const char* bad : {"const:2", "const:x", "const", "random:-1", "random:1.5",
                             "envmap:", "studio:1", "sunny", ""})
         EXPECT_THROW(parseInitialState(bad, "option 'init'"), InputError) << bad;
     const std::vector<double> e = initialEnvMap(parseInitialState("const:0.25"), 4, 2, true);
     EXPECT_EQ(e, std::vector<double>(24, 0.25));
-    EXPECT_EQ(initialSpecForms(), "const:V | envmap:FILE | random:SEED | studio | specular");
+    EXPECT_EQ(initialSpecForms(), "FILE | const:V | envmap:FILE | random:SEED | studio | specular");
 }
 
 TEST(Registry, HeldOutAndMaskChoices) {

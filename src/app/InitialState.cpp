@@ -37,7 +37,7 @@ std::span<const InitialKindRow> initialKindTable() {
 }
 
 std::string initialSpecForms() {
-    std::string s;
+    std::string s = "FILE";  // a bare path: envmap:FILE (parseInitialState)
     for (const InitialKindRow& r : kKinds) {
         if (!s.empty()) s += " | ";
         s += r.name;

@@ -34,7 +34,7 @@ struct InitialKindRow {
     const char* help;
 };
 std::span<const InitialKindRow> initialKindTable();
-/// "const:V | envmap:FILE | random:SEED | studio | specular", from the table.
+/// "FILE | const:V | envmap:FILE | random:SEED | studio | specular", from the table.
 std::string initialSpecForms();
 
 /// One parsed start.
