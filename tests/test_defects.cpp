@@ -240,6 +240,20 @@ TEST(DefectObjective, OptimizeRunsItOnAGeneratedPart) {
     for (size_t q = 0; q < regions.pixelCount(); ++q)
         red += regions.data[3 * q] > 0.99f && regions.data[3 * q + 1] < 0.01f;
     EXPECT_GT(red, 0);
+    // Naming the defects (a truth) without an objective gives the defects objective (the
+    // default measured by scripts/eval-defects); without them, the noise-unbiased one.
+    r = test::runCli("optimize " + scene + " --truth " + truth +
+                     " --heldout none --iterations 20 -o " + (dir.path() / "byDefault").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_EQ(nlohmann::json::parse(test::readFile(dir.path() / "byDefault" / "summary.json"))
+                  .value("objective", ""),
+              "defects");
+    r = test::runCli("optimize " + scene + " --heldout none --iterations 20 -o " +
+                     (dir.path() / "plain").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_EQ(nlohmann::json::parse(test::readFile(dir.path() / "plain" / "summary.json"))
+                  .value("objective", ""),
+              "unbiased");
     // Without a mask or a truth: the defect map found without labels (auto).
     r = test::runCli("optimize " + scene +
                      " --objective defects --heldout none --iterations 50 -o " +

@@ -286,17 +286,18 @@ struct Inputs {
 /// Stage 1: the scene and the training estimates of T (traced or cached, or the .tm).
 void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     const OptimizeJobOptions& o = p.o;
-    // The objective: as given; by default the noise-unbiased one, except for a .tm without
-    // halves, which only the paper's eq. 2 can use.
-    in.kind = o.objectiveKind ? *o.objectiveKind
-                              : (p.tmInput ? ObjectiveKind::Paper : ObjectiveKind::Unbiased);
+    // The objective: as given, else the defaults' (OptimizeDefaults): the defects objective when
+    // the defects are named, the noise-unbiased one otherwise, eq. 2 for a .tm without halves.
+    const OptimizeDefaults defaults = optimizeDefaults();
+    const ObjectiveKind byDefault =
+        o.truth.empty() && o.defects.empty() ? defaults.objective : defaults.objectiveWithDefects;
+    in.kind = o.objectiveKind ? *o.objectiveKind : (p.tmInput ? ObjectiveKind::Paper : byDefault);
     if (p.tmInput) {
         const Stopwatch clock;
         job.transport.file = readTransportFile(o.input);
         job.transport.path = o.input;
         job.transport.secondsTotal = clock.seconds();
-        if (!o.objectiveKind && job.transport.file.matrix.planes == 2)
-            in.kind = ObjectiveKind::Unbiased;
+        if (!o.objectiveKind && job.transport.file.matrix.planes == 2) in.kind = byDefault;
     } else {
         in.scene = loadScene(o.input, o.sceneOverrides);
         PrecomputeOptions pre = o.precompute;

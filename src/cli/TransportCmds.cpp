@@ -205,10 +205,14 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
                   "part-truth.png:none");
         c->add_flag("--rgb", j.rgb, "Optimize an RGB env map (needs/creates an RGB T)");
         c->add_flag("--smooth-abs", j.objective.smoothAbs, "Use sqrt(x²+ε²)−ε for |x|");
-        addChoice(c, "--objective", j.objectiveKind, objectiveKindTable(),
-                  "Objective (default: unbiased; paper for a .tm without halves; paper trains at "
-                  ">= " +
-                      std::to_string(optimizeDefaults().paperMinSpp) + " spp unless --spp)");
+        const OptimizeDefaults d = optimizeDefaults();
+        std::string objectiveHelp = "Objective (default: ";
+        objectiveHelp += objectiveKindName(d.objectiveWithDefects);
+        objectiveHelp += " when --truth or --defects names the defects, else ";
+        objectiveHelp += objectiveKindName(d.objective);
+        objectiveHelp += "; paper for a .tm without halves; paper trains at >= ";
+        objectiveHelp += std::to_string(d.paperMinSpp) + " spp unless --spp)";
+        addChoice(c, "--objective", j.objectiveKind, objectiveKindTable(), objectiveHelp);
         std::string heldOutHelp = "Held-out estimate every result is scored on:";
         for (const HeldOutModeRow& r : heldOutModeTable())
             heldOutHelp += std::string("\n    ") + r.name + ": " + r.help;
