@@ -292,6 +292,14 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     const ObjectiveKind byDefault =
         o.truth.empty() && o.defects.empty() ? defaults.objective : defaults.objectiveWithDefects;
     in.kind = o.objectiveKind ? *o.objectiveKind : (p.tmInput ? ObjectiveKind::Paper : byDefault);
+    if (!o.objectiveKind && in.kind == ObjectiveKind::Defects &&
+        o.objective.reg != RegTarget::EnvMap)
+        throw inputError(option("reg") + " image",
+                         "does not go with the defects objective, the default when " +
+                             option("truth") + " or " + option("defects") + " names the defects",
+                         "add " + option("objective") +
+                             " unbiased (or paper) for the regulariser "
+                             "on the image");
     if (p.tmInput) {
         const Stopwatch clock;
         job.transport.file = readTransportFile(o.input);
