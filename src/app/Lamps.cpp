@@ -1,5 +1,7 @@
 #include "app/Lamps.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -15,6 +17,7 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kDeg = kPi / 180;
 constexpr double kForbidWeight = 1e3;  // penalty per rad² of a centre inside a forbidden range
+constexpr double kOverWeight = 1e3;    // penalty per sr of (E_t − 1)² above E's box
 
 /// How deep azimuth φ lies inside [from, to] (wrapping), 0 outside.
 double forbiddenDepth(double phi, std::pair<double, double> range) {
@@ -96,14 +99,24 @@ std::vector<double> LampProblem::encode(std::span<const Lamp> lamps) const {
 double LampProblem::evaluate(std::span<const double> x, std::span<double> grad) const {
     const auto ls = lamps(x);
     const size_t texels = static_cast<size_t>(raster_.basis().texelCount());
-    std::vector<double> E(texels, 0.0), e(texels);
+    std::vector<double> E(texels, 0.0);
     std::vector<std::vector<double>> J(ls.size(), std::vector<double>(texels * kLampParams));
-    for (size_t l = 0; l < ls.size(); ++l) {
-        raster_.jacobian(ls[l], J[l], e);
-        for (size_t t = 0; t < texels; ++t) E[t] += e[t];
-    }
+    std::vector<std::vector<double>> El(ls.size(), std::vector<double>(texels));
+    tbb::parallel_for(size_t{0}, ls.size(),
+                      [&](size_t l) { raster_.jacobian(ls[l], J[l], El[l]); });
+    for (size_t l = 0; l < ls.size(); ++l)  // in lamp order: the sum does not depend on threads
+        for (size_t t = 0; t < texels; ++t) E[t] += El[l][t];
     std::vector<double> gE(grad.empty() ? 0 : loss_.dimension());
     double value = loss_.evaluate(E, gE).total;
+    // Overlapping lamps may not exceed E's box [0, 1] (the same budget as E*): a smooth
+    // quadratic penalty on the excess, weighted by the texel's solid angle.
+    const std::vector<double>& omega = raster_.texelSolidAngles();
+    for (size_t t = 0; t < texels; ++t) {
+        const double over = E[t] - 1.0;
+        if (over <= 0) continue;
+        value += kOverWeight * omega[t] * over * over;
+        if (!grad.empty()) gE[t] += 2 * kOverWeight * omega[t] * over;
+    }
     if (!grad.empty()) std::fill(grad.begin(), grad.end(), 0.0);
     for (size_t l = 0; l < ls.size(); ++l) {
         if (!grad.empty())

@@ -40,7 +40,7 @@ struct LampFitOptions {
     std::vector<std::pair<double, double>> forbiddenAzimuth;
     /// L-BFGS with the box; iterations per candidate and for the final polish.
     OptimizerMethod method = OptimizerMethod::Lbfgs;
-    int candidateIterations = 60, finalIterations = 300;
+    int candidateIterations = 25, finalIterations = 200;
     double relativeTolerance = 1e-6;  // stop when the loss changes by less than this fraction
     LampRasterOptions raster;
 };

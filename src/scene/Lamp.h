@@ -49,6 +49,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/Dual.h"
 #include "core/Vec3.h"
 #include "scene/EnvMapBasis.h"
 
@@ -143,6 +144,13 @@ T step(const T& t) {
     using std::erf;
     return 0.5 * (erf(t) + 1.0);
 }
+/// The same on Dual numbers, constant where the tails are below 1e-16 (no erf, no exp).
+template <int N>
+Dual<N> step(const Dual<N>& t) {
+    if (t.v < -5.8) return Dual<N>(0.0);
+    if (t.v > 5.8) return Dual<N>(1.0);
+    return 0.5 * (erf(t) + 1.0);
+}
 
 /// m(d) for a lamp with the frame f, elevation el, size a, width b, edge h (see above).
 template <class T>
@@ -206,6 +214,7 @@ class LampRasterizer {
     std::vector<double> gx_, gy_;  // node offsets in the cell, N² each
     std::vector<Vec3d> dir_;       // cells × N² directions
     std::vector<double> dw_;       // ... and their dω
+    std::vector<double> elev_;     // ... and their elevation asin(d.y)
     std::vector<Vec3d> cellCentre_;
     std::vector<double> cellRadius_, cellElLo_, cellElHi_;
     std::vector<double> omega_;
