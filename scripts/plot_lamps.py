@@ -76,12 +76,14 @@ def main():
         ax.set_theta_zero_location("N")
         ax.set_theta_direction(-1)
         zen = 90 - el[rows]
+        ax.grid(False)
         mesh = ax.pcolormesh(az, zen, img[rows], shading="nearest", cmap="magma", vmin=0,
                              vmax=max(1e-9, float(target.max())))
         ax.set_ylim(0, 90)
         ax.set_yticks([30, 60, 90])
         ax.set_yticklabels(["60°", "30°", "0°"])
         ax.set_title(title)
+        ax.grid(True, alpha=0.3)
         if key == "target":
             for i, lamp in enumerate(d["lamps"]):
                 for a_, z_ in lamp_outline(lamp):

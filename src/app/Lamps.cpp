@@ -249,6 +249,7 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
         for (size_t t = 0; t < E.size(); ++t) residual[t] = std::max(target[t] - E[t], 0.0);
         double bestLoss = std::numeric_limits<double>::infinity();
         std::vector<Lamp> best;
+        int evaluations = 0;
         for (const Lamp& cand : candidates(raster, residual, gE, o)) {
             std::vector<Lamp> trial = lamps;
             trial.push_back(cand);
@@ -261,6 +262,7 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
             opt.iterations = o.candidateIterations;
             opt.relativeFunctionTolerance = o.relativeTolerance;
             const OptimizerSummary s = minimize(problem.problem(), x, opt);
+            evaluations += s.evaluations;
             if (s.finalLoss < bestLoss) {
                 bestLoss = s.finalLoss;
                 best = problem.lamps(x);
@@ -276,6 +278,7 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
             opt.iterations = o.finalIterations;
             opt.relativeFunctionTolerance = o.relativeTolerance;
             const OptimizerSummary s = minimize(problem.problem(), x, opt);
+            evaluations += s.evaluations;
             if (s.finalLoss <= bestLoss) {
                 bestLoss = s.finalLoss;
                 best = problem.lamps(x);
@@ -296,6 +299,7 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
         step.lamps = lamps;
         step.loss = loss.evaluate(E, gE).total;
         step.seconds = clock.seconds();
+        step.evaluations = evaluations;
         result.steps.push_back(step);
     }
     result.envMap = E;

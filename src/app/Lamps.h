@@ -51,8 +51,9 @@ std::array<double, 2> lampParamRange(LampKind kind, int p, const LampFitOptions&
 struct LampFitStep {
     int count = 0;
     std::vector<Lamp> lamps;
-    double loss = 0;     // the objective (training T) under these lamps
-    double seconds = 0;  // since the fit started
+    double loss = 0;      // the objective (training T) under these lamps
+    double seconds = 0;   // since the fit started
+    int evaluations = 0;  // of the loss and its gradient for this k (all candidates)
 };
 
 struct LampFitResult {

@@ -253,10 +253,10 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         writePng(dir / "renders.png", sideBySide(yTarget, yLamps, t.width, t.height,
                                                  exposureScale(yTarget, t.objectMask)));
         std::ostringstream csv;
-        csv << "k,loss,loss_over_target,seconds\n";
+        csv << "k,loss,loss_over_target,seconds,evaluations\n";
         for (const LampFitStep& s : job.fit.steps)
             csv << s.count << ',' << s.loss << ',' << s.loss / job.targetLoss << ',' << s.seconds
-                << '\n';
+                << ',' << s.evaluations << '\n';
         writeTextAtomically(dir / "greedy.csv", csv.str());
 
         json pd;  // the plot's data: E*'s texels and the grid's directions, the lamps
@@ -296,7 +296,8 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
             steps.push_back({{"k", st.count},
                              {"loss", st.loss},
                              {"loss_over_target", st.loss / job.targetLoss},
-                             {"seconds", st.seconds}});
+                             {"seconds", st.seconds},
+                             {"evaluations", st.evaluations}});
         s["greedy"] = steps;
         if (job.judgedTarget) {
             s["judge"] = {{"target", toJson(*job.judgedTarget)},

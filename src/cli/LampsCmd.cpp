@@ -61,10 +61,10 @@ int runLamps(LampsArgs a) {
     }
     for (const std::string& f : a.forbid) j.fit.forbiddenAzimuth.push_back(parseAzimuthRange(f));
     const LampsJobSummary s = runLampsJob(j);
-    std::printf("%3s %14s %10s %9s\n", "K", "loss", "of E*'s", "seconds");
+    std::printf("%3s %14s %10s %9s %6s\n", "K", "loss", "of E*'s", "seconds", "evals");
     for (const LampFitStep& st : s.fit.steps)
-        std::printf("%3d %14.6g %10.4f %9.3f\n", st.count, st.loss, st.loss / s.targetLoss,
-                    st.seconds);
+        std::printf("%3d %14.6g %10.4f %9.3f %6d\n", st.count, st.loss, st.loss / s.targetLoss,
+                    st.seconds, st.evaluations);
     std::printf("E*'s loss %.6g (lower is better)\n", s.targetLoss);
     for (const Lamp& l : s.fit.steps.back().lamps) {
         if (l.radiance <= 0) continue;
