@@ -218,8 +218,7 @@ std::vector<Lamp> candidates(const LampRasterizer& raster, std::span<const doubl
 
 }  // namespace
 
-LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target,
-                       const LampFitOptions& o) {
+void checkLampFitOptions(const LampFitOptions& o) {
     if (o.count < 1 || o.count > 8)
         throw inputError(option("count"), "must be between 1 and 8, not " + std::to_string(o.count),
                          "use e.g. 3");
@@ -230,6 +229,11 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
         throw inputError(option("min-elevation"),
                          "the elevation range must be a non-empty part of [-90, 90] degrees",
                          "use e.g. 0 and 90");
+}
+
+LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target,
+                       const LampFitOptions& o) {
+    checkLampFitOptions(o);
     const Stopwatch clock;
     const EnvMapBasis basis(50, 25);
     if (loss.dimension() != static_cast<size_t>(basis.texelCount()) ||

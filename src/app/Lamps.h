@@ -83,6 +83,10 @@ class LampProblem {
     LampFitOptions options_;
 };
 
+/// InputError naming the option when the options are out of range (count 1..8, a kind, an
+/// elevation range within [−90°, 90°]).
+void checkLampFitOptions(const LampFitOptions& options);
+
 /// Fits lamps k = 1..options.count to the objective `loss` starting from E* (`target`, one value
 /// per texel of the rasterizer's basis). Throws InputError for bad options.
 LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target,

@@ -22,6 +22,7 @@
 #include "io/AtomicFile.h"
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
+#include "io/LampsFile.h"
 #include "io/SceneFile.h"
 #include "io/StagedDirectory.h"
 #include "io/TransportFile.h"
@@ -46,51 +47,6 @@ void writeEnvMapWithPreview(const std::filesystem::path& exr, const EnvMap& m) {
     auto png = exr;
     png.replace_extension(".png");
     writePng(png, envMapPreview(m, 8));
-}
-
-double wrapDegrees(double deg) {
-    double d = std::fmod(deg, 360.0);
-    if (d < 0) d += 360.0;
-    return d + 0.0;
-}
-
-json lampJson(const Lamp& l, double brightest, double distance) {
-    json j;
-    j["kind"] = lampKindName(l.kind);
-    if (l.kind != LampKind::Ring) j["azimuth_deg"] = wrapDegrees(l.azimuth * kDeg);
-    j["elevation_deg"] = l.elevation * kDeg;
-    j["radiance_relative"] = brightest > 0 ? l.radiance / brightest : 0.0;
-    j["radiance"] = l.radiance;
-    j["solid_angle_sr"] = lampSharpSolidAngle(l);
-    json at;
-    at["distance_mm"] = distance;
-    switch (l.kind) {
-        case LampKind::Disk:
-            j["angular_radius_deg"] = l.size * kDeg;
-            at["diameter_mm"] = 2 * distance * std::tan(std::min(l.size, 1.5));
-            break;
-        case LampKind::Bar:
-            j["angular_length_deg"] = 2 * l.size * kDeg;
-            j["angular_width_deg"] = 2 * l.width * kDeg;
-            j["roll_deg"] = l.roll * kDeg;
-            at["length_mm"] = 2 * distance * std::tan(l.size);
-            at["width_mm"] = 2 * distance * std::tan(l.width);
-            break;
-        case LampKind::Ring:
-            j["elevation_band_deg"] = {(l.elevation - l.size) * kDeg,
-                                       (l.elevation + l.size) * kDeg};
-            at["ring_radius_mm"] = distance * std::cos(l.elevation);
-            at["ring_height_above_part_mm"] = distance * std::sin(l.elevation);
-            at["band_height_mm"] = distance * (std::sin(std::min(l.elevation + l.size, kPi / 2)) -
-                                               std::sin(std::max(l.elevation - l.size, -kPi / 2)));
-            break;
-    }
-    if (l.kind != LampKind::Ring) {
-        const Vec3d p = lampDirection(l.azimuth, l.elevation) * distance;
-        at["position_mm"] = {p.x, p.y, p.z};
-    }
-    j["mount"] = at;
-    return j;
 }
 
 /// The two renders side by side (left, right) with a 4-pixel gap, one exposure.
@@ -153,6 +109,12 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
                              "use paper or unbiased (or fit the lamps to an E* optimized for "
                              "the defects with " +
                                  option("from") + ")");
+        checkLampFitOptions(o.fit);  // before any work
+        std::vector<double> target;
+        if (!o.from.empty()) {
+            const EnvMap m = lightFromSpec(o.from, 50, 25, 1, option("from"));
+            target.assign(m.texels.begin(), m.texels.end());
+        }
         const std::filesystem::path cacheDir = cacheDirectory(o.cache);
         if (tmInput) {
             job.transport.file = readTransportFile(o.input);
@@ -194,11 +156,7 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         const ObjectiveOnT objective = objectiveOnT(kind, t, in, o.objective);
 
         // E*.
-        std::vector<double> target;
-        if (!o.from.empty()) {
-            const EnvMap m = lightFromSpec(o.from, t.envWidth, t.envHeight, 1, option("from"));
-            target.assign(m.texels.begin(), m.texels.end());
-        } else {
+        if (o.from.empty()) {
             const Stopwatch clock;
             SearchOptions so;
             so.objective = kind;
@@ -230,16 +188,7 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         }
 
         // Outputs.
-        double brightest = 0;
-        for (const Lamp& l : lamps) brightest = std::max(brightest, l.radiance);
-        json lj;
-        lj["distance_mm"] = o.distanceMm;
-        lj["frame"] =
-            "part frame: +Y up; azimuth 0 deg toward -z, 90 deg toward +x; elevation 90 deg = +Y "
-            "(scene/Lamp.h)";
-        lj["lamps"] = json::array();
-        for (const Lamp& l : lamps)
-            if (l.radiance > 0) lj["lamps"].push_back(lampJson(l, brightest, o.distanceMm));
+        const json lj = lampsToJson(lamps, o.distanceMm);
         writeTextAtomically(dir / "lamps.json", lj.dump(2) + "\n");
         writeEnvMapWithPreview(dir / "lamps-envmap.exr",
                                toEnvMap(job.fit.envMap, t.envWidth, t.envHeight));
