@@ -17,7 +17,9 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kDeg = kPi / 180;
 constexpr double kForbidWeight = 1e3;  // penalty per rad² of a centre inside a forbidden range
-constexpr double kOverWeight = 1e3;    // penalty per sr of (E_t − 1)² above E's box
+constexpr double kPeakSeparation = 20 * kDeg;  // between the residual peaks tried
+constexpr double kMomentRadius = 30 * kDeg;    // the residual's moments around a peak
+constexpr double kOverWeight = 1e3;            // penalty per sr of (E_t − 1)² above E's box
 
 /// How deep azimuth φ lies inside [from, to] (wrapping), 0 outside.
 double forbiddenDepth(double phi, std::pair<double, double> range) {
@@ -171,24 +173,35 @@ std::vector<Lamp> candidates(const LampRasterizer& raster, std::span<const doubl
             if (forbiddenDepth(az, r) > 0) return false;
         return true;
     };
-    std::vector<std::array<int, 2>> places;
-    double bestR = -1, bestG = std::numeric_limits<double>::infinity();
-    std::array<int, 2> pr{-1, -1}, pg{-1, -1};
+    // The residual's peaks: the brightest allowed texels at least kPeakSeparation apart (up to
+    // o.residualPeaks, each above a tenth of the brightest), then the most negative dLoss/dE.
+    std::vector<std::array<int, 2>> order;
     for (int j = 0; j < H; ++j)
-        for (int i = 0; i < W; ++i) {
-            if (!allowed(j, i)) continue;
-            const size_t t = static_cast<size_t>(j * W + i);
-            if (residual[t] > bestR) {
-                bestR = residual[t];
-                pr = {j, i};
-            }
-            if (!dLdE.empty() && dLdE[t] < bestG) {
-                bestG = dLdE[t];
-                pg = {j, i};
-            }
-        }
-    if (pr[0] >= 0) places.push_back(pr);
-    if (pg[0] >= 0 && pg != pr) places.push_back(pg);
+        for (int i = 0; i < W; ++i)
+            if (allowed(j, i)) order.push_back({j, i});
+    auto at = [&](std::span<const double> v, const std::array<int, 2>& p) {
+        return v[static_cast<size_t>(p[0] * W + p[1])];
+    };
+    std::stable_sort(order.begin(), order.end(), [&](const auto& p, const auto& q) {
+        return at(residual, p) > at(residual, q);
+    });
+    std::vector<std::array<int, 2>> places;
+    const double top = order.empty() ? 0.0 : at(residual, order.front());
+    for (const auto& p : order) {
+        if (static_cast<int>(places.size()) >= o.residualPeaks || at(residual, p) <= 0.1 * top)
+            break;
+        bool apart = true;
+        for (const auto& q : places)
+            apart &= dot(b.texelDirection(p[0], p[1]), b.texelDirection(q[0], q[1])) <
+                     std::cos(kPeakSeparation);
+        if (apart) places.push_back(p);
+    }
+    if (!dLdE.empty() && !order.empty()) {
+        const auto g = *std::min_element(
+            order.begin(), order.end(),
+            [&](const auto& a, const auto& c) { return at(dLdE, a) < at(dLdE, c); });
+        if (std::find(places.begin(), places.end(), g) == places.end()) places.push_back(g);
+    }
     if (places.empty()) {  // nothing allowed by the texel centres: the middle of the band
         places.push_back(
             {std::clamp(static_cast<int>(std::lround(
@@ -196,20 +209,80 @@ std::vector<Lamp> candidates(const LampRasterizer& raster, std::span<const doubl
                         0, H - 1),
              0});
     }
+    // At each place a fixed shape (disk 8°, bar 15°×3°, ring ±5°), and at the first place also
+    // the shape of the residual's moments within kMomentRadius of it, in the tangent plane
+    // (e_φ, e_ε): the centre at the mean, a disk of the same second moment (R² = 2·tr Σ), a bar
+    // along the principal axis (a² = 3λ₁, b² = 3λ₂, uniform rectangle), a ring of the same
+    // elevation spread. Neither start is better on every part (measured on three).
+    const std::vector<double>& omega = raster.texelSolidAngles();
     std::vector<Lamp> out;
     for (const auto& pl : places) {
         const double level = std::clamp(residual[static_cast<size_t>(pl[0] * W + pl[1])], 0.2, 1.0);
-        for (LampKind kind : o.kinds) {
+        const double az0 = 2 * kPi * (pl[1] + 0.5) / W, el0 = elevationOf(pl[0]);
+        const auto f = lamp_detail::frame<double>(az0, el0, 0.0);
+        const Vec3d c{f.c[0], f.c[1], f.c[2]}, ex{f.e1[0], f.e1[1], f.e1[2]},
+            ey{f.e2[0], f.e2[1], f.e2[2]};
+        double m = 0, mx = 0, my = 0, mxx = 0, myy = 0, mxy = 0;
+        for (int j = 0; j < H; ++j)
+            for (int i = 0; i < W; ++i) {
+                const Vec3d d = b.texelDirection(j, i);
+                if (dot(d, c) < std::cos(kMomentRadius)) continue;
+                const size_t t = static_cast<size_t>(j * W + i);
+                const double w = residual[t] * omega[t];
+                const double x = dot(d, ex), y = dot(d, ey);
+                m += w;
+                mx += w * x;
+                my += w * y;
+                mxx += w * x * x;
+                myy += w * y * y;
+                mxy += w * x * y;
+            }
+        double az = az0, el = el0, sxx = 0, syy = 0, sxy = 0;
+        if (m > 0) {
+            mx /= m;
+            my /= m;
+            sxx = std::max(mxx / m - mx * mx, 0.0);
+            syy = std::max(myy / m - my * my, 0.0);
+            sxy = mxy / m - mx * my;
+            const Vec3d d = c + ex * mx + ey * my;
+            az = std::atan2(d.x, -d.z);
+            el = std::asin(std::clamp(d.y / std::sqrt(dot(d, d)), -1.0, 1.0));
+        }
+        const double tr = sxx + syy, det = sxx * syy - sxy * sxy;
+        const double l1 = 0.5 * tr + std::sqrt(std::max(0.25 * tr * tr - det, 0.0)),
+                     l2 = std::max(tr - l1, 0.0);
+        for (LampKind kind : o.kinds) {  // a fixed shape at the texel
             Lamp l;
             l.kind = kind;
             l.radiance = level;
-            l.azimuth = kind == LampKind::Ring ? 0.0 : 2 * kPi * (pl[1] + 0.5) / W;
-            l.elevation = std::clamp(elevationOf(pl[0]), o.minElevation, o.maxElevation);
+            l.azimuth = kind == LampKind::Ring ? 0.0 : az0;
+            l.elevation = std::clamp(el0, o.minElevation, o.maxElevation);
             l.size = kind == LampKind::Disk  ? 8 * kDeg
                      : kind == LampKind::Bar ? 15 * kDeg
                                              : 5 * kDeg;
             l.width = kind == LampKind::Bar ? 3 * kDeg : 2 * kDeg;
-            l.roll = 0;
+            out.push_back(l);
+        }
+        if (&pl != &places.front()) continue;
+        for (LampKind kind : o.kinds) {  // the moments' shape, at the first peak only
+            Lamp l;
+            l.kind = kind;
+            l.radiance = level;
+            l.azimuth = kind == LampKind::Ring ? 0.0 : az;
+            l.elevation = std::clamp(el, o.minElevation, o.maxElevation);
+            switch (kind) {
+                case LampKind::Disk:
+                    l.size = std::clamp(std::sqrt(2 * tr), 5 * kDeg, 40 * kDeg);
+                    break;
+                case LampKind::Bar:
+                    l.size = std::clamp(std::sqrt(3 * l1), 6 * kDeg, 50 * kDeg);
+                    l.width = std::clamp(std::sqrt(3 * l2), 3 * kDeg, 15 * kDeg);
+                    l.roll = 0.5 * std::atan2(2 * sxy, sxx - syy);  // principal axis from e_φ
+                    break;
+                case LampKind::Ring:
+                    l.size = std::clamp(std::sqrt(3 * syy), 3 * kDeg, 30 * kDeg);
+                    break;
+            }
             out.push_back(l);
         }
     }

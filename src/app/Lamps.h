@@ -14,8 +14,9 @@
 // lamp there loses any gain), not a hole in the box.
 //
 // Greedy K: lamps are added one at a time. The k-th lamp starts, for each allowed kind, at the
-// brightest direction of the residual max(E* − E_lamps, 0) (E* the optimized env map) and at
-// the direction where dLoss/dE is most negative (where light helps most); each candidate is
+// brightest directions of the residual max(E* − E_lamps, 0) (E* the optimized env map; up to
+// residualPeaks peaks at least 20° apart) and at the direction where dLoss/dE is most negative
+// (where light helps most); each candidate is
 // optimized jointly with the k−1 lamps before it and the lowest loss is kept. The loss after
 // every k is reported, so the user sees what each extra lamp buys.
 #pragma once
@@ -41,6 +42,7 @@ struct LampFitOptions {
     /// L-BFGS with the box; iterations per candidate and for the final polish.
     OptimizerMethod method = OptimizerMethod::Lbfgs;
     int candidateIterations = 25, finalIterations = 200;
+    int residualPeaks = 3;            // residual peaks (at least 20° apart) a new lamp is tried at
     double relativeTolerance = 1e-6;  // stop when the loss changes by less than this fraction
     LampRasterOptions raster;
 };
