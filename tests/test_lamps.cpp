@@ -6,6 +6,7 @@
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -152,6 +153,26 @@ TEST(LampRaster, TurningByOneTexelShiftsOneColumn) {
             for (int i = 0; i < W; ++i)
                 ASSERT_NEAR(b[static_cast<size_t>(j * W + (i + 1) % W)],
                             a[static_cast<size_t>(j * W + i)], 1e-12);
+    }
+}
+
+TEST(LampRaster, ASmallDiskLightsTheTexelOfItsDirection) {
+    // The lamp's direction convention is EnvMapBasis's: a disk centred on the direction of texel
+    // (row, col) is brightest there, and EnvMapBasis::weights of its centre name that texel.
+    const EnvMapBasis basis(50, 25);
+    LampRasterizer r(basis);
+    for (const auto& rc : {std::array<int, 2>{3, 0}, {8, 10}, {12, 49}, {20, 33}}) {
+        const Vec3d d = basis.texelDirection(rc[0], rc[1]);
+        Lamp l;
+        l.azimuth = std::atan2(d.x, -d.z);
+        l.elevation = std::asin(d.y);
+        l.size = 4 * kDeg;
+        const auto E = r.rasterize(std::span<const Lamp>(&l, 1));
+        const auto best = std::max_element(E.begin(), E.end()) - E.begin();
+        EXPECT_EQ(best, rc[0] * basis.width() + rc[1]) << rc[0] << "," << rc[1];
+        const TexelWeights w = basis.weights(Vec3f(d));
+        const auto k = std::max_element(w.weight.begin(), w.weight.end()) - w.weight.begin();
+        EXPECT_EQ(static_cast<long>(w.index[static_cast<size_t>(k)]), best);
     }
 }
 

@@ -68,10 +68,25 @@ int runLamps(LampsArgs a) {
     std::printf("E*'s loss %.6g (lower is better)\n", s.targetLoss);
     for (const Lamp& l : s.fit.steps.back().lamps) {
         if (l.radiance <= 0) continue;
-        std::printf(
-            "  %-4s azimuth %6.1f deg, elevation %5.1f deg, size %5.1f deg, radiance %.3f\n",
-            lampKindName(l.kind), std::fmod(l.azimuth / kRad + 720.0, 360.0), l.elevation / kRad,
-            l.size / kRad, l.radiance);
+        switch (l.kind) {
+            case LampKind::Disk:
+                std::printf("  disk azimuth %6.1f deg, elevation %5.1f deg, radius %5.1f deg",
+                            std::fmod(l.azimuth / kRad + 720.0, 360.0), l.elevation / kRad,
+                            l.size / kRad);
+                break;
+            case LampKind::Bar:
+                std::printf(
+                    "  bar  azimuth %6.1f deg, elevation %5.1f deg, %5.1f x %4.1f deg, roll "
+                    "%6.1f deg",
+                    std::fmod(l.azimuth / kRad + 720.0, 360.0), l.elevation / kRad,
+                    2 * l.size / kRad, 2 * l.width / kRad, l.roll / kRad);
+                break;
+            case LampKind::Ring:
+                std::printf("  ring elevations %5.1f to %5.1f deg", (l.elevation - l.size) / kRad,
+                            (l.elevation + l.size) / kRad);
+                break;
+        }
+        std::printf(", radiance %.3f\n", l.radiance);
     }
     if (s.judgedTarget) {
         std::printf("judge (U, lower is better): E* %.5g, lamps %.5g, studio %.5g\n",
