@@ -11,7 +11,11 @@
 // full-radiance core). A parameter a kind does not use has an
 // empty range (it stays put). Forbidden azimuth ranges (camera, fixtures) are a penalty on the
 // lamp's centre inside a range (a smooth quadratic in the depth of the intrusion, weighted so a
-// lamp there loses any gain), not a hole in the box.
+// lamp there loses any gain), not a hole in the box. Only the centre is kept out: a disk's or
+// bar's edge may reach into a range, and a ring (all azimuths) is not refused: drop `ring` from
+// the kinds when a range matters. Overlapping lamps must keep E within E*'s box [0, 1]: the
+// excess above 1 is a penalty 1e3·Σ_t Ω_t (E_t − 1)², so lamps get the light budget E* had
+// (without it the fit stacks lamps into one brighter than any texel of E* may be).
 //
 // Greedy K: lamps are added one at a time. The k-th lamp starts, for each allowed kind, at the
 // brightest directions of the residual max(E* − E_lamps, 0) (E* the optimized env map; up to
