@@ -1,6 +1,6 @@
 // scratchlight gradcheck SCENE.json [--methods exact,autodiff,fd,spsa] [-o REPORT.json]
 // scratchlight bench gradients [SCENE.json] [-o DIR]
-// scratchlight export-mitsuba SCENE.json [--envmap SPEC] [-o OUTDIR]
+// scratchlight export-mitsuba SCENE.json [--envmap SPEC | --lamps lamps.json] [-o OUTDIR]
 #include "cli/GradientCmds.h"
 
 #include <cstdio>
@@ -13,6 +13,7 @@
 #include "core/Error.h"
 #include "io/AtomicFile.h"
 #include "io/EnvMapIO.h"
+#include "io/LampsFile.h"
 #include "io/MitsubaExport.h"
 #include "io/SceneFile.h"
 #include "scene/Scene.h"
@@ -113,14 +114,20 @@ int runBenchGradientsCmd(BenchArgs a) {
 }
 
 struct ExportArgs {
-    std::string scene, outDir = "mitsuba", envmap;
+    std::string scene, outDir = "mitsuba", envmap, lamps;
     std::vector<std::string> overrides;
 };
 
 int runExportCmd(const ExportArgs& a) {
     auto scene = loadScene(std::filesystem::path(a.scene), a.overrides);
     EnvMap env = chooseEnvMap(*scene, a.envmap);
+    LampsFile lamps;
+    if (!a.lamps.empty()) {  // the lamps are the only light (io/LampsFile.h)
+        lamps = readLampsFile(a.lamps);
+        std::fill(env.texels.begin(), env.texels.end(), 0.0f);
+    }
     const MitsubaExport e = exportMitsuba(*scene, env, a.outDir);
+    if (!a.lamps.empty()) addLampsToMitsubaScene(e.xml, lamps);
     std::printf("wrote %s, %s and %s\nrender with Mitsuba 3: mitsuba -m scalar_rgb %s\n",
                 e.xml.string().c_str(), e.ply.string().c_str(), e.envmap.string().c_str(),
                 e.xml.string().c_str());
@@ -169,7 +176,10 @@ void registerGradients(CLI::App& app, std::function<int()>& run) {
         c->add_option("scene", a->scene, "Scene file (JSON)")->required();
         c->add_option("--envmap", a->envmap,
                       "The light: " + lightSpecForms() +
-                          " (default: the scene's envmap section, else studio)");
+                          " (default: the scene's envmap section, else studio)")
+            ->excludes(c->add_option("--lamps", a->lamps,
+                                     "lamps.json of `scratchlight lamps`: the lamps as area "
+                                     "emitters, the only light"));
         addSceneOverrides(c, a->overrides, true);
         c->add_option("-o,--output", a->outDir, "Output directory")->capture_default_str();
         c->callback([a, &run] { run = [a] { return runExportCmd(*a); }; });

@@ -1,0 +1,304 @@
+#include "app/LampsJob.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <sstream>
+
+#include "app/InitialState.h"
+#include "app/LossMask.h"
+#include "app/OptimizeJob.h"
+#include "app/Plot.h"
+#include "app/Preview.h"
+#include "app/Search.h"
+#include "app/Version.h"
+#include "core/Error.h"
+#include "core/Stopwatch.h"
+#include "core/Text.h"
+#include "io/AtomicFile.h"
+#include "io/EnvMapIO.h"
+#include "io/ImageIO.h"
+#include "io/LampsFile.h"
+#include "io/SceneFile.h"
+#include "io/StagedDirectory.h"
+#include "io/TransportFile.h"
+#include "scene/Scene.h"
+
+namespace sl {
+
+namespace {
+
+using json = nlohmann::ordered_json;
+constexpr double kPi = std::numbers::pi;
+constexpr double kDeg = 180 / kPi;
+
+EnvMap toEnvMap(std::span<const double> e, int w, int h) {
+    EnvMap m = EnvMap::constant(w, h, 0.0f, 1);
+    for (size_t i = 0; i < e.size(); ++i) m.texels[i] = static_cast<float>(e[i]);
+    return m;
+}
+
+void writeEnvMapWithPreview(const std::filesystem::path& exr, const EnvMap& m) {
+    writeEnvMap(exr, m);
+    auto png = exr;
+    png.replace_extension(".png");
+    writePng(png, envMapPreview(m, 8));
+}
+
+/// The two renders side by side (left, right) with a 4-pixel gap, one exposure.
+Image sideBySide(const std::vector<double>& left, const std::vector<double>& right, int w, int h,
+                 double exposure) {
+    const int gap = 4;
+    Image img(2 * w + gap, h, 1);
+    std::fill(img.data.begin(), img.data.end(), 0.0f);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const size_t s = static_cast<size_t>(y) * w + x;
+            img.data[static_cast<size_t>(y) * (2 * w + gap) + x] =
+                static_cast<float>(left[s] * exposure);
+            img.data[static_cast<size_t>(y) * (2 * w + gap) + w + gap + x] =
+                static_cast<float>(right[s] * exposure);
+        }
+    return img;
+}
+
+std::string fileDataUri(const std::filesystem::path& png) {
+    std::ifstream in(png, std::ios::binary);
+    if (!in) return {};
+    std::stringstream s;
+    s << in.rdbuf();
+    const std::string bytes = s.str();
+    static const char* b64 = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out = "data:image/png;base64,";
+    size_t i = 0;
+    for (; i + 2 < bytes.size(); i += 3) {
+        const unsigned v = (static_cast<unsigned char>(bytes[i]) << 16) |
+                           (static_cast<unsigned char>(bytes[i + 1]) << 8) |
+                           static_cast<unsigned char>(bytes[i + 2]);
+        for (int k = 3; k >= 0; --k) out += b64[(v >> (6 * k)) & 63];
+    }
+    if (i < bytes.size()) {
+        unsigned v = static_cast<unsigned char>(bytes[i]) << 16;
+        if (i + 1 < bytes.size()) v |= static_cast<unsigned char>(bytes[i + 1]) << 8;
+        out += b64[(v >> 18) & 63];
+        out += b64[(v >> 12) & 63];
+        out += i + 1 < bytes.size() ? b64[(v >> 6) & 63] : '=';
+        out += '=';
+    }
+    return out;
+}
+
+}  // namespace
+
+LampsJobSummary runLampsJob(const LampsJobOptions& o) {
+    StagedDirectory out(o.outDir);
+    const std::filesystem::path dir = out.path();
+    LampsJobSummary job;
+    try {
+        const bool tmInput = isTransportFile(o.input);
+        std::unique_ptr<Scene> scene;
+        ObjectiveKind kind = o.objectiveKind
+                                 ? *o.objectiveKind
+                                 : (tmInput ? ObjectiveKind::Paper : ObjectiveKind::Unbiased);
+        if (kind == ObjectiveKind::Defects)
+            throw inputError(option("objective"), "defects is not available for lamps yet",
+                             "use paper or unbiased (or fit the lamps to an E* optimized for "
+                             "the defects with " +
+                                 option("from") + ")");
+        checkLampFitOptions(o.fit);  // before any work
+        std::vector<double> target;
+        if (!o.from.empty()) {
+            const EnvMap m = lightFromSpec(o.from, 50, 25, 1, option("from"));
+            target.assign(m.texels.begin(), m.texels.end());
+        }
+        const std::filesystem::path cacheDir = cacheDirectory(o.cache);
+        if (tmInput) {
+            job.transport.file = readTransportFile(o.input);
+            job.transport.path = o.input;
+            if (!o.objectiveKind && job.transport.file.matrix.planes == 2)
+                kind = ObjectiveKind::Unbiased;
+        } else {
+            scene = loadScene(o.input, o.sceneOverrides);
+            PrecomputeOptions pre = o.precompute;
+            pre.rgb = false;
+            if (kind == ObjectiveKind::Unbiased) pre.sampleSets = 2;
+            job.transport = transportForScene(*scene, pre, cacheDir);
+        }
+        const TransportMatrix& t = job.transport.file.matrix;
+        spdlog::info("{}", describeTransport(job.transport));
+        if (t.channels != 1 || t.envWidth != 50 || t.envHeight != 25)
+            throw inputError(o.input.string(),
+                             "is not a gray transport matrix on the 50x25 env-map grid",
+                             "precompute it without " + option("rgb") + " on the default grid");
+        if (kind == ObjectiveKind::Unbiased && t.planes != 2)
+            throw inputError(o.input.string(),
+                             "has no half-sample matrices; the unbiased objective needs them",
+                             "precompute it with " + option("halves") + ", or pass the scene file");
+        if (!scene && (o.judge || o.from.empty())) {
+            try {
+                scene = sceneOfTransport(job.transport.file, "the judge and the specular start");
+            } catch (const InputError& e) {
+                spdlog::warn("{}: no judge scores, E* from const:0.5", e.what());
+            }
+        }
+
+        // The objective on T.
+        SearchInputs in;
+        in.set = {&t};
+        in.mask = lossMask(LossMaskSpec{}, t, scene.get(), ScratchMapOptions{}).pixels;
+        in.objective = o.objective;
+        in.scene = scene.get();
+        in.maxDepth = job.transport.file.provenance.maxDepth;
+        const ObjectiveOnT objective = objectiveOnT(kind, t, in, o.objective);
+
+        // E*.
+        if (o.from.empty()) {
+            const Stopwatch clock;
+            SearchOptions so;
+            so.objective = kind;
+            so.optimizer.method = OptimizerMethod::Lbfgs;
+            so.optimizer.iterations = methodRow(OptimizerMethod::Lbfgs).defaultBudget;
+            so.starts = {parseInitialState(scene ? "specular" : "const:0.5", option("from"))};
+            target = search(in, so).e;
+            job.secondsTarget = clock.seconds();
+            spdlog::info("E* optimized on T ({}, L-BFGS) in {:.2f} s", objectiveKindName(kind),
+                         job.secondsTarget);
+        }
+
+        // The lamps.
+        job.fit = fitLamps(*objective.loss, target, o.fit);
+        job.targetLoss = job.fit.targetLoss;
+        const std::vector<Lamp>& lamps = job.fit.steps.back().lamps;
+
+        // The judge.
+        std::optional<TransportSource> estimate;
+        if (o.judge && scene) {
+            estimate = judgeEstimateFor(job.transport.file, *scene, 0, cacheDir);
+            JudgeOptions jo;
+            jo.objective = o.objective;
+            Judge judge(*estimate, jo);
+            job.judgedTarget = judge.score(target, "E*");
+            job.judgedLamps = judge.score(job.fit.envMap, "lamps");
+            const EnvMap studio = lightFromSpec("studio", t.envWidth, t.envHeight, 1, "studio");
+            job.judgedStudio = judge.score(judge.envVector(studio), "studio");
+        }
+
+        // Outputs.
+        const json lj = lampsToJson(lamps, o.distanceMm);
+        writeTextAtomically(dir / "lamps.json", lj.dump(2) + "\n");
+        writeEnvMapWithPreview(dir / "lamps-envmap.exr",
+                               toEnvMap(job.fit.envMap, t.envWidth, t.envHeight));
+        writeEnvMapWithPreview(dir / "target-envmap.exr",
+                               toEnvMap(target, t.envWidth, t.envHeight));
+        std::vector<double> yLamps(t.rows()), yTarget(t.rows());
+        t.applyLuminance(job.fit.envMap, yLamps);
+        t.applyLuminance(target, yTarget);
+        writeRender(dir / "render-lamps.exr", yLamps, t.width, t.height, 1);
+        writeRender(dir / "render-target.exr", yTarget, t.width, t.height, 1);
+        writePng(dir / "renders.png", sideBySide(yTarget, yLamps, t.width, t.height,
+                                                 exposureScale(yTarget, t.objectMask)));
+        std::ostringstream csv;
+        csv << "k,loss,loss_over_target,seconds,evaluations\n";
+        for (const LampFitStep& s : job.fit.steps)
+            csv << s.count << ',' << s.loss << ',' << s.loss / job.targetLoss << ',' << s.seconds
+                << ',' << s.evaluations << '\n';
+        writeTextAtomically(dir / "greedy.csv", csv.str());
+
+        json pd;  // the plot's data: E*'s texels and the grid's directions, the lamps
+        pd["width"] = t.envWidth;
+        pd["height"] = t.envHeight;
+        pd["target"] = target;
+        pd["lamps_envmap"] = job.fit.envMap;
+        json az = json::array(), el = json::array();
+        for (int i = 0; i < t.envWidth; ++i) az.push_back(360.0 * (i + 0.5) / t.envWidth);
+        for (int j = 0; j < t.envHeight; ++j) el.push_back(90.0 - 180.0 * j / (t.envHeight - 1));
+        pd["column_azimuth_deg"] = az;
+        pd["row_elevation_deg"] = el;
+        pd["lamps"] = lj["lamps"];
+        writeTextAtomically(dir / "plot-lamps.json", pd.dump() + "\n");
+        if (o.figures) {
+            const PlotOutcome plot = runPlotScript("plot_lamps.py", {dir.string()});
+            if (!plot.ran)
+                job.plotMessage = plot.message;
+            else if (plot.exitCode != 0)
+                job.plotMessage =
+                    "scripts/plot_lamps.py exited with " + std::to_string(plot.exitCode);
+        } else {
+            job.plotMessage = "figures off";
+        }
+
+        json s;
+        s["provenance"] = runProvenance(o.commandLine);
+        s["input"] = o.input.string();
+        s["objective"] = objectiveKindName(kind);
+        s["lambda"] = o.objective.lambda;
+        s["from"] = o.from.empty() ? "optimized on T" : o.from;
+        s["seconds_target"] = job.secondsTarget;
+        s["seconds_fit"] = job.fit.seconds;
+        s["target_loss"] = job.targetLoss;
+        json steps = json::array();
+        for (const LampFitStep& st : job.fit.steps)
+            steps.push_back({{"k", st.count},
+                             {"loss", st.loss},
+                             {"loss_over_target", st.loss / job.targetLoss},
+                             {"seconds", st.seconds},
+                             {"evaluations", st.evaluations}});
+        s["greedy"] = steps;
+        if (job.judgedTarget) {
+            s["judge"] = {{"target", toJson(*job.judgedTarget)},
+                          {"lamps", toJson(*job.judgedLamps)},
+                          {"studio", toJson(*job.judgedStudio)}};
+        }
+        s["plot"] = job.plotMessage.empty() ? "plot-lamps.png" : job.plotMessage;
+        writeTextAtomically(dir / "summary.json", s.dump(2) + "\n");
+
+        // report.html: one page, images inline.
+        std::ostringstream h;
+        h << "<!doctype html><html><head><meta charset=\"utf-8\"><title>scratchlight lamps"
+             "</title><style>body{font-family:sans-serif;max-width:1100px;margin:auto}"
+             "img{max-width:100%}td,th{padding:2px 10px;text-align:right}</style></head><body>";
+        h << "<h1>" << lamps.size() << " lamps for " << escapeXml(o.input.filename().string())
+          << "</h1>";
+        const double ratio = job.fit.steps.back().loss / job.targetLoss;
+        h << "<p>Training loss (" << objectiveKindName(kind) << ", lower is better): E* "
+          << formatNumber(job.targetLoss) << ", the lamps "
+          << formatNumber(job.fit.steps.back().loss) << " (" << formatNumber(ratio)
+          << " of E*'s).</p>";
+        if (job.judgedTarget) {
+            h << "<table><tr><th>light</th><th>judge eq. 2</th><th>judge U</th><th>brightness"
+                 "</th></tr>";
+            for (const JudgeScore* js : {&*job.judgedTarget, &*job.judgedLamps, &*job.judgedStudio})
+                h << "<tr><td>" << escapeXml(js->name) << "</td><td>" << formatNumber(js->eq2.total)
+                  << "</td><td>" << formatNumber(js->unbiased.total) << "</td><td>"
+                  << formatNumber(js->brightness) << "</td></tr>";
+            h << "</table>";
+        }
+        h << "<h2>Renders: left under E*, right under the lamps (one exposure)</h2><img src=\""
+          << fileDataUri(dir / "renders.png") << "\" style=\"image-rendering:pixelated;width:"
+          << "100%\">";
+        h << "<h2>The lamps over E* (upper hemisphere)</h2>";
+        if (job.plotMessage.empty())
+            h << "<img src=\"" << fileDataUri(dir / "plot-lamps.png") << "\">";
+        else
+            h << "<p>figure not made: " << escapeXml(job.plotMessage) << "</p>";
+        h << "<h2>What each lamp buys</h2><table><tr><th>K</th><th>loss</th><th>of E*'s</th>"
+             "<th>seconds</th></tr>";
+        for (const LampFitStep& st : job.fit.steps)
+            h << "<tr><td>" << st.count << "</td><td>" << formatNumber(st.loss) << "</td><td>"
+              << formatNumber(st.loss / job.targetLoss) << "</td><td>" << formatNumber(st.seconds)
+              << "</td></tr>";
+        h << "</table><h2>lamps.json</h2><pre>" << escapeXml(lj.dump(2))
+          << "</pre></body></html>\n";
+        writeTextAtomically(dir / "report.html", h.str());
+    } catch (const InputError& e) {
+        throw InputError(out.explain(e.what()));
+    }
+    out.commit();
+    return job;
+}
+
+}  // namespace sl

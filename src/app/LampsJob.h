@@ -1,0 +1,66 @@
+// The `lamps` job: from an optimized env map E* to K physical lamps an inspector can mount,
+// fitted through T (app/Lamps.h), with what each extra lamp buys and the judge's word on them.
+//
+// OUTDIR (replaced as a unit, io/StagedDirectory.h) holds:
+//   lamps.json          per lamp: kind, azimuth/elevation in degrees in the part's frame
+//                       (scene/Lamp.h: azimuth 0° toward −z, 90° toward +x, elevation 90° = +Y),
+//                       angular size, radiance relative to the brightest lamp and absolute (E's
+//                       units), and at `distance` mm from the part's centre the position (x, y,
+//                       z in the scene's frame, mm) and physical size (mm) of the source
+//   lamps-envmap.exr/png   the lamps rasterized on the env-map grid (E of the lamps)
+//   target-envmap.exr/png  E* (the env map the lamps imitate)
+//   render-lamps.exr/png, render-target.exr/png   T·E under each; renders.png: the two side by
+//                       side (left E*, right the lamps), one exposure (E*'s)
+//   greedy.csv          k, loss, loss relative to E*'s, seconds, one row per k = 1..K
+//   summary.json        the options, T's facts, the losses, the judge's scores (E*, the lamps,
+//                       the studio lamp) when the judge's estimate is available, the timings
+//   plot-lamps.json, plot-lamps.png   the polar hemisphere plot of the lamps over E*
+//                       (scripts/plot_lamps.py; absent, and said why, without matplotlib)
+//   report.html         the renders side by side, the plot, the table
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "app/Cache.h"
+#include "app/Judge.h"
+#include "app/Lamps.h"
+#include "app/Transport.h"
+#include "objective/Objective.h"
+#include "objective/ObjectiveKind.h"
+
+namespace sl {
+
+struct LampsJobOptions {
+    std::filesystem::path input;              // scene (.json) or transport matrix (.tm)
+    std::vector<std::string> sceneOverrides;  // -D key=value (io/SceneFile.h)
+    std::filesystem::path outDir = "out/lamps";
+    /// E*: a light spec (io/EnvMapIO.h lightFromSpec); empty: optimized here on T with
+    /// optimize's method (L-BFGS) from the specular start (const:0.5 without a scene).
+    std::string from;
+    /// unset: unbiased (needs T's halves), paper for a .tm without halves. defects is refused.
+    std::optional<ObjectiveKind> objectiveKind;
+    ObjectiveOptions objective;  // λ 30 by default (optimize's)
+    LampFitOptions fit;
+    double distanceMm = 500;  // where the lamps are mounted, from the part's centre
+    bool judge = true;        // score E*, the lamps and the studio lamp on the judge's estimate
+    bool figures = true;      // scripts/plot_lamps.py
+    std::string commandLine;
+    PrecomputeOptions precompute;
+    CacheLocation cache;
+};
+
+struct LampsJobSummary {
+    TransportSource transport;
+    LampFitResult fit;
+    double targetLoss = 0;
+    double secondsTarget = 0;  // optimizing E* (0 with `from`)
+    std::optional<JudgeScore> judgedTarget, judgedLamps, judgedStudio;
+    std::string plotMessage;  // why the plot is missing ("" when made)
+};
+
+LampsJobSummary runLampsJob(const LampsJobOptions& options);
+
+}  // namespace sl

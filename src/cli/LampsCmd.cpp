@@ -1,0 +1,157 @@
+// scratchlight lamps (SCENE.json | part.tm) [--count K] [--kinds disk,bar,ring] [--from E.exr]
+//                    [--objective paper|unbiased] [--distance MM] [--min-elevation DEG]
+//                    [--max-elevation DEG] [--forbid-azimuth A:B ...] [-o OUTDIR]
+// Fits K physical lamps to the objective through T (app/LampsJob.h) and prints what each extra
+// lamp buys.
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <numbers>
+
+#include "app/LampsJob.h"
+#include "cli/Commands.h"
+#include "cli/Common.h"
+#include "core/Text.h"
+#include "io/EnvMapIO.h"
+#include "scene/Lamp.h"
+
+namespace sl::cli {
+
+namespace {
+
+constexpr double kRad = std::numbers::pi / 180;
+
+struct LampsArgs {
+    LampsJobOptions job;
+    std::string input, out = "out/lamps";
+    std::vector<std::string> kinds, forbid;
+    double minElevation = 0, maxElevation = 90;
+    bool noJudge = false, noFigures = false;
+};
+
+std::pair<double, double> parseAzimuthRange(const std::string& text) {
+    const size_t colon = text.find(':');
+    try {
+        if (colon == std::string::npos) throw std::invalid_argument("no colon");
+        size_t used = 0;
+        const double a = std::stod(text.substr(0, colon), &used);
+        if (used != colon) throw std::invalid_argument("trailing");
+        const std::string rest = text.substr(colon + 1);
+        const double b = std::stod(rest, &used);
+        if (used != rest.size()) throw std::invalid_argument("trailing");
+        return {a * kRad, b * kRad};
+    } catch (const std::logic_error&) {
+        throw UsageError("--forbid-azimuth " + text +
+                         ": expected FROM:TO in degrees (e.g. 150:210; FROM > TO wraps through 0)");
+    }
+}
+
+int runLamps(LampsArgs a) {
+    LampsJobOptions& j = a.job;
+    j.input = a.input;
+    j.outDir = a.out;
+    j.commandLine = invokedCommandLine();
+    j.judge = !a.noJudge;
+    j.figures = !a.noFigures;
+    j.fit.minElevation = a.minElevation * kRad;
+    j.fit.maxElevation = a.maxElevation * kRad;
+    if (!a.kinds.empty()) {
+        j.fit.kinds.clear();
+        for (const std::string& k : a.kinds) j.fit.kinds.push_back(parseLampKind(k, "--kinds"));
+    }
+    for (const std::string& f : a.forbid) j.fit.forbiddenAzimuth.push_back(parseAzimuthRange(f));
+    const LampsJobSummary s = runLampsJob(j);
+    std::printf("%3s %14s %10s %9s %6s\n", "K", "loss", "of E*'s", "seconds", "evals");
+    for (const LampFitStep& st : s.fit.steps)
+        std::printf("%3d %14.6g %10.4f %9.3f %6d\n", st.count, st.loss, st.loss / s.targetLoss,
+                    st.seconds, st.evaluations);
+    std::printf("E*'s loss %.6g (lower is better)\n", s.targetLoss);
+    for (const Lamp& l : s.fit.steps.back().lamps) {
+        if (l.radiance <= 0) continue;
+        switch (l.kind) {
+            case LampKind::Disk:
+                std::printf("  disk azimuth %6.1f deg, elevation %5.1f deg, radius %5.1f deg",
+                            std::fmod(l.azimuth / kRad + 720.0, 360.0), l.elevation / kRad,
+                            l.size / kRad);
+                break;
+            case LampKind::Bar:
+                std::printf(
+                    "  bar  azimuth %6.1f deg, elevation %5.1f deg, %5.1f x %4.1f deg, roll "
+                    "%6.1f deg",
+                    std::fmod(l.azimuth / kRad + 720.0, 360.0), l.elevation / kRad,
+                    2 * l.size / kRad, 2 * l.width / kRad, l.roll / kRad);
+                break;
+            case LampKind::Ring:
+                std::printf("  ring elevations %5.1f to %5.1f deg", (l.elevation - l.size) / kRad,
+                            (l.elevation + l.size) / kRad);
+                break;
+        }
+        std::printf(", radiance %.3f\n", l.radiance);
+    }
+    if (s.judgedTarget) {
+        std::printf("judge (U, lower is better): E* %.5g, lamps %.5g, studio %.5g\n",
+                    s.judgedTarget->unbiased.total, s.judgedLamps->unbiased.total,
+                    s.judgedStudio->unbiased.total);
+        const double gap = s.judgedLamps->unbiased.total / s.judgedTarget->unbiased.total - 1;
+        std::printf(
+            "the lamps are %s E* by the judge (%+.1f %%)\n",
+            std::abs(gap) <= 0.05 ? "within 5 % of" : (gap > 0 ? "worse than" : "better than"),
+            100 * gap);
+    }
+    if (!s.plotMessage.empty()) std::printf("no plot: %s\n", s.plotMessage.c_str());
+    std::printf("wrote %s/ (open %s/report.html)\n", a.out.c_str(), a.out.c_str());
+    return kOk;
+}
+
+}  // namespace
+
+void registerLamps(CLI::App& app, std::function<int()>& run) {
+    auto a = std::make_shared<LampsArgs>();
+    LampsJobOptions& j = a->job;
+    CLI::App* c = app.add_subcommand(
+        "lamps", "Fit K physical lamps (disks, bars, rings) to the objective through T");
+    c->add_option("input", a->input, "Scene file (.json, T is traced and cached) or .tm")
+        ->required();
+    c->add_option("--count", j.fit.count, "Lamps at most (greedy: the score for K = 1..count)")
+        ->check(CLI::Range(1, 8))
+        ->capture_default_str();
+    std::string kindsHelp = "Lamp kinds allowed (comma-separated; default all):";
+    for (const LampKindRow& r : lampKindTable())
+        kindsHelp += std::string("\n    ") + r.name + ": " + r.help;
+    std::vector<std::string> kindNames;
+    for (const LampKindRow& r : lampKindTable()) kindNames.emplace_back(r.name);
+    c->add_option("--kinds", a->kinds, kindsHelp)->delimiter(',')->check(CLI::IsMember(kindNames));
+    c->add_option("--from", j.from,
+                  "E*, the env map the lamps start from: " + lightSpecForms() +
+                      " (default: optimized here on T)");
+    addChoice(c, "--objective", j.objectiveKind, objectiveKindTable(),
+              "Objective (default: unbiased; paper for a .tm without halves; defects: not yet)");
+    c->add_option("--lambda", j.objective.lambda, "Regulariser weight")->capture_default_str();
+    c->add_option("--distance", j.distanceMm, "Mounting distance from the part's centre, mm")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    c->add_option("--min-elevation", a->minElevation, "Lowest lamp centre, degrees")
+        ->check(CLI::Range(-90.0, 90.0))
+        ->capture_default_str();
+    c->add_option("--max-elevation", a->maxElevation, "Highest lamp centre, degrees")
+        ->check(CLI::Range(-90.0, 90.0))
+        ->capture_default_str();
+    c->add_option("--forbid-azimuth", a->forbid,
+                  "Azimuth range FROM:TO (degrees) no lamp centre may sit in (camera, fixtures); "
+                  "repeatable")
+        ->take_all();
+    c->add_flag("--no-judge", a->noJudge, "Do not score on the judge's estimate");
+    c->add_flag("--no-figures", a->noFigures, "Do not run scripts/plot_lamps.py");
+    addSceneOverrides(c, j.sceneOverrides, true);
+    c->add_option("--spp", j.precompute.spp, "Samples per pixel (overrides render.spp)")
+        ->check(CLI::Range(1, 1 << 20));
+    c->add_option("--max-depth", j.precompute.maxDepth,
+                  "Mitsuba max_depth (overrides render.max_depth)")
+        ->check(CLI::Range(1, 64));
+    c->add_option("--seed", j.precompute.seed, "Random seed (overrides render.seed)");
+    addCacheOptions(c, j.cache);
+    c->add_option("-o,--output", a->out, "Output directory")->capture_default_str();
+    c->callback([a, &run] { run = [a] { return runLamps(*a); }; });
+}
+
+}  // namespace sl::cli

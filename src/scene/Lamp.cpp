@@ -1,0 +1,320 @@
+#include "scene/Lamp.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "core/Dual.h"
+#include "core/Error.h"
+#include "core/Registry.h"
+
+namespace sl {
+
+namespace {
+
+constexpr LampKindRow kLampKinds[] = {
+    {LampKind::Disk, "disk", "a round source: a spot (small) or a dome (large)"},
+    {LampKind::Bar, "bar", "a rectangular line light (low-angle dark field), with a roll"},
+    {LampKind::Ring, "ring", "a band of elevations all around the part (ring light)"},
+};
+
+constexpr double kPi = std::numbers::pi;
+constexpr double kReach = 6.5;  // cells farther than kReach·h beyond the lamp are skipped
+
+/// Gauss–Legendre nodes and weights on [0, 1] (weights sum to 1).
+void gaussLegendre(int n, std::vector<double>& x, std::vector<double>& w) {
+    x.assign(static_cast<size_t>(n), 0.0);
+    w.assign(static_cast<size_t>(n), 0.0);
+    for (int i = 0; i < n; ++i) {
+        double z = std::cos(kPi * (i + 0.75) / (n + 0.5)), dp = 1;
+        for (int it = 0; it < 100; ++it) {
+            double p0 = 1, p1 = z;
+            for (int k = 2; k <= n; ++k) {
+                const double p2 = ((2.0 * k - 1) * z * p1 - (k - 1.0) * p0) / k;
+                p0 = p1;
+                p1 = p2;
+            }
+            dp = n * (z * p1 - p0) / (z * z - 1);
+            const double dz = p1 / dp;
+            z -= dz;
+            if (std::abs(dz) < 1e-16) break;
+        }
+        double p0 = 1, p1 = z;
+        for (int k = 2; k <= n; ++k) {
+            const double p2 = ((2.0 * k - 1) * z * p1 - (k - 1.0) * p0) / k;
+            p0 = p1;
+            p1 = p2;
+        }
+        dp = n * (z * p1 - p0) / (z * z - 1);
+        x[static_cast<size_t>(i)] = 0.5 * (1 - z);
+        w[static_cast<size_t>(i)] = 1.0 / ((1 - z * z) * dp * dp);  // 2/((1−z²)P'²) · ½
+    }
+}
+
+/// S(t) with its tails cut where they are below 1e-16 (no erf there).
+constexpr double kTail = 5.8;
+double stepFast(double t) {
+    return t < -kTail ? 0.0 : (t > kTail ? 1.0 : lamp_detail::smoothStep(t));
+}
+
+/// The lamp's membership as membership<double>, with early outs far from the edges (the hot
+/// loop: most nodes of a touched cell are well inside or outside).
+struct QuickMembership {
+    LampKind kind;
+    lamp_detail::Frame<double> f;
+    double h, cosR = 0, hSinR = 1, sinYLimit = 2, a = 0, b = 0, lo = 0, hi = 0;
+
+    QuickMembership(const Lamp& l, double edge)
+        : kind(l.kind),
+          f(lamp_detail::frame<double>(l.azimuth, l.elevation, l.roll)),
+          h(edge),
+          a(l.size),
+          b(l.width),
+          lo(l.elevation - l.size),
+          hi(l.elevation + l.size) {
+        cosR = std::cos(l.size);
+        hSinR = edge * std::sin(l.size);
+        const double yMax = l.width + kTail * edge;
+        sinYLimit = yMax < std::numbers::pi / 2 ? std::sin(yMax) : 2.0;
+    }
+    double operator()(const Vec3d& d, double elevation) const {
+        switch (kind) {
+            case LampKind::Disk:
+                return stepFast((lamp_detail::dotd(f.c, d) - cosR) / hSinR);
+            case LampKind::Bar: {
+                const double r = lamp_detail::dotd(f.e2, d);
+                if (std::abs(r) >= sinYLimit) return 0.0;
+                const double y = std::asin(r);
+                const double sy = stepFast((b - y) / h) * stepFast((b + y) / h);
+                if (sy == 0) return 0.0;
+                const double x = std::atan2(lamp_detail::dotd(f.e1, d), lamp_detail::dotd(f.c, d));
+                return sy * stepFast((a - x) / h) * stepFast((a + x) / h);
+            }
+            case LampKind::Ring:
+                return stepFast((elevation - lo) / h) - stepFast((elevation - hi) / h);
+        }
+        return 0.0;
+    }
+};
+
+double angleBetween(const Vec3d& a, const Vec3d& b) {
+    return std::acos(std::clamp(dot(a, b), -1.0, 1.0));
+}
+
+}  // namespace
+
+std::span<const LampKindRow> lampKindTable() {
+    return kLampKinds;
+}
+
+LampKind parseLampKind(std::string_view name, const std::string& where) {
+    return parseRegistryName(lampKindTable(), name, where).value;
+}
+
+const char* lampKindName(LampKind kind) {
+    return registryRow(lampKindTable(), kind).name;
+}
+
+bool lampUsesParam(LampKind kind, int p) {
+    switch (kind) {
+        case LampKind::Disk:
+            return p <= kSize;
+        case LampKind::Bar:
+            return true;
+        case LampKind::Ring:
+            return p == kRadiance || p == kElevation || p == kSize;
+    }
+    return false;
+}
+
+Vec3d lampDirection(double azimuth, double elevation) {
+    return {std::sin(azimuth) * std::cos(elevation), std::sin(elevation),
+            -std::cos(azimuth) * std::cos(elevation)};
+}
+
+double lampSharpSolidAngle(const Lamp& lamp) {
+    switch (lamp.kind) {
+        case LampKind::Disk:
+            return 2 * kPi * (1 - std::cos(lamp.size));
+        case LampKind::Bar:
+            return 2 * lamp.size * 2 * std::sin(lamp.width);
+        case LampKind::Ring: {
+            const double lo = std::max(lamp.elevation - lamp.size, -kPi / 2);
+            const double hi = std::min(lamp.elevation + lamp.size, kPi / 2);
+            return hi > lo ? 2 * kPi * (std::sin(hi) - std::sin(lo)) : 0.0;
+        }
+    }
+    return 0;
+}
+
+LampRasterizer::LampRasterizer(const EnvMapBasis& basis, LampRasterOptions options)
+    : basis_(basis), options_(options) {
+    if (options.subsamples < 1 || options.subsamples > 64)
+        throw inputError(option("lamp-subsamples"),
+                         "must be between 1 and 64, not " + std::to_string(options.subsamples),
+                         "use 12 (the default)");
+    if (!(options.edge > 0) || options.edge > 0.2)
+        throw inputError(option("lamp-edge"), "the edge width must be in (0, 0.2] radians",
+                         "use 1 degree (the default)");
+    const int W = basis.width(), H = basis.height(), N = options.subsamples;
+    std::vector<double> x, w;
+    gaussLegendre(N, x, w);
+    n_ = N * N;
+    std::vector<double> wxy(static_cast<size_t>(n_));
+    for (int a = 0; a < N; ++a)
+        for (int b = 0; b < N; ++b) {
+            gx_.push_back(x[static_cast<size_t>(a)]);
+            gy_.push_back(x[static_cast<size_t>(b)]);
+            wxy[static_cast<size_t>(a * N + b)] =
+                w[static_cast<size_t>(a)] * w[static_cast<size_t>(b)];
+        }
+    const size_t cells = static_cast<size_t>(W) * (H - 1);
+    dir_.resize(cells * n_);
+    dw_.resize(cells * n_);
+    elev_.resize(cells * n_);
+    cellCentre_.resize(cells);
+    cellRadius_.resize(cells);
+    cellElLo_.resize(cells);
+    cellElHi_.resize(cells);
+    omega_.assign(static_cast<size_t>(W) * H, 0.0);
+    const double cellArea = (kPi / (H - 1)) * (2 * kPi / W);
+    for (int j = 0; j < H - 1; ++j)
+        for (int i = 0; i < W; ++i) {
+            const size_t cell = static_cast<size_t>(j) * W + i;
+            const Vec3d centre = EnvMapBasis::uvToDirection((i + 1.0) / W, (j + 0.5) / (H - 1));
+            cellCentre_[cell] = centre;
+            double radius = 0;
+            for (double fy : {0.0, 1.0})
+                for (double fx : {0.0, 0.5, 1.0})
+                    radius = std::max(
+                        radius, angleBetween(centre, EnvMapBasis::uvToDirection(
+                                                         (i + 0.5 + fx) / W, (j + fy) / (H - 1))));
+            cellElHi_[cell] = kPi / 2 - kPi * j / (H - 1);
+            cellElLo_[cell] = kPi / 2 - kPi * (j + 1) / (H - 1);
+            const uint32_t t00 = static_cast<uint32_t>(j * W + i),
+                           t01 = static_cast<uint32_t>(j * W + (i + 1) % W);
+            const uint32_t t10 = t00 + static_cast<uint32_t>(W),
+                           t11 = t01 + static_cast<uint32_t>(W);
+            for (int s = 0; s < n_; ++s) {
+                const double fx = gx_[static_cast<size_t>(s)], fy = gy_[static_cast<size_t>(s)];
+                const double v = (j + fy) / (H - 1);
+                const Vec3d d = EnvMapBasis::uvToDirection((i + 0.5 + fx) / W, v);
+                radius = std::max(radius, angleBetween(centre, d));
+                const double dw = std::sin(kPi * v) * cellArea * wxy[static_cast<size_t>(s)];
+                dir_[cell * n_ + s] = d;
+                elev_[cell * n_ + s] = std::asin(std::clamp(d.y, -1.0, 1.0));
+                dw_[cell * n_ + s] = dw;
+                omega_[t00] += (1 - fx) * (1 - fy) * dw;
+                omega_[t01] += fx * (1 - fy) * dw;
+                omega_[t10] += (1 - fx) * fy * dw;
+                omega_[t11] += fx * fy * dw;
+            }
+            cellRadius_[cell] = radius;
+        }
+}
+
+bool LampRasterizer::cellMayTouch(const Lamp& lamp, const Vec3d& centre, int cell) const {
+    const double reach = kReach * options_.edge;
+    const size_t c = static_cast<size_t>(cell);
+    switch (lamp.kind) {
+        case LampKind::Disk:
+            return angleBetween(centre, cellCentre_[c]) - cellRadius_[c] <= lamp.size + reach;
+        case LampKind::Bar:
+            return angleBetween(centre, cellCentre_[c]) - cellRadius_[c] <=
+                   std::abs(lamp.size) + std::abs(lamp.width) + reach;
+        case LampKind::Ring:
+            return cellElHi_[c] >= lamp.elevation - lamp.size - reach &&
+                   cellElLo_[c] <= lamp.elevation + lamp.size + reach;
+    }
+    return true;
+}
+
+void LampRasterizer::coverage(const Lamp& lamp, std::vector<double>& c,
+                              std::vector<double>* dc) const {
+    using D = Dual<5>;
+    const int W = basis_.width(), H = basis_.height();
+    const double h = options_.edge;
+    c.assign(static_cast<size_t>(W) * H, 0.0);
+    if (dc) dc->assign(c.size() * 5, 0.0);
+    const Vec3d centre = lampDirection(lamp.azimuth, lamp.elevation);
+    const QuickMembership quick(lamp, h);
+    const D az = D::variable(lamp.azimuth, 0), el = D::variable(lamp.elevation, 1),
+            a = D::variable(lamp.size, 2), b = D::variable(lamp.width, 3),
+            roll = D::variable(lamp.roll, 4);
+    const auto fj = lamp_detail::frame<D>(az, el, roll);
+    for (int j = 0; j < H - 1; ++j)
+        for (int i = 0; i < W; ++i) {
+            const int cell = j * W + i;
+            if (!cellMayTouch(lamp, centre, cell)) continue;
+            const size_t t[4] = {static_cast<size_t>(j * W + i),
+                                 static_cast<size_t>(j * W + (i + 1) % W),
+                                 static_cast<size_t>((j + 1) * W + i),
+                                 static_cast<size_t>((j + 1) * W + (i + 1) % W)};
+            for (int s = 0; s < n_; ++s) {
+                const size_t k = static_cast<size_t>(cell) * n_ + s;
+                const double fx = gx_[static_cast<size_t>(s)], fy = gy_[static_cast<size_t>(s)];
+                const double wt[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+                const double mv = quick(dir_[k], elev_[k]);
+                // Far outside (m < 1e-15) or deep inside (m > 1 − 1e-15) the edge the
+                // derivatives are below 1e-13 of the edge's: the value alone.
+                if (mv < 1e-15) continue;
+                if (!dc || mv > 1 - 1e-15) {
+                    for (int q = 0; q < 4; ++q) c[t[q]] += wt[q] * dw_[k] * mv;
+                    continue;
+                }
+                const D m = lamp_detail::membership<D>(lamp.kind, fj, el, a, b, dir_[k], h);
+                for (int q = 0; q < 4; ++q) {
+                    const double f = wt[q] * dw_[k];
+                    c[t[q]] += f * m.v;
+                    double* g = dc->data() + t[q] * 5;
+                    for (size_t p = 0; p < 5; ++p) g[p] += f * m.d[p];
+                }
+            }
+        }
+}
+
+void LampRasterizer::add(const Lamp& lamp, std::span<double> E) const {
+    std::vector<double> c;
+    coverage(lamp, c, nullptr);
+    for (size_t t = 0; t < c.size(); ++t) E[t] += lamp.radiance * c[t] / omega_[t];
+}
+
+std::vector<double> LampRasterizer::rasterize(std::span<const Lamp> lamps) const {
+    std::vector<double> E(static_cast<size_t>(basis_.texelCount()), 0.0);
+    for (const Lamp& l : lamps) add(l, E);
+    return E;
+}
+
+void LampRasterizer::gradient(const Lamp& lamp, std::span<const double> dLdE,
+                              std::span<double> dLdp, std::span<double> E) const {
+    std::vector<double> c, dc;
+    coverage(lamp, c, &dc);
+    std::fill(dLdp.begin(), dLdp.end(), 0.0);
+    for (size_t t = 0; t < c.size(); ++t) {
+        const double g = dLdE[t] / omega_[t];
+        if (!E.empty()) E[t] += lamp.radiance * c[t] / omega_[t];
+        dLdp[0] += g * c[t];
+        for (size_t p = 0; p < 5; ++p) dLdp[p + 1] += lamp.radiance * g * dc[t * 5 + p];
+    }
+}
+
+void LampRasterizer::jacobian(const Lamp& lamp, std::span<double> J, std::span<double> E) const {
+    std::vector<double> c, dc;
+    coverage(lamp, c, &dc);
+    for (size_t t = 0; t < c.size(); ++t) {
+        E[t] = lamp.radiance * c[t] / omega_[t];
+        J[t * kLampParams] = c[t] / omega_[t];
+        for (size_t p = 0; p < 5; ++p)
+            J[t * kLampParams + p + 1] = lamp.radiance * dc[t * 5 + p] / omega_[t];
+    }
+}
+
+double LampRasterizer::solidAngle(const Lamp& lamp) const {
+    std::vector<double> c;
+    coverage(lamp, c, nullptr);
+    double s = 0;
+    for (double v : c) s += v;
+    return s;
+}
+
+}  // namespace sl

@@ -1,0 +1,140 @@
+// Lamps fitted through T (app/Lamps.h): the chain rule dLoss/dθ = (∂E/∂θ)ᵀ·dLoss/dE against
+// central differences of the whole chain, and greedy K on a small part reaching E*'s loss.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "TestUtil.h"
+#include "app/Lamps.h"
+#include "core/Error.h"
+#include "objective/UnbiasedObjective.h"
+#include "scene/Scene.h"
+#include "transport/TransportSink.h"
+
+namespace {
+
+using namespace sl;
+
+TransportMatrix smallT() {
+    SceneDesc d;
+    d.heightmap.pitch = 0.05;
+    d.material.params.alphaU = d.material.params.alphaV = 0.1f;
+    d.camera.width = d.camera.height = 20;
+    d.render.maxDepth = 3;
+    const int n = 40;
+    Scene scene(d, n, n, test::bumpyHeightMap(n));
+    RenderOptions ro;
+    ro.spp = 16;
+    ro.maxDepth = 3;
+    ro.sampleSets = 2;
+    return precomputeTransport(scene, ro, 1).matrix;
+}
+
+TEST(LampFit, ChainGradientMatchesFiniteDifferences) {
+    const TransportMatrix t = smallT();
+    ObjectiveOptions oo;
+    oo.lambda = 0.5;
+    UnbiasedObjective obj(t.width, t.height, t.objectMask, oo);
+    TransportLoss loss(t, obj, false);
+    LampFitOptions o;
+    o.minElevation = -0.2;
+    LampRasterizer raster(EnvMapBasis(50, 25), o.raster);
+    LampProblem problem(loss, raster, {LampKind::Disk, LampKind::Bar, LampKind::Ring}, o);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> U(0.25, 0.75);
+    std::vector<double> x(problem.dimension());
+    for (double& v : x) v = U(rng);
+    std::vector<double> g(x.size());
+    problem.evaluate(x, g);
+    double scale = 0;
+    for (double v : g) scale = std::max(scale, std::abs(v));
+    ASSERT_GT(scale, 0.0);
+    for (size_t k = 0; k < x.size(); ++k) {
+        auto central = [&](double h) {
+            auto a = x, b = x;
+            a[k] += h;
+            b[k] -= h;
+            return (problem.evaluate(a, {}) - problem.evaluate(b, {})) / (2 * h);
+        };
+        const double fd = (4 * central(5e-5) - central(1e-4)) / 3;
+        EXPECT_NEAR(g[k], fd, 1e-6 * scale) << "parameter " << k;
+    }
+}
+
+TEST(LampFit, GreedyLampsApproachTheOptimizedEnvMap) {
+    const TransportMatrix t = smallT();
+    ObjectiveOptions oo;
+    oo.lambda = 0.5;
+    UnbiasedObjective obj(t.width, t.height, t.objectMask, oo);
+    TransportLoss loss(t, obj, false);
+    // E*: the objective minimized over the 1250 texels.
+    std::vector<double> target(loss.dimension(), 0.5);
+    OptimizerOptions opt;
+    opt.method = OptimizerMethod::Lbfgs;
+    opt.iterations = 200;
+    minimize(loss.problem(), target, opt);
+    LampFitOptions o;
+    o.count = 3;
+    o.residualPeaks = 1;  // a quicker search than the command's: disks and bars
+    o.kinds = {LampKind::Disk, LampKind::Bar};
+    const LampFitResult r = fitLamps(loss, target, o);
+    ASSERT_EQ(r.steps.size(), 3u);
+    const double start = loss.evaluate(std::vector<double>(loss.dimension(), 0.5), {}).total;
+    for (size_t k = 0; k < r.steps.size(); ++k) {
+        std::printf("K=%zu loss %.6g (E* %.6g, const 0.5 %.6g) %.2fs\n", k + 1, r.steps[k].loss,
+                    r.targetLoss, start, r.steps[k].seconds);
+        if (k > 0) {
+            EXPECT_LE(r.steps[k].loss, r.steps[k - 1].loss + 1e-12);
+        }
+        EXPECT_EQ(r.steps[k].lamps.size(), k + 1);
+    }
+    EXPECT_LT(r.steps.back().loss, start);
+    // Three lamps come within 10 % of E* (measured: 4–7 % depending on the candidates tried;
+    // E* is a local optimum over the texels from const:0.5, which lamps may also beat).
+    EXPECT_LE(r.steps.back().loss, r.targetLoss + 0.10 * std::abs(r.targetLoss));
+    for (const Lamp& l : r.steps.back().lamps) {
+        EXPECT_GE(l.elevation, o.minElevation - 1e-12);
+        EXPECT_LE(l.elevation, o.maxElevation + 1e-12);
+        EXPECT_GE(l.radiance, 0.0);
+        EXPECT_LE(l.radiance, 1.0);
+    }
+}
+
+TEST(LampFit, ForbiddenAzimuthKeepsLampsOut) {
+    const TransportMatrix t = smallT();
+    ObjectiveOptions oo;
+    oo.lambda = 0.5;
+    UnbiasedObjective obj(t.width, t.height, t.objectMask, oo);
+    TransportLoss loss(t, obj, false);
+    std::vector<double> target(loss.dimension(), 0.5);
+    LampFitOptions o;
+    o.count = 2;
+    o.kinds = {LampKind::Disk};
+    const double pi = std::numbers::pi;
+    o.forbiddenAzimuth = {{-pi / 2, pi / 2}};  // the half toward −z
+    const LampFitResult r = fitLamps(loss, target, o);
+    for (const Lamp& l : r.steps.back().lamps) {
+        if (l.radiance == 0) continue;
+        const double c = std::cos(l.azimuth);  // > 0 inside the forbidden half
+        EXPECT_LT(c, 0.05) << "azimuth " << l.azimuth * 180 / pi;
+    }
+}
+
+TEST(LampFit, RefusesBadOptions) {
+    const TransportMatrix t = smallT();
+    ObjectiveOptions oo;
+    UnbiasedObjective obj(t.width, t.height, t.objectMask, oo);
+    TransportLoss loss(t, obj, false);
+    std::vector<double> target(loss.dimension(), 0.5);
+    LampFitOptions o;
+    o.count = 9;
+    EXPECT_THROW(fitLamps(loss, target, o), InputError);
+    o.count = 2;
+    o.minElevation = 1.0;
+    o.maxElevation = 0.5;
+    EXPECT_THROW(fitLamps(loss, target, o), InputError);
+}
+
+}  // namespace
