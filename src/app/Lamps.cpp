@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "core/Error.h"
+#include "core/Progress.h"
 #include "core/Stopwatch.h"
 
 namespace sl {
@@ -321,7 +322,10 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
     std::vector<Lamp> lamps;
     std::vector<double> E(loss.dimension(), 0.0), gE(loss.dimension());
     loss.evaluate(E, gE);
+    // Each extra lamp costs more than the last (more parameters to polish): the bar counts lamps.
+    ProgressTask task("fitting lamps", o.count);
     for (int k = 1; k <= o.count; ++k) {
+        task.detail("lamp " + std::to_string(k));
         std::vector<double> residual(E.size());
         for (size_t t = 0; t < E.size(); ++t) residual[t] = std::max(target[t] - E[t], 0.0);
         double bestLoss = std::numeric_limits<double>::infinity();
@@ -378,6 +382,7 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
         step.seconds = clock.seconds();
         step.evaluations = evaluations;
         result.steps.push_back(step);
+        task.set(k);
     }
     result.envMap = E;
     result.seconds = clock.seconds();
