@@ -14,5 +14,6 @@ void registerJudge(CLI::App& app, std::function<int()>& run);
 void registerRace(CLI::App& app, std::function<int()>& run);  // after registerBench
 void registerDefectMap(CLI::App& app, std::function<int()>& run);
 void registerCache(CLI::App& app, std::function<int()>& run);
+void registerView(CLI::App& app, std::function<int()>& run);  // after registerBench
 
 }  // namespace sl::cli

@@ -124,6 +124,7 @@ int main(int argc, char** argv) {
     registerPaper(app, run);
     registerDefectMap(app, run);
     registerCache(app, run);
+    registerView(app, run);
 
     if (argc > 1 && argv[1][0] != '-' && reportUnknownCommand(app, argv[1])) return kUsageError;
     try {
