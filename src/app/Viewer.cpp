@@ -295,6 +295,15 @@ std::vector<double> ViewerSession::relight(int slot) const {
     return y;
 }
 
+std::array<int, 2> ViewerSession::hotTexel() const {
+    const TransportMatrix& t = transport();
+    const std::vector<double> ones(t.rows(), 1.0);
+    std::vector<double> sums(t.cols());
+    t.applyTransposeLuminance(ones, sums);
+    const auto k = static_cast<int>(std::max_element(sums.begin(), sums.end()) - sums.begin());
+    return {k / t.envWidth, k % t.envWidth};
+}
+
 double ViewerSession::autoExposure(int slot) const {
     return exposureScale(relight(slot), transport().objectMask);
 }
@@ -330,7 +339,6 @@ json ViewerSession::judgeJson(int slot) const {
     json j;
     j["slot"] = slot == 0 ? "a" : "b";
     j["judge"] = judge_ ? toJson(judge_->score(lights_.at(slot), slot == 0 ? "A" : "B")) : json();
-    j["auto_exposure"] = autoExposure(slot);
     return j;
 }
 
@@ -377,14 +385,19 @@ ViewerResponse handleViewerRequest(ViewerSession& session, const ViewerRequest& 
             j["input"] = session.options().input.string();
             j["output"] = session.options().outDir.string();
             j["auto_exposure"] = session.autoExposure(0);
+            j["hot_texel"] = session.hotTexel();
             return jsonResponse(j);
         }
         if (r.method == "GET" && r.path == "/api/light") {
             const int slot = viewerSlot(queryValue(r, "slot", "a"));
             return jsonResponse(json{{"slot", slot == 0 ? "a" : "b"}, {"E", session.light(slot)}});
         }
-        if (r.method == "GET" && r.path == "/api/judge")
-            return jsonResponse(session.judgeJson(viewerSlot(queryValue(r, "slot", "a"))));
+        if (r.method == "GET" && r.path == "/api/judge") {
+            const int slot = viewerSlot(queryValue(r, "slot", "a"));
+            json j = session.judgeJson(slot);
+            j["auto_exposure"] = session.autoExposure(slot);
+            return jsonResponse(j);
+        }
         if (r.method == "GET" && r.path == "/api/image.png") {
             const int slot = viewerSlot(queryValue(r, "slot", "a"));
             const double exposure = parseExposure(queryValue(r, "exposure", "1"));

@@ -16,11 +16,13 @@
 //
 // The API (JSON unless said; every request validated, errors 400 {"error": "..."}):
 //   GET  /                 the page (src/app/ViewerPage.html, embedded at build time)
-//   GET  /api/info         image and env-map size, presets, slots, judge and overlay present
+//   GET  /api/info         image and env-map size, presets, judge and overlay present, the
+//                          auto exposure of A, the texel that lights the most of the image
 //   GET  /api/light?slot=a E of a slot:  {"slot": "a", "E": [...]}
 //   POST /api/light        {"slot": "a"|"b", "E": [...]} or {"slot": ..., "preset": NAME}:
 //                          sets the light, answers with its judge numbers (as GET /api/judge)
 //   GET  /api/judge?slot=a {"slot", "judge": toJson(JudgeScore) or null, "auto_exposure"}
+//                          (POST /api/light answers the same without "auto_exposure")
 //   GET  /api/image.png?slot=a&exposure=X   T·E's luminance, ×X, sRGB-encoded 8-bit gray PNG
 //   GET  /api/overlay.png  the defect regions' outlines as RGBA (404 without regions)
 //   POST /api/save         {"slot": "a", "name": "NAME.exr"}: writes E as OUTDIR/NAME.exr and
@@ -108,6 +110,8 @@ class ViewerSession {
 
     /// Y = T·E (luminance, T's mean plane).
     std::vector<double> relight(int slot) const;
+    /// The texel (row, column) that lights the most of the image: the largest column sum of T.
+    std::array<int, 2> hotTexel() const;
     /// The auto exposure of a slot's render (app/Preview.h exposureScale).
     double autoExposure(int slot) const;
     /// The render as an 8-bit gray sRGB PNG at `exposure`.
