@@ -10,6 +10,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <csignal>
 #include <filesystem>
@@ -25,6 +26,7 @@
 #include "app/Transport.h"
 #include "app/Viewer.h"
 #include "app/ViewerServer.h"
+#include "core/Error.h"
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
 #include "io/SceneFile.h"
@@ -349,4 +351,45 @@ TEST(ViewerBrowser, PaintingATexelMatchesRelightAndJudge) {
     RecordProperty("screenshot", shot.string());
     EXPECT_TRUE(fs::exists(shot)) << sc.output;
     server.stop();
+}
+
+TEST(ViewerOutdir, OpensAnOptimizeOutputDirectoryWithItsLightRegionsAndJudge) {
+    test::TempDir dir("viewer-outdir");
+    const std::string part = (dir / "part.exr").string(), scene = (dir / "scene.json").string(),
+                      truth = (dir / "part-truth.png").string(), cache = (dir / "cache").string();
+    ASSERT_EQ(test::runCli("gen-surface -o " + part +
+                           " --width 96 --height 96 --scratches 3 --chatter-start 0.5 --scene " +
+                           scene + " --image-size 96 --spp 4 --max-depth 3")
+                  .exitCode,
+              0);
+    const fs::path out = dir / "opt";
+    auto r =
+        test::runCli("optimize " + scene + " --truth " + truth +
+                     " --heldout-spp 16 --iterations 5 --cache " + cache + " -o " + out.string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    ViewerOptions o;
+    o.input = out;
+    o.cache.dir = cache;
+    o.outDir = dir / "view";
+    ViewerSession s(o);
+    const auto presets = s.presets();
+    EXPECT_NE(std::find(presets.begin(), presets.end(), "optimized"), presets.end());
+    EXPECT_FALSE(s.overlayPng().empty());
+    ASSERT_TRUE(s.hasJudge());
+    // Light A is E*, and the judge scores it as the report did (E* stored as float32).
+    const auto& t = s.transport();
+    const EnvMap star = loadEnvMap(out / "envmap.exr", t.envWidth, t.envHeight, 1);
+    for (size_t k = 0; k < t.cols(); ++k)
+        ASSERT_EQ(s.light(0)[k], static_cast<double>(star.texels[k]));
+    const json summary = json::parse(test::readFile(out / "summary.json"));
+    const double reported = summary["compare"]["optimized"]["judge"]["eq2"].get<double>();
+    EXPECT_NEAR(s.judgeJson(0)["judge"]["eq2"].get<double>(), reported, 1e-4 * reported);
+    // An output directory without summary.json is refused with the fix.
+    o.input = dir.path();
+    try {
+        ViewerSession bad(o);
+        ADD_FAILURE() << "a directory without summary.json was accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("summary.json"), std::string::npos) << e.what();
+    }
 }
