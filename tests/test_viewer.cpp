@@ -393,3 +393,16 @@ TEST(ViewerOutdir, OpensAnOptimizeOutputDirectoryWithItsLightRegionsAndJudge) {
         EXPECT_NE(std::string(e.what()).find("summary.json"), std::string::npos) << e.what();
     }
 }
+
+TEST(ViewerBench, PrintsItsTableAndWritesCsv) {
+    test::TempDir dir("viewer-bench");
+    const fs::path csv = dir / "bench-view.csv";
+    const auto r =
+        test::runCli("bench view --size 32,48 --spp 1 --repeats 3 --no-cache -o " + csv.string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("image ms"), std::string::npos) << r.output;
+    const std::string text = test::readFile(csv);
+    EXPECT_EQ(text.rfind("size,nnz,trace_s,image_ms_median", 0), 0u) << text;
+    EXPECT_NE(text.find("\n32,"), std::string::npos) << text;
+    EXPECT_NE(text.find("\n48,"), std::string::npos) << text;
+}
