@@ -15,5 +15,6 @@ void registerRace(CLI::App& app, std::function<int()>& run);  // after registerB
 void registerDefectMap(CLI::App& app, std::function<int()>& run);
 void registerCache(CLI::App& app, std::function<int()>& run);
 void registerLamps(CLI::App& app, std::function<int()>& run);
+void registerView(CLI::App& app, std::function<int()>& run);  // after registerBench
 
 }  // namespace sl::cli

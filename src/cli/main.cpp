@@ -125,6 +125,7 @@ int main(int argc, char** argv) {
     registerDefectMap(app, run);
     registerCache(app, run);
     registerLamps(app, run);
+    registerView(app, run);
 
     if (argc > 1 && argv[1][0] != '-' && reportUnknownCommand(app, argv[1])) return kUsageError;
     try {

@@ -1,0 +1,157 @@
+// The live relighting viewer's library half (README "view"): a ViewerSession holds T, the
+// judge (when there is an estimate), two lights A and B, and answers the page's requests as
+// plain functions (handleViewerRequest: a request in, a response out), so everything but the
+// sockets is tested without a server (app/ViewerServer.h serves it over HTTP).
+//
+// Inputs (ViewerOptions::input):
+//   part.tm     T as stored; the judge scores on T's own halves when it has two (else none)
+//   SCENE.json  T traced at the scene's spp (or `spp`), cached by fingerprint, and the judge's
+//               own estimate (app/Judge.h, `judgeSpp`), exactly as `judge SCENE.json` scores
+//   OUTDIR      an optimize output directory: its summary.json's transport file, its E*
+//               (envmap.exr, the preset "optimized"; the paper's light, "paper"), its truth
+//               (when recorded) or else its defect regions' layer (view-regions.png), and the
+//               judge on optimize's held-out estimate (cached; the report's numbers)
+// A truth label mask (height-map space) gives the judge per-region visibility and the page its
+// defect overlay (the regions' outlines, app/Preview.h colours).
+//
+// The API (JSON unless said; every request validated, errors 400 {"error": "..."}):
+//   GET  /                 the page (src/app/ViewerPage.html, embedded at build time)
+//   GET  /api/info         image and env-map size, presets, judge and overlay present, the
+//                          auto exposure of A, the texel that lights the most of the image
+//   GET  /api/light?slot=a E of a slot:  {"slot": "a", "E": [...]}
+//   POST /api/light        {"slot": "a"|"b", "E": [...]} or {"slot": ..., "preset": NAME}:
+//                          sets the light, answers with its judge numbers (as GET /api/judge)
+//   GET  /api/judge?slot=a {"slot", "judge": toJson(JudgeScore) or null, "auto_exposure"}
+//                          (POST /api/light answers the same without "auto_exposure")
+//   GET  /api/image.png?slot=a&exposure=X   T·E's luminance, ×X, sRGB-encoded 8-bit gray PNG
+//   GET  /api/overlay.png  the defect regions' outlines as RGBA (404 without regions)
+//   POST /api/save         {"slot": "a", "name": "NAME.exr"}: writes E as OUTDIR/NAME.exr and
+//                          T·E as OUTDIR/NAME-render.exr (atomic; NAME: letters, digits, - _ .)
+// CONVENTION: the server never writes outside ViewerOptions::outDir.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "app/Cache.h"
+#include "app/Judge.h"
+#include "app/Transport.h"
+
+namespace sl {
+
+/// Request limits: bodies, paths and query values longer than these are refused (400/413).
+inline constexpr size_t kViewerMaxBody = 1 << 20;
+inline constexpr size_t kViewerMaxPath = 256;
+inline constexpr size_t kViewerMaxQueryValue = 64;
+/// The largest texel value a light may hold.
+inline constexpr double kViewerMaxTexel = 1e6;
+
+struct ViewerOptions {
+    std::filesystem::path input;              // part.tm, SCENE.json or an optimize OUTDIR
+    std::vector<std::string> sceneOverrides;  // -D key=value on a scene
+    std::filesystem::path outDir = "out/view";
+    std::optional<int> spp;           // T of a scene: samples per pixel (default: the scene's)
+    int judgeSpp = kJudgeDefaultSpp;  // the judge's estimate of a scene
+    bool judge = true;                // false: no judge numbers (faster start)
+    std::filesystem::path truth;      // label mask in height-map space (optional)
+    CacheLocation cache;
+    int threads = 0;
+    int pngLevel = 1;  // zlib level of the images (0..9)
+};
+
+struct ViewerRequest {
+    std::string method;  // "GET" or "POST"
+    std::string path;    // "/api/image.png"
+    std::map<std::string, std::string> query;
+    std::string body;
+};
+
+struct ViewerResponse {
+    int status = 200;
+    std::string contentType = "application/json";
+    std::string body;
+};
+
+/// Timings of the last image request (bench view).
+struct ViewerTimings {
+    double relightMs = 0, encodeMs = 0;
+    size_t pngBytes = 0;
+};
+
+class ViewerSession {
+  public:
+    explicit ViewerSession(const ViewerOptions& options);
+    /// A session on a given T (and optional judge estimate with image-space labels), for tests
+    /// and benchmarks.
+    ViewerSession(TransportSource t, std::optional<TransportSource> estimate,
+                  const ViewerOptions& options, std::vector<uint8_t> labels = {},
+                  std::vector<RegionLabel> legend = {});
+    ~ViewerSession();
+    ViewerSession(const ViewerSession&) = delete;
+    ViewerSession& operator=(const ViewerSession&) = delete;
+
+    const TransportMatrix& transport() const { return t_->file.matrix; }
+    const ViewerOptions& options() const { return options_; }
+    bool hasJudge() const { return judge_ != nullptr; }
+    std::vector<std::string> presets() const;
+
+    /// Slot 0 = A, 1 = B.
+    const std::vector<double>& light(int slot) const { return lights_.at(slot); }
+    /// Validated: cols() values, finite, 0 <= v <= kViewerMaxTexel (InputError naming `where`).
+    void setLight(int slot, std::vector<double> E, const std::string& where = "E");
+    void setPreset(int slot, const std::string& name);
+
+    /// Y = T·E (luminance, T's mean plane).
+    std::vector<double> relight(int slot) const;
+    /// The texel (row, column) that lights the most of the image: the largest column sum of T.
+    std::array<int, 2> hotTexel() const;
+    /// The auto exposure of a slot's render (app/Preview.h exposureScale).
+    double autoExposure(int slot) const;
+    /// The render as an 8-bit gray sRGB PNG at `exposure`.
+    std::string imagePng(int slot, double exposure, ViewerTimings* timings = nullptr) const;
+    /// The judge's numbers for a slot's light (null without a judge).
+    nlohmann::ordered_json judgeJson(int slot) const;
+    /// The regions' outlines as an RGBA PNG (empty without labels).
+    const std::string& overlayPng() const { return overlay_; }
+    /// Writes E as outDir/name and T·E as outDir/<stem>-render.exr; returns the E file's path.
+    std::filesystem::path save(int slot, const std::string& name) const;
+
+    /// Serialises requests (the HTTP server's worker threads share one session).
+    std::mutex& mutex() { return mutex_; }
+
+  private:
+    ViewerOptions options_;
+    std::unique_ptr<TransportSource> t_, estimate_;
+    std::unique_ptr<Judge> judge_;
+    std::vector<uint8_t> labels_;
+    std::vector<RegionLabel> legend_;
+    std::map<std::string, std::vector<double>> extraPresets_;  // "optimized" of an OUTDIR
+    std::array<std::vector<double>, 2> lights_;
+    std::string overlay_;
+    std::mutex mutex_;
+
+    void finishSetup();
+};
+
+/// The slot a query or body names: "a" (or missing) → 0, "b" → 1; InputError otherwise.
+int viewerSlot(const std::string& text);
+
+/// Checks a file name for POST /api/save: 1..64 characters of letters, digits, '-', '_', '.',
+/// not starting with '.', ending in ".exr", no path separators (InputError naming the fix).
+void checkViewerFileName(const std::string& name);
+
+/// Answers one request (locks the session's mutex). Never throws: bad input is 400 with
+/// {"error": message}, an unknown path 404, anything else 500.
+ViewerResponse handleViewerRequest(ViewerSession& session, const ViewerRequest& request);
+
+/// The page (embedded at build time from src/app/ViewerPage.html).
+const std::string& viewerPageHtml();
+
+}  // namespace sl
