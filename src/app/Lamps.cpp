@@ -356,15 +356,20 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
         // best o.polished on the full one and keep the lowest polished loss: the screened order
         // is not always the polished one.
         const std::vector<Lamp> cands = candidates(raster, residual, gE, o);
-        std::vector<std::pair<double, std::vector<Lamp>>> screened;
-        int evaluations = 0;
-        for (const Lamp& cand : cands) {
+        // The candidates are independent: screened in parallel, each on its own copy of the
+        // loss (TransportLoss keeps scratch buffers), results kept by index (deterministic).
+        std::vector<std::pair<double, std::vector<Lamp>>> screened(cands.size());
+        std::vector<int> screenEvaluations(cands.size(), 0);
+        tbb::parallel_for(size_t{0}, cands.size(), [&](size_t c) {
+            const TransportLoss own = loss;
             std::vector<Lamp> trial = lamps;
-            trial.push_back(cand);
-            const LampFitRun run = fitRun(loss, screen, trial, o, o.candidateIterations);
-            evaluations += run.evaluations;
-            screened.emplace_back(run.loss, run.lamps);
-        }
+            trial.push_back(cands[c]);
+            const LampFitRun run = fitRun(own, screen, trial, o, o.candidateIterations);
+            screenEvaluations[c] = run.evaluations;
+            screened[c] = {run.loss, run.lamps};
+        });
+        int evaluations = 0;
+        for (int e : screenEvaluations) evaluations += e;
         std::vector<size_t> order(screened.size());
         for (size_t c = 0; c < order.size(); ++c) order[c] = c;
         std::stable_sort(order.begin(), order.end(),
