@@ -377,9 +377,12 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
         double bestLoss = std::numeric_limits<double>::infinity();
         std::vector<Lamp> best;
         const size_t polish = std::min(order.size(), static_cast<size_t>(std::max(o.polished, 1)));
-        for (size_t c = 0; c < polish; ++c) {  // in screened order: ties keep the better screen
-            const LampFitRun run =
-                fitRun(loss, raster, screened[order[c]].second, o, o.finalIterations);
+        std::vector<LampFitRun> polishedRuns(polish);
+        tbb::parallel_for(size_t{0}, polish, [&](size_t c) {
+            const TransportLoss own = loss;
+            polishedRuns[c] = fitRun(own, raster, screened[order[c]].second, o, o.finalIterations);
+        });
+        for (const LampFitRun& run : polishedRuns) {  // in screened order: ties keep the better
             evaluations += run.evaluations;
             if (run.loss < bestLoss) {
                 bestLoss = run.loss;

@@ -23,9 +23,9 @@
 // (where light helps most); each candidate is screened: optimized jointly with the k−1 lamps
 // before it for candidateIterations on a coarse quadrature (screenSubsamples nodes per cell and
 // axis, 4× fewer than the default 16²; the candidates in parallel). The `polished` best screened
-// sets are then polished on the full quadrature for finalIterations and the lowest polished loss is
-// kept (candidates in a fixed order, ties to the better screen: deterministic). The loss after
-// every k is reported, so the user sees what each extra lamp buys.
+// sets are then polished (in parallel) on the full quadrature for finalIterations and the lowest
+// polished loss is kept (candidates in a fixed order, ties to the better screen: deterministic).
+// The loss after every k is reported, so the user sees what each extra lamp buys.
 #pragma once
 
 #include <array>
