@@ -290,6 +290,27 @@ std::vector<Lamp> candidates(const LampRasterizer& raster, std::span<const doubl
     return out;
 }
 
+struct LampFitRun {
+    std::vector<Lamp> lamps;
+    double loss = 0;
+    int evaluations = 0;
+};
+
+/// The lamps optimized jointly from `start` on `raster` for up to `iterations` iterations.
+LampFitRun fitRun(const TransportLoss& loss, const LampRasterizer& raster,
+                  std::span<const Lamp> start, const LampFitOptions& o, int iterations) {
+    std::vector<LampKind> kinds;
+    for (const Lamp& l : start) kinds.push_back(l.kind);
+    const LampProblem problem(loss, raster, kinds, o);
+    std::vector<double> x = problem.encode(start);
+    OptimizerOptions opt;
+    opt.method = o.method;
+    opt.iterations = iterations;
+    opt.relativeFunctionTolerance = o.relativeTolerance;
+    const OptimizerSummary s = minimize(problem.problem(), x, opt);
+    return {problem.lamps(x), s.finalLoss, s.evaluations};
+}
+
 }  // namespace
 
 void checkLampFitOptions(const LampFitOptions& o) {
@@ -315,6 +336,9 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
         throw inputError("lamps", "the transport matrix is not a gray 50x25 env map",
                          "use a gray T on the default 50x25 grid");
     const LampRasterizer raster(basis, o.raster);
+    LampRasterOptions coarse = o.raster;
+    coarse.subsamples = std::min(coarse.subsamples, o.screenSubsamples);
+    const LampRasterizer screen(basis, coarse);
     LampFitResult result;
     std::vector<double> gTarget(loss.dimension());
     result.targetLoss = loss.evaluate(target, gTarget).total;
@@ -328,41 +352,41 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
         task.detail("lamp " + std::to_string(k));
         std::vector<double> residual(E.size());
         for (size_t t = 0; t < E.size(); ++t) residual[t] = std::max(target[t] - E[t], 0.0);
+        // Screen every candidate (a few iterations on the coarse quadrature), then polish the
+        // best o.polished on the full one and keep the lowest polished loss: the screened order
+        // is not always the polished one.
+        const std::vector<Lamp> cands = candidates(raster, residual, gE, o);
+        // The candidates are independent: screened in parallel, each on its own copy of the
+        // loss (TransportLoss keeps scratch buffers), results kept by index (deterministic).
+        std::vector<std::pair<double, std::vector<Lamp>>> screened(cands.size());
+        std::vector<int> screenEvaluations(cands.size(), 0);
+        tbb::parallel_for(size_t{0}, cands.size(), [&](size_t c) {
+            const TransportLoss own = loss;
+            std::vector<Lamp> trial = lamps;
+            trial.push_back(cands[c]);
+            const LampFitRun run = fitRun(own, screen, trial, o, o.candidateIterations);
+            screenEvaluations[c] = run.evaluations;
+            screened[c] = {run.loss, run.lamps};
+        });
+        int evaluations = 0;
+        for (int e : screenEvaluations) evaluations += e;
+        std::vector<size_t> order(screened.size());
+        for (size_t c = 0; c < order.size(); ++c) order[c] = c;
+        std::stable_sort(order.begin(), order.end(),
+                         [&](size_t a, size_t b) { return screened[a].first < screened[b].first; });
         double bestLoss = std::numeric_limits<double>::infinity();
         std::vector<Lamp> best;
-        int evaluations = 0;
-        for (const Lamp& cand : candidates(raster, residual, gE, o)) {
-            std::vector<Lamp> trial = lamps;
-            trial.push_back(cand);
-            std::vector<LampKind> kinds;
-            for (const Lamp& l : trial) kinds.push_back(l.kind);
-            LampProblem problem(loss, raster, kinds, o);
-            std::vector<double> x = problem.encode(trial);
-            OptimizerOptions opt;
-            opt.method = o.method;
-            opt.iterations = o.candidateIterations;
-            opt.relativeFunctionTolerance = o.relativeTolerance;
-            const OptimizerSummary s = minimize(problem.problem(), x, opt);
-            evaluations += s.evaluations;
-            if (s.finalLoss < bestLoss) {
-                bestLoss = s.finalLoss;
-                best = problem.lamps(x);
-            }
-        }
-        {  // polish the best set
-            std::vector<LampKind> kinds;
-            for (const Lamp& l : best) kinds.push_back(l.kind);
-            LampProblem problem(loss, raster, kinds, o);
-            std::vector<double> x = problem.encode(best);
-            OptimizerOptions opt;
-            opt.method = o.method;
-            opt.iterations = o.finalIterations;
-            opt.relativeFunctionTolerance = o.relativeTolerance;
-            const OptimizerSummary s = minimize(problem.problem(), x, opt);
-            evaluations += s.evaluations;
-            if (s.finalLoss <= bestLoss) {
-                bestLoss = s.finalLoss;
-                best = problem.lamps(x);
+        const size_t polish = std::min(order.size(), static_cast<size_t>(std::max(o.polished, 1)));
+        std::vector<LampFitRun> polishedRuns(polish);
+        tbb::parallel_for(size_t{0}, polish, [&](size_t c) {
+            const TransportLoss own = loss;
+            polishedRuns[c] = fitRun(own, raster, screened[order[c]].second, o, o.finalIterations);
+        });
+        for (const LampFitRun& run : polishedRuns) {  // in screened order: ties keep the better
+            evaluations += run.evaluations;
+            if (run.loss < bestLoss) {
+                bestLoss = run.loss;
+                best = run.lamps;
             }
         }
         const double previous = result.steps.empty() ? std::numeric_limits<double>::infinity()

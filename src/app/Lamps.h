@@ -20,9 +20,12 @@
 // Greedy K: lamps are added one at a time. The k-th lamp starts, for each allowed kind, at the
 // brightest directions of the residual max(E* − E_lamps, 0) (E* the optimized env map; up to
 // residualPeaks peaks at least 20° apart) and at the direction where dLoss/dE is most negative
-// (where light helps most); each candidate is
-// optimized jointly with the k−1 lamps before it and the lowest loss is kept. The loss after
-// every k is reported, so the user sees what each extra lamp buys.
+// (where light helps most); each candidate is screened: optimized jointly with the k−1 lamps
+// before it for candidateIterations on a coarse quadrature (screenSubsamples nodes per cell and
+// axis, 4× fewer than the default 16²; the candidates in parallel). The `polished` best screened
+// sets are then polished (in parallel) on the full quadrature for finalIterations and the lowest
+// polished loss is kept (candidates in a fixed order, ties to the better screen: deterministic).
+// The loss after every k is reported, so the user sees what each extra lamp buys.
 #pragma once
 
 #include <array>
@@ -45,7 +48,10 @@ struct LampFitOptions {
     std::vector<std::pair<double, double>> forbiddenAzimuth;
     /// L-BFGS with the box; iterations per candidate and for the final polish.
     OptimizerMethod method = OptimizerMethod::Lbfgs;
-    int candidateIterations = 25, finalIterations = 200;
+    int candidateIterations = 15, finalIterations = 200;
+    /// Candidates are screened on a quadrature of this many nodes per cell and axis (at most
+    /// raster.subsamples), then the `polished` best are polished on the full one.
+    int screenSubsamples = 8, polished = 2;
     int residualPeaks = 3;            // residual peaks (at least 20° apart) a new lamp is tried at
     double relativeTolerance = 1e-6;  // stop when the loss changes by less than this fraction
     LampRasterOptions raster;
