@@ -1,6 +1,8 @@
 // Helpers shared by tests: temporary directories, tiny file writers, running the CLI.
 #pragma once
 
+#include <sys/wait.h>
+
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -76,18 +78,32 @@ struct RunResult {
     std::string output;  // stdout and stderr
 };
 
-/// Runs the scratchlight CLI with the given argument string; captures its output.
-inline RunResult runCli(const std::string& args) {
-    std::string cmd = std::string(SL_CLI_PATH) + " " + args + " 2>&1";
+/// Runs a shell command line; its exit code and its output (stdout and stderr).
+inline RunResult runShell(const std::string& line) {
     RunResult r;
-    FILE* f = popen(cmd.c_str(), "r");
+    FILE* f = popen((line + " 2>&1").c_str(), "r");
     if (!f) return r;
     char buf[4096];
     size_t n;
     while ((n = fread(buf, 1, sizeof buf, f)) > 0) r.output.append(buf, n);
-    int status = pclose(f);
+    const int status = pclose(f);
     r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     return r;
+}
+
+/// Runs the scratchlight CLI with the given argument string; captures its output.
+inline RunResult runCli(const std::string& args) {
+    return runShell(std::string(SL_CLI_PATH) + " " + args);
+}
+
+/// A small labelled part in `dir`: a 96×96 ball-end map with three scratches and a chatter half
+/// (part.exr, part-truth.png) and a scene rendering it at 96×96, 4 spp (scene.json). Returns
+/// gen-surface's exit code.
+inline int writeSmallLabelledPart(const std::filesystem::path& dir) {
+    return runCli("gen-surface -o " + (dir / "part.exr").string() +
+                  " --width 96 --height 96 --scratches 3 --chatter-start 0.5 --scene " +
+                  (dir / "scene.json").string() + " --image-size 96 --spp 4 --max-depth 3")
+        .exitCode;
 }
 
 }  // namespace sl::test

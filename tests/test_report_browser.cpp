@@ -22,19 +22,6 @@ using namespace sl;
 
 namespace {
 
-// Runs a shell command line, returning its exit code and its output (stdout and stderr).
-test::RunResult runShell(const std::string& line) {
-    test::RunResult r;
-    FILE* f = popen((line + " 2>&1").c_str(), "r");
-    if (!f) return r;
-    char buf[4096];
-    size_t n;
-    while ((n = fread(buf, 1, sizeof buf, f)) > 0) r.output.append(buf, n);
-    const int status = pclose(f);
-    r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-}
-
 std::string chromium() {
     for (const char* p : {"/usr/bin/chromium", "/usr/bin/chromium-browser"})
         if (fs::exists(p)) return p;
@@ -51,11 +38,7 @@ TEST(ReportBrowser, OptimizeReportOpensInHeadlessChromium) {
     const std::string part = (dir.path() / "part.exr").string(),
                       scene = (dir.path() / "scene.json").string(),
                       truth = (dir.path() / "part-truth.png").string();
-    ASSERT_EQ(test::runCli("gen-surface -o " + part +
-                           " --width 96 --height 96 --scratches 3 --chatter-start 0.5 --scene " +
-                           scene + " --image-size 96 --spp 4 --max-depth 3")
-                  .exitCode,
-              0);
+    ASSERT_EQ(test::writeSmallLabelledPart(dir.path()), 0);
     const fs::path out = dir.path() / "out";
     const auto r =
         test::runCli("optimize " + scene + " --truth " + truth +
@@ -83,8 +66,8 @@ TEST(ReportBrowser, OptimizeReportOpensInHeadlessChromium) {
         fs::path(SL_CLI_PATH).parent_path() / "test-artifacts" / "report-screenshot.png";
     fs::create_directories(shot.parent_path());
     const std::string check = std::string(SL_SOURCE_DIR) + "/scripts/check-report";
-    const auto c = runShell(check + " " + (out / "report.html").string() + " " + shot.string() +
-                            " --size 1400x1800 --selfcheck");
+    const auto c = test::runShell(check + " " + (out / "report.html").string() + " " +
+                                  shot.string() + " --size 1400x1800 --selfcheck");
     std::cout << c.output << "report screenshot: " << shot.string() << std::endl;
     RecordProperty("screenshot", shot.string());
     EXPECT_EQ(c.exitCode, 0) << c.output;

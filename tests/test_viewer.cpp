@@ -66,18 +66,6 @@ std::vector<double> randomLight(size_t n, unsigned seed) {
     return e;
 }
 
-test::RunResult runShell(const std::string& line) {
-    test::RunResult r;
-    FILE* f = popen((line + " 2>&1").c_str(), "r");
-    if (!f) return r;
-    char buf[4096];
-    size_t n;
-    while ((n = fread(buf, 1, sizeof buf, f)) > 0) r.output.append(buf, n);
-    const int status = pclose(f);
-    r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-}
-
 /// A raw TCP connection to 127.0.0.1:port (−1 on failure).
 int connectTo(int port) {
     const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
@@ -263,11 +251,7 @@ TEST(ViewerBrowser, PaintingATexelMatchesRelightAndJudge) {
     test::TempDir dir("viewer-browser");
     const std::string part = (dir / "part.exr").string(), scene = (dir / "scene.json").string(),
                       truth = (dir / "part-truth.png").string(), cache = (dir / "cache").string();
-    ASSERT_EQ(test::runCli("gen-surface -o " + part +
-                           " --width 96 --height 96 --scratches 3 --chatter-start 0.5 --scene " +
-                           scene + " --image-size 96 --spp 4 --max-depth 3")
-                  .exitCode,
-              0);
+    ASSERT_EQ(test::writeSmallLabelledPart(dir.path()), 0);
     ViewerOptions o;
     o.input = scene;
     o.truth = truth;
@@ -287,8 +271,8 @@ TEST(ViewerBrowser, PaintingATexelMatchesRelightAndJudge) {
         "--disable-background-networking --disable-component-update --disable-sync "
         "--disable-extensions --hide-scrollbars --mute-audio --user-data-dir=" +
         profile.string() + " --window-size=1500,1000 --virtual-time-budget=20000 ";
-    const auto dom = runShell(chromium + "--dump-dom '" + server.url() +
-                              "?selftest=1&value=20&name=selftest.exr'");
+    const auto dom = test::runShell(chromium + "--dump-dom '" + server.url() +
+                                    "?selftest=1&value=20&name=selftest.exr'");
     const std::smatch m = [&] {
         std::smatch mm;
         static const std::regex re("<pre id=\"selfcheck\">(selfcheck: [a-zA-Z]+)\\n([^<]*)</pre>");
@@ -345,8 +329,8 @@ TEST(ViewerBrowser, PaintingATexelMatchesRelightAndJudge) {
         fs::path(SL_CLI_PATH).parent_path() / "test-artifacts" / "viewer-screenshot.png";
     fs::create_directories(shot.parent_path());
     fs::remove(shot);
-    const auto sc = runShell(chromium + "--screenshot=" + shot.string() + " '" + server.url() +
-                             "?split=1&overlay=1'");
+    const auto sc = test::runShell(chromium + "--screenshot=" + shot.string() + " '" +
+                                   server.url() + "?split=1&overlay=1'");
     std::cout << "viewer screenshot: " << shot.string() << std::endl;
     RecordProperty("screenshot", shot.string());
     EXPECT_TRUE(fs::exists(shot)) << sc.output;
@@ -357,11 +341,7 @@ TEST(ViewerOutdir, OpensAnOptimizeOutputDirectoryWithItsLightRegionsAndJudge) {
     test::TempDir dir("viewer-outdir");
     const std::string part = (dir / "part.exr").string(), scene = (dir / "scene.json").string(),
                       truth = (dir / "part-truth.png").string(), cache = (dir / "cache").string();
-    ASSERT_EQ(test::runCli("gen-surface -o " + part +
-                           " --width 96 --height 96 --scratches 3 --chatter-start 0.5 --scene " +
-                           scene + " --image-size 96 --spp 4 --max-depth 3")
-                  .exitCode,
-              0);
+    ASSERT_EQ(test::writeSmallLabelledPart(dir.path()), 0);
     const fs::path out = dir / "opt";
     auto r =
         test::runCli("optimize " + scene + " --truth " + truth +

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 #include "core/Dual.h"
 #include "core/Error.h"
@@ -25,27 +26,25 @@ constexpr double kReach = 6.5;  // cells farther than kReach·h beyond the lamp 
 void gaussLegendre(int n, std::vector<double>& x, std::vector<double>& w) {
     x.assign(static_cast<size_t>(n), 0.0);
     w.assign(static_cast<size_t>(n), 0.0);
-    for (int i = 0; i < n; ++i) {
-        double z = std::cos(kPi * (i + 0.75) / (n + 0.5)), dp = 1;
-        for (int it = 0; it < 100; ++it) {
-            double p0 = 1, p1 = z;
-            for (int k = 2; k <= n; ++k) {
-                const double p2 = ((2.0 * k - 1) * z * p1 - (k - 1.0) * p0) / k;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n * (z * p1 - p0) / (z * z - 1);
-            const double dz = p1 / dp;
-            z -= dz;
-            if (std::abs(dz) < 1e-16) break;
-        }
+    // P_n(z) by the three-term recurrence, and its derivative P_n'(z).
+    auto legendre = [n](double z) {
         double p0 = 1, p1 = z;
         for (int k = 2; k <= n; ++k) {
             const double p2 = ((2.0 * k - 1) * z * p1 - (k - 1.0) * p0) / k;
             p0 = p1;
             p1 = p2;
         }
-        dp = n * (z * p1 - p0) / (z * z - 1);
+        return std::pair{p1, n * (z * p1 - p0) / (z * z - 1)};
+    };
+    for (int i = 0; i < n; ++i) {
+        double z = std::cos(kPi * (i + 0.75) / (n + 0.5));  // Newton from Tricomi's guess
+        for (int it = 0; it < 100; ++it) {
+            const auto [p, dp] = legendre(z);
+            const double dz = p / dp;
+            z -= dz;
+            if (std::abs(dz) < 1e-16) break;
+        }
+        const double dp = legendre(z).second;
         x[static_cast<size_t>(i)] = 0.5 * (1 - z);
         w[static_cast<size_t>(i)] = 1.0 / ((1 - z * z) * dp * dp);  // 2/((1−z²)P'²) · ½
     }
