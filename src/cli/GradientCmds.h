@@ -1,7 +1,7 @@
 // Gradient validation and the cross-renderer export:
-//   scratchlight gradcheck SCENE.json [--methods exact,autodiff,fd,spsa] [--json FILE] ...
+//   scratchlight gradcheck SCENE.json [--methods exact,autodiff,fd,spsa] [-o REPORT.json] ...
 //   scratchlight bench gradients [SCENE.json] [-o DIR] ...
-//   scratchlight export-mitsuba SCENE.json OUTDIR [--envmap FILE | --constant V]
+//   scratchlight export-mitsuba SCENE.json [--envmap SPEC | --lamps lamps.json] [-o OUTDIR]
 #pragma once
 
 #include <CLI/CLI.hpp>
