@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
@@ -14,6 +13,7 @@
 #include "app/OptimizeJob.h"
 #include "app/Plot.h"
 #include "app/Preview.h"
+#include "app/Report.h"
 #include "app/Search.h"
 #include "app/Version.h"
 #include "core/Error.h"
@@ -64,32 +64,6 @@ Image sideBySide(const std::vector<double>& left, const std::vector<double>& rig
                 static_cast<float>(right[s] * exposure);
         }
     return img;
-}
-
-std::string fileDataUri(const std::filesystem::path& png) {
-    std::ifstream in(png, std::ios::binary);
-    if (!in) return {};
-    std::stringstream s;
-    s << in.rdbuf();
-    const std::string bytes = s.str();
-    static const char* b64 = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    std::string out = "data:image/png;base64,";
-    size_t i = 0;
-    for (; i + 2 < bytes.size(); i += 3) {
-        const unsigned v = (static_cast<unsigned char>(bytes[i]) << 16) |
-                           (static_cast<unsigned char>(bytes[i + 1]) << 8) |
-                           static_cast<unsigned char>(bytes[i + 2]);
-        for (int k = 3; k >= 0; --k) out += b64[(v >> (6 * k)) & 63];
-    }
-    if (i < bytes.size()) {
-        unsigned v = static_cast<unsigned char>(bytes[i]) << 16;
-        if (i + 1 < bytes.size()) v |= static_cast<unsigned char>(bytes[i + 1]) << 8;
-        out += b64[(v >> 18) & 63];
-        out += b64[(v >> 12) & 63];
-        out += i + 1 < bytes.size() ? b64[(v >> 6) & 63] : '=';
-        out += '=';
-    }
-    return out;
 }
 
 }  // namespace
@@ -278,11 +252,11 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
             h << "</table>";
         }
         h << "<h2>Renders: left under E*, right under the lamps (one exposure)</h2><img src=\""
-          << fileDataUri(dir / "renders.png") << "\" style=\"image-rendering:pixelated;width:"
+          << dataUri(dir / "renders.png") << "\" style=\"image-rendering:pixelated;width:"
           << "100%\">";
         h << "<h2>The lamps over E* (upper hemisphere)</h2>";
         if (job.plotMessage.empty())
-            h << "<img src=\"" << fileDataUri(dir / "plot-lamps.png") << "\">";
+            h << "<img src=\"" << dataUri(dir / "plot-lamps.png") << "\">";
         else
             h << "<p>figure not made: " << escapeXml(job.plotMessage) << "</p>";
         h << "<h2>What each lamp buys</h2><table><tr><th>K</th><th>loss</th><th>of E*'s</th>"

@@ -141,6 +141,12 @@ std::string base64Encode(const std::string& in) {
     return out;
 }
 
+std::string dataUri(const std::filesystem::path& png) {
+    std::string out = "data:image/png;base64,";
+    out += base64Encode(readBytes(png, "image for the report"));
+    return out;
+}
+
 LossSeries readLossCsv(const std::filesystem::path& file) {
     std::istringstream in(readBytes(file, "loss curve"));
     std::string line;
@@ -519,12 +525,6 @@ std::string lampUnder(const json& cmp) {
     std::string out = "under your lamp (";
     out += lamp.value("name", std::string("studio preset"));
     out += ")";
-    return out;
-}
-
-std::string dataUri(const std::filesystem::path& png) {
-    std::string out = "data:image/png;base64,";
-    out += base64Encode(readBytes(png, "image for the report"));
     return out;
 }
 

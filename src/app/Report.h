@@ -108,4 +108,8 @@ std::string lossCurveSvg(const std::vector<LossSeries>& series, int width = 420,
 /// RFC 4648 base64 of bytes.
 std::string base64Encode(const std::string& bytes);
 
+/// A PNG file as a data URI (data:image/png;base64,...) for a self-contained page. Throws
+/// InputError naming a file that cannot be read.
+std::string dataUri(const std::filesystem::path& png);
+
 }  // namespace sl
