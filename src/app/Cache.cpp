@@ -33,33 +33,37 @@ fs::path cacheDirectory(const CacheLocation& location) {
     return {};
 }
 
-CacheContents cacheContents(const fs::path& dir) {
+namespace {
+
+/// The cache files of `dir` for which `count(path)` is true (it may remove the file first),
+/// with their sizes.
+template <class Count>
+CacheContents cacheFiles(const fs::path& dir, Count&& count) {
     CacheContents c;
     c.dir = dir;
     std::error_code ec;
     if (dir.empty() || !fs::is_directory(dir, ec)) return c;
     for (const auto& e : fs::directory_iterator(dir, ec)) {
         if (!e.is_regular_file(ec) || !isCacheFile(e.path())) continue;
+        const uintmax_t size = e.file_size(ec);
+        if (!count(e.path())) continue;
         ++c.files;
-        c.bytes += e.file_size(ec);
+        c.bytes += size;
     }
     return c;
 }
 
+}  // namespace
+
+CacheContents cacheContents(const fs::path& dir) {
+    return cacheFiles(dir, [](const fs::path&) { return true; });
+}
+
 CacheContents clearCache(const fs::path& dir) {
-    CacheContents removed;
-    removed.dir = dir;
-    std::error_code ec;
-    if (dir.empty() || !fs::is_directory(dir, ec)) return removed;
-    for (const auto& e : fs::directory_iterator(dir, ec)) {
-        if (!e.is_regular_file(ec) || !isCacheFile(e.path())) continue;
-        const uintmax_t size = e.file_size(ec);
-        if (fs::remove(e.path(), ec)) {
-            ++removed.files;
-            removed.bytes += size;
-        }
-    }
-    return removed;
+    return cacheFiles(dir, [](const fs::path& p) {
+        std::error_code ec;
+        return fs::remove(p, ec);
+    });
 }
 
 std::string describeCache(const CacheContents& c) {
