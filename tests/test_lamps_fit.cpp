@@ -32,12 +32,22 @@ TransportMatrix smallT() {
     return precomputeTransport(scene, ro, 1).matrix;
 }
 
-TEST(LampFit, ChainGradientMatchesFiniteDifferences) {
+/// The unbiased objective on smallT() through T: what every fit below minimizes.
+struct SmallProblem {
+    explicit SmallProblem(double lambda) : obj(t.width, t.height, t.objectMask, options(lambda)) {}
+    static ObjectiveOptions options(double lambda) {
+        ObjectiveOptions oo;
+        oo.lambda = lambda;
+        return oo;
+    }
     const TransportMatrix t = smallT();
-    ObjectiveOptions oo;
-    oo.lambda = 0.5;
-    UnbiasedObjective obj(t.width, t.height, t.objectMask, oo);
-    TransportLoss loss(t, obj, false);
+    UnbiasedObjective obj;
+    TransportLoss loss{t, obj, false};
+};
+
+TEST(LampFit, ChainGradientMatchesFiniteDifferences) {
+    SmallProblem small(0.5);
+    TransportLoss& loss = small.loss;
     LampFitOptions o;
     o.minElevation = -0.2;
     LampRasterizer raster(EnvMapBasis(50, 25), o.raster);
@@ -64,11 +74,8 @@ TEST(LampFit, ChainGradientMatchesFiniteDifferences) {
 }
 
 TEST(LampFit, GreedyLampsApproachTheOptimizedEnvMap) {
-    const TransportMatrix t = smallT();
-    ObjectiveOptions oo;
-    oo.lambda = 0.5;
-    UnbiasedObjective obj(t.width, t.height, t.objectMask, oo);
-    TransportLoss loss(t, obj, false);
+    SmallProblem small(0.5);
+    TransportLoss& loss = small.loss;
     // E*: the objective minimized over the 1250 texels.
     std::vector<double> target(loss.dimension(), 0.5);
     OptimizerOptions opt;
@@ -103,11 +110,8 @@ TEST(LampFit, GreedyLampsApproachTheOptimizedEnvMap) {
 }
 
 TEST(LampFit, ForbiddenAzimuthKeepsLampsOut) {
-    const TransportMatrix t = smallT();
-    ObjectiveOptions oo;
-    oo.lambda = 0.5;
-    UnbiasedObjective obj(t.width, t.height, t.objectMask, oo);
-    TransportLoss loss(t, obj, false);
+    SmallProblem small(0.5);
+    TransportLoss& loss = small.loss;
     std::vector<double> target(loss.dimension(), 0.5);
     LampFitOptions o;
     o.count = 2;
@@ -123,10 +127,8 @@ TEST(LampFit, ForbiddenAzimuthKeepsLampsOut) {
 }
 
 TEST(LampFit, RefusesBadOptions) {
-    const TransportMatrix t = smallT();
-    ObjectiveOptions oo;
-    UnbiasedObjective obj(t.width, t.height, t.objectMask, oo);
-    TransportLoss loss(t, obj, false);
+    SmallProblem small(ObjectiveOptions{}.lambda);
+    TransportLoss& loss = small.loss;
     std::vector<double> target(loss.dimension(), 0.5);
     LampFitOptions o;
     o.count = 9;
