@@ -59,6 +59,31 @@ TEST(LampCli, WritesTheLampsTheirLightAndTheReport) {
     EXPECT_LT(xml.find("<emitter type=\"area\">"), xml.rfind("</scene>"));
 }
 
+// The defects objective (the default when a truth names the defects), judged on the held-out
+// estimate with the objective itself and per-region visibility.
+TEST(LampCli, FitsTheDefectsObjectiveAndJudgesIt) {
+    test::TempDir dir("lamps-cli-defects");
+    const fs::path out = dir / "out";
+    const std::string truth = std::string(SL_SOURCE_DIR) + "/scenes/default/part-truth.png";
+    auto r = test::runCli("lamps " + kScene + " --size 64 --spp 4 --count 1 --no-figures --truth " +
+                          truth + " --cache " + (dir / "cache").string() + " -o " + out.string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("judge (defect visibility on the held-out estimate"), std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find("visibility of"), std::string::npos) << r.output;
+    const auto summary = nlohmann::json::parse(readText(out / "summary.json"));
+    EXPECT_EQ(summary["objective"], "defects");
+    const auto& j = summary["judge"]["objective"];
+    EXPECT_TRUE(j["higher_is_better"].get<bool>());
+    const double target = j["target"].get<double>(), lamps = j["lamps"].get<double>();
+    EXPECT_NEAR(j["lamps_gap"].get<double>(), (target - lamps) / target, 1e-12);
+    // The measure is the judge's visibility of the defect region.
+    ASSERT_EQ(summary["judge"]["lamps"]["visibility"].size(), 1u);
+    EXPECT_NEAR(summary["judge"]["lamps"]["visibility"][0]["visibility"].get<double>(), lamps,
+                1e-12 * std::abs(lamps));
+    EXPECT_NE(readText(out / "report.html").find("visibility: "), std::string::npos);
+}
+
 TEST(LampCli, RefusesBadInputWithTheRightExitCode) {
     test::TempDir dir("lamps-cli-bad");
     const std::string base = "lamps " + kScene + " --size 16 --spp 2 --no-judge --cache " +
@@ -75,8 +100,9 @@ TEST(LampCli, RefusesBadInputWithTheRightExitCode) {
     EXPECT_NE(r.output.find("--min-elevation"), std::string::npos) << r.output;
     r = test::runCli(base + " --from " + (dir / "missing.exr").string());
     EXPECT_EQ(r.exitCode, 1) << r.output;
-    r = test::runCli(base + " --objective defects");
+    r = test::runCli(base + " --objective defects --defects " + (dir / "missing.png").string());
     EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("missing.png"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(dir / "o"));
     r = test::runCli("export-mitsuba " + kScene + " --lamps " + (dir / "none.json").string() +
                      " -o " + (dir / "m").string());

@@ -73,6 +73,28 @@ TEST(LampFit, ChainGradientMatchesFiniteDifferences) {
     }
 }
 
+TEST(LampFit, ColumnProductsGiveTheSameLossAndGradient) {
+    SmallProblem small(0.5);
+    LampFitOptions o;
+    o.minElevation = -0.2;
+    LampRasterizer raster(EnvMapBasis(50, 25), o.raster);
+    const TransportColumns columns(small.t);
+    const std::vector<LampKind> kinds{LampKind::Disk, LampKind::Bar, LampKind::Ring};
+    LampProblem full(small.loss, raster, kinds, o), cols(small.loss, raster, kinds, o, &columns);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> U(0.25, 0.75);
+    for (int trial = 0; trial < 3; ++trial) {
+        std::vector<double> x(full.dimension());
+        for (double& v : x) v = U(rng);
+        std::vector<double> g(x.size()), gc(x.size());
+        const double v = full.evaluate(x, g), vc = cols.evaluate(x, gc);
+        EXPECT_NEAR(vc, v, 1e-9 * std::abs(v));
+        double scale = 0;
+        for (double e : g) scale = std::max(scale, std::abs(e));
+        for (size_t k = 0; k < x.size(); ++k) EXPECT_NEAR(gc[k], g[k], 1e-7 * scale) << k;
+    }
+}
+
 TEST(LampFit, GreedyLampsApproachTheOptimizedEnvMap) {
     SmallProblem small(0.5);
     TransportLoss& loss = small.loss;

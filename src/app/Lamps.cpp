@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 
 #include "core/Error.h"
 #include "core/Progress.h"
@@ -64,8 +65,13 @@ std::array<double, 2> lampParamRange(LampKind kind, int p, const LampFitOptions&
 }
 
 LampProblem::LampProblem(const TransportLoss& loss, const LampRasterizer& raster,
-                         std::vector<LampKind> kinds, const LampFitOptions& options)
-    : loss_(loss), raster_(raster), kinds_(std::move(kinds)), options_(options) {}
+                         std::vector<LampKind> kinds, const LampFitOptions& options,
+                         const TransportColumns* columns)
+    : loss_(loss),
+      raster_(raster),
+      kinds_(std::move(kinds)),
+      options_(options),
+      columns_(columns) {}
 
 std::vector<Lamp> LampProblem::lamps(std::span<const double> x) const {
     std::vector<Lamp> out;
@@ -110,7 +116,24 @@ double LampProblem::evaluate(std::span<const double> x, std::span<double> grad) 
     for (size_t l = 0; l < ls.size(); ++l)  // in lamp order: the sum does not depend on threads
         for (size_t t = 0; t < texels; ++t) E[t] += El[l][t];
     std::vector<double> gE(grad.empty() ? 0 : loss_.dimension());
-    double value = loss_.evaluate(E, gE).total;
+    double value = 0;
+    if (columns_) {
+        // The texels any lamp touches: where E or a derivative of E is non-zero. Outside them
+        // E is 0 and the chain rule needs no dLoss/dE.
+        std::vector<uint16_t> active;
+        for (size_t t = 0; t < texels; ++t) {
+            bool touched = false;
+            for (size_t l = 0; l < ls.size() && !touched; ++l) {
+                touched = El[l][t] != 0;
+                for (int k = 0; k < kLampParams && !touched; ++k)
+                    touched = J[l][t * kLampParams + static_cast<size_t>(k)] != 0;
+            }
+            if (touched) active.push_back(static_cast<uint16_t>(t));
+        }
+        value = loss_.evaluateOnColumns(*columns_, E, active, gE).total;
+    } else {
+        value = loss_.evaluate(E, gE).total;
+    }
     // Overlapping lamps may not exceed E's box [0, 1] (the same budget as E*): a smooth
     // quadratic penalty on the excess, weighted by the texel's solid angle.
     const std::vector<double>& omega = raster_.texelSolidAngles();
@@ -297,11 +320,12 @@ struct LampFitRun {
 };
 
 /// The lamps optimized jointly from `start` on `raster` for up to `iterations` iterations.
-LampFitRun fitRun(const TransportLoss& loss, const LampRasterizer& raster,
-                  std::span<const Lamp> start, const LampFitOptions& o, int iterations) {
+LampFitRun fitRun(const TransportLoss& loss, const TransportColumns* columns,
+                  const LampRasterizer& raster, std::span<const Lamp> start,
+                  const LampFitOptions& o, int iterations) {
     std::vector<LampKind> kinds;
     for (const Lamp& l : start) kinds.push_back(l.kind);
-    const LampProblem problem(loss, raster, kinds, o);
+    const LampProblem problem(loss, raster, kinds, o, columns);
     std::vector<double> x = problem.encode(start);
     OptimizerOptions opt;
     opt.method = o.method;
@@ -339,6 +363,9 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
     LampRasterOptions coarse = o.raster;
     coarse.subsamples = std::min(coarse.subsamples, o.screenSubsamples);
     const LampRasterizer screen(basis, coarse);
+    std::optional<TransportColumns> columnCopy;
+    if (o.columnProducts) columnCopy.emplace(loss.matrix());
+    const TransportColumns* columns = columnCopy ? &*columnCopy : nullptr;
     LampFitResult result;
     std::vector<double> gTarget(loss.dimension());
     result.targetLoss = loss.evaluate(target, gTarget).total;
@@ -364,7 +391,7 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
             const TransportLoss own = loss;
             std::vector<Lamp> trial = lamps;
             trial.push_back(cands[c]);
-            const LampFitRun run = fitRun(own, screen, trial, o, o.candidateIterations);
+            const LampFitRun run = fitRun(own, columns, screen, trial, o, o.candidateIterations);
             screenEvaluations[c] = run.evaluations;
             screened[c] = {run.loss, run.lamps};
         });
@@ -380,7 +407,8 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
         std::vector<LampFitRun> polishedRuns(polish);
         tbb::parallel_for(size_t{0}, polish, [&](size_t c) {
             const TransportLoss own = loss;
-            polishedRuns[c] = fitRun(own, raster, screened[order[c]].second, o, o.finalIterations);
+            polishedRuns[c] =
+                fitRun(own, columns, raster, screened[order[c]].second, o, o.finalIterations);
         });
         for (const LampFitRun& run : polishedRuns) {  // in screened order: ties keep the better
             evaluations += run.evaluations;

@@ -54,6 +54,9 @@ struct LampFitOptions {
     int screenSubsamples = 8, polished = 2;
     int residualPeaks = 3;            // residual peaks (at least 20° apart) a new lamp is tried at
     double relativeTolerance = 1e-6;  // stop when the loss changes by less than this fraction
+    /// Products over the lamps' texels only (transport/TransportColumns.h); false: over all of
+    /// T (the baseline `bench lamps` measures it against).
+    bool columnProducts = true;
     LampRasterOptions raster;
 };
 
@@ -79,8 +82,11 @@ struct LampFitResult {
 /// kLampParams per lamp, each in [0, 1] as above).
 class LampProblem {
   public:
+    /// columns (optional, a TransportColumns of loss's matrix): the products read only the
+    /// texels the lamps touch (TransportLoss::evaluateOnColumns); the same loss and gradient.
     LampProblem(const TransportLoss& loss, const LampRasterizer& raster,
-                std::vector<LampKind> kinds, const LampFitOptions& options);
+                std::vector<LampKind> kinds, const LampFitOptions& options,
+                const TransportColumns* columns = nullptr);
     size_t dimension() const { return kinds_.size() * kLampParams; }
     /// The loss at x (and the gradient when grad is non-empty).
     double evaluate(std::span<const double> x, std::span<double> grad) const;
@@ -93,6 +99,7 @@ class LampProblem {
     const LampRasterizer& raster_;
     std::vector<LampKind> kinds_;
     LampFitOptions options_;
+    const TransportColumns* columns_;
 };
 
 /// InputError naming the option when the options are out of range (count 1..8, a kind, an

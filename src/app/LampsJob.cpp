@@ -75,14 +75,12 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
     try {
         const bool tmInput = isTransportFile(o.input);
         std::unique_ptr<Scene> scene;
-        ObjectiveKind kind = o.objectiveKind
-                                 ? *o.objectiveKind
-                                 : (tmInput ? ObjectiveKind::Paper : ObjectiveKind::Unbiased);
-        if (kind == ObjectiveKind::Defects)
-            throw inputError(option("objective"), "defects is not available for lamps yet",
-                             "use paper or unbiased (or fit the lamps to an E* optimized for "
-                             "the defects with " +
-                                 option("from") + ")");
+        const bool defectsNamed = !o.truth.empty() || !o.defects.empty();
+        ObjectiveKind kind = o.objectiveKind ? *o.objectiveKind
+                             : defectsNamed  ? ObjectiveKind::Defects
+                             : tmInput       ? ObjectiveKind::Paper
+                                             : ObjectiveKind::Unbiased;
+        const bool halves = kind != ObjectiveKind::Paper;
         checkLampFitOptions(o.fit);  // before any work
         std::vector<double> target;
         if (!o.from.empty()) {
@@ -93,13 +91,13 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         if (tmInput) {
             job.transport.file = readTransportFile(o.input);
             job.transport.path = o.input;
-            if (!o.objectiveKind && job.transport.file.matrix.planes == 2)
+            if (!o.objectiveKind && !defectsNamed && job.transport.file.matrix.planes == 2)
                 kind = ObjectiveKind::Unbiased;
         } else {
             scene = loadScene(o.input, o.sceneOverrides);
             PrecomputeOptions pre = o.precompute;
             pre.rgb = false;
-            if (kind == ObjectiveKind::Unbiased) pre.sampleSets = 2;
+            if (halves) pre.sampleSets = 2;
             job.transport = transportForScene(*scene, pre, cacheDir);
         }
         const TransportMatrix& t = job.transport.file.matrix;
@@ -108,10 +106,13 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
             throw inputError(o.input.string(),
                              "is not a gray transport matrix on the 50x25 env-map grid",
                              "precompute it without " + option("rgb") + " on the default grid");
-        if (kind == ObjectiveKind::Unbiased && t.planes != 2)
+        if (kind != ObjectiveKind::Paper && t.planes != 2)
             throw inputError(o.input.string(),
-                             "has no half-sample matrices; the unbiased objective needs them",
+                             std::string("has no half-sample matrices; the ") +
+                                 objectiveKindName(kind) + " objective needs them",
                              "precompute it with " + option("halves") + ", or pass the scene file");
+        if (!scene && kind == ObjectiveKind::Defects)
+            scene = sceneOfTransport(job.transport.file, "the defects objective's regions");
         if (!scene && (o.judge || o.from.empty())) {
             try {
                 scene = sceneOfTransport(job.transport.file, "the judge and the specular start");
@@ -127,6 +128,12 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         in.objective = o.objective;
         in.scene = scene.get();
         in.maxDepth = job.transport.file.provenance.maxDepth;
+        if (kind == ObjectiveKind::Defects) {
+            DefectRegions regions = defectRegionsInImage(*scene, o.defects, o.truth, o.reference);
+            in.defects = std::move(regions.defects);
+            in.reference = std::move(regions.reference);
+        }
+        job.objective = kind;
         const ObjectiveOnT objective = objectiveOnT(kind, t, in, o.objective);
 
         // E*.
@@ -154,11 +161,44 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
             estimate = judgeEstimateFor(job.transport.file, *scene, 0, cacheDir);
             JudgeOptions jo;
             jo.objective = o.objective;
-            Judge judge(*estimate, jo);
+            // Per-region visibility of the defects objective's defect region, else of the
+            // truth's labels.
+            std::vector<uint8_t> labels;
+            std::vector<RegionLabel> legend;
+            if (kind == ObjectiveKind::Defects) {
+                for (uint8_t v : in.defects) labels.push_back(v ? 255 : 0);
+                legend = {RegionLabel{255, "defects"}};
+            } else if (!o.truth.empty()) {
+                LabelMask truth = projectTruth(*scene, o.truth);
+                labels = std::move(truth.labels);
+                legend = std::move(truth.legend);
+            }
+            Judge judge(*estimate, jo, labels, legend);
+            const EnvMap studioMap = lightFromSpec("studio", t.envWidth, t.envHeight, 1, "studio");
+            const std::vector<double> studio = judge.envVector(studioMap);
             job.judgedTarget = judge.score(target, "E*");
             job.judgedLamps = judge.score(job.fit.envMap, "lamps");
-            const EnvMap studio = lightFromSpec("studio", t.envWidth, t.envHeight, 1, "studio");
-            job.judgedStudio = judge.score(judge.envVector(studio), "studio");
+            job.judgedStudio = judge.score(studio, "studio");
+            LampsJudgement jd;
+            if (kind == ObjectiveKind::Defects) {
+                jd.measure = "defect visibility";
+                jd.higherIsBetter = true;
+                jd.target = job.judgedTarget->visibility.front().visibility;
+                jd.lamps = job.judgedLamps->visibility.front().visibility;
+                jd.studio = job.judgedStudio->visibility.front().visibility;
+                jd.gap = (jd.target - jd.lamps) / std::max(std::abs(jd.target), 1e-300);
+            } else {
+                const bool paper = kind == ObjectiveKind::Paper;
+                auto own = [&](const JudgeScore& js) {
+                    return paper ? js.eq2.total : js.unbiased.total;
+                };
+                jd.measure = paper ? "eq. 2" : "U";
+                jd.target = own(*job.judgedTarget);
+                jd.lamps = own(*job.judgedLamps);
+                jd.studio = own(*job.judgedStudio);
+                jd.gap = (jd.lamps - jd.target) / std::max(std::abs(jd.target), 1e-300);
+            }
+            job.judgement = jd;
         }
 
         // Outputs.
@@ -223,7 +263,14 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
                              {"evaluations", st.evaluations}});
         s["greedy"] = steps;
         if (job.judgedTarget) {
-            s["judge"] = {{"target", toJson(*job.judgedTarget)},
+            s["judge"] = {{"objective",
+                           {{"measure", job.judgement->measure},
+                            {"higher_is_better", job.judgement->higherIsBetter},
+                            {"target", job.judgement->target},
+                            {"lamps", job.judgement->lamps},
+                            {"studio", job.judgement->studio},
+                            {"lamps_gap", job.judgement->gap}}},
+                          {"target", toJson(*job.judgedTarget)},
                           {"lamps", toJson(*job.judgedLamps)},
                           {"studio", toJson(*job.judgedStudio)}};
         }
@@ -243,12 +290,30 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
           << formatNumber(job.fit.steps.back().loss) << " (" << formatNumber(ratio)
           << " of E*'s).</p>";
         if (job.judgedTarget) {
-            h << "<table><tr><th>light</th><th>judge eq. 2</th><th>judge U</th><th>brightness"
-                 "</th></tr>";
-            for (const JudgeScore* js : {&*job.judgedTarget, &*job.judgedLamps, &*job.judgedStudio})
-                h << "<tr><td>" << escapeXml(js->name) << "</td><td>" << formatNumber(js->eq2.total)
-                  << "</td><td>" << formatNumber(js->unbiased.total) << "</td><td>"
-                  << formatNumber(js->brightness) << "</td></tr>";
+            const LampsJudgement& jd = *job.judgement;
+            h << "<p>On the judge's held-out estimate the lamps are ";
+            h << (std::abs(jd.gap) <= 0.05 ? "within 5 % of"
+                                           : (jd.gap > 0 ? "worse than" : "better than"));
+            h << " E* (" << formatNumber(100 * jd.gap) << " % in " << escapeXml(jd.measure)
+              << ", the " << objectiveKindName(kind) << " objective's measure; "
+              << (jd.higherIsBetter ? "higher" : "lower") << " is better).</p>";
+            h << "<table><tr><th>light</th><th>judge: " << escapeXml(jd.measure)
+              << "</th><th>eq. 2</th><th>U</th><th>brightness</th>";
+            for (const RegionVisibility& v : job.judgedTarget->visibility)
+                h << "<th>visibility: " << escapeXml(v.label.name) << "</th>";
+            h << "</tr>";
+            const double own[3] = {jd.target, jd.lamps, jd.studio};
+            int row = 0;
+            for (const JudgeScore* js :
+                 {&*job.judgedTarget, &*job.judgedLamps, &*job.judgedStudio}) {
+                h << "<tr><td>" << escapeXml(js->name) << "</td><td>" << formatNumber(own[row++])
+                  << "</td><td>" << formatNumber(js->eq2.total) << "</td><td>"
+                  << formatNumber(js->unbiased.total) << "</td><td>" << formatNumber(js->brightness)
+                  << "</td>";
+                for (const RegionVisibility& v : js->visibility)
+                    h << "<td>" << formatNumber(v.visibility) << "</td>";
+                h << "</tr>";
+            }
             h << "</table>";
         }
         h << "<h2>Renders: left under E*, right under the lamps (one exposure)</h2><img src=\""

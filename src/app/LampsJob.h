@@ -13,7 +13,9 @@
 //                       side (left E*, right the lamps), one exposure (E*'s)
 //   greedy.csv          k, loss, loss relative to E*'s, seconds, one row per k = 1..K
 //   summary.json        the options, T's facts, the losses, the judge's scores (E*, the lamps,
-//                       the studio lamp) when the judge's estimate is available, the timings
+//                       the studio lamp: the objective itself on the judge's held-out estimate,
+//                       and eq. 2, U, brightness and per-region visibility) when the judge's
+//                       estimate is available, the timings
 //   plot-lamps.json, plot-lamps.png   the polar hemisphere plot of the lamps over E*
 //                       (scripts/plot_lamps.py; absent, and said why, without matplotlib)
 //   report.html         the renders side by side, the plot, the table
@@ -28,6 +30,7 @@
 #include "app/Judge.h"
 #include "app/Lamps.h"
 #include "app/Transport.h"
+#include "app/Truth.h"
 #include "objective/Objective.h"
 #include "objective/ObjectiveKind.h"
 
@@ -40,8 +43,14 @@ struct LampsJobOptions {
     /// E*: a light spec (io/EnvMapIO.h lightFromSpec); empty: optimized here on T with
     /// optimize's method (L-BFGS) from the specular start (const:0.5 without a scene).
     std::string from;
-    /// unset: unbiased (needs T's halves), paper for a .tm without halves. defects is refused.
+    /// unset: unbiased (needs T's halves), paper for a .tm without halves; defects when the
+    /// defects are named (truth or defects), as optimize.
     std::optional<ObjectiveKind> objectiveKind;
+    /// The defects objective's regions, as optimize's (app/OptimizeJob.h): the truth (labels in
+    /// height-map space, also what the judge's per-region visibility is of), the defect region
+    /// (empty: the truth, else auto) and the reference (empty: the part off the defects).
+    std::filesystem::path truth;
+    RegionSpec defects, reference;
     ObjectiveOptions objective;  // λ 30 by default (optimize's)
     LampFitOptions fit;
     double distanceMm = 500;  // where the lamps are mounted, from the part's centre
@@ -52,12 +61,26 @@ struct LampsJobOptions {
     CacheLocation cache;
 };
 
+/// The judge's word on E*, the lamps and the studio lamp for the objective fitted: for paper and
+/// unbiased the objective itself on the held-out estimate (eq. 2, U; lower is better), for
+/// defects the defect region's visibility on it (higher is better; the defects objective is
+/// −log visibility² plus exposure terms, so its values cross zero and a ratio of them means
+/// nothing). gap: how much worse the lamps are than E*, relative (> 0: worse).
+struct LampsJudgement {
+    std::string measure;  // "U", "eq. 2" or "defect visibility"
+    bool higherIsBetter = false;
+    double target = 0, lamps = 0, studio = 0;
+    double gap = 0;
+};
+
 struct LampsJobSummary {
+    ObjectiveKind objective = ObjectiveKind::Unbiased;
     TransportSource transport;
     LampFitResult fit;
     double targetLoss = 0;
     double secondsTarget = 0;  // optimizing E* (0 with `from`)
     std::optional<JudgeScore> judgedTarget, judgedLamps, judgedStudio;
+    std::optional<LampsJudgement> judgement;
     std::string plotMessage;  // why the plot is missing ("" when made)
 };
 

@@ -381,14 +381,8 @@ void loadHeldOut(const Plan& p, const Inputs& in, OptimizeJobSummary& job) {
                          "use another " + option("seed"));
 }
 
-/// The defects objective's defect region: `defects`, else the truth, else the defect map found
-/// without labels (auto).
 RegionSpec defectRegion(const OptimizeJobOptions& o) {
-    if (!o.defects.empty()) return o.defects;
-    if (!o.truth.empty()) return RegionSpec{o.truth, {}, false};
-    RegionSpec r;
-    r.automatic = true;
-    return r;
+    return defectRegionSpec(o.defects, o.truth);
 }
 
 /// Stage 3: the loss mask, the truth, every start's E0 and what E0 shows (the same for every λ).
@@ -398,23 +392,9 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     in.mask = lossMask(o.mask, t, in.scene.get(), o.scratch);
     job.maskPixels = in.mask.count;
     if (in.kind == ObjectiveKind::Defects) {
-        const RegionSpec defects = defectRegion(o);
-        in.defects = projectRegion(*in.scene, defects);
-        if (defects.automatic &&
-            std::none_of(in.defects.begin(), in.defects.end(), [](uint8_t v) { return v != 0; }))
-            throw inputError(option("defects") + " auto",
-                             "the defect map of the height map marks nothing the camera sees",
-                             "give a defect mask with " + option("defects") + " or a truth with " +
-                                 option("truth"));
-        if (o.reference.automatic) {
-            // The part the defect map finds clean and that is not a defect region pixel.
-            const std::vector<uint8_t> marked = projectRegion(*in.scene, o.reference);
-            in.reference.assign(marked.size(), 0);
-            for (size_t q = 0; q < marked.size(); ++q)
-                in.reference[q] = !marked[q] && !in.defects[q] ? 255 : 0;
-        } else if (!o.reference.empty()) {
-            in.reference = projectRegion(*in.scene, o.reference);
-        }
+        DefectRegions regions = defectRegionsInImage(*in.scene, o.defects, o.truth, o.reference);
+        in.defects = std::move(regions.defects);
+        in.reference = std::move(regions.reference);
     }
     if (!o.truth.empty()) in.truth = projectMaskFile(*in.scene, o.truth);
     const int maxDepth = job.transport.file.provenance.maxDepth;

@@ -103,6 +103,20 @@ std::vector<std::string> raceParts() {
     return {"ballend-chatter", "facemill-scratches", "pocket"};
 }
 
+PartFiles writeRacePart(const std::string& name, const std::filesystem::path& dir) {
+    const auto known = raceParts();
+    if (std::find(known.begin(), known.end(), name) == known.end())
+        throw inputError(option("parts"), "no race part named '" + name + "'",
+                         "use ballend-chatter, facemill-scratches or pocket");
+    std::filesystem::create_directories(dir);
+    PartFileOptions pf;
+    pf.scene = dir / "scene.json";
+    pf.imageSize = 256;
+    pf.spp = 16;
+    pf.maxDepth = 3;
+    return writePartFiles(generateSurface(partSpec(name)), dir / "part.exr", pf);
+}
+
 std::vector<RaceConfig> defaultRaceConfigs() {
     using K = ObjectiveKind;
     using M = OptimizerMethod;
@@ -139,14 +153,7 @@ RaceSummary runRace(const RaceOptions& o) {
     ProgressTask task("race", static_cast<double>(o.parts.size() * o.configs.size()) * o.seeds);
     for (const std::string& partName : o.parts) {
         const auto dir = o.workDir / partName;
-        std::filesystem::create_directories(dir);
-        PartFileOptions pf;
-        pf.scene = dir / "scene.json";
-        pf.imageSize = 256;
-        pf.spp = 16;
-        pf.maxDepth = 3;
-        const GeneratedSurface g = generateSurface(partSpec(partName));
-        const PartFiles files = writePartFiles(g, dir / "part.exr", pf);
+        const PartFiles files = writeRacePart(partName, dir);
         auto scene = loadScene(files.scene);
         JudgeOptions jo;
         jo.spp = o.judgeSpp;

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "app/PartFiles.h"
 #include "app/Search.h"
 
 namespace sl {
@@ -30,6 +31,9 @@ struct RacePart {
 /// The generated parts: a ball-end part whose right half has chatter, a face-mill part with
 /// scratches, a ball-end pocket (step edge); 512² samples at 0.01 mm, 256² view, max_depth 3.
 std::vector<std::string> raceParts();
+/// Writes race part `name` into `dir` (part.exr, its truth, scene.json at 256², 16 spp,
+/// max_depth 3: as the race traces it). Throws InputError for an unknown name.
+PartFiles writeRacePart(const std::string& name, const std::filesystem::path& dir);
 
 struct RaceOptions {
     std::vector<std::string> parts = raceParts();

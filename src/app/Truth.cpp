@@ -122,4 +122,36 @@ std::vector<uint8_t> projectRegion(const Scene& scene, const RegionSpec& region,
     return projectToImage(tracePrimaryHits(scene, threads), m);
 }
 
+RegionSpec defectRegionSpec(const RegionSpec& defects, const std::filesystem::path& truth) {
+    if (!defects.empty()) return defects;
+    if (!truth.empty()) return RegionSpec{truth, {}, false};
+    RegionSpec r;
+    r.automatic = true;
+    return r;
+}
+
+DefectRegions defectRegionsInImage(const Scene& scene, const RegionSpec& defectSpec,
+                                   const std::filesystem::path& truth,
+                                   const RegionSpec& reference) {
+    DefectRegions r;
+    const RegionSpec defects = defectRegionSpec(defectSpec, truth);
+    r.defects = projectRegion(scene, defects);
+    if (defects.automatic &&
+        std::none_of(r.defects.begin(), r.defects.end(), [](uint8_t v) { return v != 0; }))
+        throw inputError(
+            option("defects") + " auto",
+            "the defect map of the height map marks nothing the camera sees",
+            "give a defect mask with " + option("defects") + " or a truth with " + option("truth"));
+    if (reference.automatic) {
+        // The part the defect map finds clean and that is not a defect region pixel.
+        const std::vector<uint8_t> marked = projectRegion(scene, reference);
+        r.reference.assign(marked.size(), 0);
+        for (size_t q = 0; q < marked.size(); ++q)
+            r.reference[q] = !marked[q] && !r.defects[q] ? 255 : 0;
+    } else if (!reference.empty()) {
+        r.reference = projectRegion(scene, reference);
+    }
+    return r;
+}
+
 }  // namespace sl

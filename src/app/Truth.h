@@ -54,4 +54,19 @@ std::vector<uint8_t> regionInHeightMap(const RegionSpec& region, int mapWidth, i
 /// regionInHeightMap projected into the scene's image through the centre rays (255/0).
 std::vector<uint8_t> projectRegion(const Scene& scene, const RegionSpec& region, int threads = 0);
 
+/// The defects objective's defect region as the user named it: `defects`, else the truth (the
+/// whole mask), else the defect map found without labels (auto).
+RegionSpec defectRegionSpec(const RegionSpec& defects, const std::filesystem::path& truth);
+
+/// The defects objective's two regions in the scene's image (255/0).
+struct DefectRegions {
+    std::vector<uint8_t> defects;
+    std::vector<uint8_t> reference;  // empty: the objective's default (the part off the defects)
+};
+/// defects: defectRegionSpec(defects, truth) projected; reference: empty when not given, auto:
+/// the part the defect map leaves unmarked and outside the defects, else the region given.
+/// Throws InputError when an automatic defect region marks nothing the camera sees.
+DefectRegions defectRegionsInImage(const Scene& scene, const RegionSpec& defects,
+                                   const std::filesystem::path& truth, const RegionSpec& reference);
+
 }  // namespace sl

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "app/DefectMapBench.h"
+#include "app/LampsBench.h"
 #include "app/NoiseBench.h"
 #include "app/Plot.h"
 #include "app/RenderBench.h"
@@ -85,6 +86,30 @@ int runTransportBenchCmd(TransportBenchArgs a) {
                 ("Adam, " + std::to_string(a.o.iterations) + " iterations").c_str(), r.adam);
     std::printf("(medians: tracing of %d interleaved runs, products of %d runs)\n", a.o.repeats,
                 r.productRepeats);
+    writeTextAtomically(a.csv, r.csv());
+    std::printf("wrote %s\n", a.csv.c_str());
+    return kOk;
+}
+
+struct LampsBenchArgs {
+    LampsBenchOptions o;
+    std::vector<std::string> objectives;
+    std::string csv = "bench-lamps.csv";
+};
+
+int runLampsBenchCmd(LampsBenchArgs a) {
+    if (!a.objectives.empty()) {
+        a.o.objectives.clear();
+        for (const std::string& n : a.objectives)
+            a.o.objectives.push_back(parseObjectiveKind(n, "--objectives"));
+    }
+    const LampsBenchResult r = runLampsBench(a.o);
+    std::printf("%s", r.table().c_str());
+    std::printf(
+        "(K = %d lamps at %dx%d; judge: the objective on the held-out 1024-spp estimate, lower "
+        "is better, gap = (lamps - E*)/|E*|; fit all/cols: seconds of the fit with products "
+        "over all of T / over the lamps' texels, one after the other on the same T and E*)\n",
+        a.o.count, a.o.size, a.o.size);
     writeTextAtomically(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
@@ -251,6 +276,27 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     sm->add_option("-o,--output", m->csv, "CSV output")->capture_default_str();
     sm->callback([m, &run] { run = [m] { return runScratchMapBenchCmd(*m); }; });
+
+    auto lb = std::make_shared<LampsBenchArgs>();
+    CLI::App* lbc = bench->add_subcommand(
+        "lamps",
+        "K lamps against E* on the judge's parts per objective (judge scores), and the fit's "
+        "seconds with products over the lamps' texels vs over all of T");
+    lbc->add_option("--parts", lb->o.parts, "bundled and/or race parts")
+        ->delimiter(',')
+        ->capture_default_str();
+    lbc->add_option("--objectives", lb->objectives, "Objectives (default: unbiased,paper,defects)")
+        ->delimiter(',');
+    lbc->add_option("--count", lb->o.count, "Lamps (K)")
+        ->check(CLI::Range(1, 8))
+        ->capture_default_str();
+    lbc->add_option("--size", lb->o.size, "Image width and height")
+        ->check(CLI::Range(8, 4096))
+        ->capture_default_str();
+    lbc->add_option("--work", lb->o.workDir, "Folder for the parts, runs and cache")
+        ->capture_default_str();
+    lbc->add_option("-o,--output", lb->csv, "CSV output")->capture_default_str();
+    lbc->callback([lb, &run] { run = [lb] { return runLampsBenchCmd(*lb); }; });
 
     auto dm = std::make_shared<DefectMapBenchArgs>();
     CLI::App* dmc = bench->add_subcommand(

@@ -35,6 +35,18 @@ void addCacheOptions(CLI::App* c, CacheLocation& cache) {
     dir->excludes(off);
 }
 
+void addDefectRegionOptions(CLI::App* c, RegionSpec& defects, RegionSpec& reference) {
+    addParsed(c, "--defects", defects, parseRegionSpec,
+              "--objective defects: the defect region in height-map space: MASK.png, "
+              "TRUTH.png:LABEL[,LABEL...] (legend names or values), or auto (the defect map "
+              "of the height map, as `scratchlight defectmap`; default: --truth, else auto)");
+    addParsed(c, "--reference", reference, parseRegionSpec,
+              "--objective defects: the reference region, as --defects (default: the part "
+              "away from the defects; auto: what the defect map leaves unmarked). Region "
+              "comparison: --defects part-truth.png:chatter --reference "
+              "part-truth.png:none");
+}
+
 void addSceneOverrides(CLI::App* c, std::vector<std::string>& overrides, bool image) {
     c->add_option_function<std::vector<std::string>>(
          "-D",

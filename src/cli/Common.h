@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "app/Cache.h"
+#include "app/Truth.h"
 #include "core/Error.h"
 #include "core/Registry.h"
 #include "scene/EnvMap.h"
@@ -51,6 +52,10 @@ EnvMap chooseEnvMap(const Scene& scene, const std::string& spec);
 /// Mitsuba's; io/SceneFile.h) and, when it renders (`image`), --width/--height and --size N
 /// (both) for the image, which are camera.width/height overrides.
 void addSceneOverrides(CLI::App* c, std::vector<std::string>& overrides, bool image);
+
+/// --defects and --reference of the defects objective (app/Truth.h RegionSpec) for a command
+/// that optimizes a light (optimize, lamps). Defined after addParsed below.
+void addDefectRegionOptions(CLI::App* c, RegionSpec& defects, RegionSpec& reference);
 
 /// --cache DIR and --no-cache of a command that keeps traced matrices (app/Cache.h).
 void addCacheOptions(CLI::App* c, CacheLocation& cache);

@@ -1,5 +1,6 @@
 // scratchlight lamps (SCENE.json | part.tm) [--count K] [--kinds disk,bar,ring] [--from E.exr]
-//                    [--objective paper|unbiased] [--distance MM] [--min-elevation DEG]
+//                    [--objective paper|unbiased|defects] [--truth T.png] [--distance MM]
+//                    [--min-elevation DEG]
 //                    [--max-elevation DEG] [--forbid-azimuth A:B ...] [-o OUTDIR]
 // Fits K physical lamps to the objective through T (app/LampsJob.h) and prints what each extra
 // lamp buys.
@@ -88,11 +89,19 @@ int runLamps(LampsArgs a) {
         }
         std::printf(", radiance %.3f\n", l.radiance);
     }
-    if (s.judgedTarget) {
-        std::printf("judge (U, lower is better): E* %.5g, lamps %.5g, studio %.5g\n",
-                    s.judgedTarget->unbiased.total, s.judgedLamps->unbiased.total,
-                    s.judgedStudio->unbiased.total);
-        const double gap = s.judgedLamps->unbiased.total / s.judgedTarget->unbiased.total - 1;
+    if (s.judgement) {
+        std::printf(
+            "judge (%s on the held-out estimate, %s is better): E* %.5g, lamps %.5g, "
+            "studio %.5g\n",
+            s.judgement->measure.c_str(), s.judgement->higherIsBetter ? "higher" : "lower",
+            s.judgement->target, s.judgement->lamps, s.judgement->studio);
+        for (size_t r = 0; r < s.judgedTarget->visibility.size(); ++r)
+            std::printf("  visibility of %s: E* %.3g, lamps %.3g, studio %.3g\n",
+                        s.judgedTarget->visibility[r].label.name.c_str(),
+                        s.judgedTarget->visibility[r].visibility,
+                        s.judgedLamps->visibility[r].visibility,
+                        s.judgedStudio->visibility[r].visibility);
+        const double gap = s.judgement->gap;
         std::printf(
             "the lamps are %s E* by the judge (%+.1f %%)\n",
             std::abs(gap) <= 0.05 ? "within 5 % of" : (gap > 0 ? "worse than" : "better than"),
@@ -125,7 +134,12 @@ void registerLamps(CLI::App& app, std::function<int()>& run) {
                   "E*, the env map the lamps start from: " + lightSpecForms() +
                       " (default: optimized here on T)");
     addChoice(c, "--objective", j.objectiveKind, objectiveKindTable(),
-              "Objective (default: unbiased; paper for a .tm without halves; defects: not yet)");
+              "Objective (default: unbiased; defects when --truth or --defects names the "
+              "defects; paper for a .tm without halves)");
+    c->add_option("--truth", j.truth,
+                  "Ground-truth defect labels in height-map space (e.g. part-truth.png): the "
+                  "defects objective's defect region and the judge's per-region visibility");
+    addDefectRegionOptions(c, j.defects, j.reference);
     c->add_option("--lambda", j.objective.lambda, "Regulariser weight")->capture_default_str();
     c->add_option("--distance", j.distanceMm, "Mounting distance from the part's centre, mm")
         ->check(CLI::PositiveNumber)

@@ -194,15 +194,7 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         c->add_option("--truth", j.truth,
                       "Ground-truth defect mask in height-map space (e.g. part-truth.png): "
                       "adds the defect contrast to the metrics");
-        addParsed(c, "--defects", j.defects, parseRegionSpec,
-                  "--objective defects: the defect region in height-map space: MASK.png, "
-                  "TRUTH.png:LABEL[,LABEL...] (legend names or values), or auto (the defect map "
-                  "of the height map, as `scratchlight defectmap`; default: --truth, else auto)");
-        addParsed(c, "--reference", j.reference, parseRegionSpec,
-                  "--objective defects: the reference region, as --defects (default: the part "
-                  "away from the defects; auto: what the defect map leaves unmarked). Region "
-                  "comparison: --defects part-truth.png:chatter --reference "
-                  "part-truth.png:none");
+        addDefectRegionOptions(c, j.defects, j.reference);
         c->add_flag("--rgb", j.rgb, "Optimize an RGB env map (needs/creates an RGB T)");
         c->add_flag("--smooth-abs", j.objective.smoothAbs, "Use sqrt(x²+ε²)−ε for |x|");
         const OptimizeDefaults d = optimizeDefaults();

@@ -141,6 +141,38 @@ LossParts TransportLoss::evaluateFused(std::span<const double> E, std::span<doub
     return parts;
 }
 
+LossParts TransportLoss::evaluateOnColumns(const TransportColumns& columns,
+                                           std::span<const double> E,
+                                           std::span<const uint16_t> active,
+                                           std::span<double> grad) const {
+    if (E.size() != dimension_ || dimension_ != t_.cols())
+        throw std::invalid_argument("TransportLoss::evaluateOnColumns: needs a gray E");
+    if (columns.rows() != t_.rows() || columns.cols() != t_.cols() || columns.planes() != t_.planes)
+        throw std::invalid_argument("TransportLoss::evaluateOnColumns: columns of another T");
+    if (!grad.empty() && grad.size() != dimension_)
+        throw std::invalid_argument("TransportLoss: gradient has the wrong size");
+    std::vector<double> dLdE(grad.empty() ? 0 : dimension_);
+    LossParts parts;
+    if (unb_) {
+        columns.applyHalves(E, active, y_, yb_);
+        if (grad.empty()) return unb_->evaluate(y_, yb_, E);
+        parts = unb_->evaluate(y_, yb_, E, dLdY_, dLdYb_, dLdE);
+        std::copy(dLdE.begin(), dLdE.end(), grad.begin());
+        std::vector<double> tg(dimension_, 0.0);
+        columns.transposeHalves(dLdY_, dLdYb_, active, tg);
+        for (uint16_t c : active) grad[c] += tg[c];
+        return parts;
+    }
+    columns.apply(E, active, y_);
+    if (grad.empty()) return obj_->evaluate(y_, E);
+    parts = obj_->evaluate(y_, E, dLdY_, dLdE);
+    std::copy(dLdE.begin(), dLdE.end(), grad.begin());
+    std::vector<double> tg(dimension_, 0.0);
+    columns.transpose(dLdY_, active, tg);
+    for (uint16_t c : active) grad[c] += tg[c];
+    return parts;
+}
+
 std::vector<double> TransportLoss::image(std::span<const double> E) const {
     std::vector<double> y(t_.rows());
     t_.applyLuminance(E, y);  // T = (T_a + T_b)/2 for halves

@@ -8,6 +8,7 @@
 #include "core/Problem.h"
 #include "objective/HalfImageObjective.h"
 #include "objective/Objective.h"
+#include "transport/TransportColumns.h"
 #include "transport/TransportMatrix.h"
 
 namespace sl {
@@ -28,6 +29,13 @@ class TransportLoss {
     /// while T's rows are still in cache; the global factor −S/G² is applied at the end.
     /// Chunks are fixed, so the result does not depend on the number of threads.
     LossParts evaluateFused(std::span<const double> E, std::span<double> grad) const;
+
+    /// The same loss for an E that is zero outside the texels `active` (a gray E), through
+    /// `columns` (a TransportColumns of this loss's matrix): the products read only the active
+    /// columns. grad (when non-empty) is exact on the active texels; on the others it holds
+    /// only the objective's direct dLoss/dE (the regulariser), not Tᵀ·dLoss/dY.
+    LossParts evaluateOnColumns(const TransportColumns& columns, std::span<const double> E,
+                                std::span<const uint16_t> active, std::span<double> grad) const;
 
     /// The luminance image T·E.
     std::vector<double> image(std::span<const double> E) const;
