@@ -24,7 +24,9 @@
 // before it for candidateIterations on a coarse quadrature (screenSubsamples nodes per cell and
 // axis, 4× fewer than the default 16²; the candidates in parallel). The `polished` best screened
 // sets are then polished (in parallel) on the full quadrature for finalIterations and the lowest
-// polished loss is kept (candidates in a fixed order, ties to the better screen: deterministic).
+// polished loss is kept (candidates in a fixed order, ties to the better screen: deterministic),
+// unless the k−1 lamps with the k-th switched off score better on the same problem (then the
+// k-th lamp stays off).
 // The loss after every k is reported, so the user sees what each extra lamp buys.
 #pragma once
 
@@ -76,6 +78,7 @@ struct LampFitResult {
     double targetLoss = 0;           // the objective under E*
     std::vector<double> envMap;      // E of the last step's lamps
     double seconds = 0;
+    double cpuSeconds = 0;  // CPU seconds of the process (all threads) during the fit
 };
 
 /// The lamps' problem through `loss` for lamps of the given kinds (their parameters in x,

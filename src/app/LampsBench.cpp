@@ -39,6 +39,7 @@ LampsBenchResult runLampsBench(const LampsBenchOptions& o) {
     for (const std::string& partName : o.parts) {
         const BenchPart part = preparePart(partName, o.workDir);
         for (ObjectiveKind kind : o.objectives) {
+            task.detail(partName + " " + objectiveKindName(kind));
             LampsJobOptions j;
             j.input = part.scene;
             j.sceneOverrides = {"camera.width=" + std::to_string(o.size),
@@ -56,12 +57,15 @@ LampsBenchResult runLampsBench(const LampsBenchOptions& o) {
             j.outDir = o.workDir / "runs" / (partName + "-" + objectiveKindName(kind) + "-rows");
             j.fit.columnProducts = false;
             j.judge = false;
-            row.secondsRows = runLampsJob(j).fit.seconds;
+            const LampFitResult baseline = runLampsJob(j).fit;
+            row.secondsRows = baseline.seconds;
+            row.cpuRows = baseline.cpuSeconds;
             j.outDir = o.workDir / "runs" / (partName + "-" + objectiveKindName(kind));
             j.fit.columnProducts = true;
             j.judge = true;
             const LampsJobSummary s = runLampsJob(j);
             row.secondsColumns = s.fit.seconds;
+            row.cpuColumns = s.fit.cpuSeconds;
             row.secondsTarget = s.secondsTarget;
             row.speedup = row.secondsRows / std::max(row.secondsColumns, 1e-9);
             row.trainRatio = s.fit.steps.back().loss / s.targetLoss;
@@ -70,6 +74,7 @@ LampsBenchResult runLampsBench(const LampsBenchOptions& o) {
                 row.judgeLamps = s.judgement->lamps;
                 row.judgeStudio = s.judgement->studio;
                 row.gap = s.judgement->gap;
+                row.measure = s.judgement->measure;
                 for (size_t r = 0; r < s.judgedTarget->visibility.size(); ++r) {
                     if (s.judgedTarget->visibility[r].pixels == 0) continue;
                     row.region = s.judgedTarget->visibility[r].label.name;
@@ -81,7 +86,6 @@ LampsBenchResult runLampsBench(const LampsBenchOptions& o) {
             }
             result.rows.push_back(row);
             task.advance();
-            task.detail(partName + " " + objectiveKindName(kind));
         }
     }
     return result;
@@ -90,15 +94,16 @@ LampsBenchResult runLampsBench(const LampsBenchOptions& o) {
 std::string LampsBenchResult::csv() const {
     std::ostringstream s;
     s.precision(10);
-    s << "part,objective,seconds_target,seconds_fit_rows,seconds_fit_columns,speedup,"
-         "train_ratio,judge_target,judge_lamps,judge_studio,gap,region,vis_target,vis_lamps,"
+    s << "part,objective,measure,seconds_target,seconds_fit_rows,seconds_fit_columns,speedup,"
+         "cpu_fit_rows,cpu_fit_columns,train_ratio,judge_target,judge_lamps,judge_studio,gap,"
+         "region,vis_target,vis_lamps,"
          "vis_studio\n";
     for (const LampsBenchRow& r : rows)
-        s << r.part << ',' << objectiveKindName(r.objective) << ',' << r.secondsTarget << ','
-          << r.secondsRows << ',' << r.secondsColumns << ',' << r.speedup << ',' << r.trainRatio
-          << ',' << r.judgeTarget << ',' << r.judgeLamps << ',' << r.judgeStudio << ',' << r.gap
-          << ',' << r.region << ',' << r.visTarget << ',' << r.visLamps << ',' << r.visStudio
-          << '\n';
+        s << r.part << ',' << objectiveKindName(r.objective) << ',' << r.measure << ','
+          << r.secondsTarget << ',' << r.secondsRows << ',' << r.secondsColumns << ',' << r.speedup
+          << ',' << r.cpuRows << ',' << r.cpuColumns << ',' << r.trainRatio << ',' << r.judgeTarget
+          << ',' << r.judgeLamps << ',' << r.judgeStudio << ',' << r.gap << ',' << r.region << ','
+          << r.visTarget << ',' << r.visLamps << ',' << r.visStudio << '\n';
     return s.str();
 }
 
@@ -111,12 +116,13 @@ std::string LampsBenchResult::table() const {
     s << line;
     for (const LampsBenchRow& r : rows) {
         std::snprintf(line, sizeof line,
-                      "%-19s %-9s %7.2f %8.2f %8.2f %5.2fx %10.4g %10.4g %10.4g %+7.1f%%  %s "
-                      "%.3g / %.3g / %.3g\n",
+                      "%-19s %-9s %7.2f %8.2f %8.2f %5.2fx %8.2f %5.2fx %-18s %10.4g %10.4g "
+                      "%10.4g %+7.1f%%  %s %.3g / %.3g / %.3g\n",
                       r.part.c_str(), objectiveKindName(r.objective), r.secondsTarget,
-                      r.secondsRows, r.secondsColumns, r.speedup, r.judgeTarget, r.judgeLamps,
-                      r.judgeStudio, 100 * r.gap, r.region.c_str(), r.visTarget, r.visLamps,
-                      r.visStudio);
+                      r.secondsRows, r.secondsColumns, r.speedup, r.cpuColumns,
+                      r.cpuRows / std::max(r.cpuColumns, 1e-9), r.measure.c_str(), r.judgeTarget,
+                      r.judgeLamps, r.judgeStudio, 100 * r.gap, r.region.c_str(), r.visTarget,
+                      r.visLamps, r.visStudio);
         s << line;
     }
     return s.str();

@@ -5,7 +5,9 @@
 //
 // Every run is the `lamps` job (app/LampsJob.h) at the parts' 256² view: E* optimized on T,
 // lamps fitted greedily, both scored by the judge's held-out estimate with the objective itself
-// (lower is better; gap = (lamps − E*)/|E*|) and by per-region visibility of the truth's labels.
+// (eq. 2 or U, lower is better) or, for the defects objective, by the defect region's visibility
+// (higher is better); gap = how much worse the lamps are, relative; and by the visibility of
+// the first truth region.
 // The defects objective uses each part's truth as its defect region.
 #pragma once
 
@@ -31,11 +33,13 @@ struct LampsBenchOptions {
 struct LampsBenchRow {
     std::string part;
     ObjectiveKind objective = ObjectiveKind::Unbiased;
-    double secondsTarget = 0;   // E* on T
-    double secondsRows = 0;     // the fit, products over all of T (baseline)
-    double secondsColumns = 0;  // the fit, products over the lamps' texels
-    double speedup = 0;         // secondsRows / secondsColumns
-    double trainRatio = 0;      // the lamps' training loss over E*'s
+    double secondsTarget = 0;            // E* on T
+    double secondsRows = 0;              // the fit, products over all of T (baseline)
+    double secondsColumns = 0;           // the fit, products over the lamps' texels
+    double speedup = 0;                  // secondsRows / secondsColumns
+    double cpuRows = 0, cpuColumns = 0;  // the same fits' CPU seconds (all threads)
+    double trainRatio = 0;               // the lamps' training loss over E*'s
+    std::string measure;                 // the judge's measure for the objective (app/LampsJob.h)
     double judgeTarget = 0, judgeLamps = 0, judgeStudio = 0, gap = 0;
     std::string region;  // the first truth label the visibilities are of
     double visTarget = 0, visLamps = 0, visStudio = 0;

@@ -106,9 +106,11 @@ int runLampsBenchCmd(LampsBenchArgs a) {
     const LampsBenchResult r = runLampsBench(a.o);
     std::printf("%s", r.table().c_str());
     std::printf(
-        "(K = %d lamps at %dx%d; judge: the objective on the held-out 1024-spp estimate, lower "
-        "is better, gap = (lamps - E*)/|E*|; fit all/cols: seconds of the fit with products "
-        "over all of T / over the lamps' texels, one after the other on the same T and E*)\n",
+        "(K = %d lamps at %dx%d; judge measure on the held-out 1024-spp estimate: eq. 2 or U "
+        "(lower is better) or the defect region's visibility (higher is better); gap: how much "
+        "worse the lamps are than E*, relative; fit all/cols: wall seconds of the fit with "
+        "products over all of T / over the lamps' texels, one after the other on the same T "
+        "and E*; cpu: CPU seconds of all threads)\n",
         a.o.count, a.o.size, a.o.size);
     writeTextAtomically(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());

@@ -1,8 +1,10 @@
 // Wall-clock seconds since a start (std::chrono::steady_clock), for timings in summaries and
-// benchmark tables.
+// benchmark tables; and the process's CPU seconds (all threads, std::clock), which a benchmark
+// reports beside wall time when other work shares the machine.
 #pragma once
 
 #include <chrono>
+#include <ctime>
 
 namespace sl {
 
@@ -16,6 +18,16 @@ class Stopwatch {
   private:
     using Clock = std::chrono::steady_clock;
     Clock::time_point start_;
+};
+
+/// CPU seconds the whole process (every thread) used since construction.
+class CpuStopwatch {
+  public:
+    CpuStopwatch() : start_(std::clock()) {}
+    double seconds() const { return double(std::clock() - start_) / CLOCKS_PER_SEC; }
+
+  private:
+    std::clock_t start_;
 };
 
 /// Seconds one call of f takes.
