@@ -364,6 +364,9 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
     LampRasterOptions coarse = o.raster;
     coarse.subsamples = std::min(coarse.subsamples, o.screenSubsamples);
     const LampRasterizer screen(basis, coarse);
+    LampRasterOptions medium = o.raster;
+    medium.subsamples = std::min(medium.subsamples, o.polishSubsamples);
+    const LampRasterizer polishRaster(basis, medium);
     std::optional<TransportColumns> columnCopy;
     if (o.columnProducts) columnCopy.emplace(loss.matrix());
     const TransportColumns* columns = columnCopy ? &*columnCopy : nullptr;
@@ -409,7 +412,7 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
         tbb::parallel_for(size_t{0}, polish, [&](size_t c) {
             const TransportLoss own = loss;
             polishedRuns[c] =
-                fitRun(own, columns, raster, screened[order[c]].second, o, o.finalIterations);
+                fitRun(own, columns, polishRaster, screened[order[c]].second, o, o.finalIterations);
         });
         for (const LampFitRun& run : polishedRuns) {  // in screened order: ties keep the better
             evaluations += run.evaluations;
@@ -427,7 +430,7 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
         keep.push_back(off);
         std::vector<LampKind> keepKinds;
         for (const Lamp& l : keep) keepKinds.push_back(l.kind);
-        const LampProblem keepProblem(loss, raster, keepKinds, o, columns);
+        const LampProblem keepProblem(loss, polishRaster, keepKinds, o, columns);
         if (best.empty() || keepProblem.evaluate(keepProblem.encode(keep), {}) < bestLoss)
             best = keep;
         lamps = best;

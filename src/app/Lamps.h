@@ -54,8 +54,9 @@ struct LampFitOptions {
     /// Candidates are screened on a quadrature of this many nodes per cell and axis (at most
     /// raster.subsamples), then the `polished` best are polished on the full one.
     int screenSubsamples = 8, polished = 2;
+    int polishSubsamples = 12;        // the polish's quadrature (the reported E and loss: raster's)
     int residualPeaks = 3;            // residual peaks (at least 20° apart) a new lamp is tried at
-    double relativeTolerance = 1e-6;  // stop when the loss changes by less than this fraction
+    double relativeTolerance = 1e-5;  // stop when the loss changes by less than this fraction
     /// Products over the lamps' texels only (transport/TransportColumns.h); false: over all of
     /// T (the baseline `bench lamps` measures it against).
     bool columnProducts = true;

@@ -110,9 +110,10 @@ std::string LampsBenchResult::csv() const {
 std::string LampsBenchResult::table() const {
     std::ostringstream s;
     char line[400];
-    std::snprintf(line, sizeof line, "%-19s %-9s %7s %8s %8s %6s %10s %10s %10s %8s  %s\n", "part",
-                  "objective", "E* s", "fit all", "fit cols", "ratio", "judge E*", "lamps",
-                  "studio", "gap", "visibility E* / lamps / studio");
+    std::snprintf(
+        line, sizeof line, "%-19s %-9s %7s %8s %8s %6s %8s %6s %-18s %10s %10s %10s %8s  %s\n",
+        "part", "objective", "E* s", "fit all", "fit cols", "ratio", "cpu cols", "ratio",
+        "judge measure", "E*", "lamps", "studio", "gap", "visibility E* / lamps / studio");
     s << line;
     for (const LampsBenchRow& r : rows) {
         std::snprintf(line, sizeof line,
