@@ -2,6 +2,7 @@
 // read back (io/LampsFile.h) to the same lamps, `export-mitsuba --lamps`, and its input errors.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -82,6 +83,56 @@ TEST(LampCli, FitsTheDefectsObjectiveAndJudgesIt) {
     EXPECT_NEAR(summary["judge"]["lamps"]["visibility"][0]["visibility"].get<double>(), lamps,
                 1e-12 * std::abs(lamps));
     EXPECT_NE(readText(out / "report.html").find("visibility: "), std::string::npos);
+}
+
+/// The numbers of attribute `name`="..." of the first element after `from` in `xml`.
+std::vector<double> xmlNumbers(const std::string& xml, const std::string& element, size_t from) {
+    const size_t at = xml.find(element, from);
+    const size_t q = xml.find("value=\"", at) + 7;
+    std::vector<double> v;
+    std::stringstream s(xml.substr(q, xml.find('"', q) - q));
+    for (std::string part; std::getline(s, part, ',');) v.push_back(std::stod(part));
+    return v;
+}
+
+// Seen from the part's centre, each Mitsuba emitter covers the lamp's angles: a ring's cylinder
+// exactly its elevation band, a disk exactly its cone about its direction.
+TEST(LampMitsuba, EmittersSubtendTheLampsAngles) {
+    constexpr double kDeg = 3.14159265358979323846 / 180;
+    LampsFile f;
+    f.distanceMm = 400;
+    Lamp ring;
+    ring.kind = LampKind::Ring;
+    ring.elevation = 36 * kDeg;
+    ring.size = 4 * kDeg;
+    Lamp disk;
+    disk.kind = LampKind::Disk;
+    disk.azimuth = 30 * kDeg;
+    disk.elevation = 50 * kDeg;
+    disk.size = 10 * kDeg;
+    f.lamps = {ring, disk};
+    const std::string xml = mitsubaLampShapes(f);
+    const size_t cyl = xml.find("type=\"cylinder\"");
+    ASSERT_NE(cyl, std::string::npos) << xml;
+    const double y0 = xmlNumbers(xml, "name=\"p0\"", cyl)[1];
+    const double y1 = xmlNumbers(xml, "name=\"p1\"", cyl)[1];
+    const double radius = xmlNumbers(xml, "name=\"radius\"", cyl)[0];
+    EXPECT_NEAR(std::atan2(y0, radius), 32 * kDeg, 1e-7);
+    EXPECT_NEAR(std::atan2(y1, radius), 40 * kDeg, 1e-7);
+    const size_t dk = xml.find("type=\"disk\"");
+    ASSERT_NE(dk, std::string::npos) << xml;
+    const size_t sc = xml.find("<scale x=\"", dk) + 10;
+    const double r = std::stod(xml.substr(sc, xml.find('"', sc) - sc));
+    EXPECT_NEAR(std::atan(r / f.distanceMm), 10 * kDeg, 1e-7);
+    const size_t lk = xml.find("origin=\"", dk) + 8;
+    std::vector<double> o;
+    std::stringstream os(xml.substr(lk, xml.find('"', lk) - lk));
+    for (std::string part; std::getline(os, part, ',');) o.push_back(std::stod(part));
+    ASSERT_EQ(o.size(), 3u);
+    const Vec3d c = lampDirection(disk.azimuth, disk.elevation);
+    EXPECT_NEAR(o[0], f.distanceMm * c.x, 1e-4);
+    EXPECT_NEAR(o[1], f.distanceMm * c.y, 1e-4);
+    EXPECT_NEAR(o[2], f.distanceMm * c.z, 1e-4);
 }
 
 TEST(LampCli, RefusesBadInputWithTheRightExitCode) {

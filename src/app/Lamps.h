@@ -23,10 +23,11 @@
 // (where light helps most); each candidate is screened: optimized jointly with the k−1 lamps
 // before it for candidateIterations on a coarse quadrature (screenSubsamples nodes per cell and
 // axis, 4× fewer than the default 16²; the candidates in parallel). The `polished` best screened
-// sets are then polished (in parallel) on the full quadrature for finalIterations and the lowest
-// polished loss is kept (candidates in a fixed order, ties to the better screen: deterministic),
+// sets are then polished (in parallel) on a finer one (polishSubsamples, 12: its solid angles are
+// within 2e-5 of the exact ones, scene/Lamp.h) for finalIterations and the lowest polished loss
+// is kept (candidates in a fixed order, ties to the better screen: deterministic),
 // unless the k−1 lamps with the k-th switched off score better on the same problem (then the
-// k-th lamp stays off).
+// k-th lamp stays off). The steps' E and loss are on the full quadrature (raster.subsamples).
 // The loss after every k is reported, so the user sees what each extra lamp buys.
 #pragma once
 

@@ -182,12 +182,17 @@ std::string mitsubaLampShapes(const LampsFile& f) {
                   << vec(e2) << "\"/>\n        </transform>\n";
                 break;
             case LampKind::Ring: {
-                const double lo = std::max(l.elevation - l.size, -kPi / 2),
-                             hi = std::min(l.elevation + l.size, kPi / 2);
+                // Heights R·tan(lo), R·tan(hi) on a cylinder of radius R = D·cos ε: seen from
+                // the centre its wall spans exactly the elevations [lo, hi] (and so the band's
+                // solid angle 2π(sin hi − sin lo)).
+                const double lim = kRingElevationLimit;
+                const double lo = std::clamp(l.elevation - l.size, -lim, lim),
+                             hi = std::clamp(l.elevation + l.size, -lim, lim);
+                const double R = D * std::cos(std::clamp(l.elevation, -lim, lim));
                 x << "    <shape type=\"cylinder\">\n"
-                  << "        <point name=\"p0\" value=\"0, " << D * std::sin(lo) << ", 0\"/>\n"
-                  << "        <point name=\"p1\" value=\"0, " << D * std::sin(hi) << ", 0\"/>\n"
-                  << "        <float name=\"radius\" value=\"" << D * std::cos(l.elevation)
+                  << "        <point name=\"p0\" value=\"0, " << R * std::tan(lo) << ", 0\"/>\n"
+                  << "        <point name=\"p1\" value=\"0, " << R * std::tan(hi) << ", 0\"/>\n"
+                  << "        <float name=\"radius\" value=\"" << R
                   << "\"/>\n        <boolean name=\"flip_normals\" value=\"true\"/>\n";
                 break;
             }

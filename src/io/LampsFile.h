@@ -13,10 +13,15 @@
 // Mitsuba: each lamp is an `area` emitter of radiance R (rgb, gray) on a shape at distance D
 // whose front face (Mitsuba's area lights emit on the side of the normal) looks at the origin:
 //   disk  `disk` scaled to radius D·tan r, to_world lookat(D·c → 0, up e_ε)
+//         (seen from the part's centre: exactly the cap of angular radius r)
 //   bar   `rectangle` scaled to (D·tan a, D·tan b) along (e₁, e₂): lookat(D·c → 0, up e₂) maps
-//         the rectangle's x to e₂ × (−c) = e₁ (the frame (e₁, e₂, −c) is right-handed)
-//   ring  `cylinder` about +Y of radius D·cos ε from height D·sin(ε−a) to D·sin(ε+a), normals
-//         flipped inward (a zone of the sphere at distance D, approximated by its cylinder)
+//         the rectangle's x to e₂ × (−c) = e₁ (the frame (e₁, e₂, −c) is right-handed). Seen
+//         from the centre it spans exactly ±a along e₁ and ±b across at its middle; toward its
+//         ends the flat source narrows to about b·cos a (the spherical rectangle of scene/Lamp.h
+//         keeps ±b): a bar of ±20° is 6 % narrower at its ends
+//   ring  `cylinder` about +Y of radius R = D·cos ε from height R·tan(ε−a) to R·tan(ε+a),
+//         normals flipped inward: seen from the centre exactly the band [ε−a, ε+a] (elevations
+//         clipped to ±kRingElevationLimit, where the cylinder would be infinitely tall)
 // At a finite distance a lamp is seen from points of the part under slightly different angles:
 // the env map of the lamps (lamps-envmap.exr) is the exact light of the fit, the emitters are
 // the booth.
@@ -30,6 +35,9 @@
 #include "scene/Lamp.h"
 
 namespace sl {
+
+/// The steepest elevation a ring's cylinder reaches (radians, 85°).
+inline constexpr double kRingElevationLimit = 85 * 3.14159265358979323846 / 180;
 
 struct LampsFile {
     double distanceMm = 500;
