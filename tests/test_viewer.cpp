@@ -534,8 +534,10 @@ TEST(ViewerBrowser, PaintingATexelAndDraggingALampMatchRelightAndJudge) {
     // saved light gives the page's numbers.
     const std::string tm = (dir / "p.tm").string();
     ASSERT_EQ(test::runCli("precompute " + scene + " --spp 4 -o " + tm).exitCode, 0);
-    auto matchesCli = [&](const fs::path& savedE, const std::string& renderName,
-                          const json& report) {
+    // rel: the judge numbers' relative tolerance (E is stored as float32); cliJudge: what
+    // `judge` said.
+    auto matchesCli = [&](const fs::path& savedE, const std::string& renderName, const json& report,
+                          double rel, json* cliJudge) {
         SCOPED_TRACE(savedE.string());
         const std::string relit = (dir / ("relit-" + renderName)).string();
         auto r = test::runCli("relight " + tm + " --envmap " + savedE.string() + " -o " + relit);
@@ -555,26 +557,41 @@ TEST(ViewerBrowser, PaintingATexelAndDraggingALampMatchRelightAndJudge) {
                          " --no-references --cache " + cache + " -o " + jd.string());
         ASSERT_EQ(r.exitCode, 0) << r.output;
         const json jj = json::parse(test::readFile(jd / "judge.json"))["lights"][0];
+        *cliJudge = jj;
         const json& page = report["after"]["judge"];
         EXPECT_NEAR(page["eq2"].get<double>(), jj["eq2"].get<double>(),
-                    1e-9 * std::abs(jj["eq2"].get<double>()));
+                    rel * std::abs(jj["eq2"].get<double>()));
         EXPECT_NEAR(page["unbiased"].get<double>(), jj["unbiased"].get<double>(),
-                    1e-9 * std::abs(jj["unbiased"].get<double>()));
+                    rel * std::abs(jj["unbiased"].get<double>()));
         ASSERT_EQ(page["visibility"].size(), jj["visibility"].size());
         ASSERT_FALSE(jj["visibility"].empty());
         for (size_t k = 0; k < jj["visibility"].size(); ++k)
-            EXPECT_NEAR(page["visibility"][k]["visibility"].get<double>(),
-                        jj["visibility"][k]["visibility"].get<double>(), 1e-9)
+            EXPECT_NEAR(
+                page["visibility"][k]["visibility"].get<double>(),
+                jj["visibility"][k]["visibility"].get<double>(),
+                rel * std::max(1.0, std::abs(jj["visibility"][k]["visibility"].get<double>())))
                 << jj["visibility"][k]["name"];
     };
-    matchesCli(saved, "selftest-render.exr", self);
+    json cliJudge;
+    matchesCli(saved, "selftest-render.exr", self, 1e-9, &cliJudge);
 
-    // Drag lamp 1 on the hemisphere widget (mouse events on the canvas) to azimuth 130°,
-    // elevation 35°: the lamp moved there, the image and the judge numbers changed, the saved E
-    // is the rasterization of the saved lamps.json, and it matches `relight` and `judge`.
-    const auto lampDom = test::runShell(chromium + "--dump-dom '" + server.url() +
-                                        "?selftest=lamp&az=130&el=35&name=lamp-selftest.exr"
-                                        "&lamps=lamp-selftest.json'");
+    // Light A: the two lamps, the disk toward the texel that lights the most of the image (so
+    // that the part is lit). Drag lamp 1 on the hemisphere widget (mouse events on the canvas)
+    // 20° in azimuth and 8° down: the lamp moved there, the image and the judge numbers changed,
+    // the saved E is the rasterization of the saved lamps.json, and it matches `relight` and
+    // `judge`.
+    constexpr double kDeg = std::numbers::pi / 180;
+    const Vec3d hotDir = EnvMapBasis::uvToDirection((hot[1] + 0.5) / 50, hot[0] / 24.0);
+    const double hotEl = std::asin(hotDir.y) / kDeg;
+    const double hotAz = std::fmod(std::atan2(hotDir.x, -hotDir.z) / kDeg + 360, 360);
+    std::vector<Lamp> lit = twoLamps();
+    lit[0].azimuth = hotAz * kDeg;
+    lit[0].elevation = hotEl * kDeg;
+    session.setLamps(0, lit);
+    const double az = std::fmod(hotAz + 20, 360), el = std::clamp(hotEl - 8, 5.0, 85.0);
+    const auto lampDom = test::runShell(
+        chromium + "--dump-dom '" + server.url() + "?selftest=lamp&az=" + std::to_string(az) +
+        "&el=" + std::to_string(el) + "&name=lamp-selftest.exr&lamps=lamp-selftest.json'");
     std::smatch lm;
     {
         static const std::regex re("<pre id=\"selfcheck\">(selfcheck: [a-zA-Z]+)\\n([^<]*)</pre>");
@@ -585,9 +602,13 @@ TEST(ViewerBrowser, PaintingATexelAndDraggingALampMatchRelightAndJudge) {
     const json lself = json::parse(lm[2].str());
     EXPECT_NE(lself["before"]["image"]["hash"], lself["after"]["image"]["hash"]);
     EXPECT_NE(lself["before"]["judge"]["eq2"], lself["after"]["judge"]["eq2"]);
-    // The handle is at 130°, 35° to the widget's pixel (0.62° per pixel radially).
-    EXPECT_NEAR(lself["after"]["lamp"]["azimuth_deg"].get<double>(), 130, 1.0);
-    EXPECT_NEAR(lself["after"]["lamp"]["elevation_deg"].get<double>(), 35, 1.0);
+    // The handle is where it was dragged, to the widget's pixel (0.62° per pixel radially).
+    std::cout << "lamp dragged from azimuth " << hotAz << ", elevation " << hotEl << " to " << az
+              << ", " << el << std::endl;
+    EXPECT_NEAR(lself["before"]["lamp"]["azimuth_deg"].get<double>(), hotAz, 1e-9);
+    EXPECT_NEAR(lself["after"]["lamp"]["azimuth_deg"].get<double>(), az, 1.0);
+    EXPECT_NEAR(lself["after"]["lamp"]["elevation_deg"].get<double>(), el, 1.0);
+    EXPECT_GT(lself["after"]["image"]["mean"].get<double>(), 1.0);  // the part is lit
     ASSERT_EQ(session.lamps(0).size(), 2u);
     const fs::path savedLamps = o.outDir / "lamp-selftest.json",
                    savedLampE = o.outDir / "lamp-selftest.exr";
@@ -603,7 +624,17 @@ TEST(ViewerBrowser, PaintingATexelAndDraggingALampMatchRelightAndJudge) {
         ASSERT_EQ(lampEnv.texels[k], static_cast<float>(exact[k])) << k;
         ASSERT_NEAR(fromFile[k], exact[k], 1e-9 * peak) << k;
     }
-    matchesCli(savedLampE, "lamp-selftest-render.exr", lself);
+    // The page judged the lamps' E in double, `judge` its float32 copy in the file: equal to
+    // float rounding, and the session's judge on the file's E gives `judge`'s numbers.
+    matchesCli(savedLampE, "lamp-selftest-render.exr", lself, 1e-6, &cliJudge);
+    std::vector<double> stored(lampEnv.texels.begin(), lampEnv.texels.end());
+    session.setLight(1, stored);
+    const json onFile = session.judgeJson(1)["judge"];
+    EXPECT_NEAR(onFile["eq2"].get<double>(), cliJudge["eq2"].get<double>(),
+                1e-9 * std::abs(cliJudge["eq2"].get<double>()));
+    EXPECT_NEAR(onFile["unbiased"].get<double>(), cliJudge["unbiased"].get<double>(),
+                1e-9 * std::abs(cliJudge["unbiased"].get<double>()));
+    session.setPreset(1, "studio");  // B as the session began, for the screenshot
 
     // A screenshot with the A/B split and the defect overlay.
     const fs::path shot =
