@@ -529,11 +529,11 @@ TEST(ViewerBrowser, PaintingATexelAndDraggingALampMatchRelightAndJudge) {
     EXPECT_EQ(self["texel"][1].get<int>(), hot[1]);
     EXPECT_FLOAT_EQ(env.texels[static_cast<size_t>(hot[0] * 50 + hot[1])], 20.0f);
 
-    // `relight` on the same T (precompute at the same spp and seed) gives the viewer's render of
-    // a saved light, the page's image is that render at the page's exposure, and `judge` on the
-    // saved light gives the page's numbers.
+    // `relight` on the same T (precompute at the same spp and seed, in halves as the viewer traces
+    // it) gives the viewer's render of a saved light, the page's image is that render at the page's
+    // exposure, and `judge` on the saved light gives the page's numbers.
     const std::string tm = (dir / "p.tm").string();
-    ASSERT_EQ(test::runCli("precompute " + scene + " --spp 4 -o " + tm).exitCode, 0);
+    ASSERT_EQ(test::runCli("precompute " + scene + " --spp 4 --halves -o " + tm).exitCode, 0);
     // rel: the judge numbers' relative tolerance (E is stored as float32); cliJudge: what
     // `judge` said.
     auto matchesCli = [&](const fs::path& savedE, const std::string& renderName, const json& report,
@@ -589,9 +589,10 @@ TEST(ViewerBrowser, PaintingATexelAndDraggingALampMatchRelightAndJudge) {
     lit[0].elevation = hotEl * kDeg;
     session.setLamps(0, lit);
     const double az = std::fmod(hotAz + 20, 360), el = std::clamp(hotEl - 8, 5.0, 85.0);
-    const auto lampDom = test::runShell(
-        chromium + "--dump-dom '" + server.url() + "?selftest=lamp&az=" + std::to_string(az) +
-        "&el=" + std::to_string(el) + "&name=lamp-selftest.exr&lamps=lamp-selftest.json'");
+    const auto lampDom =
+        test::runShell(chromium + "--dump-dom '" + server.url() +
+                       "?selftest=lamp&az=" + std::to_string(az) + "&el=" + std::to_string(el) +
+                       "&name=lamp-selftest.exr&lamps=lamp-selftest.json&optimize=50'");
     std::smatch lm;
     {
         static const std::regex re("<pre id=\"selfcheck\">(selfcheck: [a-zA-Z]+)\\n([^<]*)</pre>");
@@ -627,6 +628,7 @@ TEST(ViewerBrowser, PaintingATexelAndDraggingALampMatchRelightAndJudge) {
     // The page judged the lamps' E in double, `judge` its float32 copy in the file: equal to
     // float rounding, and the session's judge on the file's E gives `judge`'s numbers.
     matchesCli(savedLampE, "lamp-selftest-render.exr", lself, 1e-6, &cliJudge);
+    const std::vector<double> optimizedB = session.light(1);
     std::vector<double> stored(lampEnv.texels.begin(), lampEnv.texels.end());
     session.setLight(1, stored);
     const json onFile = session.judgeJson(1)["judge"];
@@ -634,7 +636,25 @@ TEST(ViewerBrowser, PaintingATexelAndDraggingALampMatchRelightAndJudge) {
                 1e-9 * std::abs(cliJudge["eq2"].get<double>()));
     EXPECT_NEAR(onFile["unbiased"].get<double>(), cliJudge["unbiased"].get<double>(),
                 1e-9 * std::abs(cliJudge["unbiased"].get<double>()));
-    session.setPreset(1, "studio");  // B as the session began, for the screenshot
+    // The page's optimizer button ran optimize's search from light B (studio) for 50
+    // iterations: the loss went down, the progress bar reached the last iteration, and B is
+    // the result, with the judge's numbers the page shows.
+    const json& opt = lself["optimized"];
+    ASSERT_TRUE(opt.is_object()) << lself.dump();
+    EXPECT_EQ(opt["status"]["state"], "done");
+    EXPECT_EQ(opt["status"]["slot"], "b");
+    EXPECT_LT(opt["status"]["loss"].get<double>(), opt["status"]["initial_loss"].get<double>());
+    EXPECT_EQ(opt["progress"], opt["status"]["iteration"]);
+    EXPECT_NE(opt["image_before"]["hash"], opt["image_after"]["hash"]);
+    session.setLight(1, optimizedB);
+    const json judgedB = session.judgeJson(1)["judge"];
+    EXPECT_DOUBLE_EQ(opt["judge_after"]["eq2"].get<double>(), judgedB["eq2"].get<double>());
+    EXPECT_DOUBLE_EQ(opt["judge_after"]["unbiased"].get<double>(),
+                     judgedB["unbiased"].get<double>());
+    std::cout << "optimizer from the page: loss " << opt["status"]["initial_loss"] << " -> "
+              << opt["status"]["loss"] << " in " << opt["status"]["iteration"]
+              << " iterations; judge eq. 2 " << opt["judge_before"]["eq2"] << " -> "
+              << opt["judge_after"]["eq2"] << std::endl;
 
     // A screenshot with the A/B split and the defect overlay.
     const fs::path shot =

@@ -276,6 +276,7 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
         po.spp = options.spp;
         po.threads = options.threads;
         po.label = "view: trace T";
+        po.sampleSets = 2;  // the halves: the optimizer's objective is optimize's default
         t_ = std::make_unique<TransportSource>(
             transportForScene(*scene, po, cacheDirectory(options.cache)));
         if (options.judge) {

@@ -5,7 +5,8 @@
 //
 // Inputs (ViewerOptions::input):
 //   part.tm     T as stored; the judge scores on T's own halves when it has two (else none)
-//   SCENE.json  T traced at the scene's spp (or `spp`), cached by fingerprint, and the judge's
+//   SCENE.json  T traced at the scene's spp (or `spp`) as two halves (optimize's objectives
+//               need them; T·E is their mean), cached by fingerprint, and the judge's
 //               own estimate (app/Judge.h, `judgeSpp`), exactly as `judge SCENE.json` scores
 //   OUTDIR      an optimize output directory: its summary.json's transport file, its E*
 //               (envmap.exr, the preset "optimized"; the paper's light, "paper"), its truth
