@@ -473,6 +473,9 @@ TEST(ViewerOptimize, LowersOptimizesLossFromTheCurrentLightAndReportsProgress) {
     EXPECT_EQ(call(s, "POST", "/api/optimize", R"({"stop": true})").status, 200);
     s.waitOptimize();
     const auto after = s.optimizeStatus();
+    std::cout << "optimize: " << st["initial_loss"] << " -> " << st["loss"] << " in "
+              << st["iteration"] << " iterations; a stop ended run " << after.run << " ("
+              << after.state << ") at iteration " << after.iteration << std::endl;
     EXPECT_TRUE(after.state == "stopped" || after.state == "done") << after.state;
     EXPECT_LT(after.iteration, 100000);
     EXPECT_EQ(after.run, secondStarted ? 3 : 2);
@@ -577,7 +580,8 @@ TEST(ViewerBrowser, PaintingATexelAndDraggingALampMatchRelightAndJudge) {
 
     // Light A: the two lamps, the disk toward the texel that lights the most of the image (so
     // that the part is lit). Drag lamp 1 on the hemisphere widget (mouse events on the canvas)
-    // 20° in azimuth and 8° down: the lamp moved there, the image and the judge numbers changed,
+    // 20° in azimuth and 8° down, then press "]": the lamp moved there and grew, the image and
+    // the judge numbers changed,
     // the saved E is the rasterization of the saved lamps.json, and it matches `relight` and
     // `judge`.
     constexpr double kDeg = std::numbers::pi / 180;
@@ -610,6 +614,9 @@ TEST(ViewerBrowser, PaintingATexelAndDraggingALampMatchRelightAndJudge) {
     EXPECT_NEAR(lself["after"]["lamp"]["azimuth_deg"].get<double>(), az, 1.0);
     EXPECT_NEAR(lself["after"]["lamp"]["elevation_deg"].get<double>(), el, 1.0);
     EXPECT_GT(lself["after"]["image"]["mean"].get<double>(), 1.0);  // the part is lit
+    // ... and the shortcut "]" made it 1.25 times as large.
+    EXPECT_NEAR(lself["after"]["lamp"]["size_deg"].get<double>(),
+                1.25 * lself["before"]["lamp"]["size_deg"].get<double>(), 1e-9);
     ASSERT_EQ(session.lamps(0).size(), 2u);
     const fs::path savedLamps = o.outDir / "lamp-selftest.json",
                    savedLampE = o.outDir / "lamp-selftest.exr";

@@ -11,14 +11,20 @@
 //   OUTDIR      an optimize output directory: its summary.json's transport file, its E*
 //               (envmap.exr, the preset "optimized"; the paper's light, "paper"), its truth
 //               (when recorded) or else its defect regions' layer (view-regions.png), and the
-//               judge on optimize's held-out estimate (cached; the report's numbers)
+//               judge on optimize's held-out estimate (cached; the report's numbers); or a
+//               `lamps` output directory (summary.json names its input and has "greedy"): that
+//               scene or .tm as above (the scene without the lamps run's overrides: give them
+//               again), its E* (target-envmap.exr, "optimized")
+//   In a directory, lamps.json (or ViewerOptions::lamps) gives the preset "lamps": light A is
+//   E* when there is one and B the lamps, else A the lamps and B studio.
 // A truth label mask (height-map space) gives the judge per-region visibility and the page its
 // defect overlay (the regions' outlines, app/Preview.h colours).
 //
 // The API (JSON unless said; every request validated, errors 400 {"error": "..."}):
 //   GET  /                 the page (src/app/ViewerPage.html, embedded at build time)
 //   GET  /api/info         image and env-map size, presets, judge and overlay present, the
-//                          auto exposure of A, the texel that lights the most of the image
+//                          auto exposure of A, the texel that lights the most of the image,
+//                          "lamps" (how many lamps.json holds), "lamp_kinds"
 //   GET  /api/light?slot=a E of a slot:  {"slot": "a", "E": [...]}
 //   POST /api/light        {"slot": "a"|"b", "E": [...]} or {"slot": ..., "preset": NAME}:
 //                          sets the light, answers with its judge numbers (as GET /api/judge)
