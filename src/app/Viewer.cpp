@@ -3,15 +3,23 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <numbers>
 #include <sstream>
 
+#include "app/LossMask.h"
+#include "app/OptimizeJob.h"
 #include "app/Preview.h"
+#include "app/Search.h"
 #include "app/Truth.h"
 #include "core/Color.h"
 #include "core/Error.h"
+#include "core/Progress.h"
 #include "core/Stopwatch.h"
+#include "core/Text.h"
+#include "io/AtomicFile.h"
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
+#include "io/LampsFile.h"
 #include "io/PngBuffer.h"
 #include "io/SceneFile.h"
 #include "scene/EnvMapPresets.h"
@@ -115,21 +123,96 @@ int viewerSlot(const std::string& text) {
     throw inputError("slot", "\"" + text.substr(0, 16) + "\" is not a light slot", "use a or b");
 }
 
-void checkViewerFileName(const std::string& name) {
+void checkViewerFileName(const std::string& name, const std::string& extension) {
     const bool charsOk = std::all_of(name.begin(), name.end(), [](char c) {
         return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.';
     });
     if (name.empty() || name.size() > 64 || !charsOk || name[0] == '.' ||
-        name.find("..") != std::string::npos || name.size() < 5 ||
-        name.substr(name.size() - 4) != ".exr")
+        name.find("..") != std::string::npos || name.size() <= extension.size() ||
+        name.substr(name.size() - extension.size()) != extension) {
+        std::string fix = "use 1-64 letters, digits, '-', '_' or '.', ending in ";
+        fix += extension;
         throw inputError("name",
                          "\"" + name.substr(0, 80) +
                              "\" is not a file name in the output directory (paths are refused)",
-                         "use 1-64 letters, digits, '-', '_' or '.', ending in .exr");
+                         fix);
+    }
+}
+
+namespace {
+
+constexpr double kDeg = 180 / std::numbers::pi;
+
+double lampNumber(const json& j, const char* key, const std::string& where, double lo, double hi,
+                  bool loOpen = false) {
+    if (!j.contains(key) || !j[key].is_number())
+        throw inputError(where + " " + key, "missing or not a number",
+                         "give every lamp kind, azimuth_deg, elevation_deg, size_deg, radiance");
+    const double v = j[key].get<double>();
+    if (!std::isfinite(v) || v < lo || v > hi || (loOpen && v == lo)) {
+        std::string range = loOpen ? "(" : "[";
+        range += formatNumber(lo) + ", " + formatNumber(hi) + "]";
+        throw inputError(where + " " + key, formatNumber(v) + " is not in " + range,
+                         "give a value in " + range);
+    }
+    return v;
+}
+
+}  // namespace
+
+json viewerLampJson(const Lamp& l) {
+    json j;
+    j["kind"] = lampKindName(l.kind);
+    j["azimuth_deg"] = l.azimuth * kDeg;
+    j["elevation_deg"] = l.elevation * kDeg;
+    j["size_deg"] = l.size * kDeg;
+    j["width_deg"] = l.width * kDeg;
+    j["roll_deg"] = l.roll * kDeg;
+    j["radiance"] = l.radiance;
+    j["solid_angle_sr"] = lampSharpSolidAngle(l);
+    return j;
+}
+
+Lamp viewerLampFromJson(const json& j, const std::string& where) {
+    if (!j.is_object()) throw inputError(where, "is not a JSON object", "give {\"kind\": ...}");
+    if (!j.contains("kind") || !j["kind"].is_string())
+        throw inputError(where + " kind", "missing", "use disk, bar or ring");
+    Lamp l;
+    l.kind = parseLampKind(j["kind"].get<std::string>(), where + " kind");
+    const bool ring = l.kind == LampKind::Ring, bar = l.kind == LampKind::Bar;
+    l.azimuth =
+        ring && !j.contains("azimuth_deg") ? 0.0 : lampNumber(j, "azimuth_deg", where, -1e4, 1e4);
+    l.azimuth /= kDeg;
+    l.elevation = lampNumber(j, "elevation_deg", where, -90, 90) / kDeg;
+    l.size = lampNumber(j, "size_deg", where, 0, 90, true) / kDeg;
+    if (bar || j.contains("width_deg"))
+        l.width = lampNumber(j, "width_deg", where, 0, 90, true) / kDeg;
+    if (bar || j.contains("roll_deg")) l.roll = lampNumber(j, "roll_deg", where, -1e4, 1e4) / kDeg;
+    l.radiance = lampNumber(j, "radiance", where, 0, kViewerMaxTexel);
+    return l;
 }
 
 ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
-    const fs::path& in = options.input;
+    fs::path in = options.input;
+    fs::path lampsFile = options.lamps;
+    // A `lamps` output directory: its input (the scene or .tm), its E* and its lamps.
+    fs::path lampsDir;
+    if (fs::is_directory(in) && fs::exists(in / "summary.json")) {
+        const json s = readJsonFile(in / "summary.json");
+        if (!s.contains("transport") && s.contains("greedy") && s.contains("input") &&
+            s["input"].is_string()) {
+            lampsDir = in;
+            in = s["input"].get<std::string>();
+            if (!fs::exists(in))
+                throw inputError((lampsDir / "summary.json").string(),
+                                 "names the input " + in.string() + ", which is gone",
+                                 "run view on the scene or the .tm the lamps were fitted on");
+        }
+    }
+    if (lampsFile.empty() && fs::is_directory(options.input) &&
+        fs::exists(options.input / "lamps.json"))
+        lampsFile = options.input / "lamps.json";
+    if (!lampsFile.empty()) loadLamps(lampsFile);
     JudgeOptions jo;
     jo.spp = options.judgeSpp;
     jo.truth = options.truth;
@@ -193,6 +276,7 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
         po.spp = options.spp;
         po.threads = options.threads;
         po.label = "view: trace T";
+        po.sampleSets = 2;  // the halves: the optimizer's objective is optimize's default
         t_ = std::make_unique<TransportSource>(
             transportForScene(*scene, po, cacheDirectory(options.cache)));
         if (options.judge) {
@@ -200,6 +284,11 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
             sj.truth.clear();  // projected below, once
             estimate_ = std::make_unique<TransportSource>(judgeEstimate(*scene, sj));
         }
+    }
+    if (!lampsDir.empty() && fs::exists(lampsDir / "target-envmap.exr")) {
+        const auto& t = t_->file.matrix;
+        extraPresets_["optimized"] =
+            toVector(loadEnvMap(lampsDir / "target-envmap.exr", t.envWidth, t.envHeight, 1));
     }
     if (!truth.empty() && scene) {
         LabelMask m = projectTruth(*scene, truth, options.threads);
@@ -215,14 +304,33 @@ ViewerSession::ViewerSession(TransportSource t, std::optional<TransportSource> e
     : options_(options), labels_(std::move(labels)), legend_(std::move(legend)) {
     t_ = std::make_unique<TransportSource>(std::move(t));
     if (estimate) estimate_ = std::make_unique<TransportSource>(std::move(*estimate));
+    if (!options.lamps.empty()) loadLamps(options.lamps);
     finishSetup();
 }
 
-ViewerSession::~ViewerSession() = default;
+ViewerSession::~ViewerSession() {
+    optStop_ = true;
+    if (optThread_.joinable()) optThread_.join();
+}
+
+void ViewerSession::loadLamps(const fs::path& file) {
+    const LampsFile f = readLampsFile(file);
+    if (f.lamps.size() > kViewerMaxLamps)
+        throw inputError(file.string(),
+                         "has more than " + std::to_string(kViewerMaxLamps) + " lamps",
+                         "keep at most " + std::to_string(kViewerMaxLamps));
+    loadedLamps_ = f.lamps;
+    lampDistanceMm_ = f.distanceMm;
+}
+
+const LampRasterizer& ViewerSession::rasterizer() const {
+    return *rasterizer_;
+}
 
 void ViewerSession::finishSetup() {
     TransportMatrix& t = t_->file.matrix;
     t.threads = options_.threads;
+    rasterizer_ = std::make_unique<LampRasterizer>(EnvMapBasis(t.envWidth, t.envHeight));
     if (!labels_.empty() && labels_.size() != t.rows())
         throw inputError("truth", "its projection does not match T's image size");
     if (estimate_) {
@@ -239,6 +347,9 @@ void ViewerSession::finishSetup() {
     if (!labels_.empty()) overlay_ = outlinePng(labels_, t.width, t.height);  // else as read
     if (extraPresets_.count("optimized")) {
         lights_[0] = extraPresets_.at("optimized");
+        setPreset(1, loadedLamps_.empty() ? "studio" : "lamps");
+    } else if (!loadedLamps_.empty()) {
+        setPreset(0, "lamps");
         setPreset(1, "studio");
     } else {
         setPreset(0, "studio");
@@ -250,6 +361,7 @@ std::vector<std::string> ViewerSession::presets() const {
     std::vector<std::string> names{"uniform"};
     for (const auto& n : presetNames()) names.push_back(n);
     for (const auto& [n, e] : extraPresets_) names.push_back(n);
+    if (!loadedLamps_.empty()) names.push_back("lamps");
     return names;
 }
 
@@ -265,10 +377,38 @@ void ViewerSession::setLight(int slot, std::vector<double> E, const std::string&
             throw inputError(where, "value " + std::to_string(k) + " is not in [0, 1e6]",
                              "texels are finite, non-negative radiances");
     lights_.at(slot) = std::move(E);
+    lamps_.at(slot).clear();
+}
+
+void ViewerSession::setLamps(int slot, std::vector<Lamp> lamps) {
+    if (lamps.size() > kViewerMaxLamps)
+        throw inputError("lamps", "has " + std::to_string(lamps.size()) + " lamps",
+                         "give at most " + std::to_string(kViewerMaxLamps));
+    for (size_t k = 0; k < lamps.size(); ++k) {
+        // What viewerLampFromJson checks, for lamps that come from elsewhere.
+        const Lamp& l = lamps[k];
+        const bool ok = std::isfinite(l.azimuth) && std::abs(l.elevation) <= std::numbers::pi / 2 &&
+                        l.size > 0 && l.size <= std::numbers::pi / 2 && l.width > 0 &&
+                        l.width <= std::numbers::pi / 2 && std::isfinite(l.roll) &&
+                        l.radiance >= 0 && l.radiance <= kViewerMaxTexel;
+        if (!ok)
+            throw inputError("lamps[" + std::to_string(k) + "]", "has a field out of range",
+                             "elevation in [-90, 90], size and width in (0, 90] degrees, radiance "
+                             "in [0, 1e6]");
+    }
+    std::vector<double> e = rasterizer_->rasterize(lamps);
+    for (double& v : e) v = std::min(v, kViewerMaxTexel);  // overlapping lamps
+    lights_.at(slot) = std::move(e);
+    lamps_.at(slot) = std::move(lamps);
 }
 
 void ViewerSession::setPreset(int slot, const std::string& name) {
     const TransportMatrix& t = transport();
+    if (name == "lamps" && !loadedLamps_.empty()) {
+        setLamps(slot, loadedLamps_);
+        return;
+    }
+    lamps_.at(slot).clear();
     if (name == "uniform") {
         lights_.at(slot).assign(t.cols(), 0.5);
         return;
@@ -342,10 +482,38 @@ json ViewerSession::judgeJson(int slot) const {
     return j;
 }
 
+namespace {
+
+/// outDir/name, after checking that it resolves inside outDir (symbolic links included): the
+/// name is a plain file name (checkViewerFileName) and an existing file there must not be a link.
+fs::path insideOutDir(const fs::path& outDir, const std::string& name) {
+    fs::create_directories(outDir);
+    const fs::path dir = fs::canonical(outDir);
+    const fs::path file = dir / name;
+    if (fs::is_symlink(file) || file.parent_path() != dir)
+        throw inputError("name", "\"" + name + "\" is a link or leaves the output directory",
+                         "give a new file name");
+    return file;
+}
+
+}  // namespace
+
+fs::path ViewerSession::saveLamps(int slot, const std::string& name) const {
+    checkViewerFileName(name, ".json");
+    const auto& lamps = lamps_.at(slot);
+    if (lamps.empty())
+        throw inputError("lamps", std::string("light ") + (slot == 0 ? "A" : "B") + " has no lamps",
+                         "choose the preset lamps or add a lamp first");
+    insideOutDir(options_.outDir, name);
+    const fs::path file = options_.outDir / name;
+    writeTextAtomically(file, lampsToJson(lamps, lampDistanceMm_).dump(2) + "\n");
+    return file;
+}
+
 fs::path ViewerSession::save(int slot, const std::string& name) const {
     checkViewerFileName(name);
     const TransportMatrix& t = transport();
-    fs::create_directories(options_.outDir);
+    insideOutDir(options_.outDir, name);
     EnvMap env = EnvMap::constant(t.envWidth, t.envHeight, 0.0f);
     const auto& e = lights_.at(slot);
     for (size_t k = 0; k < e.size(); ++k) env.texels[k] = static_cast<float>(e[k]);
@@ -355,9 +523,131 @@ fs::path ViewerSession::save(int slot, const std::string& name) const {
     for (size_t p = 0; p < y.size(); ++p) img.data[p] = static_cast<float>(y[p]);
     std::string stem = name.substr(0, name.size() - 4);
     stem += "-render.exr";
+    insideOutDir(options_.outDir, stem);
     writeExr(options_.outDir / stem, img);
     writeEnvMap(file, env);
     return file;
+}
+
+void ViewerSession::startOptimize(int slot, int iterations) {
+    if (iterations < 0 || iterations > kViewerMaxIterations)
+        throw inputError("iterations", std::to_string(iterations) + " is out of range",
+                         "give 1.." + std::to_string(kViewerMaxIterations) +
+                             " (0 or none: the method's default budget)");
+    const TransportMatrix& t = transport();
+    if (t.channels != 1)
+        throw inputError("optimize", "the viewer optimizes a gray E; this T is RGB",
+                         "run scratchlight optimize with its RGB options instead");
+    {
+        std::lock_guard lock(optMutex_);
+        if (opt_.state == "running")
+            throw inputError("optimize", "an optimization is running",
+                             "wait for it or stop it ({\"stop\": true})");
+    }
+    // Not running: the last thread has left the session's mutex and is about to end.
+    if (optThread_.joinable()) optThread_.join();
+    optStop_ = false;
+    {
+        std::lock_guard lock(optMutex_);
+        const int run = opt_.run + 1;
+        opt_ = ViewerOptimizeStatus{};
+        opt_.state = "running";
+        opt_.slot = slot;
+        opt_.run = run;
+    }
+    optThread_ = std::thread(&ViewerSession::runOptimize, this, slot, lights_.at(slot), iterations);
+}
+
+void ViewerSession::stopOptimize() {
+    optStop_ = true;
+}
+
+ViewerOptimizeStatus ViewerSession::optimizeStatus() const {
+    std::lock_guard lock(optMutex_);
+    return opt_;
+}
+
+void ViewerSession::waitOptimize() {
+    std::unique_lock lock(optMutex_);
+    optDone_.wait(lock, [this] { return opt_.state != "running"; });
+}
+
+void ViewerSession::runOptimize(int slot, std::vector<double> start, int iterations) {
+    try {
+        const TransportMatrix& t = transport();
+        const Stopwatch clock;
+        // optimize's defaults (app/OptimizeJob.h): objective, λ, loss mask, method and budget.
+        const OptimizeDefaults defaults = optimizeDefaults();
+        const OptimizeJobOptions job;
+        SearchInputs si;
+        si.set = {&t};
+        si.mask = lossMask(job.mask, t, nullptr, job.scratch).pixels;
+        si.objective = job.objective;
+        si.objective.lambda = job.lambdas.front();
+        const bool labelled =
+            std::any_of(labels_.begin(), labels_.end(), [](uint8_t v) { return v != 0; });
+        ObjectiveKind kind = ObjectiveKind::Paper;
+        if (t.planes == 2) kind = labelled ? defaults.objectiveWithDefects : defaults.objective;
+        if (kind == ObjectiveKind::Defects) {
+            si.defects.resize(labels_.size());
+            for (size_t p = 0; p < labels_.size(); ++p) si.defects[p] = labels_[p] ? 255 : 0;
+        }
+        for (double& v : start) v = std::clamp(v, 0.0, 1.0);  // the optimizer's box
+        si.startValues = {start};
+        SearchOptions so;
+        so.objective = kind;
+        so.optimizer = optimizeJobOptimizerOptions();
+        const OptimizerMethodRow& row = methodRow(so.optimizer.method);
+        so.optimizer.method = row.runs;
+        so.optimizer.iterations = iterations > 0 ? iterations : row.defaultBudget;
+        so.planes = 1;
+        InitialState s0;
+        s0.kind = InitialKind::EnvMapFile;
+        s0.spec = "the viewer's light";
+        so.starts = {s0};
+        const double initial =
+            objectiveOnT(kind, t, si, si.objective).loss->evaluate(start, {}).total;
+        {
+            std::lock_guard lock(optMutex_);
+            opt_.objective = objectiveKindName(kind);
+            opt_.method = row.name;
+            opt_.budget = so.optimizer.iterations;
+            opt_.initialLoss = initial;
+            opt_.loss = initial;
+            opt_.history.emplace_back(0, initial);
+        }
+        ProgressTask task("view: optimize", so.optimizer.iterations);
+        si.callback = [&](const IterationRecord& r, std::span<const double>) {
+            task.set(r.iteration);
+            std::lock_guard lock(optMutex_);
+            opt_.iteration = r.iteration;
+            opt_.loss = r.loss;
+            opt_.seconds = clock.seconds();
+            auto& h = opt_.history;
+            if (h.size() >= 200) {  // thin: keep every other row
+                for (size_t k = 0; 2 * k < h.size(); ++k) h[k] = h[2 * k];
+                h.resize((h.size() + 1) / 2);
+            }
+            if (h.empty() || h.back().first != r.iteration) h.emplace_back(r.iteration, r.loss);
+            return !optStop_.load();
+        };
+        SearchResult result = search(si, so);
+        {
+            std::lock_guard lock(mutex_);
+            lights_.at(slot) = std::move(result.e);
+            lamps_.at(slot).clear();
+        }
+        std::lock_guard lock(optMutex_);
+        opt_.loss = result.training.total;
+        opt_.iteration = result.optimizer.iterations;
+        opt_.seconds = clock.seconds();
+        opt_.state = optStop_ ? "stopped" : "done";
+    } catch (const std::exception& e) {
+        std::lock_guard lock(optMutex_);
+        opt_.state = "failed";
+        opt_.error = e.what();
+    }
+    optDone_.notify_all();
 }
 
 ViewerResponse handleViewerRequest(ViewerSession& session, const ViewerRequest& r) {
@@ -386,11 +676,41 @@ ViewerResponse handleViewerRequest(ViewerSession& session, const ViewerRequest& 
             j["output"] = session.options().outDir.string();
             j["auto_exposure"] = session.autoExposure(0);
             j["hot_texel"] = session.hotTexel();
+            j["lamps"] = session.loadedLamps().size();
+            j["lamp_kinds"] = json::array();
+            for (const LampKindRow& k : lampKindTable()) j["lamp_kinds"].push_back(k.name);
             return jsonResponse(j);
         }
         if (r.method == "GET" && r.path == "/api/light") {
             const int slot = viewerSlot(queryValue(r, "slot", "a"));
             return jsonResponse(json{{"slot", slot == 0 ? "a" : "b"}, {"E", session.light(slot)}});
+        }
+        if (r.method == "GET" && r.path == "/api/lamps") {
+            const int slot = viewerSlot(queryValue(r, "slot", "a"));
+            json lamps = json::array();
+            for (const Lamp& l : session.lamps(slot)) lamps.push_back(viewerLampJson(l));
+            return jsonResponse(json{{"slot", slot == 0 ? "a" : "b"},
+                                     {"lamps", lamps},
+                                     {"distance_mm", session.lampDistanceMm()}});
+        }
+        if (r.method == "GET" && r.path == "/api/optimize") {
+            const ViewerOptimizeStatus st = session.optimizeStatus();
+            json j;
+            j["state"] = st.state;
+            j["slot"] = st.slot == 0 ? "a" : "b";
+            j["run"] = st.run;
+            j["iteration"] = st.iteration;
+            j["budget"] = st.budget;
+            j["loss"] = st.loss;
+            j["initial_loss"] = st.initialLoss;
+            j["objective"] = st.objective;
+            j["method"] = st.method;
+            j["seconds"] = st.seconds;
+            json h = json::array();
+            for (const auto& [it, loss] : st.history) h.push_back({it, loss});
+            j["history"] = h;
+            j["error"] = st.error;
+            return jsonResponse(j);
         }
         if (r.method == "GET" && r.path == "/api/judge") {
             const int slot = viewerSlot(queryValue(r, "slot", "a"));
@@ -413,7 +733,8 @@ ViewerResponse handleViewerRequest(ViewerSession& session, const ViewerRequest& 
             p.body = session.overlayPng();
             return p;
         }
-        if (r.method == "POST" && (r.path == "/api/light" || r.path == "/api/save")) {
+        if (r.method == "POST" && (r.path == "/api/light" || r.path == "/api/save" ||
+                                   r.path == "/api/lamps" || r.path == "/api/optimize")) {
             json body;
             try {
                 body = json::parse(r.body);
@@ -430,9 +751,52 @@ ViewerResponse handleViewerRequest(ViewerSession& session, const ViewerRequest& 
             }
             if (r.path == "/api/save") {
                 if (!body.contains("name") || !body["name"].is_string())
-                    throw inputError("name", "is missing", "give {\"name\": \"NAME.exr\"}");
-                const fs::path file = session.save(slot, body["name"].get<std::string>());
+                    throw inputError("name", "is missing",
+                                     "give {\"name\": \"NAME.exr\"} or {\"name\": \"NAME.json\"}");
+                const std::string name = body["name"].get<std::string>();
+                const bool lamps = name.size() > 5 && name.substr(name.size() - 5) == ".json";
+                const fs::path file =
+                    lamps ? session.saveLamps(slot, name) : session.save(slot, name);
                 return jsonResponse(json{{"saved", file.string()}});
+            }
+            if (r.path == "/api/optimize") {
+                if (body.contains("stop")) {
+                    if (!body["stop"].is_boolean())
+                        throw inputError("stop", "is not true or false", "give {\"stop\": true}");
+                    if (body["stop"].get<bool>()) session.stopOptimize();
+                    return jsonResponse(json{{"stopping", body["stop"].get<bool>()}});
+                }
+                int iterations = 0;
+                if (body.contains("iterations")) {
+                    if (!body["iterations"].is_number_integer())
+                        throw inputError("iterations", "is not an integer",
+                                         "give e.g. {\"iterations\": 50}");
+                    const auto n = body["iterations"].get<int64_t>();
+                    iterations =
+                        static_cast<int>(std::clamp<int64_t>(n, -1, kViewerMaxIterations + 1));
+                }
+                if (session.optimizeStatus().state == "running")
+                    return errorResponse(409,
+                                         "an optimization is running: wait for it or stop "
+                                         "it ({\"stop\": true})");
+                session.startOptimize(slot, iterations);
+                return jsonResponse(json{{"started", true}, {"slot", slot == 0 ? "a" : "b"}});
+            }
+            if (r.path == "/api/lamps") {
+                if (!body.contains("lamps") || !body["lamps"].is_array())
+                    throw inputError(
+                        "lamps", "is missing or not an array",
+                        "give {\"slot\": \"a\", \"lamps\": [{\"kind\": \"disk\", ...}]}");
+                if (body["lamps"].size() > kViewerMaxLamps)
+                    throw inputError("lamps",
+                                     "has " + std::to_string(body["lamps"].size()) + " lamps",
+                                     "give at most " + std::to_string(kViewerMaxLamps));
+                std::vector<Lamp> lamps;
+                for (size_t k = 0; k < body["lamps"].size(); ++k)
+                    lamps.push_back(
+                        viewerLampFromJson(body["lamps"][k], "lamps[" + std::to_string(k) + "]"));
+                session.setLamps(slot, std::move(lamps));
+                return jsonResponse(session.judgeJson(slot));
             }
             if (body.contains("preset")) {
                 if (!body["preset"].is_string())

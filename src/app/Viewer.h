@@ -5,19 +5,26 @@
 //
 // Inputs (ViewerOptions::input):
 //   part.tm     T as stored; the judge scores on T's own halves when it has two (else none)
-//   SCENE.json  T traced at the scene's spp (or `spp`), cached by fingerprint, and the judge's
+//   SCENE.json  T traced at the scene's spp (or `spp`) as two halves (optimize's objectives
+//               need them; T·E is their mean), cached by fingerprint, and the judge's
 //               own estimate (app/Judge.h, `judgeSpp`), exactly as `judge SCENE.json` scores
 //   OUTDIR      an optimize output directory: its summary.json's transport file, its E*
 //               (envmap.exr, the preset "optimized"; the paper's light, "paper"), its truth
 //               (when recorded) or else its defect regions' layer (view-regions.png), and the
-//               judge on optimize's held-out estimate (cached; the report's numbers)
+//               judge on optimize's held-out estimate (cached; the report's numbers); or a
+//               `lamps` output directory (summary.json names its input and has "greedy"): that
+//               scene or .tm as above (the scene without the lamps run's overrides: give them
+//               again), its E* (target-envmap.exr, "optimized")
+//   In a directory, lamps.json (or ViewerOptions::lamps) gives the preset "lamps": light A is
+//   E* when there is one and B the lamps, else A the lamps and B studio.
 // A truth label mask (height-map space) gives the judge per-region visibility and the page its
 // defect overlay (the regions' outlines, app/Preview.h colours).
 //
 // The API (JSON unless said; every request validated, errors 400 {"error": "..."}):
 //   GET  /                 the page (src/app/ViewerPage.html, embedded at build time)
 //   GET  /api/info         image and env-map size, presets, judge and overlay present, the
-//                          auto exposure of A, the texel that lights the most of the image
+//                          auto exposure of A, the texel that lights the most of the image,
+//                          "lamps" (how many lamps.json holds), "lamp_kinds"
 //   GET  /api/light?slot=a E of a slot:  {"slot": "a", "E": [...]}
 //   POST /api/light        {"slot": "a"|"b", "E": [...]} or {"slot": ..., "preset": NAME}:
 //                          sets the light, answers with its judge numbers (as GET /api/judge)
@@ -25,12 +32,41 @@
 //                          (POST /api/light answers the same without "auto_exposure")
 //   GET  /api/image.png?slot=a&exposure=X   T·E's luminance, ×X, sRGB-encoded 8-bit gray PNG
 //   GET  /api/overlay.png  the defect regions' outlines as RGBA (404 without regions)
+//   GET  /api/lamps?slot=a {"slot", "lamps": [lamp...], "distance_mm"}: the lamps the slot's
+//                          light is made of (empty when it is painted or a preset without lamps)
+//   POST /api/lamps        {"slot", "lamps": [lamp...]}: the light becomes the lamps rasterized
+//                          into the basis (scene/Lamp.h LampRasterizer, default quadrature);
+//                          answers as POST /api/light. A lamp: {"kind": disk|bar|ring,
+//                          "azimuth_deg", "elevation_deg" in [-90, 90], "size_deg" (Lamp::size:
+//                          disk radius, bar half-length, ring half-height; (0, 90]),
+//                          "width_deg" (bar half-width, (0, 90]), "roll_deg", "radiance" in
+//                          [0, 1e6]}; at most kViewerMaxLamps.
+//   POST /api/optimize     {"slot", "iterations"?: N}: starts optimize's search (app/Search.h,
+//                          optimize's default method and objective, below) on T from the slot's
+//                          current light, in a background thread, one at a time (409 while one
+//                          runs); {"stop": true} stops it at its next iteration (the best
+//                          iterate so far is kept, as optimize does on Ctrl-C)
+//   GET  /api/optimize     {"state": idle|running|done|stopped|failed, "slot", "iteration",
+//                          "budget", "loss", "initial_loss", "objective", "method", "seconds",
+//                          "run" (counts runs), "history" [[iteration, loss]...], "error"}; when
+//                          a run ends its E* becomes the slot's light (its lamps are dropped)
 //   POST /api/save         {"slot": "a", "name": "NAME.exr"}: writes E as OUTDIR/NAME.exr and
-//                          T·E as OUTDIR/NAME-render.exr (atomic; NAME: letters, digits, - _ .)
+//                          T·E as OUTDIR/NAME-render.exr; {"slot", "name": "NAME.json"}: the
+//                          slot's lamps as lamps.json (io/LampsFile.h). Atomic (io/AtomicFile.h);
+//                          NAME: letters, digits, - _ . and nothing else (no paths).
 // CONVENTION: the server never writes outside ViewerOptions::outDir.
+//
+// The optimizer from the current light: optimize's defaults (app/OptimizeJob.h
+// optimizeDefaults(): its method at the method's default budget; its objective: the defects
+// objective when the session has defect labels (a truth) and T has halves, the noise-unbiased
+// one with halves, eq. 2 without; λ and the loss mask "object" as optimize's defaults), one
+// start: the slot's light clamped into the optimizer's box [0, 1], one estimate of T (the
+// session's T; `planes` 1).
 #pragma once
 
 #include <array>
+#include <atomic>
+#include <condition_variable>
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -38,11 +74,13 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "app/Cache.h"
 #include "app/Judge.h"
 #include "app/Transport.h"
+#include "scene/Lamp.h"
 
 namespace sl {
 
@@ -52,6 +90,10 @@ inline constexpr size_t kViewerMaxPath = 256;
 inline constexpr size_t kViewerMaxQueryValue = 64;
 /// The largest texel value a light may hold.
 inline constexpr double kViewerMaxTexel = 1e6;
+/// The most lamps a light may have.
+inline constexpr size_t kViewerMaxLamps = 32;
+/// The largest iteration budget POST /api/optimize accepts.
+inline constexpr int kViewerMaxIterations = 100000;
 
 struct ViewerOptions {
     std::filesystem::path input;              // part.tm, SCENE.json or an optimize OUTDIR
@@ -61,6 +103,9 @@ struct ViewerOptions {
     int judgeSpp = kJudgeDefaultSpp;  // the judge's estimate of a scene
     bool judge = true;                // false: no judge numbers (faster start)
     std::filesystem::path truth;      // label mask in height-map space (optional)
+    /// lamps.json (io/LampsFile.h); empty: OUTDIR/lamps.json when the input is a directory that
+    /// has one. Loaded lamps are the preset "lamps".
+    std::filesystem::path lamps;
     CacheLocation cache;
     int threads = 0;
     int pngLevel = 1;  // zlib level of the images (0..9)
@@ -79,6 +124,17 @@ struct ViewerResponse {
     std::string body;
 };
 
+/// What GET /api/optimize reports.
+struct ViewerOptimizeStatus {
+    std::string state = "idle";  // idle, running, done, stopped, failed
+    int slot = 0;
+    int run = 0;  // runs started so far
+    int iteration = 0, budget = 0;
+    double loss = 0, initialLoss = 0, seconds = 0;
+    std::string objective, method, error;
+    std::vector<std::pair<int, double>> history;  // (iteration, loss), thinned to <= 200 rows
+};
+
 /// Timings of the last image request (bench view).
 struct ViewerTimings {
     double relightMs = 0, encodeMs = 0;
@@ -88,8 +144,8 @@ struct ViewerTimings {
 class ViewerSession {
   public:
     explicit ViewerSession(const ViewerOptions& options);
-    /// A session on a given T (and optional judge estimate with image-space labels), for tests
-    /// and benchmarks.
+    /// A session on a given T (and optional judge estimate with image-space labels; the lamps
+    /// of options.lamps), for tests and benchmarks.
     ViewerSession(TransportSource t, std::optional<TransportSource> estimate,
                   const ViewerOptions& options, std::vector<uint8_t> labels = {},
                   std::vector<RegionLabel> legend = {});
@@ -122,6 +178,27 @@ class ViewerSession {
     const std::string& overlayPng() const { return overlay_; }
     /// Writes E as outDir/name and T·E as outDir/<stem>-render.exr; returns the E file's path.
     std::filesystem::path save(int slot, const std::string& name) const;
+    /// Writes the slot's lamps as outDir/name (lamps.json); InputError without lamps.
+    std::filesystem::path saveLamps(int slot, const std::string& name) const;
+
+    /// The lamps a slot's light is made of (empty: painted or a preset without lamps).
+    const std::vector<Lamp>& lamps(int slot) const { return lamps_.at(slot); }
+    /// The lamps read from lamps.json (the preset "lamps"; empty without a file).
+    const std::vector<Lamp>& loadedLamps() const { return loadedLamps_; }
+    double lampDistanceMm() const { return lampDistanceMm_; }
+    /// Validated (kViewerMaxLamps, each field as POST /api/lamps says; InputError naming
+    /// lamps[i] and the field); the slot's light becomes rasterizer().rasterize(lamps).
+    void setLamps(int slot, std::vector<Lamp> lamps);
+    const LampRasterizer& rasterizer() const;
+
+    /// Starts the optimizer from the slot's light (InputError when one is running or the
+    /// budget is out of range; 0: the method's default budget).
+    void startOptimize(int slot, int iterations = 0);
+    /// Asks a running optimizer to stop at its next iteration (no-op otherwise).
+    void stopOptimize();
+    ViewerOptimizeStatus optimizeStatus() const;
+    /// Blocks until no optimizer runs (tests).
+    void waitOptimize();
 
     /// Serialises requests (the HTTP server's worker threads share one session).
     std::mutex& mutex() { return mutex_; }
@@ -134,18 +211,37 @@ class ViewerSession {
     std::vector<RegionLabel> legend_;
     std::map<std::string, std::vector<double>> extraPresets_;  // "optimized" of an OUTDIR
     std::array<std::vector<double>, 2> lights_;
+    std::array<std::vector<Lamp>, 2> lamps_;
+    std::vector<Lamp> loadedLamps_;
+    double lampDistanceMm_ = 500;
+    mutable std::unique_ptr<LampRasterizer> rasterizer_;
     std::string overlay_;
     std::mutex mutex_;
+    // The optimizer's thread and its status (guarded by optMutex_, not the session's mutex: the
+    // page polls while it runs).
+    mutable std::mutex optMutex_;
+    std::condition_variable optDone_;
+    ViewerOptimizeStatus opt_;
+    std::atomic<bool> optStop_{false};
+    std::thread optThread_;
 
     void finishSetup();
+    void loadLamps(const std::filesystem::path& file);
+    void runOptimize(int slot, std::vector<double> start, int iterations);
 };
 
 /// The slot a query or body names: "a" (or missing) → 0, "b" → 1; InputError otherwise.
 int viewerSlot(const std::string& text);
 
 /// Checks a file name for POST /api/save: 1..64 characters of letters, digits, '-', '_', '.',
-/// not starting with '.', ending in ".exr", no path separators (InputError naming the fix).
-void checkViewerFileName(const std::string& name);
+/// not starting with '.', no "..", ending in `extension` (".exr" or ".json"), no path
+/// separators (InputError naming the fix).
+void checkViewerFileName(const std::string& name, const std::string& extension = ".exr");
+
+/// A lamp of the API (degrees, see above) and back; fromJson validates (InputError naming
+/// `where` and the field).
+nlohmann::ordered_json viewerLampJson(const Lamp& lamp);
+Lamp viewerLampFromJson(const nlohmann::ordered_json& j, const std::string& where);
 
 /// Answers one request (locks the session's mutex). Never throws: bad input is 400 with
 /// {"error": message}, an unknown path 404, anything else 500.

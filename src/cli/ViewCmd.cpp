@@ -1,4 +1,5 @@
 // scratchlight view (part.tm | SCENE.json | OUTDIR) [--port 8080] [--host H] [--open] [-o DIR]
+//                   [--lamps lamps.json]
 // scratchlight bench view [SCENE.json] [--size 512,2048] [--spp 1] [--repeats 20] [-o CSV]
 // The live relighting viewer (app/Viewer.h, app/ViewerServer.h) and its latency benchmark
 // (app/ViewerBench.h).
@@ -71,9 +72,12 @@ int runBenchView(const ViewerBenchOptions& o) {
 void registerView(CLI::App& app, std::function<int()>& run) {
     auto a = std::make_shared<ViewArgs>();
     CLI::App* c = app.add_subcommand(
-        "view", "A live relighting viewer in the browser: paint the light, see T·E and the judge");
+        "view",
+        "A live relighting viewer in the browser: paint the light or drag lamps, see T·E and the "
+        "judge, run the optimizer");
     c->add_option("input", a->o.input,
-                  "A transport matrix (.tm), a scene file (.json) or an optimize output directory")
+                  "A transport matrix (.tm), a scene file (.json), or an optimize or lamps output "
+                  "directory")
         ->required();
     c->add_option("--port", a->port, "TCP port (0: any free port)")
         ->check(CLI::Range(0, 65535))
@@ -92,12 +96,15 @@ void registerView(CLI::App& app, std::function<int()>& run) {
     c->add_option("--truth", a->o.truth,
                   "Truth label mask in height-map space: per-region visibility and the defect "
                   "overlay");
+    c->add_option("--lamps", a->o.lamps,
+                  "lamps.json (written by `scratchlight lamps`): the preset \"lamps\", handles "
+                  "on the hemisphere (default: OUTDIR/lamps.json when there is one)");
     addSceneOverrides(c, a->o.sceneOverrides, true);
     addCacheOptions(c, a->o.cache);
     c->add_option("--threads", a->o.threads, "Worker threads (0: all cores)")
         ->check(CLI::Range(0, 4096));
     c->add_option("-o,--output", a->o.outDir,
-                  "Output directory: the only place the viewer writes (saved lights)")
+                  "Output directory: the only place the viewer writes (saved lights and lamps)")
         ->capture_default_str();
     c->callback([a, &run] { run = [a] { return runView(*a); }; });
 
