@@ -12,6 +12,7 @@
 #include "app/OptimizeJob.h"
 #include "app/PartFiles.h"
 #include "app/Transport.h"
+#include "app/Truth.h"
 #include "core/Error.h"
 #include "core/Progress.h"
 #include "core/Stats.h"
@@ -134,6 +135,9 @@ std::vector<RaceConfig> defaultRaceConfigs() {
                        16, 1, d.starts));
     c.push_back(config("default-paper", K::Paper, d.method, methodRow(d.method).defaultBudget,
                        d.paperMinSpp, 1, d.starts));
+    // ... and with the defects named (the part's truth): the defects objective.
+    c.push_back(config("default-defects", d.objectiveWithDefects, d.method,
+                       methodRow(d.method).defaultBudget, 16, 1, d.starts));
     c.push_back(config("unbiased-lbfgs-16-multistart", K::Unbiased, M::Lbfgs, 2000, 16, 1,
                        {"const:0.5", "specular", "studio"}));
     c.push_back(config("unbiased-lbfgs-16-continuation", K::Unbiased, M::Lbfgs, 2000, 16, 1,
@@ -162,15 +166,18 @@ RaceSummary runRace(const RaceOptions& o) {
         jo.cacheDir = cacheDir;
         log(partName + ": judge estimate (" + std::to_string(o.judgeSpp) + " spp)");
         const Judge judge(*scene, jo);
+        const std::vector<uint8_t> truthRegion =
+            projectRegion(*scene, RegionSpec{files.truth, {}, false});
 
         for (int seed = 0; seed < o.seeds; ++seed) {
             std::vector<RaceRow> rows;
             for (const RaceConfig& c : o.configs) {
                 const bool unb = c.search.objective == ObjectiveKind::Unbiased;
+                const bool defects = c.search.objective == ObjectiveKind::Defects;
                 PrecomputeOptions p;
                 p.spp = c.spp;
                 p.seed = static_cast<uint64_t>(seed) * 1000;
-                p.sampleSets = unb ? 2 : 1;
+                p.sampleSets = c.search.objective != ObjectiveKind::Paper ? 2 : 1;
                 const Stopwatch precompute;
                 const std::vector<TransportSource> set =
                     transportSetForScene(*scene, p, c.search.planes, {});
@@ -185,6 +192,7 @@ RaceSummary runRace(const RaceOptions& o) {
                 in.objective.lambda = o.lambda;
                 in.scene = scene.get();
                 in.maxDepth = set.front().file.provenance.maxDepth;
+                if (defects) in.defects = truthRegion;  // the truth names the defects
                 const Stopwatch searching;
                 const SearchResult sr = search(in, c.search);
                 r.secondsSearch = searching.seconds();
@@ -198,7 +206,9 @@ RaceSummary runRace(const RaceOptions& o) {
                 r.visDefect = regionVisibility(js, "defect");
                 r.visChatter = regionVisibility(js, "chatter");
                 r.trainLoss = sr.training.total;
-                r.heldOwn = unb ? r.unbiased : r.eq2;
+                // Own objective on the judge's estimate: U or eq. 2; the defects objective is
+                // read from its visibility columns instead (NaN here).
+                r.heldOwn = defects ? kNaN : (unb ? r.unbiased : r.eq2);
                 char buf[256];
                 std::snprintf(buf, sizeof buf, "%s seed %d %-30s %6.2f s  eq2 %8.4f  U %8.4f",
                               partName.c_str(), seed, c.name.c_str(), r.seconds, r.eq2, r.unbiased);
