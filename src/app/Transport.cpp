@@ -75,13 +75,23 @@ std::string describeTransport(const TransportSource& s) {
 }
 
 bool isTransportFile(const std::filesystem::path& input) {
-    return input.extension() == ".tm";
+    return input.extension() == ".tm" || input.extension() == ".shards";
 }
 
 RenderOptions traceOptions(const Scene& scene, const PrecomputeOptions& o) {
     RenderOptions r = renderOptionsFor(scene);
     if (o.spp) r.spp = *o.spp;
     if (o.maxDepth) r.maxDepth = *o.maxDepth;
+    if (o.rowBegin != 0 || o.rowEnd != 0) {
+        const int H = scene.camera.height();
+        if (o.rowBegin < 0 || o.rowEnd > H || o.rowBegin >= o.rowEnd)
+            throw inputError(option("rows"),
+                             std::to_string(o.rowBegin) + ":" + std::to_string(o.rowEnd) +
+                                 " is not a row range of the " + std::to_string(H) + "-row image",
+                             "use A:B with 0 <= A < B <= " + std::to_string(H));
+        r.rowBegin = o.rowBegin;
+        r.rowEnd = o.rowEnd;
+    }
     if (o.seed) r.seed = *o.seed;
     r.threads = o.threads;
     r.sampleSets = o.sampleSets;

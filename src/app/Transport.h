@@ -22,6 +22,8 @@ struct PrecomputeOptions {
     bool rgb = false;
     int sampleSets = 1;  // 2: store the halves T_a, T_b (noise-unbiased objective, held-out)
     int threads = 0;
+    /// Image rows [rowBegin, rowEnd) only (both 0: all): a shard (io/TransportFile.h SHARDS).
+    int rowBegin = 0, rowEnd = 0;
     /// What the trace's progress (core/Progress.h) is called; the image size and spp follow.
     std::string label = "precompute";
 };
@@ -71,7 +73,7 @@ TransportSource judgeEstimateFor(const TransportFile& training, const Scene& sce
 /// the trace's rays and seconds when it was traced (not on a cache hit or a file read).
 std::string describeTransport(const TransportSource& source);
 
-/// True if `input` names a transport-matrix file (by extension .tm).
+/// True if `input` names a transport-matrix file (by extension: .tm, or a .shards list).
 bool isTransportFile(const std::filesystem::path& input);
 
 }  // namespace sl

@@ -34,14 +34,31 @@ void addTraceOptions(CLI::App* c, PrecomputeOptions& p, std::vector<std::string>
 }
 
 struct PrecomputeArgs {
-    std::string scene, out = "part.tm";
+    std::string scene, out = "part.tm", rows;
     PrecomputeOptions p;
     std::vector<std::string> overrides;
 };
 
-int runPrecompute(const PrecomputeArgs& a) {
+/// --rows A:B into the options' row range.
+void parseRows(const std::string& v, PrecomputeOptions& p) {
+    const size_t colon = v.find(':');
+    try {
+        if (colon == std::string::npos) throw std::invalid_argument("no colon");
+        size_t used = 0;
+        p.rowBegin = std::stoi(v.substr(0, colon), &used);
+        if (used != colon) throw std::invalid_argument("trailing");
+        const std::string rest = v.substr(colon + 1);
+        p.rowEnd = std::stoi(rest, &used);
+        if (used != rest.size()) throw std::invalid_argument("trailing");
+    } catch (const std::logic_error&) {
+        throw UsageError("--rows " + v + ": expected A:B (image rows A to B-1, e.g. 0:256)");
+    }
+}
+
+int runPrecompute(PrecomputeArgs a) {
     if (std::filesystem::path(a.out).extension() != ".tm")
         throw UsageError("output '" + a.out + "' must end in .tm");
+    if (!a.rows.empty()) parseRows(a.rows, a.p);
     TransportSource s = precomputeToFile(a.scene, a.p, a.out, a.overrides);
     std::printf("%s\n", describeTransport(s).c_str());
     std::printf("wrote %s (fingerprint %s)\n", a.out.c_str(),
@@ -128,6 +145,9 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
             "--halves", [a](std::int64_t) { a->p.sampleSets = 2; },
             "Store the two half-sample matrices T_a, T_b (for --objective unbiased and held-out "
             "estimates)");
+        c->add_option("--rows", a->rows,
+                      "Trace image rows A to B-1 only (A:B): a shard of T for a cluster; list "
+                      "the shards in a .shards file to use them as one T (docs/CLUSTER.md)");
         c->add_option("-o,--output", a->out, "Output transport-matrix file (.tm)")
             ->capture_default_str();
         c->callback([a, &run] { run = [a] { return runPrecompute(*a); }; });

@@ -1,6 +1,7 @@
 #include "io/TransportFile.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -43,6 +44,22 @@ std::string damaged(const std::string& where, const std::string& what) {
 
 }  // namespace
 
+namespace {
+
+/// The fingerprint of a provenance's inputs: everything but what names files.
+std::string fingerprintOf(const json& in) {
+    // The file name is informative only: the content hash identifies the height map.
+    json keyed = in;
+    if (keyed.contains("heightmap")) keyed["heightmap"].erase("file");
+    if (keyed.contains("material")) keyed["material"].erase("name");
+    keyed.erase("scene_file");
+    keyed.erase("scene_overrides");
+    const std::string text = keyed.dump();
+    return toHex(hash64(text.data(), text.size(), 1)) + toHex(hash64(text.data(), text.size(), 2));
+}
+
+}  // namespace
+
 TransportProvenance transportProvenance(const Scene& scene, const RenderOptions& opt,
                                         int channels) {
     const CameraDesc& c = scene.camera.desc();
@@ -78,21 +95,15 @@ TransportProvenance transportProvenance(const Scene& scene, const RenderOptions&
         {"content_hash", toHex(hash64(scene.heights.data(), scene.heights.size() * sizeof(float)))},
         {"file", scene.desc.heightmap.path.filename().string()}};
     in["render"] = {{"spp", opt.spp}, {"max_depth", opt.maxDepth}, {"seed", opt.seed}};
+    if (opt.rowBegin != 0 || opt.rowEnd != 0)  // a shard (absent for the whole image)
+        in["rows"] = {opt.rowBegin, opt.rowEnd > 0 ? opt.rowEnd : c.height};
     if (!scene.desc.file.empty())
         in["scene_file"] = std::filesystem::absolute(scene.desc.file).lexically_normal().string();
     // The fields they change are recorded above; these let sceneOfTransport load the same scene.
     if (!scene.desc.overrides.empty()) in["scene_overrides"] = scene.desc.overrides;
     TransportProvenance p;
     p.inputs = in.dump();
-    // The file name is informative only: the content hash identifies the height map.
-    json keyed = in;
-    keyed["heightmap"].erase("file");
-    keyed["material"].erase("name");
-    keyed.erase("scene_file");
-    keyed.erase("scene_overrides");
-    std::string text = keyed.dump();
-    p.fingerprint =
-        toHex(hash64(text.data(), text.size(), 1)) + toHex(hash64(text.data(), text.size(), 2));
+    p.fingerprint = fingerprintOf(in);
     p.spp = opt.spp;
     p.maxDepth = opt.maxDepth;
     p.seed = opt.seed;
@@ -150,8 +161,113 @@ void writeTransportFile(const std::filesystem::path& file, const TransportMatrix
     });
 }
 
+TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std::string& where) {
+    if (shards.empty())
+        throw inputError(where, "lists no shard", "list the .tm files of `precompute --rows`");
+    json common;
+    std::vector<std::array<int, 2>> ranges;
+    for (size_t k = 0; k < shards.size(); ++k) {
+        json in = json::parse(shards[k].provenance.inputs);
+        const std::string name = where + " shard " + std::to_string(k + 1);
+        if (!in.contains("rows"))
+            throw inputError(name, "is a whole transport matrix, not a shard",
+                             "list only the files of `precompute --rows A:B`");
+        ranges.push_back({in["rows"][0].get<int>(), in["rows"][1].get<int>()});
+        in.erase("rows");
+        if (k == 0) {
+            common = in;
+        } else if (fingerprintOf(in) != fingerprintOf(common)) {
+            throw inputError(name,
+                             "was traced with other inputs than shard 1 (scene, camera, "
+                             "material, spp, seed or max_depth)",
+                             "trace every shard with the same scene and options");
+        }
+    }
+    TransportMatrix& first = shards.front().matrix;
+    const size_t rows = first.rows();
+    std::vector<int> owner(rows == 0 ? 0 : static_cast<size_t>(first.height), -1);
+    for (size_t k = 0; k < shards.size(); ++k) {
+        const TransportMatrix& t = shards[k].matrix;
+        if (t.width != first.width || t.height != first.height || t.channels != first.channels ||
+            t.planes != first.planes || t.cols() != first.cols())
+            throw inputError(where + " shard " + std::to_string(k + 1),
+                             "has other dimensions than shard 1", "trace every shard alike");
+        for (int y = ranges[k][0]; y < ranges[k][1]; ++y) {
+            if (y < 0 || y >= first.height)
+                throw inputError(where + " shard " + std::to_string(k + 1),
+                                 "has rows outside the image", "trace it again");
+            if (owner[static_cast<size_t>(y)] >= 0)
+                throw inputError(where, "row " + std::to_string(y) + " is in two shards",
+                                 "give each row range once");
+            owner[static_cast<size_t>(y)] = static_cast<int>(k);
+        }
+    }
+    for (int y = 0; y < first.height; ++y)
+        if (owner[static_cast<size_t>(y)] < 0)
+            throw inputError(where, "no shard has image row " + std::to_string(y),
+                             "trace the missing rows with `precompute --rows A:B`");
+    for (TransportFile& f : shards)
+        if (f.matrix.storage == TransportStorage::Dense) f.matrix.toSparse();
+    TransportMatrix m;
+    m.width = first.width;
+    m.height = first.height;
+    m.envWidth = first.envWidth;
+    m.envHeight = first.envHeight;
+    m.channels = first.channels;
+    m.planes = first.planes;
+    m.storage = TransportStorage::Sparse;
+    m.rowPtr.assign(rows + 1, 0);
+    m.objectMask.assign(rows, 0);
+    const size_t st = static_cast<size_t>(m.stride()), W = static_cast<size_t>(m.width);
+    for (size_t r = 0; r < rows; ++r) {
+        const TransportMatrix& t = shards[static_cast<size_t>(owner[r / W])].matrix;
+        const uint64_t b = t.rowPtr[r], e = t.rowPtr[r + 1];
+        m.colIdx.insert(m.colIdx.end(), t.colIdx.begin() + static_cast<std::ptrdiff_t>(b),
+                        t.colIdx.begin() + static_cast<std::ptrdiff_t>(e));
+        m.values.insert(m.values.end(), t.values.begin() + static_cast<std::ptrdiff_t>(b * st),
+                        t.values.begin() + static_cast<std::ptrdiff_t>(e * st));
+        m.rowPtr[r + 1] = m.colIdx.size();
+        m.objectMask[r] = t.objectMask[r];
+    }
+    chooseStorage(m);
+    TransportFile out;
+    out.matrix = std::move(m);
+    out.provenance = shards.front().provenance;
+    out.provenance.inputs = common.dump();
+    out.provenance.fingerprint = fingerprintOf(common);
+    return out;
+}
+
+namespace {
+
+TransportFile readShardList(const std::filesystem::path& list,
+                            const std::string& expectedFingerprint) {
+    std::ifstream in(list);
+    if (!in)
+        throw inputError(list.string(), "cannot open the shard list",
+                         "check the path (a text file with one .tm file per line)");
+    std::vector<TransportFile> shards;
+    std::string line;
+    while (std::getline(in, line)) {
+        const size_t a = line.find_first_not_of(" \t\r");
+        if (a == std::string::npos || line[a] == '#') continue;
+        const size_t b = line.find_last_not_of(" \t\r");
+        std::filesystem::path p = line.substr(a, b - a + 1);
+        if (p.is_relative()) p = list.parent_path() / p;
+        shards.push_back(readTransportFile(p));
+    }
+    TransportFile merged = mergeTransportShards(std::move(shards), list.string());
+    if (!expectedFingerprint.empty() && merged.provenance.fingerprint != expectedFingerprint)
+        throw inputError(list.string(), "its shards were traced from other inputs",
+                         "trace the shards again from this scene");
+    return merged;
+}
+
+}  // namespace
+
 TransportFile readTransportFile(const std::filesystem::path& file,
                                 const std::string& expectedFingerprint) {
+    if (file.extension() == ".shards") return readShardList(file, expectedFingerprint);
     std::ifstream in(file, std::ios::binary);
     std::error_code ec;
     const auto fileSize = std::filesystem::file_size(file, ec);

@@ -10,12 +10,21 @@
 // hash, and, when the caller knows which inputs it wants, the fingerprint: a damaged or stale
 // file is refused with a message that says which and how to fix it. Files are written to a
 // temporary name and renamed into place.
+//
+// SHARDS (a trace split by image rows, `precompute --rows A:B`, for a cluster): a shard is a .tm
+// of the whole image whose rows outside [A, B) are empty, its inputs recording "rows": [A, B].
+// A shard list (.shards: a text file, one .tm path per line, relative to the list's folder;
+// blank lines and lines starting with # skipped) reads as the merged T: every row from the
+// shard that traced it. The shards must share every other input and cover each row once. As
+// each pixel's samples depend only on (seed, pixel, sample), the merged T is the one-process
+// trace bit for bit, with its fingerprint.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
 #include <istream>
 #include <string>
+#include <vector>
 
 #include "render/PathTracer.h"
 #include "transport/TransportMatrix.h"
@@ -49,11 +58,15 @@ struct TransportFile {
     TransportProvenance provenance;
 };
 
-/// Reads and verifies a .tm file. If expectedFingerprint is non-empty and differs, throws
-/// InputError saying the file is stale. Damage, truncation, wrong version: InputError.
-/// (Opens the file and calls readTransport.)
+/// Reads and verifies a .tm file (or a .shards list of them, merged). If expectedFingerprint is
+/// non-empty and differs, throws InputError saying the file is stale. Damage, truncation, wrong
+/// version: InputError. (Opens the file and calls readTransport.)
 TransportFile readTransportFile(const std::filesystem::path& file,
                                 const std::string& expectedFingerprint = {});
+
+/// T put together from its row shards (see SHARDS above); `where` names them in errors.
+/// InputError for a shard that is not one, mismatched inputs, overlapping rows or a gap.
+TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std::string& where);
 
 /// The same on a stream holding the `size` bytes of a .tm file from its current position (an
 /// in-memory file, a fuzzer's input); `where` names the source in errors.

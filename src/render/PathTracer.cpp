@@ -76,13 +76,17 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
     // 0.618·H), so every stretch of the schedule mixes rows that see the part with rows that
     // do not: the rows done grow linearly in time and the progress' ETA holds. Each pixel's
     // samples depend only on (seed, pixel, sample), so the order changes no result.
-    const int stride = rowStride(H);
+    const int rowBegin = opt.rowBegin, rowEnd = opt.rowEnd > 0 ? opt.rowEnd : H;
+    if (rowBegin < 0 || rowEnd > H || rowBegin >= rowEnd)
+        throw std::invalid_argument("PathTracer: the row range is not within the image");
+    const int traced = rowEnd - rowBegin;
+    const int stride = rowStride(traced);
     auto body = [&](const tbb::blocked_range<int>& rows) {
         std::vector<EscapedPath> paths;
         paths.reserve(static_cast<size_t>(spp));
         Counters& c = counters.local();
         for (int k = rows.begin(); k < rows.end(); ++k) {
-            const int y = static_cast<int>((static_cast<int64_t>(k) * stride) % H);
+            const int y = rowBegin + static_cast<int>((static_cast<int64_t>(k) * stride) % traced);
             if (opt.interruptible) throwIfInterrupted();  // Ctrl-C: stop here, keep nothing
             for (int x = 0; x < W; ++x) {
                 const uint32_t pixel = static_cast<uint32_t>(y * W + x);
@@ -126,14 +130,15 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
             int done = ++rowsDone;
             if (opt.progress) {
                 std::unique_lock lock(progressMutex, std::try_to_lock);
-                if (lock.owns_lock() || done == H) opt.progress(static_cast<double>(done) / H);
+                if (lock.owns_lock() || done == traced)
+                    opt.progress(static_cast<double>(done) / traced);
             }
         }
     };
 
     int threads = opt.threads > 0 ? opt.threads : tbb::task_arena::automatic;
     tbb::task_arena arena(threads);
-    arena.execute([&] { tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), body); });
+    arena.execute([&] { tbb::parallel_for(tbb::blocked_range<int>(0, traced, 1), body); });
 
     sum.seconds = clock.seconds();
     counters.combine_each([&](const Counters& c) {

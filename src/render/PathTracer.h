@@ -35,6 +35,10 @@ struct RenderOptions {
     /// [0, spp/2) and [spp/2, spp)), each stratified over the whole pixel on its own, so that
     /// either half alone is an unbiased estimate (used for the noise-unbiased objective).
     int sampleSets = 1;
+    /// The image rows traced: [rowBegin, rowEnd) (rowEnd 0: to the last row). Rows outside are
+    /// not traced (no paths, objectMask 0): a shard of T (`precompute --rows`). Each pixel's
+    /// samples depend only on (seed, pixel, sample), so shards put together are the whole trace.
+    int rowBegin = 0, rowEnd = 0;
     std::function<void(double)> progress;  // fraction done, called from any thread, serialised
     /// An interrupt request (core/Interrupt.h) stops the trace at the next row by throwing
     /// Interrupted. Off for the renders inside a black-box optimizer step: the optimizer stops
