@@ -132,4 +132,32 @@ TEST(Shards, PrecomputeRowsAndOptimizeOnTheList) {
     EXPECT_FALSE(std::filesystem::exists(dir / "c.tm"));
 }
 
+// scripts/slurm-precompute: its job array, each task run here as Slurm would (by its task id),
+// leaves shards whose list is the whole T.
+TEST(Shards, SlurmScriptsTasksGiveTheWholeMatrix) {
+    test::TempDir dir("shards-slurm");
+    const std::string scene = std::string(SL_SOURCE_DIR) + "/scenes/default/scene.json";
+    const std::string d = dir.path().string();
+    auto r = test::runShell("SCRATCHLIGHT=" + std::string(SL_CLI_PATH) + " " +
+                            std::string(SL_SOURCE_DIR) + "/scripts/slurm-precompute " + scene +
+                            " 20 3 " + d + "/job --size 20 --spp 4");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    for (int k = 0; k < 3; ++k) {
+        r = test::runShell("SLURM_ARRAY_TASK_ID=" + std::to_string(k) + " bash " + d +
+                           "/job/precompute.sbatch");
+        ASSERT_EQ(r.exitCode, 0) << r.output;
+    }
+    ASSERT_EQ(
+        test::runCli("precompute " + scene + " --size 20 --spp 4 -o " + d + "/whole.tm").exitCode,
+        0);
+    const TransportFile whole = readTransportFile(dir / "whole.tm");
+    const TransportFile merged =
+        readTransportFile(dir.path() / "job" / "T.shards", whole.provenance.fingerprint);
+    expectSameMatrix(merged.matrix, whole.matrix);
+    r = test::runShell(std::string(SL_SOURCE_DIR) + "/scripts/slurm-precompute " + scene +
+                       " 20 30 " + d + "/bad");
+    EXPECT_EQ(r.exitCode, 2) << r.output;
+    EXPECT_NE(r.output.find("SHARDS"), std::string::npos) << r.output;
+}
+
 }  // namespace
