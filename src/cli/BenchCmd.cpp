@@ -1,6 +1,7 @@
-// scratchlight bench render | transport | scratchmap | defectmap | noise: parse the options, run
-// the benchmark in the library (app/RenderBench.h, app/TransportBench.h, app/ScratchMapBench.h,
-// app/NoiseBench.h), print its table and write its CSV.
+// scratchlight bench render | transport | scratchmap | defectmap | noise | sampling: parse the
+// options, run the benchmark in the library (app/RenderBench.h, app/TransportBench.h,
+// app/ScratchMapBench.h, app/NoiseBench.h, app/SamplingBench.h), print its table and write its
+// CSV.
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
@@ -11,6 +12,7 @@
 #include "app/NoiseBench.h"
 #include "app/Plot.h"
 #include "app/RenderBench.h"
+#include "app/SamplingBench.h"
 #include "app/ScratchMapBench.h"
 #include "app/TransportBench.h"
 #include "cli/Commands.h"
@@ -187,6 +189,51 @@ int runNoiseBenchCmd(NoiseArgs a) {
     return runPlot("plot_noise.py", {a.csv}, a.plot);
 }
 
+struct SamplingArgs {
+    SamplingBenchOptions o;
+    std::string scene, csv = "bench-sampling.csv";
+};
+
+int runSamplingBenchCmd(SamplingArgs a) {
+    a.o.scene = a.scene;
+    a.o.log = logInfo;
+    const SamplingBenchResult r = runSamplingBench(a.o);
+    std::printf("%-12s %6s %6s | %9s %9s %9s %10s | %9s %9s %8s %9s\n", "part", "spp", "sampler",
+                "rel RMSE", "net", "mean diff", "Mrays/s", "seconds", "RMSE m/b", "time m/b",
+                "eff. m/b");
+    for (const SamplingBenchPart& p : r.parts) {
+        for (int spp : a.o.spps) {
+            const SamplingBenchRow* b = r.find(p.part, Sampling::Bsdf, spp);
+            const SamplingBenchRow* m = r.find(p.part, Sampling::Mis, spp);
+            for (const SamplingBenchRow* row : {b, m}) {
+                if (!row) continue;
+                std::printf("%-12s %6d %6s | %8.3f%% %8.3f%% %+8.3f%% %10.2f | %9.3f",
+                            p.part.c_str(), spp, row == b ? "bsdf" : "mis", 100.0 * row->relRmse,
+                            100.0 * row->relRmseNet, 100.0 * row->relMeanDiff,
+                            row->raysPerSecond() / 1e6, row->seconds);
+                if (row == m && b && b->relRmse > 0 && b->seconds > 0) {
+                    // Efficiency: 1 / (error² · seconds), MIS over BSDF.
+                    const double rr = m->relRmse / b->relRmse, tr = m->seconds / b->seconds;
+                    std::printf(" %9.3f %8.2f %9.2f", rr, tr, 1.0 / (rr * rr * tr));
+                }
+                std::printf("\n");
+            }
+        }
+        std::printf(
+            "%-12s alpha %g: reference %d spp (mis, two halves) in %.1f s, its own noise "
+            "%.3f%%, %zu px on the part\n",
+            p.part.c_str(), p.alpha, a.o.referenceSpp, p.referenceSeconds, 100.0 * p.referenceNoise,
+            p.pixels);
+    }
+    std::printf(
+        "(%dx%d image under %s; rel RMSE of luminance over the part against the "
+        "reference, net = without the reference's noise; m/b = mis over bsdf, same run)\n",
+        a.o.resolution, a.o.resolution, a.o.envmap.c_str());
+    writeTextAtomically(a.csv, r.csv());
+    std::printf("wrote %s\n", a.csv.c_str());
+    return kOk;
+}
+
 }  // namespace
 
 void registerBench(CLI::App& app, std::function<int()>& run) {
@@ -294,6 +341,31 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     nc->add_option("-o,--output", n->csv, "CSV output")->capture_default_str();
     nc->add_flag("--plot", n->plot, "Also run scripts/plot_noise.py on the CSV");
     nc->callback([n, &run] { run = [n] { return runNoiseBenchCmd(*n); }; });
+
+    auto sa = std::make_shared<SamplingArgs>();
+    CLI::App* sc = bench->add_subcommand(
+        "sampling",
+        "Noise per ray: relative RMSE against a converged reference at equal spp, BSDF-only vs "
+        "MIS sampling, on the scene and on mirror-like variants; rays/s");
+    sc->add_option("scene", sa->scene, "Scene file (default: the bundled scenes/default)");
+    addSceneOverrides(sc, sa->o.sceneOverrides, false);
+    sc->add_option("--alphas", sa->o.alphas,
+                   "Parts: 0 = the scene's material, else the scene with material.alpha = A")
+        ->delimiter(',')
+        ->capture_default_str();
+    sc->add_option("--envmap", sa->o.envmap, "Light: a file, const:V or a preset")
+        ->capture_default_str();
+    sc->add_option("--size", sa->o.resolution, "Image width and height")
+        ->check(CLI::Range(8, 4096))
+        ->capture_default_str();
+    sc->add_option("--spps", sa->o.spps, "Sample counts compared")
+        ->delimiter(',')
+        ->capture_default_str();
+    sc->add_option("--reference-spp", sa->o.referenceSpp, "spp of the reference (two halves, even)")
+        ->capture_default_str();
+    sc->add_option("--threads", sa->o.threads, "Worker threads (0: all)")->capture_default_str();
+    sc->add_option("-o,--output", sa->csv, "CSV output")->capture_default_str();
+    sc->callback([sa, &run] { run = [sa] { return runSamplingBenchCmd(*sa); }; });
 }
 
 }  // namespace sl::cli
