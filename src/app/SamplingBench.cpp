@@ -73,7 +73,7 @@ SamplingBenchResult runSamplingBench(const SamplingBenchOptions& o) {
     result.options.log = nullptr;
     const std::filesystem::path file = o.scene.empty() ? bundledDefaultScene() : o.scene;
     double work = 0;
-    for (int spp : o.spps) work += 2.0 * spp;
+    for (int spp : o.spps) work += static_cast<double>(samplingTable().size()) * spp;
     work = (work + o.referenceSpp) * static_cast<double>(o.alphas.size());
     ProgressTask task("bench sampling", work);
     for (double alpha : o.alphas) {
@@ -94,9 +94,9 @@ SamplingBenchResult runSamplingBench(const SamplingBenchOptions& o) {
         RenderOptions base = renderOptionsFor(*scene);
         base.threads = o.threads;
 
-        // The reference: two independent MIS halves; their difference measures its noise.
+        // The reference: two independent halves; their difference measures its noise.
         RenderOptions ro = base;
-        ro.sampling = Sampling::Mis;
+        ro.sampling = kReferenceSampling;
         ro.spp = o.referenceSpp / 2;
         ro.seed = base.seed + 1000;
         const RenderResult ra = render(*scene, env, ro);
@@ -133,7 +133,8 @@ SamplingBenchResult runSamplingBench(const SamplingBenchOptions& o) {
                   std::to_string(part.referenceSeconds) + " s");
 
         for (int spp : o.spps) {
-            for (Sampling s : {Sampling::Bsdf, Sampling::Mis}) {
+            for (const SamplingRow& sr : samplingTable()) {
+                const Sampling s = sr.value;
                 RenderOptions r = base;
                 r.sampling = s;
                 r.spp = spp;

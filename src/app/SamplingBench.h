@@ -1,10 +1,11 @@
 // `scratchlight bench sampling`: noise per ray of the path tracer's direction sampling
 // (render/PathTracer.h, CONVENTION (direction sampling)). For each part (the scene as given, and
 // the same scene with other roughnesses, e.g. a mirror-like α = 0.02), a converged reference is
-// rendered with `mis` as two independent halves (its own noise is measured from their
-// difference), then each sampler renders at each spp with another seed; the table gives the
-// relative RMSE of the luminance against the reference over the part, the relative difference of
-// the means, seconds and rays/s, all in the same run, and the MIS/BSDF ratios.
+// rendered with kReferenceSampling as two independent halves (its own noise is measured from
+// their difference), then each sampler of the table renders at each spp with another seed; the
+// table gives the relative RMSE of the luminance against the reference over the part, the
+// relative difference of the means, seconds and rays/s, all in the same run, and each sampler's
+// ratios to `bsdf`.
 #pragma once
 
 #include <cstdint>
@@ -16,6 +17,10 @@
 #include "scene/RenderDesc.h"
 
 namespace sl {
+
+/// The sampler of the reference (the least noisy per ray in this bench's own measurements; every
+/// sampler is unbiased, and the mean-difference column would show it if one were not).
+inline constexpr Sampling kReferenceSampling = Sampling::Stratified;
 
 struct SamplingBenchOptions {
     std::filesystem::path scene;              // empty: the bundled default scene (app/Plot.h)

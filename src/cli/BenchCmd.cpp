@@ -198,36 +198,39 @@ int runSamplingBenchCmd(SamplingArgs a) {
     a.o.scene = a.scene;
     a.o.log = logInfo;
     const SamplingBenchResult r = runSamplingBench(a.o);
-    std::printf("%-12s %6s %6s | %9s %9s %9s %10s | %9s %9s %8s %9s\n", "part", "spp", "sampler",
-                "rel RMSE", "net", "mean diff", "Mrays/s", "seconds", "RMSE m/b", "time m/b",
-                "eff. m/b");
+    std::printf("%-12s %6s %10s | %9s %9s %9s %10s | %9s %10s %8s %8s\n", "part", "spp", "sampler",
+                "rel RMSE", "net", "mean diff", "Mrays/s", "seconds", "RMSE /bsdf", "time /b",
+                "eff. /b");
     for (const SamplingBenchPart& p : r.parts) {
         for (int spp : a.o.spps) {
             const SamplingBenchRow* b = r.find(p.part, Sampling::Bsdf, spp);
-            const SamplingBenchRow* m = r.find(p.part, Sampling::Mis, spp);
-            for (const SamplingBenchRow* row : {b, m}) {
+            for (const SamplingRow& sr : samplingTable()) {
+                const SamplingBenchRow* row = r.find(p.part, sr.value, spp);
                 if (!row) continue;
-                std::printf("%-12s %6d %6s | %8.3f%% %8.3f%% %+8.3f%% %10.2f | %9.3f",
-                            p.part.c_str(), spp, row == b ? "bsdf" : "mis", 100.0 * row->relRmse,
+                std::printf("%-12s %6d %10s | %8.3f%% %8.3f%% %+8.3f%% %10.2f | %9.3f",
+                            p.part.c_str(), spp, sr.name, 100.0 * row->relRmse,
                             100.0 * row->relRmseNet, 100.0 * row->relMeanDiff,
                             row->raysPerSecond() / 1e6, row->seconds);
-                if (row == m && b && b->relRmse > 0 && b->seconds > 0) {
-                    // Efficiency: 1 / (error² · seconds), MIS over BSDF.
-                    const double rr = m->relRmse / b->relRmse, tr = m->seconds / b->seconds;
-                    std::printf(" %9.3f %8.2f %9.2f", rr, tr, 1.0 / (rr * rr * tr));
+                if (row != b && b && b->relRmseNet > 0 && b->seconds > 0) {
+                    // Efficiency: 1 / (error² · seconds), against bsdf.
+                    const double rr = row->relRmseNet / b->relRmseNet,
+                                 tr = row->seconds / b->seconds;
+                    std::printf(" %10.3f %8.2f %8.2f", rr, tr, 1.0 / (rr * rr * tr));
                 }
                 std::printf("\n");
             }
         }
         std::printf(
-            "%-12s alpha %g: reference %d spp (mis, two halves) in %.1f s, its own noise "
-            "%.3f%%, %zu px on the part\n",
-            p.part.c_str(), p.alpha, a.o.referenceSpp, p.referenceSeconds, 100.0 * p.referenceNoise,
-            p.pixels);
+            "%-12s alpha %g: reference %d spp (%s, two halves) in %.1f s, its own "
+            "noise %.3f%%, %zu px on the part\n",
+            p.part.c_str(), p.alpha, a.o.referenceSpp,
+            registryRow(samplingTable(), kReferenceSampling).name, p.referenceSeconds,
+            100.0 * p.referenceNoise, p.pixels);
     }
     std::printf(
         "(%dx%d image under %s; rel RMSE of luminance over the part against the "
-        "reference, net = without the reference's noise; m/b = mis over bsdf, same run)\n",
+        "reference; net = without the reference's own noise; /bsdf: ratios of net "
+        "RMSE, seconds and 1/(RMSE^2 s) to bsdf in the same run)\n",
         a.o.resolution, a.o.resolution, a.o.envmap.c_str());
     writeTextAtomically(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());

@@ -411,7 +411,9 @@ std::vector<SceneFileField> sceneFileFields() {
          "Mitsuba's `max_depth`: 2 = one reflection, 3 = up to two"},
         {"render.seed", num(static_cast<double>(d.render.seed)), "random seed"},
         {"render.sampling", code(registryRow(samplingTable(), d.render.sampling).name),
-         "`mis`: BSDF and env-map sampling combined by MIS; `bsdf`: BSDF sampling only"},
+         "direction sampling: `stratified` (BSDF samples spread over the pixel by a shifted "
+         "Sobol' sequence), `bsdf` (independent BSDF samples), `mis` (BSDF and env-map sampling "
+         "combined by MIS)"},
         {"description", "\"\"", "free text"},
     };
 }
