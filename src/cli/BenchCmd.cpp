@@ -1,7 +1,7 @@
-// scratchlight bench render | transport | scratchmap | defectmap | noise | sampling: parse the
-// options, run the benchmark in the library (app/RenderBench.h, app/TransportBench.h,
-// app/ScratchMapBench.h, app/NoiseBench.h, app/SamplingBench.h), print its table and write its
-// CSV.
+// scratchlight bench render | transport | scratchmap | defectmap | noise | sampling | depth: parse
+// the options, run the benchmark in the library (app/RenderBench.h, app/TransportBench.h,
+// app/ScratchMapBench.h, app/NoiseBench.h, app/SamplingBench.h, app/DepthBench.h), print its
+// table and write its CSV.
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "app/DefectMapBench.h"
+#include "app/DepthBench.h"
 #include "app/NoiseBench.h"
 #include "app/Plot.h"
 #include "app/RenderBench.h"
@@ -237,6 +238,30 @@ int runSamplingBenchCmd(SamplingArgs a) {
     return kOk;
 }
 
+struct DepthArgs {
+    DepthBenchOptions o;
+    std::string scene, csv = "bench-depth.csv";
+};
+
+int runDepthBenchCmd(DepthArgs a) {
+    a.o.scene = a.scene;
+    const DepthBenchResult r = runDepthBench(a.o);
+    std::printf("%9s %14s %12s %9s %12s\n", "max_depth", "energy (E=1)", "this bounce", "seconds",
+                "rays");
+    for (const DepthBenchRow& row : r.rows)
+        std::printf("%9d %14.6g %11.4f%% %9.3f %12llu\n", row.maxDepth, row.energy,
+                    100.0 * row.added, row.seconds, static_cast<unsigned long long>(row.rays));
+    std::printf("max_depth %d (the scene has %d): %s\n", r.choice.maxDepth, r.sceneMaxDepth,
+                r.choice.reason.c_str());
+    std::printf(
+        "(%dx%d image, %d spp, white light; this bounce = its share of the image at that "
+        "max_depth)\n",
+        a.o.resolution, a.o.resolution, a.o.spp);
+    writeTextAtomically(a.csv, r.csv());
+    std::printf("wrote %s\n", a.csv.c_str());
+    return kOk;
+}
+
 }  // namespace
 
 void registerBench(CLI::App& app, std::function<int()>& run) {
@@ -369,6 +394,29 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     sc->add_option("--threads", sa->o.threads, "Worker threads (0: all)")->capture_default_str();
     sc->add_option("-o,--output", sa->csv, "CSV output")->capture_default_str();
     sc->callback([sa, &run] { run = [sa] { return runSamplingBenchCmd(*sa); }; });
+
+    auto da = std::make_shared<DepthArgs>();
+    CLI::App* dc = bench->add_subcommand(
+        "depth",
+        "Energy each further bounce adds under a white light, and the max_depth after which "
+        "the next bounce adds less than a threshold of the image");
+    dc->add_option("scene", da->scene, "Scene file (default: the bundled scenes/default)");
+    addSceneOverrides(dc, da->o.sceneOverrides, false);
+    dc->add_option("--size", da->o.resolution, "Image width and height")
+        ->check(CLI::Range(8, 4096))
+        ->capture_default_str();
+    dc->add_option("--spp", da->o.spp, "Samples per pixel")
+        ->check(CLI::Range(1, 65536))
+        ->capture_default_str();
+    dc->add_option("--max-depth", da->o.maxDepth, "Longest path length measured")
+        ->check(CLI::Range(3, 64))
+        ->capture_default_str();
+    dc->add_option("--threshold", da->o.threshold,
+                   "Stop when the next bounce adds less than this share of the image")
+        ->capture_default_str();
+    dc->add_option("--threads", da->o.threads, "Worker threads (0: all)")->capture_default_str();
+    dc->add_option("-o,--output", da->csv, "CSV output")->capture_default_str();
+    dc->callback([da, &run] { run = [da] { return runDepthBenchCmd(*da); }; });
 }
 
 }  // namespace sl::cli
