@@ -3,8 +3,12 @@
 // energy grows with max_depth and max_depth 1 shows nothing).
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
+#include "TestUtil.h"
 #include "app/DepthBench.h"
 #include "core/Error.h"
+#include "scene/Scene.h"
 
 using namespace sl;
 
@@ -39,4 +43,31 @@ TEST(DepthBench, EnergyGrowsWithThePathLengthOnTheBundledPart) {
     o.threshold = 0.001;
     o.maxDepth = 2;
     EXPECT_THROW(runDepthBench(o), InputError);
+}
+
+TEST(DepthBench, AutoDepthOfAFlatMirrorIsOneReflection) {
+    // A flat smooth mirror: no path meets the surface twice, so bounce 2 adds exactly nothing.
+    SceneDesc d;
+    d.heightmap.pitch = 0.05;
+    d.material.params.smooth = true;
+    d.camera.width = d.camera.height = 16;
+    const Scene s(d, 32, 32, std::vector<float>(32 * 32, 0.0f));
+    const DepthChoice c = autoMaxDepth(s, 2, 8);
+    EXPECT_EQ(c.maxDepth, 2) << c.reason;
+    EXPECT_NE(c.reason.find("would add 0 %"), std::string::npos) << c.reason;
+}
+
+TEST(DepthBench, RenderPrintsTheChosenDepthAndItsReason) {
+    const auto dir = std::filesystem::temp_directory_path() / "sl_test_auto_depth";
+    std::filesystem::create_directories(dir);
+    const std::string scene = std::string(SL_SOURCE_DIR) + "/scenes/default/scene.json";
+    const auto r = test::runCli("render " + scene + " --size 16 --spp 2 --auto-depth -o " +
+                                (dir / "r.exr").string());
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("max_depth "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("of the image"), std::string::npos) << r.output;
+    const auto both = test::runCli("render " + scene + " --size 16 --spp 2 --auto-depth " +
+                                   "--max-depth 3 -o " + (dir / "r.exr").string());
+    EXPECT_EQ(both.exitCode, 2) << both.output;
+    std::filesystem::remove_all(dir);
 }

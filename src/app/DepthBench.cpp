@@ -43,6 +43,47 @@ DepthChoice chooseMaxDepth(const std::vector<double>& energy, double threshold) 
     return c;
 }
 
+namespace {
+
+/// Σ luminance of the scene's image under E = 1 at max_depth `depth`, and the trace summary.
+double whiteEnergy(const Scene& scene, RenderOptions ro, int depth, TraceSummary* summary) {
+    const EnvMap white = EnvMap::constant(scene.basis.width(), scene.basis.height(), 1.0f);
+    ro.maxDepth = depth;
+    const RenderResult rr = render(scene, white, ro);
+    double e = 0;
+    for (size_t p = 0; p < rr.image.pixelCount(); ++p)
+        e += luminance<double>(rr.image.data[3 * p], rr.image.data[3 * p + 1],
+                               rr.image.data[3 * p + 2]);
+    if (summary) *summary = rr.summary;
+    return e;
+}
+
+}  // namespace
+
+DepthChoice autoMaxDepth(const Scene& scene, int spp, int limit, double threshold, int threads) {
+    RenderOptions ro = renderOptionsFor(scene);
+    ro.spp = spp;
+    ro.threads = threads;
+    std::vector<double> energy{0.0};
+    double seconds = 0;
+    for (int depth = 1; depth <= limit; ++depth) {
+        TraceSummary s;
+        energy.push_back(whiteEnergy(scene, ro, depth, &s));
+        seconds += s.seconds;
+        if (depth >= 3) {
+            DepthChoice c = chooseMaxDepth(energy, threshold);
+            if (c.maxDepth < depth || depth == limit) {
+                char buf[96];
+                std::snprintf(buf, sizeof buf,
+                              " (measured at %d spp under a white light in %.2f s)", spp, seconds);
+                c.reason += buf;
+                return c;
+            }
+        }
+    }
+    return chooseMaxDepth(energy, threshold);
+}
+
 DepthBenchResult runDepthBench(const DepthBenchOptions& o) {
     if (o.resolution < 1)
         throw inputError(option("size"), "is " + std::to_string(o.resolution), "use >= 1");
@@ -60,26 +101,21 @@ DepthBenchResult runDepthBench(const DepthBenchOptions& o) {
     d.camera.width = d.camera.height = o.resolution;
     auto scene = loadScene(d);
     r.sceneMaxDepth = scene->desc.render.maxDepth;
-    const EnvMap white = EnvMap::constant(scene->basis.width(), scene->basis.height(), 1.0f);
     RenderOptions ro = renderOptionsFor(*scene);
     ro.spp = o.spp;
     ro.threads = o.threads;
     std::vector<double> energy(static_cast<size_t>(o.maxDepth) + 1, 0.0);
     ProgressTask task("bench depth", o.maxDepth);
     for (int depth = 1; depth <= o.maxDepth; ++depth) {
-        ro.maxDepth = depth;
-        const RenderResult rr = render(*scene, white, ro);
-        double e = 0;
-        for (size_t p = 0; p < rr.image.pixelCount(); ++p)
-            e += luminance<double>(rr.image.data[3 * p], rr.image.data[3 * p + 1],
-                                   rr.image.data[3 * p + 2]);
+        TraceSummary sum;
+        const double e = whiteEnergy(*scene, ro, depth, &sum);
         energy[static_cast<size_t>(depth)] = e;
         DepthBenchRow row;
         row.maxDepth = depth;
         row.energy = e;
         row.added = e > 0 ? (e - energy[static_cast<size_t>(depth) - 1]) / e : 0;
-        row.seconds = rr.summary.seconds;
-        row.rays = rr.summary.rays;
+        row.seconds = sum.seconds;
+        row.rays = sum.rays;
         r.rows.push_back(row);
         task.advance();
     }

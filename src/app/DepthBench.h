@@ -1,6 +1,6 @@
 // `scratchlight bench depth`: how much each further bounce adds to the image, and the path length
 // (Mitsuba's max_depth, render/PathTracer.h) after which the next bounce adds less than a
-// threshold (0.1 %) of the image: issue 16, item 2's rule, measured, not yet applied by itself.
+// threshold (0.1 %) of the image: issue 16, item 2's rule (autoMaxDepth applies it for `render`).
 // The scene is rendered under a white light (E = 1, the most any E in [0, 1] can gather) at
 // max_depth 1, 2, … with one seed: a sample draws the same numbers at each vertex whatever the
 // path length, so image(d+1) − image(d) is exactly what bounce d+1 adds for these samples.
@@ -50,5 +50,14 @@ struct DepthBenchResult {
 
 /// Runs the benchmark. Throws InputError for a bad scene or option.
 DepthBenchResult runDepthBench(const DepthBenchOptions& options);
+
+struct Scene;
+
+/// The rule applied to a scene as it is (its camera, material and seed): renders under E = 1 at
+/// `spp` with max_depth 1, 2, … and stops at the first depth whose next bounce adds less than
+/// `threshold` of the image (at most limit − 1 reflections measured). What `render --auto-depth`
+/// uses; seconds spent are in the choice's reason.
+DepthChoice autoMaxDepth(const Scene& scene, int spp = 4, int limit = 16, double threshold = 0.001,
+                         int threads = 0);
 
 }  // namespace sl
