@@ -22,6 +22,7 @@
 #include "objective/DefectMap.h"
 #include "objective/ObjectiveKind.h"
 #include "optimize/Methods.h"
+#include "scene/RenderDesc.h"
 #include "scene/Scene.h"
 #include "transport/TransportSink.h"
 
@@ -63,6 +64,7 @@ TEST(Registry, EveryTableIsWellFormed) {
     expectWellFormed(lossMaskKindTable());
     expectWellFormed(optimizePresetTable());
     expectWellFormed(defectMethodTable());
+    expectWellFormed(samplingTable());
 }
 
 TEST(Registry, OptimizerMethodsSayWhoRunsThemAndTheirBudget) {

@@ -1,6 +1,7 @@
-// scratchlight bench render | transport | scratchmap | defectmap | noise: parse the options, run
-// the benchmark in the library (app/RenderBench.h, app/TransportBench.h, app/ScratchMapBench.h,
-// app/NoiseBench.h), print its table and write its CSV.
+// scratchlight bench render | transport | scratchmap | defectmap | noise | sampling | depth: parse
+// the options, run the benchmark in the library (app/RenderBench.h, app/TransportBench.h,
+// app/ScratchMapBench.h, app/NoiseBench.h, app/SamplingBench.h, app/DepthBench.h), print its
+// table and write its CSV.
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
@@ -8,10 +9,12 @@
 #include <sstream>
 
 #include "app/DefectMapBench.h"
+#include "app/DepthBench.h"
 #include "app/LampsBench.h"
 #include "app/NoiseBench.h"
 #include "app/Plot.h"
 #include "app/RenderBench.h"
+#include "app/SamplingBench.h"
 #include "app/ScratchMapBench.h"
 #include "app/TransportBench.h"
 #include "cli/Commands.h"
@@ -214,6 +217,78 @@ int runNoiseBenchCmd(NoiseArgs a) {
     return runPlot("plot_noise.py", {a.csv}, a.plot);
 }
 
+struct SamplingArgs {
+    SamplingBenchOptions o;
+    std::string scene, csv = "bench-sampling.csv";
+};
+
+int runSamplingBenchCmd(SamplingArgs a) {
+    a.o.scene = a.scene;
+    a.o.log = logInfo;
+    const SamplingBenchResult r = runSamplingBench(a.o);
+    std::printf("%-12s %6s %10s | %9s %9s %9s %10s | %9s %10s %8s %8s\n", "part", "spp", "sampler",
+                "rel RMSE", "net", "mean diff", "Mrays/s", "seconds", "RMSE /bsdf", "time /b",
+                "eff. /b");
+    for (const SamplingBenchPart& p : r.parts) {
+        for (int spp : a.o.spps) {
+            const SamplingBenchRow* b = r.find(p.part, Sampling::Bsdf, spp);
+            for (const SamplingRow& sr : samplingTable()) {
+                const SamplingBenchRow* row = r.find(p.part, sr.value, spp);
+                if (!row) continue;
+                std::printf("%-12s %6d %10s | %8.3f%% %8.3f%% %+8.3f%% %10.2f | %9.3f",
+                            p.part.c_str(), spp, sr.name, 100.0 * row->relRmse,
+                            100.0 * row->relRmseNet, 100.0 * row->relMeanDiff,
+                            row->raysPerSecond() / 1e6, row->seconds);
+                if (row != b && b && b->relRmseNet > 0 && b->seconds > 0) {
+                    // Efficiency: 1 / (error² · seconds), against bsdf.
+                    const double rr = row->relRmseNet / b->relRmseNet,
+                                 tr = row->seconds / b->seconds;
+                    std::printf(" %10.3f %8.2f %8.2f", rr, tr, 1.0 / (rr * rr * tr));
+                }
+                std::printf("\n");
+            }
+        }
+        std::printf(
+            "%-12s alpha %g: reference %d spp (%s, two halves) in %.1f s, its own "
+            "noise %.3f%%, %zu px on the part\n",
+            p.part.c_str(), p.alpha, a.o.referenceSpp,
+            registryRow(samplingTable(), kReferenceSampling).name, p.referenceSeconds,
+            100.0 * p.referenceNoise, p.pixels);
+    }
+    std::printf(
+        "(%dx%d image under %s; rel RMSE of luminance over the part against the "
+        "reference; net = without the reference's own noise; /bsdf: ratios of net "
+        "RMSE, seconds and 1/(RMSE^2 s) to bsdf in the same run)\n",
+        a.o.resolution, a.o.resolution, a.o.envmap.c_str());
+    writeTextAtomically(a.csv, r.csv());
+    std::printf("wrote %s\n", a.csv.c_str());
+    return kOk;
+}
+
+struct DepthArgs {
+    DepthBenchOptions o;
+    std::string scene, csv = "bench-depth.csv";
+};
+
+int runDepthBenchCmd(DepthArgs a) {
+    a.o.scene = a.scene;
+    const DepthBenchResult r = runDepthBench(a.o);
+    std::printf("%9s %14s %12s %9s %12s\n", "max_depth", "energy (E=1)", "this bounce", "seconds",
+                "rays");
+    for (const DepthBenchRow& row : r.rows)
+        std::printf("%9d %14.6g %11.4f%% %9.3f %12llu\n", row.maxDepth, row.energy,
+                    100.0 * row.added, row.seconds, static_cast<unsigned long long>(row.rays));
+    std::printf("max_depth %d (the scene has %d): %s\n", r.choice.maxDepth, r.sceneMaxDepth,
+                r.choice.reason.c_str());
+    std::printf(
+        "(%dx%d image, %d spp, white light; this bounce = its share of the image at that "
+        "max_depth)\n",
+        a.o.resolution, a.o.resolution, a.o.spp);
+    writeTextAtomically(a.csv, r.csv());
+    std::printf("wrote %s\n", a.csv.c_str());
+    return kOk;
+}
+
 }  // namespace
 
 void registerBench(CLI::App& app, std::function<int()>& run) {
@@ -342,6 +417,54 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     nc->add_option("-o,--output", n->csv, "CSV output")->capture_default_str();
     nc->add_flag("--plot", n->plot, "Also run scripts/plot_noise.py on the CSV");
     nc->callback([n, &run] { run = [n] { return runNoiseBenchCmd(*n); }; });
+
+    auto sa = std::make_shared<SamplingArgs>();
+    CLI::App* sc = bench->add_subcommand(
+        "sampling",
+        "Noise per ray: relative RMSE against a converged reference at equal spp, BSDF-only vs "
+        "MIS sampling, on the scene and on mirror-like variants; rays/s");
+    sc->add_option("scene", sa->scene, "Scene file (default: the bundled scenes/default)");
+    addSceneOverrides(sc, sa->o.sceneOverrides, false);
+    sc->add_option("--alphas", sa->o.alphas,
+                   "Parts: 0 = the scene's material, else the scene with material.alpha = A")
+        ->delimiter(',')
+        ->capture_default_str();
+    sc->add_option("--envmap", sa->o.envmap, "Light: a file, const:V or a preset")
+        ->capture_default_str();
+    sc->add_option("--size", sa->o.resolution, "Image width and height")
+        ->check(CLI::Range(8, 4096))
+        ->capture_default_str();
+    sc->add_option("--spps", sa->o.spps, "Sample counts compared")
+        ->delimiter(',')
+        ->capture_default_str();
+    sc->add_option("--reference-spp", sa->o.referenceSpp, "spp of the reference (two halves, even)")
+        ->capture_default_str();
+    sc->add_option("--threads", sa->o.threads, "Worker threads (0: all)")->capture_default_str();
+    sc->add_option("-o,--output", sa->csv, "CSV output")->capture_default_str();
+    sc->callback([sa, &run] { run = [sa] { return runSamplingBenchCmd(*sa); }; });
+
+    auto da = std::make_shared<DepthArgs>();
+    CLI::App* dc = bench->add_subcommand(
+        "depth",
+        "Energy each further bounce adds under a white light, and the max_depth after which "
+        "the next bounce adds less than a threshold of the image");
+    dc->add_option("scene", da->scene, "Scene file (default: the bundled scenes/default)");
+    addSceneOverrides(dc, da->o.sceneOverrides, false);
+    dc->add_option("--size", da->o.resolution, "Image width and height")
+        ->check(CLI::Range(8, 4096))
+        ->capture_default_str();
+    dc->add_option("--spp", da->o.spp, "Samples per pixel")
+        ->check(CLI::Range(1, 65536))
+        ->capture_default_str();
+    dc->add_option("--max-depth", da->o.maxDepth, "Longest path length measured")
+        ->check(CLI::Range(3, 64))
+        ->capture_default_str();
+    dc->add_option("--threshold", da->o.threshold,
+                   "Stop when the next bounce adds less than this share of the image")
+        ->capture_default_str();
+    dc->add_option("--threads", da->o.threads, "Worker threads (0: all)")->capture_default_str();
+    dc->add_option("-o,--output", da->csv, "CSV output")->capture_default_str();
+    dc->callback([da, &run] { run = [da] { return runDepthBenchCmd(*da); }; });
 }
 
 }  // namespace sl::cli

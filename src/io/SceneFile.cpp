@@ -9,6 +9,7 @@
 
 #include "core/Error.h"
 #include "core/Progress.h"
+#include "core/Registry.h"
 #include "core/Text.h"
 #include "io/HeightmapIO.h"
 #include "scene/Materials.h"
@@ -229,6 +230,13 @@ void parseRender(Fields& f, RenderDesc& r) {
             f.fail("seed", "must be a non-negative whole number");
         r.seed = s->get<uint64_t>();
     }
+    if (f.get("sampling")) {
+        std::vector<std::string> names;
+        for (const SamplingRow& row : samplingTable()) names.emplace_back(row.name);
+        const std::string name =
+            f.choice("sampling", registryRow(samplingTable(), r.sampling).name, names);
+        r.sampling = findRegistryRow(samplingTable(), name)->value;
+    }
     f.rejectUnknown();
 }
 
@@ -402,6 +410,10 @@ std::vector<SceneFileField> sceneFileFields() {
         {"render.max_depth", num(d.render.maxDepth),
          "Mitsuba's `max_depth`: 2 = one reflection, 3 = up to two"},
         {"render.seed", num(static_cast<double>(d.render.seed)), "random seed"},
+        {"render.sampling", code(registryRow(samplingTable(), d.render.sampling).name),
+         "direction sampling: `stratified` (BSDF samples spread over the pixel by a shifted "
+         "Sobol' sequence), `bsdf` (independent BSDF samples), `mis` (BSDF and env-map sampling "
+         "combined by MIS)"},
         {"description", "\"\"", "free text"},
     };
 }

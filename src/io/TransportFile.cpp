@@ -11,6 +11,7 @@
 
 #include "core/Error.h"
 #include "core/Hash.h"
+#include "core/Registry.h"
 #include "io/AtomicFile.h"
 #include "scene/Scene.h"
 
@@ -94,7 +95,13 @@ TransportProvenance transportProvenance(const Scene& scene, const RenderOptions&
         {"pixel_pitch", scene.desc.heightmap.pitch},
         {"content_hash", toHex(hash64(scene.heights.data(), scene.heights.size() * sizeof(float)))},
         {"file", scene.desc.heightmap.path.filename().string()}};
-    in["render"] = {{"spp", opt.spp}, {"max_depth", opt.maxDepth}, {"seed", opt.seed}};
+    in["render"] = {{"spp", opt.spp},
+                    {"max_depth", opt.maxDepth},
+                    {"seed", opt.seed},
+                    {"sampling", registryRow(samplingTable(), opt.sampling).name}};
+    if (!opt.guide.empty())
+        in["render"]["guide_hash"] =
+            toHex(hash64(opt.guide.data(), opt.guide.size() * sizeof(float)));
     if (opt.rowBegin != 0 || opt.rowEnd != 0)  // a shard (absent for the whole image)
         in["rows"] = {opt.rowBegin, opt.rowEnd > 0 ? opt.rowEnd : c.height};
     if (!scene.desc.file.empty())

@@ -6,15 +6,19 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <mutex>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 
 #include "core/Interrupt.h"
 #include "core/Rng.h"
 #include "core/Stopwatch.h"
+#include "render/Sobol.h"
+#include "scene/EnvSampler.h"
 #include "scene/Scene.h"
 
 namespace sl {
@@ -34,8 +38,35 @@ std::pair<double, double> sampleOffset(int s, int spp, int sampleSets, double u1
 namespace {
 
 struct Counters {
-    uint64_t rays = 0, camera = 0, escaped = 0;
+    uint64_t rays = 0, camera = 0, escaped = 0, shadow = 0;
 };
+
+constexpr float kBelowOne = 0x1.fffffep-1f;          // the largest float < 1
+constexpr double kBelowOneD = 0x1.fffffffffffffp-1;  // the largest double < 1
+
+/// Stratified sampling's permutations (see trace()): for each bounce from 2 on and each set, a
+/// Fisher-Yates shuffle of the set's strata drawn from the pixel's own stream
+/// sampleRng(seed, pixel, ~(bounce·2 + set)) (sample indices never come near those).
+void permuteStrata(uint64_t seed, uint32_t pixel, int spp, int sampleSets, int bounces,
+                   std::vector<int>& strata) {
+    const int perSet = spp / sampleSets;
+    for (int d = 2; d < bounces; ++d) {  // bounces 0 and 1 take Sobol' points
+        for (int set = 0; set < sampleSets; ++set) {
+            Pcg32 rng = sampleRng(seed, pixel, ~static_cast<uint64_t>(d * 2 + set));
+            int* p =
+                strata.data() + static_cast<size_t>(d) * spp + static_cast<size_t>(set) * perSet;
+            for (int i = 0; i < perSet; ++i) p[i] = i;
+            for (int i = perSet - 1; i > 0; --i)
+                std::swap(p[i], p[std::min(i, static_cast<int>(rng.nextDouble() * (i + 1)))]);
+        }
+    }
+}
+
+/// Mitsuba's power heuristic (its mis_weight), 0 when both densities are 0.
+inline float powerHeuristic(float pdfA, float pdfB) {
+    const float a = pdfA * pdfA, b = pdfB * pdfB;
+    return a + b > 0.0f ? a / (a + b) : 0.0f;
+}
 
 /// The row stride of trace()'s schedule: the integer nearest 0.618·H that is coprime to H.
 int rowStride(int H) {
@@ -59,6 +90,14 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
     const int W = cam.width(), H = cam.height(), spp = opt.spp;
     const int perSet = spp / opt.sampleSets;
     const float invSpp = 1.0f / static_cast<float>(spp);
+    const bool mis = opt.sampling == Sampling::Mis;
+    const bool stratified = opt.sampling == Sampling::Stratified;
+    const auto [nx, ny] = strataFor(perSet);
+    const int strataX = nx;
+    const float strataXf = static_cast<float>(nx), strataYf = static_cast<float>(ny);
+    const int bounces = std::max(0, opt.maxDepth - 1);  // vertices that sample a direction
+    std::optional<EnvSampler> emitter;
+    if (mis) emitter.emplace(scene_.basis, opt.guide);
 
     TraceSummary sum;
     sum.width = W;
@@ -72,6 +111,19 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
     std::mutex progressMutex;
     const Stopwatch clock;
 
+    // Stratified: per pixel and sample set, the random digital shifts (XOR masks) of the six
+    // Sobol' dimensions (camera x, y; the BSDF's two numbers at bounces 0 and 1).
+    using Shifts = std::array<std::array<uint32_t, 6>, 2>;
+    auto shiftsFor = [&](uint32_t pixel) {
+        Shifts sh{};
+        for (int set = 0; set < opt.sampleSets; ++set) {
+            Pcg32 r =
+                sampleRng(opt.seed, pixel, ~((uint64_t{1} << 32) + static_cast<uint64_t>(set)));
+            for (uint32_t& m : sh[static_cast<size_t>(set)]) m = r.nextU32();
+        }
+        return sh;
+    };
+
     // Rows are traced in a stride order (row k is y = k·stride mod H, stride coprime to H, near
     // 0.618·H), so every stretch of the schedule mixes rows that see the part with rows that
     // do not: the rows done grow linearly in time and the progress' ETA holds. Each pixel's
@@ -84,6 +136,9 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
     auto body = [&](const tbb::blocked_range<int>& rows) {
         std::vector<EscapedPath> paths;
         paths.reserve(static_cast<size_t>(spp));
+        // Stratified: strata[depth·spp + s] is the stratum of sample s's 2D BSDF numbers at that
+        // bounce; per set, a uniformly random permutation of its perSet strata.
+        std::vector<int> strata(stratified ? static_cast<size_t>(bounces) * spp : 0);
         Counters& c = counters.local();
         for (int k = rows.begin(); k < rows.end(); ++k) {
             const int y = rowBegin + static_cast<int>((static_cast<int64_t>(k) * stride) % traced);
@@ -92,33 +147,90 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
                 const uint32_t pixel = static_cast<uint32_t>(y * W + x);
                 paths.clear();
                 uint32_t hits = 0;
+                Shifts shifts{};
+                if (stratified) {
+                    permuteStrata(opt.seed, pixel, spp, opt.sampleSets, bounces, strata);
+                    shifts = shiftsFor(pixel);
+                }
                 for (int s = 0; s < spp; ++s) {
                     Pcg32 rng = sampleRng(opt.seed, pixel, static_cast<uint64_t>(s));
                     const double u1 = rng.nextDouble(), u2 = rng.nextDouble();
-                    const auto [ox, oy] = sampleOffset(s, spp, opt.sampleSets, u1, u2);
-                    Ray ray = cam.generateRay(x + ox, y + oy);
+                    auto [ox, oy] = sampleOffset(s, spp, opt.sampleSets, u1, u2);
                     const auto set = static_cast<uint32_t>(s / perSet);
+                    const auto kInSet = static_cast<uint32_t>(s % perSet);
+                    const auto& shift = shifts[set];
+                    if (stratified) {  // Sobol' point kInSet, shifted, jittered below 2^-32
+                        ox = std::min(
+                            (static_cast<double>(sobol(kInSet, 0) ^ shift[0]) + u1) * 0x1p-32,
+                            kBelowOneD);
+                        oy = std::min(
+                            (static_cast<double>(sobol(kInSet, 1) ^ shift[1]) + u2) * 0x1p-32,
+                            kBelowOneD);
+                    }
+                    Ray ray = cam.generateRay(x + ox, y + oy);
                     Rgb throughput{1.0f};
+                    float bsdfPdf = 0.0f;   // density of the last BSDF direction (mis)
+                    bool bsdfDelta = true;  // ... or a Dirac lobe (no emitter sampling there)
                     ++c.camera;
                     for (int depth = 0;; ++depth) {
                         SurfaceHit hit;
                         ++c.rays;
                         if (!surf.intersect(ray, 0.0f, hit)) {
-                            if (depth > 0)
-                                paths.push_back({throughput * invSpp, ray.direction, set});
+                            if (depth > 0) {
+                                float w = 1.0f;
+                                if (mis && !bsdfDelta)
+                                    w = powerHeuristic(bsdfPdf, emitter->pdf(ray.direction));
+                                if (w > 0.0f)
+                                    paths.push_back(
+                                        {throughput * (w * invSpp), ray.direction, set});
+                            }
                             break;
                         }
                         if (depth == 0) ++hits;
                         if (depth + 1 >= opt.maxDepth) break;
                         Frame frame = shadingFrame(hit.normal);
                         Vec3f wi = frame.toLocal(-ray.direction);
-                        const float b1 = rng.nextFloat(), b2 = rng.nextFloat(),
-                                    b3 = rng.nextFloat();
+                        const float b1 = rng.nextFloat();
+                        float b2 = rng.nextFloat(), b3 = rng.nextFloat();
+                        if (stratified && depth < 2) {
+                            const int dim = 2 + 2 * depth;
+                            b2 = static_cast<float>((sobol(kInSet, dim) ^ shift[dim]) >> 8) *
+                                 0x1p-24f;
+                            b3 =
+                                static_cast<float>((sobol(kInSet, dim + 1) ^ shift[dim + 1]) >> 8) *
+                                0x1p-24f;
+                        } else if (stratified) {
+                            const int st = strata[static_cast<size_t>(depth) * spp + s];
+                            b2 = std::min((static_cast<float>(st % strataX) + b2) / strataXf,
+                                          kBelowOne);
+                            b3 = std::min((static_cast<float>(st / strataX) + b3) / strataYf,
+                                          kBelowOne);
+                        }
+                        const Vec3f origin = offsetRayOrigin(hit.position, hit.normal);
+                        if (mis && !bsdf.params().smooth) {
+                            // Emitter sampling: see CONVENTION (direction sampling), (a).
+                            const float e1 = rng.nextFloat(), e2 = rng.nextFloat();
+                            const EnvSampler::Sample es = emitter->sample(e1, e2);
+                            const Vec3f wo = frame.toLocal(es.direction);
+                            if (es.pdf > 0.0f && wo.z > 0.0f) {
+                                const Rgb f = bsdf.eval(wi, wo);
+                                if (maxComponent(f) > 0.0f) {
+                                    ++c.shadow;
+                                    if (!surf.occluded(Ray{origin, es.direction}, 0.0f)) {
+                                        const float w = powerHeuristic(es.pdf, bsdf.pdf(wi, wo));
+                                        paths.push_back({throughput * f * (w / es.pdf * invSpp),
+                                                         es.direction, set});
+                                    }
+                                }
+                            }
+                        }
                         BsdfSample bs = bsdf.sample(wi, b1, b2, b3);
                         if (!bs.valid) break;
                         throughput *= bs.weight;
                         if (maxComponent(throughput) <= 0.0f) break;
-                        ray.origin = offsetRayOrigin(hit.position, hit.normal);
+                        bsdfPdf = bs.pdf;
+                        bsdfDelta = bs.delta;
+                        ray.origin = origin;
                         ray.direction = normalize(frame.toWorld(bs.wo));
                     }
                 }
@@ -145,6 +257,7 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
         sum.rays += c.rays;
         sum.cameraRays += c.camera;
         sum.escapedPaths += c.escaped;
+        sum.shadowRays += c.shadow;
     });
     return sum;
 }

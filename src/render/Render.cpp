@@ -18,6 +18,7 @@ RenderOptions renderOptionsFor(const Scene& scene) {
     o.spp = scene.desc.render.spp;
     o.maxDepth = scene.desc.render.maxDepth;
     o.seed = scene.desc.render.seed;
+    o.sampling = scene.desc.render.sampling;
     return o;
 }
 

@@ -139,4 +139,12 @@ bool Heightfield::intersect(const Ray& ray, float tnear, SurfaceHit& hit) const 
     return true;
 }
 
+bool Heightfield::occluded(const Ray& ray, float tnear) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRay r = makeRayHit(ray, tnear).ray;
+    rtcOccluded1(scene_, &ctx, &r);
+    return r.tfar < 0.0f;  // Embree sets tfar to -inf when it finds a hit
+}
+
 }  // namespace sl

@@ -84,6 +84,8 @@ class Heightfield {
 
     /// Closest hit along ray with t in (tnear, inf). Returns false on a miss.
     bool intersect(const Ray& ray, float tnear, SurfaceHit& hit) const;
+    /// Whether anything lies along ray with t in (tnear, inf) (Embree's occlusion query).
+    bool occluded(const Ray& ray, float tnear) const;
 
     int width() const { return width_; }
     int height() const { return height_; }

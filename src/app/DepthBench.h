@@ -1,0 +1,63 @@
+// `scratchlight bench depth`: how much each further bounce adds to the image, and the path length
+// (Mitsuba's max_depth, render/PathTracer.h) after which the next bounce adds less than a
+// threshold (0.1 %) of the image: issue 16, item 2's rule (autoMaxDepth applies it for `render`).
+// The scene is rendered under a white light (E = 1, the most any E in [0, 1] can gather) at
+// max_depth 1, 2, … with one seed: a sample draws the same numbers at each vertex whatever the
+// path length, so image(d+1) − image(d) is exactly what bounce d+1 adds for these samples.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace sl {
+
+struct DepthBenchOptions {
+    std::filesystem::path scene;              // empty: the bundled default scene (app/Plot.h)
+    std::vector<std::string> sceneOverrides;  // -D key=value on the scene (io/SceneFile.h)
+    int resolution = 128, spp = 16;           // image N×N, samples per pixel
+    int maxDepth = 12;                        // the longest path length measured
+    double threshold = 0.001;                 // "the next bounce adds less than this share"
+    int threads = 0;
+};
+
+struct DepthBenchRow {
+    int maxDepth = 0;
+    double energy = 0;  // Σ luminance over the image at this max_depth under E = 1
+    double added = 0;   // (energy − energy at max_depth − 1) / energy: this bounce's share
+    double seconds = 0;
+    uint64_t rays = 0;
+};
+
+struct DepthChoice {
+    int maxDepth = 0;
+    std::string reason;
+};
+
+/// The smallest max_depth d >= 2 for which going to d + 1 adds less than `threshold` of the
+/// image at d + 1; energy[d] is the image's energy at max_depth d (energy[0] unused). When no
+/// measured d qualifies, the longest measured one, saying so. Exposed for tests.
+DepthChoice chooseMaxDepth(const std::vector<double>& energy, double threshold);
+
+struct DepthBenchResult {
+    DepthBenchOptions options;
+    std::vector<DepthBenchRow> rows;
+    DepthChoice choice;
+    int sceneMaxDepth = 0;  // the scene's own render.max_depth, for comparison
+    std::string csv() const;
+};
+
+/// Runs the benchmark. Throws InputError for a bad scene or option.
+DepthBenchResult runDepthBench(const DepthBenchOptions& options);
+
+struct Scene;
+
+/// The rule applied to a scene as it is (its camera, material and seed): renders under E = 1 at
+/// `spp` with max_depth 1, 2, … and stops at the first depth whose next bounce adds less than
+/// `threshold` of the image (at most limit − 1 reflections measured). What `render --auto-depth`
+/// uses; seconds spent are in the choice's reason.
+DepthChoice autoMaxDepth(const Scene& scene, int spp = 4, int limit = 16, double threshold = 0.001,
+                         int threads = 0);
+
+}  // namespace sl
