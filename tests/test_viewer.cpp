@@ -576,7 +576,7 @@ TEST(ViewerBrowser, PaintingATexelAndDraggingALampMatchRelightAndJudge) {
                 << jj["visibility"][k]["name"];
     };
     json cliJudge;
-    matchesCli(saved, "selftest-render.exr", self, 1e-9, &cliJudge);
+    matchesCli(saved, "selftest-render.exr", self, 1e-6, &cliJudge);
 
     // Light A: the two lamps, the disk toward the texel that lights the most of the image (so
     // that the part is lit). Drag lamp 1 on the hemisphere widget (mouse events on the canvas)

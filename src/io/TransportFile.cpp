@@ -170,7 +170,8 @@ void writeTransportFile(const std::filesystem::path& file, const TransportMatrix
 
 TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std::string& where) {
     if (shards.empty())
-        throw inputError(where, "lists no shard", "list the .tm files of `precompute --rows`");
+        throw inputError(where, "lists no shard",
+                         "list the .tm files of `precompute " + option("rows") + "`");
     json common;
     std::vector<std::array<int, 2>> ranges;
     for (size_t k = 0; k < shards.size(); ++k) {
@@ -178,7 +179,7 @@ TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std:
         const std::string name = where + " shard " + std::to_string(k + 1);
         if (!in.contains("rows"))
             throw inputError(name, "is a whole transport matrix, not a shard",
-                             "list only the files of `precompute --rows A:B`");
+                             "list only the files of `precompute " + option("rows") + " A:B`");
         ranges.push_back({in["rows"][0].get<int>(), in["rows"][1].get<int>()});
         in.erase("rows");
         if (k == 0) {
@@ -212,7 +213,7 @@ TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std:
     for (int y = 0; y < first.height; ++y)
         if (owner[static_cast<size_t>(y)] < 0)
             throw inputError(where, "no shard has image row " + std::to_string(y),
-                             "trace the missing rows with `precompute --rows A:B`");
+                             "trace the missing rows with `precompute " + option("rows") + " A:B`");
     for (TransportFile& f : shards)
         if (f.matrix.storage == TransportStorage::Dense) f.matrix.toSparse();
     TransportMatrix m;
