@@ -69,33 +69,52 @@ uint64_t freshSeed(uint64_t base, uint64_t stream, uint64_t index) {
 
 RenderLoss::RenderLoss(const Scene& scene, RenderOptions options, const ImageObjective& objective,
                        bool rgb)
-    : scene_(scene),
-      options_(std::move(options)),
+    : envWidth_(scene.basis.width()),
+      envHeight_(scene.basis.height()),
+      baseSeed_(options.seed),
+      threads_(options.threads),
       objective_(objective),
       rgb_(rgb),
       dimension_(static_cast<size_t>(scene.basis.texelCount()) * (rgb ? 3 : 1)) {
-    options_.progress = {};
-    options_.interruptible = false;  // Ctrl-C stops the optimizer between steps instead
-    if (objective.width() != scene.camera.width() || objective.height() != scene.camera.height())
+    options.progress = {};
+    options.interruptible = false;  // Ctrl-C stops the optimizer between steps instead
+    owned_ = std::make_unique<BuiltinRenderer>(scene, std::move(options));
+    renderer_ = owned_.get();
+    checkObjective();
+}
+
+RenderLoss::RenderLoss(const Renderer& renderer, int envWidth, int envHeight, uint64_t baseSeed,
+                       const ImageObjective& objective, bool rgb)
+    : renderer_(&renderer),
+      envWidth_(envWidth),
+      envHeight_(envHeight),
+      baseSeed_(baseSeed),
+      objective_(objective),
+      rgb_(rgb),
+      dimension_(static_cast<size_t>(envWidth) * envHeight * (rgb ? 3 : 1)) {
+    checkObjective();
+}
+
+void RenderLoss::checkObjective() const {
+    if (objective_.width() != renderer_->width() || objective_.height() != renderer_->height())
         throw std::invalid_argument(
-            "RenderLoss: the objective's image size (" + std::to_string(objective.width()) + "x" +
-            std::to_string(objective.height()) + ") differs from the camera's");
+            "RenderLoss: the objective's image size (" + std::to_string(objective_.width()) + "x" +
+            std::to_string(objective_.height()) + ") differs from the renderer's");
 }
 
 std::vector<double> RenderLoss::image(std::span<const double> E, uint64_t seed, int threads) const {
     checkPoint(E, dimension_, "RenderLoss");
     EnvMap env;
-    env.width = scene_.basis.width();
-    env.height = scene_.basis.height();
+    env.width = envWidth_;
+    env.height = envHeight_;
     env.channels = rgb_ ? 3 : 1;
     env.texels.resize(E.size());
     for (size_t i = 0; i < E.size(); ++i) env.texels[i] = static_cast<float>(E[i]);
-    RenderOptions o = options_;
-    o.seed = seed;
-    if (threads >= 0) o.threads = threads;
-    RenderResult r = render(scene_, env, o);
+    const Image img = renderer_->render(env, seed, threads >= 0 ? threads : threads_);
     ++renders_;
-    const Image& img = r.image;
+    if (img.width != renderer_->width() || img.height != renderer_->height() || img.channels < 1)
+        throw std::runtime_error("RenderLoss: renderer '" + renderer_->name() +
+                                 "' returned an image of the wrong size");
     std::vector<double> Y(img.pixelCount());
     for (size_t p = 0; p < Y.size(); ++p) {
         if (img.channels >= 3) {
