@@ -138,7 +138,7 @@ TEST(Povray, TransportFromBasisRendersMatchesADirectRender) {
     const int n = 40;
     auto scene =
         makeScene(dir, test::bumpyHeightMap(n), n,
-                  R"({"type": "roughconductor", "alpha": 0.1, "material": "Al"})", 16, 8, 5);
+                  R"({"type": "roughconductor", "alpha": 0.1, "material": "Al"})", 16, 6, 4);
     ExternalRendererOptions ro;
     ro.povray.supersample = 2;
     ro.povray.roughSamples = 4;
@@ -146,13 +146,13 @@ TEST(Povray, TransportFromBasisRendersMatchesADirectRender) {
     BasisTransportOptions bo;
     bo.cacheDir = dir / "cache";
     const BasisTransportResult r = basisTransport(*scene, pov, bo);
-    EXPECT_EQ(r.rendered, 40);
+    EXPECT_EQ(r.rendered, 24);
     EXPECT_EQ(r.reused, 0);
     const TransportMatrix& T = r.file.matrix;
-    ASSERT_EQ(T.cols(), 40u);
+    ASSERT_EQ(T.cols(), 24u);
     ASSERT_EQ(T.rows(), 256u);
     // T·E against a direct render of a random E.
-    auto [e1, e2] = linearityPair(8, 5, 9);
+    auto [e1, e2] = linearityPair(6, 4, 9);
     const std::vector<double> E(e1.texels.begin(), e1.texels.end());
     std::vector<double> Y(T.rows());
     T.applyLuminance(E, Y);
@@ -164,12 +164,14 @@ TEST(Povray, TransportFromBasisRendersMatchesADirectRender) {
     }
     std::printf("T.E vs direct POV-Ray render: relative L2 %.3g (linearity error %.3g)\n",
                 std::sqrt(diff / norm), r.linearityError);
+    EXPECT_GT(r.linearityError, 0.0);  // measured on renders that are not black
+    EXPECT_LT(r.linearityError, 2e-3);
     ASSERT_GT(norm, 0);
     EXPECT_LT(std::sqrt(diff / norm), 3e-3);
     // A second run reads every column from the cache.
     const BasisTransportResult again = basisTransport(*scene, pov, bo);
     EXPECT_EQ(again.rendered, 0);
-    EXPECT_EQ(again.reused, 40);
+    EXPECT_EQ(again.reused, 24);
     EXPECT_EQ(again.file.matrix.values, T.values);
 }
 
@@ -188,7 +190,10 @@ TEST(Povray, SpsaThroughPovrayLowersTheLoss) {
     oo.lambda = 30;
     const ImageObjective objective(64, 64, objectMaskFor(*scene, opt), oo);
     const RenderLoss loss(pov, 50, 25, 0, objective);
-    std::vector<double> E(loss.dimension(), 0.5);
+    // Not a constant start: with POV-Ray's constant Fresnel factor a uniform light renders a
+    // uniform image (no contrast, the loss's G = 0), see io/PovrayExport.h.
+    std::vector<double> E(loss.dimension());
+    for (size_t i = 0; i < E.size(); ++i) E[i] = 0.5 + 0.3 * std::sin(0.731 * static_cast<double>(i) + 0.3);
     OptimizerOptions o;
     o.method = OptimizerMethod::Spsa;
     o.iterations = 6;

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "TestUtil.h"
+#include "app/ExternalRenderer.h"
 #include "app/HeldOut.h"
 #include "app/InitialState.h"
 #include "app/LossMask.h"
@@ -63,6 +64,7 @@ TEST(Registry, EveryTableIsWellFormed) {
     expectWellFormed(lossMaskKindTable());
     expectWellFormed(optimizePresetTable());
     expectWellFormed(defectMethodTable());
+    expectWellFormed(rendererKindTable());
 }
 
 TEST(Registry, OptimizerMethodsSayWhoRunsThemAndTheirBudget) {

@@ -5,9 +5,6 @@
 #include <spawn.h>
 #include <stdlib.h>
 #include <sys/wait.h>
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -23,6 +20,7 @@
 #include "core/Color.h"
 #include "core/Error.h"
 #include "core/Hash.h"
+#include "core/Interrupt.h"
 #include "core/Progress.h"
 #include "core/Rng.h"
 #include "core/Stopwatch.h"
@@ -87,6 +85,11 @@ std::string tailOf(const std::string& s, size_t n = 1500) {
 }
 
 }  // namespace
+
+int concurrentRenders(const ExternalRendererOptions& options) {
+    if (options.concurrentRenders > 0) return options.concurrentRenders;
+    return 4 * static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
 
 std::span<const RendererKindRow> rendererKindTable() {
     static const RendererKindRow rows[] = {
@@ -249,7 +252,15 @@ Image ExternalRenderer::render(const EnvMap& env, uint64_t seed, int threads) co
         argv = expandCommand(options_.command, m.xml.string(), m.envmap.string(), output.string());
         who = "renderer command '" + options_.command + "'";
     }
-    const ProcessResult r = runProcess(argv, dir.path(), options_.timeoutSeconds);
+    ProcessResult r = runProcess(argv, dir.path(), options_.timeoutSeconds);
+    // POV-Ray 3.7 gives up when its render thread does not start within its own time limit
+    // on a loaded machine ("Timed out waiting for worker thread startup"): a transient
+    // failure, run again (at most twice).
+    for (int retry = 0; retry < 2 && r.exitCode != 0 && !r.timedOut &&
+                        r.log.find("Timed out waiting for worker thread startup") !=
+                            std::string::npos;
+         ++retry)
+        r = runProcess(argv, dir.path(), options_.timeoutSeconds);
     if (r.timedOut)
         throw std::runtime_error(who + " did not finish within " +
                                  formatNumber(options_.timeoutSeconds) +
@@ -305,7 +316,7 @@ std::pair<EnvMap, EnvMap> linearityPair(int width, int height, uint64_t seed) {
                                 EnvMap::constant(width, height, 0.0f)};
     for (EnvMap* e : {&p.first, &p.second})
         for (float& t : e->texels)
-            if (rng.nextFloat() < 0.2f) t = rng.nextFloat();
+            if (rng.nextFloat() < 0.5f) t = rng.nextFloat();
     return p;
 }
 
@@ -370,28 +381,41 @@ BasisTransportResult basisTransport(const Scene& scene, const ExternalRenderer& 
                       static_cast<double>(cols));
     task.set(static_cast<double>(res.reused));
     std::atomic<long> done{res.reused};
-    tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
-    arena.execute([&] {
-        tbb::parallel_for(
-            tbb::blocked_range<size_t>(0, todo.size(), 1),
-            [&](const tbb::blocked_range<size_t>& r) {
-                for (size_t k = r.begin(); k < r.end(); ++k) {
-                    const size_t t = todo[k];
-                    EnvMap e = EnvMap::constant(ew, eh, 0.0f);
-                    e.texels[t] = 1.0f;
-                    const Image img = renderer.render(e, o.seed, 1);
-                    std::vector<float> y(rows);
-                    for (size_t p = 0; p < rows; ++p) {
-                        const float* c = img.data.data() + p * img.channels;
-                        y[p] = static_cast<float>(luminance<double>(c[0], c[1], c[2]));
-                    }
-                    if (!colDir.empty())
-                        writeBytesAtomically(colFile(t), y.data(), y.size() * sizeof(float));
-                    columns[t] = std::move(y);
-                    task.set(static_cast<double>(++done));
+    std::atomic<size_t> next{0};
+    std::exception_ptr error;
+    std::mutex errorMutex;
+    auto work = [&] {
+        for (size_t k; (k = next++) < todo.size();) {
+            try {
+                throwIfInterrupted();  // the finished columns stay in the cache: a rerun resumes
+                const size_t t = todo[k];
+                EnvMap e = EnvMap::constant(ew, eh, 0.0f);
+                e.texels[t] = 1.0f;
+                const Image img = renderer.render(e, o.seed, 1);
+                std::vector<float> y(rows);
+                for (size_t p = 0; p < rows; ++p) {
+                    const float* c = img.data.data() + p * img.channels;
+                    y[p] = static_cast<float>(luminance<double>(c[0], c[1], c[2]));
                 }
-            });
-    });
+                if (!colDir.empty())
+                    writeBytesAtomically(colFile(t), y.data(), y.size() * sizeof(float));
+                columns[t] = std::move(y);
+                task.set(static_cast<double>(++done));
+            } catch (...) {
+                std::lock_guard lock(errorMutex);
+                if (!error) error = std::current_exception();
+                next = todo.size();
+            }
+        }
+    };
+    const size_t workers = std::min(
+        todo.size(),
+        static_cast<size_t>(o.threads > 0 ? o.threads : concurrentRenders(renderer.options())));
+    std::vector<std::thread> pool;
+    for (size_t k = 1; k < workers; ++k) pool.emplace_back(work);
+    work();
+    for (std::thread& t : pool) t.join();
+    if (error) std::rethrow_exception(error);
     res.rendered = static_cast<int>(todo.size());
 
     TransportMatrix& T = res.file.matrix;

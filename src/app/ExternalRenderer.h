@@ -21,7 +21,7 @@
 // T FROM BASIS RENDERS: with E = e_t (texel t = 1, every other 0), our bilinear lookup IS
 // texel t's basis function (scene/EnvMapBasis.h), so a renderer linear in the light renders
 // column t of T: I = Σ_t E_t·render(e_t). basisTransport renders the 1250 columns in parallel
-// (threads renders at once, each with one thread), keeps each finished column in the cache
+// (concurrentRenders at once, each with one thread), keeps each finished column in the cache
 // folder (basis-<fingerprint>/, so an interrupted run resumes) and assembles a gray T (the
 // luminance of each render) with the object mask of our tracer's trace (the same camera). It
 // first checks linearity: linearityError(E1, E2) on two random sparse maps, refused with a
@@ -58,7 +58,14 @@ struct ExternalRendererOptions {
     std::string command;             // a template (see the header comment); empty: POV-Ray
     PovraySettings povray;
     double timeoutSeconds = 600;  // per render
+    /// Renders at once in basis renders and black-box gradients (0: 4 × the cores: POV-Ray's
+    /// front end idles in 50 ms sleeps, so one 16² render takes 0.66 s of wall time and
+    /// little CPU; 16 at once took 0.86 s on 2 cores).
+    int concurrentRenders = 0;
 };
+
+/// The renders at once `options` asks for (0 resolved).
+int concurrentRenders(const ExternalRendererOptions& options);
 
 class ExternalRenderer final : public Renderer {
   public:
@@ -122,7 +129,7 @@ BasisTransportResult precomputeBasisToFile(const std::filesystem::path& sceneFil
                                            const std::filesystem::path& out);
 
 /// Two random sparse env maps on the scene's grid (for linearity checks): each texel lit with
-/// probability 0.2, values in [0, 1), from `seed`.
+/// probability 0.5, values in [0, 1), from `seed`.
 std::pair<EnvMap, EnvMap> linearityPair(int width, int height, uint64_t seed);
 
 }  // namespace sl

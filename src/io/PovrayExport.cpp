@@ -53,7 +53,9 @@ std::string povraySceneText(const Scene& scene, const PovraySettings& st, uint64
     const ConductorParams& m = scene.bsdf.params();
     const double cosView =
         std::clamp(dot(normalize(cam.origin - cam.target), Vec3d{0, 1, 0}), 0.0, 1.0);
-    const Rgb F = scene.bsdf.fresnel(static_cast<float>(cosView));
+    const Rgb fr = fresnelConductor(static_cast<float>(cosView), m.ior.eta, m.ior.k);
+    const Rgb F{fr.x * m.specularReflectance.x, fr.y * m.specularReflectance.y,
+                fr.z * m.specularReflectance.z};
     const double alpha = m.smooth ? 0.0 : std::sqrt(static_cast<double>(m.alphaU) * m.alphaV);
 
     std::ostringstream x;

@@ -1,14 +1,12 @@
 #include "optimize/BlackBox.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
+#include <thread>
 
 #include "core/Color.h"
 #include "core/Error.h"
@@ -27,16 +25,33 @@ class NullSink : public PathSink {
     void consume(const PixelPaths&) override {}
 };
 
-/// Runs f(j) for j in [0, n) on `threads` workers (0: all cores), one task per j.
+/// Runs f(j) for j in [0, n) on `threads` workers (0: all cores), one evaluation at a time per
+/// worker. Plain threads, not TBB's pool: an external renderer's process mostly waits
+/// (app/ExternalRenderer.h), so more evaluations than cores may run at once. The first
+/// exception is rethrown after every worker stopped.
 template <typename F>
 void parallelEvaluations(size_t n, int threads, F&& f) {
-    tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
-    arena.execute([&] {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1),
-                          [&](const tbb::blocked_range<size_t>& r) {
-                              for (size_t j = r.begin(); j < r.end(); ++j) f(j);
-                          });
-    });
+    const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+    const size_t workers = std::min(n, static_cast<size_t>(threads > 0 ? threads : hw));
+    std::atomic<size_t> next{0};
+    std::exception_ptr error;
+    std::mutex errorMutex;
+    auto work = [&] {
+        for (size_t j; (j = next++) < n;) {
+            try {
+                f(j);
+            } catch (...) {
+                std::lock_guard lock(errorMutex);
+                if (!error) error = std::current_exception();
+                next = n;
+            }
+        }
+    };
+    std::vector<std::thread> pool;
+    for (size_t k = 1; k < workers; ++k) pool.emplace_back(work);
+    work();
+    for (std::thread& t : pool) t.join();
+    if (error) std::rethrow_exception(error);
 }
 
 double asFloat(double v) {
