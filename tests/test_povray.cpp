@@ -165,6 +165,7 @@ TEST(Povray, TransportFromBasisRendersMatchesADirectRender) {
     std::printf("T.E vs direct POV-Ray render: relative L2 %.3g (linearity error %.3g)\n",
                 std::sqrt(diff / norm), r.linearityError);
     EXPECT_GT(r.linearityError, 0.0);  // measured on renders that are not black
+    EXPECT_LT(r.directError, 3e-3);
     EXPECT_LT(r.linearityError, 2e-3);
     ASSERT_GT(norm, 0);
     EXPECT_LT(std::sqrt(diff / norm), 3e-3);
@@ -193,7 +194,8 @@ TEST(Povray, SpsaThroughPovrayLowersTheLoss) {
     // Not a constant start: with POV-Ray's constant Fresnel factor a uniform light renders a
     // uniform image (no contrast, the loss's G = 0), see io/PovrayExport.h.
     std::vector<double> E(loss.dimension());
-    for (size_t i = 0; i < E.size(); ++i) E[i] = 0.5 + 0.3 * std::sin(0.731 * static_cast<double>(i) + 0.3);
+    for (size_t i = 0; i < E.size(); ++i)
+        E[i] = 0.5 + 0.3 * std::sin(0.731 * static_cast<double>(i) + 0.3);
     OptimizerOptions o;
     o.method = OptimizerMethod::Spsa;
     o.iterations = 6;

@@ -256,9 +256,9 @@ Image ExternalRenderer::render(const EnvMap& env, uint64_t seed, int threads) co
     // POV-Ray 3.7 gives up when its render thread does not start within its own time limit
     // on a loaded machine ("Timed out waiting for worker thread startup"): a transient
     // failure, run again (at most twice).
-    for (int retry = 0; retry < 2 && r.exitCode != 0 && !r.timedOut &&
-                        r.log.find("Timed out waiting for worker thread startup") !=
-                            std::string::npos;
+    for (int retry = 0;
+         retry < 2 && r.exitCode != 0 && !r.timedOut &&
+         r.log.find("Timed out waiting for worker thread startup") != std::string::npos;
          ++retry)
         r = runProcess(argv, dir.path(), options_.timeoutSeconds);
     if (r.timedOut)
@@ -431,6 +431,21 @@ BasisTransportResult basisTransport(const Scene& scene, const ExternalRenderer& 
         for (size_t p = 0; p < rows; ++p) T.values[p * cols + t] = columns[t][p];
     T.objectMask = objectMaskFor(scene, ro);
     chooseStorage(T);
+    {
+        const EnvMap e = linearityPair(ew, eh, o.seed + 1).first;
+        const Image img = renderer.render(e, o.seed, 0);
+        const std::vector<double> E(e.texels.begin(), e.texels.end());
+        std::vector<double> Y(rows);
+        T.applyLuminance(E, Y);
+        double num = 0, den = 0;
+        for (size_t p = 0; p < rows; ++p) {
+            const float* c = img.data.data() + p * img.channels;
+            const double y = luminance<double>(c[0], c[1], c[2]);
+            num += (Y[p] - y) * (Y[p] - y);
+            den += y * y;
+        }
+        res.directError = den > 0 ? std::sqrt(num / den) : 0.0;
+    }
     res.file.provenance = prov;
     res.seconds = clock.seconds();
     return res;

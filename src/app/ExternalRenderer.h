@@ -111,6 +111,9 @@ struct BasisTransportOptions {
 struct BasisTransportResult {
     TransportFile file;
     double linearityError = 0;
+    /// ‖T·E − render(E)‖/‖render(E)‖ for a random E (linearityPair's first map), rendered
+    /// directly after T is built: the check that T reproduces the renderer.
+    double directError = 0;
     int rendered = 0, reused = 0;  // columns rendered now, read from the cache
     double seconds = 0;
 };

@@ -77,9 +77,10 @@ int runPrecompute(const PrecomputeArgs& a) {
         const TransportMatrix& t = r.file.matrix;
         std::printf(
             "transport matrix %dx%d px x %dx%d texels from %d basis renders (%d rendered, %d "
-            "from the cache) in %.1f s; linearity error %.2g\n",
+            "from the cache) in %.1f s; linearity error %.2g; T.E against a direct render of a "
+            "random light: relative error %.2g\n",
             t.width, t.height, t.envWidth, t.envHeight, r.rendered + r.reused, r.rendered, r.reused,
-            r.seconds, r.linearityError);
+            r.seconds, r.linearityError, r.directError);
         std::printf("wrote %s (fingerprint %s)\n", a.out.c_str(),
                     r.file.provenance.fingerprint.c_str());
         return kOk;
