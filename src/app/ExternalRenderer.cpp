@@ -97,7 +97,7 @@ std::span<const RendererKindRow> rendererKindTable() {
         {RendererKind::Povray, "povray",
          "POV-Ray 3.7 as a black box (io/PovrayExport.h: blurred mirror, not GGX)"},
         {RendererKind::Command, "command",
-         "any command line (--renderer-cmd with {scene}, {envmap}, {output})"},
+         "any command line (a template with {scene}, {envmap}, {output})"},
     };
     return rows;
 }

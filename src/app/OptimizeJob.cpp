@@ -659,7 +659,11 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
             const ExternalRenderer external(*in.scene, eo);
             const RenderLoss renderLoss(external, in.scene->basis.width(), in.scene->basis.height(),
                                         ro.seed, objective, o.rgb);
-            run.optimizer = minimizeBlackBox(renderLoss, res.e, opt, o.blackBox);
+            // POV-Ray's process mostly waits (app/ExternalRenderer.h): more renders than cores.
+            BlackBoxOptions bb = o.blackBox;
+            if (bb.fd.threads == 0) bb.fd.threads = concurrentRenders(eo);
+            if (bb.spsa.threads == 0) bb.spsa.threads = concurrentRenders(eo);
+            run.optimizer = minimizeBlackBox(renderLoss, res.e, opt, bb);
             run.optimizer.settings += "; renderer " + external.name();
         }
     } else {
