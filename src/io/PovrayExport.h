@@ -36,12 +36,16 @@
 //                 camera's axis and +Y (a constant: POV-Ray's own `fresnel` is a dielectric's),
 //                 no diffuse, ambient, specular or emission. Roughness α (√(α_u·α_v): isotropic)
 //                 as an average of `roughSamples` textures, each with its own `bumps` normal
-//                 perturbation of amount α·kBumpsPerAlpha (a different translation per texture
+//                 perturbation of amount α·bumpsPerAlpha (a different translation per texture
 //                 and per seed): every texture traces its own reflection ray, so a pixel averages
 //                 supersample² × roughSamples mirror directions around the micro-normals. This
 //                 is a blurred mirror, not GGX: the lobe's shape, shadowing-masking, the
 //                 anisotropy α_u ≠ α_v and Fresnel's angle dependence are not matched;
-//                 `conductor` (smooth) is matched up to F's angle dependence.
+//                 `conductor` (smooth) is matched up to F's angle dependence. bumpsPerAlpha 3
+//                 was measured against our tracer (256 spp, a 64² wavy part, 48² px, a checker
+//                 env map, 16 textures): relative L2 image difference 0.150, 0.130, 0.164 at
+//                 α 0.05, 0.1, 0.2 (the best per α: 4 → 0.131, 3 → 0.130, 2 → 0.122; the
+//                 uncalibrated 1 gave 0.369, 0.486, 0.412); tests/test_povray.cpp holds α 0.1.
 //   light paths   max_trace_level = max_depth (POV-Ray counts the camera ray as level 1: 2 is
 //                 one reflection, as Mitsuba's max_depth), adc_bailout 0 (no early path end),
 //                 no light sources, no radiosity, assumed_gamma 1.0, File_Gamma 1.0, output
@@ -67,7 +71,7 @@ struct PovraySettings {
     int supersample = 3;         // camera rays per pixel along each axis (s² per pixel)
     int roughSamples = 8;        // micro-normal textures averaged for a rough conductor
     int envScale = 16;           // env-map image pixels per texel along each axis
-    double bumpsPerAlpha = 1.0;  // `bumps` amount per unit of α (uncalibrated approximation)
+    double bumpsPerAlpha = 3.0;  // `bumps` amount per unit of α (measured: header comment)
 };
 
 struct PovrayFiles {
