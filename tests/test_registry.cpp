@@ -12,6 +12,7 @@
 #include <string>
 
 #include "TestUtil.h"
+#include "app/ExternalRenderer.h"
 #include "app/HeldOut.h"
 #include "app/InitialState.h"
 #include "app/LossMask.h"
@@ -65,6 +66,7 @@ TEST(Registry, EveryTableIsWellFormed) {
     expectWellFormed(optimizePresetTable());
     expectWellFormed(defectMethodTable());
     expectWellFormed(samplingTable());
+    expectWellFormed(rendererKindTable());
 }
 
 TEST(Registry, OptimizerMethodsSayWhoRunsThemAndTheirBudget) {

@@ -250,6 +250,17 @@ Plan plan(const OptimizeJobOptions& options) {
                              option("width") + ", " + option("height") + ", " + option("size") +
                              ") cannot change it",
                          "pass the scene file with the overrides instead of the .tm");
+    if (o.renderer != RendererKind::Builtin && !p.blackBox)
+        throw inputError(
+            option("renderer") + " " + registryRow(rendererKindTable(), o.renderer).name,
+            "only the black-box optimizers (fd-adam, spsa) render through it",
+            "use " + option("optimizer") +
+                " spsa or fd-adam, or build its T with "
+                "precompute " +
+                option("renderer") + " and optimize the .tm");
+    if (o.renderer == RendererKind::Command && o.external.command.empty())
+        throw inputError(option("renderer") + " command", "needs a command template",
+                         "give " + option("renderer-cmd"));
     if (p.blackBox && p.tmInput)
         throw inputError(option("optimizer") + " " + row.name,
                          "renders the scene for every gradient, so it needs the scene file",
@@ -619,8 +630,22 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
         ro.seed = job.transport.file.provenance.seed;
         ro.maxDepth = job.transport.file.provenance.maxDepth;
         ro.threads = o.precompute.threads;
-        RenderLoss renderLoss(*in.scene, ro, objective, o.rgb);
-        run.optimizer = minimizeBlackBox(renderLoss, res.e, opt, o.blackBox);
+        if (o.renderer == RendererKind::Builtin) {
+            RenderLoss renderLoss(*in.scene, ro, objective, o.rgb);
+            run.optimizer = minimizeBlackBox(renderLoss, res.e, opt, o.blackBox);
+        } else {
+            ExternalRendererOptions eo = o.external;
+            if (o.renderer == RendererKind::Povray) eo.command.clear();
+            const ExternalRenderer external(*in.scene, eo);
+            const RenderLoss renderLoss(external, in.scene->basis.width(), in.scene->basis.height(),
+                                        ro.seed, objective, o.rgb);
+            // POV-Ray's process mostly waits (app/ExternalRenderer.h): more renders than cores.
+            BlackBoxOptions bb = o.blackBox;
+            if (bb.fd.threads == 0) bb.fd.threads = concurrentRenders(eo);
+            if (bb.spsa.threads == 0) bb.spsa.threads = concurrentRenders(eo);
+            run.optimizer = minimizeBlackBox(renderLoss, res.e, opt, bb);
+            run.optimizer.settings += "; renderer " + external.name();
+        }
     } else {
         si.callback = callback;
         SearchOptions so;

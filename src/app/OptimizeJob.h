@@ -44,6 +44,7 @@
 #include <vector>
 
 #include "app/Cache.h"
+#include "app/ExternalRenderer.h"
 #include "app/HeldOut.h"
 #include "app/InitialState.h"
 #include "app/Judge.h"
@@ -115,9 +116,13 @@ struct OptimizeJobOptions {
     int heldOutEvery = 50;  // held-out column of loss.csv every N iterations
     /// method: any row of optimize/Methods.h; iterations: 0 = the method's default budget.
     OptimizerOptions optimizer = optimizeJobOptimizerOptions();
-    BlackBoxOptions blackBox;      // fd-adam / spsa: gradients through the renderer
-    PrecomputeOptions precompute;  // used when input is a scene
-    CacheLocation cache;           // where traced matrices are kept (app/Cache.h)
+    BlackBoxOptions blackBox;  // fd-adam / spsa: gradients through the renderer
+    /// The renderer fd-adam / spsa render through (app/ExternalRenderer.h); the training T,
+    /// the held-out scores and the judge stay our tracer's.
+    RendererKind renderer = RendererKind::Builtin;
+    ExternalRendererOptions external;  // povray / command
+    PrecomputeOptions precompute;      // used when input is a scene
+    CacheLocation cache;               // where traced matrices are kept (app/Cache.h)
     // The search (app/Search.h). planes: independent estimates of T cycled per step (0: the
     // method's default); continuation: λ factors before λ.
     int planes = 0;

@@ -164,9 +164,12 @@ TransportSource judgeEstimateFor(const TransportFile& training, const Scene& sce
     o.sampleSets = 2;
     o.label = "judge estimate (held out)";
     TransportSource s = transportForScene(scene, o, cacheDir);
-    // Same scene, camera, material and height map: only the sampling may differ.
+    // Same scene, camera, material and height map: only the sampling may differ, and the
+    // renderer (a T from another renderer's basis renders, app/ExternalRenderer.h, is judged on
+    // our tracer's estimate: the cross-renderer check).
     auto strip = [](json j) {
-        for (const char* k : {"render", "planes", "scene_file", "scene_overrides"}) j.erase(k);
+        for (const char* k : {"render", "planes", "scene_file", "scene_overrides", "renderer"})
+            j.erase(k);
         j["heightmap"].erase("file");
         j["material"].erase("name");
         return j;

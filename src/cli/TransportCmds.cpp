@@ -6,6 +6,8 @@
 #include <cmath>
 #include <memory>
 
+#include "app/Cache.h"
+#include "app/ExternalRenderer.h"
 #include "app/OptimizeJob.h"
 #include "app/Report.h"
 #include "app/Transport.h"
@@ -37,6 +39,8 @@ struct PrecomputeArgs {
     std::string scene, out = "part.tm", rows;
     PrecomputeOptions p;
     std::vector<std::string> overrides;
+    RendererKind renderer = RendererKind::Builtin;
+    ExternalRendererOptions external;
 };
 
 /// --rows A:B into the options' row range.
@@ -55,10 +59,50 @@ void parseRows(const std::string& v, PrecomputeOptions& p) {
     }
 }
 
+/// --renderer, --renderer-cmd (implies --renderer command), --renderer-timeout.
+void addRendererOptions(CLI::App* c, RendererKind& kind, ExternalRendererOptions& external) {
+    addChoice(c, "--renderer", kind, rendererKindTable(), "Renderer (default builtin)");
+    c->add_option_function<std::string>(
+        "--renderer-cmd",
+        [&kind, &external](const std::string& v) {
+            external.command = v;
+            if (kind == RendererKind::Builtin) kind = RendererKind::Command;
+        },
+        "External renderer command template with {scene} (a Mitsuba 3 scene.xml), {envmap}, "
+        "{output} (implies --renderer command)");
+    c->add_option("--renderer-timeout", external.timeoutSeconds,
+                  "Seconds one external render may take")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+}
+
 int runPrecompute(PrecomputeArgs a) {
     if (std::filesystem::path(a.out).extension() != ".tm")
         throw UsageError("output '" + a.out + "' must end in .tm");
     if (!a.rows.empty()) parseRows(a.rows, a.p);
+    if (a.renderer != RendererKind::Builtin) {
+        if (a.p.rgb || a.p.sampleSets != 1 || !a.rows.empty())
+            throw UsageError("--renderer " +
+                             std::string(registryRow(rendererKindTable(), a.renderer).name) +
+                             " builds a gray T from basis renders: drop --rgb, --halves and "
+                             "--rows");
+        BasisTransportOptions bo;
+        bo.threads = a.p.threads;
+        bo.seed = a.p.seed.value_or(0);
+        bo.cacheDir = cacheDirectory(CacheLocation{});
+        const BasisTransportResult r =
+            precomputeBasisToFile(a.scene, a.overrides, a.renderer, a.external, bo, a.out);
+        const TransportMatrix& t = r.file.matrix;
+        std::printf(
+            "transport matrix %dx%d px x %dx%d texels from %d basis renders (%d rendered, %d "
+            "from the cache) in %.1f s; linearity error %.2g; T.E against a direct render of a "
+            "random light: relative error %.2g\n",
+            t.width, t.height, t.envWidth, t.envHeight, r.rendered + r.reused, r.rendered, r.reused,
+            r.seconds, r.linearityError, r.directError);
+        std::printf("wrote %s (fingerprint %s)\n", a.out.c_str(),
+                    r.file.provenance.fingerprint.c_str());
+        return kOk;
+    }
     TransportSource s = precomputeToFile(a.scene, a.p, a.out, a.overrides);
     std::printf("%s\n", describeTransport(s).c_str());
     std::printf("wrote %s (fingerprint %s)\n", a.out.c_str(),
@@ -141,6 +185,7 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         c->add_option("scene", a->scene, "Scene file (JSON)")->required();
         addTraceOptions(c, a->p, a->overrides);
         c->add_flag("--rgb", a->p.rgb, "Store RGB T (3 blocks) instead of luminance T");
+        addRendererOptions(c, a->renderer, a->external);
         c->add_flag_function(
             "--halves", [a](std::int64_t) { a->p.sampleSets = 2; },
             "Store the two half-sample matrices T_a, T_b (for --objective unbiased and held-out "
@@ -169,6 +214,7 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
             "optimize", "Optimize the env map so the part's scratches show (paper eq. 1-3)");
         c->add_option("input", a->input, "Scene file (.json, T is traced and cached) or .tm")
             ->required();
+        addRendererOptions(c, j.renderer, j.external);
         addChoice(c, "--optimizer", j.optimizer.method, optimizerMethodTable(),
                   std::string("Optimizer (default: ") + methodName(optimizeDefaults().method) +
                       "; budget: --iterations)");

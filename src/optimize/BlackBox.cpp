@@ -1,14 +1,12 @@
 #include "optimize/BlackBox.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
+#include <thread>
 
 #include "core/Color.h"
 #include "core/Error.h"
@@ -27,16 +25,33 @@ class NullSink : public PathSink {
     void consume(const PixelPaths&) override {}
 };
 
-/// Runs f(j) for j in [0, n) on `threads` workers (0: all cores), one task per j.
+/// Runs f(j) for j in [0, n) on `threads` workers (0: all cores), one evaluation at a time per
+/// worker. Plain threads, not TBB's pool: an external renderer's process mostly waits
+/// (app/ExternalRenderer.h), so more evaluations than cores may run at once. The first
+/// exception is rethrown after every worker stopped.
 template <typename F>
 void parallelEvaluations(size_t n, int threads, F&& f) {
-    tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
-    arena.execute([&] {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1),
-                          [&](const tbb::blocked_range<size_t>& r) {
-                              for (size_t j = r.begin(); j < r.end(); ++j) f(j);
-                          });
-    });
+    const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+    const size_t workers = std::min(n, static_cast<size_t>(threads > 0 ? threads : hw));
+    std::atomic<size_t> next{0};
+    std::exception_ptr error;
+    std::mutex errorMutex;
+    auto work = [&] {
+        for (size_t j; (j = next++) < n;) {
+            try {
+                f(j);
+            } catch (...) {
+                std::lock_guard lock(errorMutex);
+                if (!error) error = std::current_exception();
+                next = n;
+            }
+        }
+    };
+    std::vector<std::thread> pool;
+    for (size_t k = 1; k < workers; ++k) pool.emplace_back(work);
+    work();
+    for (std::thread& t : pool) t.join();
+    if (error) std::rethrow_exception(error);
 }
 
 double asFloat(double v) {
@@ -69,33 +84,52 @@ uint64_t freshSeed(uint64_t base, uint64_t stream, uint64_t index) {
 
 RenderLoss::RenderLoss(const Scene& scene, RenderOptions options, const ImageObjective& objective,
                        bool rgb)
-    : scene_(scene),
-      options_(std::move(options)),
+    : envWidth_(scene.basis.width()),
+      envHeight_(scene.basis.height()),
+      baseSeed_(options.seed),
+      threads_(options.threads),
       objective_(objective),
       rgb_(rgb),
       dimension_(static_cast<size_t>(scene.basis.texelCount()) * (rgb ? 3 : 1)) {
-    options_.progress = {};
-    options_.interruptible = false;  // Ctrl-C stops the optimizer between steps instead
-    if (objective.width() != scene.camera.width() || objective.height() != scene.camera.height())
+    options.progress = {};
+    options.interruptible = false;  // Ctrl-C stops the optimizer between steps instead
+    owned_ = std::make_unique<BuiltinRenderer>(scene, std::move(options));
+    renderer_ = owned_.get();
+    checkObjective();
+}
+
+RenderLoss::RenderLoss(const Renderer& renderer, int envWidth, int envHeight, uint64_t baseSeed,
+                       const ImageObjective& objective, bool rgb)
+    : renderer_(&renderer),
+      envWidth_(envWidth),
+      envHeight_(envHeight),
+      baseSeed_(baseSeed),
+      objective_(objective),
+      rgb_(rgb),
+      dimension_(static_cast<size_t>(envWidth) * envHeight * (rgb ? 3 : 1)) {
+    checkObjective();
+}
+
+void RenderLoss::checkObjective() const {
+    if (objective_.width() != renderer_->width() || objective_.height() != renderer_->height())
         throw std::invalid_argument(
-            "RenderLoss: the objective's image size (" + std::to_string(objective.width()) + "x" +
-            std::to_string(objective.height()) + ") differs from the camera's");
+            "RenderLoss: the objective's image size (" + std::to_string(objective_.width()) + "x" +
+            std::to_string(objective_.height()) + ") differs from the renderer's");
 }
 
 std::vector<double> RenderLoss::image(std::span<const double> E, uint64_t seed, int threads) const {
     checkPoint(E, dimension_, "RenderLoss");
     EnvMap env;
-    env.width = scene_.basis.width();
-    env.height = scene_.basis.height();
+    env.width = envWidth_;
+    env.height = envHeight_;
     env.channels = rgb_ ? 3 : 1;
     env.texels.resize(E.size());
     for (size_t i = 0; i < E.size(); ++i) env.texels[i] = static_cast<float>(E[i]);
-    RenderOptions o = options_;
-    o.seed = seed;
-    if (threads >= 0) o.threads = threads;
-    RenderResult r = render(scene_, env, o);
+    const Image img = renderer_->render(env, seed, threads >= 0 ? threads : threads_);
     ++renders_;
-    const Image& img = r.image;
+    if (img.width != renderer_->width() || img.height != renderer_->height() || img.channels < 1)
+        throw std::runtime_error("RenderLoss: renderer '" + renderer_->name() +
+                                 "' returned an image of the wrong size");
     std::vector<double> Y(img.pixelCount());
     for (size_t p = 0; p < Y.size(); ++p) {
         if (img.channels >= 3) {

@@ -4,10 +4,11 @@
 // (docs/DESIGN.md "Black-box baselines and validation").
 //
 // THE BLACK BOX (RenderLoss): E (doubles in [0, 1]) → the renderer's float32 env map →
-// render(scene, env, options with a seed) → luminance Y of the RGB image → ImageObjective::
-// evaluate(Y, E).total, with E as the renderer saw it (float-rounded) in the regulariser. The
-// objective's mask is fixed (usually the object mask of the trace at the base seed, see
-// objectMaskFor; it equals T.objectMask for a T with the same spp and seed).
+// Renderer::render(env, seed) (render/Renderer.h: our tracer, POV-Ray or any command) → luminance Y
+// of the RGB image → ImageObjective:: evaluate(Y, E).total, with E as the renderer saw it
+// (float-rounded) in the regulariser. The objective's mask is fixed (usually the object mask of the
+// trace at the base seed, see objectMaskFor; it equals T.objectMask for a T with the same spp and
+// seed).
 //
 // SEEDS: with common random numbers (CRN) every evaluation uses the base seed
 // (RenderOptions::seed): the samples are identical, the render is exactly linear in E, and the
@@ -37,6 +38,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -45,6 +47,7 @@
 #include "objective/Objective.h"
 #include "optimize/Optimizer.h"
 #include "render/PathTracer.h"
+#include "render/Renderer.h"
 
 namespace sl {
 
@@ -59,17 +62,20 @@ uint64_t freshSeed(uint64_t base, uint64_t stream, uint64_t index);
 
 class RenderLoss {
   public:
-    /// The black box for `scene` rendered with `options` (spp, max depth, base seed, threads),
-    /// scored by `objective` (sized like the camera's image). Keeps references: scene and
-    /// objective must outlive it. rgb: E has 3 values per texel (interleaved), else 1.
+    /// The black box for `scene` rendered by our tracer with `options` (spp, max depth, base
+    /// seed, threads), scored by `objective` (sized like the camera's image). Keeps references:
+    /// scene and objective must outlive it. rgb: E has 3 values per texel (interleaved), else 1.
     RenderLoss(const Scene& scene, RenderOptions options, const ImageObjective& objective,
                bool rgb = false);
+    /// The black box for any renderer (kept by reference) on an envWidth × envHeight grid, with
+    /// `baseSeed` as the common-random-numbers seed.
+    RenderLoss(const Renderer& renderer, int envWidth, int envHeight, uint64_t baseSeed,
+               const ImageObjective& objective, bool rgb = false);
 
     size_t dimension() const { return dimension_; }
-    uint64_t baseSeed() const { return options_.seed; }
-    const RenderOptions& renderOptions() const { return options_; }
+    uint64_t baseSeed() const { return baseSeed_; }
     const ImageObjective& objective() const { return objective_; }
-    const Scene& scene() const { return scene_; }
+    const Renderer& renderer() const { return *renderer_; }
 
     /// The loss parts at E rendered with `seed`. threads: render threads (< 0: the options').
     /// Throws std::invalid_argument for a wrong size or non-finite E.
@@ -81,8 +87,12 @@ class RenderLoss {
     long renders() const { return renders_.load(); }
 
   private:
-    const Scene& scene_;
-    RenderOptions options_;
+    void checkObjective() const;
+    std::unique_ptr<BuiltinRenderer> owned_;
+    const Renderer* renderer_ = nullptr;
+    int envWidth_ = 0, envHeight_ = 0;
+    uint64_t baseSeed_ = 0;
+    int threads_ = 0;
     const ImageObjective& objective_;
     bool rgb_;
     size_t dimension_;
