@@ -265,11 +265,15 @@ std::string formatRaceTable(const std::vector<RaceRow>& rows) {
                   "vis-c", "gap");
     out << buf;
     for (const RaceRow& r : rows) {
+        // The defects objective has no held-out own loss here (its visibility columns are).
+        char g[32] = "n/a";
+        if (std::isfinite(r.heldOwn))
+            std::snprintf(g, sizeof g, "%+6.1f%%", 100.0 * (r.heldOwn / r.trainLoss - 1.0));
+        const std::string gap = g;
         std::snprintf(buf, sizeof buf,
-                      "%-18s %-31s %7.3f %6d %8.4f %8.4f %7.3f %7.3f %7.3f %6.2f %6.2f %+6.1f%%\n",
+                      "%-18s %-31s %7.3f %6d %8.4f %8.4f %7.3f %7.3f %7.3f %6.2f %6.2f %7s\n",
                       r.part.c_str(), r.config.c_str(), r.seconds, r.evaluations, r.eq2, r.unbiased,
-                      r.ratioU, r.ratioEq2, r.ratioSeconds, r.visDefect, r.visChatter,
-                      100.0 * (r.heldOwn / r.trainLoss - 1.0));
+                      r.ratioU, r.ratioEq2, r.ratioSeconds, r.visDefect, r.visChatter, gap.c_str());
         out << buf;
     }
     return out.str();
