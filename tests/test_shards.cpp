@@ -77,6 +77,9 @@ TEST(Shards, AListFileReadsAsTheMergedMatrix) {
     const TransportFile whole = s.trace(0, 0);
     const TransportFile read = readTransportFile(dir / "t.shards", whole.provenance.fingerprint);
     expectSameMatrix(read.matrix, whole.matrix);
+    // A list that lists a list (itself, here) is refused, not followed.
+    std::ofstream(dir / "self.shards") << "a.tm\nself.shards\n";
+    EXPECT_THROW(readTransportFile(dir / "self.shards"), InputError);
 }
 
 TEST(Shards, RefusesOverlapsGapsOtherInputsAndWholeMatrices) {

@@ -262,6 +262,9 @@ TransportFile readShardList(const std::filesystem::path& list,
         const size_t b = line.find_last_not_of(" \t\r");
         std::filesystem::path p = line.substr(a, b - a + 1);
         if (p.is_relative()) p = list.parent_path() / p;
+        if (p.extension() == ".shards")
+            throw inputError(list.string(), "lists another shard list, " + p.string(),
+                             "list the shards' .tm files themselves");
         shards.push_back(readTransportFile(p));
     }
     TransportFile merged = mergeTransportShards(std::move(shards), list.string());
