@@ -422,8 +422,8 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
             }
         }
         // A k-th lamp that cannot help: keep the k−1 and this one off, when that scores better
-        // on the same problem the polished runs minimized (the objective with its penalties,
-        // on the full quadrature).
+        // on the same problem the polished runs minimized (the objective with its penalties, on
+        // the polish's quadrature). Not for the first lamp: no lamp at all is a black image.
         std::vector<Lamp> keep = lamps;
         Lamp off = cands.front();
         off.radiance = 0;
@@ -431,7 +431,8 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
         std::vector<LampKind> keepKinds;
         for (const Lamp& l : keep) keepKinds.push_back(l.kind);
         const LampProblem keepProblem(loss, polishRaster, keepKinds, o, columns);
-        if (best.empty() || keepProblem.evaluate(keepProblem.encode(keep), {}) < bestLoss)
+        if (best.empty() ||
+            (k > 1 && keepProblem.evaluate(keepProblem.encode(keep), {}) < bestLoss))
             best = keep;
         lamps = best;
         E = raster.rasterize(lamps);
