@@ -77,6 +77,17 @@ TEST(Shards, AListFileReadsAsTheMergedMatrix) {
     const TransportFile whole = s.trace(0, 0);
     const TransportFile read = readTransportFile(dir / "t.shards", whole.provenance.fingerprint);
     expectSameMatrix(read.matrix, whole.matrix);
+    // Errors from a list name the shards' files.
+    std::ofstream(dir / "twice.shards") << "a.tm\na.tm\nsub/b.tm\n";
+    try {
+        readTransportFile(dir / "twice.shards");
+        ADD_FAILURE() << "overlap not refused";
+    } catch (const InputError& e) {
+        const std::string m = e.what();
+        EXPECT_NE(m.find("row 0 is in two shards"), std::string::npos) << m;
+        EXPECT_NE(m.find("a.tm and "), std::string::npos) << m;
+        EXPECT_NE(m.find("twice.shards"), std::string::npos) << m;
+    }
     // A list that lists a list (itself, here) is refused, not followed.
     std::ofstream(dir / "self.shards") << "a.tm\nself.shards\n";
     EXPECT_THROW(readTransportFile(dir / "self.shards"), InputError);

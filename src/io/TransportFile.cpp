@@ -168,7 +168,12 @@ void writeTransportFile(const std::filesystem::path& file, const TransportMatrix
     });
 }
 
-TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std::string& where) {
+TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std::string& where,
+                                   const std::vector<std::string>& names) {
+    auto shardName = [&](size_t k) {
+        return k < names.size() ? where + ": " + names[k]
+                                : where + " shard " + std::to_string(k + 1);
+    };
     if (shards.empty())
         throw inputError(where, "lists no shard",
                          "list the .tm files of `precompute " + option("rows") + "`");
@@ -176,7 +181,7 @@ TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std:
     std::vector<std::array<int, 2>> ranges;
     for (size_t k = 0; k < shards.size(); ++k) {
         json in = json::parse(shards[k].provenance.inputs);
-        const std::string name = where + " shard " + std::to_string(k + 1);
+        const std::string name = shardName(k);
         if (!in.contains("rows"))
             throw inputError(name, "is a whole transport matrix, not a shard",
                              "list only the files of `precompute " + option("rows") + " A:B`");
@@ -186,7 +191,7 @@ TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std:
             common = in;
         } else if (fingerprintOf(in) != fingerprintOf(common)) {
             throw inputError(name,
-                             "was traced with other inputs than shard 1 (scene, camera, "
+                             "was traced with other inputs than the first shard (scene, camera, "
                              "material, spp, seed or max_depth)",
                              "trace every shard with the same scene and options");
         }
@@ -198,15 +203,18 @@ TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std:
         const TransportMatrix& t = shards[k].matrix;
         if (t.width != first.width || t.height != first.height || t.channels != first.channels ||
             t.planes != first.planes || t.cols() != first.cols())
-            throw inputError(where + " shard " + std::to_string(k + 1),
-                             "has other dimensions than shard 1", "trace every shard alike");
+            throw inputError(shardName(k), "has other dimensions than the first shard",
+                             "trace every shard alike");
         for (int y = ranges[k][0]; y < ranges[k][1]; ++y) {
             if (y < 0 || y >= first.height)
-                throw inputError(where + " shard " + std::to_string(k + 1),
-                                 "has rows outside the image", "trace it again");
-            if (owner[static_cast<size_t>(y)] >= 0)
-                throw inputError(where, "row " + std::to_string(y) + " is in two shards",
-                                 "give each row range once");
+                throw inputError(shardName(k), "has rows outside the image", "trace it again");
+            if (owner[static_cast<size_t>(y)] >= 0) {
+                std::string what = "row " + std::to_string(y) + " is in two shards";
+                if (k < names.size())
+                    what += std::string(" (") + names[static_cast<size_t>(owner[y])] + " and " +
+                            names[k] + ")";
+                throw inputError(where, what, "give each row range once");
+            }
             owner[static_cast<size_t>(y)] = static_cast<int>(k);
         }
     }
@@ -255,6 +263,7 @@ TransportFile readShardList(const std::filesystem::path& list,
         throw inputError(list.string(), "cannot open the shard list",
                          "check the path (a text file with one .tm file per line)");
     std::vector<TransportFile> shards;
+    std::vector<std::string> names;
     std::string line;
     while (std::getline(in, line)) {
         const size_t a = line.find_first_not_of(" \t\r");
@@ -266,8 +275,9 @@ TransportFile readShardList(const std::filesystem::path& list,
             throw inputError(list.string(), "lists another shard list, " + p.string(),
                              "list the shards' .tm files themselves");
         shards.push_back(readTransportFile(p));
+        names.push_back(p.string());
     }
-    TransportFile merged = mergeTransportShards(std::move(shards), list.string());
+    TransportFile merged = mergeTransportShards(std::move(shards), list.string(), names);
     if (!expectedFingerprint.empty() && merged.provenance.fingerprint != expectedFingerprint)
         throw inputError(list.string(), "its shards were traced from other inputs",
                          "trace the shards again from this scene");

@@ -64,9 +64,11 @@ struct TransportFile {
 TransportFile readTransportFile(const std::filesystem::path& file,
                                 const std::string& expectedFingerprint = {});
 
-/// T put together from its row shards (see SHARDS above); `where` names them in errors.
-/// InputError for a shard that is not one, mismatched inputs, overlapping rows or a gap.
-TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std::string& where);
+/// T put together from its row shards (see SHARDS above); `where` names them in errors, and
+/// `names` (optional, one per shard: their files) each shard. InputError for a shard that is not
+/// one, mismatched inputs, overlapping rows or a gap.
+TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std::string& where,
+                                   const std::vector<std::string>& names = {});
 
 /// The same on a stream holding the `size` bytes of a .tm file from its current position (an
 /// in-memory file, a fuzzer's input); `where` names the source in errors.
