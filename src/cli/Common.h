@@ -8,6 +8,8 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "app/Cache.h"
@@ -97,6 +99,31 @@ CLI::Option* addParsed(CLI::App* c, const std::string& flag, Target& target, Par
     return c->add_option_function<std::string>(
         flag, [&target, parse, flag](const std::string& v) { target = parse(v, flag); },
         description);
+}
+
+/// "A:B" as two numbers of type T (int: std::stoi, double: std::stod), each taking its whole
+/// side of the colon; nullopt when the text is not that. The caller names the flag in its error.
+template <class T>
+std::optional<std::pair<T, T>> parseColonPair(const std::string& text) {
+    const size_t colon = text.find(':');
+    if (colon == std::string::npos) return std::nullopt;
+    auto number = [](const std::string& s) -> std::optional<T> {
+        try {
+            size_t used = 0;
+            T v;
+            if constexpr (std::is_same_v<T, int>)
+                v = std::stoi(s, &used);
+            else
+                v = std::stod(s, &used);
+            if (used != s.size()) return std::nullopt;
+            return v;
+        } catch (const std::logic_error&) {
+            return std::nullopt;
+        }
+    };
+    const auto a = number(text.substr(0, colon)), b = number(text.substr(colon + 1));
+    if (!a || !b) return std::nullopt;
+    return std::pair<T, T>{*a, *b};
 }
 
 }  // namespace sl::cli

@@ -31,20 +31,11 @@ struct LampsArgs {
 };
 
 std::pair<double, double> parseAzimuthRange(const std::string& text) {
-    const size_t colon = text.find(':');
-    try {
-        if (colon == std::string::npos) throw std::invalid_argument("no colon");
-        size_t used = 0;
-        const double a = std::stod(text.substr(0, colon), &used);
-        if (used != colon) throw std::invalid_argument("trailing");
-        const std::string rest = text.substr(colon + 1);
-        const double b = std::stod(rest, &used);
-        if (used != rest.size()) throw std::invalid_argument("trailing");
-        return {a * kRad, b * kRad};
-    } catch (const std::logic_error&) {
+    const auto range = parseColonPair<double>(text);
+    if (!range)
         throw UsageError("--forbid-azimuth " + text +
                          ": expected FROM:TO in degrees (e.g. 150:210; FROM > TO wraps through 0)");
-    }
+    return {range->first * kRad, range->second * kRad};
 }
 
 int runLamps(LampsArgs a) {
@@ -101,11 +92,8 @@ int runLamps(LampsArgs a) {
                         s.judgedTarget->visibility[r].visibility,
                         s.judgedLamps->visibility[r].visibility,
                         s.judgedStudio->visibility[r].visibility);
-        const double gap = s.judgement->gap;
-        std::printf(
-            "the lamps are %s E* by the judge (%+.1f %%)\n",
-            std::abs(gap) <= 0.05 ? "within 5 % of" : (gap > 0 ? "worse than" : "better than"),
-            100 * gap);
+        std::printf("the lamps are %s E* by the judge (%+.1f %%)\n", s.judgement->verdict(),
+                    100 * s.judgement->gap);
     }
     if (!s.plotMessage.empty()) std::printf("no plot: %s\n", s.plotMessage.c_str());
     std::printf("wrote %s/ (open %s/report.html)\n", a.out.c_str(), a.out.c_str());

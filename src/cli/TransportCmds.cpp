@@ -45,18 +45,10 @@ struct PrecomputeArgs {
 
 /// --rows A:B into the options' row range.
 void parseRows(const std::string& v, PrecomputeOptions& p) {
-    const size_t colon = v.find(':');
-    try {
-        if (colon == std::string::npos) throw std::invalid_argument("no colon");
-        size_t used = 0;
-        p.rowBegin = std::stoi(v.substr(0, colon), &used);
-        if (used != colon) throw std::invalid_argument("trailing");
-        const std::string rest = v.substr(colon + 1);
-        p.rowEnd = std::stoi(rest, &used);
-        if (used != rest.size()) throw std::invalid_argument("trailing");
-    } catch (const std::logic_error&) {
-        throw UsageError("--rows " + v + ": expected A:B (image rows A to B-1, e.g. 0:256)");
-    }
+    const auto rows = parseColonPair<int>(v);
+    if (!rows) throw UsageError("--rows " + v + ": expected A:B (image rows A to B-1, e.g. 0:256)");
+    p.rowBegin = rows->first;
+    p.rowEnd = rows->second;
 }
 
 /// --renderer, --renderer-cmd (implies --renderer command), --renderer-timeout.
