@@ -292,8 +292,7 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         if (job.judgedTarget) {
             const LampsJudgement& jd = *job.judgement;
             h << "<p>On the judge's held-out estimate the lamps are ";
-            h << (std::abs(jd.gap) <= 0.05 ? "within 5 % of"
-                                           : (jd.gap > 0 ? "worse than" : "better than"));
+            h << jd.verdict();
             h << " E* (" << formatNumber(100 * jd.gap) << " % in " << escapeXml(jd.measure)
               << ", the " << objectiveKindName(kind) << " objective's measure; "
               << (jd.higherIsBetter ? "higher" : "lower") << " is better).</p>";

@@ -71,6 +71,11 @@ struct LampsJudgement {
     bool higherIsBetter = false;
     double target = 0, lamps = 0, studio = 0;
     double gap = 0;
+    /// How the lamps compare with E* in words: "within 5 % of", "worse than" or "better than".
+    const char* verdict() const {
+        return gap >= -0.05 && gap <= 0.05 ? "within 5 % of"
+                                           : (gap > 0 ? "worse than" : "better than");
+    }
 };
 
 struct LampsJobSummary {
