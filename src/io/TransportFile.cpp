@@ -178,6 +178,7 @@ TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std:
         throw inputError(where, "lists no shard",
                          "list the .tm files of `precompute " + option("rows") + "`");
     json common;
+    std::string commonPrint;  // the fingerprint every shard's inputs but its rows must have
     std::vector<std::array<int, 2>> ranges;
     for (size_t k = 0; k < shards.size(); ++k) {
         json in = json::parse(shards[k].provenance.inputs);
@@ -189,7 +190,8 @@ TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std:
         in.erase("rows");
         if (k == 0) {
             common = in;
-        } else if (fingerprintOf(in) != fingerprintOf(common)) {
+            commonPrint = fingerprintOf(common);
+        } else if (fingerprintOf(in) != commonPrint) {
             throw inputError(name,
                              "was traced with other inputs than the first shard (scene, camera, "
                              "material, spp, seed or max_depth)",
@@ -250,7 +252,7 @@ TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std:
     out.matrix = std::move(m);
     out.provenance = shards.front().provenance;
     out.provenance.inputs = common.dump();
-    out.provenance.fingerprint = fingerprintOf(common);
+    out.provenance.fingerprint = commonPrint;
     return out;
 }
 
