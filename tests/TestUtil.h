@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "scene/Scene.h"
+
 namespace sl::test {
 
 /// A fresh directory under the system temp dir, removed when the object dies.
@@ -44,6 +46,18 @@ inline std::vector<float> bumpyHeightMap(int n) {
             h[size_t(j) * n + i] =
                 static_cast<float>(0.03 * std::sin(i * 0.5) * std::cos(j * 0.37));
     return h;
+}
+
+/// The bumpy test part's scene: 0.05 mm samples, GGX α 0.1, max_depth 3, a width×height view
+/// (the scene file's defaults otherwise). With bumpyHeightMap(n), n 32–48, the part fills it.
+inline SceneDesc bumpyPartDesc(int width, int height) {
+    SceneDesc d;
+    d.heightmap.pitch = 0.05;
+    d.material.params.alphaU = d.material.params.alphaV = 0.1f;
+    d.camera.width = width;
+    d.camera.height = height;
+    d.render.maxDepth = 3;
+    return d;
 }
 
 /// A file's bytes ("" when it cannot be read).

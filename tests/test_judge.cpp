@@ -28,12 +28,7 @@ using namespace sl;
 namespace {
 
 std::unique_ptr<Scene> wavyScene(int res, int n = 48) {
-    SceneDesc d;
-    d.heightmap.pitch = 0.05;
-    d.material.params.alphaU = d.material.params.alphaV = 0.1f;
-    d.camera.width = d.camera.height = res;
-    d.render.maxDepth = 3;
-    return std::make_unique<Scene>(d, n, n, test::bumpyHeightMap(n));
+    return std::make_unique<Scene>(test::bumpyPartDesc(res, res), n, n, test::bumpyHeightMap(n));
 }
 
 std::vector<double> randomVec(size_t n, uint64_t seed, double scale = 1.0) {

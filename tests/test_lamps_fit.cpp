@@ -18,13 +18,8 @@ namespace {
 using namespace sl;
 
 TransportMatrix smallT() {
-    SceneDesc d;
-    d.heightmap.pitch = 0.05;
-    d.material.params.alphaU = d.material.params.alphaV = 0.1f;
-    d.camera.width = d.camera.height = 20;
-    d.render.maxDepth = 3;
     const int n = 40;
-    Scene scene(d, n, n, test::bumpyHeightMap(n));
+    Scene scene(test::bumpyPartDesc(20, 20), n, n, test::bumpyHeightMap(n));
     RenderOptions ro;
     ro.spp = 16;
     ro.maxDepth = 3;

@@ -16,16 +16,7 @@ namespace {
 using namespace sl;
 
 struct ShardScene {
-    ShardScene() : scene(desc(), 32, 32, test::bumpyHeightMap(32)) {}
-    static SceneDesc desc() {
-        SceneDesc d;
-        d.heightmap.pitch = 0.05;
-        d.material.params.alphaU = d.material.params.alphaV = 0.1f;
-        d.camera.width = 24;
-        d.camera.height = 20;
-        d.render.maxDepth = 3;
-        return d;
-    }
+    ShardScene() : scene(test::bumpyPartDesc(24, 20), 32, 32, test::bumpyHeightMap(32)) {}
     TransportFile trace(int rowBegin, int rowEnd, int spp = 8) const {
         RenderOptions ro;
         ro.spp = spp;

@@ -18,13 +18,8 @@ namespace {
 using namespace sl;
 
 TransportMatrix tracedT(bool rgb, int sampleSets) {
-    SceneDesc d;
-    d.heightmap.pitch = 0.05;
-    d.material.params.alphaU = d.material.params.alphaV = 0.1f;
-    d.camera.width = d.camera.height = 16;
-    d.render.maxDepth = 3;
     const int n = 32;
-    Scene scene(d, n, n, test::bumpyHeightMap(n));
+    Scene scene(test::bumpyPartDesc(16, 16), n, n, test::bumpyHeightMap(n));
     RenderOptions ro;
     ro.spp = 8;
     ro.maxDepth = 3;
