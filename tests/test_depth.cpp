@@ -52,7 +52,7 @@ TEST(DepthBench, AutoDepthOfAFlatMirrorIsOneReflection) {
     d.material.params.smooth = true;
     d.camera.width = d.camera.height = 16;
     const Scene s(d, 32, 32, std::vector<float>(32 * 32, 0.0f));
-    const DepthChoice c = autoMaxDepth(s, 2, 8);
+    const DepthChoice c = autoMaxDepth(s, AutoDepthOptions{.spp = 2, .limit = 8});
     EXPECT_EQ(c.maxDepth, 2) << c.reason;
     EXPECT_NE(c.reason.find("would add 0 %"), std::string::npos) << c.reason;
 }

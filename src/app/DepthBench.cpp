@@ -1,5 +1,7 @@
 #include "app/DepthBench.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -60,28 +62,41 @@ double whiteEnergy(const Scene& scene, RenderOptions ro, int depth, TraceSummary
 
 }  // namespace
 
-DepthChoice autoMaxDepth(const Scene& scene, int spp, int limit, double threshold, int threads) {
+std::vector<uint8_t> pixelLattice(int width, int height, int count) {
+    const double area = static_cast<double>(width) * height;
+    const int k = std::max(1, static_cast<int>(std::sqrt(area / std::max(1, count))));
+    std::vector<uint8_t> flags(static_cast<size_t>(width) * height, 0);
+    for (int y = k / 2; y < height; y += k)
+        for (int x = k / 2; x < width; x += k) flags[static_cast<size_t>(y) * width + x] = 1;
+    return flags;
+}
+
+DepthChoice autoMaxDepth(const Scene& scene, const AutoDepthOptions& o) {
     RenderOptions ro = renderOptionsFor(scene);
-    ro.spp = spp;
-    ro.threads = threads;
+    ro.spp = o.spp;
+    ro.threads = o.threads;
+    ro.pixels = pixelLattice(scene.camera.width(), scene.camera.height(), o.pixels);
+    const auto traced = std::count(ro.pixels.begin(), ro.pixels.end(), 1);
     std::vector<double> energy{0.0};
     double seconds = 0;
-    for (int depth = 1; depth <= limit; ++depth) {
+    auto withReason = [&](DepthChoice c) {
+        char buf[128];
+        std::snprintf(buf, sizeof buf,
+                      " (measured under a white light at %d spp on %lld pixels in %.2f s)", o.spp,
+                      static_cast<long long>(traced), seconds);
+        c.reason += buf;
+        return c;
+    };
+    for (int depth = 1; depth <= o.limit; ++depth) {
         TraceSummary s;
         energy.push_back(whiteEnergy(scene, ro, depth, &s));
         seconds += s.seconds;
         if (depth >= 3) {
-            DepthChoice c = chooseMaxDepth(energy, threshold);
-            if (c.maxDepth < depth || depth == limit) {
-                char buf[96];
-                std::snprintf(buf, sizeof buf,
-                              " (measured at %d spp under a white light in %.2f s)", spp, seconds);
-                c.reason += buf;
-                return c;
-            }
+            DepthChoice c = chooseMaxDepth(energy, o.threshold);
+            if (c.maxDepth < depth || depth == o.limit) return withReason(c);
         }
     }
-    return chooseMaxDepth(energy, threshold);
+    return withReason(chooseMaxDepth(energy, o.threshold));
 }
 
 DepthBenchResult runDepthBench(const DepthBenchOptions& o) {

@@ -53,11 +53,26 @@ DepthBenchResult runDepthBench(const DepthBenchOptions& options);
 
 struct Scene;
 
-/// The rule applied to a scene as it is (its camera, material and seed): renders under E = 1 at
-/// `spp` with max_depth 1, 2, … and stops at the first depth whose next bounce adds less than
-/// `threshold` of the image (at most limit − 1 reflections measured). What `render --auto-depth`
-/// uses; seconds spent are in the choice's reason.
-DepthChoice autoMaxDepth(const Scene& scene, int spp = 4, int limit = 16, double threshold = 0.001,
-                         int threads = 0);
+/// How autoMaxDepth measures: spp samples at each of about `pixels` pixels (a regular lattice
+/// over the image: the energy per bounce is a sum over the image, and a lattice estimates its
+/// shares as well as every pixel at a fraction of the rays), up to `limit` path lengths.
+struct AutoDepthOptions {
+    int spp = 16;
+    int pixels = 16384;
+    int limit = 16;
+    double threshold = 0.001;  // "the next bounce adds less than this share of the image"
+    int threads = 0;
+};
+
+/// The lattice of about `count` pixels autoMaxDepth traces: every k-th pixel of every k-th row,
+/// k = max(1, floor(sqrt(width·height / count))); width·height flags (RenderOptions::pixels).
+std::vector<uint8_t> pixelLattice(int width, int height, int count);
+
+/// The rule applied to a scene as it is (its camera, material and seed): renders under E = 1
+/// with max_depth 1, 2, … on the lattice and stops at the first depth whose next bounce adds
+/// less than `threshold` of the image (at most limit − 1 reflections measured). What
+/// `render --auto-depth` and `precompute`/`optimize --max-depth auto` use; the choice's reason
+/// says what was measured and the seconds spent.
+DepthChoice autoMaxDepth(const Scene& scene, const AutoDepthOptions& options = {});
 
 }  // namespace sl

@@ -1,5 +1,7 @@
 #include "app/LossMask.h"
 
+#include <algorithm>
+
 #include "core/Error.h"
 #include "core/Registry.h"
 #include "io/MaskIO.h"
@@ -69,6 +71,26 @@ LossMask lossMask(const LossMaskSpec& spec, const TransportMatrix& t, const Scen
                                                             : "draw a larger region");
     }
     return m;
+}
+
+std::vector<uint8_t> lossMaskRegion(const LossMaskSpec& spec, const Scene& scene,
+                                    const ScratchMapOptions& scratch) {
+    std::vector<uint8_t> region;
+    switch (spec.kind) {
+        case LossMaskKind::Object:
+            return region;
+        case LossMaskKind::Scratch:
+            region = scratchMaskImage(scene, scratch);
+            break;
+        case LossMaskKind::File:
+            region = loadImageMask(spec.file, scene.camera.width(), scene.camera.height());
+            break;
+    }
+    if (std::none_of(region.begin(), region.end(), [](uint8_t v) { return v != 0; }))
+        throw inputError(option("mask") + " " + spec.name(), "the mask is empty",
+                         spec.kind == LossMaskKind::Scratch ? "lower " + option("scratch-threshold")
+                                                            : "draw a larger region");
+    return region;
 }
 
 }  // namespace sl

@@ -45,4 +45,10 @@ struct LossMask {
 LossMask lossMask(const LossMaskSpec& spec, const TransportMatrix& t, const Scene* scene,
                   const ScratchMapOptions& scratch);
 
+/// The mask's region before any T exists (a file's or the scratch map's pixels, width·height
+/// flags of the scene's camera), for tracing only those pixels; empty for `object` (the whole
+/// part, which only the trace finds). InputError naming option 'mask' when the region is empty.
+std::vector<uint8_t> lossMaskRegion(const LossMaskSpec& spec, const Scene& scene,
+                                    const ScratchMapOptions& scratch);
+
 }  // namespace sl

@@ -88,6 +88,7 @@ json transportJson(const TransportSource& src) {
             {"image", {t.width, t.height}},
             {"envmap", {t.envWidth, t.envHeight}},
             {"cache_hit", src.cacheHit},
+            {"max_depth_auto", src.autoDepth ? json(src.autoDepth->reason) : json(nullptr)},
             {"seconds", src.secondsTotal}};
 }
 
@@ -322,6 +323,14 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
         PrecomputeOptions pre = o.precompute;
         pre.rgb = o.rgb;
         if (in.onHalves()) pre.sampleSets = 2;
+        const auto depth = resolveMaxDepth(*in.scene, pre);
+        if (o.traceMaskOnly) {
+            if (o.mask.kind == LossMaskKind::Object)
+                throw inputError(option("trace-mask-only"), "needs a mask to trace",
+                                 "add " + option("mask") + " FILE or " + option("mask") +
+                                     " scratch, or drop it (the whole part is traced)");
+            pre.pixels = lossMaskRegion(o.mask, *in.scene, o.scratch);
+        }
         // eq. 2 rewards noise: without a given spp it trains at no fewer than paperMinSpp (the
         // paper's own loop keeps the scene's spp).
         if (in.kind == ObjectiveKind::Paper && !pre.spp &&
@@ -330,6 +339,7 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
         std::vector<TransportSource> set =
             transportSetForScene(*in.scene, pre, o.planes, p.cacheDir);
         job.transport = std::move(set.front());
+        job.transport.autoDepth = depth;
         for (size_t k = 1; k < set.size(); ++k) job.extraPlanes.push_back(std::move(set[k]));
     }
     const TransportMatrix& t = job.transport.file.matrix;
@@ -1006,6 +1016,9 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
         Inputs in;
         // Context first, as each piece is known (the results follow the work).
         loadTraining(p, in, job);
+        if (job.transport.autoDepth)
+            spdlog::info("max_depth {}: {}", job.transport.autoDepth->maxDepth,
+                         job.transport.autoDepth->reason);
         spdlog::info("{}", describeTransport(job.transport));
         loadHeldOut(p, in, job);
         if (job.heldOut)

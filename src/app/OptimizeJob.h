@@ -122,7 +122,11 @@ struct OptimizeJobOptions {
     RendererKind renderer = RendererKind::Builtin;
     ExternalRendererOptions external;  // povray / command
     PrecomputeOptions precompute;      // used when input is a scene
-    CacheLocation cache;               // where traced matrices are kept (app/Cache.h)
+    /// Trace only the loss mask's pixels (a file or the scratch map; not `object`): the loss
+    /// and E* are the same as with the whole image, for the rays of the region only. The
+    /// renders from T are then dark outside the mask (the judge still traces the whole part).
+    bool traceMaskOnly = false;
+    CacheLocation cache;  // where traced matrices are kept (app/Cache.h)
     // The search (app/Search.h). planes: independent estimates of T cycled per step (0: the
     // method's default); continuation: λ factors before λ.
     int planes = 0;

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <nlohmann/json.hpp>
 
 #include "app/HeldOut.h"
@@ -78,10 +79,30 @@ bool isTransportFile(const std::filesystem::path& input) {
     return input.extension() == ".tm" || input.extension() == ".shards";
 }
 
+std::optional<DepthChoice> resolveMaxDepth(const Scene& scene, PrecomputeOptions& o) {
+    if (!o.autoMaxDepth) return std::nullopt;
+    AutoDepthOptions a;
+    a.threads = o.threads;
+    DepthChoice c = autoMaxDepth(scene, a);
+    o.maxDepth = c.maxDepth;
+    o.autoMaxDepth = false;
+    return c;
+}
+
 RenderOptions traceOptions(const Scene& scene, const PrecomputeOptions& o) {
+    if (o.autoMaxDepth)
+        throw std::logic_error("traceOptions: resolve max_depth auto first (resolveMaxDepth)");
     RenderOptions r = renderOptionsFor(scene);
     if (o.spp) r.spp = *o.spp;
     if (o.maxDepth) r.maxDepth = *o.maxDepth;
+    if (!o.pixels.empty()) {
+        const size_t n = static_cast<size_t>(scene.camera.width()) * scene.camera.height();
+        if (o.pixels.size() != n)
+            throw std::invalid_argument("traceOptions: the pixel flags do not match the image");
+        if (std::none_of(o.pixels.begin(), o.pixels.end(), [](uint8_t f) { return f != 0; }))
+            throw std::invalid_argument("traceOptions: no pixel to trace");
+        r.pixels = o.pixels;
+    }
     if (o.rowBegin != 0 || o.rowEnd != 0) {
         const int H = scene.camera.height();
         if (o.rowBegin < 0 || o.rowEnd > H || o.rowBegin >= o.rowEnd)
@@ -103,9 +124,13 @@ TransportSource precomputeToFile(const std::filesystem::path& file,
                                  const std::vector<std::string>& sceneOverrides) {
     const Stopwatch clock;
     auto scene = loadScene(file, sceneOverrides);
-    const RenderOptions ro = traceOptions(*scene, options);
-    return trace(*scene, ro, transportProvenance(*scene, ro, options.rgb ? 3 : 1), options.rgb,
-                 options.label, out, clock);
+    PrecomputeOptions resolved = options;
+    const auto depth = resolveMaxDepth(*scene, resolved);
+    const RenderOptions ro = traceOptions(*scene, resolved);
+    TransportSource s = trace(*scene, ro, transportProvenance(*scene, ro, options.rgb ? 3 : 1),
+                              options.rgb, options.label, out, clock);
+    s.autoDepth = depth;
+    return s;
 }
 
 TransportSource transportForScene(const Scene& scene, const PrecomputeOptions& options,
@@ -168,7 +193,8 @@ TransportSource judgeEstimateFor(const TransportFile& training, const Scene& sce
     // renderer (a T from another renderer's basis renders, app/ExternalRenderer.h, is judged on
     // our tracer's estimate: the cross-renderer check).
     auto strip = [](json j) {
-        for (const char* k : {"render", "planes", "scene_file", "scene_overrides", "renderer"})
+        for (const char* k :
+             {"render", "planes", "scene_file", "scene_overrides", "renderer", "pixels"})
             j.erase(k);
         j["heightmap"].erase("file");
         j["material"].erase("name");

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "app/DepthBench.h"
 #include "io/TransportFile.h"
 #include "render/PathTracer.h"
 
@@ -18,6 +19,12 @@ struct Scene;
 
 struct PrecomputeOptions {
     std::optional<int> spp, maxDepth;
+    /// maxDepth from the measured energy per bounce (app/DepthBench.h autoMaxDepth) instead of
+    /// the scene's; resolveMaxDepth replaces it by the number before the trace.
+    bool autoMaxDepth = false;
+    /// The pixels traced (RenderOptions::pixels): empty, all; else width·height flags, e.g. a
+    /// loss mask's region: T's other rows are empty.
+    std::vector<uint8_t> pixels;
     std::optional<uint64_t> seed;
     bool rgb = false;
     int sampleSets = 1;  // 2: store the halves T_a, T_b (noise-unbiased objective, held-out)
@@ -29,13 +36,19 @@ struct PrecomputeOptions {
 };
 
 struct TransportSource {
-    TransportFile file;          // the matrix and its provenance
-    std::filesystem::path path;  // where it is stored (empty if not stored)
-    bool cacheHit = false;       // read from the cache instead of traced
-    double secondsTrace = 0;     // path tracing (0 on a cache hit)
-    double secondsTotal = 0;     // scene load + trace + build + write, or the file read
-    TraceSummary trace;          // the trace's summary (empty on a cache hit)
+    TransportFile file;                    // the matrix and its provenance
+    std::filesystem::path path;            // where it is stored (empty if not stored)
+    bool cacheHit = false;                 // read from the cache instead of traced
+    double secondsTrace = 0;               // path tracing (0 on a cache hit)
+    double secondsTotal = 0;               // scene load + trace + build + write, or the file read
+    TraceSummary trace;                    // the trace's summary (empty on a cache hit)
+    std::optional<DepthChoice> autoDepth;  // max_depth auto: what was measured and chosen
 };
+
+/// With options.autoMaxDepth: measures the scene's path length (autoMaxDepth), sets
+/// options.maxDepth to it and clears the flag; returns the choice and its reason. Otherwise
+/// nothing. Called before the trace, so the fingerprint records the number.
+std::optional<DepthChoice> resolveMaxDepth(const Scene& scene, PrecomputeOptions& options);
 
 /// The RenderOptions a precompute of `scene` uses: the scene's `render` section with the
 /// options' overrides.

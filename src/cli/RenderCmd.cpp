@@ -43,7 +43,7 @@ int runRender(const RenderArgs& a) {
     RenderOptions opt = renderOptionsFor(*scene);
     opt.threads = a.threads;
     if (a.autoDepth) {
-        const DepthChoice c = autoMaxDepth(*scene, 4, 16, 0.001, a.threads);
+        const DepthChoice c = autoMaxDepth(*scene, AutoDepthOptions{.threads = a.threads});
         opt.maxDepth = c.maxDepth;
         std::printf("max_depth %d: %s\n", c.maxDepth, c.reason.c_str());
     }
@@ -76,7 +76,7 @@ void registerRender(CLI::App& app, std::function<int()>& run) {
             ->check(CLI::Range(1, 64));
     c->add_flag("--auto-depth", a->autoDepth,
                 "Pick max_depth: the first path length whose next bounce adds < 0.1 % of the "
-                "image under a white light (measured at 4 spp; prints the reason)")
+                "image under a white light (measured on a lattice of pixels; prints the reason)")
         ->excludes(depth);
     c->add_option("--seed", a->seed, "Random seed (overrides render.seed)");
     c->add_option("--threads", a->threads, "Worker threads (0: all cores)")

@@ -3,6 +3,7 @@
 // scratchlight optimize (SCENE.json | part.tm) [--optimizer NAME] [--lambda L[,L...]] ...
 #include <spdlog/spdlog.h>
 
+#include <charconv>
 #include <cmath>
 #include <memory>
 
@@ -28,8 +29,24 @@ void addTraceOptions(CLI::App* c, PrecomputeOptions& p, std::vector<std::string>
     addSceneOverrides(c, overrides, true);
     c->add_option("--spp", p.spp, "Samples per pixel (overrides render.spp)")
         ->check(CLI::Range(1, 1 << 20));
-    c->add_option("--max-depth", p.maxDepth, "Mitsuba max_depth (overrides render.max_depth)")
-        ->check(CLI::Range(1, 64));
+    c->add_option_function<std::string>(
+         "--max-depth",
+         [&p](const std::string& v) {
+             p.autoMaxDepth = v == "auto";
+             if (!p.autoMaxDepth) p.maxDepth = std::stoi(v);
+         },
+         "Mitsuba max_depth (overrides render.max_depth), or auto: the first path length whose "
+         "next bounce adds < 0.1 % of the image under a white light (measured first on a "
+         "lattice of pixels; the choice and why are printed)")
+        ->type_name("N|auto")
+        ->check([](const std::string& v) -> std::string {
+            if (v == "auto") return {};
+            int n = 0;
+            const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
+            if (ec != std::errc{} || end != v.data() + v.size() || n < 1 || n > 64)
+                return "expected a path length 1..64 or auto, got " + v;
+            return {};
+        });
     c->add_option("--seed", p.seed, "Random seed (overrides render.seed)");
     c->add_option("--threads", p.threads, "Worker threads (0: all cores)")
         ->check(CLI::Range(0, 4096));
@@ -73,6 +90,10 @@ int runPrecompute(PrecomputeArgs a) {
         throw UsageError("output '" + a.out + "' must end in .tm");
     if (!a.rows.empty()) parseRows(a.rows, a.p);
     if (a.renderer != RendererKind::Builtin) {
+        if (a.p.autoMaxDepth)
+            throw UsageError(
+                "--max-depth auto measures our tracer's bounces; an external "
+                "renderer keeps its own path length: drop it");
         if (a.p.rgb || a.p.sampleSets != 1 || !a.rows.empty())
             throw UsageError("--renderer " +
                              std::string(registryRow(rendererKindTable(), a.renderer).name) +
@@ -96,6 +117,8 @@ int runPrecompute(PrecomputeArgs a) {
         return kOk;
     }
     TransportSource s = precomputeToFile(a.scene, a.p, a.out, a.overrides);
+    if (s.autoDepth)
+        std::printf("max_depth %d: %s\n", s.autoDepth->maxDepth, s.autoDepth->reason.c_str());
     std::printf("%s\n", describeTransport(s).c_str());
     std::printf("wrote %s (fingerprint %s)\n", a.out.c_str(),
                 s.file.provenance.fingerprint.c_str());
@@ -240,6 +263,9 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
             [](const std::string& v, const std::string&) { return parseLossMask(v); },
             "Region of the loss, always within the part: object (default), scratch (the paper's "
             "scratch map) or a PNG/EXR in image space (white = inside)");
+        c->add_flag("--trace-mask-only", j.traceMaskOnly,
+                    "Trace only the --mask region's pixels: the same loss and E* for the region's "
+                    "rays (renders from T are dark outside it)");
         c->add_option("--scratch-kernel", j.scratch.kernel, "Scratch map: detrending kernel")
             ->check(CLI::Range(1, 100000))
             ->capture_default_str();

@@ -104,6 +104,13 @@ TransportProvenance transportProvenance(const Scene& scene, const RenderOptions&
             toHex(hash64(opt.guide.data(), opt.guide.size() * sizeof(float)));
     if (opt.rowBegin != 0 || opt.rowEnd != 0)  // a shard (absent for the whole image)
         in["rows"] = {opt.rowBegin, opt.rowEnd > 0 ? opt.rowEnd : c.height};
+    if (!opt.pixels.empty()) {  // only some pixels traced (a region; absent for all)
+        std::vector<uint8_t> flags(opt.pixels.size());  // 0/1 whatever non-zero value is set
+        std::transform(opt.pixels.begin(), opt.pixels.end(), flags.begin(),
+                       [](uint8_t f) { return f != 0 ? 1 : 0; });
+        const auto traced = static_cast<size_t>(std::count(flags.begin(), flags.end(), 1));
+        in["pixels"] = {{"traced", traced}, {"hash", toHex(hash64(flags.data(), flags.size()))}};
+    }
     if (!scene.desc.file.empty())
         in["scene_file"] = std::filesystem::absolute(scene.desc.file).lexically_normal().string();
     // The fields they change are recorded above; these let sceneOfTransport load the same scene.

@@ -131,6 +131,8 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
     const int rowBegin = opt.rowBegin, rowEnd = opt.rowEnd > 0 ? opt.rowEnd : H;
     if (rowBegin < 0 || rowEnd > H || rowBegin >= rowEnd)
         throw std::invalid_argument("PathTracer: the row range is not within the image");
+    if (!opt.pixels.empty() && opt.pixels.size() != static_cast<size_t>(W) * H)
+        throw std::invalid_argument("PathTracer: the pixel flags do not match the image");
     const int traced = rowEnd - rowBegin;
     const int stride = rowStride(traced);
     auto body = [&](const tbb::blocked_range<int>& rows) {
@@ -145,6 +147,7 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
             if (opt.interruptible) throwIfInterrupted();  // Ctrl-C: stop here, keep nothing
             for (int x = 0; x < W; ++x) {
                 const uint32_t pixel = static_cast<uint32_t>(y * W + x);
+                if (!opt.pixels.empty() && opt.pixels[pixel] == 0) continue;
                 paths.clear();
                 uint32_t hits = 0;
                 Shifts shifts{};

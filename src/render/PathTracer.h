@@ -79,6 +79,10 @@ struct RenderOptions {
     /// not traced (no paths, objectMask 0): a shard of T (`precompute --rows`). Each pixel's
     /// samples depend only on (seed, pixel, sample), so shards put together are the whole trace.
     int rowBegin = 0, rowEnd = 0;
+    /// The pixels traced: empty, every pixel (of the rows above); otherwise width·height flags,
+    /// and pixels flagged 0 are not traced, as rows outside the range (no paths, objectMask 0).
+    /// Only what a region needs (a loss mask), or a sparse lattice for a quick measurement.
+    std::vector<uint8_t> pixels;
     Sampling sampling = RenderDesc{}.sampling;  // see CONVENTION (direction sampling) above
     /// Mis only: per-texel guide of the env-map sampling density (scene/EnvSampler.h), e.g. an
     /// E; empty: 1 everywhere (by solid angle).

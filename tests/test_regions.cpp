@@ -1,0 +1,138 @@
+// Modelling only what a scene needs (issue 16, item 2): a trace of some pixels only
+// (RenderOptions::pixels) is the whole trace's rows for those pixels, bit for bit;
+// `optimize --trace-mask-only` gives the E* of the whole trace for the region's rays; and
+// `--max-depth auto` measures the path length first and records the number it chose.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <nlohmann/json.hpp>
+
+#include "TestUtil.h"
+#include "app/DepthBench.h"
+#include "io/ImageIO.h"
+#include "io/TransportFile.h"
+#include "scene/Scene.h"
+#include "transport/TransportSink.h"
+
+namespace {
+
+using namespace sl;
+
+TEST(TraceRegion, FlaggedPixelsAreTheWholeTracesRowsBitForBit) {
+    const int W = 24, H = 20;
+    const Scene scene(test::bumpyPartDesc(W, H), 32, 32, test::bumpyHeightMap(32));
+    RenderOptions ro;
+    ro.spp = 8;
+    ro.sampleSets = 2;
+    TransportMatrix whole = precomputeTransport(scene, ro, 1).matrix;
+    const TransportProvenance wholeProv = transportProvenance(scene, ro, 1);
+    ro.pixels.assign(static_cast<size_t>(W) * H, 0);
+    for (int y = 5; y < 14; ++y)
+        for (int x = 3; x < 11 + y / 2; ++x) ro.pixels[static_cast<size_t>(y) * W + x] = 255;
+    TransportMatrix part = precomputeTransport(scene, ro, 1).matrix;
+    const TransportProvenance partProv = transportProvenance(scene, ro, 1);
+    whole.toSparse();
+    part.toSparse();
+    size_t flagged = 0, lit = 0;
+    for (size_t p = 0; p < whole.rows(); ++p) {
+        const uint64_t b = part.rowPtr[p], e = part.rowPtr[p + 1];
+        if (ro.pixels[p] == 0) {
+            EXPECT_EQ(b, e) << "pixel " << p << " was not flagged but has entries";
+            EXPECT_EQ(part.objectMask[p], 0) << p;
+            continue;
+        }
+        ++flagged;
+        const uint64_t wb = whole.rowPtr[p];
+        ASSERT_EQ(e - b, whole.rowPtr[p + 1] - wb) << "pixel " << p;
+        lit += e > b;
+        EXPECT_EQ(part.objectMask[p], whole.objectMask[p]) << p;
+        for (uint64_t k = 0; k < e - b; ++k) {
+            EXPECT_EQ(part.colIdx[b + k], whole.colIdx[wb + k]);
+            for (int s = 0; s < part.stride(); ++s)
+                EXPECT_EQ(part.values[(b + k) * part.stride() + s],
+                          whole.values[(wb + k) * whole.stride() + s]);
+        }
+    }
+    EXPECT_GT(flagged, 50u);
+    EXPECT_GT(lit, flagged / 2);
+    // The fingerprint records which pixels were traced (as 0/1, whatever value flags them).
+    EXPECT_NE(partProv.fingerprint, wholeProv.fingerprint);
+    const auto in = nlohmann::json::parse(partProv.inputs);
+    EXPECT_EQ(in.at("pixels").at("traced").get<size_t>(), flagged);
+    std::replace(ro.pixels.begin(), ro.pixels.end(), uint8_t{255}, uint8_t{1});
+    EXPECT_EQ(transportProvenance(scene, ro, 1).fingerprint, partProv.fingerprint);
+}
+
+TEST(TraceRegion, PixelLatticeSpacing) {
+    const auto flags = pixelLattice(1000, 500, 2000);  // k = floor(sqrt(250)) = 15
+    const auto n = std::count(flags.begin(), flags.end(), 1);
+    EXPECT_EQ(n, static_cast<long>(((1000 - 7 + 14) / 15) * ((500 - 7 + 14) / 15)));
+    EXPECT_EQ(flags[7 * 1000 + 7], 1);
+    EXPECT_EQ(flags[7 * 1000 + 8], 0);
+    EXPECT_EQ(flags[22 * 1000 + 22], 1);
+    const auto all = pixelLattice(10, 10, 1000);  // more asked than there are: every pixel
+    EXPECT_EQ(std::count(all.begin(), all.end(), 1), 100);
+}
+
+TEST(TraceRegion, OptimizeTracingOnlyTheMaskFindsTheSameLight) {
+    test::TempDir dir("trace-mask");
+    const std::string scene = std::string(SL_SOURCE_DIR) + "/scenes/default/scene.json";
+    const std::string d = dir.path().string() + "/";
+    std::vector<uint8_t> mask(24 * 24, 0);
+    for (int y = 4; y < 18; ++y)
+        for (int x = 6; x < 20; ++x) mask[static_cast<size_t>(y) * 24 + x] = 255;
+    writeMaskPng(dir / "mask.png", mask, 24, 24);
+    const std::string base = "optimize " + scene +
+                             " --size 24 --spp 8 --iterations 30 --heldout none --no-cache "
+                             "--mask " +
+                             d + "mask.png";
+    auto whole = test::runCli(base + " -o " + d + "whole");
+    ASSERT_EQ(whole.exitCode, 0) << whole.output;
+    auto part = test::runCli(base + " --trace-mask-only -o " + d + "part");
+    ASSERT_EQ(part.exitCode, 0) << part.output;
+    const std::string e1 = test::readFile(dir / "whole" / "envmap.exr");
+    EXPECT_FALSE(e1.empty());
+    EXPECT_EQ(e1, test::readFile(dir / "part" / "envmap.exr"));
+    const auto sw = nlohmann::json::parse(test::readFile(dir / "whole" / "summary.json"));
+    const auto sp = nlohmann::json::parse(test::readFile(dir / "part" / "summary.json"));
+    EXPECT_EQ(sw.at("mask_pixels"), sp.at("mask_pixels"));
+    EXPECT_LT(sp.at("transport").at("nnz").get<double>(),
+              sw.at("transport").at("nnz").get<double>());
+    // The trace's rays, from the log line "traced N rays in ...": the region's only.
+    auto rays = [](const std::string& log) {
+        const auto at = log.find("traced ");
+        return at == std::string::npos ? 0.0 : std::stod(log.substr(at + 7));
+    };
+    EXPECT_GT(rays(part.output), 0.0) << part.output;
+    EXPECT_LT(rays(part.output), 0.6 * rays(whole.output)) << part.output << whole.output;
+    // Without a mask there is no region to trace.
+    auto none = test::runCli("optimize " + scene + " --size 24 --spp 8 --heldout none " +
+                             "--no-cache --trace-mask-only -o " + d + "none");
+    EXPECT_EQ(none.exitCode, 1) << none.output;
+    EXPECT_NE(none.output.find("--trace-mask-only"), std::string::npos) << none.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "none"));
+}
+
+TEST(TraceRegion, PrecomputeMaxDepthAutoRecordsItsChoice) {
+    test::TempDir dir("depth-auto");
+    const std::string scene = std::string(SL_SOURCE_DIR) + "/scenes/default/scene.json";
+    const auto out = dir / "t.tm";
+    auto r = test::runCli("precompute " + scene + " --size 24 --spp 2 --max-depth auto -o " +
+                          out.string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const auto at = r.output.find("max_depth ");
+    ASSERT_NE(at, std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("of the image"), std::string::npos) << r.output;
+    const int chosen = std::stoi(r.output.substr(at + 10));
+    EXPECT_GE(chosen, 2);
+    EXPECT_EQ(readTransportFile(out).provenance.maxDepth, chosen);
+    for (const char* bad : {"0", "65", "deep", "3x"}) {
+        r = test::runCli("precompute " + scene + " --size 24 --spp 2 --max-depth " + bad + " -o " +
+                         (dir / "bad.tm").string());
+        EXPECT_EQ(r.exitCode, 2) << bad << ": " << r.output;
+        EXPECT_NE(r.output.find("--max-depth"), std::string::npos) << r.output;
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir / "bad.tm"));
+}
+
+}  // namespace
