@@ -79,8 +79,8 @@ TEST(TraceRegion, OptimizeTracingOnlyTheMaskFindsTheSameLight) {
     const std::string scene = std::string(SL_SOURCE_DIR) + "/scenes/default/scene.json";
     const std::string d = dir.path().string() + "/";
     std::vector<uint8_t> mask(24 * 24, 0);
-    for (int y = 4; y < 18; ++y)
-        for (int x = 6; x < 20; ++x) mask[static_cast<size_t>(y) * 24 + x] = 255;
+    for (int y = 9; y < 15; ++y)
+        for (int x = 8; x < 16; ++x) mask[static_cast<size_t>(y) * 24 + x] = 255;
     writeMaskPng(dir / "mask.png", mask, 24, 24);
     const std::string base = "optimize " + scene +
                              " --size 24 --spp 8 --iterations 30 --heldout none --no-cache "
@@ -133,6 +133,82 @@ TEST(TraceRegion, PrecomputeMaxDepthAutoRecordsItsChoice) {
         EXPECT_NE(r.output.find("--max-depth"), std::string::npos) << r.output;
     }
     EXPECT_FALSE(std::filesystem::exists(dir / "bad.tm"));
+}
+
+}  // namespace
+
+namespace {
+
+using namespace sl;
+
+// Camera::project inverts generateRay: the film position of a point on a pixel's ray.
+TEST(TraceRegion, ProjectInvertsGenerateRay) {
+    for (const auto type : {CameraDesc::Type::Perspective, CameraDesc::Type::Orthographic}) {
+        CameraDesc d;
+        d.type = type;
+        d.origin = {1.5, 3.0, 4.0};
+        d.target = {0.2, -0.1, 0.3};
+        d.up = {0.1, 1.0, 0.0};
+        d.width = 40;
+        d.height = 30;
+        const Camera cam(d);
+        for (const auto& [x, y] : {std::pair{0.0, 0.0}, {12.25, 7.5}, {39.9, 29.9}, {20.0, 3.0}}) {
+            const Ray r = cam.generateRay(x, y);
+            const Vec3d o(r.origin), dir(r.direction);
+            const auto p = cam.project(o + dir * 4.0);
+            ASSERT_TRUE(p.has_value());
+            EXPECT_NEAR(p->first, x, 1e-4) << x << "," << y;
+            EXPECT_NEAR(p->second, y, 1e-4) << x << "," << y;
+        }
+        EXPECT_FALSE(cam.project(Vec3d(d.origin) * 2.0 - Vec3d(d.target)).has_value());
+    }
+}
+
+// Skipping the pixels outside the part's footprint changes nothing but the rays: the same T,
+// bit for bit, from cameras that see the part whole, at a grazing angle, from orthographic
+// and from so close that the part's corners are behind the camera (no culling then).
+TEST(TraceRegion, BackgroundCullingChangesNothingButTheRays) {
+    std::vector<CameraSpec> cams(4);
+    cams[1].origin = Vec3d{0.0, 0.25, 2.4};  // grazing: the part is a thin band
+    cams[1].target = Vec3d{0.0, 0.0, 0.0};
+    cams[2].type = CameraDesc::Type::Orthographic;
+    cams[2].origin = Vec3d{0.5, 2.0, 1.0};
+    cams[2].target = Vec3d{0.0, 0.0, 0.0};
+    cams[2].widthMm = 2.5;
+    cams[3].origin = Vec3d{0.1, 0.12, 0.0};  // above the part, inside its box's footprint
+    cams[3].target = Vec3d{0.1, 0.0, -0.6};
+    cams[3].fovDeg = 100;
+    uint64_t saved = 0;
+    for (size_t c = 0; c < cams.size(); ++c) {
+        SceneDesc desc = test::bumpyPartDesc(36, 28);
+        desc.camera.type = cams[c].type;
+        desc.camera.origin = cams[c].origin;
+        desc.camera.target = cams[c].target;
+        desc.camera.widthMm = cams[c].widthMm;
+        desc.camera.fovDeg = cams[c].fovDeg;
+        desc.camera.width = 36;
+        desc.camera.height = 28;
+        const Scene scene(desc, 40, 40, test::bumpyHeightMap(40));
+        RenderOptions ro;
+        ro.spp = 4;
+        const auto culled = precomputeTransport(scene, ro, 1);
+        ro.cullBackground = false;
+        const auto all = precomputeTransport(scene, ro, 1);
+        TransportMatrix a = culled.matrix, b = all.matrix;
+        a.toSparse();
+        b.toSparse();
+        EXPECT_EQ(a.rowPtr, b.rowPtr) << "camera " << c;
+        EXPECT_EQ(a.colIdx, b.colIdx) << "camera " << c;
+        EXPECT_EQ(a.values, b.values) << "camera " << c;
+        EXPECT_EQ(a.objectMask, b.objectMask) << "camera " << c;
+        EXPECT_GT(b.nnz(), 0u) << "camera " << c;
+        EXPECT_LE(culled.summary.rays, all.summary.rays) << "camera " << c;
+        saved += all.summary.cameraRays - culled.summary.cameraRays;
+        if (c == 1) {
+            EXPECT_LT(culled.summary.cameraRays, all.summary.cameraRays / 2);
+        }
+    }
+    EXPECT_GT(saved, 0u);
 }
 
 }  // namespace

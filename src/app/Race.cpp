@@ -15,6 +15,7 @@
 #include "app/Truth.h"
 #include "core/Error.h"
 #include "core/Progress.h"
+#include "core/Registry.h"
 #include "core/Stats.h"
 #include "core/Stopwatch.h"
 #include "io/AtomicFile.h"
@@ -146,6 +147,29 @@ std::vector<RaceConfig> defaultRaceConfigs() {
     return c;
 }
 
+std::vector<RaceConfig> settingsRaceConfigs(const std::vector<int>& spps,
+                                            const std::vector<Sampling>& samplings,
+                                            const std::vector<int>& maxDepths) {
+    const OptimizeDefaults d = optimizeDefaults();
+    auto make = [&](int spp, Sampling sampling, int depth) {
+        RaceConfig c =
+            config("", d.objective, d.method, methodRow(d.method).defaultBudget, spp, 1, d.starts);
+        c.sampling = sampling;
+        c.maxDepth = depth;
+        c.name = "spp" + std::to_string(spp) + "-" + registryRow(samplingTable(), sampling).name +
+                 "-d" + std::to_string(depth);
+        return c;
+    };
+    std::vector<RaceConfig> c{make(16, RenderDesc{}.sampling, 3)};  // the parts' own setting
+    for (int spp : spps)
+        for (Sampling sampling : samplings)
+            for (int depth : maxDepths) {
+                RaceConfig k = make(spp, sampling, depth);
+                if (k.name != c.front().name) c.push_back(std::move(k));
+            }
+    return c;
+}
+
 RaceSummary runRace(const RaceOptions& o) {
     if (o.seeds < 1) throw inputError(option("seeds"), "must be >= 1");
     if (o.configs.empty()) throw inputError(option("configs"), "none given");
@@ -164,6 +188,7 @@ RaceSummary runRace(const RaceOptions& o) {
         jo.objective.lambda = o.lambda;
         jo.truth = files.truth;
         jo.cacheDir = cacheDir;
+        jo.maxDepth = o.judgeMaxDepth;
         log(partName + ": judge estimate (" + std::to_string(o.judgeSpp) + " spp)");
         const Judge judge(*scene, jo);
         const std::vector<uint8_t> truthRegion =
@@ -178,6 +203,8 @@ RaceSummary runRace(const RaceOptions& o) {
                 p.spp = c.spp;
                 p.seed = static_cast<uint64_t>(seed) * 1000;
                 p.sampleSets = c.search.objective != ObjectiveKind::Paper ? 2 : 1;
+                p.sampling = c.sampling;
+                p.maxDepth = c.maxDepth;
                 const Stopwatch precompute;
                 const std::vector<TransportSource> set =
                     transportSetForScene(*scene, p, c.search.planes, {});

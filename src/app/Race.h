@@ -8,11 +8,13 @@
 
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "app/PartFiles.h"
 #include "app/Search.h"
+#include "scene/RenderDesc.h"
 
 namespace sl {
 
@@ -20,10 +22,20 @@ struct RaceConfig {
     std::string name;
     SearchOptions search;
     int spp = 16;  // per estimate of T (both halves together for the unbiased objective)
+    std::optional<Sampling> sampling;  // T's direction sampling (default: the part's scene's)
+    std::optional<int> maxDepth;       // T's path length (default: the part's scene's)
 };
 
 /// The configurations raced by default (paper-loop first: the baseline).
 std::vector<RaceConfig> defaultRaceConfigs();
+
+/// Speed against error (`bench settings`): optimize's default search (the unbiased objective)
+/// on T traced at every spp × sampling × max_depth given, named "spp16-stratified-d3". The
+/// first is the parts' own setting (16 spp, the default sampler, max_depth 3), the baseline of
+/// the ratios, whether or not it is in the lists.
+std::vector<RaceConfig> settingsRaceConfigs(const std::vector<int>& spps,
+                                            const std::vector<Sampling>& samplings,
+                                            const std::vector<int>& maxDepths);
 
 struct RacePart {
     std::string name;  // ballend-chatter | facemill-scratches | pocket
@@ -40,6 +52,7 @@ struct RaceOptions {
     int seeds = 3;  // training seeds 0..seeds−1 (render.seed)
     std::vector<RaceConfig> configs = defaultRaceConfigs();
     int judgeSpp = 1024;
+    std::optional<int> judgeMaxDepth;  // the judge's path length (default: the parts' scene's)
     double lambda = 30;
     std::filesystem::path workDir = "out/race";  // parts and the judge's cache live here
     std::function<void(const std::string&)> log;

@@ -20,6 +20,7 @@ RenderBenchRow measure(const Scene& scene, const std::string& name, double genSe
     RenderOptions opt = renderOptionsFor(scene);
     opt.spp = o.spp;
     opt.threads = o.threads;
+    opt.cullBackground = false;  // the bare Embree loop traces every camera ray: the same rays
     RenderBenchRow r;
     r.map = name;
     r.genSeconds = genSeconds;

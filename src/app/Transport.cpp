@@ -95,6 +95,7 @@ RenderOptions traceOptions(const Scene& scene, const PrecomputeOptions& o) {
     RenderOptions r = renderOptionsFor(scene);
     if (o.spp) r.spp = *o.spp;
     if (o.maxDepth) r.maxDepth = *o.maxDepth;
+    if (o.sampling) r.sampling = *o.sampling;
     if (!o.pixels.empty()) {
         const size_t n = static_cast<size_t>(scene.camera.width()) * scene.camera.height();
         if (o.pixels.size() != n)

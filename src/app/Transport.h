@@ -22,6 +22,7 @@ struct PrecomputeOptions {
     /// maxDepth from the measured energy per bounce (app/DepthBench.h autoMaxDepth) instead of
     /// the scene's; resolveMaxDepth replaces it by the number before the trace.
     bool autoMaxDepth = false;
+    std::optional<Sampling> sampling;  // overrides render.sampling
     /// The pixels traced (RenderOptions::pixels): empty, all; else width·height flags, e.g. a
     /// loss mask's region: T's other rows are empty.
     std::vector<uint8_t> pixels;

@@ -1,6 +1,8 @@
 // scratchlight bench race [--parts a,b,c] [--seeds 3] [--configs NAME,...] [-o DIR]
+// scratchlight bench settings [--spp 4,16,64] [--sampling ...] [--max-depth 2,3,4] [-o DIR]
 // The race that chooses optimize's defaults (app/Race.h): prints the median table, writes
-// race.csv (every run), race-median.csv and a Pareto plot (seconds vs U) race.png.
+// race.csv (every run), race-median.csv and a Pareto plot (seconds vs U) race.png; settings
+// races the trace settings of T the same way (settings.csv, settings.png).
 #include <algorithm>
 #include <cstdio>
 #include <memory>
@@ -9,6 +11,7 @@
 #include "app/Race.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
+#include "core/Registry.h"
 
 namespace sl::cli {
 
@@ -60,6 +63,49 @@ int runRaceCmd(RaceArgs a) {
     return kOk;
 }
 
+struct SettingsArgs {
+    RaceOptions o;
+    std::vector<int> spps{4, 16, 64}, depths{2, 3, 4};
+    std::vector<std::string> samplings{"bsdf", "stratified", "mis"};
+    std::string out = "out/settings";
+};
+
+int runSettingsCmd(SettingsArgs a) {
+    std::vector<Sampling> samplings;
+    for (const std::string& name : a.samplings) {
+        const SamplingRow* row = findRegistryRow(samplingTable(), name);
+        if (!row)
+            throw UsageError("--sampling: unknown sampler '" + name + "' (" +
+                             registryNames(samplingTable()) + ")");
+        samplings.push_back(row->value);
+    }
+    a.o.configs = settingsRaceConfigs(a.spps, samplings, a.depths);
+    if (!a.o.judgeMaxDepth)
+        a.o.judgeMaxDepth = 2 + *std::max_element(a.depths.begin(), a.depths.end());
+    a.o.workDir = a.out;
+    a.o.log = [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); };
+    RaceSummary s = runRace(a.o);
+    std::printf(
+        "speed against error: optimize's default search on T traced at each setting; judge: %d "
+        "spp, max_depth %d, held out; medians over %d seed(s); ratios to %s on the same part and "
+        "seed\n",
+        a.o.judgeSpp, *a.o.judgeMaxDepth, a.o.seeds, a.o.configs.front().name.c_str());
+    std::printf("%s\n", formatRaceTable(s.medians).c_str());
+    const auto dir = std::filesystem::path(a.out);
+    writeRaceCsv(dir / "settings.csv", s.rows);
+    writeRaceCsv(dir / "settings-median.csv", s.medians);
+    const auto png = dir / "settings.png";
+    const PlotOutcome plot =
+        runPlotScript("plot_settings.py", {(dir / "settings.csv").string(), png.string()});
+    if (!plot.ran || plot.exitCode != 0)
+        std::fprintf(stderr, "warning: the plot failed (%s); plot with: %s\n",
+                     plot.message.empty() ? "python3 with matplotlib needed" : plot.message.c_str(),
+                     shellQuoted(plot.command).c_str());
+    std::printf("wrote %s, %s and %s\n", (dir / "settings.csv").c_str(),
+                (dir / "settings-median.csv").c_str(), png.c_str());
+    return kOk;
+}
+
 }  // namespace
 
 void registerRace(CLI::App& app, std::function<int()>& run) {
@@ -81,6 +127,40 @@ void registerRace(CLI::App& app, std::function<int()>& run) {
     c->add_option("-o,--output", a->out, "Output directory (parts, cache, CSV, plot)")
         ->capture_default_str();
     c->callback([a, &run] { run = [a] { return runRaceCmd(*a); }; });
+
+    auto sa = std::make_shared<SettingsArgs>();
+    sa->o.parts = {"ballend-chatter"};
+    sa->o.seeds = 2;
+    CLI::App* st = bench->add_subcommand(
+        "settings",
+        "Speed against error: the judge's score of E* against seconds for spp x sampling x "
+        "max_depth");
+    st->add_option("--parts", sa->o.parts, "Parts: ballend-chatter, facemill-scratches, pocket")
+        ->delimiter(',')
+        ->capture_default_str();
+    st->add_option("--seeds", sa->o.seeds, "Training seeds per part")
+        ->check(CLI::Range(1, 100))
+        ->capture_default_str();
+    st->add_option("--spp", sa->spps, "Samples per pixel of T")
+        ->delimiter(',')
+        ->check(CLI::Range(2, 1 << 16))
+        ->capture_default_str();
+    st->add_option("--sampling", sa->samplings, "Direction samplers (render.sampling)")
+        ->delimiter(',')
+        ->capture_default_str();
+    st->add_option("--max-depth", sa->depths, "Path lengths of T")
+        ->delimiter(',')
+        ->check(CLI::Range(2, 64))
+        ->capture_default_str();
+    st->add_option("--judge-max-depth", sa->o.judgeMaxDepth,
+                   "The judge's path length (default: the longest of --max-depth + 2)")
+        ->check(CLI::Range(2, 64));
+    st->add_option("--heldout-spp", sa->o.judgeSpp, "spp of the judge's held-out estimate")
+        ->check(CLI::Range(2, 1 << 20))
+        ->capture_default_str();
+    st->add_option("-o,--output", sa->out, "Output directory (parts, cache, CSV, plot)")
+        ->capture_default_str();
+    st->callback([sa, &run] { run = [sa] { return runSettingsCmd(*sa); }; });
 }
 
 }  // namespace sl::cli

@@ -17,6 +17,7 @@
 #include "core/Interrupt.h"
 #include "core/Rng.h"
 #include "core/Stopwatch.h"
+#include "render/Footprint.h"
 #include "render/Sobol.h"
 #include "scene/EnvSampler.h"
 #include "scene/Scene.h"
@@ -133,6 +134,8 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
         throw std::invalid_argument("PathTracer: the row range is not within the image");
     if (!opt.pixels.empty() && opt.pixels.size() != static_cast<size_t>(W) * H)
         throw std::invalid_argument("PathTracer: the pixel flags do not match the image");
+    const std::vector<PixelSpan> spans =
+        opt.cullBackground ? partFootprint(scene_) : std::vector<PixelSpan>(H, PixelSpan{0, W});
     const int traced = rowEnd - rowBegin;
     const int stride = rowStride(traced);
     auto body = [&](const tbb::blocked_range<int>& rows) {
@@ -145,7 +148,8 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
         for (int k = rows.begin(); k < rows.end(); ++k) {
             const int y = rowBegin + static_cast<int>((static_cast<int64_t>(k) * stride) % traced);
             if (opt.interruptible) throwIfInterrupted();  // Ctrl-C: stop here, keep nothing
-            for (int x = 0; x < W; ++x) {
+            const PixelSpan span = spans[static_cast<size_t>(y)];
+            for (int x = span.begin; x < span.end; ++x) {
                 const uint32_t pixel = static_cast<uint32_t>(y * W + x);
                 if (!opt.pixels.empty() && opt.pixels[pixel] == 0) continue;
                 paths.clear();

@@ -83,6 +83,9 @@ struct RenderOptions {
     /// and pixels flagged 0 are not traced, as rows outside the range (no paths, objectMask 0).
     /// Only what a region needs (a loss mask), or a sparse lattice for a quick measurement.
     std::vector<uint8_t> pixels;
+    /// Skip the pixels outside the part's footprint (render/Footprint.h): they see only the
+    /// hidden background, so the image and T are the same; off only to check exactly that.
+    bool cullBackground = true;
     Sampling sampling = RenderDesc{}.sampling;  // see CONVENTION (direction sampling) above
     /// Mis only: per-texel guide of the env-map sampling density (scene/EnvSampler.h), e.g. an
     /// E; empty: 1 everywhere (by solid angle).

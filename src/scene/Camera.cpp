@@ -44,6 +44,23 @@ Camera::Camera(const CameraDesc& desc) : desc_(desc) {
     }
 }
 
+std::optional<std::pair<double, double>> Camera::project(const Vec3d& p) const {
+    const Vec3d d = p - desc_.origin;
+    const double z = dot(d, forward_);
+    double nx = 0, ny = 0;
+    if (desc_.type == CameraDesc::Type::Perspective) {
+        if (!(z > 1e-9 * length(d))) return std::nullopt;
+        nx = dot(d, left_) / (z * tanHalfFov_);
+        ny = dot(d, up_) / (z * tanHalfFov_);
+    } else {
+        if (!(z > 0)) return std::nullopt;
+        const double half = 0.5 * desc_.widthMm;
+        nx = dot(d, left_) / half;
+        ny = dot(d, up_) / half;
+    }
+    return std::pair{(1.0 - nx) * 0.5 * desc_.width, (1.0 - ny * aspect_) * 0.5 * desc_.height};
+}
+
 Ray Camera::generateRay(double x, double y) const {
     double nx = 1.0 - 2.0 * x / desc_.width;
     double ny = (1.0 - 2.0 * y / desc_.height) / aspect_;

@@ -12,6 +12,9 @@
 // So the image's top row is toward `up`, its left column toward `left`, and it is not mirrored.
 #pragma once
 
+#include <optional>
+#include <utility>
+
 #include "core/Vec3.h"
 
 namespace sl {
@@ -35,6 +38,10 @@ class Camera {
 
     /// Ray through film position (x, y) in pixels (x right, y down from the top-left corner).
     Ray generateRay(double x, double y) const;
+    /// The inverse: the film position (x, y) whose ray passes through world point p, or nothing
+    /// when p is not in front of the camera (perspective: depth along the view direction at
+    /// most 1e-9 of its distance; orthographic: behind the film plane).
+    std::optional<std::pair<double, double>> project(const Vec3d& p) const;
 
     const CameraDesc& desc() const { return desc_; }
     int width() const { return desc_.width; }
