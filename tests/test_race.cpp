@@ -43,3 +43,38 @@ TEST(Race, JudgesEveryConfigurationAgainstTheBaselineIncludingTheDefectsDefault)
 }
 
 }  // namespace
+
+namespace {
+
+using namespace sl;
+
+// `bench settings`: the trace settings raced the same way, the part's own setting first.
+TEST(Race, SettingsRaceEachTraceSettingAgainstThePartsOwn) {
+    const auto configs =
+        settingsRaceConfigs({4, 16}, {Sampling::Bsdf, Sampling::Stratified}, {2, 3});
+    ASSERT_EQ(configs.size(), 8u);  // 2 × 2 × 2, the baseline among them
+    EXPECT_EQ(configs.front().name, "spp16-stratified-d3");
+    EXPECT_EQ(configs[1].name, "spp4-bsdf-d2");
+    EXPECT_EQ(configs[1].spp, 4);
+    EXPECT_EQ(configs[1].sampling, Sampling::Bsdf);
+    EXPECT_EQ(configs[1].maxDepth, 2);
+    for (size_t i = 1; i < configs.size(); ++i) EXPECT_NE(configs[i].name, configs[0].name);
+
+    test::TempDir dir("settings");
+    RaceOptions o;
+    o.parts = {"pocket"};
+    o.seeds = 1;
+    o.judgeSpp = 32;
+    o.judgeMaxDepth = 4;
+    o.workDir = dir.path();
+    o.configs = {configs[0], configs[1]};
+    for (RaceConfig& c : o.configs) c.search.optimizer.iterations = 10;
+    const RaceSummary s = runRace(o);
+    ASSERT_EQ(s.rows.size(), 2u);
+    EXPECT_DOUBLE_EQ(s.rows[0].ratioU, 1.0);
+    EXPECT_TRUE(std::isfinite(s.rows[1].unbiased));
+    // Another T (a quarter of the samples, one bounce fewer, another sampler): another E*.
+    EXPECT_NE(s.rows[1].unbiased, s.rows[0].unbiased);
+}
+
+}  // namespace

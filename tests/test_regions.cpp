@@ -9,6 +9,7 @@
 
 #include "TestUtil.h"
 #include "app/DepthBench.h"
+#include "app/Transport.h"
 #include "io/ImageIO.h"
 #include "io/TransportFile.h"
 #include "scene/Scene.h"
@@ -209,6 +210,29 @@ TEST(TraceRegion, BackgroundCullingChangesNothingButTheRays) {
         }
     }
     EXPECT_GT(saved, 0u);
+}
+
+}  // namespace
+
+namespace {
+
+using namespace sl;
+
+TEST(TraceRegion, TraceOptionsTakeTheSamplerAndPathLengthAsked) {
+    const Scene scene(test::bumpyPartDesc(8, 8), 16, 16, test::bumpyHeightMap(16));
+    PrecomputeOptions p;
+    EXPECT_EQ(traceOptions(scene, p).sampling, RenderDesc{}.sampling);
+    p.sampling = Sampling::Mis;
+    p.maxDepth = 5;
+    EXPECT_EQ(traceOptions(scene, p).sampling, Sampling::Mis);
+    EXPECT_EQ(traceOptions(scene, p).maxDepth, 5);
+    p.autoMaxDepth = true;  // must be resolved into a number first
+    EXPECT_THROW(traceOptions(scene, p), std::logic_error);
+    const auto choice = resolveMaxDepth(scene, p);
+    ASSERT_TRUE(choice.has_value());
+    EXPECT_FALSE(p.autoMaxDepth);
+    EXPECT_EQ(p.maxDepth, choice->maxDepth);
+    EXPECT_EQ(traceOptions(scene, p).maxDepth, choice->maxDepth);
 }
 
 }  // namespace
