@@ -6,10 +6,13 @@
 
 #include <algorithm>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "TestUtil.h"
 #include "app/DepthBench.h"
+#include "app/RegionBench.h"
 #include "app/Transport.h"
+#include "core/Error.h"
 #include "io/ImageIO.h"
 #include "io/TransportFile.h"
 #include "scene/Scene.h"
@@ -233,6 +236,36 @@ TEST(TraceRegion, TraceOptionsTakeTheSamplerAndPathLengthAsked) {
     EXPECT_FALSE(p.autoMaxDepth);
     EXPECT_EQ(p.maxDepth, choice->maxDepth);
     EXPECT_EQ(traceOptions(scene, p).maxDepth, choice->maxDepth);
+}
+
+}  // namespace
+
+namespace {
+
+using namespace sl;
+
+TEST(TraceRegion, RegionBenchReportsTheSavings) {
+    RegionBenchOptions o;
+    o.resolution = 48;
+    o.spp = 4;
+    o.repeats = 1;
+    const RegionBenchResult r = runRegionBench(o);
+    ASSERT_EQ(r.rows.size(), 4u);
+    EXPECT_EQ(r.rows[0].name, "every pixel");
+    EXPECT_EQ(r.rows[0].pixels, 48u * 48u);
+    EXPECT_TRUE(r.rows[1].sameAsBaseline);
+    EXPECT_LT(r.rows[1].cameraRays, r.rows[0].cameraRays);  // the bundled view has background
+    EXPECT_EQ(r.rows[1].nnz, r.rows[0].nnz);
+    EXPECT_LE(r.rows[2].rays, r.rows[1].rays);
+    EXPECT_LE(r.rows[2].nnz, r.rows[1].nnz);
+    EXPECT_NE(r.rows[3].detail.find("max_depth"), std::string::npos) << r.rows[3].detail;
+    std::istringstream csv(r.csv());
+    std::string line;
+    int lines = 0;
+    while (std::getline(csv, line)) ++lines;
+    EXPECT_EQ(lines, 5);
+    o.spp = 3;  // two halves need an even spp
+    EXPECT_THROW(runRegionBench(o), InputError);
 }
 
 }  // namespace

@@ -1,6 +1,8 @@
-// scratchlight bench render | transport | scratchmap | defectmap | noise | sampling | depth: parse
+// scratchlight bench render | transport | scratchmap | defectmap | noise | sampling | depth |
+// regions: parse
 // the options, run the benchmark in the library (app/RenderBench.h, app/TransportBench.h,
-// app/ScratchMapBench.h, app/NoiseBench.h, app/SamplingBench.h, app/DepthBench.h), print its
+// app/ScratchMapBench.h, app/NoiseBench.h, app/SamplingBench.h, app/DepthBench.h,
+// app/RegionBench.h), print its
 // table and write its CSV.
 #include <spdlog/spdlog.h>
 
@@ -13,6 +15,7 @@
 #include "app/LampsBench.h"
 #include "app/NoiseBench.h"
 #include "app/Plot.h"
+#include "app/RegionBench.h"
 #include "app/RenderBench.h"
 #include "app/SamplingBench.h"
 #include "app/ScratchMapBench.h"
@@ -289,6 +292,36 @@ int runDepthBenchCmd(DepthArgs a) {
     return kOk;
 }
 
+struct RegionArgs {
+    RegionBenchOptions o;
+    std::string scene, csv = "bench-regions.csv";
+};
+
+int runRegionBenchCmd(RegionArgs a) {
+    a.o.scene = a.scene;
+    const RegionBenchResult r = runRegionBench(a.o);
+    const RegionBenchRow& b = r.rows.front();
+    std::printf("%-15s %9s %10s %12s %11s %9s %8s %7s %7s %7s\n", "setting", "max_depth", "pixels",
+                "rays", "nnz", "T MB", "seconds", "rays", "bytes", "seconds");
+    for (const RegionBenchRow& row : r.rows)
+        std::printf("%-15s %9d %10llu %12llu %11zu %9.2f %8.3f %6.3fx %6.3fx %6.3fx\n",
+                    row.name.c_str(), row.maxDepth, static_cast<unsigned long long>(row.pixels),
+                    static_cast<unsigned long long>(row.rays), row.nnz,
+                    static_cast<double>(row.bytes) / 1e6, row.seconds,
+                    static_cast<double>(row.rays) / static_cast<double>(b.rays),
+                    static_cast<double>(row.bytes) / static_cast<double>(b.bytes),
+                    row.seconds / b.seconds);
+    for (const RegionBenchRow& row : r.rows)
+        std::printf("  %s: %s\n", row.name.c_str(), row.detail.c_str());
+    std::printf(
+        "(%dx%d image, %d spp in two halves; seconds: median of %d interleaved runs; ratios to "
+        "'every pixel'; footprint's T is the baseline's bit for bit: %s)\n",
+        r.width, r.height, a.o.spp, a.o.repeats, r.rows[1].sameAsBaseline ? "yes" : "NO");
+    writeTextAtomically(a.csv, r.csv());
+    std::printf("wrote %s\n", a.csv.c_str());
+    return r.rows[1].sameAsBaseline ? kOk : kRuntimeError;
+}
+
 }  // namespace
 
 void registerBench(CLI::App& app, std::function<int()>& run) {
@@ -465,6 +498,26 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     dc->add_option("--threads", da->o.threads, "Worker threads (0: all)")->capture_default_str();
     dc->add_option("-o,--output", da->csv, "CSV output")->capture_default_str();
     dc->callback([da, &run] { run = [da] { return runDepthBenchCmd(*da); }; });
+
+    auto ra = std::make_shared<RegionArgs>();
+    CLI::App* rc = bench->add_subcommand(
+        "regions",
+        "What tracing only what the scene needs saves: every pixel, the part's footprint, a "
+        "mask's pixels, max_depth auto (rays, bytes, seconds)");
+    rc->add_option("scene", ra->scene, "Scene file (default: the bundled scenes/default)");
+    addSceneOverrides(rc, ra->o.sceneOverrides, false);
+    rc->add_option("--size", ra->o.resolution, "Image width and height")
+        ->check(CLI::Range(8, 8192))
+        ->capture_default_str();
+    rc->add_option("--spp", ra->o.spp, "Samples per pixel (even: two halves)")
+        ->check(CLI::Range(2, 65536))
+        ->capture_default_str();
+    rc->add_option("--repeats", ra->o.repeats, "Interleaved runs (median)")
+        ->check(CLI::Range(1, 100))
+        ->capture_default_str();
+    rc->add_option("--threads", ra->o.threads, "Worker threads (0: all)")->capture_default_str();
+    rc->add_option("-o,--output", ra->csv, "CSV output")->capture_default_str();
+    rc->callback([ra, &run] { run = [ra] { return runRegionBenchCmd(*ra); }; });
 }
 
 }  // namespace sl::cli
