@@ -269,3 +269,41 @@ TEST(TraceRegion, RegionBenchReportsTheSavings) {
 }
 
 }  // namespace
+
+namespace {
+
+using namespace sl;
+
+TEST(TraceRegion, PrecomputeSppAutoFromTheGradientsNoise) {
+    test::TempDir dir("spp-auto");
+    const std::string scene = std::string(SL_SOURCE_DIR) + "/scenes/default/scene.json";
+    auto chosen = [&](const std::string& tolerance) {
+        const auto out = dir / ("t" + tolerance + ".tm");
+        const auto r = test::runCli("precompute " + scene + " --size 32 --max-depth 2 --spp auto" +
+                                    " --tolerance " + tolerance + " -o " + out.string());
+        EXPECT_EQ(r.exitCode, 0) << r.output;
+        const std::string log = "\n" + r.output;
+        const auto at = log.find("\nspp ");
+        if (at == std::string::npos) {
+            ADD_FAILURE() << r.output;
+            return 0;
+        }
+        EXPECT_NE(r.output.find("relative noise"), std::string::npos) << r.output;
+        const int spp = std::stoi(log.substr(at + 5));
+        EXPECT_EQ(readTransportFile(out).provenance.spp, spp);
+        return spp;
+    };
+    const int loose = chosen("0.5"), tight = chosen("0.1");
+    EXPECT_EQ(loose, kSppAutoPilot);  // the pilot's noise is below 0.5 already
+    EXPECT_GT(tight, loose);
+    EXPECT_EQ(tight & (tight - 1), 0);  // a power of two
+    for (const char* bad :
+         {"--spp 0", "--spp many", "--spp auto --tolerance 0", "--spp auto --tolerance 1.5"}) {
+        const auto r = test::runCli("precompute " + scene + " --size 32 " + bad + " -o " +
+                                    (dir / "bad.tm").string());
+        EXPECT_EQ(r.exitCode, 2) << bad << ": " << r.output;
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir / "bad.tm"));
+}
+
+}  // namespace

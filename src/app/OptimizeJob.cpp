@@ -89,6 +89,7 @@ json transportJson(const TransportSource& src) {
             {"envmap", {t.envWidth, t.envHeight}},
             {"cache_hit", src.cacheHit},
             {"max_depth_auto", src.autoDepth ? json(src.autoDepth->reason) : json(nullptr)},
+            {"spp_auto", src.autoSpp ? json(src.autoSpp->reason) : json(nullptr)},
             {"seconds", src.secondsTotal}};
 }
 
@@ -331,6 +332,12 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
                                      " scratch, or drop it (the whole part is traced)");
             pre.pixels = lossMaskRegion(o.mask, *in.scene, o.scratch);
         }
+        const auto spp = resolveSpp(
+            *in.scene, pre,
+            o.mask.kind == LossMaskKind::Object || !pre.autoSpp
+                ? std::vector<uint8_t>{}
+                : (pre.pixels.empty() ? lossMaskRegion(o.mask, *in.scene, o.scratch) : pre.pixels),
+            p.cacheDir);
         // eq. 2 rewards noise: without a given spp it trains at no fewer than paperMinSpp (the
         // paper's own loop keeps the scene's spp).
         if (in.kind == ObjectiveKind::Paper && !pre.spp &&
@@ -340,6 +347,7 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
             transportSetForScene(*in.scene, pre, o.planes, p.cacheDir);
         job.transport = std::move(set.front());
         job.transport.autoDepth = depth;
+        job.transport.autoSpp = spp;
         for (size_t k = 1; k < set.size(); ++k) job.extraPlanes.push_back(std::move(set[k]));
     }
     const TransportMatrix& t = job.transport.file.matrix;
@@ -1019,6 +1027,8 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
         if (job.transport.autoDepth)
             spdlog::info("max_depth {}: {}", job.transport.autoDepth->maxDepth,
                          job.transport.autoDepth->reason);
+        if (job.transport.autoSpp)
+            spdlog::info("spp {}: {}", job.transport.autoSpp->spp, job.transport.autoSpp->reason);
         spdlog::info("{}", describeTransport(job.transport));
         loadHeldOut(p, in, job);
         if (job.heldOut)

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "app/HeldOut.h"
@@ -10,7 +11,9 @@
 #include "core/Error.h"
 #include "core/Progress.h"
 #include "core/Stopwatch.h"
+#include "core/Text.h"
 #include "io/SceneFile.h"
+#include "objective/Objective.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
 #include "transport/TransportSink.h"
@@ -89,7 +92,66 @@ std::optional<DepthChoice> resolveMaxDepth(const Scene& scene, PrecomputeOptions
     return c;
 }
 
+std::optional<SppChoice> resolveSpp(const Scene& scene, PrecomputeOptions& o,
+                                    const std::vector<uint8_t>& region,
+                                    const std::filesystem::path& cacheDir) {
+    if (!o.autoSpp) return std::nullopt;
+    if (!(o.sppTolerance > 0 && o.sppTolerance < 1))
+        throw inputError(option("tolerance"), "is " + formatNumber(o.sppTolerance, 3),
+                         "use a relative noise in (0, 1), e.g. 0.05");
+    PrecomputeOptions pilot = o;
+    pilot.autoSpp = false;
+    pilot.spp = kSppAutoPilot;
+    pilot.sampleSets = 2;
+    pilot.rgb = false;
+    pilot.label = "spp auto: pilot";
+    const TransportSource src = transportForScene(scene, pilot, cacheDir);
+    const TransportMatrix& t = src.file.matrix;
+    std::vector<uint8_t> mask = t.objectMask;
+    if (!region.empty()) mask = intersectMasks(mask, region);
+    if (std::none_of(mask.begin(), mask.end(), [](uint8_t v) { return v != 0; }))
+        throw inputError("scene", "the pilot trace of spp auto sees none of the part",
+                         "point the camera at the part, or give " + option("spp"));
+    ObjectiveOptions oo;
+    oo.lambda = 0;  // the regulariser's gradient has no noise
+    const ImageObjective lgrad(t.width, t.height, mask, oo);
+    const std::vector<double> E(t.cols(), 0.5);
+    std::vector<double> y(t.rows()), dy(t.rows());
+    std::vector<std::vector<double>> g(2, std::vector<double>(t.cols()));
+    for (int plane = 0; plane < 2; ++plane) {
+        t.applyLuminance(E, y, plane);
+        lgrad.evaluate(y, E, dy);
+        t.applyTransposeLuminance(dy, g[static_cast<size_t>(plane)], plane);
+    }
+    double diff = 0, sum = 0;
+    for (size_t k = 0; k < t.cols(); ++k) {
+        diff += (g[0][k] - g[1][k]) * (g[0][k] - g[1][k]);
+        sum += (g[0][k] + g[1][k]) * (g[0][k] + g[1][k]);
+    }
+    SppChoice c;
+    c.pilotSpp = kSppAutoPilot;
+    c.pilotNoise = sum > 0 ? std::sqrt(diff / sum) : 1.0;
+    int n = kSppAutoPilot;
+    auto noiseAt = [&](int spp) { return c.pilotNoise * std::sqrt(double(kSppAutoPilot) / spp); };
+    while (n < kSppAutoMax && noiseAt(n) > o.sppTolerance) n *= 2;
+    c.spp = n;
+    c.chosenNoise = noiseAt(n);
+    c.reason = "the gradient's relative noise is " + formatNumber(c.pilotNoise, 3) + " at " +
+               std::to_string(kSppAutoPilot) + " spp (two independent halves of a pilot, " +
+               formatNumber(src.secondsTotal, 2) + " s), so " + formatNumber(c.chosenNoise, 3) +
+               " at " + std::to_string(n) + " spp";
+    c.reason += noiseAt(n) <= o.sppTolerance
+                    ? ", the fewest (a power of two) within the tolerance " +
+                          formatNumber(o.sppTolerance, 3)
+                    : ", above the tolerance " + formatNumber(o.sppTolerance, 3) +
+                          " but the most spp auto takes";
+    o.spp = n;
+    o.autoSpp = false;
+    return c;
+}
+
 RenderOptions traceOptions(const Scene& scene, const PrecomputeOptions& o) {
+    if (o.autoSpp) throw std::logic_error("traceOptions: resolve spp auto first (resolveSpp)");
     if (o.autoMaxDepth)
         throw std::logic_error("traceOptions: resolve max_depth auto first (resolveMaxDepth)");
     RenderOptions r = renderOptionsFor(scene);
@@ -127,10 +189,12 @@ TransportSource precomputeToFile(const std::filesystem::path& file,
     auto scene = loadScene(file, sceneOverrides);
     PrecomputeOptions resolved = options;
     const auto depth = resolveMaxDepth(*scene, resolved);
+    const auto spp = resolveSpp(*scene, resolved, {}, {});
     const RenderOptions ro = traceOptions(*scene, resolved);
     TransportSource s = trace(*scene, ro, transportProvenance(*scene, ro, options.rgb ? 3 : 1),
                               options.rgb, options.label, out, clock);
     s.autoDepth = depth;
+    s.autoSpp = spp;
     return s;
 }
 

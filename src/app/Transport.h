@@ -23,6 +23,10 @@ struct PrecomputeOptions {
     /// the scene's; resolveMaxDepth replaces it by the number before the trace.
     bool autoMaxDepth = false;
     std::optional<Sampling> sampling;  // overrides render.sampling
+    /// spp from the measured noise of the objective's gradient (resolveSpp) instead of the
+    /// scene's: the fewest samples whose gradient's relative noise is at most sppTolerance.
+    bool autoSpp = false;
+    double sppTolerance = 0.05;
     /// The pixels traced (RenderOptions::pixels): empty, all; else width·height flags, e.g. a
     /// loss mask's region: T's other rows are empty.
     std::vector<uint8_t> pixels;
@@ -36,6 +40,15 @@ struct PrecomputeOptions {
     std::string label = "precompute";
 };
 
+/// What resolveSpp measured and chose.
+struct SppChoice {
+    int spp = 0;
+    int pilotSpp = 0;
+    double pilotNoise = 0;   // relative noise of the gradient at pilotSpp
+    double chosenNoise = 0;  // ... predicted at spp (∝ 1/√spp)
+    std::string reason;
+};
+
 struct TransportSource {
     TransportFile file;                    // the matrix and its provenance
     std::filesystem::path path;            // where it is stored (empty if not stored)
@@ -44,12 +57,31 @@ struct TransportSource {
     double secondsTotal = 0;               // scene load + trace + build + write, or the file read
     TraceSummary trace;                    // the trace's summary (empty on a cache hit)
     std::optional<DepthChoice> autoDepth;  // max_depth auto: what was measured and chosen
+    std::optional<SppChoice> autoSpp;      // spp auto: what was measured and chosen
 };
 
 /// With options.autoMaxDepth: measures the scene's path length (autoMaxDepth), sets
 /// options.maxDepth to it and clears the flag; returns the choice and its reason. Otherwise
 /// nothing. Called before the trace, so the fingerprint records the number.
 std::optional<DepthChoice> resolveMaxDepth(const Scene& scene, PrecomputeOptions& options);
+
+/// The pilot trace of spp auto: samples per pixel (two halves).
+inline constexpr int kSppAutoPilot = 8;
+/// The most samples spp auto chooses.
+inline constexpr int kSppAutoMax = 4096;
+
+/// With options.autoSpp: traces a pilot T at kSppAutoPilot spp in two independent halves (the
+/// options' other settings; cached in cacheDir like transportForScene), takes the gradient
+/// g = Tᵀ·dL_grad/dY of eq. 2's image-gradient term (the term every objective builds on) at
+/// E = 0.5 on `region` (image space, nonzero inside; empty: the part) from each half, g_a and
+/// g_b, and estimates the relative noise of the gradient at n spp as
+/// r(n) = ‖g_a − g_b‖ / ‖g_a + g_b‖ (the halves' difference has four times the variance of
+/// their mean). Noise falls as 1/√spp, so it picks the smallest power of two N >= the pilot
+/// with r(pilot)·√(pilot/N) <= sppTolerance (at most kSppAutoMax, saying so), sets
+/// options.spp = N and clears the flag. Otherwise returns nothing.
+std::optional<SppChoice> resolveSpp(const Scene& scene, PrecomputeOptions& options,
+                                    const std::vector<uint8_t>& region,
+                                    const std::filesystem::path& cacheDir);
 
 /// The RenderOptions a precompute of `scene` uses: the scene's `render` section with the
 /// options' overrides.

@@ -27,8 +27,28 @@ namespace {
 
 void addTraceOptions(CLI::App* c, PrecomputeOptions& p, std::vector<std::string>& overrides) {
     addSceneOverrides(c, overrides, true);
-    c->add_option("--spp", p.spp, "Samples per pixel (overrides render.spp)")
-        ->check(CLI::Range(1, 1 << 20));
+    c->add_option_function<std::string>(
+         "--spp",
+         [&p](const std::string& v) {
+             p.autoSpp = v == "auto";
+             if (!p.autoSpp) p.spp = std::stoi(v);
+         },
+         "Samples per pixel (overrides render.spp), or auto: the fewest (a power of two) whose "
+         "gradient has a relative noise within --tolerance, measured on a pilot trace (the "
+         "choice and why are printed)")
+        ->type_name("N|auto")
+        ->check([](const std::string& v) -> std::string {
+            if (v == "auto") return {};
+            int n = 0;
+            const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
+            if (ec != std::errc{} || end != v.data() + v.size() || n < 1 || n > (1 << 20))
+                return "expected samples per pixel 1..1048576 or auto, got " + v;
+            return {};
+        });
+    c->add_option("--tolerance", p.sppTolerance,
+                  "--spp auto: the relative noise of the gradient to reach")
+        ->check(CLI::Range(1e-6, 0.999999))
+        ->capture_default_str();
     c->add_option_function<std::string>(
          "--max-depth",
          [&p](const std::string& v) {
@@ -90,10 +110,10 @@ int runPrecompute(PrecomputeArgs a) {
         throw UsageError("output '" + a.out + "' must end in .tm");
     if (!a.rows.empty()) parseRows(a.rows, a.p);
     if (a.renderer != RendererKind::Builtin) {
-        if (a.p.autoMaxDepth)
+        if (a.p.autoMaxDepth || a.p.autoSpp)
             throw UsageError(
-                "--max-depth auto measures our tracer's bounces; an external "
-                "renderer keeps its own path length: drop it");
+                "--max-depth auto and --spp auto measure our tracer; an external renderer "
+                "keeps its own path length and samples: drop them");
         if (a.p.rgb || a.p.sampleSets != 1 || !a.rows.empty())
             throw UsageError("--renderer " +
                              std::string(registryRow(rendererKindTable(), a.renderer).name) +
@@ -119,6 +139,7 @@ int runPrecompute(PrecomputeArgs a) {
     TransportSource s = precomputeToFile(a.scene, a.p, a.out, a.overrides);
     if (s.autoDepth)
         std::printf("max_depth %d: %s\n", s.autoDepth->maxDepth, s.autoDepth->reason.c_str());
+    if (s.autoSpp) std::printf("spp %d: %s\n", s.autoSpp->spp, s.autoSpp->reason.c_str());
     std::printf("%s\n", describeTransport(s).c_str());
     std::printf("wrote %s (fingerprint %s)\n", a.out.c_str(),
                 s.file.provenance.fingerprint.c_str());
