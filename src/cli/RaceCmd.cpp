@@ -17,6 +17,22 @@ namespace sl::cli {
 
 namespace {
 
+/// DIR/STEM.csv (every run), DIR/STEM-median.csv and the plot DIR/STEM.png by
+/// scripts/plot_STEM.py (a warning with the command when it cannot run).
+void writeRaceOutputs(const std::filesystem::path& dir, const std::string& stem,
+                      const std::vector<RaceRow>& rows, const std::vector<RaceRow>& medians) {
+    const auto csv = dir / (stem + ".csv"), medianCsv = dir / (stem + "-median.csv"),
+               png = dir / (stem + ".png");
+    writeRaceCsv(csv, rows);
+    writeRaceCsv(medianCsv, medians);
+    const PlotOutcome plot = runPlotScript("plot_" + stem + ".py", {csv.string(), png.string()});
+    if (!plot.ran || plot.exitCode != 0)
+        std::fprintf(stderr, "warning: the plot failed (%s); plot with: %s\n",
+                     plot.message.empty() ? "python3 with matplotlib needed" : plot.message.c_str(),
+                     shellQuoted(plot.command).c_str());
+    std::printf("wrote %s, %s and %s\n", csv.c_str(), medianCsv.c_str(), png.c_str());
+}
+
 struct RaceArgs {
     RaceOptions o;
     std::vector<std::string> configs;
@@ -46,20 +62,9 @@ int runRaceCmd(RaceArgs a) {
         a.o.seeds);
     std::printf("%s\n", formatRaceTable(s.medians).c_str());
     std::printf("%s", formatRaceTable(s.overall).c_str());
-    const auto dir = std::filesystem::path(a.out);
-    writeRaceCsv(dir / "race.csv", s.rows);
     std::vector<RaceRow> med = s.medians;
     med.insert(med.end(), s.overall.begin(), s.overall.end());
-    writeRaceCsv(dir / "race-median.csv", med);
-    const auto png = dir / "race.png";
-    const PlotOutcome plot =
-        runPlotScript("plot_race.py", {(dir / "race.csv").string(), png.string()});
-    if (!plot.ran || plot.exitCode != 0)
-        std::fprintf(stderr, "warning: the plot failed (%s); plot with: %s\n",
-                     plot.message.empty() ? "python3 with matplotlib needed" : plot.message.c_str(),
-                     shellQuoted(plot.command).c_str());
-    std::printf("wrote %s, %s and %s\n", (dir / "race.csv").c_str(),
-                (dir / "race-median.csv").c_str(), png.c_str());
+    writeRaceOutputs(a.out, "race", s.rows, med);
     return kOk;
 }
 
@@ -91,18 +96,7 @@ int runSettingsCmd(SettingsArgs a) {
         "seed\n",
         a.o.judgeSpp, *a.o.judgeMaxDepth, a.o.seeds, a.o.configs.front().name.c_str());
     std::printf("%s\n", formatRaceTable(s.medians).c_str());
-    const auto dir = std::filesystem::path(a.out);
-    writeRaceCsv(dir / "settings.csv", s.rows);
-    writeRaceCsv(dir / "settings-median.csv", s.medians);
-    const auto png = dir / "settings.png";
-    const PlotOutcome plot =
-        runPlotScript("plot_settings.py", {(dir / "settings.csv").string(), png.string()});
-    if (!plot.ran || plot.exitCode != 0)
-        std::fprintf(stderr, "warning: the plot failed (%s); plot with: %s\n",
-                     plot.message.empty() ? "python3 with matplotlib needed" : plot.message.c_str(),
-                     shellQuoted(plot.command).c_str());
-    std::printf("wrote %s, %s and %s\n", (dir / "settings.csv").c_str(),
-                (dir / "settings-median.csv").c_str(), png.c_str());
+    writeRaceOutputs(a.out, "settings", s.rows, s.medians);
     return kOk;
 }
 

@@ -25,48 +25,42 @@ namespace sl::cli {
 
 namespace {
 
-void addTraceOptions(CLI::App* c, PrecomputeOptions& p, std::vector<std::string>& overrides) {
-    addSceneOverrides(c, overrides, true);
+/// An option that takes a whole number in [lo, hi] (into `value`) or "auto" (sets `isAuto`).
+void addNumberOrAuto(CLI::App* c, const std::string& name, std::optional<int>& value, bool& isAuto,
+                     int lo, int hi, const std::string& what, const std::string& help) {
     c->add_option_function<std::string>(
-         "--spp",
-         [&p](const std::string& v) {
-             p.autoSpp = v == "auto";
-             if (!p.autoSpp) p.spp = std::stoi(v);
+         name,
+         [&value, &isAuto](const std::string& v) {
+             isAuto = v == "auto";
+             if (!isAuto) value = std::stoi(v);
          },
-         "Samples per pixel (overrides render.spp), or auto: the fewest (a power of two) whose "
-         "gradient has a relative noise within --tolerance, measured on a pilot trace (the "
-         "choice and why are printed)")
+         help)
         ->type_name("N|auto")
-        ->check([](const std::string& v) -> std::string {
+        ->check([lo, hi, what](const std::string& v) -> std::string {
             if (v == "auto") return {};
             int n = 0;
             const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
-            if (ec != std::errc{} || end != v.data() + v.size() || n < 1 || n > (1 << 20))
-                return "expected samples per pixel 1..1048576 or auto, got " + v;
+            if (ec != std::errc{} || end != v.data() + v.size() || n < lo || n > hi)
+                return "expected " + what + " " + std::to_string(lo) + ".." + std::to_string(hi) +
+                       " or auto, got " + v;
             return {};
         });
+}
+
+void addTraceOptions(CLI::App* c, PrecomputeOptions& p, std::vector<std::string>& overrides) {
+    addSceneOverrides(c, overrides, true);
+    addNumberOrAuto(c, "--spp", p.spp, p.autoSpp, 1, 1 << 20, "samples per pixel",
+                    "Samples per pixel (overrides render.spp), or auto: the fewest (a power of "
+                    "two) whose gradient has a relative noise within --tolerance, measured on a "
+                    "pilot trace (the choice and why are printed)");
     c->add_option("--tolerance", p.sppTolerance,
                   "--spp auto: the relative noise of the gradient to reach")
         ->check(CLI::Range(1e-6, 0.999999))
         ->capture_default_str();
-    c->add_option_function<std::string>(
-         "--max-depth",
-         [&p](const std::string& v) {
-             p.autoMaxDepth = v == "auto";
-             if (!p.autoMaxDepth) p.maxDepth = std::stoi(v);
-         },
-         "Mitsuba max_depth (overrides render.max_depth), or auto: the first path length whose "
-         "next bounce adds < 0.1 % of the image under a white light (measured first on a "
-         "lattice of pixels; the choice and why are printed)")
-        ->type_name("N|auto")
-        ->check([](const std::string& v) -> std::string {
-            if (v == "auto") return {};
-            int n = 0;
-            const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
-            if (ec != std::errc{} || end != v.data() + v.size() || n < 1 || n > 64)
-                return "expected a path length 1..64 or auto, got " + v;
-            return {};
-        });
+    addNumberOrAuto(c, "--max-depth", p.maxDepth, p.autoMaxDepth, 1, 64, "a path length",
+                    "Mitsuba max_depth (overrides render.max_depth), or auto: the first path "
+                    "length whose next bounce adds < 0.1 % of the image under a white light "
+                    "(measured first on a lattice of pixels; the choice and why are printed)");
     c->add_option("--seed", p.seed, "Random seed (overrides render.seed)");
     c->add_option("--threads", p.threads, "Worker threads (0: all cores)")
         ->check(CLI::Range(0, 4096));
