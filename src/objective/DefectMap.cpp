@@ -529,20 +529,25 @@ std::vector<float> notchPass(const std::vector<float>& d, int W, int H, const De
         info->fftWidth = p.W;
         info->fftHeight = p.H;
     }
-    if (sectorsOut) {
-        sectorsOut->clear();
-        for (int c = 0; c < o.textureSectors && o.textureSectors > 1; ++c) {
-            Spectrum part = s;
-            for (int y = 0; y < s.H; ++y) {
-                const int kz = y <= s.H / 2 ? y : y - s.H;
-                for (int kx = 0; kx < s.Wh; ++kx)
-                    if ((kx != 0 || kz != 0 ? sectorOf(kx, kz, o.textureSectors) : 0) != c)
-                        part.bins[static_cast<size_t>(y) * s.Wh + kx] = 0;
-            }
-            sectorsOut->push_back(inverse(part, p, W, H));
+    if (!sectorsOut || o.textureSectors < 2) return inverse(s, p, W, H);
+    // sectors 0 … K−2 from their bins; the last is the texture minus them (one FFT fewer)
+    sectorsOut->clear();
+    for (int c = 0; c + 1 < o.textureSectors; ++c) {
+        Spectrum part = s;
+        for (int y = 0; y < s.H; ++y) {
+            const int kz = y <= s.H / 2 ? y : y - s.H;
+            for (int kx = 0; kx < s.Wh; ++kx)
+                if ((kx != 0 || kz != 0 ? sectorOf(kx, kz, o.textureSectors) : 0) != c)
+                    part.bins[static_cast<size_t>(y) * s.Wh + kx] = 0;
         }
+        sectorsOut->push_back(inverse(part, p, W, H));
     }
-    return inverse(s, p, W, H);
+    std::vector<float> texture = inverse(s, p, W, H);
+    std::vector<float> last = texture;
+    for (const std::vector<float>& t : *sectorsOut)
+        for (size_t k = 0; k < last.size(); ++k) last[k] -= t[k];
+    sectorsOut->push_back(std::move(last));
+    return texture;
 }
 
 /// Steps 1–3: returns R = h − macro − texture; `macroOut` and `textureOut` (if given) receive
