@@ -1,6 +1,7 @@
 // Defect map (objective/DefectMap.h, app/DefectMapJob.h, `scratchlight defectmap`): a periodic
 // texture alone marks (almost) nothing, a groove on it is found, the flat-end part's step along
-// its feed marks is found (per-axis edge residual), invariance to h → a·h + b, the
+// its feed marks is found (per-axis edge residual), a chatter band along the path under stronger
+// scallops is found in its own sector of the texture, invariance to h → a·h + b, the
 // scoring definitions on a hand-made case, bad input, the registry and the command's files.
 #include <gtest/gtest.h>
 
@@ -126,6 +127,38 @@ TEST(DefectMap, FlatEndStepAlongTheFeedMarksIsFound) {
     EXPECT_LT(sj.overall.recall, 0.5);
 }
 
+// A band of chatter along x (rows 48–79 of 128) on scallops across z and weak feed marks along x:
+// in the texture's whole amplitude the scallops dwarf the band (as the ball-end part's
+// scallops do its chatter bands); in the sector of the texture varying along x the band stands
+// 6× above the feed marks. Only the sector split (textureSectors 2) marks it.
+TEST(DefectMap, ChatterBandAlongThePathIsFoundInItsOwnSector) {
+    constexpr int n = 128, y0 = 48, y1 = 80;
+    std::mt19937 rng(5);
+    std::normal_distribution<double> nd(0.0, 0.01);
+    std::vector<float> h(static_cast<size_t>(n) * n);
+    std::vector<uint8_t> truth(h.size(), 0);
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            const bool band = y >= y0 && y < y1;
+            const double along = (band ? 0.3 : 0.05) * std::sin(2 * M_PI * x / 12.0);
+            const size_t k = static_cast<size_t>(y) * n + x;
+            h[k] = static_cast<float>(1.0 - std::abs(std::sin(M_PI * y / 16.0)) + along + nd(rng));
+            truth[k] = band ? 144 : 0;
+        }
+    const std::vector<RegionLabel> legend{{144, "chatter-band"}};
+    DefectMapOptions o;
+    o.border = 8;
+    ASSERT_EQ(o.textureSectors, 2);
+    const DefectScore s = scoreDefectMap(detectDefects(h, n, n, o).map, truth, legend);
+    o.textureSectors = 1;
+    const DefectScore whole = scoreDefectMap(detectDefects(h, n, n, o).map, truth, legend);
+    std::printf("band: sectors 2 recall %.3f precision %.3f; sectors 1 recall %.3f\n",
+                s.overall.recall, s.overall.precision, whole.overall.recall);
+    EXPECT_GE(s.overall.recall, 0.8);
+    EXPECT_GE(s.overall.precision, 0.7);
+    EXPECT_LT(whole.overall.recall, 0.3);
+}
+
 TEST(DefectMap, InvariantToHeightOffsetAndScale) {
     std::vector<float> h = texture(kN);
     cutGroove(h, kN, 50, 60, 150, 130, 4.0, 0.4);
@@ -186,6 +219,9 @@ TEST(DefectMap, BadInputIsRefusedNamingTheProblem) {
     o = {};
     o.edgeWindow = 3;
     expectError([&] { detectDefects(h, 32, 32, o); }, "option 'edge-window'");
+    o = {};
+    o.textureSectors = 0;
+    expectError([&] { detectDefects(h, 32, 32, o); }, "option 'texture-sectors'");
     expectError([&] { scoreDefectMap(std::vector<uint8_t>(4), std::vector<uint8_t>(5), {}); },
                 "defect score");
 }

@@ -420,6 +420,10 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     dmc->add_option("--repeats", dm->o.repeats, "Runs per size (median)")
         ->check(CLI::Range(1, 50))
         ->capture_default_str();
+    dmc->add_option("--texture-sectors", dm->o.map.textureSectors,
+                    "auto: orientation sectors of the texture-change test (1: the texture whole)")
+        ->check(CLI::Range(1, 16))
+        ->capture_default_str();
     dmc->add_option("-o,--output", dm->csv, "CSV output")->capture_default_str();
     dmc->callback([dm, &run] { run = [dm] { return runDefectMapBenchCmd(*dm); }; });
 

@@ -130,6 +130,10 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--texture-energy-ratio", m.textureEnergyRatio,
                   "auto: the ratio of --texture-energy")
         ->capture_default_str();
+    c->add_option("--texture-sectors", m.textureSectors,
+                  "auto: --texture-energy on the texture split into this many orientation "
+                  "sectors of its spectrum, each against its own median (1: whole)")
+        ->capture_default_str();
     c->add_option("--kernel", m.paper.kernel, "paper: moving-average window, samples")
         ->capture_default_str();
     c->add_option("--patch", m.paper.patch, "paper: patch side, samples")->capture_default_str();

@@ -96,6 +96,10 @@ void checkOptions(const DefectMapOptions& o) {
     if (!(o.textureEnergyRatio > 1.0))
         throw inputError(option("texture-energy-ratio"),
                          "must be > 1 (got " + std::to_string(o.textureEnergyRatio) + ")");
+    if (o.textureSectors < 1 || o.textureSectors > 16)
+        throw inputError(option("texture-sectors"),
+                         "must be in [1, 16] (got " + std::to_string(o.textureSectors) + ")",
+                         "1 takes the texture whole; the default is 2");
     if (!(o.energyRatio > 1.0))
         throw inputError(option("energy-ratio"),
                          "must be > 1 (got " + std::to_string(o.energyRatio) + ")");
@@ -498,9 +502,20 @@ size_t notchTexture(Spectrum& s, const DefectMapOptions& o) {
     return notched;
 }
 
-/// One notch pass: the periodic texture of d (W×H).
+/// The orientation sector (0 … sectors−1) of bin (kx, kz): sectors of π/sectors of the
+/// wave-vector's orientation θ = atan2(kz, kx) ∈ [0, π), sector 0 centred on the k_x axis.
+int sectorOf(int kx, int kz, int sectors) {
+    constexpr double kPi = 3.14159265358979323846;
+    double theta = std::atan2(static_cast<double>(kz), static_cast<double>(kx));
+    if (theta < 0) theta += kPi;
+    const double width = kPi / sectors;
+    return static_cast<int>(std::floor(theta / width + 0.5)) % sectors;
+}
+
+/// One notch pass: the periodic texture of d (W×H). With `sectorsOut`, also the texture split
+/// by the orientation of its wave-vector into textureSectors parts (their sum is the texture).
 std::vector<float> notchPass(const std::vector<float>& d, int W, int H, const DefectMapOptions& o,
-                             DefectMap* info) {
+                             DefectMap* info, std::vector<std::vector<float>>* sectorsOut) {
     const Padded p = padMap(d, W, H, o.pad, 0.0);
     Spectrum s = forward(p);
     // the texture alone: the spectrum minus its shrunk version
@@ -514,7 +529,25 @@ std::vector<float> notchPass(const std::vector<float>& d, int W, int H, const De
         info->fftWidth = p.W;
         info->fftHeight = p.H;
     }
-    return inverse(s, p, W, H);
+    if (!sectorsOut || o.textureSectors < 2) return inverse(s, p, W, H);
+    // sectors 0 … K−2 from their bins; the last is the texture minus them (one FFT fewer)
+    sectorsOut->clear();
+    for (int c = 0; c + 1 < o.textureSectors; ++c) {
+        Spectrum part = s;
+        for (int y = 0; y < s.H; ++y) {
+            const int kz = y <= s.H / 2 ? y : y - s.H;
+            for (int kx = 0; kx < s.Wh; ++kx)
+                if ((kx != 0 || kz != 0 ? sectorOf(kx, kz, o.textureSectors) : 0) != c)
+                    part.bins[static_cast<size_t>(y) * s.Wh + kx] = 0;
+        }
+        sectorsOut->push_back(inverse(part, p, W, H));
+    }
+    std::vector<float> texture = inverse(s, p, W, H);
+    std::vector<float> last = texture;
+    for (const std::vector<float>& t : *sectorsOut)
+        for (size_t k = 0; k < last.size(); ++k) last[k] -= t[k];
+    sectorsOut->push_back(std::move(last));
+    return texture;
 }
 
 /// Steps 1–3: returns R = h − macro − texture; `macroOut` and `textureOut` (if given) receive
@@ -522,7 +555,8 @@ std::vector<float> notchPass(const std::vector<float>& d, int W, int H, const De
 std::vector<float> textureResidual(std::span<const float> h, int W, int H,
                                    const DefectMapOptions& o, DefectMap* info,
                                    std::vector<float>* macroOut = nullptr,
-                                   std::vector<float>* textureOut = nullptr) {
+                                   std::vector<float>* textureOut = nullptr,
+                                   std::vector<std::vector<float>>* sectorsOut = nullptr) {
     const size_t n = h.size();
     std::vector<float> macro(h.begin(), h.end()), d(n), texture;
     for (int pass = 0; pass < o.passes; ++pass) {
@@ -531,7 +565,7 @@ std::vector<float> textureResidual(std::span<const float> h, int W, int H,
             for (size_t k = 0; k < n; ++k) macro[k] = h[k] - texture[k];
         macro = separableMedian(macro, W, H, o.macroWindow);
         for (size_t k = 0; k < n; ++k) d[k] = h[k] - macro[k];
-        texture = notchPass(d, W, H, o, info);
+        texture = notchPass(d, W, H, o, info, pass + 1 == o.passes ? sectorsOut : nullptr);
     }
     if (textureOut) *textureOut = texture;
     for (size_t k = 0; k < n; ++k) texture[k] = d[k] - texture[k];
@@ -618,8 +652,11 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
     std::vector<float> macro;
 
     std::vector<float> texture;
+    std::vector<std::vector<float>> sectors;
+    const bool wantTexture = o.energyWindow > 0 && o.textureEnergy;
     std::vector<float> R = textureResidual(
-        heights, W, H, o, &r, &macro, o.energyWindow > 0 && o.textureEnergy ? &texture : nullptr);
+        heights, W, H, o, &r, &macro, wantTexture && o.textureSectors == 1 ? &texture : nullptr,
+        wantTexture && o.textureSectors > 1 ? &sectors : nullptr);
     std::vector<float> A = separableMedian(R, W, H, o.levelWindow);
     for (size_t k = 0; k < n; ++k) A[k] = R[k] - A[k];
     for (size_t k = 0; k < n; ++k) R[k] += macro[k];
@@ -681,7 +718,10 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
             }
         };
         markTextureChange(A, o.energyRatio);
-        if (o.textureEnergy) markTextureChange(texture, o.textureEnergyRatio);
+        if (o.textureEnergy) {
+            if (sectors.empty()) markTextureChange(texture, o.textureEnergyRatio);
+            for (std::vector<float>& t : sectors) markTextureChange(t, o.textureEnergyRatio);
+        }
     }
     r.seconds = clock.seconds();
     return r;

@@ -53,7 +53,11 @@
 //     E ≥ energyRatio × median(E), outside the border, are marked too (a scratch or a dent fills
 //     less than half a window and does not raise E). With `textureEnergy` the same on |T| with
 //     `textureEnergyRatio`: where the tool-path texture itself is locally much stronger (a band
-//     of chatter at the texture's own frequencies, which the notch took into T).
+//     of chatter at the texture's own frequencies, which the notch took into T). With
+//     textureSectors = K > 1, T is split by the orientation θ = atan2(k_z, k_x) of its bins
+//     into K sectors of π/K (sector 0 centred on the k_x axis; their sum is T) and each part is
+//     tested against its own median: a chatter band varying along the path stands out in its
+//     sector even where the scallops across the paths, in another, are stronger than it.
 // Every threshold is relative to σ or to median(E), so the map is invariant to h → a·h + b
 // (a ≠ 0) up to rounding; a constant map marks nothing. A confined region of different texture
 // (gen-surface's chatter half, 40 % of a part) is NOT meant to be marked: it is a state of
@@ -61,7 +65,8 @@
 // objective's job. It stays unmarked while its amplitude stays under the ratios of step 8 (the
 // test parts' 0.5 µm chatter does, mostly: the README gives the share marked); a stronger one
 // is marked as a texture change. Parallel over rows and columns with TBB; the result does not
-// depend on the thread count. Memory: about 12 float copies of the map.
+// depend on the thread count. Memory: about 12 float copies of the map; with textureSectors
+// K > 1, K more and a copy of the half spectrum while they are made.
 #pragma once
 
 #include <cstdint>
@@ -104,14 +109,16 @@ struct DefectMapOptions {
     int edgeWindow = 7;         // samples of the edge residual's quadratic fit (odd, >= 5)
     double edgeWeight = 1.0;    // the edge residual's weight in the score (>= 0; 0: off)
     bool edgeAxes = true;       // one edge residual per axis, each with its own σ (step 5)
-    double seedSigma = 5.0;     // hysteresis: seeds at S >= seedSigma (> 0)
+    double seedSigma = 5.5;     // hysteresis: seeds at S >= seedSigma (> 0)
     double growSigma = 2.5;     // hysteresis: grown into S >= growSigma (0 < grow <= seed)
-    int border = 32;            // samples at the map's edges never marked (>= 0)
+    int border = 40;            // samples at the map's edges never marked (>= 0)
     int minRegion = 12;         // connected regions smaller than this are dropped (>= 1)
     int energyWindow = 41;      // samples of the local amplitude's running median (odd, >= 3;
                                 // 0 switches step 7 off)
     bool textureEnergy = true;  // step 8 also on |T| (a band of stronger tool-path texture)
     double textureEnergyRatio = 4.0;  // ... with this ratio (> 1)
+    int textureSectors = 2;           // ... on T split into this many orientation sectors of
+                                      // its spectrum, each against its own median (1: T whole)
     double energyRatio = 2.0;         // E >= energyRatio·median(E) is a texture change (> 1)
     ScratchMapOptions paper;          // the `paper` method's options
 };
