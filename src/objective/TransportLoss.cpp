@@ -138,7 +138,8 @@ LossParts TransportLoss::evaluateFused(std::span<const double> E, std::span<doub
         else
             t_.accumulateTransposeRows(g, rgbE, out, r0, r1);
     };
-    const int chunkRows = std::max(16, (H + 15) / 16), band = 2;
+    // At most 16 chunks (each keeps its own Tᵀ·s), of at least 16 rows and ~16 k pixels.
+    const int chunkRows = std::max({16, (H + 15) / 16, (16384 + W - 1) / W}), band = 2;
     const int nChunks = (H + chunkRows - 1) / chunkRows;
     // Per chunk: Tᵀ·s (n), then Tᵀ·Y for the image regulariser (n, when it is on).
     const size_t per = regScale != 0 ? 2 * n : n;

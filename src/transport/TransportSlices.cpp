@@ -119,9 +119,9 @@ void forImageRowChunks(size_t height, size_t chunk, int threads, F&& f) {
 }
 
 /// Image rows per chunk of a transposed product: at most 32 chunks (each keeps a partial sum of
-/// the output), at least ~2048 pixels each.
+/// the output, and its lanes' sums), at least ~16 k pixels each.
 size_t transposeChunkRows(size_t width, size_t height) {
-    return std::max((height + 31) / 32, (2048 + width - 1) / width);
+    return std::max((height + 31) / 32, (16384 + width - 1) / width);
 }
 
 }  // namespace
@@ -235,6 +235,7 @@ void TransportSlices::forSlices(size_t r0, size_t r1, F&& f) const {
             for (size_t l = 0; l < L; ++l) {
                 const size_t i = k * L + l;
                 ln.in[l] = false;
+                ln.row[l] = 0;
                 if (i < w) {
                     ln.row[l] = first + order_[first + i];
                     ln.in[l] = whole || (ln.row[l] >= r0 && ln.row[l] < r1);
