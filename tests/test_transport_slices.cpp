@@ -168,7 +168,7 @@ TEST(TransportSlices, LossThroughSlicesEqualsTheLossThroughCsr) {
                 ImageObjective obj(t.width, t.height, t.objectMask, oo);
                 TransportLoss csr(t, obj, rgb), blk(t, obj, rgb);
                 csr.setLayout(TransportLayout::Csr);
-                EXPECT_EQ(blk.layout(), TransportLayout::Slices);  // the default
+                blk.setLayout(TransportLayout::Slices);
                 const std::vector<double> e = randomVec(csr.dimension(), 4);
                 std::vector<double> g0(e.size()), g1(e.size()), g2(e.size()), g3(e.size());
                 const LossParts a = csr.evaluate(e, g0);  // the reference: two passes on CSR
@@ -202,6 +202,7 @@ TEST(TransportSlices, UnbiasedLossOnTheHalvesEqualsTheLossThroughCsr) {
         UnbiasedObjective obj(t.width, t.height, t.objectMask, ObjectiveOptions{});
         TransportLoss csr(t, obj, false), blk(t, obj, false);
         csr.setLayout(TransportLayout::Csr);
+        blk.setLayout(TransportLayout::Slices);
         const std::vector<double> e = randomVec(csr.dimension(), 8);
         std::vector<double> g0(e.size()), g1(e.size());
         const LossParts a = csr.evaluateFused(e, g0), b = blk.evaluateFused(e, g1);
@@ -218,4 +219,25 @@ TEST(TransportSlices, FusedLossRefusesANonFiniteEnvMap) {
     std::vector<double> e = randomVec(loss.dimension(), 2), g(e.size());
     e[3] = std::nan("");
     EXPECT_THROW(loss.evaluateFused(e, g), std::invalid_argument);
+}
+
+TEST(TransportSlices, AutoLayoutReadsCsrFirstThenTheSlices) {
+    auto s = smallScene(16);
+    const TransportMatrix t = precompute(*s, 1, 1);
+    ImageObjective obj(t.width, t.height, t.objectMask, ObjectiveOptions{});
+    TransportLoss csr(t, obj, false), sl(t, obj, false), aut(t, obj, false);
+    csr.setLayout(TransportLayout::Csr);
+    sl.setLayout(TransportLayout::Slices);
+    EXPECT_EQ(aut.layout(), TransportLayout::Auto);  // the default
+    const std::vector<double> e = randomVec(aut.dimension(), 6);
+    std::vector<double> gc(e.size()), gs(e.size()), ga(e.size());
+    csr.evaluateFused(e, gc);
+    sl.evaluateFused(e, gs);
+    ASSERT_NE(0, std::memcmp(gc.data(), gs.data(), gc.size() * sizeof(double)))
+        << "the layouts' gradients round alike here: this test cannot tell them apart";
+    for (int i = 0; i < kAutoSlicesAfter + 2; ++i) {
+        aut.evaluateFused(e, ga);
+        const std::vector<double>& want = i < kAutoSlicesAfter ? gc : gs;
+        EXPECT_EQ(0, std::memcmp(ga.data(), want.data(), ga.size() * sizeof(double))) << i;
+    }
 }

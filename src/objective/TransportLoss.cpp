@@ -66,13 +66,25 @@ TransportLoss::TransportLoss(const TransportMatrix& t, const HalfImageObjective&
         throw std::invalid_argument("objective image size != transport matrix rows");
 }
 
+const TransportSlices* TransportLoss::productSlices() const {
+    switch (layout_) {
+        case TransportLayout::Csr:
+            return nullptr;
+        case TransportLayout::Slices:
+            return &slices();
+        case TransportLayout::Auto:
+            return evaluations_++ < kAutoSlicesAfter ? nullptr : &slices();
+    }
+    return nullptr;
+}
+
 const TransportSlices& TransportLoss::slices() const {
     std::call_once(slices_->once, [&] { slices_->slices = std::make_unique<TransportSlices>(t_); });
     return *slices_->slices;
 }
 
 LossParts TransportLoss::evaluateUnbiased(std::span<const double> E, std::span<double> grad) const {
-    const TransportSlices* b = layout_ == TransportLayout::Slices ? &slices() : nullptr;
+    const TransportSlices* b = productSlices();
     if (b)
         b->applyLuminanceHalves(E, y_, yb_, t_.threads);
     else
@@ -95,7 +107,7 @@ LossParts TransportLoss::evaluate(std::span<const double> E, std::span<double> g
             throw std::invalid_argument("TransportLoss: gradient has the wrong size");
         return evaluateUnbiased(E, grad);
     }
-    const TransportSlices* b = layout_ == TransportLayout::Slices ? &slices() : nullptr;
+    const TransportSlices* b = productSlices();
     if (b)
         b->applyLuminance(E, y_, TransportMatrix::kMeanPlane, t_.threads);
     else
@@ -122,7 +134,7 @@ LossParts TransportLoss::evaluateFused(std::span<const double> E, std::span<doub
     const size_t w = static_cast<size_t>(W), n = dimension_;
     const bool rgbE = dimension_ == 3 * t_.cols();
     const double regScale = obj_->imageRegScale();
-    const TransportSlices* blk = layout_ == TransportLayout::Slices ? &slices() : nullptr;
+    const TransportSlices* blk = productSlices();
     auto applyRows = [&](double* Y, size_t r0, size_t r1) {
         if (blk)
             blk->applyLuminanceRows(E.data(), rgbE, Y, r0, r1);

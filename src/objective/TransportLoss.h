@@ -33,9 +33,10 @@ class TransportLoss {
     /// number of threads; it equals evaluate()'s to rounding (G is summed band by band).
     LossParts evaluateFused(std::span<const double> E, std::span<double> grad) const;
 
-    /// The layout the products read: TransportLayout::Slices (default; a TransportSlices copy
-    /// of T built at the first evaluation and shared by copies of this loss, so T must not
-    /// change after it) or TransportLayout::Csr (T's own arrays, nothing built).
+    /// The layout the products read (transport/TransportSlices.h): Auto (default), Slices (a
+    /// TransportSlices copy of T, built once and shared by copies of this loss, so T must not
+    /// change after it) or Csr (T's own arrays, nothing built). Each copy counts its own
+    /// evaluations for Auto, so its results do not depend on what other copies do.
     void setLayout(TransportLayout layout) { layout_ = layout; }
     TransportLayout layout() const { return layout_; }
     /// The slices layout of T (built on first use).
@@ -65,7 +66,10 @@ class TransportLoss {
     size_t dimension_;
     mutable std::vector<double> y_, dLdY_, yb_, dLdYb_;
     mutable std::vector<double> partial_, dLdE_;  // the fused pass's per-chunk sums, dReg/dE
-    TransportLayout layout_ = TransportLayout::Slices;
+    TransportLayout layout_ = TransportLayout::Auto;
+    mutable int evaluations_ = 0;  // for TransportLayout::Auto
+    /// The slices an evaluation's products read, or nullptr for CSR (counts the evaluation).
+    const TransportSlices* productSlices() const;
     struct SlicesCache;
     std::shared_ptr<SlicesCache> slices_;
 

@@ -1,6 +1,6 @@
 // TransportSlices: an in-memory layout of a transport matrix (TransportMatrix.h) for the two
-// products of an iteration, T·E and Tᵀ·g, built from T once (TransportLoss builds it at its
-// first evaluation). The .tm file and TransportMatrix keep CSR; this is a copy for speed.
+// products of an iteration, T·E and Tᵀ·g, built from T once (TransportLoss builds it when it
+// pays, TransportLayout below). The .tm file and TransportMatrix keep CSR; this is a copy.
 //
 // SELL-C-σ with C = kLanes = 8 and σ = one image row: the pixels of each image row are sorted
 // by their number of entries (longest first, stably) and cut into slices of 8; a slice stores
@@ -34,8 +34,11 @@
 
 namespace sl {
 
-/// Which layout TransportLoss's products read (the bench compares them).
-enum class TransportLayout { Csr, Slices };
+/// Which layout TransportLoss's products read: T's CSR arrays, the slices, or (Auto) CSR for
+/// a loss's first kAutoSlicesAfter evaluations and the slices from then on (building them costs
+/// about as much as 15–80 evaluations save, so a loss evaluated a few times never builds them).
+enum class TransportLayout { Csr, Slices, Auto };
+inline constexpr int kAutoSlicesAfter = 16;
 
 class TransportSlices {
   public:
