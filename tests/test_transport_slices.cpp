@@ -222,10 +222,10 @@ TEST(TransportSlices, FusedLossRefusesANonFiniteEnvMap) {
 }
 
 TEST(TransportSlices, AutoLayoutReadsCsrFirstThenTheSlices) {
-    auto s = smallScene(16);
-    const TransportMatrix t = precompute(*s, 1, 1);
+    auto s = smallScene(48);  // enough entries per texel that the two orders round apart
+    const TransportMatrix t = precompute(*s, 3, 1);
     ImageObjective obj(t.width, t.height, t.objectMask, ObjectiveOptions{});
-    TransportLoss csr(t, obj, false), sl(t, obj, false), aut(t, obj, false);
+    TransportLoss csr(t, obj, true), sl(t, obj, true), aut(t, obj, true);
     csr.setLayout(TransportLayout::Csr);
     sl.setLayout(TransportLayout::Slices);
     EXPECT_EQ(aut.layout(), TransportLayout::Auto);  // the default
