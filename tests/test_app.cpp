@@ -226,8 +226,12 @@ TEST(TransportBench, MeasuresTracingTAndTheIterationOnT) {
     EXPECT_GT(r.density, 0);
     EXPECT_LE(r.density, 1);
     EXPECT_EQ(r.productRepeats, 5);
-    for (double t : {r.streamingRead, r.apply, r.iterationTwoPass, r.iterationFused, r.adam})
+    for (double t :
+         {r.streamingRead, r.apply, r.iterationTwoPass, r.iterationFused, r.adam, r.applySlices,
+          r.iterationTwoPassSlices, r.iterationFusedSlices, r.adamSlices, r.slicesBuild})
         EXPECT_GE(t, 0);
+    EXPECT_GT(r.slicesBytes, 0u);
+    EXPECT_GE(r.slicesPadding, 1.0);
     const auto csv = lines(r.csv());
     ASSERT_EQ(csv.size(), 2u);
     EXPECT_NE(csv[1].find(",3,"), std::string::npos) << csv[1];  // adam_iterations

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <sstream>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "app/InitialState.h"
@@ -17,6 +19,7 @@
 #include "render/Render.h"
 #include "scene/Scene.h"
 #include "transport/TransportSink.h"
+#include "transport/TransportSlices.h"
 
 namespace sl {
 
@@ -27,6 +30,17 @@ double medianSeconds(int repeats, F&& f) {
     std::vector<double> t;
     for (int i = 0; i < repeats; ++i) t.push_back(timeSeconds(f));
     return median(t);
+}
+
+/// Medians of f and g timed alternately (f, g, f, g, ...): both see the same load.
+template <typename F, typename G>
+std::pair<double, double> medianSecondsInterleaved(int repeats, F&& f, G&& g) {
+    std::vector<double> a, b;
+    for (int i = 0; i < repeats; ++i) {
+        a.push_back(timeSeconds(f));
+        b.push_back(timeSeconds(g));
+    }
+    return {median(a), median(b)};
 }
 
 }  // namespace
@@ -76,42 +90,68 @@ TransportBenchResult runTransportBench(const TransportBenchOptions& a) {
     r.bytes = T.bytes();
     r.density = T.density();
 
-    // 2. Products and the optimizer on T.
+    // 2. Products and the optimizer on T, on the CSR arrays and on the slices layout.
+    r.stride = T.stride();
     ObjectiveOptions oo;
     ImageObjective obj(T.width, T.height, T.objectMask, oo);
-    TransportLoss loss(T, obj, false);
+    TransportLoss csr(T, obj, false), blk(T, obj, false);
+    csr.setLayout(TransportLayout::Csr);
+    blk.setLayout(TransportLayout::Slices);
+    const ProgressTask products("bench transport: products and Adam on T");
+    r.slicesBuild = timeSeconds([&] { blk.slices(); });
+    const TransportSlices& B = blk.slices();
+    r.slicesBytes = B.bytes();
+    r.slicesPadding = B.padding();
     std::vector<double> e = initialEnvMap(InitialState{}, T.envWidth, T.envHeight, false);
-    std::vector<double> g(loss.dimension());
+    std::vector<double> g(csr.dimension());
     r.productRepeats = std::max(5, 4 * a.repeats + 1);
     const int reps = r.productRepeats;
     volatile double sink = 0;
-    const ProgressTask products("bench transport: products and Adam on T");
     r.streamingRead = medianSeconds(reps, [&] { sink = sink + streamingRead(T); });
-    r.iterationTwoPass = medianSeconds(reps, [&] { sink = sink + loss.evaluate(e, g).total; });
-    r.iterationFused = medianSeconds(reps, [&] { sink = sink + loss.evaluateFused(e, g).total; });
+    std::tie(r.iterationTwoPass, r.iterationTwoPassSlices) = medianSecondsInterleaved(
+        reps, [&] { sink = sink + csr.evaluate(e, g).total; },
+        [&] { sink = sink + blk.evaluate(e, g).total; });
+    std::tie(r.iterationFused, r.iterationFusedSlices) = medianSecondsInterleaved(
+        reps, [&] { sink = sink + csr.evaluateFused(e, g).total; },
+        [&] { sink = sink + blk.evaluateFused(e, g).total; });
     std::vector<double> y(T.rows());
-    r.apply = medianSeconds(reps, [&] { T.applyLuminance(e, y); });
-    r.adam = medianSeconds(a.repeats, [&] {
+    std::tie(r.apply, r.applySlices) = medianSecondsInterleaved(
+        reps, [&] { T.applyLuminance(e, y); },
+        [&] { B.applyLuminance(e, y, TransportMatrix::kMeanPlane, T.threads); });
+    auto adam = [&](const TransportLoss& loss) {
         std::vector<double> x = e;
         OptimizerOptions oopt;
         oopt.iterations = a.iterations;
         minimize(loss.problem(), x, oopt);
-    });
+    };
+    std::tie(r.adam, r.adamSlices) = medianSecondsInterleaved(
+        a.repeats, [&] { adam(csr); }, [&] { adam(blk); });
     return r;
+}
+
+double TransportBenchResult::nonZerosRead() const {
+    if (bytes == 0) return 0;
+    const double nzBytes = static_cast<double>(nnz) * (2.0 + 4.0 * stride);
+    return streamingRead * nzBytes / static_cast<double>(bytes);
 }
 
 std::string TransportBenchResult::csv() const {
     std::ostringstream os;
     os << "scene,width,height,spp,renderer_rays_per_s,precompute_rays_per_s,precompute_ratio,"
-          "storage,nnz,density,bytes,streaming_read_s,apply_s,iteration_two_pass_s,"
-          "iteration_two_pass_ratio,iteration_fused_s,iteration_fused_ratio,adam_iterations,"
-          "adam_s\n";
+          "storage,nnz,density,bytes,slices_bytes,slices_padding,slices_build_s,streaming_read_s,"
+          "nonzeros_read_s,apply_s,apply_slices_s,iteration_two_pass_s,"
+          "iteration_two_pass_slices_s,iteration_fused_s,iteration_fused_slices_s,"
+          "iteration_fused_ratio,iteration_fused_slices_ratio,"
+          "evaluation_slices_vs_nonzeros_read,adam_iterations,adam_s,adam_slices_s\n";
     os << options.scene.string() << ',' << width << ',' << height << ',' << options.spp << ','
        << renderer.raysPerSecond() << ',' << precompute.raysPerSecond() << ',' << precomputeRatio()
        << ',' << (sparse ? "csr" : "dense") << ',' << nnz << ',' << density << ',' << bytes << ','
-       << streamingRead << ',' << apply << ',' << iterationTwoPass << ','
-       << iterationTwoPass / streamingRead << ',' << iterationFused << ','
-       << iterationFused / streamingRead << ',' << options.iterations << ',' << adam << '\n';
+       << slicesBytes << ',' << slicesPadding << ',' << slicesBuild << ',' << streamingRead << ','
+       << nonZerosRead() << ',' << apply << ',' << applySlices << ',' << iterationTwoPass << ','
+       << iterationTwoPassSlices << ',' << iterationFused << ',' << iterationFusedSlices << ','
+       << iterationFused / streamingRead << ',' << iterationFusedSlices / streamingRead << ','
+       << iterationFusedSlices / nonZerosRead() << ',' << options.iterations << ',' << adam << ','
+       << adamSlices << '\n';
     return os.str();
 }
 

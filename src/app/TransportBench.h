@@ -1,7 +1,8 @@
 // `scratchlight bench transport`: what precomputing T costs against rendering (the same tracer
 // with the transport sink instead of the radiance sink, interleaved), T's size, and what an
 // iteration on T costs against one streaming read of T's bytes (products, one loss-and-gradient
-// evaluation in two passes and fused, a whole Adam run).
+// evaluation in two passes and fused, a whole Adam run), each on T's CSR arrays and on the
+// slices layout (transport/TransportSlices.h) side by side.
 #pragma once
 
 #include <cstddef>
@@ -28,13 +29,24 @@ struct TransportBenchResult {
     ThroughputRow renderer, precompute;  // medians over the repeats
     bool sparse = true;                  // T's storage: CSR or dense
     size_t nnz = 0, bytes = 0;
+    int stride = 1;  // floats per entry (channels · planes)
     double density = 0;
+    // The slices layout of T (transport/TransportSlices.h) the loss reads by default.
+    size_t slicesBytes = 0;
+    double slicesPadding = 0;  // its stored entries over T's non-zeros (1 = no padding)
+    double slicesBuild = 0;    // seconds to build it from T
     int productRepeats = 0;
-    double streamingRead = 0;  // seconds (medians from here on)
-    double apply = 0;          // T·E (luminance)
-    double iterationTwoPass = 0;
-    double iterationFused = 0;
-    double adam = 0;  // `iterations` Adam steps
+    double streamingRead = 0;  // seconds (medians from here on) of one read of T's CSR bytes
+    // Each product on T's CSR arrays (the old path) and on the slices layout, measured
+    // interleaved (CSR, slices, CSR, ...) so that both see the same load.
+    double apply = 0, applySlices = 0;  // T·E (luminance)
+    double iterationTwoPass = 0, iterationTwoPassSlices = 0;
+    double iterationFused = 0, iterationFusedSlices = 0;
+    double adam = 0, adamSlices = 0;  // `iterations` Adam steps (fused evaluations)
+
+    /// The time one streaming read of T's non-zeros alone takes, nnz·(2 + 4·stride) bytes at
+    /// the measured streaming read's bandwidth (the row pointers left out).
+    double nonZerosRead() const;
 
     double precomputeRatio() const;  // precompute rays/s over renderer rays/s
     std::string csv() const;         // header + one line

@@ -78,18 +78,29 @@ int runTransportBenchCmd(TransportBenchArgs a) {
                 100.0 * r.precomputeRatio());
     std::printf("  T: %s, nnz %zu, density %.4f, %.1f MB\n", r.sparse ? "CSR" : "dense", r.nnz,
                 r.density, static_cast<double>(r.bytes) / 1e6);
-    std::printf("  %-44s %12.3f ms\n", "streaming read of T's bytes", r.streamingRead * 1e3);
-    std::printf("  %-44s %12.3f ms   (%.2f x the streaming read)\n", "T.E (luminance product)",
-                r.apply * 1e3, r.apply / r.streamingRead);
-    std::printf("  %-44s %12.3f ms   (%.2f x the streaming read; %.2f Gnnz/s)\n",
-                "one iteration, two passes (T.E then T'.g)", r.iterationTwoPass * 1e3,
-                r.iterationTwoPass / r.streamingRead,
-                2.0 * static_cast<double>(r.nnz) / r.iterationTwoPass / 1e9);
-    std::printf("  %-44s %12.3f ms   (%.2f x the streaming read)\n",
-                "one iteration, fused single pass", r.iterationFused * 1e3,
-                r.iterationFused / r.streamingRead);
-    std::printf("  %-44s %12.3f s\n",
-                ("Adam, " + std::to_string(a.o.iterations) + " iterations").c_str(), r.adam);
+    std::printf(
+        "  T: %.2f bytes per non-zero; slices layout: %.1f MB, %.2f bytes per non-zero, "
+        "padding x %.3f, built in %.3f s\n",
+        static_cast<double>(r.bytes) / static_cast<double>(r.nnz),
+        static_cast<double>(r.slicesBytes) / 1e6,
+        static_cast<double>(r.slicesBytes) / static_cast<double>(r.nnz), r.slicesPadding,
+        r.slicesBuild);
+    std::printf("  %-44s %12.3f ms\n", "streaming read of T's bytes (CSR)", r.streamingRead * 1e3);
+    std::printf("  %-44s %12.3f ms\n", "streaming read of the non-zeros alone",
+                r.nonZerosRead() * 1e3);
+    std::printf("  %-44s %21s %21s\n", "(x: over the streaming read of T)", "CSR", "slices");
+    auto row = [&](const char* what, double csr, double slices) {
+        std::printf("  %-44s %9.3f ms (%5.2f x) %9.3f ms (%5.2f x)\n", what, csr * 1e3,
+                    csr / r.streamingRead, slices * 1e3, slices / r.streamingRead);
+    };
+    row("T.E (luminance product)", r.apply, r.applySlices);
+    row("one iteration, two passes (T.E then T'.g)", r.iterationTwoPass, r.iterationTwoPassSlices);
+    row("one iteration, fused single pass", r.iterationFused, r.iterationFusedSlices);
+    std::printf("  %-44s %12.3f s %17.3f s\n",
+                ("Adam, " + std::to_string(a.o.iterations) + " iterations").c_str(), r.adam,
+                r.adamSlices);
+    std::printf("  %-44s %12.2f x\n", "fused evaluation on slices / non-zeros' read",
+                r.iterationFusedSlices / r.nonZerosRead());
     std::printf("(medians: tracing of %d interleaved runs, products of %d runs)\n", a.o.repeats,
                 r.productRepeats);
     writeTextAtomically(a.csv, r.csv());

@@ -104,7 +104,8 @@ double accumulateG(int width, int height, const std::vector<uint8_t>& mask, cons
             [&](size_t p, size_t q) {
                 const double d = Y[q - base] - Y[p - base];
                 G += detail::objectiveAbs<double>(d, false, eps);
-                const double g = d > 0.0 ? 1.0 : (d < 0.0 ? -1.0 : 0.0);
+                // sign(d) without a branch: the signs of a textured image are not predictable.
+                const double g = static_cast<double>(d > 0.0) - static_cast<double>(d < 0.0);
                 s[q - base] += g;
                 s[p - base] -= g;
             },
@@ -191,34 +192,38 @@ LossParts ImageObjective::evaluate(std::span<const double> Y, std::span<const do
     detail::checkFinite(Y, "Y", "evaluate");
     detail::checkFinite(E, "E", "evaluate");
 
-    LossParts r;
-    r.S = S_;
     const bool wantY = !dLdY.empty();
     if (wantY) std::fill(dLdY.begin(), dLdY.end(), 0.0);
-    r.G = accumulateG(width_, height_, mask_, Y.data(), wantY ? dLdY.data() : nullptr,
-                      opt_.smoothAbs, opt_.smoothEps);
-    r.clamped = r.G < gFloor();
-    r.lGrad = lGrad(r.G);
+    const double G = accumulateG(width_, height_, mask_, Y.data(), wantY ? dLdY.data() : nullptr,
+                                 opt_.smoothAbs, opt_.smoothEps);
+    double sumY2 = 0.0;
+    if (opt_.reg == RegTarget::Image)
+        for (double y : Y) sumY2 += y * y;
+    const LossParts r = fromSums(G, sumY2, E, dLdE);
     if (wantY) {
         const double scale = lGradScale(r.G);
         for (double& g : dLdY) g *= scale;
+        const double k = imageRegScale();  // 2λ/(W·H) for RegTarget::Image, else 0
+        if (k != 0.0)
+            for (size_t i = 0; i < Y.size(); ++i) dLdY[i] += k * Y[i];
     }
+    return r;
+}
 
-    const double lambda = opt_.lambda;
-    double reg = 0.0;
+LossParts ImageObjective::fromSums(double G, double sumY2, std::span<const double> E,
+                                   std::span<double> dLdE) const {
+    LossParts r;
+    r.S = S_;
+    r.G = G;
+    r.clamped = r.G < gFloor();
+    r.lGrad = lGrad(r.G);
     if (opt_.reg == RegTarget::EnvMap) {
         r.lReg = envMapRegulariser(E, dLdE);
     } else {
-        for (double y : Y) reg += y * y;
-        const double n = static_cast<double>(Y.size());
-        r.lReg = reg / n;
-        if (wantY) {
-            const double k = 2.0 * lambda / n;
-            for (size_t i = 0; i < Y.size(); ++i) dLdY[i] += k * Y[i];
-        }
+        r.lReg = sumY2 / (static_cast<double>(width_) * static_cast<double>(height_));
         std::fill(dLdE.begin(), dLdE.end(), 0.0);
     }
-    r.total = r.lGrad + lambda * r.lReg;
+    r.total = r.lGrad + opt_.lambda * r.lReg;
     if (!std::isfinite(r.total)) {
         throw std::range_error(
             "ImageObjective::evaluate: the loss is not finite (G = " + std::to_string(r.G) +

@@ -67,6 +67,12 @@ class ImageObjective {
     /// and written, so they must be held. No checks: the caller guarantees sizes, finite Y.
     double accumulateSignsRows(const double* Y, double* s, int y0, int y1, int firstRow) const;
 
+    /// The loss from the sums a fused kernel accumulates over bands of rows: G and Σ_p Y_p²
+    /// (all pixels; used by RegTarget::Image). Fills dLdE as evaluate() does (when non-empty,
+    /// size N = E.size()). evaluate() assembles its result here too.
+    LossParts fromSums(double G, double sumY2, std::span<const double> E,
+                       std::span<double> dLdE) const;
+
     /// The floor of G (1e-12·S, > 0): below it L_grad is clamped to S/gFloor() and its
     /// gradient is 0 (LossParts::clamped).
     double gFloor() const { return 1e-12 * S_; }

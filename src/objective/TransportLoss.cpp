@@ -6,14 +6,39 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <stdexcept>
 
 #include "core/Error.h"
 
 namespace sl {
 
+namespace {
+
+/// Σ v², eight lanes at a time (vectorised; the order is fixed).
+double sumOfSquares(const double* v, size_t n) {
+    double acc[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    size_t i = 0;
+    for (; i + 8 <= n; i += 8)
+        for (int l = 0; l < 8; ++l) acc[l] += v[i + l] * v[i + l];
+    for (; i < n; ++i) acc[0] += v[i] * v[i];
+    return ((acc[0] + acc[4]) + (acc[2] + acc[6])) + ((acc[1] + acc[5]) + (acc[3] + acc[7]));
+}
+
+}  // namespace
+
+struct TransportLoss::SlicesCache {
+    std::once_flag once;
+    std::unique_ptr<TransportSlices> slices;
+};
+
 TransportLoss::TransportLoss(const TransportMatrix& t, const ImageObjective& objective, bool rgb)
-    : t_(t), obj_(&objective), dimension_(t.cols() * (rgb ? 3 : 1)), y_(t.rows()), dLdY_(t.rows()) {
+    : t_(t),
+      obj_(&objective),
+      dimension_(t.cols() * (rgb ? 3 : 1)),
+      y_(t.rows()),
+      dLdY_(t.rows()),
+      slices_(std::make_shared<SlicesCache>()) {
     if (rgb && t.channels != 3)
         throw std::invalid_argument("an RGB env map needs an RGB transport matrix (" +
                                     option("rgb") + ")");
@@ -29,7 +54,8 @@ TransportLoss::TransportLoss(const TransportMatrix& t, const HalfImageObjective&
       y_(t.rows()),
       dLdY_(t.rows()),
       yb_(t.rows()),
-      dLdYb_(t.rows()) {
+      dLdYb_(t.rows()),
+      slices_(std::make_shared<SlicesCache>()) {
     if (rgb && t.channels != 3)
         throw std::invalid_argument("an RGB env map needs an RGB transport matrix (" +
                                     option("rgb") + ")");
@@ -40,12 +66,36 @@ TransportLoss::TransportLoss(const TransportMatrix& t, const HalfImageObjective&
         throw std::invalid_argument("objective image size != transport matrix rows");
 }
 
+const TransportSlices* TransportLoss::productSlices() const {
+    switch (layout_) {
+        case TransportLayout::Csr:
+            return nullptr;
+        case TransportLayout::Slices:
+            return &slices();
+        case TransportLayout::Auto:
+            return evaluations_++ < kAutoSlicesAfter ? nullptr : &slices();
+    }
+    return nullptr;
+}
+
+const TransportSlices& TransportLoss::slices() const {
+    std::call_once(slices_->once, [&] { slices_->slices = std::make_unique<TransportSlices>(t_); });
+    return *slices_->slices;
+}
+
 LossParts TransportLoss::evaluateUnbiased(std::span<const double> E, std::span<double> grad) const {
-    t_.applyLuminanceHalves(E, y_, yb_);
+    const TransportSlices* b = productSlices();
+    if (b)
+        b->applyLuminanceHalves(E, y_, yb_, t_.threads);
+    else
+        t_.applyLuminanceHalves(E, y_, yb_);
     if (grad.empty()) return unb_->evaluate(y_, yb_, E);
     std::vector<double> dLdE(dimension_);
     LossParts parts = unb_->evaluate(y_, yb_, E, dLdY_, dLdYb_, dLdE);
-    t_.applyTransposeLuminanceHalves(dLdY_, dLdYb_, grad);
+    if (b)
+        b->applyTransposeLuminanceHalves(dLdY_, dLdYb_, grad, t_.threads);
+    else
+        t_.applyTransposeLuminanceHalves(dLdY_, dLdYb_, grad);
     for (size_t i = 0; i < dimension_; ++i) grad[i] += dLdE[i];
     return parts;
 }
@@ -57,13 +107,20 @@ LossParts TransportLoss::evaluate(std::span<const double> E, std::span<double> g
             throw std::invalid_argument("TransportLoss: gradient has the wrong size");
         return evaluateUnbiased(E, grad);
     }
-    t_.applyLuminance(E, y_);
+    const TransportSlices* b = productSlices();
+    if (b)
+        b->applyLuminance(E, y_, TransportMatrix::kMeanPlane, t_.threads);
+    else
+        t_.applyLuminance(E, y_);
     if (grad.empty()) return obj_->evaluate(y_, E);
     if (grad.size() != dimension_)
         throw std::invalid_argument("TransportLoss: gradient has the wrong size");
     std::vector<double> dLdE(dimension_);
     LossParts parts = obj_->evaluate(y_, E, dLdY_, dLdE);
-    t_.applyTransposeLuminance(dLdY_, grad);
+    if (b)
+        b->applyTransposeLuminance(dLdY_, grad, TransportMatrix::kMeanPlane, t_.threads);
+    else
+        t_.applyTransposeLuminance(dLdY_, grad);
     for (size_t i = 0; i < dimension_; ++i) grad[i] += dLdE[i];
     return parts;
 }
@@ -77,10 +134,32 @@ LossParts TransportLoss::evaluateFused(std::span<const double> E, std::span<doub
     const size_t w = static_cast<size_t>(W), n = dimension_;
     const bool rgbE = dimension_ == 3 * t_.cols();
     const double regScale = obj_->imageRegScale();
-    const int chunkRows = std::max(16, (H + 15) / 16), band = 2;
+    const TransportSlices* blk = productSlices();
+    auto applyRows = [&](double* Y, size_t r0, size_t r1) {
+        if (blk)
+            blk->applyLuminanceRows(E.data(), rgbE, Y, r0, r1);
+        else
+            t_.applyLuminanceRows(E.data(), rgbE, Y, r0, r1);
+    };
+    // Tᵀ·g of a band into a chunk's sums: the slices' per-lane sums (added into the chunk's
+    // partial at its end), or T's own product straight into the partial.
+    const size_t lanes = blk ? TransportSlices::kLanes : 1;
+    auto transposeRows = [&](const double* g, double* out, size_t r0, size_t r1) {
+        if (blk)
+            blk->accumulateTransposeLanes(g, rgbE, out, r0, r1);
+        else
+            t_.accumulateTransposeRows(g, rgbE, out, r0, r1);
+    };
+    // At most 16 chunks (each keeps its own Tᵀ·s), of at least 16 rows and ~16 k pixels.
+    const int chunkRows = std::max({16, (H + 15) / 16, (16384 + W - 1) / W}), band = 2;
     const int nChunks = (H + chunkRows - 1) / chunkRows;
-    std::vector<double> gs(static_cast<size_t>(nChunks) * n, 0.0);
-    std::vector<double> gy(regScale != 0 ? static_cast<size_t>(nChunks) * n : 0, 0.0);
+    // Per chunk: Tᵀ·s (n), then Tᵀ·Y for the image regulariser (n, when it is on).
+    const size_t per = regScale != 0 ? 2 * n : n;
+    partial_.resize(static_cast<size_t>(nChunks) * per);
+    struct ChunkSums {
+        double G = 0, sumY2 = 0;
+    };
+    std::vector<ChunkSums> sums(static_cast<size_t>(nChunks));
 
     auto chunk = [&](int k) {
         const int a = k * chunkRows, b = std::min(H, a + chunkRows);
@@ -92,24 +171,35 @@ LossParts TransportLoss::evaluateFused(std::span<const double> E, std::span<doub
         int computed = lo;  // rows [lo, computed) of yl hold Y
         auto ensureY = [&](int upto) {
             if (upto <= computed) return;
-            t_.applyLuminanceRows(E.data(), rgbE, rowOf(yl, computed), computed * w, upto * w);
+            applyRows(rowOf(yl, computed), computed * w, upto * w);
             computed = upto;
         };
         if (a > 0) {  // the vertical pairs (a-1, a) that the previous chunk owns touch row a
             ensureY(a + 1);
-            obj_->accumulateSignsRows(yl.data(), sl.data(), a - 1, a, lo);
+            obj_->accumulateSignsRows(yl.data(), sl.data(), a - 1, a, lo);  // G: the previous's
         }
-        double* gsk = gs.data() + static_cast<size_t>(k) * n;
-        double* gyk = gy.empty() ? nullptr : gy.data() + static_cast<size_t>(k) * n;
+        double* gsk = partial_.data() + static_cast<size_t>(k) * per;
+        std::fill(gsk, gsk + per, 0.0);
+        thread_local std::vector<double> laneSums;
+        double* sums8 = gsk;  // where the bands' Tᵀ·s (then Tᵀ·Y) go
+        if (blk) {
+            laneSums.assign(per * lanes, 0.0);
+            sums8 = laneSums.data();
+        }
+        double* gyk = regScale != 0 ? sums8 + n * lanes : nullptr;
+        ChunkSums cs;
         for (int y0 = a; y0 < b; y0 += band) {
             const int y1 = std::min(y0 + band, b);
             ensureY(std::min(y1 + 1, hi));
-            obj_->accumulateSignsRows(yl.data(), sl.data(), y0, y1, lo);
+            cs.G += obj_->accumulateSignsRows(yl.data(), sl.data(), y0, y1, lo);
             // Rows [y0, y1) now have their final s; their T rows were just read for Y.
-            t_.accumulateTransposeRows(rowOf(sl, y0), rgbE, gsk, y0 * w, y1 * w);
-            if (gyk) t_.accumulateTransposeRows(rowOf(yl, y0), rgbE, gyk, y0 * w, y1 * w);
+            transposeRows(rowOf(sl, y0), sums8, y0 * w, y1 * w);
+            if (gyk) transposeRows(rowOf(yl, y0), gyk, y0 * w, y1 * w);
+            cs.sumY2 += sumOfSquares(rowOf(yl, y0), static_cast<size_t>(y1 - y0) * w);
             std::copy(rowOf(yl, y0), rowOf(yl, y1), y_.data() + y0 * w);
         }
+        if (blk) TransportSlices::addLanes(sums8, gsk, per);
+        sums[static_cast<size_t>(k)] = cs;
     };
     auto run = [&] {
         tbb::parallel_for(
@@ -126,17 +216,27 @@ LossParts TransportLoss::evaluateFused(std::span<const double> E, std::span<doub
         run();
     }
 
-    // The values (and the env-map regulariser's gradient) from the objective itself.
-    std::vector<double> dLdE(dimension_);
-    LossParts parts = obj_->evaluate(y_, E, {}, dLdE);
+    // The loss from the chunks' sums, in chunk order; the objective assembles it.
+    ChunkSums total;
+    for (const ChunkSums& cs : sums) {
+        total.G += cs.G;
+        total.sumY2 += cs.sumY2;
+    }
+    dLdE_.resize(n);
+    // A non-finite Y or E makes Σ Y² or Σ E² non-finite (so may an overflow): then the
+    // objective's own checks run, and throw naming the value.
+    if (!std::isfinite(total.sumY2) || !std::isfinite(sumOfSquares(E.data(), E.size())))
+        obj_->evaluate(y_, E, {}, dLdE_);
+    LossParts parts = obj_->fromSums(total.G, total.sumY2, E, dLdE_);
     const double scale = obj_->lGradScale(parts.G);
     for (size_t i = 0; i < n; ++i) {
         double s = 0, yy = 0;
         for (int k = 0; k < nChunks; ++k) {
-            s += gs[static_cast<size_t>(k) * n + i];
-            if (!gy.empty()) yy += gy[static_cast<size_t>(k) * n + i];
+            const double* p = partial_.data() + static_cast<size_t>(k) * per;
+            s += p[i];
+            if (regScale != 0) yy += p[n + i];
         }
-        grad[i] = scale * s + regScale * yy + dLdE[i];
+        grad[i] = scale * s + regScale * yy + dLdE_[i];
     }
     return parts;
 }

@@ -2,6 +2,7 @@
 // with its exact gradient  dLoss/dE = Tᵀ·dLoss/dY + dReg/dE  (docs/DESIGN.md "The one idea").
 #pragma once
 
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -10,6 +11,7 @@
 #include "objective/Objective.h"
 #include "transport/TransportColumns.h"
 #include "transport/TransportMatrix.h"
+#include "transport/TransportSlices.h"
 
 namespace sl {
 
@@ -25,10 +27,20 @@ class TransportLoss {
     /// Loss parts at E; fills grad (size dimension()) when it is non-empty.
     LossParts evaluate(std::span<const double> E, std::span<double> grad) const;
     /// The same loss and gradient in one streaming pass over T: bands of rows compute Y, the
-    /// signs dG/dY of the pairs they own (with one halo row each side) and accumulate Tᵀ·s
-    /// while T's rows are still in cache; the global factor −S/G² is applied at the end.
-    /// Chunks are fixed, so the result does not depend on the number of threads.
+    /// signs dG/dY of the pairs they own (with one halo row each side), their share of G (and
+    /// of Σ Y²) and accumulate Tᵀ·s while T's rows are still in cache; the global factor
+    /// −S/G² is applied at the end. Chunks are fixed, so the result does not depend on the
+    /// number of threads; it equals evaluate()'s to rounding (G is summed band by band).
     LossParts evaluateFused(std::span<const double> E, std::span<double> grad) const;
+
+    /// The layout the products read (transport/TransportSlices.h): Auto (default), Slices (a
+    /// TransportSlices copy of T, built once and shared by copies of this loss, so T must not
+    /// change after it) or Csr (T's own arrays, nothing built). Each copy counts its own
+    /// evaluations for Auto, so its results do not depend on what other copies do.
+    void setLayout(TransportLayout layout) { layout_ = layout; }
+    TransportLayout layout() const { return layout_; }
+    /// The slices layout of T (built on first use).
+    const TransportSlices& slices() const;
 
     /// The same loss for an E that is zero outside the texels `active` (a gray E), through
     /// `columns` (a TransportColumns of this loss's matrix): the products read only the active
@@ -53,6 +65,13 @@ class TransportLoss {
     const HalfImageObjective* unb_ = nullptr;
     size_t dimension_;
     mutable std::vector<double> y_, dLdY_, yb_, dLdYb_;
+    mutable std::vector<double> partial_, dLdE_;  // the fused pass's per-chunk sums, dReg/dE
+    TransportLayout layout_ = TransportLayout::Auto;
+    mutable int evaluations_ = 0;  // for TransportLayout::Auto
+    /// The slices an evaluation's products read, or nullptr for CSR (counts the evaluation).
+    const TransportSlices* productSlices() const;
+    struct SlicesCache;
+    std::shared_ptr<SlicesCache> slices_;
 
     LossParts evaluateUnbiased(std::span<const double> E, std::span<double> grad) const;
 };
