@@ -73,6 +73,7 @@ const TransportSlices* TransportLoss::productSlices() const {
         case TransportLayout::Slices:
             return &slices();
         case TransportLayout::Auto:
+            if (t_.bytes() > kAutoSlicesMaxBytes) return nullptr;
             return evaluations_++ < kAutoSlicesAfter ? nullptr : &slices();
     }
     return nullptr;

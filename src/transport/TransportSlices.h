@@ -37,8 +37,12 @@ namespace sl {
 /// Which layout TransportLoss's products read: T's CSR arrays, the slices, or (Auto) CSR for
 /// a loss's first kAutoSlicesAfter evaluations and the slices from then on (building them costs
 /// about as much as 15–80 evaluations save, so a loss evaluated a few times never builds them).
+/// Auto keeps CSR for a T of more than kAutoSlicesMaxBytes: the copy adds about 0.9× T's
+/// memory, and a big image's T must fit beside it (4096² at 64 spp with halves: T 2.5 GB, peak
+/// 7.0 GB on CSR; the copy would take it past 8 GB).
 enum class TransportLayout { Csr, Slices, Auto };
 inline constexpr int kAutoSlicesAfter = 16;
+inline constexpr size_t kAutoSlicesMaxBytes = size_t{1} << 30;
 
 class TransportSlices {
   public:
