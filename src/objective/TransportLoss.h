@@ -5,6 +5,7 @@
 #include <span>
 #include <vector>
 
+#include "core/Communicator.h"
 #include "core/Problem.h"
 #include "objective/HalfImageObjective.h"
 #include "objective/Objective.h"
@@ -22,6 +23,17 @@ class TransportLoss {
     TransportLoss(const TransportMatrix& t, const HalfImageObjective& objective, bool rgb);
 
     size_t dimension() const { return dimension_; }
+    /// Ranks that each hold one row shard of T (io/TransportFile.h SHARDS) as this loss's
+    /// matrix: every product gives this rank's rows; the image is put together over the ranks
+    /// (Communicator::combine) before the objective, and Tᵀ·dLoss/dY summed over them
+    /// (Communicator::sum) before dLoss/dE is added once, so every rank gets the whole loss and
+    /// gradient and the ranks must evaluate in step. Null (the default) or one rank: T alone.
+    /// The fused pass and evaluateOnColumns are single-process only (the first falls back to
+    /// evaluate, the second refuses).
+    void distribute(const Communicator* ranks) {
+        ranks_ = ranks && ranks->distributed() ? ranks : nullptr;
+    }
+    bool distributed() const { return ranks_ != nullptr; }
     /// Loss parts at E; fills grad (size dimension()) when it is non-empty.
     LossParts evaluate(std::span<const double> E, std::span<double> grad) const;
     /// The same loss and gradient in one streaming pass over T: bands of rows compute Y, the
@@ -53,6 +65,7 @@ class TransportLoss {
     const HalfImageObjective* unb_ = nullptr;
     size_t dimension_;
     mutable std::vector<double> y_, dLdY_, yb_, dLdYb_;
+    const Communicator* ranks_ = nullptr;
 
     LossParts evaluateUnbiased(std::span<const double> E, std::span<double> grad) const;
 };
