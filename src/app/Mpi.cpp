@@ -4,6 +4,7 @@
 #include <climits>
 #include <cstdlib>
 #include <stdexcept>
+#include <vector>
 
 #ifdef SL_HAVE_MPI
 // The C interface only (MPI's C++ bindings are deprecated and do not compile warning-free).
@@ -59,6 +60,21 @@ class MpiCommunicator final : public Communicator {
         forChunks(v, [](double* p, int n) {
             MPI_Allreduce(MPI_IN_PLACE, p, n, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
         });
+    }
+    void gather(std::span<double> v, size_t begin, size_t end) const override {
+        const Timed timed(seconds_);
+        if (v.size() > static_cast<size_t>(INT_MAX) || begin > end || end > v.size())
+            throw std::invalid_argument("MPI gather: a block outside the array, or over 2^31");
+        const long long mine[2] = {static_cast<long long>(begin), static_cast<long long>(end)};
+        std::vector<long long> blocks(2 * static_cast<size_t>(size_));
+        MPI_Allgather(mine, 2, MPI_LONG_LONG, blocks.data(), 2, MPI_LONG_LONG, MPI_COMM_WORLD);
+        std::vector<int> counts(static_cast<size_t>(size_)), displs(counts.size());
+        for (size_t r = 0; r < counts.size(); ++r) {
+            displs[r] = static_cast<int>(blocks[2 * r]);
+            counts[r] = static_cast<int>(blocks[2 * r + 1] - blocks[2 * r]);
+        }
+        MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, v.data(), counts.data(), displs.data(),
+                       MPI_DOUBLE, MPI_COMM_WORLD);
     }
     [[noreturn]] void abort(int code) const override {
         MPI_Abort(MPI_COMM_WORLD, code);

@@ -107,16 +107,17 @@ VisibilityMetrics metricsFor(const TransportMatrix& t, const std::vector<double>
     return computeVisibilityMetrics(in);
 }
 
-/// The render a person looks at: RGB when T is RGB, else luminance. Over MPI ranks (`ranks`
-/// non-null) t is this rank's shard and the image is put together over the ranks.
+/// The render a person looks at: RGB when T is RGB, else luminance. Over MPI ranks t is this
+/// rank's shard (the rows of `shard`) and the image is put together over the ranks.
 std::vector<double> renderImage(const TransportMatrix& t, const std::vector<double>& e,
-                                const Communicator* ranks) {
-    std::vector<double> out(t.rows() * (t.channels == 3 ? 3 : 1));
+                                const RowShard& shard) {
+    const size_t ch = t.channels == 3 ? 3 : 1;
+    std::vector<double> out(t.rows() * ch);
     if (t.channels == 3)
         t.applyRgb(e, out);
     else
         t.applyLuminance(e, out);
-    if (ranks) ranks->combine(out);
+    shard.gatherImage(out, static_cast<size_t>(t.width), ch);
     return out;
 }
 
@@ -306,6 +307,7 @@ Plan plan(const OptimizeJobOptions& options) {
 /// What every λ run of the job shares.
 struct Inputs {
     const Communicator* ranks = nullptr;  // Plan::ranks
+    RowShard shard;                       // the rows of T this rank holds (over MPI ranks)
     std::unique_ptr<Scene> scene;         // loaded once; from T's provenance for a .tm when needed
     ObjectiveKind kind = ObjectiveKind::Unbiased;
     bool onHalves() const { return registryRow(objectiveKindTable(), kind).planes == 2; }
@@ -345,7 +347,7 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     if (p.tmInput) {
         const Stopwatch clock;
         job.transport.file =
-            p.ranks ? readShardOfRank(o.input, *p.ranks) : readTransportFile(o.input);
+            p.ranks ? readShardOfRank(o.input, *p.ranks, &in.shard) : readTransportFile(o.input);
         job.transport.path = o.input;
         job.transport.secondsTotal = clock.seconds();
         if (!o.objectiveKind && job.transport.file.matrix.planes == 2) in.kind = byDefault;
@@ -447,7 +449,7 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     // A start whose image has no contrast on the part (E = 0: all black) is a plateau of every
     // objective (G = 0, gradient 0): no optimizer can leave it.
     for (size_t k = 0; k < o.starts.size(); ++k) {
-        const std::vector<double> image = renderImage(t, in.startValues[k], in.ranks);
+        const std::vector<double> image = renderImage(t, in.startValues[k], in.shard);
         const size_t ch = image.size() / t.rows();
         double lo = std::numeric_limits<double>::infinity(), hi = -lo;
         for (size_t pix = 0; pix < t.rows(); ++pix)
@@ -464,7 +466,7 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
                     "0 there, so no optimizer can leave it",
                 "start from a light that shows the part, e.g. const:0.5 or specular");
     }
-    in.image0 = renderImage(t, in.startValues.front(), in.ranks);
+    in.image0 = renderImage(t, in.startValues.front(), in.shard);
     in.metricsInitial =
         metricsFor(t, in.image0, in.mask.pixels, in.startValues.front(), o.rgb, in.truth);
 }
@@ -481,7 +483,7 @@ std::vector<double> paperLight(const Plan& p, const Inputs& in, const TransportM
     si.objective = paper.objective;
     si.objective.lambda = paper.lambdas.front();
     si.rgb = p.o.rgb;
-    si.ranks = in.ranks;
+    si.shard = in.shard;
     SearchOptions so;
     so.objective = ObjectiveKind::Paper;
     so.optimizer = paper.optimizer;
@@ -583,7 +585,7 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
     si.startValues = in.startValues;
     si.defects = in.defects;
     si.reference = in.reference;
-    si.ranks = in.ranks;
+    si.shard = in.shard;
     const ObjectiveOnT own = objectiveOnT(in.kind, t, si, oo);
     const TransportLoss& loss = *own.loss;
     std::unique_ptr<HeldOutScorer> scorer;
@@ -923,9 +925,9 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
     const std::vector<uint8_t>& mask = in.mask.pixels;
     // The renders first: over MPI ranks every rank takes part in putting them together, then
     // rank 0 alone writes.
-    const std::vector<double> imageFinal = renderImage(t, r.e, in.ranks);
-    const std::vector<double> imageLamp = renderImage(t, in.lampE, in.ranks);
-    const std::vector<double> imagePaper = renderImage(t, in.paperE, in.ranks);
+    const std::vector<double> imageFinal = renderImage(t, r.e, in.shard);
+    const std::vector<double> imageLamp = renderImage(t, in.lampE, in.shard);
+    const std::vector<double> imagePaper = renderImage(t, in.paperE, in.shard);
     if (!p.writes()) return {};
     const std::filesystem::path dir = p.staged(run.dir);
     std::filesystem::create_directories(dir);

@@ -27,7 +27,7 @@ ObjectiveOnT objectiveOnT(ObjectiveKind kind, const TransportMatrix& t, const Se
             r.loss = std::make_unique<TransportLoss>(t, *r.halves, in.rgb);
             break;
         case ObjectiveKind::Defects: {
-            if (in.ranks && in.ranks->distributed())
+            if (in.shard.distributed())
                 throw inputError(std::string("the defects objective"),
                                  "does not run over MPI ranks yet (its white-furnace mean needs "
                                  "the whole T)",
@@ -40,7 +40,7 @@ ObjectiveOnT objectiveOnT(ObjectiveKind kind, const TransportMatrix& t, const Se
             break;
         }
     }
-    r.loss->distribute(in.ranks);
+    r.loss->distribute(in.shard);
     return r;
 }
 

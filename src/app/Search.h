@@ -57,9 +57,9 @@ struct SearchInputs {
     /// Sees every iteration of every start and stage (IterationRecord::iteration counts on
     /// across them); returning false stops the search.
     std::function<bool(const IterationRecord&, std::span<const double> x)> callback;
-    /// MPI ranks that each hold one row shard of every T in `set` (TransportLoss::distribute);
-    /// null: the whole T here. Every rank runs the same search in step.
-    const Communicator* ranks = nullptr;
+    /// Over MPI ranks: the rows of every T in `set` this rank holds (TransportLoss::distribute);
+    /// default: one process, the whole T here. Every rank runs the same search in step.
+    RowShard shard;
 };
 
 struct SearchResult {

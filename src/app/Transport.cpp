@@ -75,8 +75,13 @@ std::string describeTransport(const TransportSource& s) {
     return out;
 }
 
-TransportFile readShardOfRank(const std::filesystem::path& list, const Communicator& ranks) {
-    if (!ranks.distributed()) return readTransportFile(list);
+TransportFile readShardOfRank(const std::filesystem::path& list, const Communicator& ranks,
+                              RowShard* rows) {
+    if (!ranks.distributed()) {
+        TransportFile f = readTransportFile(list);
+        if (rows) *rows = RowShard{&ranks, 0, static_cast<size_t>(f.matrix.height)};
+        return f;
+    }
     if (list.extension() != ".shards")
         throw inputError(list.string(),
                          "is one transport matrix; over " + std::to_string(ranks.size()) +
@@ -133,12 +138,12 @@ TransportFile readShardOfRank(const std::filesystem::path& list, const Communica
         if (owner[static_cast<size_t>(y)] < 0)
             throw inputError(list.string(), "no shard has image row " + std::to_string(y),
                              "trace the missing rows with `precompute " + option("rows") + " A:B`");
+    const RowShard shard{&ranks, static_cast<size_t>(mine.rowBegin),
+                         static_cast<size_t>(mine.rowEnd)};
     std::vector<double> mask(f.matrix.objectMask.begin(), f.matrix.objectMask.end());
-    const size_t W = static_cast<size_t>(t.width);
-    for (size_t q = 0; q < mask.size(); ++q)
-        if (owner[q / W] != ranks.rank()) mask[q] = 0;  // only the rows this shard traced
-    ranks.combine(mask);
+    shard.gatherImage(mask, static_cast<size_t>(t.width));
     for (size_t q = 0; q < mask.size(); ++q) f.matrix.objectMask[q] = mask[q] != 0 ? 1 : 0;
+    if (rows) *rows = shard;
     f.provenance.inputs = mine.inputs;
     f.provenance.fingerprint = mine.fingerprint;
     return f;

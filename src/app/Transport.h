@@ -78,8 +78,10 @@ std::string describeTransport(const TransportSource& source);
 /// `list`, which must name N shards. The ranks check together that their shards are one trace
 /// (the same inputs, every image row in exactly one) and put the object mask together, so each
 /// rank's matrix holds its rows of T, the whole image's object mask and the merged T's
-/// provenance. With one rank: the whole list, merged (readTransportFile).
-TransportFile readShardOfRank(const std::filesystem::path& list, const Communicator& ranks);
+/// provenance; `rows` (optional) receives the rows it holds. With one rank: the whole list,
+/// merged (readTransportFile), all its rows.
+TransportFile readShardOfRank(const std::filesystem::path& list, const Communicator& ranks,
+                              RowShard* rows = nullptr);
 
 /// True if `input` names a transport-matrix file (by extension: .tm, or a .shards list).
 bool isTransportFile(const std::filesystem::path& input);

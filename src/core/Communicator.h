@@ -9,6 +9,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdlib>
 #include <span>
 #include <vector>
@@ -30,6 +31,10 @@ class Communicator {
     /// most one rank (an image whose rows the ranks split): x + 0 is exact, so the result is
     /// the same on every rank in any order of summation, at the cost of one all-reduce.
     virtual void combine(std::span<double> values) const = 0;
+    /// values ← every rank's block: this rank's [begin, end) goes to every rank. The ranks'
+    /// blocks must not overlap; elements outside every block keep their value. Half the
+    /// traffic of combine for an image whose rows the ranks split.
+    virtual void gather(std::span<double> values, size_t begin, size_t end) const = 0;
     /// Ends every rank with exit code `code` (an error on one rank must not leave the others
     /// waiting in a collective).
     [[noreturn]] virtual void abort(int code) const = 0;
@@ -45,7 +50,22 @@ class SerialCommunicator final : public Communicator {
     int size() const override { return 1; }
     void sum(std::span<double>) const override {}
     void combine(std::span<double>) const override {}
+    void gather(std::span<double>, size_t, size_t) const override {}
     [[noreturn]] void abort(int code) const override { std::exit(code); }
+};
+
+/// The image rows [rowBegin, rowEnd) this rank holds among ranks that split T by rows (its
+/// shard, io/TransportFile.h SHARDS): a product of its shard fills only them, and gatherImage
+/// puts every rank's rows together. `ranks` null: one process, which holds every row.
+struct RowShard {
+    const Communicator* ranks = nullptr;
+    size_t rowBegin = 0, rowEnd = 0;
+    bool distributed() const { return ranks && ranks->distributed(); }
+    /// image: rows of `width` pixels of `perPixel` values each.
+    void gatherImage(std::span<double> image, size_t width, size_t perPixel = 1) const {
+        if (distributed())
+            ranks->gather(image, rowBegin * width * perPixel, rowEnd * width * perPixel);
+    }
 };
 
 /// Every rank's `mine` (the same count on every rank), side by side in rank order, on every

@@ -24,16 +24,14 @@ class TransportLoss {
 
     size_t dimension() const { return dimension_; }
     /// Ranks that each hold one row shard of T (io/TransportFile.h SHARDS) as this loss's
-    /// matrix: every product gives this rank's rows; the image is put together over the ranks
-    /// (Communicator::combine) before the objective, and Tᵀ·dLoss/dY summed over them
-    /// (Communicator::sum) before dLoss/dE is added once, so every rank gets the whole loss and
-    /// gradient and the ranks must evaluate in step. Null (the default) or one rank: T alone.
-    /// The fused pass and evaluateOnColumns are single-process only (the first falls back to
-    /// evaluate, the second refuses).
-    void distribute(const Communicator* ranks) {
-        ranks_ = ranks && ranks->distributed() ? ranks : nullptr;
-    }
-    bool distributed() const { return ranks_ != nullptr; }
+    /// matrix, this one the rows of `shard`: every product gives this rank's rows; the image is
+    /// put together over the ranks (RowShard::gatherImage) before the objective, and
+    /// Tᵀ·dLoss/dY summed over them (Communicator::sum) before dLoss/dE is added once, so every
+    /// rank gets the whole loss and gradient and the ranks must evaluate in step. One process
+    /// (the default): T alone. The fused pass and evaluateOnColumns are single-process only
+    /// (the first falls back to evaluate, the second refuses).
+    void distribute(const RowShard& shard) { shard_ = shard; }
+    bool distributed() const { return shard_.distributed(); }
     /// Loss parts at E; fills grad (size dimension()) when it is non-empty.
     LossParts evaluate(std::span<const double> E, std::span<double> grad) const;
     /// The same loss and gradient in one streaming pass over T: bands of rows compute Y, the
@@ -65,7 +63,7 @@ class TransportLoss {
     const HalfImageObjective* unb_ = nullptr;
     size_t dimension_;
     mutable std::vector<double> y_, dLdY_, yb_, dLdYb_;
-    const Communicator* ranks_ = nullptr;
+    RowShard shard_;
 
     LossParts evaluateUnbiased(std::span<const double> E, std::span<double> grad) const;
 };
