@@ -124,6 +124,15 @@ TEST_F(Mpi, RefusesWhatDoesNotFitTheRanksAndEndsThemAll) {
     r = test::runShell(mpirun(2) + "optimize " + d + "t.shards -o " + d + "o");
     EXPECT_NE(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("--heldout none"), std::string::npos) << r.output;
+    // Shards of two traces (other spp), checked by the ranks together: the file is named.
+    ASSERT_EQ(test::runCli("precompute " + scene + " --size 24 --spp 3 --halves --rows 12:24 -o " +
+                           d + "c.tm")
+                  .exitCode,
+              0);
+    std::ofstream(dir / "mixed.shards") << "a.tm\nc.tm\n";
+    r = test::runShell(mpirun(2) + "optimize " + d + "mixed.shards --heldout none -o " + d + "o");
+    EXPECT_NE(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("c.tm: was traced with other inputs"), std::string::npos) << r.output;
     // Only optimize runs over ranks.
     r = test::runShell(mpirun(2) + "relight " + d + "t.shards --envmap const:1 -o " + d + "r.exr");
     EXPECT_NE(r.exitCode, 0) << r.output;

@@ -115,12 +115,11 @@ TransportFile readShardOfRank(const std::filesystem::path& list, const Communica
     for (size_t r = 0; r < files.size(); ++r) {
         const double* x = all.data() + r * kFacts;
         if (!std::equal(x + 2, x + kFacts, all.data() + 2))
-            throw inputError(files[r].string(),
-                             "was traced with other inputs than " + files[0].string() +
-                                 " (scene, camera, material, spp, seed or max_depth)",
-                             "trace every shard of " + list.string() +
-                                 " with the same scene and "
-                                 "options");
+            throw inputError(
+                files[r].string(),
+                "was traced with other inputs than " + files[0].string() +
+                    " (scene, camera, material, spp, seed or max_depth)",
+                "trace every shard of " + list.string() + " with the same scene and options");
         for (auto y = static_cast<int>(x[0]); y < static_cast<int>(x[1]); ++y) {
             if (y < 0 || y >= t.height)
                 throw inputError(files[r].string(), "has rows outside the image", "trace it again");
