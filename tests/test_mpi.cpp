@@ -125,7 +125,7 @@ TEST_F(Mpi, RefusesWhatDoesNotFitTheRanksAndEndsThemAll) {
     EXPECT_NE(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("--heldout none"), std::string::npos) << r.output;
     // Shards of two traces (other spp), checked by the ranks together: the file is named.
-    ASSERT_EQ(test::runCli("precompute " + scene + " --size 24 --spp 3 --halves --rows 12:24 -o " +
+    ASSERT_EQ(test::runCli("precompute " + scene + " --size 24 --spp 4 --halves --rows 12:24 -o " +
                            d + "c.tm")
                   .exitCode,
               0);
