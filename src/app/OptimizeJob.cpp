@@ -109,13 +109,17 @@ VisibilityMetrics metricsFor(const TransportMatrix& t, const std::vector<double>
     return computeVisibilityMetrics(in);
 }
 
-/// The render a person looks at: RGB when T is RGB, else luminance.
-std::vector<double> renderImage(const TransportMatrix& t, const std::vector<double>& e) {
-    std::vector<double> out(t.rows() * (t.channels == 3 ? 3 : 1));
+/// The render a person looks at: RGB when T is RGB, else luminance. Over MPI ranks t is this
+/// rank's shard (the rows of `shard`) and the image is put together over the ranks.
+std::vector<double> renderImage(const TransportMatrix& t, const std::vector<double>& e,
+                                const RowShard& shard) {
+    const size_t ch = t.channels == 3 ? 3 : 1;
+    std::vector<double> out(t.rows() * ch);
     if (t.channels == 3)
         t.applyRgb(e, out);
     else
         t.applyLuminance(e, out);
+    shard.gatherImage(out, static_cast<size_t>(t.width), ch);
     return out;
 }
 
@@ -211,6 +215,8 @@ struct Plan {
     OptimizerMethod requested = OptimizerMethod::Lbfgs;  // the name the results carry
     bool blackBox = false;                               // gradients through the renderer
     bool tmInput = false;
+    const Communicator* ranks = nullptr;  // MPI ranks holding shards of T (null: one process)
+    bool writes() const { return !ranks || ranks->root(); }  // this process writes OUTDIR
     std::filesystem::path cacheDir;
     std::filesystem::path writeDir;  // where OUTDIR is staged (io/StagedDirectory.h)
     /// Where a path under OUTDIR is written while staged.
@@ -272,12 +278,39 @@ Plan plan(const OptimizeJobOptions& options) {
                          "needs independent estimates of T traced from the scene",
                          "pass SCENE.json instead of the .tm, or " + option("planes") + " 1");
     p.cacheDir = cacheDirectory(o.cache);
+    if (o.ranks && o.ranks->distributed()) {
+        p.ranks = o.ranks;
+        const std::string over = "over " + std::to_string(p.ranks->size()) + " MPI ranks";
+        if (o.input.extension() != ".shards")
+            throw inputError(
+                o.input.string(),
+                over + " optimize needs a .shards list of T's row shards, one per rank",
+                "trace the shards with `precompute " + option("rows") +
+                    " A:B` and list them (docs/CLUSTER.md)");
+        if (o.heldOut.mode != HeldOutMode::None)
+            throw inputError(option("heldout"),
+                             over +
+                                 " the held-out estimate is not supported (it is a whole T, "
+                                 "traced or read in one process)",
+                             "pass " + option("heldout") +
+                                 " none, and judge E* afterwards with "
+                                 "`scratchlight judge`");
+        if (o.objectiveKind == ObjectiveKind::Defects || !o.truth.empty() || !o.defects.empty())
+            throw inputError(option("objective") + " defects",
+                             over +
+                                 " the defects objective is not supported yet (its "
+                                 "white-furnace mean needs the whole T)",
+                             "use " + option("objective") + " unbiased or paper, without " +
+                                 option("truth") + " and " + option("defects"));
+    }
     return p;
 }
 
 /// What every λ run of the job shares.
 struct Inputs {
-    std::unique_ptr<Scene> scene;  // loaded once; from T's provenance for a .tm when needed
+    const Communicator* ranks = nullptr;  // Plan::ranks
+    RowShard shard;                       // the rows of T this rank holds (over MPI ranks)
+    std::unique_ptr<Scene> scene;         // loaded once; from T's provenance for a .tm when needed
     ObjectiveKind kind = ObjectiveKind::Unbiased;
     bool onHalves() const { return registryRow(objectiveKindTable(), kind).planes == 2; }
     std::vector<uint8_t> defects, reference;  // the defects objective's regions (image)
@@ -315,7 +348,8 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
                              "on the image");
     if (p.tmInput) {
         const Stopwatch clock;
-        job.transport.file = readTransportFile(o.input);
+        job.transport.file =
+            p.ranks ? readShardOfRank(o.input, *p.ranks, &in.shard) : readTransportFile(o.input);
         job.transport.path = o.input;
         job.transport.secondsTotal = clock.seconds();
         if (!o.objectiveKind && job.transport.file.matrix.planes == 2) in.kind = byDefault;
@@ -433,7 +467,7 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     // A start whose image has no contrast on the part (E = 0: all black) is a plateau of every
     // objective (G = 0, gradient 0): no optimizer can leave it.
     for (size_t k = 0; k < o.starts.size(); ++k) {
-        const std::vector<double> image = renderImage(t, in.startValues[k]);
+        const std::vector<double> image = renderImage(t, in.startValues[k], in.shard);
         const size_t ch = image.size() / t.rows();
         double lo = std::numeric_limits<double>::infinity(), hi = -lo;
         for (size_t pix = 0; pix < t.rows(); ++pix)
@@ -450,7 +484,7 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
                     "0 there, so no optimizer can leave it",
                 "start from a light that shows the part, e.g. const:0.5 or specular");
     }
-    in.image0 = renderImage(t, in.startValues.front());
+    in.image0 = renderImage(t, in.startValues.front(), in.shard);
     in.metricsInitial =
         metricsFor(t, in.image0, in.mask.pixels, in.startValues.front(), o.rgb, in.truth);
 }
@@ -467,6 +501,7 @@ std::vector<double> paperLight(const Plan& p, const Inputs& in, const TransportM
     si.objective = paper.objective;
     si.objective.lambda = paper.lambdas.front();
     si.rgb = p.o.rgb;
+    si.shard = in.shard;
     SearchOptions so;
     so.objective = ObjectiveKind::Paper;
     so.optimizer = paper.optimizer;
@@ -568,6 +603,7 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
     si.startValues = in.startValues;
     si.defects = in.defects;
     si.reference = in.reference;
+    si.shard = in.shard;
     const ObjectiveOnT own = objectiveOnT(in.kind, t, si, oo);
     const TransportLoss& loss = *own.loss;
     std::unique_ptr<HeldOutScorer> scorer;
@@ -585,11 +621,15 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
 
     // loss.csv as it goes: the staged copy grows a row per iteration (flushed about once a
     // second); the final file replaces it with the returned E's held-out score on its last row.
-    const std::filesystem::path liveCsv = p.staged(run.dir) / "loss.csv";
-    std::filesystem::create_directories(liveCsv.parent_path());
-    std::ofstream live(liveCsv);
-    live << kLossCsvHeader << '\n' << std::flush;
-    spdlog::info("lambda {}: loss.csv as it goes: {}", lambda, liveCsv.string());
+    // Over MPI ranks only rank 0 writes.
+    std::ofstream live;
+    if (p.writes()) {
+        const std::filesystem::path liveCsv = p.staged(run.dir) / "loss.csv";
+        std::filesystem::create_directories(liveCsv.parent_path());
+        live.open(liveCsv);
+        live << kLossCsvHeader << '\n' << std::flush;
+        spdlog::info("lambda {}: loss.csv as it goes: {}", lambda, liveCsv.string());
+    }
     Stopwatch sinceFlush;
     // Progress over the whole budget: every start, every continuation stage.
     const double budget = static_cast<double>(o.optimizer.iterations) *
@@ -624,8 +664,8 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
             row << ',';
         }
         res.rows.push_back(row.str());
-        live << res.rows.back() << '\n';
-        if (res.rows.size() == 1 || sinceFlush.seconds() >= 1.0) {
+        if (live.is_open()) live << res.rows.back() << '\n';
+        if (live.is_open() && (res.rows.size() == 1 || sinceFlush.seconds() >= 1.0)) {
             live.flush();
             sinceFlush.restart();
         }
@@ -633,8 +673,11 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
         task.detail("loss " + formatNumber(r.loss, 4) +
                     (std::isnan(lastHeld) ? "" : ", held out " + formatNumber(lastHeld, 4)));
         spdlog::debug("iteration {}: loss {}", r.iteration, r.loss);
-        // Ctrl-C: stop at this iteration; the optimizer returns its best iterate.
-        if (interruptRequested()) {
+        // Ctrl-C: stop at this iteration; the optimizer returns its best iterate. Over MPI
+        // ranks all stop at the same iteration when any was asked to.
+        double stop = interruptRequested() ? 1.0 : 0.0;
+        if (in.ranks) in.ranks->sum(std::span<double>(&stop, 1));
+        if (stop > 0) {
             run.interrupted = true;
             return false;
         }
@@ -673,7 +716,9 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
         so.planes = o.planes;
         so.starts = o.starts;
         so.continuation = o.continuation;
+        const double collectives0 = in.ranks ? in.ranks->secondsInCollectives() : 0.0;
         SearchResult sr = search(si, so);
+        if (in.ranks) run.secondsCollectives = in.ranks->secondsInCollectives() - collectives0;
         res.e = sr.e;
         run.optimizer = sr.optimizer;
         run.start = sr.start;
@@ -800,6 +845,9 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     s["scratchlight"] = runProvenance(o.commandLine);
     s["optimizer"] = run.optimizer.method;
     s["planes"] = o.planes;
+    if (p.ranks)  // each rank held one shard; "transport" describes rank 0's
+        s["mpi"] = {{"ranks", p.ranks->size()},
+                    {"seconds_collectives_optimize", run.secondsCollectives}};
     s["starts"] = starts;
     s["start"] = run.start;
     s["continuation"] = o.continuation;
@@ -893,12 +941,17 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
     const OptimizeRun& run = r.run;
     const TransportMatrix& t = job.transport.file.matrix;
     const std::vector<uint8_t>& mask = in.mask.pixels;
+    // The renders first: over MPI ranks every rank takes part in putting them together, then
+    // rank 0 alone writes.
+    const std::vector<double> imageFinal = renderImage(t, r.e, in.shard);
+    const std::vector<double> imageLamp = renderImage(t, in.lampE, in.shard);
+    const std::vector<double> imagePaper = renderImage(t, in.paperE, in.shard);
+    if (!p.writes()) return {};
     const std::filesystem::path dir = p.staged(run.dir);
     std::filesystem::create_directories(dir);
     writeEnvMap(dir / "envmap.exr", toEnvMap(r.e, t, o.rgb));
     writePng(dir / "envmap.png", envMapPreview(toEnvMap(r.e, t, o.rgb), 16));
     const int ch = t.channels == 3 ? 3 : 1;
-    const std::vector<double> imageFinal = renderImage(t, r.e);
     writeRender(dir / "render.exr", imageFinal, t.width, t.height, ch);
     {
         Image i0(t.width, t.height, ch);
@@ -934,8 +987,6 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
                      in.scene->mapHeight);
     // The comparisons: the user's lamp and the paper's light under T, and what the report shows
     // (each render exposed on its own, the regions' outlines as a transparent layer).
-    const std::vector<double> imageLamp = renderImage(t, in.lampE);
-    const std::vector<double> imagePaper = renderImage(t, in.paperE);
     writeRender(dir / "compare-lamp.exr", imageLamp, t.width, t.height, ch);
     writeRender(dir / "compare-paper.exr", imagePaper, t.width, t.height, ch);
     writeEnvMap(dir / "compare-paper-envmap.exr", toEnvMap(in.paperE, t, o.rgb));
@@ -1015,13 +1066,17 @@ void writeSweep(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
 OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
     Plan p = plan(options);
     // OUTDIR is checked before any work and written as a unit: a failure or Ctrl-C leaves the
-    // previous results as they were.
-    StagedDirectory out(p.o.outDir);
-    p.o.outDir = out.target();
-    p.writeDir = out.path();
+    // previous results as they were. Over MPI ranks, rank 0 alone writes it.
+    std::optional<StagedDirectory> out;
+    if (p.writes()) {
+        out.emplace(p.o.outDir);
+        p.o.outDir = out->target();
+        p.writeDir = out->path();
+    }
     OptimizeJobSummary job;
     try {
         Inputs in;
+        in.ranks = p.ranks;
         // Context first, as each piece is known (the results follow the work).
         loadTraining(p, in, job);
         if (job.transport.autoDepth)
@@ -1051,11 +1106,12 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                 break;
             }
         }
-        if (p.o.lambdas.size() > 1) writeSweep(p, in, job, reportRuns);
+        if (p.o.lambdas.size() > 1 && p.writes()) writeSweep(p, in, job, reportRuns);
     } catch (const InputError& e) {
-        throw InputError(out.explain(e.what()));
+        if (out) throw InputError(out->explain(e.what()));
+        throw;
     }
-    out.commit();
+    if (out) out->commit();
     return job;
 }
 

@@ -51,6 +51,7 @@
 #include "app/LossMask.h"
 #include "app/Transport.h"
 #include "app/Truth.h"
+#include "core/Communicator.h"
 #include "objective/Objective.h"
 #include "objective/ObjectiveKind.h"
 #include "objective/ScratchMap.h"
@@ -131,6 +132,12 @@ struct OptimizeJobOptions {
     // method's default); continuation: λ factors before λ.
     int planes = 0;
     std::vector<double> continuation;
+    /// MPI ranks (docs/CLUSTER.md): with more than one, `input` is a .shards list naming one
+    /// shard per rank, each rank holds only its own (app/Transport.h readShardOfRank), every
+    /// rank runs the same optimization in step and rank 0 alone writes OUTDIR. Null: one
+    /// process. What needs the whole T in one place is refused (held-out estimates, the
+    /// defects objective, black-box optimizers, several estimates of T).
+    const Communicator* ranks = nullptr;
 };
 
 /// Presets: settings fixed together, one table. "paper": the paper's experiment exactly (eq. 2,
@@ -163,6 +170,9 @@ struct OptimizeRun {
     std::vector<std::string> warnings;
     /// Stopped by an interrupt request (core/Interrupt.h): E* is the best iterate so far.
     bool interrupted = false;
+    /// Over MPI ranks: this rank's seconds inside the collectives during the optimization
+    /// (part of optimizer.seconds).
+    double secondsCollectives = 0;
 };
 
 struct OptimizeJobSummary {

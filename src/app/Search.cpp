@@ -27,6 +27,11 @@ ObjectiveOnT objectiveOnT(ObjectiveKind kind, const TransportMatrix& t, const Se
             r.loss = std::make_unique<TransportLoss>(t, *r.halves, in.rgb);
             break;
         case ObjectiveKind::Defects: {
+            if (in.shard.distributed())
+                throw inputError(std::string("the defects objective"),
+                                 "does not run over MPI ranks yet (its white-furnace mean needs "
+                                 "the whole T)",
+                                 "use " + option("objective") + " unbiased or paper");
             DefectObjectiveOptions d;
             d.whiteMean = whiteFurnaceMean(t, in.mask);
             r.halves = std::make_unique<DefectObjective>(t.width, t.height, in.mask, in.defects,
@@ -35,6 +40,7 @@ ObjectiveOnT objectiveOnT(ObjectiveKind kind, const TransportMatrix& t, const Se
             break;
         }
     }
+    r.loss->distribute(in.shard);
     return r;
 }
 

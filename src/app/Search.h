@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "app/InitialState.h"
+#include "core/Communicator.h"
 #include "objective/HalfImageObjective.h"
 #include "objective/Objective.h"
 #include "objective/ObjectiveKind.h"
@@ -56,6 +57,9 @@ struct SearchInputs {
     /// Sees every iteration of every start and stage (IterationRecord::iteration counts on
     /// across them); returning false stops the search.
     std::function<bool(const IterationRecord&, std::span<const double> x)> callback;
+    /// Over MPI ranks: the rows of every T in `set` this rank holds (TransportLoss::distribute);
+    /// default: one process, the whole T here. Every rank runs the same search in step.
+    RowShard shard;
 };
 
 struct SearchResult {

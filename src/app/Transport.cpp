@@ -78,6 +78,79 @@ std::string describeTransport(const TransportSource& s) {
     return out;
 }
 
+TransportFile readShardOfRank(const std::filesystem::path& list, const Communicator& ranks,
+                              RowShard* rows) {
+    if (!ranks.distributed()) {
+        TransportFile f = readTransportFile(list);
+        if (rows) *rows = RowShard{&ranks, 0, static_cast<size_t>(f.matrix.height)};
+        return f;
+    }
+    if (list.extension() != ".shards")
+        throw inputError(list.string(),
+                         "is one transport matrix; over " + std::to_string(ranks.size()) +
+                             " MPI ranks every rank needs a shard of it",
+                         "list " + std::to_string(ranks.size()) + " shards (`precompute " +
+                             option("rows") + " A:B`) in a .shards file");
+    const std::vector<std::filesystem::path> files = shardListFiles(list);
+    if (files.size() != static_cast<size_t>(ranks.size()))
+        throw inputError(list.string(),
+                         "lists " + std::to_string(files.size()) + " shards for " +
+                             std::to_string(ranks.size()) + " MPI ranks",
+                         "run one rank per shard: mpirun -np " + std::to_string(files.size()));
+    const auto me = static_cast<size_t>(ranks.rank());
+    TransportFile f = readTransportFile(files[me]);
+    const ShardOf mine = shardOf(f, files[me].string());
+    // Every rank's rows, dimensions and inputs' fingerprint (32 hex digits as 8 exact doubles).
+    constexpr size_t kFacts = 14;
+    std::vector<double> facts(kFacts);
+    const TransportMatrix& t = f.matrix;
+    facts[0] = mine.rowBegin;
+    facts[1] = mine.rowEnd;
+    facts[2] = t.width;
+    facts[3] = t.height;
+    facts[4] = static_cast<double>(t.cols());
+    facts[5] = t.channels * 16 + t.planes;
+    for (size_t k = 0; k < 8; ++k)
+        facts[6 + k] =
+            static_cast<double>(std::stoul(mine.fingerprint.substr(4 * k, 4), nullptr, 16));
+    const std::vector<double> all = allGather(ranks, facts);
+    std::vector<int> owner(static_cast<size_t>(t.height), -1);
+    for (size_t r = 0; r < files.size(); ++r) {
+        const double* x = all.data() + r * kFacts;
+        if (!std::equal(x + 2, x + kFacts, all.data() + 2))
+            throw inputError(
+                files[r].string(),
+                "was traced with other inputs than " + files[0].string() +
+                    " (scene, camera, material, spp, seed or max_depth)",
+                "trace every shard of " + list.string() + " with the same scene and options");
+        for (auto y = static_cast<int>(x[0]); y < static_cast<int>(x[1]); ++y) {
+            if (y < 0 || y >= t.height)
+                throw inputError(files[r].string(), "has rows outside the image", "trace it again");
+            if (owner[static_cast<size_t>(y)] >= 0)
+                throw inputError(
+                    list.string(),
+                    "row " + std::to_string(y) + " is in two shards (" +
+                        files[static_cast<size_t>(owner[static_cast<size_t>(y)])].string() +
+                        " and " + files[r].string() + ")",
+                    "give each row range once");
+            owner[static_cast<size_t>(y)] = static_cast<int>(r);
+        }
+    }
+    for (int y = 0; y < t.height; ++y)
+        if (owner[static_cast<size_t>(y)] < 0)
+            throw inputError(list.string(), "no shard has image row " + std::to_string(y),
+                             "trace the missing rows with `precompute " + option("rows") + " A:B`");
+    const RowShard shard{&ranks, static_cast<size_t>(mine.rowBegin),
+                         static_cast<size_t>(mine.rowEnd)};
+    std::vector<double> mask(f.matrix.objectMask.begin(), f.matrix.objectMask.end());
+    shard.gatherImage(mask, static_cast<size_t>(t.width));
+    for (size_t q = 0; q < mask.size(); ++q) f.matrix.objectMask[q] = mask[q] != 0 ? 1 : 0;
+    if (rows) *rows = shard;
+    f.provenance.inputs = mine.inputs;
+    f.provenance.fingerprint = mine.fingerprint;
+    return f;
+}
+
 bool isTransportFile(const std::filesystem::path& input) {
     return input.extension() == ".tm" || input.extension() == ".shards";
 }

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "app/DepthBench.h"
+#include "core/Communicator.h"
 #include "io/TransportFile.h"
 #include "render/PathTracer.h"
 
@@ -118,6 +119,15 @@ TransportSource judgeEstimateFor(const TransportFile& training, const Scene& sce
 /// "transport matrix 512x512 px x 50x25 texels, gray T, CSR, nnz ... MB", and on a second line
 /// the trace's rays and seconds when it was traced (not on a cache hit or a file read).
 std::string describeTransport(const TransportSource& source);
+
+/// T over MPI ranks (docs/CLUSTER.md): rank r of N reads the r-th shard of the .shards list
+/// `list`, which must name N shards. The ranks check together that their shards are one trace
+/// (the same inputs, every image row in exactly one) and put the object mask together, so each
+/// rank's matrix holds its rows of T, the whole image's object mask and the merged T's
+/// provenance; `rows` (optional) receives the rows it holds. With one rank: the whole list,
+/// merged (readTransportFile), all its rows.
+TransportFile readShardOfRank(const std::filesystem::path& list, const Communicator& ranks,
+                              RowShard* rows = nullptr);
 
 /// True if `input` names a transport-matrix file (by extension: .tm, or a .shards list).
 bool isTransportFile(const std::filesystem::path& input);

@@ -11,6 +11,7 @@
 #include <ctime>
 
 #include "Commit.inc"  // SL_COMMIT, written by scripts/commit.cmake
+#include "app/Mpi.h"
 
 namespace sl {
 
@@ -54,6 +55,10 @@ std::string versionText() {
         t += *ver;
         t += "\n";
     }
+    // MPI is optional (app/Mpi.h): optimize over MPI ranks.
+    t += "  MPI ";
+    t += mpiBuilt() ? mpiLibraryVersion() : std::string("not built (optimize runs as one process)");
+    t += "\n";
     t.pop_back();  // the caller ends the line
     return t;
 }

@@ -14,6 +14,7 @@
 
 #include "app/Cache.h"
 #include "app/Truth.h"
+#include "core/Communicator.h"
 #include "core/Error.h"
 #include "core/Registry.h"
 #include "scene/EnvMap.h"
@@ -28,6 +29,13 @@ namespace sl::cli {
 inline std::string& invokedCommandLine() {
     static std::string line;
     return line;
+}
+
+/// The MPI ranks this process runs with (main.cpp sets them, app/Mpi.h; null before): only
+/// `optimize` runs over several, and only rank 0 prints results.
+inline const Communicator*& worldRanks() {
+    static const Communicator* ranks = nullptr;
+    return ranks;
 }
 
 /// The size of the allocation that failed when std::bad_alloc was thrown by operator new

@@ -179,7 +179,9 @@ int runOptimize(OptimizeArgs a) {
     a.job.objective.reg = a.reg == "image" ? RegTarget::Image : RegTarget::EnvMap;
     if (a.preset) applyOptimizePreset(*a.preset, a.job);
     a.job.commandLine = invokedCommandLine();
+    a.job.ranks = worldRanks();
     OptimizeJobSummary s = runOptimizeJob(a.job);
+    if (a.job.ranks && !a.job.ranks->root()) return kOk;  // rank 0 prints and writes
     std::printf("%10s %-12s %6s %6s %14s %14s %14s %14s %10s\n", "lambda", "optimizer", "iters",
                 "evals", "initial loss", "final loss", "held-out init", "held-out final",
                 "seconds");
@@ -242,7 +244,9 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         OptimizeJobOptions& j = a->job;
         CLI::App* c = app.add_subcommand(
             "optimize", "Optimize the env map so the part's scratches show (paper eq. 1-3)");
-        c->add_option("input", a->input, "Scene file (.json, T is traced and cached) or .tm")
+        c->add_option("input", a->input,
+                      "Scene file (.json, T is traced and cached), .tm, or a .shards list (under "
+                      "mpirun: one shard per rank, docs/CLUSTER.md)")
             ->required();
         addRendererOptions(c, j.renderer, j.external);
         addChoice(c, "--optimizer", j.optimizer.method, optimizerMethodTable(),
@@ -270,6 +274,9 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
             },
             "Initial env map: " + initialSpecForms() +
                 " (default: " + optimizeDefaults().starts.front() + ")");
+        c->add_flag_function(
+            "--no-figures", [&j](std::int64_t) { j.figures = false; },
+            "Do not run scripts/plot_optimize.py (the report says the figures were not asked for)");
         c->add_option("--compare", j.compare,
                       "The lamp you use now, the report's \"before\": " + lightSpecForms() +
                           " (default: studio)");

@@ -9,10 +9,12 @@
 #include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "app/Console.h"
+#include "app/Mpi.h"
 #include "app/Version.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
@@ -143,6 +145,27 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "error: %s\n", withFlags(app, e.what()).c_str());
         return kRuntimeError;
     }
+    // MPI ranks (app/Mpi.h, docs/CLUSTER.md): only optimize runs over several; the ranks but
+    // rank 0 print only errors, and an error on any rank ends them all.
+    std::unique_ptr<sl::Communicator> world;
+    try {
+        world = sl::worldCommunicator();
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return kRuntimeError;
+    }
+    worldRanks() = world.get();
+    const auto chosen = app.get_subcommands();
+    if (world->distributed() && (chosen.empty() || chosen.front()->get_name() != "optimize")) {
+        if (world->root())
+            std::fprintf(stderr,
+                         "error: only `optimize` runs over MPI ranks (this is %s over %d); run "
+                         "the command as one process\n",
+                         chosen.empty() ? "no command" : chosen.front()->get_name().c_str(),
+                         world->size());
+        world->abort(kUsageError);
+    }
+    if (!world->root()) quiet = true;
     // Output: progress and log lines through one console (app/Console.h). Lines, not blocks,
     // reach a pipe as they are printed (`| tee log` shows the run as it goes).
     std::setvbuf(stdout, nullptr, _IOLBF, 0);
@@ -151,9 +174,10 @@ int main(int argc, char** argv) {
     co.plainEvery = progressEvery;
     sl::Console console(co);
     spdlog::default_logger()->sinks() = {console.logSink()};
-    spdlog::set_level(quiet         ? spdlog::level::warn
-                      : verbose > 0 ? spdlog::level::debug
-                                    : spdlog::level::info);
+    spdlog::set_level(!world->root() ? spdlog::level::err
+                      : quiet        ? spdlog::level::warn
+                      : verbose > 0  ? spdlog::level::debug
+                                     : spdlog::level::info);
     struct ListenerScope {
         explicit ListenerScope(sl::ProgressListener* l) { sl::setProgressListener(l); }
         ~ListenerScope() {
@@ -161,12 +185,22 @@ int main(int argc, char** argv) {
             spdlog::default_logger()->sinks().clear();
         }
     } listenerScope(quiet ? nullptr : &console);
+    // An error on one rank of several: its message, then every rank ends (MPI_Abort).
+    auto fail = [&world](int code) {
+        if (world->distributed()) world->abort(code);
+        return code;
+    };
+    auto rankPrefix = [&world] {
+        return world->distributed() ? "rank " + std::to_string(world->rank()) + " of " +
+                                          std::to_string(world->size()) + ": "
+                                    : std::string();
+    };
     try {
         const int rc = run ? run() : kUsageError;
         return sl::interruptRequested() ? 128 + sl::interruptSignal() : rc;
     } catch (const sl::Interrupted&) {
         std::fprintf(stderr, "interrupted: nothing was written\n");
-        return 128 + sl::interruptSignal();
+        return fail(128 + sl::interruptSignal());
     } catch (const std::bad_alloc&) {
         const size_t n = gFailedAllocationBytes.load();
         const double gb = static_cast<double>(::sysconf(_SC_PHYS_PAGES)) *
@@ -176,12 +210,13 @@ int main(int argc, char** argv) {
                      "%.3g GB); use a smaller image (camera width/height), fewer spp, or a "
                      "smaller height map\n",
                      static_cast<double>(n) / 1e9, gb);
-        return kRuntimeError;
+        return fail(kRuntimeError);
     } catch (const UsageError& e) {
-        std::fprintf(stderr, "error: %s (see --help)\n", e.what());
-        return kUsageError;
+        std::fprintf(stderr, "error: %s%s (see --help)\n", rankPrefix().c_str(), e.what());
+        return fail(kUsageError);
     } catch (const std::exception& e) {  // InputError and every other failure
-        std::fprintf(stderr, "error: %s\n", withFlags(app, e.what()).c_str());
-        return kRuntimeError;
+        std::fprintf(stderr, "error: %s%s\n", rankPrefix().c_str(),
+                     withFlags(app, e.what()).c_str());
+        return fail(kRuntimeError);
     }
 }

@@ -184,21 +184,15 @@ TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std:
     if (shards.empty())
         throw inputError(where, "lists no shard",
                          "list the .tm files of `precompute " + option("rows") + "`");
-    json common;
-    std::string commonPrint;  // the fingerprint every shard's inputs but its rows must have
+    ShardOf common;  // the inputs and fingerprint every shard's inputs but its rows must have
     std::vector<std::array<int, 2>> ranges;
     for (size_t k = 0; k < shards.size(); ++k) {
-        json in = json::parse(shards[k].provenance.inputs);
         const std::string name = shardName(k);
-        if (!in.contains("rows"))
-            throw inputError(name, "is a whole transport matrix, not a shard",
-                             "list only the files of `precompute " + option("rows") + " A:B`");
-        ranges.push_back({in["rows"][0].get<int>(), in["rows"][1].get<int>()});
-        in.erase("rows");
+        const ShardOf in = shardOf(shards[k], name);
+        ranges.push_back({in.rowBegin, in.rowEnd});
         if (k == 0) {
             common = in;
-            commonPrint = fingerprintOf(common);
-        } else if (fingerprintOf(in) != commonPrint) {
+        } else if (in.fingerprint != common.fingerprint) {
             throw inputError(name,
                              "was traced with other inputs than the first shard (scene, camera, "
                              "material, spp, seed or max_depth)",
@@ -258,21 +252,31 @@ TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std:
     TransportFile out;
     out.matrix = std::move(m);
     out.provenance = shards.front().provenance;
-    out.provenance.inputs = common.dump();
-    out.provenance.fingerprint = commonPrint;
+    out.provenance.inputs = common.inputs;
+    out.provenance.fingerprint = common.fingerprint;
     return out;
 }
 
-namespace {
+ShardOf shardOf(const TransportFile& shard, const std::string& name) {
+    json in = json::parse(shard.provenance.inputs);
+    if (!in.contains("rows"))
+        throw inputError(name, "is a whole transport matrix, not a shard",
+                         "list only the files of `precompute " + option("rows") + " A:B`");
+    ShardOf s;
+    s.rowBegin = in["rows"][0].get<int>();
+    s.rowEnd = in["rows"][1].get<int>();
+    in.erase("rows");
+    s.inputs = in.dump();
+    s.fingerprint = fingerprintOf(in);
+    return s;
+}
 
-TransportFile readShardList(const std::filesystem::path& list,
-                            const std::string& expectedFingerprint) {
+std::vector<std::filesystem::path> shardListFiles(const std::filesystem::path& list) {
     std::ifstream in(list);
     if (!in)
         throw inputError(list.string(), "cannot open the shard list",
                          "check the path (a text file with one .tm file per line)");
-    std::vector<TransportFile> shards;
-    std::vector<std::string> names;
+    std::vector<std::filesystem::path> files;
     std::string line;
     while (std::getline(in, line)) {
         const size_t a = line.find_first_not_of(" \t\r");
@@ -283,6 +287,18 @@ TransportFile readShardList(const std::filesystem::path& list,
         if (p.extension() == ".shards")
             throw inputError(list.string(), "lists another shard list, " + p.string(),
                              "list the shards' .tm files themselves");
+        files.push_back(p);
+    }
+    return files;
+}
+
+namespace {
+
+TransportFile readShardList(const std::filesystem::path& list,
+                            const std::string& expectedFingerprint) {
+    std::vector<TransportFile> shards;
+    std::vector<std::string> names;
+    for (const std::filesystem::path& p : shardListFiles(list)) {
         shards.push_back(readTransportFile(p));
         names.push_back(p.string());
     }

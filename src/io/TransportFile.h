@@ -70,6 +70,19 @@ TransportFile readTransportFile(const std::filesystem::path& file,
 TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std::string& where,
                                    const std::vector<std::string>& names = {});
 
+/// What a shard records of itself: its rows [rowBegin, rowEnd), and the inputs and fingerprint
+/// of the whole trace it is a part of (its own without the rows: the merged T's). `name` names
+/// it in the InputError for a whole T.
+struct ShardOf {
+    int rowBegin = 0, rowEnd = 0;
+    std::string inputs, fingerprint;
+};
+ShardOf shardOf(const TransportFile& shard, const std::string& name);
+
+/// The .tm files a shard list names, in its order, relative paths resolved against the list's
+/// folder. InputError when it cannot be read or lists another list.
+std::vector<std::filesystem::path> shardListFiles(const std::filesystem::path& list);
+
 /// The same on a stream holding the `size` bytes of a .tm file from its current position (an
 /// in-memory file, a fuzzer's input); `where` names the source in errors.
 TransportFile readTransport(std::istream& in, uint64_t size, const std::string& where,

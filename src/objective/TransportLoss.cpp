@@ -90,6 +90,8 @@ LossParts TransportLoss::evaluateUnbiased(std::span<const double> E, std::span<d
         b->applyLuminanceHalves(E, y_, yb_, t_.threads);
     else
         t_.applyLuminanceHalves(E, y_, yb_);
+    shard_.gatherImage(y_, t_.width);
+    shard_.gatherImage(yb_, t_.width);
     if (grad.empty()) return unb_->evaluate(y_, yb_, E);
     std::vector<double> dLdE(dimension_);
     LossParts parts = unb_->evaluate(y_, yb_, E, dLdY_, dLdYb_, dLdE);
@@ -97,6 +99,7 @@ LossParts TransportLoss::evaluateUnbiased(std::span<const double> E, std::span<d
         b->applyTransposeLuminanceHalves(dLdY_, dLdYb_, grad, t_.threads);
     else
         t_.applyTransposeLuminanceHalves(dLdY_, dLdYb_, grad);
+    if (distributed()) shard_.ranks->sum(grad);
     for (size_t i = 0; i < dimension_; ++i) grad[i] += dLdE[i];
     return parts;
 }
@@ -113,6 +116,7 @@ LossParts TransportLoss::evaluate(std::span<const double> E, std::span<double> g
         b->applyLuminance(E, y_, TransportMatrix::kMeanPlane, t_.threads);
     else
         t_.applyLuminance(E, y_);
+    shard_.gatherImage(y_, t_.width);
     if (grad.empty()) return obj_->evaluate(y_, E);
     if (grad.size() != dimension_)
         throw std::invalid_argument("TransportLoss: gradient has the wrong size");
@@ -122,13 +126,14 @@ LossParts TransportLoss::evaluate(std::span<const double> E, std::span<double> g
         b->applyTransposeLuminance(dLdY_, grad, TransportMatrix::kMeanPlane, t_.threads);
     else
         t_.applyTransposeLuminance(dLdY_, grad);
+    if (distributed()) shard_.ranks->sum(grad);
     for (size_t i = 0; i < dimension_; ++i) grad[i] += dLdE[i];
     return parts;
 }
 
 LossParts TransportLoss::evaluateFused(std::span<const double> E, std::span<double> grad) const {
     if (E.size() != dimension_) throw std::invalid_argument("TransportLoss: E has the wrong size");
-    if (grad.empty() || unb_) return evaluate(E, grad);
+    if (grad.empty() || unb_ || distributed()) return evaluate(E, grad);
     if (grad.size() != dimension_)
         throw std::invalid_argument("TransportLoss: gradient has the wrong size");
     const int W = t_.width, H = t_.height;
@@ -248,6 +253,8 @@ LossParts TransportLoss::evaluateOnColumns(const TransportColumns& columns,
                                            std::span<double> grad) const {
     if (E.size() != dimension_ || dimension_ != t_.cols())
         throw std::invalid_argument("TransportLoss::evaluateOnColumns: needs a gray E");
+    if (distributed())
+        throw std::logic_error("TransportLoss::evaluateOnColumns: not over distributed ranks");
     if (columns.rows() != t_.rows() || columns.cols() != t_.cols() || columns.planes() != t_.planes)
         throw std::invalid_argument("TransportLoss::evaluateOnColumns: columns of another T");
     if (!grad.empty() && grad.size() != dimension_)
@@ -277,6 +284,7 @@ LossParts TransportLoss::evaluateOnColumns(const TransportColumns& columns,
 std::vector<double> TransportLoss::image(std::span<const double> E) const {
     std::vector<double> y(t_.rows());
     t_.applyLuminance(E, y);  // T = (T_a + T_b)/2 for halves
+    shard_.gatherImage(y, t_.width);
     return y;
 }
 

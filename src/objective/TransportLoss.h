@@ -6,6 +6,7 @@
 #include <span>
 #include <vector>
 
+#include "core/Communicator.h"
 #include "core/Problem.h"
 #include "objective/HalfImageObjective.h"
 #include "objective/Objective.h"
@@ -24,6 +25,15 @@ class TransportLoss {
     TransportLoss(const TransportMatrix& t, const HalfImageObjective& objective, bool rgb);
 
     size_t dimension() const { return dimension_; }
+    /// Ranks that each hold one row shard of T (io/TransportFile.h SHARDS) as this loss's
+    /// matrix, this one the rows of `shard`: every product gives this rank's rows; the image is
+    /// put together over the ranks (RowShard::gatherImage) before the objective, and
+    /// Tᵀ·dLoss/dY summed over them (Communicator::sum) before dLoss/dE is added once, so every
+    /// rank gets the whole loss and gradient and the ranks must evaluate in step. One process
+    /// (the default): T alone. The fused pass and evaluateOnColumns are single-process only
+    /// (the first falls back to evaluate, the second refuses).
+    void distribute(const RowShard& shard) { shard_ = shard; }
+    bool distributed() const { return shard_.distributed(); }
     /// Loss parts at E; fills grad (size dimension()) when it is non-empty.
     LossParts evaluate(std::span<const double> E, std::span<double> grad) const;
     /// The same loss and gradient in one streaming pass over T: bands of rows compute Y, the
@@ -72,6 +82,7 @@ class TransportLoss {
     const TransportSlices* productSlices() const;
     struct SlicesCache;
     std::shared_ptr<SlicesCache> slices_;
+    RowShard shard_;
 
     LossParts evaluateUnbiased(std::span<const double> E, std::span<double> grad) const;
 };
