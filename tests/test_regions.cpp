@@ -307,3 +307,23 @@ TEST(TraceRegion, PrecomputeSppAutoFromTheGradientsNoise) {
 }
 
 }  // namespace
+
+namespace {
+
+using namespace sl;
+
+// eq. 2 rewards noise, so optimize keeps its spp floor under --spp auto too.
+TEST(TraceRegion, OptimizeSppAutoKeepsEq2sFloor) {
+    test::TempDir dir("spp-auto-paper");
+    const std::string scene = std::string(SL_SOURCE_DIR) + "/scenes/default/scene.json";
+    const auto r = test::runCli("optimize " + scene +
+                                " --size 24 --max-depth 2 --spp auto --tolerance 0.9 --objective "
+                                "paper --iterations 3 --heldout none --no-cache --no-figures -o " +
+                                (dir / "o").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("raised to 512 spp"), std::string::npos) << r.output;
+    const auto s = nlohmann::json::parse(test::readFile(dir / "o" / "summary.json"));
+    EXPECT_EQ(s.at("transport").at("spp").get<int>(), 512);
+}
+
+}  // namespace

@@ -366,17 +366,26 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
                                      " scratch, or drop it (the whole part is traced)");
             pre.pixels = lossMaskRegion(o.mask, *in.scene, o.scratch);
         }
-        const auto spp = resolveSpp(
+        auto spp = resolveSpp(
             *in.scene, pre,
             o.mask.kind == LossMaskKind::Object || !pre.autoSpp
                 ? std::vector<uint8_t>{}
                 : (pre.pixels.empty() ? lossMaskRegion(o.mask, *in.scene, o.scratch) : pre.pixels),
             p.cacheDir);
         // eq. 2 rewards noise: without a given spp it trains at no fewer than paperMinSpp (the
-        // paper's own loop keeps the scene's spp).
-        if (in.kind == ObjectiveKind::Paper && !pre.spp &&
-            p.requested != OptimizerMethod::PaperLoop)
-            pre.spp = std::max(in.scene->desc.render.spp, optimizeDefaults().paperMinSpp);
+        // paper's own loop keeps the scene's spp). spp auto measures the gradient's noise, not
+        // that bias, so it keeps the floor too.
+        const int floor = optimizeDefaults().paperMinSpp;
+        if (in.kind == ObjectiveKind::Paper && p.requested != OptimizerMethod::PaperLoop) {
+            if (!pre.spp) {
+                pre.spp = std::max(in.scene->desc.render.spp, floor);
+            } else if (spp && *pre.spp < floor) {
+                pre.spp = floor;
+                spp->spp = floor;
+                spp->reason += "; raised to " + std::to_string(floor) +
+                               " spp, eq. 2's floor (it rewards noise)";
+            }
+        }
         std::vector<TransportSource> set =
             transportSetForScene(*in.scene, pre, o.planes, p.cacheDir);
         job.transport = std::move(set.front());
