@@ -359,30 +359,26 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
         pre.rgb = o.rgb;
         if (in.onHalves()) pre.sampleSets = 2;
         const auto depth = resolveMaxDepth(*in.scene, pre);
-        if (o.traceMaskOnly) {
-            if (o.mask.kind == LossMaskKind::Object)
-                throw inputError(option("trace-mask-only"), "needs a mask to trace",
-                                 "add " + option("mask") + " FILE or " + option("mask") +
-                                     " scratch, or drop it (the whole part is traced)");
-            pre.pixels = lossMaskRegion(o.mask, *in.scene, o.scratch);
-        }
-        auto spp = resolveSpp(
-            *in.scene, pre,
-            o.mask.kind == LossMaskKind::Object || !pre.autoSpp
-                ? std::vector<uint8_t>{}
-                : (pre.pixels.empty() ? lossMaskRegion(o.mask, *in.scene, o.scratch) : pre.pixels),
-            p.cacheDir);
+        if (o.traceMaskOnly && o.mask.kind == LossMaskKind::Object)
+            throw inputError(option("trace-mask-only"), "needs a mask to trace",
+                             "add " + option("mask") + " FILE or " + option("mask") +
+                                 " scratch, or drop it (the whole part is traced)");
+        // The loss mask's pixels before T exists (empty: the whole part), when a trace needs them.
+        std::vector<uint8_t> region;
+        if (o.traceMaskOnly || pre.autoSpp) region = lossMaskRegion(o.mask, *in.scene, o.scratch);
+        if (o.traceMaskOnly) pre.pixels = region;
+        auto spp = resolveSpp(*in.scene, pre, region, p.cacheDir);
         // eq. 2 rewards noise: without a given spp it trains at no fewer than paperMinSpp (the
         // paper's own loop keeps the scene's spp). spp auto measures the gradient's noise, not
         // that bias, so it keeps the floor too.
-        const int floor = optimizeDefaults().paperMinSpp;
+        const int minSpp = optimizeDefaults().paperMinSpp;
         if (in.kind == ObjectiveKind::Paper && p.requested != OptimizerMethod::PaperLoop) {
             if (!pre.spp) {
-                pre.spp = std::max(in.scene->desc.render.spp, floor);
-            } else if (spp && *pre.spp < floor) {
-                pre.spp = floor;
-                spp->spp = floor;
-                spp->reason += "; raised to " + std::to_string(floor) +
+                pre.spp = std::max(in.scene->desc.render.spp, minSpp);
+            } else if (spp && *pre.spp < minSpp) {
+                pre.spp = minSpp;
+                spp->spp = minSpp;
+                spp->reason += "; raised to " + std::to_string(minSpp) +
                                " spp, eq. 2's floor (it rewards noise)";
             }
         }

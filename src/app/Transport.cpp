@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -114,7 +115,8 @@ TransportFile readShardOfRank(const std::filesystem::path& list, const Communica
         facts[6 + k] =
             static_cast<double>(std::stoul(mine.fingerprint.substr(4 * k, 4), nullptr, 16));
     const std::vector<double> all = allGather(ranks, facts);
-    std::vector<int> owner(static_cast<size_t>(t.height), -1);
+    std::vector<std::array<int, 2>> ranges;
+    std::vector<std::string> names;
     for (size_t r = 0; r < files.size(); ++r) {
         const double* x = all.data() + r * kFacts;
         if (!std::equal(x + 2, x + kFacts, all.data() + 2))
@@ -123,23 +125,10 @@ TransportFile readShardOfRank(const std::filesystem::path& list, const Communica
                 "was traced with other inputs than " + files[0].string() +
                     " (scene, camera, material, spp, seed or max_depth)",
                 "trace every shard of " + list.string() + " with the same scene and options");
-        for (auto y = static_cast<int>(x[0]); y < static_cast<int>(x[1]); ++y) {
-            if (y < 0 || y >= t.height)
-                throw inputError(files[r].string(), "has rows outside the image", "trace it again");
-            if (owner[static_cast<size_t>(y)] >= 0)
-                throw inputError(
-                    list.string(),
-                    "row " + std::to_string(y) + " is in two shards (" +
-                        files[static_cast<size_t>(owner[static_cast<size_t>(y)])].string() +
-                        " and " + files[r].string() + ")",
-                    "give each row range once");
-            owner[static_cast<size_t>(y)] = static_cast<int>(r);
-        }
+        ranges.push_back({static_cast<int>(x[0]), static_cast<int>(x[1])});
+        names.push_back(files[r].string());
     }
-    for (int y = 0; y < t.height; ++y)
-        if (owner[static_cast<size_t>(y)] < 0)
-            throw inputError(list.string(), "no shard has image row " + std::to_string(y),
-                             "trace the missing rows with `precompute " + option("rows") + " A:B`");
+    shardRowOwners(ranges, t.height, list.string(), names);
     const RowShard shard{&ranks, static_cast<size_t>(mine.rowBegin),
                          static_cast<size_t>(mine.rowEnd)};
     std::vector<double> mask(f.matrix.objectMask.begin(), f.matrix.objectMask.end());
@@ -231,10 +220,7 @@ RenderOptions traceOptions(const Scene& scene, const PrecomputeOptions& o) {
     if (o.spp) r.spp = *o.spp;
     if (o.maxDepth) r.maxDepth = *o.maxDepth;
     if (o.sampling) r.sampling = *o.sampling;
-    if (!o.pixels.empty()) {
-        const size_t n = static_cast<size_t>(scene.camera.width()) * scene.camera.height();
-        if (o.pixels.size() != n)
-            throw std::invalid_argument("traceOptions: the pixel flags do not match the image");
+    if (!o.pixels.empty()) {  // their size is the tracer's to check
         if (std::none_of(o.pixels.begin(), o.pixels.end(), [](uint8_t f) { return f != 0; }))
             throw std::invalid_argument("traceOptions: no pixel to trace");
         r.pixels = o.pixels;

@@ -201,30 +201,14 @@ TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std:
     }
     TransportMatrix& first = shards.front().matrix;
     const size_t rows = first.rows();
-    std::vector<int> owner(rows == 0 ? 0 : static_cast<size_t>(first.height), -1);
     for (size_t k = 0; k < shards.size(); ++k) {
         const TransportMatrix& t = shards[k].matrix;
         if (t.width != first.width || t.height != first.height || t.channels != first.channels ||
             t.planes != first.planes || t.cols() != first.cols())
             throw inputError(shardName(k), "has other dimensions than the first shard",
                              "trace every shard alike");
-        for (int y = ranges[k][0]; y < ranges[k][1]; ++y) {
-            if (y < 0 || y >= first.height)
-                throw inputError(shardName(k), "has rows outside the image", "trace it again");
-            if (owner[static_cast<size_t>(y)] >= 0) {
-                std::string what = "row " + std::to_string(y) + " is in two shards";
-                if (k < names.size())
-                    what += std::string(" (") + names[static_cast<size_t>(owner[y])] + " and " +
-                            names[k] + ")";
-                throw inputError(where, what, "give each row range once");
-            }
-            owner[static_cast<size_t>(y)] = static_cast<int>(k);
-        }
     }
-    for (int y = 0; y < first.height; ++y)
-        if (owner[static_cast<size_t>(y)] < 0)
-            throw inputError(where, "no shard has image row " + std::to_string(y),
-                             "trace the missing rows with `precompute " + option("rows") + " A:B`");
+    const std::vector<int> owner = shardRowOwners(ranges, first.height, where, names);
     for (TransportFile& f : shards)
         if (f.matrix.storage == TransportStorage::Dense) f.matrix.toSparse();
     TransportMatrix m;
@@ -255,6 +239,32 @@ TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std:
     out.provenance.inputs = common.inputs;
     out.provenance.fingerprint = common.fingerprint;
     return out;
+}
+
+std::vector<int> shardRowOwners(const std::vector<std::array<int, 2>>& ranges, int height,
+                                const std::string& where, const std::vector<std::string>& names) {
+    std::vector<int> owner(static_cast<size_t>(std::max(height, 0)), -1);
+    for (size_t k = 0; k < ranges.size(); ++k) {
+        for (int y = ranges[k][0]; y < ranges[k][1]; ++y) {
+            if (y < 0 || y >= height)
+                throw inputError(k < names.size() ? where + ": " + names[k]
+                                                  : where + " shard " + std::to_string(k + 1),
+                                 "has rows outside the image", "trace it again");
+            const int had = owner[static_cast<size_t>(y)];
+            if (had >= 0) {
+                std::string what = "row " + std::to_string(y) + " is in two shards";
+                if (k < names.size())
+                    what += " (" + names[static_cast<size_t>(had)] + " and " + names[k] + ")";
+                throw inputError(where, what, "give each row range once");
+            }
+            owner[static_cast<size_t>(y)] = static_cast<int>(k);
+        }
+    }
+    for (int y = 0; y < height; ++y)
+        if (owner[static_cast<size_t>(y)] < 0)
+            throw inputError(where, "no shard has image row " + std::to_string(y),
+                             "trace the missing rows with `precompute " + option("rows") + " A:B`");
+    return owner;
 }
 
 ShardOf shardOf(const TransportFile& shard, const std::string& name) {

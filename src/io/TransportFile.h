@@ -20,6 +20,7 @@
 // trace bit for bit, with its fingerprint.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <istream>
@@ -78,6 +79,12 @@ struct ShardOf {
     std::string inputs, fingerprint;
 };
 ShardOf shardOf(const TransportFile& shard, const std::string& name);
+
+/// Which shard holds each image row: ranges[k] = shard k's rows [begin, end). InputError for a
+/// range outside the image (naming shard k: `where`: names[k], else `where` shard k+1), a row
+/// in two shards (naming `where` and, when given, both shards' names) or a row in none.
+std::vector<int> shardRowOwners(const std::vector<std::array<int, 2>>& ranges, int height,
+                                const std::string& where, const std::vector<std::string>& names);
 
 /// The .tm files a shard list names, in its order, relative paths resolved against the list's
 /// folder. InputError when it cannot be read or lists another list.
