@@ -79,26 +79,51 @@ const TransportSlices* TransportLoss::productSlices() const {
     return nullptr;
 }
 
+void TransportLoss::Products::luminance(std::span<const double> E, std::span<double> y) const {
+    if (slices)
+        slices->applyLuminance(E, y, TransportMatrix::kMeanPlane, t.threads);
+    else
+        t.applyLuminance(E, y);
+}
+
+void TransportLoss::Products::luminanceHalves(std::span<const double> E, std::span<double> ya,
+                                              std::span<double> yb) const {
+    if (slices)
+        slices->applyLuminanceHalves(E, ya, yb, t.threads);
+    else
+        t.applyLuminanceHalves(E, ya, yb);
+}
+
+void TransportLoss::Products::transpose(std::span<const double> dy, std::span<double> g) const {
+    if (slices)
+        slices->applyTransposeLuminance(dy, g, TransportMatrix::kMeanPlane, t.threads);
+    else
+        t.applyTransposeLuminance(dy, g);
+}
+
+void TransportLoss::Products::transposeHalves(std::span<const double> dya,
+                                              std::span<const double> dyb,
+                                              std::span<double> g) const {
+    if (slices)
+        slices->applyTransposeLuminanceHalves(dya, dyb, g, t.threads);
+    else
+        t.applyTransposeLuminanceHalves(dya, dyb, g);
+}
+
 const TransportSlices& TransportLoss::slices() const {
     std::call_once(slices_->once, [&] { slices_->slices = std::make_unique<TransportSlices>(t_); });
     return *slices_->slices;
 }
 
 LossParts TransportLoss::evaluateUnbiased(std::span<const double> E, std::span<double> grad) const {
-    const TransportSlices* b = productSlices();
-    if (b)
-        b->applyLuminanceHalves(E, y_, yb_, t_.threads);
-    else
-        t_.applyLuminanceHalves(E, y_, yb_);
+    const Products product{t_, productSlices()};
+    product.luminanceHalves(E, y_, yb_);
     shard_.gatherImage(y_, t_.width);
     shard_.gatherImage(yb_, t_.width);
     if (grad.empty()) return unb_->evaluate(y_, yb_, E);
     std::vector<double> dLdE(dimension_);
     LossParts parts = unb_->evaluate(y_, yb_, E, dLdY_, dLdYb_, dLdE);
-    if (b)
-        b->applyTransposeLuminanceHalves(dLdY_, dLdYb_, grad, t_.threads);
-    else
-        t_.applyTransposeLuminanceHalves(dLdY_, dLdYb_, grad);
+    product.transposeHalves(dLdY_, dLdYb_, grad);
     if (distributed()) shard_.ranks->sum(grad);
     for (size_t i = 0; i < dimension_; ++i) grad[i] += dLdE[i];
     return parts;
@@ -111,21 +136,15 @@ LossParts TransportLoss::evaluate(std::span<const double> E, std::span<double> g
             throw std::invalid_argument("TransportLoss: gradient has the wrong size");
         return evaluateUnbiased(E, grad);
     }
-    const TransportSlices* b = productSlices();
-    if (b)
-        b->applyLuminance(E, y_, TransportMatrix::kMeanPlane, t_.threads);
-    else
-        t_.applyLuminance(E, y_);
+    const Products product{t_, productSlices()};
+    product.luminance(E, y_);
     shard_.gatherImage(y_, t_.width);
     if (grad.empty()) return obj_->evaluate(y_, E);
     if (grad.size() != dimension_)
         throw std::invalid_argument("TransportLoss: gradient has the wrong size");
     std::vector<double> dLdE(dimension_);
     LossParts parts = obj_->evaluate(y_, E, dLdY_, dLdE);
-    if (b)
-        b->applyTransposeLuminance(dLdY_, grad, TransportMatrix::kMeanPlane, t_.threads);
-    else
-        t_.applyTransposeLuminance(dLdY_, grad);
+    product.transpose(dLdY_, grad);
     if (distributed()) shard_.ranks->sum(grad);
     for (size_t i = 0; i < dimension_; ++i) grad[i] += dLdE[i];
     return parts;

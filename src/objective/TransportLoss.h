@@ -80,6 +80,18 @@ class TransportLoss {
     mutable int evaluations_ = 0;  // for TransportLayout::Auto
     /// The slices an evaluation's products read, or nullptr for CSR (counts the evaluation).
     const TransportSlices* productSlices() const;
+    /// T's products through the layout chosen for one evaluation (slices, or T's CSR arrays
+    /// when null): the one place that dispatches on it.
+    struct Products {
+        const TransportMatrix& t;
+        const TransportSlices* slices;
+        void luminance(std::span<const double> E, std::span<double> y) const;
+        void luminanceHalves(std::span<const double> E, std::span<double> ya,
+                             std::span<double> yb) const;
+        void transpose(std::span<const double> dy, std::span<double> g) const;
+        void transposeHalves(std::span<const double> dya, std::span<const double> dyb,
+                             std::span<double> g) const;
+    };
     struct SlicesCache;
     std::shared_ptr<SlicesCache> slices_;
     RowShard shard_;
