@@ -21,6 +21,7 @@
 #include "io/HeightmapIO.h"
 #include "io/ImageIO.h"
 #include "io/Npy.h"
+#include "io/SceneFile.h"
 
 namespace fs = std::filesystem;
 using namespace sl;
@@ -300,6 +301,36 @@ TEST(HeightmapIO, EightBitPngIsDataNotSrgb) {
     EXPECT_EQ(d.format, "png uint8");
     for (size_t k = 0; k < v.size(); ++k)
         EXPECT_EQ(d.heights[k], static_cast<float>(1.0 + 2.0 * (v[k] / 255.0)));
+}
+
+TEST(HeightSource, BareMapOrSceneFile) {
+    TempDir dir;
+    std::vector<uint8_t> v = {0, 51, 255, 102, 204, 153};
+    writeOiio(dir / "b.png", 3, 2, 1, OIIO::TypeDesc::UINT8, OIIO::TypeDesc::UINT8, v.data());
+    // a bare integer map without a range is read as [0, 1]
+    const HeightSource bare = loadHeightSource(dir / "b.png");
+    EXPECT_EQ(bare.scene, nullptr);
+    EXPECT_EQ(bare.width(), 3);
+    EXPECT_EQ(bare.height(), 2);
+    for (size_t k = 0; k < v.size(); ++k) EXPECT_EQ(bare.heights()[k], v[k] / 255.0f);
+    // overrides belong to a scene file: with a bare map they are refused, naming the map
+    try {
+        (void)loadHeightSource(dir / "b.png", {"material.alpha=0.1"});
+        ADD_FAILURE() << "overrides on a bare map were accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("b.png"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("scene file"), std::string::npos) << e.what();
+    }
+    // a scene file gives the whole scene (its range, its camera); overrides apply to it
+    std::ofstream(dir / "s.json")
+        << (R"({"heightmap": {"path": "b.png", "height_range": [2, 4]}, "camera": {"width": 8,
+                  "height": 6}})");
+    const HeightSource sc = loadHeightSource(dir / "s.json", {"camera.width=10"});
+    ASSERT_NE(sc.scene, nullptr);
+    EXPECT_EQ(sc.width(), 3);
+    EXPECT_EQ(sc.height(), 2);
+    EXPECT_EQ(sc.heights()[2], 4.0f);
+    EXPECT_EQ(sc.scene->camera.width(), 10);
 }
 
 TEST(HeightmapIO, NonSquareMapKeepsOrientation) {

@@ -1,14 +1,11 @@
 #include "app/DefectMapJob.h"
 
-#include <array>
-#include <memory>
 #include <sstream>
 
 #include "core/Error.h"
 #include "core/Progress.h"
 #include "core/Stopwatch.h"
 #include "io/AtomicFile.h"
-#include "io/HeightmapIO.h"
 #include "io/ImageIO.h"
 #include "io/MaskIO.h"
 #include "io/SceneFile.h"
@@ -39,26 +36,11 @@ DefectMapJobSummary runDefectMapJob(const DefectMapJobOptions& o) {
                 "needs a scene file (its camera), not a bare height map '" + o.input.string() + "'",
                 "Give SCENE.json as the input");
     }
-    std::unique_ptr<Scene> scene;
-    HeightmapData hm;
-    if (isScene) {
-        scene = loadScene(o.input, o.sceneOverrides);
-    } else {
-        if (!o.sceneOverrides.empty())
-            throw inputError(o.input.string(),
-                             "is a bare height map: scene overrides apply to a "
-                             "scene file",
-                             "give SCENE.json, or leave out the overrides");
-        // the map is invariant to an affine change of the heights: an integer map without a
-        // height range is read as [0, 1]
-        HeightmapOptions ho;
-        ho.defaultIntegerRange = std::array<double, 2>{0.0, 1.0};
-        hm = loadHeightmap(o.input, ho);
-    }
-    const std::vector<float>& h = scene ? scene->heights : hm.heights;
+    const HeightSource src = loadHeightSource(o.input, o.sceneOverrides);
+    const std::vector<float>& h = src.heights();
     DefectMapJobSummary s;
-    s.width = scene ? scene->mapWidth : hm.width;
-    s.height = scene ? scene->mapHeight : hm.height;
+    s.width = src.width();
+    s.height = src.height();
     std::optional<LabelMask> truth;
     if (!o.truth.empty()) truth = readLabelMask(o.truth, s.width, s.height);
 
@@ -70,7 +52,7 @@ DefectMapJobSummary runDefectMapJob(const DefectMapJobOptions& o) {
     if (truth) s.score = scoreDefectMap(s.map.map, truth->labels, truth->legend, o.negatives);
     std::vector<uint8_t> image;
     if (!o.imageOutput.empty()) {
-        const PrimaryHits hits = tracePrimaryHits(*scene);
+        const PrimaryHits hits = tracePrimaryHits(*src.scene);
         image = projectToImage(hits, s.map.map);
         s.imageWidth = hits.width;
         s.imageHeight = hits.height;

@@ -20,7 +20,6 @@
 #include "cli/Common.h"
 #include "core/Error.h"
 #include "io/EnvMapIO.h"
-#include "io/HeightmapIO.h"
 #include "io/ImageIO.h"
 #include "io/SceneFile.h"
 #include "objective/ImageSpace.h"
@@ -47,22 +46,9 @@ int runScratchMap(const ScratchArgs& a) {
     const bool isScene = in.extension() == ".json";
     if (!a.imageMask.empty() && !isScene)
         throw UsageError("--image-output needs a scene file (its camera), not a bare height map");
-    std::unique_ptr<Scene> scene;
-    HeightmapData hm;
-    if (isScene) {
-        scene = loadScene(in, a.overrides);
-    } else {
-        if (!a.overrides.empty())
-            throw UsageError("-D overrides a scene file's fields; '" + a.input +
-                             "' is a bare height map");
-        // The scratch map is invariant to an affine change of the heights, so an integer map
-        // needs no height range: it is read as [0, 1].
-        HeightmapOptions o;
-        o.defaultIntegerRange = std::array<double, 2>{0.0, 1.0};
-        hm = loadHeightmap(in, o);
-    }
-    const std::vector<float>& h = scene ? scene->heights : hm.heights;
-    const int W = scene ? scene->mapWidth : hm.width, H = scene ? scene->mapHeight : hm.height;
+    const HeightSource src = loadHeightSource(in, a.overrides);
+    const std::vector<float>& h = src.heights();
+    const int W = src.width(), H = src.height();
     ScratchMap m = computeScratchMap(h, W, H, a.opt);
     writeMaskPng(a.out, m.map, W, H);
     std::printf(
@@ -71,7 +57,7 @@ int runScratchMap(const ScratchArgs& a) {
         W, H, a.opt.kernel, a.opt.patch, a.opt.threshold, m.patchesMarked, m.patchesX * m.patchesY,
         100.0 * m.markedFraction(), m.detrendedMax - m.detrendedMin, m.seconds, a.out.c_str());
     if (!a.imageMask.empty()) {
-        PrimaryHits hits = tracePrimaryHits(*scene);
+        PrimaryHits hits = tracePrimaryHits(*src.scene);
         std::vector<uint8_t> img = projectToImage(hits, m.map);
         size_t inside = 0;
         for (uint8_t v : img) inside += v != 0;

@@ -1,6 +1,7 @@
 #include "io/SceneFile.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -366,6 +367,23 @@ std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
 std::unique_ptr<Scene> loadScene(const std::filesystem::path& file,
                                  const std::vector<std::string>& overrides) {
     return loadScene(readSceneFile(file, overrides));
+}
+
+HeightSource loadHeightSource(const std::filesystem::path& file,
+                              const std::vector<std::string>& overrides) {
+    HeightSource s;
+    if (file.extension() == ".json") {
+        s.scene = loadScene(file, overrides);
+        return s;
+    }
+    if (!overrides.empty())
+        throw inputError(file.string(),
+                         "is a bare height map: scene overrides (-D) apply to a scene file",
+                         "give SCENE.json, or leave out the overrides");
+    HeightmapOptions o;
+    o.defaultIntegerRange = std::array<double, 2>{0.0, 1.0};
+    s.map = loadHeightmap(file, o);
+    return s;
 }
 
 std::vector<SceneFileField> sceneFileFields() {

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "io/HeightmapIO.h"
 #include "scene/Scene.h"
 
 namespace sl {
@@ -31,6 +32,21 @@ SceneDesc parseScene(const std::string& jsonText, const std::filesystem::path& b
 std::unique_ptr<Scene> loadScene(const SceneDesc& desc);
 std::unique_ptr<Scene> loadScene(const std::filesystem::path& file,
                                  const std::vector<std::string>& overrides = {});
+
+/// The heights of a scene file's part (SCENE.json: the whole Scene, its camera included) or of a
+/// bare height map (any other extension, io/HeightmapIO.h; an integer map without a height
+/// range is read as [0, 1], for tools invariant to an affine change of the heights, such as
+/// the defect and scratch maps). `overrides` apply to a scene file only: given with a bare
+/// map they are an InputError naming it.
+struct HeightSource {
+    std::unique_ptr<Scene> scene;  // null for a bare height map
+    HeightmapData map;             // the bare height map's data (empty for a scene)
+    const std::vector<float>& heights() const { return scene ? scene->heights : map.heights; }
+    int width() const { return scene ? scene->mapWidth : map.width; }
+    int height() const { return scene ? scene->mapHeight : map.height; }
+};
+HeightSource loadHeightSource(const std::filesystem::path& file,
+                              const std::vector<std::string>& overrides = {});
 
 /// Applies one "key.path=value" override to a scene's JSON (readSceneFile's rules); `where`
 /// names the scene file for errors.
