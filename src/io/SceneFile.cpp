@@ -241,17 +241,17 @@ void parseRender(Fields& f, RenderDesc& r) {
     f.rejectUnknown();
 }
 
-}  // namespace
-
-SceneDesc parseScene(const std::string& text, const std::filesystem::path& baseDir,
-                     const std::string& where) {
-    json j;
+json parseJsonText(const std::string& text, const std::string& where) {
     try {
-        j = json::parse(text);
+        return json::parse(text);
     } catch (const json::exception& e) {  // parse_error, or out_of_range for a number like 1e999
         throw inputError(where, std::string("not valid JSON: ") + e.what(),
                          "fix the syntax (a JSON validator shows the spot)");
     }
+}
+
+SceneDesc parseSceneJson(const json& j, const std::filesystem::path& baseDir,
+                         const std::string& where) {
     SceneDesc d;
     d.canonicalJson = j.dump();
     Fields top(j, where, "");
@@ -274,6 +274,13 @@ SceneDesc parseScene(const std::string& text, const std::filesystem::path& baseD
     top.string("description", "");
     top.rejectUnknown();
     return d;
+}
+
+}  // namespace
+
+SceneDesc parseScene(const std::string& text, const std::filesystem::path& baseDir,
+                     const std::string& where) {
+    return parseSceneJson(parseJsonText(text, where), baseDir, where);
 }
 
 void applySceneOverride(json& scene, const std::string& override, const std::string& where) {
@@ -317,21 +324,15 @@ SceneDesc readSceneFile(const std::filesystem::path& file,
                          "check the path (scene files are JSON)");
     std::stringstream ss;
     ss << in.rdbuf();
-    std::string text = ss.str();
-    if (!overrides.empty()) {
-        json j = json::parse(text, nullptr, false);
-        if (!j.is_discarded()) {  // a malformed file is reported by parseScene, as always
-            for (const std::string& o : overrides) applySceneOverride(j, o, file.string());
-            text = j.dump();
-        }
-    }
+    json j = parseJsonText(ss.str(), file.string());
+    for (const std::string& o : overrides) applySceneOverride(j, o, file.string());
     std::string where = file.string();
     if (!overrides.empty()) {
         where += " (with";
         for (const std::string& o : overrides) where += " -D " + o;
         where += ")";
     }
-    SceneDesc d = parseScene(text, file.parent_path(), where);
+    SceneDesc d = parseSceneJson(j, file.parent_path(), where);
     d.file = file;
     d.overrides = overrides;
     return d;
