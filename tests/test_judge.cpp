@@ -12,6 +12,7 @@
 #include "app/Judge.h"
 #include "app/Race.h"
 #include "app/Search.h"
+#include "app/Truth.h"
 #include "core/Error.h"
 #include "core/Rng.h"
 #include "io/ImageIO.h"
@@ -204,6 +205,22 @@ TEST(Judge, ProjectsTruthAndRejectsAMismatchedOne) {
         if (j.partMask()[p]) {
             EXPECT_EQ(j.labels()[p], 255);
         }
+    // Labels keep their values; their nonzero pixels are the region the whole mask projects
+    // to (the race takes its defects region from the judge's labels).
+    for (size_t k = 0; k < m.size(); ++k) m[k] = (k % 48) < 20 ? 0 : (k % 48) < 30 ? 128 : 255;
+    writeMaskPng(dir / "labels.png", m, 48, 48);
+    o.truth = dir / "labels.png";
+    Judge jl(*scene, o);
+    const std::vector<uint8_t> region = projectRegion(*scene, RegionSpec{o.truth, {}, false});
+    ASSERT_EQ(region.size(), jl.labels().size());
+    int values[256] = {};
+    for (size_t p = 0; p < region.size(); ++p) {
+        EXPECT_EQ(region[p] != 0, jl.labels()[p] != 0) << p;
+        ++values[jl.labels()[p]];
+    }
+    EXPECT_GT(values[0], 0);
+    EXPECT_GT(values[128], 0);
+    EXPECT_GT(values[255], 0);
 }
 
 TEST(Transport, HalvesKernelsEqualTheSeparateProducts) {

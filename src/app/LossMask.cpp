@@ -53,9 +53,10 @@ LossMask lossMask(const LossMaskSpec& spec, const TransportMatrix& t, const Scen
             if (!scene)
                 throw inputError(option("mask") + " scratch", "needs the scene",
                                  "pass SCENE.json, or a .tm whose scene file is readable");
-            m.pixels = intersectMasks(m.pixels, scratchMaskImage(*scene, scratch));
             m.scratchCells =
                 computeScratchMap(scene->heights, scene->mapWidth, scene->mapHeight, scratch).map;
+            m.pixels =
+                intersectMasks(m.pixels, projectToImage(tracePrimaryHits(*scene), m.scratchCells));
             break;
         case LossMaskKind::File:
             m.pixels = intersectMasks(m.pixels, loadImageMask(spec.file, t.width, t.height));

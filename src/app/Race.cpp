@@ -12,7 +12,6 @@
 #include "app/OptimizeJob.h"
 #include "app/PartFiles.h"
 #include "app/Transport.h"
-#include "app/Truth.h"
 #include "core/Error.h"
 #include "core/Progress.h"
 #include "core/Registry.h"
@@ -191,8 +190,10 @@ RaceSummary runRace(const RaceOptions& o) {
         jo.maxDepth = o.judgeMaxDepth;
         log(partName + ": judge estimate (" + std::to_string(o.judgeSpp) + " spp)");
         const Judge judge(*scene, jo);
-        const std::vector<uint8_t> truthRegion =
-            projectRegion(*scene, RegionSpec{files.truth, {}, false});
+        // the truth's labelled pixels (every label), from the judge's projection of it
+        std::vector<uint8_t> truthRegion(judge.labels().size());
+        std::transform(judge.labels().begin(), judge.labels().end(), truthRegion.begin(),
+                       [](uint8_t v) { return v ? uint8_t{255} : uint8_t{0}; });
 
         for (int seed = 0; seed < o.seeds; ++seed) {
             std::vector<RaceRow> rows;
