@@ -22,8 +22,8 @@ namespace fs = std::filesystem;
 using sl::fuzz::Target;
 
 const fs::path kFuzzDir = fs::path(SL_SOURCE_DIR) / "tests" / "fuzz";
-constexpr Target kTargets[] = {Target::Scene, Target::Npy, Target::Heightmap, Target::Transport,
-                               Target::Envmap};
+constexpr Target kTargets[] = {Target::Scene,     Target::Npy,    Target::Heightmap,
+                               Target::Transport, Target::Envmap, Target::Metrology};
 
 std::vector<fs::path> filesIn(const fs::path& dir) {
     std::vector<fs::path> out;

@@ -9,7 +9,9 @@
 
 #include <OpenImageIO/imageio.h>
 #include <unistd.h>
+#include <zip.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -17,6 +19,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -26,6 +29,7 @@
 
 #include "core/Error.h"
 #include "core/Hash.h"
+#include "core/Md5.h"
 #include "io/EnvMapIO.h"
 #include "io/HeightmapIO.h"
 #include "io/Npy.h"
@@ -39,8 +43,9 @@
 
 namespace sl::fuzz {
 
-enum class Target { Scene, Npy, Heightmap, Transport, Envmap };
-inline constexpr const char* kTargetNames[] = {"scene", "npy", "heightmap", "transport", "envmap"};
+enum class Target { Scene, Npy, Heightmap, Transport, Envmap, Metrology };
+inline constexpr const char* kTargetNames[] = {"scene",     "npy",    "heightmap",
+                                               "transport", "envmap", "metrology"};
 
 /// A property of an accepted input does not hold: report it as a crash.
 [[noreturn]] inline void fail(const char* what) {
@@ -77,6 +82,9 @@ class ScratchFile {
 
   private:
     std::filesystem::path path_;
+
+  public:
+    const std::filesystem::path& path() const { return path_; }
 };
 
 // --- scene ------------------------------------------------------------------------------------
@@ -237,6 +245,73 @@ inline void envmapInput(const uint8_t* data, size_t size) {
         if (!std::isfinite(v) || v < 0.0f) fail("texels finite and >= 0");
 }
 
+// --- metrology (X3P, SDF) ----------------------------------------------------------------------
+
+/// The bytes of an X3P archive holding main.xml and bindata/data.bin, with the MD5 digest of
+/// the point data in main.xml (MD5ChecksumPointData, when present) made to match the data.
+inline std::string assembleX3p(std::string xml, const std::string& data,
+                               const std::filesystem::path& scratch) {
+    const std::string open = "<MD5ChecksumPointData>", close = "</MD5ChecksumPointData>";
+    const size_t a = xml.find(open);
+    const size_t b = a == std::string::npos ? a : xml.find(close, a + open.size());
+    if (b != std::string::npos)
+        xml.replace(a + open.size(), b - a - open.size(), md5Hex(data.data(), data.size()));
+    int err = 0;
+    zip_t* z = zip_open(scratch.c_str(), ZIP_CREATE | ZIP_TRUNCATE, &err);
+    if (!z) fail("the harness can create a zip");
+    for (const auto& [name, bytes] : {std::pair<const char*, const std::string*>{"main.xml", &xml},
+                                      {"bindata/data.bin", &data}}) {
+        zip_source_t* src = zip_source_buffer(z, bytes->data(), bytes->size(), 0);
+        if (!src || zip_file_add(z, name, src, ZIP_FL_OVERWRITE) < 0) fail("zip_file_add");
+    }
+    if (zip_close(z) != 0) fail("zip_close");
+    std::ifstream in(scratch, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), {}};
+}
+
+/// The surface-metrology readers (io/X3p.h, io/Sdf.h through io/HeightmapIO.h loadHeightmap).
+/// Input: one selector byte, then the payload. Bits 0-1: 0 = the payload is an .sdf file (ASCII
+/// or binary); 1 = the payload is an .x3p file (a zip: most mutations stop at its CRCs);
+/// 2, 3 = the payload is a little-endian uint16 n, n bytes of main.xml and the point data, put
+/// into an X3P archive by assembleX3p, so that mutations reach the XML's fields and the data's
+/// checks behind the zip's CRCs and the MD5 digest. Bit 2: height_scale 2. An accepted map must
+/// be at least 2x2 with width x height finite heights (invalid points filled) and, when the file
+/// gives one, a finite positive pitch.
+inline void metrologyInput(const uint8_t* data, size_t size) {
+    static ScratchFile sdf("m.sdf"), x3p("m.x3p"), scratch("m-assembled.x3p");
+    if (size < 1) return;
+    const uint8_t sel = data[0];
+    HeightmapOptions opt;
+    if (sel & 4) opt.heightScale = 2.0;
+    const uint8_t* payload = data + 1;
+    const size_t n = size - 1;
+    std::filesystem::path file;
+    switch (sel & 3) {
+        case 0:
+            file = sdf.write(payload, n);
+            break;
+        case 1:
+            file = x3p.write(payload, n);
+            break;
+        default: {
+            if (n < 2) return;
+            const size_t xmlBytes = std::min<size_t>(payload[0] | (payload[1] << 8), n - 2);
+            const std::string xml(reinterpret_cast<const char*>(payload + 2), xmlBytes);
+            const std::string bin(reinterpret_cast<const char*>(payload + 2 + xmlBytes),
+                                  n - 2 - xmlBytes);
+            const std::string zipBytes = assembleX3p(xml, bin, scratch.path());
+            file = x3p.write(reinterpret_cast<const uint8_t*>(zipBytes.data()), zipBytes.size());
+        }
+    }
+    const HeightmapData d = loadHeightmap(file, opt);
+    if (d.width < 2 || d.height < 2 ||
+        d.heights.size() != static_cast<size_t>(d.width) * static_cast<size_t>(d.height))
+        fail("at least 2x2, width x height heights");
+    for (float v : d.heights)
+        if (!std::isfinite(v)) fail("heights are finite");
+    if (d.pitch && !(std::isfinite(*d.pitch) && *d.pitch > 0)) fail("the pitch is finite, > 0");
+}
+
 /// Once per fuzzing process: OpenImageIO without worker threads (one core per fuzzer, and
 /// reports that do not depend on thread timing).
 inline void initialize() {
@@ -257,6 +332,8 @@ inline void feed(Target t, const uint8_t* data, size_t size) {
             return transportInput(data, size);
         case Target::Envmap:
             return envmapInput(data, size);
+        case Target::Metrology:
+            return metrologyInput(data, size);
     }
 }
 

@@ -4,6 +4,7 @@
 // (TIFF, HDR, half-float EXR). The heightmap and envmap targets read one selector byte first
 // (see fuzz_heightmap.cpp, fuzz_envmap.cpp); it is prepended here.
 #include <OpenImageIO/imageio.h>
+#include <zip.h>
 
 #include <cstdint>
 #include <cstdio>
@@ -17,6 +18,7 @@
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
 #include "io/TransportFile.h"
+#include "io/X3p.h"
 #include "scene/EnvMap.h"
 #include "transport/TransportMatrix.h"
 
@@ -240,6 +242,64 @@ void transports() {
         });
 }
 
+/// One member of a zip archive, whole.
+std::string zipMember(const fs::path& archive, const char* name) {
+    int err = 0;
+    zip_t* z = zip_open(archive.c_str(), ZIP_RDONLY, &err);
+    zip_stat_t st;
+    zip_file_t* f = z && zip_stat(z, name, 0, &st) == 0 ? zip_fopen(z, name, 0) : nullptr;
+    if (!f) {
+        std::fprintf(stderr, "make_corpus: cannot read %s from %s\n", name, archive.c_str());
+        std::exit(1);
+    }
+    std::string bytes(st.size, '\0');
+    const zip_int64_t got = zip_fread(f, bytes.data(), st.size);
+    zip_fclose(f);
+    zip_close(z);
+    if (got != static_cast<zip_int64_t>(st.size)) std::exit(1);
+    return bytes;
+}
+
+template <typename T>
+void putLE(std::string& out, T v) {
+    out.append(reinterpret_cast<const char*>(&v), sizeof v);
+}
+
+void metrology() {
+    // Selector: bits 0-1 .sdf, .x3p, or (2, 3) main.xml + point data assembled into an .x3p by
+    // the target; bit 2 height_scale 2.
+    const std::vector<float> h = ramp(12, 0.001f);
+    putFile("metrology", "f64.x3p", 1, [&](const fs::path& p) { sl::writeX3p(p, 4, 3, h, 0.01); });
+    {
+        const fs::path tmp = gRoot / ".scratch" / "parts.x3p";
+        fs::create_directories(tmp.parent_path());
+        sl::writeX3p(tmp, 4, 3, h, 0.01);
+        const std::string xml = zipMember(tmp, "main.xml"),
+                          data = zipMember(tmp, "bindata/data.bin");
+        std::string in(1, '\x02');
+        putLE(in, static_cast<uint16_t>(xml.size()));
+        put("metrology", "assembled.x3p.bin", in + xml + data);
+        in[0] = '\x06';
+        put("metrology", "assembled-scale2.x3p.bin", in + xml + data);
+    }
+    put("metrology", "ascii.sdf",
+        std::string("\x00", 1) +
+            "aBCR-1.0\r\nManufacID   = fuzz\r\nCreateDate  = 010120241200\r\n"
+            "ModDate     = 010120241200\r\nNumPoints   = 3\r\nNumProfiles = 2\r\n"
+            "Xscale      = 5e-06\r\nYscale      = 5e-06\r\nZscale      = 1e-06\r\n"
+            "Zresolution = -1\r\nCompression = 0\r\nDataType    = 5\r\nCheckType   = 0\r\n*\r\n"
+            "1 2 3\r\n4 5 -6\r\n*\r\nOperator = fuzz\r\n");
+    std::string b = "\x04";  // height_scale 2
+    b += "bBCR-1.0";
+    b += std::string("fuzz      ", 10) + "010120241200" + "010120241200";
+    putLE(b, uint16_t{3});
+    putLE(b, uint16_t{2});
+    for (double v : {5e-6, 5e-6, 1e-6, 1e-9}) putLE(b, v);
+    b += std::string("\x00\x03\x00", 3);  // no compression, float32, no check
+    for (float v : {1.0f, 2.0f, 3.0f, 4.0f, 5.5f, -6.0f}) putLE(b, v);
+    put("metrology", "binary-f32.sdf", b + "*\nOperator = fuzz\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -253,6 +313,7 @@ int main(int argc, char** argv) {
     heightmaps();
     envmaps();
     transports();
+    metrology();
     fs::remove_all(gRoot / ".scratch");
     return 0;
 }
