@@ -3,15 +3,20 @@
 // same pixels), the render is linear in the light, T from basis renders reproduces a direct
 // render, SPSA through POV-Ray lowers the loss, and failures are clear errors. Tiny images.
 #include <gtest/gtest.h>
+#include <signal.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <memory>
+#include <thread>
 
 #include "TestUtil.h"
 #include "app/ExternalRenderer.h"
 #include "core/Color.h"
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "io/SceneFile.h"
 #include "objective/Objective.h"
 #include "optimize/BlackBox.h"
@@ -64,6 +69,36 @@ std::vector<double> lum(const Image& img) {
         y[p] = luminance<double>(c[0], c[1], c[2]);
     }
     return y;
+}
+
+// An interrupt (Ctrl-C, SIGTERM to us) stops the external renderer too: it gets SIGTERM, or
+// SIGKILL 2 s later when it ignores that, is reaped, and Interrupted is thrown. No povray needed.
+TEST(ExternalRenderer, InterruptStopsTheRenderer) {
+    test::TempDir dir("renderer-interrupt");
+    for (const std::string script :
+         {"echo $$ > child.pid; exec sleep 60",
+          "trap '' TERM; echo $$ > child.pid; while :; do sleep 0.05; done"}) {
+        SCOPED_TRACE(script);
+        clearInterrupt();
+        std::filesystem::remove(dir / "child.pid");
+        std::thread asker([&] {
+            for (int i = 0; i < 500 && !std::filesystem::exists(dir / "child.pid"); ++i)
+                std::this_thread::sleep_for(std::chrono::milliseconds(10));
+            std::this_thread::sleep_for(std::chrono::milliseconds(50));
+            requestInterrupt(SIGTERM);
+        });
+        const auto start = std::chrono::steady_clock::now();
+        EXPECT_THROW(runProcess({"sh", "-c", script}, dir.path(), 60.0), Interrupted);
+        const double waited =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        asker.join();
+        clearInterrupt();
+        EXPECT_LT(waited, 20.0);  // not the 60 s the child would run
+        const pid_t child = static_cast<pid_t>(std::stol(test::readFile(dir / "child.pid")));
+        errno = 0;
+        EXPECT_EQ(kill(child, 0), -1) << "the renderer " << child << " is still there";
+        EXPECT_EQ(errno, ESRCH);
+    }
 }
 
 TEST(Povray, TiltedMirrorUnderOneTexelLightsTheSamePixelsAsOurTracer) {

@@ -176,6 +176,21 @@ ProcessResult runProcess(const std::vector<std::string>& argv, const std::filesy
         const pid_t w = waitpid(pid, &status, WNOHANG);
         if (w == pid) break;
         if (w < 0 && errno != EINTR) break;
+        if (interruptRequested()) {
+            // Ctrl-C or SIGTERM to us: the renderer stops too (SIGTERM, then SIGKILL after 2 s),
+            // and nothing it wrote is used
+            kill(pid, SIGTERM);
+            const auto asked = std::chrono::steady_clock::now();
+            while (waitpid(pid, &status, WNOHANG) != pid) {
+                if (std::chrono::steady_clock::now() - asked > std::chrono::seconds(2)) {
+                    kill(pid, SIGKILL);
+                    waitpid(pid, &status, 0);
+                    break;
+                }
+                std::this_thread::sleep_for(std::chrono::milliseconds(10));
+            }
+            throw Interrupted();
+        }
         const double elapsed =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (elapsed > timeoutSeconds) {

@@ -96,7 +96,8 @@ struct ProcessResult {
 };
 
 /// Runs argv in `dir` (stdout and stderr into dir/render.log) and waits at most timeoutSeconds.
-/// Throws InputError when argv[0] cannot be started.
+/// Throws InputError when argv[0] cannot be started. On an interrupt request (core/Interrupt.h)
+/// the program gets SIGTERM (SIGKILL after 2 s), is waited for, and Interrupted is thrown.
 ProcessResult runProcess(const std::vector<std::string>& argv, const std::filesystem::path& dir,
                          double timeoutSeconds);
 
