@@ -17,6 +17,7 @@
 #include "core/Color.h"
 #include "core/Error.h"
 #include "core/Interrupt.h"
+#include "io/ImageIO.h"
 #include "io/SceneFile.h"
 #include "objective/Objective.h"
 #include "optimize/BlackBox.h"
@@ -197,6 +198,62 @@ TEST(Povray, RenderIsLinearInTheLight) {
     const double err = linearityError(pov, e1, e2, 0, 0);
     std::printf("POV-Ray linearity error %.3g\n", err);
     EXPECT_LT(err, 2e-3);  // POV-Ray's half-float EXR rounds at 2^-11
+}
+
+// `render --renderer povray`: the same scene and light through POV-Ray from the command line,
+// an EXR of the camera's size with a PNG beside it, as close to our tracer's render of the same
+// scene as the export makes it (a diffuse-looking rough conductor under a smooth sky).
+TEST(Povray, RenderCommandWithPovray) {
+    REQUIRE_POVRAY();
+    test::TempDir dir("povray-render-cli");
+    const int n = 40;
+    auto scene = makeScene(dir, test::bumpyHeightMap(n), n,
+                           R"({"type": "roughconductor", "alpha": 0.3, "material": "Al"})", 24);
+    test::writeText(dir / "scene.json", scene->desc.canonicalJson);
+    const std::string sceneFile = (dir / "scene.json").string();
+    auto r = test::runCli("render " + sceneFile + " --renderer povray --envmap studio -o " +
+                          (dir / "pov.exr").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("with povray"), std::string::npos) << r.output;
+    EXPECT_TRUE(std::filesystem::exists(dir / "pov.png"));
+    r = test::runCli("render " + sceneFile + " --envmap studio --spp 64 -o " +
+                     (dir / "ours.exr").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const Image pov = readImage(dir / "pov.exr"), ours = readImage(dir / "ours.exr");
+    ASSERT_EQ(pov.width, 24);
+    ASSERT_EQ(pov.height, 24);
+    ASSERT_EQ(ours.width, 24);
+    const std::vector<double> a = lum(pov), b = lum(ours);
+    double d = 0, nn = 0;
+    for (size_t p = 0; p < a.size(); ++p) {
+        d += (a[p] - b[p]) * (a[p] - b[p]);
+        nn += b[p] * b[p];
+    }
+    std::printf("render --renderer povray vs ours: relative RMS difference %.3f\n",
+                std::sqrt(d / nn));
+    EXPECT_LT(std::sqrt(d / nn), 0.3);
+}
+
+// Bad combinations are refused before any work, naming the option; no output is written.
+TEST(ExternalRenderer, RenderCommandRefusesBadCombinations) {
+    test::TempDir dir("render-cli-refused");
+    const int n = 16;
+    auto scene = makeScene(dir, test::bumpyHeightMap(n), n, R"({"type": "conductor"})", 8);
+    test::writeText(dir / "scene.json", scene->desc.canonicalJson);
+    const std::string base =
+        "render " + (dir / "scene.json").string() + " -o " + (dir / "x.exr").string();
+    auto r = test::runCli(base + " --renderer command");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("--renderer-cmd"), std::string::npos) << r.output;
+    r = test::runCli(base + " --renderer povray --max-depth 3");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("--max-depth"), std::string::npos) << r.output;
+    // a command that writes an image of the wrong size (the env map): a clear error
+    r = test::runCli(base + " --renderer-cmd 'cp {envmap} {output}'");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("cp"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "x.exr"));
+    EXPECT_FALSE(std::filesystem::exists(dir / "x.png"));
 }
 
 TEST(Povray, TransportFromBasisRendersMatchesADirectRender) {

@@ -305,6 +305,18 @@ Image ExternalRenderer::render(const EnvMap& env, uint64_t seed, int threads) co
     return povrayDownsample(img, factor);
 }
 
+ExternalRendererOptions externalRendererOptions(RendererKind kind,
+                                                const ExternalRendererOptions& given) {
+    if (kind == RendererKind::Builtin)
+        throw std::invalid_argument("externalRendererOptions: the built-in tracer is not external");
+    ExternalRendererOptions o = given;
+    if (kind == RendererKind::Command && o.command.empty())
+        throw inputError(option("renderer") + " command", "needs a command template",
+                         "give " + option("renderer-cmd"));
+    if (kind == RendererKind::Povray) o.command.clear();
+    return o;
+}
+
 BasisTransportResult precomputeBasisToFile(const std::filesystem::path& sceneFile,
                                            const std::vector<std::string>& overrides,
                                            RendererKind kind,
@@ -313,11 +325,7 @@ BasisTransportResult precomputeBasisToFile(const std::filesystem::path& sceneFil
                                            const std::filesystem::path& out) {
     if (kind == RendererKind::Builtin)
         throw std::invalid_argument("precomputeBasisToFile: the built-in tracer traces T itself");
-    ExternalRendererOptions ro = renderer;
-    if (kind == RendererKind::Command && ro.command.empty())
-        throw inputError(option("renderer"), "'command' needs a command template",
-                         "give " + option("renderer-cmd"));
-    if (kind == RendererKind::Povray) ro.command.clear();
+    const ExternalRendererOptions ro = externalRendererOptions(kind, renderer);
     const std::unique_ptr<Scene> scene = loadScene(sceneFile, overrides);
     const ExternalRenderer r(*scene, ro);
     BasisTransportResult res = basisTransport(*scene, r, options);

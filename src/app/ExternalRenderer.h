@@ -64,6 +64,11 @@ struct ExternalRendererOptions {
     int concurrentRenders = 0;
 };
 
+/// The options of the external renderer `kind` from what was given: POV-Ray ignores a command
+/// template; `command` without one is an InputError naming the option. Not for Builtin.
+ExternalRendererOptions externalRendererOptions(RendererKind kind,
+                                                const ExternalRendererOptions& given);
+
 /// The renders at once `options` asks for (0 resolved).
 int concurrentRenders(const ExternalRendererOptions& options);
 

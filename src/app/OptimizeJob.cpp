@@ -266,9 +266,7 @@ Plan plan(const OptimizeJobOptions& options) {
                 " spsa or fd-adam, or build its T with "
                 "precompute " +
                 option("renderer") + " and optimize the .tm");
-    if (o.renderer == RendererKind::Command && o.external.command.empty())
-        throw inputError(option("renderer") + " command", "needs a command template",
-                         "give " + option("renderer-cmd"));
+    if (o.renderer != RendererKind::Builtin) (void)externalRendererOptions(o.renderer, o.external);
     if (p.blackBox && p.tmInput)
         throw inputError(option("optimizer") + " " + row.name,
                          "renders the scene for every gradient, so it needs the scene file",
@@ -700,8 +698,7 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
             RenderLoss renderLoss(*in.scene, ro, objective, o.rgb);
             run.optimizer = minimizeBlackBox(renderLoss, res.e, opt, o.blackBox);
         } else {
-            ExternalRendererOptions eo = o.external;
-            if (o.renderer == RendererKind::Povray) eo.command.clear();
+            const ExternalRendererOptions eo = externalRendererOptions(o.renderer, o.external);
             const ExternalRenderer external(*in.scene, eo);
             const RenderLoss renderLoss(external, in.scene->basis.width(), in.scene->basis.height(),
                                         ro.seed, objective, o.rgb);

@@ -24,6 +24,23 @@ EnvMap chooseEnvMap(const Scene& scene, const std::string& spec) {
     return presetEnvMap(e.preset.empty() ? EnvMapDesc::kDefaultPreset : e.preset, w, h);
 }
 
+// --renderer, --renderer-cmd (implies --renderer command), --renderer-timeout.
+void addRendererOptions(CLI::App* c, RendererKind& kind, ExternalRendererOptions& external) {
+    addChoice(c, "--renderer", kind, rendererKindTable(), "Renderer (default builtin)");
+    c->add_option_function<std::string>(
+        "--renderer-cmd",
+        [&kind, &external](const std::string& v) {
+            external.command = v;
+            if (kind == RendererKind::Builtin) kind = RendererKind::Command;
+        },
+        "External renderer command template with {scene} (a Mitsuba 3 scene.xml), {envmap}, "
+        "{output} (implies --renderer command)");
+    c->add_option("--renderer-timeout", external.timeoutSeconds,
+                  "Seconds one external render may take")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+}
+
 void addCacheOptions(CLI::App* c, CacheLocation& cache) {
     auto* dir = c->add_option_function<std::string>(
         "--cache", [&cache](const std::string& d) { cache.dir = d; },

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "app/Cache.h"
+#include "app/ExternalRenderer.h"
 #include "app/Truth.h"
 #include "core/Communicator.h"
 #include "core/Error.h"
@@ -66,6 +67,9 @@ void addSceneOverrides(CLI::App* c, std::vector<std::string>& overrides, bool im
 /// --defects and --reference of the defects objective (app/Truth.h RegionSpec) for a command
 /// that optimizes a light (optimize, lamps). Defined after addParsed below.
 void addDefectRegionOptions(CLI::App* c, RegionSpec& defects, RegionSpec& reference);
+
+/// --renderer, --renderer-cmd (implies --renderer command), --renderer-timeout.
+void addRendererOptions(CLI::App* c, RendererKind& kind, ExternalRendererOptions& external);
 
 /// --cache DIR and --no-cache of a command that keeps traced matrices (app/Cache.h).
 void addCacheOptions(CLI::App* c, CacheLocation& cache);

@@ -1,13 +1,16 @@
-// scratchlight render SCENE.json [--envmap SPEC] [--spp N] [--threads N] [-o
-// OUT.exr]
+// scratchlight render SCENE.json [--envmap SPEC] [--spp N] [--threads N] [--renderer
+// povray|command]
+// [-o OUT.exr]
 #include <spdlog/spdlog.h>
 
 #include <memory>
 
 #include "app/DepthBench.h"
+#include "app/ExternalRenderer.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
 #include "core/Progress.h"
+#include "core/Stopwatch.h"
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
 #include "io/SceneFile.h"
@@ -25,7 +28,31 @@ struct RenderArgs {
     int threads = 0;
     float exposure = 1.0f;
     bool autoDepth = false;
+    RendererKind renderer = RendererKind::Builtin;
+    ExternalRendererOptions external;
 };
+
+/// The same scene and light through an external renderer (app/ExternalRenderer.h).
+int renderExternal(const RenderArgs& a, const Scene& scene, const EnvMap& env, uint64_t seed) {
+    if (a.autoDepth || a.maxDepth)
+        throw UsageError(
+            "--max-depth and --auto-depth set our tracer's path length; an external "
+            "renderer keeps its own: drop them");
+    const auto pngPath = siblingPath(a.out, ".exr", ".png");
+    const ExternalRenderer r(scene, externalRendererOptions(a.renderer, a.external));
+    const Stopwatch clock;
+    Image img;
+    {
+        ProgressTask task("render (" + r.name() + ")");
+        img = r.render(env, seed, a.threads);
+    }
+    writeExr(a.out, img);
+    writePng(pngPath, img, a.exposure);
+    std::printf("rendered %dx%d with %s in %.3f s\n", img.width, img.height, r.name().c_str(),
+                clock.seconds());
+    std::printf("wrote %s and %s\n", a.out.c_str(), pngPath.string().c_str());
+    return kOk;
+}
 
 int runRender(const RenderArgs& a) {
     const auto pngPath = siblingPath(a.out, ".exr", ".png");
@@ -39,6 +66,8 @@ int runRender(const RenderArgs& a) {
                  scene->mapHeight, desc.heightmap.path.filename().string(), hs.buildSeconds,
                  static_cast<double>(hs.embreeBytes) / 1e6);
     EnvMap env = chooseEnvMap(*scene, a.envmap);
+    if (a.renderer != RendererKind::Builtin)
+        return renderExternal(a, *scene, env, desc.render.seed);
 
     RenderOptions opt = renderOptionsFor(*scene);
     opt.threads = a.threads;
@@ -83,6 +112,7 @@ void registerRender(CLI::App& app, std::function<int()>& run) {
         ->check(CLI::Range(0, 4096));
     c->add_option("-o,--output", a->out, "Output EXR (linear); a PNG preview is written beside it")
         ->capture_default_str();
+    addRendererOptions(c, a->renderer, a->external);
     c->add_option("--exposure", a->exposure, "Scale applied to the PNG preview only")
         ->check(CLI::PositiveNumber);
     c->callback([a, &run] { run = [a] { return runRender(*a); }; });

@@ -82,23 +82,6 @@ void parseRows(const std::string& v, PrecomputeOptions& p) {
     p.rowEnd = rows->second;
 }
 
-/// --renderer, --renderer-cmd (implies --renderer command), --renderer-timeout.
-void addRendererOptions(CLI::App* c, RendererKind& kind, ExternalRendererOptions& external) {
-    addChoice(c, "--renderer", kind, rendererKindTable(), "Renderer (default builtin)");
-    c->add_option_function<std::string>(
-        "--renderer-cmd",
-        [&kind, &external](const std::string& v) {
-            external.command = v;
-            if (kind == RendererKind::Builtin) kind = RendererKind::Command;
-        },
-        "External renderer command template with {scene} (a Mitsuba 3 scene.xml), {envmap}, "
-        "{output} (implies --renderer command)");
-    c->add_option("--renderer-timeout", external.timeoutSeconds,
-                  "Seconds one external render may take")
-        ->check(CLI::PositiveNumber)
-        ->capture_default_str();
-}
-
 int runPrecompute(PrecomputeArgs a) {
     if (std::filesystem::path(a.out).extension() != ".tm")
         throw UsageError("output '" + a.out + "' must end in .tm");
