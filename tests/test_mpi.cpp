@@ -1,7 +1,8 @@
 // optimize over MPI ranks (docs/CLUSTER.md, app/Mpi.h): two ranks, each holding one row shard of
 // T, give the light one process gives on the whole T (to 1e-12), with the default objective
-// (unbiased, on T's halves) and with eq. 2; rank 0 alone writes. What cannot run over ranks is
-// refused, and every rank ends with a non-zero exit. Skipped in a build without MPI.
+// (unbiased, on T's halves), with eq. 2 and with the defects objective; rank 0 alone writes. What
+// cannot run over ranks is refused, and every rank ends with a non-zero exit. Skipped in a build
+// without MPI.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -63,13 +64,17 @@ TEST_F(Mpi, TwoRanksOnShardsGiveTheOneProcessLight) {
     ASSERT_EQ(test::runCli(base + " --rows 27:64 -o " + d + "b.tm").exitCode, 0);
     std::ofstream(dir / "t.shards") << "a.tm\nb.tm\n";
     test::RunResult r;
-    for (const std::string objective : {"", " --objective paper"}) {
+    const std::string truth = std::string(SL_SOURCE_DIR) + "/scenes/default/part-truth.png";
+    for (const std::string& objective : {std::string(), std::string(" --objective paper"),
+                                         " --objective defects --defects " + truth + ":255"}) {
         SCOPED_TRACE("objective:" + objective);
         const std::string args = "optimize " + d +
                                  "t.shards --heldout none --iterations 30 --no-figures" +
                                  objective + " -o " + d;
-        const std::string one = objective.empty() ? "one" : "one-paper";
-        const std::string two = objective.empty() ? "two" : "two-paper";
+        const std::string tag = objective.empty()                              ? ""
+                                : objective.find("paper") != std::string::npos ? "-paper"
+                                                                               : "-defects";
+        const std::string one = "one" + tag, two = "two" + tag;
         r = test::runCli(args + one);
         ASSERT_EQ(r.exitCode, 0) << r.output;
         r = test::runShell(mpirun(2) + args + two);

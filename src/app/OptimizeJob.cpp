@@ -293,13 +293,6 @@ Plan plan(const OptimizeJobOptions& options) {
                              "pass " + option("heldout") +
                                  " none, and judge E* afterwards with "
                                  "`scratchlight judge`");
-        if (o.objectiveKind == ObjectiveKind::Defects || !o.truth.empty() || !o.defects.empty())
-            throw inputError(option("objective") + " defects",
-                             over +
-                                 " the defects objective is not supported yet (its "
-                                 "white-furnace mean needs the whole T)",
-                             "use " + option("objective") + " unbiased or paper, without " +
-                                 option("truth") + " and " + option("defects"));
     }
     return p;
 }

@@ -505,11 +505,19 @@ std::string moreVisible(double opt, double other, const std::string& under) {
     return out;
 }
 
-/// "X % lower than under Y" for a loss (lower is better), honest when it is not lower.
+/// "X % lower than under Y" for a loss (lower is better), honest when it is not lower. A loss
+/// that can be negative (the defects objective's) has no meaningful ratio: then the difference.
 std::string lowerLoss(double opt, double other, const std::string& under) {
     if (!std::isfinite(opt) || !std::isfinite(other) || other == 0)
         return "not comparable with " + under;
     std::string out;
+    if (!(other > 0 && opt >= 0)) {
+        out = opt < other ? "lower (better) by " : "HIGHER (worse) by ";
+        out += fmt(std::abs(opt - other));
+        out += " than ";
+        out += under;
+        return out;
+    }
     if (opt < other) {
         out = percent(1.0 - opt / other) + " lower (better) than ";
         out += under;

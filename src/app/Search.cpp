@@ -27,13 +27,8 @@ ObjectiveOnT objectiveOnT(ObjectiveKind kind, const TransportMatrix& t, const Se
             r.loss = std::make_unique<TransportLoss>(t, *r.halves, in.rgb);
             break;
         case ObjectiveKind::Defects: {
-            if (in.shard.distributed())
-                throw inputError(std::string("the defects objective"),
-                                 "does not run over MPI ranks yet (its white-furnace mean needs "
-                                 "the whole T)",
-                                 "use " + option("objective") + " unbiased or paper");
             DefectObjectiveOptions d;
-            d.whiteMean = whiteFurnaceMean(t, in.mask);
+            d.whiteMean = whiteFurnaceMean(t, in.mask, in.shard);
             r.halves = std::make_unique<DefectObjective>(t.width, t.height, in.mask, in.defects,
                                                          in.reference, oo, d);
             r.loss = std::make_unique<TransportLoss>(t, *r.halves, in.rgb);

@@ -152,10 +152,12 @@ LossParts DefectObjective::evaluate(std::span<const double> Ya, std::span<const 
     return r;
 }
 
-double whiteFurnaceMean(const TransportMatrix& t, const std::vector<uint8_t>& mask) {
+double whiteFurnaceMean(const TransportMatrix& t, const std::vector<uint8_t>& mask,
+                        const RowShard& shard) {
     const std::vector<double> one(t.cols(), 1.0);
     std::vector<double> y(t.rows());
     t.applyLuminance(one, y);
+    shard.gatherImage(y, t.width);
     double sum = 0, n = 0;
     for (size_t p = 0; p < y.size(); ++p)
         if (mask[p]) sum += y[p], n += 1;

@@ -30,6 +30,7 @@
 #include <span>
 #include <vector>
 
+#include "core/Communicator.h"
 #include "objective/HalfImageObjective.h"
 #include "objective/Objective.h"
 #include "transport/TransportMatrix.h"
@@ -81,8 +82,11 @@ class DefectObjective final : public HalfImageObjective {
     DefectObjectiveOptions d_;
 };
 
-/// The white-furnace brightness w: the mean over `mask` of the luminance of T·1 (E = 1).
-double whiteFurnaceMean(const TransportMatrix& t, const std::vector<uint8_t>& mask);
+/// The white-furnace brightness w: the mean over `mask` of the luminance of T·1 (E = 1). With
+/// `shard` distributed (core/Communicator.h), t holds this rank's rows and the image is put
+/// together over the ranks first, so every rank gets the whole image's w.
+double whiteFurnaceMean(const TransportMatrix& t, const std::vector<uint8_t>& mask,
+                        const RowShard& shard = {});
 
 }  // namespace sl
 
