@@ -17,8 +17,10 @@ TransportSink::TransportSink(const EnvMapBasis& basis, int width, int height, in
       height_(height),
       channels_(channels),
       planes_(planes),
-      cols_(static_cast<size_t>(width) * height),
-      vals_(static_cast<size_t>(width) * height) {
+      chunkEntries_(
+          std::clamp<size_t>(size_t{2} * kBandRows * static_cast<size_t>(width), 1024, 65536)),
+      bands_(static_cast<size_t>((height + kBandRows - 1) / kBandRows)),
+      rows_(static_cast<size_t>(width) * height) {
     if (channels != 1 && channels != 3)
         throw std::invalid_argument("TransportSink: channels must be 1 or 3");
     if (planes != 1 && planes != 2) throw std::invalid_argument("TransportSink: planes is 1 or 2");
@@ -54,8 +56,8 @@ void TransportSink::consume(const PixelPaths& px) {
     }
     std::sort(entries.begin(), entries.end(),
               [](const Entry& a, const Entry& b) { return a.col < b.col; });
-    auto& cols = cols_[px.pixel];
-    auto& vals = vals_[px.pixel];
+    thread_local std::vector<uint16_t> cols;
+    thread_local std::vector<float> vals;
     cols.clear();
     vals.clear();
     for (size_t i = 0; i < entries.size();) {
@@ -67,6 +69,22 @@ void TransportSink::consume(const PixelPaths& px) {
         for (int pl = 0; pl < planes_; ++pl)
             for (int k = 0; k < channels_; ++k) vals.push_back(static_cast<float>(sum[pl][k]));
     }
+    if (cols.empty()) return;
+    const size_t st = vals.size() / cols.size();
+    Band& band = bands_[px.pixel / static_cast<uint32_t>(width_) / kBandRows];
+    const std::lock_guard<std::mutex> hold(band.lock);
+    if (band.chunks.empty() ||
+        band.chunks.back().cols.size() + cols.size() > band.chunks.back().cols.capacity()) {
+        Chunk& c = band.chunks.emplace_back();
+        const size_t n = std::max(chunkEntries_, cols.size());
+        c.cols.reserve(n);
+        c.vals.reserve(n * st);
+    }
+    Chunk& c = band.chunks.back();
+    rows_[px.pixel] = {static_cast<uint32_t>(band.chunks.size() - 1),
+                       static_cast<uint32_t>(c.cols.size()), static_cast<uint32_t>(cols.size())};
+    c.cols.insert(c.cols.end(), cols.begin(), cols.end());
+    c.vals.insert(c.vals.end(), vals.begin(), vals.end());
 }
 
 TransportMatrix TransportSink::finish(const TraceSummary& summary) {
@@ -79,16 +97,24 @@ TransportMatrix TransportSink::finish(const TraceSummary& summary) {
     t.planes = planes_;
     t.storage = TransportStorage::Sparse;
     t.rowPtr.assign(t.rows() + 1, 0);
-    for (size_t r = 0; r < t.rows(); ++r) t.rowPtr[r + 1] = t.rowPtr[r] + cols_[r].size();
+    for (size_t r = 0; r < t.rows(); ++r) t.rowPtr[r + 1] = t.rowPtr[r] + rows_[r].count;
     t.colIdx.resize(t.rowPtr.back());
     const size_t st = static_cast<size_t>(t.stride());
     t.values.resize(t.rowPtr.back() * st);
-    for (size_t r = 0; r < t.rows(); ++r) {
-        std::copy(cols_[r].begin(), cols_[r].end(), t.colIdx.begin() + t.rowPtr[r]);
-        std::copy(vals_[r].begin(), vals_[r].end(), t.values.begin() + t.rowPtr[r] * st);
-        std::vector<uint16_t>().swap(cols_[r]);
-        std::vector<float>().swap(vals_[r]);
+    const size_t w = static_cast<size_t>(width_);
+    for (size_t b = 0; b < bands_.size(); ++b) {
+        const size_t r1 = std::min(t.rows(), (b + 1) * kBandRows * w);
+        for (size_t r = b * kBandRows * w; r < r1; ++r) {
+            const RowRef& ref = rows_[r];
+            if (ref.count == 0) continue;
+            const Chunk& c = bands_[b].chunks[ref.chunk];
+            std::copy_n(c.cols.begin() + ref.offset, ref.count, t.colIdx.begin() + t.rowPtr[r]);
+            std::copy_n(c.vals.begin() + ref.offset * st, ref.count * st,
+                        t.values.begin() + t.rowPtr[r] * st);
+        }
+        std::vector<Chunk>().swap(bands_[b].chunks);
     }
+    std::vector<RowRef>().swap(rows_);
     t.objectMask = summary.objectMask;
     return t;
 }

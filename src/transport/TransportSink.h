@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <mutex>
 #include <vector>
 
 #include "render/PathSink.h"
@@ -26,10 +27,29 @@ class TransportSink : public PathSink {
     TransportMatrix finish(const TraceSummary& summary);
 
   private:
+    /// The rows of each band of kBandRows image rows, kept until finish() in chunks of
+    /// chunkEntries_ entries (a row never spans two; 2 entries per pixel of a band, 1024 to
+    /// 65536): no allocation per pixel, and at most one partly filled chunk per band. Vectors
+    /// grown pixel by pixel held up to twice their size plus 48 bytes a pixel; the trace's peak
+    /// memory is these lists plus the CSR arrays finish() fills.
+    struct Chunk {
+        std::vector<uint16_t> cols;  // reserved to capacity once, never reallocated
+        std::vector<float> vals;
+    };
+    struct Band {
+        std::mutex lock;
+        std::vector<Chunk> chunks;
+    };
+    struct RowRef {
+        uint32_t chunk = 0, offset = 0, count = 0;  // in its band; count 0: no entries
+    };
+    static constexpr int kBandRows = 16;
+
     const EnvMapBasis& basis_;
     int width_, height_, channels_, planes_;
-    std::vector<std::vector<uint16_t>> cols_;
-    std::vector<std::vector<float>> vals_;
+    size_t chunkEntries_;
+    std::vector<Band> bands_;
+    std::vector<RowRef> rows_;  // per pixel
 };
 
 struct PrecomputeResult {
