@@ -2,6 +2,7 @@
 // texture alone marks (almost) nothing, a groove on it is found, the flat-end part's step along
 // its feed marks is found (per-axis edge residual), a chatter band along the path under stronger
 // scallops is found in its own sector of the texture, invariance to h → a·h + b, the
+// step model marks a tool-change step's ramp and not the running medians' smear of it, the
 // scoring definitions on a hand-made case, bad input, the registry and the command's files.
 #include <gtest/gtest.h>
 
@@ -116,6 +117,7 @@ TEST(DefectMap, FlatEndStepAlongTheFeedMarksIsFound) {
         scoreDefectMap(detectDefects(g.heights, g.width, g.height).map, g.truth, legend);
     DefectMapOptions joint;
     joint.edgeAxes = false;
+    joint.stepModel = false;  // which finds this step too (step 4a)
     const DefectScore sj =
         scoreDefectMap(detectDefects(g.heights, g.width, g.height, joint).map, g.truth, legend);
     std::printf(
@@ -125,6 +127,42 @@ TEST(DefectMap, FlatEndStepAlongTheFeedMarksIsFound) {
     EXPECT_GE(s.overall.recall, 0.8);
     EXPECT_GE(s.overall.precision, 0.5);
     EXPECT_LT(sj.overall.recall, 0.5);
+}
+
+// The ball-end test part's tool-change step (gen-surface --part ballend --seed 1, every other
+// kind and the chatter off; seed 1 is a tuning seed): a 3 µm step along the paths, between
+// scallops of about 2 µm. The texture's notch and the running medians of the macro shape and of
+// the level smear the step over a band about 4 samples wide, which the level term marks (the
+// label is the 2-sample ramp); the step model (step 4a) finds the line, marks its ramp and
+// nothing else around it.
+TEST(DefectMap, StepModelMarksTheRampNotItsHalo) {
+    SurfaceSpec spec = testPartSpec(TestPart::BallEnd);
+    spec.seed = 1;
+    spec.scratchCount = 0;
+    spec.gougeCount = 0;
+    spec.dentCount = 0;
+    spec.pocketBurrHeight = 0;
+    spec.chatterBands = 0;
+    spec.chatterAmplitude = 0;
+    spec.chatterStartFraction = 0;
+    const GeneratedSurface g = generateSurface(spec);
+    const std::vector<RegionLabel> legend{{kTruthToolChange, "tool-change-step"}};
+    const DefectMap on = detectDefects(g.heights, g.width, g.height);
+    DefectMapOptions offOptions;
+    offOptions.stepModel = false;
+    const DefectMap off = detectDefects(g.heights, g.width, g.height, offOptions);
+    const DefectScore s = scoreDefectMap(on.map, g.truth, legend);
+    const DefectScore so = scoreDefectMap(off.map, g.truth, legend);
+    std::printf(
+        "ball-end step: %zu centre points, precision %.3f recall %.3f (without the step "
+        "model: precision %.3f recall %.3f)\n",
+        on.stepPoints, s.overall.precision, s.overall.recall, so.overall.precision,
+        so.overall.recall);
+    EXPECT_GE(on.stepPoints, 500u);  // of the 944 columns inside the border
+    EXPECT_GE(s.overall.precision, 0.8);
+    EXPECT_GE(s.overall.recall, 0.85);
+    EXPECT_EQ(off.stepPoints, 0u);
+    EXPECT_LT(so.overall.precision, 0.6);
 }
 
 // A band of chatter along x (rows 48–79 of 128) on scallops across z and weak feed marks along x:

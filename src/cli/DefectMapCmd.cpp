@@ -23,9 +23,10 @@ int runDefectMap(const DefectMapJobOptions& o) {
     if (m.method == DefectMethod::Auto)
         std::printf(
             "  FFT %dx%d, %zu of %zu spectrum bins notched as texture; sigma level %.4g, edge "
-            "%.4g (height units); %zu marked by level/edge, %zu more by texture change\n",
+            "%.4g (height units); %zu marked by level/edge, %zu more by step ramps (%zu step "
+            "centre points), %zu more by texture change\n",
             m.fftWidth, m.fftHeight, m.notchedBins, m.spectrumBins, m.sigmaLevel, m.sigmaEdge,
-            m.markedScore, m.markedEnergy);
+            m.markedScore, m.markedStep, m.stepPoints, m.markedEnergy);
     if (s.score) {
         const DefectScore& sc = *s.score;
         std::printf("%-18s %5s %10s %10s %10s %9s %7s %7s\n", "kind", "value", "truth", "hits",
@@ -133,6 +134,35 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--texture-sectors", m.textureSectors,
                   "auto: --texture-energy on the texture split into this many orientation "
                   "sectors of its spectrum, each against its own median (1: whole)")
+        ->capture_default_str();
+    c->add_option("--step-model", m.stepModel,
+                  "auto: detect sharp steps explicitly, take them out of the macro shape and mark "
+                  "their ramps (true/false)")
+        ->capture_default_str();
+    c->add_option("--step-window", m.stepWindow,
+                  "auto: 2m+1, each side of the step detector taking 2m samples (odd)")
+        ->capture_default_str();
+    c->add_option("--step-sigma", m.stepSigma,
+                  "auto: a step centre's jump in robust sigmas of the detector")
+        ->capture_default_str();
+    c->add_option("--step-sharpness", m.stepSharpness,
+                  "auto: a step centre's 2-sample rise over its jump")
+        ->capture_default_str();
+    c->add_option("--step-plateau", m.stepPlateau,
+                  "auto: a step centre's difference of its sides' medians over its jump")
+        ->capture_default_str();
+    c->add_option("--step-min-length", m.stepMinLength,
+                  "auto: samples of the shortest step centre line kept")
+        ->capture_default_str();
+    c->add_option("--step-ramp-half", m.stepRampHalf,
+                  "auto: samples marked within this distance of a step's centre line")
+        ->capture_default_str();
+    c->add_option("--step-ramp-moved", m.stepRampMoved,
+                  "auto: on a step's high side, mark only where a smoothstep ramp has moved the "
+                  "surface by this share of the jump")
+        ->capture_default_str();
+    c->add_option("--step-band", m.stepBand,
+                  "auto: samples around a step's centre line where only its ramp is marked")
         ->capture_default_str();
     c->add_option("--kernel", m.paper.kernel, "paper: moving-average window, samples")
         ->capture_default_str();

@@ -100,6 +100,29 @@ void checkOptions(const DefectMapOptions& o) {
         throw inputError(option("texture-sectors"),
                          "must be in [1, 16] (got " + std::to_string(o.textureSectors) + ")",
                          "1 takes the texture whole; the default is 2");
+    if (o.stepWindow < 3 || o.stepWindow % 2 == 0)
+        throw inputError(option("step-window"),
+                         "must be odd and >= 3 (got " + std::to_string(o.stepWindow) + ")",
+                         "The default is 11 samples");
+    if (!(o.stepSigma > 0.0))
+        throw inputError(option("step-sigma"),
+                         "must be > 0 (got " + std::to_string(o.stepSigma) + ")");
+    if (!(o.stepSharpness > 0.0 && o.stepSharpness <= 1.0))
+        throw inputError(option("step-sharpness"),
+                         "must be in (0, 1] (got " + std::to_string(o.stepSharpness) + ")");
+    if (o.stepMinLength < 1)
+        throw inputError(option("step-min-length"),
+                         "must be >= 1 (got " + std::to_string(o.stepMinLength) + ")");
+    if (!(o.stepRampHalf > 0.0))
+        throw inputError(option("step-ramp-half"),
+                         "must be > 0 (got " + std::to_string(o.stepRampHalf) + ")");
+    if (!(o.stepBand >= o.stepRampHalf))
+        throw inputError(option("step-band"),
+                         "must be >= step-ramp-half (got " + std::to_string(o.stepBand) + ")");
+    if (!(o.stepRampMoved >= 0.0 && o.stepRampMoved < 0.5))
+        throw inputError(option("step-ramp-moved"),
+                         "must be in [0, 0.5) (got " + std::to_string(o.stepRampMoved) + ")",
+                         "0 marks the whole ramp");
     if (!(o.energyRatio > 1.0))
         throw inputError(option("energy-ratio"),
                          "must be > 1 (got " + std::to_string(o.energyRatio) + ")");
@@ -607,6 +630,285 @@ size_t hysteresis(const std::vector<float>& score, int W, int H, double seed, do
     return marked;
 }
 
+// ---- Step 4a: the tool-change step model ------------------------------------------------------
+
+/// A direction of the step detector's lines: (dx, dz) in samples.
+struct StepDir {
+    int dx, dz;
+};
+constexpr StepDir kStepDirs[4] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}};
+
+/// One point of a detected step's centre line.
+struct StepPoint {
+    float x, z;    // the centre (samples, sub-sample along the detector's direction)
+    float nx, nz;  // unit normal, pointing to the side that is higher by `jump`
+    float jump;    // > 0, height units
+};
+
+struct StepModel {
+    std::vector<StepPoint> points;
+    std::vector<uint8_t> ramp;  // the samples within stepRampHalf of a centre line
+    std::vector<uint8_t> band;  // the samples within stepBand of a centre line
+};
+
+/// The step detector's jump at (x, z) along u on G (W wide): each side's heights at offsets
+/// gap … gap+2m−1 as two means of m samples, extrapolated linearly to (x, z); the + side's value
+/// minus the − side's. The caller keeps every offset inside the map.
+double jumpAlong(const std::vector<float>& G, int W, int x, int y, StepDir u, int m, int gap) {
+    const double reach = gap + (m - 1) / 2.0;  // the near mean's distance from (x, z)
+    auto side = [&](int sgn) {
+        double nearSum = 0, farSum = 0;
+        for (int i = 0; i < m; ++i) {
+            const int k1 = sgn * (gap + i), k2 = sgn * (gap + m + i);
+            nearSum += G[static_cast<size_t>(y + k1 * u.dz) * W + x + k1 * u.dx];
+            farSum += G[static_cast<size_t>(y + k2 * u.dz) * W + x + k2 * u.dx];
+        }
+        const double nm = nearSum / m, fm = farSum / m;
+        return nm + (nm - fm) * reach / m;
+    };
+    return side(1) - side(-1);
+}
+
+/// Step 4a's lines on G = h − T (DefectMap.h): their points, ramps and bands.
+StepModel detectSteps(const std::vector<float>& G, int W, int H, const DefectMapOptions& o,
+                      double floorSigma) {
+    const size_t n = G.size();
+    StepModel m;
+    std::vector<float> bestZ(n, 0.0f), bestJ(n, 0.0f);
+    // the jump at every sample along each direction, in that direction's robust σ
+    const int m2 = o.stepWindow / 2, gap = 2, far = gap + 2 * m2 - 1;
+    for (int d = 0; d < 4; ++d) {
+        const StepDir u = kStepDirs[d];
+        std::vector<float> J(n, 0.0f);
+        tbb::parallel_for(0, H, [&](int y) {
+            for (int x = 0; x < W; ++x) {
+                if (x - far * std::abs(u.dx) < 0 || x + far * std::abs(u.dx) >= W ||
+                    y - far * std::abs(u.dz) < 0 || y + far * std::abs(u.dz) >= H)
+                    continue;
+                J[static_cast<size_t>(y) * W + x] =
+                    static_cast<float>(jumpAlong(G, W, x, y, u, m2, gap));
+            }
+        });
+        const double sigma = std::max(1.4826 * medianAbs(J), floorSigma);
+        if (!(sigma > 0.0)) continue;
+        for (size_t k = 0; k < n; ++k) {
+            const auto z = static_cast<float>(std::abs(J[k]) / sigma);
+            if (z > bestZ[k]) {
+                bestZ[k] = z;
+                bestJ[k] = J[k];
+            }
+        }
+    }
+    // centre candidates: a strong two-sided jump (in any direction) where the gradient of G
+    // along the direction nearest its own peaks (non-maximum suppression), carries most of the
+    // jump within 2 samples (sharpness) and separates two plateaus
+    auto at = [&](int x, int y) { return G[static_cast<size_t>(y) * W + x]; };
+    std::vector<uint8_t> cand(n, 0), candDir(n, 0);
+    std::vector<float> offset(n, 0.0f), candJ(n, 0.0f), normX(n, 0.0f), normZ(n, 0.0f);
+    const int b = std::max(o.border, far + 2);
+    tbb::parallel_for(b, H - b, [&](int y) {
+        for (int x = b; x < W - b; ++x) {
+            const size_t k = static_cast<size_t>(y) * W + x;
+            if (!(bestZ[k] >= o.stepSigma)) continue;
+            // the gradient (3×3 Sobel) and the detector direction nearest it
+            float gx = (at(x + 1, y - 1) + 2 * at(x + 1, y) + at(x + 1, y + 1)) -
+                       (at(x - 1, y - 1) + 2 * at(x - 1, y) + at(x - 1, y + 1));
+            float gz = (at(x - 1, y + 1) + 2 * at(x, y + 1) + at(x + 1, y + 1)) -
+                       (at(x - 1, y - 1) + 2 * at(x, y - 1) + at(x + 1, y - 1));
+            // minus the local slope over ±6 samples (a wall's; 8× the derivative, as Sobel's)
+            float wx = 0, wz = 0;
+            for (int i = -1; i <= 1; ++i)
+                for (int j = 4; j <= 6; ++j) {
+                    wx += at(x + j, y + i) - at(x - j, y + i);
+                    wz += at(x + i, y + j) - at(x + i, y - j);
+                }
+            gx -= wx * (8.0f / 90.0f);  // 9 differences over 10 samples on average
+            gz -= wz * (8.0f / 90.0f);
+            const float gl = std::hypot(gx, gz);
+            if (!(gl > 0)) continue;
+            int dir = 0;
+            float best = -1;
+            for (int d = 0; d < 4; ++d) {
+                const StepDir v = kStepDirs[d];
+                const float c =
+                    std::abs(gx * static_cast<float>(v.dx) + gz * static_cast<float>(v.dz)) /
+                    std::sqrt(static_cast<float>(v.dx * v.dx + v.dz * v.dz));
+                if (c > best) {
+                    best = c;
+                    dir = d;
+                }
+            }
+            const StepDir u = kStepDirs[dir];
+            const auto jump = static_cast<float>(jumpAlong(G, W, x, y, u, m2, gap));
+            const float s = jump > 0 ? 1.0f : -1.0f;
+            const float ref = std::max(std::abs(jump), std::abs(bestJ[k]));  // the strongest
+            auto grad = [&](int i) {  // G(q+(i+1)u) − G(q+(i−1)u), signed toward the high side
+                return s * (at(x + (i + 1) * u.dx, y + (i + 1) * u.dz) -
+                            at(x + (i - 1) * u.dx, y + (i - 1) * u.dz));
+            };
+            const float g0 = grad(0), gm = grad(-1), gp = grad(1);
+            if (!(g0 > 0 && g0 >= gm && g0 > gp)) continue;
+            if (!(g0 >= o.stepSharpness * ref)) continue;
+            const int w = o.stepWindow / 2 + 1;  // the rise over a wider span: a wall's is
+            const float gw = s * (at(x + w * u.dx, y + w * u.dz) - at(x - w * u.dx, y - w * u.dz));
+            if (!(g0 >= o.stepSharpness * std::abs(gw))) continue;
+            // the plateaus: the median of each side over the detector's samples must differ by
+            // stepPlateau × the jump (a bump, a ridge of texture left over, comes back)
+            {
+                thread_local std::vector<float> side[2];
+                for (int sg = 0; sg < 2; ++sg) {
+                    side[sg].clear();
+                    for (int i = gap; i < gap + 2 * m2; ++i) {
+                        const int kk = sg ? i : -i;
+                        side[sg].push_back(at(x + kk * u.dx, y + kk * u.dz));
+                    }
+                    std::nth_element(side[sg].begin(), side[sg].begin() + m2, side[sg].end());
+                }
+                const float plateau =
+                    s * (side[1][static_cast<size_t>(m2)] - side[0][static_cast<size_t>(m2)]);
+                if (!(plateau >= o.stepPlateau * ref)) continue;
+            }
+            const float den = gm - 2 * g0 + gp;
+            const float delta = den < 0 ? 0.5f * (gm - gp) / den : 0.0f;
+            cand[k] = 1;
+            candDir[k] = static_cast<uint8_t>(dir);
+            candJ[k] = std::abs(jump);
+            normX[k] = gx / gl;  // toward the high side
+            normZ[k] = gz / gl;
+            offset[k] = std::clamp(delta, -0.5f, 0.5f);
+        }
+    });
+    // connected centre lines (gaps up to kLink − 1 samples bridged) of fewer than stepMinLength
+    // points are not steps
+    constexpr int kLink = 3;
+    std::vector<uint8_t> seen(n, 0);
+    std::vector<size_t> stack, comp;
+    for (size_t k0 = 0; k0 < n; ++k0) {
+        if (!cand[k0] || seen[k0]) continue;
+        comp.clear();
+        stack.assign(1, k0);
+        seen[k0] = 1;
+        while (!stack.empty()) {
+            const size_t k = stack.back();
+            stack.pop_back();
+            comp.push_back(k);
+            const int x = static_cast<int>(k % static_cast<size_t>(W));
+            const int y = static_cast<int>(k / static_cast<size_t>(W));
+            for (int dy = -kLink; dy <= kLink; ++dy)
+                for (int dx = -kLink; dx <= kLink; ++dx) {
+                    const int xx = x + dx, yy = y + dy;
+                    if (xx < 0 || yy < 0 || xx >= W || yy >= H) continue;
+                    const size_t q = static_cast<size_t>(yy) * W + xx;
+                    if (!cand[q] || seen[q]) continue;
+                    seen[q] = 1;
+                    stack.push_back(q);
+                }
+        }
+        if (comp.size() < static_cast<size_t>(o.stepMinLength)) continue;
+        // one jump per line: the median of its points' (a tool-change step is one offset)
+        std::vector<float> jumps;
+        for (size_t k : comp) jumps.push_back(candJ[k]);
+        auto mid = jumps.begin() + static_cast<std::ptrdiff_t>(jumps.size() / 2);
+        std::nth_element(jumps.begin(), mid, jumps.end());
+        const size_t first = m.points.size();
+        for (size_t k : comp) {
+            const StepDir u = kStepDirs[candDir[k]];
+            StepPoint p;
+            p.x = static_cast<float>(k % static_cast<size_t>(W)) +
+                  offset[k] * static_cast<float>(u.dx);
+            p.z = static_cast<float>(k / static_cast<size_t>(W)) +
+                  offset[k] * static_cast<float>(u.dz);
+            p.nx = normX[k];
+            p.nz = normZ[k];
+            p.jump = *mid;
+            m.points.push_back(p);
+        }
+        // each normal: across the line's principal direction among its points within
+        // kNormalRadius samples, toward the side their gradients point to (the high side)
+        constexpr float kNormalRadius = 6.0f;
+        std::vector<StepPoint> line(m.points.begin() + static_cast<std::ptrdiff_t>(first),
+                                    m.points.end());
+        for (size_t i = 0; i < line.size(); ++i) {
+            double sx = 0, sz = 0, cx = 0, cz = 0, cxx = 0, cxz = 0, czz = 0;
+            int cnt = 0;
+            for (const StepPoint& q : line)
+                if (std::abs(q.x - line[i].x) <= kNormalRadius &&
+                    std::abs(q.z - line[i].z) <= kNormalRadius) {
+                    sx += q.nx;
+                    sz += q.nz;
+                    cx += q.x;
+                    cz += q.z;
+                    cxx += static_cast<double>(q.x) * q.x;
+                    cxz += static_cast<double>(q.x) * q.z;
+                    czz += static_cast<double>(q.z) * q.z;
+                    ++cnt;
+                }
+            double nx = sx, nz = sz;
+            if (cnt >= 3) {  // the covariance's minor axis
+                cx /= cnt;
+                cz /= cnt;
+                const double a = cxx / cnt - cx * cx, c = czz / cnt - cz * cz,
+                             bb = cxz / cnt - cx * cz;
+                const double theta = 0.5 * std::atan2(2 * bb, a - c);  // major axis
+                const double mx = -std::sin(theta), mz = std::cos(theta);
+                const double sgn = mx * sx + mz * sz >= 0 ? 1.0 : -1.0;
+                nx = sgn * mx;
+                nz = sgn * mz;
+            }
+            const double l = std::hypot(nx, nz);
+            if (l > 0) {
+                m.points[first + i].nx = static_cast<float>(nx / l);
+                m.points[first + i].nz = static_cast<float>(nz / l);
+            }
+        }
+    }
+    if (m.points.empty()) return m;
+    // nearest centre point of every sample within the band (splatted discs)
+    const int reach = static_cast<int>(std::ceil(std::max(o.stepBand, o.stepRampHalf + 1.0)));
+    std::vector<float> dist2(n, std::numeric_limits<float>::infinity());
+    std::vector<int32_t> nearest(n, -1);
+    for (size_t i = 0; i < m.points.size(); ++i) {
+        const StepPoint& p = m.points[i];
+        const int cx = static_cast<int>(std::lround(p.x)), cz = static_cast<int>(std::lround(p.z));
+        for (int y = std::max(0, cz - reach); y <= std::min(H - 1, cz + reach); ++y)
+            for (int x = std::max(0, cx - reach); x <= std::min(W - 1, cx + reach); ++x) {
+                const float dx = static_cast<float>(x) - p.x, dz = static_cast<float>(y) - p.z;
+                const float r2 = dx * dx + dz * dz;
+                const size_t k = static_cast<size_t>(y) * W + x;
+                if (r2 < dist2[k]) {
+                    dist2[k] = r2;
+                    nearest[k] = static_cast<int32_t>(i);
+                }
+            }
+    }
+    m.ramp.assign(n, 0);
+    m.band.assign(n, 0);
+    // the high side's end of the marked ramp: where a smoothstep ramp 2·stepRampHalf wide
+    // centred on the line has moved the surface by stepRampMoved of the jump
+    double highSide = o.stepRampHalf;
+    if (o.stepRampMoved > 0) {
+        double lo = 0, hi = 1;  // smoothstep(v) = stepRampMoved, v in [0, 0.5]
+        for (int i = 0; i < 60; ++i) {
+            const double v = 0.5 * (lo + hi);
+            (v * v * (3 - 2 * v) < o.stepRampMoved ? lo : hi) = v;
+        }
+        highSide = (1.0 - 2.0 * lo) * o.stepRampHalf;
+    }
+    tbb::parallel_for(0, H, [&](int y) {
+        for (int x = 0; x < W; ++x) {
+            const size_t k = static_cast<size_t>(y) * W + x;
+            if (nearest[k] < 0) continue;
+            const StepPoint& p = m.points[static_cast<size_t>(nearest[k])];
+            const double r = std::sqrt(static_cast<double>(dist2[k]));
+            const double t = (x - static_cast<double>(p.x)) * p.nx +
+                             (y - static_cast<double>(p.z)) * p.nz;  // along the normal
+            if (t > -o.stepRampHalf && t < highSide && r < o.stepRampHalf + 1.0) m.ramp[k] = 255;
+            if (r <= o.stepBand) m.band[k] = 1;
+        }
+    });
+    return m;
+}
+
 }  // namespace
 
 std::vector<float> removeTexture(std::span<const float> heights, int width, int height,
@@ -657,6 +959,13 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
     std::vector<float> R = textureResidual(
         heights, W, H, o, &r, &macro, wantTexture && o.textureSectors == 1 ? &texture : nullptr,
         wantTexture && o.textureSectors > 1 ? &sectors : nullptr);
+    StepModel steps;
+    if (o.stepModel) {  // step 4a: the steps of h − T
+        std::vector<float> G(n);
+        for (size_t k = 0; k < n; ++k) G[k] = macro[k] + R[k];
+        steps = detectSteps(G, W, H, o, floorSigma);
+        r.stepPoints = steps.points.size();
+    }
     std::vector<float> A = separableMedian(R, W, H, o.levelWindow);
     for (size_t k = 0; k < n; ++k) A[k] = R[k] - A[k];
     for (size_t k = 0; k < n; ++k) R[k] += macro[k];
@@ -688,6 +997,12 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
                         S[static_cast<size_t>(y) * W + x] = 0.0f;
             });
         r.markedScore = hysteresis(S, W, H, o.seedSigma, o.growSigma, o.minRegion, r.map);
+    }
+    for (size_t k = 0; k < steps.ramp.size(); ++k) {  // step 4a: a step's band is its ramp
+        if (!steps.band[k]) continue;
+        if (steps.ramp[k] && !r.map[k]) ++r.markedStep;
+        if (!steps.ramp[k] && r.map[k]) --r.markedScore;
+        r.map[k] = steps.ramp[k];
     }
     N = {};
     Nz = {};

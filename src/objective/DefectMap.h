@@ -32,6 +32,26 @@
 //     spectrum, cropped: the periodic texture. R = d − T. With passes > 1, step 1 is repeated on
 //     h − T and steps 2–3 on the new d.
 //  4. Level: A = R − the separable running median of R over `levelWindow` samples (x, then z).
+// 4a. Steps (with `stepModel`): a tool-change step is a sharp jump between two plateaus, which
+//     the notch and the running medians of steps 1 and 4 smear over a band several samples
+//     wide (the level term marks the band; the step itself is its 2-sample ramp). On
+//     G = h − T (= M + R), for each of 4 directions u (x, z, both diagonals) the jump
+//     J_u = the + side's value minus the − side's, each side's heights at offsets 2 … 2m+1
+//     along u (m = stepWindow/2) taken as two means of m samples extrapolated linearly to the
+//     sample; Z = max over u of |J_u| / (1.4826 median |J_u|). A centre point is a sample with
+//     Z ≥ `stepSigma` where, along the detector direction nearest G's gradient there (Sobel,
+//     minus the slope over ±6 samples) and J of the same sign, the 2-sample rise
+//     g = G(q+u) − G(q−u) is a local maximum (non-maximum suppression), at least
+//     `stepSharpness` × the larger of |J_u| and max |J| and × the rise over ±(stepWindow/2+1)
+//     samples (a wall rises over many), and the medians of the two sides' 2m samples differ by
+//     at least `stepPlateau` × that jump (a bump comes back: a ridge the notch left). Centre
+//     points linked within 3 samples form lines; lines of fewer than `stepMinLength` points are
+//     dropped. A point's position is refined along u by a parabola through g (± half a sample),
+//     its normal is the minor axis of the line's points within 6 samples, toward the high side.
+//     After step 7, within `stepBand` samples of a line the map is the step's ramp alone: the
+//     samples whose distance t along the nearest point's normal lies in (−stepRampHalf,
+//     stepRampHalf) (with stepRampMoved > 0 the high side stops where a smoothstep ramp
+//     2·stepRampHalf wide has moved the surface by that share of the jump).
 //  5. Edges: N = (M + R) − its separable quadratic Savitzky–Golay fit over `edgeWindow` samples
 //     (x, then z; borders mirrored): a step or a narrow groove, but not a curved wall whose
 //     curvature changes little over the window. With `edgeAxes`, two residuals instead:
@@ -65,7 +85,8 @@
 // objective's job. It stays unmarked while its amplitude stays under the ratios of step 8 (the
 // test parts' 0.5 µm chatter does, mostly: the README gives the share marked); a stronger one
 // is marked as a texture change. Parallel over rows and columns with TBB; the result does not
-// depend on the thread count. Memory: about 12 float copies of the map; with textureSectors
+// depend on the thread count. Memory: about 12 float copies of the map (with stepModel, about
+// 10 more while the steps are found); with textureSectors
 // K > 1, K more and a copy of the half spectrum while they are made.
 #pragma once
 
@@ -120,6 +141,16 @@ struct DefectMapOptions {
     int textureSectors = 2;           // ... on T split into this many orientation sectors of
                                       // its spectrum, each against its own median (1: T whole)
     double energyRatio = 2.0;         // E >= energyRatio·median(E) is a texture change (> 1)
+    bool stepModel = true;            // step 4a: find sharp steps, mark their ramps alone
+    int stepWindow = 11;              // ... 2m+1: each side's 2m samples (odd, >= 3)
+    double stepSigma = 2.5;           // ... a centre point's Z (> 0)
+    double stepSharpness = 0.5;       // ... its 2-sample rise over the jump (in (0, 1])
+    double stepPlateau = 0.35;        // ... its sides' medians' difference over the jump (> 0)
+    int stepMinLength = 60;           // ... samples of a connected centre line (>= 1)
+    double stepRampHalf = 1.0;        // ... samples marked within this of the centre (> 0)
+    double stepBand = 8.0;            // ... and nothing else within this (>= stepRampHalf)
+    double stepRampMoved = 0.0;       // ... on the high side, only where the ramp has moved
+                                      // the surface by this share of the jump ([0, 0.5))
     ScratchMapOptions paper;          // the `paper` method's options
 };
 
@@ -131,7 +162,8 @@ struct DefectMap {
     // marked by the level/edge score and by the texture-change step, padded FFT size
     double sigmaLevel = 0, sigmaEdge = 0;
     size_t notchedBins = 0, spectrumBins = 0;
-    size_t markedScore = 0, markedEnergy = 0;
+    size_t markedScore = 0, markedEnergy = 0, markedStep = 0;
+    size_t stepPoints = 0;  // step 4a: centre points of the steps found
     int fftWidth = 0, fftHeight = 0;
     double seconds = 0;
 
