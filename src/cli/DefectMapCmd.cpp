@@ -26,6 +26,12 @@ int runDefectMap(const DefectMapJobOptions& o) {
             "%.4g (height units); %zu marked by level/edge, %zu more by texture change\n",
             m.fftWidth, m.fftHeight, m.notchedBins, m.spectrumBins, m.sigmaLevel, m.sigmaEdge,
             m.markedScore, m.markedEnergy);
+    if (m.method == DefectMethod::Auto && m.ringPitch > 0)
+        std::printf(
+            "  rings: centre (%.2f, %.2f) samples, pitch %.3f, hand %+d, isotropy %.3f, residual "
+            "%.3f: %s, %zu levels lowered\n",
+            m.ringCentreX, m.ringCentreZ, m.ringPitch, m.ringHand, m.ringIsotropy, m.ringResidual,
+            m.ringUsed ? "used" : "not used", m.ringLowered);
     if (s.score) {
         const DefectScore& sc = *s.score;
         std::printf("%-18s %5s %10s %10s %10s %9s %7s %7s\n", "kind", "value", "truth", "hits",
@@ -133,6 +139,18 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--texture-sectors", m.textureSectors,
                   "auto: --texture-energy on the texture split into this many orientation "
                   "sectors of its spectrum, each against its own median (1: whole)")
+        ->capture_default_str();
+    c->add_option("--ring-window", m.ringWindow,
+                  "auto: samples of arc of the ring model's median (rotational textures; 0: off)")
+        ->capture_default_str();
+    c->add_option("--ring-isotropy", m.ringIsotropy,
+                  "auto: the ring model needs this spread of the texture's orientations")
+        ->capture_default_str();
+    c->add_option("--ring-residual", m.ringResidual,
+                  "auto: ... and leaves at most this share of the texture's median amplitude")
+        ->capture_default_str();
+    c->add_option("--ring-ratio", m.ringRatio,
+                  "auto: the ring model's level replaces the level when at most this share of it")
         ->capture_default_str();
     c->add_option("--kernel", m.paper.kernel, "paper: moving-average window, samples")
         ->capture_default_str();
