@@ -32,6 +32,9 @@ int runDefectMap(const DefectMapJobOptions& o) {
             "%.3f: %s, %zu levels lowered\n",
             m.ringCentreX, m.ringCentreZ, m.ringPitch, m.ringHand, m.ringIsotropy, m.ringResidual,
             m.ringUsed ? "used" : "not used", m.ringLowered);
+    else if (m.method == DefectMethod::Auto && m.ringIsotropy > 0)
+        std::printf("  rings: isotropy %.3f: not used (the texture's orientations do not turn)\n",
+                    m.ringIsotropy);
     if (s.score) {
         const DefectScore& sc = *s.score;
         std::printf("%-18s %5s %10s %10s %10s %9s %7s %7s\n", "kind", "value", "truth", "hits",
