@@ -662,26 +662,25 @@ float grooveMedian(const float* img, int W, int H, const RingFit& f, int x, int 
 }
 
 /// Mean |d − arc median of d| over the samples `pts` (flat indices); +inf with none valid.
+/// Summed in the points' order (the result does not depend on the thread count).
 double arcCost(const std::vector<float>& d, int W, int H, const RingFit& f, int half,
                const std::vector<size_t>& pts) {
-    tbb::enumerable_thread_specific<std::pair<double, size_t>> acc(std::pair<double, size_t>{});
+    std::vector<float> res(pts.size());
     tbb::parallel_for(size_t{0}, pts.size(), [&](size_t i) {
         thread_local std::vector<float> buf;
         const size_t k = pts[i];
         const int x = static_cast<int>(k % static_cast<size_t>(W));
         const int z = static_cast<int>(k / static_cast<size_t>(W));
         const float m = arcMedian(d.data(), W, H, f, x, z, half, buf);
-        if (std::isnan(m)) return;
-        auto& a = acc.local();
-        a.first += std::abs(d[k] - m);
-        ++a.second;
+        res[i] = std::isnan(m) ? -1.0f : std::abs(d[k] - m);
     });
     double sum = 0.0;
     size_t cnt = 0;
-    for (const auto& a : acc) {
-        sum += a.first;
-        cnt += a.second;
-    }
+    for (float v : res)
+        if (v >= 0.0f) {
+            sum += v;
+            ++cnt;
+        }
     return cnt ? sum / static_cast<double>(cnt) : std::numeric_limits<double>::infinity();
 }
 
