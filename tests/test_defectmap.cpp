@@ -1,9 +1,10 @@
 // Defect map (objective/DefectMap.h, app/DefectMapJob.h, `scratchlight defectmap`): a periodic
 // texture alone marks (almost) nothing, a groove on it is found, the flat-end part's step along
 // its feed marks is found (per-axis edge residual), a chatter band along the path under stronger
-// scallops is found in its own sector of the texture, invariance to h → a·h + b, the
-// step model marks a tool-change step's ramp and not the running medians' smear of it, the
-// scoring definitions on a hand-made case, bad input, the registry and the command's files.
+// scallops is found in its own sector of the texture, a turned spiral's centre is explained by
+// the ring model, invariance to h → a·h + b, the step model marks a tool-change step's ramp and
+// not the running medians' smear of it, the scoring definitions on a hand-made case, bad input,
+// the registry and the command's files.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -197,6 +198,69 @@ TEST(DefectMap, ChatterBandAlongThePathIsFoundInItsOwnSector) {
     EXPECT_LT(whole.overall.recall, 0.3);
 }
 
+// A face-turned texture: a cosine groove profile along the Archimedean spiral of pitch 10
+// about (90.3, 101.7) (u = r − hand·10·φ/2π), white noise of RMS 0.03, and a dent of radius 6
+// at (150, 60). Step 4b finds the centre, pitch and hand; near the centre, where the rings curve
+// strongly, the notch's global model leaves texture that the score marks, and the ring model
+// explains it. The ball-end-like texture (parallel scallops) is not taken for rings.
+TEST(DefectMap, RingModelExplainsTheTurnedSpiralNearItsCentre) {
+    constexpr int n = 192;
+    constexpr double cx = 90.3, cz = 101.7, pitch = 10.0, dentX = 150, dentZ = 60, dentR = 6;
+    for (int hand : {1, -1}) {
+        std::mt19937 rng(3);
+        std::normal_distribution<double> nd(0.0, 0.03);
+        std::vector<float> h(static_cast<size_t>(n) * n);
+        std::vector<uint8_t> truth(h.size(), 0);
+        for (int z = 0; z < n; ++z)
+            for (int x = 0; x < n; ++x) {
+                const double r = std::hypot(x - cx, z - cz), phi = std::atan2(z - cz, x - cx);
+                const double u = r - hand * pitch * phi / (2 * M_PI);
+                const double dd = std::hypot(x - dentX, z - dentZ);
+                const size_t k = static_cast<size_t>(z) * n + x;
+                h[k] = static_cast<float>(0.5 * std::cos(2 * M_PI * u / pitch) + nd(rng) -
+                                          (dd < dentR ? 0.5 * (1 - dd * dd / (dentR * dentR)) : 0));
+                truth[k] = dd < dentR - 1 ? 224 : 0;  // the rim is too shallow to find
+            }
+        DefectMapOptions o;
+        o.border = 8;
+        const DefectMap with = detectDefects(h, n, n, o);
+        o.ringWindow = 0;
+        const DefectMap without = detectDefects(h, n, n, o);
+        // false marks: more than 3 samples from the dent
+        auto falseMarks = [&](const DefectMap& m) {
+            size_t c = 0;
+            for (int z = 0; z < n; ++z)
+                for (int x = 0; x < n; ++x)
+                    c += m.map[static_cast<size_t>(z) * n + x] &&
+                         std::hypot(x - dentX, z - dentZ) > dentR + 3;
+            return c;
+        };
+        const std::vector<RegionLabel> legend{{224, "dent"}};
+        const DefectScore sw = scoreDefectMap(with.map, truth, legend);
+        const DefectScore so = scoreDefectMap(without.map, truth, legend);
+        std::printf(
+            "hand %+d: centre (%.2f, %.2f) pitch %.3f hand %+d isotropy %.3f residual %.3f; false "
+            "marks %zu (without rings %zu), dent recall %.3f (%.3f)\n",
+            hand, with.ringCentreX, with.ringCentreZ, with.ringPitch, with.ringHand,
+            with.ringIsotropy, with.ringResidual, falseMarks(with), falseMarks(without),
+            sw.overall.recall, so.overall.recall);
+        EXPECT_TRUE(with.ringUsed);
+        EXPECT_NEAR(with.ringCentreX, cx, 1.0);
+        EXPECT_NEAR(with.ringCentreZ, cz, 1.0);
+        EXPECT_NEAR(with.ringPitch, pitch, 0.05 * pitch);
+        EXPECT_EQ(with.ringHand, hand);
+        EXPECT_FALSE(without.ringUsed);
+        EXPECT_GE(falseMarks(without), 40u);
+        EXPECT_LE(2 * falseMarks(with), falseMarks(without));
+        EXPECT_GE(sw.overall.recall, 0.8);
+        EXPECT_GE(sw.overall.recall, so.overall.recall - 0.02);
+    }
+    const std::vector<float> t = texture(kN);
+    const DefectMap m = detectDefects(t, kN, kN);
+    std::printf("scallops: isotropy %.3f residual %.3f\n", m.ringIsotropy, m.ringResidual);
+    EXPECT_FALSE(m.ringUsed);
+}
+
 TEST(DefectMap, InvariantToHeightOffsetAndScale) {
     std::vector<float> h = texture(kN);
     cutGroove(h, kN, 50, 60, 150, 130, 4.0, 0.4);
@@ -260,6 +324,12 @@ TEST(DefectMap, BadInputIsRefusedNamingTheProblem) {
     o = {};
     o.textureSectors = 0;
     expectError([&] { detectDefects(h, 32, 32, o); }, "option 'texture-sectors'");
+    o = {};
+    o.ringWindow = 60;
+    expectError([&] { detectDefects(h, 32, 32, o); }, "option 'ring-window'");
+    o = {};
+    o.ringRatio = 0;
+    expectError([&] { detectDefects(h, 32, 32, o); }, "option 'ring-ratio'");
     expectError([&] { scoreDefectMap(std::vector<uint8_t>(4), std::vector<uint8_t>(5), {}); },
                 "defect score");
 }

@@ -27,6 +27,15 @@ int runDefectMap(const DefectMapJobOptions& o) {
             "centre points), %zu more by texture change\n",
             m.fftWidth, m.fftHeight, m.notchedBins, m.spectrumBins, m.sigmaLevel, m.sigmaEdge,
             m.markedScore, m.markedStep, m.stepPoints, m.markedEnergy);
+    if (m.method == DefectMethod::Auto && m.ringPitch > 0)
+        std::printf(
+            "  rings: centre (%.2f, %.2f) samples, pitch %.3f, hand %+d, isotropy %.3f, residual "
+            "%.3f: %s, %zu levels lowered\n",
+            m.ringCentreX, m.ringCentreZ, m.ringPitch, m.ringHand, m.ringIsotropy, m.ringResidual,
+            m.ringUsed ? "used" : "not used", m.ringLowered);
+    else if (m.method == DefectMethod::Auto && m.ringIsotropy > 0)
+        std::printf("  rings: isotropy %.3f: not used (the texture's orientations do not turn)\n",
+                    m.ringIsotropy);
     if (s.score) {
         const DefectScore& sc = *s.score;
         std::printf("%-18s %5s %10s %10s %10s %9s %7s %7s\n", "kind", "value", "truth", "hits",
@@ -136,8 +145,8 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
                   "sectors of its spectrum, each against its own median (1: whole)")
         ->capture_default_str();
     c->add_option("--step-model", m.stepModel,
-                  "auto: detect sharp steps explicitly, take them out of the macro shape and mark "
-                  "their ramps (true/false)")
+                  "auto: detect sharp steps explicitly and mark only their ramps, not the running "
+                  "medians' smear of them (true/false)")
         ->capture_default_str();
     c->add_option("--step-window", m.stepWindow,
                   "auto: 2m+1, each side of the step detector taking 2m samples (odd)")
@@ -163,6 +172,18 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     c->add_option("--step-band", m.stepBand,
                   "auto: samples around a step's centre line where only its ramp is marked")
+        ->capture_default_str();
+    c->add_option("--ring-window", m.ringWindow,
+                  "auto: samples of arc of the ring model's median (rotational textures; 0: off)")
+        ->capture_default_str();
+    c->add_option("--ring-isotropy", m.ringIsotropy,
+                  "auto: the ring model needs this spread of the texture's orientations")
+        ->capture_default_str();
+    c->add_option("--ring-residual", m.ringResidual,
+                  "auto: ... and leaves at most this share of the texture's median amplitude")
+        ->capture_default_str();
+    c->add_option("--ring-ratio", m.ringRatio,
+                  "auto: the ring model's level replaces the level when at most this share of it")
         ->capture_default_str();
     c->add_option("--kernel", m.paper.kernel, "paper: moving-average window, samples")
         ->capture_default_str();

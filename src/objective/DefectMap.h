@@ -52,6 +52,28 @@
 //     samples whose distance t along the nearest point's normal lies in (−stepRampHalf,
 //     stepRampHalf) (with stepRampMoved > 0 the high side stops where a smoothstep ramp
 //     2·stepRampHalf wide has moved the surface by that share of the jump).
+// 4b. Rings (with ringWindow > 0): a rotational texture (turned, faced: grooves on circles or
+//     an Archimedean spiral about a centre) is tested for and, where found, modelled by its
+//     periodic radial profile. The centre c: each 16×16 block of d's structure tensor gives the
+//     line through the block along its dominant gradient (a ring's radius); c = the point
+//     nearest all of them, least squares weighted by the blocks' coherence², then 6
+//     Cauchy-reweighted rounds (scale 32 samples); it may lie outside the map. `isotropy` =
+//     λ_min/λ_max of Σ w·t·tᵀ (t the lines' normals): ≈ 0 for parallel paths. The pitch p: the
+//     period of the bin of most gradient power |k|²·|F|² (F the FFT of the padded d) among
+//     periods < macroWindow/2.
+//     The arc median at a point: the median of d along the spiral of constant
+//     r − s·p·φ/2π through it, `ringWindow` samples of arc (bilinear), s = ±1 the hand that
+//     leaves the smaller mean |d − arc median| 10–120 samples from c. The decision:
+//     ρ = median |d − arc median| / median |d| over a grid on the map; rings are used when
+//     isotropy ≥ `ringIsotropy` and ρ ≤ `ringResidual`. The ring texture at a sample, P, is
+//     the median of the arc medians through it and through the points 3 pitches further out
+//     and in on its radius (the same phase of the spiral on other grooves): a ring-shaped
+//     change of level (a step) differs between them and stays out of P, as does a defect
+//     along a groove (a scratch tangent to the rings) narrower than 3 pitches. Where |A| ≥
+//     growSigma·σ_A and A_ring = d − P has |A_ring| ≤ ringRatio·|A|, A takes the value A_ring
+//     (no smaller in magnitude than the median of |A|, so σ_A of step 6 is unchanged): the
+//     texture the notch left where the rings curve strongly (around the centre) and where
+//     they meet the padding is explained; a dent, a scratch across the rings, a step are not.
 //  5. Edges: N = (M + R) − its separable quadratic Savitzky–Golay fit over `edgeWindow` samples
 //     (x, then z; borders mirrored): a step or a narrow groove, but not a curved wall whose
 //     curvature changes little over the window. With `edgeAxes`, two residuals instead:
@@ -85,9 +107,10 @@
 // objective's job. It stays unmarked while its amplitude stays under the ratios of step 8 (the
 // test parts' 0.5 µm chatter does, mostly: the README gives the share marked); a stronger one
 // is marked as a texture change. Parallel over rows and columns with TBB; the result does not
-// depend on the thread count. Memory: about 12 float copies of the map (with stepModel, about
-// 10 more while the steps are found); with textureSectors
-// K > 1, K more and a copy of the half spectrum while they are made.
+// depend on the thread count. Memory: about 12 float copies of the map; with textureSectors
+// K > 1, K more and a copy of the half spectrum while they are made; step 4a about 10 more
+// while the steps are found; step 4b one more copy and, while the pitch is found, the padded
+// map and its half spectrum.
 #pragma once
 
 #include <cstdint>
@@ -151,6 +174,12 @@ struct DefectMapOptions {
     double stepBand = 8.0;            // ... and nothing else within this (>= stepRampHalf)
     double stepRampMoved = 0.0;       // ... on the high side, only where the ramp has moved
                                       // the surface by this share of the jump ([0, 0.5))
+    int ringWindow = 61;              // step 4b: samples of arc of the ring median (0: off;
+                                      // else odd, >= 3)
+    double ringIsotropy = 0.25;       // step 4b: rings need isotropy >= this (in [0, 1])
+    double ringResidual = 0.5;        // ... and ρ <= this (> 0)
+    double ringRatio = 0.5;           // step 4b: A_ring replaces A when |A_ring| <= this·|A|
+                                      // (in (0, 1])
     ScratchMapOptions paper;          // the `paper` method's options
 };
 
@@ -165,6 +194,13 @@ struct DefectMap {
     size_t markedScore = 0, markedEnergy = 0, markedStep = 0;
     size_t stepPoints = 0;  // step 4a: centre points of the steps found
     int fftWidth = 0, fftHeight = 0;
+    // step 4b: the ring model's fit (centre in samples: x = column, z = row; may lie outside
+    // the map), pitch (samples), hand (±1), the decision statistics, whether it was used and
+    // the samples whose level it lowered
+    double ringCentreX = 0, ringCentreZ = 0, ringPitch = 0, ringIsotropy = 0, ringResidual = 0;
+    int ringHand = 0;
+    bool ringUsed = false;
+    size_t ringLowered = 0;
     double seconds = 0;
 
     size_t markedCount() const;
