@@ -1,10 +1,10 @@
 // Defect map (objective/DefectMap.h, app/DefectMapJob.h, `scratchlight defectmap`): a periodic
-// texture alone marks (almost) nothing, a groove on it is found, the flat-end part's step along
-// its feed marks is found (per-axis edge residual), a chatter band along the path under stronger
-// scallops is found in its own sector of the texture, a turned spiral's centre is explained by
-// the ring model, invariance to h → a·h + b, the step model marks a tool-change step's ramp and
-// not the running medians' smear of it, the scoring definitions on a hand-made case, bad input,
-// the registry and the command's files.
+// texture alone marks (almost) nothing, a groove on it is found, a faint one by the line-valley
+// score, the flat-end part's step along its feed marks is found (per-axis edge residual), a
+// chatter band along the path under stronger scallops is found in its own sector of the
+// texture, a turned spiral's centre is explained by the ring model, invariance to h → a·h + b,
+// the step model marks a tool-change step's ramp and not the running medians' smear of it, the
+// scoring definitions on a hand-made case, bad input, the registry and the command's files.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -96,6 +96,26 @@ TEST(DefectMap, GrooveOnPeriodicTextureIsFound) {
     const DefectScore s = scoreDefectMap(m.map, truth, legend);
     EXPECT_GE(s.overall.recall, 0.8);
     EXPECT_GE(s.overall.precision, 0.7);
+}
+
+// A faint groove (3 samples wide, 0.1 deep: 5× the noise's RMS, the texture 1.3 high) on the
+// periodic texture: few of its samples reach the seeds' 5.5σ alone, but the mean over a segment
+// along it stands above the segments on both sides. The line-valley score (step 7a) finds it;
+// without it (lineLength 0) little of it is marked.
+TEST(DefectMap, FaintGrooveIsFoundByTheLineValleyScore) {
+    std::vector<float> h = texture(kN);
+    const std::vector<uint8_t> truth = cutGroove(h, kN, 45, 60, 150, 130, 3.0, 0.1);
+    const std::vector<RegionLabel> legend{{255, "defect"}};
+    DefectMapOptions o;
+    ASSERT_GT(o.lineLength, 0);
+    const DefectScore s = scoreDefectMap(detectDefects(h, kN, kN, o).map, truth, legend);
+    o.lineLength = 0;
+    const DefectScore off = scoreDefectMap(detectDefects(h, kN, kN, o).map, truth, legend);
+    std::printf("faint groove: line-valley recall %.3f precision %.3f; off recall %.3f\n",
+                s.overall.recall, s.overall.precision, off.overall.recall);
+    EXPECT_GE(s.overall.recall, 0.5);
+    EXPECT_GE(s.overall.precision, 0.8);
+    EXPECT_LT(off.overall.recall, 0.2);
 }
 
 // The flat-end test part's tool-change step (gen-surface --part flatend --seed 1, every other
@@ -261,14 +281,17 @@ TEST(DefectMap, RingModelExplainsTheTurnedSpiralNearItsCentre) {
     EXPECT_FALSE(m.ringUsed);
 }
 
+// For a < 0 without step 7a (the line-valley score looks for grooves; a < 0 makes them ridges).
 TEST(DefectMap, InvariantToHeightOffsetAndScale) {
     std::vector<float> h = texture(kN);
     cutGroove(h, kN, 50, 60, 150, 130, 4.0, 0.4);
-    const DefectMap m = detectDefects(h, kN, kN);
     for (const auto& [a, b] : {std::pair{3.0, 7.0}, std::pair{-0.5, 0.25}, std::pair{1e-3, -2.0}}) {
+        DefectMapOptions o;
+        if (a < 0) o.lineLength = 0;
+        const DefectMap m = detectDefects(h, kN, kN, o);
         std::vector<float> g(h.size());
         for (size_t k = 0; k < h.size(); ++k) g[k] = static_cast<float>(a * h[k] + b);
-        const DefectMap mg = detectDefects(g, kN, kN);
+        const DefectMap mg = detectDefects(g, kN, kN, o);
         size_t differ = 0;
         for (size_t k = 0; k < h.size(); ++k) differ += (m.map[k] != 0) != (mg.map[k] != 0);
         EXPECT_LE(differ, h.size() / 1000) << "a = " << a << ", b = " << b;
@@ -330,6 +353,11 @@ TEST(DefectMap, BadInputIsRefusedNamingTheProblem) {
     o = {};
     o.ringRatio = 0;
     expectError([&] { detectDefects(h, 32, 32, o); }, "option 'ring-ratio'");
+    o.lineLength = 4;
+    expectError([&] { detectDefects(h, 32, 32, o); }, "option 'line-length'");
+    o = {};
+    o.lineGrowSigma = o.lineSeedSigma + 1;
+    expectError([&] { detectDefects(h, 32, 32, o); }, "option 'line-grow-sigma'");
     expectError([&] { scoreDefectMap(std::vector<uint8_t>(4), std::vector<uint8_t>(5), {}); },
                 "defect score");
 }

@@ -123,6 +123,21 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     c->add_option("--grow-sigma", m.growSigma, "auto: hysteresis grow threshold (robust sigmas)")
         ->capture_default_str();
+    c->add_option("--line-length", m.lineLength,
+                  "auto: samples of the line-valley score's segment (odd; 0: off)")
+        ->capture_default_str();
+    c->add_option("--line-orientations", m.lineOrientations,
+                  "auto: directions of the line-valley score over 180 degrees")
+        ->capture_default_str();
+    c->add_option("--line-offset", m.lineOffset,
+                  "auto: samples from a line to the sides the line-valley score compares it with")
+        ->capture_default_str();
+    c->add_option("--line-seed-sigma", m.lineSeedSigma,
+                  "auto: a line region reaches this line-valley score (robust sigmas)")
+        ->capture_default_str();
+    c->add_option("--line-grow-sigma", m.lineGrowSigma,
+                  "auto: a line region holds this line-valley score (robust sigmas)")
+        ->capture_default_str();
     c->add_option("--border", m.border, "auto: samples at the map's edges never marked")
         ->capture_default_str();
     c->add_option("--min-region", m.minRegion, "auto: smallest region kept (samples)")

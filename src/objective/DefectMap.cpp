@@ -93,6 +93,22 @@ void checkOptions(const DefectMapOptions& o) {
     if (o.minRegion < 1)
         throw inputError(option("min-region"),
                          "must be >= 1 (got " + std::to_string(o.minRegion) + ")");
+    if (o.lineLength != 0 && (o.lineLength < 3 || o.lineLength % 2 == 0))
+        throw inputError(option("line-length"),
+                         "must be 0 or odd and >= 3 (got " + std::to_string(o.lineLength) + ")",
+                         "0 switches the line-valley score off; the default is 15");
+    if (o.lineOrientations < 1 || o.lineOrientations > 64)
+        throw inputError(option("line-orientations"),
+                         "must be in [1, 64] (got " + std::to_string(o.lineOrientations) + ")");
+    if (!(o.lineOffset >= 1.0 && o.lineOffset <= 16.0))
+        throw inputError(option("line-offset"),
+                         "must be in [1, 16] samples (got " + std::to_string(o.lineOffset) + ")");
+    if (!(o.lineSeedSigma > 0.0))
+        throw inputError(option("line-seed-sigma"),
+                         "must be > 0 (got " + std::to_string(o.lineSeedSigma) + ")");
+    if (!(o.lineGrowSigma > 0.0 && o.lineGrowSigma <= o.lineSeedSigma))
+        throw inputError(option("line-grow-sigma"), "must be in (0, line-seed-sigma] (got " +
+                                                        std::to_string(o.lineGrowSigma) + ")");
     if (!(o.textureEnergyRatio > 1.0))
         throw inputError(option("texture-energy-ratio"),
                          "must be > 1 (got " + std::to_string(o.textureEnergyRatio) + ")");
@@ -1196,6 +1212,101 @@ StepModel detectSteps(const std::vector<float>& G, int W, int H, const DefectMap
     return m;
 }
 
+/// The mean of A over a digital segment through every sample, of direction (c, s): along the
+/// major axis (x when |c| >= |s|) round(m·|major component|) samples to each side, the minor
+/// coordinate following round(major·slope) (a sheared line: one running sum per line, O(1)
+/// per sample). Samples past the map's edges are clamped to it.
+void segmentMeans(const std::vector<float>& A, int W, int H, double c, double s, int m,
+                  std::vector<float>& L) {
+    const bool xMajor = std::abs(c) >= std::abs(s);
+    const int Nm = xMajor ? W : H, Nn = xMajor ? H : W;  // major / minor lengths
+    const size_t sm = xMajor ? 1 : static_cast<size_t>(W), sn = xMajor ? static_cast<size_t>(W) : 1;
+    const double slope = xMajor ? s / c : c / s;
+    const int half = static_cast<int>(std::lround(m * std::abs(xMajor ? c : s)));
+    std::vector<int> r(static_cast<size_t>(Nm));
+    for (int i = 0; i < Nm; ++i)
+        r[static_cast<size_t>(i)] = static_cast<int>(std::lround(i * slope));
+    const int rMin = std::min(r.front(), r.back()), rMax = std::max(r.front(), r.back());
+    tbb::parallel_for(-rMax, Nn - rMin, [&](int line) {
+        thread_local std::vector<double> prefix;
+        prefix.assign(static_cast<size_t>(Nm + 2 * half + 1), 0.0);
+        // values along the sheared line, the ends replicated `half` samples beyond the map
+        for (int e = -half; e < Nm + half; ++e) {
+            const int i = std::clamp(e, 0, Nm - 1);
+            const int j = std::clamp(line + r[static_cast<size_t>(i)], 0, Nn - 1);
+            prefix[static_cast<size_t>(e + half + 1)] =
+                prefix[static_cast<size_t>(e + half)] + A[i * sm + static_cast<size_t>(j) * sn];
+        }
+        const double inv = 1.0 / (2 * half + 1);
+        for (int i = 0; i < Nm; ++i) {
+            const int j = line + r[static_cast<size_t>(i)];
+            if (j < 0 || j >= Nn) continue;
+            L[i * sm + static_cast<size_t>(j) * sn] = static_cast<float>(
+                (prefix[static_cast<size_t>(i + 2 * half + 1)] - prefix[static_cast<size_t>(i)]) *
+                inv);
+        }
+    });
+}
+
+/// Step 7a, the line-valley score: a scratch is a long, straight, narrow groove, lower than the
+/// surface on both of its sides. For each of `lineOrientations` directions θ = πk/K, L_θ = the
+/// mean of A over a segment about `lineLength` samples long along θ (segmentMeans), and
+/// V_θ = min(L_θ(p + o·n) − L_θ(p), L_θ(p − o·n) − L_θ(p)) / σ_θ with n the normal,
+/// o = `lineOffset` (rounded to samples) and σ_θ = 1.4826 × the median of both differences'
+/// magnitudes. V = max over θ of V_θ, 0 within `border`. Returns 1 on the regions of
+/// V ≥ lineGrowSigma (8-connected) that reach V ≥ lineSeedSigma, 0 elsewhere.
+std::vector<uint8_t> lineValleyRegions(const std::vector<float>& A, int W, int H,
+                                       const DefectMapOptions& o) {
+    constexpr double kPi = 3.14159265358979323846;
+    const size_t n = A.size();
+    const int m = o.lineLength / 2;
+    std::vector<float> L(n), V(n, -std::numeric_limits<float>::infinity());
+    for (int k = 0; k < o.lineOrientations; ++k) {
+        const double th = kPi * k / o.lineOrientations, c = std::cos(th), s = std::sin(th);
+        segmentMeans(A, W, H, c, s, m, L);
+        const int nx = static_cast<int>(std::lround(-s * o.lineOffset));
+        const int ny = static_cast<int>(std::lround(c * o.lineOffset));
+        auto side = [&](int x, int y, int sign) {
+            const int xx = std::clamp(x + sign * nx, 0, W - 1);
+            const int yy = std::clamp(y + sign * ny, 0, H - 1);
+            return L[static_cast<size_t>(yy) * W + xx];
+        };
+        // σ_θ from both differences at a fixed stride (deterministic)
+        std::vector<float> diffs;
+        const size_t stride = std::max<size_t>(1, n / (size_t{1} << 17)) | 1;
+        diffs.reserve(2 * (n / stride + 1));
+        for (size_t q = 0; q < n; q += stride) {
+            const int x = static_cast<int>(q % static_cast<size_t>(W));
+            const int y = static_cast<int>(q / static_cast<size_t>(W));
+            diffs.push_back(side(x, y, 1) - L[q]);
+            diffs.push_back(side(x, y, -1) - L[q]);
+        }
+        const double sigma = 1.4826 * medianAbs(diffs);
+        if (!(sigma > 0.0)) continue;
+        tbb::parallel_for(0, H, [&](int y) {
+            for (int x = 0; x < W; ++x) {
+                const size_t q = static_cast<size_t>(y) * W + x;
+                const float v = static_cast<float>(
+                    std::min(side(x, y, 1) - L[q], side(x, y, -1) - L[q]) / sigma);
+                V[q] = std::max(V[q], v);
+            }
+        });
+    }
+    L = {};
+    tbb::parallel_for(0, H, [&](int y) {
+        for (int x = 0; x < W; ++x) {
+            const size_t q = static_cast<size_t>(y) * W + x;
+            const bool inside = y >= o.border && y < H - o.border && x >= o.border &&
+                                x < W - o.border && std::isfinite(V[q]);
+            V[q] = inside ? std::max(V[q], 0.0f) : 0.0f;
+        }
+    });
+    std::vector<uint8_t> regions(n, 0);
+    hysteresis(V, W, H, o.lineSeedSigma, o.lineGrowSigma, 1, regions);
+    for (uint8_t& v : regions) v = v != 0;
+    return regions;
+}
+
 }  // namespace
 
 std::vector<float> removeTexture(std::span<const float> heights, int width, int height,
@@ -1284,6 +1395,12 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
                     if (y < o.border || y >= H - o.border || x < o.border || x >= W - o.border)
                         S[static_cast<size_t>(y) * W + x] = 0.0f;
             });
+        if (o.lineLength > 0) {
+            // step 7a: the line-valley regions seed the hysteresis and are grown through
+            const std::vector<uint8_t> lines = lineValleyRegions(A, W, H, o);
+            for (size_t k = 0; k < n; ++k)
+                if (lines[k]) S[k] = std::max(S[k], static_cast<float>(o.seedSigma));
+        }
         r.markedScore = hysteresis(S, W, H, o.seedSigma, o.growSigma, o.minRegion, r.map);
     }
     for (size_t k = 0; k < steps.ramp.size(); ++k) {  // step 4a: a step's band is its ramp

@@ -89,6 +89,17 @@
 //     of the map's edges (there the notch's periodic model meets the padding and is unreliable).
 //  7. Hysteresis: samples with S ≥ `seedSigma` seed the map; it grows into 8-connected samples
 //     with S ≥ `growSigma`. Connected regions of fewer than `minRegion` samples are dropped.
+// 7a. Lines (lineLength > 0), before 7: a scratch is a long, straight, narrow groove, lower
+//     than the surface on both sides. For K = `lineOrientations` directions θ = πk/K, L_θ = the
+//     mean of A over a digital segment of about `lineLength` samples along θ (one running sum
+//     per sheared line), and V_θ = min(L_θ(p + o·n) − L_θ(p), L_θ(p − o·n) − L_θ(p)) / σ_θ
+//     (n the normal, o = `lineOffset` rounded to samples, σ_θ = 1.4826 × the median of both
+//     differences' magnitudes); V = max over θ of V_θ, 0 within `border`. Regions of V ≥
+//     `lineGrowSigma` (8-connected) that reach `lineSeedSigma` seed step 7 and are grown
+//     through (their S is raised to seedSigma). Averaging along the line lifts a faint groove
+//     out of the noise; the two-sided test keeps out what is straight but not a groove: a
+//     raised line (the flat-end floor's step-over ridges, which the notch leaves in part) or a
+//     step (lower on one side only).
 //  8. Texture-change regions (chatter bands): E = the separable running median of |A| over
 //     `energyWindow` samples (on |A| pooled 2×2 with half the window, read back at the sample's
 //     cell): a robust local amplitude of what the texture model left. Samples with
@@ -101,7 +112,8 @@
 //     tested against its own median: a chatter band varying along the path stands out in its
 //     sector even where the scallops across the paths, in another, are stronger than it.
 // Every threshold is relative to σ or to median(E), so the map is invariant to h → a·h + b
-// (a ≠ 0) up to rounding; a constant map marks nothing. A confined region of different texture
+// (a > 0) up to rounding, and for a < 0 except for step 7a, which looks for grooves (a < 0
+// turns them into ridges); a constant map marks nothing. A confined region of different texture
 // (gen-surface's chatter half, 40 % of a part) is NOT meant to be marked: it is a state of
 // the process over a large region, not a local anomaly, and comparing regions is the defects
 // objective's job. It stays unmarked while its amplitude stays under the ratios of step 8 (the
@@ -110,7 +122,7 @@
 // depend on the thread count. Memory: about 12 float copies of the map; with textureSectors
 // K > 1, K more and a copy of the half spectrum while they are made; step 4a about 10 more
 // while the steps are found; step 4b one more copy and, while the pitch is found, the padded
-// map and its half spectrum.
+// map and its half spectrum; step 7a 2 more while it runs.
 #pragma once
 
 #include <cstdint>
@@ -180,7 +192,14 @@ struct DefectMapOptions {
     double ringResidual = 0.5;        // ... and ρ <= this (> 0)
     double ringRatio = 0.5;           // step 4b: A_ring replaces A when |A_ring| <= this·|A|
                                       // (in (0, 1])
-    ScratchMapOptions paper;          // the `paper` method's options
+    // auto, step 7a (the line-valley score)
+    int lineLength = 15;         // samples of the segment (odd, >= 3; 0 switches step 7a off)
+    int lineOrientations = 16;   // its directions over 180° (1..64)
+    double lineOffset = 3.0;     // samples from the line to each side it is compared with
+    double lineSeedSigma = 8.0;  // a line region reaches V >= lineSeedSigma (> 0) ...
+    double lineGrowSigma = 4.0;  // ... and holds V >= lineGrowSigma (0 < grow <= seed)
+
+    ScratchMapOptions paper;  // the `paper` method's options
 };
 
 struct DefectMap {
