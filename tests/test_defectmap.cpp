@@ -186,6 +186,39 @@ TEST(DefectMap, StepModelMarksTheRampNotItsHalo) {
     EXPECT_LT(so.overall.precision, 0.6);
 }
 
+// The turned test part's tool-change step is a ring; where the pocket wall crosses it the step
+// model's centre tests fail (the wall's slope dwarfs the step). Its points lie on one circle,
+// and the arcs between them are filled (stepGap): the ramp is marked there too, not the
+// level term's smear.
+TEST(DefectMap, StepModelFillsTheRingAcrossTheWall) {
+    SurfaceSpec spec = testPartSpec(TestPart::Turned);
+    spec.seed = 1;
+    spec.scratchCount = 0;
+    spec.gougeCount = 0;
+    spec.dentCount = 0;
+    spec.pocketBurrHeight = 0;
+    spec.chatterBands = 0;
+    spec.chatterAmplitude = 0;
+    spec.chatterStartFraction = 0;
+    const GeneratedSurface g = generateSurface(spec);
+    const std::vector<RegionLabel> legend{{kTruthToolChange, "tool-change-step"}};
+    const DefectMap filled = detectDefects(g.heights, g.width, g.height);
+    DefectMapOptions noGaps;
+    noGaps.stepGap = 0;
+    const DefectMap gaps = detectDefects(g.heights, g.width, g.height, noGaps);
+    const DefectScore sf = scoreDefectMap(filled.map, g.truth, legend);
+    const DefectScore sg = scoreDefectMap(gaps.map, g.truth, legend);
+    std::printf(
+        "turned step: %zu centre points, precision %.3f recall %.3f (arcs not filled: %zu "
+        "points, precision %.3f recall %.3f)\n",
+        filled.stepPoints, sf.overall.precision, sf.overall.recall, gaps.stepPoints,
+        sg.overall.precision, sg.overall.recall);
+    EXPECT_GT(filled.stepPoints, gaps.stepPoints + 500);
+    EXPECT_GE(sf.overall.precision, 0.7);
+    EXPECT_GE(sf.overall.recall, 0.95);
+    EXPECT_GE(sf.overall.precision, sg.overall.precision + 0.1);
+}
+
 // A band of chatter along x (rows 48–79 of 128) on scallops across z and weak feed marks along x:
 // in the texture's whole amplitude the scallops dwarf the band (as the ball-end part's
 // scallops do its chatter bands); in the sector of the texture varying along x the band stands
@@ -350,6 +383,9 @@ TEST(DefectMap, BadInputIsRefusedNamingTheProblem) {
     o = {};
     o.ringWindow = 60;
     expectError([&] { detectDefects(h, 32, 32, o); }, "option 'ring-window'");
+    o = {};
+    o.stepGap = -1;
+    expectError([&] { detectDefects(h, 32, 32, o); }, "option 'step-gap'");
     o = {};
     o.ringRatio = 0;
     expectError([&] { detectDefects(h, 32, 32, o); }, "option 'ring-ratio'");

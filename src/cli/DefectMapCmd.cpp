@@ -185,6 +185,10 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
                   "auto: on a step's high side, mark only where a smoothstep ramp has moved the "
                   "surface by this share of the jump")
         ->capture_default_str();
+    c->add_option("--step-gap", m.stepGap,
+                  "auto: samples of the longest arc between a circular step's points that is "
+                  "filled (0: none)")
+        ->capture_default_str();
     c->add_option("--step-band", m.stepBand,
                   "auto: samples around a step's centre line where only its ramp is marked")
         ->capture_default_str();

@@ -3,10 +3,12 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <numbers>
 #include <unsupported/Eigen/FFT>
 
 #include "core/Error.h"
@@ -135,6 +137,9 @@ void checkOptions(const DefectMapOptions& o) {
     if (!(o.stepBand >= o.stepRampHalf))
         throw inputError(option("step-band"),
                          "must be >= step-ramp-half (got " + std::to_string(o.stepBand) + ")");
+    if (!(o.stepGap >= 0.0))
+        throw inputError(option("step-gap"), "must be >= 0 (got " + std::to_string(o.stepGap) + ")",
+                         "0 fills no gap; the default is 200 samples");
     if (!(o.stepRampMoved >= 0.0 && o.stepRampMoved < 0.5))
         throw inputError(option("step-ramp-moved"),
                          "must be in [0, 0.5) (got " + std::to_string(o.stepRampMoved) + ")",
@@ -973,6 +978,93 @@ double jumpAlong(const std::vector<float>& G, int W, int x, int y, StepDir u, in
 }
 
 /// Step 4a's lines on G = h − T (DefectMap.h): their points, ramps and bands.
+/// Step 4a's gaps along a curved step: a ring-shaped step (a tool change on a turned part) is
+/// hidden from the centre tests where a steep wall crosses it, and the level term's smear of it
+/// stays there. A line whose points lie on a circle (Kåsa's algebraic fit; RMS distance at most
+/// 0.75 samples, radius at most 4× the map's larger side) takes every line's points within 1.5
+/// samples of that circle; the arcs between consecutive ones (by angle) up to `maxGap` samples
+/// long get points every half sample: on the circle, normal along the radius (to the side the
+/// points' normals face), the points' median jump.
+void fillCircleGaps(StepModel& m, const std::vector<std::pair<size_t, size_t>>& lines, int W, int H,
+                    double maxGap) {
+    constexpr double kFitRms = 0.75, kOnCircle = 1.5, kSpacing = 0.5;
+    std::vector<uint8_t> taken(lines.size(), 0);
+    std::vector<StepPoint> added;
+    for (size_t li = 0; li < lines.size(); ++li) {
+        if (taken[li]) continue;
+        const auto [a, b] = lines[li];
+        // x² + z² + D·x + E·z + F = 0 in least squares, about the points' mean
+        double mx = 0, mz = 0;
+        for (size_t i = a; i < b; ++i) mx += m.points[i].x, mz += m.points[i].z;
+        mx /= static_cast<double>(b - a);
+        mz /= static_cast<double>(b - a);
+        Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
+        Eigen::Vector3d v = Eigen::Vector3d::Zero();
+        for (size_t i = a; i < b; ++i) {
+            const double x = m.points[i].x - mx, z = m.points[i].z - mz;
+            const Eigen::Vector3d row(x, z, 1.0);
+            M += row * row.transpose();
+            v -= row * (x * x + z * z);
+        }
+        const Eigen::Vector3d def = M.ldlt().solve(v);
+        const double cx = -0.5 * def[0], cz = -0.5 * def[1];
+        const double r2 = cx * cx + cz * cz - def[2];
+        if (!std::isfinite(r2) || r2 <= 0) continue;
+        const double R = std::sqrt(r2);
+        if (R > 4.0 * std::max(W, H)) continue;
+        double ss = 0;
+        for (size_t i = a; i < b; ++i) {
+            const double d = std::hypot(m.points[i].x - mx - cx, m.points[i].z - mz - cz) - R;
+            ss += d * d;
+        }
+        if (std::sqrt(ss / static_cast<double>(b - a)) > kFitRms) continue;
+        // every line's points on this circle, by angle
+        std::vector<std::pair<double, size_t>> on;
+        for (size_t lj = 0; lj < lines.size(); ++lj) {
+            bool any = false;
+            for (size_t i = lines[lj].first; i < lines[lj].second; ++i) {
+                const double dx = m.points[i].x - mx - cx, dz = m.points[i].z - mz - cz;
+                if (std::abs(std::hypot(dx, dz) - R) > kOnCircle) continue;
+                on.emplace_back(std::atan2(dz, dx), i);
+                any = true;
+            }
+            if (any) taken[lj] = 1;
+        }
+        std::sort(on.begin(), on.end());
+        int outward = 0;
+        std::vector<float> jumps;
+        for (const auto& [t, i] : on) {
+            const StepPoint& p = m.points[i];
+            outward += (p.x - mx - cx) * p.nx + (p.z - mz - cz) * p.nz > 0 ? 1 : -1;
+            jumps.push_back(p.jump);
+        }
+        const auto mid = jumps.begin() + static_cast<std::ptrdiff_t>(jumps.size() / 2);
+        std::nth_element(jumps.begin(), mid, jumps.end());
+        const double sign = outward >= 0 ? 1.0 : -1.0;
+        for (size_t q = 0; q < on.size(); ++q) {
+            const double t0 = on[q].first;
+            const double t1 =
+                q + 1 < on.size() ? on[q + 1].first : on[0].first + 2.0 * std::numbers::pi;
+            const double arc = R * (t1 - t0);
+            if (!(arc > 2.0 * kSpacing && arc <= maxGap)) continue;
+            const int steps = static_cast<int>(std::floor(arc / kSpacing));
+            for (int s = 1; s < steps; ++s) {
+                const double t = t0 + (t1 - t0) * s / steps;
+                StepPoint p;
+                p.x = static_cast<float>(mx + cx + R * std::cos(t));
+                p.z = static_cast<float>(mz + cz + R * std::sin(t));
+                p.nx = static_cast<float>(sign * std::cos(t));
+                p.nz = static_cast<float>(sign * std::sin(t));
+                p.jump = *mid;
+                if (p.x >= 0 && p.z >= 0 && p.x <= static_cast<float>(W - 1) &&
+                    p.z <= static_cast<float>(H - 1))
+                    added.push_back(p);
+            }
+        }
+    }
+    m.points.insert(m.points.end(), added.begin(), added.end());
+}
+
 StepModel detectSteps(const std::vector<float>& G, int W, int H, const DefectMapOptions& o,
                       double floorSigma) {
     const size_t n = G.size();
@@ -1084,6 +1176,7 @@ StepModel detectSteps(const std::vector<float>& G, int W, int H, const DefectMap
     // connected centre lines (gaps up to kLink − 1 samples bridged) of fewer than stepMinLength
     // points are not steps
     constexpr int kLink = 3;
+    std::vector<std::pair<size_t, size_t>> lines;  // each line's points in m.points
     std::vector<uint8_t> seen(n, 0);
     std::vector<size_t> stack, comp;
     for (size_t k0 = 0; k0 < n; ++k0) {
@@ -1114,6 +1207,7 @@ StepModel detectSteps(const std::vector<float>& G, int W, int H, const DefectMap
         auto mid = jumps.begin() + static_cast<std::ptrdiff_t>(jumps.size() / 2);
         std::nth_element(jumps.begin(), mid, jumps.end());
         const size_t first = m.points.size();
+        lines.emplace_back(first, first + comp.size());
         for (size_t k : comp) {
             const StepDir u = kStepDirs[candDir[k]];
             StepPoint p;
@@ -1165,6 +1259,7 @@ StepModel detectSteps(const std::vector<float>& G, int W, int H, const DefectMap
             }
         }
     }
+    if (o.stepGap > 0) fillCircleGaps(m, lines, W, H, o.stepGap);
     if (m.points.empty()) return m;
     // nearest centre point of every sample within the band (splatted discs)
     const int reach = static_cast<int>(std::ceil(std::max(o.stepBand, o.stepRampHalf + 1.0)));

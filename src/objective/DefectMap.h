@@ -51,7 +51,12 @@
 //     After step 7, within `stepBand` samples of a line the map is the step's ramp alone: the
 //     samples whose distance t along the nearest point's normal lies in (−stepRampHalf,
 //     stepRampHalf) (with stepRampMoved > 0 the high side stops where a smoothstep ramp
-//     2·stepRampHalf wide has moved the surface by that share of the jump).
+//     2·stepRampHalf wide has moved the surface by that share of the jump). A line whose points
+//     lie on a circle (Kåsa's fit, RMS distance ≤ 0.75 samples, radius ≤ 4× the map's larger
+//     side: a ring-shaped step, a tool change on a turned part) takes every line's points
+//     within 1.5 samples of it, and the arcs between consecutive ones up to `stepGap` samples
+//     long get points every half sample (normal along the radius): where a steep wall crosses
+//     the ring, the centre tests fail and the level term's smear would stay.
 // 4b. Rings (with ringWindow > 0): a rotational texture (turned, faced: grooves on circles or
 //     an Archimedean spiral about a centre) is tested for and, where found, modelled by its
 //     periodic radial profile. The centre c: each 16×16 block of d's structure tensor gives the
@@ -186,6 +191,8 @@ struct DefectMapOptions {
     double stepBand = 8.0;            // ... and nothing else within this (>= stepRampHalf)
     double stepRampMoved = 0.0;       // ... on the high side, only where the ramp has moved
                                       // the surface by this share of the jump ([0, 0.5))
+    double stepGap = 200.0;           // ... arcs of a circular step up to this long between
+                                      // its points are filled (samples; >= 0, 0: off)
     int ringWindow = 61;              // step 4b: samples of arc of the ring median (0: off;
                                       // else odd, >= 3)
     double ringIsotropy = 0.25;       // step 4b: rings need isotropy >= this (in [0, 1])
