@@ -143,7 +143,7 @@ void checkOptions(const DefectMapOptions& o) {
     if (!(o.stepRampMoved >= 0.0 && o.stepRampMoved < 0.5))
         throw inputError(option("step-ramp-moved"),
                          "must be in [0, 0.5) (got " + std::to_string(o.stepRampMoved) + ")",
-                         "0 marks the whole ramp");
+                         "0 marks the whole ramp; the default is 0.02");
     if (o.ringWindow != 0) oddAtLeast3(o.ringWindow, "ring-window", "0 switches it off");
     if (!(o.ringIsotropy >= 0.0 && o.ringIsotropy <= 1.0))
         throw inputError(option("ring-isotropy"),

@@ -189,7 +189,7 @@ struct DefectMapOptions {
     int stepMinLength = 60;           // ... samples of a connected centre line (>= 1)
     double stepRampHalf = 1.0;        // ... samples marked within this of the centre (> 0)
     double stepBand = 8.0;            // ... and nothing else within this (>= stepRampHalf)
-    double stepRampMoved = 0.0;       // ... on the high side, only where the ramp has moved
+    double stepRampMoved = 0.02;      // ... on the high side, only where the ramp has moved
                                       // the surface by this share of the jump ([0, 0.5))
     double stepGap = 200.0;           // ... arcs of a circular step up to this long between
                                       // its points are filled (samples; >= 0, 0: off)
