@@ -248,6 +248,9 @@ TEST(ExternalRenderer, RenderCommandRefusesBadCombinations) {
     r = test::runCli(base + " --renderer povray --max-depth 3");
     EXPECT_NE(r.exitCode, 0);
     EXPECT_NE(r.output.find("--max-depth"), std::string::npos) << r.output;
+    r = test::runCli(base + " --renderer povray --spp 64");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("--spp"), std::string::npos) << r.output;
     // a command that writes an image of the wrong size (the env map): a clear error
     r = test::runCli(base + " --renderer-cmd 'cp {envmap} {output}'");
     EXPECT_NE(r.exitCode, 0);

@@ -34,10 +34,10 @@ struct RenderArgs {
 
 /// The same scene and light through an external renderer (app/ExternalRenderer.h).
 int renderExternal(const RenderArgs& a, const Scene& scene, const EnvMap& env, uint64_t seed) {
-    if (a.autoDepth || a.maxDepth)
+    if (a.autoDepth || a.maxDepth || a.spp)
         throw UsageError(
-            "--max-depth and --auto-depth set our tracer's path length; an external "
-            "renderer keeps its own: drop them");
+            "--spp, --max-depth and --auto-depth set our tracer's samples and path "
+            "length; an external renderer keeps its own: drop them");
     const auto pngPath = siblingPath(a.out, ".exr", ".png");
     const ExternalRenderer r(scene, externalRendererOptions(a.renderer, a.external));
     const Stopwatch clock;
