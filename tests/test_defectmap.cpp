@@ -63,6 +63,21 @@ std::vector<uint8_t> cutGroove(std::vector<float>& h, int n, double x0, double y
     return truth;
 }
 
+/// A test part of seed 1 (a tuning seed) with its tool-change step alone: every other kind and
+/// the chatter off (as scripts/eval-defectmap's step parts).
+GeneratedSurface stepOnlyPart(TestPart part) {
+    SurfaceSpec spec = testPartSpec(part);
+    spec.seed = 1;
+    spec.scratchCount = 0;
+    spec.gougeCount = 0;
+    spec.dentCount = 0;
+    spec.pocketBurrHeight = 0;
+    spec.chatterBands = 0;
+    spec.chatterAmplitude = 0;
+    spec.chatterStartFraction = 0;
+    return generateSurface(spec);
+}
+
 }  // namespace
 
 TEST(DefectMap, PeriodicTextureAloneMarksAlmostNothing) {
@@ -123,16 +138,7 @@ TEST(DefectMap, FaintGrooveIsFoundByTheLineValleyScore) {
 // the floor's feed marks, which leave the joint edge residual's σ about 4× that of the other
 // parts. Scored per axis, the step's own axis is quiet and the step is found.
 TEST(DefectMap, FlatEndStepAlongTheFeedMarksIsFound) {
-    SurfaceSpec spec = testPartSpec(TestPart::FlatEnd);
-    spec.seed = 1;
-    spec.scratchCount = 0;
-    spec.gougeCount = 0;
-    spec.dentCount = 0;
-    spec.pocketBurrHeight = 0;
-    spec.chatterBands = 0;
-    spec.chatterAmplitude = 0;
-    spec.chatterStartFraction = 0;
-    const GeneratedSurface g = generateSurface(spec);
+    const GeneratedSurface g = stepOnlyPart(TestPart::FlatEnd);
     const std::vector<RegionLabel> legend{{kTruthToolChange, "tool-change-step"}};
     const DefectScore s =
         scoreDefectMap(detectDefects(g.heights, g.width, g.height).map, g.truth, legend);
@@ -157,16 +163,7 @@ TEST(DefectMap, FlatEndStepAlongTheFeedMarksIsFound) {
 // label is the 2-sample ramp); the step model (step 4a) finds the line, marks its ramp and
 // nothing else around it.
 TEST(DefectMap, StepModelMarksTheRampNotItsHalo) {
-    SurfaceSpec spec = testPartSpec(TestPart::BallEnd);
-    spec.seed = 1;
-    spec.scratchCount = 0;
-    spec.gougeCount = 0;
-    spec.dentCount = 0;
-    spec.pocketBurrHeight = 0;
-    spec.chatterBands = 0;
-    spec.chatterAmplitude = 0;
-    spec.chatterStartFraction = 0;
-    const GeneratedSurface g = generateSurface(spec);
+    const GeneratedSurface g = stepOnlyPart(TestPart::BallEnd);
     const std::vector<RegionLabel> legend{{kTruthToolChange, "tool-change-step"}};
     const DefectMap on = detectDefects(g.heights, g.width, g.height);
     DefectMapOptions offOptions;
@@ -191,16 +188,7 @@ TEST(DefectMap, StepModelMarksTheRampNotItsHalo) {
 // and the arcs between them are filled (stepGap): the ramp is marked there too, not the
 // level term's smear.
 TEST(DefectMap, StepModelFillsTheRingAcrossTheWall) {
-    SurfaceSpec spec = testPartSpec(TestPart::Turned);
-    spec.seed = 1;
-    spec.scratchCount = 0;
-    spec.gougeCount = 0;
-    spec.dentCount = 0;
-    spec.pocketBurrHeight = 0;
-    spec.chatterBands = 0;
-    spec.chatterAmplitude = 0;
-    spec.chatterStartFraction = 0;
-    const GeneratedSurface g = generateSurface(spec);
+    const GeneratedSurface g = stepOnlyPart(TestPart::Turned);
     const std::vector<RegionLabel> legend{{kTruthToolChange, "tool-change-step"}};
     const DefectMap filled = detectDefects(g.heights, g.width, g.height);
     DefectMapOptions noGaps;
