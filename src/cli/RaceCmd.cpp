@@ -100,6 +100,22 @@ int runSettingsCmd(SettingsArgs a) {
     return kOk;
 }
 
+/// The options `bench race` and `bench settings` share: the parts, the training seeds, the
+/// judge's spp and the output directory.
+void addRaceRunOptions(CLI::App* c, RaceOptions& o, std::string& out) {
+    c->add_option("--parts", o.parts, "Parts: ballend-chatter, facemill-scratches, pocket")
+        ->delimiter(',')
+        ->capture_default_str();
+    c->add_option("--seeds", o.seeds, "Training seeds per part")
+        ->check(CLI::Range(1, 100))
+        ->capture_default_str();
+    c->add_option("--heldout-spp", o.judgeSpp, "spp of the judge's held-out estimate")
+        ->check(CLI::Range(2, 1 << 20))
+        ->capture_default_str();
+    c->add_option("-o,--output", out, "Output directory (parts, cache, CSV, plot)")
+        ->capture_default_str();
+}
+
 }  // namespace
 
 void registerRace(CLI::App& app, std::function<int()>& run) {
@@ -107,19 +123,9 @@ void registerRace(CLI::App& app, std::function<int()>& run) {
     auto a = std::make_shared<RaceArgs>();
     CLI::App* c = bench->add_subcommand(
         "race", "Race optimizer configurations on generated parts, scored by the judge");
-    c->add_option("--parts", a->o.parts, "Parts: ballend-chatter, facemill-scratches, pocket")
-        ->delimiter(',')
-        ->capture_default_str();
-    c->add_option("--seeds", a->o.seeds, "Training seeds per part")
-        ->check(CLI::Range(1, 100))
-        ->capture_default_str();
+    addRaceRunOptions(c, a->o, a->out);
     c->add_option("--configs", a->configs, "Configurations (default: all; paper-loop always)")
         ->delimiter(',');
-    c->add_option("--heldout-spp", a->o.judgeSpp, "spp of the judge's held-out estimate")
-        ->check(CLI::Range(2, 1 << 20))
-        ->capture_default_str();
-    c->add_option("-o,--output", a->out, "Output directory (parts, cache, CSV, plot)")
-        ->capture_default_str();
     c->callback([a, &run] { run = [a] { return runRaceCmd(*a); }; });
 
     auto sa = std::make_shared<SettingsArgs>();
@@ -129,12 +135,7 @@ void registerRace(CLI::App& app, std::function<int()>& run) {
         "settings",
         "Speed against error: the judge's score of E* against seconds for spp x sampling x "
         "max_depth");
-    st->add_option("--parts", sa->o.parts, "Parts: ballend-chatter, facemill-scratches, pocket")
-        ->delimiter(',')
-        ->capture_default_str();
-    st->add_option("--seeds", sa->o.seeds, "Training seeds per part")
-        ->check(CLI::Range(1, 100))
-        ->capture_default_str();
+    addRaceRunOptions(st, sa->o, sa->out);
     st->add_option("--spp", sa->spps, "Samples per pixel of T")
         ->delimiter(',')
         ->check(CLI::Range(2, 1 << 16))
@@ -149,11 +150,6 @@ void registerRace(CLI::App& app, std::function<int()>& run) {
     st->add_option("--judge-max-depth", sa->o.judgeMaxDepth,
                    "The judge's path length (default: the longest of --max-depth + 2)")
         ->check(CLI::Range(2, 64));
-    st->add_option("--heldout-spp", sa->o.judgeSpp, "spp of the judge's held-out estimate")
-        ->check(CLI::Range(2, 1 << 20))
-        ->capture_default_str();
-    st->add_option("-o,--output", sa->out, "Output directory (parts, cache, CSV, plot)")
-        ->capture_default_str();
     st->callback([sa, &run] { run = [sa] { return runSettingsCmd(*sa); }; });
 }
 
