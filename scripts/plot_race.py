@@ -14,13 +14,30 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
-def main(src, dst):
+def read_runs(src):
+    """The race CSV's rows as {(part, config): [(seconds, judge U), ...]} and the parts in the
+    order they first appear (`bench race` and `bench settings` write the same columns)."""
     runs = defaultdict(list)
     parts = []
     for r in csv.DictReader(open(src)):
         if r["part"] not in parts:
             parts.append(r["part"])
         runs[(r["part"], r["config"])].append((float(r["seconds"]), float(r["unbiased"])))
+    return runs, parts
+
+
+def pareto_front(points):
+    """The (seconds, U) points no cheaper point beats, cheapest first."""
+    front, best = [], float("inf")
+    for s, u in sorted(points):
+        if u < best:
+            front.append((s, u))
+            best = u
+    return front
+
+
+def main(src, dst):
+    runs, parts = read_runs(src)
     fig, axes = plt.subplots(1, len(parts), figsize=(5.5 * len(parts), 4.5), squeeze=False)
     for ax, part in zip(axes[0], parts):
         pts = []
@@ -31,11 +48,7 @@ def main(src, dst):
             pts.append((s, u, cfg))
             ax.scatter(s, u, s=30, color="black" if cfg == "paper-loop" else "C0")
             ax.annotate(cfg, (s, u), fontsize=7, xytext=(3, 3), textcoords="offset points")
-        front, best = [], float("inf")
-        for s, u, _ in sorted(pts):
-            if u < best:
-                front.append((s, u))
-                best = u
+        front = pareto_front([(s, u) for s, u, _ in pts])
         ax.plot([f[0] for f in front], [f[1] for f in front], "C1--", lw=1, label="Pareto front")
         ax.set_xscale("log")
         ax.set_xlabel("seconds (precompute + search, median over seeds)")

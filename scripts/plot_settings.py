@@ -5,10 +5,9 @@ marker size = spp, label = max_depth; the dashed line is the Pareto front (the c
 for each accuracy). One panel per part.
 Usage: plot_settings.py settings.csv settings.png"""
 from atomic_save import savefig  # scripts/atomic_save.py, beside this script
-import csv
+from plot_race import pareto_front, read_runs  # the same CSV, beside this script
 import re
 import sys
-from collections import defaultdict
 from statistics import median
 
 import matplotlib
@@ -20,12 +19,7 @@ COLOURS = {"bsdf": "C0", "stratified": "C2", "mis": "C3"}
 
 
 def main(src, dst):
-    runs = defaultdict(list)
-    parts = []
-    for r in csv.DictReader(open(src)):
-        if r["part"] not in parts:
-            parts.append(r["part"])
-        runs[(r["part"], r["config"])].append((float(r["seconds"]), float(r["unbiased"])))
+    runs, parts = read_runs(src)
     fig, axes = plt.subplots(1, len(parts), figsize=(6.5 * len(parts), 5), squeeze=False)
     for ax, part in zip(axes[0], parts):
         pts, seen = [], set()
@@ -42,11 +36,7 @@ def main(src, dst):
                        label=label, edgecolors="black", linewidths=0.4)
             ax.annotate(f"{spp}/d{depth}", (s, u), fontsize=6, xytext=(3, 3),
                         textcoords="offset points")
-        front, best = [], float("inf")
-        for s, u in sorted(pts):
-            if u < best:
-                front.append((s, u))
-                best = u
+        front = pareto_front(pts)
         ax.plot([f[0] for f in front], [f[1] for f in front], "k--", lw=0.8, label="Pareto front")
         ax.set_xscale("log")
         ax.set_xlabel("seconds (precompute + search, median over seeds)")
