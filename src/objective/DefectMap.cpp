@@ -904,37 +904,52 @@ void ringLevel(std::span<const float> h, const std::vector<float>& macro, std::v
     for (size_t c : lowered) info.ringLowered += c;
 }
 
-/// Step 6: hysteresis on the score, regions below minRegion dropped. Sets map to 255.
-size_t hysteresis(const std::vector<float>& score, int W, int H, double seed, double grow,
-                  int minRegion, std::vector<uint8_t>& map) {
-    std::vector<uint8_t> seen(score.size(), 0);
-    std::vector<size_t> stack, region;
-    size_t marked = 0;
-    for (size_t k0 = 0; k0 < score.size(); ++k0) {
-        if (seen[k0] || !(score[k0] >= seed)) continue;
-        region.clear();
+/// The connected regions of a W×H map: each starts at a sample `seed` accepts (in row-major
+/// order) and takes every sample `grow` accepts within `reach` samples (a (2·reach+1)² box) of
+/// one it holds; `region` gets each one's samples in the order they were reached. A sample
+/// belongs to one region at most.
+template <class Seed, class Grow, class Region>
+void forEachRegion(int W, int H, int reach, Seed seed, Grow grow, Region region) {
+    const size_t n = static_cast<size_t>(W) * H;
+    std::vector<uint8_t> seen(n, 0);
+    std::vector<size_t> stack, samples;
+    for (size_t k0 = 0; k0 < n; ++k0) {
+        if (seen[k0] || !seed(k0)) continue;
+        samples.clear();
         stack.assign(1, k0);
         seen[k0] = 1;
         while (!stack.empty()) {
             const size_t k = stack.back();
             stack.pop_back();
-            region.push_back(k);
+            samples.push_back(k);
             const int x = static_cast<int>(k % static_cast<size_t>(W));
             const int y = static_cast<int>(k / static_cast<size_t>(W));
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx) {
+            for (int dy = -reach; dy <= reach; ++dy)
+                for (int dx = -reach; dx <= reach; ++dx) {
                     const int xx = x + dx, yy = y + dy;
                     if (xx < 0 || yy < 0 || xx >= W || yy >= H) continue;
                     const size_t q = static_cast<size_t>(yy) * W + xx;
-                    if (seen[q] || !(score[q] >= grow)) continue;
+                    if (seen[q] || !grow(q)) continue;
                     seen[q] = 1;
                     stack.push_back(q);
                 }
         }
-        if (region.size() < static_cast<size_t>(minRegion)) continue;
-        for (size_t k : region) map[k] = 255;
-        marked += region.size();
+        region(samples);
     }
+}
+
+/// Step 6: hysteresis on the score, regions below minRegion dropped. Sets map to 255.
+size_t hysteresis(const std::vector<float>& score, int W, int H, double seed, double grow,
+                  int minRegion, std::vector<uint8_t>& map) {
+    size_t marked = 0;
+    forEachRegion(
+        W, H, 1, [&](size_t k) { return score[k] >= seed; },
+        [&](size_t k) { return score[k] >= grow; },
+        [&](const std::vector<size_t>& region) {
+            if (region.size() < static_cast<size_t>(minRegion)) return;
+            for (size_t k : region) map[k] = 255;
+            marked += region.size();
+        });
     return marked;
 }
 
@@ -1177,30 +1192,9 @@ StepModel detectSteps(const std::vector<float>& G, int W, int H, const DefectMap
     // points are not steps
     constexpr int kLink = 3;
     std::vector<std::pair<size_t, size_t>> lines;  // each line's points in m.points
-    std::vector<uint8_t> seen(n, 0);
-    std::vector<size_t> stack, comp;
-    for (size_t k0 = 0; k0 < n; ++k0) {
-        if (!cand[k0] || seen[k0]) continue;
-        comp.clear();
-        stack.assign(1, k0);
-        seen[k0] = 1;
-        while (!stack.empty()) {
-            const size_t k = stack.back();
-            stack.pop_back();
-            comp.push_back(k);
-            const int x = static_cast<int>(k % static_cast<size_t>(W));
-            const int y = static_cast<int>(k / static_cast<size_t>(W));
-            for (int dy = -kLink; dy <= kLink; ++dy)
-                for (int dx = -kLink; dx <= kLink; ++dx) {
-                    const int xx = x + dx, yy = y + dy;
-                    if (xx < 0 || yy < 0 || xx >= W || yy >= H) continue;
-                    const size_t q = static_cast<size_t>(yy) * W + xx;
-                    if (!cand[q] || seen[q]) continue;
-                    seen[q] = 1;
-                    stack.push_back(q);
-                }
-        }
-        if (comp.size() < static_cast<size_t>(o.stepMinLength)) continue;
+    const auto isCand = [&](size_t k) { return cand[k] != 0; };
+    forEachRegion(W, H, kLink, isCand, isCand, [&](const std::vector<size_t>& comp) {
+        if (comp.size() < static_cast<size_t>(o.stepMinLength)) return;
         // one jump per line: the median of its points' (a tool-change step is one offset)
         std::vector<float> jumps;
         for (size_t k : comp) jumps.push_back(candJ[k]);
@@ -1258,7 +1252,7 @@ StepModel detectSteps(const std::vector<float>& G, int W, int H, const DefectMap
                 m.points[first + i].nz = static_cast<float>(nz / l);
             }
         }
-    }
+    });
     if (o.stepGap > 0) fillCircleGaps(m, lines, W, H, o.stepGap);
     if (m.points.empty()) return m;
     // nearest centre point of every sample within the band (splatted discs)
