@@ -566,12 +566,36 @@ int sectorOf(int kx, int kz, int sectors) {
     return static_cast<int>(std::floor(theta / width + 0.5)) % sectors;
 }
 
+/// The period (samples) of the bin of most gradient power |k|²·|F|² among periods below
+/// maxPeriod, 0 when there is none: the ring model's pitch (step 4b). The weight keeps what the
+/// macro median left at long wavelengths from outweighing the texture.
+double dominantPeriod(const Spectrum& s, double maxPeriod) {
+    double best = -1.0, period = 0.0;
+    for (int y = 0; y < s.H; ++y) {
+        const int kz = y <= s.H / 2 ? y : y - s.H;
+        for (int kx = 0; kx < s.Wh; ++kx) {
+            const double fx = static_cast<double>(kx) / s.W, fz = static_cast<double>(kz) / s.H;
+            const double fr = std::hypot(fx, fz);
+            if (!(fr * maxPeriod > 1.0)) continue;
+            const double m = fr * fr * std::norm(s.bins[static_cast<size_t>(y) * s.Wh + kx]);
+            if (m > best) {
+                best = m;
+                period = 1.0 / fr;
+            }
+        }
+    }
+    return period;
+}
+
 /// One notch pass: the periodic texture of d (W×H). With `sectorsOut`, also the texture split
-/// by the orientation of its wave-vector into textureSectors parts (their sum is the texture).
+/// by the orientation of its wave-vector into textureSectors parts (their sum is the texture);
+/// with `periodOut`, d's dominantPeriod below macroWindow/2 (from the same spectrum).
 std::vector<float> notchPass(const std::vector<float>& d, int W, int H, const DefectMapOptions& o,
-                             DefectMap* info, std::vector<std::vector<float>>* sectorsOut) {
+                             DefectMap* info, std::vector<std::vector<float>>* sectorsOut,
+                             double* periodOut) {
     const Padded p = padMap(d, W, H, o.pad, 0.0);
     Spectrum s = forward(p);
+    if (periodOut) *periodOut = dominantPeriod(s, 0.5 * o.macroWindow);
     // the texture alone: the spectrum minus its shrunk version
     Spectrum kept = s;
     const size_t notched = notchTexture(kept, o);
@@ -605,12 +629,13 @@ std::vector<float> notchPass(const std::vector<float>& d, int W, int H, const De
 }
 
 /// Steps 1–3: returns R = h − macro − texture; `macroOut` and `textureOut` (if given) receive
-/// the macro shape and the texture T.
+/// the macro shape and the texture T, `periodOut` the dominant period of h − macro.
 std::vector<float> textureResidual(std::span<const float> h, int W, int H,
                                    const DefectMapOptions& o, DefectMap* info,
                                    std::vector<float>* macroOut = nullptr,
                                    std::vector<float>* textureOut = nullptr,
-                                   std::vector<std::vector<float>>* sectorsOut = nullptr) {
+                                   std::vector<std::vector<float>>* sectorsOut = nullptr,
+                                   double* periodOut = nullptr) {
     const size_t n = h.size();
     std::vector<float> macro(h.begin(), h.end()), d(n), texture;
     for (int pass = 0; pass < o.passes; ++pass) {
@@ -619,7 +644,9 @@ std::vector<float> textureResidual(std::span<const float> h, int W, int H,
             for (size_t k = 0; k < n; ++k) macro[k] = h[k] - texture[k];
         macro = separableMedian(macro, W, H, o.macroWindow);
         for (size_t k = 0; k < n; ++k) d[k] = h[k] - macro[k];
-        texture = notchPass(d, W, H, o, info, pass + 1 == o.passes ? sectorsOut : nullptr);
+        const bool last = pass + 1 == o.passes;
+        texture =
+            notchPass(d, W, H, o, info, last ? sectorsOut : nullptr, last ? periodOut : nullptr);
     }
     if (textureOut) *textureOut = texture;
     for (size_t k = 0; k < n; ++k) texture[k] = d[k] - texture[k];
@@ -728,9 +755,10 @@ double arcCost(const std::vector<float>& d, int W, int H, const RingFit& f, int 
     return cnt ? sum / static_cast<double>(cnt) : std::numeric_limits<double>::infinity();
 }
 
-/// Fits the ring model to d = h − macro (W×H): centre, pitch, hand and the two decision
-/// statistics (header, step 4b).
-RingFit fitRings(const std::vector<float>& d, int W, int H, const DefectMapOptions& o) {
+/// Fits the ring model to d = h − macro (W×H): centre, hand and the two decision statistics
+/// (header, step 4b); `pitch` is d's dominantPeriod, which the notch pass found.
+RingFit fitRings(const std::vector<float>& d, int W, int H, const DefectMapOptions& o,
+                 double pitch) {
     RingFit f;
     f.residual = std::numeric_limits<double>::infinity();
     // structure tensor per 16×16 block: the line through the block along its gradient
@@ -796,28 +824,7 @@ RingFit fitRings(const std::vector<float>& d, int W, int H, const DefectMapOptio
         f.cx = cx;
         f.cz = cz;
     }
-    // the pitch: the period of the padded spectrum's bin of most gradient power |k|²·|F|²
-    // (periods < macroWindow/2; the weight keeps what the macro median left at long
-    // wavelengths from outweighing the texture)
-    {
-        const Padded p = padMap(d, W, H, o.pad, 0.0);
-        const Spectrum s = forward(p);
-        const double maxPeriod = 0.5 * o.macroWindow;
-        double best = -1.0;
-        for (int y = 0; y < s.H; ++y) {
-            const int kz = y <= s.H / 2 ? y : y - s.H;
-            for (int kx = 0; kx < s.Wh; ++kx) {
-                const double fx = static_cast<double>(kx) / s.W, fz = static_cast<double>(kz) / s.H;
-                const double fr = std::hypot(fx, fz);
-                if (!(fr * maxPeriod > 1.0)) continue;
-                const double m = fr * fr * std::norm(s.bins[static_cast<size_t>(y) * s.Wh + kx]);
-                if (m > best) {
-                    best = m;
-                    f.pitch = 1.0 / fr;
-                }
-            }
-        }
-    }
+    f.pitch = pitch;
     const int half = o.ringWindow / 2;
     // the hand: the one that explains more of d where the rings curve most (10–120 samples
     // from the centre; the whole map's grid when too few of those lie on the map)
@@ -870,10 +877,11 @@ RingFit fitRings(const std::vector<float>& d, int W, int H, const DefectMapOptio
 /// A_ring = d − grooveMedian(d) at samples with |A| >= growSigma·σ_A and |A_ring| <=
 /// ringRatio·|A|, no smaller in magnitude than the median of |A| (so σ_A stays as it was).
 void ringLevel(std::span<const float> h, const std::vector<float>& macro, std::vector<float>& A,
-               int W, int H, const DefectMapOptions& o, double floorSigma, DefectMap& info) {
+               int W, int H, const DefectMapOptions& o, double floorSigma, double pitch,
+               DefectMap& info) {
     std::vector<float> d(h.size());
     for (size_t k = 0; k < d.size(); ++k) d[k] = h[k] - macro[k];
-    const RingFit f = fitRings(d, W, H, o);
+    const RingFit f = fitRings(d, W, H, o, pitch);
     info.ringCentreX = f.cx;
     info.ringCentreZ = f.cz;
     info.ringPitch = f.pitch;
@@ -1443,9 +1451,11 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
     std::vector<float> texture;
     std::vector<std::vector<float>> sectors;
     const bool wantTexture = o.energyWindow > 0 && o.textureEnergy;
+    double period = 0.0;  // of h − macro, the ring model's pitch
     std::vector<float> R = textureResidual(
         heights, W, H, o, &r, &macro, wantTexture && o.textureSectors == 1 ? &texture : nullptr,
-        wantTexture && o.textureSectors > 1 ? &sectors : nullptr);
+        wantTexture && o.textureSectors > 1 ? &sectors : nullptr,
+        o.ringWindow > 0 ? &period : nullptr);
     StepModel steps;
     if (o.stepModel) {  // step 4a: the steps of h − T
         std::vector<float> G(n);
@@ -1455,7 +1465,7 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
     }
     std::vector<float> A = separableMedian(R, W, H, o.levelWindow);
     for (size_t k = 0; k < n; ++k) A[k] = R[k] - A[k];
-    if (o.ringWindow > 0) ringLevel(heights, macro, A, W, H, o, floorSigma, r);  // step 4b
+    if (o.ringWindow > 0) ringLevel(heights, macro, A, W, H, o, floorSigma, period, r);  // 4b
     for (size_t k = 0; k < n; ++k) R[k] += macro[k];
     // the edge residual: both axes at once, or (edgeAxes) one per axis, each with its own σ
     std::vector<float> N = separableQuadratic(R, W, H, o.edgeWindow, true, !o.edgeAxes);

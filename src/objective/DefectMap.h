@@ -64,13 +64,12 @@
 //     nearest all of them, least squares weighted by the blocks' coherence², then 6
 //     Cauchy-reweighted rounds (scale 32 samples); it may lie outside the map. `isotropy` =
 //     λ_min/λ_max of Σ w·t·tᵀ (t the lines' normals): ≈ 0 for parallel paths. The pitch p: the
-//     period of the bin of most gradient power |k|²·|F|² (F the FFT of the padded d) among
-//     periods < macroWindow/2.
-//     The arc median at a point: the median of d along the spiral of constant
-//     r − s·p·φ/2π through it, `ringWindow` samples of arc (bilinear), s = ±1 the hand that
-//     leaves the smaller mean |d − arc median| 10–120 samples from c. The decision:
-//     ρ = median |d − arc median| / median |d| over a grid on the map; rings are used when
-//     isotropy ≥ `ringIsotropy` and ρ ≤ `ringResidual`. The ring texture at a sample, P, is
+//     period of the bin of most gradient power |k|²·|F|² (F the spectrum of step 3, taken from its
+//     notch pass) among periods < macroWindow/2. The arc median at a point: the median of d along
+//     the spiral of constant r − s·p·φ/2π through it, `ringWindow` samples of arc (bilinear), s =
+//     ±1 the hand that leaves the smaller mean |d − arc median| 10–120 samples from c. The
+//     decision: ρ = median |d − arc median| / median |d| over a grid on the map; rings are used
+//     when isotropy ≥ `ringIsotropy` and ρ ≤ `ringResidual`. The ring texture at a sample, P, is
 //     the median of the arc medians through it and through the points 3 pitches further out
 //     and in on its radius (the same phase of the spiral on other grooves): a ring-shaped
 //     change of level (a step) differs between them and stays out of P, as does a defect
@@ -126,8 +125,7 @@
 // is marked as a texture change. Parallel over rows and columns with TBB; the result does not
 // depend on the thread count. Memory: about 12 float copies of the map; with textureSectors
 // K > 1, K more and a copy of the half spectrum while they are made; step 4a about 10 more
-// while the steps are found; step 4b one more copy and, while the pitch is found, the padded
-// map and its half spectrum; step 7a 2 more while it runs.
+// while the steps are found; step 4b one more copy; step 7a 2 more while it runs.
 #pragma once
 
 #include <cstdint>
