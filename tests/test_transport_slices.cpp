@@ -24,12 +24,9 @@ namespace {
 
 // 21×21: the width is not a multiple of the 8 lanes, so every image row ends in a short slice.
 std::unique_ptr<Scene> smallScene(int res = 21) {
-    SceneDesc d;
-    d.heightmap.pitch = 0.05;
-    d.material.params.alphaU = 0.15f;
+    SceneDesc d = test::bumpyPartDesc(res, res);
+    d.material.params.alphaU = 0.15f;  // anisotropic
     d.material.params.alphaV = 0.05f;
-    d.camera.width = res;
-    d.camera.height = res;
     const int n = 40;
     return std::make_unique<Scene>(d, n, n, test::bumpyHeightMap(n));
 }
