@@ -110,6 +110,21 @@ inline RunResult runCli(const std::string& args) {
     return runShell(std::string(SL_CLI_PATH) + " " + args);
 }
 
+/// scripts/slurm-precompute SCENE ROWS SHARDS JOBDIR ARGS, then its array's tasks run here one
+/// by one (SLURM_ARRAY_TASK_ID 0 … shards−1): JOBDIR gets the shards and T.shards. The first
+/// failure's result, else the last task's.
+inline RunResult runSlurmPrecompute(const std::string& scene, int rows, int shards,
+                                    const std::string& jobDir, const std::string& args) {
+    RunResult r =
+        runShell("SCRATCHLIGHT=" + std::string(SL_CLI_PATH) + " " + std::string(SL_SOURCE_DIR) +
+                 "/scripts/slurm-precompute " + scene + " " + std::to_string(rows) + " " +
+                 std::to_string(shards) + " " + jobDir + " " + args);
+    for (int k = 0; k < shards && r.exitCode == 0; ++k)
+        r = runShell("SLURM_ARRAY_TASK_ID=" + std::to_string(k) + " bash " + jobDir +
+                     "/precompute.sbatch");
+    return r;
+}
+
 /// A small labelled part in `dir`: a 96×96 ball-end map with three scratches and a chatter half
 /// (part.exr, part-truth.png) and a scene rendering it at 96×96, 4 spp (scene.json). Returns
 /// gen-surface's exit code.

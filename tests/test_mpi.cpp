@@ -95,15 +95,8 @@ TEST_F(Mpi, TwoRanksOnShardsGiveTheOneProcessLight) {
     }
     // Three ranks through scripts/slurm-precompute's jobs (tasks run here by their ids): the
     // three shards' list is the same T, so the same light.
-    r = test::runShell("SCRATCHLIGHT=" + std::string(SL_CLI_PATH) + " " +
-                       std::string(SL_SOURCE_DIR) + "/scripts/slurm-precompute " + scene +
-                       " 64 3 " + d + "job --size 64 --spp 4 --halves");
+    r = test::runSlurmPrecompute(scene, 64, 3, d + "job", "--size 64 --spp 4 --halves");
     ASSERT_EQ(r.exitCode, 0) << r.output;
-    for (int k = 0; k < 3; ++k) {
-        r = test::runShell("SLURM_ARRAY_TASK_ID=" + std::to_string(k) + " bash " + d +
-                           "job/precompute.sbatch");
-        ASSERT_EQ(r.exitCode, 0) << r.output;
-    }
     r = test::runShell("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 MPIRUN='" +
                        std::string(SL_MPIEXEC) + " --oversubscribe' OUT=" + d + "three bash " + d +
                        "job/optimize.sbatch --iterations 30 --no-figures");

@@ -143,15 +143,8 @@ TEST(Shards, SlurmScriptsTasksGiveTheWholeMatrix) {
     test::TempDir dir("shards-slurm");
     const std::string scene = std::string(SL_SOURCE_DIR) + "/scenes/default/scene.json";
     const std::string d = dir.path().string();
-    auto r = test::runShell("SCRATCHLIGHT=" + std::string(SL_CLI_PATH) + " " +
-                            std::string(SL_SOURCE_DIR) + "/scripts/slurm-precompute " + scene +
-                            " 20 3 " + d + "/job --size 20 --spp 4");
+    auto r = test::runSlurmPrecompute(scene, 20, 3, d + "/job", "--size 20 --spp 4");
     ASSERT_EQ(r.exitCode, 0) << r.output;
-    for (int k = 0; k < 3; ++k) {
-        r = test::runShell("SLURM_ARRAY_TASK_ID=" + std::to_string(k) + " bash " + d +
-                           "/job/precompute.sbatch");
-        ASSERT_EQ(r.exitCode, 0) << r.output;
-    }
     ASSERT_EQ(
         test::runCli("precompute " + scene + " --size 20 --spp 4 -o " + d + "/whole.tm").exitCode,
         0);
