@@ -112,12 +112,16 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
                   "auto: samples of the local level's running median (odd)")
         ->capture_default_str();
     c->add_option("--edge-window", m.edgeWindow,
-                  "auto: samples of the edge residual's running mean (odd)")
+                  "auto: samples of the edge residual's quadratic fit (odd)")
         ->capture_default_str();
     c->add_option("--edge-weight", m.edgeWeight, "auto: weight of the edge residual in the score")
         ->capture_default_str();
     c->add_option("--edge-axes", m.edgeAxes,
                   "auto: one edge residual per axis, each in its own robust sigma (true/false)")
+        ->capture_default_str();
+    c->add_option("--edge-robust", m.edgeRobust,
+                  "auto: with --edge-axes, the edge fits leave out the samples that alone seed "
+                  "the map (true/false)")
         ->capture_default_str();
     c->add_option("--seed-sigma", m.seedSigma, "auto: hysteresis seed threshold (robust sigmas)")
         ->capture_default_str();

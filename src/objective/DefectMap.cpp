@@ -342,6 +342,60 @@ std::vector<float> separableQuadratic(const std::vector<float>& img, int W, int 
     return out;
 }
 
+/// The residual of img against its local quadratic fit over w samples along one axis, the fit
+/// taken without the samples whose least-squares residual `ls` exceeds `limit` (step 5,
+/// edgeRobust). Where no sample of the window is left out, or fewer than 4 remain, the
+/// least-squares residual stays.
+std::vector<float> robustQuadraticResidual(const std::vector<float>& img,
+                                           const std::vector<float>& ls, int W, int H, int w,
+                                           bool alongX, double limit) {
+    const int m = w / 2;
+    std::vector<float> out(img.size());
+    auto line = [&](const float* x, const float* r, int n, size_t stride, float* y) {
+        for (int i = 0; i < n; ++i) {
+            const size_t at = static_cast<size_t>(i) * stride;
+            // the normal equations of a + b·t + c·t² over the kept samples
+            double s0 = 0, s1 = 0, s2 = 0, s3 = 0, s4 = 0, v0 = 0, v1 = 0, v2 = 0;
+            int kept = 0;
+            for (int k = -m; k <= m; ++k) {
+                const size_t j = static_cast<size_t>(mirror(i + k, n)) * stride;
+                if (std::abs(r[j]) > limit) continue;
+                const double t = k, t2 = t * t, v = x[j];
+                s0 += 1;
+                s1 += t;
+                s2 += t2;
+                s3 += t2 * t;
+                s4 += t2 * t2;
+                v0 += v;
+                v1 += v * t;
+                v2 += v * t2;
+                ++kept;
+            }
+            const double det =
+                s0 * (s2 * s4 - s3 * s3) - s1 * (s1 * s4 - s3 * s2) + s2 * (s1 * s3 - s2 * s2);
+            if (kept == w || kept < 4 || !(std::abs(det) > 1e-9)) {
+                y[at] = r[at];
+                continue;
+            }
+            // the fit's value at t = 0 (Cramer's rule)
+            const double a =
+                (v0 * (s2 * s4 - s3 * s3) - s1 * (v1 * s4 - s3 * v2) + s2 * (v1 * s3 - s2 * v2)) /
+                det;
+            y[at] = static_cast<float>(x[at] - a);
+        }
+    };
+    if (alongX)
+        tbb::parallel_for(0, H, [&](int y) {
+            const size_t o = static_cast<size_t>(y) * W;
+            line(img.data() + o, ls.data() + o, W, 1, out.data() + o);
+        });
+    else
+        tbb::parallel_for(0, W, [&](int x) {
+            line(img.data() + x, ls.data() + x, H, static_cast<size_t>(W), out.data() + x);
+        });
+    return out;
+}
+
 /// Median of |v| over at most ~4M samples taken at a fixed stride (deterministic).
 double medianAbs(const std::vector<float>& v) {
     const size_t stride = std::max<size_t>(1, v.size() / (size_t{1} << 22));
@@ -1474,6 +1528,13 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
     if (o.edgeAxes) {
         Nz = separableQuadratic(R, W, H, o.edgeWindow, false, true);
         for (size_t k = 0; k < n; ++k) Nz[k] = R[k] - Nz[k];
+    }
+    if (o.edgeRobust && o.edgeAxes) {
+        // step 5: the fits again without the samples that alone would seed the map
+        const double sx = std::max(1.4826 * medianAbs(N), floorSigma);
+        const double sz = std::max(1.4826 * medianAbs(Nz), floorSigma);
+        N = robustQuadraticResidual(R, N, W, H, o.edgeWindow, true, o.seedSigma * sx);
+        Nz = robustQuadraticResidual(R, Nz, W, H, o.edgeWindow, false, o.seedSigma * sz);
     }
     R = {};
     macro = {};

@@ -84,7 +84,14 @@
 //     N_x = (M + R) − its fit along x alone, N_z = the same along z alone. What the texture
 //     model leaves of a directional texture (the flat-end floor's feed marks, 5 samples apart
 //     along the feed) raises the residual along the axis it varies on; a step parallel to the
-//     marks varies on the other axis and is scored against that axis's quieter σ.
+//     marks varies on the other axis and is scored against that axis's quieter σ. With
+//     `edgeRobust` (and edgeAxes) each axis's fit is taken again without the samples of its
+//     window whose least-squares residual is ≥ seedSigma × its σ (1.4826 × median): a least-
+//     squares fit is pulled toward a narrow groove or lip and leaves its neighbours a residual
+//     of the opposite sign, about 0.29 × the depth for a one-sample groove at the default
+//     window, which marked a one-sample halo around every scratch and burr; what alone would
+//     seed the map is not evidence about the surface around it. A sample keeps its least-
+//     squares residual where no sample of its window is left out, or fewer than 4 remain.
 //  6. Scale: σ_A, σ_N = 1.4826 × the median of |A|, |N| (over ≤ 4M samples at a fixed stride),
 //     each at least 1e-3 × 1.4826 × the median of |h − mean h| (so rounding on a noise-free
 //     texture is no anomaly); with `edgeAxes` σ_Nx and σ_Nz the same of |N_x| and |N_z|. The
@@ -168,6 +175,7 @@ struct DefectMapOptions {
     int edgeWindow = 7;         // samples of the edge residual's quadratic fit (odd, >= 5)
     double edgeWeight = 1.0;    // the edge residual's weight in the score (>= 0; 0: off)
     bool edgeAxes = true;       // one edge residual per axis, each with its own σ (step 5)
+    bool edgeRobust = true;     // with edgeAxes: the fits leave out what alone seeds (step 5)
     double seedSigma = 5.5;     // hysteresis: seeds at S >= seedSigma (> 0)
     double growSigma = 2.5;     // hysteresis: grown into S >= growSigma (0 < grow <= seed)
     int border = 40;            // samples at the map's edges never marked (>= 0)
