@@ -80,9 +80,9 @@ GeneratedSurface stepOnlyPart(TestPart part) {
     return generateSurface(spec);
 }
 
-// A flat-end-like floor: step-over ridges along x, `period` rows apart, the outermost half a
-// period from the top and bottom edges (as gen-surface's flat end: passes centred on the map's
-// middle), each a cusp `height` high and 2·halfWidth wide, plus white noise (fixed seed).
+// A flat-end-like floor: step-over ridges along x, `period` rows apart, half a period from
+// the map's middle row (as gen-surface's flat end: passes centred on the middle, ridges where
+// they meet), each a cusp `height` high and 2·halfWidth wide, plus white noise (fixed seed).
 std::vector<float> ridgeLattice(int n, double period, double halfWidth, double height,
                                 double noise) {
     std::mt19937 rng(7);
@@ -335,7 +335,7 @@ TEST(DefectMap, RidgeLatticeLeavesNoCopyInTheLevel) {
     constexpr int n = 320;
     constexpr double period = 85.0;
     const std::vector<float> h = ridgeLattice(n, period, 5.0, 1.0, 0.04);
-    // the row mean of the residual on each ridge's crest row, outermost first
+    // the largest row mean of the residual on a crest row: inner ridges, outermost ridges
     auto crests = [&](bool wiener, double& inner, double& outer) {
         DefectMapOptions o;
         o.levelWiener = wiener;
