@@ -102,6 +102,10 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--notch-grow", m.notchGrow, "auto: see --notch-spread")->capture_default_str();
     c->add_option("--keep-low-bins", m.keepLowBins, "auto: bins around DC never notched")
         ->capture_default_str();
+    c->add_option("--level-wiener", m.levelWiener,
+                  "auto: the score's level takes the notched bins' Wiener estimate, not their "
+                  "background with the texture's phase (true/false)")
+        ->capture_default_str();
     c->add_option("--macro-window", m.macroWindow,
                   "auto: samples of the macro shape's running median (odd)")
         ->capture_default_str();

@@ -504,8 +504,10 @@ std::vector<float> inverse(Spectrum& s, const Padded& p, int W, int H) {
     return r;
 }
 
-/// Step 2's notch on the spectrum in place; returns the number of bins shrunk.
-size_t notchTexture(Spectrum& s, const DefectMapOptions& o) {
+/// Step 3's notch on the spectrum in place; returns the number of bins shrunk. With `wiener`
+/// (the same size as s, zero-filled), each notched bin's F·(B²/|F|² − B/|F|) goes there: the
+/// level's Wiener estimate minus the shrunk bin (header, step 4).
+size_t notchTexture(Spectrum& s, const DefectMapOptions& o, Spectrum* wiener = nullptr) {
     const size_t n = s.bins.size();
     std::vector<float> mag(n);
     for (size_t k = 0; k < n; ++k) mag[k] = std::abs(s.bins[k]);
@@ -602,7 +604,9 @@ size_t notchTexture(Spectrum& s, const DefectMapOptions& o) {
             const size_t k = static_cast<size_t>(y) * s.Wh + kx;
             if (static_cast<double>(kx) * kx + static_cast<double>(kz) * kz <= keep2) continue;
             if (seed[k] || (near2[k] && mag[k] > o.notchGrow * b[k])) {
-                s.bins[k] *= b[k] / mag[k];
+                const float ratio = b[k] / mag[k];
+                if (wiener) wiener->bins[k] = s.bins[k] * (ratio * ratio - ratio);
+                s.bins[k] *= ratio;
                 ++notched;
             }
         }
@@ -643,16 +647,29 @@ double dominantPeriod(const Spectrum& s, double maxPeriod) {
 
 /// One notch pass: the periodic texture of d (W×H). With `sectorsOut`, also the texture split
 /// by the orientation of its wave-vector into textureSectors parts (their sum is the texture);
-/// with `periodOut`, d's dominantPeriod below macroWindow/2 (from the same spectrum).
+/// with `periodOut`, d's dominantPeriod below macroWindow/2 (from the same spectrum); with
+/// `levelDeltaOut` (and levelWiener), the level's Wiener residual minus d − texture (step 4).
 std::vector<float> notchPass(const std::vector<float>& d, int W, int H, const DefectMapOptions& o,
                              DefectMap* info, std::vector<std::vector<float>>* sectorsOut,
-                             double* periodOut) {
+                             double* periodOut, std::vector<float>* levelDeltaOut) {
     const Padded p = padMap(d, W, H, o.pad, 0.0);
     Spectrum s = forward(p);
     if (periodOut) *periodOut = dominantPeriod(s, 0.5 * o.macroWindow);
     // the texture alone: the spectrum minus its shrunk version
     Spectrum kept = s;
-    const size_t notched = notchTexture(kept, o);
+    Spectrum wiener;
+    const bool wantWiener = levelDeltaOut && o.levelWiener;
+    if (wantWiener) {
+        wiener.W = s.W;
+        wiener.H = s.H;
+        wiener.Wh = s.Wh;
+        wiener.bins.assign(s.bins.size(), Complex(0.0f, 0.0f));
+    }
+    const size_t notched = notchTexture(kept, o, wantWiener ? &wiener : nullptr);
+    if (wantWiener) {
+        *levelDeltaOut = inverse(wiener, p, W, H);
+        wiener = {};
+    }
     for (size_t k = 0; k < s.bins.size(); ++k) s.bins[k] -= kept.bins[k];
     kept = {};
     if (info) {
@@ -683,13 +700,15 @@ std::vector<float> notchPass(const std::vector<float>& d, int W, int H, const De
 }
 
 /// Steps 1–3: returns R = h − macro − texture; `macroOut` and `textureOut` (if given) receive
-/// the macro shape and the texture T, `periodOut` the dominant period of h − macro.
+/// the macro shape and the texture T, `periodOut` the dominant period of h − macro,
+/// `levelDeltaOut` (with levelWiener) what step 4 adds to the level for the Wiener estimate.
 std::vector<float> textureResidual(std::span<const float> h, int W, int H,
                                    const DefectMapOptions& o, DefectMap* info,
                                    std::vector<float>* macroOut = nullptr,
                                    std::vector<float>* textureOut = nullptr,
                                    std::vector<std::vector<float>>* sectorsOut = nullptr,
-                                   double* periodOut = nullptr) {
+                                   double* periodOut = nullptr,
+                                   std::vector<float>* levelDeltaOut = nullptr) {
     const size_t n = h.size();
     std::vector<float> macro(h.begin(), h.end()), d(n), texture;
     for (int pass = 0; pass < o.passes; ++pass) {
@@ -699,8 +718,8 @@ std::vector<float> textureResidual(std::span<const float> h, int W, int H,
         macro = separableMedian(macro, W, H, o.macroWindow);
         for (size_t k = 0; k < n; ++k) d[k] = h[k] - macro[k];
         const bool last = pass + 1 == o.passes;
-        texture =
-            notchPass(d, W, H, o, info, last ? sectorsOut : nullptr, last ? periodOut : nullptr);
+        texture = notchPass(d, W, H, o, info, last ? sectorsOut : nullptr,
+                            last ? periodOut : nullptr, last ? levelDeltaOut : nullptr);
     }
     if (textureOut) *textureOut = texture;
     for (size_t k = 0; k < n; ++k) texture[k] = d[k] - texture[k];
@@ -1464,7 +1483,12 @@ std::vector<float> removeTexture(std::span<const float> heights, int width, int 
                                  const DefectMapOptions& options) {
     checkOptions(options);
     checkInput(heights, width, height);
-    return textureResidual(heights, width, height, options, nullptr);
+    std::vector<float> delta;
+    std::vector<float> r =
+        textureResidual(heights, width, height, options, nullptr, nullptr, nullptr, nullptr,
+                        nullptr, options.levelWiener ? &delta : nullptr);
+    for (size_t k = 0; k < delta.size(); ++k) r[k] += delta[k];
+    return r;
 }
 
 DefectMap detectDefects(std::span<const float> heights, int width, int height,
@@ -1505,11 +1529,12 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
     std::vector<float> texture;
     std::vector<std::vector<float>> sectors;
     const bool wantTexture = o.energyWindow > 0 && o.textureEnergy;
-    double period = 0.0;  // of h − macro, the ring model's pitch
+    double period = 0.0;            // of h − macro, the ring model's pitch
+    std::vector<float> levelDelta;  // step 4: the Wiener estimate's level minus A (levelWiener)
     std::vector<float> R = textureResidual(
         heights, W, H, o, &r, &macro, wantTexture && o.textureSectors == 1 ? &texture : nullptr,
         wantTexture && o.textureSectors > 1 ? &sectors : nullptr,
-        o.ringWindow > 0 ? &period : nullptr);
+        o.ringWindow > 0 ? &period : nullptr, o.levelWiener ? &levelDelta : nullptr);
     StepModel steps;
     if (o.stepModel) {  // step 4a: the steps of h − T
         std::vector<float> G(n);
@@ -1539,6 +1564,9 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
     R = {};
     macro = {};
     r.sigmaLevel = 1.4826 * medianAbs(A);
+    // the level's Wiener estimate in the notched bins, for the score and the line valleys; σ_A
+    // above and step 8 below keep the background-magnitude residual
+    for (size_t k = 0; k < levelDelta.size(); ++k) A[k] += levelDelta[k];
     r.sigmaEdge = 1.4826 * medianAbs(N);
     const double sa = std::max(r.sigmaLevel, floorSigma), sn = std::max(r.sigmaEdge, floorSigma);
     const double snz = o.edgeAxes ? std::max(1.4826 * medianAbs(Nz), floorSigma) : 1.0;
@@ -1597,6 +1625,8 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
                 }
             }
         };
+        for (size_t k = 0; k < levelDelta.size(); ++k) A[k] -= levelDelta[k];
+        levelDelta = {};
         markTextureChange(A, o.energyRatio);
         if (o.textureEnergy) {
             if (sectors.empty()) markTextureChange(texture, o.textureEnergyRatio);

@@ -32,6 +32,15 @@
 //     spectrum, cropped: the periodic texture. R = d − T. With passes > 1, step 1 is repeated on
 //     h − T and steps 2–3 on the new d.
 //  4. Level: A = R − the separable running median of R over `levelWindow` samples (x, then z).
+//     With `levelWiener`, the score (step 6) and the line valleys (7a) take A + Δ, Δ = the
+//     inverse FFT of F·(B²/|F|² − B/|F|) over the notched bins: there the level holds the
+//     Wiener estimate F·B²/|F|² of what is not texture instead of B with the texture's phase.
+//     That phase is the texture's, so over a lattice's harmonics the shrunk bins add up to a
+//     faint copy of the lattice (a phase-only reconstruction: about 12 % of a flat-end
+//     step-over ridge, twice that where the lattice meets the map's edges and the padding),
+//     which stands out where σ_A is small (feed marks the notch removes whole); the Wiener
+//     estimate leaves B/|F| of that. σ_A (step 6) and step 8 keep A: the Wiener estimate is
+//     smaller than what it estimates, B is the background's magnitude.
 // 4a. Steps (with `stepModel`): a tool-change step is a sharp jump between two plateaus, which
 //     the notch and the running medians of steps 1 and 4 smear over a band several samples
 //     wide (the level term marks the band; the step itself is its 2-sample ramp). On
@@ -132,7 +141,8 @@
 // is marked as a texture change. Parallel over rows and columns with TBB; the result does not
 // depend on the thread count. Memory: about 12 float copies of the map; with textureSectors
 // K > 1, K more and a copy of the half spectrum while they are made; step 4a about 10 more
-// while the steps are found; step 4b one more copy; step 7a 2 more while it runs.
+// while the steps are found; step 4b one more copy; step 7a 2 more while it runs; with
+// levelWiener one more (Δ) and a copy of the half spectrum while Δ is made.
 #pragma once
 
 #include <cstdint>
@@ -171,6 +181,8 @@ struct DefectMapOptions {
     int notchSpread = 4;        // bins around a notched bin that may join it (>= 0)
     double notchGrow = 1.5;     // ... when |F| > notchGrow·B (0 < grow <= notchRatio)
     int keepLowBins = 2;        // bins around DC never notched (>= 0)
+    bool levelWiener = true;    // step 4: the score's level takes the notched bins' Wiener
+                                // estimate F·B²/|F|², not B with the texture's phase
     int levelWindow = 31;       // samples of the level's running median (odd, >= 3)
     int edgeWindow = 7;         // samples of the edge residual's quadratic fit (odd, >= 5)
     double edgeWeight = 1.0;    // the edge residual's weight in the score (>= 0; 0: off)
@@ -253,7 +265,7 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
 // surface without anomalies: check markedCount() before using it as a region.
 
 /// Steps 1–3 alone: R = h − macro shape − periodic texture (width*height), for figures and
-/// tests.
+/// tests; with levelWiener the notched bins hold their Wiener estimate (R + Δ of step 4).
 std::vector<float> removeTexture(std::span<const float> heights, int width, int height,
                                  const DefectMapOptions& options = {});
 
