@@ -212,6 +212,10 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--ring-ratio", m.ringRatio,
                   "auto: the ring model's level replaces the level when at most this share of it")
         ->capture_default_str();
+    c->add_option("--ring-repass", m.ringRepass,
+                  "auto: where the ring model is used, remove the texture once more with the macro "
+                  "shape of the map minus the texture (true/false)")
+        ->capture_default_str();
     c->add_option("--kernel", m.paper.kernel, "paper: moving-average window, samples")
         ->capture_default_str();
     c->add_option("--patch", m.paper.patch, "paper: patch side, samples")->capture_default_str();

@@ -702,22 +702,27 @@ std::vector<float> notchPass(const std::vector<float>& d, int W, int H, const De
 /// Steps 1–3: returns R = h − macro − texture; `macroOut` and `textureOut` (if given) receive
 /// the macro shape and the texture T, `periodOut` the dominant period of h − macro,
 /// `levelDeltaOut` (with levelWiener) what step 4 adds to the level for the Wiener estimate.
+/// With `prior` (a texture found before), `passes` passes (default o.passes) all start from h
+/// minus the texture found so far.
 std::vector<float> textureResidual(std::span<const float> h, int W, int H,
                                    const DefectMapOptions& o, DefectMap* info,
                                    std::vector<float>* macroOut = nullptr,
                                    std::vector<float>* textureOut = nullptr,
                                    std::vector<std::vector<float>>* sectorsOut = nullptr,
                                    double* periodOut = nullptr,
-                                   std::vector<float>* levelDeltaOut = nullptr) {
+                                   std::vector<float>* levelDeltaOut = nullptr,
+                                   std::vector<float>* prior = nullptr, int passes = 0) {
     const size_t n = h.size();
+    if (passes <= 0) passes = o.passes;
     std::vector<float> macro(h.begin(), h.end()), d(n), texture;
-    for (int pass = 0; pass < o.passes; ++pass) {
+    if (prior) texture = std::move(*prior);
+    for (int pass = 0; pass < passes; ++pass) {
         // the macro shape: the separable running median of h minus the texture found so far
-        if (pass > 0)
+        if (!texture.empty())
             for (size_t k = 0; k < n; ++k) macro[k] = h[k] - texture[k];
         macro = separableMedian(macro, W, H, o.macroWindow);
         for (size_t k = 0; k < n; ++k) d[k] = h[k] - macro[k];
-        const bool last = pass + 1 == o.passes;
+        const bool last = pass + 1 == passes;
         texture = notchPass(d, W, H, o, info, last ? sectorsOut : nullptr,
                             last ? periodOut : nullptr, last ? levelDeltaOut : nullptr);
     }
@@ -946,12 +951,9 @@ RingFit fitRings(const std::vector<float>& d, int W, int H, const DefectMapOptio
     return f;
 }
 
-/// Step 4b: fits the ring model to d = h − macro; where it is used, A (the level) becomes
-/// A_ring = d − grooveMedian(d) at samples with |A| >= growSigma·σ_A and |A_ring| <=
-/// ringRatio·|A|, no smaller in magnitude than the median of |A| (so σ_A stays as it was).
-void ringLevel(std::span<const float> h, const std::vector<float>& macro, std::vector<float>& A,
-               int W, int H, const DefectMapOptions& o, double floorSigma, double pitch,
-               DefectMap& info) {
+/// Step 4b's fit and decision on d = h − macro (fitRings); fills info's ring fields.
+RingFit ringFit(std::span<const float> h, const std::vector<float>& macro, int W, int H,
+                const DefectMapOptions& o, double pitch, DefectMap& info) {
     std::vector<float> d(h.size());
     for (size_t k = 0; k < d.size(); ++k) d[k] = h[k] - macro[k];
     const RingFit f = fitRings(d, W, H, o, pitch);
@@ -962,7 +964,18 @@ void ringLevel(std::span<const float> h, const std::vector<float>& macro, std::v
     info.ringIsotropy = f.isotropy;
     info.ringResidual = f.residual;
     info.ringUsed = f.pitch > 0.0 && f.isotropy >= o.ringIsotropy && f.residual <= o.ringResidual;
+    return f;
+}
+
+/// Step 4b where the rings are used (info.ringUsed): A (the level) becomes A_ring = d −
+/// grooveMedian(d), d = h − macro, at samples with |A| >= growSigma·σ_A and |A_ring| <=
+/// ringRatio·|A|, no smaller in magnitude than the median of |A| (so σ_A stays as it was).
+void ringLevel(std::span<const float> h, const std::vector<float>& macro, std::vector<float>& A,
+               int W, int H, const DefectMapOptions& o, double floorSigma, const RingFit& f,
+               DefectMap& info) {
     if (!info.ringUsed) return;
+    std::vector<float> d(h.size());
+    for (size_t k = 0; k < d.size(); ++k) d[k] = h[k] - macro[k];
     const float medA = static_cast<float>(medianAbs(A));
     const float limit = static_cast<float>(o.growSigma * std::max(1.4826 * medA, floorSigma));
     const float ratio = static_cast<float>(o.ringRatio);
@@ -1535,6 +1548,24 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
         heights, W, H, o, &r, &macro, wantTexture && o.textureSectors == 1 ? &texture : nullptr,
         wantTexture && o.textureSectors > 1 ? &sectors : nullptr,
         o.ringWindow > 0 ? &period : nullptr, o.levelWiener ? &levelDelta : nullptr);
+    RingFit rings;
+    if (o.ringWindow > 0) {
+        rings = ringFit(heights, macro, W, H, o, period, r);
+        if (r.ringUsed && o.ringRepass) {
+            // steps 1–3 once more, the macro shape the running median of h − T: the texture
+            // left the first macro shape biased where its window straddles a corner of the
+            // macro shape (the pocket wall's foot and top)
+            std::vector<float> T(n);
+            for (size_t k = 0; k < n; ++k) T[k] = heights[k] - macro[k] - R[k];
+            texture.clear();
+            sectors.clear();
+            levelDelta.clear();
+            R = textureResidual(heights, W, H, o, &r, &macro,
+                                wantTexture && o.textureSectors == 1 ? &texture : nullptr,
+                                wantTexture && o.textureSectors > 1 ? &sectors : nullptr, nullptr,
+                                o.levelWiener ? &levelDelta : nullptr, &T, 1);
+        }
+    }
     StepModel steps;
     if (o.stepModel) {  // step 4a: the steps of h − T
         std::vector<float> G(n);
@@ -1544,7 +1575,7 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
     }
     std::vector<float> A = separableMedian(R, W, H, o.levelWindow);
     for (size_t k = 0; k < n; ++k) A[k] = R[k] - A[k];
-    if (o.ringWindow > 0) ringLevel(heights, macro, A, W, H, o, floorSigma, period, r);  // 4b
+    if (o.ringWindow > 0) ringLevel(heights, macro, A, W, H, o, floorSigma, rings, r);  // 4b
     for (size_t k = 0; k < n; ++k) R[k] += macro[k];
     // the edge residual: both axes at once, or (edgeAxes) one per axis, each with its own σ
     std::vector<float> N = separableQuadratic(R, W, H, o.edgeWindow, true, !o.edgeAxes);

@@ -87,6 +87,13 @@
 //     (no smaller in magnitude than the median of |A|, so σ_A of step 6 is unchanged): the
 //     texture the notch left where the rings curve strongly (around the centre) and where
 //     they meet the padding is explained; a dent, a scratch across the rings, a step are not.
+//     With `ringRepass`, where the rings are used, steps 1–3 are done once more (before 4a) with
+//     the macro shape the running median of h − T (T of the first pass; the fit is kept, A is
+//     taken from the new R and d): where the macro window straddles a corner of the macro
+//     shape (a pocket wall's foot or top) the wall's samples all lie on one side of the
+//     texture beside it, so the median of h is a high (low) quantile of that texture, not its
+//     middle, and d keeps a band of that bias along the corner which the level term marks (the
+//     turned part's wall foot: 0.8 µm, 3.4–4σ_A). h − T has little texture to take a quantile of.
 //  5. Edges: N = (M + R) − its separable quadratic Savitzky–Golay fit over `edgeWindow` samples
 //     (x, then z; borders mirrored): a step or a narrow groove, but not a curved wall whose
 //     curvature changes little over the window. With `edgeAxes`, two residuals instead:
@@ -141,8 +148,9 @@
 // is marked as a texture change. Parallel over rows and columns with TBB; the result does not
 // depend on the thread count. Memory: about 12 float copies of the map; with textureSectors
 // K > 1, K more and a copy of the half spectrum while they are made; step 4a about 10 more
-// while the steps are found; step 4b one more copy; step 7a 2 more while it runs; with
-// levelWiener one more (Δ) and a copy of the half spectrum while Δ is made.
+// while the steps are found; step 4b one more copy (two while the repass runs); step 7a 2
+// more while it runs; with levelWiener one more (Δ) and a copy of the half spectrum while Δ is
+// made.
 #pragma once
 
 #include <cstdint>
@@ -217,6 +225,8 @@ struct DefectMapOptions {
     double ringResidual = 0.5;        // ... and ρ <= this (> 0)
     double ringRatio = 0.5;           // step 4b: A_ring replaces A when |A_ring| <= this·|A|
                                       // (in (0, 1])
+    bool ringRepass = true;           // step 4b: where the rings are used, steps 1–3 once
+                                      // more with the macro shape of h − T
     // auto, step 7a (the line-valley score)
     int lineLength = 15;         // samples of the segment (odd, >= 3; 0 switches step 7a off)
     int lineOrientations = 16;   // its directions over 180° (1..64)
