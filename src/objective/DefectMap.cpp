@@ -1529,9 +1529,7 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
                 separableMedian(pooled, W2, H2, std::max(3, (o.energyWindow / 2) | 1));
             const double medE = std::max(medianAbs(E2), floorSigma);
             if (!(medE > 0.0)) return;
-            auto energy = [&](int x, int y) {
-                return E2[static_cast<size_t>(y / 2) * W2 + x / 2];
-            };
+            auto energy = [&](int x, int y) { return E2[static_cast<size_t>(y / 2) * W2 + x / 2]; };
             const bool grow = o.energyGrowBorder && o.border > 0;
             std::vector<uint8_t> own(grow ? n : 0, 0);  // this test's marks
             for (size_t k = 0; k < n; ++k) {
@@ -1597,8 +1595,7 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
         markTextureChange(A, o.energyRatio, true);
         if (o.textureEnergy) {
             if (sectors.empty()) markTextureChange(texture, o.textureEnergyRatio, false);
-            for (std::vector<float>& t : sectors)
-                markTextureChange(t, o.textureEnergyRatio, false);
+            for (std::vector<float>& t : sectors) markTextureChange(t, o.textureEnergyRatio, false);
         }
     }
     r.seconds = clock.seconds();
