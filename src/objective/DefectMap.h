@@ -134,7 +134,8 @@
 // is marked as a texture change. Parallel over rows and columns with TBB; the result does not
 // depend on the thread count. Memory: about 12 float copies of the map; with textureSectors
 // K > 1, K more and a copy of the half spectrum while they are made; step 4a about 10 more
-// while the steps are found; step 4b one more copy; step 7a 2 more while it runs.
+// while the steps are found; step 4b one more copy; step 7a 2 more while it runs; step 8 with
+// energyGrowBorder a byte per sample while each test runs.
 #pragma once
 
 #include <cstdint>
