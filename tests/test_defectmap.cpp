@@ -3,10 +3,11 @@
 // a groove on it is found, a narrow one without a halo (robust edge fits), a faint one by the
 // line-valley score, the flat-end part's step along its feed marks is found (per-axis edge
 // residual), a chatter band along the path under stronger scallops is found in its own sector
-// of the texture, a turned spiral's centre is explained by the ring model, the turned part's
-// wall corners by its repass, invariance to h → a·h + b, the step model marks a tool-change
-// step's ramp and not the running medians' smear of it, the scoring definitions on a hand-made
-// case, bad input, the registry and the command's files.
+// of the texture and grows into the border where it crosses the map's edge, a turned spiral's
+// centre is explained by the ring model, the turned part's wall corners by its repass,
+// invariance to h → a·h + b, the step model marks a tool-change step's ramp and not the running
+// medians' smear of it, the scoring definitions on a hand-made case, bad input, the registry and
+// the command's files.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -301,6 +302,74 @@ TEST(DefectMap, ChatterBandAlongThePathIsFoundInItsOwnSector) {
     EXPECT_GE(s.overall.recall, 0.8);
     EXPECT_GE(s.overall.precision, 0.7);
     EXPECT_LT(whole.overall.recall, 0.3);
+}
+
+// Step 8 at the map's edges. White noise (what the notch leaves in A; the turned part's chatter
+// bands lie in A) with a band of 4× stronger noise down columns 48–79 of 128, crossing the top
+// and bottom edges, and 3× noise along the outer 10 rows at the top and bottom (as the notch's
+// leftover where a lattice meets the padding: along the whole edge). With energyGrowBorder the
+// band's marks grow outward to the map's edge; the strips' E passes ratio × median(E) (a map
+// without a border marks them) but not the line excess added in the border, so no sample of the
+// border away from the band is marked. Without it the border is never marked.
+TEST(DefectMap, TextureChangeGrowsIntoTheBorderAlongABandOnly) {
+    constexpr int n = 128, x0 = 48, x1 = 80, border = 16;
+    std::mt19937 rng(11);
+    std::normal_distribution<double> nd(0.0, 0.01);
+    std::vector<float> h(static_cast<size_t>(n) * n);
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            const bool band = x >= x0 && x < x1, strip = y < 10 || y >= n - 10;
+            const double a = band ? (strip ? 6.9 : 6.0) : (strip ? 3.5 : 1.0);
+            h[static_cast<size_t>(y) * n + x] = static_cast<float>(a * nd(rng));
+        }
+    DefectMapOptions o;
+    o.border = border;
+    o.energyWindow = 15;
+    o.lineLength = 0;
+    o.stepModel = false;
+    o.ringWindow = 0;
+    ASSERT_TRUE(o.energyGrowBorder);
+    auto inBorder = [&](int x, int y) {
+        return x < border || x >= n - border || y < border || y >= n - border;
+    };
+    // in the border: the band's samples marked, and the samples more than `border` columns
+    // from the band marked
+    auto count = [&](const DefectMap& m, size_t& bandHit, size_t& bandAll, size_t& farHit) {
+        bandHit = bandAll = farHit = 0;
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                if (!inBorder(x, y)) continue;
+                const bool marked = m.map[static_cast<size_t>(y) * n + x] != 0;
+                if (x >= x0 && x < x1) {
+                    ++bandAll;
+                    bandHit += marked;
+                } else if (x < x0 - border || x >= x1 + border) {
+                    farHit += marked;
+                }
+            }
+    };
+    size_t hit = 0, all = 0, far = 0;
+    count(detectDefects(h, n, n, o), hit, all, far);
+    DefectMapOptions off = o;
+    off.energyGrowBorder = false;
+    size_t hitOff = 0, allOff = 0, farOff = 0;
+    count(detectDefects(h, n, n, off), hitOff, allOff, farOff);
+    DefectMapOptions none = o;  // no border: the strips' own E passes the plain threshold
+    none.border = 0;
+    const DefectMap plain = detectDefects(h, n, n, none);
+    size_t stripFar = 0;
+    for (int y = 0; y < 10; ++y)
+        for (int x = 0; x < x0 - border; ++x)
+            stripFar += plain.map[static_cast<size_t>(y) * n + x] != 0;
+    std::printf(
+        "border: band %zu of %zu marked (off: %zu), far %zu (off: %zu); without a border "
+        "%zu of %d strip samples marked\n",
+        hit, all, hitOff, far, farOff, stripFar, 10 * (x0 - border));
+    EXPECT_GE(static_cast<double>(hit), 0.9 * static_cast<double>(all));
+    EXPECT_EQ(far, 0u);
+    EXPECT_EQ(hitOff, 0u);
+    EXPECT_EQ(farOff, 0u);
+    EXPECT_GE(stripFar, static_cast<size_t>(5 * (x0 - border)));
 }
 
 // A face-turned texture: a cosine groove profile along the Archimedean spiral of pitch 10

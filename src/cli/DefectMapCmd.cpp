@@ -156,6 +156,10 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--energy-ratio", m.energyRatio,
                   "auto: local amplitude over its median that marks a texture change")
         ->capture_default_str();
+    c->add_option("--energy-grow-border", m.energyGrowBorder,
+                  "auto: texture-change marks grow outward into the --border samples where the "
+                  "local amplitude stays high (true/false)")
+        ->capture_default_str();
     c->add_option("--texture-energy", m.textureEnergy,
                   "auto: also mark where the texture's own local amplitude is energy-ratio x its "
                   "median (true/false)")

@@ -138,6 +138,15 @@
 //     into K sectors of π/K (sector 0 centred on the k_x axis; their sum is T) and each part is
 //     tested against its own median: a chatter band varying along the path stands out in its
 //     sector even where the scallops across the paths, in another, are stronger than it.
+//     With `energyGrowBorder`, each test's marks then grow outward into the border, layer by
+//     layer: a sample at distance j from the map's nearest edge (j < border) joins when an
+//     8-neighbour at distance j + 1 is marked by the same test and its own E passes; for |A| the
+//     threshold there is raised by the excess of the median of E along the sample's pooled row
+//     (top and bottom border; column for left and right, the larger in a corner) over
+//     median(E). A band crossing the map's edge is then marked up to it, while the border alone
+//     marks nothing: the notch's leftover at the edges lies in A (on the ball-end part, E of
+//     |A| is 1.5–2.2× median(E) along the outer rows, its peaks above 3×), as a function of the
+//     distance to the edge, nearly constant along it; T does not carry it.
 // Every threshold is relative to σ or to median(E), so the map is invariant to h → a·h + b
 // (a > 0) up to rounding, and for a < 0 except for step 7a, which looks for grooves (a < 0
 // turns them into ridges); a constant map marks nothing. A confined region of different texture
@@ -150,7 +159,7 @@
 // K > 1, K more and a copy of the half spectrum while they are made; step 4a about 10 more
 // while the steps are found; step 4b one more copy (two while the repass runs); step 7a 2
 // more while it runs; with levelWiener one more (Δ) and a copy of the half spectrum while Δ is
-// made.
+// made; step 8 with energyGrowBorder a byte per sample while each test runs.
 #pragma once
 
 #include <cstdint>
@@ -207,6 +216,7 @@ struct DefectMapOptions {
     int textureSectors = 2;           // ... on T split into this many orientation sectors of
                                       // its spectrum, each against its own median (1: T whole)
     double energyRatio = 2.0;         // E >= energyRatio·median(E) is a texture change (> 1)
+    bool energyGrowBorder = true;     // step 8's marks grow outward into the border
     bool stepModel = true;            // step 4a: find sharp steps, mark their ramps alone
     int stepWindow = 11;              // ... 2m+1: each side's 2m samples (odd, >= 3)
     double stepSigma = 2.5;           // ... a centre point's Z (> 0)
