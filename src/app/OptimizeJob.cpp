@@ -215,6 +215,10 @@ struct Plan {
     OptimizerMethod requested = OptimizerMethod::Lbfgs;  // the name the results carry
     bool blackBox = false;                               // gradients through the renderer
     bool tmInput = false;
+    /// Noise-aware training (app/TrainingNoise.h): `validate` traces the validation estimate
+    /// (the gap and the self-check need it); `noise.adapt` raises the training spp.
+    bool validate = false;
+    TrainingNoiseOptions noise;
     const Communicator* ranks = nullptr;  // MPI ranks holding shards of T (null: one process)
     bool writes() const { return !ranks || ranks->root(); }  // this process writes OUTDIR
     std::filesystem::path cacheDir;
@@ -245,6 +249,17 @@ Plan plan(const OptimizeJobOptions& options) {
         if (o.starts.empty()) o.starts = {parseInitialState("const:0.5")};
     }
     o.optimizer.method = row.runs;
+    if (p.requested != OptimizerMethod::PaperLoop && row.gradient == GradientSource::Renderer) {
+        // A black box minimizes eq. 2 through the renderer (optimize/BlackBox.h RenderLoss): the
+        // run's loss is that objective, and nothing else is reported as its loss.
+        if (o.objectiveKind && *o.objectiveKind != ObjectiveKind::Paper)
+            throw inputError(option("objective") + " " + objectiveKindName(*o.objectiveKind),
+                             std::string("the black-box optimizer ") + row.name +
+                                 " minimizes the paper's eq. 2 through the renderer",
+                             "drop " + option("objective") +
+                                 ", or optimize on T (e.g. the default optimizer)");
+        o.objectiveKind = ObjectiveKind::Paper;
+    }
     if (o.starts.empty())
         for (const std::string& spec : optimizeDefaults().starts)
             o.starts.push_back(parseInitialState(spec));
@@ -276,6 +291,19 @@ Plan plan(const OptimizeJobOptions& options) {
                          "needs independent estimates of T traced from the scene",
                          "pass SCENE.json instead of the .tm, or " + option("planes") + " 1");
     p.cacheDir = cacheDirectory(o.cache);
+    // Noise-aware training: spp auto (the default) adapts; a given spp is measured and kept.
+    p.noise.maxGap = o.precompute.sppTolerance;
+    p.noise.maxSpp = o.noiseMaxSpp;
+    if (!(p.noise.maxGap > 0 && p.noise.maxGap < 1))
+        throw inputError(option("tolerance"), "is " + formatNumber(p.noise.maxGap, 3),
+                         "use a relative train/validation gap in (0, 1), e.g. 0.05");
+    if (p.noise.maxSpp < 1) throw inputError(option("max-spp"), "must be >= 1");
+    p.noise.adapt = !p.tmInput && (o.precompute.autoSpp || !o.precompute.spp);
+    o.precompute.autoSpp = false;  // the rule replaces the gradient-noise pilot here
+    const bool distributed = o.ranks && o.ranks->distributed();
+    p.validate = !distributed && p.requested != OptimizerMethod::PaperLoop &&
+                 (o.selfCheck || !p.blackBox);
+    if (p.blackBox || o.planes > 1 || !p.validate) p.noise.adapt = false;
     if (o.ranks && o.ranks->distributed()) {
         p.ranks = o.ranks;
         const std::string over = "over " + std::to_string(p.ranks->size()) + " MPI ranks";
@@ -318,10 +346,15 @@ struct Inputs {
     std::vector<uint8_t> regionLabels;  // image space, 0 = none
     std::vector<RegionLabel> regionLegend;
     std::string regionSource;  // where the regions come from ("" = none)
+    /// The training trace's resolved options and seed (what the validation estimate repeats
+    /// with its own seed); unset for a .tm.
+    std::optional<PrecomputeOptions> trained;
+    uint64_t trainingSeed = 0;
 };
 
-/// Stage 1: the scene and the training estimates of T (traced or cached, or the .tm).
-void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
+/// Stage 1: the scene and the training estimates of T (traced or cached, or the .tm); `spp`:
+/// the noise-aware rule's choice (app/TrainingNoise.h), over any other (0: none).
+void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp) {
     const OptimizeJobOptions& o = p.o;
     // The objective: as given, else the defaults' (OptimizeDefaults): the defects objective when
     // the defects are named, the noise-unbiased one otherwise, eq. 2 for a .tm without halves.
@@ -345,7 +378,7 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
         job.transport.secondsTotal = clock.seconds();
         if (!o.objectiveKind && job.transport.file.matrix.planes == 2) in.kind = byDefault;
     } else {
-        in.scene = loadScene(o.input, o.sceneOverrides);
+        if (!in.scene) in.scene = loadScene(o.input, o.sceneOverrides);
         PrecomputeOptions pre = o.precompute;
         pre.rgb = o.rgb;
         if (in.onHalves()) pre.sampleSets = 2;
@@ -354,30 +387,23 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
             throw inputError(option("trace-mask-only"), "needs a mask to trace",
                              "add " + option("mask") + " FILE or " + option("mask") +
                                  " scratch, or drop it (the whole part is traced)");
-        // The loss mask's pixels before T exists (empty: the whole part), when a trace needs them.
-        std::vector<uint8_t> region;
-        if (o.traceMaskOnly || pre.autoSpp) region = lossMaskRegion(o.mask, *in.scene, o.scratch);
-        if (o.traceMaskOnly) pre.pixels = region;
-        auto spp = resolveSpp(*in.scene, pre, region, p.cacheDir);
-        // eq. 2 rewards noise: without a given spp it trains at no fewer than paperMinSpp (the
-        // paper's own loop keeps the scene's spp). spp auto measures the gradient's noise, not
-        // that bias, so it keeps the floor too.
+        // The loss mask's pixels before T exists, when only they are traced.
+        if (o.traceMaskOnly) pre.pixels = lossMaskRegion(o.mask, *in.scene, o.scratch);
+        // eq. 2 rewards noise: without a given spp it starts at no fewer than paperMinSpp (the
+        // paper's own loop and the black boxes keep the scene's spp); the noise-aware rule
+        // then measures what is left.
         const int minSpp = optimizeDefaults().paperMinSpp;
-        if (in.kind == ObjectiveKind::Paper && p.requested != OptimizerMethod::PaperLoop) {
-            if (!pre.spp) {
-                pre.spp = std::max(in.scene->desc.render.spp, minSpp);
-            } else if (spp && *pre.spp < minSpp) {
-                pre.spp = minSpp;
-                spp->spp = minSpp;
-                spp->reason += "; raised to " + std::to_string(minSpp) +
-                               " spp, eq. 2's floor (it rewards noise)";
-            }
-        }
+        if (in.kind == ObjectiveKind::Paper && p.requested != OptimizerMethod::PaperLoop &&
+            !p.blackBox && !pre.spp)
+            pre.spp = std::max(in.scene->desc.render.spp, minSpp);
+        if (spp > 0) pre.spp = spp;
         std::vector<TransportSource> set =
             transportSetForScene(*in.scene, pre, o.planes, p.cacheDir);
         job.transport = std::move(set.front());
         job.transport.autoDepth = depth;
-        job.transport.autoSpp = spp;
+        if (!pre.spp) pre.spp = job.transport.file.provenance.spp;
+        in.trained = pre;
+        in.trainingSeed = job.transport.file.provenance.seed;
         for (size_t k = 1; k < set.size(); ++k) job.extraPlanes.push_back(std::move(set[k]));
     }
     const TransportMatrix& t = job.transport.file.matrix;
@@ -438,6 +464,31 @@ void loadHeldOut(const Plan& p, const Inputs& in, OptimizeJobSummary& job) {
     if (hs >= ts && hs < ts + static_cast<uint64_t>(o.planes))
         throw inputError(option("seed"), "the training seed range overlaps the judge's seed",
                          "use another " + option("seed"));
+}
+
+/// Stage 2b: the validation estimate (app/TrainingNoise.h): the training trace again with its
+/// own seed, two sample sets; for a .tm, T's recorded spp and path length on its scene.
+void loadValidation(const Plan& p, const Inputs& in, OptimizeJobSummary& job) {
+    job.validation.reset();
+    if (!p.validate) return;
+    if (!in.scene) {
+        spdlog::info(
+            "no validation estimate: the transport matrix records no scene to trace it from, so "
+            "E* is neither checked for over-fitting nor against the references");
+        return;
+    }
+    PrecomputeOptions v;
+    uint64_t seed = in.trainingSeed;
+    if (in.trained) {
+        v = *in.trained;
+    } else {
+        const TransportProvenance& prov = job.transport.file.provenance;
+        v.spp = prov.spp;
+        v.maxDepth = prov.maxDepth;
+        v.rgb = job.transport.file.matrix.channels == 3;
+        seed = prov.seed;
+    }
+    job.validation = validationEstimate(*in.scene, v, seed, p.cacheDir);
 }
 
 RegionSpec defectRegion(const OptimizeJobOptions& o) {
@@ -574,7 +625,9 @@ constexpr const char* kLossCsvHeader =
 /// One λ's optimization: E* and loss.csv's rows.
 struct LambdaResult {
     OptimizeRun run;
-    std::vector<double> e;
+    std::vector<double> e;  // the answer (app/Answer.h): E*, or the reference that beat it
+    std::vector<double> optimizedE;  // E* when the answer is a reference (else empty)
+    std::vector<std::vector<double>> startResults;  // every start's E (multistart)
     std::vector<std::string> rows;
     LossParts lampTraining, paperTraining;  // the lamp's and the paper's light on T at λ
 };
@@ -702,6 +755,10 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
             run.optimizer = minimizeBlackBox(renderLoss, res.e, opt, bb);
             run.optimizer.settings += "; renderer " + external.name();
         }
+        run.lossThrough = o.renderer == RendererKind::Builtin
+                              ? "our renderer (" + std::to_string(ro.spp) + " spp)"
+                              : std::string("the renderer ") +
+                                    registryRow(rendererKindTable(), o.renderer).name;
     } else {
         si.callback = callback;
         SearchOptions so;
@@ -718,10 +775,22 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
         run.optimizer = sr.optimizer;
         run.start = sr.start;
         run.startLosses = sr.startLosses;
+        res.startResults = std::move(sr.startResults);
     }
     run.optimizer.method = methodName(p.requested);
     live.close();
     run.final = loss.evaluate(res.e, {});
+    if (p.blackBox) {
+        // The loss the black box minimized, through its renderer (not eq. 2 on our T).
+        run.initial = LossParts{};
+        run.initial.total = run.optimizer.initialLoss;
+        run.final = LossParts{};
+        run.final.total = run.optimizer.finalLoss;
+    }
+    if (job.validation) {
+        const ObjectiveOnT v = objectiveOnT(in.kind, job.validation->file.matrix, si, oo);
+        run.validationFinal = v.loss->evaluate(res.e, {});
+    }
     if (scorer) {
         run.heldFinal = scorer->score(res.e);
         // The last row always carries the held-out score of the returned E.
@@ -735,19 +804,68 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
     }
     res.lampTraining = loss.evaluate(in.lampE, {});
     res.paperTraining = loss.evaluate(in.paperE, {});
-    if (job.heldOut) {  // the judge on the held-out estimate, at this run's λ
+    spdlog::info("lambda {}: {}", lambda, run.optimizer.briefReport());
+    return res;
+}
+
+/// The objective options of a λ run.
+ObjectiveOptions objectiveAt(const Plan& p, double lambda) {
+    ObjectiveOptions oo = p.o.objective;
+    oo.lambda = lambda;
+    return oo;
+}
+
+/// Stage 4b: the self-checked answer (app/Answer.h) on the validation estimate: E*, every
+/// other start's result and the references; a reference that wins becomes the answer and E*
+/// is kept beside it.
+void checkAnswer(const Plan& p, const Inputs& in, const OptimizeJobSummary& job, LambdaResult& r) {
+    if (!job.validation || !p.o.selfCheck) return;
+    JudgeOptions jo;
+    jo.objective = objectiveAt(p, r.run.lambda);
+    jo.rgb = p.o.rgb;
+    const Judge validation(*job.validation, jo, in.regionLabels, in.regionLegend);
+    std::vector<AnswerCandidate> candidates;
+    candidates.push_back({"optimized", CandidateKind::Optimized, r.e});
+    for (size_t k = 0; k < r.startResults.size(); ++k)
+        if (p.o.starts[k].spec != r.run.start)
+            candidates.push_back(
+                {"optimized from " + p.o.starts[k].spec, CandidateKind::Start, r.startResults[k]});
+    candidates.push_back({in.lampName, CandidateKind::Reference, in.lampE});
+    candidates.push_back({"uniform-0.5", CandidateKind::Reference,
+                          std::vector<double>(in.lampE.size(), 0.5)});
+    candidates.push_back({"paper's light", CandidateKind::Reference, in.paperE});
+    AnswerChoice choice = chooseAnswer(validation, std::move(candidates));
+    const ScoredCandidate& a = choice.answer();
+    if (choice.chosen != 0) {
+        r.optimizedE = r.e;
+        r.e = a.candidate.e;
+    }
+    spdlog::info("lambda {}: answer: {}", r.run.lambda, choice.reason);
+    r.run.answer = std::move(choice);
+}
+
+/// Stage 4c: the judge's scores (the held-out estimate, at this run's λ) of the answer, the
+/// user's lamp, the paper's light and, when a reference is the answer, E*; the warnings.
+void judgeRun(const Plan& p, const Inputs& in, const OptimizeJobSummary& job, LambdaResult& r) {
+    OptimizeRun& run = r.run;
+    if (job.heldOut) {
         JudgeOptions jo;
-        jo.objective = oo;
-        jo.rgb = o.rgb;
+        jo.objective = objectiveAt(p, run.lambda);
+        jo.rgb = p.o.rgb;
         const Judge judge(*job.heldOut, jo, in.regionLabels, in.regionLegend);
-        run.judged = judge.score(res.e, run.dir.filename().string());
+        run.judged = judge.score(r.e, run.dir.filename().string());
         run.judgedLamp = judge.score(in.lampE, "lamp");
         run.judgedPaper = judge.score(in.paperE, "paper");
+        if (!r.optimizedE.empty()) run.judgedOptimized = judge.score(r.optimizedE, "optimized");
     }
-    spdlog::info("lambda {}: {}", lambda, run.optimizer.briefReport());
-    run.warnings = resultWarnings(run, res.e);
-    for (const std::string& w : run.warnings) spdlog::warn("lambda {}: {}", lambda, w);
-    return res;
+    run.warnings = resultWarnings(run, r.optimizedE.empty() ? r.e : r.optimizedE);
+    if (run.answer && run.answer->referenceWon())
+        run.warnings.insert(run.warnings.begin(),
+                            "the answer is " + run.answer->answer().candidate.name +
+                                ", not the optimized light: " + run.answer->reason);
+    if (run.noise.rounds.size() && !run.noise.met)
+        run.warnings.push_back("training noise: " + run.noise.reason);
+    for (const std::string& w : run.warnings) spdlog::warn("lambda {}: {}", run.lambda, w);
 }
 
 /// Luminance of E per texel (gray E as it is).
@@ -866,6 +984,8 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     s["improved"] = run.final.total < run.initial.total;
     s["warnings"] = run.warnings;
     s["interrupted"] = run.interrupted;
+    // initial/final: the objective the optimizer minimized, through what it minimized it.
+    s["loss_through"] = run.lossThrough;
     s["initial_loss"] = run.initial.total;
     s["final_loss"] = run.final.total;
     s["initial"] = partsJson(run.initial);
@@ -888,6 +1008,52 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
         s["heldout_loss"] = nullptr;
     }
     s["transport"] = transportJson(job.transport);
+    if (job.validation) {
+        json v = {{"transport", transportJson(*job.validation)}};
+        if (run.validationFinal) v["final"] = partsJson(*run.validationFinal);
+        s["validation"] = v;
+    }
+    if (!run.noise.rounds.empty()) {
+        json rounds = json::array();
+        for (const TrainingNoiseRound& nr : run.noise.rounds)
+            rounds.push_back({{"spp", nr.spp},
+                              {"training", nr.training},
+                              {"validation", nr.validation},
+                              {"gap", nr.gap},
+                              {"seconds", nr.seconds}});
+        s["training_noise"] = {{"figure", figureHigherIsBetter(in.kind)
+                                              ? "defect visibility (higher is better)"
+                                              : "loss (lower is better)"},
+                               {"max_gap", run.noise.maxGap},
+                               {"adapted", run.noise.adapted},
+                               {"met", run.noise.met},
+                               {"spp", run.noise.spp()},
+                               {"gap", run.noise.gap()},
+                               {"seconds_added", run.noise.secondsAdded},
+                               {"rounds", rounds},
+                               {"reason", run.noise.reason}};
+    }
+    if (run.answer) {
+        const AnswerChoice& a = *run.answer;
+        json scored = json::array();
+        for (const ScoredCandidate& c : a.scored)
+            scored.push_back({{"name", c.candidate.name},
+                              {"kind", c.candidate.kind == CandidateKind::Reference ? "reference"
+                                                                                    : "optimized"},
+                              {"merit", c.merit.value},
+                              {"brightness", c.score.brightness},
+                              {"eligible", c.eligible},
+                              {"why", c.why}});
+        s["answer"] = {{"light", a.answer().candidate.name},
+                       {"kind", a.referenceWon() ? "reference" : "optimized"},
+                       {"merit", a.answer().merit.what},
+                       {"higher_is_better", a.answer().merit.higherIsBetter},
+                       {"reason", a.reason},
+                       {"on", "the validation estimate (independent of training and the judge)"},
+                       {"candidates", scored}};
+        if (a.referenceWon())
+            s["answer"]["optimized_envmap"] = "envmap-optimized.exr";
+    }
     if (run.judged) s["judge"] = toJson(*run.judged);
     {
         // The report's headline (app/Report.h optimizeHeadline): E* against the user's lamp
@@ -906,16 +1072,30 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
                       {"render", "compare-paper.png"},
                       {"envmap", "compare-paper-envmap.exr"},
                       {"training", partsJson(r.paperTraining)}};
-        json optimized = {{"render", "render.png"}, {"training", partsJson(run.final)}};
+        json optimized = {{"render", r.optimizedE.empty() ? "render.png" : "render-optimized.png"},
+                          {"training", partsJson(run.final)}};
         if (run.judged) {
             lamp["judge"] = toJson(*run.judgedLamp);
             paper["judge"] = toJson(*run.judgedPaper);
-            optimized["judge"] = toJson(*run.judged);
+            optimized["judge"] = toJson(run.judgedOptimized ? *run.judgedOptimized : *run.judged);
             cmp["judge_spp"] = job.heldOut->file.provenance.spp;
         }
         cmp["lamp"] = lamp;
         cmp["paper"] = paper;
         cmp["optimized"] = optimized;
+        if (run.answer && run.answer->referenceWon()) {
+            // The light returned (envmap.exr) is a reference that beat E* on validation.
+            const AnswerChoice& a = *run.answer;
+            json answer = {{"name", a.answer().candidate.name},
+                           {"render", "render.png"},
+                           {"reason", a.reason},
+                           {"merit", a.answer().merit.what},
+                           {"merit_answer", a.answer().merit.value},
+                           {"merit_optimized", a.scored[a.optimized].merit.value},
+                           {"on", "the validation estimate"}};
+            if (run.judged) answer["judge"] = toJson(*run.judged);
+            cmp["answer"] = answer;
+        }
         s["compare"] = cmp;
     }
     s["envmap_directions"] = envDirectionsJson(in, job.transport.file.matrix, r.e, o.rgb);
@@ -941,6 +1121,8 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
     const std::vector<double> imageFinal = renderImage(t, r.e, in.shard);
     const std::vector<double> imageLamp = renderImage(t, in.lampE, in.shard);
     const std::vector<double> imagePaper = renderImage(t, in.paperE, in.shard);
+    const std::vector<double> imageOptimized =
+        r.optimizedE.empty() ? imageFinal : renderImage(t, r.optimizedE, in.shard);
     if (!p.writes()) return {};
     const std::filesystem::path dir = p.staged(run.dir);
     std::filesystem::create_directories(dir);
@@ -948,6 +1130,11 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
     writePng(dir / "envmap.png", envMapPreview(toEnvMap(r.e, t, o.rgb), 16));
     const int ch = t.channels == 3 ? 3 : 1;
     writeRender(dir / "render.exr", imageFinal, t.width, t.height, ch);
+    if (!r.optimizedE.empty()) {  // a reference is the answer: E* beside it
+        writeEnvMap(dir / "envmap-optimized.exr", toEnvMap(r.optimizedE, t, o.rgb));
+        writePng(dir / "envmap-optimized.png", envMapPreview(toEnvMap(r.optimizedE, t, o.rgb), 16));
+        writeRender(dir / "render-optimized.exr", imageOptimized, t.width, t.height, ch);
+    }
     {
         Image i0(t.width, t.height, ch);
         for (size_t i = 0; i < in.image0.size(); ++i) i0.data[i] = static_cast<float>(in.image0[i]);
@@ -986,7 +1173,7 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
     writeRender(dir / "compare-paper.exr", imagePaper, t.width, t.height, ch);
     writeEnvMap(dir / "compare-paper-envmap.exr", toEnvMap(in.paperE, t, o.rgb));
     writeExposedPng(dir / "view-lamp.png", imageLamp, t);
-    writeExposedPng(dir / "view-optimized.png", imageFinal, t);
+    writeExposedPng(dir / "view-optimized.png", imageOptimized, t);
     writeExposedPng(dir / "view-paper.png", imagePaper, t);
     if (!in.regionLabels.empty()) {
         const Image outlined = outlinedRender(std::vector<double>(t.rows(), 0.0), t.width, t.height,
@@ -1073,27 +1260,85 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
         Inputs in;
         in.ranks = p.ranks;
         // Context first, as each piece is known (the results follow the work).
-        loadTraining(p, in, job);
-        if (job.transport.autoDepth)
-            spdlog::info("max_depth {}: {}", job.transport.autoDepth->maxDepth,
-                         job.transport.autoDepth->reason);
-        if (job.transport.autoSpp)
-            spdlog::info("spp {}: {}", job.transport.autoSpp->spp, job.transport.autoSpp->reason);
-        spdlog::info("{}", describeTransport(job.transport));
-        loadHeldOut(p, in, job);
-        if (job.heldOut)
-            spdlog::info(
-                "judge estimate (held out): {} ({} spp, seed {})",
-                job.heldOut->path.empty() ? std::string("not stored") : job.heldOut->path.string(),
-                job.heldOut->file.provenance.spp, job.heldOut->file.provenance.seed);
-        prepareRuns(p, in, job);
-        prepareComparisons(p, in, job);
+        // T at `spp` (unset: the scene's or the given one), its validation estimate, and what
+        // depends on T; the scene is loaded once.
+        auto load = [&](int spp) {
+            std::unique_ptr<Scene> scene = std::move(in.scene);
+            in = Inputs{};
+            in.ranks = p.ranks;
+            in.scene = std::move(scene);
+            job.extraPlanes.clear();
+            loadTraining(p, in, job, spp);
+            if (job.transport.autoDepth && spp == 0)
+                spdlog::info("max_depth {}: {}", job.transport.autoDepth->maxDepth,
+                             job.transport.autoDepth->reason);
+            spdlog::info("{}", describeTransport(job.transport));
+            loadValidation(p, in, job);
+            prepareRuns(p, in, job);
+            prepareComparisons(p, in, job);
+        };
+        Stopwatch round;
+        double notInRound = 0;  // the judge's estimate is not part of a training round
+        load(0);
+        {
+            const Stopwatch judgeClock;
+            loadHeldOut(p, in, job);
+            if (job.heldOut)
+                spdlog::info(
+                    "judge estimate (held out): {} ({} spp, seed {})",
+                    job.heldOut->path.empty() ? std::string("not stored")
+                                              : job.heldOut->path.string(),
+                    job.heldOut->file.provenance.spp, job.heldOut->file.provenance.seed);
+            if (job.validation && job.heldOut &&
+                job.validation->file.provenance.seed == job.heldOut->file.provenance.seed)
+                throw inputError(option("seed"), "the validation estimate's seed is the judge's",
+                                 "use another " + option("seed"));
+            notInRound = judgeClock.seconds();
+        }
         if (!p.cacheDir.empty() && (!p.tmInput || p.o.heldOut.mode == HeldOutMode::Judge))
             spdlog::info("cache {}", describeCache(cacheContents(p.cacheDir)));
         spdlog::info("mask: {} pixels; writing {}", job.maskPixels, p.o.outDir.string());
         std::vector<ReportRun> reportRuns;
+        TrainingNoiseSummary noise;
+        noise.maxGap = p.noise.maxGap;
+        noise.adapted = p.noise.adapt;
         for (double lambda : p.o.lambdas) {
             LambdaResult r = optimizeLambda(p, in, job, lambda);
+            // Noise-aware training (app/TrainingNoise.h), on the first λ: E* on T and on V;
+            // the spp is raised (T, V and the comparisons traced again) while the gap is large.
+            while (noise.rounds.size() < 8 && job.runs.empty() && r.run.validationFinal &&
+                   !p.blackBox && !r.run.interrupted) {
+                TrainingNoiseRound nr;
+                nr.spp = job.transport.file.provenance.spp;
+                nr.training = trainingFigure(in.kind, r.run.final);
+                nr.validation = trainingFigure(in.kind, *r.run.validationFinal);
+                nr.gap = trainingGap(in.kind, nr.training, nr.validation);
+                nr.seconds = round.seconds() - notInRound;
+                noise.rounds.push_back(nr);
+                noise.met = nr.gap <= p.noise.maxGap;
+                const int next = p.noise.adapt && !noise.met
+                                     ? nextTrainingSpp(nr.spp, nr.gap, p.noise).value_or(0)
+                                     : 0;
+                spdlog::info("training noise: {} spp, E*'s {} {} on T and {} on the validation "
+                             "estimate: gap {} %{}",
+                             nr.spp, figureHigherIsBetter(in.kind) ? "visibility" : "loss",
+                             formatNumber(nr.training, 4), formatNumber(nr.validation, 4),
+                             formatNumber(100.0 * nr.gap, 3),
+                             next > 0 ? " > " + formatNumber(100.0 * p.noise.maxGap, 3) +
+                                            " %: tracing again at " + std::to_string(next) + " spp"
+                                      : std::string());
+                if (next == 0) break;
+                noise.secondsAdded += nr.seconds;
+                round.restart();
+                notInRound = 0;
+                load(next);
+                r = optimizeLambda(p, in, job, lambda);
+            }
+            noise.reason = describeTrainingNoise(noise);
+            if (!noise.rounds.empty()) spdlog::info("training spp: {}", noise.reason);
+            r.run.noise = noise;
+            checkAnswer(p, in, job, r);
+            judgeRun(p, in, job, r);
             reportRuns.push_back(writeRunOutputs(p, in, job, r));
             job.runs.push_back(std::move(r.run));
             if (job.runs.back().interrupted) {  // the λs after it are not run

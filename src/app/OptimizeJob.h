@@ -43,12 +43,14 @@
 #include <string>
 #include <vector>
 
+#include "app/Answer.h"
 #include "app/Cache.h"
 #include "app/ExternalRenderer.h"
 #include "app/HeldOut.h"
 #include "app/InitialState.h"
 #include "app/Judge.h"
 #include "app/LossMask.h"
+#include "app/TrainingNoise.h"
 #include "app/Transport.h"
 #include "app/Truth.h"
 #include "core/Communicator.h"
@@ -123,6 +125,14 @@ struct OptimizeJobOptions {
     RendererKind renderer = RendererKind::Builtin;
     ExternalRendererOptions external;  // povray / command
     PrecomputeOptions precompute;      // used when input is a scene
+    /// Noise-aware training (app/TrainingNoise.h): without a given spp (precompute.spp unset, or
+    /// precompute.autoSpp) the training spp is raised until E*'s train/validation gap is within
+    /// precompute.sppTolerance; with a given spp the gap is measured and warned about. Off for
+    /// the paper's loop (the paper's experiment), black-box optimizers and MPI ranks.
+    int noiseMaxSpp = TrainingNoiseOptions{}.maxSpp;
+    /// The self-checked answer (app/Answer.h): the light returned is the best of E*, every
+    /// start's result and the references on the validation estimate. False: E* is returned.
+    bool selfCheck = true;
     /// Trace only the loss mask's pixels (a file or the scratch map; not `object`): the loss
     /// and E* are the same as with the whole image, for the rays of the region only. The
     /// renders from T are then dark outside the mask (the judge still traces the whole part).
@@ -165,6 +175,17 @@ struct OptimizeRun {
     /// ... and of the user's lamp and of the paper's light (eq. 2, Adam from E0 = 0.5 on the
     /// same T), on the same estimate at the same λ.
     std::optional<JudgeScore> judgedLamp, judgedPaper;
+    /// The optimized light's judge scores when the answer is a reference (else `judged` is it).
+    std::optional<JudgeScore> judgedOptimized;
+    /// E*'s figure (app/TrainingNoise.h trainingFigure) on the training and the validation
+    /// estimate, and the rule's rounds (the first λ only; later λs keep its spp).
+    std::optional<LossParts> validationFinal;
+    TrainingNoiseSummary noise;
+    /// The self-check (app/Answer.h): absent without a validation estimate.
+    std::optional<AnswerChoice> answer;
+    /// The training loss: the objective the optimizer minimized, through what (our T, or the
+    /// renderer of a black-box optimizer: then initial/final hold only its totals).
+    std::string lossThrough = "T";
     /// What to know before trusting E*: a failed optimizer, no improvement on the start, an
     /// all-black light, an image without contrast (also in summary.json and the log).
     std::vector<std::string> warnings;
@@ -179,6 +200,7 @@ struct OptimizeJobSummary {
     TransportSource transport;
     std::vector<TransportSource> extraPlanes;  // estimates 1..planes−1 of T
     std::optional<TransportSource> heldOut;    // the judge's estimate
+    std::optional<TransportSource> validation;  // the validation estimate (app/TrainingNoise.h)
     size_t maskPixels = 0;
     std::vector<OptimizeRun> runs;
     bool interrupted = false;  // a run was interrupted; the λs after it were not run

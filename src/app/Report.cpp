@@ -10,6 +10,7 @@
 #include "core/Error.h"
 #include "core/Text.h"
 #include "io/AtomicFile.h"
+#include "objective/DefectVisibility.h"
 
 namespace sl {
 
@@ -450,16 +451,19 @@ double num(const json& j, const char* key) {
     return j[key].get<double>();
 }
 
-/// All defect regions as one: the RMS gradient over every region's pixels over the clean
-/// surface's, sqrt(Σ pixels·visibility² / Σ pixels) (the clean RMS gradient is shared).
+/// All defect regions as one (objective/DefectVisibility.h combinedVisibility) from a judge
+/// score's JSON.
 double combinedVisibility(const json& judge) {
-    double sum = 0, pixels = 0;
     if (!judge.is_object() || !judge.contains("visibility")) return std::nan("");
+    std::vector<RegionVisibility> regions;
     for (const json& r : judge["visibility"]) {
-        const double v = num(r, "visibility"), p = num(r, "pixels");
-        if (std::isfinite(v) && p > 0) sum += p * v * v, pixels += p;
+        RegionVisibility v;
+        v.visibility = num(r, "visibility");
+        const double p = num(r, "pixels");
+        v.pixels = std::isfinite(p) && p > 0 ? static_cast<size_t>(p) : 0;
+        regions.push_back(v);
     }
-    return pixels > 0 ? std::sqrt(sum / pixels) : std::nan("");
+    return sl::combinedVisibility(std::span<const RegionVisibility>(regions));
 }
 
 std::string fmt(double v, int digits = 3) {
@@ -658,6 +662,32 @@ std::string optimizeHeadline(const json& s) {
                opt = cmp.value("optimized", json::object());
     const std::string underLamp = lampUnder(cmp), underPaper = "under the paper's light";
     std::string out;
+    // A reference that beat E* on the validation estimate is the answer (app/Answer.h): said
+    // first, then the judge's figures of the answer beside E*'s.
+    if (cmp.contains("answer") && cmp["answer"].is_object()) {
+        const json& ans = cmp["answer"];
+        const std::string name = ans.value("name", std::string("a reference light"));
+        out = "The answer is " + name +
+              ", not the optimized light: on an independent validation estimate it showed the "
+              "defects better (" +
+              ans.value("merit", std::string("figure")) + " " + fmt(num(ans, "merit_answer"), 3) +
+              " vs " + fmt(num(ans, "merit_optimized"), 3) +
+              "); the optimized light is kept beside it (envmap-optimized.exr).";
+        if (ans.contains("judge") && opt.contains("judge")) {
+            const std::string spp = fmt(num(cmp, "judge_spp"), 6);
+            const double va = combinedVisibility(ans["judge"]),
+                         vo = combinedVisibility(opt["judge"]);
+            if (std::isfinite(va) && std::isfinite(vo))
+                out += " Judge: defect visibility " + fmt(va, 3) + " (" + name + ") vs " +
+                       fmt(vo, 3) + " (optimized), on an independent " + spp + "-spp estimate.";
+            else
+                out += " Judge: U " + fmt(num(ans["judge"], "unbiased"), 3) + " (" + name +
+                       ") vs " + fmt(num(opt["judge"], "unbiased"), 3) +
+                       " (optimized; lower is better), on an independent " + spp +
+                       "-spp estimate.";
+        }
+        return out;
+    }
     if (opt.contains("judge")) {
         const std::string spp = fmt(num(cmp, "judge_spp"), 6);
         const double vo = combinedVisibility(opt["judge"]), vl = combinedVisibility(lamp["judge"]),
@@ -685,7 +715,7 @@ std::string optimizeHeadline(const json& s) {
     const json& to = opt.value("training", json::object());
     const double lo = num(to, "loss"), ll = num(lamp.value("training", json::object()), "loss"),
                  lp = num(paper.value("training", json::object()), "loss");
-    out = "On the training estimate only (no independent estimate was asked for), the " +
+    out = "Training figures only (no judge's estimate was asked for): the " +
           cmp.value("objective", std::string("objective")) +
           " loss (lower is better) under the optimized light is " + lowerLoss(lo, ll, underLamp);
     out += " and " + lowerLoss(lo, lp, underPaper);

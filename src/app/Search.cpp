@@ -124,6 +124,7 @@ SearchResult search(const SearchInputs& in, const SearchOptions& o) {
         }
         const LossParts value = finalStage.value(e);
         best.startLosses.emplace_back(start.spec, value.total);
+        best.startResults.push_back(e);
         if (value.total < best.training.total) {
             best.training = value;
             best.e = e;

@@ -69,6 +69,7 @@ struct SearchResult {
     std::string start;           // the best start
     LossParts training;          // loss of E* on the training estimate(s) (mean over K)
     std::vector<std::pair<std::string, double>> startLosses;  // every start's training loss
+    std::vector<std::vector<double>> startResults;  // every start's optimized E, in start order
 };
 
 SearchResult search(const SearchInputs& inputs, const SearchOptions& options);

@@ -47,14 +47,25 @@ void addNumberOrAuto(CLI::App* c, const std::string& name, std::optional<int>& v
         });
 }
 
-void addTraceOptions(CLI::App* c, PrecomputeOptions& p, std::vector<std::string>& overrides) {
+/// The trace's options. noiseAware: optimize's spp auto (app/TrainingNoise.h) instead of
+/// precompute's gradient-noise pilot.
+void addTraceOptions(CLI::App* c, PrecomputeOptions& p, std::vector<std::string>& overrides,
+                     bool noiseAware = false) {
     addSceneOverrides(c, overrides, true);
-    addNumberOrAuto(c, "--spp", p.spp, p.autoSpp, 1, 1 << 20, "samples per pixel",
-                    "Samples per pixel (overrides render.spp), or auto: the fewest (a power of "
-                    "two) whose gradient has a relative noise within --tolerance, measured on a "
-                    "pilot trace (the choice and why are printed)");
+    addNumberOrAuto(
+        c, "--spp", p.spp, p.autoSpp, 1, 1 << 20, "samples per pixel",
+        noiseAware
+            ? "Training samples per pixel, or auto (the default): from the scene's render.spp, "
+              "raised until the optimized light's train/validation gap is within --tolerance "
+              "(measured on an independent validation estimate; every round, the choice and its "
+              "seconds are printed). A given N is kept and its gap is warned about"
+            : "Samples per pixel (overrides render.spp), or auto: the fewest (a power of two) "
+              "whose gradient has a relative noise within --tolerance, measured on a pilot "
+              "trace (the choice and why are printed)");
     c->add_option("--tolerance", p.sppTolerance,
-                  "--spp auto: the relative noise of the gradient to reach")
+                  noiseAware ? "--spp auto: the largest train/validation gap of the optimized "
+                               "light (a fraction)"
+                             : "--spp auto: the relative noise of the gradient to reach")
         ->check(CLI::Range(1e-6, 0.999999))
         ->capture_default_str();
     addNumberOrAuto(c, "--max-depth", p.maxDepth, p.autoMaxDepth, 1, 64, "a path length",
@@ -340,7 +351,15 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
             ->delimiter(',');
         addChoice(c, "--preset", a->preset, optimizePresetTable(),
                   "Settings fixed together (they override the options they fix)");
-        addTraceOptions(c, j.precompute, j.sceneOverrides);
+        addTraceOptions(c, j.precompute, j.sceneOverrides, true);
+        c->add_option("--max-spp", j.noiseMaxSpp, "--spp auto: the most training spp it traces")
+            ->check(CLI::Range(1, 1 << 20))
+            ->capture_default_str();
+        c->add_flag_function(
+            "--no-self-check", [&j](std::int64_t) { j.selfCheck = false; },
+            "Return the optimized light even when your lamp, a uniform dome or the paper's light "
+            "shows the defects better on the validation estimate (by default the best of them is "
+            "the answer and the optimized light is kept beside it)");
         addCacheOptions(c, j.cache);
         c->add_option("-o,--output", a->out, "Output directory")->capture_default_str();
         c->callback([a, &run] { run = [a] { return runOptimize(*a); }; });

@@ -125,4 +125,14 @@ std::vector<RegionVisibility> defectVisibility(int w, int h, std::span<const dou
     return out;
 }
 
+double combinedVisibility(std::span<const RegionVisibility> regions) {
+    double sum = 0, pixels = 0;
+    for (const RegionVisibility& r : regions)
+        if (std::isfinite(r.visibility) && r.pixels > 0) {
+            sum += static_cast<double>(r.pixels) * r.visibility * r.visibility;
+            pixels += static_cast<double>(r.pixels);
+        }
+    return pixels > 0 ? std::sqrt(sum / pixels) : kNaN;
+}
+
 }  // namespace sl

@@ -50,4 +50,9 @@ std::vector<RegionVisibility> defectVisibility(int width, int height, std::span<
                                                std::span<const uint8_t> labels,
                                                const std::vector<RegionLabel>& legend);
 
+/// All regions as one: the RMS gradient over every region's pixels over the clean surface's,
+/// sqrt(Σ pixels·visibility² / Σ pixels) over the regions with pixels and a finite visibility
+/// (the clean RMS gradient is shared). NaN when there is none.
+double combinedVisibility(std::span<const RegionVisibility> regions);
+
 }  // namespace sl

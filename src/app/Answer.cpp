@@ -1,0 +1,76 @@
+#include "app/Answer.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "core/Text.h"
+#include "objective/DefectVisibility.h"
+
+namespace sl {
+
+AnswerMerit answerMerit(const JudgeScore& s) {
+    const double v = combinedVisibility(s.visibility);
+    if (std::isfinite(v)) return {v, true, "defect visibility"};
+    return {s.unbiased.total, false, "U"};
+}
+
+bool betterMerit(const AnswerMerit& a, const AnswerMerit& b) {
+    if (!std::isfinite(a.value)) return false;
+    if (!std::isfinite(b.value)) return true;
+    return a.higherIsBetter ? a.value > b.value : a.value < b.value;
+}
+
+AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> candidates,
+                          const AnswerOptions& options) {
+    AnswerChoice c;
+    bool anyOptimized = false, anyEligible = false;
+    for (AnswerCandidate& cand : candidates) {
+        ScoredCandidate s;
+        s.score = validation.score(cand.e, cand.name);
+        s.merit = answerMerit(s.score);
+        if (!(s.score.brightness >= options.minBrightness)) {
+            s.eligible = false;
+            s.why = "too dark: brightness " + formatNumber(s.score.brightness, 3) +
+                    " of the white furnace, below " + formatNumber(options.minBrightness, 3);
+        }
+        anyOptimized |= cand.kind != CandidateKind::Reference;
+        anyEligible |= s.eligible;
+        s.candidate = std::move(cand);
+        c.scored.push_back(std::move(s));
+    }
+    if (!anyOptimized) throw std::invalid_argument("chooseAnswer: no optimized candidate");
+    // When every candidate is too dark, the brightest-merit one is still the answer (said so).
+    bool haveBest = false, haveOpt = false;
+    for (size_t k = 0; k < c.scored.size(); ++k) {
+        const ScoredCandidate& s = c.scored[k];
+        if (s.candidate.kind != CandidateKind::Reference &&
+            (!haveOpt || betterMerit(s.merit, c.scored[c.optimized].merit))) {
+            c.optimized = k;
+            haveOpt = true;
+        }
+        if ((s.eligible || !anyEligible) &&
+            (!haveBest || betterMerit(s.merit, c.scored[c.chosen].merit))) {
+            c.chosen = k;
+            haveBest = true;
+        }
+    }
+    const ScoredCandidate& a = c.answer();
+    const ScoredCandidate& o = c.scored[c.optimized];
+    const std::string on = " on the validation estimate (" + a.merit.what + " " +
+                           formatNumber(a.merit.value, 4) + " vs the optimized light's " +
+                           formatNumber(o.merit.value, 4) + ")";
+    if (!anyEligible)
+        c.reason = "every light leaves the part darker than " +
+                   formatNumber(options.minBrightness, 3) + " of white; " + a.candidate.name +
+                   " is the best of them" + on;
+    else if (c.referenceWon())
+        c.reason = "the reference light " + a.candidate.name +
+                   " shows the defects better than the optimized light" + on +
+                   (o.eligible ? std::string() : "; the optimized light is " + o.why);
+    else
+        c.reason = "the optimized light (" + a.candidate.name + ") is the best of " +
+                   std::to_string(c.scored.size()) + " candidates" + on;
+    return c;
+}
+
+}  // namespace sl

@@ -1,0 +1,71 @@
+// The self-checked answer: which light `optimize` returns.
+//
+// The optimized light is best on its training estimate by construction, so the training
+// estimate cannot say whether it is better than a plain lamp. Every candidate — the optimized
+// light of every start, the user's lamp (or the studio preset), a uniform dome (const 0.5) and
+// the paper's light — is scored on the validation estimate (app/TrainingNoise.h: independent of
+// the training estimate and of the judge's), by the figure the answer line reports
+// (answerMerit: the defects' combined visibility when defect regions are known, else the judge's
+// U). A candidate whose image is darker than minBrightness of the white furnace is not eligible
+// (a black answer shows nothing a person can use) unless none is bright enough. The best
+// eligible candidate is the answer; when it is a reference, the run says so first and the
+// optimized light is kept beside it. The judge's estimate then reports on the answer, so the
+// selection does not bias the figures a person reads.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "app/Judge.h"
+
+namespace sl {
+
+/// What the answer is judged on: the value, its direction and its name.
+struct AnswerMerit {
+    double value = 0;
+    bool higherIsBetter = false;
+    std::string what;  // "defect visibility" or "U"
+};
+/// The answer line's figure of a judge's score: the combined visibility of its regions
+/// (objective/DefectVisibility.h combinedVisibility) when it has any with a finite value, else U.
+AnswerMerit answerMerit(const JudgeScore& score);
+/// a better than b by their merit (the same `what`; NaN is never better).
+bool betterMerit(const AnswerMerit& a, const AnswerMerit& b);
+
+/// Where a candidate comes from.
+enum class CandidateKind { Optimized, Start, Reference };
+struct AnswerCandidate {
+    std::string name;  // "optimized", "start specular", "lamp", "uniform-0.5", "paper"
+    CandidateKind kind = CandidateKind::Reference;
+    std::vector<double> e;
+};
+
+struct AnswerOptions {
+    double minBrightness = 0.05;  // of the white furnace's mean over the part
+};
+
+struct ScoredCandidate {
+    AnswerCandidate candidate;
+    JudgeScore score;  // on the validation estimate
+    AnswerMerit merit;
+    bool eligible = true;
+    std::string why;  // why not eligible
+};
+
+struct AnswerChoice {
+    std::vector<ScoredCandidate> scored;  // in the order given
+    size_t chosen = 0;                    // index into scored
+    size_t optimized = 0;                 // the best optimized candidate (kind Optimized/Start)
+    bool referenceWon() const { return scored[chosen].candidate.kind == CandidateKind::Reference; }
+    const ScoredCandidate& answer() const { return scored[chosen]; }
+    /// One line: what was chosen and why (the figures on the validation estimate).
+    std::string reason;
+};
+
+/// Scores every candidate on `validation` and picks the answer (header). At least one
+/// candidate of kind Optimized is required.
+AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> candidates,
+                          const AnswerOptions& options = {});
+
+}  // namespace sl

@@ -1,0 +1,83 @@
+#include "app/TrainingNoise.h"
+
+#include <cmath>
+#include <limits>
+
+#include "core/Text.h"
+
+namespace sl {
+
+TransportSource validationEstimate(const Scene& scene, const PrecomputeOptions& training,
+                                   uint64_t trainingSeed, const std::filesystem::path& cacheDir) {
+    PrecomputeOptions o = training;
+    o.seed = trainingSeed + kValidationSeedOffset;
+    o.sampleSets = 2;
+    o.label = "validation estimate";
+    return transportForScene(scene, o, cacheDir);
+}
+
+bool figureHigherIsBetter(ObjectiveKind kind) {
+    switch (kind) {
+        case ObjectiveKind::Paper:
+        case ObjectiveKind::Unbiased:
+            return false;
+        case ObjectiveKind::Defects:
+            return true;
+    }
+    return false;
+}
+
+double trainingFigure(ObjectiveKind kind, const LossParts& parts) {
+    switch (kind) {
+        case ObjectiveKind::Paper:
+        case ObjectiveKind::Unbiased:
+            return parts.total;
+        case ObjectiveKind::Defects:
+            // L_vis = ψ(g(R)) − φ(g(D)) = −2·log(visibility) with the objective's own floors: a
+            // light whose reference energy the estimate's noise pushed below the floor has an
+            // enormous visibility on that estimate, and this says so.
+            return std::exp(-0.5 * parts.lGrad);
+    }
+    return parts.total;
+}
+
+double trainingGap(ObjectiveKind kind, double training, double validation) {
+    const double better = figureHigherIsBetter(kind) ? training - validation : validation - training;
+    if (validation == 0) return better > 0 ? std::numeric_limits<double>::infinity() : 0.0;
+    return better / std::abs(validation);
+}
+
+std::optional<int> nextTrainingSpp(int spp, double gap, const TrainingNoiseOptions& o) {
+    if (spp >= o.maxSpp) return std::nullopt;
+    // The noise's share of the gap falls as 1/spp: aim at half the tolerance.
+    const double wanted = std::isfinite(gap) ? spp * gap / (0.5 * o.maxGap) : double(o.maxSpp);
+    int n = 2 * spp;
+    while (n < o.maxSpp && n < wanted && n < kMaxSppGrowth * spp) n *= 2;
+    return std::min(n, o.maxSpp);
+}
+
+std::string describeTrainingNoise(const TrainingNoiseSummary& s) {
+    if (s.rounds.empty()) return "not measured";
+    std::string out;
+    for (size_t k = 0; k < s.rounds.size(); ++k) {
+        const TrainingNoiseRound& r = s.rounds[k];
+        out += (k ? "; " : "") + std::to_string(r.spp) + " spp: train/validation gap " +
+               formatNumber(100.0 * r.gap, 3) + " %";
+    }
+    const std::string tol = formatNumber(100.0 * s.maxGap, 3) + " %";
+    if (!s.adapted)
+        out += s.met ? " (the given spp; within " + tol + ")"
+                     : " (the given spp: ABOVE " + tol +
+                           ", so the light partly fits the training estimate's noise; leave spp "
+                           "to the rule or raise it)";
+    else if (s.met)
+        out += " -> " + std::to_string(s.spp()) + " spp (within " + tol + ")";
+    else
+        out += " -> " + std::to_string(s.spp()) + " spp, the most the rule traces, still above " +
+               tol + ": no light is trusted on its training estimate alone";
+    if (s.rounds.size() > 1)
+        out += "; the rule added " + formatNumber(s.secondsAdded, 3) + " s";
+    return out;
+}
+
+}  // namespace sl

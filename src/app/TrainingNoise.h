@@ -1,0 +1,106 @@
+// Noise-aware training (docs/DESIGN.md "Noise is the trap"): how many samples per pixel the
+// training estimate of T needs so that the optimum does not fit its noise.
+//
+// An optimizer that minimizes a loss on one Monte Carlo estimate of T finds the light that is
+// best on that estimate: part of its score is the estimate's noise, which an independent
+// estimate does not share. The rule measures that directly, on the part and for the objective
+// in use:
+//
+//   1. T (the training estimate, spp n) and V (the validation estimate: the same scene, spp and
+//      path length, two sample sets, the seed training seed + kValidationSeedOffset, disjoint
+//      from every training seed and from the judge's) are traced (both cached);
+//   2. the search runs on T as it would anyway; its E* is scored on T and on V;
+//   3. the gap (trainingGap) is how much better E* looks on T than on V, relative to V:
+//        paper, unbiased (losses, lower is better):  gap = (L_V − L_T) / L_V
+//        defects (visibility exp(−L_vis/2), higher is better): gap = (v_T − v_V) / v_V
+//   4. gap ≤ maxGap: n is kept. Otherwise, the part of the gap the noise makes falls as 1/spp
+//      (the optimizer's gain on noise is proportional to the noise's variance), so the next n is
+//      the smallest power of two ≥ 2n with gap·n/n' ≤ maxGap/2 (half the tolerance, so one more
+//      trace usually settles it), at most kMaxSppGrowth·n (a gap far above the tolerance is
+//      often a cliff the noise opened — e.g. the defect objective's reference energy pushed
+//      below its floor — which closes long before 1/spp predicts) and at most maxSpp; back to 1.
+//
+// A given spp is kept: its gap is still measured, and a gap above maxGap is warned about. When
+// maxSpp is reached above maxGap, the run says the light is not trustworthy on its own and the
+// self-checked answer (app/Answer.h) decides against the references.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "app/Judge.h"
+#include "app/Transport.h"
+#include "objective/Objective.h"
+#include "objective/ObjectiveKind.h"
+
+namespace sl {
+
+/// The validation estimate's seed: the training seed plus this ("valid"). It is not in any
+/// training seed range a user can reach with --planes (< 2^20) and not the judge's seed.
+inline constexpr uint64_t kValidationSeedOffset = 0x76616C6964ULL << 20;
+
+/// The most one round multiplies the training spp by.
+inline constexpr int kMaxSppGrowth = 4;
+
+struct TrainingNoiseOptions {
+    /// Measure the gap and raise spp until it is within maxGap (false: keep the given spp and
+    /// only warn).
+    bool adapt = true;
+    double maxGap = 0.05;
+    /// Half the judge's default spp (app/Judge.h): T and V together never trace more samples
+    /// than the judge's estimate does, so the rule at most about doubles a run's tracing.
+    int maxSpp = kJudgeDefaultSpp / 2;
+};
+
+/// The validation estimate V for a training trace of `scene` made with `training` (its spp,
+/// path length, pixels and channels, already resolved) and seed `trainingSeed`: the same trace
+/// with two sample sets and the seed trainingSeed + kValidationSeedOffset, cached in cacheDir
+/// like transportForScene.
+TransportSource validationEstimate(const Scene& scene, const PrecomputeOptions& training,
+                                   uint64_t trainingSeed, const std::filesystem::path& cacheDir);
+
+/// One training trace of the rule: its spp, E*'s figure on T and on V, the gap, the seconds
+/// the round cost (traces, the search and the scoring).
+struct TrainingNoiseRound {
+    int spp = 0;
+    double training = 0, validation = 0;  // trainingFigure of E* on T and on V
+    double gap = 0;
+    double seconds = 0;
+};
+
+/// What the rule did.
+struct TrainingNoiseSummary {
+    std::vector<TrainingNoiseRound> rounds;
+    bool adapted = false;  // the rule chose spp (false: a given spp was kept)
+    bool met = false;      // the last round's gap ≤ maxGap
+    double maxGap = 0.05;
+    /// Seconds spent beyond the last round (the earlier rounds' traces and searches): what the
+    /// rule added to a run that would have used the last round's spp from the start.
+    double secondsAdded = 0;
+    std::string reason;  // one line for the log and summary.json
+    int spp() const { return rounds.empty() ? 0 : rounds.back().spp; }
+    double gap() const { return rounds.empty() ? 0.0 : rounds.back().gap; }
+};
+
+/// The figure of the objective the gap is measured on: the loss for paper and unbiased (lower
+/// is better), the defects' visibility exp(−L_vis/2) for defects (higher is better; L_vis =
+/// lGrad of the defects objective's LossParts, −log(g(D)/g(R)) with its floors, so this is
+/// sqrt(g(D)/g(R)) where both are above the floor).
+double trainingFigure(ObjectiveKind kind, const LossParts& parts);
+bool figureHigherIsBetter(ObjectiveKind kind);
+/// How much better E* looks on its training estimate than on the validation estimate, as a
+/// fraction of the validation figure (header, step 3); ≤ 0 when it looks no better. +inf when
+/// the validation figure is 0 and the training one is not.
+double trainingGap(ObjectiveKind kind, double training, double validation);
+
+/// The next spp after a round at `spp` with `gap` (header, step 4); nullopt when spp is already
+/// at options.maxSpp.
+std::optional<int> nextTrainingSpp(int spp, double gap, const TrainingNoiseOptions& options);
+
+/// The summary's reason line: the rounds' spp and gaps, the choice and the seconds it added.
+std::string describeTrainingNoise(const TrainingNoiseSummary& summary);
+
+}  // namespace sl

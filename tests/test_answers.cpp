@@ -1,0 +1,262 @@
+// Answers that hold: the noise-aware training rule (app/TrainingNoise.h), the self-checked
+// answer (app/Answer.h) and what optimize's summary says its losses are.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <nlohmann/json.hpp>
+
+#include "TestUtil.h"
+#include "app/Answer.h"
+#include "app/Judge.h"
+#include "app/TrainingNoise.h"
+#include "core/Rng.h"
+#include "objective/DefectVisibility.h"
+#include "scene/Scene.h"
+
+using namespace sl;
+using json = nlohmann::json;
+
+namespace {
+
+std::vector<double> randomLight(size_t n, uint64_t seed) {
+    Pcg32 rng(seed, 7);
+    std::vector<double> v(n);
+    for (double& x : v) x = 0.2 + 0.6 * rng.nextDouble();
+    return v;
+}
+
+std::vector<double> scaled(std::vector<double> e, double c) {
+    for (double& x : e) x *= c;
+    return e;
+}
+
+json readJson(const std::filesystem::path& p) {
+    return json::parse(test::readFile(p));
+}
+
+}  // namespace
+
+// The gap is how much better E* looks on its training estimate than on the validation one,
+// relative to the validation figure, in the direction of each objective's figure.
+TEST(TrainingNoise, GapFollowsEachObjectivesDirection) {
+    // Losses (lower is better): training 20.3, validation 32.7 -> (32.7 - 20.3) / 32.7.
+    EXPECT_NEAR(trainingGap(ObjectiveKind::Unbiased, 20.3, 32.7), 12.4 / 32.7, 1e-15);
+    EXPECT_NEAR(trainingGap(ObjectiveKind::Paper, 10, 9), -1.0 / 9, 1e-15);
+    // Visibility (higher is better): training 3, validation 2 -> 0.5.
+    EXPECT_DOUBLE_EQ(trainingGap(ObjectiveKind::Defects, 3, 2), 0.5);
+    EXPECT_LT(trainingGap(ObjectiveKind::Defects, 2, 3), 0);
+    EXPECT_EQ(trainingGap(ObjectiveKind::Defects, 1, 0), std::numeric_limits<double>::infinity());
+    // The defects figure is exp(−L_vis/2): sqrt(g(D)/g(R)) above the objective's floors.
+    LossParts p;
+    p.lGrad = -2 * std::log(1.5);  // g(D)/g(R) = 9/4
+    EXPECT_NEAR(trainingFigure(ObjectiveKind::Defects, p), 1.5, 1e-15);
+    p.total = 7;
+    EXPECT_DOUBLE_EQ(trainingFigure(ObjectiveKind::Unbiased, p), 7.0);
+}
+
+// The next spp: at least twice the last, the smallest power-of-two multiple whose predicted gap
+// (∝ 1/spp) is within half the tolerance, at most 4× the last and never above the cap; none at
+// the cap.
+TEST(TrainingNoise, NextSppAimsAtHalfTheToleranceUnderTheCap) {
+    TrainingNoiseOptions o;
+    o.maxGap = 0.05;
+    o.maxSpp = 1024;
+    EXPECT_EQ(nextTrainingSpp(16, 0.06, o), 64);   // 16·0.06/0.025 = 38.4 -> 64
+    EXPECT_EQ(nextTrainingSpp(16, 0.051, o), 64);  // 32.6 -> 64
+    EXPECT_EQ(nextTrainingSpp(16, 0.04, o), 32);   // 25.6 -> 32 (and at least 2·16)
+    EXPECT_EQ(nextTrainingSpp(16, 0.4, o), 64);    // 256 wanted, at most 4× a round
+    EXPECT_EQ(nextTrainingSpp(64, 0.1, o), 256);   // 256 exactly
+    EXPECT_EQ(nextTrainingSpp(512, 0.2, o), 1024);  // capped
+    EXPECT_EQ(nextTrainingSpp(1024, 0.2, o), std::nullopt);
+    EXPECT_EQ(nextTrainingSpp(16, std::numeric_limits<double>::infinity(), o), 64);
+}
+
+// On any estimate G_u(cE) = c²·G_u(E) (the image is linear in E), so with λ = 0
+// U(cE) = U(E)/c exactly: the brighter copy of the lamp wins, the dimmer loses to the lamp.
+TEST(Answer, TheBestOnValidationIsTheAnswerAndALampCanBeIt) {
+    auto scene = std::make_unique<Scene>(test::bumpyPartDesc(32, 32), 40, 40,
+                                         test::bumpyHeightMap(40));
+    JudgeOptions jo;
+    jo.spp = 32;
+    jo.objective.lambda = 0;
+    const Judge validation(*scene, jo);
+    const std::vector<double> lamp = randomLight(1250, 3);
+    const double uLamp = validation.score(lamp).unbiased.total;
+    {
+        const AnswerChoice c = chooseAnswer(
+            validation, {{"optimized", CandidateKind::Optimized, scaled(lamp, 0.5)},
+                         {"lamp", CandidateKind::Reference, lamp}});
+        ASSERT_EQ(c.scored.size(), 2u);
+        EXPECT_NEAR(c.scored[0].merit.value, 2 * uLamp, 1e-9 * uLamp);
+        EXPECT_EQ(c.scored[0].merit.what, "U");
+        EXPECT_TRUE(c.referenceWon());
+        EXPECT_EQ(c.answer().candidate.name, "lamp");
+        EXPECT_EQ(c.optimized, 0u);
+        EXPECT_NE(c.reason.find("reference light lamp"), std::string::npos) << c.reason;
+    }
+    {
+        const AnswerChoice c = chooseAnswer(
+            validation, {{"optimized", CandidateKind::Optimized, scaled(lamp, 1.25)},
+                         {"lamp", CandidateKind::Reference, lamp}});
+        EXPECT_FALSE(c.referenceWon());
+        EXPECT_EQ(c.chosen, 0u);
+        EXPECT_NEAR(c.answer().merit.value, uLamp / 1.25, 1e-9 * uLamp);
+    }
+    // Without an optimized candidate there is nothing to check.
+    EXPECT_THROW(chooseAnswer(validation, {{"lamp", CandidateKind::Reference, lamp}}),
+                 std::invalid_argument);
+}
+
+// Defect visibility is invariant to the light's scale, so a light 100× dimmer shows the
+// defects exactly as well by the ratio — and is still not the answer: its image is darker than
+// 0.05 of white. When every light is that dark, the best of them is, said so.
+TEST(Answer, ALightThatLeavesThePartBlackIsNotTheAnswer) {
+    auto scene = std::make_unique<Scene>(test::bumpyPartDesc(32, 32), 40, 40,
+                                         test::bumpyHeightMap(40));
+    JudgeOptions jo;
+    jo.spp = 32;
+    std::vector<uint8_t> labels(32 * 32, 0);
+    for (int y = 10; y < 22; ++y)
+        for (int x = 14; x < 17; ++x) labels[size_t(y) * 32 + x] = 1;
+    const TransportSource estimate = judgeEstimate(*scene, jo);
+    const Judge validation(estimate, jo, labels, {RegionLabel{1, "scratch"}});
+    // Of two random lights, the one with the higher visibility is dimmed to 1 %.
+    std::vector<double> a = randomLight(1250, 11), b = randomLight(1250, 12);
+    const double va = combinedVisibility(validation.score(a).visibility),
+                 vb = combinedVisibility(validation.score(b).visibility);
+    ASSERT_TRUE(std::isfinite(va) && std::isfinite(vb));
+    if (vb > va) std::swap(a, b);
+    const std::vector<double> dark = scaled(a, 0.01);
+    const AnswerChoice c =
+        chooseAnswer(validation, {{"optimized", CandidateKind::Optimized, dark},
+                                  {"lamp", CandidateKind::Reference, b}});
+    EXPECT_EQ(c.scored[0].merit.what, "defect visibility");
+    EXPECT_NEAR(c.scored[0].merit.value, std::max(va, vb), 1e-9 * std::max(va, vb));
+    EXPECT_GT(c.scored[0].merit.value, c.scored[1].merit.value);
+    EXPECT_FALSE(c.scored[0].eligible);
+    EXPECT_NE(c.scored[0].why.find("too dark"), std::string::npos);
+    EXPECT_TRUE(c.referenceWon());
+    // Both dark: the better one is still the answer, and the reason says why.
+    const AnswerChoice d =
+        chooseAnswer(validation, {{"optimized", CandidateKind::Optimized, dark},
+                                  {"lamp", CandidateKind::Reference, scaled(b, 0.01)}});
+    EXPECT_EQ(d.chosen, 0u);
+    EXPECT_NE(d.reason.find("darker than"), std::string::npos) << d.reason;
+}
+
+// A labelled part traced at 4 spp: the defects objective fits the estimate's noise, so the rule
+// measures a gap above 5 % and traces again at more spp (or says, at its cap, that no light is
+// trusted); summary.json records every round, the answer and its candidates, and the losses
+// are the defects objective's on T.
+TEST(OptimizeAnswers, DefectsBelowTheTrainingNoiseRaiseTheSpp) {
+    test::TempDir dir("answers-noise");
+    ASSERT_EQ(test::writeSmallLabelledPart(dir.path()), 0);
+    const auto out = dir.path() / "out";
+    const test::RunResult r =
+        test::runCli("optimize " + (dir.path() / "scene.json").string() + " --truth " +
+                     (dir.path() / "part-truth.png").string() +
+                     " --heldout none --no-figures --max-spp 64 --cache " +
+                     (dir.path() / "cache").string() + " -o " + out.string() + " 2>&1");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const json s = readJson(out / "summary.json");
+    EXPECT_EQ(s["objective"], "defects");
+    EXPECT_EQ(s["loss_through"], "T");
+    const json& n = s["training_noise"];
+    ASSERT_TRUE(n.is_object()) << s.dump(2);
+    ASSERT_GE(n["rounds"].size(), 2u) << n.dump(2);
+    EXPECT_EQ(n["rounds"][0]["spp"], 4);
+    EXPECT_GT(n["rounds"][0]["gap"].get<double>(), 0.05);
+    for (size_t k = 1; k < n["rounds"].size(); ++k)
+        EXPECT_GT(n["rounds"][k]["spp"].get<int>(), n["rounds"][k - 1]["spp"].get<int>());
+    EXPECT_EQ(s["transport"]["spp"], n["spp"]);
+    EXPECT_EQ(s["validation"]["transport"]["spp"], n["spp"]);
+    EXPECT_NE(s["validation"]["transport"]["seed"], s["transport"]["seed"]);
+    const bool met = n["met"].get<bool>();
+    EXPECT_EQ(met, n["gap"].get<double>() <= 0.05);
+    if (!met) {
+        EXPECT_EQ(n["spp"], 64);
+        EXPECT_NE(r.output.find("no light is trusted"), std::string::npos) << r.output;
+    }
+    // The gap is the figures' relative difference.
+    const json& last = n["rounds"].back();
+    EXPECT_NEAR(last["gap"].get<double>(),
+                (last["training"].get<double>() - last["validation"].get<double>()) /
+                    last["validation"].get<double>(),
+                1e-12);
+    // Every candidate was scored on the validation estimate; the answer is one of them.
+    const json& a = s["answer"];
+    ASSERT_TRUE(a.is_object());
+    EXPECT_GE(a["candidates"].size(), 4u);
+    EXPECT_EQ(a["merit"], "defect visibility");
+    bool found = false;
+    for (const json& c : a["candidates"]) found |= c["name"] == a["light"];
+    EXPECT_TRUE(found);
+    EXPECT_EQ(std::filesystem::exists(out / "envmap-optimized.exr"), a["kind"] == "reference");
+    // --heldout none: the headline says its figures are training figures, first.
+    EXPECT_NE(r.output.find("Training figures only"), std::string::npos) << r.output;
+}
+
+// A given spp is kept; its gap is measured and, above the tolerance, warned about.
+TEST(OptimizeAnswers, AGivenSppIsKeptAndItsGapWarnedAbout) {
+    test::TempDir dir("answers-given");
+    ASSERT_EQ(test::writeSmallLabelledPart(dir.path()), 0);
+    const auto out = dir.path() / "out";
+    const test::RunResult r = test::runCli(
+        "optimize " + (dir.path() / "scene.json").string() + " --truth " +
+        (dir.path() / "part-truth.png").string() + " --spp 4 --heldout none --no-figures --cache " +
+        (dir.path() / "cache").string() + " -o " + out.string() + " 2>&1");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const json s = readJson(out / "summary.json");
+    const json& n = s["training_noise"];
+    ASSERT_EQ(n["rounds"].size(), 1u);
+    EXPECT_FALSE(n["adapted"].get<bool>());
+    EXPECT_EQ(s["transport"]["spp"], 4);
+    if (!n["met"].get<bool>()) {
+        EXPECT_NE(n["reason"].get<std::string>().find("the given spp: ABOVE"), std::string::npos);
+        bool warned = false;
+        for (const json& w : s["warnings"])
+            warned |= w.get<std::string>().find("training noise") != std::string::npos;
+        EXPECT_TRUE(warned) << s["warnings"].dump();
+    }
+}
+
+// A black box (SPSA through our renderer) minimizes eq. 2 through the renderer: the summary's
+// objective, initial and final loss are that, and say so; another objective is refused.
+TEST(OptimizeAnswers, TheBlackBoxSummaryReportsTheLossItMinimized) {
+    test::TempDir dir("answers-blackbox");
+    ASSERT_EQ(test::writeSmallLabelledPart(dir.path()), 0);
+    const auto out = dir.path() / "out";
+    const std::string common = "optimize " + (dir.path() / "scene.json").string() +
+                               " --optimizer spsa --iterations 6 --heldout none --no-figures "
+                               "--cache " +
+                               (dir.path() / "cache").string() + " -o " + out.string();
+    const test::RunResult r = test::runCli(common + " 2>&1");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const json s = readJson(out / "summary.json");
+    EXPECT_EQ(s["objective"], "paper");
+    EXPECT_NE(s["loss_through"].get<std::string>().find("our renderer"), std::string::npos);
+    // loss.csv's first and best rows are the optimizer's own losses through the renderer.
+    const std::string csv = test::readFile(out / "loss.csv");
+    std::istringstream lines(csv);
+    std::string line;
+    std::getline(lines, line);  // header
+    double best = std::numeric_limits<double>::infinity(), first = std::nan("");
+    while (std::getline(lines, line)) {
+        std::istringstream f(line);
+        std::string it, ev, loss;
+        std::getline(f, it, ',');
+        std::getline(f, ev, ',');
+        std::getline(f, loss, ',');
+        const double v = std::stod(loss);
+        if (std::isnan(first)) first = v;
+        best = std::min(best, v);
+    }
+    EXPECT_NEAR(s["initial_loss"].get<double>(), first, 1e-9 * std::abs(first));
+    EXPECT_NEAR(s["final_loss"].get<double>(), best, 1e-9 * std::abs(best));
+    EXPECT_EQ(s["improved"].get<bool>(), best < first);
+    const test::RunResult refused = test::runCli(common + " --objective unbiased 2>&1");
+    EXPECT_NE(refused.exitCode, 0);
+    EXPECT_NE(refused.output.find("eq. 2 through the renderer"), std::string::npos)
+        << refused.output;
+}
