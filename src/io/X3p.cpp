@@ -327,30 +327,38 @@ class X3pReader {
             fail("not enough memory for a " + std::to_string(w_) + "x" + std::to_string(h_) +
                  " height map");
         }
+        // One loop per data type (the type is not tested per point); little-endian values
+        // are assembled from bytes, so the host's byte order does not matter.
         const double mm = 1000.0;
-        const unsigned char* p = raw.data();
-        for (size_t k = 0; k < d.heights.size(); ++k, p += bytes_) {
-            double v = 0.0;
-            if (code_ == 'I') {
-                uint16_t u = static_cast<uint16_t>(p[0] | (p[1] << 8));
-                v = std::bit_cast<int16_t>(u);
-            } else if (code_ == 'L') {
-                uint32_t u = 0;
-                for (int b = 3; b >= 0; --b) u = (u << 8) | p[b];
-                v = std::bit_cast<int32_t>(u);
-            } else if (code_ == 'F') {
-                uint32_t u = 0;
-                for (int b = 3; b >= 0; --b) u = (u << 8) | p[b];
-                v = std::bit_cast<float>(u);
-            } else {
-                uint64_t u = 0;
-                for (int b = 7; b >= 0; --b) u = (u << 8) | p[b];
-                v = std::bit_cast<double>(u);
+        const float nan = std::numeric_limits<float>::quiet_NaN();
+        const auto convert = [&](auto decode) {
+            const unsigned char* p = raw.data();
+            float* out = d.heights.data();
+            const size_t count = d.heights.size();
+            for (size_t k = 0; k < count; ++k, p += bytes_) {
+                const double v = decode(p);
+                out[k] = std::isnan(v) ? nan : static_cast<float>((v * zInc_ + zOff_) * mm);
             }
-            const bool masked = !valid.empty() && !((valid[k / 8] >> (k % 8)) & 1);
-            d.heights[k] = masked || std::isnan(v) ? std::numeric_limits<float>::quiet_NaN()
-                                                   : static_cast<float>((v * zInc_ + zOff_) * mm);
-        }
+            if (!valid.empty())
+                for (size_t k = 0; k < count; ++k)
+                    if (!((valid[k / 8] >> (k % 8)) & 1)) out[k] = nan;
+        };
+        const auto u32 = [](const unsigned char* p) {
+            return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 |
+                   uint32_t(p[3]) << 24;
+        };
+        if (code_ == 'I')
+            convert([](const unsigned char* p) {
+                return double(std::bit_cast<int16_t>(static_cast<uint16_t>(p[0] | (p[1] << 8))));
+            });
+        else if (code_ == 'L')
+            convert([&](const unsigned char* p) { return double(std::bit_cast<int32_t>(u32(p))); });
+        else if (code_ == 'F')
+            convert([&](const unsigned char* p) { return double(std::bit_cast<float>(u32(p))); });
+        else
+            convert([&](const unsigned char* p) {
+                return std::bit_cast<double>(uint64_t(u32(p)) | uint64_t(u32(p + 4)) << 32);
+            });
         return d;
     }
 
