@@ -30,7 +30,7 @@ Scene::Scene(SceneDesc d, int w, int h, std::vector<float> hs)
 
 std::string HeightmapLoad::text(int width, int height, double pitch) const {
     char b[96];
-    std::snprintf(b, sizeof b, "%dx%d samples at %.6g", width, height, pitch);
+    std::snprintf(b, sizeof b, "%dx%d samples at %.6g mm", width, height, pitch);
     std::string t = b;
     if (!format.empty()) t += ", " + format;
     if (!resampling.empty()) t += "; " + resampling;
