@@ -185,7 +185,7 @@ def main():
     a = ap.parse_args()
     os.makedirs(a.outdir, exist_ok=True)
     h, labels, legend = make(a.kind, a.seed, a.n, a.pitch)
-    np.save(os.path.join(a.outdir, "part.npy"), h)
+    np.save(os.path.join(a.outdir, "part.npy"), np.ascontiguousarray(h))
     png_gray8(os.path.join(a.outdir, "part-truth.png"), labels)
     with open(os.path.join(a.outdir, "part-truth.json"), "w") as f:
         json.dump({"labels": legend}, f)
