@@ -8,6 +8,7 @@
 
 #include "core/Error.h"
 #include "io/AtomicFile.h"
+#include "io/InputFile.h"
 
 namespace sl {
 
@@ -94,16 +95,10 @@ json lampsToJson(const std::vector<Lamp>& lamps, double distanceMm) {
 
 LampsFile readLampsFile(const std::filesystem::path& file) {
     const std::string where = file.string();
-    std::ifstream in(file);
-    if (!in)
-        throw inputError(where, "cannot be read", "give the lamps.json `scratchlight lamps` wrote");
-    json j;
-    try {
-        j = json::parse(in);
-    } catch (const json::exception& e) {
-        throw inputError(where, std::string("is not JSON: ") + e.what(),
+    json j = readJsonInput(file, "a lamps file", "give the lamps.json `scratchlight lamps` wrote");
+    if (!j.is_object())
+        throw inputError(where, "is not a JSON object",
                          "give the lamps.json `scratchlight lamps` wrote");
-    }
     LampsFile f;
     f.distanceMm = number(j, "distance_mm", where);
     if (!(f.distanceMm > 0))

@@ -3,16 +3,15 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
-#include <sstream>
 
 #include "core/Error.h"
 #include "core/Progress.h"
 #include "core/Registry.h"
 #include "core/Text.h"
 #include "io/HeightmapIO.h"
+#include "io/InputFile.h"
 #include "scene/Materials.h"
 #include "transport/TransportMatrix.h"
 
@@ -50,20 +49,20 @@ class Fields {
     double number(const std::string& key, double def) {
         const json* v = get(key);
         if (!v) return def;
-        if (!v->is_number()) fail(key, "must be a number, got " + v->dump());
+        if (!v->is_number()) fail(key, "must be a number, got " + jsonExcerpt(*v));
         double d = v->get<double>();
         if (!std::isfinite(d)) fail(key, "must be finite");
         return d;
     }
     double positive(const std::string& key, double def) {
         double d = number(key, def);
-        if (!(d > 0)) fail(key, "must be > 0, got " + json(d).dump());
+        if (!(d > 0)) fail(key, "must be > 0, got " + formatNumber(d));
         return d;
     }
     int integer(const std::string& key, int def, int lo, int hi) {
         const json* v = get(key);
         if (!v) return def;
-        if (!v->is_number_integer()) fail(key, "must be a whole number, got " + v->dump());
+        if (!v->is_number_integer()) fail(key, "must be a whole number, got " + jsonExcerpt(*v));
         auto i = v->get<long long>();
         if (i < lo || i > hi)
             fail(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
@@ -73,7 +72,7 @@ class Fields {
     std::string string(const std::string& key, const std::string& def) {
         const json* v = get(key);
         if (!v) return def;
-        if (!v->is_string()) fail(key, "must be a string, got " + v->dump());
+        if (!v->is_string()) fail(key, "must be a string, got " + jsonExcerpt(*v));
         return v->get<std::string>();
     }
     std::string choice(const std::string& key, const std::string& def,
@@ -89,11 +88,11 @@ class Fields {
         const json* v = get(key);
         if (!v) return std::nullopt;
         if (!v->is_array() || v->size() != 3)
-            fail(key, "must be an array of 3 numbers, got " + v->dump());
+            fail(key, "must be an array of 3 numbers, got " + jsonExcerpt(*v));
         Vec3d r;
         for (int i = 0; i < 3; ++i) {
             if (!(*v)[i].is_number() || !std::isfinite((*v)[i].get<double>()))
-                fail(key, "must be an array of 3 finite numbers, got " + v->dump());
+                fail(key, "must be an array of 3 finite numbers, got " + jsonExcerpt(*v));
             r[i] = (*v)[i].get<double>();
         }
         return r;
@@ -143,10 +142,10 @@ void parseHeightmap(Fields& f, const std::filesystem::path& baseDir, HeightmapDe
     if (!(h.heightScale != 0)) f.fail("height_scale", "must be non-zero");
     if (const json* r = f.get("height_range")) {
         if (!r->is_array() || r->size() != 2 || !(*r)[0].is_number() || !(*r)[1].is_number())
-            f.fail("height_range", "must be [min, max], got " + r->dump());
+            f.fail("height_range", "must be [min, max], got " + jsonExcerpt(*r));
         double lo = (*r)[0].get<double>(), hi = (*r)[1].get<double>();
         if (!std::isfinite(lo) || !std::isfinite(hi) || !(hi > lo))
-            f.fail("height_range", "must be [min, max] with max > min, got " + r->dump());
+            f.fail("height_range", "must be [min, max] with max > min, got " + jsonExcerpt(*r));
         h.heightRange = std::array<double, 2>{lo, hi};
     }
     f.rejectUnknown();
@@ -242,12 +241,7 @@ void parseRender(Fields& f, RenderDesc& r) {
 }
 
 json parseJsonText(const std::string& text, const std::string& where) {
-    try {
-        return json::parse(text);
-    } catch (const json::exception& e) {  // parse_error, or out_of_range for a number like 1e999
-        throw inputError(where, std::string("not valid JSON: ") + e.what(),
-                         "fix the syntax (a JSON validator shows the spot)");
-    }
+    return parseJsonInput(text, where);
 }
 
 SceneDesc parseSceneJson(const json& j, const std::filesystem::path& baseDir,
@@ -293,7 +287,8 @@ void applySceneOverride(json& scene, const std::string& override, const std::str
     if (!scene.is_object())
         throw inputError(where, "is not a JSON object", "a scene file is {\"heightmap\": ...}");
     const std::string text = override.substr(eq + 1);
-    json value = json::parse(text, nullptr, false);
+    json value = jsonNestingDepth(text) > kMaxJsonDepth ? json(json::value_t::discarded)
+                                                        : json::parse(text, nullptr, false);
     if (value.is_discarded()) value = text;  // a bare word: a string
     json* at = &scene;
     std::string walked;
@@ -318,13 +313,9 @@ void applySceneOverride(json& scene, const std::string& override, const std::str
 
 SceneDesc readSceneFile(const std::filesystem::path& file,
                         const std::vector<std::string>& overrides) {
-    std::ifstream in(file, std::ios::binary);
-    if (!in)
-        throw inputError(file.string(), "cannot open the scene file",
-                         "check the path (scene files are JSON)");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    json j = parseJsonText(ss.str(), file.string());
+    json j = parseJsonText(readInputFile(file, "the scene file", kMaxJsonFileBytes,
+                                         "check the path (scene files are JSON)"),
+                           file.string());
     for (const std::string& o : overrides) applySceneOverride(j, o, file.string());
     std::string where = file.string();
     if (!overrides.empty()) {
@@ -336,6 +327,13 @@ SceneDesc readSceneFile(const std::filesystem::path& file,
     d.file = file;
     d.overrides = overrides;
     return d;
+}
+
+std::vector<std::filesystem::path> sceneInputFiles(const SceneDesc& desc) {
+    std::vector<std::filesystem::path> files;
+    for (const auto& f : {desc.file, desc.heightmap.path, desc.envmap.path})
+        if (!f.empty()) files.push_back(f);
+    return files;
 }
 
 std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
@@ -410,7 +408,8 @@ std::vector<SceneFileField> sceneFileFields() {
         {"material.distribution", code(microfacetName(m.distribution)),
          "or `beckmann` (visible-normal sampling, as Mitsuba)"},
         {"material.alpha", m.alphaU == m.alphaV ? num(m.alphaU) : pair(m.alphaU, m.alphaV),
-         "roughness α; `alpha_u` (along +x, the map's columns) and `alpha_v` (along z) for "
+         "roughness α; `alpha_u` (along +x, the map's columns) and `alpha_v` (along z) "
+         "for "
          "anisotropy"},
         {"material.material", code(d.material.name),
          "`none` (η=0, k=1: a perfect mirror), `Al`, `Cr`, `Fe`, `Cu`, `Au`, `Ag`; or explicit "
