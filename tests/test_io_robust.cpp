@@ -472,3 +472,87 @@ TEST(RobustIO, BinaryShardListIsNamedNotPrinted) {
         EXPECT_LT(msg.size(), 400u) << msg;
     }
 }
+
+// ---- Issue 35, item 5: what the files and options admit. ----
+
+// lamps.json bar widths of -5 or 500 degrees and ring bands past the zenith were read.
+TEST(RobustIO, LampsFileRefusesWhatNoLampIs) {
+    test::TempDir dir("lampsrange");
+    const fs::path file = dir / "lamps.json";
+    auto lamps = [&](const std::string& lamp) {
+        test::writeText(file, R"({"distance_mm": 500, "lamps": [)" + lamp + "]}");
+    };
+    const std::string bar =
+        R"({"kind": "bar", "radiance": 1, "azimuth_deg": 10, "elevation_deg": 40,
+            "angular_length_deg": 30, "roll_deg": 0, "angular_width_deg": )";
+    lamps(bar + "10}");
+    EXPECT_EQ(readLampsFile(file).lamps.size(), 1u);
+    for (const std::string w : {"-5", "500", "0"}) {
+        lamps(bar + w + "}");
+        expectRefused([&] { readLampsFile(file); }, {"lamps[0] angular_width_deg", "is " + w});
+    }
+    const std::string ring =
+        R"({"kind": "ring", "radiance": 1, "elevation_deg": 60, "elevation_band_deg": )";
+    lamps(ring + "[40, 80]}");
+    EXPECT_EQ(readLampsFile(file).lamps.size(), 1u);
+    for (const std::string band : {"[80, 120]", "[-100, 10]", "[50, 40]"}) {
+        lamps(ring + band + "}");
+        expectRefused([&] { readLampsFile(file); }, {"elevation_band_deg", "[-90, 90]"});
+    }
+    lamps(ring + R"(["a", 3]})");
+    expectRefused([&] { readLampsFile(file); }, {"elevation_band_deg", "not [lo, hi]"});
+    lamps(R"({"kind": "disk", "radiance": 1, "azimuth_deg": 0, "elevation_deg": 40,
+              "angular_radius_deg": 0})");
+    expectRefused([&] { readLampsFile(file); }, {"angular_radius_deg", "(0, 90]"});
+}
+
+// --forbid-azimuth 0:360 forbade nothing (lamps still placed at 0 degrees).
+TEST(RobustIO, ForbiddenAzimuthRangesAreChecked) {
+    constexpr double kDeg = 3.14159265358979323846 / 180;
+    LampFitOptions o;
+    o.forbiddenAzimuth = {{150 * kDeg, 210 * kDeg}, {350 * kDeg, 10 * kDeg}};
+    EXPECT_NO_THROW(checkLampFitOptions(o));
+    o.forbiddenAzimuth = {{0, 360 * kDeg}};
+    expectRefused([&] { checkLampFitOptions(o); },
+                  {"option 'forbid-azimuth' 0:360", "forbids every azimuth"});
+    o.forbiddenAzimuth = {{-180 * kDeg, 180 * kDeg}};
+    expectRefused([&] { checkLampFitOptions(o); }, {"forbids every azimuth"});
+    o.forbiddenAzimuth = {{30 * kDeg, 30 * kDeg}};
+    expectRefused([&] { checkLampFitOptions(o); }, {"is empty"});
+    o.forbiddenAzimuth = {{0, 1e9}};
+    expectRefused([&] { checkLampFitOptions(o); }, {"[-360, 360]"});
+}
+
+// Roughness 1.5 or 1e30 was read (1e30 as a float is inf); const:1e39 rendered in full, then the
+// EXR writer blamed out.exr.
+TEST(RobustIO, RoughnessAndConstantLightRangesAreChecked) {
+    const std::string hm = R"({"heightmap": {"path": "x.exr"}, "material": )";
+    EXPECT_NO_THROW(parseScene(hm + R"({"alpha": 1}})", "."));
+    for (const std::string bad :
+         {R"({"alpha": 1.5})", R"({"alpha": 1e30})", R"({"alpha": 0.1, "alpha_v": 2})"})
+        expectRefused([&] { parseScene(hm + bad + "}", "."); },
+                      {"material.alpha", "must be in (0, 1]"});
+    expectRefused([&] { lightFromSpec("const:1e39", 50, 25, 1, "--envmap"); },
+                  {"const:1e39", "more than 1e6"});
+    EXPECT_NO_THROW(lightFromSpec("const:2", 50, 25, 1, "--envmap"));
+}
+
+// `gen-surface -o A.x3p` twice gave different bytes: the zip members carried the clock's time.
+TEST(RobustIO, X3pMembersCarryAFixedTime) {
+    test::TempDir dir("x3ptime");
+    const std::vector<float> h(6 * 5, 0.25f);
+    writeX3p(dir / "a.x3p", 6, 5, h, 0.01);
+    const std::string bytes = bytesOf(dir / "a.x3p");
+    // Every local file header (PK\3\4): DOS date at +12, year - 1980 in its top 7 bits.
+    int members = 0;
+    for (size_t at = 0; (at = bytes.find("PK\x03\x04", at)) != std::string::npos; at += 4) {
+        ASSERT_LE(at + 14, bytes.size());
+        const auto date = static_cast<uint16_t>(static_cast<uint8_t>(bytes[at + 12]) |
+                                                static_cast<uint8_t>(bytes[at + 13]) << 8);
+        EXPECT_EQ(date >> 9, 0) << "member " << members << " is not dated 1980";
+        ++members;
+    }
+    EXPECT_EQ(members, 3);
+    writeX3p(dir / "b.x3p", 6, 5, h, 0.01);
+    EXPECT_EQ(bytesOf(dir / "b.x3p"), bytes);
+}

@@ -158,9 +158,18 @@ void parseMaterial(Fields& f, MaterialDesc& m) {
     std::string dist =
         f.choice("distribution", microfacetName(p.distribution), {"ggx", "beckmann"});
     p.distribution = dist == "ggx" ? Microfacet::GGX : Microfacet::Beckmann;
-    double alpha = f.positive("alpha", p.alphaU);
-    p.alphaU = static_cast<float>(f.positive("alpha_u", alpha));
-    p.alphaV = static_cast<float>(f.positive("alpha_v", alpha));
+    // Roughness α: the microfacet slope's spread; past 1 a surface is rougher than any machined
+    // metal (and a float overflows at 3.4e38), so (0, 1] is what the scene file admits.
+    auto roughness = [&](const char* key, double def) {
+        const double a = f.positive(key, def);
+        if (a > 1)
+            f.fail(key, "must be in (0, 1], got " + formatNumber(a),
+                   "roughness alpha: about 0.01 polished, 0.1 ground, 0.5 very rough");
+        return a;
+    };
+    double alpha = roughness("alpha", p.alphaU);
+    p.alphaU = static_cast<float>(roughness("alpha_u", alpha));
+    p.alphaV = static_cast<float>(roughness("alpha_v", alpha));
     auto eta = f.rgb("eta"), k = f.rgb("k");
     bool hasName = f.get("material") != nullptr;
     if (eta || k) {
@@ -408,7 +417,7 @@ std::vector<SceneFileField> sceneFileFields() {
         {"material.distribution", code(microfacetName(m.distribution)),
          "or `beckmann` (visible-normal sampling, as Mitsuba)"},
         {"material.alpha", m.alphaU == m.alphaV ? num(m.alphaU) : pair(m.alphaU, m.alphaV),
-         "roughness α; `alpha_u` (along +x, the map's columns) and `alpha_v` (along z) "
+         "roughness α in (0, 1]; `alpha_u` (along +x, the map's columns) and `alpha_v` (along z) "
          "for "
          "anisotropy"},
         {"material.material", code(d.material.name),
