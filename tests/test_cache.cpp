@@ -10,6 +10,8 @@
 
 #include "TestUtil.h"
 #include "app/Cache.h"
+#include "io/TransportFile.h"
+#include "transport/TransportMatrix.h"
 
 using namespace sl;
 namespace fs = std::filesystem;
@@ -48,17 +50,43 @@ TEST(Cache, LocationFollowsFlagThenEnvironmentThenXdg) {
     ::setenv("SCRATCHLIGHT_CACHE", saved.c_str(), 1);
 }
 
+// Issue 35: `cache clear` deleted a user's transport-notes.tm by its name alone. A file is the
+// cache's only when its content says so (a .tm header holding the fingerprint it is named by).
 TEST(Cache, ClearRemovesOnlyTheCachesFiles) {
     test::TempDir dir("cache-clear");
-    test::writeText(dir / "transport-0123abcd.tm", std::string(1000, 'x'));
-    test::writeText(dir / "transport-0123abcd.tm.tmp-1", "partial");
+    const std::string fp = "0123456789abcdef0123456789abcdef";
+    TransportMatrix t;
+    t.width = t.height = 1;
+    t.envWidth = 2;
+    t.envHeight = 3;
+    t.storage = TransportStorage::Dense;
+    t.values.assign(t.cols(), 0.5f);
+    t.objectMask.assign(1, 1);
+    TransportProvenance prov;
+    prov.fingerprint = fp;
+    prov.inputs = "{}";
+    writeTransportFile(dir / ("transport-" + fp + ".tm"), t, prov);
+    const uintmax_t tmBytes = fs::file_size(dir / ("transport-" + fp + ".tm"));
+    // A temporary of a killed run, cut short after the magic.
+    test::writeText(dir / (".transport-" + fp + ".tmp-123-0.tm"), "SLTMATRX");
+    // The user's files, however their names look.
+    test::writeText(dir / "transport-notes.tm", "the user's notes");
+    test::writeText(dir / ("transport-" + std::string(32, 'f') + ".tm"), std::string(100, 'x'));
+    prov.fingerprint = std::string(32, 'e');  // a real matrix, but not named by its fingerprint
+    writeTransportFile(dir / ("transport-" + std::string(32, 'd') + ".tm"), t, prov);
+    test::writeText(dir / (".transport-" + fp + ".tmp-1-2.tm"), "a user's draft");
     test::writeText(dir / "notes.txt", "the user's");
     const CacheContents before = cacheContents(dir.path());
     EXPECT_EQ(before.files, 2u);
-    EXPECT_EQ(before.bytes, 1007u);
+    EXPECT_EQ(before.bytes, tmBytes + 8);
     const CacheContents removed = clearCache(dir.path());
     EXPECT_EQ(removed.files, 2u);
-    EXPECT_TRUE(fs::exists(dir / "notes.txt"));
+    EXPECT_FALSE(fs::exists(dir / ("transport-" + fp + ".tm")));
+    for (const std::string& kept :
+         {std::string("transport-notes.tm"), "transport-" + std::string(32, 'f') + ".tm",
+          "transport-" + std::string(32, 'd') + ".tm", ".transport-" + fp + ".tmp-1-2.tm",
+          std::string("notes.txt")})
+        EXPECT_TRUE(fs::exists(dir / kept)) << kept;
     EXPECT_EQ(cacheContents(dir.path()).files, 0u);
     EXPECT_EQ(cacheContents(dir / "missing").files, 0u);
 }

@@ -185,3 +185,127 @@ TEST_F(CliTest, BenchScratchmapPrintsATableAndWritesCsv) {
     EXPECT_EQ(lines, 3);
     EXPECT_EQ(runCli("bench scratchmap --sizes 0").exitCode, 2);
 }
+
+// Issue 35: an output never replaces an input of the same run. `render scene.json -o part.exr`
+// overwrote the scene's own height map (exit 0); the PNG preview beside the output may not
+// replace it either.
+TEST_F(CliTest, RenderRefusesToWriteOverItsInputs) {
+    Image hm(16, 12, 1);
+    for (size_t i = 0; i < hm.data.size(); ++i) hm.data[i] = 0.001f * static_cast<float>(i % 7);
+    writeExr(dir / "part.exr", hm);
+    const std::string before = test::readFile(dir / "part.exr");
+    const std::string s =
+        scene(R"({"heightmap": {"path": "part.exr", "pixel_pitch": 0.1}, )" + smallCamera + "}");
+    for (const std::string& o : {(dir / "part.exr").string(), (dir / "." / "part.exr").string()}) {
+        const auto r = runCli("render " + s + " --spp 1 --envmap const:0.5 -o " + o);
+        EXPECT_EQ(r.exitCode, 1) << r.output;
+        EXPECT_NE(r.output.find("is an input of this run"), std::string::npos) << r.output;
+        EXPECT_EQ(test::readFile(dir / "part.exr"), before);
+    }
+    // The preview: a height map part.png and -o part.exr (whose preview is part.png).
+    std::filesystem::remove(dir / "part.exr");
+    writePng16(dir / "part.png", hm);
+    const std::string pngBefore = test::readFile(dir / "part.png");
+    const std::string s2 = scene(
+        R"({"heightmap": {"path": "part.png", "pixel_pitch": 0.1, "height_range": [0, 0.01]}, )" +
+        smallCamera + "}");
+    const auto r =
+        runCli("render " + s2 + " --spp 1 --envmap const:0.5 -o " + (dir / "part.exr").string());
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("preview"), std::string::npos) << r.output;
+    EXPECT_EQ(test::readFile(dir / "part.png"), pngBefore);
+    EXPECT_FALSE(std::filesystem::exists(dir / "part.exr"));
+}
+
+// `gen-surface -o g.exr --scene part.exr` wrote scene JSON over a height map; a scene that
+// cannot be written left the map behind. Now the scene must be a .json, no two outputs are the
+// same file, and the files appear together or not at all.
+TEST_F(CliTest, GenSurfaceNeverWritesHalfOrOverAnotherOutput) {
+    Image hm(4, 4, 1);
+    writeExr(dir / "part.exr", hm);
+    const std::string before = test::readFile(dir / "part.exr");
+    const std::string small = " --width 24 --height 24 --pitch 0.05";
+    auto r = runCli("gen-surface -o " + (dir / "g.exr").string() + " --scene " +
+                    (dir / "part.exr").string() + small);
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("must end in .json"), std::string::npos) << r.output;
+    EXPECT_EQ(test::readFile(dir / "part.exr"), before);
+    EXPECT_FALSE(std::filesystem::exists(dir / "g.exr"));
+    // The scene named as the truth legend.
+    r = runCli("gen-surface -o " + (dir / "g.exr").string() + " --scene " +
+               (dir / "g-truth.json").string() + small);
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("is also the truth legend"), std::string::npos) << r.output;
+    // A scene that cannot be written (its folder is a file): nothing at all is left.
+    test::writeText(dir / "afile", "x");
+    r = runCli("gen-surface -o " + (dir / "g.exr").string() + " --scene " +
+               (dir / "afile" / "g.json").string() + small);
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    for (const char* name : {"g.exr", "g-truth.png", "g-truth.json"})
+        EXPECT_FALSE(std::filesystem::exists(dir / name)) << name;
+    for (auto& e : std::filesystem::directory_iterator(dir.path()))
+        EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
+    // And the ordinary run writes all four.
+    r = runCli("gen-surface -o " + (dir / "g.exr").string() + " --scene " +
+               (dir / "g.json").string() + small);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    for (const char* name : {"g.exr", "g-truth.png", "g-truth.json", "g.json"})
+        EXPECT_TRUE(std::filesystem::exists(dir / name)) << name;
+}
+
+// Issue 35, item 5: messages name the flag and print bounds readably; a list with an empty entry
+// is refused; nothing is half-written by an option that cannot work.
+TEST_F(CliTest, OptionMessagesNameTheFlagReadably) {
+    const std::string s = (dir / "missing.json").string();
+    auto r = runCli("optimize " + s + " --lr 0");
+    EXPECT_EQ(r.exitCode, 2) << r.output;
+    EXPECT_NE(r.output.find("--lr"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("must be a finite number > 0, got '0'"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("0000000000"), std::string::npos) << r.output;  // no 309 digits
+    r = runCli("optimize " + s + " --lambda 1,,3");
+    EXPECT_EQ(r.exitCode, 2) << r.output;
+    EXPECT_NE(r.output.find("--lambda"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("an empty entry"), std::string::npos) << r.output;
+    r = runCli("optimize " + s + " --lambda 1,x");
+    EXPECT_EQ(r.exitCode, 2) << r.output;
+    EXPECT_NE(r.output.find("'x' is not a finite number"), std::string::npos) << r.output;
+    // gen-surface names its flags, not SurfaceSpec's fields.
+    const std::string g = "gen-surface -o " + (dir / "g.exr").string() + " --width 16 --height 16";
+    r = runCli(g + " --pitch 0");
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("--pitch"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("SurfaceSpec"), std::string::npos) << r.output;
+    r = runCli(g + " --scratches=-1");
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("--scratches"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "g.exr"));
+}
+
+TEST_F(CliTest, RenderChecksItsOutputsAndSaysWhenItIsBlack) {
+    writeGoodMap();
+    const std::string s =
+        scene(R"({"heightmap": {"path": "map.npy", "pixel_pitch": 0.1}, )" + smallCamera + "}");
+    // --exposure nan, and a directory where the preview goes: refused before the work.
+    auto r = runCli("render " + s + " --spp 1 --exposure nan -o " + out());
+    EXPECT_EQ(r.exitCode, 2) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(out()));
+    std::filesystem::create_directories(png());
+    r = runCli("render " + s + " --spp 1 -o " + out());
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("is a directory"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(out()));
+    std::filesystem::remove(png());
+    r = runCli("render " + s + " --spp 1 --envmap const:1e39 -o " + out());
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("more than 1e6"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(out()));
+    // Heights of 1e30: a black render, and a word about it.
+    std::vector<float> h(16 * 12, 0.0f);
+    h[7] = 1e30f;
+    test::writeNpyF32(dir / "map.npy", 12, 16, h);
+    r = runCli("render " + s + " --spp 1 --envmap const:1 -o " + out());
+    EXPECT_NE(r.output.find("the render is black"), std::string::npos) << r.output;
+    if (r.exitCode == 0) {
+        EXPECT_NE(r.output.find("height map's units"), std::string::npos) << r.output;
+    }
+}

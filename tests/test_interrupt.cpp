@@ -266,3 +266,73 @@ TEST(StagedDirectory, FullDiskLeavesThePreviousResults) {
     EXPECT_EQ(entries(out), names);
     EXPECT_EQ(entries(dir.path()), (std::vector<std::string>{"g.tm", "out"}));
 }
+
+// Issue 35: a folder is ours only by our marker. A folder of the user's that happens to hold a
+// summary.json (or an output of a scratchlight before the marker) was wiped by `optimize -o`.
+TEST(StagedDirectory, ASummaryWithoutOurMarkerIsNotReplaced) {
+    test::TempDir dir("staged-summary");
+    const fs::path old = dir.path() / "old";
+    fs::create_directories(old);
+    writeFile(old / "summary.json", "{}");
+    writeFile(old / "thesis.tex", "precious");
+    try {
+        StagedDirectory s(old);
+        ADD_FAILURE() << "accepted";
+    } catch (const InputError& e) {
+        const std::string msg = e.what();
+        for (const char* part : {"summary.json", ".scratchlight-output", "not replaced",
+                                 "remove it yourself", "another output directory"})
+            EXPECT_NE(msg.find(part), std::string::npos) << part << " not in: " << msg;
+    }
+    EXPECT_EQ(test::readFile(old / "thesis.tex"), "precious");
+    // A marker file of another content is not ours either.
+    writeFile(old / StagedDirectory::kMarker, "mine");
+    EXPECT_THROW(StagedDirectory{old}, InputError);
+    // What this class wrote is replaced as before.
+    const fs::path ours = dir.path() / "ours";
+    {
+        StagedDirectory s(ours);
+        writeFile(s.path() / "summary.json", "{}");
+        s.commit();
+    }
+    EXPECT_TRUE(fs::exists(ours / StagedDirectory::kMarker));
+    StagedDirectory again(ours);
+    again.commit();
+    EXPECT_FALSE(fs::exists(ours / "summary.json"));
+}
+
+// An output folder replaced as a whole must not hold an input of the same run.
+TEST(StagedDirectory, OptimizeRefusesAnOutputThatHoldsItsInput) {
+    test::TempDir dir("staged-input");
+    const fs::path out = dir.path() / "out";
+    {
+        StagedDirectory s(out);
+        s.commit();
+    }
+    const fs::path scene = out / "scene.json";
+    fs::copy_file(fs::path(SL_SOURCE_DIR) / "scenes/default/scene.json", scene);
+    const auto r = test::runCli("optimize " + scene.string() + " -o " + out.string());
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("holds an input of this run"), std::string::npos) << r.output;
+    EXPECT_TRUE(fs::exists(scene));
+}
+
+// Issue 35: gen-surface ignored Ctrl-C and finished (up to 22 s), then exited 130 with its
+// files written. Now it stops between stages and rows' blocks and writes nothing.
+TEST(Interrupt, GenSurfaceStopsAndWritesNothing) {
+    test::TempDir dir("int-gen");
+    const fs::path log = dir.path() / "log.txt";
+    const pid_t pid = spawnCli({"gen-surface", "-o", (dir.path() / "g.exr").string(), "--width",
+                                "6000", "--height", "6000"},
+                               log);
+    ASSERT_TRUE(waitForHandler(pid, 10));
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    const auto t0 = std::chrono::steady_clock::now();
+    ::kill(pid, SIGINT);
+    const int code = waitExit(pid);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_EQ(code, 130) << test::readFile(log);
+    EXPECT_LT(seconds, 3.0) << test::readFile(log);
+    EXPECT_EQ(entries(dir.path()), std::vector<std::string>{"log.txt"}) << test::readFile(log);
+}

@@ -1,33 +1,44 @@
 // Readers that refuse bad data and writers that never leave a bad file (issue 14, "Hard cases
 // and bad input"): truncated TIFF height maps, negative or non-finite env maps, an env-map grid
 // larger than a transport matrix holds, image writes into a full file system, and EXR files
-// without a timestamp (equal images, equal bytes).
+// without a timestamp (equal images, equal bytes). Issue 35: JSON nested 70 000 deep (scene
+// files, .tm headers, lamps.json, legends), FIFOs and devices as inputs, binary shard lists.
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iterator>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "TestUtil.h"
+#include "app/Lamps.h"
 #include "core/Error.h"
+#include "core/Hash.h"
 #include "core/Image.h"
 #include "io/EnvMapIO.h"
 #include "io/HeightmapIO.h"
 #include "io/ImageIO.h"
+#include "io/InputFile.h"
+#include "io/LampsFile.h"
+#include "io/MaskIO.h"
 #include "io/SceneFile.h"
+#include "io/TransportFile.h"
+#include "io/X3p.h"
 #include "render/PathTracer.h"
 #include "scene/Scene.h"
 #include "transport/TransportSink.h"
@@ -304,4 +315,244 @@ TEST(RobustIO, EqualExrOutputsAreByteIdentical) {
     ASSERT_TRUE(in);
     EXPECT_EQ(in->spec().find_attribute("DateTime"), nullptr);
     EXPECT_EQ(readImage(dir / "a.exr").data, img.data);
+}
+
+// ---- Hard inputs, second pass (issue 35): deep JSON, devices and FIFOs as inputs. ----
+
+namespace {
+
+/// `depth` nested arrays: [[[...0...]]].
+std::string deepArray(size_t depth) {
+    return std::string(depth, '[') + "0" + std::string(depth, ']');
+}
+
+/// Runs the CLI under `timeout` (a hang fails the test instead of blocking the suite).
+test::RunResult runCliBounded(const std::string& args) {
+    return test::runShell("timeout 20 " + std::string(SL_CLI_PATH) + " " + args);
+}
+
+}  // namespace
+
+// A JSON value nested ~70 000 deep: the error message quoted it with the JSON library's
+// recursive dump(), which overflowed the stack (SIGSEGV). Now the depth is refused before parsing
+// and a quoted value is a bounded prefix.
+TEST(RobustIO, DeeplyNestedJsonSceneIsRefusedNotACrash) {
+    test::TempDir dir("deep");
+    const fs::path scene = dir / "deep.json";
+    test::writeText(scene, R"({"heightmap": {"path": )" + deepArray(70000) + "}}");
+    expectRefused([&] { readSceneFile(scene); }, {"deep.json", "nested deeper than 64"});
+    expectRefused([&] { parseScene(R"({"camera": {"fov": )" + deepArray(70000) + "}}", "."); },
+                  {"nested deeper than 64"});
+    // Through the command line too: exit 1 and the message, no signal.
+    const auto r = runCliBounded("render " + scene.string() + " -o " + (dir / "o.exr").string());
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("nested deeper than 64"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir / "o.exr"));
+    // A shallow but wrong value is quoted as a bounded prefix.
+    std::string wide = "[";
+    for (int k = 0; k < 30000; ++k) wide += "1, ";
+    wide += "1]";
+    try {
+        parseScene(R"({"heightmap": {"path": "x.exr"}, "description": )" + wide + "}", ".");
+        ADD_FAILURE() << "accepted";
+    } catch (const InputError& e) {
+        EXPECT_LT(std::string(e.what()).size(), 400u) << e.what();
+        EXPECT_NE(std::string(e.what()).find("must be a string, got [1, 1, 1"), std::string::npos)
+            << e.what();
+    }
+}
+
+TEST(RobustIO, JsonExcerptIsBoundedForAnyValue) {
+    // Built by the iterative parser, then quoted: no recursion per level, at most 80 characters.
+    const nlohmann::json deep = nlohmann::json::parse(deepArray(70000));
+    const std::string q = jsonExcerpt(deep);
+    EXPECT_EQ(q, std::string(80, '[') + "...");
+    EXPECT_EQ(jsonExcerpt(nlohmann::json{{"a", 1}}), R"({"a": 1})");
+    EXPECT_EQ(jsonExcerpt(std::string(1000, 'x'), 10), "\"xxxxxxxxx...");
+    EXPECT_EQ(jsonNestingDepth(R"({"a": "[[[[", "b": [[1]]})"), 3);
+    EXPECT_EQ(textExcerpt(std::string("a\x01\xff", 3)), "a\\x01\\xff");
+}
+
+// The same value inside a .tm header's "inputs": the header is refused as damaged.
+TEST(RobustIO, DeeplyNestedTransportHeaderIsRefusedNotACrash) {
+    test::TempDir dir("deeptm");
+    TransportMatrix t;
+    t.width = t.height = 1;
+    t.envWidth = 2;
+    t.envHeight = 3;
+    t.storage = TransportStorage::Dense;
+    t.values.assign(t.cols(), 0.5f);
+    t.objectMask.assign(1, 1);
+    TransportProvenance prov;
+    prov.fingerprint = std::string(32, '0');
+    prov.inputs = R"({"pad": "PADPAD"})";
+    const fs::path file = dir / "deep.tm";
+    writeTransportFile(file, t, prov);
+    ASSERT_NO_THROW(readTransportFile(file));
+    // Splice 70 000 levels into the header in place of "PADPAD"; fix its length and checksum.
+    std::string bytes = bytesOf(file);
+    uint32_t len = 0;
+    std::memcpy(&len, bytes.data() + 12, 4);
+    std::string header = bytes.substr(16, len);
+    const size_t at = header.find("\"PADPAD\"");
+    ASSERT_NE(at, std::string::npos);
+    header.replace(at, 8, deepArray(70000));
+    const uint64_t hash = hash64(header.data(), header.size());
+    const auto newLen = static_cast<uint32_t>(header.size());
+    std::string out = bytes.substr(0, 12);
+    out.append(reinterpret_cast<const char*>(&newLen), 4);
+    out += header;
+    out.append(reinterpret_cast<const char*>(&hash), 8);
+    out += bytes.substr(16 + len + 8);
+    test::writeText(file, out);
+    expectRefused([&] { readTransportFile(file); }, {"deep.tm", "damaged", "deeper than 64"});
+}
+
+TEST(RobustIO, DeeplyNestedLampsAndLegendFilesAreRefused) {
+    test::TempDir dir("deeplamps");
+    test::writeText(dir / "lamps.json",
+                    R"({"distance_mm": 500, "lamps": )" + deepArray(70000) + "}");
+    expectRefused([&] { readLampsFile(dir / "lamps.json"); },
+                  {"lamps.json", "nested deeper than 64"});
+    const std::vector<uint8_t> mask(16, 255);
+    writeMaskPng(dir / "t-truth.png", mask, 4, 4);
+    test::writeText(dir / "t-truth.json", R"({"labels": )" + deepArray(70000) + "}");
+    expectRefused([&] { readLabelMask(dir / "t-truth.png", 4, 4); },
+                  {"t-truth.json", "nested deeper than 64"});
+    // A directory where a legend belongs: a clear message, not a raw stream error.
+    writeMaskPng(dir / "d-truth.png", mask, 4, 4);
+    fs::create_directories(dir / "d-truth.json");
+    expectRefused([&] { readLabelMask(dir / "d-truth.png", 4, 4); },
+                  {"d-truth.json", "is a directory"});
+}
+
+// `render /dev/zero` read without bound (2.4 GB in 5 s); a FIFO as the scene file blocked the
+// open forever. Every input path is checked to be a regular file first.
+TEST(RobustIO, DevicesAndFifosAreRefusedNotRead) {
+    test::TempDir dir("fifo");
+    const fs::path fifo = dir / "scene.json";
+    ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+    expectRefused([&] { readSceneFile(fifo); }, {"scene.json", "not a regular file"});
+    expectRefused([&] { readSceneFile("/dev/zero"); }, {"/dev/zero", "not a regular file"});
+    expectRefused([&] { readTransportFile(fifo); }, {"not a regular file"});
+    expectRefused([&] { readLampsFile(fifo); }, {"not a regular file"});
+    writeMaskPng(dir / "f-truth.png", std::vector<uint8_t>(16, 255), 4, 4);
+    ASSERT_EQ(mkfifo((dir / "f-truth.json").c_str(), 0600), 0);
+    expectRefused([&] { readLabelMask(dir / "f-truth.png", 4, 4); }, {"not a regular file"});
+    const fs::path list = dir / "T.shards";
+    ASSERT_EQ(mkfifo(list.c_str(), 0600), 0);
+    expectRefused([&] { readTransportFile(list); }, {"T.shards", "not a regular file"});
+    const auto t0 = std::chrono::steady_clock::now();
+    for (const std::string& in : {fifo.string(), std::string("/dev/zero")}) {
+        const auto r = runCliBounded("render " + in + " -o " + (dir / "o.exr").string());
+        EXPECT_EQ(r.exitCode, 1) << r.output;
+        EXPECT_NE(r.output.find("not a regular file"), std::string::npos) << r.output;
+    }
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 10);
+    // A plausible size: a scene file of more than 16 MiB is refused before it is read.
+    const fs::path big = dir / "big.json";
+    { std::ofstream(big) << "{}"; }
+    fs::resize_file(big, (16u << 20) + 1);
+    expectRefused([&] { readSceneFile(big); }, {"big.json", "at most 16 MiB"});
+}
+
+// A binary file given as a shard list printed its bytes as a "file name".
+TEST(RobustIO, BinaryShardListIsNamedNotPrinted) {
+    test::TempDir dir("binshards");
+    std::string junk = "\x93NUMPY\x01\x00";
+    for (int i = 0; i < 300; ++i) junk += static_cast<char>(i * 37);
+    test::writeText(dir / "T.shards", junk);
+    try {
+        readTransportFile(dir / "T.shards");
+        ADD_FAILURE() << "accepted";
+    } catch (const InputError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("line 1"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("binary"), std::string::npos) << msg;
+        EXPECT_LT(msg.size(), 400u) << msg;
+    }
+}
+
+// ---- Issue 35, item 5: what the files and options admit. ----
+
+// lamps.json bar widths of -5 or 500 degrees and ring bands past the zenith were read.
+TEST(RobustIO, LampsFileRefusesWhatNoLampIs) {
+    test::TempDir dir("lampsrange");
+    const fs::path file = dir / "lamps.json";
+    auto lamps = [&](const std::string& lamp) {
+        test::writeText(file, R"({"distance_mm": 500, "lamps": [)" + lamp + "]}");
+    };
+    const std::string bar =
+        R"({"kind": "bar", "radiance": 1, "azimuth_deg": 10, "elevation_deg": 40,
+            "angular_length_deg": 30, "roll_deg": 0, "angular_width_deg": )";
+    lamps(bar + "10}");
+    EXPECT_EQ(readLampsFile(file).lamps.size(), 1u);
+    for (const std::string w : {"-5", "500", "0"}) {
+        lamps(bar + w + "}");
+        expectRefused([&] { readLampsFile(file); }, {"lamps[0] angular_width_deg", "is " + w});
+    }
+    const std::string ring =
+        R"({"kind": "ring", "radiance": 1, "elevation_deg": 60, "elevation_band_deg": )";
+    lamps(ring + "[40, 80]}");
+    EXPECT_EQ(readLampsFile(file).lamps.size(), 1u);
+    for (const std::string band : {"[80, 120]", "[-100, 10]", "[50, 40]"}) {
+        lamps(ring + band + "}");
+        expectRefused([&] { readLampsFile(file); }, {"elevation_band_deg", "[-90, 90]"});
+    }
+    lamps(ring + R"(["a", 3]})");
+    expectRefused([&] { readLampsFile(file); }, {"elevation_band_deg", "not [lo, hi]"});
+    lamps(R"({"kind": "disk", "radiance": 1, "azimuth_deg": 0, "elevation_deg": 40,
+              "angular_radius_deg": 0})");
+    expectRefused([&] { readLampsFile(file); }, {"angular_radius_deg", "(0, 90]"});
+}
+
+// --forbid-azimuth 0:360 forbade nothing (lamps still placed at 0 degrees).
+TEST(RobustIO, ForbiddenAzimuthRangesAreChecked) {
+    constexpr double kDeg = 3.14159265358979323846 / 180;
+    LampFitOptions o;
+    o.forbiddenAzimuth = {{150 * kDeg, 210 * kDeg}, {350 * kDeg, 10 * kDeg}};
+    EXPECT_NO_THROW(checkLampFitOptions(o));
+    o.forbiddenAzimuth = {{0, 360 * kDeg}};
+    expectRefused([&] { checkLampFitOptions(o); },
+                  {"option 'forbid-azimuth' 0:360", "forbids every azimuth"});
+    o.forbiddenAzimuth = {{-180 * kDeg, 180 * kDeg}};
+    expectRefused([&] { checkLampFitOptions(o); }, {"forbids every azimuth"});
+    o.forbiddenAzimuth = {{30 * kDeg, 30 * kDeg}};
+    expectRefused([&] { checkLampFitOptions(o); }, {"is empty"});
+    o.forbiddenAzimuth = {{0, 1e9}};
+    expectRefused([&] { checkLampFitOptions(o); }, {"[-360, 360]"});
+}
+
+// Roughness 1.5 or 1e30 was read (1e30 as a float is inf); const:1e39 rendered in full, then the
+// EXR writer blamed out.exr.
+TEST(RobustIO, RoughnessAndConstantLightRangesAreChecked) {
+    const std::string hm = R"({"heightmap": {"path": "x.exr"}, "material": )";
+    EXPECT_NO_THROW(parseScene(hm + R"({"alpha": 1}})", "."));
+    for (const std::string bad :
+         {R"({"alpha": 1.5})", R"({"alpha": 1e30})", R"({"alpha": 0.1, "alpha_v": 2})"})
+        expectRefused([&] { parseScene(hm + bad + "}", "."); },
+                      {"material.alpha", "must be in (0, 1]"});
+    expectRefused([&] { lightFromSpec("const:1e39", 50, 25, 1, "--envmap"); },
+                  {"const:1e39", "more than 1e6"});
+    EXPECT_NO_THROW(lightFromSpec("const:2", 50, 25, 1, "--envmap"));
+}
+
+// `gen-surface -o A.x3p` twice gave different bytes: the zip members carried the clock's time.
+TEST(RobustIO, X3pMembersCarryAFixedTime) {
+    test::TempDir dir("x3ptime");
+    const std::vector<float> h(6 * 5, 0.25f);
+    writeX3p(dir / "a.x3p", 6, 5, h, 0.01);
+    const std::string bytes = bytesOf(dir / "a.x3p");
+    // Every local file header (PK\3\4): DOS date at +12, year - 1980 in its top 7 bits.
+    int members = 0;
+    for (size_t at = 0; (at = bytes.find("PK\x03\x04", at)) != std::string::npos; at += 4) {
+        ASSERT_LE(at + 14, bytes.size());
+        const auto date = static_cast<uint16_t>(static_cast<uint8_t>(bytes[at + 12]) |
+                                                static_cast<uint8_t>(bytes[at + 13]) << 8);
+        EXPECT_EQ(date >> 9, 0) << "member " << members << " is not dated 1980";
+        ++members;
+    }
+    EXPECT_EQ(members, 3);
+    writeX3p(dir / "b.x3p", 6, 5, h, 0.01);
+    EXPECT_EQ(bytesOf(dir / "b.x3p"), bytes);
 }

@@ -331,9 +331,9 @@ TEST(Optimize, RejectsUnknownMethodAndBadOptions) {
     expectError(
         "iterations", [](Options& o) { o.iterations = 0; }, p, x0);
     expectError(
-        "learningRate", [](Options& o) { o.learningRate = 0; }, p, x0);
+        "option 'learning-rate'", [](Options& o) { o.learningRate = 0; }, p, x0);
     expectError(
-        "learningRate", [](Options& o) { o.learningRate = NAN; }, p, x0);
+        "option 'learning-rate'", [](Options& o) { o.learningRate = NAN; }, p, x0);
     expectError(
         "beta1", [](Options& o) { o.beta1 = 1.0; }, p, x0);
     expectError(
@@ -341,7 +341,8 @@ TEST(Optimize, RejectsUnknownMethodAndBadOptions) {
     expectError(
         "epsilon", [](Options& o) { o.epsilon = 0; }, p, x0);
     expectError(
-        "relativeFunctionTolerance", [](Options& o) { o.relativeFunctionTolerance = -1; }, p, x0);
+        "option 'relative-function-tolerance'",
+        [](Options& o) { o.relativeFunctionTolerance = -1; }, p, x0);
     expectError(
         "population", [](Options& o) { o.population = -1; }, p, x0);
     Problem flat = p;

@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <filesystem>
@@ -752,4 +753,50 @@ TEST(ViewerBench, PrintsItsTableAndWritesCsv) {
     EXPECT_EQ(text.rfind("size,nnz,trace_s,image_ms_median", 0), 0u) << text;
     EXPECT_NE(text.find("\n32,"), std::string::npos) << text;
     EXPECT_NE(text.find("\n48,"), std::string::npos) << text;
+}
+
+// Issue 35: two viewers on one port both started and shared its requests; 16 idle connections
+// delayed a request by 7.7 s (200 stopped it); `view -o <a file>` started and answered every
+// save with a raw 500.
+TEST(ViewerServer, OwnsItsPortOutlastsIdleClientsAndChecksItsFolder) {
+    std::signal(SIGPIPE, SIG_IGN);
+    test::TempDir dir("viewer-port");
+    ViewerOptions o;
+    o.outDir = dir / "saves";
+    ViewerSession s(smallTransport(16, 1, false), std::nullopt, o);
+    ViewerServer server(s, "127.0.0.1", 0);
+    server.start();
+    ASSERT_GT(server.port(), 0);
+    try {
+        ViewerServer second(s, "127.0.0.1", server.port());
+        ADD_FAILURE() << "a second server bound port " << server.port();
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("is taken"), std::string::npos) << e.what();
+    }
+    // 40 idle connections (more than the pool), then a request: answered within seconds.
+    std::vector<int> idle;
+    for (int k = 0; k < 40; ++k) idle.push_back(connectTo(server.port()));
+    const auto t0 = std::chrono::steady_clock::now();
+    httplib::Client c("127.0.0.1", server.port());
+    c.set_read_timeout(10, 0);
+    auto r = c.Get("/api/info");
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ASSERT_TRUE(r) << "the server stopped answering";
+    EXPECT_EQ(r->status, 200);
+    EXPECT_LT(seconds, 3.0);
+    for (const int fd : idle)
+        if (fd >= 0) ::close(fd);
+    server.stop();
+    // A file where the saves go: refused when the session starts.
+    test::writeText(dir / "afile", "x");
+    ViewerOptions bad;
+    bad.outDir = dir / "afile";
+    try {
+        ViewerSession refused(smallTransport(16, 1, false), std::nullopt, bad);
+        ADD_FAILURE() << "a file accepted as the save folder";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("is a file, not a directory"), std::string::npos)
+            << e.what();
+    }
 }

@@ -1,9 +1,13 @@
 #include "app/Cache.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <string_view>
 #include <system_error>
+
+#include "io/TransportFile.h"
 
 namespace sl {
 
@@ -11,10 +15,43 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// A file this cache writes: transport-<hex>.tm, or its temporary while written.
+bool hexDigits(std::string_view s) {
+    return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) {
+        return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
+    });
+}
+
+bool digits(std::string_view s) {
+    return !s.empty() &&
+           std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
+/// A file this cache wrote, by its name and its content, never by the name alone:
+/// transport-<fingerprint>.tm whose header holds that fingerprint (the cache names each matrix
+/// by it), or the temporary of one while written (io/AtomicFile.h:
+/// .transport-<fingerprint>.tmp-<pid>-<n>.tm) that is empty or starts as a .tm file does.
 bool isCacheFile(const fs::path& p) {
     const std::string name = p.filename().string();
-    return name.rfind("transport-", 0) == 0 && name.find(".tm") != std::string::npos;
+    constexpr std::string_view kPrefix = "transport-", kExt = ".tm";
+    if (name.size() > kPrefix.size() + kExt.size() && name.rfind(kPrefix, 0) == 0 &&
+        name.ends_with(kExt)) {
+        const std::string fp =
+            name.substr(kPrefix.size(), name.size() - kPrefix.size() - kExt.size());
+        if (fp.size() != 32 || !hexDigits(fp)) return false;
+        std::string inFile;
+        return peekTransportFile(p, &inFile) == 2 && inFile == fp;
+    }
+    // .transport-<fp>.tmp-<pid>-<n>.tm
+    if (name.rfind(".transport-", 0) != 0 || !name.ends_with(kExt)) return false;
+    const std::string rest = name.substr(11, name.size() - 11 - kExt.size());
+    const size_t tmp = rest.find(".tmp-");
+    if (tmp != 32 || !hexDigits(rest.substr(0, 32))) return false;
+    const std::string ids = rest.substr(tmp + 5);
+    const size_t dash = ids.find('-');
+    if (dash == std::string::npos || !digits(ids.substr(0, dash)) || !digits(ids.substr(dash + 1)))
+        return false;
+    std::error_code ec;
+    return fs::file_size(p, ec) == 0 || peekTransportFile(p) > 0;
 }
 
 const char* env(const char* name) {

@@ -38,8 +38,9 @@ struct CacheContents {
 /// What `dir` holds (0 files when it does not exist).
 CacheContents cacheContents(const std::filesystem::path& dir);
 
-/// Removes the cache's files from `dir` (transport-*.tm and their temporaries; nothing else, so
-/// a folder given by mistake loses nothing else). Returns what was removed.
+/// Removes the cache's files from `dir`: the matrices it wrote (transport-<fingerprint>.tm whose
+/// header holds that fingerprint) and their temporaries; never a file by its name alone, so a
+/// folder given by mistake loses nothing else. Returns what was removed.
 CacheContents clearCache(const std::filesystem::path& dir);
 
 /// "DIR: 3 transport matrices, 118 MB" (or "no cache").

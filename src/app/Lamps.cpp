@@ -9,8 +9,10 @@
 #include <optional>
 
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "core/Progress.h"
 #include "core/Stopwatch.h"
+#include "core/Text.h"
 
 namespace sl {
 
@@ -348,6 +350,21 @@ void checkLampFitOptions(const LampFitOptions& o) {
         throw inputError(option("min-elevation"),
                          "the elevation range must be a non-empty part of [-90, 90] degrees",
                          "use e.g. 0 and 90");
+    for (const auto& [from, to] : o.forbiddenAzimuth) {
+        const std::string range =
+            formatNumber(from / kDeg) + ":" + formatNumber(to / kDeg) + " (degrees)";
+        if (!std::isfinite(from) || !std::isfinite(to) || std::abs(from) > 2 * kPi + 1e-12 ||
+            std::abs(to) > 2 * kPi + 1e-12)
+            throw inputError(option("forbid-azimuth") + " " + range,
+                             "each end must be in [-360, 360] degrees", "use e.g. 150:210");
+        if (std::abs(to - from) >= 2 * kPi - 1e-12)
+            throw inputError(option("forbid-azimuth") + " " + range,
+                             "forbids every azimuth: no lamp could be placed",
+                             "give a range narrower than 360 degrees, e.g. 150:210");
+        if (std::abs(std::remainder(to - from, 2 * kPi)) < 1e-12)
+            throw inputError(option("forbid-azimuth") + " " + range, "is empty",
+                             "give FROM:TO with FROM != TO, e.g. 150:210");
+    }
 }
 
 LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target,
@@ -380,6 +397,9 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
     // Each extra lamp costs more than the last (more parameters to polish): the bar counts lamps.
     ProgressTask task("fitting lamps", o.count);
     for (int k = 1; k <= o.count; ++k) {
+        // Ctrl-C (core/Interrupt.h): stop before each lamp and each candidate's fit; the job
+        // writes nothing (its output directory is staged).
+        throwIfInterrupted();
         task.detail("lamp " + std::to_string(k));
         std::vector<double> residual(E.size());
         for (size_t t = 0; t < E.size(); ++t) residual[t] = std::max(target[t] - E[t], 0.0);
@@ -392,6 +412,7 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
         std::vector<std::pair<double, std::vector<Lamp>>> screened(cands.size());
         std::vector<int> screenEvaluations(cands.size(), 0);
         tbb::parallel_for(size_t{0}, cands.size(), [&](size_t c) {
+            throwIfInterrupted();
             const TransportLoss own = loss;
             std::vector<Lamp> trial = lamps;
             trial.push_back(cands[c]);
@@ -409,7 +430,9 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
         std::vector<Lamp> best;
         const size_t polish = std::min(order.size(), static_cast<size_t>(std::max(o.polished, 1)));
         std::vector<LampFitRun> polishedRuns(polish);
+        throwIfInterrupted();
         tbb::parallel_for(size_t{0}, polish, [&](size_t c) {
+            throwIfInterrupted();
             const TransportLoss own = loss;
             polishedRuns[c] =
                 fitRun(own, columns, polishRaster, screened[order[c]].second, o, o.finalIterations);

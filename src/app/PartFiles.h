@@ -20,11 +20,18 @@ struct PartFiles {
     double lo = 0, hi = 0;  // height range, mm
 };
 
+/// The files writePartFiles would write, checked before any work: the height map's extension,
+/// a scene file ending in .json, no two of them the same file, none a directory. Throws
+/// InputError naming the file and the fix. Fills `heightmap`, `truth`, `legend` and `scene`.
+PartFiles checkPartFiles(const std::filesystem::path& heightmap, const PartFileOptions& options);
+
 /// heightmap: .exr (float32 mm), .png (16-bit over [lo, hi], recorded in the scene file) or .x3p
 /// (X3P, float64 metres with its pitch; the scene file then gives no pixel_pitch).
 /// Truth: <stem>-truth.png (labels, synth/SurfaceGenerator.h) and <stem>-truth.json (legend:
 /// truthLegend, every label present).
-/// Throws InputError for another extension.
+/// Throws InputError as checkPartFiles. All the files are written under temporary names and
+/// renamed into place together at the end: a failure leaves none of them (and the files they
+/// would have replaced unchanged).
 PartFiles writePartFiles(const GeneratedSurface& g, const std::filesystem::path& heightmap,
                          const PartFileOptions& options);
 

@@ -10,6 +10,7 @@
 #include "core/Error.h"
 #include "core/Text.h"
 #include "io/AtomicFile.h"
+#include "io/InputFile.h"
 #include "objective/DefectVisibility.h"
 
 namespace sl {
@@ -19,13 +20,8 @@ using nlohmann::json;
 namespace {
 
 std::string readBytes(const std::filesystem::path& file, const std::string& what) {
-    std::ifstream in(file, std::ios::binary);
-    if (!in)
-        throw inputError(file.string(), "cannot read " + what,
+    return readInputFile(file, what, 1ull << 30,
                          "Check that the file exists (re-run the command that writes it)");
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
 }
 
 std::string fmtNum(double v) {
@@ -253,12 +249,11 @@ namespace {
 /// An optimize OUTDIR's summary.json; InputError naming it when missing or malformed.
 json readOptimizeSummary(const std::filesystem::path& dir) {
     const auto summaryPath = dir / "summary.json";
-    json s;
-    try {
-        s = json::parse(readBytes(summaryPath, "the optimize summary"));
-    } catch (const json::exception& e) {
-        throw inputError(summaryPath.string(), std::string("malformed JSON: ") + e.what());
-    }
+    json s =
+        parseJsonInput(readInputFile(summaryPath, "the optimize summary", kMaxJsonFileBytes,
+                                     "Check that the file exists (re-run the "
+                                     "command that writes it)"),
+                       summaryPath.string());
     if (!s.is_object()) throw inputError(summaryPath.string(), "not a JSON object");
     return s;
 }
@@ -386,14 +381,7 @@ void merge(json& into, const json& from) {
 }  // namespace
 
 ReportContent readReportSpec(const std::filesystem::path& specFile) {
-    std::ifstream in(specFile);
-    if (!in) throw inputError(specFile.string(), "cannot read the report spec");
-    json s;
-    try {
-        s = json::parse(in);
-    } catch (const json::exception& e) {
-        throw inputError(specFile.string(), std::string("malformed JSON: ") + e.what());
-    }
+    json s = readJsonInput(specFile, "the report spec");
     const auto base = specFile.parent_path();
     const std::string w = specFile.string();
     ReportContent c;

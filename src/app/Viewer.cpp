@@ -1,5 +1,7 @@
 #include "app/Viewer.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -19,6 +21,7 @@
 #include "io/AtomicFile.h"
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
+#include "io/InputFile.h"
 #include "io/LampsFile.h"
 #include "io/PngBuffer.h"
 #include "io/SceneFile.h"
@@ -48,15 +51,7 @@ std::vector<double> toVector(const EnvMap& env) {
 }
 
 json readJsonFile(const fs::path& file) {
-    std::ifstream in(file);
-    if (!in) throw inputError(file.string(), "cannot be read");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    try {
-        return json::parse(ss.str());
-    } catch (const std::exception& e) {
-        throw inputError(file.string(), std::string("is not valid JSON: ") + e.what());
-    }
+    return readJsonInput(file, "a summary");
 }
 
 /// The regions' boundary pixels in their outline colours, transparent elsewhere.
@@ -192,7 +187,28 @@ Lamp viewerLampFromJson(const json& j, const std::string& where) {
     return l;
 }
 
+namespace {
+
+/// The folder saves go into, checked when the viewer starts (not at the first save, which
+/// answered a raw 500): not a file, under a directory, writable.
+void checkSaveDir(const fs::path& dir) {
+    const std::string where = option("output") + " " + dir.string();
+    std::error_code ec;
+    if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+        throw inputError(where, "is a file, not a directory", "give a folder to save into");
+    fs::path p = fs::absolute(dir, ec).lexically_normal();
+    while (p.has_relative_path() && !fs::exists(p, ec)) p = p.parent_path();
+    if (!fs::is_directory(p, ec))
+        throw inputError(where, p.string() + " is a file, not a directory",
+                         "give a folder to save into");
+    if (::access(p.c_str(), W_OK | X_OK) != 0)
+        throw inputError(where, p.string() + " is not writable", "give a writable folder");
+}
+
+}  // namespace
+
 ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
+    checkSaveDir(options.outDir);
     fs::path in = options.input;
     fs::path lampsFile = options.lamps;
     // A `lamps` output directory: its input (the scene or .tm), its E* and its lamps.
@@ -249,10 +265,7 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
                 extraPresets_[name] = toVector(loadEnvMap(in / file, t.envWidth, t.envHeight, 1));
         // The defect regions optimize outlined (a transparent layer), when there is no truth.
         if (truth.empty() && fs::exists(in / "view-regions.png")) {
-            std::ifstream f(in / "view-regions.png", std::ios::binary);
-            std::stringstream ss;
-            ss << f.rdbuf();
-            overlay_ = ss.str();
+            overlay_ = readInputFile(in / "view-regions.png", "the regions' overlay", 1ull << 28);
         }
         if (options.judge) {
             // The optimization's held-out estimate (cached by optimize), as its report scores.
@@ -302,6 +315,7 @@ ViewerSession::ViewerSession(TransportSource t, std::optional<TransportSource> e
                              const ViewerOptions& options, std::vector<uint8_t> labels,
                              std::vector<RegionLabel> legend)
     : options_(options), labels_(std::move(labels)), legend_(std::move(legend)) {
+    checkSaveDir(options.outDir);
     t_ = std::make_unique<TransportSource>(std::move(t));
     if (estimate) estimate_ = std::make_unique<TransportSource>(std::move(*estimate));
     if (!options.lamps.empty()) loadLamps(options.lamps);
@@ -735,12 +749,7 @@ ViewerResponse handleViewerRequest(ViewerSession& session, const ViewerRequest& 
         }
         if (r.method == "POST" && (r.path == "/api/light" || r.path == "/api/save" ||
                                    r.path == "/api/lamps" || r.path == "/api/optimize")) {
-            json body;
-            try {
-                body = json::parse(r.body);
-            } catch (const std::exception&) {
-                throw inputError("request body", "is not valid JSON", "send a JSON object");
-            }
+            json body = parseJsonInput(r.body, "request body", "send a JSON object");
             if (!body.is_object())
                 throw inputError("request body", "is not a JSON object", "send {\"slot\": ...}");
             int slot = 0;

@@ -13,6 +13,8 @@ namespace sl {
 
 namespace {
 
+constexpr size_t kViewerThreads = 32;  // connections served at once
+
 void answer(ViewerSession& session, const httplib::Request& req, httplib::Response& res) {
     ViewerRequest r;
     r.method = req.method;
@@ -31,10 +33,21 @@ ViewerServer::ViewerServer(ViewerSession& session, const std::string& host, int 
     : session_(session), host_(host), server_(std::make_unique<httplib::Server>()) {
     httplib::Server& s = *server_;
     s.set_payload_max_length(kViewerMaxBody);
-    s.set_read_timeout(5, 0);
+    // Idle or slow clients may not starve the others: a pool of kViewerThreads connections, each
+    // closed after 1 s idle between requests or 2 s without a byte of a request.
+    s.new_task_queue = [] { return new httplib::ThreadPool(kViewerThreads); };
+    s.set_read_timeout(2, 0);
     s.set_write_timeout(5, 0);
+    s.set_keep_alive_timeout(1);
     s.set_keep_alive_max_count(1000);
     s.set_tcp_nodelay(true);
+    // The port is ours alone: SO_REUSEADDR (a restart binds at once) but not httplib's default
+    // SO_REUSEPORT, with which a second viewer bound the same port and took half its requests.
+    s.set_socket_options([](socket_t sock) {
+        int yes = 1;
+        setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, reinterpret_cast<const void*>(&yes),
+                   sizeof(yes));
+    });
     auto handler = [this](const httplib::Request& req, httplib::Response& res) {
         answer(session_, req, res);
     };
@@ -52,9 +65,10 @@ ViewerServer::ViewerServer(ViewerSession& session, const std::string& host, int 
                              "give a local address such as 127.0.0.1");
     } else {
         if (!s.bind_to_port(host, port))
-            throw inputError(option("port"),
-                             "cannot listen on " + host + ":" + std::to_string(port),
-                             "the port is taken or not allowed; give another (0: any free port)");
+            throw inputError(
+                option("port"),
+                "port " + std::to_string(port) + " is taken (or not allowed) on " + host,
+                "stop the program that uses it, or give another (0: any free port)");
         port_ = port;
     }
 }

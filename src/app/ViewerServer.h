@@ -2,7 +2,9 @@
 // handleViewerRequest (app/Viewer.h); this file only moves bytes. Bound to 127.0.0.1 unless a
 // host is given (the command line then warns). Request bodies over kViewerMaxBody are refused
 // before they are read in full; a malformed request or a connection closed mid-transfer ends
-// that connection only.
+// that connection only. The port is bound exclusively (no SO_REUSEPORT: a second viewer on the
+// same port is refused); 32 connections are served at once, each closed after 1 s idle or 2 s
+// without a byte, so idle or slow clients delay the others by seconds at most.
 #pragma once
 
 #include <memory>

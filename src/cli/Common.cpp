@@ -37,7 +37,7 @@ void addRendererOptions(CLI::App* c, RendererKind& kind, ExternalRendererOptions
         "{output} (implies --renderer command)");
     c->add_option("--renderer-timeout", external.timeoutSeconds,
                   "Seconds one external render may take")
-        ->check(CLI::PositiveNumber)
+        ->check(positiveNumber())
         ->capture_default_str();
 }
 
@@ -120,11 +120,73 @@ int runPlot(const std::string& script, const std::vector<std::string>& args, boo
 
 namespace {
 
-bool hasFlag(const CLI::App& app, const std::string& flag) {
-    if (app.get_option_no_throw(flag)) return true;
+CLI::Validator numberAtLeast(bool allowZero) {
+    return CLI::Validator(
+        [allowZero](std::string& text) -> std::string {
+            const char* bound = allowZero ? ">= 0" : "> 0";
+            size_t used = 0;
+            double v = 0;
+            try {
+                v = std::stod(text, &used);
+            } catch (const std::exception&) {
+                used = 0;
+            }
+            if (used == 0 || used != text.size() || !std::isfinite(v) ||
+                !(allowZero ? v >= 0 : v > 0))
+                return std::string("must be a finite number ") + bound + ", got '" + text + "'";
+            return {};
+        },
+        allowZero ? "NUMBER >= 0" : "NUMBER > 0");
+}
+
+}  // namespace
+
+CLI::Validator positiveNumber() {
+    return numberAtLeast(false);
+}
+
+CLI::Validator nonNegativeNumber() {
+    return numberAtLeast(true);
+}
+
+std::vector<double> parseNumberList(const std::vector<std::string>& texts,
+                                    const std::string& flag) {
+    std::vector<double> values;
+    for (const std::string& text : texts) {
+        size_t start = 0;
+        for (;;) {
+            const size_t comma = text.find(',', start);
+            const std::string item =
+                text.substr(start, comma == std::string::npos ? comma : comma - start);
+            size_t used = 0;
+            double v = 0;
+            try {
+                v = std::stod(item, &used);
+            } catch (const std::exception&) {
+                used = 0;
+            }
+            if (item.empty() || used != item.size() || !std::isfinite(v))
+                throw CLI::ValidationError(
+                    flag, "'" + text + "': " +
+                              (item.empty() ? std::string("an empty entry")
+                                            : "'" + item + "' is not a finite number") +
+                              "; give numbers separated by commas, e.g. 10,30,100");
+            values.push_back(v);
+            if (comma == std::string::npos) break;
+            start = comma + 1;
+        }
+    }
+    return values;
+}
+
+namespace {
+
+/// The option of `app` or a subcommand that answers to `flag` (nullptr: none).
+const CLI::Option* findFlag(const CLI::App& app, const std::string& flag) {
+    if (const CLI::Option* o = app.get_option_no_throw(flag)) return o;
     for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
-        if (hasFlag(*sub, flag)) return true;
-    return false;
+        if (const CLI::Option* o = findFlag(*sub, flag)) return o;
+    return nullptr;
 }
 
 }  // namespace
@@ -139,7 +201,11 @@ std::string withFlags(const CLI::App& app, const std::string& message) {
         const std::string name = message.substr(nameStart, end - nameStart);
         const std::string flag = (name.size() == 1 ? "-" : "--") + name;  // -D, --width
         out += message.substr(pos, at - pos);
-        out += hasFlag(app, flag) ? flag : message.substr(at, end + 1 - at);
+        // The flag's first name: an option may also answer to the library's name of it
+        // (--lr, --learning-rate), and the user knows it by the first.
+        const CLI::Option* o = findFlag(app, flag);
+        const std::string first = o ? o->get_name() : std::string();  // "" when hidden
+        out += !first.empty() ? first : o ? flag : message.substr(at, end + 1 - at);
         pos = end + 1;
     }
     return out + message.substr(pos);

@@ -74,6 +74,16 @@ void addRendererOptions(CLI::App* c, RendererKind& kind, ExternalRendererOptions
 /// --cache DIR and --no-cache of a command that keeps traced matrices (app/Cache.h).
 void addCacheOptions(CLI::App* c, CacheLocation& cache);
 
+/// A finite number > 0 (positiveNumber) or >= 0 (nonNegativeNumber), refused as "--flag: must be
+/// a finite number > 0, got X" (CLI11's PositiveNumber printed its bounds as 309-digit numbers).
+CLI::Validator positiveNumber();
+CLI::Validator nonNegativeNumber();
+
+/// A list of numbers "A,B,C" (a flag may also be given again): every entry a finite number,
+/// none empty ("1,,3" is refused). CLI::ValidationError naming `flag` otherwise (a usage error:
+/// it is thrown while the command line is parsed).
+std::vector<double> parseNumberList(const std::vector<std::string>& texts, const std::string& flag);
+
 /// Checks an output path ends in `ext` (usage error otherwise) and returns the sibling with
 /// extension `siblingExt` (e.g. the PNG preview next to an EXR).
 std::filesystem::path siblingPath(const std::filesystem::path& out, const std::string& ext,

@@ -50,13 +50,14 @@ int runGen(GenArgs a) {
     for (const auto& [option, apply] : a.given)
         if (option->count() > 0) apply(spec, a.spec);
     if (a.noPocket) spec.pocketEdge = false;
-    GeneratedSurface g = generateSurface(spec);
-
     PartFileOptions po;
     po.scene = a.scene;
     po.imageSize = a.imageSize;
     po.spp = a.spp;
     po.maxDepth = a.maxDepth;
+    checkPartFiles(out, po);  // before the work
+    GeneratedSurface g = generateSurface(spec);
+
     const PartFiles f = writePartFiles(g, out, po);
     const double lo = f.lo, hi = f.hi;
     const std::filesystem::path truth = f.truth;
@@ -100,46 +101,51 @@ void registerGenSurface(CLI::App& app, std::function<int()>& run) {
     addSpec(c, g, "--tool-radius", &SurfaceSpec::toolRadius,
             "Tool radius in mm (ball, face-mill cutter or flat end mill)");
     addSpec(c, g, "--stepover", &SurfaceSpec::stepover, "Path or pass spacing in mm");
-    addSpec(c, g, "--feed", &SurfaceSpec::feedPerTooth,
+    addSpec(c, g, "--feed,--feed-per-tooth", &SurfaceSpec::feedPerTooth,
             "Feed per tooth in mm (per revolution for turned; flatend: 0 = no feed marks)");
-    addSpec(c, g, "--nose-radius", &SurfaceSpec::insertNoseRadius,
+    addSpec(c, g, "--nose-radius,--insert-nose-radius", &SurfaceSpec::insertNoseRadius,
             "Insert nose radius in mm (facemill, turned)");
     addSpec(c, g, "--tool-corner-radius", &SurfaceSpec::toolCornerRadius,
             "Flat end mill corner radius in mm");
-    addSpec(c, g, "--raster-angle", &SurfaceSpec::rasterAngleDeg,
+    addSpec(c, g, "--raster-angle,--raster-angle-deg", &SurfaceSpec::rasterAngleDeg,
             "Direction of the tool paths, degrees from +x toward +z");
     addSpec(c, g, "--turn-centre-x", &SurfaceSpec::turnCentreX,
             "Turned: x of the spiral's centre in mm (map centre 0)");
     addSpec(c, g, "--turn-centre-z", &SurfaceSpec::turnCentreZ,
             "Turned: z of the spiral's centre in mm (map centre 0)");
-    addSpec(c, g, "--scratches", &SurfaceSpec::scratchCount, "Number of random scratches");
+    addSpec(c, g, "--scratches,--scratch-count", &SurfaceSpec::scratchCount,
+            "Number of random scratches");
     addSpec(c, g, "--scratch-depth", &SurfaceSpec::scratchDepth, "Deepest scratch in mm");
     addSpec(c, g, "--scratch-depth-min", &SurfaceSpec::scratchDepthMin,
             "Shallowest scratch as a fraction of --scratch-depth");
     addSpec(c, g, "--scratch-width", &SurfaceSpec::scratchWidth, "Widest scratch in mm");
     addSpec(c, g, "--scratch-width-min", &SurfaceSpec::scratchWidthMin,
             "Narrowest scratch as a fraction of --scratch-width");
-    addSpec(c, g, "--scratch-direction", &SurfaceSpec::scratchDirectionDeg,
+    addSpec(c, g, "--scratch-direction,--scratch-direction-deg", &SurfaceSpec::scratchDirectionDeg,
             "Mean scratch direction, degrees from +x toward +z");
-    addSpec(c, g, "--scratch-direction-spread", &SurfaceSpec::scratchDirectionSpreadDeg,
+    addSpec(c, g, "--scratch-direction-spread,--scratch-direction-spread-deg",
+            &SurfaceSpec::scratchDirectionSpreadDeg,
             "Scratch directions spread over this many degrees (180: any direction)");
     CLI::Option* lips = c->add_flag("--label-scratch-lips", a->spec.labelScratchLips,
                                     "Label the scratches' raised lips as burr (160)");
     a->given.emplace_back(lips, [](SurfaceSpec& dst, const SurfaceSpec& src) {
         dst.labelScratchLips = src.labelScratchLips;
     });
-    addSpec(c, g, "--gouges", &SurfaceSpec::gougeCount, "Number of random gouges (label 255)");
-    addSpec(c, g, "--dents", &SurfaceSpec::dentCount, "Number of random dents (label 224)");
+    addSpec(c, g, "--gouges,--gouge-count", &SurfaceSpec::gougeCount,
+            "Number of random gouges (label 255)");
+    addSpec(c, g, "--dents,--dent-count", &SurfaceSpec::dentCount,
+            "Number of random dents (label 224)");
     addSpec(c, g, "--dent-depth", &SurfaceSpec::dentDepth, "Deepest dent in mm");
     addSpec(c, g, "--dent-radius", &SurfaceSpec::dentRadius, "Dent indenter radius in mm");
-    addSpec(c, g, "--burr", &SurfaceSpec::pocketBurrHeight,
+    addSpec(c, g, "--burr,--pocket-burr-height", &SurfaceSpec::pocketBurrHeight,
             "Burr height on the pocket edge in mm (0: none; label 160)");
     addSpec(c, g, "--tool-change-step", &SurfaceSpec::toolChangeStep,
             "Tool-change step in mm, lower beyond --tool-change-at (0: none; label 192)");
     addSpec(c, g, "--tool-change-at", &SurfaceSpec::toolChangeAt,
             "Across-path position (turned: radius) of the tool-change step in mm");
-    addSpec(c, g, "--chatter", &SurfaceSpec::chatterAmplitude, "Chatter amplitude in mm (0: none)");
-    addSpec(c, g, "--chatter-start", &SurfaceSpec::chatterStartFraction,
+    addSpec(c, g, "--chatter,--chatter-amplitude", &SurfaceSpec::chatterAmplitude,
+            "Chatter amplitude in mm (0: none)");
+    addSpec(c, g, "--chatter-start,--chatter-start-fraction", &SurfaceSpec::chatterStartFraction,
             "Chatter only from this fraction of the width in +x (0.5: the right half, "
             "labelled 128 in the truth)");
     addSpec(c, g, "--chatter-bands", &SurfaceSpec::chatterBands,
@@ -148,9 +154,9 @@ void registerGenSurface(CLI::App& app, std::function<int()>& run) {
             "Width of a chatter band across the paths in mm");
     addSpec(c, g, "--chatter-band-amplitude", &SurfaceSpec::chatterBandAmplitude,
             "Chatter amplitude inside the bands in mm");
-    addSpec(c, g, "--noise", &SurfaceSpec::noiseRms,
+    addSpec(c, g, "--noise,--noise-rms", &SurfaceSpec::noiseRms,
             "Measurement noise: white noise RMS in mm (0: none; not labelled)");
-    addSpec(c, g, "--spikes", &SurfaceSpec::spikeCount,
+    addSpec(c, g, "--spikes,--spike-count", &SurfaceSpec::spikeCount,
             "Measurement noise: single-sample spikes (not labelled)");
     addSpec(c, g, "--spike-height", &SurfaceSpec::spikeHeight, "Largest spike in mm");
     c->add_flag("--no-pocket", a->noPocket, "Leave out the pocket edge (step)");

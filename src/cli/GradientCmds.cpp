@@ -47,7 +47,7 @@ void addSetupOptions(CLI::App* c, GradientSetup& s, SetupArgs& a) {
     c->add_option("--threads", s.threads, "Worker threads (0: all cores)")
         ->check(CLI::Range(0, 4096));
     c->add_option("--lambda", s.objective.lambda, "Regulariser weight λ")
-        ->check(CLI::NonNegativeNumber)
+        ->check(nonNegativeNumber())
         ->capture_default_str();
     c->add_flag("--smooth-abs", s.objective.smoothAbs, "Use sqrt(x²+ε²)−ε for |x|");
     addParsed(c, "--init", s.init, parseInitialState,
@@ -156,7 +156,7 @@ void registerGradients(CLI::App& app, std::function<int()>& run) {
             ->check(CLI::Range(1e-12, 0.49))
             ->capture_default_str();
         c->add_option("--spsa-c", a->o.spsa.c, "SPSA perturbation size c")
-            ->check(CLI::PositiveNumber)
+            ->check(positiveNumber())
             ->capture_default_str();
         c->add_option("--spsa-q", a->o.spsa.q, "SPSA estimates averaged per gradient")
             ->check(CLI::Range(1, 1 << 20))
@@ -213,7 +213,7 @@ void registerGradients(CLI::App& app, std::function<int()>& run) {
             ->delimiter(',')
             ->capture_default_str();
         c->add_option("--spsa-opt-c", o.spsa.c, "SPSA c of the whole optimizations")
-            ->check(CLI::PositiveNumber)
+            ->check(positiveNumber())
             ->capture_default_str();
         c->add_option("--repeats", o.repeats, "Repeats per measurement (medians)")
             ->check(CLI::Range(1, 1000))
@@ -225,7 +225,7 @@ void registerGradients(CLI::App& app, std::function<int()>& run) {
             ->check(CLI::Range(1, 100000000))
             ->capture_default_str();
         c->add_option("--budget", o.budgetSeconds, "Wall-clock budget per optimization (s)")
-            ->check(CLI::PositiveNumber)
+            ->check(positiveNumber())
             ->capture_default_str();
         c->add_flag("--no-optimize", a->noOptimize, "Skip the whole optimizations");
         c->add_option("-o,--output", a->out, "Output directory")->capture_default_str();

@@ -60,7 +60,7 @@ void registerJudge(CLI::App& app, std::function<int()>& run) {
                   "Truth label mask in height-map space (gen-surface's <stem>-truth.png; "
                   "its <stem>-truth.json names the regions)");
     c->add_option("--lambda", a->o.judge.objective.lambda, "λ of eq. 2 and U")
-        ->check(CLI::NonNegativeNumber)
+        ->check(nonNegativeNumber())
         ->capture_default_str();
     c->add_flag("--rgb", a->o.judge.rgb, "Score RGB env maps in colour (an RGB estimate)");
     c->add_flag("--no-references", a->noReferences,

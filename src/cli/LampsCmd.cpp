@@ -130,7 +130,7 @@ void registerLamps(CLI::App& app, std::function<int()>& run) {
     addDefectRegionOptions(c, j.defects, j.reference);
     c->add_option("--lambda", j.objective.lambda, "Regulariser weight")->capture_default_str();
     c->add_option("--distance", j.distanceMm, "Mounting distance from the part's centre, mm")
-        ->check(CLI::PositiveNumber)
+        ->check(positiveNumber())
         ->capture_default_str();
     c->add_option("--min-elevation", a->minElevation, "Lowest lamp centre, degrees")
         ->check(CLI::Range(-90.0, 90.0))

@@ -3,6 +3,7 @@
 // [-o OUT.exr]
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <memory>
 
 #include "app/DepthBench.h"
@@ -13,6 +14,7 @@
 #include "core/Stopwatch.h"
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
+#include "io/InputFile.h"
 #include "io/SceneFile.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
@@ -32,6 +34,33 @@ struct RenderArgs {
     ExternalRendererOptions external;
 };
 
+/// Both outputs checked before the work: neither may be a directory (the EXR would be written,
+/// then the PNG refused).
+void checkOutputs(const std::filesystem::path& exr, const std::filesystem::path& png) {
+    for (const auto& p : {exr, png})
+        if (std::filesystem::is_directory(p))
+            throw InputError(p.string() + ": is a directory, not an output file. Give another " +
+                             "output name");
+}
+
+/// A render without one lit pixel says so, and when the heights dwarf the part (heights of 1e30,
+/// a map in other units) says that too: the camera frames the part by its extent.
+void warnIfBlack(const Image& img, const Scene& scene) {
+    if (std::any_of(img.data.begin(), img.data.end(), [](float v) { return v != 0; })) return;
+    const auto [lo, hi] = std::minmax_element(scene.heights.begin(), scene.heights.end());
+    const double span = lo == scene.heights.end() ? 0 : double(*hi) - double(*lo);
+    const double extent = std::max(scene.mapWidth, scene.mapHeight) * scene.desc.heightmap.pitch;
+    if (span > 100 * extent)
+        spdlog::warn(
+            "the render is black: the heights span {:.3g} mm over a part {:.3g} mm wide; check "
+            "the height map's units (heightmap.height_scale, height_range)",
+            span, extent);
+    else
+        spdlog::warn(
+            "the render is black: no light reaches the camera (check the env map and "
+            "the camera)");
+}
+
 /// The same scene and light through an external renderer (app/ExternalRenderer.h).
 int renderExternal(const RenderArgs& a, const Scene& scene, const EnvMap& env, uint64_t seed) {
     if (a.autoDepth || a.maxDepth || a.spp)
@@ -39,6 +68,7 @@ int renderExternal(const RenderArgs& a, const Scene& scene, const EnvMap& env, u
             "--spp, --max-depth and --auto-depth set our tracer's samples and path "
             "length; an external renderer keeps its own: drop them");
     const auto pngPath = siblingPath(a.out, ".exr", ".png");
+    checkOutputs(a.out, pngPath);
     const ExternalRenderer r(scene, externalRendererOptions(a.renderer, a.external));
     const Stopwatch clock;
     Image img;
@@ -56,7 +86,13 @@ int renderExternal(const RenderArgs& a, const Scene& scene, const EnvMap& env, u
 
 int runRender(const RenderArgs& a) {
     const auto pngPath = siblingPath(a.out, ".exr", ".png");
+    checkOutputs(a.out, pngPath);
     SceneDesc desc = readSceneFile(a.scene, a.overrides);
+    // Neither output may replace what this run reads (the scene's height map, say).
+    std::vector<std::filesystem::path> inputs = sceneInputFiles(desc);
+    inputs.push_back(a.envmap.rfind("envmap:", 0) == 0 ? a.envmap.substr(7) : a.envmap);
+    refuseOutputOverInput(a.out, "output", inputs);
+    refuseOutputOverInput(pngPath, "preview", inputs);
     if (a.spp) desc.render.spp = *a.spp;
     if (a.maxDepth) desc.render.maxDepth = *a.maxDepth;
     if (a.seed) desc.render.seed = *a.seed;
@@ -79,6 +115,7 @@ int runRender(const RenderArgs& a) {
     ProgressTask task("render", 1);
     opt.progress = task.fraction();
     RenderResult r = render(*scene, env, opt);
+    warnIfBlack(r.image, *scene);
     writeExr(a.out, r.image);
     writePng(pngPath, r.image, a.exposure);
     const TraceSummary& s = r.summary;
@@ -114,7 +151,7 @@ void registerRender(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     addRendererOptions(c, a->renderer, a->external);
     c->add_option("--exposure", a->exposure, "Scale applied to the PNG preview only")
-        ->check(CLI::PositiveNumber);
+        ->check(positiveNumber());
     c->callback([a, &run] { run = [a] { return runRender(*a); }; });
 }
 

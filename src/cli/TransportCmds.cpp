@@ -18,6 +18,8 @@
 #include "core/Text.h"
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
+#include "io/InputFile.h"
+#include "io/SceneFile.h"
 #include "optimize/BlackBox.h"
 #include "optimize/Methods.h"
 
@@ -168,6 +170,14 @@ struct OptimizeArgs {
 };
 
 int runOptimize(OptimizeArgs a) {
+    // OUTDIR is replaced as a whole: it must not hold what this run reads.
+    std::vector<std::filesystem::path> inputs = {a.input, a.job.truth, a.job.mask.file,
+                                                 a.job.compare};
+    if (std::filesystem::path(a.input).extension() == ".json" && std::filesystem::exists(a.input) &&
+        std::filesystem::exists(a.out))
+        for (const auto& f : sceneInputFiles(readSceneFile(a.input, a.job.sceneOverrides)))
+            inputs.push_back(f);
+    refuseOutputOverInput(a.out, "output directory", inputs, true);
     a.job.input = a.input;
     a.job.outDir = a.out;
     a.job.objective.reg = a.reg == "image" ? RegTarget::Image : RegTarget::EnvMap;
@@ -247,17 +257,24 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
                   std::string("Optimizer (default: ") + methodName(optimizeDefaults().method) +
                       "; budget: --iterations)");
         c->add_option("--fd-step", j.blackBox.fd.h, "fd-adam: finite-difference step h")
-            ->check(CLI::PositiveNumber)
+            ->check(positiveNumber())
             ->capture_default_str();
         c->add_option("--spsa-q", j.blackBox.spsa.q, "spsa: estimates averaged per step")
             ->check(CLI::Range(1, 100000))
             ->capture_default_str();
         c->add_option("--spsa-c", j.blackBox.spsa.c, "spsa: perturbation size")
-            ->check(CLI::PositiveNumber)
+            ->check(positiveNumber())
             ->capture_default_str();
-        c->add_option("--lambda", j.lambdas, "Regulariser weight(s); several run a sweep")
-            ->delimiter(',')
-            ->capture_default_str();
+        std::string lambdaDefault;
+        for (const double l : j.lambdas)
+            lambdaDefault += (lambdaDefault.empty() ? "" : ",") + formatNumber(l);
+        c->add_option_function<std::vector<std::string>>(
+             "--lambda",
+             [&j](const std::vector<std::string>& v) {
+                 j.lambdas = parseNumberList(v, "--lambda");
+             },
+             "Regulariser weight(s) A,B,...; several run a sweep")
+            ->default_str(lambdaDefault);
         c->add_option("--reg", a->reg, "L2 regulariser on the env map or on the image")
             ->check(CLI::IsMember({"envmap", "image"}))
             ->capture_default_str();
@@ -322,12 +339,12 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
                           std::to_string(r.defaultBudget) + ")";
         c->add_option("--iterations", j.optimizer.iterations, budgetHelp)
             ->check(CLI::Range(1, 1000000));
-        c->add_option("--ftol", j.optimizer.relativeFunctionTolerance,
+        c->add_option("--ftol,--relative-function-tolerance", j.optimizer.relativeFunctionTolerance,
                       "NLopt/Ceres: stop when the loss changes by less than this fraction (0: off)")
-            ->check(CLI::NonNegativeNumber)
+            ->check(nonNegativeNumber())
             ->capture_default_str();
-        c->add_option("--lr", j.optimizer.learningRate, "Adam learning rate")
-            ->check(CLI::PositiveNumber)
+        c->add_option("--lr,--learning-rate", j.optimizer.learningRate, "Adam learning rate")
+            ->check(positiveNumber())
             ->capture_default_str();
         c->add_option("--planes", j.planes,
                       "Independent estimates of T (seeds seed+k) cycled by the optimizer, one "

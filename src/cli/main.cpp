@@ -112,7 +112,7 @@ int main(int argc, char** argv) {
     app.add_flag("-v,--verbose", verbose, "Also debug lines (e.g. every optimizer iteration)");
     app.add_option("--progress-every", progressEvery,
                    "Seconds between progress lines when the output is not a terminal")
-        ->check(CLI::PositiveNumber)
+        ->check(positiveNumber())
         ->capture_default_str();
 
     std::function<int()> run;

@@ -7,7 +7,9 @@
 #include <sstream>
 
 #include "core/Error.h"
+#include "core/Text.h"
 #include "io/AtomicFile.h"
+#include "io/InputFile.h"
 
 namespace sl {
 
@@ -94,16 +96,10 @@ json lampsToJson(const std::vector<Lamp>& lamps, double distanceMm) {
 
 LampsFile readLampsFile(const std::filesystem::path& file) {
     const std::string where = file.string();
-    std::ifstream in(file);
-    if (!in)
-        throw inputError(where, "cannot be read", "give the lamps.json `scratchlight lamps` wrote");
-    json j;
-    try {
-        j = json::parse(in);
-    } catch (const json::exception& e) {
-        throw inputError(where, std::string("is not JSON: ") + e.what(),
+    json j = readJsonInput(file, "a lamps file", "give the lamps.json `scratchlight lamps` wrote");
+    if (!j.is_object())
+        throw inputError(where, "is not a JSON object",
                          "give the lamps.json `scratchlight lamps` wrote");
-    }
     LampsFile f;
     f.distanceMm = number(j, "distance_mm", where);
     if (!(f.distanceMm > 0))
@@ -132,23 +128,44 @@ LampsFile readLampsFile(const std::filesystem::path& file) {
                 l.roll = number(e, "roll_deg", at) / kDeg;
                 break;
             case LampKind::Ring: {
-                if (!e.contains("elevation_band_deg") || !e["elevation_band_deg"].is_array() ||
-                    e["elevation_band_deg"].size() != 2)
-                    throw inputError(at + " elevation_band_deg", "missing or not [lo, hi]",
+                const json* band =
+                    e.contains("elevation_band_deg") ? &e["elevation_band_deg"] : nullptr;
+                if (!band || !band->is_array() || band->size() != 2 || !(*band)[0].is_number() ||
+                    !(*band)[1].is_number() || !std::isfinite((*band)[0].get<double>()) ||
+                    !std::isfinite((*band)[1].get<double>()))
+                    throw inputError(at + " elevation_band_deg",
+                                     "missing or not [lo, hi] in degrees",
                                      "write it as `scratchlight lamps` does");
-                const double lo = e["elevation_band_deg"][0].get<double>() / kDeg,
-                             hi = e["elevation_band_deg"][1].get<double>() / kDeg;
-                l.elevation = 0.5 * (lo + hi);
-                l.size = 0.5 * (hi - lo);
+                const double lo = (*band)[0].get<double>(), hi = (*band)[1].get<double>();
+                if (!(lo >= -90 && hi <= 90 && lo < hi))
+                    throw inputError(at + " elevation_band_deg",
+                                     "is [" + formatNumber(lo) + ", " + formatNumber(hi) +
+                                         "]: a band must lie within [-90, 90] degrees (horizon "
+                                         "0, zenith 90) with lo < hi",
+                                     "write it as `scratchlight lamps` does");
+                l.elevation = 0.5 * (lo + hi) / kDeg;
+                l.size = 0.5 * (hi - lo) / kDeg;
                 break;
             }
         }
-        if (!(l.radiance >= 0) || !(l.size > 0) || l.size > kPi / 2 ||
-            std::abs(l.elevation) > kPi / 2 + 1e-9)
-            throw inputError(at,
-                             "has a negative radiance, a size outside (0, 90] degrees or an "
-                             "elevation outside [-90, 90]",
+        // What the lamps admit (scene/Lamp.h): angles in degrees, sizes in (0, 90].
+        auto refuse = [&](const char* field, double value, const char* range) {
+            throw inputError(at + " " + field, "is " + formatNumber(value) + ", outside " + range,
                              "write it as `scratchlight lamps` does");
+        };
+        if (!(l.radiance >= 0)) refuse("radiance", l.radiance, "[0, inf)");
+        if (std::abs(l.elevation) > kPi / 2 + 1e-9)
+            refuse("elevation_deg", l.elevation * kDeg, "[-90, 90] degrees");
+        if (l.kind == LampKind::Disk && !(l.size > 0 && l.size <= kPi / 2 + 1e-9))
+            refuse("angular_radius_deg", l.size * kDeg, "(0, 90] degrees");
+        if (l.kind == LampKind::Bar) {
+            if (!(l.size > 0 && l.size <= kPi / 2 + 1e-9))
+                refuse("angular_length_deg", 2 * l.size * kDeg, "(0, 180] degrees");
+            if (!(l.width > 0 && l.width <= kPi / 4 + 1e-9))
+                refuse("angular_width_deg", 2 * l.width * kDeg, "(0, 90] degrees");
+        }
+        if (std::abs(l.azimuth) > 1e6) refuse("azimuth_deg", l.azimuth * kDeg, "[-1e6, 1e6]");
+        if (std::abs(l.roll) > 1e6) refuse("roll_deg", l.roll * kDeg, "[-1e6, 1e6]");
         f.lamps.push_back(l);
     }
     return f;

@@ -9,6 +9,7 @@
 #include "core/Error.h"
 #include "io/ImageFile.h"
 #include "io/ImageIO.h"
+#include "io/InputFile.h"
 
 namespace sl {
 
@@ -20,15 +21,8 @@ std::string sizeText(int w, int h) {
 
 std::vector<RegionLabel> readLegend(const std::filesystem::path& file) {
     const std::string where = file.string();
-    std::ifstream in(file);
-    if (!in) throw inputError(where, "cannot open the legend");
-    nlohmann::json j;
-    try {
-        j = nlohmann::json::parse(in);
-    } catch (const nlohmann::json::exception& e) {
-        throw inputError(where, std::string("is not valid JSON (") + e.what() + ")",
-                         "write {\"labels\": [{\"value\": 255, \"name\": \"defect\"}]}");
-    }
+    nlohmann::json j = readJsonInput(
+        file, "a truth legend", "write {\"labels\": [{\"value\": 255, \"name\": \"defect\"}]}");
     if (!j.is_object() || !j.contains("labels") || !j["labels"].is_array())
         throw inputError(where, "has no \"labels\" array",
                          "write {\"labels\": [{\"value\": 255, \"name\": \"defect\"}]}");

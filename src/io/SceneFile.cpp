@@ -6,7 +6,6 @@
 #include <array>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -17,6 +16,7 @@
 #include "core/Registry.h"
 #include "core/Text.h"
 #include "io/HeightmapIO.h"
+#include "io/InputFile.h"
 #include "scene/Materials.h"
 #include "transport/TransportMatrix.h"
 
@@ -54,20 +54,20 @@ class Fields {
     double number(const std::string& key, double def) {
         const json* v = get(key);
         if (!v) return def;
-        if (!v->is_number()) fail(key, "must be a number, got " + v->dump());
+        if (!v->is_number()) fail(key, "must be a number, got " + jsonExcerpt(*v));
         double d = v->get<double>();
         if (!std::isfinite(d)) fail(key, "must be finite");
         return d;
     }
     double positive(const std::string& key, double def) {
         double d = number(key, def);
-        if (!(d > 0)) fail(key, "must be > 0, got " + json(d).dump());
+        if (!(d > 0)) fail(key, "must be > 0, got " + formatNumber(d));
         return d;
     }
     int integer(const std::string& key, int def, int lo, int hi) {
         const json* v = get(key);
         if (!v) return def;
-        if (!v->is_number_integer()) fail(key, "must be a whole number, got " + v->dump());
+        if (!v->is_number_integer()) fail(key, "must be a whole number, got " + jsonExcerpt(*v));
         auto i = v->get<long long>();
         if (i < lo || i > hi)
             fail(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
@@ -77,7 +77,7 @@ class Fields {
     std::string string(const std::string& key, const std::string& def) {
         const json* v = get(key);
         if (!v) return def;
-        if (!v->is_string()) fail(key, "must be a string, got " + v->dump());
+        if (!v->is_string()) fail(key, "must be a string, got " + jsonExcerpt(*v));
         return v->get<std::string>();
     }
     std::string choice(const std::string& key, const std::string& def,
@@ -93,11 +93,11 @@ class Fields {
         const json* v = get(key);
         if (!v) return std::nullopt;
         if (!v->is_array() || v->size() != 3)
-            fail(key, "must be an array of 3 numbers, got " + v->dump());
+            fail(key, "must be an array of 3 numbers, got " + jsonExcerpt(*v));
         Vec3d r;
         for (int i = 0; i < 3; ++i) {
             if (!(*v)[i].is_number() || !std::isfinite((*v)[i].get<double>()))
-                fail(key, "must be an array of 3 finite numbers, got " + v->dump());
+                fail(key, "must be an array of 3 finite numbers, got " + jsonExcerpt(*v));
             r[i] = (*v)[i].get<double>();
         }
         return r;
@@ -230,10 +230,10 @@ void parseHeightmap(Fields& f, const std::filesystem::path& baseDir, HeightmapDe
     if (const json* l = f.get("levelling")) h.levelling = parseLevelling(f, *l);
     if (const json* r = f.get("height_range")) {
         if (!r->is_array() || r->size() != 2 || !(*r)[0].is_number() || !(*r)[1].is_number())
-            f.fail("height_range", "must be [min, max], got " + r->dump());
+            f.fail("height_range", "must be [min, max], got " + jsonExcerpt(*r));
         double lo = (*r)[0].get<double>(), hi = (*r)[1].get<double>();
         if (!std::isfinite(lo) || !std::isfinite(hi) || !(hi > lo))
-            f.fail("height_range", "must be [min, max] with max > min, got " + r->dump());
+            f.fail("height_range", "must be [min, max] with max > min, got " + jsonExcerpt(*r));
         h.heightRange = std::array<double, 2>{lo, hi};
     }
     f.rejectUnknown();
@@ -246,9 +246,18 @@ void parseMaterial(Fields& f, MaterialDesc& m) {
     std::string dist =
         f.choice("distribution", microfacetName(p.distribution), {"ggx", "beckmann"});
     p.distribution = dist == "ggx" ? Microfacet::GGX : Microfacet::Beckmann;
-    double alpha = f.positive("alpha", p.alphaU);
-    p.alphaU = static_cast<float>(f.positive("alpha_u", alpha));
-    p.alphaV = static_cast<float>(f.positive("alpha_v", alpha));
+    // Roughness α: the microfacet slope's spread; past 1 a surface is rougher than any machined
+    // metal (and a float overflows at 3.4e38), so (0, 1] is what the scene file admits.
+    auto roughness = [&](const char* key, double def) {
+        const double a = f.positive(key, def);
+        if (a > 1)
+            f.fail(key, "must be in (0, 1], got " + formatNumber(a),
+                   "roughness alpha: about 0.01 polished, 0.1 ground, 0.5 very rough");
+        return a;
+    };
+    double alpha = roughness("alpha", p.alphaU);
+    p.alphaU = static_cast<float>(roughness("alpha_u", alpha));
+    p.alphaV = static_cast<float>(roughness("alpha_v", alpha));
     auto eta = f.rgb("eta"), k = f.rgb("k");
     bool hasName = f.get("material") != nullptr;
     if (eta || k) {
@@ -329,12 +338,7 @@ void parseRender(Fields& f, RenderDesc& r) {
 }
 
 json parseJsonText(const std::string& text, const std::string& where) {
-    try {
-        return json::parse(text);
-    } catch (const json::exception& e) {  // parse_error, or out_of_range for a number like 1e999
-        throw inputError(where, std::string("not valid JSON: ") + e.what(),
-                         "fix the syntax (a JSON validator shows the spot)");
-    }
+    return parseJsonInput(text, where);
 }
 
 SceneDesc parseSceneJson(const json& j, const std::filesystem::path& baseDir,
@@ -380,7 +384,8 @@ void applySceneOverride(json& scene, const std::string& override, const std::str
     if (!scene.is_object())
         throw inputError(where, "is not a JSON object", "a scene file is {\"heightmap\": ...}");
     const std::string text = override.substr(eq + 1);
-    json value = json::parse(text, nullptr, false);
+    json value = jsonNestingDepth(text) > kMaxJsonDepth ? json(json::value_t::discarded)
+                                                        : json::parse(text, nullptr, false);
     if (value.is_discarded()) value = text;  // a bare word: a string
     json* at = &scene;
     std::string walked;
@@ -405,13 +410,9 @@ void applySceneOverride(json& scene, const std::string& override, const std::str
 
 SceneDesc readSceneFile(const std::filesystem::path& file,
                         const std::vector<std::string>& overrides) {
-    std::ifstream in(file, std::ios::binary);
-    if (!in)
-        throw inputError(file.string(), "cannot open the scene file",
-                         "check the path (scene files are JSON)");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    json j = parseJsonText(ss.str(), file.string());
+    json j = parseJsonText(readInputFile(file, "the scene file", kMaxJsonFileBytes,
+                                         "check the path (scene files are JSON)"),
+                           file.string());
     for (const std::string& o : overrides) applySceneOverride(j, o, file.string());
     std::string where = file.string();
     if (!overrides.empty()) {
@@ -448,6 +449,13 @@ void reportLoad(const std::filesystem::path& file, const HeightmapLoad& load, in
 }
 
 }  // namespace
+
+std::vector<std::filesystem::path> sceneInputFiles(const SceneDesc& desc) {
+    std::vector<std::filesystem::path> files;
+    for (const auto& f : {desc.file, desc.heightmap.path, desc.envmap.path})
+        if (!f.empty()) files.push_back(f);
+    return files;
+}
 
 std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
     // A 5000² map takes seconds to read and build (core/Progress.h shows the elapsed time).
@@ -566,7 +574,8 @@ std::vector<SceneFileField> sceneFileFields() {
         {"material.distribution", code(microfacetName(m.distribution)),
          "or `beckmann` (visible-normal sampling, as Mitsuba)"},
         {"material.alpha", m.alphaU == m.alphaV ? num(m.alphaU) : pair(m.alphaU, m.alphaV),
-         "roughness α; `alpha_u` (along +x, the map's columns) and `alpha_v` (along z) for "
+         "roughness α in (0, 1]; `alpha_u` (along +x, the map's columns) and `alpha_v` (along z) "
+         "for "
          "anisotropy"},
         {"material.material", code(d.material.name),
          "`none` (η=0, k=1: a perfect mirror), `Al`, `Cr`, `Fe`, `Cu`, `Au`, `Ag`; or explicit "

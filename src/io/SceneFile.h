@@ -28,6 +28,9 @@ SceneDesc readSceneFile(const std::filesystem::path& file,
 SceneDesc parseScene(const std::string& jsonText, const std::filesystem::path& baseDir,
                      const std::string& where = "scene");
 
+/// The files a scene reads: the scene file, its height map and its env map (those it names).
+std::vector<std::filesystem::path> sceneInputFiles(const SceneDesc& desc);
+
 /// Load the height map a SceneDesc names and build the Scene (Embree surface included).
 std::unique_ptr<Scene> loadScene(const SceneDesc& desc);
 std::unique_ptr<Scene> loadScene(const std::filesystem::path& file,

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <system_error>
 
 #include "core/Error.h"
@@ -17,12 +18,18 @@ namespace fs = std::filesystem;
 
 namespace {
 
-bool replaceable(const fs::path& dir) {
+constexpr const char* kMarkerText =
+    "written by scratchlight; the directory is replaced as a whole by the next run\n";
+
+/// Ours: it holds the marker file with the text we write (a regular file, not a link).
+bool hasMarker(const fs::path& dir) {
     std::error_code ec;
-    if (fs::is_empty(dir, ec) && !ec) return true;
-    for (const char* f : {StagedDirectory::kMarker, "summary.json", "judge.json"})
-        if (fs::exists(dir / f, ec)) return true;
-    return false;
+    const fs::path m = dir / StagedDirectory::kMarker;
+    if (!fs::is_regular_file(fs::symlink_status(m, ec)) || fs::file_size(m, ec) > 4096)
+        return false;
+    std::ifstream in(m, std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(in)), {});
+    return text.rfind("written by scratchlight", 0) == 0;
 }
 
 }  // namespace
@@ -37,11 +44,26 @@ StagedDirectory::StagedDirectory(fs::path target) : target_(std::move(target)) {
         if (!fs::is_directory(abs, ec))
             throw inputError(where, "is a file",
                              "give a directory (new, or one scratchlight wrote)");
-        if (!replaceable(abs))
+        const bool empty = fs::is_empty(abs, ec) && !ec;
+        if (!empty && !hasMarker(abs)) {
+            // An output of a scratchlight before the marker looks like a folder of the user's
+            // that holds a summary.json: neither is wiped on a guess.
+            for (const char* f : {"summary.json", "judge.json"})
+                if (fs::exists(abs / f, ec))
+                    throw inputError(where,
+                                     std::string("holds a ") + f + " but not the marker file " +
+                                         kMarker +
+                                         " that scratchlight writes into each output directory "
+                                         "(an output of an older version, or a folder of "
+                                         "yours); it is not replaced",
+                                     "remove it yourself if it is an old output, or give "
+                                     "another output directory");
             throw inputError(where,
-                             "exists and holds files scratchlight did not write; it would be "
-                             "replaced as a whole",
+                             "exists and holds files scratchlight did not write (no marker "
+                             "file " +
+                                 std::string(kMarker) + "); it would be replaced as a whole",
                              "give a new or empty directory, or one scratchlight wrote before");
+        }
     }
     const fs::path parent = abs.parent_path();
     fs::create_directories(parent, ec);
@@ -64,7 +86,7 @@ StagedDirectory::StagedDirectory(fs::path target) : target_(std::move(target)) {
         throw inputError(where, "cannot create the staging directory " + staging_.string(),
                          ec ? ec.message() : "");
     std::ofstream marker(staging_ / kMarker);
-    marker << "written by scratchlight; the directory is replaced as a whole by the next run\n";
+    marker << kMarkerText;
     if (!marker.good())
         throw inputError(where, "cannot write in the staging directory " + staging_.string());
 }

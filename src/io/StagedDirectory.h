@@ -8,10 +8,12 @@
 //   write(out.path() / "a.exr");   // ... every file of the run
 //   out.commit();                  // outDir now holds exactly the new files
 //
-// Safety: a directory is replaced only if it is empty, or one this class wrote before (it holds
-// the marker file `.scratchlight-output`), or an output of an older scratchlight (it holds a
-// summary.json or judge.json). Anything else (e.g. `-o .` or a folder of the user's) is refused
-// before the work starts, so no command can wipe files it did not write.
+// Safety: a directory is replaced only if it is empty or one this class wrote before (it holds
+// the marker file `.scratchlight-output` with the text this class writes). Anything else (e.g.
+// `-o .` or a folder of the user's) is refused before the work starts, so no command can wipe
+// files it did not write. A folder with a summary.json or judge.json but no marker (an output of
+// a scratchlight before the marker, or a folder of the user's that happens to hold such a file)
+// is refused too, with a message saying so and how to proceed.
 #pragma once
 
 #include <filesystem>

@@ -8,11 +8,13 @@
 #include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "core/Error.h"
 #include "core/Hash.h"
 #include "core/Registry.h"
 #include "io/AtomicFile.h"
+#include "io/InputFile.h"
 #include "scene/Scene.h"
 
 namespace sl {
@@ -282,13 +284,17 @@ ShardOf shardOf(const TransportFile& shard, const std::string& name) {
 }
 
 std::vector<std::filesystem::path> shardListFiles(const std::filesystem::path& list) {
-    std::ifstream in(list);
-    if (!in)
-        throw inputError(list.string(), "cannot open the shard list",
-                         "check the path (a text file with one .tm file per line)");
+    std::istringstream in(readInputFile(list, "a shard list", 1ull << 20,
+                                        "check the path (a text file with one .tm file per line)"));
     std::vector<std::filesystem::path> files;
     std::string line;
-    while (std::getline(in, line)) {
+    for (int number = 1; std::getline(in, line); ++number) {
+        for (const char c : line)
+            if ((static_cast<unsigned char>(c) < 0x20 && c != '\t' && c != '\r') || c == 0x7f)
+                throw inputError(list.string() + ": line " + std::to_string(number),
+                                 "is not a file name (\"" + textExcerpt(line, 40) +
+                                     "\": control bytes; is this a binary file?)",
+                                 "a shard list is a text file with one .tm file per line");
         const size_t a = line.find_first_not_of(" \t\r");
         if (a == std::string::npos || line[a] == '#') continue;
         const size_t b = line.find_last_not_of(" \t\r");
@@ -321,9 +327,38 @@ TransportFile readShardList(const std::filesystem::path& list,
 
 }  // namespace
 
+int peekTransportFile(const std::filesystem::path& file, std::string* fingerprint) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(file, ec)) return 0;
+    std::ifstream in(file, std::ios::binary);
+    char magic[8] = {};
+    uint32_t version = 0, len = 0;
+    in.read(magic, 8);
+    if (!in || std::memcmp(magic, kMagic, 8) != 0) return 0;
+    in.read(reinterpret_cast<char*>(&version), 4);
+    in.read(reinterpret_cast<char*>(&len), 4);
+    if (!in || version != kVersion || len > (1u << 24)) return 1;
+    std::string header(len, '\0');
+    uint64_t headerHash = 0;
+    in.read(header.data(), len);
+    in.read(reinterpret_cast<char*>(&headerHash), 8);
+    if (!in || hash64(header.data(), header.size()) != headerHash ||
+        jsonNestingDepth(header) > kMaxJsonDepth)
+        return 1;
+    try {
+        const json h = json::parse(header);
+        if (fingerprint) *fingerprint = h.at("fingerprint").get<std::string>();
+    } catch (const json::exception&) {
+        return 1;
+    }
+    return 2;
+}
+
 TransportFile readTransportFile(const std::filesystem::path& file,
                                 const std::string& expectedFingerprint) {
     if (file.extension() == ".shards") return readShardList(file, expectedFingerprint);
+    checkInputFile(file, "a transport-matrix file", UINT64_MAX,
+                   "check the path, or create it with `scratchlight precompute`");
     std::ifstream in(file, std::ios::binary);
     std::error_code ec;
     const auto fileSize = std::filesystem::file_size(file, ec);
@@ -369,6 +404,9 @@ TransportFile readTransport(std::istream& in, uint64_t fileSize, const std::stri
     std::vector<SectionRef> sections;
     uint64_t nnz = 0;
     try {
+        if (jsonNestingDepth(header) > kMaxJsonDepth)
+            throw InputError(damaged(where, "the header nests deeper than " +
+                                                std::to_string(kMaxJsonDepth) + " levels"));
         const json h = json::parse(header);
         if (!h.is_object()) throw InputError(damaged(where, "the header is not a JSON object"));
         auto integer = [&](const json& obj, const char* key, int64_t lo, int64_t hi) {
@@ -376,10 +414,10 @@ TransportFile readTransport(std::istream& in, uint64_t fileSize, const std::stri
             if (!v.is_number_integer() ||
                 (v.is_number_unsigned() && v.get<uint64_t>() > uint64_t(hi)) ||
                 v.get<int64_t>() < lo || v.get<int64_t>() > hi)
-                throw InputError(damaged(where, "header field '" + std::string(key) + "' is " +
-                                                    v.dump() + ", expected a whole number in [" +
-                                                    std::to_string(lo) + ", " + std::to_string(hi) +
-                                                    "]"));
+                throw InputError(
+                    damaged(where, "header field '" + std::string(key) + "' is " + jsonExcerpt(v) +
+                                       ", expected a whole number in [" + std::to_string(lo) +
+                                       ", " + std::to_string(hi) + "]"));
             return v.get<int64_t>();
         };
         auto text = [&](const json& obj, const char* key) {

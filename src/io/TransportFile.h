@@ -65,6 +65,11 @@ struct TransportFile {
 TransportFile readTransportFile(const std::filesystem::path& file,
                                 const std::string& expectedFingerprint = {});
 
+/// What a file holds, peeked at without reading T: 0 not a transport-matrix file (or not
+/// readable), 1 its magic only (a file cut short while written), 2 a whole checked header; then
+/// `fingerprint` is the header's. Never throws.
+int peekTransportFile(const std::filesystem::path& file, std::string* fingerprint = nullptr);
+
 /// T put together from its row shards (see SHARDS above); `where` names them in errors, and
 /// `names` (optional, one per shard: their files) each shard. InputError for a shard that is not
 /// one, mismatched inputs, overlapping rows or a gap.

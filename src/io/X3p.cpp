@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <limits>
 #include <memory>
 #include <new>
@@ -431,6 +432,7 @@ void writeX3p(const fs::path& file, int width, int height, const std::vector<flo
         "</p:ISO5436_2>\n";
     const std::string sum = md5Hex(xml.data(), xml.size()) + " *main.xml\n";
 
+    constexpr time_t kFixedZipTime = 315619200;  // 1980-01-02 00:00 UTC: >= 1980 in any zone
     writeAtomically(file, [&](const fs::path& temp) {
         int err = 0;
         zip_t* z = zip_open(temp.c_str(), ZIP_CREATE | ZIP_TRUNCATE, &err);
@@ -441,11 +443,17 @@ void writeX3p(const fs::path& file, int width, int height, const std::vector<flo
               {"bindata/data.bin", &data},
               {"md5checksum.hex", &sum}}) {
             zip_source_t* src = zip_source_buffer(z, bytes->data(), bytes->size(), 0);
-            if (!src || zip_file_add(z, name, src, ZIP_FL_OVERWRITE) < 0) {
+            const zip_int64_t index = src ? zip_file_add(z, name, src, ZIP_FL_OVERWRITE) : -1;
+            if (index < 0) {
                 if (src) zip_source_free(src);
                 throw inputError(where, std::string("cannot add ") + name +
                                             " to the X3P archive: " + zip_strerror(z));
             }
+            // A fixed member time (early 1980, where zip time begins), not the clock: the
+            // same map gives the same bytes, as our EXR files do.
+            if (zip_file_set_mtime(z, static_cast<zip_uint64_t>(index), kFixedZipTime, 0) != 0)
+                throw inputError(where, std::string("cannot set the time of ") + name +
+                                            " in the X3P archive: " + zip_strerror(z));
         }
         if (zip_close(z) != 0)
             throw inputError(where,

@@ -12,6 +12,7 @@
 #include <unsupported/Eigen/FFT>
 
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "core/Registry.h"
 #include "core/Stopwatch.h"
 
@@ -1548,6 +1549,7 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
         heights, W, H, o, &r, &macro, wantTexture && o.textureSectors == 1 ? &texture : nullptr,
         wantTexture && o.textureSectors > 1 ? &sectors : nullptr,
         o.ringWindow > 0 ? &period : nullptr, o.levelWiener ? &levelDelta : nullptr);
+    throwIfInterrupted();  // Ctrl-C between the steps (core/Interrupt.h)
     RingFit rings;
     if (o.ringWindow > 0) {
         rings = ringFit(heights, macro, W, H, o, period, r);
@@ -1574,11 +1576,13 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
         r.stepPoints = steps.points.size();
     }
     std::vector<float> A = separableMedian(R, W, H, o.levelWindow);
+    throwIfInterrupted();  // Ctrl-C between the steps (core/Interrupt.h)
     for (size_t k = 0; k < n; ++k) A[k] = R[k] - A[k];
     if (o.ringWindow > 0) ringLevel(heights, macro, A, W, H, o, floorSigma, rings, r);  // 4b
     for (size_t k = 0; k < n; ++k) R[k] += macro[k];
     // the edge residual: both axes at once, or (edgeAxes) one per axis, each with its own σ
     std::vector<float> N = separableQuadratic(R, W, H, o.edgeWindow, true, !o.edgeAxes);
+    throwIfInterrupted();  // Ctrl-C between the steps (core/Interrupt.h)
     for (size_t k = 0; k < n; ++k) N[k] = R[k] - N[k];
     std::vector<float> Nz;
     if (o.edgeAxes) {

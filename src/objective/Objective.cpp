@@ -62,6 +62,7 @@
 #include <string>
 
 #include "core/Error.h"
+#include "core/Text.h"
 
 namespace sl {
 
@@ -131,8 +132,8 @@ ImageObjective::ImageObjective(int width, int height, std::vector<uint8_t> mask,
                          "Use a mask of the same size as the rendered image");
     }
     if (!std::isfinite(opt_.lambda) || opt_.lambda < 0.0) {
-        throw inputError("objective.lambda",
-                         "is " + std::to_string(opt_.lambda) + ", not a finite value >= 0",
+        throw inputError(option("lambda"),
+                         "is " + formatNumber(opt_.lambda) + ", not a finite value >= 0",
                          "Use e.g. 30 (the paper's value; 10 for its RGB run) or 0 for no L2");
     }
     if (opt_.smoothAbs && !(std::isfinite(opt_.smoothEps) && opt_.smoothEps > 0.0)) {

@@ -174,25 +174,24 @@ void validate(const Problem& problem, const std::vector<double>& x, const Optimi
     auto bad = [](const std::string& field, const std::string& problemText,
                   const std::string& fix) { return inputError(field, problemText, fix); };
     if (o.iterations < 1)
-        throw bad("optimizer option 'iterations'", "is " + std::to_string(o.iterations),
-                  "use a count >= 1");
+        throw bad(option("iterations"), "is " + std::to_string(o.iterations), "use a count >= 1");
     if (!(o.learningRate > 0) || !std::isfinite(o.learningRate))
-        throw bad("optimizer option 'learningRate'", "is " + formatNumber(o.learningRate),
+        throw bad(option("learning-rate"), "is " + formatNumber(o.learningRate),
                   "use a finite value > 0 (the paper: 0.02)");
     if (!(o.beta1 >= 0 && o.beta1 < 1))
-        throw bad("optimizer option 'beta1'", "is " + formatNumber(o.beta1),
+        throw bad(option("beta1"), "is " + formatNumber(o.beta1),
                   "use 0 <= beta1 < 1 (default 0.9)");
     if (!(o.beta2 >= 0 && o.beta2 < 1))
-        throw bad("optimizer option 'beta2'", "is " + formatNumber(o.beta2),
+        throw bad(option("beta2"), "is " + formatNumber(o.beta2),
                   "use 0 <= beta2 < 1 (default 0.999)");
     if (!(o.epsilon > 0) || !std::isfinite(o.epsilon))
-        throw bad("optimizer option 'epsilon'", "is " + formatNumber(o.epsilon),
+        throw bad(option("epsilon"), "is " + formatNumber(o.epsilon),
                   "use a finite value > 0 (default 1e-8)");
     if (!(o.relativeFunctionTolerance >= 0) || !std::isfinite(o.relativeFunctionTolerance))
-        throw bad("optimizer option 'relativeFunctionTolerance'",
+        throw bad(option("relative-function-tolerance"),
                   "is " + formatNumber(o.relativeFunctionTolerance), "use a value >= 0 (0 = off)");
     if (o.population < 0)
-        throw bad("optimizer option 'population'", "is " + std::to_string(o.population),
+        throw bad(option("population"), "is " + std::to_string(o.population),
                   "use a count >= 0 (0 = NLopt's default)");
     if (!std::isfinite(problem.lower) || !std::isfinite(problem.upper) ||
         !(problem.lower < problem.upper))

@@ -6,12 +6,14 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <string>
 
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "core/Progress.h"
 #include "core/Rng.h"
 #include "core/Text.h"
@@ -34,9 +36,24 @@ constexpr uint64_t kTurnStream = 0x7475726e73303031ULL;
 constexpr uint64_t kNoiseStream = 0x6e6f697365303031ULL;
 constexpr uint64_t kSpikeStream = 0x7370696b65303031ULL;
 
+/// A SurfaceSpec field's option name: its dash-separated lower-case form (toolRadius:
+/// 'tool-radius'; core/Error.h option()).
+std::string optionName(const std::string& field) {
+    std::string name;
+    for (const char c : field) {
+        if (std::isupper(static_cast<unsigned char>(c))) {
+            name += '-';
+            name += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+        } else {
+            name += c;
+        }
+    }
+    return name;
+}
+
 void require(bool ok, const std::string& field, const std::string& problem,
              const std::string& fix) {
-    if (!ok) throw inputError("SurfaceSpec." + field, problem, fix);
+    if (!ok) throw inputError(option(optionName(field)), problem, fix);
 }
 
 void requireFinite(double v, const std::string& field) {
@@ -1009,6 +1026,7 @@ void compose(const SurfaceSpec& spec, const Frame& fr, const ToolMarks& tm, cons
     out.heights.assign(N, 0.0f);
     out.truth.assign(N, 0);
     tbb::parallel_for(tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& r) {
+        throwIfInterrupted();
         std::vector<double> row(static_cast<size_t>(W)), across(static_cast<size_t>(W));
         std::vector<uint8_t> lab(static_cast<size_t>(W));
         auto mark = [&](int i, uint8_t v) {
@@ -1284,6 +1302,9 @@ GeneratedSurface generateSurface(const SurfaceSpec& spec) {
             out.feedMark = out.scallop;
             break;
     }
+    // Ctrl-C (core/Interrupt.h): stop between the stages and between the rows' blocks; nothing
+    // is written (the caller writes only a finished surface).
+    throwIfInterrupted();
     Features ft;
     ft.pocket = pocketColumns(spec, fr, out);
     ft.scratches = placeScratches(spec, fr, out);
@@ -1292,9 +1313,12 @@ GeneratedSurface generateSurface(const SurfaceSpec& spec) {
     ft.bands = placeChatterBands(spec, fr, tm);
     out.chatterBands = ft.bands;
     ft.burr = placeBurr(spec, fr, out);
+    throwIfInterrupted();
     Roughness rough;
     rough.build(spec);
+    throwIfInterrupted();
     compose(spec, fr, tm, ft, rough, out);
+    throwIfInterrupted();
     addSpikes(spec, out);
     out.description = describe(spec, fr, tm, out);
     return out;
