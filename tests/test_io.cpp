@@ -328,7 +328,7 @@ TEST(HeightSource, BareMapOrSceneFile) {
     }
     // a scene file gives the whole scene (its range, its camera); overrides apply to it
     std::ofstream(dir / "s.json")
-        << (R"({"heightmap": {"path": "b.png", "height_range": [2, 4]}, "camera": {"width": 8,
+        << (R"({"heightmap": {"path": "b.png", "height_range": [2, 4], "pixel_pitch": 0.01}, "camera": {"width": 8,
                   "height": 6}})");
     const HeightSource sc = loadHeightSource(dir / "s.json", {"camera.width=10"});
     ASSERT_NE(sc.scene, nullptr);

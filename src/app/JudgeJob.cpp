@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <optional>
 #include <sstream>
 
+#include "app/PartSummary.h"
 #include "app/Preview.h"
 #include "app/Report.h"
 #include "app/Version.h"
@@ -160,6 +163,7 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
         nlohmann::ordered_json j;
         j["scratchlight"] = runProvenance(o.commandLine);
         j["scene"] = o.scene.string();
+        j["part"] = partSummaryJson(*scene);
         j["estimate"] = {{"spp", jo.spp},
                          {"seed", jo.seed},
                          {"max_depth", sum.estimate.file.provenance.maxDepth},

@@ -62,8 +62,7 @@ int runRender(const RenderArgs& a) {
     if (a.seed) desc.render.seed = *a.seed;
     auto scene = loadScene(desc);
     const HeightfieldStats& hs = scene->surface->stats();
-    spdlog::info("height map {}x{} ({}), Embree grid built in {:.3f} s, {:.1f} MB", scene->mapWidth,
-                 scene->mapHeight, desc.heightmap.path.filename().string(), hs.buildSeconds,
+    spdlog::info("Embree grid built in {:.3f} s, {:.1f} MB", hs.buildSeconds,
                  static_cast<double>(hs.embreeBytes) / 1e6);
     EnvMap env = chooseEnvMap(*scene, a.envmap);
     if (a.renderer != RendererKind::Builtin)

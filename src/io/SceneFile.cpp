@@ -1,5 +1,7 @@
 #include "io/SceneFile.h"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -346,6 +348,21 @@ std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
     opt.heightScale = desc.heightmap.heightScale;
     HeightmapData map = loadHeightmap(desc.heightmap.path, opt);
     SceneDesc d = desc;
+    // A map without a pitch (EXR, TIFF, PNG, .npy) is refused unless the scene gives one: a
+    // silent default was 6x off on a real part.
+    if (!map.pitch && !desc.heightmap.pitchGiven) {
+        const std::string where =
+            desc.file.empty() ? desc.heightmap.path.string() : desc.file.string();
+        throw inputError(where,
+                         desc.heightmap.path.filename().string() + " (" + map.format + ", " +
+                             std::to_string(map.width) + "x" + std::to_string(map.height) +
+                             ") carries no sample spacing, and the scene gives no "
+                             "heightmap.pixel_pitch",
+                         "Add \"pixel_pitch\": MM (the spacing of the samples in mm) to the "
+                         "scene's heightmap section, or accept the default " +
+                             formatNumber(HeightmapDesc{}.pitch) + " mm with " +
+                             option("assume-pitch"));
+    }
     // A height map that carries its pitch (X3P, SDF) sets it unless the scene gives one; a scene
     // pitch that disagrees with the file's is refused rather than silently preferred.
     if (map.pitch) {
@@ -362,7 +379,29 @@ std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
                                         "); remove pixel_pitch from the scene to use the file's");
         }
     }
-    return std::make_unique<Scene>(std::move(d), map.width, map.height, std::move(map.heights));
+    auto scene =
+        std::make_unique<Scene>(std::move(d), map.width, map.height, std::move(map.heights));
+    scene->mapFormat = map.format;
+    scene->invalidFilled = map.invalidFilled;
+    spdlog::info("{}", describePart(*scene));
+    return scene;
+}
+
+std::string describePart(const Scene& scene) {
+    const HeightmapDesc& h = scene.desc.heightmap;
+    const auto [lo, hi] = std::minmax_element(scene.heights.begin(), scene.heights.end());
+    const double p = h.pitch;
+    std::string s = "part " + h.path.filename().string();
+    if (!scene.mapFormat.empty()) s += " (" + scene.mapFormat + ")";
+    s += ": " + std::to_string(scene.mapWidth) + " x " + std::to_string(scene.mapHeight) +
+         " samples, pitch " + formatNumber(p) + " mm" + (h.pitchGiven ? "" : " (the file's)") +
+         ", " + formatNumber((scene.mapWidth - 1) * p, 4) + " x " +
+         formatNumber((scene.mapHeight - 1) * p, 4) + " mm";
+    if (lo != scene.heights.end())
+        s += ", heights " + formatNumber(*lo, 4) + " .. " + formatNumber(*hi, 4) + " mm";
+    s += ", " + std::to_string(scene.invalidFilled) + " invalid point" +
+         (scene.invalidFilled == 1 ? "" : "s") + " filled";
+    return s;
 }
 
 std::unique_ptr<Scene> loadScene(const std::filesystem::path& file,
@@ -398,8 +437,10 @@ std::vector<SceneFileField> sceneFileFields() {
          "EXR or TIFF (float32/float16/uint16), PNG (16- or 8-bit), NumPy `.npy` "
          "(float32/float64/uint16, C order), X3P (ISO 25178-72), SDF (ISO 25178-71, ASCII or "
          "binary)"},
-        {"heightmap.pixel_pitch", num(d.heightmap.pitch),
-         "sample spacing in scene units (mm); X3P and SDF carry their own (leave it out)"},
+        {"heightmap.pixel_pitch", "required (X3P, SDF: the file's)",
+         "sample spacing in scene units (mm); X3P and SDF carry their own (leave it out); a map "
+         "without one is refused unless given (or " +
+             num(d.heightmap.pitch) + " accepted on the command line)"},
         {"heightmap.height_range", "required for integer maps",
          "`[min, max]`: the integer range normalised to [0,1] maps linearly onto it; not allowed "
          "for float, X3P and SDF maps"},

@@ -28,10 +28,16 @@ SceneDesc readSceneFile(const std::filesystem::path& file,
 SceneDesc parseScene(const std::string& jsonText, const std::filesystem::path& baseDir,
                      const std::string& where = "scene");
 
-/// Load the height map a SceneDesc names and build the Scene (Embree surface included).
+/// Load the height map a SceneDesc names and build the Scene (Embree surface included). A map
+/// that carries no pitch (EXR, TIFF, PNG, .npy) needs heightmap.pixel_pitch (pitchGiven): else an
+/// InputError saying how to give it. Logs describePart (spdlog info) once loaded.
 std::unique_ptr<Scene> loadScene(const SceneDesc& desc);
 std::unique_ptr<Scene> loadScene(const std::filesystem::path& file,
                                  const std::vector<std::string>& overrides = {});
+
+/// One line on what was read: "part part.exr (exr float32): 1024 x 1024 samples, pitch 0.01 mm,
+/// 10.23 x 10.23 mm, heights -0.006 .. 0.002 mm, 0 invalid points filled".
+std::string describePart(const Scene& scene);
 
 /// The heights of a scene file's part (SCENE.json: the whole Scene, its camera included) or of a
 /// bare height map (any other extension, io/HeightmapIO.h; an integer map without a height
