@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <stdlib.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -46,6 +47,43 @@ TEST(Cache, LocationFollowsFlagThenEnvironmentThenXdg) {
     ::setenv("HOME", "/home/inspector", 1);
     EXPECT_EQ(cacheDirectory({}), fs::path("/home/inspector/.cache/scratchlight"));
     ::setenv("SCRATCHLIGHT_CACHE", saved.c_str(), 1);
+}
+
+// The size cap: least recently used first (a hit refreshes a matrix's time), nothing but the
+// cache's own finished matrices, and the command line's --cache-max reaches it.
+TEST(Cache, SizeCapRemovesTheLeastRecentlyUsedFirst) {
+    test::TempDir dir("cache-cap");
+    const auto now = fs::file_time_type::clock::now();
+    int age = 4;
+    for (const char* name : {"transport-a.tm", "transport-b.tm", "transport-c.tm", "other.tm"}) {
+        test::writeText(dir / name, std::string(1000, 'x'));
+        fs::last_write_time(dir / name, now - std::chrono::hours(age--));
+    }
+    touchCacheFile(dir / "transport-a.tm");  // the oldest, used now
+    const CacheContents removed = trimCache(dir.path(), 1500);
+    EXPECT_EQ(removed.files, 2u);
+    EXPECT_EQ(removed.bytes, 2000u);
+    EXPECT_TRUE(fs::exists(dir / "transport-a.tm"));
+    EXPECT_FALSE(fs::exists(dir / "transport-b.tm"));
+    EXPECT_FALSE(fs::exists(dir / "transport-c.tm"));
+    EXPECT_TRUE(fs::exists(dir / "other.tm"));  // not the cache's
+    EXPECT_EQ(trimCache(dir.path(), 1500).files, 0u);
+
+    CacheLocation capped;
+    capped.dir = dir.path();
+    capped.maxBytes = 0;
+    EXPECT_EQ(cacheDirectory(capped), dir.path());
+    EXPECT_FALSE(fs::exists(dir / "transport-a.tm"));
+    EXPECT_TRUE(fs::exists(dir / "other.tm"));
+
+    test::writeText(dir / "transport-d.tm", std::string(1000, 'x'));
+    const auto r = test::runCli("judge " + std::string(SL_SOURCE_DIR) +
+                                "/scenes/default/scene.json --cache " + dir.path().string() +
+                                " --cache-max 500 --size 8 --spp 2 -o " + (dir / "j").string());
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("least recently used"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir / "transport-d.tm"));
+    EXPECT_EQ(test::runCli("judge x.json --cache-max lots").exitCode, 2);
 }
 
 TEST(Cache, ClearRemovesOnlyTheCachesFiles) {

@@ -51,6 +51,13 @@ void addCacheOptions(CLI::App* c, CacheLocation& cache) {
         "--no-cache", [&cache](std::int64_t) { cache.disabled = true; },
         "Trace every matrix; read and keep nothing in the cache");
     dir->excludes(off);
+    c->add_option_function<uintmax_t>(
+         "--cache-max", [&cache](uintmax_t bytes) { cache.maxBytes = bytes; },
+         "Size cap of the cache, e.g. 500MB or 8GB (default " +
+             std::to_string(kDefaultCacheMaxBytes / 1000000000) +
+             "GB): the least recently used matrices are removed first")
+        ->transform(CLI::AsSizeValue(true))
+        ->type_name("SIZE");
 }
 
 void addDefectRegionOptions(CLI::App* c, RegionSpec& defects, RegionSpec& reference) {

@@ -328,6 +328,18 @@ EnvMap lightFromSpec(const std::string& spec, int w, int h, int channels,
             for (int k = 0; k < 3; ++k) rgb.texels[3 * t + k] = m.texels[t];
         return rgb;
     }
+    // Neither a light name nor a file there: say both, and where a relative path was looked for
+    // (the working directory; a scene file's own envmap.path is resolved by the scene parser).
+    std::error_code ec;
+    if (!spec.empty() && !std::filesystem::exists(spec, ec)) {
+        const std::string nearest = nearestName(spec, presets);
+        throw inputError(where + " '" + spec + "'",
+                         "is neither a light name nor a file (looked for " +
+                             std::filesystem::absolute(spec, ec).string() +
+                             "; a relative path is resolved against the working directory)",
+                         (nearest.empty() ? std::string() : "Did you mean '" + nearest + "'? ") +
+                             "Give one of " + lightSpecForms());
+    }
     return loadEnvMap(spec, w, h, channels);
 }
 
