@@ -59,7 +59,12 @@ void writeJudgeReport(const std::filesystem::path& dir, const JudgeJobOptions& o
         "gradient over the part's mean brightness (about 0.01 is the least the eye sees). "
         "Brightness: the part's mean over the white furnace's (E = 1).");
     if (!judge.legend().empty()) {
-        std::string legend = "Regions outlined (truth " + o.judge.truth.filename().string() + "):";
+        std::string legend =
+            "Regions outlined (" +
+            (o.defects.empty()
+                 ? "truth " + o.judge.truth.filename().string()
+                 : "defect region " + defectRegionSpec(o.defects, o.judge.truth).text()) +
+            "):";
         for (const RegionLabel& r : judge.legend()) {
             legend += " ";
             legend += r.name;
@@ -149,7 +154,27 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
         }
         JudgeOptions jo = o.judge;
         jo.cacheDir = cacheDirectory(o.cache);
-        Judge judge(*scene, jo);
+        if (o.defects.empty() && !o.reference.empty())
+            throw inputError(option("reference"), "is the reference of a defect region",
+                             "give " + option("defects") + " too (e.g. auto)");
+        // With a defect region: its regions in the image first (a bad mask fails before the
+        // trace), then one region "defects" as optimize's held-out judge scores it.
+        std::optional<DefectRegions> regions;
+        if (!o.defects.empty())
+            regions = defectRegionsInImage(*scene, o.defects, jo.truth, o.reference);
+        std::optional<TransportSource> estimate;
+        std::unique_ptr<Judge> judged;
+        if (regions) {
+            estimate = judgeEstimate(*scene, jo);
+            std::vector<uint8_t> labels(regions->defects.size());
+            for (size_t q = 0; q < labels.size(); ++q) labels[q] = regions->defects[q] ? 255 : 0;
+            judged = std::make_unique<Judge>(*estimate, jo, std::move(labels),
+                                             std::vector<RegionLabel>{{255, "defects"}},
+                                             regions->reference);
+        } else {
+            judged = std::make_unique<Judge>(*scene, jo);
+        }
+        const Judge& judge = *judged;
         const TransportMatrix& t = judge.estimate().file.matrix;
 
         sum.estimate = judge.estimate();
@@ -172,6 +197,11 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
                          {"image", {t.width, t.height}}};
         j["lambda"] = jo.objective.lambda;
         if (!jo.truth.empty()) j["truth"] = jo.truth.string();
+        if (regions) {
+            j["defects"] = defectRegionSpec(o.defects, jo.truth).text();
+            j["reference"] =
+                o.reference.empty() ? "the part away from the defects" : o.reference.text();
+        }
         j["lights"] = nlohmann::ordered_json::array();
         for (const JudgeScore& s : sum.scores) j["lights"].push_back(toJson(s));
         sum.json = j.dump(2) + "\n";

@@ -60,6 +60,7 @@ void registerJudge(CLI::App& app, std::function<int()>& run) {
     c->add_option("--truth", a->o.judge.truth,
                   "Truth label mask in height-map space (gen-surface's <stem>-truth.png; "
                   "its <stem>-truth.json names the regions)");
+    addDefectRegionOptions(c, a->o.defects, a->o.reference);
     c->add_option("--lambda", a->o.judge.objective.lambda, "λ of eq. 2 and U")
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
