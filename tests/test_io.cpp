@@ -973,3 +973,16 @@ TEST(EnvMapIO, TinyNegativeTexelsAreClampedWithOneWarningLargeOnesRefused) {
     writeExr(dir / "dark.exr", Image(8, 4, 1, -1e-9f));
     EXPECT_THROW(loadEnvMap(dir / "dark.exr", 8, 4, 1), InputError);
 }
+
+// A bare height map (defectmap, scratchmap) says what was read, as a scene's part does.
+TEST(HeightSource, ABareMapSaysWhatWasRead) {
+    TempDir dir;
+    Image img(4, 3, 1, 0.0f);
+    img.at(1, 1, 0) = 0.25f;
+    writeExr(dir / "bare.exr", img);
+    const std::string log = loggedBy([&] { loadHeightSource(dir / "bare.exr"); });
+    EXPECT_NE(log.find("info: part bare.exr (exr float32): 4 x 3 samples, no pitch (a bare "
+                       "height map), heights 0 .. 0.25, 0 invalid points filled"),
+              std::string::npos)
+        << log;
+}

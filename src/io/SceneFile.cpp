@@ -423,6 +423,24 @@ HeightSource loadHeightSource(const std::filesystem::path& file,
     HeightmapOptions o;
     o.defaultIntegerRange = std::array<double, 2>{0.0, 1.0};
     s.map = loadHeightmap(file, o);
+    // What was read, as loadScene says it for a scene (describePart).
+    const HeightmapData& m = s.map;
+    std::string line = "part " + file.filename().string() + " (" + m.format +
+                       "): " + std::to_string(m.width) + " x " + std::to_string(m.height) +
+                       " samples";
+    if (m.pitch)
+        line += ", pitch " + formatNumber(*m.pitch) + " mm (the file's), " +
+                formatNumber((m.width - 1) * *m.pitch, 4) + " x " +
+                formatNumber((m.height - 1) * *m.pitch, 4) + " mm";
+    else
+        line += ", no pitch (a bare height map)";
+    if (!m.heights.empty()) {
+        const auto [lo, hi] = std::minmax_element(m.heights.begin(), m.heights.end());
+        line += ", heights " + formatNumber(*lo, 4) + " .. " + formatNumber(*hi, 4);
+    }
+    line += ", " + std::to_string(m.invalidFilled) + " invalid point" +
+            (m.invalidFilled == 1 ? "" : "s") + " filled";
+    spdlog::info("{}", line);
     return s;
 }
 

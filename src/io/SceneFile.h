@@ -43,7 +43,8 @@ std::string describePart(const Scene& scene);
 /// bare height map (any other extension, io/HeightmapIO.h; an integer map without a height
 /// range is read as [0, 1], for tools invariant to an affine change of the heights, such as
 /// the defect and scratch maps). `overrides` apply to a scene file only: given with a bare
-/// map they are an InputError naming it.
+/// map they are an InputError naming it. Logs what was read (a bare map: its grid, pitch when
+/// the file has one, height range and invalid points; a scene: loadScene's describePart).
 struct HeightSource {
     std::unique_ptr<Scene> scene;  // null for a bare height map
     HeightmapData map;             // the bare height map's data (empty for a scene)
