@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <stdlib.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -52,6 +53,61 @@ TEST(Cache, LocationFollowsFlagThenEnvironmentThenXdg) {
 
 // Issue 35: `cache clear` deleted a user's transport-notes.tm by its name alone. A file is the
 // cache's only when its content says so (a .tm header holding the fingerprint it is named by).
+// The size cap: least recently used first (a hit refreshes a matrix's time), nothing but the
+// cache's own finished matrices, and the command line's --cache-max reaches it.
+TEST(Cache, SizeCapRemovesTheLeastRecentlyUsedFirst) {
+    test::TempDir dir("cache-cap");
+    // The cache's own files (a header holding the fingerprint each is named by), ~the same size.
+    TransportMatrix t;
+    t.width = t.height = 1;
+    t.envWidth = 2;
+    t.envHeight = 3;
+    t.storage = TransportStorage::Dense;
+    t.values.assign(t.cols(), 0.5f);
+    t.objectMask.assign(1, 1);
+    auto cacheFile = [&](char c) {
+        const std::string fp(32, c);
+        TransportProvenance prov;
+        prov.fingerprint = fp;
+        prov.inputs = "{}";
+        const fs::path f = dir / ("transport-" + fp + ".tm");
+        writeTransportFile(f, t, prov);
+        return f;
+    };
+    const fs::path a = cacheFile('a'), b = cacheFile('b'), c = cacheFile('c');
+    const uintmax_t size = fs::file_size(a);
+    test::writeText(dir / "other.tm", std::string(1000, 'x'));
+    const auto now = fs::file_time_type::clock::now();
+    int age = 4;
+    for (const fs::path& f : {a, b, c, dir / "other.tm"})
+        fs::last_write_time(f, now - std::chrono::hours(age--));
+    touchCacheFile(a);  // the oldest, used now
+    const CacheContents removed = trimCache(dir.path(), size + size / 2);
+    EXPECT_EQ(removed.files, 2u);
+    EXPECT_EQ(removed.bytes, 2 * size);
+    EXPECT_TRUE(fs::exists(a));
+    EXPECT_FALSE(fs::exists(b));
+    EXPECT_FALSE(fs::exists(c));
+    EXPECT_TRUE(fs::exists(dir / "other.tm"));  // not the cache's
+    EXPECT_EQ(trimCache(dir.path(), size + size / 2).files, 0u);
+
+    CacheLocation capped;
+    capped.dir = dir.path();
+    capped.maxBytes = 0;
+    EXPECT_EQ(cacheDirectory(capped), dir.path());
+    EXPECT_FALSE(fs::exists(a));
+    EXPECT_TRUE(fs::exists(dir / "other.tm"));
+
+    const fs::path d = cacheFile('d');
+    const auto r = test::runCli("judge " + std::string(SL_SOURCE_DIR) +
+                                "/scenes/default/scene.json --cache " + dir.path().string() +
+                                " --cache-max 500 --size 8 --spp 2 -o " + (dir / "j").string());
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("least recently used"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(d));
+    EXPECT_EQ(test::runCli("judge x.json --cache-max lots").exitCode, 2);
+}
+
 TEST(Cache, ClearRemovesOnlyTheCachesFiles) {
     test::TempDir dir("cache-clear");
     const std::string fp = "0123456789abcdef0123456789abcdef";

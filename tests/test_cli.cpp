@@ -61,8 +61,8 @@ TEST_F(CliTest, HelpAndUsageErrors) {
     EXPECT_EQ(runCli("render x.json --spp 0").exitCode, 2);
     EXPECT_EQ(runCli("render x.json --envmap a.exr --constant 1").exitCode, 2);  // no such flag
     writeGoodMap();
-    auto r = runCli("render " + scene(R"({"heightmap": {"path": "map.npy"}})") + " -o " +
-                    (dir / "out.tif").string());
+    auto r = runCli("render " + scene(R"({"heightmap": {"path": "map.npy", "pixel_pitch": 0.1}})") +
+                    " -o " + (dir / "out.tif").string());
     EXPECT_EQ(r.exitCode, 2) << r.output;
 }
 
@@ -98,6 +98,30 @@ TEST_F(CliTest, RendersAndWritesExrAndPng) {
     EXPECT_EQ(exr.height, 16);
     EXPECT_EQ(exr.channels, 3);
     EXPECT_TRUE(std::filesystem::exists(png()));
+}
+
+// Say what was read: the part's grid, pitch, size in mm, height range and invalid points; a map
+// without a pitch is refused unless the scene gives one or --assume-pitch accepts the default.
+TEST_F(CliTest, PrintsThePartAndRefusesAMapWithoutAPitch) {
+    writeGoodMap();
+    const std::string noPitch = scene(R"({"heightmap": {"path": "map.npy"}, )" + smallCamera + "}");
+    expectInputError(noPitch, {"map.npy", "carries no sample spacing", "pixel_pitch",
+                               "0.01 mm with --assume-pitch"});
+    auto r = runCli("render " + noPitch + " --assume-pitch --spp 1 --envmap const:0.5 -o " + out());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("warning: --assume-pitch: the height map's samples are taken to be "
+                            "0.01 mm apart"),
+              std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find("part map.npy (npy float32): 16 x 12 samples, pitch 0.01 mm, 0.15 x "
+                            "0.11 mm, heights 0 .. 0.006 mm, 0 invalid points filled"),
+              std::string::npos)
+        << r.output;
+    // -q keeps the warning, drops the context line.
+    r = runCli("render -q " + noPitch + " --assume-pitch --spp 1 --envmap const:0.5 -o " + out());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("warning: --assume-pitch"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("part map.npy"), std::string::npos) << r.output;
 }
 
 TEST_F(CliTest, MissingSceneFile) {

@@ -141,6 +141,47 @@ TEST(CliGrammar, EveryCommandFollowsOneGrammar) {
     }
 }
 
+// The small things: a mistyped flag gets the nearest one; a light that is neither a file nor a
+// name gets the names, const:V and where a relative path was looked for; -q keeps only results,
+// warnings and errors; export-mitsuba says what it wrote.
+TEST(CliGrammar, MistakesGetSuggestionsAndQuietIsQuiet) {
+    test::TempDir dir("grammar");
+    const std::string scene = std::string(SL_SOURCE_DIR) + "/scenes/default/scene.json";
+    auto r = runCli("render " + scene + " --sizee 256 -o " + (dir / "a.exr").string());
+    EXPECT_EQ(r.exitCode, 2) << r.output;
+    EXPECT_NE(r.output.find("--sizee: did you mean --size?"), std::string::npos) << r.output;
+    r = runCli("optimize " + scene + " --iteratoins=5 -o " + (dir / "o").string());
+    EXPECT_EQ(r.exitCode, 2) << r.output;
+    EXPECT_NE(r.output.find("--iteratoins: did you mean --iterations?"), std::string::npos)
+        << r.output;
+
+    r = runCli("render " + scene + " --size 8 --spp 1 --envmap studioo -o " +
+               (dir / "b.exr").string());
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    for (const char* part :
+         {"--envmap 'studioo'", "neither a light name nor a file",
+          "resolved against the working directory", "Did you mean 'studio'", "const:V", "studio"})
+        EXPECT_NE(r.output.find(part), std::string::npos) << part << " not in: " << r.output;
+
+    r = runCli("render -q " + scene + " --size 8 --spp 1 --envmap const:0.5 -o " +
+               (dir / "c.exr").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_EQ(r.output, "") << "render -q printed";
+    r = runCli("render " + scene + " --size 8 --spp 1 --envmap const:0.5 -o " +
+               (dir / "c.exr").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("part part.exr (exr float32): 1024 x 1024 samples, pitch 0.01 mm, "
+                            "10.23 x 10.23 mm"),
+              std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find("wrote " + (dir / "c.exr").string()), std::string::npos) << r.output;
+
+    r = runCli("export-mitsuba " + scene + " --size 8 -o " + (dir / "m").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("wrote " + (dir / "m").string()), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("mitsuba -m scalar_rgb"), std::string::npos) << r.output;
+}
+
 TEST(CliGrammar, SceneOverridesReachTheRenderAndNameTheirMistakes) {
     test::TempDir dir("grammar");
     const std::string scene = std::string(SL_SOURCE_DIR) + "/scenes/default/scene.json";

@@ -634,11 +634,29 @@ TEST(FormatsScene, PitchComesFromTheFileUnlessTheSceneGivesOne) {
         EXPECT_NE(msg.find("remove pixel_pitch"), std::string::npos) << msg;
     }
 
-    // A map without its own pitch keeps the scene's default.
+    // A map without its own pitch needs the scene's (a silent default was 6x off on a real
+    // part): refused, saying how to give it; the override that accepts the default works.
     std::vector<float> flat(48, 0.0f);
     test::writeNpyF32(dir / "part.npy", 6, 8, flat);
     test::writeText(dir / "npy.json", R"({"heightmap": {"path": "part.npy"}, )" + cam + "}");
-    EXPECT_NEAR(loadScene(dir / "npy.json")->surface->pitch(), 0.01, 1e-15);
+    try {
+        loadScene(dir / "npy.json");
+        ADD_FAILURE() << "a map without a pitch was read at the default";
+    } catch (const InputError& e) {
+        const std::string msg = e.what();
+        for (const char* part : {"npy.json", "part.npy", "carries no sample spacing",
+                                 "\"pixel_pitch\": MM", "option 'assume-pitch'"})
+            EXPECT_NE(msg.find(part), std::string::npos) << part << " not in: " << msg;
+    }
+    EXPECT_NEAR(loadScene(dir / "npy.json", {"heightmap.pixel_pitch=0.01"})->surface->pitch(), 0.01,
+                1e-15);
+    test::writeText(dir / "npy2.json",
+                    R"({"heightmap": {"path": "part.npy", "pixel_pitch": 0.03}, )" + cam + "}");
+    const auto withPitch = loadScene(dir / "npy2.json");
+    EXPECT_NEAR(withPitch->surface->pitch(), 0.03, 1e-15);
+    EXPECT_EQ(describePart(*withPitch),
+              "part part.npy (npy float32): 8 x 6 samples, pitch 0.03 mm, 0.21 x 0.15 mm, heights "
+              "0 .. 0 mm, 0 invalid points filled");
 
     // SDF too.
     SdfSpec sd;

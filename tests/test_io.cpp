@@ -1,6 +1,8 @@
 // Tests for src/io: .npy reader, height maps, image files, atomic writes and env maps.
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -9,9 +11,12 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <numbers>
 #include <random>
+#include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "core/Color.h"
@@ -323,7 +328,7 @@ TEST(HeightSource, BareMapOrSceneFile) {
     }
     // a scene file gives the whole scene (its range, its camera); overrides apply to it
     std::ofstream(dir / "s.json")
-        << (R"({"heightmap": {"path": "b.png", "height_range": [2, 4]}, "camera": {"width": 8,
+        << (R"({"heightmap": {"path": "b.png", "height_range": [2, 4], "pixel_pitch": 0.01}, "camera": {"width": 8,
                   "height": 6}})");
     const HeightSource sc = loadHeightSource(dir / "s.json", {"camera.width=10"});
     ASSERT_NE(sc.scene, nullptr);
@@ -899,4 +904,85 @@ TEST(EnvMapIO, RejectsBadArguments) {
     TempDir dir;
     expectInputError([&] { loadEnvMap(dir / "nosky.hdr", 50, 25, 1); }, {"nosky.hdr", "not found"});
     expectInputError([&] { envMapPreview(EnvMap::constant(2, 2, 0.0f), 0); }, {"scale"});
+}
+
+namespace {
+
+/// The spdlog lines `body` logs (the default logger swapped for a stream while it runs).
+template <class Body>
+std::string loggedBy(Body body) {
+    std::ostringstream out;
+    auto previous = spdlog::default_logger();
+    auto logger = std::make_shared<spdlog::logger>(
+        "capture", std::make_shared<spdlog::sinks::ostream_sink_mt>(out));
+    logger->set_pattern("%l: %v");
+    spdlog::set_default_logger(logger);
+    try {
+        body();
+    } catch (...) {
+        spdlog::set_default_logger(previous);
+        throw;
+    }
+    spdlog::set_default_logger(previous);
+    return out.str();
+}
+
+}  // namespace
+
+// Real HDR photos (Blender's HDRIs) carry resampling ringing: a few texels at −3e-6 against a
+// maximum of 55 are clamped with one warning line; −0.5 is real negative energy and refused.
+TEST(EnvMapIO, TinyNegativeTexelsAreClampedWithOneWarningLargeOnesRefused) {
+    TempDir dir;
+    Image img(64, 32, 3, 1.0f);
+    img.at(10, 5, 0) = 55.0f;  // the sun
+    img.at(3, 20, 1) = -3e-6f;
+    img.at(40, 30, 2) = -2e-6f;
+    img.at(41, 30, 0) = -1e-6f;
+    writeExr(dir / "ringing.exr", img);
+    for (auto [w, h, ch] : {std::tuple{64, 32, 3}, std::tuple{50, 25, 1}, std::tuple{50, 25, 0}}) {
+        EnvMap env;
+        const std::string log = loggedBy([&] { env = loadEnvMap(dir / "ringing.exr", w, h, ch); });
+        EXPECT_EQ(std::count(log.begin(), log.end(), '\n'), 1) << log;
+        for (const char* part : {"warning", "ringing.exr", "3 pixels", "-3e-06", "row 20, column 3",
+                                 "maximum 55", "clamped to 0"})
+            EXPECT_NE(log.find(part), std::string::npos) << part << " not in: " << log;
+        EXPECT_GE(*std::min_element(env.texels.begin(), env.texels.end()), 0.0f);
+    }
+    // On the grid the clamped pixels are exactly 0, the others untouched.
+    const EnvMap onGrid = loadEnvMap(dir / "ringing.exr", 64, 32, 3);
+    EXPECT_EQ(onGrid.texels[(20 * 64 + 3) * 3 + 1], 0.0f);
+    EXPECT_EQ(onGrid.texels[(5 * 64 + 10) * 3 + 0], 55.0f);
+    // The same path serves every light spec (render, optimize --compare/--init, judge, view).
+    EXPECT_NE(loggedBy([&] {
+                  lightFromSpec((dir / "ringing.exr").string(), 50, 25, 1, "compare");
+              }).find("clamped"),
+              std::string::npos);
+
+    img.at(3, 20, 1) = -0.5f;
+    writeExr(dir / "negative.exr", img);
+    try {
+        loadEnvMap(dir / "negative.exr", 50, 25, 1);
+        ADD_FAILURE() << "-0.5 against 55 was accepted";
+    } catch (const InputError& e) {
+        const std::string m = e.what();
+        for (const char* part : {"negative.exr", "negative (-0.5)", "row 20, column 3, channel 1",
+                                 "3 negative values", "maximum of 55", "Clamp"})
+            EXPECT_NE(m.find(part), std::string::npos) << part << " not in: " << m;
+    }
+    // No positive value at all: nothing to measure the ringing against.
+    writeExr(dir / "dark.exr", Image(8, 4, 1, -1e-9f));
+    EXPECT_THROW(loadEnvMap(dir / "dark.exr", 8, 4, 1), InputError);
+}
+
+// A bare height map (defectmap, scratchmap) says what was read, as a scene's part does.
+TEST(HeightSource, ABareMapSaysWhatWasRead) {
+    TempDir dir;
+    Image img(4, 3, 1, 0.0f);
+    img.at(1, 1, 0) = 0.25f;
+    writeExr(dir / "bare.exr", img);
+    const std::string log = loggedBy([&] { loadHeightSource(dir / "bare.exr"); });
+    EXPECT_NE(log.find("info: part bare.exr (exr float32): 4 x 3 samples, no pitch (a bare "
+                       "height map), heights 0 .. 0.25, 0 invalid points filled"),
+              std::string::npos)
+        << log;
 }

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
 
@@ -142,6 +143,26 @@ TEST(DefectVisibility, KnownGradientsGiveTheirRatio) {
     EXPECT_EQ(v[1].pixels, 0u);
     EXPECT_TRUE(std::isnan(v[1].visibility));
     EXPECT_EQ(v[2].label.name, "label-7");
+}
+
+// A reference region restricts the defect-free surface the visibility compares against.
+TEST(DefectVisibility, AReferenceRegionIsTheSurfaceComparedWith) {
+    const int w = 40, h = 30;
+    std::vector<double> y(size_t(w) * h);
+    std::vector<uint8_t> part(y.size(), 1), labels(y.size(), 0), reference(y.size(), 0);
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i) {
+            const size_t q = size_t(j) * w + i;
+            const bool in = i >= 5 && i < 15 && j >= 5 && j < 15;
+            labels[q] = in ? 255 : 0;
+            reference[q] = i >= 27;
+            y[q] = (in ? 0.03 : i >= 25 ? 0.02 : 0.01) * (i + j) + 1.0;
+        }
+    const auto all = defectVisibility(w, h, y, y, part, labels, {{255, "scratch"}});
+    const auto ref = defectVisibility(w, h, y, y, part, labels, {{255, "scratch"}}, reference);
+    EXPECT_LT(all[0].visibility, 1.0);  // the whole surface: its step at i = 25 included
+    EXPECT_NEAR(ref[0].cleanRmsGradient, 0.02, 1e-12);
+    EXPECT_NEAR(ref[0].visibility, 1.5, 1e-9);
 }
 
 // Independent noise in the two halves does not raise the visibility estimate on average.
@@ -363,4 +384,52 @@ TEST(JudgeCommand, WritesTheReportWithOutlinedRegions) {
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_NE(r.output.find("nope.exr"), std::string::npos) << r.output;
     EXPECT_TRUE(std::filesystem::exists(out / "report.html"));
+}
+
+// judge --defects/--reference, as optimize takes them: the judge scores the region optimize
+// --objective defects optimized (auto: the defect map), with the numbers optimize's held-out
+// judge reported for the same estimate.
+TEST(JudgeCommand, ScoresTheDefectRegionAsOptimizeDoes) {
+    test::TempDir dir("judge-defects");
+    const std::string part = (dir.path() / "part.exr").string(),
+                      scene = (dir.path() / "scene.json").string(),
+                      truth = (dir.path() / "part-truth.png").string();
+    ASSERT_EQ(test::runCli("gen-surface -o " + part +
+                           " --width 160 --height 160 --scratches 3 --chatter-start 0.5 --scene " +
+                           scene + " --image-size 40 --spp 8 --max-depth 3")
+                  .exitCode,
+              0);
+    const auto opt = dir.path() / "opt";
+    auto r =
+        test::runCli("optimize " + scene +
+                     " --objective defects --iterations 20 --heldout-spp 16 -o " + opt.string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const auto summary = nlohmann::json::parse(test::readFile(opt / "summary.json"));
+    ASSERT_EQ(summary.value("defects", ""), "auto") << summary.dump(1);
+    const auto& optimized = summary.at("judge").at("visibility").at(0);
+
+    const auto out = dir.path() / "judged";
+    r = test::runCli("judge " + scene + " " + opt.string() +
+                     " --defects auto --spp 16 --no-references -o " + out.string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const auto judged = nlohmann::json::parse(test::readFile(out / "judge.json"));
+    EXPECT_EQ(judged.value("defects", ""), "auto");
+    const auto& v = judged.at("lights").at(0).at("visibility").at(0);
+    EXPECT_EQ(v.value("name", ""), "defects");
+    EXPECT_EQ(v.value("pixels", 0), optimized.value("pixels", -1));
+    EXPECT_NEAR(v.value("visibility", 0.0), optimized.value("visibility", -1.0),
+                1e-6 * std::abs(optimized.value("visibility", 1.0)));  // E* saved as float32
+
+    // A labelled region and a reference; a reference alone is refused, naming --defects.
+    r = test::runCli("judge " + scene + " --truth " + truth + " --defects " + truth +
+                     ":defect --reference " + truth + ":none --spp 16 -o " +
+                     (dir.path() / "j2").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(test::readFile(dir.path() / "j2" / "judge.json")
+                  .find("\"reference\": \"" + truth + ":none\""),
+              std::string::npos);
+    r = test::runCli("judge " + scene + " --reference " + truth + ":none --spp 16 -o " +
+                     (dir.path() / "j3").string());
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("--defects"), std::string::npos) << r.output;
 }

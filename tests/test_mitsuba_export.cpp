@@ -185,7 +185,7 @@ TEST(MitsubaExport, XmlHasTheSameCameraFilmIntegratorAndMaterial) {
                            R"(, "material": {"type": "conductor"})");
     ortho.reset();
     test::writeNpyF32(dir / "h2.npy", 4, 4, std::vector<float>(16, 0.0f));
-    auto o = loadScene(parseScene(R"({"heightmap": {"path": "h2.npy"},
+    auto o = loadScene(parseScene(R"({"heightmap": {"path": "h2.npy", "pixel_pitch": 0.01},
         "material": {"type": "conductor"},
         "camera": {"type": "orthographic", "width_mm": 0.3, "origin": [0, 2, 0.001],
                    "target": [0, 0, 0], "up": [0, 0, -1], "width": 16, "height": 8}})",

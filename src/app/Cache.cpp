@@ -1,11 +1,14 @@
 #include "app/Cache.h"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 #include <string_view>
 #include <system_error>
+#include <vector>
 
 #include "io/TransportFile.h"
 
@@ -61,13 +64,30 @@ const char* env(const char* name) {
 
 }  // namespace
 
-fs::path cacheDirectory(const CacheLocation& location) {
+namespace {
+
+fs::path locate(const CacheLocation& location) {
     if (location.disabled) return {};
     if (location.dir) return *location.dir;
     if (const char* d = env("SCRATCHLIGHT_CACHE")) return d;
     if (const char* x = env("XDG_CACHE_HOME")) return fs::path(x) / "scratchlight";
     if (const char* h = env("HOME")) return fs::path(h) / ".cache" / "scratchlight";
     return {};
+}
+
+}  // namespace
+
+fs::path cacheDirectory(const CacheLocation& location) {
+    const fs::path dir = locate(location);
+    const uintmax_t cap = location.maxBytes.value_or(kDefaultCacheMaxBytes);
+    const CacheContents removed = trimCache(dir, cap);
+    if (removed.files > 0)
+        spdlog::info(
+            "cache {}: removed the {} least recently used transport matri{} ({:.1f} MB) "
+            "to stay under its cap of {:.1f} MB",
+            dir.string(), removed.files, removed.files == 1 ? "x" : "ces",
+            static_cast<double>(removed.bytes) / 1e6, static_cast<double>(cap) / 1e6);
+    return dir;
 }
 
 namespace {
@@ -101,6 +121,42 @@ CacheContents clearCache(const fs::path& dir) {
         std::error_code ec;
         return fs::remove(p, ec);
     });
+}
+
+CacheContents trimCache(const fs::path& dir, uintmax_t maxBytes) {
+    struct Entry {
+        fs::path path;
+        fs::file_time_type used;
+        uintmax_t bytes;
+    };
+    std::vector<Entry> entries;
+    uintmax_t total = 0;
+    cacheFiles(dir, [&](const fs::path& p) {
+        std::error_code ec;
+        const uintmax_t size = fs::file_size(p, ec);
+        if (ec) return false;
+        total += size;
+        if (p.extension() == ".tm") entries.push_back({p, fs::last_write_time(p, ec), size});
+        return true;
+    });
+    CacheContents removed;
+    removed.dir = dir;
+    std::sort(entries.begin(), entries.end(),
+              [](const Entry& a, const Entry& b) { return a.used < b.used; });
+    for (const Entry& e : entries) {
+        if (total <= maxBytes) break;
+        std::error_code ec;
+        if (!fs::remove(e.path, ec)) continue;
+        total -= e.bytes;
+        ++removed.files;
+        removed.bytes += e.bytes;
+    }
+    return removed;
+}
+
+void touchCacheFile(const fs::path& file) {
+    std::error_code ec;
+    fs::last_write_time(file, fs::file_time_type::clock::now(), ec);
 }
 
 std::string describeCache(const CacheContents& c) {

@@ -13,20 +13,29 @@
 //   none when HOME is unset either.
 // A matrix at the paper's 512² and 1024 spp takes ~40 MB; cacheContents() says how much the
 // folder holds and clearCache() removes the matrices (only files this cache writes).
+// Size cap: cacheDirectory() trims the folder to CacheLocation::maxBytes (default
+// kDefaultCacheMaxBytes) when a command asks for it, least recently used matrix first (a
+// matrix's modification time is its last use: a cache hit refreshes it, touchCacheFile).
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <string>
 
 namespace sl {
+
+/// The cache's default size cap: a few 512², 1024-spp matrices of several parts.
+inline constexpr uintmax_t kDefaultCacheMaxBytes = 4'000'000'000;
 
 struct CacheLocation {
     std::optional<std::filesystem::path> dir;  // unset: the default (above)
     bool disabled = false;
+    std::optional<uintmax_t> maxBytes;  // size cap (unset: kDefaultCacheMaxBytes)
 };
 
-/// The folder (empty: no cache).
+/// The folder (empty: no cache), trimmed to the location's size cap (trimCache; what it removes
+/// is logged).
 std::filesystem::path cacheDirectory(const CacheLocation& location);
 
 struct CacheContents {
@@ -42,6 +51,13 @@ CacheContents cacheContents(const std::filesystem::path& dir);
 /// header holds that fingerprint) and their temporaries; never a file by its name alone, so a
 /// folder given by mistake loses nothing else. Returns what was removed.
 CacheContents clearCache(const std::filesystem::path& dir);
+
+/// Removes the least recently used transport matrices of `dir` (oldest modification time first;
+/// finished transport-*.tm only) until the rest holds at most maxBytes. Returns what was removed.
+CacheContents trimCache(const std::filesystem::path& dir, uintmax_t maxBytes);
+
+/// Marks a cache file as used now (its modification time), for trimCache's order.
+void touchCacheFile(const std::filesystem::path& file);
 
 /// "DIR: 3 transport matrices, 118 MB" (or "no cache").
 std::string describeCache(const CacheContents& contents);

@@ -41,17 +41,21 @@ Judge::Judge(const Scene& scene, const JudgeOptions& options) : options_(options
 }
 
 Judge::Judge(const TransportSource& estimate, const JudgeOptions& options,
-             std::vector<uint8_t> labels, std::vector<RegionLabel> legend)
+             std::vector<uint8_t> labels, std::vector<RegionLabel> legend,
+             std::vector<uint8_t> reference)
     : estimate_(&estimate),
       options_(options),
       labels_(std::move(labels)),
-      legend_(std::move(legend)) {
+      legend_(std::move(legend)),
+      reference_(std::move(reference)) {
     const TransportMatrix& t = estimate_->file.matrix;
     if (t.planes != 2)
         throw inputError(estimate_->path.string(), "the judge needs two independent sample sets",
                          "precompute it with " + option("halves"));
     if (!labels_.empty() && labels_.size() != t.rows())
         throw std::invalid_argument("Judge: labels do not match the image size");
+    if (!reference_.empty() && reference_.size() != t.rows())
+        throw std::invalid_argument("Judge: the reference does not match the image size");
     buildObjectives();
 }
 
@@ -121,7 +125,8 @@ JudgeScore Judge::score(std::span<const double> E, const std::string& name) cons
     }
     s.brightness = white > 0 ? lit / white : 0.0;
     if (!labels_.empty())
-        s.visibility = defectVisibility(t.width, t.height, ya, yb, partMask(), labels_, legend_);
+        s.visibility =
+            defectVisibility(t.width, t.height, ya, yb, partMask(), labels_, legend_, reference_);
     return s;
 }
 

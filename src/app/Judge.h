@@ -72,9 +72,11 @@ class Judge {
     Judge(const Judge&) = delete;
     Judge& operator=(const Judge&) = delete;
     /// A judge on a given two-plane estimate that outlives it (optimize's held-out estimate,
-    /// tests). `labels`: image-space labels (width*height) or empty.
+    /// tests). `labels`: image-space labels (width*height) or empty; `reference`: where the
+    /// defect-free surface of the visibility may lie (width*height, nonzero) or empty (the part).
     Judge(const TransportSource& estimate, const JudgeOptions& options,
-          std::vector<uint8_t> labels = {}, std::vector<RegionLabel> legend = {});
+          std::vector<uint8_t> labels = {}, std::vector<RegionLabel> legend = {},
+          std::vector<uint8_t> reference = {});
 
     /// Scores E (gray: one value per texel; RGB: three, needs options.rgb).
     JudgeScore score(std::span<const double> E, const std::string& name = {}) const;
@@ -96,6 +98,7 @@ class Judge {
     JudgeOptions options_;
     std::vector<uint8_t> labels_;
     std::vector<RegionLabel> legend_;
+    std::vector<uint8_t> reference_;
     std::unique_ptr<ImageObjective> eq2_;          // eq. 2 on the part mask, built once
     std::unique_ptr<UnbiasedObjective> unbiased_;  // U on the part mask, built once
 

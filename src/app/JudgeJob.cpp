@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <optional>
 #include <sstream>
 
+#include "app/PartSummary.h"
 #include "app/Preview.h"
 #include "app/Report.h"
 #include "app/Version.h"
@@ -57,7 +60,12 @@ void writeJudgeReport(const std::filesystem::path& dir, const JudgeJobOptions& o
         "Brightness: the part's mean over the white furnace's (E = 1).");
     rc.notes.push_back(part);
     if (!judge.legend().empty()) {
-        std::string legend = "Regions outlined (truth " + o.judge.truth.filename().string() + "):";
+        std::string legend =
+            "Regions outlined (" +
+            (o.defects.empty()
+                 ? "truth " + o.judge.truth.filename().string()
+                 : "defect region " + defectRegionSpec(o.defects, o.judge.truth).text()) +
+            "):";
         for (const RegionLabel& r : judge.legend()) {
             legend += " ";
             legend += r.name;
@@ -147,7 +155,27 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
         }
         JudgeOptions jo = o.judge;
         jo.cacheDir = cacheDirectory(o.cache);
-        Judge judge(*scene, jo);
+        if (o.defects.empty() && !o.reference.empty())
+            throw inputError(option("reference"), "is the reference of a defect region",
+                             "give " + option("defects") + " too (e.g. auto)");
+        // With a defect region: its regions in the image first (a bad mask fails before the
+        // trace), then one region "defects" as optimize's held-out judge scores it.
+        std::optional<DefectRegions> regions;
+        if (!o.defects.empty())
+            regions = defectRegionsInImage(*scene, o.defects, jo.truth, o.reference);
+        std::optional<TransportSource> estimate;
+        std::unique_ptr<Judge> judged;
+        if (regions) {
+            estimate = judgeEstimate(*scene, jo);
+            std::vector<uint8_t> labels(regions->defects.size());
+            for (size_t q = 0; q < labels.size(); ++q) labels[q] = regions->defects[q] ? 255 : 0;
+            judged = std::make_unique<Judge>(*estimate, jo, std::move(labels),
+                                             std::vector<RegionLabel>{{255, "defects"}},
+                                             regions->reference);
+        } else {
+            judged = std::make_unique<Judge>(*scene, jo);
+        }
+        const Judge& judge = *judged;
         const TransportMatrix& t = judge.estimate().file.matrix;
 
         sum.estimate = judge.estimate();
@@ -162,6 +190,7 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
         j["scratchlight"] = runProvenance(o.commandLine);
         j["scene"] = o.scene.string();
         j["heightmap"] = heightmapLoadJson(*scene);
+        j["part"] = partSummaryJson(*scene);
         j["estimate"] = {{"spp", jo.spp},
                          {"seed", jo.seed},
                          {"max_depth", sum.estimate.file.provenance.maxDepth},
@@ -170,6 +199,11 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
                          {"image", {t.width, t.height}}};
         j["lambda"] = jo.objective.lambda;
         if (!jo.truth.empty()) j["truth"] = jo.truth.string();
+        if (regions) {
+            j["defects"] = defectRegionSpec(o.defects, jo.truth).text();
+            j["reference"] =
+                o.reference.empty() ? "the part away from the defects" : o.reference.text();
+        }
         j["lights"] = nlohmann::ordered_json::array();
         for (const JudgeScore& s : sum.scores) j["lights"].push_back(toJson(s));
         sum.json = j.dump(2) + "\n";

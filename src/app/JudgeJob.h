@@ -20,6 +20,7 @@
 
 #include "app/Cache.h"
 #include "app/Judge.h"
+#include "app/Truth.h"
 
 namespace sl {
 
@@ -29,8 +30,14 @@ struct JudgeJobOptions {
     /// Env-map files (EXR/HDR/PNG…), or optimize output directories (their envmap.exr).
     std::vector<std::filesystem::path> lights;
     bool references = true;  // also score uniform 0.5 and the studio preset
-    JudgeOptions judge;      // its cacheDir is set from `cache`
-    CacheLocation cache;     // where the estimate is cached (app/Cache.h)
+    /// The defects objective's regions, as optimize takes them (app/Truth.h): with `defects`
+    /// (a mask, TRUTH.png:LABEL,... with judge.truth, or auto: the defect map) the visibility is
+    /// that of this one region, "defects", as optimize's held-out judge scores it, instead of
+    /// the truth's labels; `reference` (optional) is the surface it is compared with (default:
+    /// the part away from the defects).
+    RegionSpec defects, reference;
+    JudgeOptions judge;   // its cacheDir is set from `cache`
+    CacheLocation cache;  // where the estimate is cached (app/Cache.h)
     std::filesystem::path outDir = "out/judge";
     std::string commandLine;  // how the run was asked for: recorded in judge.json, not parsed
 };

@@ -11,6 +11,7 @@
 #include "app/InitialState.h"
 #include "app/LossMask.h"
 #include "app/OptimizeJob.h"
+#include "app/PartSummary.h"
 #include "app/Plot.h"
 #include "app/Preview.h"
 #include "app/Report.h"
@@ -248,6 +249,7 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         json s;
         s["provenance"] = runProvenance(o.commandLine);
         s["input"] = o.input.string();
+        if (scene) s["part"] = partSummaryJson(*scene);
         s["objective"] = objectiveKindName(kind);
         s["lambda"] = o.objective.lambda;
         s["from"] = o.from.empty() ? "optimized on T" : o.from;

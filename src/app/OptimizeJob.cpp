@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "app/InitialState.h"
+#include "app/PartSummary.h"
 #include "app/Plot.h"
 #include "app/Preview.h"
 #include "app/Report.h"
@@ -956,6 +957,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     for (const InitialState& s : o.starts) starts.push_back(s.spec);
     json s;
     s["scratchlight"] = runProvenance(o.commandLine);
+    if (in.scene) s["part"] = partSummaryJson(*in.scene);
     s["optimizer"] = run.optimizer.method;
     s["planes"] = o.planes;
     if (p.ranks)  // each rank held one shard; "transport" describes rank 0's

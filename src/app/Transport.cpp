@@ -7,6 +7,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "app/Cache.h"
 #include "app/HeldOut.h"
 #include "app/Judge.h"
 #include "core/Error.h"
@@ -270,6 +271,7 @@ TransportSource transportForScene(const Scene& scene, const PrecomputeOptions& o
             s.file = readTransportFile(cached, prov.fingerprint);
             s.path = cached;
             s.cacheHit = true;
+            touchCacheFile(cached);  // its last use, for the cache's size cap (app/Cache.h)
             s.secondsTotal = clock.seconds();
             spdlog::info("transport matrix from cache {}", cached.string());
             return s;

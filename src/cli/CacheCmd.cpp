@@ -1,5 +1,6 @@
 // scratchlight cache [--cache DIR]          where the cache is and what it holds
 // scratchlight cache clear [--cache DIR]    removes its transport matrices
+#include <cstdint>
 #include <cstdio>
 #include <memory>
 
@@ -16,7 +17,9 @@ struct CacheArgs {
 };
 
 int runCache(const CacheArgs& a) {
-    const auto dir = cacheDirectory(a.location);
+    CacheLocation where = a.location;
+    where.maxBytes = UINTMAX_MAX;  // looking trims nothing
+    const auto dir = cacheDirectory(where);
     if (dir.empty()) {
         std::printf("no cache (HOME is not set; give --cache DIR or set SCRATCHLIGHT_CACHE)\n");
         return kOk;

@@ -9,6 +9,7 @@
 
 #include "app/Plot.h"
 #include "core/Error.h"
+#include "core/Text.h"
 #include "io/EnvMapIO.h"
 #include "scene/EnvMapPresets.h"
 #include "scene/Scene.h"
@@ -50,6 +51,13 @@ void addCacheOptions(CLI::App* c, CacheLocation& cache) {
         "--no-cache", [&cache](std::int64_t) { cache.disabled = true; },
         "Trace every matrix; read and keep nothing in the cache");
     dir->excludes(off);
+    c->add_option_function<uintmax_t>(
+         "--cache-max", [&cache](uintmax_t bytes) { cache.maxBytes = bytes; },
+         "Size cap of the cache, e.g. 500MB or 8GB (default " +
+             std::to_string(kDefaultCacheMaxBytes / 1000000000) +
+             "GB): the least recently used matrices are removed first")
+        ->transform(CLI::AsSizeValue(true))
+        ->type_name("SIZE");
 }
 
 void addDefectRegionOptions(CLI::App* c, RegionSpec& defects, RegionSpec& reference) {
@@ -73,6 +81,23 @@ void addSceneOverrides(CLI::App* c, std::vector<std::string>& overrides, bool im
          "Scene override key=value (repeatable), e.g. -D material.alpha=0.1 -D render.spp=16")
         ->type_name("KEY=VALUE")
         ->allow_extra_args(false);
+    // A map without a pitch is refused (io/SceneFile.h loadScene); this accepts the default,
+    // loudly: everything in mm (the part's size, its slopes, the camera's framing) follows.
+    c->add_flag_callback(
+        "--assume-pitch",
+        [&overrides] {
+            const std::string p = formatNumber(HeightmapDesc{}.pitch);
+            std::fprintf(stderr,
+                         "warning: --assume-pitch: the height map's samples are taken to be %s mm "
+                         "apart, a guess, not your part's spacing (its size in mm, its slopes and "
+                         "the camera's framing follow from it); give heightmap.pixel_pitch "
+                         "when you know it\n",
+                         p.c_str());
+            overrides.push_back("heightmap.pixel_pitch=" + p);
+        },
+        "Accept the default pixel pitch (" + formatNumber(HeightmapDesc{}.pitch) +
+            " mm) for a height map that carries none (EXR, TIFF, PNG, .npy) when the scene "
+            "gives no heightmap.pixel_pitch");
     if (!image) return;
     auto camera = [&overrides](const char* field) {
         return [&overrides, field](int v) {

@@ -3,6 +3,8 @@
 // scratchlight export-mitsuba SCENE.json [--envmap SPEC | --lamps lamps.json] [-o OUTDIR]
 #include "cli/GradientCmds.h"
 
+#include <spdlog/spdlog.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -128,10 +130,10 @@ int runExportCmd(const ExportArgs& a) {
     }
     const MitsubaExport e = exportMitsuba(*scene, env, a.outDir);
     if (!a.lamps.empty()) addLampsToMitsubaScene(e.xml, lamps);
-    std::printf("wrote %s, %s and %s\nrender with Mitsuba 3: mitsuba -m scalar_rgb %s\n",
-                e.xml.string().c_str(), e.ply.string().c_str(), e.envmap.string().c_str(),
-                e.xml.string().c_str());
-    for (const std::string& n : e.notes) std::printf("note: %s\n", n.c_str());
+    spdlog::info("wrote {}, {} and {}{}", e.xml.string(), e.ply.string(), e.envmap.string(),
+                 a.lamps.empty() ? "" : " (with the lamps of " + a.lamps + ")");
+    spdlog::info("render with Mitsuba 3: mitsuba -m scalar_rgb {}", e.xml.string());
+    for (const std::string& n : e.notes) spdlog::info("note: {}", n);
     return kOk;
 }
 

@@ -1,6 +1,8 @@
 // scratchlight judge SCENE.json [ENV.exr | OUTDIR ...] [--spp 1024] [--truth TRUTH.png]
 //                   [--lambda 30] [--no-references] [-o DIR]
 // Scores env maps on the judge's independent estimate (app/Judge.h) and prints a table.
+#include <spdlog/spdlog.h>
+
 #include <cstdio>
 #include <memory>
 
@@ -27,16 +29,15 @@ int runJudge(const JudgeArgs& a) {
     o.commandLine = invokedCommandLine();
     JudgeJobSummary s = runJudgeJob(o);
     const auto& est = s.estimate;
-    std::printf("judge estimate: %d spp in two halves, seed %llu, %s (%s)\n", o.judge.spp,
-                static_cast<unsigned long long>(o.judge.seed),
-                est.cacheHit ? "from the cache" : "traced", est.path.string().c_str());
+    spdlog::info("judge estimate: {} spp in two halves, seed {}, {} ({})", o.judge.spp,
+                 o.judge.seed, est.cacheHit ? "from the cache" : "traced", est.path.string());
     std::printf("%s", formatJudgeTable(s.scores).c_str());
     std::printf(
         "lower eq2 and U are better; bright: mean brightness over the white furnace's; "
         "visibility: RMS gradient in the region over the defect-free surface's; contrast: "
         "the region's RMS gradient over the mean brightness (the eye needs about 0.01)\n");
-    std::printf("wrote %s/ (report.html, judge.json, judge.csv, renders.exr, renders.png)\n",
-                o.outDir.string().c_str());
+    spdlog::info("wrote {}/ (report.html, judge.json, judge.csv, renders.exr, renders.png)",
+                 o.outDir.string());
     return kOk;
 }
 
@@ -59,6 +60,7 @@ void registerJudge(CLI::App& app, std::function<int()>& run) {
     c->add_option("--truth", a->o.judge.truth,
                   "Truth label mask in height-map space (gen-surface's <stem>-truth.png; "
                   "its <stem>-truth.json names the regions)");
+    addDefectRegionOptions(c, a->o.defects, a->o.reference);
     c->add_option("--lambda", a->o.judge.objective.lambda, "λ of eq. 2 and U")
         ->check(nonNegativeNumber())
         ->capture_default_str();

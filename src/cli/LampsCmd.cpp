@@ -4,6 +4,8 @@
 //                    [--max-elevation DEG] [--forbid-azimuth A:B ...] [-o OUTDIR]
 // Fits K physical lamps to the objective through T (app/LampsJob.h) and prints what each extra
 // lamp buys.
+#include <spdlog/spdlog.h>
+
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -96,7 +98,7 @@ int runLamps(LampsArgs a) {
                     100 * s.judgement->gap);
     }
     if (!s.plotMessage.empty()) std::printf("no plot: %s\n", s.plotMessage.c_str());
-    std::printf("wrote %s/ (open %s/report.html)\n", a.out.c_str(), a.out.c_str());
+    spdlog::info("wrote {}/ (open {}/report.html)", a.out, a.out);
     return kOk;
 }
 

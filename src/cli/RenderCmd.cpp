@@ -78,9 +78,9 @@ int renderExternal(const RenderArgs& a, const Scene& scene, const EnvMap& env, u
     }
     writeExr(a.out, img);
     writePng(pngPath, img, a.exposure);
-    std::printf("rendered %dx%d with %s in %.3f s\n", img.width, img.height, r.name().c_str(),
-                clock.seconds());
-    std::printf("wrote %s and %s\n", a.out.c_str(), pngPath.string().c_str());
+    spdlog::info("rendered {}x{} with {} in {:.3f} s", img.width, img.height, r.name(),
+                 clock.seconds());
+    spdlog::info("wrote {} and {}", a.out, pngPath.string());
     return kOk;
 }
 
@@ -98,8 +98,7 @@ int runRender(const RenderArgs& a) {
     if (a.seed) desc.render.seed = *a.seed;
     auto scene = loadScene(desc);
     const HeightfieldStats& hs = scene->surface->stats();
-    spdlog::info("height map {}x{} ({}), Embree grid built in {:.3f} s, {:.1f} MB", scene->mapWidth,
-                 scene->mapHeight, desc.heightmap.path.filename().string(), hs.buildSeconds,
+    spdlog::info("Embree grid built in {:.3f} s, {:.1f} MB", hs.buildSeconds,
                  static_cast<double>(hs.embreeBytes) / 1e6);
     EnvMap env = chooseEnvMap(*scene, a.envmap);
     if (a.renderer != RendererKind::Builtin)
@@ -110,7 +109,7 @@ int runRender(const RenderArgs& a) {
     if (a.autoDepth) {
         const DepthChoice c = autoMaxDepth(*scene, AutoDepthOptions{.threads = a.threads});
         opt.maxDepth = c.maxDepth;
-        std::printf("max_depth %d: %s\n", c.maxDepth, c.reason.c_str());
+        spdlog::info("max_depth {}: {}", c.maxDepth, c.reason);
     }
     ProgressTask task("render", 1);
     opt.progress = task.fraction();
@@ -119,9 +118,9 @@ int runRender(const RenderArgs& a) {
     writeExr(a.out, r.image);
     writePng(pngPath, r.image, a.exposure);
     const TraceSummary& s = r.summary;
-    std::printf("rendered %dx%d at %d spp (max_depth %d) in %.3f s: %.2f Mrays/s\n", s.width,
-                s.height, s.spp, opt.maxDepth, s.seconds, s.raysPerSecond() / 1e6);
-    std::printf("wrote %s and %s\n", a.out.c_str(), pngPath.string().c_str());
+    spdlog::info("rendered {}x{} at {} spp (max_depth {}) in {:.3f} s: {:.2f} Mrays/s", s.width,
+                 s.height, s.spp, opt.maxDepth, s.seconds, s.raysPerSecond() / 1e6);
+    spdlog::info("wrote {} and {}", a.out, pngPath.string());
     return kOk;
 }
 }  // namespace

@@ -158,8 +158,9 @@ int runRelight(const RelightArgs& a) {
     else
         t.applyLuminance(e, img);
     writeRender(a.out, img, t.width, t.height, ch);
-    std::printf("relit %dx%d (%s) from %s\nwrote %s and %s\n", t.width, t.height,
-                ch == 3 ? "RGB" : "luminance", a.tm.c_str(), a.out.c_str(), png.string().c_str());
+    spdlog::info("relit {}x{} ({}) from {}", t.width, t.height, ch == 3 ? "RGB" : "luminance",
+                 a.tm);
+    spdlog::info("wrote {} and {}", a.out, png.string());
     return kOk;
 }
 
@@ -207,7 +208,7 @@ int runOptimize(OptimizeArgs a) {
         if (s.runs.size() > 1) prefix = "lambda " + formatNumber(r.lambda) + ": ";
         std::printf("%s%s\n", prefix.c_str(), optimizeHeadlineOf(r.dir).c_str());
     }
-    std::printf("wrote %s/ (open %s/report.html)\n", a.out.c_str(), a.out.c_str());
+    spdlog::info("wrote {}/ (open {}/report.html)", a.out, a.out);
     return kOk;
 }
 

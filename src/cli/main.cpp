@@ -22,6 +22,7 @@
 #include "cli/PaperCmds.h"
 #include "core/Error.h"
 #include "core/Interrupt.h"
+#include "core/Text.h"
 
 namespace {
 
@@ -48,42 +49,48 @@ void installSignalHandlers() {
     signal(SIGXFSZ, SIG_IGN);
 }
 
-/// Levenshtein distance, for "did you mean".
-size_t editDistance(const std::string& a, const std::string& b) {
-    std::vector<size_t> row(b.size() + 1);
-    for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
-    for (size_t i = 1; i <= a.size(); ++i) {
-        size_t diag = row[0];
-        row[0] = i;
-        for (size_t j = 1; j <= b.size(); ++j) {
-            const size_t up = row[j];
-            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] != b[j - 1] ? 1 : 0)});
-            diag = up;
-        }
-    }
-    return row[b.size()];
-}
-
 /// An unknown command word gets its name, the nearest command and the list, not CLI11's "A
 /// subcommand is required". Returns false when `word` is a command.
 bool reportUnknownCommand(const CLI::App& app, const std::string& word) {
-    std::string nearest, names;
-    size_t best = std::string::npos;
+    std::string names;
+    std::vector<std::string> commands;
     for (const CLI::App* c : app.get_subcommands({})) {
         if (c->get_name() == word) return false;
         names += names.empty() ? "" : ", ";
         names += c->get_name();
-        const size_t d = editDistance(word, c->get_name());
-        if (d < best) {
-            best = d;
-            nearest = c->get_name();
-        }
+        commands.push_back(c->get_name());
     }
     std::fprintf(stderr, "error: unknown command '%s'", word.c_str());
-    if (best <= std::max<size_t>(2, word.size() / 3))
-        std::fprintf(stderr, "; did you mean '%s'?", nearest.c_str());
+    const std::string nearest = sl::nearestName(word, commands);
+    if (!nearest.empty()) std::fprintf(stderr, "; did you mean '%s'?", nearest.c_str());
     std::fprintf(stderr, "\ncommands: %s (scratchlight --help)\n", names.c_str());
     return true;
+}
+
+/// After a parse error: every "--name" on the command line that no chosen command (or the app)
+/// has gets "did you mean --nearest?" from the options of the command that was chosen.
+void suggestOptions(const CLI::App& app, int argc, char** argv) {
+    std::vector<const CLI::App*> chain{&app};
+    for (const CLI::App* c = &app;;) {
+        const auto chosen = c->get_subcommands();
+        if (chosen.empty()) break;
+        c = chosen.front();
+        chain.push_back(c);
+    }
+    std::vector<std::string> known;
+    for (const CLI::App* c : chain)
+        for (const CLI::Option* o : c->get_options())
+            for (const std::string& n : o->get_lnames()) known.push_back("--" + n);
+    for (int k = 1; k < argc; ++k) {
+        std::string word = argv[k];
+        if (word == "--") break;
+        if (word.rfind("--", 0) != 0) continue;
+        word = word.substr(0, word.find('='));
+        if (std::find(known.begin(), known.end(), word) != known.end()) continue;
+        const std::string nearest = sl::nearestName(word, known);
+        if (!nearest.empty())
+            std::fprintf(stderr, "%s: did you mean %s?\n", word.c_str(), nearest.c_str());
+    }
 }
 
 }  // namespace
@@ -140,6 +147,7 @@ int main(int argc, char** argv) {
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
         app.exit(e);
+        suggestOptions(app, argc, argv);
         return kUsageError;
     } catch (const sl::InputError& e) {  // a value the library's parser refused (cli/Common.h)
         std::fprintf(stderr, "error: %s\n", withFlags(app, e.what()).c_str());

@@ -1,10 +1,12 @@
 // Small text helpers shared by the writers of files, tables and messages.
 #pragma once
 
+#include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace sl {
 
@@ -47,6 +49,37 @@ inline std::string escapeXml(std::string_view s) {
         }
     }
     return o;
+}
+
+/// Levenshtein distance (insertions, deletions, substitutions), for "did you mean".
+inline size_t editDistance(std::string_view a, std::string_view b) {
+    std::vector<size_t> row(b.size() + 1);
+    for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (size_t i = 1; i <= a.size(); ++i) {
+        size_t diag = row[0];
+        row[0] = i;
+        for (size_t j = 1; j <= b.size(); ++j) {
+            const size_t up = row[j];
+            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] != b[j - 1] ? 1 : 0)});
+            diag = up;
+        }
+    }
+    return row[b.size()];
+}
+
+/// The candidate nearest to `word` when it is near enough to be a typo (distance at most
+/// max(2, |word| / 3)), else "".
+inline std::string nearestName(std::string_view word, const std::vector<std::string>& candidates) {
+    std::string nearest;
+    size_t best = std::string::npos;
+    for (const std::string& c : candidates) {
+        const size_t d = editDistance(word, c);
+        if (d < best) {
+            best = d;
+            nearest = c;
+        }
+    }
+    return best <= std::max<size_t>(2, word.size() / 3) ? nearest : std::string();
 }
 
 }  // namespace sl

@@ -1,5 +1,7 @@
 #include "io/EnvMapIO.h"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -116,20 +118,53 @@ void checkSource(const std::string& where, const Image& src) {
     }
 }
 
-/// A file's pixels are radiance: refuses the first negative colour value (alpha is ignored).
-void checkNonNegative(const std::string& where, const Image& src) {
+/// A file's pixels are radiance, never negative. Resampling ringing in real HDR photos leaves
+/// tiny negative values: up to kEnvNegativeTolerance of the map's largest colour value they are
+/// clamped to 0 with one warning line; anything larger is refused with the numbers. Alpha is
+/// ignored.
+void clampOrRefuseNegative(const std::string& where, Image& src) {
     const size_t c = static_cast<size_t>(src.channels);
     const size_t colour = src.channels >= 3 ? 3 : 1;
-    for (size_t k = 0; k < src.data.size(); ++k) {
-        if (k % c >= colour || !(src.data[k] < 0.0f)) continue;
-        const size_t p = k / c, w = static_cast<size_t>(src.width);
-        throw inputError(where,
-                         "env map value is negative (" + formatNumber(src.data[k]) + ") at row " +
-                             std::to_string(p / w) + ", column " + std::to_string(p % w) +
-                             ", channel " + std::to_string(k % c) +
-                             "; an environment map holds radiance, which is never negative",
-                         "Clamp the image's negative values to 0 and save it again");
+    float maxValue = 0.0f, worst = 0.0f;
+    size_t worstAt = 0, negativeValues = 0, negativePixels = 0;
+    for (size_t p = 0; p * c < src.data.size(); ++p) {
+        bool negative = false;
+        for (size_t k = p * c; k < p * c + colour; ++k) {
+            const float v = src.data[k];
+            maxValue = std::max(maxValue, v);
+            if (!(v < 0.0f)) continue;
+            negative = true;
+            ++negativeValues;
+            if (v < worst) {
+                worst = v;
+                worstAt = k;
+            }
+        }
+        negativePixels += negative ? 1 : 0;
     }
+    if (negativePixels == 0) return;
+    const size_t p = worstAt / c, w = static_cast<size_t>(src.width);
+    const std::string at = "row " + std::to_string(p / w) + ", column " + std::to_string(p % w) +
+                           ", channel " + std::to_string(worstAt % c);
+    const double ratio = maxValue > 0.0f ? -static_cast<double>(worst) / maxValue : 0.0;
+    if (maxValue <= 0.0f || ratio > kEnvNegativeTolerance)
+        throw inputError(
+            where,
+            "env map value is negative (" + formatNumber(worst) + ") at " + at + ", the worst of " +
+                std::to_string(negativeValues) + " negative value" +
+                (negativeValues == 1 ? "" : "s") + " against a maximum of " +
+                formatNumber(maxValue) + " (" + formatNumber(ratio) + " of it; up to " +
+                formatNumber(kEnvNegativeTolerance) +
+                " is resampling ringing, clamped with a warning); an environment map holds "
+                "radiance, which is never negative",
+            "Clamp the image's negative values to 0 and save it again");
+    for (size_t k = 0; k < src.data.size(); ++k)
+        if (k % c < colour && src.data[k] < 0.0f) src.data[k] = 0.0f;
+    spdlog::warn(
+        "{}: {} pixel{} slightly negative (the worst {} at {}, {} of the maximum {}: "
+        "resampling ringing); clamped to 0",
+        where, negativePixels, negativePixels == 1 ? " was" : "s were", formatNumber(worst), at,
+        formatNumber(ratio), formatNumber(maxValue));
 }
 
 /// Pixel (x, y) of src converted to `channels` output channels, in double.
@@ -203,9 +238,9 @@ EnvMap resampleEquirect(const Image& src, int width, int height, int channels,
 EnvMap loadEnvMap(const std::filesystem::path& file, int width, int height, int channels) {
     const std::string where = file.string();
     if (channels != 0) checkGrid(where, width, height, channels);
-    const Image img = readImage(file);
+    Image img = readImage(file);
     checkSource(where, img);
-    checkNonNegative(where, img);
+    clampOrRefuseNegative(where, img);
     if (channels == 0) {
         channels = img.channels >= 3 ? 3 : 1;
         checkGrid(where, width, height, channels);
@@ -295,6 +330,18 @@ EnvMap lightFromSpec(const std::string& spec, int w, int h, int channels,
         for (size_t t = 0; t < m.texelCount(); ++t)
             for (int k = 0; k < 3; ++k) rgb.texels[3 * t + k] = m.texels[t];
         return rgb;
+    }
+    // Neither a light name nor a file there: say both, and where a relative path was looked for
+    // (the working directory; a scene file's own envmap.path is resolved by the scene parser).
+    std::error_code ec;
+    if (!spec.empty() && !std::filesystem::exists(spec, ec)) {
+        const std::string nearest = nearestName(spec, presets);
+        throw inputError(where + " '" + spec + "'",
+                         "is neither a light name nor a file (looked for " +
+                             std::filesystem::absolute(spec, ec).string() +
+                             "; a relative path is resolved against the working directory)",
+                         (nearest.empty() ? std::string() : "Did you mean '" + nearest + "'? ") +
+                             "Give one of " + lightSpecForms());
     }
     return loadEnvMap(spec, w, h, channels);
 }

@@ -32,13 +32,19 @@ namespace sl {
 EnvMap resampleEquirect(const Image& src, int width, int height, int channels,
                         const std::string& where = "env map image");
 
+/// Negative env-map values down to this fraction of the map's maximum are clamped (loadEnvMap).
+inline constexpr double kEnvNegativeTolerance = 1e-4;
+
 /// Reads an env map image (readImage: EXR/HDR linear, PNG/JPEG sRGB-decoded) and resamples it
 /// with resampleEquirect. Exception: a file that already has exactly width×height pixels is
 /// taken as texels on the grid (what writeEnvMap writes and how Mitsuba reads it), so a saved
 /// map loads back unchanged; only its channels are converted. channels == 0: as in the file
-/// (1 for gray or gray+alpha, 3 for RGB or RGBA). A file with a NaN, infinite or negative colour
-/// value is refused (InputError naming the file and the first such pixel): radiance is finite
-/// and never negative.
+/// (1 for gray or gray+alpha, 3 for RGB or RGBA). A file with a NaN or infinite colour value is
+/// refused (InputError naming the file and the first such pixel): radiance is finite. Radiance is
+/// never negative either, but real HDR photos carry resampling ringing (Blender's HDRIs: −3e-6 to
+/// −0.004 against maxima of 55–34 000): negative values down to kEnvNegativeTolerance × the
+/// map's largest colour value are clamped to 0 with one warning line (spdlog: how many pixels,
+/// the worst); a larger one is refused, naming the worst pixel, the count and the maximum.
 EnvMap loadEnvMap(const std::filesystem::path& file, int width, int height, int channels);
 
 /// A light spec, one grammar for every option that takes a light (`where` names it in errors):

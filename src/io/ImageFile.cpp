@@ -238,8 +238,9 @@ std::unique_ptr<OIIO::ImageInput> openImageFile(const fs::path& file, const std:
     std::error_code ec;
     if (!fs::exists(file, ec))
         throw inputError(where, "file not found",
-                         "Check the path (relative paths are resolved against the scene file's "
-                         "directory)");
+                         "Check the path (looked for " + fs::absolute(file, ec).string() +
+                             "; a path in a scene file is relative to the scene file's folder, "
+                             "one on the command line to the working directory)");
     if (fs::is_directory(file, ec)) throw inputError(where, "is a directory, not an image file");
     if (!fs::is_regular_file(file, ec))
         throw inputError(where, "not a regular file", "Give the path of an image file");

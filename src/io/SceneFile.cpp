@@ -467,6 +467,21 @@ std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
     SceneDesc d = desc;
     const std::string sceneWhere =
         desc.file.empty() ? desc.heightmap.path.string() : desc.file.string();
+    // A map without a pitch (EXR, TIFF, PNG, .npy) is refused unless the scene gives one: a
+    // silent default was 6x off on a real part.
+    if (!map.pitch && !desc.heightmap.pitchGiven) {
+        const std::string where =
+            desc.file.empty() ? desc.heightmap.path.string() : desc.file.string();
+        throw inputError(where,
+                         desc.heightmap.path.filename().string() + " (" + map.format + ", " +
+                             std::to_string(map.width) + "x" + std::to_string(map.height) +
+                             ") carries no sample spacing, and the scene gives no "
+                             "heightmap.pixel_pitch",
+                         "Add \"pixel_pitch\": MM (the spacing of the samples in mm) to the "
+                         "scene's heightmap section, or accept the default " +
+                             formatNumber(HeightmapDesc{}.pitch) + " mm with " +
+                             option("assume-pitch"));
+    }
     // A height map that carries its pitch (X3P, SDF) sets it unless the scene gives one; a scene
     // pitch that disagrees with the file's is refused rather than silently preferred.
     if (map.pitch) {
@@ -487,9 +502,29 @@ std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
     auto scene =
         std::make_unique<Scene>(std::move(d), map.width, map.height, std::move(map.heights));
     scene->load = std::move(load);
+    scene->mapFormat = map.format;
+    scene->invalidFilled = map.invalidFilled;
+    spdlog::info("{}", describePart(*scene));
     reportLoad(desc.heightmap.path, scene->load, scene->mapWidth, scene->mapHeight,
                scene->desc.heightmap.pitch);
     return scene;
+}
+
+std::string describePart(const Scene& scene) {
+    const HeightmapDesc& h = scene.desc.heightmap;
+    const auto [lo, hi] = std::minmax_element(scene.heights.begin(), scene.heights.end());
+    const double p = h.pitch;
+    std::string s = "part " + h.path.filename().string();
+    if (!scene.mapFormat.empty()) s += " (" + scene.mapFormat + ")";
+    s += ": " + std::to_string(scene.mapWidth) + " x " + std::to_string(scene.mapHeight) +
+         " samples, pitch " + formatNumber(p) + " mm" + (h.pitchGiven ? "" : " (the file's)") +
+         ", " + formatNumber((scene.mapWidth - 1) * p, 4) + " x " +
+         formatNumber((scene.mapHeight - 1) * p, 4) + " mm";
+    if (lo != scene.heights.end())
+        s += ", heights " + formatNumber(*lo, 4) + " .. " + formatNumber(*hi, 4) + " mm";
+    s += ", " + std::to_string(scene.invalidFilled) + " invalid point" +
+         (scene.invalidFilled == 1 ? "" : "s") + " filled";
+    return s;
 }
 
 std::unique_ptr<Scene> loadScene(const std::filesystem::path& file,
@@ -515,6 +550,24 @@ HeightSource loadHeightSource(const std::filesystem::path& file,
     const HeightmapLoad load =
         levelMap(s.map, LevellingDesc{}, s.map.pitch.value_or(1.0), file.string());
     reportLoad(file, load, s.map.width, s.map.height, s.map.pitch.value_or(1.0));
+    // What was read, as loadScene says it for a scene (describePart).
+    const HeightmapData& m = s.map;
+    std::string line = "part " + file.filename().string() + " (" + m.format +
+                       "): " + std::to_string(m.width) + " x " + std::to_string(m.height) +
+                       " samples";
+    if (m.pitch)
+        line += ", pitch " + formatNumber(*m.pitch) + " mm (the file's), " +
+                formatNumber((m.width - 1) * *m.pitch, 4) + " x " +
+                formatNumber((m.height - 1) * *m.pitch, 4) + " mm";
+    else
+        line += ", no pitch (a bare height map)";
+    if (!m.heights.empty()) {
+        const auto [lo, hi] = std::minmax_element(m.heights.begin(), m.heights.end());
+        line += ", heights " + formatNumber(*lo, 4) + " .. " + formatNumber(*hi, 4);
+    }
+    line += ", " + std::to_string(m.invalidFilled) + " invalid point" +
+            (m.invalidFilled == 1 ? "" : "s") + " filled";
+    spdlog::info("{}", line);
     return s;
 }
 
@@ -555,9 +608,11 @@ std::vector<SceneFileField> sceneFileFields() {
          "(float32/float64/uint16, C order), X3P (ISO 25178-72), SDF (ISO 25178-71, ASCII or "
          "binary), and the instrument formats Gwyddion reads (Wyko OPD, Sensofar PLU, Digital "
          "Surf SUR, Zygo DAT, …), recognised by content"},
-        {"heightmap.pixel_pitch", num(d.heightmap.pitch),
+        {"heightmap.pixel_pitch", "required (measured maps: the file's)",
          "sample spacing in scene units (mm); measured maps (X3P, SDF, instrument formats) carry "
-         "their own (leave it out); non-square pixels are resampled onto the finer pitch"},
+         "their own (leave it out); non-square pixels are resampled onto the finer pitch; a map "
+         "without one is refused unless given (or " +
+             num(d.heightmap.pitch) + " accepted on the command line)"},
         {"heightmap.height_range", "required for integer maps",
          "`[min, max]`: the integer range normalised to [0,1] maps linearly onto it; not allowed "
          "for float, X3P and SDF maps"},

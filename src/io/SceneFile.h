@@ -32,15 +32,23 @@ SceneDesc parseScene(const std::string& jsonText, const std::filesystem::path& b
 std::vector<std::filesystem::path> sceneInputFiles(const SceneDesc& desc);
 
 /// Load the height map a SceneDesc names and build the Scene (Embree surface included).
+/// Load the height map a SceneDesc names and build the Scene (Embree surface included). A map
+/// that carries no pitch (EXR, TIFF, PNG, .npy) needs heightmap.pixel_pitch (pitchGiven): else an
+/// InputError saying how to give it. Logs describePart (spdlog info) once loaded.
 std::unique_ptr<Scene> loadScene(const SceneDesc& desc);
 std::unique_ptr<Scene> loadScene(const std::filesystem::path& file,
                                  const std::vector<std::string>& overrides = {});
+
+/// One line on what was read: "part part.exr (exr float32): 1024 x 1024 samples, pitch 0.01 mm,
+/// 10.23 x 10.23 mm, heights -0.006 .. 0.002 mm, 0 invalid points filled".
+std::string describePart(const Scene& scene);
 
 /// The heights of a scene file's part (SCENE.json: the whole Scene, its camera included) or of a
 /// bare height map (any other extension, io/HeightmapIO.h; an integer map without a height
 /// range is read as [0, 1], for tools invariant to an affine change of the heights, such as
 /// the defect and scratch maps). `overrides` apply to a scene file only: given with a bare
-/// map they are an InputError naming it.
+/// map they are an InputError naming it. Logs what was read (a bare map: its grid, pitch when
+/// the file has one, height range and invalid points; a scene: loadScene's describePart).
 struct HeightSource {
     std::unique_ptr<Scene> scene;  // null for a bare height map
     HeightmapData map;             // the bare height map's data (empty for a scene)

@@ -75,7 +75,8 @@ std::vector<RegionVisibility> defectVisibility(int w, int h, std::span<const dou
                                                std::span<const double> Yb,
                                                std::span<const uint8_t> partMask,
                                                std::span<const uint8_t> labels,
-                                               const std::vector<RegionLabel>& legend) {
+                                               const std::vector<RegionLabel>& legend,
+                                               std::span<const uint8_t> reference) {
     const size_t n = static_cast<size_t>(w) * h;
     if (Ya.size() != n || Yb.size() != n || partMask.size() != n || labels.size() != n)
         throw std::invalid_argument("defectVisibility: image sizes differ");
@@ -96,7 +97,8 @@ std::vector<RegionVisibility> defectVisibility(int w, int h, std::span<const dou
 
     const std::vector<uint8_t> near = dilate(any, w, h, kCleanMargin);
     std::vector<uint8_t> clean(n, 0);
-    for (size_t p = 0; p < n; ++p) clean[p] = partMask[p] && !near[p];
+    for (size_t p = 0; p < n; ++p)
+        clean[p] = partMask[p] && !near[p] && (reference.empty() || reference[p]);
     const double cleanRms = rms(meanGradientProduct(w, h, Ya, Yb, clean));
     std::vector<uint8_t> part(n, 0);
     for (size_t p = 0; p < n; ++p) part[p] = partMask[p] != 0;

@@ -4,7 +4,8 @@
 // image (one value per defect kind, 0 = no defect), for every label v:
 //
 //   R_v      = part pixels labelled v;   F = part pixels farther than kCleanMargin pixels
-//              (Chebyshev) from every labelled pixel: the defect-free surface
+//              (Chebyshev) from every labelled pixel: the defect-free surface (with a
+//              reference region given: only its pixels, the defects objective's reference)
 //   g²(X)    = Σ_{pairs p,q ⊂ X} (Y_a,q − Y_a,p)·(Y_b,q − Y_b,p) / #pairs(X)   (x and y neighbours)
 //              an unbiased estimate of the mean squared noise-free gradient in X
 //   rms(X)   = sqrt(max(g²(X), 0))
@@ -44,11 +45,13 @@ struct RegionVisibility {
 /// Per-label visibility. labels: width*height label image (image space); partMask: nonzero
 /// on the part. Labels present in `labels` but missing from `legend` are scored as
 /// "label-<v>"; legend entries with no pixel are reported with pixels = 0 and NaN scores.
+/// reference: nonzero where F may lie (empty: the whole part).
 std::vector<RegionVisibility> defectVisibility(int width, int height, std::span<const double> Ya,
                                                std::span<const double> Yb,
                                                std::span<const uint8_t> partMask,
                                                std::span<const uint8_t> labels,
-                                               const std::vector<RegionLabel>& legend);
+                                               const std::vector<RegionLabel>& legend,
+                                               std::span<const uint8_t> reference = {});
 
 /// All regions as one: the RMS gradient over every region's pixels over the clean surface's,
 /// sqrt(Σ pixels·visibility² / Σ pixels) over the regions with pixels and a finite visibility

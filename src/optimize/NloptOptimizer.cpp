@@ -39,6 +39,7 @@
 #include <string>
 #include <vector>
 
+#include "core/Error.h"
 #include "optimize/OptimizerDetail.h"
 
 namespace sl::detail {
@@ -211,7 +212,8 @@ void minimizeNlopt(Run& run, std::vector<double>& x) {
             if (o.method == OptimizerMethod::Lbfgs || mlsl)
                 outcome += std::string(mlsl ? " in a local L-BFGS search (ends MLSL)" : "") +
                            "; L-BFGS found no decrease along its direction: a gradient that does "
-                           "not match the loss, or a kink (try the objective's smooth |x|)";
+                           "not match the loss, or a kink (try the objective's smooth |x|, " +
+                           option("smooth-abs") + ")";
             s.failed = true;
         }
     }

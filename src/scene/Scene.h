@@ -88,6 +88,9 @@ struct Scene {
     SceneDesc desc;
     int mapWidth, mapHeight;
     std::vector<float> heights;
+    /// What the height-map file was (io/SceneFile.h loadScene sets them; empty/0 in code).
+    std::string mapFormat;     // e.g. "exr float32"
+    size_t invalidFilled = 0;  // invalid points filled (X3P, SDF)
     std::unique_ptr<Heightfield> surface;
     Camera camera;
     ConductorBsdf bsdf;
