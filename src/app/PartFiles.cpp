@@ -42,6 +42,7 @@ PartFiles writePartFiles(const GeneratedSurface& g, const std::filesystem::path&
     legend["labels"] = nlohmann::ordered_json::array();
     for (const RegionLabel& l : truthLegend(g.truth))
         legend["labels"].push_back({{"value", l.value}, {"name", l.name}});
+    for (const auto& [key, value] : o.legendExtra.items()) legend[key] = value;
     writeMaskPng(f.truth, g.truth, g.width, g.height);
     writeTextAtomically(f.legend, legend.dump(2) + "\n");
 
