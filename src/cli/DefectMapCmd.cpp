@@ -27,6 +27,9 @@ int runDefectMap(const DefectMapJobOptions& o) {
             "centre points), %zu more by texture change\n",
             m.fftWidth, m.fftHeight, m.notchedBins, m.spectrumBins, m.sigmaLevel, m.sigmaEdge,
             m.markedScore, m.markedStep, m.stepPoints, m.markedEnergy);
+    if (m.method == DefectMethod::Auto)
+        std::printf("  seed thresholds used: score %.3g, line valleys %.3g (robust sigmas)\n",
+                    m.seedUsed, m.lineSeedUsed);
     if (m.method == DefectMethod::Auto && m.ringPitch > 0)
         std::printf(
             "  rings: centre (%.2f, %.2f) samples, pitch %.3f, hand %+d, isotropy %.3f, residual "
@@ -145,6 +148,13 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     c->add_option("--line-grow-sigma", m.lineGrowSigma,
                   "auto: a line region holds this line-valley score (robust sigmas)")
+        ->capture_default_str();
+    c->add_option("--seed-tail", m.seedTail,
+                  "auto: seed thresholds raised to this x the texture's own score quantile "
+                  "(--seed-tail-quantile) when higher (0: off)")
+        ->capture_default_str();
+    c->add_option("--seed-tail-quantile", m.seedTailQuantile,
+                  "auto: the quantile of the score that --seed-tail scales")
         ->capture_default_str();
     c->add_option("--border", m.border, "auto: samples at the map's edges never marked")
         ->capture_default_str();

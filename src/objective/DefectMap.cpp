@@ -105,6 +105,13 @@ void checkOptions(const DefectMapOptions& o) {
     if (!(o.lineOffset >= 1.0 && o.lineOffset <= 16.0))
         throw inputError(option("line-offset"),
                          "must be in [1, 16] samples (got " + std::to_string(o.lineOffset) + ")");
+    if (!(o.seedTail >= 0.0) || !std::isfinite(o.seedTail))
+        throw inputError(option("seed-tail"),
+                         "must be >= 0 (got " + std::to_string(o.seedTail) + ")",
+                         "0 switches the texture's-tail thresholds off");
+    if (!(o.seedTailQuantile > 0.0 && o.seedTailQuantile < 1.0))
+        throw inputError(option("seed-tail-quantile"),
+                         "must be in (0, 1) (got " + std::to_string(o.seedTailQuantile) + ")");
     if (!(o.lineSeedSigma > 0.0))
         throw inputError(option("line-seed-sigma"),
                          "must be > 0 (got " + std::to_string(o.lineSeedSigma) + ")");
@@ -1438,8 +1445,25 @@ void segmentMeans(const std::vector<float>& A, int W, int H, double c, double s,
 /// o = `lineOffset` (rounded to samples) and σ_θ = 1.4826 × the median of both differences'
 /// magnitudes. V = max over θ of V_θ, 0 within `border`. Returns 1 on the regions of
 /// V ≥ lineGrowSigma (8-connected) that reach V ≥ lineSeedSigma, 0 elsewhere.
+/// Step 7b: the seed threshold raised to seedTail × the seedTailQuantile quantile of `score`
+/// over the samples outside the border (score is 0 in the border), when that is higher.
+double tailSeed(const std::vector<float>& score, int W, int H, const DefectMapOptions& o,
+                double seed) {
+    if (!(o.seedTail > 0.0)) return seed;
+    std::vector<float> v;
+    v.reserve(score.size());
+    for (int y = o.border; y < H - o.border; ++y)
+        for (int x = o.border; x < W - o.border; ++x)
+            v.push_back(score[static_cast<size_t>(y) * W + x]);
+    if (v.empty()) return seed;
+    const size_t k = std::min(
+        v.size() - 1, static_cast<size_t>(o.seedTailQuantile * static_cast<double>(v.size())));
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+    return std::max(seed, o.seedTail * static_cast<double>(v[k]));
+}
+
 std::vector<uint8_t> lineValleyRegions(const std::vector<float>& A, int W, int H,
-                                       const DefectMapOptions& o) {
+                                       const DefectMapOptions& o, double* seedUsed) {
     constexpr double kPi = 3.14159265358979323846;
     const size_t n = A.size();
     const int m = o.lineLength / 2;
@@ -1485,7 +1509,9 @@ std::vector<uint8_t> lineValleyRegions(const std::vector<float>& A, int W, int H
         }
     });
     std::vector<uint8_t> regions(n, 0);
-    hysteresis(V, W, H, o.lineSeedSigma, o.lineGrowSigma, 1, regions);
+    const double seed = tailSeed(V, W, H, o, o.lineSeedSigma);
+    if (seedUsed) *seedUsed = seed;
+    hysteresis(V, W, H, seed, o.lineGrowSigma * seed / o.lineSeedSigma, 1, regions);
     for (uint8_t& v : regions) v = v != 0;
     return regions;
 }
@@ -1614,13 +1640,17 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
                     if (y < o.border || y >= H - o.border || x < o.border || x >= W - o.border)
                         S[static_cast<size_t>(y) * W + x] = 0.0f;
             });
+        // step 7b: the texture's own tail raises the thresholds
+        const double seed = tailSeed(S, W, H, o, o.seedSigma);
+        r.seedUsed = seed;
         if (o.lineLength > 0) {
             // step 7a: the line-valley regions seed the hysteresis and are grown through
-            const std::vector<uint8_t> lines = lineValleyRegions(A, W, H, o);
+            const std::vector<uint8_t> lines = lineValleyRegions(A, W, H, o, &r.lineSeedUsed);
             for (size_t k = 0; k < n; ++k)
-                if (lines[k]) S[k] = std::max(S[k], static_cast<float>(o.seedSigma));
+                if (lines[k]) S[k] = std::max(S[k], static_cast<float>(seed));
         }
-        r.markedScore = hysteresis(S, W, H, o.seedSigma, o.growSigma, o.minRegion, r.map);
+        r.markedScore =
+            hysteresis(S, W, H, seed, o.growSigma * seed / o.seedSigma, o.minRegion, r.map);
     }
     for (size_t k = 0; k < steps.ramp.size(); ++k) {  // step 4a: a step's band is its ramp
         if (!steps.band[k]) continue;

@@ -127,6 +127,16 @@
 //     out of the noise; the two-sided test keeps out what is straight but not a groove: a
 //     raised line (the flat-end floor's step-over ridges, which the notch leaves in part) or a
 //     step (lower on one side only).
+// 7b. The texture's own tail (seedTail > 0; off by default until it is measured on the
+//     gen-surface parts' table): a measured texture is not a stationary Gaussian
+//     field: the tool marks, striae and particles the notch cannot model leave a residual whose
+//     tail is far heavier than a Gaussian's (on a bullet land, S ≥ 5.5 on a fifth of the map),
+//     so thresholds in robust σ mark the texture itself. Let q = the seedTailQuantile quantile
+//     of S over the samples outside the border (V for step 7a); the seed threshold becomes
+//     max(seedSigma, seedTail·q), the grow threshold is scaled by the same factor. On a
+//     Gaussian residual q_0.99 = 2.6 σ and 1.5·q = 3.9 < 5.5: nothing changes; what the map is
+//     for (an inserted defect covers ~1 % of the map) stays above it, being far deeper than
+//     the texture's tail.
 //  8. Texture-change regions (chatter bands): E = the separable running median of |A| over
 //     `energyWindow` samples (on |A| pooled 2×2 with half the window, read back at the sample's
 //     cell): a robust local amplitude of what the texture model left. Samples with
@@ -243,6 +253,11 @@ struct DefectMapOptions {
     double lineOffset = 3.0;     // samples from the line to each side it is compared with
     double lineSeedSigma = 8.0;  // a line region reaches V >= lineSeedSigma (> 0) ...
     double lineGrowSigma = 4.0;  // ... and holds V >= lineGrowSigma (0 < grow <= seed)
+    // step 7b (the texture's own tail): the seed thresholds of steps 7 and 7a are raised to
+    // seedTail × the seedTailQuantile-quantile of S (of V for 7a) over the samples outside the
+    // border, when that is higher, and their grow thresholds by the same factor (0: off)
+    double seedTail = 0.0;           // (>= 0; 1.5 the value tried on real textures)
+    double seedTailQuantile = 0.99;  // (in (0, 1))
 
     ScratchMapOptions paper;  // the `paper` method's options
 };
@@ -265,6 +280,8 @@ struct DefectMap {
     int ringHand = 0;
     bool ringUsed = false;
     size_t ringLowered = 0;
+    // step 7b: the seed thresholds used (the options' when the tail did not raise them)
+    double seedUsed = 0, lineSeedUsed = 0;
     double seconds = 0;
 
     size_t markedCount() const;
