@@ -43,7 +43,7 @@ std::string nameOf(const std::filesystem::path& light) {
 void writeJudgeReport(const std::filesystem::path& dir, const JudgeJobOptions& o,
                       const Judge& judge, const std::vector<std::pair<std::string, EnvMap>>& lights,
                       const std::vector<std::vector<double>>& images,
-                      const std::vector<JudgeScore>& scores) {
+                      const std::vector<JudgeScore>& scores, const std::string& part) {
     const TransportMatrix& t = judge.estimate().file.matrix;
     ReportContent rc;
     rc.title = "scratchlight judge: " + o.scene.filename().string();
@@ -55,6 +55,7 @@ void writeJudgeReport(const std::filesystem::path& dir, const JudgeJobOptions& o
         "region is no more salient than the machining texture. Contrast: the region's RMS "
         "gradient over the part's mean brightness (about 0.01 is the least the eye sees). "
         "Brightness: the part's mean over the white furnace's (E = 1).");
+    rc.notes.push_back(part);
     if (!judge.legend().empty()) {
         std::string legend = "Regions outlined (truth " + o.judge.truth.filename().string() + "):";
         for (const RegionLabel& r : judge.legend()) {
@@ -160,6 +161,7 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
         nlohmann::ordered_json j;
         j["scratchlight"] = runProvenance(o.commandLine);
         j["scene"] = o.scene.string();
+        j["heightmap"] = heightmapLoadJson(*scene);
         j["estimate"] = {{"spp", jo.spp},
                          {"seed", jo.seed},
                          {"max_depth", sum.estimate.file.provenance.maxDepth},
@@ -190,7 +192,8 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
         }
         writeTextAtomically(dir / "judge.csv", csv.str());
         writeSideBySide(dir / "renders", images, t.width, t.height, judge.partMask());
-        writeJudgeReport(dir, o, judge, lights, images, sum.scores);
+        writeJudgeReport(dir, o, judge, lights, images, sum.scores,
+                         heightmapSentence(nlohmann::json::parse(j["heightmap"].dump())));
     } catch (const InputError& e) {
         throw InputError(out.explain(e.what()));
     }

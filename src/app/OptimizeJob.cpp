@@ -887,6 +887,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     } else {
         s["heldout_loss"] = nullptr;
     }
+    if (in.scene) s["heightmap"] = heightmapLoadJson(*in.scene);  // reader and levelling
     s["transport"] = transportJson(job.transport);
     if (run.judged) s["judge"] = toJson(*run.judged);
     {

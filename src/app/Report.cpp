@@ -693,6 +693,33 @@ std::string optimizeHeadline(const json& s) {
     return out;
 }
 
+std::string heightmapSentence(const json& hm) {
+    std::ostringstream f;
+    f << "The part: "
+      << std::filesystem::path(hm.value("file", std::string("?"))).filename().string() << " ("
+      << hm.value("format", std::string("?")) << ")";
+    if (hm.contains("size") && hm["size"].is_array() && hm["size"].size() == 2)
+        f << ", " << hm["size"][0].dump() << "×" << hm["size"][1].dump() << " samples";
+    if (hm.contains("pitch") && hm["pitch"].is_number())
+        f << " at " << fmt(hm["pitch"].get<double>(), 4) << " mm";
+    if (hm.contains("resampling") && hm["resampling"].is_string())
+        f << "; " << hm["resampling"].get<std::string>();
+    f << ".";
+    if (hm.contains("levelling") && hm["levelling"].is_object()) {
+        const json& l = hm["levelling"];
+        f << " Levelling: " << l.value("mode", std::string("?"));
+        if (l.value("auto", false)) f << " (the default for this kind of map)";
+        if (l.contains("rms_before") && l["rms_before"].is_number() && l["rms_after"].is_number())
+            f << ", RMS height " << fmt(l["rms_before"].get<double>(), 4) << " → "
+              << fmt(l["rms_after"].get<double>(), 4) << " mm over "
+              << l.value("points", json(0)).dump() << " valid points";
+        if (l.contains("radius") && l["radius"].is_number())
+            f << ", cylinder radius " << fmt(std::abs(l["radius"].get<double>()), 4) << " mm";
+        f << ".";
+    }
+    return f.str();
+}
+
 std::string optimizeHeadlineOf(const std::filesystem::path& outDir) {
     return optimizeHeadline(readOptimizeSummary(outDir));
 }
@@ -746,6 +773,8 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
             f << " Defect regions: " << cmp["regions"].get<std::string>() << ".";
         h << "<p class=\"found\">" << escapeXml(f.str()) << "</p>\n";
     }
+    if (s.contains("heightmap") && s["heightmap"].is_object())
+        h << "<p class=\"part\">" << escapeXml(heightmapSentence(s["heightmap"])) << "</p>\n";
     if (s.contains("warnings"))
         for (const json& w : s["warnings"])
             h << "<p class=\"warn\">" << escapeXml(w.get<std::string>()) << "</p>\n";

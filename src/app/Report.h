@@ -88,6 +88,10 @@ std::string optimizeHeadline(const nlohmann::json& summary);
 /// The same from an optimize OUTDIR (its summary.json; InputError when missing or malformed).
 std::string optimizeHeadlineOf(const std::filesystem::path& outDir);
 
+/// One sentence on the part from a summary's "heightmap" object (io/SceneFile.h
+/// heightmapLoadJson): file, reader, grid and pitch, resampling, invalid points, levelling.
+std::string heightmapSentence(const nlohmann::json& heightmap);
+
 /// Reads a loss.csv (header with "iteration" and "loss" columns). Throws InputError.
 LossSeries readLossCsv(const std::filesystem::path& file);
 

@@ -1,9 +1,9 @@
 #include "core/Md5.h"
 
 #include <array>
-#include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <utility>
 
 namespace sl {
 
@@ -15,50 +15,63 @@ constexpr std::array<uint32_t, 64> kShift = {
     4,  11, 16, 23, 6,  10, 15, 21, 6,  10, 15, 21, 6,  10, 15, 21, 6,  10, 15, 21};
 
 /// K[i] = floor(|sin(i + 1)| · 2^32) (RFC 1321 §3.4).
-const std::array<uint32_t, 64>& constants() {
-    static const std::array<uint32_t, 64> k = [] {
-        std::array<uint32_t, 64> t{};
-        for (size_t i = 0; i < t.size(); ++i)
-            t[i] = static_cast<uint32_t>(
-                std::floor(std::abs(std::sin(static_cast<double>(i + 1))) * 4294967296.0));
-        return t;
-    }();
-    return k;
-}
+constexpr std::array<uint32_t, 64> kK = {
+    0xd76aa478, 0xe8c7b756, 0x242070db, 0xc1bdceee, 0xf57c0faf, 0x4787c62a, 0xa8304613, 0xfd469501,
+    0x698098d8, 0x8b44f7af, 0xffff5bb1, 0x895cd7be, 0x6b901122, 0xfd987193, 0xa679438e, 0x49b40821,
+    0xf61e2562, 0xc040b340, 0x265e5a51, 0xe9b6c7aa, 0xd62f105d, 0x02441453, 0xd8a1e681, 0xe7d3fbc8,
+    0x21e1cde6, 0xc33707d6, 0xf4d50d87, 0x455a14ed, 0xa9e3e905, 0xfcefa3f8, 0x676f02d9, 0x8d2a4c8a,
+    0xfffa3942, 0x8771f681, 0x6d9d6122, 0xfde5380c, 0xa4beea44, 0x4bdecfa9, 0xf6bb4b60, 0xbebfbc70,
+    0x289b7ec6, 0xeaa127fa, 0xd4ef3085, 0x04881d05, 0xd9d4d039, 0xe6db99e5, 0x1fa27cf8, 0xc4ac5665,
+    0xf4292244, 0x432aff97, 0xab9423a7, 0xfc93a039, 0x655b59c3, 0x8f0ccc92, 0xffeff47d, 0x85845dd1,
+    0x6fa87e4f, 0xfe2ce6e0, 0xa3014314, 0x4e0811a1, 0xf7537e82, 0xbd3af235, 0x2ad7d2bb, 0xeb86d391};
 
-uint32_t rotl(uint32_t x, uint32_t c) {
+constexpr uint32_t rotl(uint32_t x, uint32_t c) {
     return (x << c) | (x >> (32 - c));
 }
 
+/// One MD5 step of round R (0..3) at index I; the round's function, message word and shift are
+/// compile-time constants, so the compiler unrolls the 64 steps.
+template <int R, int I>
+inline void step(uint32_t& a, uint32_t& b, uint32_t& c, uint32_t& d, const uint32_t* m) {
+    uint32_t f;
+    int g;
+    if constexpr (R == 0) {
+        f = (b & c) | (~b & d);
+        g = I;
+    } else if constexpr (R == 1) {
+        f = (d & b) | (~d & c);
+        g = (5 * I + 1) % 16;
+    } else if constexpr (R == 2) {
+        f = b ^ c ^ d;
+        g = (3 * I + 5) % 16;
+    } else {
+        f = c ^ (b | ~d);
+        g = (7 * I) % 16;
+    }
+    f += a + kK[I] + m[g];
+    a = d;
+    d = c;
+    c = b;
+    b += rotl(f, kShift[I]);
+}
+
+template <int R, int... I>
+inline void round(uint32_t& a, uint32_t& b, uint32_t& c, uint32_t& d, const uint32_t* m,
+                  std::integer_sequence<int, I...>) {
+    (step<R, 16 * R + I>(a, b, c, d, m), ...);
+}
+
 void block(std::array<uint32_t, 4>& s, const unsigned char* p) {
-    const auto& k = constants();
     uint32_t m[16];
     for (size_t i = 0; i < 16; ++i)
         m[i] = uint32_t(p[4 * i]) | uint32_t(p[4 * i + 1]) << 8 | uint32_t(p[4 * i + 2]) << 16 |
                uint32_t(p[4 * i + 3]) << 24;
     uint32_t a = s[0], b = s[1], c = s[2], d = s[3];
-    for (size_t i = 0; i < 64; ++i) {
-        uint32_t f = 0;
-        size_t g = 0;
-        if (i < 16) {
-            f = (b & c) | (~b & d);
-            g = i;
-        } else if (i < 32) {
-            f = (d & b) | (~d & c);
-            g = (5 * i + 1) % 16;
-        } else if (i < 48) {
-            f = b ^ c ^ d;
-            g = (3 * i + 5) % 16;
-        } else {
-            f = c ^ (b | ~d);
-            g = (7 * i) % 16;
-        }
-        f += a + k[i] + m[g];
-        a = d;
-        d = c;
-        c = b;
-        b += rotl(f, kShift[i]);
-    }
+    const auto idx = std::make_integer_sequence<int, 16>();
+    round<0>(a, b, c, d, m, idx);
+    round<1>(a, b, c, d, m, idx);
+    round<2>(a, b, c, d, m, idx);
+    round<3>(a, b, c, d, m, idx);
     s[0] += a;
     s[1] += b;
     s[2] += c;

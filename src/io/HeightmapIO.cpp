@@ -6,12 +6,14 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <new>
 #include <system_error>
 
 #include "core/Error.h"
 #include "core/Text.h"
+#include "io/GwyddionReader.h"
 #include "io/ImageFile.h"
 #include "io/ImageIO.h"
 #include "io/Npy.h"
@@ -154,6 +156,8 @@ size_t fillInvalid(HeightmapData& d) {
             ++invalid;
         }
     if (invalid == 0) return 0;
+    d.invalid.assign(z.size(), 0);
+    for (size_t k = 0; k < z.size(); ++k) d.invalid[k] = state[k];
     const auto neighbours = [&](size_t k, auto&& f) {
         const size_t i = k % w, j = k / w;
         if (i > 0) f(k - 1);
@@ -202,7 +206,65 @@ size_t fillInvalid(HeightmapData& d) {
     return invalid;
 }
 
-/// X3P and SDF: heights in mm with NaN for invalid points -> checked, filled, scaled heights.
+std::string micrometres(double mm) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.4g", mm * 1000.0);
+    return b;
+}
+
+/// Non-square pixels -> the finer pitch, by linear interpolation along the coarser axis
+/// (io/HeightmapIO.h); the invalid mask follows (a sample is invented when a source sample
+/// with non-zero weight was).
+void resampleSquare(const std::string& where, HeightmapData& d) {
+    if (!d.pitchY) return;
+    const double px = *d.pitch, py = *d.pitchY;
+    d.pitchY.reset();
+    if (std::abs(px - py) <= 1e-6 * std::max(px, py)) return;
+    const double p = std::min(px, py);
+    const bool alongY = py > px;  // rows are farther apart than columns: interpolate rows
+    const size_t w = static_cast<size_t>(d.width), h = static_cast<size_t>(d.height);
+    const size_t n = alongY ? h : w;  // samples along the interpolated axis
+    const double ratio = (alongY ? py : px) / p;
+    const size_t m = static_cast<size_t>(std::floor(static_cast<double>(n - 1) * ratio + 1e-9)) + 1;
+    const size_t nw = alongY ? w : m, nh = alongY ? m : h;
+    if (static_cast<long long>(nw * nh) > detail::kMaxMetrologySamples)
+        throw inputError(where,
+                         "resampled to square pixels the map would have " +
+                             std::to_string(nw * nh) + " points, more than the " +
+                             std::to_string(detail::kMaxMetrologySamples) + " accepted",
+                         "Crop the measurement");
+    std::vector<float> out(nw * nh);
+    std::vector<uint8_t> bad(d.invalid.empty() ? 0 : nw * nh);
+    for (size_t k = 0; k < m; ++k) {
+        const double pos = static_cast<double>(k) / ratio;
+        size_t k0 = static_cast<size_t>(std::floor(pos));
+        if (k0 > n - 2) k0 = n - 2;
+        const double t = std::clamp(pos - static_cast<double>(k0), 0.0, 1.0);
+        const size_t others = alongY ? w : h;
+        for (size_t o = 0; o < others; ++o) {
+            const size_t a = alongY ? k0 * w + o : o * w + k0;
+            const size_t b = alongY ? a + w : a + 1;
+            const size_t to = alongY ? k * nw + o : o * nw + k;
+            out[to] = static_cast<float>((1.0 - t) * d.heights[a] + t * d.heights[b]);
+            if (!bad.empty())
+                bad[to] =
+                    static_cast<uint8_t>((t < 1.0 && d.invalid[a]) || (t > 0.0 && d.invalid[b]));
+        }
+    }
+    d.resampling = std::to_string(w) + "x" + std::to_string(h) + " samples of " + micrometres(px) +
+                   " x " + micrometres(py) + " um resampled to " + std::to_string(nw) + "x" +
+                   std::to_string(nh) + " of " + micrometres(p) +
+                   " um (linear interpolation along " + (alongY ? "y" : "x") +
+                   " onto the finer pitch)";
+    d.width = static_cast<int>(nw);
+    d.height = static_cast<int>(nh);
+    d.heights = std::move(out);
+    d.invalid = std::move(bad);
+    d.pitch = p;
+}
+
+/// Measured maps (X3P, SDF, Gwyddion): heights in mm with NaN for invalid points -> checked,
+/// filled, square, scaled heights.
 HeightmapData finishMetrology(const std::string& where, HeightmapData d,
                               const HeightmapOptions& opt) {
     checkSize(where, d.width, d.height);
@@ -222,6 +284,7 @@ HeightmapData finishMetrology(const std::string& where, HeightmapData d,
     d.invalidFilled = fillInvalid(d);
     if (d.invalidFilled > 0)
         d.format += ", " + std::to_string(d.invalidFilled) + " invalid points filled";
+    resampleSquare(where, d);
     finishFloat(where, d, m.scale);
     return d;
 }
@@ -344,9 +407,33 @@ HeightmapData loadWithOiio(const fs::path& file, const HeightmapOptions& opt) {
     return d;
 }
 
+/// What a file's first bytes say it is.
+enum class Content { Npy, Zip, Sdf, Image, Unknown };
+
+Content sniff(const fs::path& file) {
+    unsigned char b[8] = {};
+    size_t got = 0;
+    if (FILE* f = std::fopen(file.c_str(), "rb")) {
+        got = std::fread(b, 1, sizeof b, f);
+        std::fclose(f);
+    }
+    const auto starts = [&](const char* magic, size_t len) {
+        return got >= len && std::memcmp(b, magic, len) == 0;
+    };
+    if (starts("\x93NUMPY", 6)) return Content::Npy;
+    if (starts("PK\x03\x04", 4)) return Content::Zip;
+    if (starts("aBCR-", 5) || starts("bBCR-", 5) || starts("aISO-", 5) || starts("bISO-", 5))
+        return Content::Sdf;
+    if (starts("\x76\x2f\x31\x01", 4) || starts("\x89PNG", 4) || starts("II*\0", 4) ||
+        starts("MM\0*", 4) || starts("\xff\xd8\xff", 3))
+        return Content::Image;
+    return Content::Unknown;
+}
+
 }  // namespace
 
-HeightmapData loadHeightmap(const fs::path& file, const HeightmapOptions& opt) {
+HeightmapData loadHeightmap(const fs::path& file, const HeightmapOptions& opt,
+                            HeightmapReader reader) {
     const std::string where = file.string();
     checkOptions(where, opt);
     std::error_code ec;
@@ -357,10 +444,37 @@ HeightmapData loadHeightmap(const fs::path& file, const HeightmapOptions& opt) {
     if (!fs::is_regular_file(file, ec))
         throw inputError(where, "the height map path is not a regular file",
                          "Point heightmap.path at an EXR, TIFF, PNG, .npy, X3P or SDF file");
+    if (reader == HeightmapReader::Gwyddion) return finishMetrology(where, readGwyddion(file), opt);
     const std::string ext = lower(file.extension().string());
+    switch (sniff(file)) {
+        case Content::Npy:
+            return loadNpy(file, opt);
+        case Content::Sdf:
+            return finishMetrology(where, readSdf(file), opt);
+        case Content::Image:
+            return loadWithOiio(file, opt);
+        case Content::Zip:
+            if (ext == ".x3p" || !gwyddionBuilt())
+                return finishMetrology(where, readX3p(file), opt);
+            // A zip named otherwise: an X3P, else one of the zip-based instrument formats.
+            try {
+                return finishMetrology(where, readX3p(file), opt);
+            } catch (const InputError&) {
+                if (gwyddionDetect(file).empty()) throw;
+            }
+            return finishMetrology(where, readGwyddion(file), opt);
+        case Content::Unknown:
+            break;
+    }
+    // The content says nothing we know: a damaged file of the format its name says keeps that
+    // format's error; anything else is Gwyddion's if one of its file modules claims it.
     if (ext == ".npy") return loadNpy(file, opt);
     if (ext == ".x3p") return finishMetrology(where, readX3p(file), opt);
     if (ext == ".sdf") return finishMetrology(where, readSdf(file), opt);
+    const bool image = ext == ".exr" || ext == ".tif" || ext == ".tiff" || ext == ".png" ||
+                       ext == ".jpg" || ext == ".jpeg" || ext == ".hdr";
+    if (!image && !gwyddionDetect(file).empty())
+        return finishMetrology(where, readGwyddion(file), opt);
     return loadWithOiio(file, opt);
 }
 

@@ -16,7 +16,8 @@
 //     millimetres: height = 1000 · z[m] · heightScale, whatever the stored type (like float
 //     maps, heightmap.height_range must not be given). They carry their sample spacing:
 //     HeightmapData::pitch (mm); the scene uses it when heightmap.pixel_pitch is not given
-//     (io/SceneFile.h). X and Y spacing must agree within 1e-6 (relative): samples are square.
+//     (io/SceneFile.h). When the X and Y spacings differ (by more than 1e-6, relative) the map
+//     is resampled onto a square grid at the finer of the two (see "Non-square pixels" below).
 //       - X3P (.x3p, ISO 25178-72 / ISO 5436-2 XML in a zip): Record1/FeatureType SUR, CX and
 //         CY incremental (AxisType I, Increment in m), CZ absolute (AxisType A) with DataType
 //         I (int16), L (int32), F (float32) or D (float64), z = value · CZ/Increment (default 1)
@@ -29,7 +30,14 @@
 //         member exists); libzip checks every member's CRC-32. Refused: FCM/PRF feature types,
 //         absolute CX/CY axes, SizeZ > 1, XML point lists (no PointDataLink), a missing member,
 //         other data types, a data member whose length is not SizeX·SizeY·bytes, a checksum
-//         mismatch. (io/X3p.h writeX3p writes this variant, float64; `gen-surface OUT.x3p`.)
+//         mismatch of the point data or the valid-points mask. main.xml's own checksum (the
+//         Record4/ChecksumFile member) that does not match is a warning when the point data's
+//         MD5 is given and matches (x3ptools edits main.xml after writing its checksum). The
+//         members may sit in one folder inside the zip (`sample-land/main.xml`, as x3ptools
+//         and zips made on a Mac write them); links in main.xml are then relative to that
+//         folder, and macOS's `__MACOSX/` entries are ignored. The root element may be
+//         <ISO5436_2> (any namespace prefix) or x3ptools' <ISO5436>.
+//         (io/X3p.h writeX3p writes this variant, float64; `gen-surface OUT.x3p`.)
 //       - SDF (.sdf, ISO 25178-71 / Surfstand "BCR"): ASCII (first line aBCR-1.0, aBCR-0.0 or
 //         aISO-1.0, then `Key = value` lines, `*`, NumPoints·NumProfiles whitespace-separated
 //         values, optionally `*` and a trailer) or binary (bBCR-1.0 / bISO-1.0: an 81-byte
@@ -42,10 +50,25 @@
 //         in ASCII) and Gwyddion's sentinels 65535 (uint16), 4294967295 (uint32), −32768
 //         (int16), −2147483648 (int32). Compression ≠ 0 is refused; CheckType is ignored (the
 //         checksum is not verified).
+//       - instrument formats (Wyko OPD, Sensofar PLU, Digital Surf SUR, Zygo DAT, NanoFocus,
+//         Gwyddion's .gwy and whatever else Gwyddion's file modules read): through Gwyddion
+//         (io/GwyddionReader.h; the build option SCRATCHLIGHT_GWYDDION), heights and spacing in
+//         metres, invalid points from the channel's mask; format "gwyddion <module>".
+//     Non-square pixels (X spacing px ≠ Y spacing py): the map is resampled onto the finer pitch
+//     p = min(px, py) by linear interpolation along the coarser axis (the finer axis keeps its
+//     samples): W' = ⌊(W−1)·px/p⌋ + 1 columns, H' = ⌊(H−1)·py/p⌋ + 1 rows, new sample k at
+//     k·p from the first. HeightmapData::resampling says so; a new sample is invalid when a
+//     source sample it weights is.
 //     Invalid points are filled, deterministically, layer by layer from the valid region: each
 //     pass gives every invalid point that has a valid 4-neighbour the mean of those neighbours,
 //     all at once, then counts them valid. HeightmapData::invalidFilled counts them (and the
 //     format string says so). Refused: no valid point, or more than half the points invalid.
+// Which reader: by content (the first bytes: .npy's magic, a zip = X3P, SDF's version line,
+// EXR/PNG/TIFF/JPEG magic), then by extension for what the content does not say (a damaged
+// file keeps its format's error), then Gwyddion's file modules (by content and name), then
+// OpenImageIO. X3P and SDF use our own readers, also when Gwyddion is built: they read the X3P
+// files whose members sit in a folder (Gwyddion refuses them) and are faster (README
+// "Instrument files").
 // Checks: file exists and decodes, at least 2×2 samples, every height finite (the error names
 // the first bad row and column).
 //
@@ -56,6 +79,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -76,11 +100,26 @@ struct HeightmapData {
     int width = 0, height = 0;
     std::vector<float> heights;   // row-major, row 0 first (width * height values)
     std::string format;           // e.g. "exr float32", "png uint16", "npy float64"
-    std::optional<double> pitch;  // X3P, SDF: the file's sample spacing (mm); unset otherwise
-    size_t invalidFilled = 0;     // X3P, SDF: invalid points filled (see above)
+    std::optional<double> pitch;  // measured maps: the sample spacing (mm); unset otherwise
+    /// The file's Y spacing (mm) when it differs from its X spacing; after loadHeightmap the map
+    /// is square at `pitch` and this is unset (resampling says what was done).
+    std::optional<double> pitchY;
+    size_t invalidFilled = 0;  // measured maps: invalid points filled (see above)
+    /// Per sample, 1 where the height was invented (an invalid point filled, or interpolated
+    /// from one); empty when every height is measured. Levelling fits the others only.
+    std::vector<uint8_t> invalid;
+    std::string resampling;             // "" or how non-square pixels were made square
+    std::vector<std::string> warnings;  // what an imperfect file made the reader assume
+    /// A measured map (X3P, SDF, an instrument format): carries its pitch and heights in mm.
+    bool measured() const { return pitch.has_value(); }
 };
 
-HeightmapData loadHeightmap(const std::filesystem::path& file, const HeightmapOptions& opt);
+/// Which reader loadHeightmap uses: the one the content says, or Gwyddion's file modules for
+/// any file (benches compare our X3P and SDF readers with Gwyddion's).
+enum class HeightmapReader { Auto, Gwyddion };
+
+HeightmapData loadHeightmap(const std::filesystem::path& file, const HeightmapOptions& opt,
+                            HeightmapReader reader = HeightmapReader::Auto);
 
 namespace detail {
 /// Largest side and sample count an X3P or SDF header may claim (refused above).

@@ -1,12 +1,16 @@
 #include "io/SceneFile.h"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
+#include <system_error>
 
 #include "core/Error.h"
 #include "core/Progress.h"
@@ -128,6 +132,88 @@ class Fields {
     std::set<std::string> known_;
 };
 
+/// heightmap.levelling: "auto", "none", "plane", "polynomial:N", "cylinder:x|y", or
+/// {"mode": ..., "degree": N, "axis": "x"|"y"}.
+LevellingDesc parseLevelling(Fields& parent, const json& v) {
+    using M = LevellingDesc::Mode;
+    const char* const forms =
+        "give \"auto\", \"none\", \"plane\", \"polynomial:3\", \"cylinder:y\", or "
+        "{\"mode\": \"polynomial\", \"degree\": 3} / {\"mode\": \"cylinder\", \"axis\": "
+        "\"y\"}";
+    LevellingDesc d;
+    std::string mode;
+    std::optional<int> degree;
+    std::optional<std::string> axis;
+    if (v.is_string()) {
+        const std::string t = v.get<std::string>();
+        const size_t colon = t.find(':');
+        mode = t.substr(0, colon);
+        if (colon != std::string::npos) {
+            const std::string arg = t.substr(colon + 1);
+            if (mode == "polynomial") {
+                int n = -1;
+                const auto r = std::from_chars(arg.data(), arg.data() + arg.size(), n);
+                if (r.ec != std::errc() || r.ptr != arg.data() + arg.size())
+                    parent.fail("levelling", "the degree in \"" + t + "\" is not a whole number",
+                                forms);
+                degree = n;
+            } else if (mode == "cylinder") {
+                axis = arg;
+            } else {
+                parent.fail("levelling", "\"" + t + "\" takes no argument after ':'", forms);
+            }
+        }
+    } else if (v.is_object()) {
+        Fields lf = *parent.object("levelling");
+        mode = lf.choice("mode", "plane", {"auto", "none", "plane", "polynomial", "cylinder"});
+        if (lf.get("degree")) degree = lf.integer("degree", 1, -1000000, 1000000);
+        if (lf.get("axis")) axis = lf.string("axis", "y");
+        lf.rejectUnknown();
+    } else {
+        parent.fail("levelling", "must be a string or an object, got " + v.dump(), forms);
+    }
+    if (mode == "auto")
+        d.mode = M::Auto;
+    else if (mode == "none")
+        d.mode = M::None;
+    else if (mode == "plane")
+        d.mode = M::Plane;
+    else if (mode == "polynomial")
+        d.mode = M::Polynomial;
+    else if (mode == "cylinder")
+        d.mode = M::Cylinder;
+    else
+        parent.fail("levelling", "unknown mode \"" + mode + "\"", forms);
+    if (degree && d.mode != M::Polynomial)
+        parent.fail("levelling", "a degree is for \"polynomial\" only", forms);
+    if (axis && d.mode != M::Cylinder)
+        parent.fail("levelling", "an axis is for \"cylinder\" only", forms);
+    if (d.mode == M::Polynomial) {
+        if (!degree)
+            parent.fail("levelling", "\"polynomial\" needs its degree",
+                        "give \"polynomial:3\" or {\"mode\": \"polynomial\", \"degree\": 3}");
+        if (*degree < 0 || *degree > LevellingDesc::kMaxDegree)
+            parent.fail(
+                "levelling",
+                "degree " + std::to_string(*degree) + " is not in [0, " +
+                    std::to_string(LevellingDesc::kMaxDegree) + "]",
+                "use a degree from 0 (the mean) to " + std::to_string(LevellingDesc::kMaxDegree));
+        d.degree = *degree;
+    }
+    if (d.mode == M::Cylinder) {
+        if (!axis)
+            parent.fail("levelling",
+                        "\"cylinder\" needs the direction its axis runs along (x or y)",
+                        "give \"cylinder:y\" or {\"mode\": \"cylinder\", \"axis\": \"y\"}");
+        if (*axis != "x" && *axis != "y")
+            parent.fail("levelling", "axis \"" + *axis + "\" is not x or y",
+                        "x: the axis runs along the map's columns' direction (+x); y: along "
+                        "its rows' direction");
+        d.axis = (*axis)[0];
+    }
+    return d;
+}
+
 void parseHeightmap(Fields& f, const std::filesystem::path& baseDir, HeightmapDesc& h) {
     const json* p = f.get("path");
     if (!p)
@@ -141,6 +227,7 @@ void parseHeightmap(Fields& f, const std::filesystem::path& baseDir, HeightmapDe
     h.pitch = f.positive("pixel_pitch", h.pitch);
     h.heightScale = f.number("height_scale", h.heightScale);
     if (!(h.heightScale != 0)) f.fail("height_scale", "must be non-zero");
+    if (const json* l = f.get("levelling")) h.levelling = parseLevelling(f, *l);
     if (const json* r = f.get("height_range")) {
         if (!r->is_array() || r->size() != 2 || !(*r)[0].is_number() || !(*r)[1].is_number())
             f.fail("height_range", "must be [min, max], got " + r->dump());
@@ -338,6 +425,30 @@ SceneDesc readSceneFile(const std::filesystem::path& file,
     return d;
 }
 
+namespace {
+
+/// Levels a loaded map in place (scene/Levelling.h) and says what loading did.
+HeightmapLoad levelMap(HeightmapData& map, const LevellingDesc& levelling, double pitch,
+                       const std::string& where) {
+    HeightmapLoad load;
+    load.format = map.format;
+    load.invalidFilled = map.invalidFilled;
+    load.resampling = map.resampling;
+    load.warnings = map.warnings;
+    load.levelling = levelHeights(map.heights, map.width, map.height, pitch, map.invalid, levelling,
+                                  map.measured(), where);
+    return load;
+}
+
+void reportLoad(const std::filesystem::path& file, const HeightmapLoad& load, int w, int h,
+                double pitch) {
+    for (const std::string& warning : load.warnings)
+        spdlog::warn("{}: {}", file.filename().string(), warning);
+    spdlog::info("{}: {}", file.filename().string(), load.text(w, h, pitch));
+}
+
+}  // namespace
+
 std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
     // A 5000² map takes seconds to read and build (core/Progress.h shows the elapsed time).
     const ProgressTask task("loading " + desc.heightmap.path.filename().string());
@@ -346,6 +457,8 @@ std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
     opt.heightScale = desc.heightmap.heightScale;
     HeightmapData map = loadHeightmap(desc.heightmap.path, opt);
     SceneDesc d = desc;
+    const std::string sceneWhere =
+        desc.file.empty() ? desc.heightmap.path.string() : desc.file.string();
     // A height map that carries its pitch (X3P, SDF) sets it unless the scene gives one; a scene
     // pitch that disagrees with the file's is refused rather than silently preferred.
     if (map.pitch) {
@@ -362,7 +475,13 @@ std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
                                         "); remove pixel_pitch from the scene to use the file's");
         }
     }
-    return std::make_unique<Scene>(std::move(d), map.width, map.height, std::move(map.heights));
+    HeightmapLoad load = levelMap(map, d.heightmap.levelling, d.heightmap.pitch, sceneWhere);
+    auto scene =
+        std::make_unique<Scene>(std::move(d), map.width, map.height, std::move(map.heights));
+    scene->load = std::move(load);
+    reportLoad(desc.heightmap.path, scene->load, scene->mapWidth, scene->mapHeight,
+               scene->desc.heightmap.pitch);
+    return scene;
 }
 
 std::unique_ptr<Scene> loadScene(const std::filesystem::path& file,
@@ -384,7 +503,36 @@ HeightSource loadHeightSource(const std::filesystem::path& file,
     HeightmapOptions o;
     o.defaultIntegerRange = std::array<double, 2>{0.0, 1.0};
     s.map = loadHeightmap(file, o);
+    // A bare map is levelled by the default (auto: plane for a measured map, else none).
+    const HeightmapLoad load =
+        levelMap(s.map, LevellingDesc{}, s.map.pitch.value_or(1.0), file.string());
+    reportLoad(file, load, s.map.width, s.map.height, s.map.pitch.value_or(1.0));
     return s;
+}
+
+nlohmann::ordered_json heightmapLoadJson(const Scene& scene) {
+    const HeightmapLoad& l = scene.load;
+    const LevellingResult& r = l.levelling;
+    nlohmann::ordered_json lev;
+    lev["mode"] = levellingName(r.applied);
+    lev["auto"] = r.automatic;
+    if (r.applied.mode != LevellingDesc::Mode::None) {
+        lev["points"] = r.points;
+        lev["rms_before"] = r.rmsBefore;
+        lev["rms_after"] = r.rmsAfter;
+        if (r.applied.mode == LevellingDesc::Mode::Cylinder) lev["radius"] = r.radius;
+    }
+    nlohmann::ordered_json j;
+    j["file"] = scene.desc.heightmap.path.string();
+    j["format"] = l.format;
+    j["size"] = {scene.mapWidth, scene.mapHeight};
+    j["pitch"] = scene.desc.heightmap.pitch;
+    j["invalid_filled"] = l.invalidFilled;
+    j["resampling"] = l.resampling.empty() ? nlohmann::ordered_json(nullptr)
+                                           : nlohmann::ordered_json(l.resampling);
+    j["levelling"] = lev;
+    j["warnings"] = l.warnings;
+    return j;
 }
 
 std::vector<SceneFileField> sceneFileFields() {
@@ -397,14 +545,22 @@ std::vector<SceneFileField> sceneFileFields() {
         {"heightmap.path", "required",
          "EXR or TIFF (float32/float16/uint16), PNG (16- or 8-bit), NumPy `.npy` "
          "(float32/float64/uint16, C order), X3P (ISO 25178-72), SDF (ISO 25178-71, ASCII or "
-         "binary)"},
+         "binary), and the instrument formats Gwyddion reads (Wyko OPD, Sensofar PLU, Digital "
+         "Surf SUR, Zygo DAT, …), recognised by content"},
         {"heightmap.pixel_pitch", num(d.heightmap.pitch),
-         "sample spacing in scene units (mm); X3P and SDF carry their own (leave it out)"},
+         "sample spacing in scene units (mm); measured maps (X3P, SDF, instrument formats) carry "
+         "their own (leave it out); non-square pixels are resampled onto the finer pitch"},
         {"heightmap.height_range", "required for integer maps",
          "`[min, max]`: the integer range normalised to [0,1] maps linearly onto it; not allowed "
          "for float, X3P and SDF maps"},
         {"heightmap.height_scale", num(d.heightmap.heightScale),
          "float maps: heights are multiplied by it"},
+        {"heightmap.levelling", "`auto`",
+         "form removal fitted on the valid points and subtracted: `none`, `plane`, "
+         "`polynomial:N` (degree 0–10), `cylinder:x` or `cylinder:y` (the axis' direction; a "
+         "circle arc across it), or `{\"mode\": \"cylinder\", \"axis\": \"y\"}`; `auto` is "
+         "`plane` for measured maps (X3P, SDF, instrument formats), `none` for EXR, TIFF, PNG "
+         "and .npy"},
         {"material.type", code(d.material.type),
          "or `conductor` (smooth mirror) — Mitsuba 3's plugins"},
         {"material.distribution", code(microfacetName(m.distribution)),

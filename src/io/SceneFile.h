@@ -48,6 +48,10 @@ struct HeightSource {
 HeightSource loadHeightSource(const std::filesystem::path& file,
                               const std::vector<std::string>& overrides = {});
 
+/// What loading a scene's height map did (Scene::load: reader, invalid points, resampling,
+/// levelling) as JSON, for summaries (optimize's summary.json, judge.json).
+nlohmann::ordered_json heightmapLoadJson(const Scene& scene);
+
 /// Applies one "key.path=value" override to a scene's JSON (readSceneFile's rules); `where`
 /// names the scene file for errors.
 void applySceneOverride(nlohmann::json& scene, const std::string& override,

@@ -155,13 +155,10 @@ class SdfReader {
             fail("Xscale and Yscale (the sample spacing in m) must be > 0; they are " +
                      std::to_string(xs) + " and " + std::to_string(ys),
                  kFixDamaged);
-        if (std::abs(xs - ys) > 1e-6 * std::max(xs, ys))
-            fail("the X and Y sample spacings differ (Xscale " + std::to_string(xs) +
-                     " m, Yscale " + std::to_string(ys) + " m); the scene needs square samples",
-                 "Resample the measurement to equal X and Y spacing and export it again");
         if (!std::isfinite(zs) || zs == 0.0)
             fail("Zscale = " + std::to_string(zs) + " must be finite and non-zero", kFixDamaged);
         pitchMm_ = xs * 1000.0;
+        pitchYMm_ = ys * 1000.0;  // loadHeightmap resamples non-square pixels
         zScaleMm_ = zs * 1000.0;
     }
 
@@ -170,6 +167,7 @@ class SdfReader {
         d.width = static_cast<int>(w_);
         d.height = static_cast<int>(h_);
         d.pitch = pitchMm_;
+        if (pitchYMm_ != pitchMm_) d.pitchY = pitchYMm_;
         d.format = "sdf " + variant + " " + type_->name;
         try {
             d.heights.resize(static_cast<size_t>(w_ * h_));
@@ -314,7 +312,7 @@ class SdfReader {
     bool binary_ = false;
     const SdfType* type_ = nullptr;
     long long w_ = 0, h_ = 0;
-    double pitchMm_ = 0.0, zScaleMm_ = 1000.0;
+    double pitchMm_ = 0.0, pitchYMm_ = 0.0, zScaleMm_ = 1000.0;
 };
 
 }  // namespace

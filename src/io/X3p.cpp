@@ -116,10 +116,35 @@ class X3pReader {
         zip_.reset(z);
     }
 
-    /// The member `name` (`why` says where it is named), which must hold `expected` bytes
-    /// (0: any size up to `limit`).
-    std::vector<unsigned char> member(const std::string& name, const std::string& why,
+    /// Where main.xml is: the archive's root, or one folder that holds it (x3ptools' and Mac
+    /// zips: `sample-land/main.xml`, beside `__MACOSX/` entries, which are ignored). Sets the
+    /// prefix every member name of main.xml is relative to.
+    void findRoot() {
+        if (zip_name_locate(zip_.get(), "main.xml", 0) >= 0) return;
+        const zip_int64_t n = zip_get_num_entries(zip_.get(), 0);
+        std::vector<std::string> found;
+        for (zip_int64_t i = 0; i < n; ++i) {
+            const char* c = zip_get_name(zip_.get(), static_cast<zip_uint64_t>(i), 0);
+            if (!c) continue;
+            const std::string name = c;
+            if (name.rfind("__MACOSX/", 0) == 0) continue;
+            const size_t slash = name.find('/');
+            if (slash == std::string::npos || slash == 0) continue;
+            if (name.compare(slash, std::string::npos, "/main.xml") == 0)
+                found.push_back(name.substr(0, slash + 1));
+        }
+        if (found.size() > 1)
+            fail("the archive holds " + std::to_string(found.size()) +
+                     " measurements (main.xml in '" + found[0] + "' and '" + found[1] + "')",
+                 "Put one measurement in each .x3p file");
+        if (found.size() == 1) prefix_ = found[0];
+    }
+
+    /// The member `name` (`why` says where it is named; relative to the folder main.xml is
+    /// in), which must hold `expected` bytes (0: any size up to `limit`).
+    std::vector<unsigned char> member(const std::string& relName, const std::string& why,
                                       uint64_t expected, uint64_t limit = 0) {
+        const std::string name = prefix_ + relName;
         zip_stat_t st;
         zip_stat_init(&st);
         if (zip_stat(zip_.get(), name.c_str(), 0, &st) != 0)
@@ -180,19 +205,25 @@ class X3pReader {
     /// that member exists.
     void checkXmlMd5() {
         const std::string name = text("Record4/ChecksumFile", false);
-        if (name.empty() || zip_name_locate(zip_.get(), name.c_str(), 0) < 0) return;
+        if (name.empty() || zip_name_locate(zip_.get(), (prefix_ + name).c_str(), 0) < 0) return;
         const std::vector<unsigned char> sum =
             member(name, "named by Record4/ChecksumFile", 0, 4096);
         const std::string want =
             lower(trim(std::string(sum.begin(), sum.end()).substr(0, 32).c_str()));
         const std::string got = md5Hex(xml_.data(), xml_.size());
-        if (want != got)
-            fail("main.xml does not match its MD5 checksum in '" + name + "' (" + want +
-                     "; main.xml's is " + got + ")",
-                 kFixDamaged);
+        if (want == got) return;
+        const std::string problem = "main.xml does not match its MD5 checksum in '" + name + "' (" +
+                                    want + "; main.xml's is " + got + ")";
+        // main.xml edited after its checksum was written (x3ptools does): the heights are still
+        // verified by their own MD5, so read them with a warning; without one, refuse.
+        if (text("Record3/DataLink/MD5ChecksumPointData", false).empty())
+            fail(problem, kFixDamaged);
+        xmlChecksumWarning_ =
+            problem + "; read anyway: the point data's own MD5 checksum is verified";
     }
 
     void parseXml() {
+        findRoot();
         xml_ = member("main.xml", "every X3P file has one", 0, kMaxXmlBytes);
         const pugi::xml_parse_result r = doc_.load_buffer(xml_.data(), xml_.size());
         if (!r)
@@ -201,9 +232,13 @@ class X3pReader {
                  kFixDamaged);
         root_ = doc_.document_element();
         const std::string rootName = root_.name();
-        const std::string suffix = "ISO5436_2";
-        if (rootName.size() < suffix.size() ||
-            rootName.compare(rootName.size() - suffix.size(), suffix.size(), suffix) != 0)
+        const auto endsWith = [&](const std::string& suffix) {
+            return rootName.size() >= suffix.size() &&
+                   rootName.compare(rootName.size() - suffix.size(), suffix.size(), suffix) == 0;
+        };
+        const std::string local =
+            rootName.substr(rootName.find(':') == std::string::npos ? 0 : rootName.find(':') + 1);
+        if (!endsWith("ISO5436_2") && local != "ISO5436")  // x3ptools writes <ISO5436>
             fail("main.xml's root element is <" + rootName + ">, not <ISO5436_2>", kFixDamaged);
 
         const std::string feature = text("Record1/FeatureType");
@@ -226,12 +261,8 @@ class X3pReader {
         if (!(ix > 0) || !(iy > 0))
             fail("Record1/Axes/CX/Increment and CY/Increment must be > 0 (they are " +
                  std::to_string(ix) + " and " + std::to_string(iy) + " m)");
-        if (std::abs(ix - iy) > 1e-6 * std::max(ix, iy))
-            fail("the X and Y sample spacings differ (CX/Increment " + std::to_string(ix) +
-                     " m, CY/Increment " + std::to_string(iy) +
-                     " m); the scene needs square samples",
-                 "Resample the measurement to equal X and Y spacing and export it again");
         pitchMm_ = ix * 1000.0;
+        pitchYMm_ = iy * 1000.0;  // loadHeightmap resamples non-square pixels
 
         type_ = text("Record1/Axes/CZ/DataType");
         code_ = type_.size() == 1 ? type_[0] : '?';
@@ -284,6 +315,8 @@ class X3pReader {
         d.width = static_cast<int>(w_);
         d.height = static_cast<int>(h_);
         d.pitch = pitchMm_;
+        if (pitchYMm_ != pitchMm_) d.pitchY = pitchYMm_;
+        if (!xmlChecksumWarning_.empty()) d.warnings.push_back(xmlChecksumWarning_);
         d.format = "x3p " + std::string(type_ == "I"   ? "int16"
                                         : type_ == "L" ? "int32"
                                         : type_ == "F" ? "float32"
@@ -294,30 +327,38 @@ class X3pReader {
             fail("not enough memory for a " + std::to_string(w_) + "x" + std::to_string(h_) +
                  " height map");
         }
+        // One loop per data type (the type is not tested per point); little-endian values
+        // are assembled from bytes, so the host's byte order does not matter.
         const double mm = 1000.0;
-        const unsigned char* p = raw.data();
-        for (size_t k = 0; k < d.heights.size(); ++k, p += bytes_) {
-            double v = 0.0;
-            if (code_ == 'I') {
-                uint16_t u = static_cast<uint16_t>(p[0] | (p[1] << 8));
-                v = std::bit_cast<int16_t>(u);
-            } else if (code_ == 'L') {
-                uint32_t u = 0;
-                for (int b = 3; b >= 0; --b) u = (u << 8) | p[b];
-                v = std::bit_cast<int32_t>(u);
-            } else if (code_ == 'F') {
-                uint32_t u = 0;
-                for (int b = 3; b >= 0; --b) u = (u << 8) | p[b];
-                v = std::bit_cast<float>(u);
-            } else {
-                uint64_t u = 0;
-                for (int b = 7; b >= 0; --b) u = (u << 8) | p[b];
-                v = std::bit_cast<double>(u);
+        const float nan = std::numeric_limits<float>::quiet_NaN();
+        const auto convert = [&](auto decode) {
+            const unsigned char* p = raw.data();
+            float* out = d.heights.data();
+            const size_t count = d.heights.size();
+            for (size_t k = 0; k < count; ++k, p += bytes_) {
+                const double v = decode(p);
+                out[k] = std::isnan(v) ? nan : static_cast<float>((v * zInc_ + zOff_) * mm);
             }
-            const bool masked = !valid.empty() && !((valid[k / 8] >> (k % 8)) & 1);
-            d.heights[k] = masked || std::isnan(v) ? std::numeric_limits<float>::quiet_NaN()
-                                                   : static_cast<float>((v * zInc_ + zOff_) * mm);
-        }
+            if (!valid.empty())
+                for (size_t k = 0; k < count; ++k)
+                    if (!((valid[k / 8] >> (k % 8)) & 1)) out[k] = nan;
+        };
+        const auto u32 = [](const unsigned char* p) {
+            return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 |
+                   uint32_t(p[3]) << 24;
+        };
+        if (code_ == 'I')
+            convert([](const unsigned char* p) {
+                return double(std::bit_cast<int16_t>(static_cast<uint16_t>(p[0] | (p[1] << 8))));
+            });
+        else if (code_ == 'L')
+            convert([&](const unsigned char* p) { return double(std::bit_cast<int32_t>(u32(p))); });
+        else if (code_ == 'F')
+            convert([&](const unsigned char* p) { return double(std::bit_cast<float>(u32(p))); });
+        else
+            convert([&](const unsigned char* p) {
+                return std::bit_cast<double>(uint64_t(u32(p)) | uint64_t(u32(p + 4)) << 32);
+            });
         return d;
     }
 
@@ -327,8 +368,10 @@ class X3pReader {
     std::vector<unsigned char> xml_;
     pugi::xml_document doc_;
     pugi::xml_node root_;
-    double pitchMm_ = 0.0, zInc_ = 1.0, zOff_ = 0.0;
+    double pitchMm_ = 0.0, pitchYMm_ = 0.0, zInc_ = 1.0, zOff_ = 0.0;
     std::string type_, dataName_, validName_;
+    std::string prefix_;              // the folder main.xml is in ("" at the root)
+    std::string xmlChecksumWarning_;  // main.xml's checksum did not match (see checkXmlMd5)
     char code_ = '?';
     uint64_t bytes_ = 0;
     long long w_ = 0, h_ = 0;

@@ -1,6 +1,7 @@
 #include "scene/Scene.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <utility>
 
 namespace sl {
@@ -26,5 +27,15 @@ Scene::Scene(SceneDesc d, int w, int h, std::vector<float> hs)
       camera(resolveCamera(desc.camera, *surface)),
       bsdf(desc.material.params),
       basis(desc.envmap.width, desc.envmap.height) {}
+
+std::string HeightmapLoad::text(int width, int height, double pitch) const {
+    char b[96];
+    std::snprintf(b, sizeof b, "%dx%d samples at %.6g", width, height, pitch);
+    std::string t = b;
+    if (!format.empty()) t += ", " + format;
+    if (!resampling.empty()) t += "; " + resampling;
+    t += "; levelling: " + levelling.text();
+    return t;
+}
 
 }  // namespace sl

@@ -15,6 +15,7 @@
 #include "scene/Conductor.h"
 #include "scene/EnvMapBasis.h"
 #include "scene/Heightfield.h"
+#include "scene/Levelling.h"
 #include "scene/RenderDesc.h"
 
 namespace sl {
@@ -25,6 +26,19 @@ struct HeightmapDesc {
     bool pitchGiven = false;     // the scene file gave pixel_pitch (else a file's own pitch wins)
     std::optional<std::array<double, 2>> heightRange;  // integer maps: [min, max] in mm
     double heightScale = 1.0;                          // float maps: multiplier
+    LevellingDesc levelling;  // form removal when loaded (scene/Levelling.h)
+};
+
+/// What loading the height map did (io/SceneFile.h loadScene): printed when the part is loaded,
+/// recorded in optimize's and judge's summaries (io/SceneFile.h heightmapLoadJson).
+struct HeightmapLoad {
+    std::string format;         // the reader's, e.g. "gwyddion opdfile, 809 invalid points filled"
+    size_t invalidFilled = 0;   // invalid points of the file, filled
+    std::string resampling;     // "" or how non-square pixels were made square
+    LevellingResult levelling;  // what was removed
+    std::vector<std::string> warnings;  // the reader's
+    /// "736x560 at 1.634 um, gwyddion opdfile, ...; levelled: plane ...".
+    std::string text(int width, int height, double pitch) const;
 };
 
 struct EnvMapDesc {
@@ -78,6 +92,7 @@ struct Scene {
     Camera camera;
     ConductorBsdf bsdf;
     EnvMapBasis basis;
+    HeightmapLoad load;  // set by loadScene
 };
 
 }  // namespace sl

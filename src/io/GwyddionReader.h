@@ -1,0 +1,42 @@
+// GwyddionReader: height maps read through Gwyddion's file modules (Gwyddion 2.x, Debian
+// `gwyddion` and `libgwyddion20-dev`; GPL-2+, see README "Licence"). The one file of
+// scratchlight that includes Gwyddion's headers; built with the CMake option SCRATCHLIGHT_GWYDDION
+// (default ON). Without it gwyddionBuilt() is false, gwyddionDetect() finds nothing and
+// readGwyddion()/writeGwy() throw an InputError that names the option.
+//
+// Gwyddion is initialised once, on the first file that needs it (thread-safe), headless as its
+// own gwyddion-thumbnailer does: the widget types, the gradient resources, then only the file
+// modules (`<libdir>/gwyddion/modules/file`; the other module kinds need a display). Gwyddion is
+// not thread-safe: every call into it holds one lock.
+//
+// What is read (loadHeightmap dispatches here for a file whose content none of our own readers
+// claims, io/HeightmapIO.h): the lowest-numbered channel (/N/data) whose lateral and height units
+// are metres; heights become millimetres (×1000), NaN where the channel's mask (/N/mask, the
+// file module's invalid points) is set or the value is not finite. pitch = dx, pitchY = dy (mm).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "io/HeightmapIO.h"
+
+namespace sl {
+
+/// Whether this build reads files through Gwyddion.
+bool gwyddionBuilt();
+
+/// The Gwyddion file module that claims `file` by its content (and name), e.g. "opdfile",
+/// "sensofar"; "" when none does or Gwyddion is not built. Initialises Gwyddion.
+std::string gwyddionDetect(const std::filesystem::path& file);
+
+/// Reads `file` through Gwyddion (see above): heights in mm, NaN for invalid points, `pitch` and
+/// `pitchY` in mm, `format` "gwyddion <module>". Throws InputError naming the file.
+HeightmapData readGwyddion(const std::filesystem::path& file);
+
+/// Writes a W×H height map (mm, row 0 first) with square pitch pitchMm as Gwyddion's own .gwy
+/// file (heights and lateral units in metres). For benches and tests.
+void writeGwy(const std::filesystem::path& file, int width, int height,
+              const std::vector<float>& heightsMm, double pitchMm);
+
+}  // namespace sl
