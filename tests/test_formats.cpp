@@ -400,9 +400,13 @@ TEST(FormatsX3p, UnsupportedVariantsAreRefusedNamingFileAndField) {
     X3pSpec noData;
     noData.withData = false;
     refuse("nodata.x3p", noData, {"bindata/data.bin", "PointDataLink"});
-    X3pSpec rect;
+    X3pSpec rect;  // non-square pixels are resampled (io/HeightmapIO.h), not refused
     rect.incY = 6e-6;
-    refuse("rect.x3p", rect, {"square", "CY/Increment"});
+    rect.values = ramp(4, 3);
+    writeX3p(dir / "rect.x3p", rect);
+    const HeightmapData r = loadHeightmap(dir / "rect.x3p", {});
+    EXPECT_EQ(r.height, 3);  // ⌊2·6/5⌋ + 1 rows at 5 µm
+    EXPECT_NE(r.resampling.find("onto the finer pitch"), std::string::npos) << r.resampling;
     X3pSpec huge;
     huge.sizeX = 2000000;
     huge.values = ramp(4, 3);
@@ -452,7 +456,11 @@ TEST(FormatsX3p, WriterRoundTripsHeightsAndPitch) {
     zip_source_t* src = zip_source_buffer(z, wrong.data(), wrong.size(), 0);
     ASSERT_GE(zip_file_add(z, "md5checksum.hex", src, ZIP_FL_OVERWRITE), 0);
     ASSERT_EQ(zip_close(z), 0);
-    expectRefused(dir / "w.x3p", {"main.xml", "md5checksum.hex"});
+    // main.xml edited after its checksum (as x3ptools does): the data's own MD5 still holds, so
+    // it is read with a warning.
+    const HeightmapData edited = loadHeightmap(dir / "w.x3p", {});
+    ASSERT_EQ(edited.warnings.size(), 1u);
+    EXPECT_NE(edited.warnings[0].find("md5checksum.hex"), std::string::npos) << edited.warnings[0];
     EXPECT_THROW(sl::writeX3p(dir / "x.x3p", 3, 3, mm, 0.01), InputError);
 }
 
@@ -575,7 +583,9 @@ TEST(FormatsSdf, UnsupportedAndDamagedFilesAreRefusedNamingFileAndField) {
     rect.ys = 1e-5;
     rect.values = ramp(4, 3);
     writeSdfBinary(dir / "rect.sdf", rect);
-    expectRefused(dir / "rect.sdf", {"square", "Yscale"});
+    const HeightmapData rs = loadHeightmap(dir / "rect.sdf", {});  // resampled, not refused
+    EXPECT_EQ(rs.height, 5);  // ⌊2·10/5⌋ + 1 rows at 5 µm
+    EXPECT_NEAR(*rs.pitch, 0.005, 1e-12);
 
     test::writeText(dir / "junk.sdf", "hello world, not an sdf file\n");
     expectRefused(dir / "junk.sdf", {"SDF version"});

@@ -1,5 +1,5 @@
 // scratchlight bench render | transport | scratchmap | defectmap | noise | sampling | depth |
-// regions: parse
+// regions | read | ...: parse
 // the options, run the benchmark in the library (app/RenderBench.h, app/TransportBench.h,
 // app/ScratchMapBench.h, app/NoiseBench.h, app/SamplingBench.h, app/DepthBench.h,
 // app/RegionBench.h), print its
@@ -15,6 +15,7 @@
 #include "app/LampsBench.h"
 #include "app/NoiseBench.h"
 #include "app/Plot.h"
+#include "app/ReadBench.h"
 #include "app/RegionBench.h"
 #include "app/RenderBench.h"
 #include "app/SamplingBench.h"
@@ -172,6 +173,28 @@ int runScratchMapBenchCmd(const ScratchMapBenchArgs& a) {
                     row.seconds, row.patches, row.patchesMarked, 100.0 * row.markedFraction);
     std::printf("(kernel %d, patch %d, threshold %g; median of %d runs)\n", a.o.map.kernel,
                 a.o.map.patch, a.o.map.threshold, a.o.repeats);
+    writeTextAtomically(a.csv, r.csv());
+    std::printf("wrote %s\n", a.csv.c_str());
+    return kOk;
+}
+
+struct ReadBenchArgs {
+    ReadBenchOptions o;
+    std::string csv = "bench-read.csv";
+};
+
+int runReadBenchCmd(const ReadBenchArgs& a) {
+    const ReadBenchResult r = runReadBench(a.o);
+    std::printf("%-12s %-20s %9s %10s %9s\n", "format", "reader", "MB", "seconds", "vs EXR");
+    for (const ReadBenchRow& row : r.rows)
+        std::printf("%-12s %-20s %9.1f %10.3f %8.2fx\n", row.format.c_str(), row.reader.c_str(),
+                    row.megabytes, row.seconds, row.ratioToExr);
+    std::printf("(%dx%d heights, loadHeightmap median of %d reads", a.o.size, a.o.size,
+                a.o.repeats);
+    if (r.gwyddionInitSeconds > 0)
+        std::printf("; Gwyddion's one-time initialisation %.3f s, not included",
+                    r.gwyddionInitSeconds);
+    std::printf(")\n");
     writeTextAtomically(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
@@ -397,6 +420,20 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     sm->add_option("-o,--output", m->csv, "CSV output")->capture_default_str();
     sm->callback([m, &run] { run = [m] { return runScratchMapBenchCmd(*m); }; });
+
+    auto rb = std::make_shared<ReadBenchArgs>();
+    CLI::App* rbc = bench->add_subcommand(
+        "read",
+        "Seconds to read an NxN height map from instrument files (X3P by our reader and by "
+        "Gwyddion's, Gwyddion's .gwy) against the same heights from EXR");
+    rbc->add_option("--size", rb->o.size, "N for the NxN height map")
+        ->check(CLI::Range(2, 20000))
+        ->capture_default_str();
+    rbc->add_option("--repeats", rb->o.repeats, "Reads per file (median)")
+        ->check(CLI::Range(1, 50))
+        ->capture_default_str();
+    rbc->add_option("-o,--output", rb->csv, "CSV output")->capture_default_str();
+    rbc->callback([rb, &run] { run = [rb] { return runReadBenchCmd(*rb); }; });
 
     auto lb = std::make_shared<LampsBenchArgs>();
     CLI::App* lbc = bench->add_subcommand(

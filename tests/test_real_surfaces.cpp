@@ -1,0 +1,440 @@
+// Measured surfaces: levelling and form removal (scene/Levelling.h, exact on synthetic forms),
+// the scene file's heightmap.levelling, non-square pixels, X3P members in a folder, and every
+// file of ../shared/real-surfaces (skipped with a message when that folder is absent) read,
+// levelled and rendered through the CLI. Tests that need Gwyddion's file modules have
+// "Gwyddion" in their name and are skipped only in a build without it (SCRATCHLIGHT_GWYDDION).
+#include <gtest/gtest.h>
+#include <zip.h>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "TestUtil.h"
+#include "core/Error.h"
+#include "io/GwyddionReader.h"
+#include "io/HeightmapIO.h"
+#include "io/SceneFile.h"
+#include "io/X3p.h"
+#include "scene/Levelling.h"
+
+namespace sl {
+namespace {
+
+namespace fs = std::filesystem;
+using Mode = LevellingDesc::Mode;
+
+double coordX(int i, int w, double p) {
+    return (i - (w - 1) / 2.0) * p;
+}
+
+LevellingDesc mode(Mode m, int degree = 1, char axis = 'y') {
+    LevellingDesc d;
+    d.mode = m;
+    d.degree = degree;
+    d.axis = axis;
+    return d;
+}
+
+double maxAbs(const std::vector<float>& v, const std::vector<uint8_t>& invalid = {}) {
+    double m = 0;
+    for (size_t k = 0; k < v.size(); ++k)
+        if (invalid.empty() || !invalid[k]) m = std::max(m, std::abs(static_cast<double>(v[k])));
+    return m;
+}
+
+TEST(Levelling, TiltedPlaneLevelsToZeroIgnoringInvalidPoints) {
+    const int w = 40, h = 30;
+    const double p = 0.01;
+    std::vector<float> z(static_cast<size_t>(w * h));
+    std::vector<uint8_t> invalid(z.size(), 0);
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i)
+            z[static_cast<size_t>(j * w + i)] =
+                static_cast<float>(0.3 + 0.02 * coordX(i, w, p) - 0.05 * coordX(j, h, p));
+    for (size_t k = 7; k < z.size(); k += 37) {  // invented points far off the plane
+        z[k] = 5.0f;
+        invalid[k] = 1;
+    }
+    const LevellingResult r = levelHeights(z, w, h, p, invalid, mode(Mode::Plane), true, "plane");
+    EXPECT_LT(maxAbs(z, invalid), 1e-7);
+    EXPECT_EQ(r.points, z.size() - 33);
+    EXPECT_GT(r.rmsBefore, 0.0);
+    EXPECT_LT(r.rmsAfter, 1e-7);
+    // auto: a plane for a measured map, nothing for a designed one
+    std::vector<float> z2(z.size(), 1.0f);
+    EXPECT_EQ(levelHeights(z2, w, h, p, {}, {}, false, "x").applied.mode, Mode::None);
+    EXPECT_EQ(z2[0], 1.0f);
+    EXPECT_EQ(levelHeights(z2, w, h, p, {}, {}, true, "x").applied.mode, Mode::Plane);
+    EXPECT_LT(maxAbs(z2), 1e-7);
+}
+
+TEST(Levelling, PolynomialOfDegreeNRemovesADegreeNSurfaceExactly) {
+    const int w = 64, h = 48;
+    const double p = 0.005;
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (int n = 0; n <= 5; ++n) {
+        // Σ c_ab x^a y^b over a + b ≤ n, x and y in mm (|x| ≤ 0.16), heights ~ 0.01 mm
+        std::vector<double> c;
+        for (int t = 0; t <= n; ++t)
+            for (int a = 0; a <= t; ++a) c.push_back(u(rng) * 0.01 / std::pow(0.16, t));
+        std::vector<float> z(static_cast<size_t>(w * h));
+        double peak = 0;
+        for (int j = 0; j < h; ++j)
+            for (int i = 0; i < w; ++i) {
+                const double x = coordX(i, w, p), y = coordX(j, h, p);
+                double v = 0;
+                size_t k = 0;
+                for (int t = 0; t <= n; ++t)
+                    for (int a = 0; a <= t; ++a) v += c[k++] * std::pow(x, a) * std::pow(y, t - a);
+                z[static_cast<size_t>(j * w + i)] = static_cast<float>(v);
+                peak = std::max(peak, std::abs(v));
+            }
+        levelHeights(z, w, h, p, {}, mode(Mode::Polynomial, n), true, "poly");
+        EXPECT_LT(maxAbs(z), 2e-6 * peak) << "degree " << n;
+        // one degree less leaves some of it
+        if (n >= 1) {
+            std::vector<float> z2(z.size());
+            for (int j = 0; j < h; ++j)
+                for (int i = 0; i < w; ++i)
+                    z2[static_cast<size_t>(j * w + i)] =
+                        static_cast<float>(std::pow(coordX(i, w, p), n) * 10);
+            levelHeights(z2, w, h, p, {}, mode(Mode::Polynomial, n - 1), true, "poly");
+            EXPECT_GT(maxAbs(z2), 1e-4 * std::pow(0.16, n)) << "degree " << n;
+        }
+    }
+}
+
+/// A cylinder of radius R along `axis` (convex or concave), tilted along the axis, plus a small
+/// texture across it: levelling by the cylinder leaves the texture.
+void cylinderCase(char axis, double sigma) {
+    const int w = 200, h = 120;
+    const double p = 0.002, R = 2.0;  // a 0.4 × 0.24 mm patch of a 2 mm radius
+    std::vector<float> z(static_cast<size_t>(w * h)), texture(z.size());
+    std::vector<uint8_t> invalid(z.size(), 0);
+    double texMean = 0;
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i) {
+            const double x = coordX(i, w, p), y = coordX(j, h, p);
+            const double s = axis == 'y' ? x : y, t = axis == 'y' ? y : x;
+            const size_t k = static_cast<size_t>(j * w + i);
+            const double tex =
+                2e-4 * std::sin(2 * M_PI * s / 0.011) * std::cos(2 * M_PI * t / 0.017);
+            texture[k] = static_cast<float>(tex);
+            texMean += tex;
+            z[k] = static_cast<float>(0.1 + sigma * std::sqrt(R * R - (s - 0.03) * (s - 0.03)) +
+                                      0.01 * t + tex);
+        }
+    texMean /= static_cast<double>(z.size());
+    for (size_t k = 3; k < z.size(); k += 101) {
+        z[k] = -3.0f;
+        invalid[k] = 1;
+    }
+    const LevellingResult r =
+        levelHeights(z, w, h, p, invalid, mode(Mode::Cylinder, 1, axis), true, "cyl");
+    EXPECT_NEAR(std::abs(r.radius), R, 2e-3 * R) << axis;
+    EXPECT_EQ(r.radius > 0, sigma > 0) << axis;
+    double worst = 0;
+    for (size_t k = 0; k < z.size(); ++k)
+        if (!invalid[k]) worst = std::max(worst, std::abs(z[k] - (texture[k] - texMean)));
+    EXPECT_LT(worst, 0.03 * 2e-4) << axis << " sigma " << sigma;  // 3 % of the texture's amplitude
+    EXPECT_LT(r.rmsAfter, 1.1 * 2e-4 / 2) << axis;
+}
+
+TEST(Levelling, CylinderOfKnownRadiusLevelsToTheTexture) {
+    cylinderCase('y', 1.0);
+    cylinderCase('x', 1.0);
+    cylinderCase('y', -1.0);
+}
+
+TEST(Levelling, CylinderOnAFlatMapIsAClearError) {
+    std::vector<float> z(100, 0.0f);
+    for (size_t k = 0; k < z.size(); ++k) z[k] = static_cast<float>(k % 10) * 1e-3f;
+    try {
+        levelHeights(z, 10, 10, 0.01, {}, mode(Mode::Cylinder, 1, 'y'), true, "flat.x3p");
+        FAIL() << "a line has no circle";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("flat.x3p"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("plane"), std::string::npos) << e.what();
+    }
+}
+
+// --- the scene file -----------------------------------------------------------------------------
+
+TEST(Levelling, SceneFileFieldStringsObjectsAndOverrides) {
+    test::TempDir dir("level");
+    const int n = 24;
+    std::vector<float> mm(static_cast<size_t>(n * n));
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+            mm[static_cast<size_t>(j * n + i)] =
+                0.001f * static_cast<float>(i) + 0.0005f * static_cast<float>(j);
+    writeX3p(dir / "tilt.x3p", n, n, mm, 0.01);
+    test::writeText(dir / "s.json", R"({"heightmap": {"path": "tilt.x3p"}})");
+    const auto scene = loadScene(dir / "s.json");
+    EXPECT_EQ(scene->load.levelling.applied.mode, Mode::Plane);
+    EXPECT_TRUE(scene->load.levelling.automatic);
+    EXPECT_LT(maxAbs(scene->heights), 1e-7);
+    EXPECT_EQ(loadScene(dir / "s.json", {"heightmap.levelling=none"})->heights[5], mm[5]);
+    const auto poly = readSceneFile(dir / "s.json", {"heightmap.levelling=polynomial:3"});
+    EXPECT_EQ(poly.heightmap.levelling.mode, Mode::Polynomial);
+    EXPECT_EQ(poly.heightmap.levelling.degree, 3);
+    const auto cyl =
+        readSceneFile(dir / "s.json", {R"(heightmap.levelling={"mode": "cylinder", "axis": "x"})"});
+    EXPECT_EQ(cyl.heightmap.levelling.mode, Mode::Cylinder);
+    EXPECT_EQ(cyl.heightmap.levelling.axis, 'x');
+    const auto cyl2 = readSceneFile(
+        dir / "s.json", {"heightmap.levelling.mode=cylinder", "heightmap.levelling.axis=y"});
+    EXPECT_EQ(cyl2.heightmap.levelling.axis, 'y');
+    const auto refused = [&](const std::string& o, const std::string& part) {
+        try {
+            readSceneFile(dir / "s.json", {o});
+            ADD_FAILURE() << o << " was accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find("heightmap.levelling"), std::string::npos)
+                << e.what();
+        }
+    };
+    refused("heightmap.levelling=sphere", "sphere");
+    refused("heightmap.levelling=polynomial", "degree");
+    refused("heightmap.levelling=polynomial:11", "[0, 10]");
+    refused("heightmap.levelling=cylinder", "x or y");
+    refused("heightmap.levelling=cylinder:z", "\"z\"");
+    refused(R"(heightmap.levelling={"mode": "plane", "axis": "x"})", "cylinder");
+    refused(R"(heightmap.levelling={"mode": "plane", "radius": 2})", "radius");
+    refused("heightmap.levelling=3", "string or an object");
+    // recorded for summaries
+    const nlohmann::ordered_json j = heightmapLoadJson(*scene);
+    EXPECT_EQ(j["levelling"]["mode"], "plane");
+    EXPECT_EQ(j["levelling"]["auto"], true);
+    EXPECT_EQ(j["size"][0], n);
+}
+
+// --- readers ------------------------------------------------------------------------------------
+
+TEST(FormatsX3p, NonSquarePixelsAreResampledOntoTheFinerPitch) {
+    test::TempDir dir("x3p");
+    // writeX3p writes square pixels; rewrite its CY increment to 3× CX.
+    const int w = 5, h = 4;
+    std::vector<float> mm(static_cast<size_t>(w * h));
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i)
+            mm[static_cast<size_t>(j * w + i)] =
+                0.01f * static_cast<float>(j) + 0.001f * static_cast<float>(i);
+    writeX3p(dir / "sq.x3p", w, h, mm, 0.002);
+    int err = 0;
+    zip_t* z = zip_open((dir / "sq.x3p").c_str(), 0, &err);
+    ASSERT_NE(z, nullptr);
+    zip_stat_t st;
+    ASSERT_EQ(zip_stat(z, "main.xml", 0, &st), 0);
+    std::string xml(st.size, '\0');
+    zip_file_t* f = zip_fopen(z, "main.xml", 0);
+    ASSERT_EQ(zip_fread(f, xml.data(), st.size), static_cast<zip_int64_t>(st.size));
+    zip_fclose(f);
+    const std::string cy = "<CY><AxisType>I</AxisType><DataType>D</DataType><Increment>2e-06";
+    const size_t at = xml.find(cy);
+    ASSERT_NE(at, std::string::npos) << xml;
+    xml.replace(at, cy.size(), "<CY><AxisType>I</AxisType><DataType>D</DataType><Increment>6e-06");
+    zip_source_t* src = zip_source_buffer(z, xml.data(), xml.size(), 0);
+    ASSERT_GE(zip_file_add(z, "main.xml", src, ZIP_FL_OVERWRITE), 0);
+    zip_delete(z, zip_name_locate(z, "md5checksum.hex", 0));
+    ASSERT_EQ(zip_close(z), 0);
+    const HeightmapData d = loadHeightmap(dir / "sq.x3p", {});
+    EXPECT_EQ(d.width, 5);
+    EXPECT_EQ(d.height, 10);  // (4 − 1)·3 + 1 rows at 0.002 mm
+    ASSERT_TRUE(d.pitch);
+    EXPECT_NEAR(*d.pitch, 0.002, 1e-15);
+    EXPECT_FALSE(d.pitchY);
+    EXPECT_NE(d.resampling.find("linear interpolation along y"), std::string::npos) << d.resampling;
+    for (int j = 0; j < d.height; ++j)  // a linear ramp is kept exactly
+        for (int i = 0; i < w; ++i)
+            EXPECT_NEAR(d.heights[static_cast<size_t>(j * w + i)], 0.01 * j / 3.0 + 0.001 * i, 1e-7)
+                << j << "," << i;
+}
+
+/// Repacks an X3P's members into `folder/` with macOS's __MACOSX entries beside them.
+void repackInFolder(const fs::path& in, const fs::path& out, const std::string& folder) {
+    int err = 0;
+    zip_t* a = zip_open(in.c_str(), ZIP_RDONLY, &err);
+    ASSERT_NE(a, nullptr);
+    zip_t* b = zip_open(out.c_str(), ZIP_CREATE | ZIP_TRUNCATE, &err);
+    ASSERT_NE(b, nullptr);
+    std::vector<std::string> keep;
+    zip_dir_add(b, folder.c_str(), 0);
+    for (zip_int64_t i = 0; i < zip_get_num_entries(a, 0); ++i) {
+        const std::string name = zip_get_name(a, static_cast<zip_uint64_t>(i), 0);
+        zip_stat_t st;
+        zip_stat_index(a, static_cast<zip_uint64_t>(i), 0, &st);
+        keep.emplace_back(st.size, '\0');
+        zip_file_t* f = zip_fopen_index(a, static_cast<zip_uint64_t>(i), 0);
+        zip_fread(f, keep.back().data(), st.size);
+        zip_fclose(f);
+        zip_source_t* s = zip_source_buffer(b, keep.back().data(), keep.back().size(), 0);
+        ASSERT_GE(zip_file_add(b, (folder + "/" + name).c_str(), s, 0), 0);
+    }
+    static const std::string junk = "Mac resource fork";
+    for (const char* n : {"__MACOSX/._x", "__MACOSX/x/main.xml"}) {
+        zip_source_t* s = zip_source_buffer(b, junk.data(), junk.size(), 0);
+        ASSERT_GE(zip_file_add(b, n, s, 0), 0);
+    }
+    ASSERT_EQ(zip_close(b), 0);
+    zip_discard(a);
+}
+
+TEST(FormatsX3p, MembersInAFolderBesideMacosxEntriesAreRead) {
+    test::TempDir dir("x3p");
+    const int w = 6, h = 5;
+    std::vector<float> mm(static_cast<size_t>(w * h));
+    for (size_t k = 0; k < mm.size(); ++k) mm[k] = 0.0001f * static_cast<float>(k);
+    writeX3p(dir / "flat.x3p", w, h, mm, 0.003);
+    repackInFolder(dir / "flat.x3p", dir / "folder.x3p", "sample-land");
+    const HeightmapData d = loadHeightmap(dir / "folder.x3p", {});
+    EXPECT_EQ(d.width, w);
+    EXPECT_EQ(d.height, h);
+    EXPECT_TRUE(d.warnings.empty());
+    for (size_t k = 0; k < mm.size(); ++k) EXPECT_FLOAT_EQ(d.heights[k], mm[k]);
+    // by content: the same file named .dat is still an X3P
+    fs::copy_file(dir / "folder.x3p", dir / "folder.dat");
+    EXPECT_EQ(loadHeightmap(dir / "folder.dat", {}).format, "x3p float64");
+}
+
+TEST(FormatsGwyddion, ReadsGwyddionsOwnFileByContent) {
+    if (!SL_HAVE_GWYDDION) GTEST_SKIP() << "built with -DSCRATCHLIGHT_GWYDDION=OFF";
+    test::TempDir dir("gwy");
+    const int w = 7, h = 4;
+    std::vector<float> mm(static_cast<size_t>(w * h));
+    for (size_t k = 0; k < mm.size(); ++k) mm[k] = 0.001f * static_cast<float>(k) - 0.01f;
+    mm[9] = std::numeric_limits<float>::quiet_NaN();  // .gwy keeps NaN: filled as an invalid point
+    writeGwy(dir / "m.gwy", w, h, mm, 0.0025);
+    fs::copy_file(dir / "m.gwy", dir / "m.bin");  // a name that says nothing
+    for (const char* name : {"m.gwy", "m.bin"}) {
+        const HeightmapData d = loadHeightmap(dir / name, {});
+        EXPECT_EQ(d.format.rfind("gwyddion gwyfile", 0), 0u) << d.format;
+        EXPECT_EQ(d.width, w);
+        EXPECT_EQ(d.height, h);
+        ASSERT_TRUE(d.pitch);
+        EXPECT_NEAR(*d.pitch, 0.0025, 1e-12);
+        EXPECT_EQ(d.invalidFilled, 1u);
+        for (size_t k = 0; k < mm.size(); ++k)
+            if (k != 9) EXPECT_FLOAT_EQ(d.heights[k], mm[k]) << k;
+    }
+    test::writeText(dir / "junk.xyz123", "nothing any reader knows\n");
+    EXPECT_THROW(loadHeightmap(dir / "junk.xyz123", {}), InputError);
+}
+
+// --- the shared real surfaces -------------------------------------------------------------------
+
+fs::path sharedDir() {
+    return fs::path(SL_SOURCE_DIR) / ".." / "shared" / "real-surfaces";
+}
+
+struct RealFile {
+    const char* name;
+    bool needsGwyddion;
+    int width, height;  // after resampling
+    double pitch;       // mm
+    size_t invalid;
+    const char* levelling;  // the scene's, "" = auto (plane)
+};
+
+// What each file is (../shared/real-surfaces/README.md): the OPD's 1.634 × 1.907 µm pixels are
+// resampled onto 1.634 µm (480 rows → ⌊479·1.90661/1.63424⌋ + 1 = 559). The bullet lands
+// are curved across the land: the NanoFocus land across y (its axis runs along x), the Sensofar
+// one across x.
+const RealFile kRealFiles[] = {
+    {"wyko-circular-toolmarks.opd", true, 736, 559, 0.00163424, 809, ""},
+    {"sensofar-periodic-lines.plu", true, 768, 576, 0.000332, 0, ""},
+    {"nanofocus-bullet-land-striations.x3p", false, 501, 1588, 0.0015625, 24829, "cylinder:x"},
+    {"sensofar-bullet-land-in-folder.x3p", false, 918, 256, 0.00258, 25292, "cylinder:y"},
+    {"logo-in-folder.x3p", false, 741, 419, 0.000645, 0, ""},
+};
+
+void checkRealFile(const RealFile& f) {
+    const fs::path file = sharedDir() / f.name;
+    if (!fs::exists(file)) GTEST_SKIP() << file << " is absent (../shared/real-surfaces)";
+    if (f.needsGwyddion && !SL_HAVE_GWYDDION)
+        GTEST_SKIP() << "built with -DSCRATCHLIGHT_GWYDDION=OFF";
+    test::TempDir dir("real");
+    std::string json = R"({"heightmap": {"path": ")" + file.string() + "\"";
+    if (*f.levelling) json += std::string(R"(, "levelling": ")") + f.levelling + "\"";
+    json += "}}";
+    test::writeText(dir / "scene.json", json);
+    const auto scene = loadScene(dir / "scene.json");
+    EXPECT_EQ(scene->mapWidth, f.width);
+    EXPECT_EQ(scene->mapHeight, f.height);
+    EXPECT_NEAR(scene->desc.heightmap.pitch, f.pitch, 1e-6 * f.pitch);
+    EXPECT_EQ(scene->load.invalidFilled, f.invalid);
+    for (float v : scene->heights) ASSERT_TRUE(std::isfinite(v));
+    const LevellingResult& lv = scene->load.levelling;
+    EXPECT_EQ(lv.applied.mode, *f.levelling ? Mode::Cylinder : Mode::Plane);
+    EXPECT_LT(lv.rmsAfter, lv.rmsBefore);
+    // Nothing of the form is left: fitting it again removes (almost) nothing.
+    std::vector<float> again = scene->heights;
+    const LevellingResult re =
+        levelHeights(again, scene->mapWidth, scene->mapHeight, scene->desc.heightmap.pitch, {},
+                     mode(Mode::Plane), true, f.name);
+    EXPECT_GT(re.rmsAfter, 0.999 * re.rmsBefore) << f.name;
+    if (*f.levelling) {  // and no curvature across the land either
+        const LevellingResult q =
+            levelHeights(again, scene->mapWidth, scene->mapHeight, scene->desc.heightmap.pitch, {},
+                         mode(Mode::Polynomial, 2), true, f.name);
+        EXPECT_GT(q.rmsAfter, 0.97 * q.rmsBefore) << f.name;
+    }
+    // The CLI renders it at 64² with its real pitch, levelled.
+    const test::RunResult r = test::runCli("render " + (dir / "scene.json").string() +
+                                           " -D camera.width=64 -D camera.height=64 --spp 2 -o " +
+                                           (dir / "r.exr").string());
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(fs::exists(dir / "r.png")) << r.output;
+    EXPECT_NE(r.output.find("levelling: "), std::string::npos) << r.output;
+}
+
+TEST(RealSurfacesGwyddion, WykoOpdNonSquarePixels) {
+    checkRealFile(kRealFiles[0]);
+}
+TEST(RealSurfacesGwyddion, SensofarPlu) {
+    checkRealFile(kRealFiles[1]);
+}
+TEST(RealSurfaces, NanofocusX3pBulletLandCylinder) {
+    checkRealFile(kRealFiles[2]);
+}
+TEST(RealSurfaces, SensofarX3pInAFolderCylinder) {
+    checkRealFile(kRealFiles[3]);
+}
+TEST(RealSurfaces, LogoX3pInAFolder) {
+    checkRealFile(kRealFiles[4]);
+}
+
+TEST(RealSurfaces, LogoWarnsOnlyAboutItsEditedMainXml) {
+    const fs::path file = sharedDir() / "logo-in-folder.x3p";
+    if (!fs::exists(file)) GTEST_SKIP() << file << " is absent (../shared/real-surfaces)";
+    const HeightmapData d = loadHeightmap(file, {});
+    ASSERT_EQ(d.warnings.size(), 1u);
+    EXPECT_NE(d.warnings[0].find("main.xml does not match"), std::string::npos) << d.warnings[0];
+    EXPECT_TRUE(
+        loadHeightmap(sharedDir() / "sensofar-bullet-land-in-folder.x3p", {}).warnings.empty());
+}
+
+TEST(RealSurfacesGwyddion, OurX3pReaderAgreesWithGwyddions) {
+    if (!SL_HAVE_GWYDDION) GTEST_SKIP() << "built with -DSCRATCHLIGHT_GWYDDION=OFF";
+    const fs::path file = sharedDir() / "nanofocus-bullet-land-striations.x3p";
+    if (!fs::exists(file)) GTEST_SKIP() << file << " is absent (../shared/real-surfaces)";
+    const HeightmapData ours = loadHeightmap(file, {});
+    const HeightmapData gwy = loadHeightmap(file, {}, HeightmapReader::Gwyddion);
+    ASSERT_EQ(ours.width, gwy.width);
+    ASSERT_EQ(ours.height, gwy.height);
+    EXPECT_EQ(ours.invalidFilled, gwy.invalidFilled);
+    EXPECT_NEAR(*ours.pitch, *gwy.pitch, 1e-12);
+    size_t differ = 0;
+    for (size_t k = 0; k < ours.heights.size(); ++k)
+        differ += ours.invalid[k] == 0 && ours.heights[k] != gwy.heights[k];
+    EXPECT_EQ(differ, 0u);
+}
+
+}  // namespace
+}  // namespace sl
