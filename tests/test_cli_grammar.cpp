@@ -106,10 +106,10 @@ TEST(CliGrammar, EveryCommandFollowsOneGrammar) {
                                              "judge",  "gradcheck",  "bench gradients"};
     // Benchmarks that render at a size of their own (and sweep or fix the sampling).
     const std::set<std::string> benchSized = {"bench render", "bench transport", "bench noise"};
-    const std::set<std::string> readsScene = {"render",          "precompute",  "optimize",
-                                              "judge",           "gradcheck",   "export-mitsuba",
-                                              "scratchmap",      "defectmap",   "bench render",
-                                              "bench transport", "bench noise", "bench gradients"};
+    const std::set<std::string> readsScene = {
+        "render",          "precompute",  "optimize",       "judge",          "gradcheck",
+        "export-mitsuba",  "scratchmap",  "defectmap",      "insert-defects", "bench render",
+        "bench transport", "bench noise", "bench gradients"};
     for (const std::string& c : commands) {
         SCOPED_TRACE(c);
         const auto help = runCli(c + " --help");

@@ -124,6 +124,61 @@ TEST(DefectMap, PeriodicTextureAloneMarksAlmostNothing) {
     EXPECT_LT(std::sqrt(s2 / c), 0.25 * textureRms);
 }
 
+// Step 7b (seedTail): a texture with its own heavy tail -- the periodic texture plus "particles"
+// (blobs of radius 2, 10× the noise high) on 3 % of the map, as a measured texture has --
+// marks the particles with thresholds in robust σ alone; raised to 1.5 × the score's 0.99
+// quantile they are left and the deep groove is still found. On the Gaussian texture alone
+// the tail raises nothing.
+TEST(DefectMap, TextureTailRaisesTheThresholdsOnAHeavyTailedTexture) {
+    const int n = 256;
+    std::vector<float> h = texture(n);
+    std::vector<uint8_t> particle(h.size(), 0);
+    std::mt19937 rng(5);
+    std::uniform_int_distribution<int> pos(45, n - 46);
+    for (int b = 0; b < 150; ++b) {
+        const int cx = pos(rng), cy = pos(rng);
+        for (int y = cy - 2; y <= cy + 2; ++y)
+            for (int x = cx - 2; x <= cx + 2; ++x)
+                if ((x - cx) * (x - cx) + (y - cy) * (y - cy) <= 4) {
+                    h[static_cast<size_t>(y) * n + x] += 0.2f;
+                    particle[static_cast<size_t>(y) * n + x] = 1;
+                }
+    }
+    const std::vector<uint8_t> truth = cutGroove(h, n, 60, 70, 190, 170, 5.0, 2.0);
+    const std::vector<RegionLabel> legend{{255, "defect"}};
+    auto onParticles = [&](const DefectMap& m) {
+        size_t c = 0;
+        for (size_t k = 0; k < m.map.size(); ++k) c += m.map[k] && particle[k] && !truth[k];
+        return c;
+    };
+    DefectMapOptions off, on;
+    off.seedTail = 0;
+    on.seedTail = 1.5;
+    const DefectMap plain = detectDefects(h, n, n, off);
+    const DefectMap tail = detectDefects(h, n, n, on);
+    EXPECT_GT(onParticles(plain), 500u);
+    EXPECT_LT(onParticles(tail), onParticles(plain) / 5);
+    EXPECT_GT(tail.seedUsed, off.seedSigma);
+    const DefectScore s = scoreDefectMap(tail.map, truth, legend);
+    EXPECT_GE(s.overall.recall, 0.8);
+    EXPECT_GT(s.overall.precision, scoreDefectMap(plain.map, truth, legend).overall.precision);
+    // growTail: the grow threshold from the same quantile, not scaled with the seed (lower
+    // here: the groove is grown further, never less)
+    DefectMapOptions grow = on;
+    grow.growTail = 0.3;
+    const DefectMap tg = detectDefects(h, n, n, grow);
+    const double q = tail.seedUsed / on.seedTail;
+    EXPECT_NEAR(tail.growUsed, on.growSigma * tail.seedUsed / on.seedSigma, 1e-9);
+    EXPECT_NEAR(tg.growUsed, std::max(on.growSigma, 0.3 * q), 1e-6);
+    EXPECT_LT(tg.growUsed, tail.growUsed);
+    EXPECT_GE(scoreDefectMap(tg.map, truth, legend).overall.recall, s.overall.recall);
+    // the Gaussian texture: nothing raised
+    const std::vector<float> g = texture(n);
+    const DefectMap gm = detectDefects(g, n, n, on);
+    EXPECT_DOUBLE_EQ(gm.seedUsed, off.seedSigma);
+    EXPECT_EQ(gm.map, detectDefects(g, n, n, off).map);
+}
+
 TEST(DefectMap, GrooveOnPeriodicTextureIsFound) {
     std::vector<float> h = texture(kN);
     const std::vector<uint8_t> truth = cutGroove(h, kN, 50, 60, 150, 130, 4.0, 0.4);
@@ -240,6 +295,49 @@ TEST(DefectMap, StepModelMarksTheRampNotItsHalo) {
     EXPECT_GE(s.overall.recall, 0.85);
     EXPECT_EQ(off.stepPoints, 0u);
     EXPECT_LT(so.overall.precision, 0.6);
+}
+
+// Step 4a with stepKeepBlob: a straight step (0.3 high, across the map at row 100) on noise with
+// a pit (radius 5, 0.4 deep) 4 samples from it, inside the step's band. The band keeps only
+// the step's ramp, so without the switch the pit is lost; with it the pit's compact region is
+// kept, and the band elsewhere is unchanged.
+TEST(DefectMap, StepModelLeavesAPitBesideTheStep) {
+    constexpr int n = 256, cx = 128, cy = 104, radius = 5;
+    std::mt19937 rng(6);
+    std::normal_distribution<double> nd(0.0, 0.01);
+    std::vector<float> h(static_cast<size_t>(n) * n);
+    std::vector<uint8_t> pit(h.size(), 0);
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            const size_t k = static_cast<size_t>(y) * n + x;
+            const double r2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
+            double v = (y >= 100 ? 0.3 : 0.0) + nd(rng);
+            if (r2 < radius * radius) {
+                v -= 0.4 * (1.0 - r2 / (radius * radius));
+                pit[k] = 255;
+            }
+            h[k] = static_cast<float>(v);
+        }
+    DefectMapOptions off, on;
+    off.stepKeepBlob = 0;
+    on.stepKeepBlob = 40;
+    const DefectMap mo = detectDefects(h, n, n, off);
+    const DefectMap mn = detectDefects(h, n, n, on);
+    const std::vector<RegionLabel> legend{{255, "pit"}};
+    const double recallOff = scoreDefectMap(mo.map, pit, legend).overall.recall;
+    const double recallOn = scoreDefectMap(mn.map, pit, legend).overall.recall;
+    size_t differFar = 0;  // samples more than 30 columns from the pit
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x)
+            if (std::abs(x - cx) > 30)
+                differFar += (mo.map[static_cast<size_t>(y) * n + x] != 0) !=
+                             (mn.map[static_cast<size_t>(y) * n + x] != 0);
+    std::printf("pit beside a step: %zu centre points; pit recall %.3f, with the switch %.3f\n",
+                mo.stepPoints, recallOff, recallOn);
+    EXPECT_GT(mo.stepPoints, 100u);
+    EXPECT_LT(recallOff, 0.5);
+    EXPECT_GE(recallOn, 0.8);
+    EXPECT_EQ(differFar, 0u);
 }
 
 // The turned test part's tool-change step is a ring; where the pocket wall crosses it the step
@@ -370,6 +468,89 @@ TEST(DefectMap, TextureChangeGrowsIntoTheBorderAlongABandOnly) {
     EXPECT_EQ(hitOff, 0u);
     EXPECT_EQ(farOff, 0u);
     EXPECT_GE(stripFar, static_cast<size_t>(5 * (x0 - border)));
+}
+
+// Step 8 with energySpread: white noise whose amplitude varies everywhere (a smooth product of
+// sines, 0.15–1.85 × its mean), as a measured texture's local amplitude does, is marked by the
+// plain ratio in its loud patches; with the threshold at least median(E) + energySpread × E's
+// robust spread nothing is. A band of 3× the amplitude on stationary noise is marked either way.
+TEST(DefectMap, TextureChangeSpreadLeavesATextureThatVariesEverywhere) {
+    constexpr int n = 256;
+    std::mt19937 rng(3);
+    std::normal_distribution<double> nd(0.0, 0.05);
+    std::vector<float> varying(static_cast<size_t>(n) * n), banded(varying.size());
+    std::vector<uint8_t> band(varying.size(), 0);
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            const size_t k = static_cast<size_t>(y) * n + x;
+            const double a =
+                1.0 + 0.85 * std::sin(2 * M_PI * x / 90.0) * std::sin(2 * M_PI * y / 70.0);
+            varying[k] = static_cast<float>(a * nd(rng));
+            band[k] = y >= 110 && y < 150;
+            banded[k] = static_cast<float>((band[k] ? 3.0 : 1.0) * nd(rng));
+        }
+    DefectMapOptions plain, spread;
+    plain.lineLength = spread.lineLength = 0;
+    plain.energySpread = 0.0;
+    spread.energySpread = 6.0;
+    const DefectMap vp = detectDefects(varying, n, n, plain);
+    const DefectMap vs = detectDefects(varying, n, n, spread);
+    const DefectMap bs = detectDefects(banded, n, n, spread);
+    size_t bandHit = 0, bandAll = 0;
+    for (int y = 110; y < 150; ++y)
+        for (int x = 40; x < n - 40; ++x) {
+            ++bandAll;
+            bandHit += bs.map[static_cast<size_t>(y) * n + x] != 0;
+        }
+    std::printf(
+        "varying amplitude: %zu marked by texture change (ratio %.2f), with the spread %zu "
+        "(ratio %.2f); band %zu of %zu (ratio %.2f)\n",
+        vp.markedEnergy, vp.energyRatioUsed, vs.markedEnergy, vs.energyRatioUsed, bandHit, bandAll,
+        bs.energyRatioUsed);
+    EXPECT_GT(vp.markedEnergy, 2000u);
+    EXPECT_DOUBLE_EQ(vp.energyRatioUsed, plain.energyRatio);
+    EXPECT_GT(vs.energyRatioUsed, plain.energyRatio);
+    EXPECT_LT(vs.markedEnergy, vp.markedEnergy / 10);
+    EXPECT_GE(static_cast<double>(bandHit), 0.8 * static_cast<double>(bandAll));
+}
+
+// Step 8 with energyBorderDepth: a block of louder noise along the top of the interior (20 rows
+// from the border's inner line, the whole width) is a texture-change region hugging the edge
+// and is dropped; a band of the same amplitude across the middle of the map, though it touches
+// the left and right edges, reaches the middle and is kept.
+TEST(DefectMap, TextureChangeBlocksAlongTheBorderAreDropped) {
+    constexpr int n = 256, border = 40;
+    std::mt19937 rng(4);
+    std::normal_distribution<double> nd(0.0, 0.05);
+    std::vector<float> h(static_cast<size_t>(n) * n);
+    auto block = [&](int y) { return y >= border && y < border + 20; };
+    auto band = [&](int y) { return y >= 110 && y < 150; };
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x)
+            h[static_cast<size_t>(y) * n + x] =
+                static_cast<float>((block(y) || band(y) ? 3.0 : 1.0) * nd(rng));
+    DefectMapOptions keep, drop;
+    keep.lineLength = drop.lineLength = 0;
+    keep.energyBorderDepth = 0.0;
+    drop.energyBorderDepth = 0.25;
+    const DefectMap mk = detectDefects(h, n, n, keep);
+    const DefectMap md = detectDefects(h, n, n, drop);
+    auto rows = [&](const DefectMap& m, auto&& in) {
+        size_t c = 0;
+        for (int y = 0; y < n; ++y)
+            for (int x = border; x < n - border; ++x)
+                c += in(y) && m.map[static_cast<size_t>(y) * n + x] != 0;
+        return c;
+    };
+    const size_t blockKeep = rows(mk, block), blockDrop = rows(md, block);
+    const size_t bandKeep = rows(mk, band), bandDrop = rows(md, band);
+    std::printf("border block: %zu marked, %zu with the rule (%zu dropped); band %zu, %zu\n",
+                blockKeep, blockDrop, md.energyBorderDropped, bandKeep, bandDrop);
+    EXPECT_GT(blockKeep, 1500u);  // of 20 × 176
+    EXPECT_LT(blockDrop, blockKeep / 10);
+    EXPECT_GT(md.energyBorderDropped, 0u);
+    EXPECT_EQ(bandDrop, bandKeep);
+    EXPECT_GT(bandKeep, 5000u);  // of 40 × 176
 }
 
 // A face-turned texture: a cosine groove profile along the Archimedean spiral of pitch 10

@@ -1064,8 +1064,9 @@ TEST(Synth, LegendNamesEveryLabelPresent) {
     }
     EXPECT_TRUE(std::is_sorted(values.rbegin(), values.rend()));
     EXPECT_EQ(std::adjacent_find(values.begin(), values.end()), values.end());
-    EXPECT_EQ(names, (std::vector<std::string>{"defect", "dent", "tool-change-step", "burr",
-                                               "chatter-band", "chatter"}));
+    EXPECT_EQ(names,
+              (std::vector<std::string>{"defect", "scratch", "gouge", "pit", "pit-chain", "dent",
+                                        "tool-change-step", "burr", "chatter-band", "chatter"}));
     // As always: "defect" even when absent, "chatter" only when present.
     std::vector<uint8_t> empty(16, 0);
     auto legend = sl::truthLegend(empty);

@@ -76,6 +76,7 @@ PartFiles writePartFiles(const GeneratedSurface& g, const std::filesystem::path&
     legend["labels"] = nlohmann::ordered_json::array();
     for (const RegionLabel& l : truthLegend(g.truth))
         legend["labels"].push_back({{"value", l.value}, {"name", l.name}});
+    for (const auto& [key, value] : o.legendExtra.items()) legend[key] = value;
     writeMaskPng(truthOut.tempPath(), g.truth, g.width, g.height);
     writeTextAtomically(legendOut.tempPath(), legend.dump(2) + "\n");
 

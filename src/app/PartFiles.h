@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <nlohmann/json.hpp>
 
 #include "synth/SurfaceGenerator.h"
 
@@ -13,6 +14,9 @@ struct PartFileOptions {
     int imageSize = 0;            // scene camera width = height in pixels (0: the scene default)
     int spp = 64;                 // scene render.spp
     int maxDepth = 4;             // scene render.max_depth
+    // Members added to the legend file after "labels" (e.g. insert-defects' list of the
+    // defects it inserted); readers of the legend read "labels" only.
+    nlohmann::ordered_json legendExtra = nlohmann::ordered_json::object();
 };
 
 struct PartFiles {

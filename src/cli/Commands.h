@@ -13,6 +13,7 @@ void registerTransport(CLI::App& app, std::function<int()>& run);
 void registerJudge(CLI::App& app, std::function<int()>& run);
 void registerRace(CLI::App& app, std::function<int()>& run);  // after registerBench
 void registerDefectMap(CLI::App& app, std::function<int()>& run);
+void registerInsertDefects(CLI::App& app, std::function<int()>& run);
 void registerCache(CLI::App& app, std::function<int()>& run);
 void registerLamps(CLI::App& app, std::function<int()>& run);
 void registerView(CLI::App& app, std::function<int()>& run);  // after registerBench

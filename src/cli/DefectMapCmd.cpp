@@ -27,6 +27,12 @@ int runDefectMap(const DefectMapJobOptions& o) {
             "centre points), %zu more by texture change\n",
             m.fftWidth, m.fftHeight, m.notchedBins, m.spectrumBins, m.sigmaLevel, m.sigmaEdge,
             m.markedScore, m.markedStep, m.stepPoints, m.markedEnergy);
+    if (m.method == DefectMethod::Auto)
+        std::printf(
+            "  thresholds used: score seed %.3g grow %.3g, line valleys seed %.3g (robust "
+            "sigmas); texture change %.3g x median; %zu texture-change samples along the border "
+            "dropped\n",
+            m.seedUsed, m.growUsed, m.lineSeedUsed, m.energyRatioUsed, m.energyBorderDropped);
     if (m.method == DefectMethod::Auto && m.ringPitch > 0)
         std::printf(
             "  rings: centre (%.2f, %.2f) samples, pitch %.3f, hand %+d, isotropy %.3f, residual "
@@ -146,6 +152,17 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--line-grow-sigma", m.lineGrowSigma,
                   "auto: a line region holds this line-valley score (robust sigmas)")
         ->capture_default_str();
+    c->add_option("--seed-tail", m.seedTail,
+                  "auto: seed thresholds raised to this x the texture's own score quantile "
+                  "(--seed-tail-quantile) when higher (0: off)")
+        ->capture_default_str();
+    c->add_option("--seed-tail-quantile", m.seedTailQuantile,
+                  "auto: the quantile of the score that --seed-tail scales")
+        ->capture_default_str();
+    c->add_option("--grow-tail", m.growTail,
+                  "auto: with --seed-tail, grow thresholds at least this x the same score "
+                  "quantile, not scaled with the seed (0: scaled)")
+        ->capture_default_str();
     c->add_option("--border", m.border, "auto: samples at the map's edges never marked")
         ->capture_default_str();
     c->add_option("--min-region", m.minRegion, "auto: smallest region kept (samples)")
@@ -159,6 +176,14 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--energy-grow-border", m.energyGrowBorder,
                   "auto: texture-change marks grow outward into the --border samples where the "
                   "local amplitude stays high (true/false)")
+        ->capture_default_str();
+    c->add_option("--energy-spread", m.energySpread,
+                  "auto: the texture-change threshold is at least median + this x the robust "
+                  "spread of the local amplitude (0: off)")
+        ->capture_default_str();
+    c->add_option("--energy-border-depth", m.energyBorderDepth,
+                  "auto: texture-change regions that touch the border and reach no deeper than "
+                  "this x half the interior's smaller side are dropped (0: off)")
         ->capture_default_str();
     c->add_option("--texture-energy", m.textureEnergy,
                   "auto: also mark where the texture's own local amplitude is energy-ratio x its "
@@ -196,6 +221,10 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--step-ramp-moved", m.stepRampMoved,
                   "auto: on a step's high side, mark only where a smoothstep ramp has moved the "
                   "surface by this share of the jump")
+        ->capture_default_str();
+    c->add_option("--step-keep-blob", m.stepKeepBlob,
+                  "auto: compact marked regions (pits, particles) up to this many samples across "
+                  "are kept within a step's band (0: off)")
         ->capture_default_str();
     c->add_option("--step-gap", m.stepGap,
                   "auto: samples of the longest arc between a circular step's points that is "

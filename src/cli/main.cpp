@@ -125,6 +125,7 @@ int main(int argc, char** argv) {
     std::function<int()> run;
     registerRender(app, run);
     registerGenSurface(app, run);
+    registerInsertDefects(app, run);
     registerTransport(app, run);
     registerJudge(app, run);
     registerBench(app, run);

@@ -106,6 +106,29 @@ void checkOptions(const DefectMapOptions& o) {
     if (!(o.lineOffset >= 1.0 && o.lineOffset <= 16.0))
         throw inputError(option("line-offset"),
                          "must be in [1, 16] samples (got " + std::to_string(o.lineOffset) + ")");
+    if (!(o.seedTail >= 0.0) || !std::isfinite(o.seedTail))
+        throw inputError(option("seed-tail"),
+                         "must be >= 0 (got " + std::to_string(o.seedTail) + ")",
+                         "0 switches the texture's-tail thresholds off");
+    if (!(o.growTail >= 0.0) || !std::isfinite(o.growTail))
+        throw inputError(option("grow-tail"),
+                         "must be >= 0 (got " + std::to_string(o.growTail) + ")",
+                         "0 scales the grow thresholds with the seed's");
+    if (!(o.energySpread >= 0.0) || !std::isfinite(o.energySpread))
+        throw inputError(option("energy-spread"),
+                         "must be >= 0 (got " + std::to_string(o.energySpread) + ")",
+                         "0 switches the texture-change test's spread threshold off");
+    if (!(o.energyBorderDepth >= 0.0 && o.energyBorderDepth <= 1.0))
+        throw inputError(option("energy-border-depth"),
+                         "must be in [0, 1] (got " + std::to_string(o.energyBorderDepth) + ")",
+                         "0 keeps the texture-change blocks along the border");
+    if (o.stepKeepBlob < 0)
+        throw inputError(option("step-keep-blob"),
+                         "must be >= 0 samples (got " + std::to_string(o.stepKeepBlob) + ")",
+                         "0 lets a step's band replace every mark in it");
+    if (!(o.seedTailQuantile > 0.0 && o.seedTailQuantile < 1.0))
+        throw inputError(option("seed-tail-quantile"),
+                         "must be in (0, 1) (got " + std::to_string(o.seedTailQuantile) + ")");
     if (!(o.lineSeedSigma > 0.0))
         throw inputError(option("line-seed-sigma"),
                          "must be > 0 (got " + std::to_string(o.lineSeedSigma) + ")");
@@ -1439,8 +1462,33 @@ void segmentMeans(const std::vector<float>& A, int W, int H, double c, double s,
 /// o = `lineOffset` (rounded to samples) and σ_θ = 1.4826 × the median of both differences'
 /// magnitudes. V = max over θ of V_θ, 0 within `border`. Returns 1 on the regions of
 /// V ≥ lineGrowSigma (8-connected) that reach V ≥ lineSeedSigma, 0 elsewhere.
+/// Step 7b: the seed and grow thresholds from the texture's own tail. q = the seedTailQuantile
+/// quantile of `score` over the samples outside the border (score is 0 in the border); the seed
+/// is max(seed, seedTail·q), the grow threshold max(grow, growTail·q) with growTail > 0, else
+/// grow scaled by the seed's factor; never above the seed.
+struct Thresholds {
+    double seed, grow;
+};
+Thresholds tailThresholds(const std::vector<float>& score, int W, int H, const DefectMapOptions& o,
+                          double seed, double grow) {
+    if (!(o.seedTail > 0.0)) return {seed, grow};
+    std::vector<float> v;
+    v.reserve(score.size());
+    for (int y = o.border; y < H - o.border; ++y)
+        for (int x = o.border; x < W - o.border; ++x)
+            v.push_back(score[static_cast<size_t>(y) * W + x]);
+    if (v.empty()) return {seed, grow};
+    const size_t k = std::min(
+        v.size() - 1, static_cast<size_t>(o.seedTailQuantile * static_cast<double>(v.size())));
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+    const double q = static_cast<double>(v[k]);
+    const double s = std::max(seed, o.seedTail * q);
+    const double g = o.growTail > 0.0 ? std::max(grow, o.growTail * q) : grow * s / seed;
+    return {s, std::min(g, s)};
+}
+
 std::vector<uint8_t> lineValleyRegions(const std::vector<float>& A, int W, int H,
-                                       const DefectMapOptions& o) {
+                                       const DefectMapOptions& o, double* seedUsed) {
     constexpr double kPi = 3.14159265358979323846;
     const size_t n = A.size();
     const int m = o.lineLength / 2;
@@ -1486,9 +1534,38 @@ std::vector<uint8_t> lineValleyRegions(const std::vector<float>& A, int W, int H
         }
     });
     std::vector<uint8_t> regions(n, 0);
-    hysteresis(V, W, H, o.lineSeedSigma, o.lineGrowSigma, 1, regions);
+    const Thresholds t = tailThresholds(V, W, H, o, o.lineSeedSigma, o.lineGrowSigma);
+    if (seedUsed) *seedUsed = t.seed;
+    hysteresis(V, W, H, t.seed, t.grow, 1, regions);
     for (uint8_t& v : regions) v = v != 0;
     return regions;
+}
+
+/// Step 4a's stepKeepBlob: a region is compact when its bounding box's sides are at most
+/// `size` samples and its principal axes' ratio is at most 3 (second moments: λ_max ≤ 9·λ_min).
+bool compactRegion(const std::vector<size_t>& region, int W, int size) {
+    int x0 = W, x1 = -1, y0 = std::numeric_limits<int>::max(), y1 = -1;
+    double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+    for (size_t k : region) {
+        const int x = static_cast<int>(k % static_cast<size_t>(W));
+        const int y = static_cast<int>(k / static_cast<size_t>(W));
+        x0 = std::min(x0, x);
+        x1 = std::max(x1, x);
+        y0 = std::min(y0, y);
+        y1 = std::max(y1, y);
+        sx += x;
+        sy += y;
+        sxx += static_cast<double>(x) * x;
+        syy += static_cast<double>(y) * y;
+        sxy += static_cast<double>(x) * y;
+    }
+    if (x1 - x0 + 1 > size || y1 - y0 + 1 > size) return false;
+    const double c = static_cast<double>(region.size());
+    const double mx = sx / c, my = sy / c;
+    const double a = sxx / c - mx * mx + 1.0 / 12, b = syy / c - my * my + 1.0 / 12,
+                 d = sxy / c - mx * my;  // + a sample's own extent
+    const double mean = 0.5 * (a + b), dev = std::sqrt(0.25 * (a - b) * (a - b) + d * d);
+    return mean + dev <= 9.0 * (mean - dev);
 }
 
 }  // namespace
@@ -1618,16 +1695,34 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
                     if (y < o.border || y >= H - o.border || x < o.border || x >= W - o.border)
                         S[static_cast<size_t>(y) * W + x] = 0.0f;
             });
+        // step 7b: the texture's own tail raises the thresholds
+        const Thresholds t = tailThresholds(S, W, H, o, o.seedSigma, o.growSigma);
+        const double seed = t.seed;
+        r.seedUsed = seed;
+        r.growUsed = t.grow;
         if (o.lineLength > 0) {
             // step 7a: the line-valley regions seed the hysteresis and are grown through
-            const std::vector<uint8_t> lines = lineValleyRegions(A, W, H, o);
+            const std::vector<uint8_t> lines = lineValleyRegions(A, W, H, o, &r.lineSeedUsed);
             for (size_t k = 0; k < n; ++k)
-                if (lines[k]) S[k] = std::max(S[k], static_cast<float>(o.seedSigma));
+                if (lines[k]) S[k] = std::max(S[k], static_cast<float>(seed));
         }
-        r.markedScore = hysteresis(S, W, H, o.seedSigma, o.growSigma, o.minRegion, r.map);
+        r.markedScore = hysteresis(S, W, H, seed, t.grow, o.minRegion, r.map);
+    }
+    // step 4a with stepKeepBlob: the score's compact regions (pits, particles) that meet a
+    // step's band are kept
+    std::vector<uint8_t> keep;
+    if (o.stepKeepBlob > 0 && !steps.band.empty()) {
+        keep.assign(n, 0);
+        forEachRegion(
+            W, H, 1, [&](size_t k) { return r.map[k] && steps.band[k]; },
+            [&](size_t k) { return r.map[k] != 0; },
+            [&](const std::vector<size_t>& region) {
+                if (compactRegion(region, W, o.stepKeepBlob))
+                    for (size_t k : region) keep[k] = 1;
+            });
     }
     for (size_t k = 0; k < steps.ramp.size(); ++k) {  // step 4a: a step's band is its ramp
-        if (!steps.band[k]) continue;
+        if (!steps.band[k] || (!keep.empty() && keep[k])) continue;
         if (steps.ramp[k] && !r.map[k]) ++r.markedStep;
         if (!steps.ramp[k] && r.map[k]) --r.markedScore;
         r.map[k] = steps.ramp[k];
@@ -1653,68 +1748,109 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
                 separableMedian(pooled, W2, H2, std::max(3, (o.energyWindow / 2) | 1));
             const double medE = std::max(medianAbs(E2), floorSigma);
             if (!(medE > 0.0)) return;
+            double base = ratio * medE;  // the threshold on E
+            if (o.energySpread > 0.0) {
+                // E's own spread inside the border: a texture whose local amplitude varies
+                // everywhere raises the threshold
+                std::vector<float> dev;
+                const int b2 = o.border / 2;
+                for (int py = b2; py < H2 - b2; ++py)
+                    for (int px = b2; px < W2 - b2; ++px)
+                        dev.push_back(
+                            static_cast<float>(E2[static_cast<size_t>(py) * W2 + px] - medE));
+                if (!dev.empty())
+                    base = std::max(base, medE + o.energySpread * 1.4826 * medianAbs(dev));
+            }
+            if (lineExcess) r.energyRatioUsed = base / medE;
             auto energy = [&](int x, int y) { return E2[static_cast<size_t>(y / 2) * W2 + x / 2]; };
             const bool grow = o.energyGrowBorder && o.border > 0;
-            std::vector<uint8_t> own(grow ? n : 0, 0);  // this test's marks
+            std::vector<uint8_t> own(n, 0);  // this test's marks
             for (size_t k = 0; k < n; ++k) {
                 const int x = static_cast<int>(k % static_cast<size_t>(W));
                 const int y = static_cast<int>(k / static_cast<size_t>(W));
-                if (layer(x, y) >= o.border && energy(x, y) >= ratio * medE) {
+                if (layer(x, y) >= o.border && energy(x, y) >= base) own[k] = 1;
+            }
+            if (grow) {
+                std::vector<double> rowExcess(H2, 0.0), colExcess(W2, 0.0);
+                if (lineExcess) {
+                    std::vector<float> line;
+                    for (int py = 0; py < H2; ++py)
+                        if (2 * py < o.border || 2 * py + 1 >= H - o.border) {
+                            line.assign(E2.begin() + static_cast<size_t>(py) * W2,
+                                        E2.begin() + static_cast<size_t>(py + 1) * W2);
+                            rowExcess[py] = std::max(0.0, medianAbs(line) - medE);
+                        }
+                    line.resize(H2);
+                    for (int px = 0; px < W2; ++px)
+                        if (2 * px < o.border || 2 * px + 1 >= W - o.border) {
+                            for (int py = 0; py < H2; ++py)
+                                line[py] = E2[static_cast<size_t>(py) * W2 + px];
+                            colExcess[px] = std::max(0.0, medianAbs(line) - medE);
+                        }
+                }
+                // grow outward, layer by layer: a sample at distance j from the edge joins when
+                // its E passes and an 8-neighbour at distance j + 1 is marked by this test
+                auto visit = [&](int x, int y, int j) {
+                    const size_t k = static_cast<size_t>(y) * W + x;
+                    double excess = 0.0;
+                    if (y < o.border || y >= H - o.border) excess = rowExcess[y / 2];
+                    if (x < o.border || x >= W - o.border)
+                        excess = std::max(excess, colExcess[x / 2]);
+                    const double threshold = base + excess;
+                    if (own[k] || energy(x, y) < threshold) return;
+                    for (int dy = -1; dy <= 1; ++dy)
+                        for (int dx = -1; dx <= 1; ++dx) {
+                            const int xx = x + dx, yy = y + dy;
+                            if (xx < 0 || yy < 0 || xx >= W || yy >= H || layer(xx, yy) != j + 1 ||
+                                !own[static_cast<size_t>(yy) * W + xx])
+                                continue;
+                            own[k] = 1;
+                            return;
+                        }
+                };
+                for (int j = o.border - 1; j >= 0; --j) {
+                    if (2 * j + 1 >= W || 2 * j + 1 >= H) continue;  // no sample at distance j
+                    for (int x = j; x < W - j; ++x) {
+                        visit(x, j, j);
+                        visit(x, H - 1 - j, j);
+                    }
+                    for (int y = j + 1; y < H - 1 - j; ++y) {
+                        visit(j, y, j);
+                        visit(W - 1 - j, y, j);
+                    }
+                }
+            }
+            if (o.energyBorderDepth > 0.0) {
+                // blocks along the border: regions touching the interior's edge that reach no
+                // deeper than energyBorderDepth × half the interior's smaller side
+                const double deep =
+                    o.energyBorderDepth * 0.5 * std::min(W - 2 * o.border, H - 2 * o.border);
+                forEachRegion(
+                    W, H, 1, [&](size_t k) { return own[k] != 0; },
+                    [&](size_t k) { return own[k] != 0; },
+                    [&](const std::vector<size_t>& region) {
+                        int depth = -1;
+                        for (size_t k : region)
+                            depth = std::max(depth,
+                                             layer(static_cast<int>(k % static_cast<size_t>(W)),
+                                                   static_cast<int>(k / static_cast<size_t>(W))) -
+                                                 o.border);
+                        int shallow = depth;  // the region's nearest sample to the interior edge
+                        for (size_t k : region)
+                            shallow = std::min(shallow,
+                                               layer(static_cast<int>(k % static_cast<size_t>(W)),
+                                                     static_cast<int>(k / static_cast<size_t>(W))) -
+                                                   o.border);
+                        if (shallow > 0 || static_cast<double>(depth) >= deep) return;
+                        for (size_t k : region) own[k] = 0;
+                        r.energyBorderDropped += region.size();
+                    });
+            }
+            for (size_t k = 0; k < n; ++k)
+                if (own[k]) {
                     if (!r.map[k]) ++r.markedEnergy;
                     r.map[k] = 255;
-                    if (grow) own[k] = 1;
                 }
-            }
-            if (!grow) return;
-            std::vector<double> rowExcess(H2, 0.0), colExcess(W2, 0.0);
-            if (lineExcess) {
-                std::vector<float> line;
-                for (int py = 0; py < H2; ++py)
-                    if (2 * py < o.border || 2 * py + 1 >= H - o.border) {
-                        line.assign(E2.begin() + static_cast<size_t>(py) * W2,
-                                    E2.begin() + static_cast<size_t>(py + 1) * W2);
-                        rowExcess[py] = std::max(0.0, medianAbs(line) - medE);
-                    }
-                line.resize(H2);
-                for (int px = 0; px < W2; ++px)
-                    if (2 * px < o.border || 2 * px + 1 >= W - o.border) {
-                        for (int py = 0; py < H2; ++py)
-                            line[py] = E2[static_cast<size_t>(py) * W2 + px];
-                        colExcess[px] = std::max(0.0, medianAbs(line) - medE);
-                    }
-            }
-            // grow outward, layer by layer: a sample at distance j from the edge joins when
-            // its E passes and an 8-neighbour at distance j + 1 is marked by this test
-            auto visit = [&](int x, int y, int j) {
-                const size_t k = static_cast<size_t>(y) * W + x;
-                double excess = 0.0;
-                if (y < o.border || y >= H - o.border) excess = rowExcess[y / 2];
-                if (x < o.border || x >= W - o.border) excess = std::max(excess, colExcess[x / 2]);
-                const double threshold = ratio * medE + excess;
-                if (own[k] || energy(x, y) < threshold) return;
-                for (int dy = -1; dy <= 1; ++dy)
-                    for (int dx = -1; dx <= 1; ++dx) {
-                        const int xx = x + dx, yy = y + dy;
-                        if (xx < 0 || yy < 0 || xx >= W || yy >= H || layer(xx, yy) != j + 1 ||
-                            !own[static_cast<size_t>(yy) * W + xx])
-                            continue;
-                        own[k] = 1;
-                        if (!r.map[k]) ++r.markedEnergy;
-                        r.map[k] = 255;
-                        return;
-                    }
-            };
-            for (int j = o.border - 1; j >= 0; --j) {
-                if (2 * j + 1 >= W || 2 * j + 1 >= H) continue;  // no sample at distance j
-                for (int x = j; x < W - j; ++x) {
-                    visit(x, j, j);
-                    visit(x, H - 1 - j, j);
-                }
-                for (int y = j + 1; y < H - 1 - j; ++y) {
-                    visit(j, y, j);
-                    visit(W - 1 - j, y, j);
-                }
-            }
         };
         for (size_t k = 0; k < levelDelta.size(); ++k) A[k] -= levelDelta[k];
         levelDelta = {};

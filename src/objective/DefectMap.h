@@ -127,6 +127,23 @@
 //     out of the noise; the two-sided test keeps out what is straight but not a groove: a
 //     raised line (the flat-end floor's step-over ridges, which the notch leaves in part) or a
 //     step (lower on one side only).
+// 7b. The texture's own tail (seedTail > 0; off by default until it is measured on the
+//     gen-surface parts' table): a measured texture is not a stationary Gaussian
+//     field: the tool marks, striae and particles the notch cannot model leave a residual whose
+//     tail is far heavier than a Gaussian's (on a bullet land, S ≥ 5.5 on a fifth of the map),
+//     so thresholds in robust σ mark the texture itself. Let q = the seedTailQuantile quantile
+//     of S over the samples outside the border (V for step 7a); the seed threshold becomes
+//     max(seedSigma, seedTail·q), the grow threshold is scaled by the same factor, or with
+//     growTail > 0 it is max(growSigma, growTail·q) (never above the seed): the tail sets how
+//     high a defect must stand to seed; how far it grows is a lower share of the same tail. On a
+//     Gaussian residual q_0.99 = 2.6 σ and 1.5·q = 3.9 < 5.5: nothing changes; what the map is
+//     for (an inserted defect covers ~1 % of the map) stays above it, being far deeper than
+//     the texture's tail.
+//     With stepKeepBlob > 0, before step 4a's bands replace the map: a marked region (8-
+//     connected, of the map so far) that meets a band and is compact (bounding box sides ≤
+//     stepKeepBlob samples, principal axes' ratio ≤ 3) is kept as it is: a pit or particle
+//     beside a step (on a measured texture, beside a stria the step model takes for a step)
+//     is not the level term's smear along the step, which is long.
 //  8. Texture-change regions (chatter bands): E = the separable running median of |A| over
 //     `energyWindow` samples (on |A| pooled 2×2 with half the window, read back at the sample's
 //     cell): a robust local amplitude of what the texture model left. Samples with
@@ -147,6 +164,15 @@
 //     marks nothing: the notch's leftover at the edges lies in A (on the ball-end part, E of
 //     |A| is 1.5–2.2× median(E) along the outer rows, its peaks above 3×), as a function of the
 //     distance to the edge, nearly constant along it; T does not carry it.
+//     With energySpread > 0 each test's threshold is at least median(E) + energySpread × 1.4826
+//     × the median of |E − median(E)| over the pooled cells inside the border: on a stationary
+//     texture E barely varies and the ratio decides; on a texture whose local amplitude varies
+//     everywhere (a measured bullet land's striae) the threshold rises with that variation, so
+//     only a change far beyond it is marked. With energyBorderDepth > 0, a region of a test's
+//     marks (8-connected, after the growth into the border) that touches the interior's edge
+//     and reaches no deeper than energyBorderDepth × half the interior's smaller side is
+//     dropped: a band crossing the map reaches its middle; a block along an edge (the notch's
+//     leftover at the edges, a trend of the measured texture) does not.
 // Every threshold is relative to σ or to median(E), so the map is invariant to h → a·h + b
 // (a > 0) up to rounding, and for a < 0 except for step 7a, which looks for grooves (a < 0
 // turns them into ridges); a constant map marks nothing. A confined region of different texture
@@ -159,7 +185,7 @@
 // K > 1, K more and a copy of the half spectrum while they are made; step 4a about 10 more
 // while the steps are found; step 4b one more copy (two while the repass runs); step 7a 2
 // more while it runs; with levelWiener one more (Δ) and a copy of the half spectrum while Δ is
-// made; step 8 with energyGrowBorder a byte per sample while each test runs.
+// made; step 8 a byte per sample while each test runs.
 #pragma once
 
 #include <cstdint>
@@ -243,6 +269,27 @@ struct DefectMapOptions {
     double lineOffset = 3.0;     // samples from the line to each side it is compared with
     double lineSeedSigma = 8.0;  // a line region reaches V >= lineSeedSigma (> 0) ...
     double lineGrowSigma = 4.0;  // ... and holds V >= lineGrowSigma (0 < grow <= seed)
+    // step 7b (the texture's own tail): the seed thresholds of steps 7 and 7a are raised to
+    // seedTail × the seedTailQuantile-quantile of S (of V for 7a) over the samples outside the
+    // border, when that is higher, and their grow thresholds by the same factor (0: off)
+    double seedTail = 0.0;           // (>= 0; 1.5 the value tried on real textures)
+    double seedTailQuantile = 0.99;  // (in (0, 1))
+    double growTail = 0.0;           // with seedTail: the grow thresholds are max(their σ value,
+                            // growTail × the same quantile), not scaled with the seed (>= 0)
+    // step 8 on a texture whose local amplitude varies everywhere: E's threshold is at least
+    // median(E) + energySpread × 1.4826 × the median of |E − median(E)| (inside the border;
+    // 0: off, >= 0)
+    double energySpread = 0.0;
+    // step 8's blocks along the border: a region of a texture-change test that touches the
+    // interior's edge (the border's inner line) and reaches no deeper into the interior than
+    // energyBorderDepth × half the interior's smaller side is dropped (0: off; in [0, 1]): a band
+    // crossing the map reaches the middle, a block the notch's edge effects or a trend of the
+    // texture paints hugs the edge
+    double energyBorderDepth = 0.0;
+    // step 4a: a marked region of the score that is compact (its bounding box's sides at most
+    // stepKeepBlob samples and its principal axes' ratio at most 3: a pit, a particle) is kept
+    // within a step's band, not replaced by the ramp (0: off)
+    int stepKeepBlob = 0;
 
     ScratchMapOptions paper;  // the `paper` method's options
 };
@@ -265,6 +312,12 @@ struct DefectMap {
     int ringHand = 0;
     bool ringUsed = false;
     size_t ringLowered = 0;
+    // step 7b: the thresholds used (the options' when the tail did not raise them)
+    double seedUsed = 0, growUsed = 0, lineSeedUsed = 0;
+    // step 8: the thresholds of the |A| test over median(E) (energyRatio unless energySpread
+    // raised it) and the samples its border-share rule dropped (every test)
+    double energyRatioUsed = 0;
+    size_t energyBorderDropped = 0;
     double seconds = 0;
 
     size_t markedCount() const;

@@ -1328,6 +1328,10 @@ namespace {
 
 constexpr TruthKind kTruthKinds[] = {
     {kTruthDefect, "defect", "scratch grooves and gouges"},
+    {kTruthScratch, "scratch", "inserted scratches (insert-defects, model A)"},
+    {kTruthGouge, "gouge", "inserted gouges (insert-defects, model B)"},
+    {kTruthPit, "pit", "inserted pits (insert-defects, model A)"},
+    {kTruthPitChain, "pit-chain", "inserted chains of pits (insert-defects, model B)"},
     {kTruthDent, "dent", "spherical dents"},
     {kTruthToolChange, "tool-change-step", "the ramp of a tool-change step"},
     {kTruthBurr, "burr", "the pocket-edge burr and labelled scratch lips"},

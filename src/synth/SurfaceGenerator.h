@@ -117,6 +117,10 @@
 namespace sl {
 
 inline constexpr uint8_t kTruthDefect = 255;       // scratch or gouge
+inline constexpr uint8_t kTruthScratch = 250;      // inserted scratch (synth/DefectInsert.h, A)
+inline constexpr uint8_t kTruthGouge = 248;        // inserted asymmetric gouge (model B)
+inline constexpr uint8_t kTruthPit = 240;          // inserted pit with a rim (model A)
+inline constexpr uint8_t kTruthPitChain = 236;     // inserted chain of small pits (model B)
 inline constexpr uint8_t kTruthDent = 224;         // spherical dent
 inline constexpr uint8_t kTruthToolChange = 192;   // tool-change step (its ramp)
 inline constexpr uint8_t kTruthBurr = 160;         // pocket-edge burr, labelled scratch lips
