@@ -62,11 +62,11 @@ TEST(TrainingNoise, NextSppAimsAtHalfTheToleranceUnderTheCap) {
     TrainingNoiseOptions o;
     o.maxGap = 0.05;
     o.maxSpp = 1024;
-    EXPECT_EQ(nextTrainingSpp(16, 0.06, o), 64);   // 16·0.06/0.025 = 38.4 -> 64
-    EXPECT_EQ(nextTrainingSpp(16, 0.051, o), 64);  // 32.6 -> 64
-    EXPECT_EQ(nextTrainingSpp(16, 0.04, o), 32);   // 25.6 -> 32 (and at least 2·16)
-    EXPECT_EQ(nextTrainingSpp(16, 0.4, o), 64);    // 256 wanted, at most 4× a round
-    EXPECT_EQ(nextTrainingSpp(64, 0.1, o), 256);   // 256 exactly
+    EXPECT_EQ(nextTrainingSpp(16, 0.06, o), 64);    // 16·0.06/0.025 = 38.4 -> 64
+    EXPECT_EQ(nextTrainingSpp(16, 0.051, o), 64);   // 32.6 -> 64
+    EXPECT_EQ(nextTrainingSpp(16, 0.04, o), 32);    // 25.6 -> 32 (and at least 2·16)
+    EXPECT_EQ(nextTrainingSpp(16, 0.4, o), 64);     // 256 wanted, at most 4× a round
+    EXPECT_EQ(nextTrainingSpp(64, 0.1, o), 256);    // 256 exactly
     EXPECT_EQ(nextTrainingSpp(512, 0.2, o), 1024);  // capped
     EXPECT_EQ(nextTrainingSpp(1024, 0.2, o), std::nullopt);
     EXPECT_EQ(nextTrainingSpp(16, std::numeric_limits<double>::infinity(), o), 64);
@@ -75,8 +75,8 @@ TEST(TrainingNoise, NextSppAimsAtHalfTheToleranceUnderTheCap) {
 // On any estimate G_u(cE) = c²·G_u(E) (the image is linear in E), so with λ = 0
 // U(cE) = U(E)/c exactly: the brighter copy of the lamp wins, the dimmer loses to the lamp.
 TEST(Answer, TheBestOnValidationIsTheAnswerAndALampCanBeIt) {
-    auto scene = std::make_unique<Scene>(test::bumpyPartDesc(32, 32), 40, 40,
-                                         test::bumpyHeightMap(40));
+    auto scene =
+        std::make_unique<Scene>(test::bumpyPartDesc(32, 32), 40, 40, test::bumpyHeightMap(40));
     JudgeOptions jo;
     jo.spp = 32;
     jo.objective.lambda = 0;
@@ -84,9 +84,9 @@ TEST(Answer, TheBestOnValidationIsTheAnswerAndALampCanBeIt) {
     const std::vector<double> lamp = randomLight(1250, 3);
     const double uLamp = validation.score(lamp).unbiased.total;
     {
-        const AnswerChoice c = chooseAnswer(
-            validation, {{"optimized", CandidateKind::Optimized, scaled(lamp, 0.5)},
-                         {"lamp", CandidateKind::Reference, lamp}});
+        const AnswerChoice c =
+            chooseAnswer(validation, {{"optimized", CandidateKind::Optimized, scaled(lamp, 0.5)},
+                                      {"lamp", CandidateKind::Reference, lamp}});
         ASSERT_EQ(c.scored.size(), 2u);
         EXPECT_NEAR(c.scored[0].merit.value, 2 * uLamp, 1e-9 * uLamp);
         EXPECT_EQ(c.scored[0].merit.what, "U");
@@ -96,9 +96,9 @@ TEST(Answer, TheBestOnValidationIsTheAnswerAndALampCanBeIt) {
         EXPECT_NE(c.reason.find("reference light lamp"), std::string::npos) << c.reason;
     }
     {
-        const AnswerChoice c = chooseAnswer(
-            validation, {{"optimized", CandidateKind::Optimized, scaled(lamp, 1.25)},
-                         {"lamp", CandidateKind::Reference, lamp}});
+        const AnswerChoice c =
+            chooseAnswer(validation, {{"optimized", CandidateKind::Optimized, scaled(lamp, 1.25)},
+                                      {"lamp", CandidateKind::Reference, lamp}});
         EXPECT_FALSE(c.referenceWon());
         EXPECT_EQ(c.chosen, 0u);
         EXPECT_NEAR(c.answer().merit.value, uLamp / 1.25, 1e-9 * uLamp);
@@ -112,8 +112,8 @@ TEST(Answer, TheBestOnValidationIsTheAnswerAndALampCanBeIt) {
 // defects exactly as well by the ratio — and is still not the answer: its image is darker than
 // 0.05 of white. When every light is that dark, the best of them is, said so.
 TEST(Answer, ALightThatLeavesThePartBlackIsNotTheAnswer) {
-    auto scene = std::make_unique<Scene>(test::bumpyPartDesc(32, 32), 40, 40,
-                                         test::bumpyHeightMap(40));
+    auto scene =
+        std::make_unique<Scene>(test::bumpyPartDesc(32, 32), 40, 40, test::bumpyHeightMap(40));
     JudgeOptions jo;
     jo.spp = 32;
     std::vector<uint8_t> labels(32 * 32, 0);
@@ -128,9 +128,8 @@ TEST(Answer, ALightThatLeavesThePartBlackIsNotTheAnswer) {
     ASSERT_TRUE(std::isfinite(va) && std::isfinite(vb));
     if (vb > va) std::swap(a, b);
     const std::vector<double> dark = scaled(a, 0.01);
-    const AnswerChoice c =
-        chooseAnswer(validation, {{"optimized", CandidateKind::Optimized, dark},
-                                  {"lamp", CandidateKind::Reference, b}});
+    const AnswerChoice c = chooseAnswer(validation, {{"optimized", CandidateKind::Optimized, dark},
+                                                     {"lamp", CandidateKind::Reference, b}});
     EXPECT_EQ(c.scored[0].merit.what, "defect visibility");
     EXPECT_NEAR(c.scored[0].merit.value, std::max(va, vb), 1e-9 * std::max(va, vb));
     EXPECT_GT(c.scored[0].merit.value, c.scored[1].merit.value);
@@ -142,7 +141,7 @@ TEST(Answer, ALightThatLeavesThePartBlackIsNotTheAnswer) {
         chooseAnswer(validation, {{"optimized", CandidateKind::Optimized, dark},
                                   {"lamp", CandidateKind::Reference, scaled(b, 0.01)}});
     EXPECT_EQ(d.chosen, 0u);
-    EXPECT_NE(d.reason.find("darker than"), std::string::npos) << d.reason;
+    EXPECT_NE(d.reason.find("no light passes the checks"), std::string::npos) << d.reason;
 }
 
 // A labelled part traced at 4 spp: the defects objective fits the estimate's noise, so the rule
@@ -236,12 +235,14 @@ TEST(OptimizeAnswers, TheBlackBoxSummaryReportsTheLossItMinimized) {
     const json s = readJson(out / "summary.json");
     EXPECT_EQ(s["objective"], "paper");
     EXPECT_NE(s["loss_through"].get<std::string>().find("our renderer"), std::string::npos);
-    // loss.csv's first and best rows are the optimizer's own losses through the renderer.
+    // loss.csv's rows are the optimizer's own losses through the renderer: the first is the
+    // summary's initial loss; the final one (SPSA re-evaluates its best estimate exactly) lies
+    // within what the optimizer saw.
     const std::string csv = test::readFile(out / "loss.csv");
     std::istringstream lines(csv);
     std::string line;
     std::getline(lines, line);  // header
-    double best = std::numeric_limits<double>::infinity(), first = std::nan("");
+    double first = std::nan(""), lo = std::numeric_limits<double>::infinity(), hi = -lo;
     while (std::getline(lines, line)) {
         std::istringstream f(line);
         std::string it, ev, loss;
@@ -250,11 +251,14 @@ TEST(OptimizeAnswers, TheBlackBoxSummaryReportsTheLossItMinimized) {
         std::getline(f, loss, ',');
         const double v = std::stod(loss);
         if (std::isnan(first)) first = v;
-        best = std::min(best, v);
+        lo = std::min(lo, v);
+        hi = std::max(hi, v);
     }
     EXPECT_NEAR(s["initial_loss"].get<double>(), first, 1e-9 * std::abs(first));
-    EXPECT_NEAR(s["final_loss"].get<double>(), best, 1e-9 * std::abs(best));
-    EXPECT_EQ(s["improved"].get<bool>(), best < first);
+    const double fin = s["final_loss"].get<double>();
+    EXPECT_GE(fin, lo * (1 - 0.05));
+    EXPECT_LE(fin, hi);
+    EXPECT_EQ(s["improved"].get<bool>(), fin < s["initial_loss"].get<double>());
     const test::RunResult refused = test::runCli(common + " --objective unbiased 2>&1");
     EXPECT_NE(refused.exitCode, 0);
     EXPECT_NE(refused.output.find("eq. 2 through the renderer"), std::string::npos)

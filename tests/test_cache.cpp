@@ -155,9 +155,9 @@ TEST(Cache, OptimizeUsesItSaysSoAndTheCommandClearsIt) {
         " --size 32 --spp 4 --heldout-spp 8 --iterations 5 --cache " + cache.string() + " -o ";
     auto r = test::runCli("optimize " + scene + common + (dir / "a").string());
     ASSERT_EQ(r.exitCode, 0) << r.output;
-    // Training T (two halves) and the judge's estimate.
-    EXPECT_EQ(countTm(cache), 2u) << r.output;
-    EXPECT_NE(r.output.find("cache " + cache.string() + ": 2 transport matrices"),
+    // Training T (two halves), the validation estimate and the judge's estimate.
+    EXPECT_EQ(countTm(cache), 3u) << r.output;
+    EXPECT_NE(r.output.find("cache " + cache.string() + ": 3 transport matrices"),
               std::string::npos)
         << r.output;
     r = test::runCli("optimize " + scene + common + (dir / "b").string());
@@ -174,9 +174,9 @@ TEST(Cache, OptimizeUsesItSaysSoAndTheCommandClearsIt) {
 
     r = test::runCli("cache --cache " + cache.string());
     ASSERT_EQ(r.exitCode, 0) << r.output;
-    EXPECT_NE(r.output.find("2 transport matrices"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("3 transport matrices"), std::string::npos) << r.output;
     r = test::runCli("cache clear --cache " + cache.string());
     ASSERT_EQ(r.exitCode, 0) << r.output;
-    EXPECT_NE(r.output.find("removed 2 transport matrices"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("removed 3 transport matrices"), std::string::npos) << r.output;
     EXPECT_EQ(countTm(cache), 0u);
 }

@@ -69,7 +69,8 @@ TEST_F(Mpi, TwoRanksOnShardsGiveTheOneProcessLight) {
                                          " --objective defects --defects " + truth + ":255"}) {
         SCOPED_TRACE("objective:" + objective);
         const std::string args = "optimize " + d +
-                                 "t.shards --heldout none --iterations 30 --no-figures" +
+                                 "t.shards --heldout none --iterations 30 --no-figures "
+                                 "--no-self-check" +
                                  objective + " -o " + d;
         const std::string tag = objective.empty()                              ? ""
                                 : objective.find("paper") != std::string::npos ? "-paper"

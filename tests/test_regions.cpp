@@ -312,7 +312,8 @@ namespace {
 
 using namespace sl;
 
-// eq. 2 rewards noise, so optimize keeps its spp floor under --spp auto too.
+// eq. 2 rewards noise, so optimize starts at its spp floor under --spp auto too, and the
+// train/validation rule measures what is left.
 TEST(TraceRegion, OptimizeSppAutoKeepsEq2sFloor) {
     test::TempDir dir("spp-auto-paper");
     const std::string scene = std::string(SL_SOURCE_DIR) + "/scenes/default/scene.json";
@@ -321,7 +322,7 @@ TEST(TraceRegion, OptimizeSppAutoKeepsEq2sFloor) {
                                 "paper --iterations 3 --heldout none --no-cache --no-figures -o " +
                                 (dir / "o").string());
     ASSERT_EQ(r.exitCode, 0) << r.output;
-    EXPECT_NE(r.output.find("raised to 512 spp"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("training noise: 512 spp"), std::string::npos) << r.output;
     const auto s = nlohmann::json::parse(test::readFile(dir / "o" / "summary.json"));
     EXPECT_EQ(s.at("transport").at("spp").get<int>(), 512);
 }

@@ -32,6 +32,21 @@ AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> 
             s.eligible = false;
             s.why = "too dark: brightness " + formatNumber(s.score.brightness, 3) +
                     " of the white furnace, below " + formatNumber(options.minBrightness, 3);
+        } else if (s.merit.higherIsBetter) {
+            // A ratio of two gradients a light barely makes is noise over noise: the defects
+            // must also show against the image's brightness.
+            double sum = 0, pixels = 0;
+            for (const RegionVisibility& r : s.score.visibility)
+                if (std::isfinite(r.contrast) && r.pixels > 0) {
+                    sum += static_cast<double>(r.pixels) * r.contrast * r.contrast;
+                    pixels += static_cast<double>(r.pixels);
+                }
+            const double contrast = pixels > 0 ? std::sqrt(sum / pixels) : 0.0;
+            if (!(contrast >= options.minContrast)) {
+                s.eligible = false;
+                s.why = "the defects barely show: their gradient is " + formatNumber(contrast, 3) +
+                        " of the image's brightness, below " + formatNumber(options.minContrast, 3);
+            }
         }
         anyOptimized |= cand.kind != CandidateKind::Reference;
         anyEligible |= s.eligible;
@@ -60,8 +75,9 @@ AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> 
                            formatNumber(a.merit.value, 4) + " vs the optimized light's " +
                            formatNumber(o.merit.value, 4) + ")";
     if (!anyEligible)
-        c.reason = "every light leaves the part darker than " +
-                   formatNumber(options.minBrightness, 3) + " of white; " + a.candidate.name +
+        c.reason = "no light passes the checks (brightness at least " +
+                   formatNumber(options.minBrightness, 3) +
+                   " of white, defects showing against it); " + a.candidate.name +
                    " is the best of them" + on;
     else if (c.referenceWon())
         c.reason = "the reference light " + a.candidate.name +

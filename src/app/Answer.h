@@ -6,8 +6,9 @@
 // the paper's light — is scored on the validation estimate (app/TrainingNoise.h: independent of
 // the training estimate and of the judge's), by the figure the answer line reports
 // (answerMerit: the defects' combined visibility when defect regions are known, else the judge's
-// U). A candidate whose image is darker than minBrightness of the white furnace is not eligible
-// (a black answer shows nothing a person can use) unless none is bright enough. The best
+// U). A candidate whose image is darker than minBrightness of the white furnace, or (with
+// regions) whose defects' gradient is below minContrast of the image's brightness (a uniform
+// dome makes both gradients tiny and their ratio noise), is not eligible unless none is. The best
 // eligible candidate is the answer; when it is a reference, the run says so first and the
 // optimized light is kept beside it. The judge's estimate then reports on the answer, so the
 // selection does not bias the figures a person reads.
@@ -43,6 +44,9 @@ struct AnswerCandidate {
 
 struct AnswerOptions {
     double minBrightness = 0.05;  // of the white furnace's mean over the part
+    /// With defect regions: the least combined contrast (RMS gradient in the regions over the
+    /// mean brightness; the eye needs about 0.01), below which a visibility ratio is noise.
+    double minContrast = 0.01;
 };
 
 struct ScoredCandidate {

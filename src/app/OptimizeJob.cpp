@@ -254,11 +254,11 @@ Plan plan(const OptimizeJobOptions& options) {
         // A black box minimizes eq. 2 through the renderer (optimize/BlackBox.h RenderLoss): the
         // run's loss is that objective, and nothing else is reported as its loss.
         if (o.objectiveKind && *o.objectiveKind != ObjectiveKind::Paper)
-            throw inputError(option("objective") + " " + objectiveKindName(*o.objectiveKind),
-                             std::string("the black-box optimizer ") + row.name +
-                                 " minimizes the paper's eq. 2 through the renderer",
-                             "drop " + option("objective") +
-                                 ", or optimize on T (e.g. the default optimizer)");
+            throw inputError(
+                option("objective") + " " + objectiveKindName(*o.objectiveKind),
+                std::string("the black-box optimizer ") + row.name +
+                    " minimizes the paper's eq. 2 through the renderer",
+                "drop " + option("objective") + ", or optimize on T (e.g. the default optimizer)");
         o.objectiveKind = ObjectiveKind::Paper;
     }
     if (o.starts.empty())
@@ -302,8 +302,8 @@ Plan plan(const OptimizeJobOptions& options) {
     p.noise.adapt = !p.tmInput && (o.precompute.autoSpp || !o.precompute.spp);
     o.precompute.autoSpp = false;  // the rule replaces the gradient-noise pilot here
     const bool distributed = o.ranks && o.ranks->distributed();
-    p.validate = !distributed && p.requested != OptimizerMethod::PaperLoop &&
-                 (o.selfCheck || !p.blackBox);
+    p.validate =
+        !distributed && p.requested != OptimizerMethod::PaperLoop && (o.selfCheck || !p.blackBox);
     if (p.blackBox || o.planes > 1 || !p.validate) p.noise.adapt = false;
     if (o.ranks && o.ranks->distributed()) {
         p.ranks = o.ranks;
@@ -626,7 +626,7 @@ constexpr const char* kLossCsvHeader =
 /// One λ's optimization: E* and loss.csv's rows.
 struct LambdaResult {
     OptimizeRun run;
-    std::vector<double> e;  // the answer (app/Answer.h): E*, or the reference that beat it
+    std::vector<double> e;           // the answer (app/Answer.h): E*, or the reference that beat it
     std::vector<double> optimizedE;  // E* when the answer is a reference (else empty)
     std::vector<std::vector<double>> startResults;  // every start's E (multistart)
     std::vector<std::string> rows;
@@ -756,10 +756,10 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
             run.optimizer = minimizeBlackBox(renderLoss, res.e, opt, bb);
             run.optimizer.settings += "; renderer " + external.name();
         }
-        run.lossThrough = o.renderer == RendererKind::Builtin
-                              ? "our renderer (" + std::to_string(ro.spp) + " spp)"
-                              : std::string("the renderer ") +
-                                    registryRow(rendererKindTable(), o.renderer).name;
+        run.lossThrough =
+            o.renderer == RendererKind::Builtin
+                ? "our renderer (" + std::to_string(ro.spp) + " spp)"
+                : std::string("the renderer ") + registryRow(rendererKindTable(), o.renderer).name;
     } else {
         si.callback = callback;
         SearchOptions so;
@@ -832,8 +832,8 @@ void checkAnswer(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
             candidates.push_back(
                 {"optimized from " + p.o.starts[k].spec, CandidateKind::Start, r.startResults[k]});
     candidates.push_back({in.lampName, CandidateKind::Reference, in.lampE});
-    candidates.push_back({"uniform-0.5", CandidateKind::Reference,
-                          std::vector<double>(in.lampE.size(), 0.5)});
+    candidates.push_back(
+        {"uniform-0.5", CandidateKind::Reference, std::vector<double>(in.lampE.size(), 0.5)});
     candidates.push_back({"paper's light", CandidateKind::Reference, in.paperE});
     AnswerChoice choice = chooseAnswer(validation, std::move(candidates));
     const ScoredCandidate& a = choice.answer();
@@ -1024,29 +1024,29 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
                               {"validation", nr.validation},
                               {"gap", nr.gap},
                               {"seconds", nr.seconds}});
-        s["training_noise"] = {{"figure", figureHigherIsBetter(in.kind)
-                                              ? "defect visibility (higher is better)"
-                                              : "loss (lower is better)"},
-                               {"max_gap", run.noise.maxGap},
-                               {"adapted", run.noise.adapted},
-                               {"met", run.noise.met},
-                               {"spp", run.noise.spp()},
-                               {"gap", run.noise.gap()},
-                               {"seconds_added", run.noise.secondsAdded},
-                               {"rounds", rounds},
-                               {"reason", run.noise.reason}};
+        s["training_noise"] = {
+            {"figure", figureHigherIsBetter(in.kind) ? "defect visibility (higher is better)"
+                                                     : "loss (lower is better)"},
+            {"max_gap", run.noise.maxGap},
+            {"adapted", run.noise.adapted},
+            {"met", run.noise.met},
+            {"spp", run.noise.spp()},
+            {"gap", run.noise.gap()},
+            {"seconds_added", run.noise.secondsAdded},
+            {"rounds", rounds},
+            {"reason", run.noise.reason}};
     }
     if (run.answer) {
         const AnswerChoice& a = *run.answer;
         json scored = json::array();
         for (const ScoredCandidate& c : a.scored)
-            scored.push_back({{"name", c.candidate.name},
-                              {"kind", c.candidate.kind == CandidateKind::Reference ? "reference"
-                                                                                    : "optimized"},
-                              {"merit", c.merit.value},
-                              {"brightness", c.score.brightness},
-                              {"eligible", c.eligible},
-                              {"why", c.why}});
+            scored.push_back(
+                {{"name", c.candidate.name},
+                 {"kind", c.candidate.kind == CandidateKind::Reference ? "reference" : "optimized"},
+                 {"merit", c.merit.value},
+                 {"brightness", c.score.brightness},
+                 {"eligible", c.eligible},
+                 {"why", c.why}});
         s["answer"] = {{"light", a.answer().candidate.name},
                        {"kind", a.referenceWon() ? "reference" : "optimized"},
                        {"merit", a.answer().merit.what},
@@ -1054,8 +1054,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
                        {"reason", a.reason},
                        {"on", "the validation estimate (independent of training and the judge)"},
                        {"candidates", scored}};
-        if (a.referenceWon())
-            s["answer"]["optimized_envmap"] = "envmap-optimized.exr";
+        if (a.referenceWon()) s["answer"]["optimized_envmap"] = "envmap-optimized.exr";
     }
     if (run.judged) s["judge"] = toJson(*run.judged);
     {
@@ -1287,11 +1286,10 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
             const Stopwatch judgeClock;
             loadHeldOut(p, in, job);
             if (job.heldOut)
-                spdlog::info(
-                    "judge estimate (held out): {} ({} spp, seed {})",
-                    job.heldOut->path.empty() ? std::string("not stored")
-                                              : job.heldOut->path.string(),
-                    job.heldOut->file.provenance.spp, job.heldOut->file.provenance.seed);
+                spdlog::info("judge estimate (held out): {} ({} spp, seed {})",
+                             job.heldOut->path.empty() ? std::string("not stored")
+                                                       : job.heldOut->path.string(),
+                             job.heldOut->file.provenance.spp, job.heldOut->file.provenance.seed);
             if (job.validation && job.heldOut &&
                 job.validation->file.provenance.seed == job.heldOut->file.provenance.seed)
                 throw inputError(option("seed"), "the validation estimate's seed is the judge's",
@@ -1322,14 +1320,15 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                 const int next = p.noise.adapt && !noise.met
                                      ? nextTrainingSpp(nr.spp, nr.gap, p.noise).value_or(0)
                                      : 0;
-                spdlog::info("training noise: {} spp, E*'s {} {} on T and {} on the validation "
-                             "estimate: gap {} %{}",
-                             nr.spp, figureHigherIsBetter(in.kind) ? "visibility" : "loss",
-                             formatNumber(nr.training, 4), formatNumber(nr.validation, 4),
-                             formatNumber(100.0 * nr.gap, 3),
-                             next > 0 ? " > " + formatNumber(100.0 * p.noise.maxGap, 3) +
-                                            " %: tracing again at " + std::to_string(next) + " spp"
-                                      : std::string());
+                spdlog::info(
+                    "training noise: {} spp, E*'s {} {} on T and {} on the validation "
+                    "estimate: gap {} %{}",
+                    nr.spp, figureHigherIsBetter(in.kind) ? "visibility" : "loss",
+                    formatNumber(nr.training, 4), formatNumber(nr.validation, 4),
+                    formatNumber(100.0 * nr.gap, 3),
+                    next > 0 ? " > " + formatNumber(100.0 * p.noise.maxGap, 3) +
+                                   " %: tracing again at " + std::to_string(next) + " spp"
+                             : std::string());
                 if (next == 0) break;
                 noise.secondsAdded += nr.seconds;
                 round.restart();

@@ -198,8 +198,8 @@ struct OptimizeRun {
 
 struct OptimizeJobSummary {
     TransportSource transport;
-    std::vector<TransportSource> extraPlanes;  // estimates 1..planes−1 of T
-    std::optional<TransportSource> heldOut;    // the judge's estimate
+    std::vector<TransportSource> extraPlanes;   // estimates 1..planes−1 of T
+    std::optional<TransportSource> heldOut;     // the judge's estimate
     std::optional<TransportSource> validation;  // the validation estimate (app/TrainingNoise.h)
     size_t maskPixels = 0;
     std::vector<OptimizeRun> runs;

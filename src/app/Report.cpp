@@ -249,11 +249,10 @@ namespace {
 /// An optimize OUTDIR's summary.json; InputError naming it when missing or malformed.
 json readOptimizeSummary(const std::filesystem::path& dir) {
     const auto summaryPath = dir / "summary.json";
-    json s =
-        parseJsonInput(readInputFile(summaryPath, "the optimize summary", kMaxJsonFileBytes,
-                                     "Check that the file exists (re-run the "
-                                     "command that writes it)"),
-                       summaryPath.string());
+    json s = parseJsonInput(readInputFile(summaryPath, "the optimize summary", kMaxJsonFileBytes,
+                                          "Check that the file exists (re-run the "
+                                          "command that writes it)"),
+                            summaryPath.string());
     if (!s.is_object()) throw inputError(summaryPath.string(), "not a JSON object");
     return s;
 }
@@ -671,8 +670,7 @@ std::string optimizeHeadline(const json& s) {
             else
                 out += " Judge: U " + fmt(num(ans["judge"], "unbiased"), 3) + " (" + name +
                        ") vs " + fmt(num(opt["judge"], "unbiased"), 3) +
-                       " (optimized; lower is better), on an independent " + spp +
-                       "-spp estimate.";
+                       " (optimized; lower is better), on an independent " + spp + "-spp estimate.";
         }
         return out;
     }

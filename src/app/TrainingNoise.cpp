@@ -42,7 +42,8 @@ double trainingFigure(ObjectiveKind kind, const LossParts& parts) {
 }
 
 double trainingGap(ObjectiveKind kind, double training, double validation) {
-    const double better = figureHigherIsBetter(kind) ? training - validation : validation - training;
+    const double better =
+        figureHigherIsBetter(kind) ? training - validation : validation - training;
     if (validation == 0) return better > 0 ? std::numeric_limits<double>::infinity() : 0.0;
     return better / std::abs(validation);
 }
@@ -75,8 +76,7 @@ std::string describeTrainingNoise(const TrainingNoiseSummary& s) {
     else
         out += " -> " + std::to_string(s.spp()) + " spp, the most the rule traces, still above " +
                tol + ": no light is trusted on its training estimate alone";
-    if (s.rounds.size() > 1)
-        out += "; the rule added " + formatNumber(s.secondsAdded, 3) + " s";
+    if (s.rounds.size() > 1) out += "; the rule added " + formatNumber(s.secondsAdded, 3) + " s";
     return out;
 }
 
