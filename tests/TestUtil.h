@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "scene/Scene.h"
+#include "transport/TransportMatrix.h"
 
 namespace sl::test {
 
@@ -58,6 +59,19 @@ inline SceneDesc bumpyPartDesc(int width, int height) {
     d.camera.height = height;
     d.render.maxDepth = 3;
     return d;
+}
+
+/// A dense 1×1-pixel T on a 2×3 env-map grid, every entry 0.5: the smallest matrix a .tm file
+/// holds (for tests of the file and the cache, not of light transport).
+inline TransportMatrix tinyTransportMatrix() {
+    TransportMatrix t;
+    t.width = t.height = 1;
+    t.envWidth = 2;
+    t.envHeight = 3;
+    t.storage = TransportStorage::Dense;
+    t.values.assign(t.cols(), 0.5f);
+    t.objectMask.assign(1, 1);
+    return t;
 }
 
 /// A file's bytes ("" when it cannot be read).

@@ -51,20 +51,12 @@ TEST(Cache, LocationFollowsFlagThenEnvironmentThenXdg) {
     ::setenv("SCRATCHLIGHT_CACHE", saved.c_str(), 1);
 }
 
-// Issue 35: `cache clear` deleted a user's transport-notes.tm by its name alone. A file is the
-// cache's only when its content says so (a .tm header holding the fingerprint it is named by).
 // The size cap: least recently used first (a hit refreshes a matrix's time), nothing but the
 // cache's own finished matrices, and the command line's --cache-max reaches it.
 TEST(Cache, SizeCapRemovesTheLeastRecentlyUsedFirst) {
     test::TempDir dir("cache-cap");
     // The cache's own files (a header holding the fingerprint each is named by), ~the same size.
-    TransportMatrix t;
-    t.width = t.height = 1;
-    t.envWidth = 2;
-    t.envHeight = 3;
-    t.storage = TransportStorage::Dense;
-    t.values.assign(t.cols(), 0.5f);
-    t.objectMask.assign(1, 1);
+    const TransportMatrix t = test::tinyTransportMatrix();
     auto cacheFile = [&](char c) {
         const std::string fp(32, c);
         TransportProvenance prov;
@@ -108,16 +100,12 @@ TEST(Cache, SizeCapRemovesTheLeastRecentlyUsedFirst) {
     EXPECT_EQ(test::runCli("judge x.json --cache-max lots").exitCode, 2);
 }
 
+// Issue 35: `cache clear` deleted a user's transport-notes.tm by its name alone. A file is the
+// cache's only when its content says so (a .tm header holding the fingerprint it is named by).
 TEST(Cache, ClearRemovesOnlyTheCachesFiles) {
     test::TempDir dir("cache-clear");
     const std::string fp = "0123456789abcdef0123456789abcdef";
-    TransportMatrix t;
-    t.width = t.height = 1;
-    t.envWidth = 2;
-    t.envHeight = 3;
-    t.storage = TransportStorage::Dense;
-    t.values.assign(t.cols(), 0.5f);
-    t.objectMask.assign(1, 1);
+    const TransportMatrix t = test::tinyTransportMatrix();
     TransportProvenance prov;
     prov.fingerprint = fp;
     prov.inputs = "{}";

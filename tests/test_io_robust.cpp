@@ -376,13 +376,7 @@ TEST(RobustIO, JsonExcerptIsBoundedForAnyValue) {
 // The same value inside a .tm header's "inputs": the header is refused as damaged.
 TEST(RobustIO, DeeplyNestedTransportHeaderIsRefusedNotACrash) {
     test::TempDir dir("deeptm");
-    TransportMatrix t;
-    t.width = t.height = 1;
-    t.envWidth = 2;
-    t.envHeight = 3;
-    t.storage = TransportStorage::Dense;
-    t.values.assign(t.cols(), 0.5f);
-    t.objectMask.assign(1, 1);
+    const TransportMatrix t = test::tinyTransportMatrix();
     TransportProvenance prov;
     prov.fingerprint = std::string(32, '0');
     prov.inputs = R"({"pad": "PADPAD"})";
