@@ -35,13 +35,7 @@ AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> 
         } else if (s.merit.higherIsBetter) {
             // A ratio of two gradients a light barely makes is noise over noise: the defects
             // must also show against the image's brightness.
-            double sum = 0, pixels = 0;
-            for (const RegionVisibility& r : s.score.visibility)
-                if (std::isfinite(r.contrast) && r.pixels > 0) {
-                    sum += static_cast<double>(r.pixels) * r.contrast * r.contrast;
-                    pixels += static_cast<double>(r.pixels);
-                }
-            const double contrast = pixels > 0 ? std::sqrt(sum / pixels) : 0.0;
+            const double contrast = combinedContrast(s.score.visibility);
             if (!(contrast >= options.minContrast)) {
                 s.eligible = false;
                 s.why = "the defects barely show: their gradient is " + formatNumber(contrast, 3) +

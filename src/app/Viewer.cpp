@@ -92,14 +92,8 @@ std::string queryValue(const ViewerRequest& r, const std::string& key,
 }
 
 double parseExposure(const std::string& text) {
-    double v = 0;
-    size_t used = 0;
-    try {
-        v = std::stod(text, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (used != text.size() || !std::isfinite(v) || v <= 0 || v > 1e9)
+    const double v = parseFiniteNumber(text).value_or(0.0);
+    if (v <= 0 || v > 1e9)
         throw inputError("exposure", "\"" + text + "\" is not a number in (0, 1e9]",
                          "give e.g. exposure=1.5");
     return v;

@@ -149,15 +149,8 @@ CLI::Validator numberAtLeast(bool allowZero) {
     return CLI::Validator(
         [allowZero](std::string& text) -> std::string {
             const char* bound = allowZero ? ">= 0" : "> 0";
-            size_t used = 0;
-            double v = 0;
-            try {
-                v = std::stod(text, &used);
-            } catch (const std::exception&) {
-                used = 0;
-            }
-            if (used == 0 || used != text.size() || !std::isfinite(v) ||
-                !(allowZero ? v >= 0 : v > 0))
+            const std::optional<double> v = parseFiniteNumber(text);
+            if (!v || !(allowZero ? *v >= 0 : *v > 0))
                 return std::string("must be a finite number ") + bound + ", got '" + text + "'";
             return {};
         },
@@ -183,20 +176,14 @@ std::vector<double> parseNumberList(const std::vector<std::string>& texts,
             const size_t comma = text.find(',', start);
             const std::string item =
                 text.substr(start, comma == std::string::npos ? comma : comma - start);
-            size_t used = 0;
-            double v = 0;
-            try {
-                v = std::stod(item, &used);
-            } catch (const std::exception&) {
-                used = 0;
-            }
-            if (item.empty() || used != item.size() || !std::isfinite(v))
+            const std::optional<double> v = parseFiniteNumber(item);
+            if (!v)
                 throw CLI::ValidationError(
                     flag, "'" + text + "': " +
                               (item.empty() ? std::string("an empty entry")
                                             : "'" + item + "' is not a finite number") +
                               "; give numbers separated by commas, e.g. 10,30,100");
-            values.push_back(v);
+            values.push_back(*v);
             if (comma == std::string::npos) break;
             start = comma + 1;
         }

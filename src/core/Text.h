@@ -3,12 +3,29 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdio>
+#include <optional>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
 
 namespace sl {
+
+/// The whole of `text` as a finite number (std::stod's syntax), or nothing: empty text, trailing
+/// characters, NaN, infinities and values out of double's range are not numbers here.
+inline std::optional<double> parseFiniteNumber(const std::string& text) {
+    size_t used = 0;
+    double v = 0;
+    try {
+        v = std::stod(text, &used);
+    } catch (const std::logic_error&) {
+        return std::nullopt;
+    }
+    if (used == 0 || used != text.size() || !std::isfinite(v)) return std::nullopt;
+    return v;
+}
 
 /// printf's "%.<precision>g": the shortest of fixed and scientific notation, e.g. 0.05, 1e-06.
 inline std::string formatNumber(double v, int precision = 6) {

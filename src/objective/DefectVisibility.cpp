@@ -127,14 +127,27 @@ std::vector<RegionVisibility> defectVisibility(int w, int h, std::span<const dou
     return out;
 }
 
-double combinedVisibility(std::span<const RegionVisibility> regions) {
+namespace {
+
+/// sqrt(Σ pixels·x² / Σ pixels) of one field over the regions with pixels and a finite value.
+double pooledRms(std::span<const RegionVisibility> regions, double RegionVisibility::*field) {
     double sum = 0, pixels = 0;
     for (const RegionVisibility& r : regions)
-        if (std::isfinite(r.visibility) && r.pixels > 0) {
-            sum += static_cast<double>(r.pixels) * r.visibility * r.visibility;
+        if (std::isfinite(r.*field) && r.pixels > 0) {
+            sum += static_cast<double>(r.pixels) * (r.*field) * (r.*field);
             pixels += static_cast<double>(r.pixels);
         }
     return pixels > 0 ? std::sqrt(sum / pixels) : kNaN;
+}
+
+}  // namespace
+
+double combinedVisibility(std::span<const RegionVisibility> regions) {
+    return pooledRms(regions, &RegionVisibility::visibility);
+}
+
+double combinedContrast(std::span<const RegionVisibility> regions) {
+    return pooledRms(regions, &RegionVisibility::contrast);
 }
 
 }  // namespace sl

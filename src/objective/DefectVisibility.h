@@ -57,5 +57,8 @@ std::vector<RegionVisibility> defectVisibility(int width, int height, std::span<
 /// sqrt(Σ pixels·visibility² / Σ pixels) over the regions with pixels and a finite visibility
 /// (the clean RMS gradient is shared). NaN when there is none.
 double combinedVisibility(std::span<const RegionVisibility> regions);
+/// The regions' contrast pooled the same way (the defects' RMS gradient over the mean
+/// brightness). NaN when there is none.
+double combinedContrast(std::span<const RegionVisibility> regions);
 
 }  // namespace sl
