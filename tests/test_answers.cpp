@@ -74,6 +74,27 @@ TEST(TrainingNoise, NextSppAimsAtHalfTheToleranceUnderTheCap) {
 
 // On any estimate G_u(cE) = c²·G_u(E) (the image is linear in E), so with λ = 0
 // U(cE) = U(E)/c exactly: the brighter copy of the lamp wins, the dimmer loses to the lamp.
+// The defect pixels' multiplier: the most (kDefectSppScale) while the extra samples stay
+// within kDefectSppBudget of the part's, halving otherwise; 1 when nothing is affordable.
+TEST(TrainingNoise, DefectPixelsTakeMoreSamplesWithinTheBudget) {
+    EXPECT_EQ(defectSppFactor(0, 5000), 1);
+    EXPECT_EQ(defectSppFactor(50, 5000), kDefectSppScale);  // 1 %: 31 × 50 ≤ 2500
+    EXPECT_EQ(defectSppFactor(84, 5212), 32);
+    EXPECT_EQ(defectSppFactor(200, 5000), 8);   // 31·200 > 2500, 15·200 > 2500, 7·200 ≤ 2500
+    EXPECT_EQ(defectSppFactor(2501, 5000), 1);  // over half the part: not even 2×
+    EXPECT_EQ(defectSppFactor(1250, 5000), 2);
+    for (size_t d = 1; d < 5000; d += 97) {
+        const int f = defectSppFactor(d, 5000);
+        EXPECT_LE(static_cast<double>(d) * (f - 1), kDefectSppBudget * 5000 + 1e-9) << d;
+        EXPECT_LE(f, kDefectSppScale);
+        EXPECT_GE(f, 1);
+        EXPECT_GE(f, defectSppFactor(d + 97, 5000)) << "more defect pixels, more samples? " << d;
+    }
+    const std::vector<uint8_t> defects = {0, 1, 0, 255};
+    EXPECT_TRUE(defectSppScale(defects, 1).empty());
+    EXPECT_EQ(defectSppScale(defects, 8), (std::vector<uint8_t>{1, 8, 1, 8}));
+}
+
 TEST(Answer, TheBestOnValidationIsTheAnswerAndALampCanBeIt) {
     auto scene =
         std::make_unique<Scene>(test::bumpyPartDesc(32, 32), 40, 40, test::bumpyHeightMap(40));
@@ -170,6 +191,8 @@ TEST(OptimizeAnswers, DefectsBelowTheTrainingNoiseRaiseTheSpp) {
         EXPECT_GT(n["rounds"][k]["spp"].get<int>(), n["rounds"][k - 1]["spp"].get<int>());
     EXPECT_EQ(s["transport"]["spp"], n["spp"]);
     EXPECT_EQ(s["validation"]["transport"]["spp"], n["spp"]);
+    // The truth marks chatter over half the part: too many pixels to supersample them.
+    EXPECT_TRUE(s["transport"]["spp_scale"].is_null()) << s["transport"].dump(2);
     EXPECT_NE(s["validation"]["transport"]["seed"], s["transport"]["seed"]);
     const bool met = n["met"].get<bool>();
     EXPECT_EQ(met, n["gap"].get<double>() <= 0.05);
@@ -201,12 +224,18 @@ TEST(OptimizeAnswers, AGivenSppIsKeptAndItsGapWarnedAbout) {
     test::TempDir dir("answers-given");
     ASSERT_EQ(test::writeSmallLabelledPart(dir.path()), 0);
     const auto out = dir.path() / "out";
-    const test::RunResult r = test::runCli(
-        "optimize " + (dir.path() / "scene.json").string() + " --truth " +
-        (dir.path() / "part-truth.png").string() + " --spp 4 --heldout none --no-figures --cache " +
-        (dir.path() / "cache").string() + " -o " + out.string() + " 2>&1");
+    const test::RunResult r =
+        test::runCli("optimize " + (dir.path() / "scene.json").string() + " --truth " +
+                     (dir.path() / "part-truth.png").string() +
+                     " --spp 4 --defect-spp-scale 4 --heldout none --no-figures --cache " +
+                     (dir.path() / "cache").string() + " -o " + out.string() + " 2>&1");
     ASSERT_EQ(r.exitCode, 0) << r.output;
     const json s = readJson(out / "summary.json");
+    // The defect pixels took 4× the spp, in T and in V alike, and the run said so.
+    ASSERT_TRUE(s["transport"]["spp_scale"].is_object()) << s["transport"].dump(2);
+    EXPECT_EQ(s["transport"]["spp_scale"]["max"], 4);
+    EXPECT_EQ(s["validation"]["transport"]["spp_scale"], s["transport"]["spp_scale"]);
+    EXPECT_NE(r.output.find("take 4x the training spp"), std::string::npos) << r.output;
     const json& n = s["training_noise"];
     ASSERT_EQ(n["rounds"].size(), 1u);
     EXPECT_FALSE(n["adapted"].get<bool>());

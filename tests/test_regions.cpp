@@ -67,6 +67,61 @@ TEST(TraceRegion, FlaggedPixelsAreTheWholeTracesRowsBitForBit) {
     EXPECT_EQ(transportProvenance(scene, ro, 1).fingerprint, partProv.fingerprint);
 }
 
+// Region supersampling (RenderOptions::sppScale): a pixel with multiplier f is the row of a
+// plain trace at f·spp, bit for bit, and a pixel with multiplier 1 the row of the plain trace at
+// spp; so every row stays an unbiased estimate and T·E a render. The fingerprint records it.
+TEST(TraceRegion, SupersampledPixelsAreTheRowsOfAPlainTraceAtTheirSpp) {
+    const int W = 24, H = 20;
+    const Scene scene(test::bumpyPartDesc(W, H), 32, 32, test::bumpyHeightMap(32));
+    RenderOptions ro;
+    ro.spp = 4;
+    ro.sampleSets = 2;
+    for (Sampling sampling : {Sampling::Stratified, Sampling::Mis}) {
+        ro.sampling = sampling;
+        ro.sppScale.clear();
+        ro.spp = 4;
+        TransportMatrix base = precomputeTransport(scene, ro, 1).matrix;
+        const std::string baseFingerprint = transportProvenance(scene, ro, 1).fingerprint;
+        ro.spp = 16;
+        TransportMatrix high = precomputeTransport(scene, ro, 1).matrix;
+        ro.spp = 4;
+        ro.sppScale.assign(static_cast<size_t>(W) * H, 1);
+        size_t scaled = 0;
+        for (int y = 6; y < 13; ++y)
+            for (int x = 5; x < 15; ++x, ++scaled) ro.sppScale[static_cast<size_t>(y) * W + x] = 4;
+        TransportMatrix mixed = precomputeTransport(scene, ro, 1).matrix;
+        for (TransportMatrix* t : {&base, &high, &mixed}) t->toSparse();
+        size_t lit = 0;
+        for (size_t p = 0; p < mixed.rows(); ++p) {
+            const TransportMatrix& ref = ro.sppScale[p] == 4 ? high : base;
+            const uint64_t b = mixed.rowPtr[p], e = mixed.rowPtr[p + 1], rb = ref.rowPtr[p];
+            ASSERT_EQ(e - b, ref.rowPtr[p + 1] - rb) << "pixel " << p;
+            EXPECT_EQ(mixed.objectMask[p], ref.objectMask[p]) << p;
+            lit += ro.sppScale[p] == 4 && e > b;
+            for (uint64_t k = 0; k < e - b; ++k) {
+                ASSERT_EQ(mixed.colIdx[b + k], ref.colIdx[rb + k]) << p;
+                for (int s = 0; s < mixed.stride(); ++s)
+                    ASSERT_EQ(mixed.values[(b + k) * mixed.stride() + s],
+                              ref.values[(rb + k) * ref.stride() + s])
+                        << "pixel " << p;
+            }
+        }
+        EXPECT_GT(lit, scaled / 2);
+        const TransportProvenance prov = transportProvenance(scene, ro, 1);
+        EXPECT_NE(prov.fingerprint, baseFingerprint);
+        const auto in = nlohmann::json::parse(prov.inputs);
+        EXPECT_EQ(in.at("render").at("spp_scale").at("max"), 4);
+        EXPECT_EQ(in.at("render").at("spp_scale").at("scaled_pixels").get<size_t>(), scaled);
+        EXPECT_EQ(in.at("render").at("spp"), 4);
+    }
+    // Multipliers of the wrong size or above the cap are refused.
+    ro.sppScale.assign(5, 2);
+    EXPECT_THROW(precomputeTransport(scene, ro, 1), std::invalid_argument);
+    ro.sppScale.assign(static_cast<size_t>(W) * H, 1);
+    ro.sppScale[7] = static_cast<uint8_t>(kMaxSppScale + 1);
+    EXPECT_THROW(precomputeTransport(scene, ro, 1), std::invalid_argument);
+}
+
 TEST(TraceRegion, PixelLatticeSpacing) {
     const auto flags = pixelLattice(1000, 500, 2000);  // k = floor(sqrt(250)) = 15
     const auto n = std::count(flags.begin(), flags.end(), 1);

@@ -37,6 +37,7 @@
 #include "objective/TransportLoss.h"
 #include "objective/UnbiasedObjective.h"
 #include "optimize/SpecularInit.h"
+#include "render/Footprint.h"
 #include "render/Render.h"
 #include "scene/EnvMapBasis.h"
 #include "scene/EnvMapPresets.h"
@@ -72,6 +73,14 @@ json heldJson(const HeldOutScore& h) {
     return {{"own", partsJson(h.own)}, {"paper_eq2", partsJson(h.paper)}};
 }
 
+/// The trace's per-pixel sample multipliers as its provenance records them (null: none).
+json sppScaleOf(const TransportProvenance& prov) {
+    const json in = json::parse(prov.inputs, nullptr, false);
+    if (in.is_discarded() || !in.contains("render") || !in["render"].contains("spp_scale"))
+        return nullptr;
+    return in["render"]["spp_scale"];
+}
+
 json transportJson(const TransportSource& src) {
     const TransportMatrix& t = src.file.matrix;
     const auto& prov = src.file.provenance;
@@ -91,6 +100,7 @@ json transportJson(const TransportSource& src) {
             {"cache_hit", src.cacheHit},
             {"max_depth_auto", src.autoDepth ? json(src.autoDepth->reason) : json(nullptr)},
             {"spp_auto", src.autoSpp ? json(src.autoSpp->reason) : json(nullptr)},
+            {"spp_scale", sppScaleOf(prov)},
             {"seconds", src.secondsTotal}};
 }
 
@@ -220,6 +230,9 @@ struct Plan {
     /// (the gap and the self-check need it); `noise.adapt` raises the training spp.
     bool validate = false;
     TrainingNoiseOptions noise;
+    /// The defect pixels of the defects objective take more samples (app/TrainingNoise.h
+    /// defectSppScale); not for black boxes (their renders take one spp) nor shards.
+    bool superSampleDefects = false;
     const Communicator* ranks = nullptr;  // MPI ranks holding shards of T (null: one process)
     bool writes() const { return !ranks || ranks->root(); }  // this process writes OUTDIR
     std::filesystem::path cacheDir;
@@ -305,6 +318,7 @@ Plan plan(const OptimizeJobOptions& options) {
     p.validate =
         !distributed && p.requested != OptimizerMethod::PaperLoop && (o.selfCheck || !p.blackBox);
     if (p.blackBox || o.planes > 1 || !p.validate) p.noise.adapt = false;
+    p.superSampleDefects = !p.blackBox && !distributed;
     if (o.ranks && o.ranks->distributed()) {
         p.ranks = o.ranks;
         const std::string over = "over " + std::to_string(p.ranks->size()) + " MPI ranks";
@@ -334,6 +348,8 @@ struct Inputs {
     ObjectiveKind kind = ObjectiveKind::Unbiased;
     bool onHalves() const { return registryRow(objectiveKindTable(), kind).planes == 2; }
     std::vector<uint8_t> defects, reference;  // the defects objective's regions (image)
+    int defectSppFactor = 1;  // the defect pixels' sample multiplier (app/TrainingNoise.h)
+    bool defectSppLogged = false;
     std::vector<const TransportMatrix*> set;  // the training estimates of T
     LossMask mask;
     std::vector<uint8_t> truth;                    // the truth mask in the image (metrics), 255/0
@@ -398,6 +414,38 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp) {
             !p.blackBox && !pre.spp)
             pre.spp = std::max(in.scene->desc.render.spp, minSpp);
         if (spp > 0) pre.spp = spp;
+        // The defects objective's regions before T (their pixels take more samples,
+        // app/TrainingNoise.h defectSppScale); kept for prepareRuns.
+        if (in.kind == ObjectiveKind::Defects && in.defects.empty()) {
+            DefectRegions regions =
+                defectRegionsInImage(*in.scene, o.defects, o.truth, o.reference);
+            in.defects = std::move(regions.defects);
+            in.reference = std::move(regions.reference);
+        }
+        if (in.kind == ObjectiveKind::Defects && p.superSampleDefects) {
+            size_t part = 0, marked = 0;
+            const std::vector<PixelSpan> spans = partFootprint(*in.scene);
+            const int W = in.scene->camera.width();
+            for (size_t y = 0; y < spans.size(); ++y)
+                for (int x = spans[y].begin; x < spans[y].end; ++x) {
+                    ++part;
+                    marked += in.defects[y * static_cast<size_t>(W) + static_cast<size_t>(x)] != 0;
+                }
+            const int factor =
+                o.defectSppScale > 0 ? o.defectSppScale : defectSppFactor(marked, part);
+            pre.sppScale = defectSppScale(in.defects, factor);
+            in.defectSppFactor = factor;
+            if (factor > 1 && !in.defectSppLogged) {
+                spdlog::info(
+                    "defect pixels: {} of the part's {} take {}x the training spp (their few "
+                    "pairs are the objective's noisiest sum; +{} % samples)",
+                    marked, part, factor,
+                    formatNumber(100.0 * static_cast<double>(marked) * (factor - 1) /
+                                     static_cast<double>(std::max<size_t>(part, 1)),
+                                 2));
+                in.defectSppLogged = true;
+            }
+        }
         std::vector<TransportSource> set =
             transportSetForScene(*in.scene, pre, o.planes, p.cacheDir);
         job.transport = std::move(set.front());
@@ -502,7 +550,7 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     const TransportMatrix& t = job.transport.file.matrix;
     in.mask = lossMask(o.mask, t, in.scene.get(), o.scratch);
     job.maskPixels = in.mask.count;
-    if (in.kind == ObjectiveKind::Defects) {
+    if (in.kind == ObjectiveKind::Defects && in.defects.empty()) {
         DefectRegions regions = defectRegionsInImage(*in.scene, o.defects, o.truth, o.reference);
         in.defects = std::move(regions.defects);
         in.reference = std::move(regions.reference);

@@ -130,6 +130,9 @@ struct OptimizeJobOptions {
     /// precompute.sppTolerance; with a given spp the gap is measured and warned about. Off for
     /// the paper's loop (the paper's experiment), black-box optimizers and MPI ranks.
     int noiseMaxSpp = TrainingNoiseOptions{}.maxSpp;
+    /// The defects objective's defect pixels take this many times the training spp (and the
+    /// validation estimate's); 0: the rule of app/TrainingNoise.h (defectSppFactor), 1: off.
+    int defectSppScale = 0;
     /// The self-checked answer (app/Answer.h): the light returned is the best of E*, every
     /// start's result and the references on the validation estimate. False: E* is returned.
     bool selfCheck = true;

@@ -16,6 +16,22 @@ TransportSource validationEstimate(const Scene& scene, const PrecomputeOptions& 
     return transportForScene(scene, o, cacheDir);
 }
 
+int defectSppFactor(size_t defectPixels, size_t partPixels) {
+    int f = kDefectSppScale;
+    while (f > 1 && static_cast<double>(defectPixels) * (f - 1) >
+                        kDefectSppBudget * static_cast<double>(partPixels))
+        f /= 2;
+    return defectPixels == 0 ? 1 : f;
+}
+
+std::vector<uint8_t> defectSppScale(const std::vector<uint8_t>& defects, int factor) {
+    if (factor <= 1) return {};
+    std::vector<uint8_t> s(defects.size(), 1);
+    for (size_t p = 0; p < s.size(); ++p)
+        if (defects[p]) s[p] = static_cast<uint8_t>(factor);
+    return s;
+}
+
 bool figureHigherIsBetter(ObjectiveKind kind) {
     switch (kind) {
         case ObjectiveKind::Paper:

@@ -38,6 +38,23 @@
 
 namespace sl {
 
+/// Region supersampling (docs/DESIGN.md "Noise is the trap"): the defects objective's g(D) is
+/// a mean over the few pixel pairs of the defect region (often 1-5 % of the part), so at any spp
+/// its noise dwarfs the reference's (thousands of pairs) and it is what the optimum fits. The
+/// defect pixels take kDefectSppScale times the spp (a per-pixel multiplier of the trace,
+/// RenderOptions::sppScale), or the largest power of two below it whose extra samples stay
+/// within kDefectSppBudget of the part's: the noise of g(D) falls by that factor for a fraction
+/// of the cost of raising spp everywhere.
+inline constexpr int kDefectSppScale = 32;
+inline constexpr double kDefectSppBudget = 0.5;
+
+/// The multiplier of the defect pixels by the rule above (1 when none is affordable):
+/// `defectPixels` of the `partPixels` the camera sees of the part.
+int defectSppFactor(size_t defectPixels, size_t partPixels);
+/// The per-pixel multipliers: `factor` on the nonzero pixels of `defects`, 1 elsewhere; empty
+/// when factor is 1 (the plain trace).
+std::vector<uint8_t> defectSppScale(const std::vector<uint8_t>& defects, int factor);
+
 /// The validation estimate's seed: the training seed plus this ("valid"). It is not in any
 /// training seed range a user can reach with --planes (< 2^20) and not the judge's seed.
 inline constexpr uint64_t kValidationSeedOffset = 0x76616C6964ULL << 20;

@@ -226,6 +226,7 @@ RenderOptions traceOptions(const Scene& scene, const PrecomputeOptions& o) {
             throw std::invalid_argument("traceOptions: no pixel to trace");
         r.pixels = o.pixels;
     }
+    r.sppScale = o.sppScale;  // its size is the tracer's to check
     if (o.rowBegin != 0 || o.rowEnd != 0) {
         const int H = scene.camera.height();
         if (o.rowBegin < 0 || o.rowEnd > H || o.rowBegin >= o.rowEnd)

@@ -31,6 +31,8 @@ struct PrecomputeOptions {
     /// The pixels traced (RenderOptions::pixels): empty, all; else width·height flags, e.g. a
     /// loss mask's region: T's other rows are empty.
     std::vector<uint8_t> pixels;
+    /// Per-pixel sample multipliers (RenderOptions::sppScale): empty, spp everywhere.
+    std::vector<uint8_t> sppScale;
     std::optional<uint64_t> seed;
     bool rgb = false;
     int sampleSets = 1;  // 2: store the halves T_a, T_b (noise-unbiased objective, held-out)

@@ -373,6 +373,12 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         c->add_option("--max-spp", j.noiseMaxSpp, "--spp auto: the most training spp it traces")
             ->check(CLI::Range(1, 1 << 20))
             ->capture_default_str();
+        c->add_option("--defect-spp-scale", j.defectSppScale,
+                      "--objective defects: the defect pixels take N times the training spp "
+                      "(their few pixel pairs are the noisiest part of the objective); 0: the "
+                      "rule (up to 32, within half the part's samples), 1: off")
+            ->check(CLI::Range(0, kMaxSppScale))
+            ->capture_default_str();
         c->add_flag_function(
             "--no-self-check", [&j](std::int64_t) { j.selfCheck = false; },
             "Return the optimized light even when your lamp, a uniform dome or the paper's light "

@@ -104,6 +104,15 @@ TransportProvenance transportProvenance(const Scene& scene, const RenderOptions&
     if (!opt.guide.empty())
         in["render"]["guide_hash"] =
             toHex(hash64(opt.guide.data(), opt.guide.size() * sizeof(float)));
+    if (!opt.sppScale.empty()) {  // per-pixel sample multipliers (absent: spp everywhere)
+        std::vector<uint8_t> f(opt.sppScale.size());
+        std::transform(opt.sppScale.begin(), opt.sppScale.end(), f.begin(),
+                       [](uint8_t v) { return std::max<uint8_t>(v, 1); });
+        in["render"]["spp_scale"] = {
+            {"max", *std::max_element(f.begin(), f.end())},
+            {"scaled_pixels", std::count_if(f.begin(), f.end(), [](uint8_t v) { return v > 1; })},
+            {"hash", toHex(hash64(f.data(), f.size()))}};
+    }
     if (opt.rowBegin != 0 || opt.rowEnd != 0)  // a shard (absent for the whole image)
         in["rows"] = {opt.rowBegin, opt.rowEnd > 0 ? opt.rowEnd : c.height};
     if (!opt.pixels.empty()) {  // only some pixels traced (a region; absent for all)

@@ -88,14 +88,31 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
     const Camera& cam = scene_.camera;
     const Heightfield& surf = *scene_.surface;
     const ConductorBsdf& bsdf = scene_.bsdf;
-    const int W = cam.width(), H = cam.height(), spp = opt.spp;
-    const int perSet = spp / opt.sampleSets;
-    const float invSpp = 1.0f / static_cast<float>(spp);
+    const int W = cam.width(), H = cam.height(), baseSpp = opt.spp;
     const bool mis = opt.sampling == Sampling::Mis;
     const bool stratified = opt.sampling == Sampling::Stratified;
-    const auto [nx, ny] = strataFor(perSet);
-    const int strataX = nx;
-    const float strataXf = static_cast<float>(nx), strataYf = static_cast<float>(ny);
+    if (!opt.sppScale.empty() && opt.sppScale.size() != static_cast<size_t>(W) * H)
+        throw std::invalid_argument("PathTracer: the spp multipliers do not match the image");
+    int maxScale = 1;
+    for (uint8_t f : opt.sppScale) maxScale = std::max(maxScale, static_cast<int>(f));
+    if (maxScale > kMaxSppScale)
+        throw std::invalid_argument("PathTracer: an spp multiplier is above kMaxSppScale");
+    // A pixel's sampling constants, per multiplier (index: the multiplier).
+    struct PixelSampling {
+        int spp = 0, perSet = 0, strataX = 1;
+        float invSpp = 0, strataXf = 1, strataYf = 1;
+    };
+    std::vector<PixelSampling> samplings(static_cast<size_t>(maxScale) + 1);
+    for (int f = 1; f <= maxScale; ++f) {
+        PixelSampling& ps = samplings[static_cast<size_t>(f)];
+        ps.spp = baseSpp * f;
+        ps.perSet = ps.spp / opt.sampleSets;
+        ps.invSpp = 1.0f / static_cast<float>(ps.spp);
+        const auto [nx, ny] = strataFor(ps.perSet);
+        ps.strataX = nx;
+        ps.strataXf = static_cast<float>(nx);
+        ps.strataYf = static_cast<float>(ny);
+    }
     const int bounces = std::max(0, opt.maxDepth - 1);  // vertices that sample a direction
     std::optional<EnvSampler> emitter;
     if (mis) emitter.emplace(scene_.basis, opt.guide);
@@ -103,7 +120,7 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
     TraceSummary sum;
     sum.width = W;
     sum.height = H;
-    sum.spp = spp;
+    sum.spp = baseSpp;
     sum.objectMask.assign(static_cast<size_t>(W) * H, 0);
     sum.coverage.assign(static_cast<size_t>(W) * H, 0.0f);
 
@@ -140,10 +157,10 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
     const int stride = rowStride(traced);
     auto body = [&](const tbb::blocked_range<int>& rows) {
         std::vector<EscapedPath> paths;
-        paths.reserve(static_cast<size_t>(spp));
+        paths.reserve(static_cast<size_t>(baseSpp));
         // Stratified: strata[depth·spp + s] is the stratum of sample s's 2D BSDF numbers at that
         // bounce; per set, a uniformly random permutation of its perSet strata.
-        std::vector<int> strata(stratified ? static_cast<size_t>(bounces) * spp : 0);
+        std::vector<int> strata(stratified ? static_cast<size_t>(bounces) * baseSpp * maxScale : 0);
         Counters& c = counters.local();
         for (int k = rows.begin(); k < rows.end(); ++k) {
             const int y = rowBegin + static_cast<int>((static_cast<int64_t>(k) * stride) % traced);
@@ -152,6 +169,10 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
             for (int x = span.begin; x < span.end; ++x) {
                 const uint32_t pixel = static_cast<uint32_t>(y * W + x);
                 if (!opt.pixels.empty() && opt.pixels[pixel] == 0) continue;
+                const PixelSampling& ps =
+                    samplings[opt.sppScale.empty() ? 1 : std::max<size_t>(1, opt.sppScale[pixel])];
+                const int spp = ps.spp, perSet = ps.perSet, strataX = ps.strataX;
+                const float invSpp = ps.invSpp, strataXf = ps.strataXf, strataYf = ps.strataYf;
                 paths.clear();
                 uint32_t hits = 0;
                 Shifts shifts{};

@@ -65,6 +65,9 @@ struct Scene;
 /// Sampling is recorded beside it in the fingerprint: `bsdf` traces as revision 2 did.
 inline constexpr int kTracerRevision = 2;
 
+/// The largest per-pixel sample multiplier (RenderOptions::sppScale).
+inline constexpr int kMaxSppScale = 64;
+
 struct RenderOptions {
     // Defaults: the scene file's render section (scene/RenderDesc.h), defined there once.
     int spp = RenderDesc{}.spp;
@@ -83,6 +86,13 @@ struct RenderOptions {
     /// and pixels flagged 0 are not traced, as rows outside the range (no paths, objectMask 0).
     /// Only what a region needs (a loss mask), or a sparse lattice for a quick measurement.
     std::vector<uint8_t> pixels;
+    /// Per-pixel sample multiplier: empty, every pixel takes spp samples; otherwise width·height
+    /// factors in [1, kMaxSppScale] (0 reads as 1), and pixel p takes spp·sppScale[p] samples,
+    /// in sets of spp·sppScale[p]/sampleSets (each sample still depends only on (seed, pixel,
+    /// sample), so shards and threads change nothing). Every pixel stays an unbiased
+    /// estimate, so T·E still equals a render; only the noise differs: samples where an
+    /// estimator needs them (a small region whose statistic would be noisy), not everywhere.
+    std::vector<uint8_t> sppScale;
     /// Skip the pixels outside the part's footprint (render/Footprint.h): they see only the
     /// hidden background, so the image and T are the same; off only to check exactly that.
     bool cullBackground = true;
