@@ -90,6 +90,45 @@ TEST(DefectObjective, ExactGradientMatchesAutodiff) {
     }
 }
 
+// The dark floor L_dark (objective/DefectObjective.h): below kMinVisibleBrightness of the white
+// furnace the loss rises by exactly κ_f·log(m/(f·w))², without bound as the part goes black;
+// above it nothing changes.
+TEST(DefectObjective, ADarkPartCostsTheFloorsLogSquared) {
+    SceneDesc d;
+    d.heightmap.pitch = 0.05;
+    d.camera.origin = {0, 2, 2};
+    d.camera.width = d.camera.height = 20;
+    const Scene scene(d, 32, 32, test::bumpyHeightMap(32));
+    const TransportMatrix t = halves(scene, 8);
+    DefectObjectiveOptions with;
+    with.whiteMean = whiteMean(t);
+    DefectObjectiveOptions without = with;
+    without.darkWeight = 0;
+    const ObjectiveOptions oo;
+    const DefectObjective a(t.width, t.height, t.objectMask, stripe(t, 8, 12), {}, oo, with);
+    const DefectObjective b(t.width, t.height, t.objectMask, stripe(t, 8, 12), {}, oo, without);
+    const TransportLoss la(t, a, false), lb(t, b, false);
+    std::vector<double> ya(t.rows()), yb(t.rows());
+    double last = 0;
+    for (double level : {0.5, 0.06, 0.04, 0.01, 0.001}) {
+        SCOPED_TRACE(level);
+        const std::vector<double> E(t.cols(), level);  // the part's mean is level·w
+        t.applyLuminance(E, ya);
+        double m = 0, n = 0;
+        for (size_t p = 0; p < ya.size(); ++p)
+            if (t.objectMask[p]) m += ya[p], n += 1;
+        m /= n;
+        const double floor = kMinVisibleBrightness * with.whiteMean;
+        const double expected =
+            m < floor ? with.darkWeight * std::pow(std::log(m / floor), 2.0) : 0.0;
+        const double extra = la.evaluate(E, {}).total - lb.evaluate(E, {}).total;
+        EXPECT_NEAR(extra, expected, 1e-6 * (1 + expected));  // T vs its halves: float sums
+        EXPECT_GE(extra, last - 1e-12);                       // darker costs more
+        last = extra;
+    }
+    EXPECT_GT(last, 100.0);  // 1/50 of the floor: κ_f·log(50)² ≈ 1530
+}
+
 // A V-groove along z on a gently textured plane, seen from straight above: a light from the
 // side (across the groove, elevation twice the wall slope) lights one wall and not the other;
 // the same light turned to come along the groove lights neither. The objective prefers the

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "app/Judge.h"
+#include "objective/DefectObjective.h"
 
 namespace sl {
 
@@ -43,7 +44,7 @@ struct AnswerCandidate {
 };
 
 struct AnswerOptions {
-    double minBrightness = 0.05;  // of the white furnace's mean over the part
+    double minBrightness = kMinVisibleBrightness;  // of the white furnace's mean over the part
     /// With defect regions: the least combined contrast (RMS gradient in the regions over the
     /// mean brightness; the eye needs about 0.01), below which a visibility ratio is noise.
     double minContrast = 0.01;

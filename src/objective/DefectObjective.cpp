@@ -55,6 +55,8 @@ DefectObjective::DefectObjective(int width, int height, std::vector<uint8_t> par
                          "use reg envmap");
     if (!(d_.whiteMean > 0) || !std::isfinite(d_.whiteMean))
         throw std::invalid_argument("DefectObjective: whiteMean must be > 0");
+    if (!(d_.darkFloor >= 0 && d_.darkFloor < 1) || !(d_.darkWeight >= 0))
+        throw std::invalid_argument("DefectObjective: need 0 <= darkFloor < 1, darkWeight >= 0");
     if (!(d_.low >= 0 && d_.low < d_.high) || !std::isfinite(d_.high))
         throw std::invalid_argument("DefectObjective: need 0 <= low < high");
     const std::vector<uint8_t>& p = mask();
@@ -122,7 +124,10 @@ LossParts DefectObjective::evaluate(std::span<const double> Ya, std::span<const 
     const double w = d_.whiteMean, k = d_.exposureWeight;
     const double under = std::max(0.0, (d_.low * w - m) / w),
                  over = std::max(0.0, (m - d_.high * w) / w);
-    const double exposure = k * (under * under + over * over + clip);
+    const double floorM = d_.darkFloor * w, mEff = std::max(m, 1e-12 * w);
+    const double darkLog = floorM > 0 && m < floorM ? std::log(mEff / floorM) : 0.0;
+    const double exposure =
+        k * (under * under + over * over + clip) + d_.darkWeight * darkLog * darkLog;
     r.lReg = base_.envMapRegulariser(E, dLdE);
     r.total = r.lGrad + exposure + options().lambda * r.lReg;
 
@@ -141,7 +146,8 @@ LossParts DefectObjective::evaluate(std::span<const double> Ya, std::span<const 
     addEnergy(reference_, dPhiR / pairsR_);
     addEnergy(defects_, -dPhiD / pairsD_);
     // d/dm of the band terms, then dm/dY = 1/(2·|P|) per half; the clip term per pixel.
-    const double dm = k * (-2.0 * under / w + 2.0 * over / w) / (2.0 * partPixels_);
+    const double dDark = darkLog != 0 && m > 1e-12 * w ? 2.0 * d_.darkWeight * darkLog / m : 0.0;
+    const double dm = (k * (-2.0 * under / w + 2.0 * over / w) + dDark) / (2.0 * partPixels_);
     for (size_t p = 0; p < n; ++p) {
         if (!part[p]) continue;
         const double y = (Ya[p] + Yb[p]) * 0.5;

@@ -19,7 +19,11 @@
 //   m     = mean Ȳ over P;  w = the white-furnace mean (mean over P of T·1, given)
 //   L_exp = κ·[ (max(0, lo·w − m)/w)² + (max(0, m − hi·w)/w)² + mean_P max(0, Ȳ − 1)² ]
 //           keeps the mean brightness within [lo, hi] of the furnace value and off clipping
-//   Loss  = L_vis + L_exp + λ·mean(E²)
+//   L_dark = κ_f·log(max(m, 1e-12·w)/(f·w))² where m < f·w, else 0: a floor the band's soft
+//           pull cannot be traded against (a dark-field light can buy more visibility than
+//           L_exp costs and leave the part at 1/600 of white); f is the answer's brightness
+//           floor (app/Answer.h), so E* stays a light a person can see
+//   Loss  = L_vis + L_exp + L_dark + λ·mean(E²)
 //
 // L_vis is invariant to scaling E; L_exp and λ fix the scale (with λ > 0 the optimum sits near
 // the band's lower edge). The gradient dLoss/dY_a, dLoss/dY_b is exact; value<S>() computes the
@@ -37,10 +41,17 @@
 
 namespace sl {
 
+/// The least mean brightness over the part, as a fraction of the white furnace's, of a light a
+/// person can see the part under: the defects objective's floor (L_dark) and the self-checked
+/// answer's eligibility (app/Answer.h).
+inline constexpr double kMinVisibleBrightness = 0.05;
+
 struct DefectObjectiveOptions {
     double whiteMean = 0;          // mean over the part of T·1 (the white furnace), > 0
     double low = 0.2, high = 0.8;  // the brightness band, as fractions of whiteMean
     double exposureWeight = 10;    // κ
+    double darkFloor = kMinVisibleBrightness;  // f, a fraction of whiteMean (0: no floor)
+    double darkWeight = 100;                   // κ_f
 };
 
 class DefectObjective final : public HalfImageObjective {

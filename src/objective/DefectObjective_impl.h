@@ -46,6 +46,13 @@ S DefectObjective::value(std::span<const S> Ya, std::span<const S> Yb, std::span
     const double w = d_.whiteMean;
     loss += d_.exposureWeight * (detail::hingeSquared(S((d_.low * w - m) / w)) +
                                  detail::hingeSquared(S((m - d_.high * w) / w)) + clip);
+    const double floorM = d_.darkFloor * w;
+    if (floorM > 0 && detail::realPart(m) < floorM) {
+        using std::log;
+        const S dark =
+            detail::realPart(m) > 1e-12 * w ? S(log(m / floorM)) : S(std::log(1e-12 * w / floorM));
+        loss += d_.darkWeight * dark * dark;
+    }
     if (options().lambda != 0) {
         S reg(0.0);
         for (const S& e : E) reg += e * e;
