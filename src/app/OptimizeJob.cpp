@@ -11,8 +11,8 @@
 #include <sstream>
 
 #include "app/InitialState.h"
+#include "app/OptimizeFigures.h"
 #include "app/PartSummary.h"
-#include "app/Plot.h"
 #include "app/Preview.h"
 #include "app/Report.h"
 #include "app/Search.h"
@@ -133,14 +133,16 @@ std::vector<double> luminanceOf(const std::vector<double>& image, size_t pixels)
     return y;
 }
 
-/// A render exposed on its own as a camera would (app/Preview.h exposureScale on the part).
-void writeExposedPng(const std::filesystem::path& png, const std::vector<double>& image,
-                     const TransportMatrix& t) {
+/// A render exposed on its own as a camera would (app/Preview.h exposureScale on the part),
+/// written as a PNG; returned for the figures.
+Image writeExposedPng(const std::filesystem::path& png, const std::vector<double>& image,
+                      const TransportMatrix& t) {
     const int ch = image.size() == t.rows() ? 1 : 3;
     const double scale = exposureScale(luminanceOf(image, t.rows()), t.objectMask);
     Image img(t.width, t.height, ch);
     for (size_t i = 0; i < image.size(); ++i) img.data[i] = static_cast<float>(image[i] * scale);
     writePng(png, img);
+    return img;
 }
 
 /// A direction as the env-map plot shows it: azimuth in [0°, 360°) = u·360° and elevation
@@ -630,6 +632,7 @@ struct LambdaResult {
     std::vector<double> optimizedE;  // E* when the answer is a reference (else empty)
     std::vector<std::vector<double>> startResults;  // every start's E (multistart)
     std::vector<std::string> rows;
+    LossCurve curve;                        // loss.csv's loss and held-out loss, for the loss plot
     LossParts lampTraining, paperTraining;  // the lamp's and the paper's light on T at λ
 };
 
@@ -714,6 +717,12 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
             row << ',';
         }
         res.rows.push_back(row.str());
+        res.curve.iteration.push_back(static_cast<double>(r.iteration));
+        res.curve.loss.push_back(r.loss);
+        if (scorer && full) {
+            res.curve.heldIteration.push_back(static_cast<double>(r.iteration));
+            res.curve.held.push_back(lastHeld);
+        }
         if (live.is_open()) live << res.rows.back() << '\n';
         if (live.is_open() && (res.rows.size() == 1 || sinceFlush.seconds() >= 1.0)) {
             live.flush();
@@ -801,6 +810,8 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
             tail << std::setprecision(10) << ',' << run.heldFinal->own.total << ','
                  << run.heldFinal->paper.total;
             res.rows.back() += tail.str();
+            res.curve.heldIteration.push_back(res.curve.iteration.back());
+            res.curve.held.push_back(run.heldFinal->own.total);
         }
     }
     res.lampTraining = loss.evaluate(in.lampE, {});
@@ -921,8 +932,9 @@ json envDirectionsJson(const Inputs& in, const TransportMatrix& t, const std::ve
     return j;
 }
 
-/// plot-data.json: the lights' texel luminances and the grid's directions, what
-/// scripts/plot_optimize.py draws the env-map plot from (it restates no convention).
+/// plot-data.json: the lights' texel luminances and the grid's directions, what the env-map
+/// plots are drawn from (app/OptimizeFigures.h here, scripts/plot_optimize.py by hand; neither
+/// restates the convention).
 json plotDataJson(const Inputs& in, const TransportMatrix& t, const std::vector<double>& e,
                   bool rgb) {
     const EnvMapBasis basis(t.envWidth, t.envHeight);
@@ -1111,6 +1123,37 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     return s;
 }
 
+/// What the figures show, from plot-data.json's and summary.json's content (as
+/// scripts/plot_optimize.py reads them from the files) and the loss curve.
+OptimizeFiguresInput figuresInput(const json& plotData, const json& summary,
+                                  const LossCurve& curve) {
+    OptimizeFiguresInput f;
+    f.envmap.width = plotData.at("width").get<int>();
+    f.envmap.height = plotData.at("height").get<int>();
+    f.envmap.azimuthDeg = plotData.at("azimuth_deg").get<std::vector<double>>();
+    f.envmap.elevationDeg = plotData.at("elevation_deg").get<std::vector<double>>();
+    f.envmap.luminance = plotData.at("lights").at("optimized").get<std::vector<double>>();
+    const json& dirs = summary.at("envmap_directions");
+    auto direction = [](const json& d) {
+        return PlotDirection{d.at("azimuth_deg").get<double>(),
+                             d.at("elevation_deg").get<double>()};
+    };
+    if (dirs.contains("camera")) f.directions.camera = direction(dirs["camera"]);
+    if (dirs.contains("mirror")) f.directions.mirror = direction(dirs["mirror"]);
+    for (const json& d : dirs.at("brightest")) f.directions.brightest.push_back(direction(d));
+    f.loss = curve;
+    std::ostringstream lambda;
+    lambda << summary.at("lambda").get<double>();
+    f.lossTitle = summary.at("optimizer").get<std::string>() + " on " +
+                  summary.at("objective").get<std::string>() + ", λ = " + lambda.str();
+    f.title = "scratchlight optimize: loss " +
+              formatNumber(summary.at("initial_loss").get<double>(), 4) + " → " +
+              formatNumber(summary.at("final_loss").get<double>(), 4);
+    f.lampTitle =
+        "your lamp (" + summary.at("compare").at("lamp").at("name").get<std::string>() + ")";
+    return f;
+}
+
 /// Stage 5: one run's files (the header of OptimizeJob.h lists them); returns its report entry.
 ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
                           const LambdaResult& r) {
@@ -1174,8 +1217,8 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
     writeRender(dir / "compare-lamp.exr", imageLamp, t.width, t.height, ch);
     writeRender(dir / "compare-paper.exr", imagePaper, t.width, t.height, ch);
     writeEnvMap(dir / "compare-paper-envmap.exr", toEnvMap(in.paperE, t, o.rgb));
-    writeExposedPng(dir / "view-lamp.png", imageLamp, t);
-    writeExposedPng(dir / "view-optimized.png", imageOptimized, t);
+    Image lampView = writeExposedPng(dir / "view-lamp.png", imageLamp, t);
+    Image optimizedView = writeExposedPng(dir / "view-optimized.png", imageOptimized, t);
     writeExposedPng(dir / "view-paper.png", imagePaper, t);
     if (!in.regionLabels.empty()) {
         const Image outlined = outlinedRender(std::vector<double>(t.rows(), 0.0), t.width, t.height,
@@ -1189,26 +1232,26 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
         }
         writePng(dir / "view-regions.png", layer);
     }
-    writeTextAtomically(dir / "plot-data.json", plotDataJson(in, t, r.e, o.rgb).dump() + "\n");
+    const json plotData = plotDataJson(in, t, r.e, o.rgb);
+    writeTextAtomically(dir / "plot-data.json", plotData.dump() + "\n");
     const VisibilityMetrics metricsFinal = metricsFor(t, imageFinal, mask, r.e, o.rgb, in.truth);
-    writeTextAtomically(dir / "summary.json",
-                        runSummaryJson(p, in, job, r, metricsFinal).dump(2) + "\n");
-    // The figures (scripts/plot_optimize.py); without python3 or matplotlib the report says why.
+    const json summary = runSummaryJson(p, in, job, r, metricsFinal);
+    writeTextAtomically(dir / "summary.json", summary.dump(2) + "\n");
+    // The figures, drawn in-process (app/OptimizeFigures.h); when they fail the report says why.
     std::string figureProblem;
     if (!o.figures) {
         figureProblem = "figures not asked for";
     } else {
-        std::fflush(stdout);
-        const ProgressTask task("figures (matplotlib)");
-        const PlotOutcome plot = runPlotScript("plot_optimize.py", {dir.string()});
-        if (!plot.ran)
-            figureProblem = plot.message;
-        else if (plot.exitCode == 3)
-            figureProblem = "python3 has no matplotlib (install python3-matplotlib)";
-        else if (plot.exitCode != 0)
-            figureProblem = "plot_optimize.py failed (exit code " + std::to_string(plot.exitCode) +
-                            "): " + shellQuoted(plot.command);
-        if (!figureProblem.empty()) spdlog::warn("figures not made: {}", figureProblem);
+        const ProgressTask task("figures");
+        try {
+            OptimizeFiguresInput fig = figuresInput(plotData, summary, r.curve);
+            fig.lampView = std::move(lampView);
+            fig.optimizedView = std::move(optimizedView);
+            writeOptimizeFigures(dir, fig);
+        } catch (const std::exception& e) {
+            figureProblem = e.what();
+            spdlog::warn("figures not made: {}", figureProblem);
+        }
     }
     writeTextAtomically(dir / "report.html", renderOptimizeReportHtml(dir, figureProblem));
     std::ostringstream title;
