@@ -517,7 +517,7 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     // A start whose image has no contrast on the part (E = 0: all black) is a plateau of every
     // objective (G = 0, gradient 0): no optimizer can leave it.
     for (size_t k = 0; k < o.starts.size(); ++k) {
-        const std::vector<double> image = renderImage(t, in.startValues[k], in.shard);
+        std::vector<double> image = renderImage(t, in.startValues[k], in.shard);
         const size_t ch = image.size() / t.rows();
         double lo = std::numeric_limits<double>::infinity(), hi = -lo;
         for (size_t pix = 0; pix < t.rows(); ++pix)
@@ -533,8 +533,8 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
                     "): the objective's G is 0 and its gradient "
                     "0 there, so no optimizer can leave it",
                 "start from a light that shows the part, e.g. const:0.5 or specular");
+        if (k == 0) in.image0 = std::move(image);  // T·E0 of the first start, rendered once
     }
-    in.image0 = renderImage(t, in.startValues.front(), in.shard);
     in.metricsInitial =
         metricsFor(t, in.image0, in.mask.pixels, in.startValues.front(), o.rgb, in.truth);
 }
