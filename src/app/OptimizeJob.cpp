@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "app/Cache.h"
 #include "app/InitialState.h"
 #include "app/OptimizeFigures.h"
 #include "app/PartSummary.h"
@@ -20,6 +21,7 @@
 #include "app/Version.h"
 #include "core/Color.h"
 #include "core/Error.h"
+#include "core/Hash.h"
 #include "core/Interrupt.h"
 #include "core/Progress.h"
 #include "core/Registry.h"
@@ -541,10 +543,29 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
 
 /// The paper's light on our T: eq. 2 at the paper's λ 30 on mean(E²), Adam lr 0.02 × 100 from
 /// E0 = 0.5 (applyOptimizePreset's "paper" settings), on the training estimate T itself rather
-/// than 100 fresh estimates, so it costs well under a second.
-std::vector<double> paperLight(const Plan& p, const Inputs& in, const TransportMatrix& t) {
+/// than 100 fresh estimates. It depends only on T, the loss mask and the channels, so it is
+/// kept in the cache beside T (app/Cache.h readCachedLight), keyed by T's fingerprint and those:
+/// a run on a cached T does not optimize it again (the same values, bit for bit).
+std::vector<double> paperLight(const Plan& p, const Inputs& in, const TransportMatrix& t,
+                               const std::string& fingerprint) {
     OptimizeJobOptions paper;
     applyOptimizePreset(OptimizePreset::Paper, paper);
+    std::string key;
+    if (!p.cacheDir.empty() && !fingerprint.empty() && !in.shard.distributed()) {
+        std::ostringstream what;
+        what << std::setprecision(17) << "paper's light 1; T " << fingerprint << "; rgb " << p.o.rgb
+             << "; mask " << toHex(hash64(in.mask.pixels.data(), in.mask.pixels.size()))
+             << "; lambda " << paper.lambdas.front() << "; lr " << paper.optimizer.learningRate
+             << "; iterations " << paper.optimizer.iterations << "; start "
+             << paper.starts.front().spec << "; reg " << static_cast<int>(paper.objective.reg);
+        const std::string w = what.str();
+        key = toHex(hash64(w.data(), w.size(), 1)) + toHex(hash64(w.data(), w.size(), 2));
+        if (auto cached = readCachedLight(p.cacheDir, key);
+            cached && cached->size() == t.cols() * (p.o.rgb ? 3 : 1)) {
+            spdlog::info("the paper's light on T from cache");
+            return *cached;
+        }
+    }
     SearchInputs si;
     si.set = {&t};
     si.mask = in.mask.pixels;
@@ -559,7 +580,9 @@ std::vector<double> paperLight(const Plan& p, const Inputs& in, const TransportM
     so.optimizer.callback = nullptr;
     so.planes = 1;
     so.starts = paper.starts;
-    return search(si, so).e;
+    std::vector<double> e = search(si, so).e;
+    if (!key.empty()) writeCachedLight(p.cacheDir, key, "paper's light on T " + fingerprint, e);
+    return e;
 }
 
 /// Stage 3b: what E* is compared with (the user's lamp, the paper's light) and the regions the
@@ -585,7 +608,7 @@ void prepareComparisons(const Plan& p, Inputs& in, const OptimizeJobSummary& job
     } else {
         in.lampE.assign(lamp.texels.begin(), lamp.texels.end());
     }
-    in.paperE = paperLight(p, in, t);
+    in.paperE = paperLight(p, in, t, job.transport.file.provenance.fingerprint);
     if (!o.truth.empty()) {
         const LabelMask truth = projectTruth(*in.scene, o.truth);
         in.regionLabels = truth.labels;
