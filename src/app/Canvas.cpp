@@ -140,7 +140,7 @@ double Canvas::textWidth(const std::string& utf8, double size, bool bold) const 
     return te.x_advance;
 }
 
-void Canvas::label(Point at, const std::string& utf8, const TextStyle& style, Colour fill) {
+Box Canvas::labelBox(Point at, const std::string& utf8, const TextStyle& style) const {
     const double w = textWidth(utf8, style.size, style.bold);
     const double h = style.size * 1.17;  // DejaVu Sans: ascent + descent
     const double pad = 0.25 * style.size;
@@ -149,8 +149,14 @@ void Canvas::label(Point at, const std::string& utf8, const TextStyle& style, Co
     // Inside the canvas, whatever the anchor asked.
     x = std::clamp(x, pad + 1, std::max(pad + 1, width_ - w - pad - 1));
     y = std::clamp(y, pad + 1, std::max(pad + 1, height_ - h - pad - 1));
+    return {x - pad, y - pad, w + 2 * pad, h + 2 * pad};
+}
+
+void Canvas::label(Point at, const std::string& utf8, const TextStyle& style, Colour fill) {
+    const Box box = labelBox(at, utf8, style);
+    const double pad = 0.25 * style.size, x = box.x + pad, y = box.y + pad;
     cairo_t* cr = s_->cr;
-    const double r = pad, bx = x - pad, by = y - pad, bw = w + 2 * pad, bh = h + 2 * pad;
+    const double r = pad, bx = box.x, by = box.y, bw = box.w, bh = box.h;
     const double pi = std::numbers::pi;
     cairo_new_path(cr);
     cairo_arc(cr, bx + bw - r, by + r, r, -pi / 2, 0);
@@ -413,16 +419,24 @@ void Axes::decorate(const std::string& title, bool grid, double fontSize, double
     }
     c_.strokeRect(x_, y_, w_, h_, black, 1.0);
     ts.h = Align::Centre;
+    // An axis label longer than its side (and a little more) is set smaller to fit.
+    auto fitted = [&](const std::string& s, double side) {
+        const double w = c_.textWidth(s, fontSize);
+        return w > side + 2 * fontSize ? fontSize * (side + 2 * fontSize) / w : fontSize;
+    };
     if (!xa_.label.empty()) {
         ts.v = Align::Start;
+        ts.size = fitted(xa_.label, w_);
         c_.text({x_ + w_ / 2, y_ + h_ + tick + 2 * pad + 1.2 * fontSize}, xa_.label, ts);
     }
     if (!ya_.label.empty()) {
         ts.v = Align::End;
         ts.angleDeg = 90;
+        ts.size = fitted(ya_.label, h_);
         c_.text({x_ - tick - 2 * pad - widest, y_ + h_ / 2}, ya_.label, ts);
         ts.angleDeg = 0;
     }
+    ts.size = fontSize;
     if (!title.empty()) {
         ts.size = titleSize;
         ts.v = Align::End;

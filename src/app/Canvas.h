@@ -33,6 +33,13 @@ struct Point {
     double x = 0, y = 0;
 };
 
+struct Box {
+    double x = 0, y = 0, w = 0, h = 0;
+    bool overlaps(const Box& o) const {
+        return x < o.x + o.w && o.x < x + w && y < o.y + o.h && o.y < y + h;
+    }
+};
+
 enum class Align { Start, Centre, End };  // left/top, centre, right/bottom
 enum class Marker { Circle, Cross, Star };
 
@@ -63,6 +70,8 @@ class Canvas {
     double textWidth(const std::string& utf8, double size, bool bold = false) const;
     /// Text on a rounded box of `fill` (an annotation), kept inside the canvas.
     void label(Point at, const std::string& utf8, const TextStyle& style, Colour fill);
+    /// The box label() would fill, without drawing it.
+    Box labelBox(Point at, const std::string& utf8, const TextStyle& style) const;
 
     void polyline(std::span<const Point> points, Colour colour, double lineWidth,
                   bool dashed = false);

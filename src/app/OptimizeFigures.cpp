@@ -90,32 +90,61 @@ struct Scale {
     double font, small, title;  // pixels
 };
 
-/// The markers of the directions on a plot, at `pos(d)`; brightest labelled beside their star,
-/// offsets alternating so labels of nearby peaks do not overlap.
-template <class Pos>
+/// The markers of the directions on a plot, at `pos(d)`, clipped to `clip` (the plot's frame
+/// or disc); the brightest labelled beside their star, each label at the first of a few offsets
+/// where it covers no marker and no label before it (nor `placed`: text already drawn), and all
+/// labels under the markers.
+template <class Pos, class Clip>
 void markDirections(Canvas& c, const PlotDirections& dirs, Pos pos, bool polar, double small,
-                    double unit) {
+                    double unit, Clip clip, std::vector<Box> placed = {}) {
     auto shown = [&](const PlotDirection& d) { return !polar || d.elevationDeg >= 0; };
-    // The labels first, the markers over them: no label hides a direction.
-    const double offsets[3][2] = {{10, 10}, {10, -16}, {-10, 14}};  // points, y up
+    auto markerBox = [&](const PlotDirection& d, double size) {
+        const Point p = pos(d);
+        return Box{p.x - size / 2, p.y - size / 2, size, size};
+    };
+    for (const auto& d : {dirs.camera, dirs.mirror})
+        if (d && shown(*d)) placed.push_back(markerBox(*d, 8 * unit));
+    for (const PlotDirection& d : dirs.brightest)
+        if (shown(d)) placed.push_back(markerBox(d, 12 * unit));
+    const double offsets[][2] = {{10, 10}, {10, -16}, {-10, 14}, {-10, -16},
+                                 {10, 26}, {10, -30}, {-10, 28}, {-10, -30}};  // points, y up
     for (size_t k = 0; k < dirs.brightest.size(); ++k) {
         const PlotDirection& d = dirs.brightest[k];
         if (!shown(d)) continue;
         const Point p = pos(d);
-        double dx = offsets[k % 3][0], dy = offsets[k % 3][1];
-        if (!polar && d.azimuthDeg > 300) dx = -std::abs(dx);
+        const std::string text = std::to_string(k + 1) + ": " + directionLabel(d);
         TextStyle ts{small, kBlack};
-        ts.h = dx > 0 ? Align::Start : Align::End;
         ts.v = Align::Centre;
-        c.label({p.x + dx * unit, p.y - dy * unit},
-                std::to_string(k + 1) + ": " + directionLabel(d), ts, Colour{1, 1, 1, 0.85});
+        Point at{};
+        for (size_t tried = 0; tried < std::size(offsets); ++tried) {
+            // The first choice alternates as the brightest do, as plot_optimize.py's does.
+            const auto& o = offsets[tried == 0 ? k % 3 : tried];
+            double dx = o[0];
+            if (!polar && d.azimuthDeg > 300) dx = -std::abs(dx);
+            ts.h = dx > 0 ? Align::Start : Align::End;
+            at = {p.x + dx * unit, p.y - o[1] * unit};
+            const Box box = c.labelBox(at, text, ts);
+            if (std::none_of(placed.begin(), placed.end(),
+                             [&](const Box& b) { return b.overlaps(box); }))
+                break;
+            if (tried + 1 == std::size(offsets)) {  // crowded: the first choice after all
+                const auto& first = offsets[k % 3];
+                dx = !polar && d.azimuthDeg > 300 ? -std::abs(first[0]) : first[0];
+                ts.h = dx > 0 ? Align::Start : Align::End;
+                at = {p.x + dx * unit, p.y - first[1] * unit};
+            }
+        }
+        placed.push_back(c.labelBox(at, text, ts));
+        c.label(at, text, ts, Colour{1, 1, 1, 0.85});
     }
+    clip();
     if (dirs.camera && shown(*dirs.camera))
         c.marker(pos(*dirs.camera), Marker::Circle, 8 * unit, kCamera, kBlack);
     if (dirs.mirror && shown(*dirs.mirror))
         c.marker(pos(*dirs.mirror), Marker::Cross, 8 * unit, kMirror, kBlack);
     for (const PlotDirection& d : dirs.brightest)
         if (shown(d)) c.marker(pos(d), Marker::Star, 12 * unit, kWhite, kBlack);
+    c.unclip();
 }
 
 /// The lat-long plot of E in the frame (x, y, w, h); `unit`: pixels per point.
@@ -142,11 +171,9 @@ void drawLatLong(Canvas& c, const EnvMapPlot& e, const PlotDirections& dirs, dou
     ts.h = Align::End;
     ts.v = Align::End;
     c.text(axes.at(358, 2), "horizon", ts);
-    c.clipRect(x, y, w, h);
     markDirections(
         c, dirs, [&](const PlotDirection& d) { return axes.at(d.azimuthDeg, d.elevationDeg); },
-        false, s.small, unit);
-    c.unclip();
+        false, s.small, unit, [&] { c.clipRect(x, y, w, h); });
     if (legend) {
         std::vector<LegendEntry> entries;
         if (dirs.camera)
@@ -239,9 +266,11 @@ void drawHemisphere(Canvas& c, const EnvMapPlot& e, const PlotDirections& dirs, 
     rs.v = Align::End;
     const std::pair<double, const char*> radial[] = {
         {60, "el 60°"}, {30, "el 30°"}, {0, "horizon"}};
+    std::vector<Box> radialBoxes;
     for (const auto& [elv, text] : radial) {
         const Point p = pos(22.5, elv);
         c.label({p.x + 2, p.y - 2}, text, rs, Colour{1, 1, 1, 0.6});
+        radialBoxes.push_back(c.labelBox({p.x + 2, p.y - 2}, text, rs));
     }
     TextStyle title{s.title, kBlack};
     title.h = Align::Centre;
@@ -250,7 +279,7 @@ void drawHemisphere(Canvas& c, const EnvMapPlot& e, const PlotDirections& dirs, 
            "upper hemisphere seen from above", title);
     markDirections(
         c, dirs, [&](const PlotDirection& d) { return pos(d.azimuthDeg, d.elevationDeg); }, true,
-        s.small, s.small / 8);
+        s.small, s.small / 8, [&] { c.clipCircle(centre, radius + 6); }, radialBoxes);
 }
 
 /// The loss plot in the frame (x, y, w, h).
