@@ -351,6 +351,11 @@ struct Inputs {
     std::vector<uint8_t> regionLabels;  // image space, 0 = none
     std::vector<RegionLabel> regionLegend;
     std::string regionSource;  // where the regions come from ("" = none)
+    /// defects, reference, truth, truthLabels, lampName and lampE depend on the scene and the
+    /// options, not on T: once set (the first load), a training-noise round that traces T again
+    /// keeps them instead of projecting the regions (or computing the defect map) again.
+    bool sceneParts = false;
+    LabelMask truthLabels;  // the truth projected into the image, its legend (truth given)
     /// The training trace's resolved options and seed (what the validation estimate repeats
     /// with its own seed); unset for a .tm.
     std::optional<PrecomputeOptions> trained;
@@ -506,12 +511,12 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     const TransportMatrix& t = job.transport.file.matrix;
     in.mask = lossMask(o.mask, t, in.scene.get(), o.scratch);
     job.maskPixels = in.mask.count;
-    if (in.kind == ObjectiveKind::Defects) {
+    if (in.kind == ObjectiveKind::Defects && !in.sceneParts) {
         DefectRegions regions = defectRegionsInImage(*in.scene, o.defects, o.truth, o.reference);
         in.defects = std::move(regions.defects);
         in.reference = std::move(regions.reference);
     }
-    if (!o.truth.empty()) in.truth = projectMaskFile(*in.scene, o.truth);
+    if (!o.truth.empty() && !in.sceneParts) in.truth = projectMaskFile(*in.scene, o.truth);
     const int maxDepth = job.transport.file.provenance.maxDepth;
     for (const InitialState& s : o.starts)
         in.startValues.push_back(
@@ -590,29 +595,33 @@ std::vector<double> paperLight(const Plan& p, const Inputs& in, const TransportM
 void prepareComparisons(const Plan& p, Inputs& in, const OptimizeJobSummary& job) {
     const OptimizeJobOptions& o = p.o;
     const TransportMatrix& t = job.transport.file.matrix;
-    const EnvMap lamp = o.compare.empty() ? studioEnvMap(t.envWidth, t.envHeight)
-                                          : lightFromSpec(o.compare, t.envWidth, t.envHeight,
-                                                          o.rgb ? 3 : 0, option("compare"));
-    in.lampName = o.compare.empty() ? std::string("studio preset")
-                                    : std::filesystem::path(o.compare).filename().string();
-    // As the judge reads a light (Judge::envVector): RGB maps by their luminance on a gray T.
-    const size_t n = lamp.texelCount();
-    if (lamp.channels == 1 && o.rgb) {
-        in.lampE.resize(3 * n);
-        for (size_t i = 0; i < 3 * n; ++i) in.lampE[i] = lamp.texels[i / 3];
-    } else if (lamp.channels == 3 && !o.rgb) {
-        in.lampE.resize(n);
-        for (size_t i = 0; i < n; ++i)
-            in.lampE[i] = luminance(double(lamp.texels[3 * i]), double(lamp.texels[3 * i + 1]),
-                                    double(lamp.texels[3 * i + 2]));
-    } else {
-        in.lampE.assign(lamp.texels.begin(), lamp.texels.end());
+    if (!in.sceneParts) {
+        // The user's lamp: it does not depend on T (only on the env map's size).
+        const EnvMap lamp = o.compare.empty() ? studioEnvMap(t.envWidth, t.envHeight)
+                                              : lightFromSpec(o.compare, t.envWidth, t.envHeight,
+                                                              o.rgb ? 3 : 0, option("compare"));
+        in.lampName = o.compare.empty() ? std::string("studio preset")
+                                        : std::filesystem::path(o.compare).filename().string();
+        // As the judge reads a light (Judge::envVector): RGB maps by their luminance on a gray T.
+        const size_t n = lamp.texelCount();
+        if (lamp.channels == 1 && o.rgb) {
+            in.lampE.resize(3 * n);
+            for (size_t i = 0; i < 3 * n; ++i) in.lampE[i] = lamp.texels[i / 3];
+        } else if (lamp.channels == 3 && !o.rgb) {
+            in.lampE.resize(n);
+            for (size_t i = 0; i < n; ++i)
+                in.lampE[i] = luminance(double(lamp.texels[3 * i]), double(lamp.texels[3 * i + 1]),
+                                        double(lamp.texels[3 * i + 2]));
+        } else {
+            in.lampE.assign(lamp.texels.begin(), lamp.texels.end());
+        }
+        if (!o.truth.empty()) in.truthLabels = projectTruth(*in.scene, o.truth);
+        in.sceneParts = true;
     }
     in.paperE = paperLight(p, in, t, job.transport.file.provenance.fingerprint);
     if (!o.truth.empty()) {
-        const LabelMask truth = projectTruth(*in.scene, o.truth);
-        in.regionLabels = truth.labels;
-        in.regionLegend = truth.legend;
+        in.regionLabels = in.truthLabels.labels;
+        in.regionLegend = in.truthLabels.legend;
         in.regionSource = "truth " + o.truth.filename().string();
     } else if (!in.defects.empty()) {
         in.regionLabels.assign(in.defects.size(), 0);
@@ -1331,10 +1340,19 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
         // T at `spp` (unset: the scene's or the given one), its validation estimate, and what
         // depends on T; the scene is loaded once.
         auto load = [&](int spp) {
-            std::unique_ptr<Scene> scene = std::move(in.scene);
+            Inputs kept = std::move(in);
             in = Inputs{};
             in.ranks = p.ranks;
-            in.scene = std::move(scene);
+            in.scene = std::move(kept.scene);  // loaded once
+            if (kept.sceneParts) {             // what does not depend on T: computed once
+                in.defects = std::move(kept.defects);
+                in.reference = std::move(kept.reference);
+                in.truth = std::move(kept.truth);
+                in.truthLabels = std::move(kept.truthLabels);
+                in.lampName = std::move(kept.lampName);
+                in.lampE = std::move(kept.lampE);
+                in.sceneParts = true;
+            }
             job.extraPlanes.clear();
             loadTraining(p, in, job, spp);
             if (job.transport.autoDepth && spp == 0)
