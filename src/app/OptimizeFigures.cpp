@@ -150,9 +150,7 @@ void markDirections(Canvas& c, const PlotDirections& dirs, Pos pos, bool polar, 
 /// The lat-long plot of E in the frame (x, y, w, h); `unit`: pixels per point.
 void drawLatLong(Canvas& c, const EnvMapPlot& e, const PlotDirections& dirs, double x, double y,
                  double w, double h, const Scale& s, double unit, bool legend) {
-    AxisSpec ax{
-        0, 360, false, niceTicks(0, 360, 8), degrees, "azimuth (0° toward −z, 90° toward +x)"};
-    ax.ticks.clear();
+    AxisSpec ax{0, 360, false, {}, degrees, "azimuth (0° toward −z, 90° toward +x)"};
     for (int a = 0; a <= 360; a += 45) ax.ticks.push_back(a);
     AxisSpec ay{-90, 90, false, {}, degrees, "elevation (90° = up, +Y)"};
     for (int a = -90; a <= 90; a += 30) ay.ticks.push_back(a);
