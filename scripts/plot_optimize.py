@@ -9,8 +9,9 @@ and writes, each atomically:
                           brightest directions labelled) and a polar plot of the upper hemisphere
   OUTDIR/plot-loss.png    the loss on a log axis (when every value is > 0) with the held-out loss
   OUTDIR/overview.png     the renders under your lamp and under E*, the env map and the loss
-`optimize` runs this itself for report.html (src/app/Plot.h); it prints nothing unless --print. The env-map convention is not
-restated here: plot-data.json carries each texel column's azimuth and row's elevation as
+`optimize` draws the same figures itself, in-process (src/app/OptimizeFigures.h); run this by
+hand to redraw them with matplotlib (to restyle them, say). It prints nothing unless --print.
+The env-map convention is not restated here: plot-data.json carries each texel column's azimuth and row's elevation as
 scene/EnvMapBasis.h defines them. Exit code 3: matplotlib is missing (use Debian's
 /usr/bin/python3 with python3-matplotlib). PNGs carry no software/date metadata, so they are
 byte-identical from run to run.

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "TestUtil.h"
 #include "app/Cache.h"
@@ -148,9 +149,19 @@ TEST(Cache, OptimizeUsesItSaysSoAndTheCommandClearsIt) {
     EXPECT_NE(r.output.find("cache " + cache.string() + ": 3 transport matrices"),
               std::string::npos)
         << r.output;
+    // The paper's light on T is kept beside it (issue 32: nothing done twice).
+    EXPECT_NE(r.output.find(": 3 transport matrices, 1 derived light"), std::string::npos)
+        << r.output;
+    EXPECT_EQ(r.output.find("the paper's light on T from cache"), std::string::npos) << r.output;
     r = test::runCli("optimize " + scene + common + (dir / "b").string());
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("transport matrix from cache"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("the paper's light on T from cache"), std::string::npos) << r.output;
+    // The same light, bit for bit: the same file and the same scores.
+    EXPECT_EQ(test::readFile(dir / "a" / "compare-paper-envmap.exr"),
+              test::readFile(dir / "b" / "compare-paper-envmap.exr"));
+    EXPECT_EQ(test::readFile(dir / "a" / "plot-data.json"),
+              test::readFile(dir / "b" / "plot-data.json"));
 
     // --no-cache traces and keeps nothing.
     r = test::runCli("optimize " + scene +
@@ -165,6 +176,40 @@ TEST(Cache, OptimizeUsesItSaysSoAndTheCommandClearsIt) {
     EXPECT_NE(r.output.find("3 transport matrices"), std::string::npos) << r.output;
     r = test::runCli("cache clear --cache " + cache.string());
     ASSERT_EQ(r.exitCode, 0) << r.output;
-    EXPECT_NE(r.output.find("removed 3 transport matrices"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("removed 3 transport matrices and 1 derived light"), std::string::npos)
+        << r.output;
     EXPECT_EQ(countTm(cache), 0u);
+    EXPECT_EQ(cacheContents(cache).lights, 0u);
+}
+
+// A light derived from T (the paper's light) is read back bit for bit, only under its own key,
+// and is listed, trimmed and cleared with the matrices.
+TEST(Cache, DerivedLightsReadBackExactlyUnderTheirKeyAndGoWithTheMatrices) {
+    test::TempDir dir("cache-lights");
+    const std::string key(32, 'a'), other(32, 'b');
+    const std::vector<double> e{0.1, 1.0 / 3.0, 2e-300, 0.0, 123456.789012345678};
+    EXPECT_FALSE(readCachedLight(dir.path(), key));
+    writeCachedLight(dir.path(), key, "a test light", e);
+    const auto back = readCachedLight(dir.path(), key);
+    ASSERT_TRUE(back);
+    EXPECT_EQ(*back, e);  // exactly
+    EXPECT_FALSE(readCachedLight(dir.path(), other));
+    EXPECT_FALSE(readCachedLight({}, key));
+    writeCachedLight({}, key, "nowhere", e);  // no cache: nothing, no error
+    // A file named like one but holding another key, or not JSON: not the cache's.
+    test::writeText(dir / ("light-" + other + ".json"),
+                    "{\"key\": \"" + key + "\", \"values\": []}");
+    test::writeText(dir / ("light-" + std::string(32, 'c') + ".json"), "the user's notes");
+    EXPECT_FALSE(readCachedLight(dir.path(), other));
+    const CacheContents c = cacheContents(dir.path());
+    EXPECT_EQ(c.files, 0u);
+    EXPECT_EQ(c.lights, 1u);
+    EXPECT_NE(describeCache(c).find("0 transport matrices, 1 derived light"), std::string::npos)
+        << describeCache(c);
+    EXPECT_EQ(trimCache(dir.path(), 0).lights, 1u);
+    EXPECT_FALSE(readCachedLight(dir.path(), key));
+    writeCachedLight(dir.path(), key, "a test light", e);
+    EXPECT_EQ(clearCache(dir.path()).lights, 1u);
+    EXPECT_TRUE(fs::exists(dir / ("light-" + other + ".json")));
+    EXPECT_TRUE(fs::exists(dir / ("light-" + std::string(32, 'c') + ".json")));
 }

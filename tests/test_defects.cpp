@@ -90,9 +90,9 @@ TEST(DefectObjective, ExactGradientMatchesAutodiff) {
     }
 }
 
-// The dark floor L_dark (objective/DefectObjective.h): below kMinVisibleBrightness of the white
-// furnace the loss rises by exactly κ_f·log(m/(f·w))², without bound as the part goes black;
-// above it nothing changes.
+// The dark floor L_dark (objective/DefectObjective.h): below darkFloor (2·kMinVisibleBrightness)
+// of the white furnace the loss rises by exactly κ_f·log(m/(f·w))², without bound as the part goes
+// black; above it nothing changes.
 TEST(DefectObjective, ADarkPartCostsTheFloorsLogSquared) {
     SceneDesc d;
     d.heightmap.pitch = 0.05;
@@ -110,7 +110,7 @@ TEST(DefectObjective, ADarkPartCostsTheFloorsLogSquared) {
     const TransportLoss la(t, a, false), lb(t, b, false);
     std::vector<double> ya(t.rows()), yb(t.rows());
     double last = 0;
-    for (double level : {0.5, 0.06, 0.04, 0.01, 0.001}) {
+    for (double level : {0.5, 0.12, 0.08, 0.02, 0.001}) {
         SCOPED_TRACE(level);
         const std::vector<double> E(t.cols(), level);  // the part's mean is level·w
         t.applyLuminance(E, ya);
@@ -118,7 +118,7 @@ TEST(DefectObjective, ADarkPartCostsTheFloorsLogSquared) {
         for (size_t p = 0; p < ya.size(); ++p)
             if (t.objectMask[p]) m += ya[p], n += 1;
         m /= n;
-        const double floor = kMinVisibleBrightness * with.whiteMean;
+        const double floor = with.darkFloor * with.whiteMean;
         const double expected =
             m < floor ? with.darkWeight * std::pow(std::log(m / floor), 2.0) : 0.0;
         const double extra = la.evaluate(E, {}).total - lb.evaluate(E, {}).total;
@@ -126,7 +126,7 @@ TEST(DefectObjective, ADarkPartCostsTheFloorsLogSquared) {
         EXPECT_GE(extra, last - 1e-12);                       // darker costs more
         last = extra;
     }
-    EXPECT_GT(last, 100.0);  // 1/50 of the floor: κ_f·log(50)² ≈ 1530
+    EXPECT_GT(last, 100.0);  // 1/100 of the floor: κ_f·log(100)² ≈ 2120
 }
 
 // A V-groove along z on a gently textured plane, seen from straight above: a light from the

@@ -77,14 +77,15 @@ TEST(ReportBrowser, OptimizeReportOpensInHeadlessChromium) {
     EXPECT_TRUE(fs::exists(shot));
 }
 
-// Without python3's matplotlib the page still opens and says why a figure is missing.
+// Without its figures (--no-figures, or figures that could not be drawn) the page still opens
+// and says why each is missing.
 TEST(ReportBrowser, AMissingFigureIsNamedWithItsReason) {
     test::TempDir dir("report-nofig");
     const fs::path out = dir.path();
     std::ofstream(out / "summary.json") << R"({"optimizer": "lbfgs", "objective": "unbiased",
         "lambda": 30, "initial_loss": 2, "final_loss": 1})";
     std::ofstream(out / "loss.csv") << "iteration,loss\n0,2\n1,1\n";
-    const std::string html = renderOptimizeReportHtml(out, "python3 has no matplotlib");
-    EXPECT_NE(html.find("figure not made: python3 has no matplotlib"), std::string::npos);
+    const std::string html = renderOptimizeReportHtml(out, "loss plot: needs at least one loss");
+    EXPECT_NE(html.find("figure not made: loss plot: needs at least one loss"), std::string::npos);
     EXPECT_NE(html.find("no comparison with a lamp"), std::string::npos);
 }

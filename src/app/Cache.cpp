@@ -5,11 +5,14 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
 #include <system_error>
 #include <vector>
 
+#include "io/AtomicFile.h"
 #include "io/TransportFile.h"
 
 namespace sl {
@@ -29,11 +32,43 @@ bool digits(std::string_view s) {
            std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
 }
 
+constexpr std::string_view kLightPrefix = "light-", kLightExt = ".json";
+
+/// A derived light's file: JSON whose "key" is `key` and whose "values" are numbers.
+std::optional<std::vector<double>> readLightFile(const fs::path& p, const std::string& key) {
+    std::error_code ec;
+    if (!fs::is_regular_file(p, ec) || fs::file_size(p, ec) > (64u << 20)) return std::nullopt;
+    std::ifstream in(p);
+    const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    if (j.is_discarded() || !j.is_object() || j.value("key", std::string()) != key ||
+        !j.contains("values") || !j["values"].is_array())
+        return std::nullopt;
+    std::vector<double> v;
+    v.reserve(j["values"].size());
+    for (const auto& x : j["values"]) {
+        if (!x.is_number()) return std::nullopt;
+        v.push_back(x.get<double>());
+    }
+    return v;
+}
+
+/// light-<key>.json holding that key.
+bool isLightFile(const fs::path& p) {
+    const std::string name = p.filename().string();
+    if (name.size() != kLightPrefix.size() + 32 + kLightExt.size() ||
+        name.rfind(kLightPrefix, 0) != 0 || !name.ends_with(kLightExt))
+        return false;
+    const std::string key = name.substr(kLightPrefix.size(), 32);
+    return hexDigits(key) && readLightFile(p, key).has_value();
+}
+
 /// A file this cache wrote, by its name and its content, never by the name alone:
 /// transport-<fingerprint>.tm whose header holds that fingerprint (the cache names each matrix
 /// by it), or the temporary of one while written (io/AtomicFile.h:
-/// .transport-<fingerprint>.tmp-<pid>-<n>.tm) that is empty or starts as a .tm file does.
+/// .transport-<fingerprint>.tmp-<pid>-<n>.tm) that is empty or starts as a .tm file does; or a
+/// derived light, light-<key>.json holding that key.
 bool isCacheFile(const fs::path& p) {
+    if (isLightFile(p)) return true;
     const std::string name = p.filename().string();
     constexpr std::string_view kPrefix = "transport-", kExt = ".tm";
     if (name.size() > kPrefix.size() + kExt.size() && name.rfind(kPrefix, 0) == 0 &&
@@ -104,7 +139,7 @@ CacheContents cacheFiles(const fs::path& dir, Count&& count) {
         if (!e.is_regular_file(ec) || !isCacheFile(e.path())) continue;
         const uintmax_t size = e.file_size(ec);
         if (!count(e.path())) continue;
-        ++c.files;
+        ++(e.path().extension() == ".tm" ? c.files : c.lights);
         c.bytes += size;
     }
     return c;
@@ -136,7 +171,8 @@ CacheContents trimCache(const fs::path& dir, uintmax_t maxBytes) {
         const uintmax_t size = fs::file_size(p, ec);
         if (ec) return false;
         total += size;
-        if (p.extension() == ".tm") entries.push_back({p, fs::last_write_time(p, ec), size});
+        if (p.extension() == ".tm" || isLightFile(p))
+            entries.push_back({p, fs::last_write_time(p, ec), size});
         return true;
     });
     CacheContents removed;
@@ -148,10 +184,35 @@ CacheContents trimCache(const fs::path& dir, uintmax_t maxBytes) {
         std::error_code ec;
         if (!fs::remove(e.path, ec)) continue;
         total -= e.bytes;
-        ++removed.files;
+        ++(e.path.extension() == ".tm" ? removed.files : removed.lights);
         removed.bytes += e.bytes;
     }
     return removed;
+}
+
+std::optional<std::vector<double>> readCachedLight(const fs::path& dir, const std::string& key) {
+    if (dir.empty()) return std::nullopt;
+    const fs::path file = dir / (std::string(kLightPrefix) + key + std::string(kLightExt));
+    auto v = readLightFile(file, key);
+    if (v) touchCacheFile(file);
+    return v;
+}
+
+void writeCachedLight(const fs::path& dir, const std::string& key, const std::string& what,
+                      std::span<const double> values) {
+    if (dir.empty()) return;
+    const nlohmann::json j = {{"key", key},
+                              {"what", what},
+                              {"values", std::vector<double>(values.begin(), values.end())}};
+    try {
+        std::error_code ec;
+        fs::create_directories(dir, ec);
+        // nlohmann writes doubles so that they read back bit for bit.
+        writeTextAtomically(dir / (std::string(kLightPrefix) + key + std::string(kLightExt)),
+                            j.dump() + "\n");
+    } catch (const std::exception& e) {
+        spdlog::warn("cache {}: the {} was not stored: {}", dir.string(), what, e.what());
+    }
 }
 
 void touchCacheFile(const fs::path& file) {
@@ -162,9 +223,13 @@ void touchCacheFile(const fs::path& file) {
 std::string describeCache(const CacheContents& c) {
     if (c.dir.empty()) return "no cache";
     char buf[96];
-    std::snprintf(buf, sizeof buf, ": %zu transport matri%s, %.1f MB", c.files,
-                  c.files == 1 ? "x" : "ces", static_cast<double>(c.bytes) / 1e6);
-    return c.dir.string() + buf;
+    std::string lights;
+    if (c.lights > 0)
+        lights = ", " + std::to_string(c.lights) + " derived light" + (c.lights == 1 ? "" : "s");
+    std::snprintf(buf, sizeof buf, ": %zu transport matri%s", c.files, c.files == 1 ? "x" : "ces");
+    std::string out = c.dir.string() + buf + lights;
+    std::snprintf(buf, sizeof buf, ", %.1f MB", static_cast<double>(c.bytes) / 1e6);
+    return out + buf;
 }
 
 }  // namespace sl

@@ -16,12 +16,17 @@
 // Size cap: cacheDirectory() trims the folder to CacheLocation::maxBytes (default
 // kDefaultCacheMaxBytes) when a command asks for it, least recently used matrix first (a
 // matrix's modification time is its last use: a cache hit refreshes it, touchCacheFile).
+// Beside the matrices it keeps lights derived from them (light-<key>.json: the paper's light
+// optimize computes on its T), so a run on the same T does not compute them again; they go with
+// the matrices (listed, trimmed and cleared alike) and are a few kB each.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
+#include <vector>
 
 namespace sl {
 
@@ -40,7 +45,8 @@ std::filesystem::path cacheDirectory(const CacheLocation& location);
 
 struct CacheContents {
     std::filesystem::path dir;
-    size_t files = 0;  // transport matrices
+    size_t files = 0;   // transport matrices
+    size_t lights = 0;  // lights derived from them (light-<key>.json)
     uintmax_t bytes = 0;
 };
 
@@ -56,10 +62,23 @@ CacheContents clearCache(const std::filesystem::path& dir);
 /// finished transport-*.tm only) until the rest holds at most maxBytes. Returns what was removed.
 CacheContents trimCache(const std::filesystem::path& dir, uintmax_t maxBytes);
 
+/// A light derived from a traced T, read from dir/light-<key>.json: `key` is 32 hex digits over
+/// T's fingerprint and every other input of the result (the caller's). Its values as written,
+/// bit for bit; nullopt when dir is empty or the file is missing, damaged or holds another key.
+/// A hit marks the file used (touchCacheFile).
+std::optional<std::vector<double>> readCachedLight(const std::filesystem::path& dir,
+                                                   const std::string& key);
+
+/// Stores a derived light as dir/light-<key>.json (atomically; `what` says what it is). Does
+/// nothing when dir is empty; a failed write is logged, not thrown: the cache only saves time.
+void writeCachedLight(const std::filesystem::path& dir, const std::string& key,
+                      const std::string& what, std::span<const double> values);
+
 /// Marks a cache file as used now (its modification time), for trimCache's order.
 void touchCacheFile(const std::filesystem::path& file);
 
-/// "DIR: 3 transport matrices, 118 MB" (or "no cache").
+/// "DIR: 3 transport matrices, 118 MB" (", 1 derived light" after the matrices when there are
+/// any; or "no cache").
 std::string describeCache(const CacheContents& contents);
 
 }  // namespace sl

@@ -10,9 +10,10 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "app/Cache.h"
 #include "app/InitialState.h"
+#include "app/OptimizeFigures.h"
 #include "app/PartSummary.h"
-#include "app/Plot.h"
 #include "app/Preview.h"
 #include "app/Report.h"
 #include "app/Search.h"
@@ -20,6 +21,7 @@
 #include "app/Version.h"
 #include "core/Color.h"
 #include "core/Error.h"
+#include "core/Hash.h"
 #include "core/Interrupt.h"
 #include "core/Progress.h"
 #include "core/Registry.h"
@@ -143,14 +145,16 @@ std::vector<double> luminanceOf(const std::vector<double>& image, size_t pixels)
     return y;
 }
 
-/// A render exposed on its own as a camera would (app/Preview.h exposureScale on the part).
-void writeExposedPng(const std::filesystem::path& png, const std::vector<double>& image,
-                     const TransportMatrix& t) {
+/// A render exposed on its own as a camera would (app/Preview.h exposureScale on the part),
+/// written as a PNG; returned for the figures.
+Image writeExposedPng(const std::filesystem::path& png, const std::vector<double>& image,
+                      const TransportMatrix& t) {
     const int ch = image.size() == t.rows() ? 1 : 3;
     const double scale = exposureScale(luminanceOf(image, t.rows()), t.objectMask);
     Image img(t.width, t.height, ch);
     for (size_t i = 0; i < image.size(); ++i) img.data[i] = static_cast<float>(image[i] * scale);
     writePng(png, img);
+    return img;
 }
 
 /// A direction as the env-map plot shows it: azimuth in [0°, 360°) = u·360° and elevation
@@ -363,6 +367,11 @@ struct Inputs {
     std::vector<uint8_t> regionLabels;  // image space, 0 = none
     std::vector<RegionLabel> regionLegend;
     std::string regionSource;  // where the regions come from ("" = none)
+    /// defects, reference, truth, truthLabels, lampName and lampE depend on the scene and the
+    /// options, not on T: once set (the first load), a training-noise round that traces T again
+    /// keeps them instead of projecting the regions (or computing the defect map) again.
+    bool sceneParts = false;
+    LabelMask truthLabels;  // the truth projected into the image, its legend (truth given)
     /// The training trace's resolved options and seed (what the validation estimate repeats
     /// with its own seed); unset for a .tm.
     std::optional<PrecomputeOptions> trained;
@@ -550,12 +559,12 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     const TransportMatrix& t = job.transport.file.matrix;
     in.mask = lossMask(o.mask, t, in.scene.get(), o.scratch);
     job.maskPixels = in.mask.count;
-    if (in.kind == ObjectiveKind::Defects && in.defects.empty()) {
+    if (in.kind == ObjectiveKind::Defects && !in.sceneParts && in.defects.empty()) {
         DefectRegions regions = defectRegionsInImage(*in.scene, o.defects, o.truth, o.reference);
         in.defects = std::move(regions.defects);
         in.reference = std::move(regions.reference);
     }
-    if (!o.truth.empty()) in.truth = projectMaskFile(*in.scene, o.truth);
+    if (!o.truth.empty() && !in.sceneParts) in.truth = projectMaskFile(*in.scene, o.truth);
     const int maxDepth = job.transport.file.provenance.maxDepth;
     for (const InitialState& s : o.starts)
         in.startValues.push_back(
@@ -563,7 +572,7 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     // A start whose image has no contrast on the part (E = 0: all black) is a plateau of every
     // objective (G = 0, gradient 0): no optimizer can leave it.
     for (size_t k = 0; k < o.starts.size(); ++k) {
-        const std::vector<double> image = renderImage(t, in.startValues[k], in.shard);
+        std::vector<double> image = renderImage(t, in.startValues[k], in.shard);
         const size_t ch = image.size() / t.rows();
         double lo = std::numeric_limits<double>::infinity(), hi = -lo;
         for (size_t pix = 0; pix < t.rows(); ++pix)
@@ -579,18 +588,37 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
                     "): the objective's G is 0 and its gradient "
                     "0 there, so no optimizer can leave it",
                 "start from a light that shows the part, e.g. const:0.5 or specular");
+        if (k == 0) in.image0 = std::move(image);  // T·E0 of the first start, rendered once
     }
-    in.image0 = renderImage(t, in.startValues.front(), in.shard);
     in.metricsInitial =
         metricsFor(t, in.image0, in.mask.pixels, in.startValues.front(), o.rgb, in.truth);
 }
 
 /// The paper's light on our T: eq. 2 at the paper's λ 30 on mean(E²), Adam lr 0.02 × 100 from
 /// E0 = 0.5 (applyOptimizePreset's "paper" settings), on the training estimate T itself rather
-/// than 100 fresh estimates, so it costs well under a second.
-std::vector<double> paperLight(const Plan& p, const Inputs& in, const TransportMatrix& t) {
+/// than 100 fresh estimates. It depends only on T, the loss mask and the channels, so it is
+/// kept in the cache beside T (app/Cache.h readCachedLight), keyed by T's fingerprint and those:
+/// a run on a cached T does not optimize it again (the same values, bit for bit).
+std::vector<double> paperLight(const Plan& p, const Inputs& in, const TransportMatrix& t,
+                               const std::string& fingerprint) {
     OptimizeJobOptions paper;
     applyOptimizePreset(OptimizePreset::Paper, paper);
+    std::string key;
+    if (!p.cacheDir.empty() && !fingerprint.empty() && !in.shard.distributed()) {
+        std::ostringstream what;
+        what << std::setprecision(17) << "paper's light 1; T " << fingerprint << "; rgb " << p.o.rgb
+             << "; mask " << toHex(hash64(in.mask.pixels.data(), in.mask.pixels.size()))
+             << "; lambda " << paper.lambdas.front() << "; lr " << paper.optimizer.learningRate
+             << "; iterations " << paper.optimizer.iterations << "; start "
+             << paper.starts.front().spec << "; reg " << static_cast<int>(paper.objective.reg);
+        const std::string w = what.str();
+        key = toHex(hash64(w.data(), w.size(), 1)) + toHex(hash64(w.data(), w.size(), 2));
+        if (auto cached = readCachedLight(p.cacheDir, key);
+            cached && cached->size() == t.cols() * (p.o.rgb ? 3 : 1)) {
+            spdlog::info("the paper's light on T from cache");
+            return *cached;
+        }
+    }
     SearchInputs si;
     si.set = {&t};
     si.mask = in.mask.pixels;
@@ -605,7 +633,9 @@ std::vector<double> paperLight(const Plan& p, const Inputs& in, const TransportM
     so.optimizer.callback = nullptr;
     so.planes = 1;
     so.starts = paper.starts;
-    return search(si, so).e;
+    std::vector<double> e = search(si, so).e;
+    if (!key.empty()) writeCachedLight(p.cacheDir, key, "paper's light on T " + fingerprint, e);
+    return e;
 }
 
 /// Stage 3b: what E* is compared with (the user's lamp, the paper's light) and the regions the
@@ -613,29 +643,33 @@ std::vector<double> paperLight(const Plan& p, const Inputs& in, const TransportM
 void prepareComparisons(const Plan& p, Inputs& in, const OptimizeJobSummary& job) {
     const OptimizeJobOptions& o = p.o;
     const TransportMatrix& t = job.transport.file.matrix;
-    const EnvMap lamp = o.compare.empty() ? studioEnvMap(t.envWidth, t.envHeight)
-                                          : lightFromSpec(o.compare, t.envWidth, t.envHeight,
-                                                          o.rgb ? 3 : 0, option("compare"));
-    in.lampName = o.compare.empty() ? std::string("studio preset")
-                                    : std::filesystem::path(o.compare).filename().string();
-    // As the judge reads a light (Judge::envVector): RGB maps by their luminance on a gray T.
-    const size_t n = lamp.texelCount();
-    if (lamp.channels == 1 && o.rgb) {
-        in.lampE.resize(3 * n);
-        for (size_t i = 0; i < 3 * n; ++i) in.lampE[i] = lamp.texels[i / 3];
-    } else if (lamp.channels == 3 && !o.rgb) {
-        in.lampE.resize(n);
-        for (size_t i = 0; i < n; ++i)
-            in.lampE[i] = luminance(double(lamp.texels[3 * i]), double(lamp.texels[3 * i + 1]),
-                                    double(lamp.texels[3 * i + 2]));
-    } else {
-        in.lampE.assign(lamp.texels.begin(), lamp.texels.end());
+    if (!in.sceneParts) {
+        // The user's lamp: it does not depend on T (only on the env map's size).
+        const EnvMap lamp = o.compare.empty() ? studioEnvMap(t.envWidth, t.envHeight)
+                                              : lightFromSpec(o.compare, t.envWidth, t.envHeight,
+                                                              o.rgb ? 3 : 0, option("compare"));
+        in.lampName = o.compare.empty() ? std::string("studio preset")
+                                        : std::filesystem::path(o.compare).filename().string();
+        // As the judge reads a light (Judge::envVector): RGB maps by their luminance on a gray T.
+        const size_t n = lamp.texelCount();
+        if (lamp.channels == 1 && o.rgb) {
+            in.lampE.resize(3 * n);
+            for (size_t i = 0; i < 3 * n; ++i) in.lampE[i] = lamp.texels[i / 3];
+        } else if (lamp.channels == 3 && !o.rgb) {
+            in.lampE.resize(n);
+            for (size_t i = 0; i < n; ++i)
+                in.lampE[i] = luminance(double(lamp.texels[3 * i]), double(lamp.texels[3 * i + 1]),
+                                        double(lamp.texels[3 * i + 2]));
+        } else {
+            in.lampE.assign(lamp.texels.begin(), lamp.texels.end());
+        }
+        if (!o.truth.empty()) in.truthLabels = projectTruth(*in.scene, o.truth);
+        in.sceneParts = true;
     }
-    in.paperE = paperLight(p, in, t);
+    in.paperE = paperLight(p, in, t, job.transport.file.provenance.fingerprint);
     if (!o.truth.empty()) {
-        const LabelMask truth = projectTruth(*in.scene, o.truth);
-        in.regionLabels = truth.labels;
-        in.regionLegend = truth.legend;
+        in.regionLabels = in.truthLabels.labels;
+        in.regionLegend = in.truthLabels.legend;
         in.regionSource = "truth " + o.truth.filename().string();
     } else if (!in.defects.empty()) {
         in.regionLabels.assign(in.defects.size(), 0);
@@ -678,6 +712,7 @@ struct LambdaResult {
     std::vector<double> optimizedE;  // E* when the answer is a reference (else empty)
     std::vector<std::vector<double>> startResults;  // every start's E (multistart)
     std::vector<std::string> rows;
+    LossCurve curve;                        // loss.csv's loss and held-out loss, for the loss plot
     LossParts lampTraining, paperTraining;  // the lamp's and the paper's light on T at λ
 };
 
@@ -762,6 +797,12 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
             row << ',';
         }
         res.rows.push_back(row.str());
+        res.curve.iteration.push_back(static_cast<double>(r.iteration));
+        res.curve.loss.push_back(r.loss);
+        if (scorer && full) {
+            res.curve.heldIteration.push_back(static_cast<double>(r.iteration));
+            res.curve.held.push_back(lastHeld);
+        }
         if (live.is_open()) live << res.rows.back() << '\n';
         if (live.is_open() && (res.rows.size() == 1 || sinceFlush.seconds() >= 1.0)) {
             live.flush();
@@ -849,6 +890,8 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
             tail << std::setprecision(10) << ',' << run.heldFinal->own.total << ','
                  << run.heldFinal->paper.total;
             res.rows.back() += tail.str();
+            res.curve.heldIteration.push_back(res.curve.iteration.back());
+            res.curve.held.push_back(run.heldFinal->own.total);
         }
     }
     res.lampTraining = loss.evaluate(in.lampE, {});
@@ -969,8 +1012,9 @@ json envDirectionsJson(const Inputs& in, const TransportMatrix& t, const std::ve
     return j;
 }
 
-/// plot-data.json: the lights' texel luminances and the grid's directions, what
-/// scripts/plot_optimize.py draws the env-map plot from (it restates no convention).
+/// plot-data.json: the lights' texel luminances and the grid's directions, what the env-map
+/// plots are drawn from (app/OptimizeFigures.h here, scripts/plot_optimize.py by hand; neither
+/// restates the convention).
 json plotDataJson(const Inputs& in, const TransportMatrix& t, const std::vector<double>& e,
                   bool rgb) {
     const EnvMapBasis basis(t.envWidth, t.envHeight);
@@ -1159,6 +1203,37 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     return s;
 }
 
+/// What the figures show, from plot-data.json's and summary.json's content (as
+/// scripts/plot_optimize.py reads them from the files) and the loss curve.
+OptimizeFiguresInput figuresInput(const json& plotData, const json& summary,
+                                  const LossCurve& curve) {
+    OptimizeFiguresInput f;
+    f.envmap.width = plotData.at("width").get<int>();
+    f.envmap.height = plotData.at("height").get<int>();
+    f.envmap.azimuthDeg = plotData.at("azimuth_deg").get<std::vector<double>>();
+    f.envmap.elevationDeg = plotData.at("elevation_deg").get<std::vector<double>>();
+    f.envmap.luminance = plotData.at("lights").at("optimized").get<std::vector<double>>();
+    const json& dirs = summary.at("envmap_directions");
+    auto direction = [](const json& d) {
+        return PlotDirection{d.at("azimuth_deg").get<double>(),
+                             d.at("elevation_deg").get<double>()};
+    };
+    if (dirs.contains("camera")) f.directions.camera = direction(dirs["camera"]);
+    if (dirs.contains("mirror")) f.directions.mirror = direction(dirs["mirror"]);
+    for (const json& d : dirs.at("brightest")) f.directions.brightest.push_back(direction(d));
+    f.loss = curve;
+    std::ostringstream lambda;
+    lambda << summary.at("lambda").get<double>();
+    f.lossTitle = summary.at("optimizer").get<std::string>() + " on " +
+                  summary.at("objective").get<std::string>() + ", λ = " + lambda.str();
+    f.title = "scratchlight optimize: loss " +
+              formatNumber(summary.at("initial_loss").get<double>(), 4) + " → " +
+              formatNumber(summary.at("final_loss").get<double>(), 4);
+    f.lampTitle =
+        "your lamp (" + summary.at("compare").at("lamp").at("name").get<std::string>() + ")";
+    return f;
+}
+
 /// Stage 5: one run's files (the header of OptimizeJob.h lists them); returns its report entry.
 ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
                           const LambdaResult& r) {
@@ -1222,8 +1297,8 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
     writeRender(dir / "compare-lamp.exr", imageLamp, t.width, t.height, ch);
     writeRender(dir / "compare-paper.exr", imagePaper, t.width, t.height, ch);
     writeEnvMap(dir / "compare-paper-envmap.exr", toEnvMap(in.paperE, t, o.rgb));
-    writeExposedPng(dir / "view-lamp.png", imageLamp, t);
-    writeExposedPng(dir / "view-optimized.png", imageOptimized, t);
+    Image lampView = writeExposedPng(dir / "view-lamp.png", imageLamp, t);
+    Image optimizedView = writeExposedPng(dir / "view-optimized.png", imageOptimized, t);
     writeExposedPng(dir / "view-paper.png", imagePaper, t);
     if (!in.regionLabels.empty()) {
         const Image outlined = outlinedRender(std::vector<double>(t.rows(), 0.0), t.width, t.height,
@@ -1237,26 +1312,26 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
         }
         writePng(dir / "view-regions.png", layer);
     }
-    writeTextAtomically(dir / "plot-data.json", plotDataJson(in, t, r.e, o.rgb).dump() + "\n");
+    const json plotData = plotDataJson(in, t, r.e, o.rgb);
+    writeTextAtomically(dir / "plot-data.json", plotData.dump() + "\n");
     const VisibilityMetrics metricsFinal = metricsFor(t, imageFinal, mask, r.e, o.rgb, in.truth);
-    writeTextAtomically(dir / "summary.json",
-                        runSummaryJson(p, in, job, r, metricsFinal).dump(2) + "\n");
-    // The figures (scripts/plot_optimize.py); without python3 or matplotlib the report says why.
+    const json summary = runSummaryJson(p, in, job, r, metricsFinal);
+    writeTextAtomically(dir / "summary.json", summary.dump(2) + "\n");
+    // The figures, drawn in-process (app/OptimizeFigures.h); when they fail the report says why.
     std::string figureProblem;
     if (!o.figures) {
         figureProblem = "figures not asked for";
     } else {
-        std::fflush(stdout);
-        const ProgressTask task("figures (matplotlib)");
-        const PlotOutcome plot = runPlotScript("plot_optimize.py", {dir.string()});
-        if (!plot.ran)
-            figureProblem = plot.message;
-        else if (plot.exitCode == 3)
-            figureProblem = "python3 has no matplotlib (install python3-matplotlib)";
-        else if (plot.exitCode != 0)
-            figureProblem = "plot_optimize.py failed (exit code " + std::to_string(plot.exitCode) +
-                            "): " + shellQuoted(plot.command);
-        if (!figureProblem.empty()) spdlog::warn("figures not made: {}", figureProblem);
+        const ProgressTask task("figures");
+        try {
+            OptimizeFiguresInput fig = figuresInput(plotData, summary, r.curve);
+            fig.lampView = std::move(lampView);
+            fig.optimizedView = std::move(optimizedView);
+            writeOptimizeFigures(dir, fig);
+        } catch (const std::exception& e) {
+            figureProblem = e.what();
+            spdlog::warn("figures not made: {}", figureProblem);
+        }
     }
     writeTextAtomically(dir / "report.html", renderOptimizeReportHtml(dir, figureProblem));
     std::ostringstream title;
@@ -1313,10 +1388,20 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
         // T at `spp` (unset: the scene's or the given one), its validation estimate, and what
         // depends on T; the scene is loaded once.
         auto load = [&](int spp) {
-            std::unique_ptr<Scene> scene = std::move(in.scene);
+            Inputs kept = std::move(in);
             in = Inputs{};
             in.ranks = p.ranks;
-            in.scene = std::move(scene);
+            in.scene = std::move(kept.scene);  // loaded once
+            if (kept.sceneParts) {             // what does not depend on T: computed once
+                in.defects = std::move(kept.defects);
+                in.reference = std::move(kept.reference);
+                in.truth = std::move(kept.truth);
+                in.truthLabels = std::move(kept.truthLabels);
+                in.lampName = std::move(kept.lampName);
+                in.lampE = std::move(kept.lampE);
+                in.sceneParts = true;
+            }
+            in.defectSppLogged = kept.defectSppLogged;
             job.extraPlanes.clear();
             loadTraining(p, in, job, spp);
             if (job.transport.autoDepth && spp == 0)

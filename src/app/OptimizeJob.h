@@ -27,8 +27,9 @@
 //   view-regions.png          the defect regions' outlines (truth, else the defects objective's
 //                             region, else a drawn loss mask) on a transparent layer
 //   plot-data.json            the lights' texel luminances and the grid's directions
-//   plot-envmap.png, plot-loss.png, overview.png  scripts/plot_optimize.py's figures (absent,
-//                             and the report says why, without python3/matplotlib)
+//   plot-envmap.png, plot-loss.png, overview.png  the report's figures, drawn in-process
+//                             (app/OptimizeFigures.h; absent with figures off, and the report
+//                             says why); scripts/plot_optimize.py redraws them from the files
 // A sweep also writes OUTDIR/sweep.csv (one row per λ).
 //
 // OUTDIR is checked before any work and replaced as a unit (io/StagedDirectory.h): a failure
@@ -104,7 +105,7 @@ struct OptimizeJobOptions {
     /// lightFromSpec: a file, const:V or a preset; empty: the "studio" preset), scored beside
     /// E* and the paper's light.
     std::string compare;
-    bool figures = true;  // the report's figures by scripts/plot_optimize.py (app/Plot.h)
+    bool figures = true;  // the report's figures (app/OptimizeFigures.h)
     /// The defects objective's regions in height-map space (app/Truth.h RegionSpec): the defects
     /// (empty: `truth`, else auto: the defect map of the scene's height map) and the
     /// defect-free reference (empty: the part away from the defects; auto: the part the defect

@@ -846,7 +846,7 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
              "</div>\n";
     h << "</section>\n";
 
-    // 3. The env map as a plot; 4. the loss curve (matplotlib, scripts/plot_optimize.py).
+    // 3. The env map as a plot; 4. the loss curve (app/OptimizeFigures.h).
     h << "<section id=\"envmap\"><h2>The light: env map with axes</h2>\n"
       << figureOrReason(dir, "plot-envmap.png", "env-map plot", figureProblem)
       << "<p class=\"caption\">Azimuth 0° points toward −z, 90° toward +x; elevation 90° is "

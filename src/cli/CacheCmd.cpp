@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <memory>
+#include <string>
 
 #include "app/Cache.h"
 #include "cli/Commands.h"
@@ -26,9 +27,13 @@ int runCache(const CacheArgs& a) {
     }
     if (a.clear) {
         const CacheContents removed = clearCache(dir);
-        std::printf("removed %zu transport matri%s (%.1f MB) from %s\n", removed.files,
-                    removed.files == 1 ? "x" : "ces", static_cast<double>(removed.bytes) / 1e6,
-                    dir.string().c_str());
+        std::string lights;
+        if (removed.lights > 0)
+            lights = " and " + std::to_string(removed.lights) + " derived light" +
+                     (removed.lights == 1 ? "" : "s");
+        std::printf("removed %zu transport matri%s%s (%.1f MB) from %s\n", removed.files,
+                    removed.files == 1 ? "x" : "ces", lights.c_str(),
+                    static_cast<double>(removed.bytes) / 1e6, dir.string().c_str());
         return kOk;
     }
     std::printf("%s\n", describeCache(cacheContents(dir)).c_str());

@@ -288,7 +288,7 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
                 " (default: " + optimizeDefaults().starts.front() + ")");
         c->add_flag_function(
             "--no-figures", [&j](std::int64_t) { j.figures = false; },
-            "Do not run scripts/plot_optimize.py (the report says the figures were not asked for)");
+            "Do not draw the report's figures (the report says they were not asked for)");
         c->add_option("--compare", j.compare,
                       "The lamp you use now, the report's \"before\": " + lightSpecForms() +
                           " (default: studio)");

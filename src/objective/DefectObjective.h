@@ -21,8 +21,8 @@
 //           keeps the mean brightness within [lo, hi] of the furnace value and off clipping
 //   L_dark = κ_f·log(max(m, 1e-12·w)/(f·w))² where m < f·w, else 0: a floor the band's soft
 //           pull cannot be traded against (a dark-field light can buy more visibility than
-//           L_exp costs and leave the part at 1/600 of white); f is the answer's brightness
-//           floor (app/Answer.h), so E* stays a light a person can see
+//           L_exp costs and leave the part at 1/600 of white); f is twice the answer's
+//           brightness floor (app/Answer.h), so E* stays a light a person can see
 //   Loss  = L_vis + L_exp + L_dark + λ·mean(E²)
 //
 // L_vis is invariant to scaling E; L_exp and λ fix the scale (with λ > 0 the optimum sits near
@@ -50,8 +50,10 @@ struct DefectObjectiveOptions {
     double whiteMean = 0;          // mean over the part of T·1 (the white furnace), > 0
     double low = 0.2, high = 0.8;  // the brightness band, as fractions of whiteMean
     double exposureWeight = 10;    // κ
-    double darkFloor = kMinVisibleBrightness;  // f, a fraction of whiteMean (0: no floor)
-    double darkWeight = 100;                   // κ_f
+    /// f, a fraction of whiteMean (0: no floor): twice the answer's eligibility, since the
+    /// optimum settles just under a soft floor and another estimate must still see it above.
+    double darkFloor = 2 * kMinVisibleBrightness;
+    double darkWeight = 100;  // κ_f
 };
 
 class DefectObjective final : public HalfImageObjective {
