@@ -2,6 +2,8 @@
 // central differences of the whole chain, and greedy K on a small part reaching E*'s loss.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -140,6 +142,57 @@ TEST(LampFit, ForbiddenAzimuthKeepsLampsOut) {
         if (l.radiance == 0) continue;
         const double c = std::cos(l.azimuth);  // > 0 inside the forbidden half
         EXPECT_LT(c, 0.05) << "azimuth " << l.azimuth * 180 / pi;
+    }
+}
+
+// A lamp may not stand in the camera's view (LampFitOptions::camera): the camera placed where
+// the unconstrained fit puts its first lamp, the constrained fit keeps every disk's centre out
+// of the margin, and the penalty's gradient (through the chain) matches central differences.
+TEST(LampFit, TheCamerasConeKeepsLampsOut) {
+    SmallProblem small(0.5);
+    TransportLoss& loss = small.loss;
+    std::vector<double> target(loss.dimension(), 0.5);
+    LampFitOptions o;
+    o.count = 2;
+    o.kinds = {LampKind::Disk};
+    const LampFitResult free = fitLamps(loss, target, o);
+    const Lamp& first = free.steps.front().lamps.front();
+    ASSERT_GT(first.radiance, 0.0);
+    o.camera = std::array<double, 2>{first.azimuth, first.elevation};
+    o.cameraMargin = 25 * std::numbers::pi / 180;
+    const Vec3d camera = lampDirection(first.azimuth, first.elevation);
+    const LampFitResult kept = fitLamps(loss, target, o);
+    for (const Lamp& l : kept.steps.back().lamps) {
+        if (l.radiance == 0) continue;
+        const double angle =
+            std::acos(std::clamp(dot(lampDirection(l.azimuth, l.elevation), camera), -1.0, 1.0));
+        EXPECT_GT(angle, o.cameraMargin - 0.02)
+            << "a lamp " << angle * 180 / std::numbers::pi << " deg from the camera";
+    }
+    // The penalty's gradient: a disk at 10° from the camera (inside the cone).
+    LampRasterizer raster(EnvMapBasis(50, 25), o.raster);
+    LampProblem problem(loss, raster, {LampKind::Disk}, o);
+    Lamp inside = first;
+    inside.elevation = std::min(first.elevation + 10 * std::numbers::pi / 180, 1.4);
+    inside.size = 0.2;
+    inside.radiance = 0.6;
+    const std::vector<double> x = problem.encode(std::span<const Lamp>(&inside, 1));
+    std::vector<double> g(x.size());
+    const double withCone = problem.evaluate(x, g);
+    LampFitOptions noCamera = o;
+    noCamera.camera.reset();
+    const LampProblem plain(loss, raster, {LampKind::Disk}, noCamera);
+    EXPECT_GT(withCone, plain.evaluate(x, {}));  // the intrusion costs
+    double scale = 0;
+    for (double v : g) scale = std::max(scale, std::abs(v));
+    for (size_t k = 0; k < x.size(); ++k) {
+        auto central = [&](double h) {
+            auto a = x, b = x;
+            a[k] += h;
+            b[k] -= h;
+            return (problem.evaluate(a, {}) - problem.evaluate(b, {})) / (2 * h);
+        };
+        EXPECT_NEAR(g[k], (4 * central(5e-5) - central(1e-4)) / 3, 1e-5 * scale) << k;
     }
 }
 

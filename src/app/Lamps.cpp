@@ -34,6 +34,15 @@ double forbiddenDepth(double phi, std::pair<double, double> range) {
     return std::min(off, width - off);
 }
 
+/// How deep the direction (azimuth φ, elevation ε) lies inside the camera's cone: margin minus
+/// its angle to the camera, 0 outside (or without a camera).
+double cameraDepth(double phi, double eps, const LampFitOptions& o) {
+    if (!o.camera) return 0;
+    const Vec3d a = lampDirection(phi, eps), c = lampDirection((*o.camera)[0], (*o.camera)[1]);
+    const double angle = std::acos(std::clamp(dot(a, c), -1.0, 1.0));
+    return std::max(0.0, o.cameraMargin - angle);
+}
+
 }  // namespace
 
 std::array<double, 2> lampParamRange(LampKind kind, int p, const LampFitOptions& o) {
@@ -156,6 +165,26 @@ double LampProblem::evaluate(std::span<const double> x, std::span<double> grad) 
                 grad[l * kLampParams + static_cast<size_t>(k)] = g * (r[1] - r[0]);
             }
         if (!lampUsesParam(ls[l].kind, kAzimuth)) continue;
+        if (const double depth = cameraDepth(ls[l].azimuth, ls[l].elevation, options_); depth > 0) {
+            value += kForbidWeight * depth * depth;
+            if (!grad.empty()) {
+                // d depth / d(φ, ε) by central differences (the depth is smooth inside the cone
+                // away from its axis, where the gradient is any direction out).
+                const double h = 1e-7;
+                const double dPhi = (cameraDepth(ls[l].azimuth + h, ls[l].elevation, options_) -
+                                     cameraDepth(ls[l].azimuth - h, ls[l].elevation, options_)) /
+                                    (2 * h),
+                             dEps = (cameraDepth(ls[l].azimuth, ls[l].elevation + h, options_) -
+                                     cameraDepth(ls[l].azimuth, ls[l].elevation - h, options_)) /
+                                    (2 * h);
+                const auto ra = lampParamRange(ls[l].kind, kAzimuth, options_),
+                           re = lampParamRange(ls[l].kind, kElevation, options_);
+                grad[l * kLampParams + kAzimuth] +=
+                    2 * kForbidWeight * depth * dPhi * (ra[1] - ra[0]);
+                grad[l * kLampParams + kElevation] +=
+                    2 * kForbidWeight * depth * dEps * (re[1] - re[0]);
+            }
+        }
         for (const auto& range : options_.forbiddenAzimuth) {
             const double depth = forbiddenDepth(ls[l].azimuth, range);
             if (depth <= 0) continue;
@@ -197,7 +226,7 @@ std::vector<Lamp> candidates(const LampRasterizer& raster, std::span<const doubl
         const double az = 2 * kPi * (i + 0.5) / W;
         for (const auto& r : o.forbiddenAzimuth)
             if (forbiddenDepth(az, r) > 0) return false;
-        return true;
+        return cameraDepth(az, el, o) <= 0;
     };
     // The residual's peaks: the brightest allowed texels at least kPeakSeparation apart (up to
     // o.residualPeaks, each above a tenth of the brightest), then the most negative dLoss/dE.
@@ -350,6 +379,10 @@ void checkLampFitOptions(const LampFitOptions& o) {
         throw inputError(option("min-elevation"),
                          "the elevation range must be a non-empty part of [-90, 90] degrees",
                          "use e.g. 0 and 90");
+    if (!(o.cameraMargin >= 0 && o.cameraMargin < kPi / 2))
+        throw inputError(option("camera-margin"),
+                         "must be in [0, 90) degrees, not " + formatNumber(o.cameraMargin / kDeg),
+                         "use e.g. 10");
     for (const auto& [from, to] : o.forbiddenAzimuth) {
         const std::string range =
             formatNumber(from / kDeg) + ":" + formatNumber(to / kDeg) + " (degrees)";

@@ -11,7 +11,8 @@
 // full-radiance core). A parameter a kind does not use has an
 // empty range (it stays put). Forbidden azimuth ranges (camera, fixtures) are a penalty on the
 // lamp's centre inside a range (a smooth quadratic in the depth of the intrusion, weighted so a
-// lamp there loses any gain), not a hole in the box. Only the centre is kept out: a disk's or
+// lamp there loses any gain), not a hole in the box; so is a centre within the margin of the
+// camera's direction (LampFitOptions::camera). Only the centre is kept out: a disk's or
 // bar's edge may reach into a range, and a ring (all azimuths) is not refused: drop `ring` from
 // the kinds when a range matters. Overlapping lamps must keep E within E*'s box [0, 1]: the
 // excess above 1 is a penalty 1e3·Σ_t Ω_t (E_t − 1)², so lamps get the light budget E* had
@@ -32,6 +33,7 @@
 #pragma once
 
 #include <array>
+#include <optional>
 #include <span>
 #include <string>
 #include <utility>
@@ -49,6 +51,12 @@ struct LampFitOptions {
     double minElevation = 0, maxElevation = 1.5707963267948966;  // radians
     /// Azimuth ranges no lamp's centre may sit in, radians [from, to] (from > to wraps).
     std::vector<std::pair<double, double>> forbiddenAzimuth;
+    /// The camera, as seen from the part's centre (azimuth, elevation in radians; unset: no
+    /// camera). No disk's or bar's centre may sit within cameraMargin of it, the same penalty
+    /// as a forbidden azimuth (a lamp there would stand in the camera's view or shine into
+    /// the lens); a ring, all around, is not kept out.
+    std::optional<std::array<double, 2>> camera;
+    double cameraMargin = 0.17453292519943295;  // 10°
     /// L-BFGS with the box; iterations per candidate and for the final polish.
     OptimizerMethod method = OptimizerMethod::Lbfgs;
     int candidateIterations = 15, finalIterations = 200;

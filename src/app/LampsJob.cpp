@@ -151,8 +151,21 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
                          job.secondsTarget);
         }
 
-        // The lamps.
-        job.fit = fitLamps(*objective.loss, target, o.fit);
+        // The lamps, kept out of the camera's cone (seen from the part's centre, the camera's
+        // target).
+        LampFitOptions fit = o.fit;
+        if (scene && fit.cameraMargin > 0) {
+            const CameraDesc& c = scene->camera.desc();
+            const Vec3d d = normalize(c.origin - c.target);
+            fit.camera =
+                std::array<double, 2>{std::atan2(d.x, -d.z), std::asin(std::clamp(d.y, -1.0, 1.0))};
+            spdlog::info(
+                "no lamp centre within {} deg of the camera (azimuth {} deg, elevation "
+                "{} deg)",
+                formatNumber(fit.cameraMargin * kDeg), formatNumber((*fit.camera)[0] * kDeg),
+                formatNumber((*fit.camera)[1] * kDeg));
+        }
+        job.fit = fitLamps(*objective.loss, target, fit);
         job.targetLoss = job.fit.targetLoss;
         const std::vector<Lamp>& lamps = job.fit.steps.back().lamps;
 

@@ -28,7 +28,7 @@ struct LampsArgs {
     LampsJobOptions job;
     std::string input, out = "out/lamps";
     std::vector<std::string> kinds, forbid;
-    double minElevation = 0, maxElevation = 90;
+    double minElevation = 0, maxElevation = 90, cameraMargin = 10;
     bool noJudge = false, noFigures = false;
 };
 
@@ -49,6 +49,7 @@ int runLamps(LampsArgs a) {
     j.figures = !a.noFigures;
     j.fit.minElevation = a.minElevation * kRad;
     j.fit.maxElevation = a.maxElevation * kRad;
+    j.fit.cameraMargin = a.cameraMargin * kRad;
     if (!a.kinds.empty()) {
         j.fit.kinds.clear();
         for (const std::string& k : a.kinds) j.fit.kinds.push_back(parseLampKind(k, "--kinds"));
@@ -144,6 +145,11 @@ void registerLamps(CLI::App& app, std::function<int()>& run) {
                   "Azimuth range FROM:TO (degrees) no lamp centre may sit in (camera, fixtures); "
                   "repeatable")
         ->take_all();
+    c->add_option("--camera-margin", a->cameraMargin,
+                  "No disk or bar centre within this many degrees of the camera's direction "
+                  "(seen from the part's centre); 0: no such limit")
+        ->check(CLI::Range(0.0, 89.0))
+        ->capture_default_str();
     c->add_flag("--no-judge", a->noJudge, "Do not score on the judge's estimate");
     c->add_flag("--no-figures", a->noFigures, "Do not run scripts/plot_lamps.py");
     addSceneOverrides(c, j.sceneOverrides, true);
