@@ -66,7 +66,7 @@ TEST(LampCli, FitsTheDefectsObjectiveAndJudgesIt) {
     test::TempDir dir("lamps-cli-defects");
     const fs::path out = dir / "out";
     const std::string truth = std::string(SL_SOURCE_DIR) + "/scenes/default/part-truth.png";
-    auto r = test::runCli("lamps " + kScene + " --size 64 --spp 4 --count 1 --no-figures --truth " +
+    auto r = test::runCli("lamps " + kScene + " --size 64 --spp 4 --count 2 --no-figures --truth " +
                           truth + " --cache " + (dir / "cache").string() + " -o " + out.string());
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("judge (defect visibility on the held-out estimate"), std::string::npos)
@@ -83,6 +83,20 @@ TEST(LampCli, FitsTheDefectsObjectiveAndJudgesIt) {
     EXPECT_NEAR(summary["judge"]["lamps"]["visibility"][0]["visibility"].get<double>(), lamps,
                 1e-12 * std::abs(lamps));
     EXPECT_NE(readText(out / "report.html").find("visibility: "), std::string::npos);
+    // The self-check: every K's lamps and the studio lamp on the validation estimate; the answer
+    // is one of them and is said.
+    const auto& a = summary["answer"];
+    ASSERT_TRUE(a.is_object()) << summary.dump(2);
+    ASSERT_EQ(a["candidates"].size(), 3u);  // 1 lamp, 2 lamps, the studio preset
+    EXPECT_EQ(a["candidates"][0]["name"], "1 lamp");
+    EXPECT_EQ(a["candidates"][1]["name"], "2 lamps");
+    EXPECT_EQ(a["candidates"][2]["name"], "studio preset");
+    EXPECT_EQ(a["candidates"][2]["kind"], "reference");
+    bool found = false;
+    for (const auto& c : a["candidates"]) found |= c["name"] == a["light"];
+    EXPECT_TRUE(found);
+    EXPECT_NE(r.output.find("The answer is"), std::string::npos) << r.output;
+    EXPECT_NE(readText(out / "report.html").find("The answer is"), std::string::npos);
 }
 
 /// The numbers of attribute `name`="..." of the first element after `from` in `xml`.

@@ -83,4 +83,23 @@ AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> 
     return c;
 }
 
+nlohmann::ordered_json answerJson(const AnswerChoice& a) {
+    nlohmann::ordered_json scored = nlohmann::ordered_json::array();
+    for (const ScoredCandidate& c : a.scored)
+        scored.push_back(
+            {{"name", c.candidate.name},
+             {"kind", c.candidate.kind == CandidateKind::Reference ? "reference" : "optimized"},
+             {"merit", c.merit.value},
+             {"brightness", c.score.brightness},
+             {"eligible", c.eligible},
+             {"why", c.why}});
+    return {{"light", a.answer().candidate.name},
+            {"kind", a.referenceWon() ? "reference" : "optimized"},
+            {"merit", a.answer().merit.what},
+            {"higher_is_better", a.answer().merit.higherIsBetter},
+            {"reason", a.reason},
+            {"on", "the validation estimate (independent of training and the judge)"},
+            {"candidates", scored}};
+}
+
 }  // namespace sl

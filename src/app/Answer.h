@@ -15,6 +15,7 @@
 #pragma once
 
 #include <cstddef>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -67,6 +68,10 @@ struct AnswerChoice {
     /// One line: what was chosen and why (the figures on the validation estimate).
     std::string reason;
 };
+
+/// summary.json's `answer`: the light chosen, its kind, the merit, the reason and every
+/// candidate (name, kind, merit, brightness, eligible, why), scored on the validation estimate.
+nlohmann::ordered_json answerJson(const AnswerChoice& choice);
 
 /// Scores every candidate on `validation` and picks the answer (header). At least one
 /// candidate of kind Optimized is required.

@@ -16,6 +16,7 @@
 #include "app/Preview.h"
 #include "app/Report.h"
 #include "app/Search.h"
+#include "app/TrainingNoise.h"
 #include "app/Version.h"
 #include "core/Error.h"
 #include "core/Stopwatch.h"
@@ -76,6 +77,7 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
     try {
         const bool tmInput = isTransportFile(o.input);
         std::unique_ptr<Scene> scene;
+        std::optional<PrecomputeOptions> trained;  // T's trace options (a scene given)
         const bool defectsNamed = !o.truth.empty() || !o.defects.empty();
         ObjectiveKind kind = o.objectiveKind ? *o.objectiveKind
                              : defectsNamed  ? ObjectiveKind::Defects
@@ -96,10 +98,10 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
                 kind = ObjectiveKind::Unbiased;
         } else {
             scene = loadScene(o.input, o.sceneOverrides);
-            PrecomputeOptions pre = o.precompute;
-            pre.rgb = false;
-            if (halves) pre.sampleSets = 2;
-            job.transport = transportForScene(*scene, pre, cacheDir);
+            trained = o.precompute;
+            trained->rgb = false;
+            if (halves) trained->sampleSets = 2;
+            job.transport = transportForScene(*scene, *trained, cacheDir);
         }
         const TransportMatrix& t = job.transport.file.matrix;
         spdlog::info("{}", describeTransport(job.transport));
@@ -215,6 +217,47 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
             job.judgement = jd;
         }
 
+        // The self-check: every K's lamps and the studio lamp on the validation estimate.
+        if (o.selfCheck && scene) {
+            PrecomputeOptions v;
+            if (trained) {
+                v = *trained;
+                v.spp = job.transport.file.provenance.spp;
+            } else {
+                v.spp = job.transport.file.provenance.spp;
+                v.maxDepth = job.transport.file.provenance.maxDepth;
+            }
+            const TransportSource vs =
+                validationEstimate(*scene, v, job.transport.file.provenance.seed, cacheDir);
+            JudgeOptions jo;
+            jo.objective = o.objective;
+            std::vector<uint8_t> labels;
+            std::vector<RegionLabel> legend;
+            if (kind == ObjectiveKind::Defects) {
+                for (uint8_t x : in.defects) labels.push_back(x ? 255 : 0);
+                legend = {RegionLabel{255, "defects"}};
+            }
+            const Judge validation(vs, jo, labels, legend);
+            const LampRasterizer raster(EnvMapBasis(t.envWidth, t.envHeight), o.fit.raster);
+            std::vector<AnswerCandidate> cands;
+            for (const LampFitStep& st : job.fit.steps)
+                cands.push_back({std::to_string(st.count) + (st.count == 1 ? " lamp" : " lamps"),
+                                 CandidateKind::Optimized, raster.rasterize(st.lamps)});
+            const EnvMap studioMap = lightFromSpec("studio", t.envWidth, t.envHeight, 1, "studio");
+            cands.push_back(
+                {"studio preset", CandidateKind::Reference, validation.envVector(studioMap)});
+            job.answer = chooseAnswer(validation, std::move(cands));
+            const AnswerChoice& a = *job.answer;
+            const std::string fitted = std::to_string(job.fit.steps.size()) + " lamps";
+            job.answerLine =
+                a.referenceWon()
+                    ? "The answer is the studio lamp, not the fitted lamps: " + a.reason
+                : a.answer().candidate.name != fitted
+                    ? "The answer is " + a.answer().candidate.name + " (lamps.json keeps all " +
+                          fitted + "; greedy.csv has each K): " + a.reason
+                    : "The answer is the " + fitted + ": " + a.reason;
+        }
+
         // Outputs.
         const json lj = lampsToJson(lamps, o.distanceMm);
         writeTextAtomically(dir / "lamps.json", lj.dump(2) + "\n");
@@ -277,6 +320,10 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
                              {"seconds", st.seconds},
                              {"evaluations", st.evaluations}});
         s["greedy"] = steps;
+        if (job.answer) {
+            s["answer"] = answerJson(*job.answer);
+            s["answer"]["line"] = job.answerLine;
+        }
         if (job.judgedTarget) {
             s["judge"] = {{"objective",
                            {{"measure", job.judgement->measure},
@@ -299,6 +346,7 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
              "img{max-width:100%}td,th{padding:2px 10px;text-align:right}</style></head><body>";
         h << "<h1>" << lamps.size() << " lamps for " << escapeXml(o.input.filename().string())
           << "</h1>";
+        if (!job.answerLine.empty()) h << "<p><b>" << escapeXml(job.answerLine) << "</b></p>";
         const double ratio = job.fit.steps.back().loss / job.targetLoss;
         h << "<p>Training loss (" << objectiveKindName(kind) << ", lower is better): E* "
           << formatNumber(job.targetLoss) << ", the lamps "

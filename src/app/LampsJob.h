@@ -12,10 +12,11 @@
 //   render-lamps.exr/png, render-target.exr/png   T·E under each; renders.png: the two side by
 //                       side (left E*, right the lamps), one exposure (E*'s)
 //   greedy.csv          k, loss, loss relative to E*'s, seconds, one row per k = 1..K
-//   summary.json        the options, T's facts, the losses, the judge's scores (E*, the lamps,
-//                       the studio lamp: the objective itself on the judge's held-out estimate,
-//                       and eq. 2, U, brightness and per-region visibility) when the judge's
-//                       estimate is available, the timings
+//   summary.json        the options, T's facts, the losses, the self-checked answer (which K,
+//                       or the studio lamp, is best on a validation estimate), the judge's scores
+//                       (E*, the lamps, the studio lamp: the objective itself on the judge's
+//                       held-out estimate, and eq. 2, U, brightness and per-region visibility) when
+//                       the judge's estimate is available, the timings
 //   plot-lamps.json, plot-lamps.png   the polar hemisphere plot of the lamps over E*
 //                       (scripts/plot_lamps.py; absent, and said why, without matplotlib)
 //   report.html         the renders side by side, the plot, the table
@@ -26,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "app/Answer.h"
 #include "app/Cache.h"
 #include "app/Judge.h"
 #include "app/Lamps.h"
@@ -55,7 +57,11 @@ struct LampsJobOptions {
     LampFitOptions fit;
     double distanceMm = 500;  // where the lamps are mounted, from the part's centre
     bool judge = true;        // score E*, the lamps and the studio lamp on the judge's estimate
-    bool figures = true;      // scripts/plot_lamps.py
+    /// The self-checked answer (app/Answer.h): the lamps of every K and the studio lamp scored
+    /// on a validation estimate (the training trace again with its own seed); the best
+    /// eligible one is the answer, said first. Needs the scene.
+    bool selfCheck = true;
+    bool figures = true;  // scripts/plot_lamps.py
     std::string commandLine;
     PrecomputeOptions precompute;
     CacheLocation cache;
@@ -87,6 +93,10 @@ struct LampsJobSummary {
     std::optional<JudgeScore> judgedTarget, judgedLamps, judgedStudio;
     std::optional<LampsJudgement> judgement;
     std::string plotMessage;  // why the plot is missing ("" when made)
+    /// The self-check (with a scene and selfCheck): candidates "K lamps" for every K, and
+    /// "studio preset"; answerLine says what the answer is, first.
+    std::optional<AnswerChoice> answer;
+    std::string answerLine;
 };
 
 LampsJobSummary runLampsJob(const LampsJobOptions& options);

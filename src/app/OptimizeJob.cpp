@@ -1130,22 +1130,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     }
     if (run.answer) {
         const AnswerChoice& a = *run.answer;
-        json scored = json::array();
-        for (const ScoredCandidate& c : a.scored)
-            scored.push_back(
-                {{"name", c.candidate.name},
-                 {"kind", c.candidate.kind == CandidateKind::Reference ? "reference" : "optimized"},
-                 {"merit", c.merit.value},
-                 {"brightness", c.score.brightness},
-                 {"eligible", c.eligible},
-                 {"why", c.why}});
-        s["answer"] = {{"light", a.answer().candidate.name},
-                       {"kind", a.referenceWon() ? "reference" : "optimized"},
-                       {"merit", a.answer().merit.what},
-                       {"higher_is_better", a.answer().merit.higherIsBetter},
-                       {"reason", a.reason},
-                       {"on", "the validation estimate (independent of training and the judge)"},
-                       {"candidates", scored}};
+        s["answer"] = answerJson(a);
         if (a.referenceWon()) s["answer"]["optimized_envmap"] = "envmap-optimized.exr";
     }
     if (run.judged) s["judge"] = toJson(*run.judged);

@@ -56,6 +56,7 @@ int runLamps(LampsArgs a) {
     }
     for (const std::string& f : a.forbid) j.fit.forbiddenAzimuth.push_back(parseAzimuthRange(f));
     const LampsJobSummary s = runLampsJob(j);
+    if (!s.answerLine.empty()) std::printf("%s\n", s.answerLine.c_str());
     std::printf("%3s %14s %10s %9s %6s\n", "K", "loss", "of E*'s", "seconds", "evals");
     for (const LampFitStep& st : s.fit.steps)
         std::printf("%3d %14.6g %10.4f %9.3f %6d\n", st.count, st.loss, st.loss / s.targetLoss,
@@ -151,6 +152,10 @@ void registerLamps(CLI::App& app, std::function<int()>& run) {
         ->check(CLI::Range(0.0, 89.0))
         ->capture_default_str();
     c->add_flag("--no-judge", a->noJudge, "Do not score on the judge's estimate");
+    c->add_flag_function(
+        "--no-self-check", [&j](std::int64_t) { j.selfCheck = false; },
+        "Do not score every K's lamps and the studio lamp on a validation estimate (by default "
+        "the best of them is named as the answer, first)");
     c->add_flag("--no-figures", a->noFigures, "Do not run scripts/plot_lamps.py");
     addSceneOverrides(c, j.sceneOverrides, true);
     c->add_option("--spp", j.precompute.spp, "Samples per pixel (overrides render.spp)")
