@@ -15,6 +15,7 @@
 #include "cli/Commands.h"
 #include "cli/Common.h"
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "core/Text.h"
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
@@ -209,6 +210,10 @@ int runOptimize(OptimizeArgs a) {
         std::printf("%s%s\n", prefix.c_str(), optimizeHeadlineOf(r.dir).c_str());
     }
     spdlog::info("wrote {}/ (open {}/report.html)", a.out, a.out);
+    // --keep-interrupted: the best light so far is written, and the exit code still says that
+    // the run was cut short (core/Interrupt.h).
+    if (s.interrupted || (!s.runs.empty() && s.runs.back().interrupted))
+        return 128 + interruptSignal();
     return kOk;
 }
 
@@ -314,6 +319,9 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
                       "adds the defect contrast to the metrics");
         addDefectRegionOptions(c, j.defects, j.reference);
         c->add_flag("--rgb", j.rgb, "Optimize an RGB env map (needs/creates an RGB T)");
+        c->add_flag("--keep-interrupted", j.keepInterrupted,
+                    "On Ctrl-C, write the best light so far into OUTDIR (marked interrupted, exit "
+                    "130) instead of leaving the previous OUTDIR as it was");
         c->add_flag("--smooth-abs", j.objective.smoothAbs, "Use sqrt(x²+ε²)−ε for |x|");
         const OptimizeDefaults d = optimizeDefaults();
         std::string objectiveHelp = "Objective (default: ";
