@@ -571,3 +571,50 @@ TEST(Interrupt, JudgeAndLampsStopAndWriteNothing) {
     }
 }
 
+// Issue 35: `judge -o` and `lamps -o` get optimize's checks of OUTDIR (one function,
+// cli/Common.h refuseOutputDirOverInputs, and io/StagedDirectory.h): not a file, not a folder of
+// the user's without our marker, not a folder that holds an input of the run. Each is refused
+// before any work, and nothing is touched.
+TEST(StagedDirectory, JudgeAndLampsCheckTheirOutputLikeOptimize) {
+    test::TempDir dir("out-checks");
+    const fs::path scene = fs::path(SL_SOURCE_DIR) / "scenes/default/scene.json";
+    const fs::path file = dir.path() / "file.txt", mine = dir.path() / "mine",
+                   ours = dir.path() / "ours";
+    writeFile(file, "a file");
+    fs::create_directories(mine);
+    writeFile(mine / "notes.txt", "keep");
+    {
+        StagedDirectory s(ours);
+        s.commit();
+    }
+    const fs::path light = ours / "light.exr", oursScene = ours / "scene.json";
+    ASSERT_EQ(test::runCli("render " + scene.string() + " --size 16 --spp 1 -o " + light.string())
+                  .exitCode,
+              0);
+    fs::copy_file(scene, oursScene);
+    for (const std::string cmd : {"judge", "lamps"}) {
+        SCOPED_TRACE(cmd);
+        const std::string run = cmd + " --no-cache ";
+        struct Case {
+            std::string args, says;
+        };
+        const std::vector<Case> cases = {
+            {scene.string() + " -o " + file.string(), "is a file"},
+            {scene.string() + " -o " + mine.string(), "scratchlight did not write"},
+            {oursScene.string() + " -o " + ours.string(), "holds an input of this run"},
+            {scene.string() + (cmd == "judge" ? " " : " --from ") + light.string() + " -o " +
+                 ours.string(),
+             "holds an input of this run"},
+        };
+        for (const Case& c : cases) {
+            const auto r = test::runCli(run + c.args);
+            EXPECT_EQ(r.exitCode, 1) << c.args << "\n" << r.output;
+            EXPECT_NE(r.output.find(c.says), std::string::npos) << c.args << "\n" << r.output;
+        }
+    }
+    EXPECT_EQ(test::readFile(file), "a file");
+    EXPECT_EQ(test::readFile(mine / "notes.txt"), "keep");
+    EXPECT_TRUE(fs::exists(light));
+    EXPECT_TRUE(fs::exists(oursScene));
+    EXPECT_EQ(entries(dir.path()), (std::vector<std::string>{"file.txt", "mine", "ours"}));
+}

@@ -173,13 +173,9 @@ struct OptimizeArgs {
 
 int runOptimize(OptimizeArgs a) {
     // OUTDIR is replaced as a whole: it must not hold what this run reads.
-    std::vector<std::filesystem::path> inputs = {a.input, a.job.truth, a.job.mask.file,
-                                                 a.job.compare};
-    if (std::filesystem::path(a.input).extension() == ".json" && std::filesystem::exists(a.input) &&
-        std::filesystem::exists(a.out))
-        for (const auto& f : sceneInputFiles(readSceneFile(a.input, a.job.sceneOverrides)))
-            inputs.push_back(f);
-    refuseOutputOverInput(a.out, "output directory", inputs, true);
+    refuseOutputDirOverInputs(
+        a.out, a.input, a.job.sceneOverrides,
+        {a.job.truth, a.job.mask.file, a.job.compare, a.job.defects.file, a.job.reference.file});
     a.job.input = a.input;
     a.job.outDir = a.out;
     a.job.objective.reg = a.reg == "image" ? RegTarget::Image : RegTarget::EnvMap;
