@@ -229,6 +229,14 @@ void resampleSquare(const std::string& where, HeightmapData& d) {
         return;
     }
     const double ratio = (alongY ? py : px) / p;
+    // Real instruments differ by a few times at most (a line scanner's profiles perhaps 100);
+    // a 124-byte file with a 1e7 ratio made 1.6 GB of interpolated points (scripts/fuzz).
+    if (!(ratio <= 1000))
+        throw inputError(where,
+                         "its x and y pitches (" + micrometres(px) + " and " + micrometres(py) +
+                             " um) differ more than 1000-fold: square pixels would stretch it " +
+                             formatNumber(ratio) + " times",
+                         "Check the file's pitches (a damaged header?)");
     // Counted in double first: a pitch ratio of 1e70 (a damaged file) must be refused, not
     // converted to size_t (undefined; found by scripts/fuzz).
     const double along = std::floor(static_cast<double>(n - 1) * ratio + 1e-9) + 1;
