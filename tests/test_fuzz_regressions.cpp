@@ -65,6 +65,15 @@ const std::map<std::string, std::string> kExpected = {
     {"transport/nan-values.tm", "entries of T are finite and >= 0"},
     // A section without "bytes": nlohmann::json's out_of_range escaped the reader.
     {"transport/section-without-bytes.tm", "damaged transport-matrix file"},
+    // Issue 35: a value nested 70 000 deep (140 KB) overflowed the stack when quoted in a
+    // message; past the fuzzers' old 600-2500-byte inputs. Refused by depth before parsing.
+    {"scene/nested-70000-deep.json", "nested deeper than 64"},
+    // An SDF whose y pitch is 1e70 times its x pitch: resampling to square pixels converted
+    // the 6e72 points to size_t (undefined behaviour) before refusing them.
+    {"heightmap/sdf-pitch-ratio-1e70.bin", "differ more than 1000-fold"},
+    {"metrology/pitch-ratio-overflow.bin", "differ more than 1000-fold"},
+    // A 124-byte SDF with a 1e7 pitch ratio: 1.6 GB of interpolated points, 43 s (timeout).
+    {"metrology/pitch-ratio-1e7-slow.bin", "differ more than 1000-fold"},
 };
 
 }  // namespace

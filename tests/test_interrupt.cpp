@@ -1,6 +1,7 @@
 // Nothing lost on failure or Ctrl-C: an OUTDIR is replaced as a unit (io/StagedDirectory.h), a
 // location that cannot work is refused before the work, and SIGINT/SIGTERM sent from this test
-// stop `optimize` with its best light written and marked, and `precompute` with nothing left.
+// stop every long command at its next safe point with nothing written (the previous OUTDIR as it
+// was), or `optimize --keep-interrupted` with its best light written and marked.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -18,7 +19,10 @@
 
 #include "TestUtil.h"
 #include "core/Error.h"
+#include "core/Interrupt.h"
+#include "io/ExitCleanup.h"
 #include "io/StagedDirectory.h"
+#include "io/TransportFile.h"
 
 extern char** environ;
 
@@ -159,9 +163,10 @@ TEST(StagedDirectory, OptimizeChecksTheOutputBeforeTheWork) {
     EXPECT_EQ(test::readFile(mine / "notes.txt"), "keep");
 }
 
-// Ctrl-C during a long optimization: the optimizer stops at its next iteration, the best light
-// so far is written with "interrupted": true, the exit code is 130; SIGTERM gives 143. During
-// precompute nothing is left behind. The previous results survive an interrupted precompute.
+// Ctrl-C during a long optimization with --keep-interrupted: the optimizer stops at its next
+// iteration, the best light so far is written with "interrupted": true, the exit code is 130;
+// SIGTERM gives 143. During precompute nothing is left behind. The previous results survive an
+// interrupted precompute.
 TEST(Interrupt, SignalsStopCleanly) {
     test::TempDir dir("interrupt");
     const fs::path scene = fs::path(SL_SOURCE_DIR) / "scenes/default/scene.json";
@@ -181,7 +186,7 @@ TEST(Interrupt, SignalsStopCleanly) {
             fs::remove_all(out);
             const pid_t pid =
                 spawnCli({"optimize", tm.string(), "--optimizer", "adam", "--iterations", "1000000",
-                          "--heldout", "none", "-o", out.string()},
+                          "--heldout", "none", "--keep-interrupted", "-o", out.string()},
                          log);
             std::string stagingName = ".";  // built in steps: GCC 12 -Wrestrict (bug 105329)
             stagingName += out.filename().string();
@@ -335,4 +340,281 @@ TEST(Interrupt, GenSurfaceStopsAndWritesNothing) {
     EXPECT_EQ(code, 130) << test::readFile(log);
     EXPECT_LT(seconds, 3.0) << test::readFile(log);
     EXPECT_EQ(entries(dir.path()), std::vector<std::string>{"log.txt"}) << test::readFile(log);
+}
+
+namespace {
+
+/// A finished `optimize` run in `out` from the small T `tm` (precomputed here): the "previous
+/// results" an interrupted run must leave as they are.
+void previousRun(const fs::path& scene, const fs::path& tm, const fs::path& out) {
+    ASSERT_EQ(test::runCli("precompute " + scene.string() + " --spp 2 -o " + tm.string()).exitCode,
+              0);
+    ASSERT_EQ(test::runCli("optimize " + tm.string() + " --heldout none --iterations 5 -o " +
+                           out.string())
+                  .exitCode,
+              0);
+}
+
+/// Starts a long `optimize` of `tm` into `out` and waits until its optimizer runs (rows in the
+/// staged loss.csv). Returns its pid, or -1 (with a test failure) when it never got there.
+pid_t startLongOptimize(const fs::path& tm, const fs::path& out, const fs::path& log) {
+    const pid_t pid = spawnCli({"optimize", tm.string(), "--optimizer", "adam", "--iterations",
+                                "1000000", "--heldout", "none", "-o", out.string()},
+                               log);
+    std::string name = ".";  // built in steps: GCC 12 -Wrestrict (bug 105329)
+    name += out.filename().string();
+    name += ".staging-";
+    name += std::to_string(pid);
+    const fs::path csv = out.parent_path() / name / "loss.csv";
+    for (int k = 0; k < 600; ++k) {
+        const std::string text = test::readFile(csv);
+        if (std::count(text.begin(), text.end(), '\n') >= 2) return pid;
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    ADD_FAILURE() << "the optimizer never ran\n" << test::readFile(log);
+    kill(pid, SIGKILL);
+    waitExit(pid);
+    return -1;
+}
+
+}  // namespace
+
+// The commit contract (core/Interrupt.h): an interrupt before a command's last safe point
+// (enterCommit) throws and the exit code says so; one after it lets the results be written and
+// the command's own exit code stands (a SIGINT during precompute's rename exited 130 after
+// writing). StagedDirectory::commit is such a point: the previous results stay on an interrupt.
+TEST(Interrupt, TheCommitIsTheLastSafePoint) {
+    clearInterrupt();
+    EXPECT_EQ(commandExitCode(0), 0);
+    requestInterrupt(SIGINT);
+    EXPECT_THROW(enterCommit(), Interrupted);
+    EXPECT_EQ(commandExitCode(0), 130);
+    clearInterrupt();
+    enterCommit();
+    requestInterrupt(SIGINT);  // while the results are being written
+    EXPECT_EQ(commandExitCode(0), 0);
+    EXPECT_EQ(commandExitCode(1), 1);
+    clearInterrupt();
+    EXPECT_TRUE(requestFirstInterrupt(SIGINT));
+    EXPECT_FALSE(requestFirstInterrupt(SIGTERM));  // the second signal: exit at once
+    EXPECT_EQ(interruptSignal(), SIGINT);
+    clearInterrupt();
+
+    test::TempDir dir("commit-point");
+    const fs::path out = dir.path() / "out";
+    {
+        StagedDirectory s(out);
+        writeFile(s.path() / "a.txt", "old");
+        s.commit();
+    }
+    {
+        StagedDirectory s(out);
+        writeFile(s.path() / "a.txt", "new");
+        requestInterrupt(SIGINT);
+        EXPECT_THROW(s.commit(), Interrupted);
+    }
+    EXPECT_EQ(test::readFile(out / "a.txt"), "old");
+    EXPECT_EQ(entries(dir.path()), std::vector<std::string>{"out"});
+    {  // what the user asked to keep (optimize --keep-interrupted)
+        StagedDirectory s(out);
+        writeFile(s.path() / "a.txt", "kept");
+        s.commit(/*evenIfInterrupted=*/true);
+    }
+    clearInterrupt();
+    EXPECT_EQ(test::readFile(out / "a.txt"), "kept");
+    // A result file (precompute's .tm) is not written on an interrupt; a cache file is.
+    const TransportMatrix t = test::tinyTransportMatrix();
+    TransportProvenance prov;
+    prov.fingerprint = std::string(32, 'a');
+    prov.inputs = "{}";
+    requestInterrupt(SIGINT);
+    EXPECT_THROW(writeTransportFile(dir.path() / "r.tm", t, prov, /*result=*/true), Interrupted);
+    EXPECT_EQ(entries(dir.path()), std::vector<std::string>{"out"});
+    writeTransportFile(dir.path() / "cache.tm", t, prov);
+    clearInterrupt();
+    EXPECT_EQ(entries(dir.path()), (std::vector<std::string>{"cache.tm", "out"}));
+}
+
+// Issue 35: a second quick Ctrl-C exited at once and left `.staging-<pid>/`. exitAtOnce (what
+// the second signal calls) removes the registered staging directories and temporaries and kills
+// the registered process groups first. Run in a child process, which it ends.
+TEST(ExitCleanup, ExitAtOnceRemovesStagingAndKillsGroups) {
+    test::TempDir dir("exit-at-once");
+    const fs::path out = dir.path() / "out";
+    {
+        StagedDirectory s(out);
+        writeFile(s.path() / "a.txt", "old");
+        s.commit();
+    }
+    const fs::path pidFile = dir.path() / "sleeper.pid";
+    const pid_t child = fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+        StagedDirectory s(out);
+        fs::create_directories(s.path() / "sub" / "deeper");
+        writeFile(s.path() / "sub" / "deeper" / "b.txt", "new");
+        for (int k = 0; k < 300; ++k) writeFile(s.path() / std::to_string(k), "x");
+        writeFile(dir.path() / ".x.tmp-1-1.exr", "temporary");
+        registerExitCleanup(dir.path() / ".x.tmp-1-1.exr");
+        const pid_t sleeper = fork();
+        if (sleeper == 0) {
+            setpgid(0, 0);
+            execlp("sleep", "sleep", "60", static_cast<char*>(nullptr));
+            _exit(127);
+        }
+        setpgid(sleeper, sleeper);
+        writeFile(pidFile, std::to_string(sleeper));
+        registerExitProcessGroup(sleeper);
+        exitAtOnce(130);
+    }
+    EXPECT_EQ(waitExit(child), 130);
+    EXPECT_EQ(test::readFile(out / "a.txt"), "old");
+    EXPECT_EQ(entries(dir.path()), (std::vector<std::string>{"out", "sleeper.pid"}));
+    const pid_t sleeper = static_cast<pid_t>(std::stol(test::readFile(pidFile)));
+    bool ended = false;  // killed: gone, or a zombie until its new parent reaps it
+    for (int k = 0; k < 500 && !ended; ++k) {
+        const std::string stat = test::readFile("/proc/" + std::to_string(sleeper) + "/stat");
+        const size_t paren = stat.rfind(')');
+        ended = stat.empty() ||
+                (paren != std::string::npos && paren + 2 < stat.size() && stat[paren + 2] == 'Z');
+        if (!ended) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    EXPECT_TRUE(ended) << "the process group " << sleeper << " outlived the exit";
+}
+
+// Issue 35: an interrupted `optimize` replaced the previous OUTDIR with its best light so far,
+// though the README promises it stays untouched. Now Ctrl-C (without --keep-interrupted) keeps
+// nothing, and a second quick signal, which exits at once, still removes the staging folder.
+TEST(Interrupt, OptimizeLeavesThePreviousOutput) {
+    test::TempDir dir("int-previous");
+    const fs::path scene = fs::path(SL_SOURCE_DIR) / "scenes/default/scene.json";
+    const fs::path tm = dir.path() / "g.tm", out = dir.path() / "out";
+    previousRun(scene, tm, out);
+    const std::string before = test::readFile(out / "summary.json");
+    const auto names = entries(out);
+    const fs::path log = dir.path() / "log.txt";
+    {  // one Ctrl-C
+        const pid_t pid = startLongOptimize(tm, out, log);
+        ASSERT_GT(pid, 0);
+        kill(pid, SIGINT);
+        EXPECT_EQ(waitExit(pid), 130) << test::readFile(log);
+        EXPECT_NE(test::readFile(log).find("nothing was written"), std::string::npos)
+            << test::readFile(log);
+    }
+    EXPECT_EQ(test::readFile(out / "summary.json"), before);
+    EXPECT_EQ(entries(out), names);
+    EXPECT_EQ(entries(dir.path()), (std::vector<std::string>{"g.tm", "log.txt", "out"}));
+    {  // two signals at once: the process is stopped while both arrive, so the second is
+       // handled after the first, whatever the timing
+        const pid_t pid = startLongOptimize(tm, out, log);
+        ASSERT_GT(pid, 0);
+        kill(pid, SIGSTOP);
+        kill(pid, SIGINT);
+        kill(pid, SIGTERM);
+        kill(pid, SIGCONT);
+        const int code = waitExit(pid);
+        EXPECT_TRUE(code == 130 || code == 143) << code << "\n" << test::readFile(log);
+    }
+    EXPECT_EQ(test::readFile(out / "summary.json"), before);
+    EXPECT_EQ(entries(out), names);
+    EXPECT_EQ(entries(dir.path()), (std::vector<std::string>{"g.tm", "log.txt", "out"}));
+}
+
+// Issue 35: a SIGINT while precompute renamed its output still exited 130 after writing. Sent
+// at moments from the trace to the end: either the run stopped and wrote nothing (130), or it
+// wrote the whole file and says so (0), never both, never a temporary left.
+TEST(Interrupt, PrecomputeWritesAllOrNothing) {
+    test::TempDir dir("int-precompute");
+    const fs::path scene = fs::path(SL_SOURCE_DIR) / "scenes/default/scene.json";
+    const fs::path tm = dir.path() / "t.tm", log = dir.path() / "log.txt";
+    int stopped = 0, finished = 0;
+    for (const int delayMs : {0, 50, 150, 300, 600, 1000, 2000, 4000}) {
+        SCOPED_TRACE(delayMs);
+        fs::remove(tm);
+        const pid_t pid =
+            spawnCli({"precompute", scene.string(), "--spp", "4", "-o", tm.string()}, log);
+        ASSERT_TRUE(waitForHandler(pid, 30));
+        std::this_thread::sleep_for(std::chrono::milliseconds(delayMs));
+        kill(pid, SIGINT);
+        const int code = waitExit(pid);
+        if (code == 130) {
+            ++stopped;
+            EXPECT_FALSE(fs::exists(tm)) << test::readFile(log);
+        } else {
+            ++finished;
+            EXPECT_EQ(code, 0) << test::readFile(log);
+            EXPECT_NO_THROW(readTransportFile(tm)) << test::readFile(log);
+        }
+        EXPECT_EQ(entries(dir.path()).size(), fs::exists(tm) ? 2u : 1u) << test::readFile(log);
+    }
+    EXPECT_GT(stopped, 0);
+}
+
+// `judge` and `lamps` stop at the next row or lamp and write nothing: no OUTDIR, no staging.
+TEST(Interrupt, JudgeAndLampsStopAndWriteNothing) {
+    test::TempDir dir("int-judge");
+    const fs::path scene = fs::path(SL_SOURCE_DIR) / "scenes/default/scene.json";
+    const fs::path log = dir.path() / "log.txt";
+    const std::vector<std::vector<std::string>> runs = {
+        {"judge", scene.string(), "--spp", "100000", "--no-cache", "-o",
+         (dir.path() / "judged").string()},
+        {"lamps", scene.string(), "--count", "8", "--no-cache", "-D", "render.spp=64", "-o",
+         (dir.path() / "lamps").string()}};
+    for (const auto& args : runs) {
+        SCOPED_TRACE(args.front());
+        const pid_t pid = spawnCli(args, log);
+        ASSERT_TRUE(waitForHandler(pid, 30));
+        std::this_thread::sleep_for(std::chrono::milliseconds(800));
+        kill(pid, SIGINT);
+        EXPECT_EQ(waitExit(pid), 130) << test::readFile(log);
+        EXPECT_EQ(entries(dir.path()), std::vector<std::string>{"log.txt"}) << test::readFile(log);
+    }
+}
+
+// Issue 35: `judge -o` and `lamps -o` get optimize's checks of OUTDIR (one function,
+// cli/Common.h refuseOutputDirOverInputs, and io/StagedDirectory.h): not a file, not a folder of
+// the user's without our marker, not a folder that holds an input of the run. Each is refused
+// before any work, and nothing is touched.
+TEST(StagedDirectory, JudgeAndLampsCheckTheirOutputLikeOptimize) {
+    test::TempDir dir("out-checks");
+    const fs::path scene = fs::path(SL_SOURCE_DIR) / "scenes/default/scene.json";
+    const fs::path file = dir.path() / "file.txt", mine = dir.path() / "mine",
+                   ours = dir.path() / "ours";
+    writeFile(file, "a file");
+    fs::create_directories(mine);
+    writeFile(mine / "notes.txt", "keep");
+    {
+        StagedDirectory s(ours);
+        s.commit();
+    }
+    const fs::path light = ours / "light.exr", oursScene = ours / "scene.json";
+    ASSERT_EQ(test::runCli("render " + scene.string() + " --size 16 --spp 1 -o " + light.string())
+                  .exitCode,
+              0);
+    fs::copy_file(scene, oursScene);
+    for (const std::string cmd : {"judge", "lamps"}) {
+        SCOPED_TRACE(cmd);
+        const std::string run = cmd + " --no-cache ";
+        struct Case {
+            std::string args, says;
+        };
+        const std::vector<Case> cases = {
+            {scene.string() + " -o " + file.string(), "is a file"},
+            {scene.string() + " -o " + mine.string(), "scratchlight did not write"},
+            {oursScene.string() + " -o " + ours.string(), "holds an input of this run"},
+            {scene.string() + (cmd == "judge" ? " " : " --from ") + light.string() + " -o " +
+                 ours.string(),
+             "holds an input of this run"},
+        };
+        for (const Case& c : cases) {
+            const auto r = test::runCli(run + c.args);
+            EXPECT_EQ(r.exitCode, 1) << c.args << "\n" << r.output;
+            EXPECT_NE(r.output.find(c.says), std::string::npos) << c.args << "\n" << r.output;
+        }
+    }
+    EXPECT_EQ(test::readFile(file), "a file");
+    EXPECT_EQ(test::readFile(mine / "notes.txt"), "keep");
+    EXPECT_TRUE(fs::exists(light));
+    EXPECT_TRUE(fs::exists(oursScene));
+    EXPECT_EQ(entries(dir.path()), (std::vector<std::string>{"file.txt", "mine", "ours"}));
 }

@@ -102,6 +102,63 @@ TEST(ExternalRenderer, InterruptStopsTheRenderer) {
     }
 }
 
+namespace {
+
+/// Whether process `pid` is gone or a zombie (killed, not yet reaped by its new parent), polled
+/// for up to `seconds`: a SIGKILL is delivered at once, but not synchronously with kill().
+bool processEnded(pid_t pid, double seconds) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    for (;;) {
+        const std::string stat = test::readFile("/proc/" + std::to_string(pid) + "/stat");
+        const size_t paren = stat.rfind(')');
+        if (stat.empty() || paren == std::string::npos ||
+            (paren + 2 < stat.size() && stat[paren + 2] == 'Z'))
+            return true;
+        if (std::chrono::steady_clock::now() > end) return false;
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+}
+
+}  // namespace
+
+// Issue 35: after --renderer-timeout or SIGTERM the renderer's children kept running (only its
+// pid was signalled). It runs in its own process group now, and the group is killed: on the
+// timeout, on an interrupt, and what it leaves running when it exits.
+TEST(ExternalRenderer, ItsChildrenDoNotOutliveIt) {
+    test::TempDir dir("renderer-group");
+    const std::string script = "sleep 60 & echo $! > child.pid; wait";
+    auto childPid = [&] {
+        return static_cast<pid_t>(std::stol(test::readFile(dir / "child.pid")));
+    };
+    {  // the timeout
+        clearInterrupt();
+        const ProcessResult r = runProcess({"sh", "-c", script}, dir.path(), 0.5);
+        EXPECT_TRUE(r.timedOut);
+        EXPECT_TRUE(processEnded(childPid(), 10)) << "the renderer's child is still there";
+    }
+    {  // an interrupt (Ctrl-C, SIGTERM to us)
+        std::filesystem::remove(dir / "child.pid");
+        clearInterrupt();
+        std::thread asker([&] {
+            for (int i = 0; i < 500 && !std::filesystem::exists(dir / "child.pid"); ++i)
+                std::this_thread::sleep_for(std::chrono::milliseconds(10));
+            std::this_thread::sleep_for(std::chrono::milliseconds(50));
+            requestInterrupt(SIGTERM);
+        });
+        EXPECT_THROW(runProcess({"sh", "-c", script}, dir.path(), 60.0), Interrupted);
+        asker.join();
+        clearInterrupt();
+        EXPECT_TRUE(processEnded(childPid(), 10)) << "the renderer's child is still there";
+    }
+    {  // a renderer that exits and leaves a child running
+        std::filesystem::remove(dir / "child.pid");
+        const ProcessResult r =
+            runProcess({"sh", "-c", "sleep 60 & echo $! > child.pid"}, dir.path(), 60.0);
+        EXPECT_EQ(r.exitCode, 0);
+        EXPECT_TRUE(processEnded(childPid(), 10)) << "the renderer's child is still there";
+    }
+}
+
 TEST(Povray, TiltedMirrorUnderOneTexelLightsTheSamePixelsAsOurTracer) {
     REQUIRE_POVRAY();
     test::TempDir dir("povray-mirror");

@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "core/Progress.h"
 #include "core/Stopwatch.h"
 #include "io/AtomicFile.h"
@@ -60,6 +61,7 @@ DefectMapJobSummary runDefectMapJob(const DefectMapJobOptions& o) {
         for (uint8_t v : image) s.imageMarked += v != 0;
     }
 
+    enterCommit();  // Ctrl-C before the files appear: none does; after: all (core/Interrupt.h)
     writeMaskPng(o.output, s.map.map, s.width, s.height);
     s.written.push_back(o.output);
     if (!o.imageOutput.empty()) {

@@ -26,6 +26,7 @@
 #include "core/Stopwatch.h"
 #include "core/Text.h"
 #include "io/AtomicFile.h"
+#include "io/ExitCleanup.h"
 #include "io/ImageIO.h"
 #include "io/MitsubaExport.h"
 #include "io/SceneFile.h"
@@ -162,9 +163,17 @@ ProcessResult runProcess(const std::vector<std::string>& argv, const std::filesy
     posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
     posix_spawn_file_actions_addopen(&fa, 1, "render.log", O_WRONLY | O_CREAT | O_TRUNC, 0644);
     posix_spawn_file_actions_adddup2(&fa, 1, 2);
+    // Its own process group: a timeout, Ctrl-C or SIGTERM ends the renderer and every process
+    // it started (kill(-group)); a second Ctrl-C, which exits at once, too (io/ExitCleanup.h).
+    posix_spawnattr_t attr;
+    posix_spawnattr_init(&attr);
+    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETPGROUP);
+    posix_spawnattr_setpgroup(&attr, 0);
     pid_t pid = 0;
-    const int err = posix_spawnp(&pid, args[0], &fa, nullptr, args.data(), environ);
+    const int err = posix_spawnp(&pid, args[0], &fa, &attr, args.data(), environ);
     posix_spawn_file_actions_destroy(&fa);
+    posix_spawnattr_destroy(&attr);
+    if (err == 0) registerExitProcessGroup(pid);
     if (err != 0)
         throw inputError("renderer '" + argv[0] + "'",
                          std::string("cannot be started: ") + std::strerror(err),
@@ -179,28 +188,32 @@ ProcessResult runProcess(const std::vector<std::string>& argv, const std::filesy
         if (interruptRequested()) {
             // Ctrl-C or SIGTERM to us: the renderer stops too (SIGTERM, then SIGKILL after 2 s),
             // and nothing it wrote is used
-            kill(pid, SIGTERM);
+            kill(-pid, SIGTERM);
             const auto asked = std::chrono::steady_clock::now();
             while (waitpid(pid, &status, WNOHANG) != pid) {
                 if (std::chrono::steady_clock::now() - asked > std::chrono::seconds(2)) {
-                    kill(pid, SIGKILL);
+                    kill(-pid, SIGKILL);
                     waitpid(pid, &status, 0);
                     break;
                 }
                 std::this_thread::sleep_for(std::chrono::milliseconds(10));
             }
+            kill(-pid, SIGKILL);  // what the renderer started and left running
+            unregisterExitProcessGroup(pid);
             throw Interrupted();
         }
         const double elapsed =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (elapsed > timeoutSeconds) {
-            kill(pid, SIGKILL);
+            kill(-pid, SIGKILL);
             waitpid(pid, &status, 0);
             r.timedOut = true;
             break;
         }
         std::this_thread::sleep_for(std::chrono::milliseconds(elapsed < 1 ? 2 : 20));
     }
+    kill(-pid, SIGKILL);  // nothing the renderer started outlives its render
+    unregisterExitProcessGroup(pid);
     if (!r.timedOut && WIFEXITED(status)) r.exitCode = WEXITSTATUS(status);
     std::ifstream log(dir / "render.log");
     std::stringstream ss;
@@ -329,7 +342,7 @@ BasisTransportResult precomputeBasisToFile(const std::filesystem::path& sceneFil
     const std::unique_ptr<Scene> scene = loadScene(sceneFile, overrides);
     const ExternalRenderer r(*scene, ro);
     BasisTransportResult res = basisTransport(*scene, r, options);
-    writeTransportFile(out, res.file.matrix, res.file.provenance);
+    writeTransportFile(out, res.file.matrix, res.file.provenance, /*result=*/true);
     return res;
 }
 

@@ -101,8 +101,10 @@ struct ProcessResult {
 };
 
 /// Runs argv in `dir` (stdout and stderr into dir/render.log) and waits at most timeoutSeconds.
-/// Throws InputError when argv[0] cannot be started. On an interrupt request (core/Interrupt.h)
-/// the program gets SIGTERM (SIGKILL after 2 s), is waited for, and Interrupted is thrown.
+/// The program runs in its own process group, and the group is what is signalled: on the
+/// timeout (SIGKILL), on an interrupt request (core/Interrupt.h: SIGTERM, SIGKILL after 2 s;
+/// then Interrupted is thrown) and when the program ends (SIGKILL to what it left running), so
+/// nothing it started outlives the call. Throws InputError when argv[0] cannot be started.
 ProcessResult runProcess(const std::vector<std::string>& argv, const std::filesystem::path& dir,
                          double timeoutSeconds);
 

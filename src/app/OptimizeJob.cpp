@@ -1454,6 +1454,9 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                 load(next);
                 r = optimizeLambda(p, in, job, lambda);
             }
+            // Ctrl-C keeps nothing (the previous OUTDIR stays) unless the user asked to keep
+            // the best so far (core/Interrupt.h).
+            if (!p.o.keepInterrupted) throwIfInterrupted();
             noise.reason = describeTrainingNoise(noise);
             if (!noise.rounds.empty()) spdlog::info("training spp: {}", noise.reason);
             r.run.noise = noise;
@@ -1471,7 +1474,7 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
         if (out) throw InputError(out->explain(e.what()));
         throw;
     }
-    if (out) out->commit();
+    if (out) out->commit(/*evenIfInterrupted=*/p.o.keepInterrupted);
     return job;
 }
 

@@ -33,9 +33,10 @@
 // A sweep also writes OUTDIR/sweep.csv (one row per λ).
 //
 // OUTDIR is checked before any work and replaced as a unit (io/StagedDirectory.h): a failure
-// leaves the previous results untouched. An interrupt (core/Interrupt.h) stops the running
-// optimizer at its next iteration; its best iterate is written with "interrupted": true and the
-// λs after it are not run.
+// leaves the previous results untouched, and so does an interrupt (core/Interrupt.h): it stops
+// the running optimizer at its next iteration (tracing at its next row) and nothing is written.
+// With `keepInterrupted` (--keep-interrupted) the optimizer's best iterate so far is written
+// instead, with "interrupted": true, replacing OUTDIR, and the λs after it are not run.
 #pragma once
 
 #include <filesystem>
@@ -114,6 +115,8 @@ struct OptimizeJobOptions {
     /// objective with A as `defects` and B as `reference`.
     RegionSpec defects, reference;
     std::string commandLine;  // how the run was asked for: recorded in summary.json, not parsed
+    /// Ctrl-C: write the best E so far (marked "interrupted") instead of leaving OUTDIR as it was.
+    bool keepInterrupted = false;
     bool rgb = false;
     HeldOutSource heldOut;  // default: the judge's estimate traced from the scene (cached)
     int heldOutSpp = 0;     // 0: the judge's default (app/Judge.h)

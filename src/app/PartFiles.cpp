@@ -99,7 +99,7 @@ PartFiles writePartFiles(const GeneratedSurface& g, const std::filesystem::path&
         j["render"] = {{"spp", o.spp}, {"max_depth", o.maxDepth}, {"seed", 0}};
         writeTextAtomically(sceneOut->tempPath(), j.dump(2) + "\n");
     }
-    throwIfInterrupted();  // Ctrl-C before the files appear: none of them does
+    enterCommit();  // Ctrl-C before the files appear: none of them does; after: all of them
     hmOut.commit();
     truthOut.commit();
     legendOut.commit();

@@ -26,7 +26,7 @@ namespace {
 
 TransportSource trace(const Scene& scene, const RenderOptions& ro, const TransportProvenance& prov,
                       bool rgb, const std::string& label, const std::filesystem::path& out,
-                      const Stopwatch& clock) {
+                      const Stopwatch& clock, bool result = false) {
     ProgressTask task(label + " (" + std::to_string(scene.camera.width()) + "x" +
                           std::to_string(scene.camera.height()) + " px, " + std::to_string(ro.spp) +
                           " spp)",
@@ -37,7 +37,7 @@ TransportSource trace(const Scene& scene, const RenderOptions& ro, const Transpo
     TransportSource s;
     s.secondsTrace = r.summary.seconds;
     s.trace = r.summary;
-    if (!out.empty()) writeTransportFile(out, r.matrix, prov);
+    if (!out.empty()) writeTransportFile(out, r.matrix, prov, result);
     s.file.matrix = std::move(r.matrix);
     s.file.provenance = prov;
     s.path = out;
@@ -253,7 +253,7 @@ TransportSource precomputeToFile(const std::filesystem::path& file,
     const auto spp = resolveSpp(*scene, resolved, {}, {});
     const RenderOptions ro = traceOptions(*scene, resolved);
     TransportSource s = trace(*scene, ro, transportProvenance(*scene, ro, options.rgb ? 3 : 1),
-                              options.rgb, options.label, out, clock);
+                              options.rgb, options.label, out, clock, /*result=*/true);
     s.autoDepth = depth;
     s.autoSpp = spp;
     return s;

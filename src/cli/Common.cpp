@@ -11,6 +11,8 @@
 #include "core/Error.h"
 #include "core/Text.h"
 #include "io/EnvMapIO.h"
+#include "io/InputFile.h"
+#include "io/SceneFile.h"
 #include "scene/EnvMapPresets.h"
 #include "scene/Scene.h"
 
@@ -126,6 +128,19 @@ std::filesystem::path siblingPath(const std::filesystem::path& out, const std::s
     std::filesystem::path p = out;
     p.replace_extension(siblingExt);
     return p;
+}
+
+void refuseOutputDirOverInputs(const std::filesystem::path& outDir,
+                               const std::filesystem::path& input,
+                               const std::vector<std::string>& sceneOverrides,
+                               std::vector<std::filesystem::path> others) {
+    others.push_back(input);
+    // The scene's own files matter only when OUTDIR exists (a new one holds nothing).
+    if (input.extension() == ".json" && std::filesystem::exists(input) &&
+        std::filesystem::exists(outDir))
+        for (const auto& f : sceneInputFiles(readSceneFile(input, sceneOverrides)))
+            others.push_back(f);
+    refuseOutputOverInput(outDir, "output directory", others, true);
 }
 
 int runPlot(const std::string& script, const std::vector<std::string>& args, bool run) {

@@ -89,6 +89,17 @@ std::vector<double> parseNumberList(const std::vector<std::string>& texts, const
 std::filesystem::path siblingPath(const std::filesystem::path& out, const std::string& ext,
                                   const std::string& siblingExt);
 
+/// The one check of an OUTDIR that a run replaces as a whole (optimize, judge, lamps -o;
+/// io/StagedDirectory.h checks the folder itself): it must not be, or hold, what the run reads:
+/// `input` (a scene .json, a .tm or .shards), the files a scene names (its height map, ...) and
+/// `others` (truth masks, region files, lights; names of no file, such as presets, are
+/// skipped). Throws InputError naming the directory and the input (io/InputFile.h
+/// refuseOutputOverInput).
+void refuseOutputDirOverInputs(const std::filesystem::path& outDir,
+                               const std::filesystem::path& input,
+                               const std::vector<std::string>& sceneOverrides,
+                               std::vector<std::filesystem::path> others);
+
 /// Runs the plotting script `script` (a name under scripts/, found beside the executable, or a
 /// path) with python3 and `args` when `run`; otherwise prints the command that would. Prints
 /// "no plot: ..." when the script or python3 is missing; a failing script is a runtime error.

@@ -26,6 +26,10 @@ int runJudge(const JudgeArgs& a) {
     o.scene = a.scene;
     o.references = !a.noReferences;
     for (const auto& l : a.lights) o.lights.emplace_back(l);
+    // OUTDIR is replaced as a whole: it must not hold what this run reads (as optimize -o).
+    std::vector<std::filesystem::path> inputs = o.lights;
+    for (const auto& f : {o.judge.truth, o.defects.file, o.reference.file}) inputs.push_back(f);
+    refuseOutputDirOverInputs(o.outDir, o.scene, o.sceneOverrides, inputs);
     o.commandLine = invokedCommandLine();
     JudgeJobSummary s = runJudgeJob(o);
     const auto& est = s.estimate;

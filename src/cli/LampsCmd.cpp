@@ -44,6 +44,10 @@ int runLamps(LampsArgs a) {
     LampsJobOptions& j = a.job;
     j.input = a.input;
     j.outDir = a.out;
+    // OUTDIR is replaced as a whole: it must not hold what this run reads (as optimize -o).
+    refuseOutputDirOverInputs(
+        j.outDir, j.input, j.sceneOverrides,
+        {std::filesystem::path(j.from), j.truth, j.defects.file, j.reference.file});
     j.commandLine = invokedCommandLine();
     j.judge = !a.noJudge;
     j.figures = !a.noFigures;

@@ -10,6 +10,7 @@
 #include "app/ExternalRenderer.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
+#include "core/Interrupt.h"
 #include "core/Progress.h"
 #include "core/Stopwatch.h"
 #include "io/EnvMapIO.h"
@@ -76,6 +77,7 @@ int renderExternal(const RenderArgs& a, const Scene& scene, const EnvMap& env, u
         ProgressTask task("render (" + r.name() + ")");
         img = r.render(env, seed, a.threads);
     }
+    enterCommit();  // Ctrl-C before the files appear: none does; after: both (core/Interrupt.h)
     writeExr(a.out, img);
     writePng(pngPath, img, a.exposure);
     spdlog::info("rendered {}x{} with {} in {:.3f} s", img.width, img.height, r.name(),
@@ -115,6 +117,7 @@ int runRender(const RenderArgs& a) {
     opt.progress = task.fraction();
     RenderResult r = render(*scene, env, opt);
     warnIfBlack(r.image, *scene);
+    enterCommit();  // Ctrl-C before the files appear: none does; after: both (core/Interrupt.h)
     writeExr(a.out, r.image);
     writePng(pngPath, r.image, a.exposure);
     const TraceSummary& s = r.summary;

@@ -15,6 +15,7 @@
 #include "cli/Commands.h"
 #include "cli/Common.h"
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "core/Text.h"
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
@@ -172,13 +173,9 @@ struct OptimizeArgs {
 
 int runOptimize(OptimizeArgs a) {
     // OUTDIR is replaced as a whole: it must not hold what this run reads.
-    std::vector<std::filesystem::path> inputs = {a.input, a.job.truth, a.job.mask.file,
-                                                 a.job.compare};
-    if (std::filesystem::path(a.input).extension() == ".json" && std::filesystem::exists(a.input) &&
-        std::filesystem::exists(a.out))
-        for (const auto& f : sceneInputFiles(readSceneFile(a.input, a.job.sceneOverrides)))
-            inputs.push_back(f);
-    refuseOutputOverInput(a.out, "output directory", inputs, true);
+    refuseOutputDirOverInputs(
+        a.out, a.input, a.job.sceneOverrides,
+        {a.job.truth, a.job.mask.file, a.job.compare, a.job.defects.file, a.job.reference.file});
     a.job.input = a.input;
     a.job.outDir = a.out;
     a.job.objective.reg = a.reg == "image" ? RegTarget::Image : RegTarget::EnvMap;
@@ -209,6 +206,10 @@ int runOptimize(OptimizeArgs a) {
         std::printf("%s%s\n", prefix.c_str(), optimizeHeadlineOf(r.dir).c_str());
     }
     spdlog::info("wrote {}/ (open {}/report.html)", a.out, a.out);
+    // --keep-interrupted: the best light so far is written, and the exit code still says that
+    // the run was cut short (core/Interrupt.h).
+    if (s.interrupted || (!s.runs.empty() && s.runs.back().interrupted))
+        return 128 + interruptSignal();
     return kOk;
 }
 
@@ -314,6 +315,9 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
                       "adds the defect contrast to the metrics");
         addDefectRegionOptions(c, j.defects, j.reference);
         c->add_flag("--rgb", j.rgb, "Optimize an RGB env map (needs/creates an RGB T)");
+        c->add_flag("--keep-interrupted", j.keepInterrupted,
+                    "On Ctrl-C, write the best light so far into OUTDIR (marked interrupted, exit "
+                    "130) instead of leaving the previous OUTDIR as it was");
         c->add_flag("--smooth-abs", j.objective.smoothAbs, "Use sqrt(x²+ε²)−ε for |x|");
         const OptimizeDefaults d = optimizeDefaults();
         std::string objectiveHelp = "Objective (default: ";

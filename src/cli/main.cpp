@@ -23,17 +23,17 @@
 #include "core/Error.h"
 #include "core/Interrupt.h"
 #include "core/Text.h"
+#include "io/ExitCleanup.h"
 
 namespace {
 
 /// The first SIGINT/SIGTERM asks the work to stop at its next safe point; a second one exits at
-/// once. Only async-signal-safe calls here.
+/// once, removing staged and temporary outputs and killing external renderers first
+/// (io/ExitCleanup.h). Only async-signal-safe calls here.
 extern "C" void onSignal(int signal) {
-    if (sl::interruptRequested()) ::_exit(128 + signal);
-    sl::requestInterrupt(signal);
+    if (!sl::requestFirstInterrupt(signal)) sl::exitAtOnce(128 + signal);
     static const char msg[] =
-        "\ninterrupted: stopping at the next safe point (an optimizer keeps its best so far; "
-        "again to quit at once)\n";
+        "\ninterrupted: stopping at the next safe point (again to quit at once)\n";
     [[maybe_unused]] const ssize_t n = ::write(STDERR_FILENO, msg, sizeof msg - 1);
 }
 
@@ -206,9 +206,11 @@ int main(int argc, char** argv) {
     };
     try {
         const int rc = run ? run() : kUsageError;
-        return sl::interruptRequested() ? 128 + sl::interruptSignal() : rc;
+        if (sl::interruptRequested() && sl::commandExitCode(rc) == rc && rc == kOk)
+            std::fprintf(stderr, "interrupted after the results were complete: kept\n");
+        return sl::commandExitCode(rc);
     } catch (const sl::Interrupted&) {
-        std::fprintf(stderr, "interrupted: nothing was written\n");
+        std::fprintf(stderr, "interrupted: nothing was written (a previous output is unchanged)\n");
         return fail(128 + sl::interruptSignal());
     } catch (const std::bad_alloc&) {
         const size_t n = gFailedAllocationBytes.load();

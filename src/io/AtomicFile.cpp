@@ -7,6 +7,7 @@
 #include <system_error>
 
 #include "core/Error.h"
+#include "io/ExitCleanup.h"
 
 #if defined(__unix__) || defined(__APPLE__)
 #include <fcntl.h>
@@ -95,6 +96,7 @@ AtomicOutput::AtomicOutput(fs::path finalPath) : final_(std::move(finalPath)) {
     name += std::to_string(gTempCounter.fetch_add(1));
     name += final_.extension().string();
     temp_ = final_.parent_path() / name;
+    registerExitCleanup(temp_);  // a second Ctrl-C, which exits at once, still removes it
 }
 
 AtomicOutput::~AtomicOutput() {
@@ -106,6 +108,7 @@ void AtomicOutput::abandon() noexcept {
     abandoned_ = true;
     std::error_code ec;
     if (!temp_.empty()) fs::remove(temp_, ec);
+    unregisterExitCleanup(temp_);
     // Deepest first; fs::remove on a directory only succeeds when it is empty.
     for (auto it = createdDirs_.rbegin(); it != createdDirs_.rend(); ++it) fs::remove(*it, ec);
     createdDirs_.clear();
@@ -134,6 +137,7 @@ void AtomicOutput::commit() {
                          "directory");
     }
     committed_ = true;
+    unregisterExitCleanup(temp_);
     createdDirs_.clear();
 }
 

@@ -224,15 +224,31 @@ void resampleSquare(const std::string& where, HeightmapData& d) {
     const bool alongY = py > px;  // rows are farther apart than columns: interpolate rows
     const size_t w = static_cast<size_t>(d.width), h = static_cast<size_t>(d.height);
     const size_t n = alongY ? h : w;  // samples along the interpolated axis
+    if (n < 2) {  // one row (column): nothing to interpolate, the other axis' pitch holds
+        d.pitch = alongY ? px : py;
+        return;
+    }
     const double ratio = (alongY ? py : px) / p;
-    const size_t m = static_cast<size_t>(std::floor(static_cast<double>(n - 1) * ratio + 1e-9)) + 1;
-    const size_t nw = alongY ? w : m, nh = alongY ? m : h;
-    if (static_cast<long long>(nw * nh) > detail::kMaxMetrologySamples)
+    // Real instruments differ by a few times at most (a line scanner's profiles perhaps 100);
+    // a 124-byte file with a 1e7 ratio made 1.6 GB of interpolated points (scripts/fuzz).
+    if (!(ratio <= 1000))
         throw inputError(where,
-                         "resampled to square pixels the map would have " +
-                             std::to_string(nw * nh) + " points, more than the " +
+                         "its x and y pitches (" + micrometres(px) + " and " + micrometres(py) +
+                             " um) differ more than 1000-fold: square pixels would stretch it " +
+                             formatNumber(ratio) + " times",
+                         "Check the file's pitches (a damaged header?)");
+    // Counted in double first: a pitch ratio of 1e70 (a damaged file) must be refused, not
+    // converted to size_t (undefined; found by scripts/fuzz).
+    const double along = std::floor(static_cast<double>(n - 1) * ratio + 1e-9) + 1;
+    const double points = along * static_cast<double>(alongY ? w : h);
+    if (!(points <= static_cast<double>(detail::kMaxMetrologySamples)))
+        throw inputError(where,
+                         "resampled to square pixels the map would have " + formatNumber(points) +
+                             " points, more than the " +
                              std::to_string(detail::kMaxMetrologySamples) + " accepted",
                          "Crop the measurement");
+    const auto m = static_cast<size_t>(along);
+    const size_t nw = alongY ? w : m, nh = alongY ? m : h;
     std::vector<float> out(nw * nh);
     std::vector<uint8_t> bad(d.invalid.empty() ? 0 : nw * nh);
     for (size_t k = 0; k < m; ++k) {

@@ -58,7 +58,8 @@
 //     p = min(px, py) by linear interpolation along the coarser axis (the finer axis keeps its
 //     samples): W' = ⌊(W−1)·px/p⌋ + 1 columns, H' = ⌊(H−1)·py/p⌋ + 1 rows, new sample k at
 //     k·p from the first. HeightmapData::resampling says so; a new sample is invalid when a
-//     source sample it weights is.
+//     source sample it weights is. Pitches more than 1000-fold apart are refused (a damaged
+//     header: a 124-byte file would become gigabytes); one row or column is not resampled.
 //     Invalid points are filled, deterministically, layer by layer from the valid region: each
 //     pass gives every invalid point that has a valid 4-neighbour the mean of those neighbours,
 //     all at once, then counts them valid. HeightmapData::invalidFilled counts them (and the

@@ -11,6 +11,8 @@
 #include <system_error>
 
 #include "core/Error.h"
+#include "core/Interrupt.h"
+#include "io/ExitCleanup.h"
 
 namespace sl {
 
@@ -85,20 +87,26 @@ StagedDirectory::StagedDirectory(fs::path target) : target_(std::move(target)) {
     if (!fs::create_directory(staging_, ec) || ec)
         throw inputError(where, "cannot create the staging directory " + staging_.string(),
                          ec ? ec.message() : "");
+    registerExitCleanup(staging_);  // a second Ctrl-C, which exits at once, still removes it
     std::ofstream marker(staging_ / kMarker);
     marker << kMarkerText;
-    if (!marker.good())
+    if (!marker.good()) {
+        fs::remove_all(staging_, ec);
+        unregisterExitCleanup(staging_);
         throw inputError(where, "cannot write in the staging directory " + staging_.string());
+    }
 }
 
 StagedDirectory::~StagedDirectory() {
     if (committed_) return;
     std::error_code ec;
     fs::remove_all(staging_, ec);
+    unregisterExitCleanup(staging_);
 }
 
-void StagedDirectory::commit() {
+void StagedDirectory::commit(bool evenIfInterrupted) {
     if (committed_) throw std::logic_error("StagedDirectory::commit called twice");
+    enterCommit(evenIfInterrupted);  // the last safe point: an interrupt before it keeps nothing
     std::error_code ec;
     const bool existed = fs::exists(target_, ec);
     int rc = 0;
@@ -113,6 +121,7 @@ void StagedDirectory::commit() {
             "the previous results are unchanged; check the file system");
     committed_ = true;
     if (existed) fs::remove_all(staging_, ec);  // the old results, now at the staging name
+    unregisterExitCleanup(staging_);
 }
 
 std::string StagedDirectory::explain(const std::string& message) const {

@@ -8,6 +8,11 @@
 //   write(out.path() / "a.exr");   // ... every file of the run
 //   out.commit();                  // outDir now holds exactly the new files
 //
+// Ctrl-C (core/Interrupt.h): commit() is the command's last safe point (enterCommit): an
+// interrupt before it throws Interrupted and leaves the previous results; one after it lets the
+// swap finish. A second signal, which exits at once, still removes the staging directory
+// (io/ExitCleanup.h).
+//
 // Safety: a directory is replaced only if it is empty or one this class wrote before (it holds
 // the marker file `.scratchlight-output` with the text this class writes). Anything else (e.g.
 // `-o .` or a folder of the user's) is refused before the work starts, so no command can wipe
@@ -37,9 +42,11 @@ class StagedDirectory {
     const std::filesystem::path& path() const { return staging_; }  // write here
     const std::filesystem::path& target() const { return target_; }
 
-    /// Swaps the staged directory into place and removes the old results. Throws InputError
-    /// naming the target when the swap fails (the old results then stay in place).
-    void commit();
+    /// Swaps the staged directory into place and removes the old results. Throws Interrupted
+    /// when an interrupt was requested (unless `evenIfInterrupted`: results the user asked to
+    /// keep, core/Interrupt.h enterCommit), InputError naming the target when the swap fails;
+    /// the old results then stay in place.
+    void commit(bool evenIfInterrupted = false);
 
     /// A message about a file in the staging directory, said about the target instead (the
     /// staging directory is gone by the time the user reads it), noting that the previous

@@ -12,6 +12,7 @@
 
 #include "core/Error.h"
 #include "core/Hash.h"
+#include "core/Interrupt.h"
 #include "core/Registry.h"
 #include "io/AtomicFile.h"
 #include "io/InputFile.h"
@@ -136,7 +137,7 @@ TransportProvenance transportProvenance(const Scene& scene, const RenderOptions&
 }
 
 void writeTransportFile(const std::filesystem::path& file, const TransportMatrix& t,
-                        const TransportProvenance& prov) {
+                        const TransportProvenance& prov, bool result) {
     std::vector<Section> sections = {{"object_mask", t.objectMask.data(), t.objectMask.size()}};
     if (t.storage == TransportStorage::Sparse) {
         sections.push_back({"row_ptr", t.rowPtr.data(), t.rowPtr.size() * sizeof(uint64_t)});
@@ -170,7 +171,9 @@ void writeTransportFile(const std::filesystem::path& file, const TransportMatrix
     const std::string header = h.dump();
     const uint64_t headerHash = hash64(header.data(), header.size());
 
-    writeAtomically(file, [&](const std::filesystem::path& tmp) {
+    AtomicOutput out(file);
+    {
+        const std::filesystem::path& tmp = out.tempPath();
         std::ofstream os(tmp, std::ios::binary);
         if (!os) throw inputError(file.string(), "cannot write the transport-matrix file");
         const auto len = static_cast<uint32_t>(header.size());
@@ -183,7 +186,9 @@ void writeTransportFile(const std::filesystem::path& file, const TransportMatrix
             os.write(static_cast<const char*>(s.data), static_cast<std::streamsize>(s.bytes));
         os.close();  // flushes; a failed flush or close sets failbit
         if (!os) throw inputError(file.string(), "writing failed (disk full?)");
-    });
+    }
+    if (result) enterCommit();  // Ctrl-C while writing: the temporary goes, nothing appears
+    out.commit();
 }
 
 TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std::string& where,

@@ -51,8 +51,11 @@ struct TransportProvenance {
 TransportProvenance transportProvenance(const Scene& scene, const RenderOptions& options,
                                         int channels);
 
+/// Writes T atomically (a temporary renamed into place). `result`: the file is the command's
+/// result (precompute's), so its rename is the command's commit (core/Interrupt.h enterCommit:
+/// Ctrl-C before it writes nothing, after it lets the file appear whole); a cache file is not.
 void writeTransportFile(const std::filesystem::path& file, const TransportMatrix& t,
-                        const TransportProvenance& provenance);
+                        const TransportProvenance& provenance, bool result = false);
 
 struct TransportFile {
     TransportMatrix matrix;

@@ -164,9 +164,11 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
         Counters& c = counters.local();
         for (int k = rows.begin(); k < rows.end(); ++k) {
             const int y = rowBegin + static_cast<int>((static_cast<int64_t>(k) * stride) % traced);
-            if (opt.interruptible) throwIfInterrupted();  // Ctrl-C: stop here, keep nothing
             const PixelSpan span = spans[static_cast<size_t>(y)];
             for (int x = span.begin; x < span.end; ++x) {
+                // Ctrl-C: stop here, keep nothing. Per pixel, not per row: a row at the judge's
+                // spp can take minutes (one relaxed atomic load per pixel).
+                if (opt.interruptible) throwIfInterrupted();
                 const uint32_t pixel = static_cast<uint32_t>(y * W + x);
                 if (!opt.pixels.empty() && opt.pixels[pixel] == 0) continue;
                 const PixelSampling& ps =

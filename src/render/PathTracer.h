@@ -101,7 +101,7 @@ struct RenderOptions {
     /// E; empty: 1 everywhere (by solid angle).
     std::vector<float> guide;
     std::function<void(double)> progress;  // fraction done, called from any thread, serialised
-    /// An interrupt request (core/Interrupt.h) stops the trace at the next row by throwing
+    /// An interrupt request (core/Interrupt.h) stops the trace at the next pixel by throwing
     /// Interrupted. Off for the renders inside a black-box optimizer step: the optimizer stops
     /// at its next iteration instead, keeping its best iterate.
     bool interruptible = true;
