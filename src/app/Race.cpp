@@ -282,6 +282,12 @@ std::vector<RaceWorld> raceWorlds(const RaceOptions& o) {
     std::vector<std::pair<std::string, PartFiles>> parts;
     for (const std::string& name : o.parts) parts.emplace_back(name, PartFiles{});
     for (const auto& file : o.real) parts.emplace_back(file.stem().string(), PartFiles{});
+    for (size_t i = 0; i < parts.size(); ++i)
+        for (size_t j = 0; j < i; ++j)
+            if (parts[i].first == parts[j].first)
+                throw inputError(option(i < o.parts.size() ? "parts" : "real"),
+                                 "two parts named '" + parts[i].first + "'",
+                                 "give each part once (real textures are named by their stem)");
     for (size_t i = 0; i < parts.size(); ++i) {
         const bool real = i >= o.parts.size();
         const auto dir = o.workDir / ((real ? "real-" : "") + parts[i].first);

@@ -91,7 +91,8 @@ struct RaceOptions {
 };
 
 struct RaceRow {
-    std::string part, config;  // part: the world, e.g. "turned@128 a0.3 h2" (defaults left out)
+    std::string part, config;  // part: the world, e.g. "turned@128/a0.3/h2" (the size when not 256,
+                               // α when given, the height scale when not 1)
     int seed = 0;
     double secondsPrecompute = 0, secondsSearch = 0, seconds = 0;
     int evaluations = 0;
