@@ -16,10 +16,13 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 def read_runs(src):
     """The race CSV's rows as {(part, config): [(seconds, judge U), ...]} and the parts in the
-    order they first appear (`bench race` and `bench settings` write the same columns)."""
+    order they first appear (`bench race` and `bench settings` write the same columns; the
+    studio lamp's reference rows, which take no seconds, are left out)."""
     runs = defaultdict(list)
     parts = []
     for r in csv.DictReader(open(src)):
+        if r["config"] == "studio-lamp":
+            continue
         if r["part"] not in parts:
             parts.append(r["part"])
         runs[(r["part"], r["config"])].append((float(r["seconds"]), float(r["unbiased"])))

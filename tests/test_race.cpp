@@ -3,10 +3,17 @@
 // the baseline in the same run; the defects objective sees the part's truth as its defects.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <limits>
 
 #include "TestUtil.h"
+#include "app/PartFiles.h"
 #include "app/Race.h"
+#include "core/Error.h"
+#include "core/Stats.h"
+#include "synth/SurfaceGenerator.h"
 
 namespace {
 
@@ -75,6 +82,150 @@ TEST(Race, SettingsRaceEachTraceSettingAgainstThePartsOwn) {
     EXPECT_TRUE(std::isfinite(s.rows[1].unbiased));
     // Another T (a quarter of the samples, one bounce fewer, another sampler): another E*.
     EXPECT_NE(s.rows[1].unbiased, s.rows[0].unbiased);
+}
+
+}  // namespace
+
+namespace {
+
+using namespace sl;
+
+RaceRow partRow(const std::string& part, const std::string& config, double vsLamp, double vsPaper,
+                double figure = 1.0) {
+    RaceRow r;
+    r.part = part;
+    r.config = config;
+    r.seed = -1;
+    r.figure = figure;
+    r.vsLamp = vsLamp;
+    r.vsPaper = vsPaper;
+    return r;
+}
+
+// The standings: median and worst (min) over parts; the winner is the best worst part, not the
+// best median; a config without a figure of its own counts 0 there, a reference without one
+// leaves the part out of that ratio.
+TEST(Race, StandingsNameTheWinnerByItsWorstPart) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const std::vector<RaceRow> medians{
+        partRow("p1", "sharp", 9.0, 3.0),     partRow("p2", "sharp", 5.0, 2.0),
+        partRow("p3", "sharp", 0.8, 0.5),     partRow("p1", "steady", 2.0, 1.0),
+        partRow("p2", "steady", 1.5, nan),    partRow("p3", "steady", 1.2, 1.4),
+        partRow("p1", "failing", 3.0, 3.0),   partRow("p2", "failing", nan, nan, nan),
+        partRow("p3", "failing", 4.0, 4.0),   partRow("p1", kLampConfig, 1.0, 0.5),
+        partRow("p2", kLampConfig, 1.0, 0.6), partRow("p3", kLampConfig, 1.0, 0.7)};
+    const auto st = raceStandings(medians, {"sharp", "steady", "failing", kLampConfig});
+    ASSERT_EQ(st.size(), 4u);
+    EXPECT_EQ(st[0].parts, 3);
+    EXPECT_DOUBLE_EQ(st[0].medianVsLamp, 5.0);
+    EXPECT_DOUBLE_EQ(st[0].worstVsLamp, 0.8);
+    EXPECT_EQ(st[0].worstLampPart, "p3");
+    EXPECT_DOUBLE_EQ(st[0].worstVsPaper, 0.5);
+    EXPECT_DOUBLE_EQ(st[1].worstVsLamp, 1.2);
+    EXPECT_DOUBLE_EQ(st[1].medianVsPaper, 1.2);  // p2 has no paper-loop figure: left out
+    EXPECT_EQ(st[1].failed, 0);
+    EXPECT_EQ(st[2].failed, 1);
+    EXPECT_DOUBLE_EQ(st[2].worstVsLamp, 0.0);  // no light on p2
+    EXPECT_EQ(st[2].worstLampPart, "p2");
+    EXPECT_DOUBLE_EQ(st[3].medianVsLamp, 1.0);
+    // "sharp" has the best median (5.0), "steady" the best worst part (1.2): steady wins.
+    EXPECT_EQ(raceWinner(st), "steady");
+    EXPECT_NE(formatRaceStandings(st).find("steady"), std::string::npos);
+}
+
+// A tiny wide world: a generated part and a "real" texture (an X3P written here, defects
+// inserted as insert-defects does) at 32², two configurations; the lamp's reference row on
+// every part, the standings' median/worst are the median/min of the per-part rows.
+TEST(Race, TinyWideWorldHasLampRowsAndWorstCaseStandings) {
+    test::TempDir dir("wide-race");
+    SurfaceSpec tex;
+    tex.width = tex.height = 160;
+    tex.pitch = 0.02;
+    tex.pocketEdge = false;
+    tex.scratchCount = tex.gougeCount = 0;
+    const auto x3p = dir.path() / "texture.x3p";
+    writePartFiles(generateSurface(tex), x3p, {});
+
+    RaceOptions o;
+    o.parts = {"facemill-scratches"};
+    o.real = {x3p};
+    o.sizes = {32};
+    o.seeds = 1;
+    o.judgeSpp = 32;
+    o.threads = 1;
+    o.workDir = dir.path() / "race";
+    o.configs.clear();
+    for (RaceConfig& c : defaultRaceConfigs())
+        if (c.name == "paper-loop" || c.name == "default-unbiased") o.configs.push_back(c);
+    ASSERT_EQ(o.configs.size(), 2u);
+    o.configs.front().search.optimizer.iterations = 10;
+    const RaceSummary s = runRace(o);
+    ASSERT_EQ(s.rows.size(), 4u);
+    ASSERT_EQ(s.lamps.size(), 2u);
+    ASSERT_EQ(s.lampMedians.size(), 2u);
+    EXPECT_EQ(s.rows[0].part, "facemill-scratches@32");
+    EXPECT_EQ(s.rows[2].part, "texture@32");
+    for (const RaceRow& l : s.lamps) {
+        EXPECT_EQ(l.config, kLampConfig);
+        EXPECT_DOUBLE_EQ(l.vsLamp, 1.0);
+        EXPECT_TRUE(std::isfinite(l.figure));
+    }
+    ASSERT_EQ(s.standings.size(), 3u);  // the two configs, then the lamp
+    EXPECT_EQ(s.standings.back().config, kLampConfig);
+    for (const RaceStanding& st : s.standings) {
+        std::vector<double> lamp, paper;
+        for (const RaceRow& r : s.medians)
+            if (r.config == st.config) lamp.push_back(r.vsLamp), paper.push_back(r.vsPaper);
+        for (const RaceRow& r : s.lampMedians)
+            if (r.config == st.config) lamp.push_back(r.vsLamp), paper.push_back(r.vsPaper);
+        ASSERT_EQ(lamp.size(), 2u) << st.config;
+        EXPECT_EQ(st.parts, 2);
+        EXPECT_DOUBLE_EQ(st.medianVsLamp, median(lamp));
+        EXPECT_DOUBLE_EQ(st.worstVsLamp, *std::min_element(lamp.begin(), lamp.end()));
+        EXPECT_DOUBLE_EQ(st.medianVsPaper, median(paper));
+        EXPECT_DOUBLE_EQ(st.worstVsPaper, *std::min_element(paper.begin(), paper.end()));
+    }
+    EXPECT_DOUBLE_EQ(s.standings[0].medianVsPaper, 1.0);  // paper-loop against itself
+    const RaceStanding& a = s.standings[0];
+    const RaceStanding& b = s.standings[1];
+    EXPECT_EQ(s.winner, a.worstVsLamp >= b.worstVsLamp ? a.config : b.config);
+}
+
+// Real textures: a file that is missing or not a height map is refused, naming it, before any
+// part is traced.
+TEST(Race, RealTextureErrorsNameTheFile) {
+    test::TempDir dir("wide-race-real");
+    const auto missing = dir.path() / "nowhere.x3p";
+    const auto garbage = dir.path() / "garbage.x3p";
+    std::ofstream(garbage) << "not a height map";
+    for (const auto& file : {missing, garbage}) {
+        RaceOptions o;
+        o.parts = {};
+        o.real = {file};
+        o.workDir = dir.path() / "race";
+        try {
+            runRace(o);
+            FAIL() << file << " was accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+        }
+    }
+}
+
+// Every gen-surface test part and a shallow and deep variant of each generated part are race
+// parts; another name is refused with the list.
+TEST(Race, KnowsTheTestPartsAndTheirShallowAndDeepVariants) {
+    const auto names = knownRaceParts();
+    for (const char* n : {"ballend-chatter", "ballend", "facemill", "flatend", "turned",
+                          "turned-shallow", "pocket-deep"})
+        EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
+    test::TempDir dir("wide-race-parts");
+    try {
+        writeRacePart("lathe", dir.path());
+        FAIL();
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("flatend-deep"), std::string::npos) << e.what();
+    }
 }
 
 }  // namespace

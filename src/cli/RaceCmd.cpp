@@ -1,7 +1,11 @@
-// scratchlight bench race [--parts a,b,c] [--seeds 3] [--configs NAME,...] [-o DIR]
+// scratchlight bench race [--parts a,b,c] [--real FILE...] [--sizes 128,256] [--alphas 0.05,0.3]
+//                        [--height-scales 1,2] [--seeds 3] [--configs NAME,...] [--threads N]
+//                        [-o DIR]
 // scratchlight bench settings [--spp 4,16,64] [--sampling ...] [--max-depth 2,3,4] [-o DIR]
-// The race that chooses optimize's defaults (app/Race.h): prints the median table, writes
-// race.csv (every run), race-median.csv and a Pareto plot (seconds vs U) race.png; settings
+// The race that chooses optimize's defaults (app/Race.h): prints the median table and the
+// standings (median and worst part per configuration, the winner by the worst part), writes
+// race.csv (every run), race-median.csv, race-configs.csv (the standings) and a Pareto plot
+// (seconds vs U) race.png; settings
 // races the trace settings of T the same way (settings.csv, settings.png).
 #include <algorithm>
 #include <cstdio>
@@ -12,6 +16,7 @@
 #include "cli/Commands.h"
 #include "cli/Common.h"
 #include "core/Registry.h"
+#include "core/Stopwatch.h"
 
 namespace sl::cli {
 
@@ -55,16 +60,32 @@ int runRaceCmd(RaceArgs a) {
     }
     a.o.workDir = a.out;
     a.o.log = [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); };
+    const Stopwatch wall;
     RaceSummary s = runRace(a.o);
     std::printf(
         "medians over %d seed(s); ratios to paper-loop on the same part and seed; gap: "
-        "judge score of the own objective over the training loss\n",
+        "judge score of the own objective over the training loss; xlamp, xpl: times better "
+        "than the studio lamp, than paper-loop, on the part's figure (the defects' combined "
+        "visibility; U where no defect is in view)\n",
         a.o.seeds);
-    std::printf("%s\n", formatRaceTable(s.medians).c_str());
-    std::printf("%s", formatRaceTable(s.overall).c_str());
-    std::vector<RaceRow> med = s.medians;
+    std::vector<RaceRow> med;
+    for (size_t i = 0; i < s.medians.size(); ++i) {  // each part's configs, then its lamp
+        med.push_back(s.medians[i]);
+        if ((i + 1) % a.o.configs.size() == 0) med.push_back(s.lampMedians[i / a.o.configs.size()]);
+    }
+    std::printf("%s\n", formatRaceTable(med).c_str());
+    std::printf("%s\n", formatRaceTable(s.overall).c_str());
+    std::printf(
+        "per configuration over %zu part(s): median and worst (min) of its per-part "
+        "medians\n%s",
+        s.lampMedians.size(), formatRaceStandings(s.standings).c_str());
+    std::printf("%s: %s\n", kRaceWinnerRule, s.winner.c_str());
+    std::printf("race wall time %.1f s\n", wall.seconds());
+    std::vector<RaceRow> rows = s.rows;
+    rows.insert(rows.end(), s.lamps.begin(), s.lamps.end());
     med.insert(med.end(), s.overall.begin(), s.overall.end());
-    writeRaceOutputs(a.out, "race", s.rows, med);
+    writeRaceStandingsCsv(std::filesystem::path(a.out) / "race-configs.csv", s.standings);
+    writeRaceOutputs(a.out, "race", rows, med);
     return kOk;
 }
 
@@ -103,9 +124,27 @@ int runSettingsCmd(SettingsArgs a) {
 /// The options `bench race` and `bench settings` share: the parts, the training seeds, the
 /// judge's spp and the output directory.
 void addRaceRunOptions(CLI::App* c, RaceOptions& o, std::string& out) {
-    c->add_option("--parts", o.parts, "Parts: ballend-chatter, facemill-scratches, pocket")
+    std::string parts;
+    for (const std::string& n : knownRaceParts()) parts += (parts.empty() ? "" : ", ") + n;
+    c->add_option("--parts", o.parts, "Generated parts: " + parts)
         ->delimiter(',')
         ->capture_default_str();
+    c->add_option("--real", o.real,
+                  "Real textures (instrument height maps: .x3p, .opd, .plu, ...) with defects "
+                  "inserted as insert-defects does");
+    c->add_option("--sizes", o.sizes, "Image sizes (width = height) of every part")
+        ->delimiter(',')
+        ->check(CLI::Range(8, 4096))
+        ->capture_default_str();
+    c->add_option("--alphas", o.alphas,
+                  "Surface roughness alpha (material.alpha; default: the part's)")
+        ->delimiter(',')
+        ->check(CLI::Range(1e-4, 1.0));
+    c->add_option("--height-scales", o.heightScales,
+                  "Texture height (heightmap.height_scale) of every part")
+        ->delimiter(',')
+        ->capture_default_str();
+    c->add_option("--threads", o.threads, "Worker threads (0: all)")->capture_default_str();
     c->add_option("--seeds", o.seeds, "Training seeds per part")
         ->check(CLI::Range(1, 100))
         ->capture_default_str();
