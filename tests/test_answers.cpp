@@ -65,11 +65,13 @@ TEST(TrainingNoise, NextSppAimsAtHalfTheToleranceUnderTheCap) {
     EXPECT_EQ(nextTrainingSpp(16, 0.06, o), 64);    // 16·0.06/0.025 = 38.4 -> 64
     EXPECT_EQ(nextTrainingSpp(16, 0.051, o), 64);   // 32.6 -> 64
     EXPECT_EQ(nextTrainingSpp(16, 0.04, o), 32);    // 25.6 -> 32 (and at least 2·16)
-    EXPECT_EQ(nextTrainingSpp(16, 0.4, o), 64);     // 256 wanted, at most 4× a round
+    EXPECT_EQ(nextTrainingSpp(16, 0.4, o), 128);    // 256 wanted, at most 8× a round
     EXPECT_EQ(nextTrainingSpp(64, 0.1, o), 256);    // 256 exactly
     EXPECT_EQ(nextTrainingSpp(512, 0.2, o), 1024);  // capped
     EXPECT_EQ(nextTrainingSpp(1024, 0.2, o), std::nullopt);
-    EXPECT_EQ(nextTrainingSpp(16, std::numeric_limits<double>::infinity(), o), 64);
+    EXPECT_EQ(nextTrainingSpp(16, std::numeric_limits<double>::infinity(), o), 128);
+    EXPECT_EQ(nextTrainingSpp(64, 2.5, o), 512);  // 6 400 wanted: 8× a round
+    EXPECT_EQ(kMaxSppGrowth, 8);
 }
 
 // On any estimate G_u(cE) = c²·G_u(E) (the image is linear in E), so with λ = 0
