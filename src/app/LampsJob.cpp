@@ -171,24 +171,25 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         job.targetLoss = job.fit.targetLoss;
         const std::vector<Lamp>& lamps = job.fit.steps.back().lamps;
 
+        // What the judge and the self-check score: per-region visibility of the defects
+        // objective's defect region, else of the truth's labels.
+        JudgeOptions jo;
+        jo.objective = o.objective;
+        std::vector<uint8_t> labels;
+        std::vector<RegionLabel> legend;
+        if (kind == ObjectiveKind::Defects) {
+            for (uint8_t v : in.defects) labels.push_back(v ? 255 : 0);
+            legend = {RegionLabel{255, "defects"}};
+        } else if (!o.truth.empty() && scene) {
+            LabelMask truth = projectTruth(*scene, o.truth);
+            labels = std::move(truth.labels);
+            legend = std::move(truth.legend);
+        }
+
         // The judge.
         std::optional<TransportSource> estimate;
         if (o.judge && scene) {
             estimate = judgeEstimateFor(job.transport.file, *scene, 0, cacheDir);
-            JudgeOptions jo;
-            jo.objective = o.objective;
-            // Per-region visibility of the defects objective's defect region, else of the
-            // truth's labels.
-            std::vector<uint8_t> labels;
-            std::vector<RegionLabel> legend;
-            if (kind == ObjectiveKind::Defects) {
-                for (uint8_t v : in.defects) labels.push_back(v ? 255 : 0);
-                legend = {RegionLabel{255, "defects"}};
-            } else if (!o.truth.empty()) {
-                LabelMask truth = projectTruth(*scene, o.truth);
-                labels = std::move(truth.labels);
-                legend = std::move(truth.legend);
-            }
             Judge judge(*estimate, jo, labels, legend);
             const EnvMap studioMap = lightFromSpec("studio", t.envWidth, t.envHeight, 1, "studio");
             const std::vector<double> studio = judge.envVector(studioMap);
@@ -229,14 +230,6 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
             }
             const TransportSource vs =
                 validationEstimate(*scene, v, job.transport.file.provenance.seed, cacheDir);
-            JudgeOptions jo;
-            jo.objective = o.objective;
-            std::vector<uint8_t> labels;
-            std::vector<RegionLabel> legend;
-            if (kind == ObjectiveKind::Defects) {
-                for (uint8_t x : in.defects) labels.push_back(x ? 255 : 0);
-                legend = {RegionLabel{255, "defects"}};
-            }
             const Judge validation(vs, jo, labels, legend);
             const LampRasterizer raster(EnvMapBasis(t.envWidth, t.envHeight), o.fit.raster);
             std::vector<AnswerCandidate> cands;
