@@ -211,9 +211,10 @@ void minimizeNlopt(Run& run, std::vector<double>& x) {
             if (what != "nlopt failure") outcome += ": " + what;
             if (o.method == OptimizerMethod::Lbfgs || mlsl)
                 outcome += std::string(mlsl ? " in a local L-BFGS search (ends MLSL)" : "") +
-                           "; L-BFGS found no decrease along its direction: a gradient that does "
-                           "not match the loss, or a kink (try the objective's smooth |x|, " +
-                           option("smooth-abs") + ")";
+                           "; L-BFGS found no decrease along its direction: the loss is flat "
+                           "to its precision there (near an optimum; the best point is kept), "
+                           "a kink (eq. 2 and U: try their smooth |x|, " +
+                           option("smooth-abs") + "), or a gradient that does not match the loss";
             s.failed = true;
         }
     }
