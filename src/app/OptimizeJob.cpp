@@ -352,8 +352,9 @@ struct Inputs {
     ObjectiveKind kind = ObjectiveKind::Unbiased;
     bool onHalves() const { return registryRow(objectiveKindTable(), kind).planes == 2; }
     std::vector<uint8_t> defects, reference;  // the defects objective's regions (image)
-    int defectSppFactor = 1;  // the defect pixels' sample multiplier (app/TrainingNoise.h)
-    bool defectSppLogged = false;
+    /// The training trace's per-pixel sample multipliers (app/TrainingNoise.h defectSppScale;
+    /// empty: none), chosen on the first load from the scene and the regions, kept after.
+    std::optional<std::vector<uint8_t>> sppScale;
     std::vector<const TransportMatrix*> set;  // the training estimates of T
     LossMask mask;
     std::vector<uint8_t> truth;                    // the truth mask in the image (metrics), 255/0
@@ -377,6 +378,39 @@ struct Inputs {
     std::optional<PrecomputeOptions> trained;
     uint64_t trainingSeed = 0;
 };
+
+/// The defects objective's regions in the image (defect map or truth projected), unless this
+/// job already has them (they depend on the scene and the options only).
+void defectRegionsOnce(const OptimizeJobOptions& o, Inputs& in) {
+    if (in.sceneParts || !in.defects.empty()) return;
+    DefectRegions regions = defectRegionsInImage(*in.scene, o.defects, o.truth, o.reference);
+    in.defects = std::move(regions.defects);
+    in.reference = std::move(regions.reference);
+}
+
+/// The defect pixels' sample multipliers of the training trace: `given` (> 0), else the rule's
+/// factor for the defect pixels on the part's footprint; printed when above 1.
+std::vector<uint8_t> chooseDefectSppScale(const Scene& scene, const std::vector<uint8_t>& defects,
+                                          int given) {
+    size_t part = 0, marked = 0;
+    const std::vector<PixelSpan> spans = partFootprint(scene);
+    const auto W = static_cast<size_t>(scene.camera.width());
+    for (size_t y = 0; y < spans.size(); ++y)
+        for (int x = spans[y].begin; x < spans[y].end; ++x) {
+            ++part;
+            marked += defects[y * W + static_cast<size_t>(x)] != 0;
+        }
+    const int factor = given > 0 ? given : defectSppFactor(marked, part);
+    if (factor > 1)
+        spdlog::info(
+            "defect pixels: {} of the part's {} take {}x the training spp (their few pairs are "
+            "the objective's noisiest sum; +{} % samples)",
+            marked, part, factor,
+            formatNumber(100.0 * static_cast<double>(marked) * (factor - 1) /
+                             static_cast<double>(std::max<size_t>(part, 1)),
+                         2));
+    return defectSppScale(defects, factor);
+}
 
 /// Stage 1: the scene and the training estimates of T (traced or cached, or the .tm); `spp`:
 /// the noise-aware rule's choice (app/TrainingNoise.h), over any other (0: none).
@@ -423,38 +457,13 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp) {
             !p.blackBox && !pre.spp)
             pre.spp = std::max(in.scene->desc.render.spp, minSpp);
         if (spp > 0) pre.spp = spp;
-        // The defects objective's regions before T (their pixels take more samples,
-        // app/TrainingNoise.h defectSppScale); kept for prepareRuns.
-        if (in.kind == ObjectiveKind::Defects && in.defects.empty()) {
-            DefectRegions regions =
-                defectRegionsInImage(*in.scene, o.defects, o.truth, o.reference);
-            in.defects = std::move(regions.defects);
-            in.reference = std::move(regions.reference);
+        // The defect pixels take more samples (app/TrainingNoise.h defectSppScale): the
+        // defects objective's regions are needed before T.
+        if (in.kind == ObjectiveKind::Defects && p.superSampleDefects && !in.sppScale) {
+            defectRegionsOnce(o, in);
+            in.sppScale = chooseDefectSppScale(*in.scene, in.defects, o.defectSppScale);
         }
-        if (in.kind == ObjectiveKind::Defects && p.superSampleDefects) {
-            size_t part = 0, marked = 0;
-            const std::vector<PixelSpan> spans = partFootprint(*in.scene);
-            const int W = in.scene->camera.width();
-            for (size_t y = 0; y < spans.size(); ++y)
-                for (int x = spans[y].begin; x < spans[y].end; ++x) {
-                    ++part;
-                    marked += in.defects[y * static_cast<size_t>(W) + static_cast<size_t>(x)] != 0;
-                }
-            const int factor =
-                o.defectSppScale > 0 ? o.defectSppScale : defectSppFactor(marked, part);
-            pre.sppScale = defectSppScale(in.defects, factor);
-            in.defectSppFactor = factor;
-            if (factor > 1 && !in.defectSppLogged) {
-                spdlog::info(
-                    "defect pixels: {} of the part's {} take {}x the training spp (their few "
-                    "pairs are the objective's noisiest sum; +{} % samples)",
-                    marked, part, factor,
-                    formatNumber(100.0 * static_cast<double>(marked) * (factor - 1) /
-                                     static_cast<double>(std::max<size_t>(part, 1)),
-                                 2));
-                in.defectSppLogged = true;
-            }
-        }
+        if (in.sppScale) pre.sppScale = *in.sppScale;
         std::vector<TransportSource> set =
             transportSetForScene(*in.scene, pre, o.planes, p.cacheDir);
         job.transport = std::move(set.front());
@@ -559,11 +568,7 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     const TransportMatrix& t = job.transport.file.matrix;
     in.mask = lossMask(o.mask, t, in.scene.get(), o.scratch);
     job.maskPixels = in.mask.count;
-    if (in.kind == ObjectiveKind::Defects && !in.sceneParts && in.defects.empty()) {
-        DefectRegions regions = defectRegionsInImage(*in.scene, o.defects, o.truth, o.reference);
-        in.defects = std::move(regions.defects);
-        in.reference = std::move(regions.reference);
-    }
+    if (in.kind == ObjectiveKind::Defects) defectRegionsOnce(o, in);
     if (!o.truth.empty() && !in.sceneParts) in.truth = projectMaskFile(*in.scene, o.truth);
     const int maxDepth = job.transport.file.provenance.maxDepth;
     for (const InitialState& s : o.starts)
@@ -1386,7 +1391,7 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                 in.lampE = std::move(kept.lampE);
                 in.sceneParts = true;
             }
-            in.defectSppLogged = kept.defectSppLogged;
+            in.sppScale = std::move(kept.sppScale);  // chosen with the regions, on the first load
             job.extraPlanes.clear();
             loadTraining(p, in, job, spp);
             if (job.transport.autoDepth && spp == 0)
