@@ -863,6 +863,8 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
         so.planes = o.planes;
         so.starts = o.starts;
         so.continuation = o.continuation;
+        so.lightWidth = o.lightWidth;
+        so.lightHeight = o.lightHeight;
         const double collectives0 = in.ranks ? in.ranks->secondsInCollectives() : 0.0;
         SearchResult sr = search(si, so);
         if (in.ranks) run.secondsCollectives = in.ranks->secondsInCollectives() - collectives0;
@@ -1063,6 +1065,9 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     s["starts"] = starts;
     s["start"] = run.start;
     s["continuation"] = o.continuation;
+    s["light_grid"] = o.lightWidth > 0 && o.lightHeight > 0
+                          ? std::to_string(o.lightWidth) + "x" + std::to_string(o.lightHeight)
+                          : std::string("texels");
     s["objective"] = objectiveKindName(in.kind);
     s["lambda"] = run.lambda;
     s["reg"] = o.objective.reg == RegTarget::EnvMap ? "envmap" : "image";

@@ -2,10 +2,12 @@
 
 #include <limits>
 #include <memory>
+#include <optional>
 
 #include "app/InitialState.h"
 #include "core/Error.h"
 #include "core/Stopwatch.h"
+#include "objective/CoarseLight.h"
 #include "objective/DefectObjective.h"
 #include "objective/TransportLoss.h"
 #include "objective/UnbiasedObjective.h"
@@ -78,6 +80,10 @@ SearchResult search(const SearchInputs& in, const SearchOptions& o) {
     const Stopwatch clock;
     const TransportMatrix& t = *in.set.front();
     const auto count = static_cast<size_t>(o.planes);
+    std::optional<CoarseLight> grid;
+    if (o.lightWidth > 0 && o.lightHeight > 0 &&
+        (o.lightWidth != t.envWidth || o.lightHeight != t.envHeight))
+        grid.emplace(t.envWidth, t.envHeight, o.lightWidth, o.lightHeight, in.rgb ? 3 : 1);
 
     // The final stage's losses judge the starts; earlier stages are built per run.
     StageLosses finalStage(in, o.objective, in.objective, count);
@@ -112,11 +118,18 @@ SearchResult search(const SearchInputs& in, const SearchOptions& o) {
                 if (!in.callback) return true;
                 IterationRecord shifted = r;
                 shifted.iteration += base;
-                const bool go = in.callback(shifted, x);
+                const bool go =
+                    grid ? in.callback(shifted, grid->prolong(x)) : in.callback(shifted, x);
                 if (!go) stopped = true;
                 return go;
             };
-            last = minimize(stage->problem(nullptr), e, opt);
+            if (grid) {
+                std::vector<double> theta = grid->project(e);
+                last = minimize(grid->over(stage->problem(nullptr)), theta, opt);
+                e = grid->prolong(theta);
+            } else {
+                last = minimize(stage->problem(nullptr), e, opt);
+            }
             iterationBase += last.iterations + 1;
             iterations += last.iterations;
             evaluations += last.evaluations;

@@ -9,6 +9,9 @@
 //                 (multistart); the specs of app/InitialState.h.
 //   continuation  λ factors run in turn before λ itself, each stage starting where the last
 //                 ended (e.g. {4, 2}: λ·4, then λ·2, then λ).
+//   light grid    the light's degrees of freedom: one value per texel, or a coarser grid of
+//                 nodes interpolated onto the env map (objective/CoarseLight.h); every start
+//                 is projected onto it, and E* is the interpolated light.
 #pragma once
 
 #include <cstdint>
@@ -37,6 +40,9 @@ struct SearchOptions {
     int planes = 1;
     std::vector<InitialState> starts{InitialState{}};  // default: const:0.5
     std::vector<double> continuation;
+    /// The grid the light is searched on (objective/CoarseLight.h): lightWidth × lightHeight
+    /// nodes interpolated onto the env map; 0 (either): one value per texel.
+    int lightWidth = 0, lightHeight = 0;
 };
 
 struct SearchInputs {
