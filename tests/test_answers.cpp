@@ -78,6 +78,34 @@ TEST(TrainingNoise, NextSppAimsAtHalfTheToleranceUnderTheCap) {
 // U(cE) = U(E)/c exactly: the brighter copy of the lamp wins, the dimmer loses to the lamp.
 // The defect pixels' multiplier: the most (kDefectSppScale) while the extra samples stay
 // within kDefectSppBudget of the part's, halving otherwise; 1 when nothing is affordable.
+// Step 5's grids: √2 fewer nodes per side a step, from the env map's own, down to
+// kCoarsestLightNodes.
+TEST(TrainingNoise, CoarserLightsStepBySqrtTwoDownToTheCoarsest) {
+    std::vector<std::string> ladder;
+    for (auto g = nextLightGrid(LightGrid{}, 50, 25); g; g = nextLightGrid(*g, 50, 25))
+        ladder.push_back(g->name());
+    const std::vector<std::string> expected{"35x18 nodes", "25x13 nodes", "18x9 nodes",
+                                            "13x6 nodes", "9x4 nodes"};
+    EXPECT_EQ(ladder, expected);  // 6x3 = 18 nodes would be below 32
+    EXPECT_FALSE(nextLightGrid(LightGrid{9, 4}, 50, 25));
+    // The height never goes below 2 nodes (the poles), the width below 1.
+    EXPECT_EQ(nextLightGrid(LightGrid{}, 200, 2)->name(), "141x2 nodes");
+}
+
+// A given grid (or the gap met) ends the rule; describe says which grid E* was searched on.
+TEST(TrainingNoise, TheDescriptionNamesTheGridOfEachRound) {
+    TrainingNoiseSummary s;
+    s.adapted = true;
+    s.maxGap = 0.05;
+    s.rounds = {{64, LightGrid{}, 3.0, 1.0, 2.0, 1.0},
+                {512, LightGrid{}, 2.0, 1.0, 1.0, 1.0},
+                {512, LightGrid{25, 13}, 1.04, 1.0, 0.04, 1.0}};
+    s.met = true;
+    const std::string d = describeTrainingNoise(s);
+    EXPECT_NE(d.find("512 spp, 25x13 nodes: train/validation gap 4 %"), std::string::npos) << d;
+    EXPECT_NE(d.find("-> 512 spp on 25x13 nodes (within 5 %)"), std::string::npos) << d;
+}
+
 TEST(TrainingNoise, DefectPixelsTakeMoreSamplesWithinTheBudget) {
     EXPECT_EQ(defectSppFactor(0, 5000), 1);
     EXPECT_EQ(defectSppFactor(50, 5000), kDefectSppScale);  // 1 %: 31 × 50 ≤ 2500
@@ -159,6 +187,10 @@ TEST(Answer, ALightThatLeavesThePartBlackIsNotTheAnswer) {
     EXPECT_FALSE(c.scored[0].eligible);
     EXPECT_NE(c.scored[0].why.find("too dark"), std::string::npos);
     EXPECT_TRUE(c.referenceWon());
+    // The reason says the optimized light failed a check, not that the lamp showed more.
+    EXPECT_NE(c.reason.find("the optimized light does not pass the checks"), std::string::npos)
+        << c.reason;
+    EXPECT_EQ(c.reason.find("shows the defects better"), std::string::npos) << c.reason;
     // Both dark: the better one is still the answer, and the reason says why.
     const AnswerChoice d =
         chooseAnswer(validation, {{"optimized", CandidateKind::Optimized, dark},
@@ -188,9 +220,22 @@ TEST(OptimizeAnswers, DefectsBelowTheTrainingNoiseRaiseTheSpp) {
     ASSERT_TRUE(n.is_object()) << s.dump(2);
     ASSERT_GE(n["rounds"].size(), 2u) << n.dump(2);
     EXPECT_EQ(n["rounds"][0]["spp"], 4);
+    EXPECT_EQ(n["rounds"][0]["light_grid"], "texels");
     EXPECT_GT(n["rounds"][0]["gap"].get<double>(), 0.05);
-    for (size_t k = 1; k < n["rounds"].size(); ++k)
-        EXPECT_GT(n["rounds"][k]["spp"].get<int>(), n["rounds"][k - 1]["spp"].get<int>());
+    // The spp rises first (each round a new trace); at the most spp the light's grid gets
+    // coarser instead (step 5), on the same T.
+    for (size_t k = 1; k < n["rounds"].size(); ++k) {
+        const json &a = n["rounds"][k - 1], &b = n["rounds"][k];
+        if (b["spp"] != a["spp"]) {
+            EXPECT_GT(b["spp"].get<int>(), a["spp"].get<int>());
+            EXPECT_EQ(b["light_grid"], "texels") << n.dump(2);
+        } else {
+            EXPECT_EQ(b["spp"], 64) << n.dump(2);
+            EXPECT_NE(b["light_grid"], a["light_grid"]);
+        }
+    }
+    EXPECT_EQ(n["light_grid"], n["rounds"].back()["light_grid"]);
+    EXPECT_EQ(s["light_grid"], n["light_grid"]);
     EXPECT_EQ(s["transport"]["spp"], n["spp"]);
     EXPECT_EQ(s["validation"]["transport"]["spp"], n["spp"]);
     // The truth marks chatter over half the part: too many pixels to supersample them.
@@ -239,11 +284,14 @@ TEST(OptimizeAnswers, AGivenSppIsKeptAndItsGapWarnedAbout) {
     EXPECT_EQ(s["validation"]["transport"]["spp_scale"], s["transport"]["spp_scale"]);
     EXPECT_NE(r.output.find("take 4x the training spp"), std::string::npos) << r.output;
     const json& n = s["training_noise"];
-    ASSERT_EQ(n["rounds"].size(), 1u);
+    ASSERT_GE(n["rounds"].size(), 1u);
     EXPECT_FALSE(n["adapted"].get<bool>());
     EXPECT_EQ(s["transport"]["spp"], 4);
+    for (const json& round : n["rounds"]) EXPECT_EQ(round["spp"], 4);  // only the grid adapts
     if (!n["met"].get<bool>()) {
-        EXPECT_NE(n["reason"].get<std::string>().find("the given spp: ABOVE"), std::string::npos);
+        const std::string reason = n["reason"].get<std::string>();
+        EXPECT_NE(reason.find("(the given spp"), std::string::npos) << reason;
+        EXPECT_NE(reason.find(": ABOVE 5 %"), std::string::npos) << reason;
         bool warned = false;
         for (const json& w : s["warnings"])
             warned |= w.get<std::string>().find("training noise") != std::string::npos;

@@ -73,10 +73,13 @@ AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> 
                    formatNumber(options.minBrightness, 3) +
                    " of white, defects showing against it); " + a.candidate.name +
                    " is the best of them" + on;
+    else if (c.referenceWon() && !o.eligible)
+        c.reason = "the optimized light does not pass the checks on the validation estimate (" +
+                   o.why + "); the reference light " + a.candidate.name +
+                   " is the best light that does" + on;
     else if (c.referenceWon())
         c.reason = "the reference light " + a.candidate.name +
-                   " shows the defects better than the optimized light" + on +
-                   (o.eligible ? std::string() : "; the optimized light is " + o.why);
+                   " shows the defects better than the optimized light" + on;
     else
         c.reason = "the optimized light (" + a.candidate.name + ") is the best of " +
                    std::to_string(c.scored.size()) + " candidates" + on;

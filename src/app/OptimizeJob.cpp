@@ -322,6 +322,7 @@ Plan plan(const OptimizeJobOptions& options) {
     p.validate =
         !distributed && p.requested != OptimizerMethod::PaperLoop && (o.selfCheck || !p.blackBox);
     if (p.blackBox || o.planes > 1 || !p.validate) p.noise.adapt = false;
+    p.noise.adaptGrid = !o.lightGrid && !p.blackBox && o.planes == 1 && p.validate;
     p.superSampleDefects = !p.blackBox && !distributed;
     if (o.ranks && o.ranks->distributed()) {
         p.ranks = o.ranks;
@@ -863,8 +864,7 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
         so.planes = o.planes;
         so.starts = o.starts;
         so.continuation = o.continuation;
-        so.lightWidth = o.lightWidth;
-        so.lightHeight = o.lightHeight;
+        so.lightGrid = o.lightGrid.value_or(LightGrid{});
         const double collectives0 = in.ranks ? in.ranks->secondsInCollectives() : 0.0;
         SearchResult sr = search(si, so);
         if (in.ranks) run.secondsCollectives = in.ranks->secondsInCollectives() - collectives0;
@@ -1065,9 +1065,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     s["starts"] = starts;
     s["start"] = run.start;
     s["continuation"] = o.continuation;
-    s["light_grid"] = o.lightWidth > 0 && o.lightHeight > 0
-                          ? std::to_string(o.lightWidth) + "x" + std::to_string(o.lightHeight)
-                          : std::string("texels");
+    s["light_grid"] = o.lightGrid.value_or(LightGrid{}).name();
     s["objective"] = objectiveKindName(in.kind);
     s["lambda"] = run.lambda;
     s["reg"] = o.objective.reg == RegTarget::EnvMap ? "envmap" : "image";
@@ -1122,6 +1120,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
         json rounds = json::array();
         for (const TrainingNoiseRound& nr : run.noise.rounds)
             rounds.push_back({{"spp", nr.spp},
+                              {"light_grid", nr.grid.name()},
                               {"training", nr.training},
                               {"validation", nr.validation},
                               {"gap", nr.gap},
@@ -1133,6 +1132,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
             {"adapted", run.noise.adapted},
             {"met", run.noise.met},
             {"spp", run.noise.spp()},
+            {"light_grid", run.noise.grid().name()},
             {"gap", run.noise.gap()},
             {"seconds_added", run.noise.secondsAdded},
             {"rounds", rounds},
@@ -1181,6 +1181,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
                            {"merit", a.answer().merit.what},
                            {"merit_answer", a.answer().merit.value},
                            {"merit_optimized", a.scored[a.optimized].merit.value},
+                           {"optimized_why", a.scored[a.optimized].why},
                            {"on", "the validation estimate"}};
             if (run.judged) answer["judge"] = toJson(*run.judged);
             cmp["answer"] = answer;
@@ -1435,10 +1436,11 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
             LambdaResult r = optimizeLambda(p, in, job, lambda);
             // Noise-aware training (app/TrainingNoise.h), on the first λ: E* on T and on V;
             // the spp is raised (T, V and the comparisons traced again) while the gap is large.
-            while (noise.rounds.size() < 8 && job.runs.empty() && r.run.validationFinal &&
+            while (noise.rounds.size() < 16 && job.runs.empty() && r.run.validationFinal &&
                    !p.blackBox && !r.run.interrupted) {
                 TrainingNoiseRound nr;
                 nr.spp = job.transport.file.provenance.spp;
+                nr.grid = p.o.lightGrid.value_or(LightGrid{});
                 nr.training = trainingFigure(in.kind, r.run.final);
                 nr.validation = trainingFigure(in.kind, *r.run.validationFinal);
                 nr.gap = trainingGap(in.kind, nr.training, nr.validation);
@@ -1448,20 +1450,32 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                 const int next = p.noise.adapt && !noise.met
                                      ? nextTrainingSpp(nr.spp, nr.gap, p.noise).value_or(0)
                                      : 0;
+                // At the most spp (or a given one): a coarser light instead (step 5).
+                const std::optional<LightGrid> coarser =
+                    next == 0 && !noise.met && p.noise.adaptGrid
+                        ? nextLightGrid(nr.grid, job.transport.file.matrix.envWidth,
+                                        job.transport.file.matrix.envHeight)
+                        : std::nullopt;
+                const std::string then =
+                    next > 0  ? ": tracing again at " + std::to_string(next) + " spp"
+                    : coarser ? ": searching again on " + coarser->name() + " (a coarser light)"
+                              : std::string();
                 spdlog::info(
-                    "training noise: {} spp, E*'s {} {} on T and {} on the validation "
+                    "training noise: {} spp, {}, E*'s {} {} on T and {} on the validation "
                     "estimate: gap {} %{}",
-                    nr.spp, figureHigherIsBetter(in.kind) ? "visibility" : "loss",
+                    nr.spp, nr.grid.name(), figureHigherIsBetter(in.kind) ? "visibility" : "loss",
                     formatNumber(nr.training, 4), formatNumber(nr.validation, 4),
                     formatNumber(100.0 * nr.gap, 3),
-                    next > 0 ? " > " + formatNumber(100.0 * p.noise.maxGap, 3) +
-                                   " %: tracing again at " + std::to_string(next) + " spp"
-                             : std::string());
-                if (next == 0) break;
+                    then.empty() ? std::string()
+                                 : " > " + formatNumber(100.0 * p.noise.maxGap, 3) + " %" + then);
+                if (next == 0 && !coarser) break;
                 noise.secondsAdded += nr.seconds;
                 round.restart();
                 notInRound = 0;
-                load(next);
+                if (next > 0)
+                    load(next);
+                else
+                    p.o.lightGrid = *coarser;
                 r = optimizeLambda(p, in, job, lambda);
             }
             // Ctrl-C keeps nothing (the previous OUTDIR stays) unless the user asked to keep

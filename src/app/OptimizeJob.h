@@ -149,9 +149,10 @@ struct OptimizeJobOptions {
     // method's default); continuation: λ factors before λ.
     int planes = 0;
     std::vector<double> continuation;
-    /// The grid of nodes the light is searched on (objective/CoarseLight.h); 0: one value per
-    /// texel.
-    int lightWidth = 0, lightHeight = 0;
+    /// The grid the light is searched on (objective/CoarseLight.h). Unset: the noise rule's
+    /// (app/TrainingNoise.h: one value per texel, coarser while the gap stays large at the
+    /// most spp); set: that grid, the gap only measured.
+    std::optional<LightGrid> lightGrid;
     /// MPI ranks (docs/CLUSTER.md): with more than one, `input` is a .shards list naming one
     /// shard per rank, each rank holds only its own (app/Transport.h readShardOfRank), every
     /// rank runs the same optimization in step and rank 0 alone writes OUTDIR. Null: one

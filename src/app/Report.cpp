@@ -654,12 +654,18 @@ std::string optimizeHeadline(const json& s) {
     if (cmp.contains("answer") && cmp["answer"].is_object()) {
         const json& ans = cmp["answer"];
         const std::string name = ans.value("name", std::string("a reference light"));
-        out = "The answer is " + name +
-              ", not the optimized light: on an independent validation estimate it showed the "
-              "defects better (" +
-              ans.value("merit", std::string("figure")) + " " + fmt(num(ans, "merit_answer"), 3) +
-              " vs " + fmt(num(ans, "merit_optimized"), 3) +
-              "); the optimized light is kept beside it (envmap-optimized.exr).";
+        const std::string why = ans.value("optimized_why", std::string());
+        const std::string figures = ans.value("merit", std::string("figure")) + " " +
+                                    fmt(num(ans, "merit_answer"), 3) + " vs " +
+                                    fmt(num(ans, "merit_optimized"), 3);
+        out = "The answer is " + name + ", not the optimized light: " +
+              (why.empty() ? "on an independent validation estimate it showed the defects "
+                             "better (" +
+                                 figures + ")"
+                           : "on an independent validation estimate the optimized light did not "
+                             "pass the checks (" +
+                                 why + "; " + figures + ")") +
+              "; the optimized light is kept beside it (envmap-optimized.exr).";
         if (ans.contains("judge") && opt.contains("judge")) {
             const std::string spp = fmt(num(cmp, "judge_spp"), 6);
             const double va = combinedVisibility(ans["judge"]),

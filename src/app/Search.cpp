@@ -81,9 +81,10 @@ SearchResult search(const SearchInputs& in, const SearchOptions& o) {
     const TransportMatrix& t = *in.set.front();
     const auto count = static_cast<size_t>(o.planes);
     std::optional<CoarseLight> grid;
-    if (o.lightWidth > 0 && o.lightHeight > 0 &&
-        (o.lightWidth != t.envWidth || o.lightHeight != t.envHeight))
-        grid.emplace(t.envWidth, t.envHeight, o.lightWidth, o.lightHeight, in.rgb ? 3 : 1);
+    if (!o.lightGrid.perTexel() &&
+        (o.lightGrid.width != t.envWidth || o.lightGrid.height != t.envHeight))
+        grid.emplace(t.envWidth, t.envHeight, o.lightGrid.width, o.lightGrid.height,
+                     in.rgb ? 3 : 1);
 
     // The final stage's losses judge the starts; earlier stages are built per run.
     StageLosses finalStage(in, o.objective, in.objective, count);

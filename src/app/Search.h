@@ -23,6 +23,7 @@
 
 #include "app/InitialState.h"
 #include "core/Communicator.h"
+#include "objective/CoarseLight.h"
 #include "objective/HalfImageObjective.h"
 #include "objective/Objective.h"
 #include "objective/ObjectiveKind.h"
@@ -40,9 +41,9 @@ struct SearchOptions {
     int planes = 1;
     std::vector<InitialState> starts{InitialState{}};  // default: const:0.5
     std::vector<double> continuation;
-    /// The grid the light is searched on (objective/CoarseLight.h): lightWidth × lightHeight
-    /// nodes interpolated onto the env map; 0 (either): one value per texel.
-    int lightWidth = 0, lightHeight = 0;
+    /// The grid the light is searched on (objective/CoarseLight.h); default: one value per
+    /// texel.
+    LightGrid lightGrid;
 };
 
 struct SearchInputs {

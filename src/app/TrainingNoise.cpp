@@ -1,5 +1,6 @@
 #include "app/TrainingNoise.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -73,24 +74,36 @@ std::optional<int> nextTrainingSpp(int spp, double gap, const TrainingNoiseOptio
     return std::min(n, o.maxSpp);
 }
 
+std::optional<LightGrid> nextLightGrid(const LightGrid& grid, int envWidth, int envHeight) {
+    const int w = grid.perTexel() ? envWidth : grid.width;
+    const int h = grid.perTexel() ? envHeight : grid.height;
+    const int nw = std::max(1, static_cast<int>(std::lround(w / std::sqrt(2.0))));
+    const int nh = std::max(2, static_cast<int>(std::lround(h / std::sqrt(2.0))));
+    if (nw * nh < kCoarsestLightNodes || (nw == w && nh == h)) return std::nullopt;
+    return LightGrid{nw, nh};
+}
+
 std::string describeTrainingNoise(const TrainingNoiseSummary& s) {
     if (s.rounds.empty()) return "not measured";
     std::string out;
     for (size_t k = 0; k < s.rounds.size(); ++k) {
         const TrainingNoiseRound& r = s.rounds[k];
-        out += (k ? "; " : "") + std::to_string(r.spp) + " spp: train/validation gap " +
-               formatNumber(100.0 * r.gap, 3) + " %";
+        out += (k ? "; " : "") + std::to_string(r.spp) + " spp" +
+               (r.grid.perTexel() ? std::string() : ", " + r.grid.name()) +
+               ": train/validation gap " + formatNumber(100.0 * r.gap, 3) + " %";
     }
+    const std::string on = s.grid().perTexel() ? std::string() : " on " + s.grid().name();
     const std::string tol = formatNumber(100.0 * s.maxGap, 3) + " %";
     if (!s.adapted)
-        out += s.met ? " (the given spp; within " + tol + ")"
-                     : " (the given spp: ABOVE " + tol +
+        out += s.met ? " (the given spp" + on + "; within " + tol + ")"
+                     : " (the given spp" + on + ": ABOVE " + tol +
                            ", so the light partly fits the training estimate's noise; leave spp "
                            "to the rule or raise it)";
     else if (s.met)
-        out += " -> " + std::to_string(s.spp()) + " spp (within " + tol + ")";
+        out += " -> " + std::to_string(s.spp()) + " spp" + on + " (within " + tol + ")";
     else
-        out += " -> " + std::to_string(s.spp()) + " spp, the most the rule traces, still above " +
+        out += " -> " + std::to_string(s.spp()) + " spp" + on +
+               ", the most spp the rule traces and the coarsest light it searches, still above " +
                tol + ": no light is trusted on its training estimate alone";
     if (s.rounds.size() > 1) out += "; the rule added " + formatNumber(s.secondsAdded, 3) + " s";
     return out;

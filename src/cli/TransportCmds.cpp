@@ -378,24 +378,12 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
             ->check(CLI::Range(1, 1 << 20))
             ->capture_default_str();
         c->add_option_function<std::string>(
-             "--light-grid",
-             [&j](const std::string& v) {
-                 const auto x = v.find('x');
-                 int w = 0, h = 0;
-                 try {
-                     if (x == std::string::npos) throw std::invalid_argument(v);
-                     w = std::stoi(v.substr(0, x));
-                     h = std::stoi(v.substr(x + 1));
-                 } catch (const std::exception&) {
-                     throw CLI::ValidationError("--light-grid",
-                                                "'" + v + "' is not WxH, e.g. 24x12");
-                 }
-                 j.lightWidth = w;
-                 j.lightHeight = h;
-             },
-             "Search the light on a grid of WxH nodes interpolated onto the env map (fewer "
-             "degrees of freedom fit less of T's noise); default: one value per texel")
-            ->type_name("WxH");
+             "--light-grid", [&j](const std::string& v) { j.lightGrid = parseLightGrid(v); },
+             "Search the light on a grid of WxH nodes interpolated onto the env map, or "
+             "'texels' (one value per texel); default: the noise rule's, per texel unless the "
+             "train/validation gap stays large at --max-spp, then coarser (fewer degrees of "
+             "freedom fit less of T's noise)")
+            ->type_name("WxH|texels");
         c->add_option("--defect-spp-scale", j.defectSppScale,
                       "--objective defects: the defect pixels take N times the training spp "
                       "(their few pixel pairs are the noisiest part of the objective); 0: the "

@@ -1,5 +1,6 @@
 #include "objective/CoarseLight.h"
 
+#include <charconv>
 #include <memory>
 #include <stdexcept>
 
@@ -94,6 +95,26 @@ Problem CoarseLight::over(Problem fine) const {
         return value;
     };
     return p;
+}
+
+std::string LightGrid::name() const {
+    return perTexel() ? std::string("texels")
+                      : std::to_string(width) + "x" + std::to_string(height) + " nodes";
+}
+
+LightGrid parseLightGrid(std::string_view text) {
+    if (text == "texels") return LightGrid{};
+    int w = 0, h = 0;
+    const char* end = text.data() + text.size();
+    auto r = std::from_chars(text.data(), end, w);
+    const bool sep = r.ec == std::errc() && r.ptr != end && *r.ptr == 'x';
+    if (sep) r = std::from_chars(r.ptr + 1, end, h);
+    if (!sep || r.ec != std::errc() || r.ptr != end || w < 1 || h < 2)
+        throw inputError(option("light-grid"),
+                         "'" + std::string(text.substr(0, 40)) + (text.size() > 40 ? "..." : "") +
+                             "' is not a grid",
+                         "use WxH nodes (W >= 1, H >= 2), e.g. 24x12, or 'texels'");
+    return LightGrid{w, h};
 }
 
 std::string CoarseLight::name() const {

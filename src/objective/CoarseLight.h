@@ -18,11 +18,25 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/Problem.h"
 
 namespace sl {
+
+/// The grid a light is searched on: width × height nodes, or (0 × 0) one value per texel of
+/// the env map.
+struct LightGrid {
+    int width = 0, height = 0;
+    bool perTexel() const { return width <= 0 || height <= 0; }
+    /// "W×H nodes" as printed, or "texels".
+    std::string name() const;
+    bool operator==(const LightGrid&) const = default;
+};
+
+/// "WxH" (W ≥ 1, H ≥ 2) or "texels"; InputError naming option 'light-grid' otherwise.
+LightGrid parseLightGrid(std::string_view text);
 
 class CoarseLight {
   public:
