@@ -1130,6 +1130,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
                                                      : "loss (lower is better)"},
             {"max_gap", run.noise.maxGap},
             {"adapted", run.noise.adapted},
+            {"grid_adapted", run.noise.gridAdapted},
             {"met", run.noise.met},
             {"spp", run.noise.spp()},
             {"light_grid", run.noise.grid().name()},
@@ -1432,6 +1433,7 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
         TrainingNoiseSummary noise;
         noise.maxGap = p.noise.maxGap;
         noise.adapted = p.noise.adapt;
+        noise.gridAdapted = p.noise.adaptGrid;
         for (double lambda : p.o.lambdas) {
             LambdaResult r = optimizeLambda(p, in, job, lambda);
             // Noise-aware training (app/TrainingNoise.h), on the first λ: E* on T and on V;

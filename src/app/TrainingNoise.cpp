@@ -102,9 +102,10 @@ std::string describeTrainingNoise(const TrainingNoiseSummary& s) {
     else if (s.met)
         out += " -> " + std::to_string(s.spp()) + " spp" + on + " (within " + tol + ")";
     else
-        out += " -> " + std::to_string(s.spp()) + " spp" + on +
-               ", the most spp the rule traces and the coarsest light it searches, still above " +
-               tol + ": no light is trusted on its training estimate alone";
+        out +=
+            " -> " + std::to_string(s.spp()) + " spp" + on + ", the most spp the rule traces" +
+            (s.gridAdapted ? " and the coarsest light it searches" : " on the light's given grid") +
+            ", still above " + tol + ": no light is trusted on its training estimate alone";
     if (s.rounds.size() > 1) out += "; the rule added " + formatNumber(s.secondsAdded, 3) + " s";
     return out;
 }

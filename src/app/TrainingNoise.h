@@ -116,8 +116,9 @@ struct TrainingNoiseRound {
 /// What the rule did.
 struct TrainingNoiseSummary {
     std::vector<TrainingNoiseRound> rounds;
-    bool adapted = false;  // the rule chose spp (false: a given spp was kept)
-    bool met = false;      // the last round's gap ≤ maxGap
+    bool adapted = false;      // the rule chose spp (false: a given spp was kept)
+    bool gridAdapted = false;  // the rule may coarsen the light (false: a given grid was kept)
+    bool met = false;          // the last round's gap ≤ maxGap
     double maxGap = 0.05;
     /// Seconds spent beyond the last round (the earlier rounds' traces and searches): what the
     /// rule added to a run that would have used the last round's spp from the start.
