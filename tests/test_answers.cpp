@@ -2,6 +2,7 @@
 // answer (app/Answer.h) and what optimize's summary says its losses are.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -199,6 +200,53 @@ TEST(Answer, ALightThatLeavesThePartBlackIsNotTheAnswer) {
     EXPECT_NE(d.reason.find("no light passes the checks"), std::string::npos) << d.reason;
 }
 
+// A finer light (searched before E* on a finer grid, its training figure over-fit) is the answer
+// only when no trusted optimized light passes the checks, and then only if it beats the
+// references on the validation estimate.
+TEST(Answer, AFinerLightStandsInOnlyWhenTheTrustedOnesFailTheChecks) {
+    auto scene =
+        std::make_unique<Scene>(test::bumpyPartDesc(32, 32), 40, 40, test::bumpyHeightMap(40));
+    JudgeOptions jo;
+    jo.spp = 32;
+    std::vector<uint8_t> labels(32 * 32, 0);
+    for (int y = 10; y < 22; ++y)
+        for (int x = 14; x < 17; ++x) labels[size_t(y) * 32 + x] = 1;
+    const TransportSource estimate = judgeEstimate(*scene, jo);
+    const Judge validation(estimate, jo, labels, {RegionLabel{1, "scratch"}});
+    // Three random lights by visibility: best, middle, worst.
+    std::vector<std::vector<double>> l{randomLight(1250, 21), randomLight(1250, 22),
+                                       randomLight(1250, 23)};
+    std::sort(l.begin(), l.end(), [&](const auto& a, const auto& b) {
+        return combinedVisibility(validation.score(a).visibility) >
+               combinedVisibility(validation.score(b).visibility);
+    });
+    // E* passes the checks: the better finer light is not the answer, and says why.
+    const AnswerChoice trusted =
+        chooseAnswer(validation, {{"optimized", CandidateKind::Optimized, l[1]},
+                                  {"optimized on texels", CandidateKind::Finer, l[0]},
+                                  {"lamp", CandidateKind::Reference, l[2]}});
+    EXPECT_EQ(trusted.chosen, 0u) << trusted.reason;
+    EXPECT_FALSE(trusted.scored[1].eligible);
+    EXPECT_NE(trusted.scored[1].why.find("fits the estimate's noise"), std::string::npos);
+    // E* too dark: the finer light beats the lamp and is the answer, said so.
+    const AnswerChoice fallback =
+        chooseAnswer(validation, {{"optimized", CandidateKind::Optimized, scaled(l[1], 0.01)},
+                                  {"optimized on texels", CandidateKind::Finer, l[0]},
+                                  {"lamp", CandidateKind::Reference, l[2]}});
+    EXPECT_EQ(fallback.chosen, 1u) << fallback.reason;
+    EXPECT_FALSE(fallback.referenceWon());
+    EXPECT_NE(fallback.reason.find("searched before it on a finer grid"), std::string::npos)
+        << fallback.reason;
+    EXPECT_EQ(answerJson(fallback)["kind"], "finer");
+    // ... but a lamp better than the finer light still wins.
+    const AnswerChoice lamp =
+        chooseAnswer(validation, {{"optimized", CandidateKind::Optimized, scaled(l[1], 0.01)},
+                                  {"optimized on texels", CandidateKind::Finer, l[2]},
+                                  {"lamp", CandidateKind::Reference, l[0]}});
+    EXPECT_EQ(lamp.chosen, 2u) << lamp.reason;
+    EXPECT_TRUE(lamp.referenceWon());
+}
+
 // A labelled part traced at 4 spp: the defects objective fits the estimate's noise, so the rule
 // measures a gap above 5 % and traces again at more spp (or says, at its cap, that no light is
 // trusted); summary.json records every round, the answer and its candidates, and the losses
@@ -261,7 +309,7 @@ TEST(OptimizeAnswers, DefectsBelowTheTrainingNoiseRaiseTheSpp) {
     bool found = false;
     for (const json& c : a["candidates"]) found |= c["name"] == a["light"];
     EXPECT_TRUE(found);
-    EXPECT_EQ(std::filesystem::exists(out / "envmap-optimized.exr"), a["kind"] == "reference");
+    EXPECT_EQ(std::filesystem::exists(out / "envmap-optimized.exr"), a["light"] != "optimized");
     // --heldout none: the headline says its figures are training figures, first.
     EXPECT_NE(r.output.find("Training figures only"), std::string::npos) << r.output;
 }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <nlohmann/json.hpp>
 
 #include "TestUtil.h"
 #include "app/PartFiles.h"
@@ -229,3 +230,41 @@ TEST(Race, KnowsTheTestPartsAndTheirShallowAndDeepVariants) {
 }
 
 }  // namespace
+
+// The whole optimize job as a race configuration: the row's light is the job's self-checked
+// answer (envmap.exr of its output), scored on the race's judge like every other row.
+TEST(Race, TheWholeOptimizeJobIsRacedByItsAnswer) {
+    test::TempDir dir("race-job");
+    RaceOptions o;
+    o.parts = {"facemill-scratches"};
+    o.sizes = {64};
+    o.seeds = 1;
+    o.judgeSpp = 32;
+    o.threads = 1;
+    o.workDir = dir.path() / "race";
+    o.configs.clear();
+    for (RaceConfig& c : defaultRaceConfigs())
+        if (c.name == "paper-loop" || c.name == "optimize") o.configs.push_back(c);
+    ASSERT_EQ(o.configs.size(), 2u);
+    ASSERT_TRUE(o.configs[1].wholeJob);
+    o.configs.front().search.optimizer.iterations = 10;
+    std::string log;
+    o.log = [&log](const std::string& line) { log += line + "\n"; };
+    const RaceSummary s = runRace(o);
+    ASSERT_EQ(s.rows.size(), 2u);
+    const RaceRow& job = s.rows[1];
+    EXPECT_EQ(job.config, "optimize");
+    ASSERT_TRUE(std::isfinite(job.figure)) << log;
+    EXPECT_GT(job.seconds, 0.0);
+    // The job wrote its output where the race says, with the rule's rounds and the answer the
+    // race scored (its name in the race's log line).
+    const auto out = o.workDir / "jobs" / "facemill-scratches@64-optimize-seed0";
+    ASSERT_TRUE(std::filesystem::exists(out / "envmap.exr")) << out;
+    ASSERT_TRUE(std::filesystem::exists(out / "summary.json"));
+    const std::string summary = test::readFile(out / "summary.json");
+    EXPECT_NE(summary.find("\"training_noise\""), std::string::npos);
+    const auto answer = nlohmann::json::parse(summary)["answer"];
+    ASSERT_TRUE(answer.is_object()) << summary;
+    EXPECT_NE(log.find("optimize: " + answer["light"].get<std::string>() + ", "), std::string::npos)
+        << log;
+}

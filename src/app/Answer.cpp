@@ -20,6 +20,19 @@ bool betterMerit(const AnswerMerit& a, const AnswerMerit& b) {
     return a.higherIsBetter ? a.value > b.value : a.value < b.value;
 }
 
+const char* candidateKindName(CandidateKind kind) {
+    switch (kind) {
+        case CandidateKind::Reference:
+            return "reference";
+        case CandidateKind::Finer:
+            return "finer";
+        case CandidateKind::Optimized:
+        case CandidateKind::Start:
+            break;
+    }
+    return "optimized";
+}
+
 AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> candidates,
                           const AnswerOptions& options) {
     AnswerChoice c;
@@ -48,11 +61,29 @@ AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> 
         c.scored.push_back(std::move(s));
     }
     if (!anyOptimized) throw std::invalid_argument("chooseAnswer: no optimized candidate");
+    // A finer light competes only when no trusted optimized light passes the checks.
+    bool trustedEligible = false;
+    for (const ScoredCandidate& s : c.scored)
+        trustedEligible |= s.eligible && (s.candidate.kind == CandidateKind::Optimized ||
+                                          s.candidate.kind == CandidateKind::Start);
+    if (trustedEligible) {
+        anyEligible = false;
+        for (ScoredCandidate& s : c.scored) {
+            if (s.candidate.kind == CandidateKind::Finer && s.eligible) {
+                s.eligible = false;
+                s.why =
+                    "its training figure fits the estimate's noise, and a trusted optimized "
+                    "light passes the checks";
+            }
+            anyEligible |= s.eligible;
+        }
+    }
     // When every candidate is too dark, the brightest-merit one is still the answer (said so).
     bool haveBest = false, haveOpt = false;
     for (size_t k = 0; k < c.scored.size(); ++k) {
         const ScoredCandidate& s = c.scored[k];
-        if (s.candidate.kind != CandidateKind::Reference &&
+        if ((s.candidate.kind == CandidateKind::Optimized ||
+             s.candidate.kind == CandidateKind::Start) &&
             (!haveOpt || betterMerit(s.merit, c.scored[c.optimized].merit))) {
             c.optimized = k;
             haveOpt = true;
@@ -73,6 +104,12 @@ AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> 
                    formatNumber(options.minBrightness, 3) +
                    " of white, defects showing against it); " + a.candidate.name +
                    " is the best of them" + on;
+    else if (a.candidate.kind == CandidateKind::Finer)
+        c.reason = "the optimized light does not pass the checks on the validation estimate (" +
+                   o.why + "); " + a.candidate.name +
+                   ", searched before it on a finer grid (its training figure fits the noise), "
+                   "is the best light that does" +
+                   on;
     else if (c.referenceWon() && !o.eligible)
         c.reason = "the optimized light does not pass the checks on the validation estimate (" +
                    o.why + "); the reference light " + a.candidate.name +
@@ -89,15 +126,14 @@ AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> 
 nlohmann::ordered_json answerJson(const AnswerChoice& a) {
     nlohmann::ordered_json scored = nlohmann::ordered_json::array();
     for (const ScoredCandidate& c : a.scored)
-        scored.push_back(
-            {{"name", c.candidate.name},
-             {"kind", c.candidate.kind == CandidateKind::Reference ? "reference" : "optimized"},
-             {"merit", c.merit.value},
-             {"brightness", c.score.brightness},
-             {"eligible", c.eligible},
-             {"why", c.why}});
+        scored.push_back({{"name", c.candidate.name},
+                          {"kind", candidateKindName(c.candidate.kind)},
+                          {"merit", c.merit.value},
+                          {"brightness", c.score.brightness},
+                          {"eligible", c.eligible},
+                          {"why", c.why}});
     return {{"light", a.answer().candidate.name},
-            {"kind", a.referenceWon() ? "reference" : "optimized"},
+            {"kind", candidateKindName(a.answer().candidate.kind)},
             {"merit", a.answer().merit.what},
             {"higher_is_better", a.answer().merit.higherIsBetter},
             {"reason", a.reason},

@@ -12,6 +12,13 @@
 // eligible candidate is the answer; when it is a reference, the run says so first and the
 // optimized light is kept beside it. The judge's estimate then reports on the answer, so the
 // selection does not bias the figures a person reads.
+//
+// Finer lights (CandidateKind::Finer): the lights the noise rule searched on a finer grid at the
+// same spp before it settled on E*'s (app/TrainingNoise.h step 5). Their training figures fit
+// the estimate's noise, so they are not the answer while E* or a start passes the checks; when
+// none does (e.g. E*'s defects' gradient just under minContrast), the best of them on the
+// validation estimate competes with the references, since an independent estimate still says
+// fairly which shows the defects better.
 #pragma once
 
 #include <cstddef>
@@ -37,7 +44,9 @@ AnswerMerit answerMerit(const JudgeScore& score);
 bool betterMerit(const AnswerMerit& a, const AnswerMerit& b);
 
 /// Where a candidate comes from.
-enum class CandidateKind { Optimized, Start, Reference };
+enum class CandidateKind { Optimized, Start, Finer, Reference };
+/// summary.json's name of a kind: "optimized" (E* and the starts), "finer", "reference".
+const char* candidateKindName(CandidateKind kind);
 struct AnswerCandidate {
     std::string name;  // "optimized", "start specular", "lamp", "uniform-0.5", "paper"
     CandidateKind kind = CandidateKind::Reference;

@@ -717,6 +717,9 @@ struct LambdaResult {
     std::vector<double> e;           // the answer (app/Answer.h): E*, or the reference that beat it
     std::vector<double> optimizedE;  // E* when the answer is a reference (else empty)
     std::vector<std::vector<double>> startResults;  // every start's E (multistart)
+    /// The lights the noise rule searched on finer grids at this run's spp before E*'s
+    /// (app/TrainingNoise.h step 5), named with their grid and gap: the self-check's fallback.
+    std::vector<std::pair<std::string, std::vector<double>>> finer;
     std::vector<std::string> rows;
     LossCurve curve;                        // loss.csv's loss and held-out loss, for the loss plot
     LossParts lampTraining, paperTraining;  // the lamp's and the paper's light on T at λ
@@ -929,6 +932,7 @@ void checkAnswer(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
         if (p.o.starts[k].spec != r.run.start)
             candidates.push_back(
                 {"optimized from " + p.o.starts[k].spec, CandidateKind::Start, r.startResults[k]});
+    for (const auto& [name, e] : r.finer) candidates.push_back({name, CandidateKind::Finer, e});
     candidates.push_back({in.lampName, CandidateKind::Reference, in.lampE});
     candidates.push_back(
         {"uniform-0.5", CandidateKind::Reference, std::vector<double>(in.lampE.size(), 0.5)});
@@ -1173,8 +1177,10 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
         cmp["lamp"] = lamp;
         cmp["paper"] = paper;
         cmp["optimized"] = optimized;
-        if (run.answer && run.answer->referenceWon()) {
-            // The light returned (envmap.exr) is a reference that beat E* on validation.
+        if (run.answer && (run.answer->referenceWon() ||
+                           run.answer->answer().candidate.kind == CandidateKind::Finer)) {
+            // The light returned (envmap.exr) is a reference (or a finer light) that beat E* on
+            // validation.
             const AnswerChoice& a = *run.answer;
             json answer = {{"name", a.answer().candidate.name},
                            {"render", "render.png"},
@@ -1474,11 +1480,18 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                 noise.secondsAdded += nr.seconds;
                 round.restart();
                 notInRound = 0;
-                if (next > 0)
+                std::vector<std::pair<std::string, std::vector<double>>> finer;
+                if (next > 0) {
                     load(next);
-                else
+                } else {
+                    finer = std::move(r.finer);
+                    finer.emplace_back("optimized on " + nr.grid.name() + " (gap " +
+                                           formatNumber(100.0 * nr.gap, 3) + " %)",
+                                       r.optimizedE.empty() ? r.e : r.optimizedE);
                     p.o.lightGrid = *coarser;
+                }
                 r = optimizeLambda(p, in, job, lambda);
+                r.finer = std::move(finer);
             }
             // Ctrl-C keeps nothing (the previous OUTDIR stays) unless the user asked to keep
             // the best so far (core/Interrupt.h).

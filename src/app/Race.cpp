@@ -9,6 +9,7 @@
 #include <limits>
 #include <map>
 #include <sstream>
+#include <tuple>
 
 #include "app/InsertDefectsJob.h"
 #include "app/Judge.h"
@@ -21,6 +22,7 @@
 #include "core/Registry.h"
 #include "core/Stats.h"
 #include "core/Stopwatch.h"
+#include "core/Text.h"
 #include "io/AtomicFile.h"
 #include "io/SceneFile.h"
 #include "objective/DefectVisibility.h"
@@ -227,6 +229,21 @@ std::vector<RaceConfig> defaultRaceConfigs() {
     c.push_back(config("unbiased-lbfgs-16-continuation", K::Unbiased, M::Lbfgs, 2000, 16, 1,
                        {"const:0.5"}, {4.0, 2.0}));
     c.push_back(config("unbiased-mlsl-16", K::Unbiased, M::Mlsl, 1500, 16));
+    // The whole optimize job as a user runs it with the defects named (not raced by default:
+    // each run traces T and the validation estimate at the rule's spp; `--configs` names them):
+    // its default, and the same with one value per texel always (no coarser light).
+    for (const auto& [name, grid, automatic] :
+         {std::tuple{"optimize", std::optional<LightGrid>{}, false},
+          std::tuple{"optimize-auto", std::optional<LightGrid>{}, true},
+          std::tuple{"optimize-texels", std::optional<LightGrid>{LightGrid{}}, false}}) {
+        RaceConfig j;
+        j.name = name;
+        j.search.objective = d.objectiveWithDefects;
+        j.wholeJob = true;
+        j.jobLightGrid = grid;
+        j.autoDefects = automatic;
+        c.push_back(j);
+    }
     return c;
 }
 
@@ -410,6 +427,53 @@ RaceSummary raceOnWorlds(const RaceOptions& o) {
                 };
                 if (defects && (c.autoDefects ? !regions : !truthInView)) {
                     noLight("no defects to name");
+                    continue;
+                }
+                if (c.wholeJob) {
+                    OptimizeJobOptions opt;
+                    opt.input = world.files.scene;
+                    opt.sceneOverrides = world.overrides;
+                    std::string dirName = partName + "-" + c.name + "-seed" + std::to_string(seed);
+                    std::replace(dirName.begin(), dirName.end(), '/', '_');
+                    opt.outDir = std::filesystem::absolute(o.workDir) / "jobs" / dirName;
+                    opt.lambdas = {o.lambda};
+                    if (c.autoDefects) {
+                        opt.defects.automatic = true;
+                        opt.objectiveKind = ObjectiveKind::Defects;
+                    } else {
+                        opt.truth = world.files.truth;
+                    }
+                    opt.heldOut.mode = HeldOutMode::None;  // the race's judge scores the answer
+                    opt.figures = false;
+                    opt.cache.dir = cacheDir;
+                    opt.precompute.seed = static_cast<uint64_t>(seed) * 1000;
+                    opt.precompute.threads = o.threads;
+                    opt.lightGrid = c.jobLightGrid;
+                    const Stopwatch job;
+                    OptimizeJobSummary js;
+                    try {
+                        js = runOptimizeJob(opt);
+                    } catch (const InputError& e) {
+                        noLight(e.what());
+                        continue;
+                    }
+                    if (js.runs.empty() || !js.runs.front().answer) {
+                        noLight("the job returned no self-checked answer");
+                        continue;
+                    }
+                    const OptimizeRun& run = js.runs.front();
+                    r.secondsSearch = r.seconds = job.seconds();
+                    r.evaluations = run.optimizer.evaluations;
+                    scoreRow(r, judge.score(run.answer->answer().candidate.e, c.name), figureIsU);
+                    r.trainLoss = run.final.total;
+                    r.heldOwn = kNaN;
+                    log(partName + " seed " + std::to_string(seed) + " " + c.name + ": " +
+                        run.answer->answer().candidate.name + ", " +
+                        std::to_string(run.noise.spp()) + " spp, " + run.noise.grid().name() +
+                        ", gap " + formatNumber(100.0 * run.noise.gap(), 3) + " %, " +
+                        formatNumber(r.seconds, 3) + " s, visibility " + formatNumber(r.figure, 4));
+                    task.advance();
+                    rows.push_back(r);
                     continue;
                 }
                 PrecomputeOptions p;

@@ -26,6 +26,7 @@
 
 #include "app/PartFiles.h"
 #include "app/Search.h"
+#include "objective/CoarseLight.h"
 #include "scene/RenderDesc.h"
 
 namespace sl {
@@ -39,6 +40,13 @@ struct RaceConfig {
     /// The defects objective's regions: false, the part's truth (every label); true, the
     /// defect map found without labels (app/Truth.h RegionSpec "auto", as optimize's).
     bool autoDefects = false;
+    /// Run the whole `optimize` job (app/OptimizeJob.h: the noise rule's spp and light grid,
+    /// the defect pixels' samples, the self-checked answer) on the part with its defects named
+    /// (the truth, or the defect map with autoDefects) instead of one search on a T at `spp`;
+    /// the row's light is the job's answer and its seconds the job's. `search` only names the
+    /// objective (defects).
+    bool wholeJob = false;
+    std::optional<LightGrid> jobLightGrid;  // the job's light grid (unset: its rule's)
 };
 
 /// The configurations raced by default (paper-loop first: the baseline).
