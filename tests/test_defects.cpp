@@ -74,19 +74,64 @@ TEST(DefectObjective, ExactGradientMatchesAutodiff) {
     dopt.whiteMean = whiteMean(t);
     ObjectiveOptions oo;
     oo.lambda = 3;
-    const DefectObjective obj(t.width, t.height, t.objectMask, stripe(t, 8, 12), {}, oo, dopt);
-    const TransportLoss loss(t, obj, false);
-    Pcg32 rng(7, 1);
-    // A mid light, a dark one (the band's lower edge is active) and a bright one (clipping).
-    for (double scale : {0.5, 0.02, 3.0}) {
-        SCOPED_TRACE(scale);
-        std::vector<double> E(t.cols());
-        for (double& e : E) e = scale * (0.2 + 0.8 * rng.nextDouble());
-        std::vector<double> g(t.cols());
-        const LossParts p = loss.evaluate(E, g);
-        const AutodiffGradient ad = autodiffThroughHalves(t, obj, E);
-        EXPECT_NEAR(p.total, ad.loss, 1e-12 * std::abs(ad.loss));
-        EXPECT_LT(compareGradients(g, ad.gradient).relativeL2, 1e-9);
+    // The default contrast floor, and one so high that L_con is active at every light.
+    for (double contrastFloor : {dopt.contrastFloor, 10.0}) {
+        SCOPED_TRACE(contrastFloor);
+        DefectObjectiveOptions o = dopt;
+        o.contrastFloor = contrastFloor;
+        const DefectObjective obj(t.width, t.height, t.objectMask, stripe(t, 8, 12), {}, oo, o);
+        const TransportLoss loss(t, obj, false);
+        Pcg32 rng(7, 1);
+        // A mid light, a dark one (the band's lower edge is active) and a bright one (clipping).
+        for (double scale : {0.5, 0.02, 3.0}) {
+            SCOPED_TRACE(scale);
+            std::vector<double> E(t.cols());
+            for (double& e : E) e = scale * (0.2 + 0.8 * rng.nextDouble());
+            std::vector<double> g(t.cols());
+            const LossParts p = loss.evaluate(E, g);
+            const AutodiffGradient ad = autodiffThroughHalves(t, obj, E);
+            EXPECT_NEAR(p.total, ad.loss, 1e-12 * std::abs(ad.loss));
+            EXPECT_LT(compareGradients(g, ad.gradient).relativeL2, 1e-9);
+        }
+    }
+}
+
+// The contrast floor L_con: where the defects' contrast sqrt(g(D))/m is under f_c·c0 the loss
+// rises by exactly κ_c·(½·log(g(D)/(f_c·c0·m)²))²; above it nothing changes. The contrast is
+// invariant to the light's scale, so one light is scored against floors around its contrast.
+TEST(DefectObjective, LowContrastDefectsCostTheFloorsLogSquared) {
+    SceneDesc d;
+    d.heightmap.pitch = 0.05;
+    d.camera.origin = {0, 2, 2};
+    d.camera.width = d.camera.height = 20;
+    const Scene scene(d, 32, 32, test::bumpyHeightMap(32));
+    const TransportMatrix t = halves(scene, 8);
+    DefectObjectiveOptions without;
+    without.whiteMean = whiteMean(t);
+    without.contrastWeight = 0;
+    const ObjectiveOptions oo;
+    const DefectObjective b(t.width, t.height, t.objectMask, stripe(t, 8, 12), {}, oo, without);
+    const TransportLoss lb(t, b, false);
+    const std::vector<double> E(t.cols(), 0.5);
+    const LossParts base = lb.evaluate(E, {});
+    std::vector<double> ya(t.rows());
+    t.applyLuminance(E, ya);
+    double m = 0, n = 0;
+    for (size_t p = 0; p < ya.size(); ++p)
+        if (t.objectMask[p]) m += ya[p], n += 1;
+    m /= n;
+    ASSERT_GT(base.G, 0.0);
+    const double contrast = std::sqrt(base.G) / m;
+    for (double f : {0.5, 0.99, 1.5, 4.0}) {  // the floor over the light's contrast
+        SCOPED_TRACE(f);
+        DefectObjectiveOptions with = without;
+        with.contrastWeight = 100;
+        with.contrastFloor = f * contrast;
+        const DefectObjective a(t.width, t.height, t.objectMask, stripe(t, 8, 12), {}, oo, with);
+        const TransportLoss la(t, a, false);
+        const double extra = la.evaluate(E, {}).total - base.total;
+        const double expected = f > 1 ? 100 * std::pow(std::log(1 / f), 2.0) : 0.0;
+        EXPECT_NEAR(extra, expected, 1e-6 * (1 + expected));  // T vs its halves: float sums
     }
 }
 

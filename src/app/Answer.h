@@ -57,7 +57,7 @@ struct AnswerOptions {
     double minBrightness = kMinVisibleBrightness;  // of the white furnace's mean over the part
     /// With defect regions: the least combined contrast (RMS gradient in the regions over the
     /// mean brightness; the eye needs about 0.01), below which a visibility ratio is noise.
-    double minContrast = 0.01;
+    double minContrast = kMinDefectContrast;
 };
 
 struct ScoredCandidate {

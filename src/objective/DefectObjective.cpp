@@ -126,8 +126,14 @@ LossParts DefectObjective::evaluate(std::span<const double> Ya, std::span<const 
                  over = std::max(0.0, (m - d_.high * w) / w);
     const double floorM = d_.darkFloor * w, mEff = std::max(m, 1e-12 * w);
     const double darkLog = floorM > 0 && m < floorM ? std::log(mEff / floorM) : 0.0;
-    const double exposure =
-        k * (under * under + over * over + clip) + d_.darkWeight * darkLog * darkLog;
+    // L_con: u = ½·log(g(D)/(f_c·c0)²) − log m, negative when the contrast is under the floor.
+    const double cf = d_.contrastFloor;
+    const double gDe = std::max(r.G, floor());
+    const double u = cf > 0 && m > 1e-12 * w && gDe < cf * cf * m * m
+                         ? 0.5 * std::log(gDe / (cf * cf)) - std::log(m)
+                         : 0.0;
+    const double exposure = k * (under * under + over * over + clip) +
+                            d_.darkWeight * darkLog * darkLog + d_.contrastWeight * u * u;
     r.lReg = base_.envMapRegulariser(E, dLdE);
     r.total = r.lGrad + exposure + options().lambda * r.lReg;
 
@@ -144,10 +150,13 @@ LossParts DefectObjective::evaluate(std::span<const double> Ya, std::span<const 
         });
     };
     addEnergy(reference_, dPhiR / pairsR_);
-    addEnergy(defects_, -dPhiD / pairsD_);
+    const double dConD = u != 0 && r.G >= floor() ? d_.contrastWeight * u / r.G : 0.0;
+    addEnergy(defects_, (dConD - dPhiD) / pairsD_);
     // d/dm of the band terms, then dm/dY = 1/(2·|P|) per half; the clip term per pixel.
     const double dDark = darkLog != 0 && m > 1e-12 * w ? 2.0 * d_.darkWeight * darkLog / m : 0.0;
-    const double dm = (k * (-2.0 * under / w + 2.0 * over / w) + dDark) / (2.0 * partPixels_);
+    const double dCon = u != 0 ? -2.0 * d_.contrastWeight * u / m : 0.0;
+    const double dm =
+        (k * (-2.0 * under / w + 2.0 * over / w) + dDark + dCon) / (2.0 * partPixels_);
     for (size_t p = 0; p < n; ++p) {
         if (!part[p]) continue;
         const double y = (Ya[p] + Yb[p]) * 0.5;

@@ -23,7 +23,12 @@
 //           pull cannot be traded against (a dark-field light can buy more visibility than
 //           L_exp costs and leave the part at 1/600 of white); f is twice the answer's
 //           brightness floor (app/Answer.h), so E* stays a light a person can see
-//   Loss  = L_vis + L_exp + L_dark + λ·mean(E²)
+//   L_con = κ_c·(½·log(max(g(D), g0)/(f_c·c0·m)²))² where g(D) < (f_c·c0·m)², else 0: the
+//           defects' contrast sqrt(g(D))/m (their rms gradient over the part's brightness, the
+//           judge's contrast) kept above f_c = 2 times c0 = kMinDefectContrast, the answer's
+//           eligibility: a light can buy visibility by flattening the reference until the
+//           defects' own gradient is under what any eye sees, and the check then refuses it
+//   Loss  = L_vis + L_exp + L_dark + L_con + λ·mean(E²)
 //
 // L_vis is invariant to scaling E; L_exp and λ fix the scale (with λ > 0 the optimum sits near
 // the band's lower edge). The gradient dLoss/dY_a, dLoss/dY_b is exact; value<S>() computes the
@@ -45,6 +50,10 @@ namespace sl {
 /// person can see the part under: the defects objective's floor (L_dark) and the self-checked
 /// answer's eligibility (app/Answer.h).
 inline constexpr double kMinVisibleBrightness = 0.05;
+/// The least combined contrast of the defects (rms gradient in their regions over the part's
+/// mean brightness; the eye needs about 0.01) at which a visibility ratio means something: the
+/// defects objective's contrast floor (L_con, at twice this) and the answer's eligibility.
+inline constexpr double kMinDefectContrast = 0.01;
 
 struct DefectObjectiveOptions {
     double whiteMean = 0;          // mean over the part of T·1 (the white furnace), > 0
@@ -54,6 +63,9 @@ struct DefectObjectiveOptions {
     /// optimum settles just under a soft floor and another estimate must still see it above.
     double darkFloor = 2 * kMinVisibleBrightness;
     double darkWeight = 100;  // κ_f
+    /// f_c·c0 of L_con (0: no floor): twice the answer's contrast eligibility, as darkFloor.
+    double contrastFloor = 2 * kMinDefectContrast;
+    double contrastWeight = 100;  // κ_c
 };
 
 class DefectObjective final : public HalfImageObjective {

@@ -53,6 +53,15 @@ S DefectObjective::value(std::span<const S> Ya, std::span<const S> Yb, std::span
             detail::realPart(m) > 1e-12 * w ? S(log(m / floorM)) : S(std::log(1e-12 * w / floorM));
         loss += d_.darkWeight * dark * dark;
     }
+    const double cf = d_.contrastFloor;
+    if (cf > 0 && detail::realPart(m) > 1e-12 * w) {
+        const S gDe = detail::realPart(gD) >= floor() ? gD : S(floor());
+        if (detail::realPart(gDe) < cf * cf * detail::realPart(m) * detail::realPart(m)) {
+            using std::log;
+            const S u = 0.5 * log(gDe / (cf * cf)) - log(m);
+            loss += d_.contrastWeight * u * u;
+        }
+    }
     if (options().lambda != 0) {
         S reg(0.0);
         for (const S& e : E) reg += e * e;
