@@ -50,6 +50,11 @@ double TransportBenchResult::precomputeRatio() const {
     return r > 0 ? precompute.raysPerSecond() / r : 0;
 }
 
+double TransportBenchResult::precomputeVsBare() const {
+    const double b = bare.raysPerSecond();
+    return b > 0 ? precompute.raysPerSecond() / b : 0;
+}
+
 TransportBenchResult runTransportBench(const TransportBenchOptions& a) {
     if (a.repeats < 1) throw inputError("repeats", "is " + std::to_string(a.repeats), "use >= 1");
     if (a.iterations < 1)
@@ -66,12 +71,14 @@ TransportBenchResult runTransportBench(const TransportBenchOptions& a) {
     r.options = a;
     r.maxDepth = opt.maxDepth;
     // 1. Tracing: renderer (radiance sink) and precompute (transport sink), interleaved.
-    std::vector<ThroughputRow> ren, pre;
+    std::vector<ThroughputRow> ren, pre, bare;
     TransportMatrix T;
     {
-        ProgressTask task("bench transport: tracing", 2.0 * a.repeats);
+        ProgressTask task("bench transport: tracing", 3.0 * a.repeats);
         for (int i = 0; i < a.repeats; ++i) {
             ren.push_back(benchRenderer(*scene, opt));
+            task.advance();
+            bare.push_back(benchBareEmbree(*scene, opt));
             task.advance();
             PrecomputeResult p = precomputeTransport(*scene, opt, 1);
             pre.push_back(
@@ -82,6 +89,7 @@ TransportBenchResult runTransportBench(const TransportBenchOptions& a) {
     }
     r.renderer = medianThroughput(ren);
     r.precompute = medianThroughput(pre);
+    r.bare = medianThroughput(bare);
     T.threads = a.threads;
     r.width = T.width;
     r.height = T.height;
@@ -138,6 +146,7 @@ double TransportBenchResult::nonZerosRead() const {
 std::string TransportBenchResult::csv() const {
     std::ostringstream os;
     os << "scene,width,height,spp,renderer_rays_per_s,precompute_rays_per_s,precompute_ratio,"
+          "bare_embree_rays_per_s,precompute_vs_bare_embree,"
           "storage,nnz,density,bytes,slices_bytes,slices_padding,slices_build_s,streaming_read_s,"
           "nonzeros_read_s,apply_s,apply_slices_s,iteration_two_pass_s,"
           "iteration_two_pass_slices_s,iteration_fused_s,iteration_fused_slices_s,"
@@ -145,7 +154,8 @@ std::string TransportBenchResult::csv() const {
           "evaluation_slices_vs_nonzeros_read,adam_iterations,adam_s,adam_slices_s\n";
     os << options.scene.string() << ',' << width << ',' << height << ',' << options.spp << ','
        << renderer.raysPerSecond() << ',' << precompute.raysPerSecond() << ',' << precomputeRatio()
-       << ',' << (sparse ? "csr" : "dense") << ',' << nnz << ',' << density << ',' << bytes << ','
+       << ',' << bare.raysPerSecond() << ',' << precomputeVsBare() << ','
+       << (sparse ? "csr" : "dense") << ',' << nnz << ',' << density << ',' << bytes << ','
        << slicesBytes << ',' << slicesPadding << ',' << slicesBuild << ',' << streamingRead << ','
        << nonZerosRead() << ',' << apply << ',' << applySlices << ',' << iterationTwoPass << ','
        << iterationTwoPassSlices << ',' << iterationFused << ',' << iterationFusedSlices << ','

@@ -77,6 +77,8 @@ int runTransportBenchCmd(TransportBenchArgs a) {
     std::printf("  %-44s %12.2f Mrays/s   (%.1f%% of the renderer)\n",
                 r.precompute.workload.c_str(), r.precompute.raysPerSecond() / 1e6,
                 100.0 * r.precomputeRatio());
+    std::printf("  %-44s %12.2f Mrays/s   (precompute: %.1f%% of it)\n", r.bare.workload.c_str(),
+                r.bare.raysPerSecond() / 1e6, 100.0 * r.precomputeVsBare());
     std::printf("  T: %s, nnz %zu, density %.4f, %.1f MB\n", r.sparse ? "CSR" : "dense", r.nnz,
                 r.density, static_cast<double>(r.bytes) / 1e6);
     std::printf(
