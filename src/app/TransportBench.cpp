@@ -18,6 +18,7 @@
 #include "optimize/Optimizer.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
+#include "transport/TransportColumns.h"
 #include "transport/TransportSink.h"
 #include "transport/TransportSlices.h"
 
@@ -126,6 +127,17 @@ TransportBenchResult runTransportBench(const TransportBenchOptions& a) {
     std::tie(r.apply, r.applySlices) = medianSecondsInterleaved(
         reps, [&] { T.applyLuminance(e, y); },
         [&] { B.applyLuminance(e, y, TransportMatrix::kMeanPlane, T.threads); });
+    {
+        const TransportColumns C(T);
+        r.columnsBytes = C.bytes();
+        std::vector<double> gy(T.rows());
+        for (size_t i = 0; i < gy.size(); ++i) gy[i] = y[i] - 0.25;  // a gradient-like image
+        std::vector<double> out(T.cols());
+        std::tie(r.transposeSlices, r.transposeColumns) = medianSecondsInterleaved(
+            reps,
+            [&] { B.applyTransposeLuminance(gy, out, TransportMatrix::kMeanPlane, T.threads); },
+            [&] { C.transposeAll(gy, out, TransportMatrix::kMeanPlane, T.threads); });
+    }
     auto adam = [&](const TransportLoss& loss) {
         std::vector<double> x = e;
         OptimizerOptions oopt;
@@ -151,7 +163,8 @@ std::string TransportBenchResult::csv() const {
           "nonzeros_read_s,apply_s,apply_slices_s,iteration_two_pass_s,"
           "iteration_two_pass_slices_s,iteration_fused_s,iteration_fused_slices_s,"
           "iteration_fused_ratio,iteration_fused_slices_ratio,"
-          "evaluation_slices_vs_nonzeros_read,adam_iterations,adam_s,adam_slices_s\n";
+          "evaluation_slices_vs_nonzeros_read,adam_iterations,adam_s,adam_slices_s,"
+          "transpose_slices_s,transpose_columns_s,columns_bytes\n";
     os << options.scene.string() << ',' << width << ',' << height << ',' << options.spp << ','
        << renderer.raysPerSecond() << ',' << precompute.raysPerSecond() << ',' << precomputeRatio()
        << ',' << bare.raysPerSecond() << ',' << precomputeVsBare() << ','
@@ -161,7 +174,8 @@ std::string TransportBenchResult::csv() const {
        << iterationTwoPassSlices << ',' << iterationFused << ',' << iterationFusedSlices << ','
        << iterationFused / streamingRead << ',' << iterationFusedSlices / streamingRead << ','
        << iterationFusedSlices / nonZerosRead() << ',' << options.iterations << ',' << adam << ','
-       << adamSlices << '\n';
+       << adamSlices << ',' << transposeSlices << ',' << transposeColumns << ',' << columnsBytes
+       << '\n';
     return os.str();
 }
 

@@ -46,6 +46,10 @@ struct TransportBenchResult {
     double iterationTwoPass = 0, iterationTwoPassSlices = 0;
     double iterationFused = 0, iterationFusedSlices = 0;
     double adam = 0, adamSlices = 0;  // `iterations` Adam steps (fused evaluations)
+    /// Tᵀ·g alone on the slices and on the columns layout (transport/TransportColumns.h,
+    /// transposeAll), interleaved; and the columns' bytes.
+    double transposeSlices = 0, transposeColumns = 0;
+    size_t columnsBytes = 0;
 
     /// The time one streaming read of T's non-zeros alone takes, nnz·(2 + 4·stride) bytes at
     /// the measured streaming read's bandwidth (the row pointers left out).

@@ -97,6 +97,10 @@ int runTransportBenchCmd(TransportBenchArgs a) {
                     csr / r.streamingRead, slices * 1e3, slices / r.streamingRead);
     };
     row("T.E (luminance product)", r.apply, r.applySlices);
+    std::printf("  %-44s %9.3f ms (%5.2f x) %9.3f ms (%5.2f x)  columns: %.1f MB\n",
+                "T'.g: slices | columns (CSC, no scatter)", r.transposeSlices * 1e3,
+                r.transposeSlices / r.streamingRead, r.transposeColumns * 1e3,
+                r.transposeColumns / r.streamingRead, static_cast<double>(r.columnsBytes) / 1e6);
     row("one iteration, two passes (T.E then T'.g)", r.iterationTwoPass, r.iterationTwoPassSlices);
     row("one iteration, fused single pass", r.iterationFused, r.iterationFusedSlices);
     std::printf("  %-44s %12.3f s %17.3f s\n",
