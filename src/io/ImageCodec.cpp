@@ -17,6 +17,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
+#ifndef SL_IMAGE_CODEC_LINKED
 constexpr const char* kModuleName = "libscratchlight-oiio.so";
 
 /// Where the module may be: beside the executable (the build tree), the installed
@@ -34,6 +35,7 @@ std::vector<fs::path> moduleCandidates() {
 #endif
     return out;
 }
+#endif
 
 struct Loaded {
     std::once_flag once;
