@@ -17,6 +17,11 @@
 #include "app/ScratchMapBench.h"
 #include "app/TransportBench.h"
 #include "core/Error.h"
+#include "io/SceneFile.h"
+#include "render/Benchmark.h"
+#include "render/Footprint.h"
+#include "render/Render.h"
+#include "scene/Scene.h"
 
 using namespace sl;
 
@@ -195,6 +200,30 @@ TEST(RenderBench, RendererAndBareEmbreeTraceTheSameCameraRays) {
     EXPECT_THROW(runRenderBench(o), InputError);
 }
 
+TEST(RenderBench, BareEmbreeTracesTheTracersCameraRays) {
+    // With the background culled (the tracer's default), the bare loop traces the camera rays
+    // of the footprint's pixels only, as the tracer does; without, every pixel's.
+    SmallScene s;
+    SceneDesc d = readSceneFile(s.scene);
+    d.camera.width = d.camera.height = 24;
+    auto scene = loadScene(d);
+    RenderOptions opt = renderOptionsFor(*scene);
+    opt.spp = 2;
+    opt.maxDepth = 1;  // camera rays only
+    uint64_t footprint = 0;
+    for (const PixelSpan& sp : partFootprint(*scene)) footprint += uint64_t(sp.end - sp.begin);
+    ASSERT_LT(footprint, 24u * 24u);
+    ASSERT_GT(footprint, 0u);
+    opt.cullBackground = true;
+    EXPECT_EQ(benchBareEmbree(*scene, opt).rays, 2 * footprint);
+    struct NullSink : PathSink {
+        void consume(const PixelPaths&) override {}
+    } sink;
+    EXPECT_EQ(PathTracer(*scene).trace(opt, sink).cameraRays, 2 * footprint);
+    opt.cullBackground = false;
+    EXPECT_EQ(benchBareEmbree(*scene, opt).rays, 2u * 24u * 24u);
+}
+
 TEST(RenderBench, MedianOfRepeatsIsTheTrueMedianOfTheSeconds) {
     std::vector<ThroughputRow> rows{
         {"w", 100, 4.0}, {"w", 100, 1.0}, {"w", 100, 2.0}, {"w", 100, 8.0}};
@@ -221,6 +250,8 @@ TEST(TransportBench, MeasuresTracingTAndTheIterationOnT) {
     EXPECT_EQ(r.maxDepth, 3);
     // The transport sink follows the renderer's paths: the same rays.
     EXPECT_EQ(r.precompute.rays, r.renderer.rays);
+    EXPECT_GT(r.bare.rays, 0u);
+    EXPECT_GT(r.precomputeVsBare(), 0);
     EXPECT_GT(r.nnz, 0u);
     EXPECT_GT(r.bytes, 0u);
     EXPECT_GT(r.density, 0);

@@ -19,10 +19,12 @@
 #include <tuple>
 #include <vector>
 
+#include "TestUtil.h"
 #include "core/Color.h"
 #include "core/Error.h"
 #include "io/AtomicFile.h"
 #include "io/EnvMapIO.h"
+#include "io/ExrReader.h"
 #include "io/HeightmapIO.h"
 #include "io/ImageIO.h"
 #include "io/Npy.h"
@@ -555,6 +557,90 @@ TEST(ImageIO, ExrRoundTripIsExactWithNamedChannels) {
             EXPECT_EQ(in->spec().channelnames, std::vector<std::string>({"R", "G", "B"}));
         }
     }
+}
+
+/// Every pixel of `p` as OpenImageIO reads it (read_image as float).
+std::vector<float> oiioPixels(const fs::path& p, int& nch) {
+    auto in = OIIO::ImageInput::open(p.string());
+    if (!in) return {};
+    const OIIO::ImageSpec& spec = in->spec();
+    nch = spec.nchannels;
+    std::vector<float> v(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);
+    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, v.data())) return {};
+    return v;
+}
+
+TEST(ImageIO, ExrsReadWithOpenExrAreOpenImageIOsPixelsToTheBit) {
+    // io/ExrReader.h reads the EXRs it can without OpenImageIO; each must give what OpenImageIO
+    // gives, and the others must still be read (by OpenImageIO's module).
+    TempDir dir;
+    struct Case {
+        const char* name;
+        int nch;
+        OIIO::TypeDesc type;
+        bool direct;  // read by OpenEXR itself
+        std::vector<std::string> channels;
+        int tile = 0, x = 0, y = 0;
+    };
+    const std::vector<Case> cases = {
+        {"y-float", 1, OIIO::TypeDesc::FLOAT, true, {"Y"}},
+        {"z-half", 1, OIIO::TypeDesc::HALF, true, {"Z"}},
+        {"rgb-float", 3, OIIO::TypeDesc::FLOAT, true, {"R", "G", "B"}},
+        {"rgba-half", 4, OIIO::TypeDesc::HALF, true, {"R", "G", "B", "A"}},
+        {"rgb-tiled", 3, OIIO::TypeDesc::FLOAT, true, {"R", "G", "B"}, 4},
+        {"y-window", 1, OIIO::TypeDesc::FLOAT, true, {"Y"}, 0, 3, -2},
+        {"two-named", 2, OIIO::TypeDesc::FLOAT, false, {"height", "quality"}},
+        {"alpha-only", 1, OIIO::TypeDesc::FLOAT, false, {"A"}},
+        {"y-uint", 1, OIIO::TypeDesc::UINT, false, {"Y"}},
+    };
+    const int w = 7, h = 5;
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.name);
+        std::vector<float> v(static_cast<size_t>(w) * h * c.nch);
+        for (size_t k = 0; k < v.size(); ++k)
+            v[k] = std::ldexp(static_cast<float>(k % 13) + 0.37f, static_cast<int>(k % 7) - 3);
+        const fs::path p = dir / (std::string(c.name) + ".exr");
+        {
+            auto out = OIIO::ImageOutput::create(p.string());
+            ASSERT_TRUE(out);
+            OIIO::ImageSpec spec(w, h, c.nch, c.type);
+            spec.channelnames = c.channels;
+            spec.alpha_channel = c.nch == 4 ? 3 : -1;
+            spec.x = c.x;
+            spec.y = c.y;
+            if (c.tile) spec.tile_width = spec.tile_height = c.tile;
+            ASSERT_TRUE(out->open(p.string(), spec)) << out->geterror();
+            ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, v.data())) << out->geterror();
+            ASSERT_TRUE(out->close());
+        }
+        EXPECT_EQ(detail::openExrDirect(p.string()) != nullptr, c.direct);
+        int nch = 0;
+        const std::vector<float> want = oiioPixels(p, nch);
+        ASSERT_FALSE(want.empty());
+        const Image got = readImage(p);
+        EXPECT_EQ(got.width, w);
+        EXPECT_EQ(got.height, h);
+        EXPECT_EQ(got.channels, nch);
+        ASSERT_EQ(got.data.size(), want.size());
+        EXPECT_EQ(std::memcmp(got.data.data(), want.data(), want.size() * sizeof(float)), 0);
+    }
+}
+
+TEST(ImageIO, ARunOnExrInputsWritingExrAndPngNeverLoadsOpenImageIO) {
+    // OpenImageIO is a module loaded on first use (io/ImageCodec.h): a render of the bundled
+    // part (an EXR height map) to EXR and PNG files must not load it. The dynamic loader lists
+    // what it loads (LD_DEBUG=files).
+    TempDir dir;
+    const std::string scene = std::string(SL_SOURCE_DIR) + "/scenes/default/scene.json";
+    const test::RunResult r =
+        test::runShell("LD_DEBUG=files " + std::string(SL_CLI_PATH) + " render " + scene +
+                       " --size 16 --spp 1 -o " + (dir / "r.exr").string() + " 2>&1");
+    ASSERT_EQ(r.exitCode, 0) << r.output.substr(r.output.size() > 4000 ? r.output.size() - 4000
+                                                                       : 0);
+    EXPECT_NE(r.output.find("libtbb"), std::string::npos);  // LD_DEBUG does list libraries
+    EXPECT_EQ(r.output.find("libOpenImageIO"), std::string::npos);
+    EXPECT_EQ(r.output.find("libscratchlight-oiio"), std::string::npos);
+    EXPECT_TRUE(fs::exists(dir / "r.exr"));
 }
 
 TEST(ImageIO, PngPreviewIsSrgbEncodedAndClamped) {

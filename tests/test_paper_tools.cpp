@@ -381,3 +381,32 @@ TEST(PaperCli, EnvMapPresetIsAnRgbImageThatInitialisesThroughLStar) {
         EXPECT_NEAR(e[t], std::clamp(lightnessLStar01(v, v, v), 0.0, 1.0), 1e-6) << t;
     }
 }
+
+TEST(SpecularInit, KeptInTheCacheByTsFingerprintAndReadBackBitForBit) {
+    // The specular start of a run on a cached T comes from the cache (app/InitialState.h): the
+    // second call traces no ray (the BVH of a fresh scene stays unbuilt) and gives the same
+    // values; another fingerprint or max_depth is another entry.
+    test::TempDir dir{"specular-cache"};
+    CameraSpec c;
+    c.type = CameraDesc::Type::Orthographic;
+    c.origin = Vec3d{0, 10, 10};
+    c.target = Vec3d{0, 0, 0};
+    c.up = Vec3d{0, 1, 0};
+    c.widthMm = 4.0;
+    c.width = c.height = 16;
+    const InitialState spec = parseInitialState("specular");
+    auto first = flatScene(c);
+    const std::vector<double> want = specularInitialEnvMap(*first, 3, false);
+    const std::vector<double> stored =
+        initialEnvMap(spec, 50, 25, false, first.get(), 3, dir.path(), "fp-1");
+    EXPECT_EQ(stored, want);
+    auto fresh = flatScene(c);
+    EXPECT_EQ(initialEnvMap(spec, 50, 25, false, fresh.get(), 3, dir.path(), "fp-1"), want);
+    EXPECT_FALSE(fresh->surface->built());
+    // Another T or path length traces again.
+    EXPECT_EQ(initialEnvMap(spec, 50, 25, false, fresh.get(), 3, dir.path(), "fp-2"), want);
+    EXPECT_TRUE(fresh->surface->built());
+    auto third = flatScene(c);
+    EXPECT_EQ(initialEnvMap(spec, 50, 25, false, third.get(), 2, dir.path(), "fp-1"),
+              specularInitialEnvMap(*third, 2, false));
+}

@@ -290,3 +290,28 @@ TEST(Render, NoCameraRaySlipsThroughTheSurface) {
     EXPECT_GT(interior, 3000);
     EXPECT_EQ(missed, 0);
 }
+
+TEST(Heightfield, TheBvhIsBuiltOnTheFirstQueryAndAnswersAsBefore) {
+    // A flat 5×4 map at height 0.25, pitch 0.5: nothing is built until a ray is asked about;
+    // then a ray straight down hits at the plane's height, exactly where it was aimed.
+    const std::vector<float> h(20, 0.25f);
+    Heightfield hf(5, 4, 0.5, h);
+    EXPECT_FALSE(hf.built());
+    EXPECT_EQ(hf.minHeight(), 0.25f);
+    EXPECT_EQ(hf.maxHeight(), 0.25f);
+    SurfaceHit hit;
+    ASSERT_TRUE(hf.intersect(Ray{Vec3f{0.3f, 2.0f, -0.2f}, Vec3f{0, -1, 0}}, 0.0f, hit));
+    EXPECT_TRUE(hf.built());
+    EXPECT_FLOAT_EQ(hit.t, 1.75f);
+    EXPECT_FLOAT_EQ(hit.position.y, 0.25f);
+    EXPECT_FLOAT_EQ(hit.normal.y, 1.0f);
+    EXPECT_FALSE(hf.intersect(Ray{Vec3f{0.3f, 2.0f, -0.2f}, Vec3f{0, 1, 0}}, 0.0f, hit));
+    EXPECT_TRUE(hf.occluded(Ray{Vec3f{0.0f, 1.0f, 0.0f}, Vec3f{0, -1, 0}}, 0.0f));
+    // The build's figures include the vertex buffer, ours and shared with Embree.
+    EXPECT_EQ(hf.stats().vertexBytes, 20 * 3 * sizeof(float));
+    EXPECT_GT(hf.stats().embreeBytes, hf.stats().vertexBytes);
+    // Another map's stats() builds it too.
+    Heightfield other(5, 4, 0.5, h);
+    EXPECT_EQ(other.stats().gridCount, 1);
+    EXPECT_TRUE(other.built());
+}

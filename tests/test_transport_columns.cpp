@@ -80,6 +80,12 @@ void checkProducts(TransportMatrix t) {
         std::vector<double> want(t.cols(), -7.0);  // untouched outside the active texels
         for (uint16_t k : a.active) want[k] = out[k];
         expectClose(outc, want, "Tᵀ·g");
+        // Every column at once, split over threads: T's product, the same for any threads.
+        std::vector<double> all1(t.cols()), all2(t.cols());
+        c.transposeAll(g, all1, p, 1);
+        c.transposeAll(g, all2, p, 2);
+        expectClose(all1, out, "Tᵀ·g over every column");
+        EXPECT_EQ(all1, all2);
     }
     if (t.planes == 2) {
         std::vector<double> ya(t.rows()), yb(t.rows()), yca(t.rows()), ycb(t.rows());
@@ -95,6 +101,11 @@ void checkProducts(TransportMatrix t) {
         std::vector<double> want(t.cols(), 0.0);
         for (uint16_t k : a.active) want[k] = out[k];
         expectClose(outc, want, "T_aᵀ·ga + T_bᵀ·gb");
+        std::vector<double> all1(t.cols()), all2(t.cols());
+        c.transposeHalvesAll(g, g2, all1, 1);
+        c.transposeHalvesAll(g, g2, all2, 2);
+        expectClose(all1, out, "T_aᵀ·ga + T_bᵀ·gb over every column");
+        EXPECT_EQ(all1, all2);
     }
 }
 

@@ -52,14 +52,20 @@ std::optional<std::vector<double>> readLightFile(const fs::path& p, const std::s
     return v;
 }
 
-/// light-<key>.json holding that key.
+/// light-<key>.json holding that key: its first bytes are writeCachedLight's {"key":"<key>"
+/// (nlohmann writes the keys in order). Only the start is read: listing and trimming the cache
+/// parsed every light's values three times a run, ~0.06 s with fifty lights.
 bool isLightFile(const fs::path& p) {
     const std::string name = p.filename().string();
     if (name.size() != kLightPrefix.size() + 32 + kLightExt.size() ||
         name.rfind(kLightPrefix, 0) != 0 || !name.ends_with(kLightExt))
         return false;
     const std::string key = name.substr(kLightPrefix.size(), 32);
-    return hexDigits(key) && readLightFile(p, key).has_value();
+    if (!hexDigits(key)) return false;
+    const std::string head = "{\"key\":\"" + key + "\",";
+    std::string got(head.size(), '\0');
+    std::ifstream in(p, std::ios::binary);
+    return in.read(got.data(), static_cast<std::streamsize>(got.size())) && got == head;
 }
 
 /// A file this cache wrote, by its name and its content, never by the name alone:

@@ -17,7 +17,7 @@
 // kDefaultCacheMaxBytes) when a command asks for it, least recently used matrix first (a
 // matrix's modification time is its last use: a cache hit refreshes it, touchCacheFile).
 // Beside the matrices it keeps lights derived from them (light-<key>.json: the paper's light
-// optimize computes on its T), so a run on the same T does not compute them again; they go with
+// optimize computes on its T, and its specular start), so a run on the same T does not compute them again; they go with
 // the matrices (listed, trimmed and cleared alike) and are a few kB each.
 #pragma once
 

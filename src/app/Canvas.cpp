@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "core/Color.h"
+#include "io/PngBuffer.h"
 
 namespace sl {
 
@@ -45,12 +46,6 @@ void setFont(cairo_t* cr, double size, bool bold) {
     cairo_select_font_face(cr, kFace, CAIRO_FONT_SLANT_NORMAL,
                            bold ? CAIRO_FONT_WEIGHT_BOLD : CAIRO_FONT_WEIGHT_NORMAL);
     cairo_set_font_size(cr, size);
-}
-
-cairo_status_t appendBytes(void* closure, const unsigned char* data, unsigned int length) {
-    auto* out = static_cast<std::vector<uint8_t>*>(closure);
-    out->insert(out->end(), data, data + length);
-    return CAIRO_STATUS_SUCCESS;
 }
 
 uint8_t encoded(float linear) {
@@ -307,13 +302,11 @@ void Canvas::unclip() {
 }
 
 std::vector<uint8_t> Canvas::png() const {
-    cairo_surface_flush(s_->surface);
-    std::vector<uint8_t> out;
-    const cairo_status_t st = cairo_surface_write_to_png_stream(s_->surface, appendBytes, &out);
-    if (st != CAIRO_STATUS_SUCCESS)
-        throw std::runtime_error(std::string("encoding a figure as PNG: ") +
-                                 cairo_status_to_string(st));
-    return out;
+    // zlib directly (io/PngBuffer.h), no row filter: cairo's writer (libpng's adaptive filters)
+    // took ~8 % of a cached optimize run for the same pixels.
+    const std::vector<uint8_t> px = rgb();
+    const std::string bytes = encodePng(px.data(), width_, height_, 3, 8, PngColour::None, 6);
+    return std::vector<uint8_t>(bytes.begin(), bytes.end());
 }
 
 std::vector<uint8_t> Canvas::rgb() const {

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "app/Cache.h"
 #include "core/Color.h"
 #include "core/Error.h"
+#include "core/Hash.h"
 #include "core/Registry.h"
 #include "core/Rng.h"
 #include "io/EnvMapIO.h"
@@ -121,6 +123,23 @@ std::vector<double> initialEnvMap(const InitialState& start, int width, int heig
     if (start.kind != InitialKind::Specular) return initialEnvMap(start, width, height, rgb);
     if (!scene) bad(option("init"), start.spec, "needs the scene");
     return specularInitialEnvMap(*scene, maxDepth, rgb);
+}
+
+std::vector<double> initialEnvMap(const InitialState& start, int width, int height, bool rgb,
+                                  const Scene* scene, int maxDepth,
+                                  const std::filesystem::path& cacheDir,
+                                  const std::string& fingerprint) {
+    if (start.kind != InitialKind::Specular || cacheDir.empty() || fingerprint.empty())
+        return initialEnvMap(start, width, height, rgb, scene, maxDepth);
+    const std::string what = "specular start 1; T " + fingerprint + "; rgb " + std::to_string(rgb) +
+                             "; max_depth " + std::to_string(maxDepth);
+    const std::string key =
+        toHex(hash64(what.data(), what.size(), 1)) + toHex(hash64(what.data(), what.size(), 2));
+    const size_t n = static_cast<size_t>(width) * static_cast<size_t>(height) * (rgb ? 3 : 1);
+    if (auto cached = readCachedLight(cacheDir, key); cached && cached->size() == n) return *cached;
+    std::vector<double> e = initialEnvMap(start, width, height, rgb, scene, maxDepth);
+    if (e.size() == n) writeCachedLight(cacheDir, key, "specular start on T " + fingerprint, e);
+    return e;
 }
 
 std::vector<double> initialEnvMap(const InitialState& start, int width, int height, bool rgb) {

@@ -59,6 +59,15 @@ std::vector<double> initialEnvMap(const InitialState& start, int width, int heig
 std::vector<double> initialEnvMap(const InitialState& start, int width, int height, bool rgb,
                                   const Scene* scene, int maxDepth);
 
+/// The same, with the `specular` start kept in the cache beside T (app/Cache.h
+/// readCachedLight, keyed by T's fingerprint, which covers the scene, its camera and maxDepth,
+/// and by rgb): a run on a cached T then traces no ray (the same values, bit for bit). Empty
+/// cacheDir or fingerprint: as above.
+std::vector<double> initialEnvMap(const InitialState& start, int width, int height, bool rgb,
+                                  const Scene* scene, int maxDepth,
+                                  const std::filesystem::path& cacheDir,
+                                  const std::string& fingerprint);
+
 /// E0 from an env map as `envmap:FILE` takes a loaded file: a one-channel map is E itself, a
 /// colour map becomes gray by CIE L*/100 (or stays RGB with rgb); clamped to [0, 1].
 std::vector<double> initialEnvMapFrom(const EnvMap& map, bool rgb);

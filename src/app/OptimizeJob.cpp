@@ -573,8 +573,9 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     if (!o.truth.empty() && !in.sceneParts) in.truth = projectMaskFile(*in.scene, o.truth);
     const int maxDepth = job.transport.file.provenance.maxDepth;
     for (const InitialState& s : o.starts)
-        in.startValues.push_back(
-            initialEnvMap(s, t.envWidth, t.envHeight, o.rgb, in.scene.get(), maxDepth));
+        in.startValues.push_back(initialEnvMap(s, t.envWidth, t.envHeight, o.rgb, in.scene.get(),
+                                               maxDepth, in.shard.distributed() ? "" : p.cacheDir,
+                                               job.transport.file.provenance.fingerprint));
     // A start whose image has no contrast on the part (E = 0: all black) is a plateau of every
     // objective (G = 0, gradient 0): no optimizer can leave it.
     for (size_t k = 0; k < o.starts.size(); ++k) {

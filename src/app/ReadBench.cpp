@@ -78,8 +78,9 @@ ReadBenchResult runReadBench(const ReadBenchOptions& o) {
         fs::path file;
         HeightmapReader how;
     };
-    std::vector<Case> cases = {{"exr float32", "OpenImageIO", exr, HeightmapReader::Auto},
-                               {"x3p float64", "ours (io/X3p.cpp)", x3p, HeightmapReader::Auto}};
+    std::vector<Case> cases = {
+        {"exr float32", "OpenEXR (io/ExrReader.cpp)", exr, HeightmapReader::Auto},
+        {"x3p float64", "ours (io/X3p.cpp)", x3p, HeightmapReader::Auto}};
     if (gwyddionBuilt()) {
         cases.push_back({"x3p float64", "Gwyddion (opengps)", x3p, HeightmapReader::Gwyddion});
         cases.push_back({"gwy float64", "Gwyddion (gwyfile)", gwy, HeightmapReader::Auto});

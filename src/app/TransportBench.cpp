@@ -18,6 +18,7 @@
 #include "optimize/Optimizer.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
+#include "transport/TransportColumns.h"
 #include "transport/TransportSink.h"
 #include "transport/TransportSlices.h"
 
@@ -50,6 +51,11 @@ double TransportBenchResult::precomputeRatio() const {
     return r > 0 ? precompute.raysPerSecond() / r : 0;
 }
 
+double TransportBenchResult::precomputeVsBare() const {
+    const double b = bare.raysPerSecond();
+    return b > 0 ? precompute.raysPerSecond() / b : 0;
+}
+
 TransportBenchResult runTransportBench(const TransportBenchOptions& a) {
     if (a.repeats < 1) throw inputError("repeats", "is " + std::to_string(a.repeats), "use >= 1");
     if (a.iterations < 1)
@@ -66,12 +72,14 @@ TransportBenchResult runTransportBench(const TransportBenchOptions& a) {
     r.options = a;
     r.maxDepth = opt.maxDepth;
     // 1. Tracing: renderer (radiance sink) and precompute (transport sink), interleaved.
-    std::vector<ThroughputRow> ren, pre;
+    std::vector<ThroughputRow> ren, pre, bare;
     TransportMatrix T;
     {
-        ProgressTask task("bench transport: tracing", 2.0 * a.repeats);
+        ProgressTask task("bench transport: tracing", 3.0 * a.repeats);
         for (int i = 0; i < a.repeats; ++i) {
             ren.push_back(benchRenderer(*scene, opt));
+            task.advance();
+            bare.push_back(benchBareEmbree(*scene, opt));
             task.advance();
             PrecomputeResult p = precomputeTransport(*scene, opt, 1);
             pre.push_back(
@@ -82,6 +90,7 @@ TransportBenchResult runTransportBench(const TransportBenchOptions& a) {
     }
     r.renderer = medianThroughput(ren);
     r.precompute = medianThroughput(pre);
+    r.bare = medianThroughput(bare);
     T.threads = a.threads;
     r.width = T.width;
     r.height = T.height;
@@ -118,6 +127,17 @@ TransportBenchResult runTransportBench(const TransportBenchOptions& a) {
     std::tie(r.apply, r.applySlices) = medianSecondsInterleaved(
         reps, [&] { T.applyLuminance(e, y); },
         [&] { B.applyLuminance(e, y, TransportMatrix::kMeanPlane, T.threads); });
+    {
+        const TransportColumns C(T);
+        r.columnsBytes = C.bytes();
+        std::vector<double> gy(T.rows());
+        for (size_t i = 0; i < gy.size(); ++i) gy[i] = y[i] - 0.25;  // a gradient-like image
+        std::vector<double> out(T.cols());
+        std::tie(r.transposeSlices, r.transposeColumns) = medianSecondsInterleaved(
+            reps,
+            [&] { B.applyTransposeLuminance(gy, out, TransportMatrix::kMeanPlane, T.threads); },
+            [&] { C.transposeAll(gy, out, TransportMatrix::kMeanPlane, T.threads); });
+    }
     auto adam = [&](const TransportLoss& loss) {
         std::vector<double> x = e;
         OptimizerOptions oopt;
@@ -138,20 +158,24 @@ double TransportBenchResult::nonZerosRead() const {
 std::string TransportBenchResult::csv() const {
     std::ostringstream os;
     os << "scene,width,height,spp,renderer_rays_per_s,precompute_rays_per_s,precompute_ratio,"
+          "bare_embree_rays_per_s,precompute_vs_bare_embree,"
           "storage,nnz,density,bytes,slices_bytes,slices_padding,slices_build_s,streaming_read_s,"
           "nonzeros_read_s,apply_s,apply_slices_s,iteration_two_pass_s,"
           "iteration_two_pass_slices_s,iteration_fused_s,iteration_fused_slices_s,"
           "iteration_fused_ratio,iteration_fused_slices_ratio,"
-          "evaluation_slices_vs_nonzeros_read,adam_iterations,adam_s,adam_slices_s\n";
+          "evaluation_slices_vs_nonzeros_read,adam_iterations,adam_s,adam_slices_s,"
+          "transpose_slices_s,transpose_columns_s,columns_bytes\n";
     os << options.scene.string() << ',' << width << ',' << height << ',' << options.spp << ','
        << renderer.raysPerSecond() << ',' << precompute.raysPerSecond() << ',' << precomputeRatio()
-       << ',' << (sparse ? "csr" : "dense") << ',' << nnz << ',' << density << ',' << bytes << ','
+       << ',' << bare.raysPerSecond() << ',' << precomputeVsBare() << ','
+       << (sparse ? "csr" : "dense") << ',' << nnz << ',' << density << ',' << bytes << ','
        << slicesBytes << ',' << slicesPadding << ',' << slicesBuild << ',' << streamingRead << ','
        << nonZerosRead() << ',' << apply << ',' << applySlices << ',' << iterationTwoPass << ','
        << iterationTwoPassSlices << ',' << iterationFused << ',' << iterationFusedSlices << ','
        << iterationFused / streamingRead << ',' << iterationFusedSlices / streamingRead << ','
        << iterationFusedSlices / nonZerosRead() << ',' << options.iterations << ',' << adam << ','
-       << adamSlices << '\n';
+       << adamSlices << ',' << transposeSlices << ',' << transposeColumns << ',' << columnsBytes
+       << '\n';
     return os.str();
 }
 

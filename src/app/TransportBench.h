@@ -1,5 +1,6 @@
 // `scratchlight bench transport`: what precomputing T costs against rendering (the same tracer
-// with the transport sink instead of the radiance sink, interleaved), T's size, and what an
+// with the transport sink instead of the radiance sink) and against bare Embree closest hits on
+// the same camera rays (all three interleaved), T's size, and what an
 // iteration on T costs against one streaming read of T's bytes (products, one loss-and-gradient
 // evaluation in two passes and fused, a whole Adam run), each on T's CSR arrays and on the
 // slices layout (transport/TransportSlices.h) side by side.
@@ -27,7 +28,9 @@ struct TransportBenchResult {
     TransportBenchOptions options;
     int width = 0, height = 0, maxDepth = 0;
     ThroughputRow renderer, precompute;  // medians over the repeats
-    bool sparse = true;                  // T's storage: CSR or dense
+    /// Bare Embree closest hits on the same camera rays (render/Benchmark.h), interleaved.
+    ThroughputRow bare;
+    bool sparse = true;  // T's storage: CSR or dense
     size_t nnz = 0, bytes = 0;
     int stride = 1;  // floats per entry (channels · planes)
     double density = 0;
@@ -43,13 +46,18 @@ struct TransportBenchResult {
     double iterationTwoPass = 0, iterationTwoPassSlices = 0;
     double iterationFused = 0, iterationFusedSlices = 0;
     double adam = 0, adamSlices = 0;  // `iterations` Adam steps (fused evaluations)
+    /// Tᵀ·g alone on the slices and on the columns layout (transport/TransportColumns.h,
+    /// transposeAll), interleaved; and the columns' bytes.
+    double transposeSlices = 0, transposeColumns = 0;
+    size_t columnsBytes = 0;
 
     /// The time one streaming read of T's non-zeros alone takes, nnz·(2 + 4·stride) bytes at
     /// the measured streaming read's bandwidth (the row pointers left out).
     double nonZerosRead() const;
 
-    double precomputeRatio() const;  // precompute rays/s over renderer rays/s
-    std::string csv() const;         // header + one line
+    double precomputeRatio() const;   // precompute rays/s over renderer rays/s
+    double precomputeVsBare() const;  // precompute rays/s over bare Embree rays/s
+    std::string csv() const;          // header + one line
 };
 
 /// Runs the benchmark. Throws InputError for a bad scene or option.

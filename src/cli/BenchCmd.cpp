@@ -77,6 +77,8 @@ int runTransportBenchCmd(TransportBenchArgs a) {
     std::printf("  %-44s %12.2f Mrays/s   (%.1f%% of the renderer)\n",
                 r.precompute.workload.c_str(), r.precompute.raysPerSecond() / 1e6,
                 100.0 * r.precomputeRatio());
+    std::printf("  %-44s %12.2f Mrays/s   (precompute: %.1f%% of it)\n", r.bare.workload.c_str(),
+                r.bare.raysPerSecond() / 1e6, 100.0 * r.precomputeVsBare());
     std::printf("  T: %s, nnz %zu, density %.4f, %.1f MB\n", r.sparse ? "CSR" : "dense", r.nnz,
                 r.density, static_cast<double>(r.bytes) / 1e6);
     std::printf(
@@ -95,6 +97,10 @@ int runTransportBenchCmd(TransportBenchArgs a) {
                     csr / r.streamingRead, slices * 1e3, slices / r.streamingRead);
     };
     row("T.E (luminance product)", r.apply, r.applySlices);
+    std::printf("  %-44s %9.3f ms (%5.2f x) %9.3f ms (%5.2f x)  columns: %.1f MB\n",
+                "T'.g: slices | columns (CSC, no scatter)", r.transposeSlices * 1e3,
+                r.transposeSlices / r.streamingRead, r.transposeColumns * 1e3,
+                r.transposeColumns / r.streamingRead, static_cast<double>(r.columnsBytes) / 1e6);
     row("one iteration, two passes (T.E then T'.g)", r.iterationTwoPass, r.iterationTwoPassSlices);
     row("one iteration, fused single pass", r.iterationFused, r.iterationFusedSlices);
     std::printf("  %-44s %12.3f s %17.3f s\n",

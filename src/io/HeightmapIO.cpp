@@ -1,7 +1,5 @@
 #include "io/HeightmapIO.h"
 
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -32,13 +30,14 @@ const char* const kFixDamaged =
     "Check that the file is a complete EXR, TIFF, PNG or .npy file (the format its name "
     "says); save it again";
 
-std::string typeName(OIIO::TypeDesc t) {
-    if (t == OIIO::TypeDesc::HALF) return "float16";
-    if (t == OIIO::TypeDesc::FLOAT) return "float32";
-    if (t == OIIO::TypeDesc::DOUBLE) return "float64";
-    if (t == OIIO::TypeDesc::UINT8) return "uint8";
-    if (t == OIIO::TypeDesc::UINT16) return "uint16";
-    return t.c_str();
+std::string typeName(const detail::ImageHeader& h) {
+    using detail::PixelType;
+    if (h.format == PixelType::Half) return "float16";
+    if (h.format == PixelType::Float) return "float32";
+    if (h.format == PixelType::Double) return "float64";
+    if (h.format == PixelType::UInt8) return "uint8";
+    if (h.format == PixelType::UInt16) return "uint16";
+    return h.formatText;
 }
 
 std::string formatShortName(const std::string& oiioName) {
@@ -362,20 +361,21 @@ void takeGrayChannel(const std::string& where, const T* strip, size_t pixels, in
 HeightmapData loadWithOiio(const fs::path& file, const HeightmapOptions& opt) {
     const std::string where = file.string();
     auto in = detail::openImageFile(file, kFixDamaged);
-    const OIIO::ImageSpec& spec = in->spec();
-    const std::string fmtName = formatShortName(in->format_name());
+    const detail::ImageHeader& spec = in->header();
+    const std::string fmtName = formatShortName(in->formatName());
     if (spec.deep || spec.depth > 1)
         throw inputError(where, "deep or volume images cannot be height maps", kFixFloat);
     checkSize(where, spec.width, spec.height);
     detail::checkImageSize(file, spec);
 
-    const OIIO::TypeDesc native = spec.format;
-    const bool isFloat = native == OIIO::TypeDesc::HALF || native == OIIO::TypeDesc::FLOAT ||
-                         native == OIIO::TypeDesc::DOUBLE;
-    const bool isInt = native == OIIO::TypeDesc::UINT8 || native == OIIO::TypeDesc::UINT16;
-    const std::string format = fmtName + " " + typeName(native);
+    using detail::PixelType;
+    const PixelType native = spec.format;
+    const bool isFloat =
+        native == PixelType::Half || native == PixelType::Float || native == PixelType::Double;
+    const bool isInt = native == PixelType::UInt8 || native == PixelType::UInt16;
+    const std::string format = fmtName + " " + typeName(spec);
     if (!isFloat && !isInt)
-        throw inputError(where, "unsupported pixel type " + typeName(native) + " (" + format + ")",
+        throw inputError(where, "unsupported pixel type " + typeName(spec) + " (" + format + ")",
                          kFixFloat);
     const Mapping m = mappingFor(where, opt, isInt, format);
 
@@ -392,7 +392,8 @@ HeightmapData loadWithOiio(const fs::path& file, const HeightmapOptions& opt) {
     }
     // Integers are read as UINT16 (OIIO scales uint8 by 257, exactly: v/255 == 257v/65535) and
     // mapped by us in double; OIIO's own uint16 -> float conversion is not correctly rounded.
-    const OIIO::TypeDesc readAs = isInt ? OIIO::TypeDesc::UINT16 : OIIO::TypeDesc::FLOAT;
+    const PixelType readAs = isInt ? PixelType::UInt16 : PixelType::Float;
+    const size_t readSize = detail::pixelTypeSize(readAs);
     const int nch = spec.nchannels;
 
     // Bands of rows (io/ImageFile.h readBands), channel 0 into the heights; uint16 codes are
@@ -402,14 +403,14 @@ HeightmapData loadWithOiio(const fs::path& file, const HeightmapOptions& opt) {
     detail::readBands(*in, file, readAs, kFixDamaged, [&](int y0, int y1, const void* values) {
         const size_t px = static_cast<size_t>(y1 - y0) * w, off = static_cast<size_t>(y0) * w;
         if (nch == 1)
-            std::memcpy(bytes + off * readAs.size(), values, px * readAs.size());
+            std::memcpy(bytes + off * readSize, values, px * readSize);
         else if (isInt)
             takeGrayChannel<uint16_t>(where, static_cast<const uint16_t*>(values), px, nch,
-                                      spec.alpha_channel, uint16_t(65535), y0, spec.width,
+                                      spec.alphaChannel, uint16_t(65535), y0, spec.width,
                                       bytes + off * sizeof(uint16_t));
         else
             takeGrayChannel<float>(where, static_cast<const float*>(values), px, nch,
-                                   spec.alpha_channel, 1.0f, y0, spec.width,
+                                   spec.alphaChannel, 1.0f, y0, spec.width,
                                    bytes + off * sizeof(float));
     });
     in->close();

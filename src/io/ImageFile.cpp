@@ -9,6 +9,7 @@
 
 #include "core/Error.h"
 #include "core/Text.h"
+#include "io/ExrReader.h"
 
 namespace sl::detail {
 
@@ -233,7 +234,8 @@ void checkPngChunks(const fs::path& file) {
     }
 }
 
-std::unique_ptr<OIIO::ImageInput> openImageFile(const fs::path& file, const std::string& fix) {
+std::unique_ptr<ImageReader> openImageFile(const fs::path& file, const std::string& fix,
+                                           bool exrDirect) {
     const std::string where = file.string();
     std::error_code ec;
     if (!fs::exists(file, ec))
@@ -248,26 +250,27 @@ std::unique_ptr<OIIO::ImageInput> openImageFile(const fs::path& file, const std:
     if (ext.size() < 2)
         throw inputError(where, "the file name has no extension to tell its image format",
                          "Name the file by its format (.exr, .png, .tif, ...)");
-    // create() with a bare extension makes that format's reader without touching the file.
-    auto in = OIIO::ImageInput::create(ext.substr(1));
-    if (!in) {
-        (void)OIIO::geterror();  // OIIO keeps the message otherwise
+    if (ext == ".exr") {
+        checkExrHeader(file);
+        if (exrDirect)
+            if (auto direct = openExrDirect(where)) return direct;
+    }
+    std::string err;
+    auto in = imageCodec(where).createReader(ext.substr(1), &err);
+    if (!in)
         throw inputError(where, "no image reader for files named *" + ext,
                          "Save the image as EXR, PNG or TIFF");
-    }
-    const std::string format = in->format_name();
-    if (format == "openexr") checkExrHeader(file);
+    const std::string format = in->formatName();
+    if (format == "openexr" && ext != ".exr") checkExrHeader(file);
     if (format == "png") checkPngChunks(file);
-    OIIO::ImageSpec spec;
-    if (!in->open(where, spec)) {
-        std::string err = in->geterror();
-        if (err.empty()) err = OIIO::geterror();
+    if (!in->open(where)) {
+        err = in->error();
         throw inputError(where, "cannot read the file as " + format + " (" + err + ")", fix);
     }
     return in;
 }
 
-void checkImageSize(const fs::path& file, const OIIO::ImageSpec& spec) {
+void checkImageSize(const fs::path& file, const ImageHeader& spec) {
     const std::string where = file.string();
     if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth < 1)
         throw inputError(where, "the image is empty (" + std::to_string(spec.width) + "x" +
@@ -287,73 +290,46 @@ void checkImageSize(const fs::path& file, const OIIO::ImageSpec& spec) {
     if (uint64_t(spec.width) * uint64_t(spec.height) * uint64_t(spec.depth) * ch > maxSamples)
         tooLarge(std::to_string(spec.width) + "x" + std::to_string(spec.height) + " pixels of " +
                  std::to_string(spec.nchannels) + " channels");
-    if (spec.tile_width > 0 && uint64_t(spec.tile_width) * uint64_t(std::max(spec.tile_height, 1)) *
-                                       uint64_t(std::max(spec.tile_depth, 1)) * ch >
-                                   maxSamples)
-        tooLarge("tiles of " + std::to_string(spec.tile_width) + "x" +
-                 std::to_string(spec.tile_height) + " pixels");
-    const int rowsPerStrip = spec.get_int_attribute("tiff:RowsPerStrip", 0);
-    if (spec.tile_width <= 0 && rowsPerStrip > spec.height &&
+    if (spec.tileWidth > 0 && uint64_t(spec.tileWidth) * uint64_t(std::max(spec.tileHeight, 1)) *
+                                      uint64_t(std::max(spec.tileDepth, 1)) * ch >
+                                  maxSamples)
+        tooLarge("tiles of " + std::to_string(spec.tileWidth) + "x" +
+                 std::to_string(spec.tileHeight) + " pixels");
+    const int rowsPerStrip = spec.rowsPerStrip;
+    if (spec.tileWidth <= 0 && rowsPerStrip > spec.height &&
         uint64_t(spec.width) * uint64_t(rowsPerStrip) * ch > maxSamples)
         tooLarge("strips of " + std::to_string(rowsPerStrip) + " rows of " +
                  std::to_string(spec.width) + " pixels");
 }
 
-void checkRead(OIIO::ImageInput& in, bool ok, const fs::path& file, const std::string& fix) {
-    if (ok && !in.has_error()) return;
-    std::string err = in.geterror();
-    if (err.empty()) err = "no reason given";
-    throw inputError(file.string(),
-                     "cannot read the pixels: the file is damaged or truncated (" + err + ")", fix);
-}
-
-void readBands(OIIO::ImageInput& in, const fs::path& file, OIIO::TypeDesc type,
-               const std::string& fix,
+void readBands(ImageReader& in, const fs::path& file, PixelType type, const std::string& fix,
                const std::function<void(int y0, int y1, const void* values)>& sink) {
-    const OIIO::ImageSpec& spec = in.spec();
+    const ImageHeader& spec = in.header();
     const int nch = spec.nchannels;
-    const size_t nativePixel = spec.pixel_bytes(/*native=*/true);
-    const size_t outPixel = type.size() * static_cast<size_t>(nch);
+    const size_t nativePixel = spec.nativePixelBytes;
+    const size_t outPixel = pixelTypeSize(type) * static_cast<size_t>(nch);
     const size_t rowNative = nativePixel * static_cast<size_t>(spec.width);
     const size_t rowOut = outPixel * static_cast<size_t>(spec.width);
     // About 4 MB of native pixels per band; tiled files: whole rows of tiles.
     int rows = static_cast<int>(std::clamp<size_t>(
         (size_t(4) << 20) / std::max<size_t>(rowNative, 1), 1, static_cast<size_t>(spec.height)));
-    const bool tiled = spec.tile_width > 0;
-    if (tiled) rows = (rows + spec.tile_height - 1) / spec.tile_height * spec.tile_height;
+    const bool tiled = spec.tileWidth > 0;
+    if (tiled) rows = (rows + spec.tileHeight - 1) / spec.tileHeight * spec.tileHeight;
     std::vector<unsigned char> native(static_cast<size_t>(rows) * rowNative);
     std::vector<unsigned char> out(static_cast<size_t>(rows) * rowOut);
     for (int y0 = 0; y0 < spec.height; y0 += rows) {
         const int y1 = std::min(spec.height, y0 + rows);
-        const bool ok = tiled ? in.read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y + y0,
-                                              spec.y + y1, spec.z, spec.z + 1, 0, nch,
-                                              OIIO::TypeDesc::UNKNOWN, native.data())
-                              : in.read_scanlines(0, 0, spec.y + y0, spec.y + y1, spec.z, 0, nch,
-                                                  OIIO::TypeDesc::UNKNOWN, native.data());
-        checkRead(in, ok, file, fix);
-        const size_t pixels = static_cast<size_t>(y1 - y0) * static_cast<size_t>(spec.width);
-        bool converted = true;
-        if (spec.channelformats.empty()) {
-            converted = OIIO::convert_pixel_values(spec.format, native.data(), type, out.data(),
-                                                   static_cast<int>(pixels * size_t(nch)));
-        } else {
-            // Per-channel formats (OpenEXR): convert one channel at a time.
-            size_t offset = 0;
-            for (int c = 0; converted && c < nch; ++c) {
-                const OIIO::TypeDesc cf = spec.channelformats[static_cast<size_t>(c)];
-                converted = OIIO::convert_image(
-                    1, spec.width, y1 - y0, 1, native.data() + offset, cf,
-                    static_cast<OIIO::stride_t>(nativePixel), OIIO::AutoStride, OIIO::AutoStride,
-                    out.data() + static_cast<size_t>(c) * type.size(), type,
-                    static_cast<OIIO::stride_t>(outPixel), OIIO::AutoStride, OIIO::AutoStride);
-                offset += cf.size();
-            }
-        }
-        if (!converted)
+        if (!in.readNative(y0, y1, native.data())) {
+            std::string err = in.error();
+            if (err.empty()) err = "no reason given";
             throw inputError(
                 file.string(),
-                "cannot convert its pixels (" + std::string(spec.format.c_str()) + ") to numbers",
-                fix);
+                "cannot read the pixels: the file is damaged or truncated (" + err + ")", fix);
+        }
+        const size_t pixels = static_cast<size_t>(y1 - y0) * static_cast<size_t>(spec.width);
+        if (!in.convert(native.data(), pixels, type, out.data()))
+            throw inputError(file.string(),
+                             "cannot convert its pixels (" + spec.formatText + ") to numbers", fix);
         sink(y0, y1, out.data());
     }
 }

@@ -1,5 +1,7 @@
-// ImageFile: how io/ opens and reads image files with OpenImageIO, in one place (ImageIO,
-// HeightmapIO and MaskIO use it; nothing outside io/ includes it).
+// ImageFile: how io/ opens and reads image files, in one place (ImageIO, HeightmapIO and
+// MaskIO use it; nothing outside io/ includes it). EXRs that OpenEXR reads exactly as
+// OpenImageIO does are read with OpenEXR (io/ExrReader.h), every other file through
+// OpenImageIO's module (io/ImageCodec.h), loaded then.
 //
 //   * Only the reader that the file's extension names is used: a file that reader refuses is
 //     refused. (OpenImageIO's own open() would then try every reader it has, so a damaged .exr
@@ -19,13 +21,13 @@
 //     that rows are missing.
 #pragma once
 
-#include <OpenImageIO/imageio.h>
-
 #include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <memory>
 #include <string>
+
+#include "io/ImageCodec.h"
 
 namespace sl::detail {
 
@@ -36,20 +38,17 @@ inline constexpr uint64_t kMaxDecodedPerFileByte = 8192;
 /// Images up to this many decoded float bytes pass the ratio check whatever their file size.
 inline constexpr uint64_t kMinDecodedLimit = uint64_t(1) << 20;
 
-/// Opens `file` with the OpenImageIO reader its extension names, after checking that it is a
-/// readable regular file (and, for OpenEXR, its header). Throws InputError naming the file,
-/// with `fix` as the fix for an unreadable or damaged file.
-std::unique_ptr<OIIO::ImageInput> openImageFile(const std::filesystem::path& file,
-                                                const std::string& fix);
+/// Opens `file` with the reader its extension names, after checking that it is a readable
+/// regular file (and, for OpenEXR, its header): OpenEXR's own for the EXRs io/ExrReader.h
+/// reads (when `exrDirect`; those readers convert to float only), OpenImageIO's otherwise.
+/// Throws InputError naming the file, with `fix` as the fix for an unreadable or damaged file.
+std::unique_ptr<ImageReader> openImageFile(const std::filesystem::path& file,
+                                           const std::string& fix, bool exrDirect = true);
 
 /// Checks that the opened image's size (W·H·channels float samples, and what a reader buffers
 /// at once: a tile, or a TIFF strip) is plausible for the size of its file (see
 /// kMaxDecodedPerFileByte). Throws InputError naming the file.
-void checkImageSize(const std::filesystem::path& file, const OIIO::ImageSpec& spec);
-
-/// Throws InputError naming the file if `ok` is false or `in` holds an error.
-void checkRead(OIIO::ImageInput& in, bool ok, const std::filesystem::path& file,
-               const std::string& fix);
+void checkImageSize(const std::filesystem::path& file, const ImageHeader& spec);
 
 /// Reads every pixel of the opened image (all channels, interleaved) band by band of rows: each
 /// band is read in the file's own pixel format and converted here to `type` (UINT8, UINT16 or
@@ -57,8 +56,8 @@ void checkRead(OIIO::ImageInput& in, bool ok, const std::filesystem::path& file,
 /// then handed to sink(y0, y1, values) for rows [y0, y1) (0 = the image's top row). (OpenImageIO
 /// 2.4 converts through a buffer of at least 256 scanlines, rounded up to a TIFF's strip height,
 /// whatever the image's height: a header could make it allocate gigabytes for one row.) Tiled
-/// files are read by bands of whole tile rows. Every read is checked with checkRead.
-void readBands(OIIO::ImageInput& in, const std::filesystem::path& file, OIIO::TypeDesc type,
+/// files are read by bands of whole tile rows. A failed read throws InputError naming the file.
+void readBands(ImageReader& in, const std::filesystem::path& file, PixelType type,
                const std::string& fix,
                const std::function<void(int y0, int y1, const void* values)>& sink);
 

@@ -5,8 +5,6 @@
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfIO.h>
 #include <OpenEXR/ImfOutputFile.h>
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
 
 #include <algorithm>
 #include <array>
@@ -23,6 +21,7 @@
 #include "core/Text.h"
 #include "io/AtomicFile.h"
 #include "io/ImageFile.h"
+#include "io/PngBuffer.h"
 
 namespace sl {
 
@@ -41,15 +40,15 @@ struct Encoding {
     float gamma = 1.0f;
 };
 
-Encoding encodingOf(const OIIO::ImageSpec& spec, const std::string& formatName,
+Encoding encodingOf(const detail::ImageHeader& spec, const std::string& formatName,
                     const std::string& where) {
-    const std::string csName(spec.get_string_attribute("oiio:ColorSpace"));
+    const std::string csName = spec.colorSpace;
     const std::string cs = lower(csName);
     Encoding e;
     if (cs.empty()) {
         const bool srgbFormat = formatName == "png" || formatName == "jpeg";
-        e.transfer = (srgbFormat || spec.format == OIIO::TypeDesc::UINT8) ? Transfer::Srgb
-                                                                          : Transfer::Linear;
+        e.transfer = (srgbFormat || spec.format == detail::PixelType::UInt8) ? Transfer::Srgb
+                                                                             : Transfer::Linear;
         return e;
     }
     if (cs == "srgb" || cs == "srgb_texture" || cs == "srgb_rec709_scene") {
@@ -58,7 +57,7 @@ Encoding encodingOf(const OIIO::ImageSpec& spec, const std::string& formatName,
                cs == "lin_rec709_scene" || cs == "raw") {
         e.transfer = Transfer::Linear;
     } else if (cs.rfind("gamma", 0) == 0) {
-        float g = spec.get_float_attribute("oiio:Gamma", 0.0f);
+        float g = spec.gamma;
         if (!(g > 0.0f)) {
             try {
                 g = std::stof(cs.substr(5));
@@ -192,30 +191,10 @@ class MemoryStream : public Imf::OStream {
     size_t pos_ = 0;
 };
 
-/// Encodes the image in memory (OpenImageIO's writers do not all report failed writes: its PNG
-/// writer's close() returns true after a write failed), then writes the bytes to the temporary
-/// file with every write checked (io/AtomicFile.h writeBytesAtomically): a full disk is an
-/// InputError, the temporary is removed, and nothing is renamed into place.
-void writeWithOiio(const fs::path& file, OIIO::ImageSpec spec, OIIO::TypeDesc type,
-                   const void* pixels) {
-    const std::string where = file.string();
-    auto o = OIIO::ImageOutput::create(file.extension().string().substr(1));
-    if (!o)
-        throw inputError(where, "no image writer for this file type (" + OIIO::geterror() + ")",
-                         "Use an .exr or .png file name");
-    std::vector<unsigned char> encoded;
-    OIIO::Filesystem::IOVecOutput memory(encoded);
-    if (!o->supports("ioproxy") || !o->set_ioproxy(&memory))
-        throw inputError(where, "internal error: the " + std::string(o->format_name()) +
-                                    " writer cannot write to memory");
-    bool ok = o->open(where, spec) && o->write_image(type, pixels);
-    ok = o->close() && ok && !o->has_error();
-    if (!ok) {
-        std::string err = o->geterror();
-        if (err.empty()) err = OIIO::geterror();
-        throw inputError(where, "cannot encode the image (" + err + ")");
-    }
-    o.reset();
+/// PNG files: zlib's default level (OpenImageIO's, which wrote them before).
+constexpr int kPngFileLevel = 6;
+
+void writePngFile(const fs::path& file, const std::string& encoded) {
     writeBytesAtomically(file, encoded.data(), encoded.size());
 }
 
@@ -224,13 +203,13 @@ void writeWithOiio(const fs::path& file, OIIO::ImageSpec spec, OIIO::TypeDesc ty
 Image readImage(const fs::path& file) {
     const std::string where = file.string();
     auto in = detail::openImageFile(file, kImageFix);
-    const OIIO::ImageSpec& spec = in->spec();
+    const detail::ImageHeader& spec = in->header();
     if (spec.deep) throw inputError(where, "deep images are not supported", "Flatten the image");
     if (spec.depth > 1) throw inputError(where, "volume images are not supported");
     detail::checkImageSize(file, spec);
     const size_t n = static_cast<size_t>(spec.width) * static_cast<size_t>(spec.height) *
                      static_cast<size_t>(spec.nchannels);
-    const Encoding enc = encodingOf(spec, in->format_name(), where);
+    const Encoding enc = encodingOf(spec, in->formatName(), where);
 
     Image img;
     img.width = spec.width;
@@ -243,14 +222,13 @@ Image readImage(const fs::path& file) {
                                     std::to_string(spec.height) + "x" +
                                     std::to_string(spec.nchannels) + " float image");
     }
-    const OIIO::TypeDesc native = spec.format;
-    const bool u8 = native == OIIO::TypeDesc::UINT8, u16 = native == OIIO::TypeDesc::UINT16;
-    const OIIO::TypeDesc readAs = u8    ? OIIO::TypeDesc::UINT8
-                                  : u16 ? OIIO::TypeDesc::UINT16
-                                        : OIIO::TypeDesc::FLOAT;
+    using detail::PixelType;
+    const PixelType native = spec.format;
+    const bool u8 = native == PixelType::UInt8, u16 = native == PixelType::UInt16;
+    const PixelType readAs = u8 ? PixelType::UInt8 : u16 ? PixelType::UInt16 : PixelType::Float;
     // Integer values are stored packed at the front of the float buffer and widened below.
-    const size_t rowBytes =
-        static_cast<size_t>(spec.width) * static_cast<size_t>(spec.nchannels) * readAs.size();
+    const size_t rowBytes = static_cast<size_t>(spec.width) * static_cast<size_t>(spec.nchannels) *
+                            detail::pixelTypeSize(readAs);
     unsigned char* bytes = reinterpret_cast<unsigned char*>(img.data.data());
     detail::readBands(*in, file, readAs, kImageFix, [&](int y0, int y1, const void* values) {
         std::memcpy(bytes + static_cast<size_t>(y0) * rowBytes, values,
@@ -259,13 +237,13 @@ Image readImage(const fs::path& file) {
     in->close();
 
     if (u8) {
-        widenDecoded<uint8_t>(img, enc, spec.alpha_channel);
+        widenDecoded<uint8_t>(img, enc, spec.alphaChannel);
     } else if (u16) {
-        widenDecoded<uint16_t>(img, enc, spec.alpha_channel);
+        widenDecoded<uint16_t>(img, enc, spec.alphaChannel);
     } else if (enc.transfer != Transfer::Linear) {
         const size_t c = static_cast<size_t>(img.channels);
         for (size_t k = 0; k < n; ++k)
-            if (static_cast<int>(k % c) != spec.alpha_channel)
+            if (static_cast<int>(k % c) != spec.alphaChannel)
                 img.data[k] = decode(enc, img.data[k]);
     }
     return img;
@@ -325,11 +303,8 @@ void writePng(const fs::path& file, const Image& img, float exposure) {
             e = srgbEncode(exposure == 0.0f ? 0.0f : v * exposure);  // clamps to [0, 1]
         px[k] = static_cast<uint8_t>(std::lround(e * 255.0f));
     }
-    OIIO::ImageSpec spec(img.width, img.height, img.channels, OIIO::TypeDesc::UINT8);
-    spec.channelnames = channelNames(img.channels);
-    spec.alpha_channel = img.channels == 4 ? 3 : -1;
-    spec.attribute("oiio:ColorSpace", "sRGB");
-    writeWithOiio(file, spec, OIIO::TypeDesc::UINT8, px.data());
+    writePngFile(file, encodePng(px.data(), img.width, img.height, img.channels, 8, PngColour::Srgb,
+                                 kPngFileLevel));
 }
 
 void writePng16(const fs::path& file, const Image& img) {
@@ -341,11 +316,9 @@ void writePng16(const fs::path& file, const Image& img) {
         if (std::isnan(v)) throwBadValue(file, img, k, v);
         px[k] = static_cast<uint16_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 65535.0f));
     }
-    OIIO::ImageSpec spec(img.width, img.height, img.channels, OIIO::TypeDesc::UINT16);
-    spec.channelnames = channelNames(img.channels);
-    spec.alpha_channel = img.channels == 4 ? 3 : -1;
-    spec.attribute("oiio:ColorSpace", "Linear");  // data, not colour: gAMA 1.0
-    writeWithOiio(file, spec, OIIO::TypeDesc::UINT16, px.data());
+    // Data, not colour: gAMA 1.0.
+    writePngFile(file, encodePng(px.data(), img.width, img.height, img.channels, 16,
+                                 PngColour::Linear, kPngFileLevel));
 }
 
 void writeMaskPng(const fs::path& file, const std::vector<uint8_t>& mask, int w, int h) {
@@ -358,10 +331,7 @@ void writeMaskPng(const fs::path& file, const std::vector<uint8_t>& mask, int w,
                                             std::to_string(mask.size()) + " bytes, " +
                                             std::to_string(w) + "x" + std::to_string(h) +
                                             " needs " + std::to_string(static_cast<size_t>(w) * h));
-    OIIO::ImageSpec spec(w, h, 1, OIIO::TypeDesc::UINT8);
-    spec.channelnames = {"Y"};
-    spec.attribute("oiio:ColorSpace", "Linear");
-    writeWithOiio(file, spec, OIIO::TypeDesc::UINT8, mask.data());
+    writePngFile(file, encodePng(mask.data(), w, h, 1, 8, PngColour::Linear, kPngFileLevel));
 }
 
 }  // namespace sl

@@ -1,7 +1,5 @@
 #include "io/MaskIO.h"
 
-#include <OpenImageIO/imageio.h>
-
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -48,8 +46,9 @@ LabelMask readLabelMask(const std::filesystem::path& file, int mapWidth, int map
     const std::string where = file.string();
     if (!std::filesystem::is_regular_file(file))
         throw inputError(where, "no such file", "give the truth mask gen-surface wrote");
-    auto in = detail::openImageFile(file, "Give the truth mask gen-surface wrote");
-    const OIIO::ImageSpec& spec = in->spec();
+    // Read as bytes: OpenImageIO's conversions, so an EXR mask goes through it too.
+    auto in = detail::openImageFile(file, "Give the truth mask gen-surface wrote", false);
+    const detail::ImageHeader& spec = in->header();
     detail::checkImageSize(file, spec);
     if (spec.width != mapWidth || spec.height != mapHeight)
         throw inputError(where,
@@ -65,7 +64,7 @@ LabelMask readLabelMask(const std::filesystem::path& file, int mapWidth, int map
     m.labels.resize(n);
     // UINT8 reads integer files raw (16-bit scaled to 8 bits); no colour decoding. Channel 0.
     const size_t nch = static_cast<size_t>(spec.nchannels), w = static_cast<size_t>(spec.width);
-    detail::readBands(*in, file, OIIO::TypeDesc::UINT8, "Give the truth mask gen-surface wrote",
+    detail::readBands(*in, file, detail::PixelType::UInt8, "Give the truth mask gen-surface wrote",
                       [&](int y0, int y1, const void* values) {
                           const auto* v = static_cast<const uint8_t*>(values);
                           const size_t off = static_cast<size_t>(y0) * w;

@@ -20,6 +20,7 @@ size_t PrimaryHits::hitCount() const {
 PrimaryHits tracePrimaryHits(const Scene& scene, int threads) {
     const Camera& cam = scene.camera;
     const Heightfield& surf = *scene.surface;
+    surf.ensureBuilt();
     PrimaryHits r;
     r.width = cam.width();
     r.height = cam.height();

@@ -19,6 +19,7 @@ std::vector<double> specularInitialEnvMap(const Scene& scene, int maxDepth, bool
             "Use render.max_depth >= 2 (2 = one reflection)");
     const Camera& cam = scene.camera;
     const Heightfield& surf = *scene.surface;
+    surf.ensureBuilt();
     const EnvMapBasis& basis = scene.basis;
     const size_t texels = static_cast<size_t>(basis.texelCount());
     struct Local {

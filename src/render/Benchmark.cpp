@@ -7,6 +7,7 @@
 
 #include "core/Rng.h"
 #include "core/Stopwatch.h"
+#include "render/Footprint.h"
 #include "render/Render.h"
 #include "scene/EnvMapPresets.h"
 #include "scene/Scene.h"
@@ -23,6 +24,8 @@ ThroughputRow benchBareEmbree(const Scene& scene, const RenderOptions& opt) {
     const Camera& cam = scene.camera;
     const int W = cam.width(), H = cam.height(), spp = opt.spp;
     RTCScene rs = scene.surface->rtcScene();
+    const std::vector<PixelSpan> spans =
+        opt.cullBackground ? partFootprint(scene) : std::vector<PixelSpan>(H, PixelSpan{0, W});
     tbb::combinable<uint64_t> rays;
     const Stopwatch clock;
     auto body = [&](const tbb::blocked_range<int>& rowsRange) {
@@ -30,7 +33,8 @@ ThroughputRow benchBareEmbree(const Scene& scene, const RenderOptions& opt) {
         RTCIntersectContext ctx;
         rtcInitIntersectContext(&ctx);
         for (int y = rowsRange.begin(); y < rowsRange.end(); ++y) {
-            for (int x = 0; x < W; ++x) {
+            const PixelSpan span = spans[static_cast<size_t>(y)];
+            for (int x = span.begin; x < span.end; ++x) {
                 const auto pixel = static_cast<uint64_t>(y) * W + x;
                 for (int s = 0; s < spp; ++s) {
                     Pcg32 rng = sampleRng(opt.seed, pixel, static_cast<uint64_t>(s));

@@ -20,9 +20,10 @@ struct ThroughputRow {
 
 /// The renderer (path tracer + radiance sink, scene material) at options.spp.
 ThroughputRow benchRenderer(const Scene& scene, const RenderOptions& options);
-/// Bare rtcIntersect1 on the same camera rays (same jitter, same threads), then, for rays that
-/// hit, the mirror-reflected ray, up to options.maxDepth-1 bounces: the renderer's ray
-/// distribution for a smooth surface with no BSDF sampling and no sink.
+/// Bare rtcIntersect1 on the same camera rays (same jitter, same threads, and with
+/// options.cullBackground the same pixels: those of the part's footprint, render/Footprint.h),
+/// then, for rays that hit, the mirror-reflected ray, up to options.maxDepth-1 bounces: the
+/// renderer's ray distribution for a smooth surface with no BSDF sampling and no sink.
 ThroughputRow benchBareEmbree(const Scene& scene, const RenderOptions& options);
 
 }  // namespace sl

@@ -87,6 +87,7 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
         throw std::invalid_argument("two sample sets need an even spp");
     const Camera& cam = scene_.camera;
     const Heightfield& surf = *scene_.surface;
+    surf.ensureBuilt();
     const ConductorBsdf& bsdf = scene_.bsdf;
     const int W = cam.width(), H = cam.height(), baseSpp = opt.spp;
     const bool mis = opt.sampling == Sampling::Mis;

@@ -58,23 +58,11 @@ Heightfield::Heightfield(int width, int height, double pitch, std::span<const fl
     memory_[1] = 0;
 
     const Stopwatch clock;
-    device_ = rtcNewDevice(nullptr);
-    if (!device_) throw std::runtime_error("Embree: could not create a device");
-    rtcSetDeviceMemoryMonitorFunction(device_, memoryMonitor, memory_.get());
-
-    scene_ = rtcNewScene(device_);
-    // Watertight intersection: without it, a few rays in a million slip between neighbouring
-    // grid triangles and miss the surface (measured: at 1024 spp, 1627 of 20100 interior pixels
-    // of the bundled scene had a camera sample that passed through the part).
-    rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
-    RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_GRID);
-    size_t nv = static_cast<size_t>(width) * height;
-    auto* verts = static_cast<float*>(rtcSetNewGeometryBuffer(
-        geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), nv));
-    if (!verts) embreeFail(device_, "allocating the vertex buffer");
+    const size_t nv = static_cast<size_t>(width) * height;
+    vertices_.resize(3 * nv + 1);  // Embree reads a vertex with a 16-byte load
     stats_.vertexBytes = nv * 3 * sizeof(float);
-
     const double cx = 0.5 * (width - 1), cz = 0.5 * (height - 1);
+    float* verts = vertices_.data();
     tbb::parallel_for(0, height, [&](int j) {
         float z = static_cast<float>((j - cz) * pitch);
         float* row = verts + static_cast<size_t>(j) * width * 3;
@@ -88,6 +76,25 @@ Heightfield::Heightfield(int width, int height, double pitch, std::span<const fl
     auto [mn, mx] = std::minmax_element(heights.begin(), heights.end());
     minH_ = *mn;
     maxH_ = *mx;
+    fillSeconds_ = clock.seconds();
+}
+
+void Heightfield::build() const {
+    const Stopwatch clock;
+    const int width = width_, height = height_;
+    device_ = rtcNewDevice(nullptr);
+    if (!device_) throw std::runtime_error("Embree: could not create a device");
+    rtcSetDeviceMemoryMonitorFunction(device_, memoryMonitor, memory_.get());
+
+    scene_ = rtcNewScene(device_);
+    // Watertight intersection: without it, a few rays in a million slip between neighbouring
+    // grid triangles and miss the surface (measured: at 1024 spp, 1627 of 20100 interior pixels
+    // of the bundled scene had a camera sample that passed through the part).
+    rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
+    RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_GRID);
+    const size_t nv = static_cast<size_t>(width) * height;
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, vertices_.data(),
+                               0, 3 * sizeof(float), nv);
 
     // Blocks of at most 32767 vertices per side, sharing their border vertices.
     std::vector<RTCGrid> grids;
@@ -114,9 +121,13 @@ Heightfield::Heightfield(int width, int height, double pitch, std::span<const fl
     rtcReleaseGeometry(geom);
     rtcCommitScene(scene_);
     if (rtcGetDeviceError(device_) != RTC_ERROR_NONE) embreeFail(device_, "building the BVH");
-    stats_.buildSeconds = clock.seconds();
-    stats_.embreeBytes = static_cast<size_t>(std::max<int64_t>(0, memory_[0].load()));
-    stats_.embreePeakBytes = static_cast<size_t>(std::max<int64_t>(0, memory_[1].load()));
+    stats_.buildSeconds = fillSeconds_ + clock.seconds();
+    // The vertex buffer is ours, shared with Embree: counted as Embree's, as when it made it.
+    stats_.embreeBytes =
+        stats_.vertexBytes + static_cast<size_t>(std::max<int64_t>(0, memory_[0].load()));
+    stats_.embreePeakBytes =
+        stats_.vertexBytes + static_cast<size_t>(std::max<int64_t>(0, memory_[1].load()));
+    built_.store(true, std::memory_order_release);
 }
 
 Heightfield::~Heightfield() {
@@ -125,6 +136,7 @@ Heightfield::~Heightfield() {
 }
 
 bool Heightfield::intersect(const Ray& ray, float tnear, SurfaceHit& hit) const {
+    ensureBuilt();
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh = makeRayHit(ray, tnear);
@@ -140,6 +152,7 @@ bool Heightfield::intersect(const Ray& ray, float tnear, SurfaceHit& hit) const 
 }
 
 bool Heightfield::occluded(const Ray& ray, float tnear) const {
+    ensureBuilt();
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRay r = makeRayHit(ray, tnear).ray;

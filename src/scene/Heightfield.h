@@ -20,7 +20,9 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <span>
+#include <vector>
 
 #include "core/Vec3.h"
 #include "scene/Camera.h"
@@ -30,7 +32,7 @@ namespace sl {
 struct HeightfieldStats {
     int gridCount = 0;           // RTCGrid primitives (blocks of <= 32767 vertices per side)
     size_t vertexBytes = 0;      // the grid's vertex buffer
-    size_t embreeBytes = 0;      // everything Embree holds after the build (incl. vertex buffer)
+    size_t embreeBytes = 0;      // everything Embree holds after the build, with the vertex buffer
     size_t embreePeakBytes = 0;  // peak during the build
     double buildSeconds = 0;     // vertex fill + BVH build
 };
@@ -74,6 +76,10 @@ inline RTCRayHit makeRayHit(const Ray& ray, float tnear) {
     return rh;
 }
 
+/// The BVH is built on the first query (intersect, occluded, rtcScene or stats), not on
+/// construction: a run that reads its transport matrix from the cache never traces a ray, and
+/// building Embree's BVH of a 1024² map took ~0.1-0.2 s of it on 2 cores. The vertices are
+/// filled on construction (the grid's vertex buffer is ours, shared with Embree).
 class Heightfield {
   public:
     /// heights: W×H, row-major, row 0 first, in scene units. Throws InputError if too small.
@@ -94,17 +100,37 @@ class Heightfield {
     double extentZ() const { return (height_ - 1) * pitch_; }
     float minHeight() const { return minH_; }
     float maxHeight() const { return maxH_; }
-    const HeightfieldStats& stats() const { return stats_; }
-    RTCScene rtcScene() const { return scene_; }
+    /// The build's figures (builds the BVH if it is not built yet).
+    const HeightfieldStats& stats() const {
+        ensureBuilt();
+        return stats_;
+    }
+    RTCScene rtcScene() const {
+        ensureBuilt();
+        return scene_;
+    }
+    /// Whether the BVH has been built (by a query).
+    bool built() const { return built_.load(std::memory_order_acquire); }
+    /// Builds the BVH now if it is not built: call it before a parallel loop of queries, so
+    /// that the build is not started from inside one of its tasks.
+    void ensureBuilt() const {
+        if (!built_.load(std::memory_order_acquire)) std::call_once(once_, [this] { build(); });
+    }
 
   private:
     int width_, height_;
     double pitch_;
     float minH_ = 0, maxH_ = 0;
-    RTCDevice device_ = nullptr;
-    RTCScene scene_ = nullptr;
-    HeightfieldStats stats_;
+    std::vector<float> vertices_;  // x, y, z per sample, then one float of padding (Embree's)
+    double fillSeconds_ = 0;
+    mutable std::once_flag once_;
+    mutable std::atomic<bool> built_{false};
+    mutable RTCDevice device_ = nullptr;
+    mutable RTCScene scene_ = nullptr;
+    mutable HeightfieldStats stats_;
     std::unique_ptr<std::atomic<int64_t>[]> memory_;  // [current, peak] for Embree's monitor
+
+    void build() const;
 };
 
 }  // namespace sl

@@ -1,5 +1,9 @@
 #include "transport/TransportColumns.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <stdexcept>
 
@@ -8,6 +12,38 @@ namespace sl {
 namespace {
 
 constexpr double kLum[3] = {0.2126, 0.7152, 0.0722};
+
+/// Σ term(k) over [k0, k1) in four interleaved partial sums (entry k into sum k mod 4, then
+/// (s0 + s2) + (s1 + s3)): the adds of one sum no longer wait on each other, and the order is
+/// fixed.
+template <typename F>
+inline double columnSum(uint64_t k0, uint64_t k1, F&& term) {
+    double s[4] = {0, 0, 0, 0};
+    uint64_t k = k0;
+    for (; k + 4 <= k1; k += 4) {
+        s[0] += term(k);
+        s[1] += term(k + 1);
+        s[2] += term(k + 2);
+        s[3] += term(k + 3);
+    }
+    for (int l = 0; k < k1; ++k, ++l) s[l] += term(k);
+    return (s[0] + s[2]) + (s[1] + s[3]);
+}
+
+/// f(c0, c1) over blocks of columns, in an arena of `threads` (0: all).
+template <typename F>
+void forColumnBlocks(size_t cols, int threads, F&& f) {
+    auto body = [&] {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, cols, 16),
+                          [&](const tbb::blocked_range<size_t>& r) { f(r.begin(), r.end()); });
+    };
+    if (threads > 0) {
+        tbb::task_arena arena(threads);
+        arena.execute(body);
+    } else {
+        body();
+    }
+}
 
 }  // namespace
 
@@ -135,6 +171,55 @@ void TransportColumns::transposeHalves(std::span<const double> ga, std::span<con
         }
         out[c] = acc;
     }
+}
+
+size_t TransportColumns::bytes() const {
+    return colPtr_.size() * sizeof(uint64_t) + row_.size() * sizeof(uint32_t) +
+           value_.size() * sizeof(float);
+}
+
+void TransportColumns::transposeAll(std::span<const double> g, std::span<double> out, int plane,
+                                    int threads) const {
+    if (g.size() != rows_ || out.size() != cols_)
+        throw std::invalid_argument("TransportColumns::transposeAll: wrong sizes");
+    if (plane != TransportMatrix::kMeanPlane && (plane < 0 || plane >= planes_))
+        throw std::invalid_argument("TransportColumns: no such plane");
+    const size_t P = static_cast<size_t>(planes_);
+    const bool mean = plane == TransportMatrix::kMeanPlane && planes_ == 2;
+    const size_t off = plane > 0 ? static_cast<size_t>(plane) : 0;
+    const float* val = value_.data();
+    const uint32_t* row = row_.data();
+    const double* gd = g.data();
+    forColumnBlocks(cols_, threads, [&](size_t c0, size_t c1) {
+        for (size_t c = c0; c < c1; ++c) {
+            const uint64_t k1 = colPtr_[c + 1];
+            auto term = [&](uint64_t k) {
+                return mean ? 0.5 * (double(val[2 * k]) + val[2 * k + 1]) * gd[row[k]]
+                            : double(val[k * P + off]) * gd[row[k]];
+            };
+            out[c] = columnSum(colPtr_[c], k1, term);
+        }
+    });
+}
+
+void TransportColumns::transposeHalvesAll(std::span<const double> ga, std::span<const double> gb,
+                                          std::span<double> out, int threads) const {
+    if (planes_ != 2)
+        throw std::invalid_argument("TransportColumns::transposeHalvesAll: no halves");
+    if (ga.size() != rows_ || gb.size() != rows_ || out.size() != cols_)
+        throw std::invalid_argument("TransportColumns::transposeHalvesAll: wrong sizes");
+    const float* val = value_.data();
+    const uint32_t* row = row_.data();
+    const double* a = ga.data();
+    const double* b = gb.data();
+    forColumnBlocks(cols_, threads, [&](size_t c0, size_t c1) {
+        for (size_t c = c0; c < c1; ++c) {
+            out[c] = columnSum(colPtr_[c], colPtr_[c + 1], [&](uint64_t k) {
+                const uint32_t r = row[k];
+                return double(val[2 * k]) * a[r] + double(val[2 * k + 1]) * b[r];
+            });
+        }
+    });
 }
 
 }  // namespace sl

@@ -48,6 +48,18 @@ class TransportColumns {
     void transposeHalves(std::span<const double> ga, std::span<const double> gb,
                          std::span<const uint16_t> active, std::span<double> out) const;
 
+    /// out = T_planeᵀ·g over every column (out.size() == cols()), the columns split over
+    /// `threads` worker threads (0: all); each column's sum runs over its rows in order, so the
+    /// result does not depend on the threads. The full transposed product with no scatter: the
+    /// fast form when T is read many times (TransportLoss's gradient, transport/TransportSlices.h
+    /// for T·E).
+    void transposeAll(std::span<const double> g, std::span<double> out,
+                      int plane = TransportMatrix::kMeanPlane, int threads = 0) const;
+    /// out = T_aᵀ·ga + T_bᵀ·gb over every column (planes() == 2), as transposeAll.
+    void transposeHalvesAll(std::span<const double> ga, std::span<const double> gb,
+                            std::span<double> out, int threads = 0) const;
+    size_t bytes() const;  // of the arrays a product reads
+
   private:
     size_t rows_ = 0, cols_ = 0;
     int planes_ = 1;
