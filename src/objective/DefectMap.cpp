@@ -24,6 +24,9 @@ constexpr DefectMethodRow kMethods[] = {
     {DefectMethod::Auto, "auto",
      "remove the periodic tool-path texture (spectral notch) and a robust local level; mark what "
      "stands out (levels, edges, texture-change regions)"},
+    {DefectMethod::Lay, "lay",
+     "measured textures: the median along the texture's own lay is its background; mark regions "
+     "far above the residual's robust sigma and the texture's RMS, none along the border"},
     {DefectMethod::Paper, "paper",
      "the paper's scratch map: patches whose moving-average-detrended range is large"},
 };
@@ -1570,6 +1573,10 @@ bool compactRegion(const std::vector<size_t>& region, int W, int size) {
 
 }  // namespace
 
+std::vector<float> separableRunningMedian(const std::vector<float>& img, int W, int H, int w) {
+    return separableMedian(img, W, H, w);
+}
+
 std::vector<float> removeTexture(std::span<const float> heights, int width, int height,
                                  const DefectMapOptions& options) {
     checkOptions(options);
@@ -1594,6 +1601,22 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
             checkInput(heights, width, height);
             ScratchMap m = computeScratchMap(heights, width, height, o.paper);
             r.map = std::move(m.map);
+            r.seconds = clock.seconds();
+            return r;
+        }
+        case DefectMethod::Lay: {
+            checkInput(heights, width, height);
+            LayMap m = detectLayDefects(heights, width, height, o.lay);
+            r.map = std::move(m.map);
+            r.sigmaLevel = m.sigma;
+            r.layX = m.layX;
+            r.layZ = m.layZ;
+            r.layCoherence = m.coherence;
+            r.layTextureRms = m.textureRms;
+            r.layRegions = m.regions;
+            r.layDroppedShallow = m.droppedShallow;
+            r.layDroppedBorder = m.droppedBorder;
+            r.markedScore = r.markedCount();
             r.seconds = clock.seconds();
             return r;
         }

@@ -5,6 +5,9 @@
 // Methods (one table, core/Registry.h; `defectMethodTable()`):
 //   auto   (default) model the nominal surface as macro shape + periodic tool-path texture and
 //          mark what that model cannot explain (below);
+//   lay    a texture model learned from the part itself, for measured textures:
+//          objective/LayMap.h (the median along the texture's lay, thresholds against the
+//          residual's robust σ and the texture's RMS, no regions along the border);
 //   paper  the paper's scratch map, objective/ScratchMap.h computeScratchMap with
 //          DefectMapOptions::paper (patches whose detrended range is large).
 //
@@ -195,11 +198,12 @@
 #include <vector>
 
 #include "core/RegionLabel.h"
+#include "objective/LayMap.h"
 #include "objective/ScratchMap.h"
 
 namespace sl {
 
-enum class DefectMethod { Auto, Paper };
+enum class DefectMethod { Auto, Lay, Paper };
 
 struct DefectMethodRow {
     DefectMethod value;
@@ -291,6 +295,7 @@ struct DefectMapOptions {
     // within a step's band, not replaced by the ramp (0: off)
     int stepKeepBlob = 0;
 
+    LayMapOptions lay;        // the `lay` method's options
     ScratchMapOptions paper;  // the `paper` method's options
 };
 
@@ -318,6 +323,10 @@ struct DefectMap {
     // raised it) and the samples its border-share rule dropped (every test)
     double energyRatioUsed = 0;
     size_t energyBorderDropped = 0;
+    // lay only: the lay direction (x = column, z = row), its coherence, σ of the residual and
+    // the texture's RMS (height units), regions kept and dropped (objective/LayMap.h)
+    double layX = 0, layZ = 0, layCoherence = 0, layTextureRms = 0;
+    size_t layRegions = 0, layDroppedShallow = 0, layDroppedBorder = 0;
     double seconds = 0;
 
     size_t markedCount() const;
@@ -336,6 +345,10 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
 // (objective/ImageSpace.h; 255 where the pixel's centre ray sees a marked sample), then
 // intersect with the object mask as for any loss mask. m.map is empty of marks (all 0) on a
 // surface without anomalies: check markedCount() before using it as a region.
+
+/// Step 1's separable running median of a W×H image over w samples (odd): along x (rows),
+/// then along z (columns); windows shrink at the borders. Shared with objective/LayMap.
+std::vector<float> separableRunningMedian(const std::vector<float>& img, int W, int H, int w);
 
 /// Steps 1–3 alone: R = h − macro shape − periodic texture (width*height), for figures and
 /// tests; with levelWiener the notched bins hold their Wiener estimate (R + Δ of step 4).
