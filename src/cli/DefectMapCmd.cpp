@@ -30,9 +30,8 @@ int runDefectMap(const DefectMapJobOptions& o) {
     if (m.method == DefectMethod::Auto)
         std::printf(
             "  thresholds used: score seed %.3g grow %.3g, line valleys seed %.3g (robust "
-            "sigmas); texture change %.3g x median; %zu texture-change samples along the border "
-            "dropped\n",
-            m.seedUsed, m.growUsed, m.lineSeedUsed, m.energyRatioUsed, m.energyBorderDropped);
+            "sigmas)\n",
+            m.seedUsed, m.growUsed, m.lineSeedUsed);
     if (m.method == DefectMethod::Auto && m.ringPitch > 0)
         std::printf(
             "  rings: centre (%.2f, %.2f) samples, pitch %.3f, hand %+d, isotropy %.3f, residual "
@@ -183,14 +182,6 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
                   "auto: texture-change marks grow outward into the --border samples where the "
                   "local amplitude stays high (true/false)")
         ->capture_default_str();
-    c->add_option("--energy-spread", m.energySpread,
-                  "auto: the texture-change threshold is at least median + this x the robust "
-                  "spread of the local amplitude (0: off)")
-        ->capture_default_str();
-    c->add_option("--energy-border-depth", m.energyBorderDepth,
-                  "auto: texture-change regions that touch the border and reach no deeper than "
-                  "this x half the interior's smaller side are dropped (0: off)")
-        ->capture_default_str();
     c->add_option("--texture-energy", m.textureEnergy,
                   "auto: also mark where the texture's own local amplitude is energy-ratio x its "
                   "median (true/false)")
@@ -227,10 +218,6 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--step-ramp-moved", m.stepRampMoved,
                   "auto: on a step's high side, mark only where a smoothstep ramp has moved the "
                   "surface by this share of the jump")
-        ->capture_default_str();
-    c->add_option("--step-keep-blob", m.stepKeepBlob,
-                  "auto: compact marked regions (pits, particles) up to this many samples across "
-                  "are kept within a step's band (0: off)")
         ->capture_default_str();
     c->add_option("--step-gap", m.stepGap,
                   "auto: samples of the longest arc between a circular step's points that is "
