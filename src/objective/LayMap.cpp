@@ -18,7 +18,7 @@ void checkLayMapOptions(const LayMapOptions& o) {
             throw inputError(option(name), "must be odd and >= 3 (got " + std::to_string(v) + ")",
                              fix);
     };
-    oddAtLeast3(o.layLength, "lay-length", "The default is 61 samples");
+    oddAtLeast3(o.layLength, "lay-length", "The default is 81 samples");
     oddAtLeast3(o.levelWindow, "lay-level-window", "The default is 31 samples");
     oddAtLeast3(o.macroWindow, "lay-macro-window", "The default is 61 samples");
     if (!(o.clipQuantile > 0.0 && o.clipQuantile <= 1.0))

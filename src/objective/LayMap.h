@@ -49,7 +49,7 @@
 namespace sl {
 
 struct LayMapOptions {
-    int layLength = 61;             // samples of the median along the lay (odd, >= 3)
+    int layLength = 81;             // samples of the median along the lay (odd, >= 3)
     double clipQuantile = 0.95;     // gradients clipped at this quantile of |g| (in (0, 1])
     int levelWindow = 31;           // samples of the residual's running median (odd, >= 3)
     int macroWindow = 61;           // samples of the running median d is taken about (odd, >= 3)
