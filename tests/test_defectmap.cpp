@@ -297,52 +297,6 @@ TEST(DefectMap, StepModelMarksTheRampNotItsHalo) {
     EXPECT_LT(so.overall.precision, 0.6);
 }
 
-// Step 4a with stepKeepBlob: a straight step (0.3 high, across the map at row 100) on noise with
-// a pit (radius 5, 0.4 deep) 4 samples from it, inside the step's band. The band keeps only
-// the step's ramp, so without the switch the pit is lost; with it the pit's compact region is
-// kept, and the band elsewhere is unchanged.
-// DISABLED: the switch does not yet do what this test asks on its synthetic case (measured recall
-// 0.17 on the pit, not >= 0.8); the switch stays off by default (README, the defect map on measured
-// textures).
-TEST(DefectMap, DISABLED_StepModelLeavesAPitBesideTheStep) {
-    constexpr int n = 256, cx = 128, cy = 104, radius = 5;
-    std::mt19937 rng(6);
-    std::normal_distribution<double> nd(0.0, 0.01);
-    std::vector<float> h(static_cast<size_t>(n) * n);
-    std::vector<uint8_t> pit(h.size(), 0);
-    for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x) {
-            const size_t k = static_cast<size_t>(y) * n + x;
-            const double r2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
-            double v = (y >= 100 ? 0.3 : 0.0) + nd(rng);
-            if (r2 < radius * radius) {
-                v -= 0.4 * (1.0 - r2 / (radius * radius));
-                pit[k] = 255;
-            }
-            h[k] = static_cast<float>(v);
-        }
-    DefectMapOptions off, on;
-    off.stepKeepBlob = 0;
-    on.stepKeepBlob = 40;
-    const DefectMap mo = detectDefects(h, n, n, off);
-    const DefectMap mn = detectDefects(h, n, n, on);
-    const std::vector<RegionLabel> legend{{255, "pit"}};
-    const double recallOff = scoreDefectMap(mo.map, pit, legend).overall.recall;
-    const double recallOn = scoreDefectMap(mn.map, pit, legend).overall.recall;
-    size_t differFar = 0;  // samples more than 30 columns from the pit
-    for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x)
-            if (std::abs(x - cx) > 30)
-                differFar += (mo.map[static_cast<size_t>(y) * n + x] != 0) !=
-                             (mn.map[static_cast<size_t>(y) * n + x] != 0);
-    std::printf("pit beside a step: %zu centre points; pit recall %.3f, with the switch %.3f\n",
-                mo.stepPoints, recallOff, recallOn);
-    EXPECT_GT(mo.stepPoints, 100u);
-    EXPECT_LT(recallOff, 0.5);
-    EXPECT_GE(recallOn, 0.8);
-    EXPECT_EQ(differFar, 0u);
-}
-
 // The turned test part's tool-change step is a ring; where the pocket wall crosses it the step
 // model's centre tests fail (the wall's slope dwarfs the step). Its points lie on one circle,
 // and the arcs between them are filled (stepGap): the ramp is marked there too, not the
@@ -471,95 +425,6 @@ TEST(DefectMap, TextureChangeGrowsIntoTheBorderAlongABandOnly) {
     EXPECT_EQ(hitOff, 0u);
     EXPECT_EQ(farOff, 0u);
     EXPECT_GE(stripFar, static_cast<size_t>(5 * (x0 - border)));
-}
-
-// Step 8 with energySpread: white noise whose amplitude varies everywhere (a smooth product of
-// sines, 0.15–1.85 × its mean), as a measured texture's local amplitude does, is marked by the
-// plain ratio in its loud patches; with the threshold at least median(E) + energySpread × E's
-// robust spread nothing is. A band of 3× the amplitude on stationary noise is marked either way.
-// DISABLED: the switch does not yet do what this test asks on its synthetic case (the uniform
-// texture's texture-change marks were 0, so the case does not exercise the switch); the switch
-// stays off by default (README, the defect map on measured textures).
-TEST(DefectMap, DISABLED_TextureChangeSpreadLeavesATextureThatVariesEverywhere) {
-    constexpr int n = 256;
-    std::mt19937 rng(3);
-    std::normal_distribution<double> nd(0.0, 0.05);
-    std::vector<float> varying(static_cast<size_t>(n) * n), banded(varying.size());
-    std::vector<uint8_t> band(varying.size(), 0);
-    for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x) {
-            const size_t k = static_cast<size_t>(y) * n + x;
-            const double a =
-                1.0 + 0.85 * std::sin(2 * M_PI * x / 90.0) * std::sin(2 * M_PI * y / 70.0);
-            varying[k] = static_cast<float>(a * nd(rng));
-            band[k] = y >= 110 && y < 150;
-            banded[k] = static_cast<float>((band[k] ? 3.0 : 1.0) * nd(rng));
-        }
-    DefectMapOptions plain, spread;
-    plain.lineLength = spread.lineLength = 0;
-    plain.energySpread = 0.0;
-    spread.energySpread = 6.0;
-    const DefectMap vp = detectDefects(varying, n, n, plain);
-    const DefectMap vs = detectDefects(varying, n, n, spread);
-    const DefectMap bs = detectDefects(banded, n, n, spread);
-    size_t bandHit = 0, bandAll = 0;
-    for (int y = 110; y < 150; ++y)
-        for (int x = 40; x < n - 40; ++x) {
-            ++bandAll;
-            bandHit += bs.map[static_cast<size_t>(y) * n + x] != 0;
-        }
-    std::printf(
-        "varying amplitude: %zu marked by texture change (ratio %.2f), with the spread %zu "
-        "(ratio %.2f); band %zu of %zu (ratio %.2f)\n",
-        vp.markedEnergy, vp.energyRatioUsed, vs.markedEnergy, vs.energyRatioUsed, bandHit, bandAll,
-        bs.energyRatioUsed);
-    EXPECT_GT(vp.markedEnergy, 2000u);
-    EXPECT_DOUBLE_EQ(vp.energyRatioUsed, plain.energyRatio);
-    EXPECT_GT(vs.energyRatioUsed, plain.energyRatio);
-    EXPECT_LT(vs.markedEnergy, vp.markedEnergy / 10);
-    EXPECT_GE(static_cast<double>(bandHit), 0.8 * static_cast<double>(bandAll));
-}
-
-// Step 8 with energyBorderDepth: a block of louder noise along the top of the interior (20 rows
-// from the border's inner line, the whole width) is a texture-change region hugging the edge
-// and is dropped; a band of the same amplitude across the middle of the map, though it touches
-// the left and right edges, reaches the middle and is kept.
-// DISABLED: the switch does not yet do what this test asks on its synthetic case (measured: the
-// border blocks are not dropped (1612 vs 161 kept, 0 samples dropped)); the switch stays off by
-// default (README, the defect map on measured textures).
-TEST(DefectMap, DISABLED_TextureChangeBlocksAlongTheBorderAreDropped) {
-    constexpr int n = 256, border = 40;
-    std::mt19937 rng(4);
-    std::normal_distribution<double> nd(0.0, 0.05);
-    std::vector<float> h(static_cast<size_t>(n) * n);
-    auto block = [&](int y) { return y >= border && y < border + 20; };
-    auto band = [&](int y) { return y >= 110 && y < 150; };
-    for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x)
-            h[static_cast<size_t>(y) * n + x] =
-                static_cast<float>((block(y) || band(y) ? 3.0 : 1.0) * nd(rng));
-    DefectMapOptions keep, drop;
-    keep.lineLength = drop.lineLength = 0;
-    keep.energyBorderDepth = 0.0;
-    drop.energyBorderDepth = 0.25;
-    const DefectMap mk = detectDefects(h, n, n, keep);
-    const DefectMap md = detectDefects(h, n, n, drop);
-    auto rows = [&](const DefectMap& m, auto&& in) {
-        size_t c = 0;
-        for (int y = 0; y < n; ++y)
-            for (int x = border; x < n - border; ++x)
-                c += in(y) && m.map[static_cast<size_t>(y) * n + x] != 0;
-        return c;
-    };
-    const size_t blockKeep = rows(mk, block), blockDrop = rows(md, block);
-    const size_t bandKeep = rows(mk, band), bandDrop = rows(md, band);
-    std::printf("border block: %zu marked, %zu with the rule (%zu dropped); band %zu, %zu\n",
-                blockKeep, blockDrop, md.energyBorderDropped, bandKeep, bandDrop);
-    EXPECT_GT(blockKeep, 1500u);  // of 20 × 176
-    EXPECT_LT(blockDrop, blockKeep / 10);
-    EXPECT_GT(md.energyBorderDropped, 0u);
-    EXPECT_EQ(bandDrop, bandKeep);
-    EXPECT_GT(bandKeep, 5000u);  // of 40 × 176
 }
 
 // A face-turned texture: a cosine groove profile along the Archimedean spiral of pitch 10
@@ -850,7 +715,7 @@ TEST(DefectMap, MethodRegistry) {
         parseDefectMethod("fancy", "option 'method'");
         ADD_FAILURE();
     } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("auto, paper"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("auto, lay, paper"), std::string::npos) << e.what();
     }
 }
 

@@ -1,4 +1,4 @@
-// scratchlight defectmap (HEIGHTMAP | SCENE.json) [--method auto|paper] [-o map.png]
+// scratchlight defectmap (HEIGHTMAP | SCENE.json) [--method auto|lay|paper] [-o map.png]
 //                        [--image-output MASK.png] [--truth TRUTH.png] [--score-output FILE]
 //                        [tuning ...]
 // Parses the options and prints the result; the work is app/DefectMapJob.h and
@@ -30,9 +30,8 @@ int runDefectMap(const DefectMapJobOptions& o) {
     if (m.method == DefectMethod::Auto)
         std::printf(
             "  thresholds used: score seed %.3g grow %.3g, line valleys seed %.3g (robust "
-            "sigmas); texture change %.3g x median; %zu texture-change samples along the border "
-            "dropped\n",
-            m.seedUsed, m.growUsed, m.lineSeedUsed, m.energyRatioUsed, m.energyBorderDropped);
+            "sigmas)\n",
+            m.seedUsed, m.growUsed, m.lineSeedUsed);
     if (m.method == DefectMethod::Auto && m.ringPitch > 0)
         std::printf(
             "  rings: centre (%.2f, %.2f) samples, pitch %.3f, hand %+d, isotropy %.3f, residual "
@@ -42,6 +41,12 @@ int runDefectMap(const DefectMapJobOptions& o) {
     else if (m.method == DefectMethod::Auto && m.ringIsotropy > 0)
         std::printf("  rings: isotropy %.3f: not used (the texture's orientations do not turn)\n",
                     m.ringIsotropy);
+    if (m.method == DefectMethod::Lay)
+        std::printf(
+            "  lay (%.3f, %.3f), coherence %.3f; sigma %.4g, texture RMS %.4g (height units); "
+            "%zu regions kept, %zu below the texture's RMS and %zu at the border dropped\n",
+            m.layX, m.layZ, m.layCoherence, m.sigmaLevel, m.layTextureRms, m.layRegions,
+            m.layDroppedShallow, m.layDroppedBorder);
     if (s.score) {
         const DefectScore& sc = *s.score;
         std::printf("%-18s %5s %10s %10s %10s %9s %7s %7s\n", "kind", "value", "truth", "hits",
@@ -177,14 +182,6 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
                   "auto: texture-change marks grow outward into the --border samples where the "
                   "local amplitude stays high (true/false)")
         ->capture_default_str();
-    c->add_option("--energy-spread", m.energySpread,
-                  "auto: the texture-change threshold is at least median + this x the robust "
-                  "spread of the local amplitude (0: off)")
-        ->capture_default_str();
-    c->add_option("--energy-border-depth", m.energyBorderDepth,
-                  "auto: texture-change regions that touch the border and reach no deeper than "
-                  "this x half the interior's smaller side are dropped (0: off)")
-        ->capture_default_str();
     c->add_option("--texture-energy", m.textureEnergy,
                   "auto: also mark where the texture's own local amplitude is energy-ratio x its "
                   "median (true/false)")
@@ -222,10 +219,6 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
                   "auto: on a step's high side, mark only where a smoothstep ramp has moved the "
                   "surface by this share of the jump")
         ->capture_default_str();
-    c->add_option("--step-keep-blob", m.stepKeepBlob,
-                  "auto: compact marked regions (pits, particles) up to this many samples across "
-                  "are kept within a step's band (0: off)")
-        ->capture_default_str();
     c->add_option("--step-gap", m.stepGap,
                   "auto: samples of the longest arc between a circular step's points that is "
                   "filled (0: none)")
@@ -248,6 +241,38 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--ring-repass", m.ringRepass,
                   "auto: where the ring model is used, remove the texture once more with the macro "
                   "shape of the map minus the texture (true/false)")
+        ->capture_default_str();
+    LayMapOptions& l = m.lay;
+    c->add_option("--lay-length", l.layLength, "lay: samples of the median along the lay (odd)")
+        ->capture_default_str();
+    c->add_option(
+         "--lay-clip-quantile", l.clipQuantile,
+         "lay: gradients clipped at this quantile of their magnitude for the lay direction")
+        ->capture_default_str();
+    c->add_option("--lay-level-window", l.levelWindow,
+                  "lay: samples of the residual's running median (odd)")
+        ->capture_default_str();
+    c->add_option("--lay-macro-window", l.macroWindow,
+                  "lay: samples of the running median the texture's RMS is taken about (odd)")
+        ->capture_default_str();
+    c->add_option("--lay-seed-sigma", l.seedSigma,
+                  "lay: a region reaches this many robust sigmas of the residual")
+        ->capture_default_str();
+    c->add_option("--lay-grow-sigma", l.growSigma, "lay: ... and holds this many")
+        ->capture_default_str();
+    c->add_option("--lay-texture-rms", l.textureRms,
+                  "lay: a region's peak is at least this x the texture's RMS (0: off)")
+        ->capture_default_str();
+    c->add_option("--lay-border", l.border, "lay: samples at the map's edges never marked")
+        ->capture_default_str();
+    c->add_option("--lay-min-region", l.minRegion, "lay: smallest region kept (samples)")
+        ->capture_default_str();
+    c->add_option("--lay-drop-border-regions", l.dropBorderRegions,
+                  "lay: drop regions that reach the border's inner line (true/false)")
+        ->capture_default_str();
+    c->add_option("--lay-border-regrow", l.borderRegrow,
+                  "lay: a region reaching the border is split again at this x the texture-RMS "
+                  "threshold; parts that do not reach it are kept")
         ->capture_default_str();
     c->add_option("--kernel", m.paper.kernel, "paper: moving-average window, samples")
         ->capture_default_str();

@@ -24,6 +24,9 @@ constexpr DefectMethodRow kMethods[] = {
     {DefectMethod::Auto, "auto",
      "remove the periodic tool-path texture (spectral notch) and a robust local level; mark what "
      "stands out (levels, edges, texture-change regions)"},
+    {DefectMethod::Lay, "lay",
+     "measured textures: the median along the texture's own lay is its background; mark regions "
+     "far above the residual's robust sigma and the texture's RMS, none along the border"},
     {DefectMethod::Paper, "paper",
      "the paper's scratch map: patches whose moving-average-detrended range is large"},
 };
@@ -114,18 +117,6 @@ void checkOptions(const DefectMapOptions& o) {
         throw inputError(option("grow-tail"),
                          "must be >= 0 (got " + std::to_string(o.growTail) + ")",
                          "0 scales the grow thresholds with the seed's");
-    if (!(o.energySpread >= 0.0) || !std::isfinite(o.energySpread))
-        throw inputError(option("energy-spread"),
-                         "must be >= 0 (got " + std::to_string(o.energySpread) + ")",
-                         "0 switches the texture-change test's spread threshold off");
-    if (!(o.energyBorderDepth >= 0.0 && o.energyBorderDepth <= 1.0))
-        throw inputError(option("energy-border-depth"),
-                         "must be in [0, 1] (got " + std::to_string(o.energyBorderDepth) + ")",
-                         "0 keeps the texture-change blocks along the border");
-    if (o.stepKeepBlob < 0)
-        throw inputError(option("step-keep-blob"),
-                         "must be >= 0 samples (got " + std::to_string(o.stepKeepBlob) + ")",
-                         "0 lets a step's band replace every mark in it");
     if (!(o.seedTailQuantile > 0.0 && o.seedTailQuantile < 1.0))
         throw inputError(option("seed-tail-quantile"),
                          "must be in (0, 1) (got " + std::to_string(o.seedTailQuantile) + ")");
@@ -1541,34 +1532,11 @@ std::vector<uint8_t> lineValleyRegions(const std::vector<float>& A, int W, int H
     return regions;
 }
 
-/// Step 4a's stepKeepBlob: a region is compact when its bounding box's sides are at most
-/// `size` samples and its principal axes' ratio is at most 3 (second moments: λ_max ≤ 9·λ_min).
-bool compactRegion(const std::vector<size_t>& region, int W, int size) {
-    int x0 = W, x1 = -1, y0 = std::numeric_limits<int>::max(), y1 = -1;
-    double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
-    for (size_t k : region) {
-        const int x = static_cast<int>(k % static_cast<size_t>(W));
-        const int y = static_cast<int>(k / static_cast<size_t>(W));
-        x0 = std::min(x0, x);
-        x1 = std::max(x1, x);
-        y0 = std::min(y0, y);
-        y1 = std::max(y1, y);
-        sx += x;
-        sy += y;
-        sxx += static_cast<double>(x) * x;
-        syy += static_cast<double>(y) * y;
-        sxy += static_cast<double>(x) * y;
-    }
-    if (x1 - x0 + 1 > size || y1 - y0 + 1 > size) return false;
-    const double c = static_cast<double>(region.size());
-    const double mx = sx / c, my = sy / c;
-    const double a = sxx / c - mx * mx + 1.0 / 12, b = syy / c - my * my + 1.0 / 12,
-                 d = sxy / c - mx * my;  // + a sample's own extent
-    const double mean = 0.5 * (a + b), dev = std::sqrt(0.25 * (a - b) * (a - b) + d * d);
-    return mean + dev <= 9.0 * (mean - dev);
-}
-
 }  // namespace
+
+std::vector<float> separableRunningMedian(const std::vector<float>& img, int W, int H, int w) {
+    return separableMedian(img, W, H, w);
+}
 
 std::vector<float> removeTexture(std::span<const float> heights, int width, int height,
                                  const DefectMapOptions& options) {
@@ -1594,6 +1562,22 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
             checkInput(heights, width, height);
             ScratchMap m = computeScratchMap(heights, width, height, o.paper);
             r.map = std::move(m.map);
+            r.seconds = clock.seconds();
+            return r;
+        }
+        case DefectMethod::Lay: {
+            checkInput(heights, width, height);
+            LayMap m = detectLayDefects(heights, width, height, o.lay);
+            r.map = std::move(m.map);
+            r.sigmaLevel = m.sigma;
+            r.layX = m.layX;
+            r.layZ = m.layZ;
+            r.layCoherence = m.coherence;
+            r.layTextureRms = m.textureRms;
+            r.layRegions = m.regions;
+            r.layDroppedShallow = m.droppedShallow;
+            r.layDroppedBorder = m.droppedBorder;
+            r.markedScore = r.markedCount();
             r.seconds = clock.seconds();
             return r;
         }
@@ -1708,21 +1692,8 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
         }
         r.markedScore = hysteresis(S, W, H, seed, t.grow, o.minRegion, r.map);
     }
-    // step 4a with stepKeepBlob: the score's compact regions (pits, particles) that meet a
-    // step's band are kept
-    std::vector<uint8_t> keep;
-    if (o.stepKeepBlob > 0 && !steps.band.empty()) {
-        keep.assign(n, 0);
-        forEachRegion(
-            W, H, 1, [&](size_t k) { return r.map[k] && steps.band[k]; },
-            [&](size_t k) { return r.map[k] != 0; },
-            [&](const std::vector<size_t>& region) {
-                if (compactRegion(region, W, o.stepKeepBlob))
-                    for (size_t k : region) keep[k] = 1;
-            });
-    }
     for (size_t k = 0; k < steps.ramp.size(); ++k) {  // step 4a: a step's band is its ramp
-        if (!steps.band[k] || (!keep.empty() && keep[k])) continue;
+        if (!steps.band[k]) continue;
         if (steps.ramp[k] && !r.map[k]) ++r.markedStep;
         if (!steps.ramp[k] && r.map[k]) --r.markedScore;
         r.map[k] = steps.ramp[k];
@@ -1749,19 +1720,6 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
             const double medE = std::max(medianAbs(E2), floorSigma);
             if (!(medE > 0.0)) return;
             double base = ratio * medE;  // the threshold on E
-            if (o.energySpread > 0.0) {
-                // E's own spread inside the border: a texture whose local amplitude varies
-                // everywhere raises the threshold
-                std::vector<float> dev;
-                const int b2 = o.border / 2;
-                for (int py = b2; py < H2 - b2; ++py)
-                    for (int px = b2; px < W2 - b2; ++px)
-                        dev.push_back(
-                            static_cast<float>(E2[static_cast<size_t>(py) * W2 + px] - medE));
-                if (!dev.empty())
-                    base = std::max(base, medE + o.energySpread * 1.4826 * medianAbs(dev));
-            }
-            if (lineExcess) r.energyRatioUsed = base / medE;
             auto energy = [&](int x, int y) { return E2[static_cast<size_t>(y / 2) * W2 + x / 2]; };
             const bool grow = o.energyGrowBorder && o.border > 0;
             std::vector<uint8_t> own(n, 0);  // this test's marks
@@ -1819,32 +1777,6 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
                         visit(W - 1 - j, y, j);
                     }
                 }
-            }
-            if (o.energyBorderDepth > 0.0) {
-                // blocks along the border: regions touching the interior's edge that reach no
-                // deeper than energyBorderDepth × half the interior's smaller side
-                const double deep =
-                    o.energyBorderDepth * 0.5 * std::min(W - 2 * o.border, H - 2 * o.border);
-                forEachRegion(
-                    W, H, 1, [&](size_t k) { return own[k] != 0; },
-                    [&](size_t k) { return own[k] != 0; },
-                    [&](const std::vector<size_t>& region) {
-                        int depth = -1;
-                        for (size_t k : region)
-                            depth = std::max(depth,
-                                             layer(static_cast<int>(k % static_cast<size_t>(W)),
-                                                   static_cast<int>(k / static_cast<size_t>(W))) -
-                                                 o.border);
-                        int shallow = depth;  // the region's nearest sample to the interior edge
-                        for (size_t k : region)
-                            shallow = std::min(shallow,
-                                               layer(static_cast<int>(k % static_cast<size_t>(W)),
-                                                     static_cast<int>(k / static_cast<size_t>(W))) -
-                                                   o.border);
-                        if (shallow > 0 || static_cast<double>(depth) >= deep) return;
-                        for (size_t k : region) own[k] = 0;
-                        r.energyBorderDropped += region.size();
-                    });
             }
             for (size_t k = 0; k < n; ++k)
                 if (own[k]) {

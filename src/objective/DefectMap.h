@@ -5,6 +5,9 @@
 // Methods (one table, core/Registry.h; `defectMethodTable()`):
 //   auto   (default) model the nominal surface as macro shape + periodic tool-path texture and
 //          mark what that model cannot explain (below);
+//   lay    a texture model learned from the part itself, for measured textures:
+//          objective/LayMap.h (the median along the texture's lay, thresholds against the
+//          residual's robust σ and the texture's RMS, no regions along the border);
 //   paper  the paper's scratch map, objective/ScratchMap.h computeScratchMap with
 //          DefectMapOptions::paper (patches whose detrended range is large).
 //
@@ -139,11 +142,6 @@
 //     Gaussian residual q_0.99 = 2.6 σ and 1.5·q = 3.9 < 5.5: nothing changes; what the map is
 //     for (an inserted defect covers ~1 % of the map) stays above it, being far deeper than
 //     the texture's tail.
-//     With stepKeepBlob > 0, before step 4a's bands replace the map: a marked region (8-
-//     connected, of the map so far) that meets a band and is compact (bounding box sides ≤
-//     stepKeepBlob samples, principal axes' ratio ≤ 3) is kept as it is: a pit or particle
-//     beside a step (on a measured texture, beside a stria the step model takes for a step)
-//     is not the level term's smear along the step, which is long.
 //  8. Texture-change regions (chatter bands): E = the separable running median of |A| over
 //     `energyWindow` samples (on |A| pooled 2×2 with half the window, read back at the sample's
 //     cell): a robust local amplitude of what the texture model left. Samples with
@@ -164,15 +162,6 @@
 //     marks nothing: the notch's leftover at the edges lies in A (on the ball-end part, E of
 //     |A| is 1.5–2.2× median(E) along the outer rows, its peaks above 3×), as a function of the
 //     distance to the edge, nearly constant along it; T does not carry it.
-//     With energySpread > 0 each test's threshold is at least median(E) + energySpread × 1.4826
-//     × the median of |E − median(E)| over the pooled cells inside the border: on a stationary
-//     texture E barely varies and the ratio decides; on a texture whose local amplitude varies
-//     everywhere (a measured bullet land's striae) the threshold rises with that variation, so
-//     only a change far beyond it is marked. With energyBorderDepth > 0, a region of a test's
-//     marks (8-connected, after the growth into the border) that touches the interior's edge
-//     and reaches no deeper than energyBorderDepth × half the interior's smaller side is
-//     dropped: a band crossing the map reaches its middle; a block along an edge (the notch's
-//     leftover at the edges, a trend of the measured texture) does not.
 // Every threshold is relative to σ or to median(E), so the map is invariant to h → a·h + b
 // (a > 0) up to rounding, and for a < 0 except for step 7a, which looks for grooves (a < 0
 // turns them into ridges); a constant map marks nothing. A confined region of different texture
@@ -195,11 +184,12 @@
 #include <vector>
 
 #include "core/RegionLabel.h"
+#include "objective/LayMap.h"
 #include "objective/ScratchMap.h"
 
 namespace sl {
 
-enum class DefectMethod { Auto, Paper };
+enum class DefectMethod { Auto, Lay, Paper };
 
 struct DefectMethodRow {
     DefectMethod value;
@@ -276,21 +266,8 @@ struct DefectMapOptions {
     double seedTailQuantile = 0.99;  // (in (0, 1))
     double growTail = 0.0;           // with seedTail: the grow thresholds are max(their σ value,
                             // growTail × the same quantile), not scaled with the seed (>= 0)
-    // step 8 on a texture whose local amplitude varies everywhere: E's threshold is at least
-    // median(E) + energySpread × 1.4826 × the median of |E − median(E)| (inside the border;
-    // 0: off, >= 0)
-    double energySpread = 0.0;
-    // step 8's blocks along the border: a region of a texture-change test that touches the
-    // interior's edge (the border's inner line) and reaches no deeper into the interior than
-    // energyBorderDepth × half the interior's smaller side is dropped (0: off; in [0, 1]): a band
-    // crossing the map reaches the middle, a block the notch's edge effects or a trend of the
-    // texture paints hugs the edge
-    double energyBorderDepth = 0.0;
-    // step 4a: a marked region of the score that is compact (its bounding box's sides at most
-    // stepKeepBlob samples and its principal axes' ratio at most 3: a pit, a particle) is kept
-    // within a step's band, not replaced by the ramp (0: off)
-    int stepKeepBlob = 0;
 
+    LayMapOptions lay;        // the `lay` method's options
     ScratchMapOptions paper;  // the `paper` method's options
 };
 
@@ -314,10 +291,10 @@ struct DefectMap {
     size_t ringLowered = 0;
     // step 7b: the thresholds used (the options' when the tail did not raise them)
     double seedUsed = 0, growUsed = 0, lineSeedUsed = 0;
-    // step 8: the thresholds of the |A| test over median(E) (energyRatio unless energySpread
-    // raised it) and the samples its border-share rule dropped (every test)
-    double energyRatioUsed = 0;
-    size_t energyBorderDropped = 0;
+    // lay only: the lay direction (x = column, z = row), its coherence, σ of the residual and
+    // the texture's RMS (height units), regions kept and dropped (objective/LayMap.h)
+    double layX = 0, layZ = 0, layCoherence = 0, layTextureRms = 0;
+    size_t layRegions = 0, layDroppedShallow = 0, layDroppedBorder = 0;
     double seconds = 0;
 
     size_t markedCount() const;
@@ -336,6 +313,10 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
 // (objective/ImageSpace.h; 255 where the pixel's centre ray sees a marked sample), then
 // intersect with the object mask as for any loss mask. m.map is empty of marks (all 0) on a
 // surface without anomalies: check markedCount() before using it as a region.
+
+/// Step 1's separable running median of a W×H image over w samples (odd): along x (rows),
+/// then along z (columns); windows shrink at the borders. Shared with objective/LayMap.
+std::vector<float> separableRunningMedian(const std::vector<float>& img, int W, int H, int w);
 
 /// Steps 1–3 alone: R = h − macro shape − periodic texture (width*height), for figures and
 /// tests; with levelWiener the notched bins hold their Wiener estimate (R + Δ of step 4).
