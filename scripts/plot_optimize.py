@@ -156,7 +156,7 @@ def draw_loss(ax, it, loss, hit, held, s):
     ax.plot(it, loss, color="#1f77b4", lw=1.5, label="training loss")
     if held:
         ax.plot(hit, held, color="#d62728", lw=1.2, ls="--", marker="o", ms=4,
-                label="held-out loss (independent estimate)")
+                label="the same loss on the independent estimate")
     values = [v for v in loss + held if math.isfinite(v)]
     if values and min(values) > 0:
         ax.set_yscale("log")

@@ -135,6 +135,94 @@ TEST(DefectObjective, LowContrastDefectsCostTheFloorsLogSquared) {
     }
 }
 
+// Labels (issue 31 item 4): with two defect labels L_vis is ψ(g(R)) minus the soft-min of the
+// labels' φ (objective/DefectObjective.h), to the last digit, with an exact gradient; and the
+// rule holds: one label made 8x as salient while the other all but vanishes lowers the pooled
+// objective (one region) but raises the labelled one.
+TEST(DefectObjective, TheWorstLabelCountsSoftlyAndIsNotBoughtByAnother) {
+    const int W = 16, H = 16;
+    const std::vector<uint8_t> part(W * H, 1);
+    std::vector<uint8_t> labelled(W * H, 0), pooled(W * H, 0), reference(W * H, 0);
+    for (int y = 0; y < H; ++y) {
+        for (int x : {2, 3}) labelled[y * W + x] = 1, pooled[y * W + x] = 1;
+        for (int x : {10, 11}) labelled[y * W + x] = 2, pooled[y * W + x] = 1;
+        for (int x : {6, 7}) reference[y * W + x] = 1;
+    }
+    DefectObjectiveOptions dopt;
+    dopt.whiteMean = 1;
+    ObjectiveOptions oo;
+    oo.lambda = 0;
+    const DefectObjective byLabel(W, H, part, labelled, reference, oo, dopt);
+    const DefectObjective asOne(W, H, part, pooled, reference, oo, dopt);
+    ASSERT_EQ(byLabel.labels(), (std::vector<uint8_t>{1, 2}));
+    // Rows alternate by c inside each stripe (vertical pairs differ by c, horizontal by 0).
+    auto image = [&](double c1, double c2) {
+        std::vector<double> y(W * H);
+        for (int r = 0; r < H; ++r)
+            for (int x = 0; x < W; ++x) {
+                const double c = labelled[r * W + x] == 1   ? c1
+                                 : labelled[r * W + x] == 2 ? c2
+                                                            : 0.01;
+                y[r * W + x] = 0.5 + c * (r % 2);
+            }
+        return y;
+    };
+    const std::vector<double> E(8, 0.5);
+    // g of a 2-column stripe of 16 rows: 30 vertical pairs of c², 16 horizontal of 0.
+    auto g = [](double c) { return 30.0 / 46.0 * c * c; };
+    const double tau = kLabelSoftMin;
+    for (auto [c1, c2] : {std::pair{0.05, 0.05}, std::pair{0.4, 0.002}, std::pair{0.2, 0.03}}) {
+        SCOPED_TRACE(c1);
+        const std::vector<double> y = image(c1, c2);
+        const double phi1 = std::log(g(c1)), phi2 = std::log(g(c2));
+        const double M = -tau * std::log(0.5 * (std::exp(-phi1 / tau) + std::exp(-phi2 / tau)));
+        const LossParts p = byLabel.evaluate(y, y, E);
+        EXPECT_NEAR(p.lGrad, std::log(g(0.01)) - M, 1e-12 * std::abs(p.lGrad));
+        EXPECT_LE(M, 0.5 * (phi1 + phi2) + 1e-12);  // between the worst label and the mean
+        EXPECT_GE(M, std::min(phi1, phi2) - 1e-12);
+    }
+    const double before = byLabel.evaluate(image(0.05, 0.05), image(0.05, 0.05), E).total;
+    const double after = byLabel.evaluate(image(0.4, 0.002), image(0.4, 0.002), E).total;
+    const double pooledBefore = asOne.evaluate(image(0.05, 0.05), image(0.05, 0.05), E).total;
+    const double pooledAfter = asOne.evaluate(image(0.4, 0.002), image(0.4, 0.002), E).total;
+    EXPECT_LT(pooledAfter, pooledBefore);  // one region: the vanished label is not seen
+    EXPECT_GT(after, before + 1.0);        // by label: it is
+    // One label: the soft-min is φ itself (the pooled objective as it was).
+    EXPECT_NEAR(asOne.evaluate(image(0.05, 0.05), image(0.05, 0.05), E).lGrad,
+                std::log(g(0.01)) - std::log(g(0.05)), 1e-12);
+
+    // The exact gradient through T's halves against autodiff, two labels on a rendered part.
+    SceneDesc d;
+    d.heightmap.pitch = 0.05;
+    d.camera.origin = {0, 2, 2};
+    d.camera.width = d.camera.height = 20;
+    d.render.maxDepth = 3;
+    const Scene scene(d, 32, 32, test::bumpyHeightMap(32));
+    const TransportMatrix t = halves(scene, 8);
+    DefectObjectiveOptions tdopt;
+    tdopt.whiteMean = whiteMean(t);
+    std::vector<uint8_t> two = stripe(t, 4, 7);
+    const std::vector<uint8_t> second = stripe(t, 12, 15);
+    for (size_t q = 0; q < two.size(); ++q)
+        if (second[q]) two[q] = 7;
+    ObjectiveOptions to;
+    to.lambda = 3;
+    const DefectObjective obj(t.width, t.height, t.objectMask, two, {}, to, tdopt);
+    ASSERT_EQ(obj.labels().size(), 2u);
+    const TransportLoss loss(t, obj, false);
+    Pcg32 rng(11, 1);
+    for (double scale : {0.5, 0.05}) {
+        SCOPED_TRACE(scale);
+        std::vector<double> e(t.cols());
+        for (double& v : e) v = scale * (0.2 + 0.8 * rng.nextDouble());
+        std::vector<double> grad(t.cols());
+        const LossParts p = loss.evaluate(e, grad);
+        const AutodiffGradient ad = autodiffThroughHalves(t, obj, e);
+        EXPECT_NEAR(p.total, ad.loss, 1e-12 * std::abs(ad.loss));
+        EXPECT_LT(compareGradients(grad, ad.gradient).relativeL2, 1e-9);
+    }
+}
+
 // The dark floor L_dark (objective/DefectObjective.h): below darkFloor (2·kMinVisibleBrightness)
 // of the white furnace the loss rises by exactly κ_f·log(m/(f·w))², without bound as the part goes
 // black; above it nothing changes.
@@ -404,9 +492,18 @@ TEST(RegionSpec, PicksLabelsOfATruthFile) {
     ASSERT_GT(scratch, 0u);
     auto count = [](const std::vector<uint8_t>& x) {
         size_t n = 0;
-        for (uint8_t v : x) n += v == 255;
+        for (uint8_t v : x) n += v != 0;
         return n;
     };
+    // The labels keep their values (the defects objective scores each); "none" is 255.
+    {
+        const auto both =
+            regionInHeightMap(parseRegionSpec(truth + ":chatter,defect", "d"), 64, 48);
+        for (size_t q = 0; q < both.size(); ++q)
+            ASSERT_EQ(both[q], m.labels[q] == 128 || m.labels[q] == 255 ? m.labels[q] : 0) << q;
+        const auto clean = regionInHeightMap(parseRegionSpec(truth + ":none", "d"), 64, 48);
+        for (size_t q = 0; q < clean.size(); ++q) ASSERT_EQ(clean[q], m.labels[q] ? 0 : 255) << q;
+    }
     EXPECT_EQ(count(regionInHeightMap(parseRegionSpec(truth + ":chatter", "d"), 64, 48)), chatter);
     EXPECT_EQ(count(regionInHeightMap(parseRegionSpec(truth + ":128", "d"), 64, 48)), chatter);
     EXPECT_EQ(count(regionInHeightMap(parseRegionSpec(truth + ":none", "d"), 64, 48)), none);

@@ -24,6 +24,7 @@
 #include <numbers>
 #include <random>
 #include <regex>
+#include <sstream>
 #include <string>
 #include <thread>
 
@@ -741,6 +742,106 @@ TEST(ViewerOutdir, OpensAnOptimizeOutputDirectoryWithItsLightRegionsAndJudge) {
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("summary.json"), std::string::npos) << e.what();
     }
+}
+
+// One output, one objective (issue 31 item 3): for an `optimize --objective defects` output on
+// automatic regions, the terminal, summary.json (what the report shows), loss.csv, `judge
+// --defects` and the viewer give the same numbers: the held-out figure is the defects loss on
+// the independent estimate (U beside it), the judge's visibility is of the same region, and the
+// viewer's optimizer runs the defects objective on the same regions from the same loss.
+TEST(ViewerOutdir, JudgeViewerReportAndTerminalAgreeOnTheObjectivesNumbers) {
+    test::TempDir dir("one-objective");
+    const std::string part = (dir / "part.exr").string(), scene = (dir / "scene.json").string(),
+                      cache = (dir / "cache").string();
+    ASSERT_EQ(test::runCli("gen-surface -o " + part +
+                           " --width 160 --height 160 --scratches 3 --chatter-start 0.5 --scene " +
+                           scene + " --image-size 40 --spp 8 --max-depth 3")
+                  .exitCode,
+              0);
+    const fs::path out = dir / "opt";
+    auto r =
+        test::runCli("optimize " + scene +
+                     " --objective defects --spp 16 --iterations 20 --heldout-spp 16 --cache " +
+                     cache + " -o " + out.string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const json s = json::parse(test::readFile(out / "summary.json"));
+    ASSERT_EQ(s.value("objective", ""), "defects");
+    EXPECT_EQ(s.value("heldout_objective", ""), "defects");
+    const double held = s.at("heldout_loss").get<double>(), heldU = s.at("heldout_U").get<double>();
+    // The held-out figure is the defects loss (the visibility term is negative), not U.
+    EXPECT_NE(held, heldU);
+    EXPECT_EQ(s.at("heldout").at("final").at("unbiased").at("loss").get<double>(), heldU);
+    const json& judged = s.at("judge");
+    const double vis = judged.at("visibility").at(0).at("visibility").get<double>();
+    ASSERT_EQ(judged.at("visibility").at(0).value("name", ""), "defects");
+
+    // The terminal: the held-out line names the objective and prints both figures.
+    std::smatch m;
+    const std::regex line(
+        "held out \\(lambda 30, 16 spp\\): the defects loss (\\S+) -> (\\S+) \\(lower is "
+        "better\\); U there (\\S+) -> (\\S+)");
+    ASSERT_TRUE(std::regex_search(r.output, m, line)) << r.output;
+    EXPECT_NEAR(std::stod(m[2]), held, 1e-5 * std::abs(held));
+    EXPECT_NEAR(std::stod(m[4]), heldU, 1e-5 * std::abs(heldU));
+    // loss.csv's last row: the same held-out figures.
+    {
+        const std::string csv = test::readFile(out / "loss.csv");
+        ASSERT_NE(csv.find("heldout_loss,heldout_paper_loss,heldout_U"), std::string::npos);
+        std::string last = csv.substr(csv.rfind('\n', csv.size() - 2) + 1);
+        std::vector<std::string> cells;
+        std::stringstream ls(last);
+        for (std::string c; std::getline(ls, c, ',');) cells.push_back(c);
+        ASSERT_EQ(cells.size(), 9u) << last;
+        EXPECT_NEAR(std::stod(cells[6]), held, 1e-9 * std::abs(held));
+        EXPECT_NEAR(std::stod(cells[8]), heldU, 1e-9 * std::abs(heldU));
+    }
+    // The report shows the held-out rows with that objective's name.
+    const std::string html = test::readFile(out / "report.html");
+    EXPECT_NE(html.find("held out: the defects loss on the independent estimate"),
+              std::string::npos);
+    EXPECT_NE(html.find("held out: U on the independent estimate"), std::string::npos);
+
+    // judge --defects auto on the output: the same region, the same visibility.
+    r = test::runCli("judge " + scene + " " + out.string() + " --defects auto --spp 16 --cache " +
+                     cache + " --no-references -o " + (dir / "judged").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const json j = json::parse(test::readFile(dir / "judged" / "judge.json"));
+    const json& jv = j.at("lights").at(0).at("visibility").at(0);
+    EXPECT_EQ(jv.value("pixels", 0), judged.at("visibility").at(0).value("pixels", -1));
+    EXPECT_NEAR(jv.value("visibility", 0.0), vis, 1e-5 * std::abs(vis));  // E* as float32
+    EXPECT_NEAR(j.at("lights").at(0).value("unbiased", 0.0), judged.value("unbiased", -1.0),
+                1e-5 * std::abs(judged.value("unbiased", 1.0)));
+
+    // The viewer on the output: the judge's visibility of the same region at the same λ, and an
+    // optimizer that runs the defects objective on the output's regions and T.
+    ViewerOptions o;
+    o.input = out;
+    o.cache.dir = cache;
+    o.outDir = dir / "view";
+    ViewerSession v(o);
+    ASSERT_TRUE(v.outputObjective());
+    EXPECT_EQ(v.outputObjective()->kind, ObjectiveKind::Defects);
+    ASSERT_TRUE(v.hasJudge());
+    const json vj = json::parse(v.judgeJson(0).dump());
+    ASSERT_EQ(vj.at("judge").at("visibility").size(), 1u) << vj.dump();
+    EXPECT_NEAR(vj["judge"]["visibility"][0]["visibility"].get<double>(), vis,
+                1e-5 * std::abs(vis));
+    EXPECT_NEAR(vj["judge"]["unbiased"].get<double>(), judged.value("unbiased", -1.0),
+                1e-5 * std::abs(judged.value("unbiased", 1.0)));
+    // From E* (envmap-optimized.exr when a reference is the answer), the optimizer's starting
+    // loss is the run's final training loss.
+    const auto& t = v.transport();
+    const fs::path star = fs::exists(out / "envmap-optimized.exr") ? out / "envmap-optimized.exr"
+                                                                   : out / "envmap.exr";
+    const EnvMap e = loadEnvMap(star, t.envWidth, t.envHeight, 1);
+    v.setLight(0, std::vector<double>(e.texels.begin(), e.texels.end()));
+    v.startOptimize(0, 2);
+    v.waitOptimize();
+    const ViewerOptimizeStatus st = v.optimizeStatus();
+    ASSERT_NE(st.state, "failed") << st.error;
+    EXPECT_EQ(st.objective, "defects");
+    const double final = s.at("final_loss").get<double>();
+    EXPECT_NEAR(st.initialLoss, final, 1e-4 * std::abs(final) + 1e-6);
 }
 
 TEST(ViewerBench, PrintsItsTableAndWritesCsv) {

@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "app/Search.h"
 #include "core/Error.h"
 #include "core/Registry.h"
 #include "objective/TransportLoss.h"
@@ -41,8 +42,9 @@ HeldOutSource parseHeldOutSource(std::string_view text, const std::string& where
 
 HeldOutScorer::HeldOutScorer(const TransportMatrix& heldOut,
                              const std::vector<uint8_t>& trainingMask,
-                             const ObjectiveOptions& options, bool unbiased, bool rgb)
-    : unbiased_(unbiased) {
+                             const ObjectiveOptions& options, ObjectiveKind kind, bool rgb,
+                             std::vector<uint8_t> defects, std::vector<uint8_t> reference)
+    : kind_(kind) {
     if (heldOut.planes != 2)
         throw std::invalid_argument("held-out transport matrix needs two sample sets");
     std::vector<uint8_t> mask = intersectMasks(trainingMask, heldOut.objectMask);
@@ -50,6 +52,14 @@ HeldOutScorer::HeldOutScorer(const TransportMatrix& heldOut,
     unb_ = std::make_unique<UnbiasedObjective>(heldOut.width, heldOut.height, mask, options);
     paperLoss_ = std::make_unique<TransportLoss>(heldOut, *paper_, rgb);
     unbLoss_ = std::make_unique<TransportLoss>(heldOut, *unb_, rgb);
+    if (kind == ObjectiveKind::Defects) {
+        SearchInputs in;
+        in.mask = mask;
+        in.rgb = rgb;
+        in.defects = std::move(defects);
+        in.reference = std::move(reference);
+        defects_ = std::make_unique<ObjectiveOnT>(objectiveOnT(kind, heldOut, in, options));
+    }
 }
 
 HeldOutScorer::~HeldOutScorer() = default;
@@ -57,8 +67,18 @@ HeldOutScorer::~HeldOutScorer() = default;
 HeldOutScore HeldOutScorer::score(std::span<const double> E) const {
     HeldOutScore s;
     s.paper = paperLoss_->evaluate(E, {});
-    LossParts unb = unbLoss_->evaluate(E, {});
-    s.own = unbiased_ ? unb : s.paper;
+    s.unbiased = unbLoss_->evaluate(E, {});
+    switch (kind_) {
+        case ObjectiveKind::Paper:
+            s.own = s.paper;
+            break;
+        case ObjectiveKind::Unbiased:
+            s.own = s.unbiased;
+            break;
+        case ObjectiveKind::Defects:
+            s.own = defects_->loss->evaluate(E, {});
+            break;
+    }
     return s;
 }
 

@@ -2,7 +2,9 @@
 // an independent estimate — for `optimize`, the judge's (app/Judge.h: its own seed, 1024 spp by
 // default, two sample sets), so that both the paper's eq. 2 and the noise-unbiased objective
 // can be evaluated on it. The held-out objectives use the training mask intersected with the
-// held-out T's object mask (the judge's own scores use the part mask).
+// held-out T's object mask (the judge's own scores use the part mask). The held-out figure of a
+// run is the objective it optimized (`own`: eq. 2, U, or the defects loss on the same regions),
+// so the training and held-out curves are one quantity; U and eq. 2 are kept beside it.
 #pragma once
 
 #include <cstdint>
@@ -13,12 +15,14 @@
 #include <string_view>
 
 #include "objective/Objective.h"
+#include "objective/ObjectiveKind.h"
 #include "objective/UnbiasedObjective.h"
 #include "transport/TransportMatrix.h"
 
 namespace sl {
 
 class TransportLoss;
+struct ObjectiveOnT;
 
 /// Where the held-out estimate comes from: one table (core/Registry.h) of the choices.
 enum class HeldOutMode {
@@ -41,21 +45,25 @@ struct HeldOutSource {
 HeldOutSource parseHeldOutSource(std::string_view text, const std::string& where);
 
 struct HeldOutScore {
-    LossParts own;    // the objective that was optimized
-    LossParts paper;  // the paper's eq. 2 (the common yardstick), on T = (T_a + T_b)/2
+    LossParts own;       // the objective that was optimized
+    LossParts unbiased;  // U (the noise-unbiased objective), whatever was optimized
+    LossParts paper;     // the paper's eq. 2 (the common yardstick), on T = (T_a + T_b)/2
 };
 
 class HeldOutScorer {
   public:
-    /// heldOut must have two planes. unbiased: the optimized objective is the unbiased one.
-    /// rgb: E has 3 values per texel.
+    /// heldOut must have two planes. kind: the optimized objective; defects and reference: its
+    /// regions (image space, the defects objective's; app/Search.h SearchInputs). rgb: E has 3
+    /// values per texel.
     HeldOutScorer(const TransportMatrix& heldOut, const std::vector<uint8_t>& trainingMask,
-                  const ObjectiveOptions& options, bool unbiased, bool rgb);
+                  const ObjectiveOptions& options, ObjectiveKind kind, bool rgb,
+                  std::vector<uint8_t> defects = {}, std::vector<uint8_t> reference = {});
     ~HeldOutScorer();
     HeldOutScore score(std::span<const double> E) const;
 
   private:
-    bool unbiased_;
+    ObjectiveKind kind_;
+    std::unique_ptr<ObjectiveOnT> defects_;  // the defects objective on heldOut (Defects only)
     std::unique_ptr<ImageObjective> paper_;
     std::unique_ptr<UnbiasedObjective> unb_;
     std::unique_ptr<TransportLoss> paperLoss_, unbLoss_;  // built once, reused by score()

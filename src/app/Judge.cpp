@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <sstream>
 
 #include "app/Truth.h"
@@ -176,6 +177,17 @@ std::string formatJudgeTable(const std::vector<JudgeScore>& scores) {
         for (const RegionVisibility& r : s.visibility)
             if (std::find(regions.begin(), regions.end(), r.label.name) == regions.end())
                 regions.push_back(r.label.name);
+    // The worst label first: by the first light's visibility, ascending (unmeasured last).
+    auto firstVisibility = [&](const std::string& name) {
+        if (!scores.empty())
+            for (const RegionVisibility& r : scores.front().visibility)
+                if (r.label.name == name && std::isfinite(r.visibility)) return r.visibility;
+        return std::numeric_limits<double>::infinity();
+    };
+    std::stable_sort(regions.begin(), regions.end(),
+                     [&](const std::string& a, const std::string& b) {
+                         return firstVisibility(a) < firstVisibility(b);
+                     });
     size_t nameWidth = 5;
     for (const JudgeScore& s : scores) nameWidth = std::max(nameWidth, s.name.size());
     std::ostringstream out;

@@ -112,7 +112,8 @@ TransportSource judgeEstimate(const Scene& scene, const JudgeOptions& options);
 /// value, pixels, visibility, rms_gradient, clean_rms_gradient, weber), eq2_parts, unbiased_parts.
 nlohmann::ordered_json toJson(const JudgeScore& score);
 
-/// A fixed-width table of scores, one row per light (for the terminal).
+/// A fixed-width table of scores, one row per light (for the terminal); the regions' columns
+/// worst first (by the first light's visibility, ascending).
 std::string formatJudgeTable(const std::vector<JudgeScore>& scores);
 
 }  // namespace sl

@@ -155,7 +155,9 @@ NoiseBenchResult runNoiseBench(const NoiseBenchOptions& o) {
                 UnbiasedObjective unb(t.width, t.height, t.objectMask, oo);
                 TransportLoss loss =
                     unbiased ? TransportLoss(t, unb, false) : TransportLoss(t, paper, false);
-                const HeldOutScorer scorer(held, t.objectMask, oo, unbiased, false);
+                const HeldOutScorer scorer(
+                    held, t.objectMask, oo,
+                    unbiased ? ObjectiveKind::Unbiased : ObjectiveKind::Paper, false);
                 for (const NoiseBenchOptimizer& m : o.optimizers) {
                     std::vector<double> e =
                         initialEnvMap(InitialState{}, t.envWidth, t.envHeight, false);  // 0.5

@@ -346,7 +346,7 @@ void drawLoss(Canvas& c, const LossCurve& l, const std::string& title, double x,
     if (!l.held.empty()) {
         axes.line(l.heldIteration, l.held, kHeld, 1.2 * unit, true, Marker::Circle);
         entries.push_back(
-            {"held-out loss (independent estimate)", kHeld, true, true, Marker::Circle});
+            {"the same loss on the independent estimate", kHeld, true, true, Marker::Circle});
     }
     axes.legend(entries, true, legendFont);
 }

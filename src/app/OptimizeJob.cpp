@@ -72,7 +72,9 @@ json partsJson(const LossParts& p) {
 }
 
 json heldJson(const HeldOutScore& h) {
-    return {{"own", partsJson(h.own)}, {"paper_eq2", partsJson(h.paper)}};
+    return {{"own", partsJson(h.own)},
+            {"unbiased", partsJson(h.unbiased)},
+            {"paper_eq2", partsJson(h.paper)}};
 }
 
 /// The trace's per-pixel sample multipliers as its provenance records them (null: none).
@@ -368,7 +370,8 @@ struct Inputs {
     std::vector<double> lampE, paperE;
     std::vector<uint8_t> regionLabels;  // image space, 0 = none
     std::vector<RegionLabel> regionLegend;
-    std::string regionSource;  // where the regions come from ("" = none)
+    std::vector<uint8_t> regionReference;  // the defect region's reference (empty: the default)
+    std::string regionSource;              // where the regions come from ("" = none)
     /// defects, reference, truth, truthLabels, lampName and lampE depend on the scene and the
     /// options, not on T: once set (the first load), a training-noise round that traces T again
     /// keeps them instead of projecting the regions (or computing the defect map) again.
@@ -682,6 +685,7 @@ void prepareComparisons(const Plan& p, Inputs& in, const OptimizeJobSummary& job
         in.regionLabels.assign(in.defects.size(), 0);
         for (size_t q = 0; q < in.defects.size(); ++q) in.regionLabels[q] = in.defects[q] ? 255 : 0;
         in.regionLegend = {RegionLabel{255, "defects"}};
+        in.regionReference = in.reference;  // as judge --defects --reference scores it
         in.regionSource = "defect region " + defectRegion(o).text();
     } else if (o.mask.kind != LossMaskKind::Object) {
         in.regionLabels.assign(in.mask.pixels.size(), 0);
@@ -710,7 +714,7 @@ std::vector<std::string> resultWarnings(const OptimizeRun& run, const std::vecto
 }
 
 constexpr const char* kLossCsvHeader =
-    "iteration,evaluations,loss,L_grad,L_reg,seconds,heldout_loss,heldout_paper_loss";
+    "iteration,evaluations,loss,L_grad,L_reg,seconds,heldout_loss,heldout_paper_loss,heldout_U";
 
 /// One λ's optimization: E* and loss.csv's rows.
 struct LambdaResult {
@@ -751,12 +755,13 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
     const TransportLoss& loss = *own.loss;
     std::unique_ptr<HeldOutScorer> scorer;
     if (job.heldOut)
-        scorer = std::make_unique<HeldOutScorer>(job.heldOut->file.matrix, mask, oo, in.onHalves(),
-                                                 o.rgb);
+        scorer = std::make_unique<HeldOutScorer>(job.heldOut->file.matrix, mask, oo, in.kind, o.rgb,
+                                                 in.defects, in.reference);
 
     LambdaResult res;
     OptimizeRun& run = res.run;
     run.lambda = lambda;
+    run.objective = objectiveKindName(in.kind);
     run.dir = o.lambdas.size() > 1 ? o.outDir / lambdaName(lambda) : o.outDir;
     res.e = in.startValues.front();
     run.initial = loss.evaluate(res.e, {});
@@ -801,10 +806,10 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
             const Stopwatch clock;
             HeldOutScore h = scorer->score(x);
             run.secondsHeldOutScoring += clock.seconds();
-            row << h.own.total << ',' << h.paper.total;
+            row << h.own.total << ',' << h.paper.total << ',' << h.unbiased.total;
             lastHeld = h.own.total;
         } else {
-            row << ',';
+            row << ",,";
         }
         res.rows.push_back(row.str());
         res.curve.iteration.push_back(static_cast<double>(r.iteration));
@@ -895,11 +900,11 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
     if (scorer) {
         run.heldFinal = scorer->score(res.e);
         // The last row always carries the held-out score of the returned E.
-        if (!res.rows.empty() && res.rows.back().back() == ',') {
-            res.rows.back().pop_back();
+        if (!res.rows.empty() && res.rows.back().ends_with(",,,")) {
+            res.rows.back().resize(res.rows.back().size() - 3);
             std::ostringstream tail;
             tail << std::setprecision(10) << ',' << run.heldFinal->own.total << ','
-                 << run.heldFinal->paper.total;
+                 << run.heldFinal->paper.total << ',' << run.heldFinal->unbiased.total;
             res.rows.back() += tail.str();
             res.curve.heldIteration.push_back(res.curve.iteration.back());
             res.curve.held.push_back(run.heldFinal->own.total);
@@ -926,7 +931,8 @@ void checkAnswer(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
     JudgeOptions jo;
     jo.objective = objectiveAt(p, r.run.lambda);
     jo.rgb = p.o.rgb;
-    const Judge validation(*job.validation, jo, in.regionLabels, in.regionLegend);
+    const Judge validation(*job.validation, jo, in.regionLabels, in.regionLegend,
+                           in.regionReference);
     std::vector<AnswerCandidate> candidates;
     candidates.push_back({"optimized", CandidateKind::Optimized, r.e});
     for (size_t k = 0; k < r.startResults.size(); ++k)
@@ -956,7 +962,7 @@ void judgeRun(const Plan& p, const Inputs& in, const OptimizeJobSummary& job, La
         JudgeOptions jo;
         jo.objective = objectiveAt(p, run.lambda);
         jo.rgb = p.o.rgb;
-        const Judge judge(*job.heldOut, jo, in.regionLabels, in.regionLegend);
+        const Judge judge(*job.heldOut, jo, in.regionLabels, in.regionLegend, in.regionReference);
         run.judged = judge.score(r.e, run.dir.filename().string());
         run.judgedLamp = judge.score(in.lampE, "lamp");
         run.judgedPaper = judge.score(in.paperE, "paper");
@@ -1108,6 +1114,8 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
         s["heldout_L_grad"] = run.heldFinal->own.lGrad;
         s["heldout_L_reg"] = run.heldFinal->own.lReg;
         s["heldout_paper_loss"] = run.heldFinal->paper.total;
+        s["heldout_U"] = run.heldFinal->unbiased.total;
+        s["heldout_objective"] = objectiveKindName(in.kind);
         s["heldout"] = {{"initial", heldJson(*run.heldInitial)},
                         {"final", heldJson(*run.heldFinal)},
                         {"transport", transportJson(*job.heldOut)}};
@@ -1292,6 +1300,7 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
         for (size_t q = 0; q < labels.size(); ++q)
             labels[q] = in.defects[q] ? 255 : (!in.reference.empty() && in.reference[q] ? 128 : 0);
         writePng(dir / "regions.png", outlinedRender(y, t.width, t.height, mask, labels));
+        writeDefectRegions(dir, {in.defects, in.reference}, t.width, t.height);
     }
     if (!in.mask.scratchCells.empty())
         writeMaskPng(dir / "scratchmap.png", in.mask.scratchCells, in.scene->mapWidth,
@@ -1498,7 +1507,13 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
             // the best so far (core/Interrupt.h).
             if (!p.o.keepInterrupted) throwIfInterrupted();
             noise.reason = describeTrainingNoise(noise);
-            if (!noise.rounds.empty()) spdlog::info("training spp: {}", noise.reason);
+            // The seconds are printed here and recorded as seconds_added, not in the reason
+            // (summary.json's text stays the same for any run of the same inputs).
+            if (!noise.rounds.empty())
+                spdlog::info("training spp: {}{}", noise.reason,
+                             noise.rounds.size() > 1
+                                 ? "; the rule added " + formatNumber(noise.secondsAdded, 3) + " s"
+                                 : std::string());
             r.run.noise = noise;
             checkAnswer(p, in, job, r);
             judgeRun(p, in, job, r);

@@ -17,7 +17,8 @@
 //                (4) the loss on a log axis with the held-out loss; (5) the three lights' metrics
 //   initial-envmap.png, mask.png (the loss mask), scratchmap.png (with the scratch mask),
 //   regions.png (objective defects: the render with the defect region outlined red and a given
-//   reference region blue)
+//   reference region blue), regions-defects.png and regions-reference.png (the same regions as
+//   masks, app/Truth.h writeDefectRegions: what the viewer optimizes and judges with)
 // The comparisons (summary.json "compare": lamp, paper, optimized; each with its training loss
 // and, with the held-out estimate, the judge's scores):
 //   compare-lamp.{exr,png}    T·E under the user's lamp (--compare ENV; default: studio preset)
@@ -178,6 +179,7 @@ struct OptimizeRun {
     std::filesystem::path dir;
     OptimizerSummary optimizer;
     LossParts initial, final;
+    std::string objective;  // what initial, final and heldFinal.own are (ObjectiveKind's name)
     std::optional<HeldOutScore> heldInitial, heldFinal;
     double secondsHeldOutScoring = 0;  // inside the optimizer's time (callback)
     std::string start;                 // the start that won (multistart)

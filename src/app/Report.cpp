@@ -460,6 +460,26 @@ std::string fmt(double v, int digits = 3) {
     return buf;
 }
 
+/// With two or more labelled regions, the one that shows least under the answer, first: "The
+/// least visible label is dent: 1.2 (your lamp 3.4)." (empty with fewer regions).
+std::string worstLabelSentence(const json& answer, const json& lamp) {
+    if (!answer.is_object() || !answer.contains("visibility") || answer["visibility"].size() < 2)
+        return "";
+    const json* worst = nullptr;
+    for (const json& r : answer["visibility"])
+        if (std::isfinite(num(r, "visibility")) &&
+            (!worst || num(r, "visibility") < num(*worst, "visibility")))
+            worst = &r;
+    if (!worst) return "";
+    const std::string name = worst->value("name", std::string("?"));
+    double atLamp = std::nan("");
+    if (lamp.is_object() && lamp.contains("visibility"))
+        for (const json& r : lamp["visibility"])
+            if (r.value("name", std::string()) == name) atLamp = num(r, "visibility");
+    return " The least visible label is " + name + ": " + fmt(num(*worst, "visibility"), 3) +
+           " (your lamp " + fmt(atLamp, 3) + ").";
+}
+
 std::string degrees(const json& d, const char* key) {
     char buf[32];
     std::snprintf(buf, sizeof buf, "%.0f°", num(d, key));
@@ -672,7 +692,8 @@ std::string optimizeHeadline(const json& s) {
                          vo = combinedVisibility(opt["judge"]);
             if (std::isfinite(va) && std::isfinite(vo))
                 out += " Judge: defect visibility " + fmt(va, 3) + " (" + name + ") vs " +
-                       fmt(vo, 3) + " (optimized), on an independent " + spp + "-spp estimate.";
+                       fmt(vo, 3) + " (optimized), on an independent " + spp + "-spp estimate." +
+                       worstLabelSentence(ans["judge"], lamp.value("judge", json::object()));
             else
                 out += " Judge: U " + fmt(num(ans["judge"], "unbiased"), 3) + " (" + name +
                        ") vs " + fmt(num(opt["judge"], "unbiased"), 3) +
@@ -690,6 +711,7 @@ std::string optimizeHeadline(const json& s) {
             out += ". Judge: defect visibility " + fmt(vo, 3) + " (optimized) vs " + fmt(vl, 3) +
                    " (your lamp) vs " + fmt(vp, 3);
             out += " (paper's light), on an independent " + spp + "-spp estimate.";
+            out += worstLabelSentence(opt["judge"], lamp["judge"]);
             return out;
         }
         const double uo = num(opt["judge"], "unbiased"), ul = num(lamp["judge"], "unbiased"),
@@ -861,7 +883,8 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
     h << "<section id=\"loss\"><h2>Loss during the optimization</h2>\n"
       << figureOrReason(dir, "plot-loss.png", "loss plot", figureProblem)
       << "<p class=\"caption\">The optimizer's loss on its training estimate and, every few "
-         "iterations, on the held-out estimate (lower is better).</p></section>\n";
+         "iterations, the same objective on the held-out estimate (lower is better; "
+         "summary.json heldout_U has the noise-unbiased U there).</p></section>\n";
 
     // 5. The numbers: the three lights side by side, then before/after metrics and settings.
     h << "<section id=\"metrics\"><h2>The numbers</h2>\n";
@@ -898,6 +921,17 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
     h << compareRow(
         "training loss (" + cmp.value("objective", std::string("objective")) + ", lower is better)",
         training(lamp), training(paper), training(opt), 1);
+    // The held-out figures of the run: the objective it optimized on the independent estimate,
+    // and U there (scored for the returned light only).
+    if (s.contains("heldout_loss") && s["heldout_loss"].is_number()) {
+        const double nan = std::nan("");
+        h << compareRow("held out: the " + cmp.value("objective", std::string("objective")) +
+                            " loss on the independent estimate (lower is better)",
+                        nan, nan, num(s, "heldout_loss"), -1);
+        if (s.contains("heldout_U"))
+            h << compareRow("held out: U on the independent estimate (lower is better)", nan, nan,
+                            num(s, "heldout_U"), -1);
+    }
     h << "</tbody></table>\n<p class=\"caption\">Defect visibility: a region's RMS image "
          "gradient (noise-unbiased, from two independent halves of the judge's estimate) over "
          "that of the defect-free surface; 1 = no more salient than the machining texture. "

@@ -106,7 +106,6 @@ std::string describeTrainingNoise(const TrainingNoiseSummary& s) {
             " -> " + std::to_string(s.spp()) + " spp" + on + ", the most spp the rule traces" +
             (s.gridAdapted ? " and the coarsest light it searches" : " on the light's given grid") +
             ", still above " + tol + ": no light is trusted on its training estimate alone";
-    if (s.rounds.size() > 1) out += "; the rule added " + formatNumber(s.secondsAdded, 3) + " s";
     return out;
 }
 

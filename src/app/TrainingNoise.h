@@ -144,7 +144,8 @@ double trainingGap(ObjectiveKind kind, double training, double validation);
 /// at options.maxSpp.
 std::optional<int> nextTrainingSpp(int spp, double gap, const TrainingNoiseOptions& options);
 
-/// The summary's reason line: the rounds' spp and gaps, the choice and the seconds it added.
+/// The summary's reason line: the rounds' spp, grids and gaps and the choice (the seconds the
+/// rule added are TrainingNoiseSummary::secondsAdded, printed beside it).
 std::string describeTrainingNoise(const TrainingNoiseSummary& summary);
 
 }  // namespace sl

@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <stdexcept>
 
 #include "core/Error.h"
+#include "core/Image.h"
 #include "core/Text.h"
+#include "io/ImageIO.h"
 #include "objective/DefectMap.h"
 #include "objective/ImageSpace.h"
 #include "scene/Scene.h"
@@ -112,7 +115,10 @@ std::vector<uint8_t> regionInHeightMap(const RegionSpec& region, int mapWidth, i
         wanted[value] = true;
     }
     std::vector<uint8_t> out(m.labels.size(), 0);
-    for (size_t p = 0; p < out.size(); ++p) out[p] = wanted[m.labels[p]] ? 255 : 0;
+    // The labels keep their values (the defects objective scores each: objective/
+    // DefectObjective.h); "none" (0) is 255 inside.
+    for (size_t p = 0; p < out.size(); ++p)
+        out[p] = wanted[m.labels[p]] ? (m.labels[p] ? m.labels[p] : 255) : 0;
     return out;
 }
 
@@ -135,7 +141,9 @@ DefectRegions defectRegionsInImage(const Scene& scene, const RegionSpec& defectS
                                    const RegionSpec& reference) {
     DefectRegions r;
     const RegionSpec defects = defectRegionSpec(defectSpec, truth);
-    r.defects = projectRegion(scene, defects);
+    // The truth itself: every label, with its value.
+    r.defects = defectSpec.empty() && !truth.empty() ? projectTruth(scene, truth).labels
+                                                     : projectRegion(scene, defects);
     if (defects.automatic &&
         std::none_of(r.defects.begin(), r.defects.end(), [](uint8_t v) { return v != 0; }))
         throw inputError(
@@ -151,6 +159,39 @@ DefectRegions defectRegionsInImage(const Scene& scene, const RegionSpec& defectS
     } else if (!reference.empty()) {
         r.reference = projectRegion(scene, reference);
     }
+    return r;
+}
+
+void writeDefectRegions(const std::filesystem::path& dir, const DefectRegions& regions, int width,
+                        int height) {
+    auto visible = [](const std::vector<uint8_t>& m) {
+        std::vector<uint8_t> v(m.size());
+        for (size_t q = 0; q < m.size(); ++q) v[q] = m[q] ? 255 : 0;
+        return v;
+    };
+    writeMaskPng(dir / kRegionsDefectsFile, regions.defects, width, height);  // the labels
+    if (!regions.reference.empty())
+        writeMaskPng(dir / kRegionsReferenceFile, visible(regions.reference), width, height);
+}
+
+std::optional<DefectRegions> readDefectRegions(const std::filesystem::path& dir, int width,
+                                               int height) {
+    if (!std::filesystem::exists(dir / kRegionsDefectsFile)) return std::nullopt;
+    DefectRegions r;
+    const std::filesystem::path file = dir / kRegionsDefectsFile;
+    const Image labels = readImage(file);
+    if (labels.width != width || labels.height != height)
+        throw inputError(file.string(),
+                         "is " + std::to_string(labels.width) + "x" +
+                             std::to_string(labels.height) + ", T's image " +
+                             std::to_string(width) + "x" + std::to_string(height),
+                         "view the output with the transport matrix it was optimized on");
+    r.defects.resize(static_cast<size_t>(width) * static_cast<size_t>(height));
+    for (size_t q = 0; q < r.defects.size(); ++q)  // written verbatim, tagged linear
+        r.defects[q] = static_cast<uint8_t>(
+            std::lround(std::clamp(labels.data[q * labels.channels] * 255.0f, 0.0f, 255.0f)));
+    if (std::filesystem::exists(dir / kRegionsReferenceFile))
+        r.reference = loadImageMask(dir / kRegionsReferenceFile, width, height);
     return r;
 }
 

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -68,5 +69,18 @@ struct DefectRegions {
 /// Throws InputError when an automatic defect region marks nothing the camera sees.
 DefectRegions defectRegionsInImage(const Scene& scene, const RegionSpec& defects,
                                    const std::filesystem::path& truth, const RegionSpec& reference);
+
+/// The defects objective's regions as an optimize output keeps them, in image space:
+/// regions-defects.png (the label values, 8-bit, tagged linear) and (when not the default)
+/// regions-reference.png (255/0), written losslessly, so the viewer runs the objective on the
+/// regions that made the output.
+inline constexpr const char* kRegionsDefectsFile = "regions-defects.png";
+inline constexpr const char* kRegionsReferenceFile = "regions-reference.png";
+void writeDefectRegions(const std::filesystem::path& dir, const DefectRegions& regions, int width,
+                        int height);
+/// The regions writeDefectRegions wrote into dir (nullopt when dir has no regions-defects.png);
+/// InputError naming the file when one does not fit width×height.
+std::optional<DefectRegions> readDefectRegions(const std::filesystem::path& dir, int width,
+                                               int height);
 
 }  // namespace sl

@@ -106,6 +106,37 @@ const std::string& viewerPageHtml() {
     return page;
 }
 
+ViewerObjective readViewerObjective(const fs::path& dir, int width, int height) {
+    const fs::path file = dir / "summary.json";
+    const json s = readJsonFile(file);
+    ViewerObjective o;
+    try {
+        o.kind = parseObjectiveKind(s.at("objective").get<std::string>(), file.string());
+        o.options.lambda = s.at("lambda").get<double>();
+        o.options.smoothAbs = s.value("smooth_abs", false);
+        o.options.reg =
+            s.value("reg", std::string("envmap")) == "image" ? RegTarget::Image : RegTarget::EnvMap;
+    } catch (const json::exception& e) {
+        throw inputError(file.string(), std::string("has no usable objective: ") + e.what(),
+                         "run view on the output of a current optimize");
+    }
+    if (fs::exists(dir / "mask.png")) {
+        o.mask = loadImageMask(dir / "mask.png", width, height);
+        for (uint8_t& v : o.mask) v = v ? 1 : 0;  // masks hold 0/1 (app/LossMask.h)
+    }
+    if (o.kind == ObjectiveKind::Defects) {
+        auto regions = readDefectRegions(dir, width, height);
+        if (!regions)
+            throw inputError(file.string(),
+                             std::string("names the defects objective, but ") +
+                                 kRegionsDefectsFile + " is missing",
+                             "run optimize again to write it");
+        o.defects = std::move(regions->defects);
+        o.reference = std::move(regions->reference);
+    }
+    return o;
+}
+
 int viewerSlot(const std::string& text) {
     if (text.empty() || text == "a") return 0;
     if (text == "b") return 1;
@@ -257,8 +288,17 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
               {"paper", "compare-paper-envmap.exr"}})
             if (fs::exists(in / file))
                 extraPresets_[name] = toVector(loadEnvMap(in / file, t.envWidth, t.envHeight, 1));
-        // The defect regions optimize outlined (a transparent layer), when there is no truth.
-        if (truth.empty() && fs::exists(in / "view-regions.png")) {
+        // The objective (and regions) that made the output: the optimizer's, and the judge's
+        // regions when there is no truth (as optimize's judge scored them).
+        made_ = readViewerObjective(in, t.width, t.height);
+        if (truth.empty() && made_->kind == ObjectiveKind::Defects) {
+            labels_.assign(made_->defects.size(), 0);
+            for (size_t q = 0; q < labels_.size(); ++q) labels_[q] = made_->defects[q] ? 255 : 0;
+            legend_ = {RegionLabel{255, "defects"}};
+            reference_ = made_->reference;
+        }
+        // The regions optimize outlined (a transparent layer), when there are no labels here.
+        if (truth.empty() && labels_.empty() && fs::exists(in / "view-regions.png")) {
             overlay_ = readInputFile(in / "view-regions.png", "the regions' overlay", 1ull << 28);
         }
         if (options.judge) {
@@ -350,7 +390,8 @@ void ViewerSession::finishSetup() {
         JudgeOptions jo;
         jo.spp = estimate_->file.provenance.spp;
         jo.threads = options_.threads;
-        judge_ = std::make_unique<Judge>(*estimate_, jo, labels_, legend_);
+        if (made_) jo.objective.lambda = made_->options.lambda;  // the output's judge's λ
+        judge_ = std::make_unique<Judge>(*estimate_, jo, labels_, legend_, reference_);
     }
     if (!labels_.empty()) overlay_ = outlinePng(labels_, t.width, t.height);  // else as read
     if (extraPresets_.count("optimized")) {
@@ -598,7 +639,14 @@ void ViewerSession::runOptimize(int slot, std::vector<double> start, int iterati
         if (t.planes == 2) kind = labelled ? defaults.objectiveWithDefects : defaults.objective;
         if (kind == ObjectiveKind::Defects) {
             si.defects.resize(labels_.size());
-            for (size_t p = 0; p < labels_.size(); ++p) si.defects[p] = labels_[p] ? 255 : 0;
+            for (size_t p = 0; p < labels_.size(); ++p) si.defects[p] = labels_[p];  // the labels
+        }
+        if (made_) {  // the objective (and regions) that made the output
+            kind = made_->kind;
+            si.objective = made_->options;
+            if (!made_->mask.empty()) si.mask = made_->mask;
+            si.defects = made_->defects;
+            si.reference = made_->reference;
         }
         for (double& v : start) v = std::clamp(v, 0.0, 1.0);  // the optimizer's box
         si.startValues = {start};

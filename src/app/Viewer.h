@@ -56,12 +56,16 @@
 //                          NAME: letters, digits, - _ . and nothing else (no paths).
 // CONVENTION: the server never writes outside ViewerOptions::outDir.
 //
-// The optimizer from the current light: optimize's defaults (app/OptimizeJob.h
-// optimizeDefaults(): its method at the method's default budget; its objective: the defects
-// objective when the session has defect labels (a truth) and T has halves, the noise-unbiased
-// one with halves, eq. 2 without; λ and the loss mask "object" as optimize's defaults), one
-// start: the slot's light clamped into the optimizer's box [0, 1], one estimate of T (the
-// session's T; `planes` 1).
+// The optimizer from the current light: on an optimize OUTDIR, the objective that made the
+// output (ViewerObjective: summary.json's objective, λ, smooth_abs, its mask.png and, for the
+// defects objective, its regions-defects.png / regions-reference.png); otherwise optimize's
+// defaults (app/OptimizeJob.h optimizeDefaults(): the defects objective when the session has
+// defect labels (a truth) and T has halves, the noise-unbiased one with halves, eq. 2 without;
+// λ and the loss mask "object" as optimize's defaults). Always optimize's default method at its
+// default budget, one start: the slot's light clamped into the optimizer's box [0, 1], one
+// estimate of T (the session's T; `planes` 1). On an OUTDIR of the defects objective without a
+// truth the judge scores the same regions as optimize's judge did (one region, "defects", and
+// its reference), at the output's λ.
 #pragma once
 
 #include <array>
@@ -80,6 +84,8 @@
 #include "app/Cache.h"
 #include "app/Judge.h"
 #include "app/Transport.h"
+#include "objective/Objective.h"
+#include "objective/ObjectiveKind.h"
 #include "scene/Lamp.h"
 
 namespace sl {
@@ -110,6 +116,17 @@ struct ViewerOptions {
     int threads = 0;
     int pngLevel = 1;  // zlib level of the images (0..9)
 };
+
+/// The objective that made an optimize output, as the viewer reads it back.
+struct ViewerObjective {
+    ObjectiveKind kind = ObjectiveKind::Unbiased;
+    ObjectiveOptions options;                 // λ, smooth_abs (summary.json)
+    std::vector<uint8_t> mask;                // the loss mask (mask.png; empty: the part)
+    std::vector<uint8_t> defects, reference;  // the defects objective's regions (app/Truth.h)
+};
+/// Reads it from an optimize OUTDIR (summary.json "objective", "lambda", "smooth_abs", mask.png,
+/// the region files) for a T of width×height; InputError naming the file when one is unfit.
+ViewerObjective readViewerObjective(const std::filesystem::path& outDir, int width, int height);
 
 struct ViewerRequest {
     std::string method;  // "GET" or "POST"
@@ -156,6 +173,8 @@ class ViewerSession {
     const TransportMatrix& transport() const { return t_->file.matrix; }
     const ViewerOptions& options() const { return options_; }
     bool hasJudge() const { return judge_ != nullptr; }
+    /// The objective of the optimize OUTDIR the session was opened on (nullopt otherwise).
+    const std::optional<ViewerObjective>& outputObjective() const { return made_; }
     std::vector<std::string> presets() const;
 
     /// Slot 0 = A, 1 = B.
@@ -209,6 +228,8 @@ class ViewerSession {
     std::unique_ptr<Judge> judge_;
     std::vector<uint8_t> labels_;
     std::vector<RegionLabel> legend_;
+    std::vector<uint8_t> reference_;  // the judge's reference region (empty: the default)
+    std::optional<ViewerObjective> made_;
     std::map<std::string, std::vector<double>> extraPresets_;  // "optimized" of an OUTDIR
     std::array<std::vector<double>, 2> lights_;
     std::array<std::vector<Lamp>, 2> lamps_;

@@ -193,6 +193,15 @@ int runOptimize(OptimizeArgs a) {
                     r.initial.total, r.final.total,
                     r.heldInitial ? r.heldInitial->own.total : std::nan(""),
                     r.heldFinal ? r.heldFinal->own.total : std::nan(""), r.optimizer.seconds);
+    // The held-out columns are the optimized objective on the independent estimate, U beside.
+    for (const OptimizeRun& r : s.runs)
+        if (r.heldFinal)
+            std::printf(
+                "held out (lambda %g, %d spp): the %s loss %.6g -> %.6g (lower is better); U "
+                "there %.6g -> %.6g\n",
+                r.lambda, s.heldOut ? s.heldOut->file.provenance.spp : 0, r.objective.c_str(),
+                r.heldInitial->own.total, r.heldFinal->own.total, r.heldInitial->unbiased.total,
+                r.heldFinal->unbiased.total);
     for (const OptimizeRun& r : s.runs)
         if (r.judged)
             std::printf("judge (lambda %g): eq2 %.4f, U %.4f, mean E %.4f, %.0f%% texels dark%s\n",

@@ -61,14 +61,26 @@ DefectObjective::DefectObjective(int width, int height, std::vector<uint8_t> par
         throw std::invalid_argument("DefectObjective: need 0 <= low < high");
     const std::vector<uint8_t>& p = mask();
     defects_.resize(n);
-    for (size_t k = 0; k < n; ++k) defects_[k] = p[k] && defects[k] ? 1 : 0;
+    for (size_t k = 0; k < n; ++k) defects_[k] = p[k] ? defects[k] : 0;
     if (reference.empty()) {
         reference_ = defaultReference(width, height, p, defects_, 2);
     } else {
         reference_.resize(n);
         for (size_t k = 0; k < n; ++k) reference_[k] = p[k] && reference[k] && !defects_[k];
     }
-    pairsD_ = pairCount(width, height, defects_);
+    // The labels with a pair of neighbouring pixels of their own are measured.
+    std::array<double, 256> pairsOf{};
+    detail::forEachMaskedPair(width, height, defects_.data(), [&](size_t a, size_t b) {
+        if (defects_[a] == defects_[b]) pairsOf[defects_[a]] += 1;
+    });
+    labelIndex_.fill(-1);
+    for (int v = 1; v < 256; ++v)
+        if (pairsOf[v] > 0) {
+            labelIndex_[v] = static_cast<int>(labels_.size());
+            labels_.push_back(static_cast<uint8_t>(v));
+            pairsK_.push_back(pairsOf[v]);
+            pairsD_ += pairsOf[v];
+        }
     pairsR_ = pairCount(width, height, reference_);
     if (pairsD_ == 0)
         throw inputError(option("defects"), "no two neighbouring defect pixels on the part",
@@ -95,20 +107,27 @@ LossParts DefectObjective::evaluate(std::span<const double> Ya, std::span<const 
     detail::checkFinite(Yb, "Yb", "evaluate");
     detail::checkFinite(E, "E", "evaluate");
 
-    auto energy = [&](const std::vector<uint8_t>& region, double pairs) {
-        double g = 0;
-        detail::forEachMaskedPair(W, H, region.data(), [&](size_t p, size_t q) {
-            g += (Ya[q] - Ya[p]) * (Yb[q] - Yb[p]);
-        });
-        return g / pairs;
-    };
     LossParts r;
-    r.G = energy(defects_, pairsD_);
-    r.S = energy(reference_, pairsR_);
-    r.clamped = r.G < floor();  // the defects show no gradient (the reference may well)
-    const double phiD = detail::defectLogFloor(r.G, floor()),
+    const size_t K = labels_.size();
+    std::vector<double> gK(K, 0.0), phi(K), dPhi(K), weight;
+    forEachLabelPair(
+        [&](size_t k, size_t p, size_t q) { gK[k] += (Ya[q] - Ya[p]) * (Yb[q] - Yb[p]); });
+    double sumD = 0;
+    for (size_t k = 0; k < K; ++k) {
+        sumD += gK[k];
+        gK[k] /= pairsK_[k];
+        phi[k] = detail::defectLogFloor(gK[k], floor());
+        dPhi[k] = 1.0 / std::max(gK[k], floor());
+        r.clamped = r.clamped || gK[k] < floor();  // a label shows no gradient
+    }
+    r.G = K == 1 ? gK[0] : sumD / pairsD_;
+    double gR = 0;
+    detail::forEachMaskedPair(W, H, reference_.data(),
+                              [&](size_t p, size_t q) { gR += (Ya[q] - Ya[p]) * (Yb[q] - Yb[p]); });
+    r.S = gR / pairsR_;
+    const double phiD = detail::labelSoftMin(phi, kLabelSoftMin, &weight),
                  phiR = std::log(std::max(r.S, floor()));
-    const double dPhiD = 1.0 / std::max(r.G, floor()), dPhiR = r.S >= floor() ? 1.0 / r.S : 0.0;
+    const double dPhiR = r.S >= floor() ? 1.0 / r.S : 0.0;
     r.lGrad = phiR - phiD;
 
     const std::vector<uint8_t>& part = mask();
@@ -140,18 +159,22 @@ LossParts DefectObjective::evaluate(std::span<const double> Ya, std::span<const 
     if (dLdYa.empty() || dLdYb.empty()) return r;
     std::fill(dLdYa.begin(), dLdYa.end(), 0.0);
     std::fill(dLdYb.begin(), dLdYb.end(), 0.0);
-    auto addEnergy = [&](const std::vector<uint8_t>& region, double scale) {
-        detail::forEachMaskedPair(W, H, region.data(), [&](size_t p, size_t q) {
-            const double da = Ya[q] - Ya[p], db = Yb[q] - Yb[p];
-            dLdYa[q] += scale * db;
-            dLdYa[p] -= scale * db;
-            dLdYb[q] += scale * da;
-            dLdYb[p] -= scale * da;
-        });
+    auto addPair = [&](double scale, size_t p, size_t q) {
+        const double da = Ya[q] - Ya[p], db = Yb[q] - Yb[p];
+        dLdYa[q] += scale * db;
+        dLdYa[p] -= scale * db;
+        dLdYb[q] += scale * da;
+        dLdYb[p] -= scale * da;
     };
-    addEnergy(reference_, dPhiR / pairsR_);
+    const double scaleR = dPhiR / pairsR_;
+    detail::forEachMaskedPair(W, H, reference_.data(),
+                              [&](size_t p, size_t q) { addPair(scaleR, p, q); });
+    // L_con through g(D), the pooled defect energy: dG per label pair as r.G was formed.
     const double dConD = u != 0 && r.G >= floor() ? d_.contrastWeight * u / r.G : 0.0;
-    addEnergy(defects_, (dConD - dPhiD) / pairsD_);
+    std::vector<double> scaleK(K);
+    for (size_t j = 0; j < K; ++j)
+        scaleK[j] = -weight[j] * dPhi[j] / pairsK_[j] + dConD / (K == 1 ? pairsK_[0] : pairsD_);
+    forEachLabelPair([&](size_t label, size_t p, size_t q) { addPair(scaleK[label], p, q); });
     // d/dm of the band terms, then dm/dY = 1/(2·|P|) per half; the clip term per pixel.
     const double dDark = darkLog != 0 && m > 1e-12 * w ? 2.0 * d_.darkWeight * darkLog / m : 0.0;
     const double dCon = u != 0 ? -2.0 * d_.contrastWeight * u / m : 0.0;

@@ -2,14 +2,22 @@
 // relative to the defect-free surface's, on two independent half-sample images (as the unbiased
 // objective), while the image stays usefully exposed.
 //
-// Regions (image space, all within the part mask P): D, the defect pixels; R, the reference
+// Regions (image space, all within the part mask P): D, the defect pixels, each with its label
+// (the mask's value: a truth's labels, or one label for a plain mask); R, the reference
 // (default: the part pixels farther than kCleanMargin pixels from every defect pixel, the judge's
 // "defect-free surface"; objective/DefectVisibility.h). Pairs are right and lower neighbours with
 // both pixels in the region. With Y_a, Y_b the half images and Ȳ = (Y_a + Y_b)/2:
 //
 //   g(X)  = Σ_{pairs p,q ⊂ X} (Y_a,q − Y_a,p)(Y_b,q − Y_b,p) / #pairs(X)
 //           unbiased for the mean squared noise-free gradient in X (the judge's g²)
-//   L_vis = ψ(g(R)) − φ(g(D))  = −log(visibility²) where both g are above the floor
+//   L_vis = ψ(g(R)) − M,  M = φ(g(D)) with one label: −log(visibility²) above the floor
+//   With labels D_1..D_K (pairs with both pixels in one label; labels without a pair are not
+//   measured): the defects are the worst label's, softly,
+//   M     = softmin_τ φ(g(D_k)) = −τ·log( (1/K)·Σ_k exp(−φ(g(D_k))/τ) ),  τ = kLabelSoftMin
+//           between min_k φ_k and their mean, equal to φ when all labels are alike; its
+//           gradient weighs label k by w_k = exp(−φ_k/τ)/Σ_j exp(−φ_j/τ), so the optimizer works
+//           on the label that shows least and cannot buy one label's visibility with another's
+//           disappearance (a pooled g(D) would: one bright scratch outweighs a dent gone dark)
 //   φ(g)  = log g for g ≥ g0, else its tangent log g0 + (g − g0)/g0: finite, C¹ and increasing
 //           for any g (a noisy g can be ≤ 0), so a light that hides the defects is pushed back
 //   ψ(g)  = log max(g, g0): flat below the floor, so noise that makes the reference's estimate
@@ -35,6 +43,7 @@
 // same loss in any scalar type for the autodiff check (objective/Autodiff.h).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -55,6 +64,10 @@ inline constexpr double kMinVisibleBrightness = 0.05;
 /// defects objective's contrast floor (L_con, at twice this) and the answer's eligibility.
 inline constexpr double kMinDefectContrast = 0.01;
 
+/// τ of the soft-min over labels, in units of log g (= 2·log visibility): labels whose
+/// visibility differs by a factor 2 get weights in the ratio exp(2·log 2/τ) = 16.
+inline constexpr double kLabelSoftMin = 0.5;
+
 struct DefectObjectiveOptions {
     double whiteMean = 0;          // mean over the part of T·1 (the white furnace), > 0
     double low = 0.2, high = 0.8;  // the brightness band, as fractions of whiteMean
@@ -70,16 +83,17 @@ struct DefectObjectiveOptions {
 
 class DefectObjective final : public HalfImageObjective {
   public:
-    /// part: the loss mask (nonzero inside); defects: nonzero on defect pixels; reference: the
-    /// defect-free region (empty: the default above). All width*height. Throws InputError when
-    /// a region has no pixel pair or a size is wrong (naming option 'defects' / 'reference').
+    /// part: the loss mask (nonzero inside); defects: the label on defect pixels (0: none);
+    /// reference: the defect-free region (empty: the default above). All width*height. Throws
+    /// InputError when a region has no pixel pair or a size is wrong (naming option 'defects' /
+    /// 'reference').
     DefectObjective(int width, int height, std::vector<uint8_t> part, std::vector<uint8_t> defects,
                     std::vector<uint8_t> reference, ObjectiveOptions options,
                     DefectObjectiveOptions defect);
 
     /// Loss at the half images and E; fills the gradients when the spans are non-empty.
-    /// LossParts: lGrad = L_vis, lReg = mean(E²), G = g(D), S = g(R), clamped when g(D) is
-    /// below the floor (the defects show nothing); total includes L_exp.
+    /// LossParts: lGrad = L_vis, lReg = mean(E²), G = g(D) over every label's pairs, S = g(R),
+    /// clamped when some label's g is below the floor (it shows nothing); total includes L_exp.
     LossParts evaluate(std::span<const double> Ya, std::span<const double> Yb,
                        std::span<const double> E, std::span<double> dLdYa = {},
                        std::span<double> dLdYb = {}, std::span<double> dLdE = {}) const override;
@@ -94,6 +108,8 @@ class DefectObjective final : public HalfImageObjective {
     int height() const { return base_.height(); }
     const std::vector<uint8_t>& mask() const { return base_.mask(); }
     const std::vector<uint8_t>& defects() const { return defects_; }
+    /// The measured labels (values of the defect mask with a pixel pair), ascending.
+    const std::vector<uint8_t>& labels() const { return labels_; }
     const std::vector<uint8_t>& reference() const { return reference_; }
     const ObjectiveOptions& options() const { return base_.options(); }
 
@@ -103,7 +119,13 @@ class DefectObjective final : public HalfImageObjective {
   private:
     ImageObjective base_;  // the part mask, options, the env-map regulariser
     std::vector<uint8_t> defects_, reference_;
+    std::vector<uint8_t> labels_;        // measured labels
+    std::array<int, 256> labelIndex_{};  // value → index in labels_ (−1: not measured)
+    std::vector<double> pairsK_;         // pixel pairs of each label
     double pairsD_ = 0, pairsR_ = 0, partPixels_ = 0;
+    /// Calls f(k, p, q) for every pair of defect pixels p, q with one measured label k.
+    template <typename F>
+    void forEachLabelPair(F&& f) const;
     DefectObjectiveOptions d_;
 };
 

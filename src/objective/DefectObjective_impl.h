@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cmath>
+#include <vector>
 
 namespace sl {
 
@@ -18,21 +19,56 @@ template <typename S>
 S hingeSquared(const S& x) {
     return realPart(x) > 0 ? x * x : S(0.0);
 }
+/// M of DefectObjective.h: the soft-min over labels, −τ·log((1/K)·Σ exp(−φ_k/τ)), shifted by
+/// the smallest φ for range; one label: φ itself. weights (optional): dM/dφ_k.
+template <typename S>
+S labelSoftMin(const std::vector<S>& phi, double tau, std::vector<double>* weights = nullptr) {
+    using std::exp;
+    using std::log;
+    if (weights) weights->assign(phi.size(), 1.0);
+    if (phi.size() == 1) return phi.front();
+    size_t lo = 0;
+    for (size_t k = 1; k < phi.size(); ++k)
+        if (realPart(phi[k]) < realPart(phi[lo])) lo = k;
+    S sum(0.0);
+    for (const S& f : phi) sum += exp(-(f - phi[lo]) / tau);
+    if (weights)
+        for (size_t k = 0; k < phi.size(); ++k)
+            (*weights)[k] = std::exp(-(realPart(phi[k]) - realPart(phi[lo])) / tau) / realPart(sum);
+    return phi[lo] - tau * log(sum / static_cast<double>(phi.size()));
+}
 }  // namespace detail
+
+template <typename F>
+void DefectObjective::forEachLabelPair(F&& f) const {
+    detail::forEachMaskedPair(width(), height(), defects_.data(), [&](size_t p, size_t q) {
+        const uint8_t v = defects_[p];
+        if (v != defects_[q]) return;
+        const int k = labelIndex_[v];
+        if (k >= 0) f(static_cast<size_t>(k), p, q);
+    });
+}
 
 template <typename S>
 S DefectObjective::value(std::span<const S> Ya, std::span<const S> Yb, std::span<const S> E) const {
     const int W = width(), H = height();
-    S gD(0.0), gR(0.0);
-    detail::forEachMaskedPair(W, H, defects_.data(),
-                              [&](size_t p, size_t q) { gD += (Ya[q] - Ya[p]) * (Yb[q] - Yb[p]); });
+    std::vector<S> gK(labels_.size(), S(0.0));
+    S gR(0.0);
+    forEachLabelPair(
+        [&](size_t k, size_t p, size_t q) { gK[k] += (Ya[q] - Ya[p]) * (Yb[q] - Yb[p]); });
     detail::forEachMaskedPair(W, H, reference_.data(),
                               [&](size_t p, size_t q) { gR += (Ya[q] - Ya[p]) * (Yb[q] - Yb[p]); });
-    gD /= pairsD_;
+    std::vector<S> phi(gK.size(), S(0.0));
+    for (size_t k = 0; k < gK.size(); ++k)
+        phi[k] = detail::defectLogFloor(S(gK[k] / pairsK_[k]), floor());
     gR /= pairsR_;
+    // g(D), the pooled defect energy, as evaluate() forms LossParts::G (for L_con).
+    S gD(0.0);
+    for (const S& g : gK) gD += g;
+    gD = gK.size() == 1 ? S(gK[0] / pairsK_[0]) : S(gD / pairsD_);
     using std::log;
     S loss = (detail::realPart(gR) >= floor() ? S(log(gR)) : S(std::log(floor()))) -
-             detail::defectLogFloor(gD, floor());
+             detail::labelSoftMin(phi, kLabelSoftMin);
     S m(0.0), clip(0.0);
     const std::vector<uint8_t>& part = mask();
     for (size_t p = 0; p < part.size(); ++p) {
