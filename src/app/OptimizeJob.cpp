@@ -324,7 +324,9 @@ Plan plan(const OptimizeJobOptions& options) {
     p.validate =
         !distributed && p.requested != OptimizerMethod::PaperLoop && (o.selfCheck || !p.blackBox);
     if (p.blackBox || o.planes > 1 || !p.validate) p.noise.adapt = false;
-    p.noise.adaptGrid = !o.lightGrid && !p.blackBox && o.planes == 1 && p.validate;
+    // A given T (.tm, .shards) keeps its per-texel light as the spp it was traced at, so one
+    // process and MPI ranks (which cannot validate) return the same light from it.
+    p.noise.adaptGrid = !o.lightGrid && !p.blackBox && o.planes == 1 && p.validate && !p.tmInput;
     p.superSampleDefects = !p.blackBox && !distributed;
     if (o.ranks && o.ranks->distributed()) {
         p.ranks = o.ranks;

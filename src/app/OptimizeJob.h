@@ -152,7 +152,8 @@ struct OptimizeJobOptions {
     std::vector<double> continuation;
     /// The grid the light is searched on (objective/CoarseLight.h). Unset: the noise rule's
     /// (app/TrainingNoise.h: one value per texel, coarser while the gap stays large at the
-    /// most spp); set: that grid, the gap only measured.
+    /// most spp; per texel for a given T, .tm or .shards); set: that grid, the gap only
+    /// measured.
     std::optional<LightGrid> lightGrid;
     /// MPI ranks (docs/CLUSTER.md): with more than one, `input` is a .shards list naming one
     /// shard per rank, each rank holds only its own (app/Transport.h readShardOfRank), every
