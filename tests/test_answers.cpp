@@ -36,6 +36,28 @@ json readJson(const std::filesystem::path& p) {
     return json::parse(test::readFile(p));
 }
 
+/// A small bumpy part with one labelled scratch (a 3×12 stripe) and a 32-spp judge of it: the
+/// validation estimate the Answer tests score lights on.
+struct ScratchedPartJudge {
+    std::unique_ptr<Scene> scene;
+    TransportSource estimate;
+    std::unique_ptr<Judge> judge;
+    static std::unique_ptr<ScratchedPartJudge> make() {
+        auto r = std::make_unique<ScratchedPartJudge>();
+        r->scene =
+            std::make_unique<Scene>(test::bumpyPartDesc(32, 32), 40, 40, test::bumpyHeightMap(40));
+        JudgeOptions jo;
+        jo.spp = 32;
+        std::vector<uint8_t> labels(32 * 32, 0);
+        for (int y = 10; y < 22; ++y)
+            for (int x = 14; x < 17; ++x) labels[size_t(y) * 32 + x] = 1;
+        r->estimate = judgeEstimate(*r->scene, jo);
+        r->judge = std::make_unique<Judge>(r->estimate, jo, labels,
+                                           std::vector{RegionLabel{1, "scratch"}});
+        return r;
+    }
+};
+
 }  // namespace
 
 // The gap is how much better E* looks on its training estimate than on the validation one,
@@ -164,15 +186,8 @@ TEST(Answer, TheBestOnValidationIsTheAnswerAndALampCanBeIt) {
 // defects exactly as well by the ratio — and is still not the answer: its image is darker than
 // 0.05 of white. When every light is that dark, the best of them is, said so.
 TEST(Answer, ALightThatLeavesThePartBlackIsNotTheAnswer) {
-    auto scene =
-        std::make_unique<Scene>(test::bumpyPartDesc(32, 32), 40, 40, test::bumpyHeightMap(40));
-    JudgeOptions jo;
-    jo.spp = 32;
-    std::vector<uint8_t> labels(32 * 32, 0);
-    for (int y = 10; y < 22; ++y)
-        for (int x = 14; x < 17; ++x) labels[size_t(y) * 32 + x] = 1;
-    const TransportSource estimate = judgeEstimate(*scene, jo);
-    const Judge validation(estimate, jo, labels, {RegionLabel{1, "scratch"}});
+    const auto part = ScratchedPartJudge::make();
+    const Judge& validation = *part->judge;
     // Of two random lights, the one with the higher visibility is dimmed to 1 %.
     std::vector<double> a = randomLight(1250, 11), b = randomLight(1250, 12);
     const double va = combinedVisibility(validation.score(a).visibility),
@@ -204,15 +219,8 @@ TEST(Answer, ALightThatLeavesThePartBlackIsNotTheAnswer) {
 // only when no trusted optimized light passes the checks, and then only if it beats the
 // references on the validation estimate.
 TEST(Answer, AFinerLightStandsInOnlyWhenTheTrustedOnesFailTheChecks) {
-    auto scene =
-        std::make_unique<Scene>(test::bumpyPartDesc(32, 32), 40, 40, test::bumpyHeightMap(40));
-    JudgeOptions jo;
-    jo.spp = 32;
-    std::vector<uint8_t> labels(32 * 32, 0);
-    for (int y = 10; y < 22; ++y)
-        for (int x = 14; x < 17; ++x) labels[size_t(y) * 32 + x] = 1;
-    const TransportSource estimate = judgeEstimate(*scene, jo);
-    const Judge validation(estimate, jo, labels, {RegionLabel{1, "scratch"}});
+    const auto part = ScratchedPartJudge::make();
+    const Judge& validation = *part->judge;
     // Three random lights by visibility: best, middle, worst.
     std::vector<std::vector<double>> l{randomLight(1250, 21), randomLight(1250, 22),
                                        randomLight(1250, 23)};

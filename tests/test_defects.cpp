@@ -42,14 +42,19 @@ TransportMatrix halves(const Scene& scene, int spp) {
     return precomputeTransport(scene, o, 1).matrix;
 }
 
-/// Mean over the part of T·1: the white-furnace brightness.
-double whiteMean(const TransportMatrix& t) {
-    std::vector<double> one(t.cols(), 1.0), y(t.rows());
-    t.applyLuminance(one, y);
+/// Mean over the part of T·E: the part's brightness under E.
+double partMean(const TransportMatrix& t, const std::vector<double>& e) {
+    std::vector<double> y(t.rows());
+    t.applyLuminance(e, y);
     double s = 0, n = 0;
     for (size_t p = 0; p < y.size(); ++p)
         if (t.objectMask[p]) s += y[p], n += 1;
     return s / n;
+}
+
+/// Mean over the part of T·1: the white-furnace brightness.
+double whiteMean(const TransportMatrix& t) {
+    return partMean(t, std::vector<double>(t.cols(), 1.0));
 }
 
 /// Columns [x0, x1) of the image as the defect region.
@@ -114,12 +119,7 @@ TEST(DefectObjective, LowContrastDefectsCostTheFloorsLogSquared) {
     const TransportLoss lb(t, b, false);
     const std::vector<double> E(t.cols(), 0.5);
     const LossParts base = lb.evaluate(E, {});
-    std::vector<double> ya(t.rows());
-    t.applyLuminance(E, ya);
-    double m = 0, n = 0;
-    for (size_t p = 0; p < ya.size(); ++p)
-        if (t.objectMask[p]) m += ya[p], n += 1;
-    m /= n;
+    const double m = partMean(t, E);
     ASSERT_GT(base.G, 0.0);
     const double contrast = std::sqrt(base.G) / m;
     for (double f : {0.5, 0.99, 1.5, 4.0}) {  // the floor over the light's contrast
@@ -241,16 +241,11 @@ TEST(DefectObjective, ADarkPartCostsTheFloorsLogSquared) {
     const DefectObjective a(t.width, t.height, t.objectMask, stripe(t, 8, 12), {}, oo, with);
     const DefectObjective b(t.width, t.height, t.objectMask, stripe(t, 8, 12), {}, oo, without);
     const TransportLoss la(t, a, false), lb(t, b, false);
-    std::vector<double> ya(t.rows()), yb(t.rows());
     double last = 0;
     for (double level : {0.5, 0.12, 0.08, 0.02, 0.001}) {
         SCOPED_TRACE(level);
         const std::vector<double> E(t.cols(), level);  // the part's mean is level·w
-        t.applyLuminance(E, ya);
-        double m = 0, n = 0;
-        for (size_t p = 0; p < ya.size(); ++p)
-            if (t.objectMask[p]) m += ya[p], n += 1;
-        m /= n;
+        const double m = partMean(t, E);
         const double floor = with.darkFloor * with.whiteMean;
         const double expected =
             m < floor ? with.darkWeight * std::pow(std::log(m / floor), 2.0) : 0.0;

@@ -18,6 +18,23 @@
 
 namespace {
 
+/// One seed of facemill-scratches at `size`², a 32-spp judge, one thread, paper-loop (the
+/// baseline) and the configuration `config`.
+sl::RaceOptions tinyRace(const std::filesystem::path& workDir, int size,
+                         const std::string& config) {
+    sl::RaceOptions o;
+    o.parts = {"facemill-scratches"};
+    o.sizes = {size};
+    o.seeds = 1;
+    o.judgeSpp = 32;
+    o.threads = 1;
+    o.workDir = workDir;
+    o.configs.clear();
+    for (sl::RaceConfig& c : sl::defaultRaceConfigs())
+        if (c.name == "paper-loop" || c.name == config) o.configs.push_back(c);
+    return o;
+}
+
 using namespace sl;
 
 TEST(Race, JudgesEveryConfigurationAgainstTheBaselineIncludingTheDefectsDefault) {
@@ -147,17 +164,8 @@ TEST(Race, TinyWideWorldHasLampRowsAndWorstCaseStandings) {
     const auto x3p = dir.path() / "texture.x3p";
     writePartFiles(generateSurface(tex), x3p, {});
 
-    RaceOptions o;
-    o.parts = {"facemill-scratches"};
+    RaceOptions o = tinyRace(dir.path() / "race", 32, "default-unbiased");
     o.real = {x3p};
-    o.sizes = {32};
-    o.seeds = 1;
-    o.judgeSpp = 32;
-    o.threads = 1;
-    o.workDir = dir.path() / "race";
-    o.configs.clear();
-    for (RaceConfig& c : defaultRaceConfigs())
-        if (c.name == "paper-loop" || c.name == "default-unbiased") o.configs.push_back(c);
     ASSERT_EQ(o.configs.size(), 2u);
     o.configs.front().search.optimizer.iterations = 10;
     const RaceSummary s = runRace(o);
@@ -229,22 +237,11 @@ TEST(Race, KnowsTheTestPartsAndTheirShallowAndDeepVariants) {
     }
 }
 
-}  // namespace
-
 // The whole optimize job as a race configuration: the row's light is the job's self-checked
 // answer (envmap.exr of its output), scored on the race's judge like every other row.
 TEST(Race, TheWholeOptimizeJobIsRacedByItsAnswer) {
     test::TempDir dir("race-job");
-    RaceOptions o;
-    o.parts = {"facemill-scratches"};
-    o.sizes = {64};
-    o.seeds = 1;
-    o.judgeSpp = 32;
-    o.threads = 1;
-    o.workDir = dir.path() / "race";
-    o.configs.clear();
-    for (RaceConfig& c : defaultRaceConfigs())
-        if (c.name == "paper-loop" || c.name == "optimize") o.configs.push_back(c);
+    RaceOptions o = tinyRace(dir.path() / "race", 64, "optimize");
     ASSERT_EQ(o.configs.size(), 2u);
     ASSERT_TRUE(o.configs[1].wholeJob);
     o.configs.front().search.optimizer.iterations = 10;
@@ -268,3 +265,5 @@ TEST(Race, TheWholeOptimizeJobIsRacedByItsAnswer) {
     EXPECT_NE(log.find("optimize: " + answer["light"].get<std::string>() + ", "), std::string::npos)
         << log;
 }
+
+}  // namespace
