@@ -30,7 +30,19 @@ TransportSource judgeEstimate(const Scene& scene, const JudgeOptions& o) {
     return transportForScene(scene, p, o.cacheDir);
 }
 
+ViewingModel viewingFor(const Scene& scene) {
+    try {
+        return resolveViewing(scene.desc.viewing, scene.camera.mmPerPixel());
+    } catch (const std::invalid_argument& e) {
+        throw inputError(
+            (scene.desc.file.empty() ? std::string("the scene") : scene.desc.file.string()) +
+                ": viewing",
+            e.what(), "give positive distances, sizes and white luminance");
+    }
+}
+
 Judge::Judge(const Scene& scene, const JudgeOptions& options) : options_(options) {
+    if (!options_.viewing) options_.viewing = viewingFor(scene);
     owned_ = judgeEstimate(scene, options);
     estimate_ = &*owned_;
     buildObjectives();
@@ -125,9 +137,15 @@ JudgeScore Judge::score(std::span<const double> E, const std::string& name) cons
             if (partMask()[p]) lit += y[p], white += w[p];
     }
     s.brightness = white > 0 ? lit / white : 0.0;
-    if (!labels_.empty())
-        s.visibility =
-            defectVisibility(t.width, t.height, ya, yb, partMask(), labels_, legend_, reference_);
+    if (!labels_.empty()) {
+        std::optional<JndViewing> viewing;
+        const auto partPixels = static_cast<double>(
+            std::count_if(partMask().begin(), partMask().end(), [](uint8_t m) { return m != 0; }));
+        if (options_.viewing && partPixels > 0)
+            viewing = JndViewing{*options_.viewing, white / partPixels};
+        s.visibility = defectVisibility(t.width, t.height, ya, yb, partMask(), labels_, legend_,
+                                        reference_, viewing ? &*viewing : nullptr);
+    }
     return s;
 }
 
@@ -147,6 +165,12 @@ nlohmann::ordered_json parts(const LossParts& p) {
 
 }  // namespace
 
+nlohmann::ordered_json viewingJson(const ViewingModel& view) {
+    return {{"pixels_per_degree", view.pixelsPerDegree},
+            {"white_cd_m2", view.whiteLuminance},
+            {"text", view.describe()}};
+}
+
 nlohmann::ordered_json toJson(const JudgeScore& s) {
     nlohmann::ordered_json j;
     j["name"] = s.name;
@@ -164,7 +188,11 @@ nlohmann::ordered_json toJson(const JudgeScore& s) {
                      {"rms_gradient", number(r.rmsGradient)},
                      {"clean_rms_gradient", number(r.cleanRmsGradient)},
                      {"contrast", number(r.contrast)},
-                     {"weber", number(r.weber)}});
+                     {"weber", number(r.weber)},
+                     {"jnd", number(r.jnd)},
+                     {"jnd_frequency_cpd", number(r.jndFrequency)},
+                     {"mask_contrast", number(r.maskContrast)},
+                     {"luminance_cd_m2", number(r.luminance)}});
     j["visibility"] = v;
     j["eq2_parts"] = parts(s.eq2);
     j["unbiased_parts"] = parts(s.unbiased);
@@ -177,11 +205,19 @@ std::string formatJudgeTable(const std::vector<JudgeScore>& scores) {
         for (const RegionVisibility& r : s.visibility)
             if (std::find(regions.begin(), regions.end(), r.label.name) == regions.end())
                 regions.push_back(r.label.name);
-    // The worst label first: by the first light's visibility, ascending (unmeasured last).
+    // JND first where the judge has a viewing model (the ratio beside it).
+    const bool jnd = std::any_of(scores.begin(), scores.end(), [](const JudgeScore& s) {
+        return std::any_of(s.visibility.begin(), s.visibility.end(),
+                           [](const RegionVisibility& r) { return std::isfinite(r.jnd); });
+    });
+    // The worst label first: by the first light's JND (else visibility), ascending (unmeasured
+    // last).
     auto firstVisibility = [&](const std::string& name) {
         if (!scores.empty())
-            for (const RegionVisibility& r : scores.front().visibility)
-                if (r.label.name == name && std::isfinite(r.visibility)) return r.visibility;
+            for (const RegionVisibility& r : scores.front().visibility) {
+                const double v = jnd ? r.jnd : r.visibility;
+                if (r.label.name == name && std::isfinite(v)) return v;
+            }
         return std::numeric_limits<double>::infinity();
     };
     std::stable_sort(regions.begin(), regions.end(),
@@ -196,6 +232,10 @@ std::string formatJudgeTable(const std::vector<JudgeScore>& scores) {
                   "light", "eq2", "U", "mean E", "dark<1e-3", "bright");
     out << buf;
     for (const std::string& r : regions) {
+        if (jnd) {
+            std::snprintf(buf, sizeof buf, " %14s", ("JND " + r).substr(0, 14).c_str());
+            out << buf;
+        }
         std::snprintf(buf, sizeof buf, " %14s %8s", ("vis " + r).substr(0, 14).c_str(), "contrast");
         out << buf;
     }
@@ -209,6 +249,13 @@ std::string formatJudgeTable(const std::vector<JudgeScore>& scores) {
             const RegionVisibility* v = nullptr;
             for (const RegionVisibility& x : s.visibility)
                 if (x.label.name == r) v = &x;
+            if (jnd) {
+                if (v)
+                    std::snprintf(buf, sizeof buf, " %14.2f", v->jnd);
+                else
+                    std::snprintf(buf, sizeof buf, " %14s", "-");
+                out << buf;
+            }
             if (v)
                 std::snprintf(buf, sizeof buf, " %14.3f %8.4f", v->visibility, v->contrast);
             else

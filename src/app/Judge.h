@@ -8,7 +8,9 @@
 //   mean_E     mean texel value;  sparsity: fraction of texel values < kDarkTexel
 //   visibility with a truth label mask (height-map space, projected through each pixel's centre
 //              ray): per region, the noise-unbiased RMS gradient inside it over that of the
-//              defect-free surface, and its Weber contrast (objective/DefectVisibility.h)
+//              defect-free surface, and its Weber contrast (objective/DefectVisibility.h);
+//              with a viewing model, its JND: how many times its threshold a person sees it
+//              (perception/JndVisibility.h)
 // Both losses use the part mask (pixels whose every judge sample hit the part); lower is
 // better for both.
 //
@@ -51,7 +53,14 @@ struct JudgeOptions {
     std::filesystem::path truth;     // label mask in height-map space (optional)
     std::filesystem::path cacheDir;  // where the estimate is cached ("" = not stored)
     int threads = 0;
+    /// How a person sees the image: with it, each region's visibility in JND too
+    /// (perception/JndVisibility.h). Judge(scene, ...) takes the scene's when unset.
+    std::optional<ViewingModel> viewing;
 };
+
+/// The scene's viewing model (its "viewing" block, perception/ViewingModel.h), one pixel of
+/// its camera spanning Camera::mmPerPixel of the part.
+ViewingModel viewingFor(const Scene& scene);
 
 struct JudgeScore {
     std::string name;
@@ -108,8 +117,12 @@ class Judge {
 /// The judge's estimate for a scene (cached by fingerprint in cacheDir, traced otherwise).
 TransportSource judgeEstimate(const Scene& scene, const JudgeOptions& options);
 
+/// The viewing model as JSON: pixels_per_degree, white_cd_m2, text (ViewingModel::describe).
+nlohmann::ordered_json viewingJson(const ViewingModel& view);
+
 /// The score as JSON: name, eq2, unbiased, mean_E, sparsity, visibility (per region: name,
-/// value, pixels, visibility, rms_gradient, clean_rms_gradient, weber), eq2_parts, unbiased_parts.
+/// value, pixels, visibility, rms_gradient, clean_rms_gradient, weber, jnd, jnd_frequency_cpd,
+/// mask_contrast, luminance_cd_m2), eq2_parts, unbiased_parts.
 nlohmann::ordered_json toJson(const JudgeScore& score);
 
 /// A fixed-width table of scores, one row per light (for the terminal); the regions' columns

@@ -155,6 +155,7 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
         }
         JudgeOptions jo = o.judge;
         jo.cacheDir = cacheDirectory(o.cache);
+        if (!jo.viewing) jo.viewing = viewingFor(*scene);
         if (o.defects.empty() && !o.reference.empty())
             throw inputError(option("reference"), "is the reference of a defect region",
                              "give " + option("defects") + " too (e.g. auto)");
@@ -198,6 +199,7 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
                          {"cache_hit", sum.estimate.cacheHit},
                          {"image", {t.width, t.height}}};
         j["lambda"] = jo.objective.lambda;
+        j["viewing"] = viewingJson(*jo.viewing);
         if (!jo.truth.empty()) j["truth"] = jo.truth.string();
         if (regions) {
             j["defects"] = defectRegionSpec(o.defects, jo.truth).text();

@@ -175,6 +175,7 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         // objective's defect region, else of the truth's labels.
         JudgeOptions jo;
         jo.objective = o.objective;
+        jo.viewing = scene ? viewingFor(*scene) : defaultViewing();
         std::vector<uint8_t> labels;
         std::vector<RegionLabel> legend;
         if (kind == ObjectiveKind::Defects) {

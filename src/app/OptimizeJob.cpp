@@ -956,6 +956,12 @@ void checkAnswer(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
     r.run.answer = std::move(choice);
 }
 
+/// How a person sees the images (the judge's JND): the scene's viewing model, the default one
+/// when only T is at hand.
+ViewingModel viewingOf(const Inputs& in) {
+    return in.scene ? viewingFor(*in.scene) : defaultViewing();
+}
+
 /// Stage 4c: the judge's scores (the held-out estimate, at this run's λ) of the answer, the
 /// user's lamp, the paper's light and, when a reference is the answer, E*; the warnings.
 void judgeRun(const Plan& p, const Inputs& in, const OptimizeJobSummary& job, LambdaResult& r) {
@@ -964,6 +970,7 @@ void judgeRun(const Plan& p, const Inputs& in, const OptimizeJobSummary& job, La
         JudgeOptions jo;
         jo.objective = objectiveAt(p, run.lambda);
         jo.rgb = p.o.rgb;
+        jo.viewing = viewingOf(in);
         const Judge judge(*job.heldOut, jo, in.regionLabels, in.regionLegend, in.regionReference);
         run.judged = judge.score(r.e, run.dir.filename().string());
         run.judgedLamp = judge.score(in.lampE, "lamp");
@@ -1184,6 +1191,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
             paper["judge"] = toJson(*run.judgedPaper);
             optimized["judge"] = toJson(run.judgedOptimized ? *run.judgedOptimized : *run.judged);
             cmp["judge_spp"] = job.heldOut->file.provenance.spp;
+            cmp["viewing"] = viewingJson(viewingOf(in));
         }
         cmp["lamp"] = lamp;
         cmp["paper"] = paper;

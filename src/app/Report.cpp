@@ -453,6 +453,20 @@ double combinedVisibility(const json& judge) {
     return sl::combinedVisibility(std::span<const RegionVisibility>(regions));
 }
 
+/// The regions' JND as one (objective/DefectVisibility.h combinedJnd); NaN without JND.
+double combinedJnd(const json& judge) {
+    if (!judge.is_object() || !judge.contains("visibility")) return std::nan("");
+    std::vector<RegionVisibility> regions;
+    for (const json& r : judge["visibility"]) {
+        RegionVisibility v;
+        v.jnd = num(r, "jnd");
+        const double p = num(r, "pixels");
+        v.pixels = std::isfinite(p) && p > 0 ? static_cast<size_t>(p) : 0;
+        regions.push_back(v);
+    }
+    return sl::combinedJnd(std::span<const RegionVisibility>(regions));
+}
+
 std::string fmt(double v, int digits = 3) {
     if (!std::isfinite(v)) return "—";
     char buf[64];
@@ -536,6 +550,31 @@ std::string lowerLoss(double opt, double other, const std::string& under) {
     }
     out = percent(opt / other - 1.0) + " HIGHER (worse) than ";
     out += under;
+    return out;
+}
+
+/// "1.9 JND above threshold" / "below threshold (0.4 JND)": 1 JND is the threshold of seeing.
+std::string jndPhrase(double j) {
+    if (!std::isfinite(j)) return "—";
+    if (j >= 1.0) return fmt(j, 3) + " JND above threshold";
+    return "below threshold (" + fmt(j, 2) + " JND)";
+}
+
+/// The headline's first sentence in the units of the eye (perception/JndVisibility.h): "Under
+/// the optimized light the defects are 8.9 JND above threshold, 3.1 under your lamp (...) and
+/// 2.0 under the paper's light, as a person sees the image (38.8 px/deg, white 200 cd/m²). "
+/// Empty when the judge has no JND.
+std::string jndSentence(const json& opt, const json& lamp, const json& paper,
+                        const std::string& underLamp, const json& viewing) {
+    const double jo = combinedJnd(opt), jl = combinedJnd(lamp), jp = combinedJnd(paper);
+    if (!std::isfinite(jo) || !std::isfinite(jl)) return "";
+    std::string out = "Under the optimized light the defects are " + jndPhrase(jo) + ", " +
+                      fmt(jl, 3) + " " + underLamp;
+    if (std::isfinite(jp)) out += " and " + fmt(jp, 3) + " under the paper's light";
+    out += ", as a person sees the image";
+    if (viewing.contains("text") && viewing["text"].is_string())
+        out += " (" + viewing["text"].get<std::string>() + ")";
+    out += ". ";
     return out;
 }
 
@@ -706,7 +745,11 @@ std::string optimizeHeadline(const json& s) {
         const double vo = combinedVisibility(opt["judge"]), vl = combinedVisibility(lamp["judge"]),
                      vp = combinedVisibility(paper["judge"]);
         if (std::isfinite(vo) && std::isfinite(vl) && std::isfinite(vp)) {
-            out = "Under the optimized light the defects are " + moreVisible(vo, vl, underLamp);
+            out = jndSentence(opt["judge"], lamp["judge"], paper["judge"], underLamp,
+                              cmp.value("viewing", json::object()));
+            out += (out.empty() ? "Under the optimized light the defects are "
+                                : "By the visibility ratio they are ") +
+                   moreVisible(vo, vl, underLamp);
             out += " and " + moreVisible(vo, vp, "under the paper's light");
             out += ". Judge: defect visibility " + fmt(vo, 3) + " (optimized) vs " + fmt(vl, 3) +
                    " (your lamp) vs " + fmt(vp, 3);

@@ -342,6 +342,7 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
         labels_ = std::move(m.labels);
         legend_ = std::move(m.legend);
     }
+    if (scene) viewing_ = viewingFor(*scene);
     finishSetup();
 }
 
@@ -390,6 +391,7 @@ void ViewerSession::finishSetup() {
         JudgeOptions jo;
         jo.spp = estimate_->file.provenance.spp;
         jo.threads = options_.threads;
+        jo.viewing = viewing_;
         if (made_) jo.objective.lambda = made_->options.lambda;  // the output's judge's λ
         judge_ = std::make_unique<Judge>(*estimate_, jo, labels_, legend_, reference_);
     }

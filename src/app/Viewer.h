@@ -227,6 +227,7 @@ class ViewerSession {
     std::unique_ptr<TransportSource> t_, estimate_;
     std::unique_ptr<Judge> judge_;
     std::vector<uint8_t> labels_;
+    ViewingModel viewing_ = defaultViewing();  // the judge's JND: the scene's when it has one
     std::vector<RegionLabel> legend_;
     std::vector<uint8_t> reference_;  // the judge's reference region (empty: the default)
     std::optional<ViewerObjective> made_;

@@ -337,6 +337,16 @@ void parseRender(Fields& f, RenderDesc& r) {
     f.rejectUnknown();
 }
 
+/// "viewing": how a person sees the images (perception/ViewingModel.h).
+void parseViewing(Fields& f, ViewingDesc& v) {
+    if (f.get("pixels_per_degree")) v.pixelsPerDegree = f.positive("pixels_per_degree", 1.0);
+    v.distanceMm = f.positive("distance_mm", v.distanceMm);
+    v.displayPixelMm = f.positive("display_pixel_mm", v.displayPixelMm);
+    if (f.get("magnification")) v.magnification = f.positive("magnification", 1.0);
+    v.whiteCdM2 = f.positive("white_cd_m2", v.whiteCdM2);
+    f.rejectUnknown();
+}
+
 json parseJsonText(const std::string& text, const std::string& where) {
     return parseJsonInput(text, where);
 }
@@ -362,6 +372,8 @@ SceneDesc parseSceneJson(const json& j, const std::filesystem::path& baseDir,
     parseEnvmap(envmap, baseDir, d.envmap);
     auto render = section("render");
     parseRender(render, d.render);
+    auto viewing = section("viewing");
+    parseViewing(viewing, d.viewing);
     top.string("description", "");
     top.rejectUnknown();
     return d;

@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
+
+#include "perception/JndVisibility.h"
 
 namespace sl {
 
@@ -76,7 +79,8 @@ std::vector<RegionVisibility> defectVisibility(int w, int h, std::span<const dou
                                                std::span<const uint8_t> partMask,
                                                std::span<const uint8_t> labels,
                                                const std::vector<RegionLabel>& legend,
-                                               std::span<const uint8_t> reference) {
+                                               std::span<const uint8_t> reference,
+                                               const JndViewing* viewing) {
     const size_t n = static_cast<size_t>(w) * h;
     if (Ya.size() != n || Yb.size() != n || partMask.size() != n || labels.size() != n)
         throw std::invalid_argument("defectVisibility: image sizes differ");
@@ -103,6 +107,8 @@ std::vector<RegionVisibility> defectVisibility(int w, int h, std::span<const dou
     std::vector<uint8_t> part(n, 0);
     for (size_t p = 0; p < n; ++p) part[p] = partMask[p] != 0;
     const double partMean = meanOver(Ya, Yb, part);
+    std::optional<BandContrast> bands;
+    if (viewing) bands.emplace(w, h, Ya, Yb, partMask, viewing->white, viewing->view);
 
     std::vector<RegionVisibility> out;
     for (const RegionLabel& r : regions) {
@@ -122,6 +128,13 @@ std::vector<RegionVisibility> defectVisibility(int w, int h, std::span<const dou
         for (size_t p = 0; p < n; ++p) background[p] = ring[p] && partMask[p] && !any[p];
         const double mIn = meanOver(Ya, Yb, in), mBg = meanOver(Ya, Yb, background);
         v.weber = mBg > 0 ? (mIn - mBg) / mBg : kNaN;
+        if (bands && v.pixels > 0) {
+            const JndScore j = bands->score(in, clean);
+            v.jnd = j.jnd;
+            v.jndFrequency = j.jnd > 0 ? j.frequency : kNaN;
+            v.maskContrast = j.maskContrast;
+            v.luminance = j.luminance;
+        }
         out.push_back(v);
     }
     return out;
@@ -148,6 +161,17 @@ double combinedVisibility(std::span<const RegionVisibility> regions) {
 
 double combinedContrast(std::span<const RegionVisibility> regions) {
     return pooledRms(regions, &RegionVisibility::contrast);
+}
+
+double combinedJnd(std::span<const RegionVisibility> regions) {
+    double sum = 0;
+    bool any = false;
+    for (const RegionVisibility& r : regions)
+        if (std::isfinite(r.jnd) && r.pixels > 0) {
+            sum += std::pow(r.jnd, kJndPooling);
+            any = true;
+        }
+    return any ? std::pow(sum, 1.0 / kJndPooling) : kNaN;
 }
 
 }  // namespace sl

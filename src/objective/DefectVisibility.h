@@ -16,16 +16,21 @@
 //   weber_v  = (mean Ȳ over R_v − mean Ȳ over B_v) / mean Ȳ over B_v,  Ȳ = (Y_a + Y_b)/2,
 //              B_v = the unlabelled part pixels within kWeberRing pixels of R_v (its local
 //              background)
+//   jnd_v    with a viewing model: the region's visibility in just-noticeable differences over
+//            F's texture (perception/JndVisibility.h), with the band it is seen in and the
+//            texture's masking contrast
 //
 // Values that cannot be formed (no pairs, zero denominators) are NaN (JSON null).
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "core/RegionLabel.h"
+#include "perception/ViewingModel.h"
 
 namespace sl {
 
@@ -40,18 +45,31 @@ struct RegionVisibility {
     double visibility = 0;        // rms(R_v) / rms(F)
     double contrast = 0;          // rms(R_v) / mean brightness of the part
     double weber = 0;             // Weber contrast against the local background
+    double jnd = std::numeric_limits<double>::quiet_NaN();           // NaN: no viewing model given
+    double jndFrequency = std::numeric_limits<double>::quiet_NaN();  // c/deg it is seen at
+    double maskContrast =
+        std::numeric_limits<double>::quiet_NaN();                 // the texture's RMS band contrast
+    double luminance = std::numeric_limits<double>::quiet_NaN();  // cd/m², the part's mean
+};
+
+/// How the JND is seen: the viewing model and the image value shown at the display's white
+/// (the white furnace's mean over the part).
+struct JndViewing {
+    ViewingModel view;
+    double white = 0;
 };
 
 /// Per-label visibility. labels: width*height label image (image space); partMask: nonzero
 /// on the part. Labels present in `labels` but missing from `legend` are scored as
 /// "label-<v>"; legend entries with no pixel are reported with pixels = 0 and NaN scores.
-/// reference: nonzero where F may lie (empty: the whole part).
+/// reference: nonzero where F may lie (empty: the whole part). viewing: also the JND.
 std::vector<RegionVisibility> defectVisibility(int width, int height, std::span<const double> Ya,
                                                std::span<const double> Yb,
                                                std::span<const uint8_t> partMask,
                                                std::span<const uint8_t> labels,
                                                const std::vector<RegionLabel>& legend,
-                                               std::span<const uint8_t> reference = {});
+                                               std::span<const uint8_t> reference = {},
+                                               const JndViewing* viewing = nullptr);
 
 /// All regions as one: the RMS gradient over every region's pixels over the clean surface's,
 /// sqrt(Σ pixels·visibility² / Σ pixels) over the regions with pixels and a finite visibility
@@ -60,5 +78,8 @@ double combinedVisibility(std::span<const RegionVisibility> regions);
 /// The regions' contrast pooled the same way (the defects' RMS gradient over the mean
 /// brightness). NaN when there is none.
 double combinedContrast(std::span<const RegionVisibility> regions);
+/// The regions' JND as one: their Minkowski sum (exponent kJndPooling, probability summation:
+/// several regions each at threshold are seen more surely than one). NaN when there is none.
+double combinedJnd(std::span<const RegionVisibility> regions);
 
 }  // namespace sl

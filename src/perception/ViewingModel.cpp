@@ -39,6 +39,19 @@ std::string ViewingModel::describe() const {
            " cd/m²";
 }
 
+ViewingModel resolveViewing(const ViewingDesc& d, double imageMmPerPixel) {
+    if (d.pixelsPerDegree) {
+        if (!(*d.pixelsPerDegree > 0) || !std::isfinite(*d.pixelsPerDegree) || !(d.whiteCdM2 > 0) ||
+            !std::isfinite(d.whiteCdM2))
+            throw std::invalid_argument(
+                "ViewingModel: pixels per degree and white must be positive");
+        return {*d.pixelsPerDegree, d.whiteCdM2};
+    }
+    if (d.magnification)
+        return ViewingModel::part(d.distanceMm, *d.magnification, imageMmPerPixel, d.whiteCdM2);
+    return ViewingModel::display(d.distanceMm, d.displayPixelMm, d.whiteCdM2);
+}
+
 ViewingModel defaultViewing() {
     return ViewingModel::display(kViewingDistanceMm, kDisplayPixelMm, kDisplayWhiteCdM2);
 }

@@ -12,6 +12,7 @@
 // light that shows almost nothing is seen at the low luminance it has.
 #pragma once
 
+#include <optional>
 #include <string>
 
 namespace sl {
@@ -34,5 +35,19 @@ inline constexpr double kViewingDistanceMm = 600.0;
 inline constexpr double kDisplayPixelMm = 0.27;
 inline constexpr double kDisplayWhiteCdM2 = 200.0;
 ViewingModel defaultViewing();
+
+/// The scene file's "viewing" block as written (io/SceneFile.cpp checks its fields):
+/// pixels_per_degree given wins; else magnification given: the part through a loupe; else a
+/// display. Unset fields take the defaults above.
+struct ViewingDesc {
+    std::optional<double> pixelsPerDegree;
+    double distanceMm = kViewingDistanceMm;
+    double displayPixelMm = kDisplayPixelMm;
+    std::optional<double> magnification;
+    double whiteCdM2 = kDisplayWhiteCdM2;
+};
+/// The model for an image whose pixel covers `imageMmPerPixel` of the part (used by the
+/// magnification form only).
+ViewingModel resolveViewing(const ViewingDesc& desc, double imageMmPerPixel);
 
 }  // namespace sl

@@ -99,3 +99,13 @@ CameraDesc defaultCameraFor(double extentX, double extentZ, double heightMin, do
 }
 
 }  // namespace sl
+
+namespace sl {
+
+double Camera::mmPerPixel() const {
+    if (desc_.type == CameraDesc::Type::Orthographic) return desc_.widthMm / desc_.width;
+    const double distance = length(desc_.origin - desc_.target);
+    return 2.0 * distance * std::tan(desc_.fovDeg * std::numbers::pi / 360.0) / desc_.width;
+}
+
+}  // namespace sl

@@ -43,6 +43,10 @@ class Camera {
     /// most 1e-9 of its distance; orthographic: behind the film plane).
     std::optional<std::pair<double, double>> project(const Vec3d& p) const;
 
+    /// The part's length (scene units, mm) one pixel spans at the target: orthographic
+    /// widthMm / width; perspective 2·|origin − target|·tan(fov/2) / width.
+    double mmPerPixel() const;
+
     const CameraDesc& desc() const { return desc_; }
     int width() const { return desc_.width; }
     int height() const { return desc_.height; }

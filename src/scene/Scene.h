@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "perception/ViewingModel.h"
 #include "scene/Camera.h"
 #include "scene/Conductor.h"
 #include "scene/EnvMapBasis.h"
@@ -79,6 +80,7 @@ struct SceneDesc {
     CameraSpec camera;
     EnvMapDesc envmap;
     RenderDesc render;
+    ViewingDesc viewing;  // how a person sees the images (the judge's JND)
 };
 
 struct Scene {

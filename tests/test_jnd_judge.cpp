@@ -1,0 +1,122 @@
+// JND through the product: the scene file's viewing block, the judge's per-region JND and the
+// answer line that leads with it (perception/, app/Judge, app/Report).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "TestUtil.h"
+#include "app/Judge.h"
+#include "app/Report.h"
+#include "core/Error.h"
+#include "io/SceneFile.h"
+#include "scene/Scene.h"
+
+using namespace sl;
+
+TEST(Viewing, SceneFileBlockIsReadCheckedAndResolved) {
+    const std::string head = R"({"heightmap": {"path": "x.exr", "pixel_pitch": 0.01}, "viewing": )";
+    const SceneDesc d = parseScene(
+        head + R"({"distance_mm": 300, "display_pixel_mm": 0.25, "white_cd_m2": 100}})", ".");
+    const ViewingModel v = resolveViewing(d.viewing, 0.01);
+    EXPECT_DOUBLE_EQ(v.pixelsPerDegree, ViewingModel::display(300, 0.25, 100).pixelsPerDegree);
+    EXPECT_EQ(v.whiteLuminance, 100);
+    // Omitted: a monitor at a bench.
+    const SceneDesc none = parseScene(R"({"heightmap": {"path": "x.exr"}})", ".");
+    EXPECT_DOUBLE_EQ(resolveViewing(none.viewing, 0.01).pixelsPerDegree,
+                     defaultViewing().pixelsPerDegree);
+    // The part through a 5× loupe at 250 mm, 0.02 mm of it per image pixel.
+    const SceneDesc loupe = parseScene(head + R"({"distance_mm": 250, "magnification": 5}})", ".");
+    EXPECT_DOUBLE_EQ(resolveViewing(loupe.viewing, 0.02).pixelsPerDegree,
+                     ViewingModel::display(250, 0.1, kDisplayWhiteCdM2).pixelsPerDegree);
+    // Given directly, the angle wins.
+    const SceneDesc direct = parseScene(head + R"({"pixels_per_degree": 60}})", ".");
+    EXPECT_EQ(resolveViewing(direct.viewing, 0.01).pixelsPerDegree, 60);
+    // Bad values and unknown fields are refused, naming the field.
+    try {
+        parseScene(head + R"({"distance_mm": -1}})", ".");
+        FAIL() << "a negative distance was accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("viewing.distance_mm"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(parseScene(head + R"({"ppd": 60}})", "."), InputError);
+}
+
+namespace {
+
+struct LabelledPart {
+    std::unique_ptr<Scene> scene;
+    TransportSource estimate;
+    std::unique_ptr<Judge> judge;
+};
+
+LabelledPart labelledPart() {
+    LabelledPart r;
+    r.scene =
+        std::make_unique<Scene>(test::bumpyPartDesc(32, 32), 40, 40, test::bumpyHeightMap(40));
+    JudgeOptions jo;
+    jo.spp = 32;
+    jo.viewing = viewingFor(*r.scene);
+    std::vector<uint8_t> labels(32 * 32, 0);
+    for (int y = 10; y < 22; ++y)
+        for (int x = 14; x < 17; ++x) labels[size_t(y) * 32 + x] = 1;
+    r.estimate = judgeEstimate(*r.scene, jo);
+    r.judge =
+        std::make_unique<Judge>(r.estimate, jo, labels, std::vector{RegionLabel{1, "scratch"}});
+    return r;
+}
+
+}  // namespace
+
+TEST(JudgeJnd, TheSameLightDimmerHasTheSameRatioAndFewerJnd) {
+    const LabelledPart part = labelledPart();
+    std::vector<double> light(part.estimate.file.matrix.cols(), 0.0);
+    for (size_t i = 0; i < light.size(); i += 7) light[i] = 1.0;  // a sparse pattern of lamps
+    std::vector<double> dim = light;
+    for (double& v : dim) v *= 0.001;
+    const RegionVisibility bright = part.judge->score(light).visibility.at(0);
+    const RegionVisibility dark = part.judge->score(dim).visibility.at(0);
+    ASSERT_TRUE(std::isfinite(bright.jnd));
+    // The ratio cannot tell a light from the same light at 0.1 %; the eye can (Barten: lower
+    // luminance, lower sensitivity).
+    EXPECT_NEAR(dark.visibility, bright.visibility, 1e-9 * bright.visibility);
+    EXPECT_LT(dark.jnd, bright.jnd);
+    EXPECT_NEAR(dark.luminance, 0.001 * bright.luminance, 1e-9 * bright.luminance);
+    // No light: nothing to see.
+    const std::vector<double> off(light.size(), 0.0);
+    const RegionVisibility none = part.judge->score(off).visibility.at(0);
+    EXPECT_FALSE(none.jnd > 0);
+    // The score's JSON carries it.
+    const nlohmann::ordered_json j = toJson(part.judge->score(light));
+    EXPECT_DOUBLE_EQ(j["visibility"][0]["jnd"].get<double>(), bright.jnd);
+}
+
+TEST(JudgeJnd, TheAnswerLineLeadsWithJnd) {
+    auto judge = [](double jnd, double visibility) {
+        return nlohmann::json{
+            {"visibility",
+             {{{"name", "scratch"}, {"pixels", 100}, {"visibility", visibility}, {"jnd", jnd}}}}};
+    };
+    nlohmann::json s = {{"compare",
+                         {{"judge_spp", 1024},
+                          {"viewing", {{"text", "38.8 px/deg, white 200 cd/m²"}}},
+                          {"lamp", {{"name", "studio preset"}, {"judge", judge(3.1, 0.6)}}},
+                          {"paper", {{"judge", judge(2.0, 1.2)}}},
+                          {"optimized", {{"judge", judge(8.9, 26)}}}}}};
+    const std::string h = optimizeHeadline(s);
+    EXPECT_EQ(h.rfind("Under the optimized light the defects are 8.9 JND above threshold, 3.1 "
+                      "under your lamp (studio preset) and 2 under the paper's light, as a person "
+                      "sees the image (38.8 px/deg, white 200 cd/m²). By the visibility ratio "
+                      "they are 43× as visible",
+                      0),
+              0u)
+        << h;
+    s["compare"]["optimized"]["judge"] = judge(0.4, 26);
+    EXPECT_NE(optimizeHeadline(s).find("below threshold (0.4 JND)"), std::string::npos);
+    // Without JND (an output from before it): the ratio sentence as before.
+    s["compare"]["optimized"]["judge"]["visibility"][0].erase("jnd");
+    EXPECT_EQ(
+        optimizeHeadline(s).rfind("Under the optimized light the defects are 43× as visible", 0),
+        0u);
+}
