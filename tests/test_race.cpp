@@ -178,6 +178,12 @@ TEST(Race, TinyWideWorldHasLampRowsAndWorstCaseStandings) {
         EXPECT_EQ(l.config, kLampConfig);
         EXPECT_DOUBLE_EQ(l.vsLamp, 1.0);
         EXPECT_TRUE(std::isfinite(l.figure));
+        // JND beside the ratio: 1 against itself, undefined where the lamp shows nothing in JND
+        // (at 32² the part spans under a degree on the default screen).
+        if (l.jnd > 0)
+            EXPECT_DOUBLE_EQ(l.jndVsLamp, 1.0);
+        else
+            EXPECT_TRUE(std::isnan(l.jndVsLamp));
     }
     ASSERT_EQ(s.standings.size(), 3u);  // the two configs, then the lamp
     EXPECT_EQ(s.standings.back().config, kLampConfig);
@@ -193,6 +199,16 @@ TEST(Race, TinyWideWorldHasLampRowsAndWorstCaseStandings) {
         EXPECT_DOUBLE_EQ(st.worstVsLamp, *std::min_element(lamp.begin(), lamp.end()));
         EXPECT_DOUBLE_EQ(st.medianVsPaper, median(paper));
         EXPECT_DOUBLE_EQ(st.worstVsPaper, *std::min_element(paper.begin(), paper.end()));
+        // The JND standings over the parts whose lamp shows the defects at all.
+        std::vector<double> jnd;
+        for (const RaceRow& r : s.medians)
+            if (r.config == st.config && std::isfinite(r.jndVsLamp)) jnd.push_back(r.jndVsLamp);
+        if (jnd.empty()) {
+            EXPECT_TRUE(std::isnan(st.medianJndVsLamp)) << st.config;
+        } else {
+            EXPECT_DOUBLE_EQ(st.medianJndVsLamp, median(jnd)) << st.config;
+            EXPECT_DOUBLE_EQ(st.worstJndVsLamp, *std::min_element(jnd.begin(), jnd.end()));
+        }
     }
     EXPECT_DOUBLE_EQ(s.standings[0].medianVsPaper, 1.0);  // paper-loop against itself
     const RaceStanding& a = s.standings[0];

@@ -138,7 +138,7 @@ RaceRow medianRow(const std::vector<const RaceRow*>& rows) {
           &RaceRow::unbiased, &RaceRow::meanE, &RaceRow::sparsity, &RaceRow::visDefect,
           &RaceRow::visChatter, &RaceRow::trainLoss, &RaceRow::heldOwn, &RaceRow::ratioU,
           &RaceRow::ratioEq2, &RaceRow::ratioSeconds, &RaceRow::figure, &RaceRow::vsLamp,
-          &RaceRow::vsPaper})
+          &RaceRow::vsPaper, &RaceRow::jnd, &RaceRow::jndVsLamp})
         m.*f = med(f);
     std::vector<double> ev;
     for (const RaceRow* r : rows) ev.push_back(r->evaluations);
@@ -351,6 +351,7 @@ void scoreRow(RaceRow& r, const JudgeScore& js, bool figureIsU) {
     r.visChatter = regionVisibility(js, "chatter");
     r.figureIsU = figureIsU;
     r.figure = figureIsU ? js.unbiased.total : combinedVisibility(js.visibility);
+    r.jnd = combinedJnd(js.visibility);
 }
 
 RaceSummary raceOnWorlds(const RaceOptions& o) {
@@ -538,6 +539,7 @@ RaceSummary raceOnWorlds(const RaceOptions& o) {
                 r.ratioSeconds = r.seconds / base.seconds;
                 r.vsLamp = timesBetter(figureIsU, r.figure, lamp.figure);
                 r.vsPaper = timesBetter(figureIsU, r.figure, base.figure);
+                r.jndVsLamp = lamp.jnd > 0 ? r.jnd / lamp.jnd : kNaN;
             }
             sum.lamps.push_back(rows.back());
             rows.pop_back();
@@ -586,8 +588,9 @@ std::vector<RaceStanding> raceStandings(const std::vector<RaceRow>& medians,
     for (const std::string& name : configs) {
         RaceStanding st;
         st.config = name;
-        std::vector<double> lamp, paper, seconds;
-        st.worstVsLamp = st.worstVsPaper = std::numeric_limits<double>::infinity();
+        std::vector<double> lamp, paper, jnd, seconds;
+        st.worstVsLamp = st.worstVsPaper = st.worstJndVsLamp =
+            std::numeric_limits<double>::infinity();
         for (const RaceRow& r : medians) {
             if (r.config != name) continue;
             ++st.parts;
@@ -608,6 +611,7 @@ std::vector<RaceStanding> raceStandings(const std::vector<RaceRow>& medians,
             };
             take(r.vsLamp, lamp, st.worstVsLamp, st.worstLampPart);
             take(r.vsPaper, paper, st.worstVsPaper, st.worstPaperPart);
+            take(r.jndVsLamp, jnd, st.worstJndVsLamp, st.worstJndPart);
         }
         auto summarize = [](const std::vector<double>& v, double& med, double& worst) {
             med = v.empty() ? kNaN : median(v);
@@ -615,6 +619,7 @@ std::vector<RaceStanding> raceStandings(const std::vector<RaceRow>& medians,
         };
         summarize(lamp, st.medianVsLamp, st.worstVsLamp);
         summarize(paper, st.medianVsPaper, st.worstVsPaper);
+        summarize(jnd, st.medianJndVsLamp, st.worstJndVsLamp);
         st.medianSeconds = seconds.empty() ? kNaN : median(seconds);
         out.push_back(st);
     }
@@ -636,15 +641,18 @@ std::string raceWinner(const std::vector<RaceStanding>& standings) {
 std::string formatRaceStandings(const std::vector<RaceStanding>& standings) {
     std::ostringstream out;
     char buf[512];
-    std::snprintf(buf, sizeof buf, "%-31s %5s %6s %9s %9s %-26s %9s %9s %-26s %8s\n", "config",
-                  "parts", "failed", "xlamp-med", "xlamp-min", "worst part (lamp)", "xpl-med",
-                  "xpl-min", "worst part (paper-loop)", "seconds");
+    std::snprintf(buf, sizeof buf, "%-31s %5s %6s %9s %9s %-26s %9s %9s %-26s %8s %9s %9s %-26s\n",
+                  "config", "parts", "failed", "xlamp-med", "xlamp-min", "worst part (lamp)",
+                  "xpl-med", "xpl-min", "worst part (paper-loop)", "seconds", "JNDx-med",
+                  "JNDx-min", "worst part (JND, lamp)");
     out << buf;
     for (const RaceStanding& s : standings) {
-        std::snprintf(buf, sizeof buf, "%-31s %5d %6d %9.3f %9.3f %-26s %9.3f %9.3f %-26s %8.3f\n",
+        std::snprintf(buf, sizeof buf,
+                      "%-31s %5d %6d %9.3f %9.3f %-26s %9.3f %9.3f %-26s %8.3f %9.3f %9.3f %-26s\n",
                       s.config.c_str(), s.parts, s.failed, s.medianVsLamp, s.worstVsLamp,
                       s.worstLampPart.c_str(), s.medianVsPaper, s.worstVsPaper,
-                      s.worstPaperPart.c_str(), s.medianSeconds);
+                      s.worstPaperPart.c_str(), s.medianSeconds, s.medianJndVsLamp,
+                      s.worstJndVsLamp, s.worstJndPart.c_str());
         out << buf;
     }
     return out.str();
@@ -655,11 +663,13 @@ void writeRaceStandingsCsv(const std::filesystem::path& file,
     std::ostringstream s;
     s.precision(10);
     s << "config,parts,failed,vs_lamp_median,vs_lamp_worst,vs_lamp_worst_part,vs_paper_median,"
-         "vs_paper_worst,vs_paper_worst_part,seconds_median\n";
+         "vs_paper_worst,vs_paper_worst_part,seconds_median,jnd_vs_lamp_median,jnd_vs_lamp_worst,"
+         "jnd_vs_lamp_worst_part\n";
     for (const RaceStanding& r : standings)
         s << r.config << ',' << r.parts << ',' << r.failed << ',' << r.medianVsLamp << ','
           << r.worstVsLamp << ',' << r.worstLampPart << ',' << r.medianVsPaper << ','
-          << r.worstVsPaper << ',' << r.worstPaperPart << ',' << r.medianSeconds << '\n';
+          << r.worstVsPaper << ',' << r.worstPaperPart << ',' << r.medianSeconds << ','
+          << r.medianJndVsLamp << ',' << r.worstJndVsLamp << ',' << r.worstJndPart << '\n';
     writeTextAtomically(file, s.str());
 }
 
@@ -668,14 +678,15 @@ void writeRaceCsv(const std::filesystem::path& file, const std::vector<RaceRow>&
     s.precision(10);
     s << "part,config,seed,seconds_precompute,seconds_search,seconds,evaluations,eq2,unbiased,"
          "mean_E,sparsity,visibility_defect,visibility_chatter,train_loss,heldout_own,"
-         "ratio_U,ratio_eq2,ratio_seconds,figure,figure_value,vs_lamp,vs_paper\n";
+         "ratio_U,ratio_eq2,ratio_seconds,figure,figure_value,vs_lamp,vs_paper,jnd,jnd_vs_lamp\n";
     for (const RaceRow& r : rows)
         s << r.part << ',' << r.config << ',' << r.seed << ',' << r.secondsPrecompute << ','
           << r.secondsSearch << ',' << r.seconds << ',' << r.evaluations << ',' << r.eq2 << ','
           << r.unbiased << ',' << r.meanE << ',' << r.sparsity << ',' << r.visDefect << ','
           << r.visChatter << ',' << r.trainLoss << ',' << r.heldOwn << ',' << r.ratioU << ','
           << r.ratioEq2 << ',' << r.ratioSeconds << ',' << (r.figureIsU ? "U" : "visibility") << ','
-          << r.figure << ',' << r.vsLamp << ',' << r.vsPaper << '\n';
+          << r.figure << ',' << r.vsLamp << ',' << r.vsPaper << ',' << r.jnd << ',' << r.jndVsLamp
+          << '\n';
     writeTextAtomically(file, s.str());
 }
 

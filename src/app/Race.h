@@ -20,6 +20,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -112,6 +113,10 @@ struct RaceRow {
     bool figureIsU = false;
     double figure = 0;
     double vsLamp = 0, vsPaper = 0;  // times better than the studio lamp, than paper-loop
+    /// The defects' JND as a person sees them (objective/DefectVisibility.h combinedJnd; the
+    /// scene's viewing model) and its ratio to the lamp's; NaN without defects in view.
+    double jnd = std::numeric_limits<double>::quiet_NaN();
+    double jndVsLamp = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// The name of the studio lamp's reference row.
@@ -132,6 +137,11 @@ struct RaceStanding {
     std::string worstLampPart;
     double medianVsPaper = 0, worstVsPaper = 0;
     std::string worstPaperPart;
+    /// The same over parts on JND (the lamp's JND over the light's is not the winner's rule;
+    /// shown beside it). NaN when no part has JND.
+    double medianJndVsLamp = std::numeric_limits<double>::quiet_NaN(),
+           worstJndVsLamp = std::numeric_limits<double>::quiet_NaN();
+    std::string worstJndPart;
     double medianSeconds = 0;
 };
 
