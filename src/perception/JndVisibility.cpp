@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <future>
 #include <numbers>
 #include <stdexcept>
 
@@ -92,17 +93,37 @@ BandContrast::BandContrast(int width, int height, std::span<const double> Ya,
     const double partMean = count ? sum / static_cast<double>(count) : 0.0;
     luminance_ = white > 0 ? view.whiteLuminance * std::clamp(partMean / white, 0.0, 1.0) : 0.0;
 
-    // Gaussians of σ_0 .. σ_K (σ_{k+1} = 2σ_k), of each estimate, and the local means.
-    std::vector<std::vector<double>> ga, gb;
-    for (int k = 0; k <= kJndBands; ++k) {
-        ga.push_back(partGaussian(width, height, Ya, part, bandSigma(k)));
-        gb.push_back(partGaussian(width, height, Yb, part, bandSigma(k)));
+    // Gaussians of σ_0 .. σ_K (σ_{k+1} = 2σ_k) of each estimate, normalized over the part (the
+    // part's own weight convolved once per σ), one task per σ.
+    std::vector<double> maskedA(n), maskedB(n), weight(n);
+    for (size_t p = 0; p < n; ++p) {
+        weight[p] = part[p] ? 1.0 : 0.0;
+        maskedA[p] = part[p] ? Ya[p] : 0.0;
+        maskedB[p] = part[p] ? Yb[p] : 0.0;
     }
-    std::vector<double> meanImage(n);
-    for (size_t p = 0; p < n; ++p) meanImage[p] = 0.5 * (Ya[p] + Yb[p]);
+    std::vector<std::vector<double>> ga(kJndBands + 1), gb(kJndBands + 1);
+    {
+        std::vector<std::future<void>> tasks;
+        for (int k = 0; k <= kJndBands; ++k)
+            tasks.push_back(std::async(std::launch::async, [&, k] {
+                const std::vector<double> kernel = gaussianKernel(bandSigma(k));
+                const std::vector<double> den = convolve(width, height, weight, kernel);
+                ga[k] = convolve(width, height, maskedA, kernel);
+                gb[k] = convolve(width, height, maskedB, kernel);
+                for (size_t p = 0; p < n; ++p) {
+                    const bool reached = den[p] > 1e-12;
+                    ga[k][p] = reached ? ga[k][p] / den[p] : 0.0;
+                    gb[k][p] = reached ? gb[k][p] / den[p] : 0.0;
+                }
+            }));
+        for (auto& t : tasks) t.get();
+    }
     productAB_.assign(kJndBands, std::vector<double>(n, 0.0));
-    const std::vector<double> narrowest =
-        partGaussian(width, height, meanImage, part, kLocalMeanSigma);
+    // The narrowest local mean: Ȳ's Gaussian of kLocalMeanSigma (σ_4), the mean of the two
+    // estimates' (the normalized convolution is linear in the image).
+    static_assert(kLocalMeanSigma == 8.0, "σ_4 = 8 px is the narrowest local mean");
+    std::vector<double> narrowest(n);
+    for (size_t p = 0; p < n; ++p) narrowest[p] = 0.5 * (ga[4][p] + gb[4][p]);
     std::vector<double> wide(n);
     for (int k = 0; k < kJndBands; ++k) {
         // The band's local mean: the Gaussian 2σ_k of Ȳ, at least kLocalMeanSigma wide so that
