@@ -935,6 +935,10 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
       << ")</th><th>paper's light</th><th>optimized</th></tr></thead><tbody>\n";
     if (opt.contains("judge")) {
         const json &jl = lamp["judge"], &jp = paper["judge"], &jo = opt["judge"];
+        // JND first (as a person sees it: README "Visibility in JND"), the ratio beside it.
+        if (std::isfinite(combinedJnd(jo)))
+            h << compareRow("judge: JND of the defects (all regions)", combinedJnd(jl),
+                            combinedJnd(jp), combinedJnd(jo), 0);
         h << compareRow("judge: defect visibility (all regions)", combinedVisibility(jl),
                         combinedVisibility(jp), combinedVisibility(jo), 0);
         if (jo.contains("visibility"))
@@ -945,6 +949,9 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
                                ? num(j["visibility"][k], key)
                                : std::nan("");
                 };
+                if (std::isfinite(at(jo, "jnd")))
+                    h << compareRow("judge: JND of " + name, at(jl, "jnd"), at(jp, "jnd"),
+                                    at(jo, "jnd"), 0);
                 h << compareRow("judge: visibility of " + name, at(jl, "visibility"),
                                 at(jp, "visibility"), at(jo, "visibility"), 0);
                 h << compareRow("judge: contrast of " + name, at(jl, "contrast"),
@@ -975,7 +982,9 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
             h << compareRow("held out: U on the independent estimate (lower is better)", nan, nan,
                             num(s, "heldout_U"), -1);
     }
-    h << "</tbody></table>\n<p class=\"caption\">Defect visibility: a region's RMS image "
+    h << "</tbody></table>\n<p class=\"caption\">JND: how many times its threshold a person "
+         "sees the region on the screen (1: at the threshold, 0: nothing to see; the viewing "
+         "model in summary.json compare.viewing). Defect visibility: a region's RMS image "
          "gradient (noise-unbiased, from two independent halves of the judge's estimate) over "
          "that of the defect-free surface; 1 = no more salient than the machining texture. "
          "\"All regions\" pools every region's pixels. Contrast: the RMS gradient over the "
