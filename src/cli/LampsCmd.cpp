@@ -94,12 +94,21 @@ int runLamps(LampsArgs a) {
             "studio %.5g\n",
             s.judgement->measure.c_str(), s.judgement->higherIsBetter ? "higher" : "lower",
             s.judgement->target, s.judgement->lamps, s.judgement->studio);
-        for (size_t r = 0; r < s.judgedTarget->visibility.size(); ++r)
-            std::printf("  visibility of %s: E* %.3g, lamps %.3g, studio %.3g\n",
-                        s.judgedTarget->visibility[r].label.name.c_str(),
-                        s.judgedTarget->visibility[r].visibility,
-                        s.judgedLamps->visibility[r].visibility,
-                        s.judgedStudio->visibility[r].visibility);
+        for (size_t r = 0; r < s.judgedTarget->visibility.size(); ++r) {
+            const RegionVisibility &t = s.judgedTarget->visibility[r],
+                                   &l = s.judgedLamps->visibility[r],
+                                   &st = s.judgedStudio->visibility[r];
+            // JND first (README "Visibility in JND"), the ratio beside it.
+            if (std::isfinite(l.jnd))
+                std::printf(
+                    "  %s: %.3g JND under the lamps, %.3g under E*, %.3g under the studio "
+                    "lamp (visibility ratio %.3g, %.3g, %.3g)\n",
+                    t.label.name.c_str(), l.jnd, t.jnd, st.jnd, l.visibility, t.visibility,
+                    st.visibility);
+            else
+                std::printf("  visibility of %s: E* %.3g, lamps %.3g, studio %.3g\n",
+                            t.label.name.c_str(), t.visibility, l.visibility, st.visibility);
+        }
         std::printf("the lamps are %s E* by the judge (%+.1f %%)\n", s.judgement->verdict(),
                     100 * s.judgement->gap);
     }
