@@ -23,6 +23,7 @@
 #include "app/TransportBench.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
+#include "core/Interrupt.h"
 #include "io/AtomicFile.h"
 
 namespace sl::cli {
@@ -35,6 +36,13 @@ double mb(size_t b) {
 
 void logInfo(const std::string& m) {
     spdlog::info("{}", m);
+}
+
+/// A benchmark's CSV, after its last safe point (core/Interrupt.h): a Ctrl-C before it writes
+/// nothing, one after it lets the file appear whole.
+void writeBenchCsv(const std::string& path, const std::string& text) {
+    enterCommit();
+    writeTextAtomically(path, text);
 }
 
 struct RenderBenchArgs {
@@ -56,7 +64,7 @@ int runRenderBenchCmd(RenderBenchArgs a) {
                     row.bare.raysPerSecond() / 1e6, 100.0 * row.ratio());
     std::printf("(%dx%d image, %d spp, median of %d interleaved runs; ratio = renderer/bare)\n",
                 a.o.resolution, a.o.resolution, a.o.spp, a.o.repeats);
-    writeTextAtomically(a.csv, r.csv());
+    writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
@@ -110,7 +118,7 @@ int runTransportBenchCmd(TransportBenchArgs a) {
                 r.iterationFusedSlices / r.nonZerosRead());
     std::printf("(medians: tracing of %d interleaved runs, products of %d runs)\n", a.o.repeats,
                 r.productRepeats);
-    writeTextAtomically(a.csv, r.csv());
+    writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
@@ -136,7 +144,7 @@ int runLampsBenchCmd(LampsBenchArgs a) {
         "products over all of T / over the lamps' texels, one after the other on the same T "
         "and E*; cpu: CPU seconds of all threads)\n",
         a.o.count, a.o.size, a.o.size);
-    writeTextAtomically(a.csv, r.csv());
+    writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
@@ -159,7 +167,7 @@ int runDefectMapBenchCmd(const DefectMapBenchArgs& a) {
         "(ball-end test part at NxN, seed 1; median of %d runs; ratio = auto / paper in "
         "the same run)\n",
         a.o.repeats);
-    writeTextAtomically(a.csv, r.csv());
+    writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
@@ -179,7 +187,7 @@ int runScratchMapBenchCmd(const ScratchMapBenchArgs& a) {
                     row.seconds, row.patches, row.patchesMarked, 100.0 * row.markedFraction);
     std::printf("(kernel %d, patch %d, threshold %g; median of %d runs)\n", a.o.map.kernel,
                 a.o.map.patch, a.o.map.threshold, a.o.repeats);
-    writeTextAtomically(a.csv, r.csv());
+    writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
@@ -201,7 +209,7 @@ int runReadBenchCmd(const ReadBenchArgs& a) {
         std::printf("; Gwyddion's one-time initialisation %.3f s, not included",
                     r.gwyddionInitSeconds);
     std::printf(")\n");
-    writeTextAtomically(a.csv, r.csv());
+    writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
@@ -253,6 +261,7 @@ int runNoiseBenchCmd(NoiseArgs a) {
            << g.converged << ',' << g.seconds << ',' << g.trainLoss << ',' << g.heldOutLoss << ','
            << g.heldOutPaper << ',' << g.trainGap << ',' << g.relToTop << ',' << g.relToTopMin
            << ',' << g.relToTopMax << ',' << r.heldOutSpp << '\n';
+    enterCommit();  // both CSVs or neither (core/Interrupt.h)
     writeTextAtomically(a.csv, os.str());
     writeTextAtomically(a.groupsCsv(), og.str());
     std::printf("wrote %s and %s\n", a.csv.c_str(), a.groupsCsv().c_str());
@@ -303,7 +312,7 @@ int runSamplingBenchCmd(SamplingArgs a) {
         "reference; net = without the reference's own noise; /bsdf: ratios of net "
         "RMSE, seconds and 1/(RMSE^2 s) to bsdf in the same run)\n",
         a.o.resolution, a.o.resolution, a.o.envmap.c_str());
-    writeTextAtomically(a.csv, r.csv());
+    writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
@@ -327,7 +336,7 @@ int runDepthBenchCmd(DepthArgs a) {
         "(%dx%d image, %d spp, white light; this bounce = its share of the image at that "
         "max_depth)\n",
         a.o.resolution, a.o.resolution, a.o.spp);
-    writeTextAtomically(a.csv, r.csv());
+    writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
@@ -357,7 +366,7 @@ int runRegionBenchCmd(RegionArgs a) {
         "(%dx%d image, %d spp in two halves; seconds: median of %d interleaved runs; ratios to "
         "'every pixel'; footprint's T is the baseline's bit for bit: %s)\n",
         r.width, r.height, a.o.spp, a.o.repeats, r.rows[1].sameAsBaseline ? "yes" : "NO");
-    writeTextAtomically(a.csv, r.csv());
+    writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return r.rows[1].sameAsBaseline ? kOk : kRuntimeError;
 }
@@ -376,13 +385,13 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
         ->delimiter(',')
         ->capture_default_str();
     c->add_option("--size", a->o.resolution, "Image width and height")
-        ->check(CLI::Range(8, 4096))
+        ->check(inRange(8, 4096))
         ->capture_default_str();
     c->add_option("--spp", a->o.spp, "Samples per pixel")
-        ->check(CLI::Range(1, 4096))
+        ->check(inRange(1, 4096))
         ->capture_default_str();
     c->add_option("--repeats", a->o.repeats, "Runs per measurement (median)")
-        ->check(CLI::Range(1, 50))
+        ->check(inRange(1, 50))
         ->capture_default_str();
     c->add_option("--threads", a->o.threads, "Worker threads (0: all)")->capture_default_str();
     c->add_option("-o,--output", a->csv, "CSV output")->capture_default_str();
@@ -394,16 +403,16 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     t->add_option("scene", b->scene, "Scene file (default: the bundled scenes/default)");
     addSceneOverrides(t, b->o.sceneOverrides, false);
     t->add_option("--size", b->o.resolution, "Image width and height")
-        ->check(CLI::Range(8, 4096))
+        ->check(inRange(8, 4096))
         ->capture_default_str();
     t->add_option("--spp", b->o.spp, "Samples per pixel")
-        ->check(CLI::Range(1, 65536))
+        ->check(inRange(1, 65536))
         ->capture_default_str();
     t->add_option("--iterations", b->o.iterations, "Adam iterations")
-        ->check(CLI::Range(1, 1000000))
+        ->check(inRange(1, 1000000))
         ->capture_default_str();
     t->add_option("--repeats", b->o.repeats, "Runs per tracing measurement (median)")
-        ->check(CLI::Range(1, 50))
+        ->check(inRange(1, 50))
         ->capture_default_str();
     t->add_option("--threads", b->o.threads, "Worker threads (0: all)")->capture_default_str();
     t->add_option("-o,--output", b->csv, "CSV output")->capture_default_str();
@@ -414,7 +423,7 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
         "scratchmap", "Seconds of the paper's scratch map on synthetic NxN height maps");
     sm->add_option("--sizes", m->o.sizes, "Height-map sizes (N for NxN)")
         ->delimiter(',')
-        ->check(CLI::Range(1, 100000))
+        ->check(inRange(1, 100000))
         ->capture_default_str();
     sm->add_option("--kernel", m->o.map.kernel, "Moving-average window (samples)")
         ->capture_default_str();
@@ -422,7 +431,7 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     sm->add_option("--threshold", m->o.map.threshold, "Patch range threshold in [0, 1]")
         ->capture_default_str();
     sm->add_option("--repeats", m->o.repeats, "Runs per size (median)")
-        ->check(CLI::Range(1, 50))
+        ->check(inRange(1, 50))
         ->capture_default_str();
     sm->add_option("-o,--output", m->csv, "CSV output")->capture_default_str();
     sm->callback([m, &run] { run = [m] { return runScratchMapBenchCmd(*m); }; });
@@ -433,10 +442,10 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
         "Seconds to read an NxN height map from instrument files (X3P by our reader and by "
         "Gwyddion's, Gwyddion's .gwy) against the same heights from EXR");
     rbc->add_option("--size", rb->o.size, "N for the NxN height map")
-        ->check(CLI::Range(2, 20000))
+        ->check(inRange(2, 20000))
         ->capture_default_str();
     rbc->add_option("--repeats", rb->o.repeats, "Reads per file (median)")
-        ->check(CLI::Range(1, 50))
+        ->check(inRange(1, 50))
         ->capture_default_str();
     rbc->add_option("-o,--output", rb->csv, "CSV output")->capture_default_str();
     rbc->callback([rb, &run] { run = [rb] { return runReadBenchCmd(*rb); }; });
@@ -452,10 +461,10 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     lbc->add_option("--objectives", lb->objectives, "Objectives (default: unbiased,paper,defects)")
         ->delimiter(',');
     lbc->add_option("--count", lb->o.count, "Lamps (K)")
-        ->check(CLI::Range(1, 8))
+        ->check(inRange(1, 8))
         ->capture_default_str();
     lbc->add_option("--size", lb->o.size, "Image width and height")
-        ->check(CLI::Range(8, 4096))
+        ->check(inRange(8, 4096))
         ->capture_default_str();
     lbc->add_option("--work", lb->o.workDir, "Folder for the parts, runs and cache")
         ->capture_default_str();
@@ -469,14 +478,14 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
         "test part");
     dmc->add_option("--sizes", dm->o.sizes, "Height-map sizes (N for NxN)")
         ->delimiter(',')
-        ->check(CLI::Range(2, 100000))
+        ->check(inRange(2, 100000))
         ->capture_default_str();
     dmc->add_option("--repeats", dm->o.repeats, "Runs per size (median)")
-        ->check(CLI::Range(1, 50))
+        ->check(inRange(1, 50))
         ->capture_default_str();
     dmc->add_option("--texture-sectors", dm->o.map.textureSectors,
                     "auto: orientation sectors of the texture-change test (1: the texture whole)")
-        ->check(CLI::Range(1, 16))
+        ->check(inRange(1, 16))
         ->capture_default_str();
     dmc->add_option("-o,--output", dm->csv, "CSV output")->capture_default_str();
     dmc->callback([dm, &run] { run = [dm] { return runDefectMapBenchCmd(*dm); }; });
@@ -490,7 +499,7 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     nc->add_option("scene", n->o.scene, "Scene file")->required();
     addSceneOverrides(nc, n->o.sceneOverrides, false);
     nc->add_option("--size", n->o.resolution, "Image width and height")
-        ->check(CLI::Range(8, 4096))
+        ->check(inRange(8, 4096))
         ->capture_default_str();
     nc->add_option("--spps", n->o.spps, "Training spp values (even)")
         ->delimiter(',')
@@ -498,7 +507,7 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     nc->add_option("--heldout-spp", n->o.heldOutSpp, "spp of the shared held-out estimate")
         ->capture_default_str();
     nc->add_option("--seeds", n->o.seeds, "Training seeds per spp (medians over them)")
-        ->check(CLI::Range(1, 100))
+        ->check(inRange(1, 100))
         ->capture_default_str();
     nc->add_option("--optimizers", n->optimizers,
                    "METHOD[:BUDGET],... (budget: adam steps, NLopt evaluations, Ceres "
@@ -523,7 +532,7 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     sc->add_option("--envmap", sa->o.envmap, "Light: a file, const:V or a preset")
         ->capture_default_str();
     sc->add_option("--size", sa->o.resolution, "Image width and height")
-        ->check(CLI::Range(8, 4096))
+        ->check(inRange(8, 4096))
         ->capture_default_str();
     sc->add_option("--spps", sa->o.spps, "Sample counts compared")
         ->delimiter(',')
@@ -542,13 +551,13 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     dc->add_option("scene", da->scene, "Scene file (default: the bundled scenes/default)");
     addSceneOverrides(dc, da->o.sceneOverrides, false);
     dc->add_option("--size", da->o.resolution, "Image width and height")
-        ->check(CLI::Range(8, 4096))
+        ->check(inRange(8, 4096))
         ->capture_default_str();
     dc->add_option("--spp", da->o.spp, "Samples per pixel")
-        ->check(CLI::Range(1, 65536))
+        ->check(inRange(1, 65536))
         ->capture_default_str();
     dc->add_option("--max-depth", da->o.maxDepth, "Longest path length measured")
-        ->check(CLI::Range(3, 64))
+        ->check(inRange(3, 64))
         ->capture_default_str();
     dc->add_option("--threshold", da->o.threshold,
                    "Stop when the next bounce adds less than this share of the image")
@@ -565,13 +574,13 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     rc->add_option("scene", ra->scene, "Scene file (default: the bundled scenes/default)");
     addSceneOverrides(rc, ra->o.sceneOverrides, false);
     rc->add_option("--size", ra->o.resolution, "Image width and height")
-        ->check(CLI::Range(8, 8192))
+        ->check(inRange(8, 8192))
         ->capture_default_str();
     rc->add_option("--spp", ra->o.spp, "Samples per pixel (even: two halves)")
-        ->check(CLI::Range(2, 65536))
+        ->check(inRange(2, 65536))
         ->capture_default_str();
     rc->add_option("--repeats", ra->o.repeats, "Interleaved runs (median)")
-        ->check(CLI::Range(1, 100))
+        ->check(inRange(1, 100))
         ->capture_default_str();
     rc->add_option("--threads", ra->o.threads, "Worker threads (0: all)")->capture_default_str();
     rc->add_option("-o,--output", ra->csv, "CSV output")->capture_default_str();
