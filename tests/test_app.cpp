@@ -284,9 +284,9 @@ TEST(TargetsBench, ARowPerTargetWithItsBoundAndPhasesInsideTheWallTime) {
     o.workDir = dir.path();
     const TargetsBenchResult r = runTargetsBench(o);
     ASSERT_EQ(r.rows.size(), 3u);
-    EXPECT_EQ(r.rows[0].target, "optimize part.tm --lambda 10 --heldout none");
-    EXPECT_EQ(r.rows[1].target, "optimize part.tm --lambda 10");
-    EXPECT_EQ(r.rows[2].target, "lamps part.tm --count 1");
+    EXPECT_EQ(r.rows[0].target, "re-optimize T at lambda 10, no held-out");
+    EXPECT_EQ(r.rows[1].target, "re-optimize T at lambda 10, judge's held-out");
+    EXPECT_EQ(r.rows[2].target, "lamps on T, K = 1");
     EXPECT_EQ(r.rows[0].targetSeconds, 0.2);
     EXPECT_EQ(r.rows[1].targetSeconds, 0.2);
     EXPECT_EQ(r.rows[2].targetSeconds, 1.0);

@@ -121,10 +121,11 @@ TargetsBenchResult runTargetsBench(const TargetsBenchOptions& o) {
     }
     const std::string l = formatNumber(o.lambda);
     result.rows.push_back(
-        rowOf("optimize part.tm --lambda " + l + " --heldout none", kReoptimizeTarget, none));
-    result.rows.push_back(rowOf("optimize part.tm --lambda " + l, kReoptimizeTarget, judge));
+        rowOf("re-optimize T at lambda " + l + ", no held-out", kReoptimizeTarget, none));
     result.rows.push_back(
-        rowOf("lamps part.tm --count " + std::to_string(o.lampCount), kLampsTarget, lamp));
+        rowOf("re-optimize T at lambda " + l + ", judge's held-out", kReoptimizeTarget, judge));
+    result.rows.push_back(
+        rowOf("lamps on T, K = " + std::to_string(o.lampCount), kLampsTarget, lamp));
     return result;
 }
 

@@ -2,9 +2,9 @@
 // run so that the ratios share the machine's load. On the bundled part (or a scene) at N², S spp
 // with halves, after one untimed run that fills the cache (T, its validation estimate, the
 // paper's light, the specular start, the judge's estimate):
-//   - re-optimize: `optimize part.tm --lambda L --heldout none` (target 0.2 s),
+//   - re-optimize: optimize on the cached T at another lambda L, no held-out (target 0.2 s),
 //   - the same with the default held-out estimate, the judge's (target 0.2 s),
-//   - `lamps part.tm --count 3` (target 1 s).
+//   - lamps on T, K = 3 (target 1 s).
 // Each is run `repeats` times, interleaved, in this process (no process start-up: ~0.03 s),
 // as the command runs it (the job with the command's defaults, figures and report included).
 // A row: the median wall seconds and its ratio to the target, and where the time went: the

@@ -25,6 +25,7 @@
 #include "cli/Commands.h"
 #include "cli/Common.h"
 #include "core/Interrupt.h"
+#include "core/Text.h"
 #include "io/AtomicFile.h"
 
 namespace sl::cli {
@@ -138,9 +139,11 @@ int runTargetsBenchCmd(TargetsBenchArgs a) {
         "first runs keep; each job in this process as the command runs it (no process start-up), "
         "median and range of %d interleaved runs; ratio = median / bound; optimizer: its "
         "seconds (lamps: the fits K = 1..K), evals: loss-and-gradient evaluations in them; rest: "
-        "loading, E* (lamps), comparison lights, self-check, renders, figures, report)\n",
+        "loading, E* (lamps), comparison lights, self-check, renders, figures, report); the rows "
+        "are `optimize part.tm --lambda %s --heldout none`, the same with the default "
+        "--heldout, and `lamps part.tm --count %d`\n",
         a.o.scene.empty() ? "the bundled part" : a.o.scene.c_str(), a.o.size, a.o.size, a.o.spp,
-        r.precomputeSeconds, a.o.repeats);
+        r.precomputeSeconds, a.o.repeats, formatNumber(a.o.lambda).c_str(), a.o.lampCount);
     writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
