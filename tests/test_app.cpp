@@ -15,6 +15,7 @@
 #include "app/RenderBench.h"
 #include "app/Report.h"
 #include "app/ScratchMapBench.h"
+#include "app/TargetsBench.h"
 #include "app/TransportBench.h"
 #include "core/Error.h"
 #include "io/SceneFile.h"
@@ -269,6 +270,39 @@ TEST(TransportBench, MeasuresTracingTAndTheIterationOnT) {
 
     o.scene = s.dir / "missing.json";
     EXPECT_THROW(runTransportBench(o), InputError);
+}
+
+// bench targets: a row per issue-32 target, its bound, and the phases inside the job's wall time
+// (the optimizer's seconds and the lamps' E* and fits are parts of it, so the rest is >= 0).
+TEST(TargetsBench, ARowPerTargetWithItsBoundAndPhasesInsideTheWallTime) {
+    test::TempDir dir("targets-bench");
+    TargetsBenchOptions o;
+    o.size = 16;
+    o.spp = 2;
+    o.repeats = 1;
+    o.lampCount = 1;
+    o.workDir = dir.path();
+    const TargetsBenchResult r = runTargetsBench(o);
+    ASSERT_EQ(r.rows.size(), 3u);
+    EXPECT_EQ(r.rows[0].target, "re-optimize T at lambda 10, no held-out");
+    EXPECT_EQ(r.rows[1].target, "re-optimize T at lambda 10, judge's held-out");
+    EXPECT_EQ(r.rows[2].target, "lamps on T, K = 1");
+    EXPECT_EQ(r.rows[0].targetSeconds, 0.2);
+    EXPECT_EQ(r.rows[1].targetSeconds, 0.2);
+    EXPECT_EQ(r.rows[2].targetSeconds, 1.0);
+    for (const TargetsBenchRow& row : r.rows) {
+        SCOPED_TRACE(row.target);
+        EXPECT_GT(row.evaluations, 0);
+        EXPECT_GT(row.optimizerSeconds, 0);
+        EXPECT_GE(row.rest(), 0);
+        EXPECT_LE(row.secondsMin, row.seconds);
+        EXPECT_GE(row.secondsMax, row.seconds);
+        EXPECT_DOUBLE_EQ(row.ratio(), row.seconds / row.targetSeconds);
+    }
+    EXPECT_GT(r.rows[2].secondsTarget, 0);  // lamps optimized E* first
+    const std::string csv = r.csv();
+    EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4);
+    EXPECT_TRUE(std::filesystem::exists(dir.path() / "optimize" / "report.html"));
 }
 
 TEST(ScratchMapBench, MarksTheScratchAndWritesOneRowPerSize) {

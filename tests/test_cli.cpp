@@ -303,6 +303,46 @@ TEST_F(CliTest, OptionMessagesNameTheFlagReadably) {
     EXPECT_EQ(r.exitCode, 1) << r.output;
     EXPECT_NE(r.output.find("--scratches"), std::string::npos) << r.output;
     EXPECT_FALSE(std::filesystem::exists(dir / "g.exr"));
+    // Ranges (cli/Common.h inRange): the flag, the kind of value, readable bounds and what was
+    // given; CLI11's Range said "Value abc not in range 1 to 16384" and "-90.000000 to 90.000000".
+    struct Case {
+        std::string args, says;
+    };
+    for (const Case& c : std::vector<Case>{
+             {"render " + s + " --size 0", "--size: must be an integer in 1..16384, got '0'"},
+             {"render " + s + " --size abc", "--size: must be an integer in 1..16384, got 'abc'"},
+             {"render " + s + " --size 2.5", "--size: must be an integer in 1..16384, got '2.5'"},
+             {"lamps " + s + " --min-elevation 95",
+              "--min-elevation: must be a number in -90..90, got '95'"},
+             {"lamps " + s + " --min-elevation nan",
+              "--min-elevation: must be a number in -90..90, got 'nan'"},
+             {"bench race --alphas 2", "--alphas: must be a number in 0.0001..1, got '2'"},
+             {"optimize " + s + " --cache-max 5XB", "--cache-max: '5XB' is not a size"}}) {
+        r = runCli(c.args);
+        EXPECT_EQ(r.exitCode, 2) << c.args << "\n" << r.output;
+        EXPECT_NE(r.output.find(c.says), std::string::npos) << c.args << "\n" << r.output;
+        EXPECT_EQ(r.output.find("000000"), std::string::npos) << c.args << "\n" << r.output;
+    }
+}
+
+// The byte sizes of --cache-max (cli/Common.h parseByteSize): units of 1000 and of 1024, any
+// case, are parsed (the run then stops at the missing scene, exit 1); anything else is a usage
+// error naming the flag (CLI11's AsSizeValue said "The following arguments were not expected").
+TEST_F(CliTest, CacheMaxTakesSizesWithUnits) {
+    const std::string s = "optimize " + (dir / "missing.json").string() + " --cache-max ";
+    for (const char* good : {"500MB", "8gb", "2GiB", "1.5kb", "4096"}) {
+        const auto r = runCli(s + good);
+        EXPECT_EQ(r.exitCode, 1) << good << "\n" << r.output;
+        EXPECT_EQ(r.output.find("--cache-max"), std::string::npos) << good << "\n" << r.output;
+    }
+    for (const char* bad : {"MB", "5XB", "1e400", "1..2MB", "99999999999TB"}) {
+        const auto r = runCli(s + "'" + bad + "'");
+        EXPECT_EQ(r.exitCode, 2) << bad << "\n" << r.output;
+        EXPECT_NE(r.output.find("--cache-max: '" + std::string(bad) + "' is not a size"),
+                  std::string::npos)
+            << bad << "\n"
+            << r.output;
+    }
 }
 
 TEST_F(CliTest, RenderChecksItsOutputsAndSaysWhenItIsBlack) {

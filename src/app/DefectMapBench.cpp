@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "core/Progress.h"
 #include "core/Stats.h"
 #include "synth/SurfaceGenerator.h"
@@ -28,7 +29,9 @@ DefectMapBenchResult runDefectMapBench(const DefectMapBenchOptions& o) {
         row.size = n;
         std::vector<double> tAuto, tPaper;
         for (int r = 0; r < o.repeats; ++r) {
+            throwIfInterrupted();
             const DefectMap a = detectDefects(part.heights, n, n, autoOptions);
+            throwIfInterrupted();
             const DefectMap p = detectDefects(part.heights, n, n, paperOptions);
             tAuto.push_back(a.seconds);
             tPaper.push_back(p.seconds);

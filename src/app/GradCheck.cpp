@@ -9,6 +9,7 @@
 
 #include "app/InitialState.h"
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "core/Progress.h"
 #include "core/Stats.h"
 #include "core/Stopwatch.h"
@@ -66,7 +67,8 @@ std::unique_ptr<Lab> makeLab(const GradientSetup& s, int repeats) {
     lab->rec = std::make_unique<PathRecording>(recordPaths(*lab->scene, lab->render));
     lab->objective = std::make_unique<ImageObjective>(lab->t.width, lab->t.height,
                                                       lab->t.objectMask, s.objective);
-    lab->box = std::make_unique<RenderLoss>(*lab->scene, lab->render, *lab->objective);
+    lab->box = std::make_unique<RenderLoss>(*lab->scene, lab->render, *lab->objective, false,
+                                            /*interruptible=*/true);  // it keeps nothing
     lab->exact = std::make_unique<TransportLoss>(lab->t, *lab->objective, false);
     lab->E0 = initialEnvMap(s.init, lab->t.envWidth, lab->t.envHeight, false);
     lab->reference = autodiffThroughPaths(*lab->rec, *lab->objective, lab->E0, s.threads);
@@ -84,6 +86,7 @@ GradCheckRow measure(const Lab& lab, const std::string& method, const std::strin
     row.repeats = repeats;
     std::vector<double> secs, errs, coss;
     for (int r = 0; r < repeats; ++r) {
+        throwIfInterrupted();
         long renders = 0;
         const Stopwatch clock;
         const std::vector<double> g = gradient(r, renders);
@@ -308,7 +311,7 @@ struct Tracer {
             p.renders = blackBox ? r.evaluations : 0;
             out.push_back(p);
             overhead += clock.seconds();
-            return p.seconds < budget;
+            return p.seconds < budget && !interruptRequested();  // Ctrl-C: see run() below
         };
     }
 };
@@ -364,7 +367,6 @@ BenchGradientsReport runBenchGradients(const BenchGradientsOptions& o) {
         csv << r.method << "," << csvQuote(r.settings) << buf;
     }
     rep.gradientsCsv = o.outDir / "gradients.csv";
-    writeTextAtomically(rep.gradientsCsv, csv.str());
 
     if (o.optimizations) {
         const Lab& L = *lab;
@@ -373,6 +375,7 @@ BenchGradientsReport runBenchGradients(const BenchGradientsOptions& o) {
                       method.rfind("fd", 0) == 0 || method.rfind("spsa", 0) == 0};
             std::vector<double> E = L.E0;
             body(E, tr.callback());
+            throwIfInterrupted();  // the optimizer stopped at the iteration a Ctrl-C came
         };
         OptimizerOptions adam;
         adam.method = OptimizerMethod::Adam;
@@ -427,7 +430,12 @@ BenchGradientsReport runBenchGradients(const BenchGradientsOptions& o) {
             oc << csvQuote(p.method) << buf;
         }
         rep.optimizationCsv = o.outDir / "optimization.csv";
+        enterCommit();  // both CSVs or neither (core/Interrupt.h)
+        writeTextAtomically(rep.gradientsCsv, csv.str());
         writeTextAtomically(rep.optimizationCsv, oc.str());
+    } else {
+        enterCommit();
+        writeTextAtomically(rep.gradientsCsv, csv.str());
     }
     return rep;
 }

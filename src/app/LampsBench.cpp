@@ -8,6 +8,7 @@
 #include "app/Plot.h"
 #include "app/Race.h"
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "core/Progress.h"
 
 namespace sl {
@@ -39,6 +40,7 @@ LampsBenchResult runLampsBench(const LampsBenchOptions& o) {
     for (const std::string& partName : o.parts) {
         const BenchPart part = preparePart(partName, o.workDir);
         for (ObjectiveKind kind : o.objectives) {
+            throwIfInterrupted();
             task.detail(partName + " " + objectiveKindName(kind));
             LampsJobOptions j;
             j.input = part.scene;

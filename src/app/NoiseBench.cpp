@@ -6,6 +6,7 @@
 #include "app/HeldOut.h"
 #include "app/InitialState.h"
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "core/Progress.h"
 #include "core/Registry.h"
 #include "core/Stats.h"
@@ -164,7 +165,11 @@ NoiseBenchResult runNoiseBench(const NoiseBenchOptions& o) {
                     OptimizerOptions opt;
                     opt.method = m.method;
                     opt.iterations = m.budget;
+                    opt.callback = [](const IterationRecord&, std::span<const double>) {
+                        return !interruptRequested();  // Ctrl-C: stop here, then throw
+                    };
                     const OptimizerSummary sum = minimize(loss.problem(), e, opt);
+                    throwIfInterrupted();
                     task.advance();
                     const HeldOutScore h = scorer.score(e);
                     NoiseBenchRow row;

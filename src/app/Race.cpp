@@ -18,6 +18,7 @@
 #include "app/Transport.h"
 #include "app/Truth.h"
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "core/Progress.h"
 #include "core/Registry.h"
 #include "core/Stats.h"
@@ -404,6 +405,7 @@ RaceSummary raceOnWorlds(const RaceOptions& o) {
         for (int seed = 0; seed < o.seeds; ++seed) {
             std::vector<RaceRow> rows;
             for (const RaceConfig& c : o.configs) {
+                throwIfInterrupted();
                 const bool unb = c.search.objective == ObjectiveKind::Unbiased;
                 const bool defects = c.search.objective == ObjectiveKind::Defects;
                 RaceRow r;

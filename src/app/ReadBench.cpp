@@ -8,6 +8,7 @@
 
 #include "core/Error.h"
 #include "core/Image.h"
+#include "core/Interrupt.h"
 #include "core/Progress.h"
 #include "core/Stats.h"
 #include "core/Stopwatch.h"
@@ -61,11 +62,13 @@ ReadBenchResult runReadBench(const ReadBenchOptions& o) {
         Image img(n, n, 1);
         img.data = h;
         writeExr(exr, img);
+        throwIfInterrupted();  // between the files: the temporary folder goes with the throw
         // the instrument files carry invalid points (NaN), as real measurements do
         std::vector<float> withNan = h;
         for (size_t k = 0; k < withNan.size(); k += 9973)
             withNan[k] = std::numeric_limits<float>::quiet_NaN();
         writeX3p(x3p, n, n, withNan, pitch);
+        throwIfInterrupted();
         if (gwyddionBuilt()) {
             const Stopwatch init;
             (void)gwyddionDetect(exr);
@@ -93,6 +96,7 @@ ReadBenchResult runReadBench(const ReadBenchOptions& o) {
         row.megabytes = static_cast<double>(fs::file_size(c.file)) / 1e6;
         std::vector<double> seconds;
         for (int r = 0; r < o.repeats; ++r) {
+            throwIfInterrupted();
             const Stopwatch clock;
             const HeightmapData d = loadHeightmap(c.file, {}, c.how);
             seconds.push_back(clock.seconds());

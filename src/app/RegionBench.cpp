@@ -7,6 +7,7 @@
 #include "app/LossMask.h"
 #include "app/Plot.h"
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "core/Progress.h"
 #include "core/Stats.h"
 #include "core/Stopwatch.h"
@@ -89,6 +90,7 @@ RegionBenchResult runRegionBench(const RegionBenchOptions& o) {
     ProgressTask task("bench regions", static_cast<double>(o.repeats * settings.size()));
     for (int rep = 0; rep < o.repeats; ++rep)
         for (size_t k = 0; k < settings.size(); ++k) {
+            throwIfInterrupted();
             Setting& s = settings[k];
             const Stopwatch clock;
             RenderOptions ro = s.ro;

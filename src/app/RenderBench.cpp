@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "core/Progress.h"
 #include "core/Stats.h"
 #include "core/Stopwatch.h"
@@ -28,6 +29,7 @@ RenderBenchRow measure(const Scene& scene, const std::string& name, double genSe
     // Interleaved, so that both see the same machine state.
     std::vector<ThroughputRow> ren, bare;
     for (int i = 0; i < o.repeats; ++i) {
+        throwIfInterrupted();
         ren.push_back(benchRenderer(scene, opt));
         bare.push_back(benchBareEmbree(scene, opt));
     }

@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "core/Progress.h"
 #include "core/Stats.h"
 
@@ -32,6 +33,7 @@ ScratchMapBenchResult runScratchMapBench(const ScratchMapBenchOptions& o) {
         row.size = n;
         std::vector<double> seconds;
         for (int r = 0; r < o.repeats; ++r) {
+            throwIfInterrupted();
             const ScratchMap m = computeScratchMap(h, n, n, o.map);
             seconds.push_back(m.seconds);
             task.advance();

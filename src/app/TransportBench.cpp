@@ -10,6 +10,7 @@
 #include "app/Plot.h"
 #include "app/RenderBench.h"
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "core/Progress.h"
 #include "core/Stats.h"
 #include "core/Stopwatch.h"
@@ -29,7 +30,10 @@ namespace {
 template <typename F>
 double medianSeconds(int repeats, F&& f) {
     std::vector<double> t;
-    for (int i = 0; i < repeats; ++i) t.push_back(timeSeconds(f));
+    for (int i = 0; i < repeats; ++i) {
+        throwIfInterrupted();
+        t.push_back(timeSeconds(f));
+    }
     return median(t);
 }
 
@@ -38,6 +42,7 @@ template <typename F, typename G>
 std::pair<double, double> medianSecondsInterleaved(int repeats, F&& f, G&& g) {
     std::vector<double> a, b;
     for (int i = 0; i < repeats; ++i) {
+        throwIfInterrupted();
         a.push_back(timeSeconds(f));
         b.push_back(timeSeconds(g));
     }
@@ -142,7 +147,11 @@ TransportBenchResult runTransportBench(const TransportBenchOptions& a) {
         std::vector<double> x = e;
         OptimizerOptions oopt;
         oopt.iterations = a.iterations;
+        oopt.callback = [](const IterationRecord&, std::span<const double>) {
+            return !interruptRequested();  // Ctrl-C: stop at this iteration, then throw
+        };
         minimize(loss.problem(), x, oopt);
+        throwIfInterrupted();
     };
     std::tie(r.adam, r.adamSlices) = medianSecondsInterleaved(
         a.repeats, [&] { adam(csr); }, [&] { adam(blk); });

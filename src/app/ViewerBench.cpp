@@ -11,6 +11,7 @@
 #include "app/Viewer.h"
 #include "app/ViewerServer.h"
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "core/Stats.h"
 #include "core/Stopwatch.h"
 #include "io/AtomicFile.h"
@@ -46,6 +47,7 @@ std::vector<ViewerBenchRow> runViewerBench(const ViewerBenchOptions& o) {
 
         std::vector<double> relight, encode, image, light;
         for (int k = 0; k < o.repeats; ++k) {
+            throwIfInterrupted();
             ViewerTimings tm;
             session.imagePng(0, 1.0, &tm);
             relight.push_back(tm.relightMs);
@@ -60,6 +62,7 @@ std::vector<ViewerBenchRow> runViewerBench(const ViewerBenchOptions& o) {
         const double exposure = session.autoExposure(0);
         const std::string imagePath = "/api/image.png?slot=a&exposure=" + std::to_string(exposure);
         for (int k = 0; k < o.repeats + 1; ++k) {  // the first round warms up
+            throwIfInterrupted();  // the server stops as the exception leaves its scope
             e[static_cast<size_t>(k) % cols] += 1.0;
             nlohmann::json body = {{"slot", "a"}, {"E", e}};
             Stopwatch c1;
@@ -90,6 +93,7 @@ std::vector<ViewerBenchRow> runViewerBench(const ViewerBenchOptions& o) {
         csv << r.size << ',' << r.nnz << ',' << r.traceSeconds << ',' << r.imageMs << ','
             << r.lightMs << ',' << r.relightMs << ',' << r.encodeMs << ',' << r.pngBytes << ','
             << (r.size <= 512 ? 50 : 150) << '\n';
+    enterCommit();  // the last safe point (core/Interrupt.h)
     writeTextAtomically(o.csv, csv.str());
     return rows;
 }

@@ -20,9 +20,12 @@
 #include "app/RenderBench.h"
 #include "app/SamplingBench.h"
 #include "app/ScratchMapBench.h"
+#include "app/TargetsBench.h"
 #include "app/TransportBench.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
+#include "core/Interrupt.h"
+#include "core/Text.h"
 #include "io/AtomicFile.h"
 
 namespace sl::cli {
@@ -35,6 +38,13 @@ double mb(size_t b) {
 
 void logInfo(const std::string& m) {
     spdlog::info("{}", m);
+}
+
+/// A benchmark's CSV, after its last safe point (core/Interrupt.h): a Ctrl-C before it writes
+/// nothing, one after it lets the file appear whole.
+void writeBenchCsv(const std::string& path, const std::string& text) {
+    enterCommit();
+    writeTextAtomically(path, text);
 }
 
 struct RenderBenchArgs {
@@ -56,7 +66,7 @@ int runRenderBenchCmd(RenderBenchArgs a) {
                     row.bare.raysPerSecond() / 1e6, 100.0 * row.ratio());
     std::printf("(%dx%d image, %d spp, median of %d interleaved runs; ratio = renderer/bare)\n",
                 a.o.resolution, a.o.resolution, a.o.spp, a.o.repeats);
-    writeTextAtomically(a.csv, r.csv());
+    writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
@@ -110,7 +120,31 @@ int runTransportBenchCmd(TransportBenchArgs a) {
                 r.iterationFusedSlices / r.nonZerosRead());
     std::printf("(medians: tracing of %d interleaved runs, products of %d runs)\n", a.o.repeats,
                 r.productRepeats);
-    writeTextAtomically(a.csv, r.csv());
+    writeBenchCsv(a.csv, r.csv());
+    std::printf("wrote %s\n", a.csv.c_str());
+    return kOk;
+}
+
+struct TargetsBenchArgs {
+    TargetsBenchOptions o;
+    std::string csv = "bench-targets.csv";
+};
+
+int runTargetsBenchCmd(TargetsBenchArgs a) {
+    a.o.log = logInfo;
+    const TargetsBenchResult r = runTargetsBench(a.o);
+    std::printf("%s", r.table().c_str());
+    std::printf(
+        "(%s at %dx%d, %d spp with halves, T traced in %.1f s and cached with everything the "
+        "first runs keep; each job in this process as the command runs it (no process start-up), "
+        "median and range of %d interleaved runs; ratio = median / bound; optimizer: its "
+        "seconds (lamps: the fits K = 1..K), evals: loss-and-gradient evaluations in them; rest: "
+        "loading, E* (lamps), comparison lights, self-check, renders, figures, report); the rows "
+        "are `optimize part.tm --lambda %s --heldout none`, the same with the default "
+        "--heldout, and `lamps part.tm --count %d`\n",
+        a.o.scene.empty() ? "the bundled part" : a.o.scene.c_str(), a.o.size, a.o.size, a.o.spp,
+        r.precomputeSeconds, a.o.repeats, formatNumber(a.o.lambda).c_str(), a.o.lampCount);
+    writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
@@ -136,7 +170,7 @@ int runLampsBenchCmd(LampsBenchArgs a) {
         "products over all of T / over the lamps' texels, one after the other on the same T "
         "and E*; cpu: CPU seconds of all threads)\n",
         a.o.count, a.o.size, a.o.size);
-    writeTextAtomically(a.csv, r.csv());
+    writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
@@ -159,7 +193,7 @@ int runDefectMapBenchCmd(const DefectMapBenchArgs& a) {
         "(ball-end test part at NxN, seed 1; median of %d runs; ratio = auto / paper in "
         "the same run)\n",
         a.o.repeats);
-    writeTextAtomically(a.csv, r.csv());
+    writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
@@ -179,7 +213,7 @@ int runScratchMapBenchCmd(const ScratchMapBenchArgs& a) {
                     row.seconds, row.patches, row.patchesMarked, 100.0 * row.markedFraction);
     std::printf("(kernel %d, patch %d, threshold %g; median of %d runs)\n", a.o.map.kernel,
                 a.o.map.patch, a.o.map.threshold, a.o.repeats);
-    writeTextAtomically(a.csv, r.csv());
+    writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
@@ -201,7 +235,7 @@ int runReadBenchCmd(const ReadBenchArgs& a) {
         std::printf("; Gwyddion's one-time initialisation %.3f s, not included",
                     r.gwyddionInitSeconds);
     std::printf(")\n");
-    writeTextAtomically(a.csv, r.csv());
+    writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
@@ -253,6 +287,7 @@ int runNoiseBenchCmd(NoiseArgs a) {
            << g.converged << ',' << g.seconds << ',' << g.trainLoss << ',' << g.heldOutLoss << ','
            << g.heldOutPaper << ',' << g.trainGap << ',' << g.relToTop << ',' << g.relToTopMin
            << ',' << g.relToTopMax << ',' << r.heldOutSpp << '\n';
+    enterCommit();  // both CSVs or neither (core/Interrupt.h)
     writeTextAtomically(a.csv, os.str());
     writeTextAtomically(a.groupsCsv(), og.str());
     std::printf("wrote %s and %s\n", a.csv.c_str(), a.groupsCsv().c_str());
@@ -303,7 +338,7 @@ int runSamplingBenchCmd(SamplingArgs a) {
         "reference; net = without the reference's own noise; /bsdf: ratios of net "
         "RMSE, seconds and 1/(RMSE^2 s) to bsdf in the same run)\n",
         a.o.resolution, a.o.resolution, a.o.envmap.c_str());
-    writeTextAtomically(a.csv, r.csv());
+    writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
@@ -327,7 +362,7 @@ int runDepthBenchCmd(DepthArgs a) {
         "(%dx%d image, %d spp, white light; this bounce = its share of the image at that "
         "max_depth)\n",
         a.o.resolution, a.o.resolution, a.o.spp);
-    writeTextAtomically(a.csv, r.csv());
+    writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
@@ -357,7 +392,7 @@ int runRegionBenchCmd(RegionArgs a) {
         "(%dx%d image, %d spp in two halves; seconds: median of %d interleaved runs; ratios to "
         "'every pixel'; footprint's T is the baseline's bit for bit: %s)\n",
         r.width, r.height, a.o.spp, a.o.repeats, r.rows[1].sameAsBaseline ? "yes" : "NO");
-    writeTextAtomically(a.csv, r.csv());
+    writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return r.rows[1].sameAsBaseline ? kOk : kRuntimeError;
 }
@@ -376,13 +411,13 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
         ->delimiter(',')
         ->capture_default_str();
     c->add_option("--size", a->o.resolution, "Image width and height")
-        ->check(CLI::Range(8, 4096))
+        ->check(inRange(8, 4096))
         ->capture_default_str();
     c->add_option("--spp", a->o.spp, "Samples per pixel")
-        ->check(CLI::Range(1, 4096))
+        ->check(inRange(1, 4096))
         ->capture_default_str();
     c->add_option("--repeats", a->o.repeats, "Runs per measurement (median)")
-        ->check(CLI::Range(1, 50))
+        ->check(inRange(1, 50))
         ->capture_default_str();
     c->add_option("--threads", a->o.threads, "Worker threads (0: all)")->capture_default_str();
     c->add_option("-o,--output", a->csv, "CSV output")->capture_default_str();
@@ -394,16 +429,16 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     t->add_option("scene", b->scene, "Scene file (default: the bundled scenes/default)");
     addSceneOverrides(t, b->o.sceneOverrides, false);
     t->add_option("--size", b->o.resolution, "Image width and height")
-        ->check(CLI::Range(8, 4096))
+        ->check(inRange(8, 4096))
         ->capture_default_str();
     t->add_option("--spp", b->o.spp, "Samples per pixel")
-        ->check(CLI::Range(1, 65536))
+        ->check(inRange(1, 65536))
         ->capture_default_str();
     t->add_option("--iterations", b->o.iterations, "Adam iterations")
-        ->check(CLI::Range(1, 1000000))
+        ->check(inRange(1, 1000000))
         ->capture_default_str();
     t->add_option("--repeats", b->o.repeats, "Runs per tracing measurement (median)")
-        ->check(CLI::Range(1, 50))
+        ->check(inRange(1, 50))
         ->capture_default_str();
     t->add_option("--threads", b->o.threads, "Worker threads (0: all)")->capture_default_str();
     t->add_option("-o,--output", b->csv, "CSV output")->capture_default_str();
@@ -414,7 +449,7 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
         "scratchmap", "Seconds of the paper's scratch map on synthetic NxN height maps");
     sm->add_option("--sizes", m->o.sizes, "Height-map sizes (N for NxN)")
         ->delimiter(',')
-        ->check(CLI::Range(1, 100000))
+        ->check(inRange(1, 100000))
         ->capture_default_str();
     sm->add_option("--kernel", m->o.map.kernel, "Moving-average window (samples)")
         ->capture_default_str();
@@ -422,7 +457,7 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     sm->add_option("--threshold", m->o.map.threshold, "Patch range threshold in [0, 1]")
         ->capture_default_str();
     sm->add_option("--repeats", m->o.repeats, "Runs per size (median)")
-        ->check(CLI::Range(1, 50))
+        ->check(inRange(1, 50))
         ->capture_default_str();
     sm->add_option("-o,--output", m->csv, "CSV output")->capture_default_str();
     sm->callback([m, &run] { run = [m] { return runScratchMapBenchCmd(*m); }; });
@@ -433,10 +468,10 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
         "Seconds to read an NxN height map from instrument files (X3P by our reader and by "
         "Gwyddion's, Gwyddion's .gwy) against the same heights from EXR");
     rbc->add_option("--size", rb->o.size, "N for the NxN height map")
-        ->check(CLI::Range(2, 20000))
+        ->check(inRange(2, 20000))
         ->capture_default_str();
     rbc->add_option("--repeats", rb->o.repeats, "Reads per file (median)")
-        ->check(CLI::Range(1, 50))
+        ->check(inRange(1, 50))
         ->capture_default_str();
     rbc->add_option("-o,--output", rb->csv, "CSV output")->capture_default_str();
     rbc->callback([rb, &run] { run = [rb] { return runReadBenchCmd(*rb); }; });
@@ -452,15 +487,41 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     lbc->add_option("--objectives", lb->objectives, "Objectives (default: unbiased,paper,defects)")
         ->delimiter(',');
     lbc->add_option("--count", lb->o.count, "Lamps (K)")
-        ->check(CLI::Range(1, 8))
+        ->check(inRange(1, 8))
         ->capture_default_str();
     lbc->add_option("--size", lb->o.size, "Image width and height")
-        ->check(CLI::Range(8, 4096))
+        ->check(inRange(8, 4096))
         ->capture_default_str();
     lbc->add_option("--work", lb->o.workDir, "Folder for the parts, runs and cache")
         ->capture_default_str();
     lbc->add_option("-o,--output", lb->csv, "CSV output")->capture_default_str();
     lbc->callback([lb, &run] { run = [lb] { return runLampsBenchCmd(*lb); }; });
+
+    auto tb = std::make_shared<TargetsBenchArgs>();
+    CLI::App* tbc = bench->add_subcommand(
+        "targets",
+        "Issue 32's wall-clock targets, a row each with its ratio to the bound: re-optimizing a "
+        "cached T with another lambda (held-out none, and the judge's), lamps K = 3");
+    tbc->add_option("--scene", tb->o.scene, "Scene file (default: the bundled part)");
+    tbc->add_option("--size", tb->o.size, "Image width and height")
+        ->check(inRange(8, 4096))
+        ->capture_default_str();
+    tbc->add_option("--spp", tb->o.spp, "spp of T (two halves)")
+        ->check(inRange(2, 65536))
+        ->capture_default_str();
+    tbc->add_option("--lambda", tb->o.lambda, "The other lambda of the re-optimization")
+        ->check(nonNegativeNumber())
+        ->capture_default_str();
+    tbc->add_option("--count", tb->o.lampCount, "Lamps (K)")
+        ->check(inRange(1, 8))
+        ->capture_default_str();
+    tbc->add_option("--repeats", tb->o.repeats, "Timed runs of each target")
+        ->check(inRange(1, 50))
+        ->capture_default_str();
+    tbc->add_option("--work", tb->o.workDir, "Folder for T, the cache and the runs' outputs")
+        ->capture_default_str();
+    tbc->add_option("-o,--output", tb->csv, "CSV output")->capture_default_str();
+    tbc->callback([tb, &run] { run = [tb] { return runTargetsBenchCmd(*tb); }; });
 
     auto dm = std::make_shared<DefectMapBenchArgs>();
     CLI::App* dmc = bench->add_subcommand(
@@ -469,14 +530,14 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
         "test part");
     dmc->add_option("--sizes", dm->o.sizes, "Height-map sizes (N for NxN)")
         ->delimiter(',')
-        ->check(CLI::Range(2, 100000))
+        ->check(inRange(2, 100000))
         ->capture_default_str();
     dmc->add_option("--repeats", dm->o.repeats, "Runs per size (median)")
-        ->check(CLI::Range(1, 50))
+        ->check(inRange(1, 50))
         ->capture_default_str();
     dmc->add_option("--texture-sectors", dm->o.map.textureSectors,
                     "auto: orientation sectors of the texture-change test (1: the texture whole)")
-        ->check(CLI::Range(1, 16))
+        ->check(inRange(1, 16))
         ->capture_default_str();
     dmc->add_option("-o,--output", dm->csv, "CSV output")->capture_default_str();
     dmc->callback([dm, &run] { run = [dm] { return runDefectMapBenchCmd(*dm); }; });
@@ -490,7 +551,7 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     nc->add_option("scene", n->o.scene, "Scene file")->required();
     addSceneOverrides(nc, n->o.sceneOverrides, false);
     nc->add_option("--size", n->o.resolution, "Image width and height")
-        ->check(CLI::Range(8, 4096))
+        ->check(inRange(8, 4096))
         ->capture_default_str();
     nc->add_option("--spps", n->o.spps, "Training spp values (even)")
         ->delimiter(',')
@@ -498,7 +559,7 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     nc->add_option("--heldout-spp", n->o.heldOutSpp, "spp of the shared held-out estimate")
         ->capture_default_str();
     nc->add_option("--seeds", n->o.seeds, "Training seeds per spp (medians over them)")
-        ->check(CLI::Range(1, 100))
+        ->check(inRange(1, 100))
         ->capture_default_str();
     nc->add_option("--optimizers", n->optimizers,
                    "METHOD[:BUDGET],... (budget: adam steps, NLopt evaluations, Ceres "
@@ -523,7 +584,7 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     sc->add_option("--envmap", sa->o.envmap, "Light: a file, const:V or a preset")
         ->capture_default_str();
     sc->add_option("--size", sa->o.resolution, "Image width and height")
-        ->check(CLI::Range(8, 4096))
+        ->check(inRange(8, 4096))
         ->capture_default_str();
     sc->add_option("--spps", sa->o.spps, "Sample counts compared")
         ->delimiter(',')
@@ -542,13 +603,13 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     dc->add_option("scene", da->scene, "Scene file (default: the bundled scenes/default)");
     addSceneOverrides(dc, da->o.sceneOverrides, false);
     dc->add_option("--size", da->o.resolution, "Image width and height")
-        ->check(CLI::Range(8, 4096))
+        ->check(inRange(8, 4096))
         ->capture_default_str();
     dc->add_option("--spp", da->o.spp, "Samples per pixel")
-        ->check(CLI::Range(1, 65536))
+        ->check(inRange(1, 65536))
         ->capture_default_str();
     dc->add_option("--max-depth", da->o.maxDepth, "Longest path length measured")
-        ->check(CLI::Range(3, 64))
+        ->check(inRange(3, 64))
         ->capture_default_str();
     dc->add_option("--threshold", da->o.threshold,
                    "Stop when the next bounce adds less than this share of the image")
@@ -565,13 +626,13 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     rc->add_option("scene", ra->scene, "Scene file (default: the bundled scenes/default)");
     addSceneOverrides(rc, ra->o.sceneOverrides, false);
     rc->add_option("--size", ra->o.resolution, "Image width and height")
-        ->check(CLI::Range(8, 8192))
+        ->check(inRange(8, 8192))
         ->capture_default_str();
     rc->add_option("--spp", ra->o.spp, "Samples per pixel (even: two halves)")
-        ->check(CLI::Range(2, 65536))
+        ->check(inRange(2, 65536))
         ->capture_default_str();
     rc->add_option("--repeats", ra->o.repeats, "Interleaved runs (median)")
-        ->check(CLI::Range(1, 100))
+        ->check(inRange(1, 100))
         ->capture_default_str();
     rc->add_option("--threads", ra->o.threads, "Worker threads (0: all)")->capture_default_str();
     rc->add_option("-o,--output", ra->csv, "CSV output")->capture_default_str();

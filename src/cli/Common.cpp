@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <mutex>
@@ -53,12 +54,12 @@ void addCacheOptions(CLI::App* c, CacheLocation& cache) {
         "--no-cache", [&cache](std::int64_t) { cache.disabled = true; },
         "Trace every matrix; read and keep nothing in the cache");
     dir->excludes(off);
-    c->add_option_function<uintmax_t>(
-         "--cache-max", [&cache](uintmax_t bytes) { cache.maxBytes = bytes; },
+    c->add_option_function<std::string>(
+         "--cache-max",
+         [&cache](const std::string& text) { cache.maxBytes = parseByteSize(text, "--cache-max"); },
          "Size cap of the cache, e.g. 500MB or 8GB (default " +
              std::to_string(kDefaultCacheMaxBytes / 1000000000) +
              "GB): the least recently used matrices are removed first")
-        ->transform(CLI::AsSizeValue(true))
         ->type_name("SIZE");
 }
 
@@ -107,10 +108,10 @@ void addSceneOverrides(CLI::App* c, std::vector<std::string>& overrides, bool im
         };
     };
     c->add_option_function<int>("--width", camera("width"), "Image width in pixels (camera.width)")
-        ->check(CLI::Range(1, 16384));
+        ->check(inRange(1, 16384));
     c->add_option_function<int>("--height", camera("height"),
                                 "Image height in pixels (camera.height)")
-        ->check(CLI::Range(1, 16384));
+        ->check(inRange(1, 16384));
     c->add_option_function<int>(
          "--size",
          [&overrides](int v) {
@@ -118,7 +119,7 @@ void addSceneOverrides(CLI::App* c, std::vector<std::string>& overrides, bool im
              overrides.push_back("camera.height=" + std::to_string(v));
          },
          "Image width and height in pixels (a square image)")
-        ->check(CLI::Range(1, 16384));
+        ->check(inRange(1, 16384));
 }
 
 std::filesystem::path siblingPath(const std::filesystem::path& out, const std::string& ext,
@@ -176,6 +177,50 @@ CLI::Validator numberAtLeast(bool allowZero) {
 
 CLI::Validator positiveNumber() {
     return numberAtLeast(false);
+}
+
+CLI::Validator integerInRange(long long lo, long long hi) {
+    const std::string range = std::to_string(lo) + ".." + std::to_string(hi);
+    return CLI::Validator(
+        [lo, hi, range](std::string& text) -> std::string {
+            long long v = 0;
+            const char* end = text.data() + text.size();
+            const auto [ptr, ec] = std::from_chars(text.data(), end, v);
+            if (text.empty() || ec != std::errc() || ptr != end || v < lo || v > hi)
+                return "must be an integer in " + range + ", got '" + text + "'";
+            return {};
+        },
+        "in " + range);
+}
+
+CLI::Validator numberInRange(double lo, double hi) {
+    const std::string range = formatNumber(lo) + ".." + formatNumber(hi);
+    return CLI::Validator(
+        [lo, hi, range](std::string& text) -> std::string {
+            const std::optional<double> v = parseFiniteNumber(text);
+            if (!v || *v < lo || *v > hi)
+                return "must be a number in " + range + ", got '" + text + "'";
+            return {};
+        },
+        "in " + range);
+}
+
+uintmax_t parseByteSize(const std::string& text, const std::string& flag) {
+    size_t digits = 0;
+    while (digits < text.size() &&
+           (std::isdigit(static_cast<unsigned char>(text[digits])) || text[digits] == '.'))
+        ++digits;
+    const std::optional<double> v = parseFiniteNumber(text.substr(0, digits));
+    std::string unit = lower(text.substr(digits));
+    while (!unit.empty() && unit.front() == ' ') unit.erase(unit.begin());
+    static const std::pair<const char*, double> units[] = {
+        {"", 1.0},       {"b", 1.0},  {"kb", 1e3},     {"kib", 1024.0}, {"mb", 1e6},
+        {"mib", 0x1p20}, {"gb", 1e9}, {"gib", 0x1p30}, {"tb", 1e12},    {"tib", 0x1p40}};
+    for (const auto& [name, factor] : units)
+        if (v && unit == name && *v * factor < 0x1p63) return static_cast<uintmax_t>(*v * factor);
+    throw CLI::ValidationError(flag, "'" + text +
+                                         "' is not a size; give bytes with a unit, e.g. 500MB, "
+                                         "8GB or 2GiB");
 }
 
 CLI::Validator nonNegativeNumber() {

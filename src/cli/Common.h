@@ -79,6 +79,24 @@ void addCacheOptions(CLI::App* c, CacheLocation& cache);
 CLI::Validator positiveNumber();
 CLI::Validator nonNegativeNumber();
 
+/// An integer (integerInRange) or a finite number (numberInRange) in [lo, hi], refused as
+/// "--flag: must be an integer in 1..16384, got '0'" (CLI11's Range said "Value abc not in range
+/// 1 to 16384" for a word and printed its float bounds as -90.000000). inRange picks by the
+/// bounds' type, so `inRange(1, 8)` takes integers and `inRange(-90.0, 90.0)` numbers.
+CLI::Validator integerInRange(long long lo, long long hi);
+CLI::Validator numberInRange(double lo, double hi);
+template <typename T>
+CLI::Validator inRange(T lo, T hi) {
+    if constexpr (std::is_integral_v<T>)
+        return integerInRange(lo, hi);
+    else
+        return numberInRange(lo, hi);
+}
+
+/// A size in bytes with an optional unit (b, kb = 1000 b, kib = 1024 b, mb, mib, gb, gib, tb,
+/// tib; any case), e.g. 500MB or 8GB; CLI::ValidationError naming `flag` otherwise.
+uintmax_t parseByteSize(const std::string& text, const std::string& flag);
+
 /// A list of numbers "A,B,C" (a flag may also be given again): every entry a finite number,
 /// none empty ("1,,3" is refused). CLI::ValidationError naming `flag` otherwise (a usage error:
 /// it is thrown while the command line is parsed).

@@ -95,8 +95,8 @@ void registerGenSurface(CLI::App& app, std::function<int()>& run) {
               "A labelled test part (1024x1024 at 0.01 mm, every defect kind); the options "
               "given override its settings")
         ->excludes(process);
-    addSpec(c, g, "--width", &SurfaceSpec::width, "Samples per row")->check(CLI::Range(2, 32767));
-    addSpec(c, g, "--height", &SurfaceSpec::height, "Rows")->check(CLI::Range(2, 32767));
+    addSpec(c, g, "--width", &SurfaceSpec::width, "Samples per row")->check(inRange(2, 32767));
+    addSpec(c, g, "--height", &SurfaceSpec::height, "Rows")->check(inRange(2, 32767));
     addSpec(c, g, "--pitch", &SurfaceSpec::pitch, "Sample spacing in mm");
     addSpec(c, g, "--tool-radius", &SurfaceSpec::toolRadius,
             "Tool radius in mm (ball, face-mill cutter or flat end mill)");
@@ -163,12 +163,12 @@ void registerGenSurface(CLI::App& app, std::function<int()>& run) {
     addSpec(c, g, "--seed", &SurfaceSpec::seed, "Random seed");
     c->add_option("--image-size", a->imageSize,
                   "Scene file: camera image width and height in pixels (default: the scene's)")
-        ->check(CLI::Range(1, 16384));
+        ->check(inRange(1, 16384));
     c->add_option("--spp", a->spp, "Scene file: render.spp")
-        ->check(CLI::Range(1, 1 << 20))
+        ->check(inRange(1, 1 << 20))
         ->capture_default_str();
     c->add_option("--max-depth", a->maxDepth, "Scene file: render.max_depth")
-        ->check(CLI::Range(1, 64))
+        ->check(inRange(1, 64))
         ->capture_default_str();
     c->add_option("--scene", a->scene, "Also write a scene file (JSON) that renders the map");
     c->callback([a, &run] { run = [a] { return runGen(*a); }; });

@@ -13,6 +13,7 @@
 #include "app/Plot.h"
 #include "cli/Common.h"
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "io/AtomicFile.h"
 #include "io/EnvMapIO.h"
 #include "io/LampsFile.h"
@@ -34,20 +35,19 @@ void addSetupOptions(CLI::App* c, GradientSetup& s, SetupArgs& a) {
     c->add_option("--size", a.size,
                   "Image N×N pixels (replaces the scene's camera size; 0 keeps it). Autodiff and "
                   "finite differences need small images")
-        ->check(CLI::Range(0, 4096))
+        ->check(inRange(0, 4096))
         ->capture_default_str();
     c->add_option("--width", s.width, "Image width in pixels (overrides --size)")
-        ->check(CLI::Range(1, 4096));
+        ->check(inRange(1, 4096));
     c->add_option("--height", s.height, "Image height in pixels (overrides --size)")
-        ->check(CLI::Range(1, 4096));
+        ->check(inRange(1, 4096));
     c->add_option("--spp", a.spp, "Samples per pixel (0 keeps render.spp)")
-        ->check(CLI::Range(0, 1 << 20))
+        ->check(inRange(0, 1 << 20))
         ->capture_default_str();
     c->add_option("--max-depth", s.maxDepth, "Mitsuba max_depth (overrides render.max_depth)")
-        ->check(CLI::Range(1, 64));
+        ->check(inRange(1, 64));
     c->add_option("--seed", s.seed, "Random seed (overrides render.seed)");
-    c->add_option("--threads", s.threads, "Worker threads (0: all cores)")
-        ->check(CLI::Range(0, 4096));
+    c->add_option("--threads", s.threads, "Worker threads (0: all cores)")->check(inRange(0, 4096));
     c->add_option("--lambda", s.objective.lambda, "Regulariser weight λ")
         ->check(nonNegativeNumber())
         ->capture_default_str();
@@ -78,6 +78,7 @@ int runGradCheckCmd(GradCheckArgs a) {
     const GradCheckReport r = runGradCheck(a.o);
     std::fputs(r.table().c_str(), stdout);
     if (!a.out.empty()) {
+        enterCommit();  // the last safe point (core/Interrupt.h)
         writeTextAtomically(a.out, r.json());
         std::printf("wrote %s\n", a.out.c_str());
     }
@@ -155,16 +156,16 @@ void registerGradients(CLI::App& app, std::function<int()>& run) {
             ->check(CLI::IsMember(gradCheckMethods()))
             ->capture_default_str();
         c->add_option("--fd-step", a->o.fd.h, "Finite-difference step h (E units)")
-            ->check(CLI::Range(1e-12, 0.49))
+            ->check(inRange(1e-12, 0.49))
             ->capture_default_str();
         c->add_option("--spsa-c", a->o.spsa.c, "SPSA perturbation size c")
             ->check(positiveNumber())
             ->capture_default_str();
         c->add_option("--spsa-q", a->o.spsa.q, "SPSA estimates averaged per gradient")
-            ->check(CLI::Range(1, 1 << 20))
+            ->check(inRange(1, 1 << 20))
             ->capture_default_str();
         c->add_option("--repeats", a->o.repeats, "Repeats (medians of time and error)")
-            ->check(CLI::Range(1, 1000))
+            ->check(inRange(1, 1000))
             ->capture_default_str();
         c->add_option("-o,--output", a->out, "Also write the report to this JSON file");
         c->callback([a, &run] { run = [a] { return runGradCheckCmd(*a); }; });
@@ -218,13 +219,13 @@ void registerGradients(CLI::App& app, std::function<int()>& run) {
             ->check(positiveNumber())
             ->capture_default_str();
         c->add_option("--repeats", o.repeats, "Repeats per measurement (medians)")
-            ->check(CLI::Range(1, 1000))
+            ->check(inRange(1, 1000))
             ->capture_default_str();
         c->add_option("--iterations", o.iterations, "Adam iterations (exact, autodiff, fd-adam)")
-            ->check(CLI::Range(1, 1000000))
+            ->check(inRange(1, 1000000))
             ->capture_default_str();
         c->add_option("--spsa-iterations", o.spsaIterations, "SPSA iterations")
-            ->check(CLI::Range(1, 100000000))
+            ->check(inRange(1, 100000000))
             ->capture_default_str();
         c->add_option("--budget", o.budgetSeconds, "Wall-clock budget per optimization (s)")
             ->check(positiveNumber())

@@ -104,7 +104,7 @@ void registerInsertDefects(CLI::App& app, std::function<int()>& run) {
     c->add_option("--pitch", a->pitch, "Sample spacing in mm, for a map that carries none");
     c->add_option("--image-size", a->imageSize,
                   "Scene file: camera image width and height in pixels (default: the scene's)")
-        ->check(CLI::Range(1, 16384));
+        ->check(inRange(1, 16384));
     c->callback([a, &run] { run = [a] { return runInsert(*a); }; });
 }
 

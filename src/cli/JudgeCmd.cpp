@@ -55,12 +55,12 @@ void registerJudge(CLI::App& app, std::function<int()>& run) {
     c->add_option("lights", a->lights,
                   "Env-map files, or optimize output directories (their envmap.exr)");
     c->add_option("--spp", a->o.judge.spp, "Samples per pixel of the estimate (two halves)")
-        ->check(CLI::Range(2, 1 << 20))
+        ->check(inRange(2, 1 << 20))
         ->capture_default_str();
     c->add_option("--seed", a->o.judge.seed, "The judge's seed (another judge: another seed)")
         ->capture_default_str();
     c->add_option("--max-depth", a->o.judge.maxDepth, "Mitsuba max_depth (default: the scene's)")
-        ->check(CLI::Range(1, 64));
+        ->check(inRange(1, 64));
     c->add_option("--truth", a->o.judge.truth,
                   "Truth label mask in height-map space (gen-surface's <stem>-truth.png; "
                   "its <stem>-truth.json names the regions)");
@@ -74,7 +74,7 @@ void registerJudge(CLI::App& app, std::function<int()>& run) {
     addSceneOverrides(c, a->o.sceneOverrides, true);
     addCacheOptions(c, a->o.cache);
     c->add_option("--threads", a->o.judge.threads, "Worker threads (0: all cores)")
-        ->check(CLI::Range(0, 4096));
+        ->check(inRange(0, 4096));
     c->add_option("-o,--output", a->o.outDir, "Output directory")->capture_default_str();
     c->callback([a, &run] { run = [a] { return runJudge(*a); }; });
 }

@@ -127,7 +127,7 @@ void registerLamps(CLI::App& app, std::function<int()>& run) {
     c->add_option("input", a->input, "Scene file (.json, T is traced and cached) or .tm")
         ->required();
     c->add_option("--count", j.fit.count, "Lamps at most (greedy: the score for K = 1..count)")
-        ->check(CLI::Range(1, 8))
+        ->check(inRange(1, 8))
         ->capture_default_str();
     std::string kindsHelp = "Lamp kinds allowed (comma-separated; default all):";
     for (const LampKindRow& r : lampKindTable())
@@ -150,10 +150,10 @@ void registerLamps(CLI::App& app, std::function<int()>& run) {
         ->check(positiveNumber())
         ->capture_default_str();
     c->add_option("--min-elevation", a->minElevation, "Lowest lamp centre, degrees")
-        ->check(CLI::Range(-90.0, 90.0))
+        ->check(inRange(-90.0, 90.0))
         ->capture_default_str();
     c->add_option("--max-elevation", a->maxElevation, "Highest lamp centre, degrees")
-        ->check(CLI::Range(-90.0, 90.0))
+        ->check(inRange(-90.0, 90.0))
         ->capture_default_str();
     c->add_option("--forbid-azimuth", a->forbid,
                   "Azimuth range FROM:TO (degrees) no lamp centre may sit in (camera, fixtures); "
@@ -162,7 +162,7 @@ void registerLamps(CLI::App& app, std::function<int()>& run) {
     c->add_option("--camera-margin", a->cameraMargin,
                   "No disk or bar centre within this many degrees of the camera's direction "
                   "(seen from the part's centre); 0: no such limit")
-        ->check(CLI::Range(0.0, 89.0))
+        ->check(inRange(0.0, 89.0))
         ->capture_default_str();
     c->add_flag("--no-judge", a->noJudge, "Do not score on the judge's estimate");
     c->add_flag_function(
@@ -172,10 +172,10 @@ void registerLamps(CLI::App& app, std::function<int()>& run) {
     c->add_flag("--no-figures", a->noFigures, "Do not run scripts/plot_lamps.py");
     addSceneOverrides(c, j.sceneOverrides, true);
     c->add_option("--spp", j.precompute.spp, "Samples per pixel (overrides render.spp)")
-        ->check(CLI::Range(1, 1 << 20));
+        ->check(inRange(1, 1 << 20));
     c->add_option("--max-depth", j.precompute.maxDepth,
                   "Mitsuba max_depth (overrides render.max_depth)")
-        ->check(CLI::Range(1, 64));
+        ->check(inRange(1, 64));
     c->add_option("--seed", j.precompute.seed, "Random seed (overrides render.seed)");
     addCacheOptions(c, j.cache);
     c->add_option("-o,--output", a->out, "Output directory")->capture_default_str();

@@ -137,14 +137,14 @@ void registerPaper(CLI::App& app, std::function<int()>& run) {
         addSceneOverrides(c, a->overrides, false);
         c->add_option("--kernel", a->opt.kernel, "Moving-average window, samples")
             ->capture_default_str()
-            ->check(CLI::Range(1, 1 << 20));
+            ->check(inRange(1, 1 << 20));
         c->add_option("--patch", a->opt.patch, "Patch side, samples")
             ->capture_default_str()
-            ->check(CLI::Range(1, 1 << 20));
+            ->check(inRange(1, 1 << 20));
         c->add_option("--threshold", a->opt.threshold,
                       "Max-min of a patch on the [0,1]-scaled detrended map that marks it")
             ->capture_default_str()
-            ->check(CLI::Range(0.0, 1.0));
+            ->check(inRange(0.0, 1.0));
         c->add_option("-o,--output", a->out, "Map in height-map space (8-bit PNG, 255 = marked)")
             ->capture_default_str();
         c->add_option("--image-output", a->imageMask,
@@ -176,10 +176,10 @@ void registerPaper(CLI::App& app, std::function<int()>& run) {
         c->add_option("name", a->name, "Preset name")->capture_default_str();
         c->add_option("--width", a->width, "Texels")
             ->capture_default_str()
-            ->check(CLI::Range(1, 100000));
+            ->check(inRange(1, 100000));
         c->add_option("--height", a->height, "Texels")
             ->capture_default_str()
-            ->check(CLI::Range(2, 100000));
+            ->check(inRange(2, 100000));
         c->add_option("-o,--output", a->out, "EXR file")->capture_default_str();
         c->callback([a, &run] { run = [a] { return runPreset(*a); }; });
     }

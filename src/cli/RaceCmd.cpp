@@ -15,6 +15,7 @@
 #include "app/Race.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
+#include "core/Interrupt.h"
 #include "core/Registry.h"
 #include "core/Stopwatch.h"
 
@@ -84,6 +85,7 @@ int runRaceCmd(RaceArgs a) {
     std::vector<RaceRow> rows = s.rows;
     rows.insert(rows.end(), s.lamps.begin(), s.lamps.end());
     med.insert(med.end(), s.overall.begin(), s.overall.end());
+    enterCommit();  // the last safe point: every output or none (core/Interrupt.h)
     writeRaceStandingsCsv(std::filesystem::path(a.out) / "race-configs.csv", s.standings);
     writeRaceOutputs(a.out, "race", rows, med);
     return kOk;
@@ -117,6 +119,7 @@ int runSettingsCmd(SettingsArgs a) {
         "seed\n",
         a.o.judgeSpp, *a.o.judgeMaxDepth, a.o.seeds, a.o.configs.front().name.c_str());
     std::printf("%s\n", formatRaceTable(s.medians).c_str());
+    enterCommit();
     writeRaceOutputs(a.out, "settings", s.rows, s.medians);
     return kOk;
 }
@@ -134,22 +137,22 @@ void addRaceRunOptions(CLI::App* c, RaceOptions& o, std::string& out) {
                   "inserted as insert-defects does");
     c->add_option("--sizes", o.sizes, "Image sizes (width = height) of every part")
         ->delimiter(',')
-        ->check(CLI::Range(8, 4096))
+        ->check(inRange(8, 4096))
         ->capture_default_str();
     c->add_option("--alphas", o.alphas,
                   "Surface roughness alpha (material.alpha; default: the part's)")
         ->delimiter(',')
-        ->check(CLI::Range(1e-4, 1.0));
+        ->check(inRange(1e-4, 1.0));
     c->add_option("--height-scales", o.heightScales,
                   "Texture height (heightmap.height_scale) of every part")
         ->delimiter(',')
         ->capture_default_str();
     c->add_option("--threads", o.threads, "Worker threads (0: all)")->capture_default_str();
     c->add_option("--seeds", o.seeds, "Training seeds per part")
-        ->check(CLI::Range(1, 100))
+        ->check(inRange(1, 100))
         ->capture_default_str();
     c->add_option("--heldout-spp", o.judgeSpp, "spp of the judge's held-out estimate")
-        ->check(CLI::Range(2, 1 << 20))
+        ->check(inRange(2, 1 << 20))
         ->capture_default_str();
     c->add_option("-o,--output", out, "Output directory (parts, cache, CSV, plot)")
         ->capture_default_str();
@@ -177,18 +180,18 @@ void registerRace(CLI::App& app, std::function<int()>& run) {
     addRaceRunOptions(st, sa->o, sa->out);
     st->add_option("--spp", sa->spps, "Samples per pixel of T")
         ->delimiter(',')
-        ->check(CLI::Range(2, 1 << 16))
+        ->check(inRange(2, 1 << 16))
         ->capture_default_str();
     st->add_option("--sampling", sa->samplings, "Direction samplers (render.sampling)")
         ->delimiter(',')
         ->capture_default_str();
     st->add_option("--max-depth", sa->depths, "Path lengths of T")
         ->delimiter(',')
-        ->check(CLI::Range(2, 64))
+        ->check(inRange(2, 64))
         ->capture_default_str();
     st->add_option("--judge-max-depth", sa->o.judgeMaxDepth,
                    "The judge's path length (default: the longest of --max-depth + 2)")
-        ->check(CLI::Range(2, 64));
+        ->check(inRange(2, 64));
     st->callback([sa, &run] { run = [sa] { return runSettingsCmd(*sa); }; });
 }
 

@@ -138,17 +138,17 @@ void registerRender(CLI::App& app, std::function<int()>& run) {
                       "to the scene's env-map grid");
     addSceneOverrides(c, a->overrides, true);
     c->add_option("--spp", a->spp, "Samples per pixel (overrides render.spp)")
-        ->check(CLI::Range(1, 1 << 20));
+        ->check(inRange(1, 1 << 20));
     auto* depth =
         c->add_option("--max-depth", a->maxDepth, "Mitsuba max_depth (overrides render.max_depth)")
-            ->check(CLI::Range(1, 64));
+            ->check(inRange(1, 64));
     c->add_flag("--auto-depth", a->autoDepth,
                 "Pick max_depth: the first path length whose next bounce adds < 0.1 % of the "
                 "image under a white light (measured on a lattice of pixels; prints the reason)")
         ->excludes(depth);
     c->add_option("--seed", a->seed, "Random seed (overrides render.seed)");
     c->add_option("--threads", a->threads, "Worker threads (0: all cores)")
-        ->check(CLI::Range(0, 4096));
+        ->check(inRange(0, 4096));
     c->add_option("-o,--output", a->out, "Output EXR (linear); a PNG preview is written beside it")
         ->capture_default_str();
     addRendererOptions(c, a->renderer, a->external);

@@ -69,15 +69,14 @@ void addTraceOptions(CLI::App* c, PrecomputeOptions& p, std::vector<std::string>
                   noiseAware ? "--spp auto: the largest train/validation gap of the optimized "
                                "light (a fraction)"
                              : "--spp auto: the relative noise of the gradient to reach")
-        ->check(CLI::Range(1e-6, 0.999999))
+        ->check(inRange(1e-6, 0.999999))
         ->capture_default_str();
     addNumberOrAuto(c, "--max-depth", p.maxDepth, p.autoMaxDepth, 1, 64, "a path length",
                     "Mitsuba max_depth (overrides render.max_depth), or auto: the first path "
                     "length whose next bounce adds < 0.1 % of the image under a white light "
                     "(measured first on a lattice of pixels; the choice and why are printed)");
     c->add_option("--seed", p.seed, "Random seed (overrides render.seed)");
-    c->add_option("--threads", p.threads, "Worker threads (0: all cores)")
-        ->check(CLI::Range(0, 4096));
+    c->add_option("--threads", p.threads, "Worker threads (0: all cores)")->check(inRange(0, 4096));
 }
 
 struct PrecomputeArgs {
@@ -271,7 +270,7 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
             ->check(positiveNumber())
             ->capture_default_str();
         c->add_option("--spsa-q", j.blackBox.spsa.q, "spsa: estimates averaged per step")
-            ->check(CLI::Range(1, 100000))
+            ->check(inRange(1, 100000))
             ->capture_default_str();
         c->add_option("--spsa-c", j.blackBox.spsa.c, "spsa: perturbation size")
             ->check(positiveNumber())
@@ -311,10 +310,10 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
                     "Trace only the --mask region's pixels: the same loss and E* for the region's "
                     "rays (renders from T are dark outside it)");
         c->add_option("--scratch-kernel", j.scratch.kernel, "Scratch map: detrending kernel")
-            ->check(CLI::Range(1, 100000))
+            ->check(inRange(1, 100000))
             ->capture_default_str();
         c->add_option("--scratch-patch", j.scratch.patch, "Scratch map: patch size")
-            ->check(CLI::Range(1, 100000))
+            ->check(inRange(1, 100000))
             ->capture_default_str();
         c->add_option("--scratch-threshold", j.scratch.threshold,
                       "Scratch map: max-min threshold of a patch (of the [0,1] detrended range)")
@@ -342,17 +341,17 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         addParsed(c, "--heldout", j.heldOut, parseHeldOutSource, heldOutHelp);
         c->add_option("--heldout-spp", j.heldOutSpp,
                       "spp of the judge's held-out estimate (0: the judge's 1024)")
-            ->check(CLI::Range(0, 1 << 20))
+            ->check(inRange(0, 1 << 20))
             ->capture_default_str();
         c->add_option("--heldout-every", j.heldOutEvery, "Held-out score every N iterations")
-            ->check(CLI::Range(1, 1000000))
+            ->check(inRange(1, 1000000))
             ->capture_default_str();
         std::string budgetHelp = "Budget (default: the method's); one iteration is:";
         for (const OptimizerMethodRow& r : optimizerMethodTable())
             budgetHelp += std::string("\n    ") + r.name + ": " + r.iteration + " (default " +
                           std::to_string(r.defaultBudget) + ")";
         c->add_option("--iterations", j.optimizer.iterations, budgetHelp)
-            ->check(CLI::Range(1, 1000000));
+            ->check(inRange(1, 1000000));
         c->add_option("--ftol,--relative-function-tolerance", j.optimizer.relativeFunctionTolerance,
                       "NLopt/Ceres: stop when the loss changes by less than this fraction (0: off)")
             ->check(nonNegativeNumber())
@@ -365,7 +364,7 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
                       "per step (stochastic, as the paper's loop; default: the method's, 1, "
                       "paper-loop " +
                           std::to_string(methodRow(OptimizerMethod::PaperLoop).defaultPlanes) + ")")
-            ->check(CLI::Range(1, 1000));
+            ->check(inRange(1, 1000));
         c->add_option_function<std::vector<std::string>>(
              "--starts",
              [&j](const std::vector<std::string>& specs) {
@@ -384,7 +383,7 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
                   "Settings fixed together (they override the options they fix)");
         addTraceOptions(c, j.precompute, j.sceneOverrides, true);
         c->add_option("--max-spp", j.noiseMaxSpp, "--spp auto: the most training spp it traces")
-            ->check(CLI::Range(1, 1 << 20))
+            ->check(inRange(1, 1 << 20))
             ->capture_default_str();
         c->add_option_function<std::string>(
              "--light-grid", [&j](const std::string& v) { j.lightGrid = parseLightGrid(v); },
@@ -397,7 +396,7 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
                       "--objective defects: the defect pixels take N times the training spp "
                       "(their few pixel pairs are the noisiest part of the objective); 0: the "
                       "rule (up to 32, within half the part's samples), 1: off")
-            ->check(CLI::Range(0, kMaxSppScale))
+            ->check(inRange(0, kMaxSppScale))
             ->capture_default_str();
         c->add_flag_function(
             "--no-self-check", [&j](std::int64_t) { j.selfCheck = false; },

@@ -80,17 +80,17 @@ void registerView(CLI::App& app, std::function<int()>& run) {
                   "directory")
         ->required();
     c->add_option("--port", a->port, "TCP port (0: any free port)")
-        ->check(CLI::Range(0, 65535))
+        ->check(inRange(0, 65535))
         ->capture_default_str();
     c->add_option("--host", a->host,
                   "Address to listen on (default 127.0.0.1 only; anything else is reachable "
                   "from other machines and prints a warning)");
     c->add_flag("--open", a->open, "Open the page in the default browser (xdg-open)");
     c->add_option("--spp", a->o.spp, "Samples per pixel of T for a scene (default: the scene's)")
-        ->check(CLI::Range(1, 1 << 20));
+        ->check(inRange(1, 1 << 20));
     c->add_option("--heldout-spp", a->o.judgeSpp,
                   "Samples per pixel of the judge's estimate of a scene (two halves)")
-        ->check(CLI::Range(2, 1 << 20))
+        ->check(inRange(2, 1 << 20))
         ->capture_default_str();
     c->add_flag("--no-judge", a->noJudge, "No judge numbers (no estimate is traced)");
     c->add_option("--truth", a->o.truth,
@@ -102,7 +102,7 @@ void registerView(CLI::App& app, std::function<int()>& run) {
     addSceneOverrides(c, a->o.sceneOverrides, true);
     addCacheOptions(c, a->o.cache);
     c->add_option("--threads", a->o.threads, "Worker threads (0: all cores)")
-        ->check(CLI::Range(0, 4096));
+        ->check(inRange(0, 4096));
     c->add_option("-o,--output", a->o.outDir,
                   "Output directory: the only place the viewer writes (saved lights and lamps)")
         ->capture_default_str();
@@ -117,15 +117,15 @@ void registerView(CLI::App& app, std::function<int()>& run) {
         ->delimiter(',')
         ->capture_default_str();
     v->add_option("--spp", b->spp, "Samples per pixel of T")
-        ->check(CLI::Range(1, 1 << 20))
+        ->check(inRange(1, 1 << 20))
         ->capture_default_str();
     v->add_option("--repeats", b->repeats, "Requests per size (the median is reported)")
-        ->check(CLI::Range(1, 100000))
+        ->check(inRange(1, 100000))
         ->capture_default_str();
     addSceneOverrides(v, b->sceneOverrides, false);
     addCacheOptions(v, b->cache);
     v->add_option("--threads", b->threads, "Worker threads (0: all cores)")
-        ->check(CLI::Range(0, 4096));
+        ->check(inRange(0, 4096));
     v->add_option("-o,--output", b->csv, "CSV file")->capture_default_str();
     v->callback([b, &run] { run = [b] { return runBenchView(*b); }; });
 }

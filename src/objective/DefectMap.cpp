@@ -1629,6 +1629,7 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
                                 o.levelWiener ? &levelDelta : nullptr, &T, 1);
         }
     }
+    throwIfInterrupted();  // Ctrl-C between the steps (core/Interrupt.h)
     StepModel steps;
     if (o.stepModel) {  // step 4a: the steps of h − T
         std::vector<float> G(n);
@@ -1657,6 +1658,7 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
         N = robustQuadraticResidual(R, N, W, H, o.edgeWindow, true, o.seedSigma * sx);
         Nz = robustQuadraticResidual(R, Nz, W, H, o.edgeWindow, false, o.seedSigma * sz);
     }
+    throwIfInterrupted();  // Ctrl-C between the steps (core/Interrupt.h)
     R = {};
     macro = {};
     r.sigmaLevel = 1.4826 * medianAbs(A);
@@ -1698,6 +1700,7 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
         if (!steps.ramp[k] && r.map[k]) --r.markedScore;
         r.map[k] = steps.ramp[k];
     }
+    throwIfInterrupted();  // Ctrl-C between the steps (core/Interrupt.h)
     N = {};
     Nz = {};
     if (o.energyWindow > 0) {

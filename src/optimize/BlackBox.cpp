@@ -83,7 +83,7 @@ uint64_t freshSeed(uint64_t base, uint64_t stream, uint64_t index) {
 }
 
 RenderLoss::RenderLoss(const Scene& scene, RenderOptions options, const ImageObjective& objective,
-                       bool rgb)
+                       bool rgb, bool interruptible)
     : envWidth_(scene.basis.width()),
       envHeight_(scene.basis.height()),
       baseSeed_(options.seed),
@@ -92,7 +92,7 @@ RenderLoss::RenderLoss(const Scene& scene, RenderOptions options, const ImageObj
       rgb_(rgb),
       dimension_(static_cast<size_t>(scene.basis.texelCount()) * (rgb ? 3 : 1)) {
     options.progress = {};
-    options.interruptible = false;  // Ctrl-C stops the optimizer between steps instead
+    options.interruptible = interruptible;  // else Ctrl-C stops the optimizer between steps
     owned_ = std::make_unique<BuiltinRenderer>(scene, std::move(options));
     renderer_ = owned_.get();
     checkObjective();

@@ -65,8 +65,10 @@ class RenderLoss {
     /// The black box for `scene` rendered by our tracer with `options` (spp, max depth, base
     /// seed, threads), scored by `objective` (sized like the camera's image). Keeps references:
     /// scene and objective must outlive it. rgb: E has 3 values per texel (interleaved), else 1.
+    /// interruptible: a Ctrl-C throws Interrupted from inside a render (a benchmark that keeps
+    /// nothing); by default it does not, and an optimizer stops between its steps instead.
     RenderLoss(const Scene& scene, RenderOptions options, const ImageObjective& objective,
-               bool rgb = false);
+               bool rgb = false, bool interruptible = false);
     /// The black box for any renderer (kept by reference) on an envWidth × envHeight grid, with
     /// `baseSeed` as the common-random-numbers seed.
     RenderLoss(const Renderer& renderer, int envWidth, int envHeight, uint64_t baseSeed,
