@@ -51,6 +51,13 @@ namespace sl {
 struct LayMapOptions {
     int layLength = 81;             // samples of the median along the lay (odd, >= 3)
     double clipQuantile = 0.95;     // gradients clipped at this quantile of |g| (in (0, 1])
+    double fieldSigma = 0;          // σ (samples) of the local lay field's tensor (>= 0; 0: one
+                                    // lay for the map)
+    double fieldCoherence = 0.1;    // below this local coherence, the global lay (in [0, 1])
+    int layPasses = 1;              // the lay taken out this many times (>= 1; the second
+                                    // pass, on the residual, takes out a crossing lay)
+    int fieldExclude = 4;           // the field leaves out the first pass's marks grown by this
+                                    // many samples (>= 0)
     int levelWindow = 31;           // samples of the residual's running median (odd, >= 3)
     int macroWindow = 61;           // samples of the running median d is taken about (odd, >= 3)
     double seedSigma = 6.0;         // a region reaches |r| >= seedSigma·σ (> 0)
