@@ -249,6 +249,18 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
          "--lay-clip-quantile", l.clipQuantile,
          "lay: gradients clipped at this quantile of their magnitude for the lay direction")
         ->capture_default_str();
+    c->add_option("--lay-field-sigma", l.fieldSigma,
+                  "lay: sigma (samples) of the local lay field's tensor (0: one lay for the map)")
+        ->capture_default_str();
+    c->add_option("--lay-field-coherence", l.fieldCoherence,
+                  "lay: below this local coherence, the global lay")
+        ->capture_default_str();
+    c->add_option("--lay-passes", l.layPasses,
+                  "lay: times the lay is taken out (the second on the residual: a crossing lay)")
+        ->capture_default_str();
+    c->add_option("--lay-field-exclude", l.fieldExclude,
+                  "lay: the field leaves out the first pass's marks grown by this many samples")
+        ->capture_default_str();
     c->add_option("--lay-level-window", l.levelWindow,
                   "lay: samples of the residual's running median (odd)")
         ->capture_default_str();

@@ -32,6 +32,19 @@ void checkLayMapOptions(const LayMapOptions& o) {
         throw inputError(option("lay-texture-rms"), "must be >= 0 (0: off)", "The default is 1.5");
     if (!(o.borderRegrow >= 0.0 && o.borderRegrow <= 1.0))
         throw inputError(option("lay-border-regrow"), "must be in [0, 1]", "The default is 0.5");
+    if (!(o.fieldSigma >= 0.0))
+        throw inputError(option("lay-field-sigma"), "must be >= 0 (0: one lay for the map)",
+                         "The default is 0; 16 follows curved lays");
+    if (!(o.fieldCoherence >= 0.0 && o.fieldCoherence <= 1.0))
+        throw inputError(option("lay-field-coherence"), "must be in [0, 1]", "The default is 0.1");
+    if (o.layPasses < 1)
+        throw inputError(option("lay-passes"),
+                         "must be >= 1 (got " + std::to_string(o.layPasses) + ")",
+                         "The default is 1");
+    if (o.fieldExclude < 0)
+        throw inputError(option("lay-field-exclude"),
+                         "must be >= 0 (got " + std::to_string(o.fieldExclude) + ")",
+                         "The default is 4 samples");
     if (o.border < 0)
         throw inputError(option("lay-border"),
                          "must be >= 0 (got " + std::to_string(o.border) + ")");
@@ -61,19 +74,53 @@ float bilinearMirrored(std::span<const float> h, int W, int H, double x, double 
                               fz * ((1 - fx) * at(x0, z1) + fx * at(x1, z1)));
 }
 
+/// A separable Gaussian blur of σ samples (radius 3σ, edges clamped), in place.
+void gaussianBlur(std::vector<float>& v, int W, int H, double sigma) {
+    const int R = std::max(1, static_cast<int>(std::ceil(3 * sigma)));
+    std::vector<double> kernel(static_cast<size_t>(2 * R + 1));
+    double sum = 0;
+    for (int i = -R; i <= R; ++i)
+        sum += kernel[static_cast<size_t>(i + R)] = std::exp(-i * i / (2 * sigma * sigma));
+    for (double& k : kernel) k /= sum;
+    std::vector<float> tmp(v.size());
+    tbb::parallel_for(0, H, [&](int y) {
+        for (int x = 0; x < W; ++x) {
+            double s = 0;
+            for (int i = -R; i <= R; ++i)
+                s += kernel[static_cast<size_t>(i + R)] *
+                     v[static_cast<size_t>(y) * W + std::clamp(x + i, 0, W - 1)];
+            tmp[static_cast<size_t>(y) * W + x] = static_cast<float>(s);
+        }
+    });
+    tbb::parallel_for(0, H, [&](int y) {
+        for (int x = 0; x < W; ++x) {
+            double s = 0;
+            for (int i = -R; i <= R; ++i)
+                s += kernel[static_cast<size_t>(i + R)] *
+                     tmp[static_cast<size_t>(std::clamp(y + i, 0, H - 1)) * W + x];
+            v[static_cast<size_t>(y) * W + x] = static_cast<float>(s);
+        }
+    });
+}
+
 }  // namespace
 
-LayMap detectLayDefects(std::span<const float> heights, int width, int height,
-                        const LayMapOptions& o) {
-    checkLayMapOptions(o);
-    const int W = width, H = height;
-    const size_t n = heights.size();
-    LayMap r;
-    r.map.assign(n, 0);
-    const int b = o.border;
-    auto inside = [&](int x, int y) { return x >= b && y >= b && x < W - b && y < H - b; };
-    if (W - 2 * b < 1 || H - 2 * b < 1) return r;  // nothing outside the border
+namespace {
 
+/// One pass of the method; with `exclude` (1 where a sample is left out of the local lay
+/// field's tensor) and o.fieldSigma > 0 the background follows the local field.
+/// Steps 1–2 on src: the lay (global, and the local field with `exclude`) and
+/// src − its median along the lay.
+struct LayPass {
+    std::vector<float> res;
+    double layX = 1, layZ = 0, coherence = 0;
+};
+
+LayPass removeLay(std::span<const float> heights, int W, int H, const LayMapOptions& o,
+                  const std::vector<uint8_t>* exclude) {
+    const size_t n = heights.size();
+    const int b = o.border;
+    LayPass r;
     // 1. the lay: the clipped structure tensor's minor eigenvector, on the heights smoothed by a
     // Gaussian of σ = 1.5 samples (central differences of waves a few samples long are damped
     // differently along x and z, which tilts the tensor; the smoothing removes those waves)
@@ -102,6 +149,21 @@ LayMap detectLayDefects(std::span<const float> heights, int width, int height,
             }
         });
     }
+    // central differences of the smoothed heights at every sample (one-sided at the edges):
+    // the local lay field (step 1b) needs them everywhere
+    std::vector<float> fgx(n), fgz(n);
+    tbb::parallel_for(0, H, [&](int y) {
+        for (int x = 0; x < W; ++x) {
+            const size_t k = static_cast<size_t>(y) * W + x;
+            const int xl = std::max(x - 1, 0), xr = std::min(x + 1, W - 1);
+            const int yu = std::max(y - 1, 0), yd = std::min(y + 1, H - 1);
+            fgx[k] = (g[static_cast<size_t>(y) * W + xr] - g[static_cast<size_t>(y) * W + xl]) /
+                     static_cast<float>(std::max(xr - xl, 1));
+            fgz[k] = (g[static_cast<size_t>(yd) * W + x] - g[static_cast<size_t>(yu) * W + x]) /
+                     static_cast<float>(std::max(yd - yu, 1));
+        }
+    });
+    double clipAll = 0.0;
     std::vector<float> gx, gz, mag;
     for (int y = std::max(b, 1); y < std::min(H - b, H - 1); ++y)
         for (int x = std::max(b, 1); x < std::min(W - b, W - 1); ++x) {
@@ -119,6 +181,7 @@ LayMap detectLayDefects(std::span<const float> heights, int width, int height,
         std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(q),
                          sorted.end());
         const double clip = sorted[q];
+        clipAll = clip;
         double jxx = 0, jxz = 0, jzz = 0;
         for (size_t k = 0; k < mag.size(); ++k) {
             const double f = mag[k] > clip && mag[k] > 0 ? clip / mag[k] : 1.0;
@@ -163,22 +226,108 @@ LayMap detectLayDefects(std::span<const float> heights, int width, int height,
     gz = {};
     mag = {};
 
-    // 2. the background: the median along the lay
+    // 1b. the local lay field: the clipped structure tensor smoothed by a Gaussian of
+    // σ = fieldSigma samples, its minor eigenvector at every sample; where its coherence is
+    // below fieldCoherence the global lay. Off (fieldSigma 0): the global lay everywhere.
+    std::vector<float> tx, tz;
+    if (exclude && o.fieldSigma > 0 && clipAll > 0) {
+        std::vector<float> a(n), c(n), e(n);  // jxx − jzz, 2·jxz, jxx + jzz
+        for (size_t k = 0; k < n; ++k) {
+            const double m = std::hypot(fgx[k], fgz[k]);
+            const double f = (*exclude)[k] ? 0.0 : m > clipAll ? clipAll / m : 1.0;
+            const double ux = f * fgx[k], uz = f * fgz[k];
+            a[k] = static_cast<float>(ux * ux - uz * uz);
+            c[k] = static_cast<float>(2 * ux * uz);
+            e[k] = static_cast<float>(ux * ux + uz * uz);
+        }
+        gaussianBlur(a, W, H, o.fieldSigma);
+        gaussianBlur(c, W, H, o.fieldSigma);
+        gaussianBlur(e, W, H, o.fieldSigma);
+        tx.resize(n);
+        tz.resize(n);
+        for (size_t k = 0; k < n; ++k) {
+            const double coh = e[k] > 0 ? std::hypot(a[k], c[k]) / e[k] : 0.0;
+            if (coh < o.fieldCoherence) {
+                tx[k] = static_cast<float>(r.layX);
+                tz[k] = static_cast<float>(r.layZ);
+                continue;
+            }
+            const double phi = 0.5 * std::atan2(static_cast<double>(c[k]), a[k]);
+            tx[k] = static_cast<float>(-std::sin(phi));
+            tz[k] = static_cast<float>(std::cos(phi));
+        }
+    }
+    fgx = {};
+    fgz = {};
+
+    // 2. the background: the median along the lay (a straight line along the global lay, or
+    // the streamline of the local field through the sample, unit steps each way)
     std::vector<float> res(n);
     const int half = o.layLength / 2;
     tbb::parallel_for(0, H, [&](int y) {
         thread_local std::vector<float> line;
         line.resize(static_cast<size_t>(o.layLength));
         for (int x = 0; x < W; ++x) {
-            for (int s = -half; s <= half; ++s)
-                line[static_cast<size_t>(s + half)] =
-                    bilinearMirrored(heights, W, H, x + s * r.layX, y + s * r.layZ);
+            if (tx.empty()) {
+                for (int s = -half; s <= half; ++s)
+                    line[static_cast<size_t>(s + half)] =
+                        bilinearMirrored(heights, W, H, x + s * r.layX, y + s * r.layZ);
+            } else {
+                line[static_cast<size_t>(half)] = heights[static_cast<size_t>(y) * W + x];
+                for (int sign = -1; sign <= 1; sign += 2) {
+                    double px = x, pz = y;
+                    const size_t k0 = static_cast<size_t>(y) * W + x;
+                    double dx = static_cast<double>(sign) * tx[k0],
+                           dz = static_cast<double>(sign) * tz[k0];
+                    for (int s = 1; s <= half; ++s) {
+                        px += dx;
+                        pz += dz;
+                        line[static_cast<size_t>(half + sign * s)] =
+                            bilinearMirrored(heights, W, H, px, pz);
+                        const int ix = static_cast<int>(std::lround(mirrorInto(px, W)));
+                        const int iz = static_cast<int>(std::lround(mirrorInto(pz, H)));
+                        const size_t q = static_cast<size_t>(iz) * W + ix;
+                        double nx = tx[q], nz = tz[q];
+                        if (nx * dx + nz * dz < 0) {
+                            nx = -nx;
+                            nz = -nz;
+                        }
+                        dx = nx;
+                        dz = nz;
+                    }
+                }
+            }
             auto mid = line.begin() + half;
             std::nth_element(line.begin(), mid, line.end());
             const size_t k = static_cast<size_t>(y) * W + x;
             res[k] = heights[k] - *mid;
         }
     });
+    r.res = std::move(res);
+    return r;
+}
+
+LayMap detectOnce(std::span<const float> heights, int width, int height, const LayMapOptions& o,
+                  const std::vector<uint8_t>* exclude) {
+    const int W = width, H = height;
+    const size_t n = heights.size();
+    LayMap r;
+    r.map.assign(n, 0);
+    const int b = o.border;
+    auto inside = [&](int x, int y) { return x >= b && y >= b && x < W - b && y < H - b; };
+    if (W - 2 * b < 1 || H - 2 * b < 1) return r;  // nothing outside the border
+
+    // 1–2, then again on the residual: where two lays cross (a face mill's two passes) the
+    // first takes one out, the second the other
+    std::vector<float> res;
+    {
+        LayPass p = removeLay(heights, W, H, o, exclude);
+        r.layX = p.layX;
+        r.layZ = p.layZ;
+        r.coherence = p.coherence;
+        res = std::move(p.res);
+        for (int pass = 1; pass < o.layPasses; ++pass) res = removeLay(res, W, H, o, exclude).res;
+    }
     throwIfInterrupted();
     // 3. the residual, levelled
     {
@@ -294,6 +443,29 @@ LayMap detectLayDefects(std::span<const float> heights, int width, int height,
         for (size_t k : outer) allow[k] = 0;
     }
     return r;
+}
+
+}  // namespace
+
+LayMap detectLayDefects(std::span<const float> heights, int width, int height,
+                        const LayMapOptions& o) {
+    checkLayMapOptions(o);
+    LayMap first = detectOnce(heights, width, height, o, nullptr);
+    if (!(o.fieldSigma > 0)) return first;
+    // the local field leaves out what the first pass (one lay for the map) marked, grown by
+    // fieldExclude samples: a deep scratch across the lay would otherwise turn the field
+    // along itself and become its own background
+    const int W = width, H = height, g = o.fieldExclude;
+    std::vector<uint8_t> exclude(first.map.size(), 0);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            if (!first.map[static_cast<size_t>(y) * W + x]) continue;
+            for (int yy = std::max(0, y - g); yy <= std::min(H - 1, y + g); ++yy)
+                for (int xx = std::max(0, x - g); xx <= std::min(W - 1, x + g); ++xx)
+                    exclude[static_cast<size_t>(yy) * W + xx] = 1;
+        }
+    throwIfInterrupted();
+    return detectOnce(heights, width, height, o, &exclude);
 }
 
 }  // namespace sl

@@ -22,6 +22,19 @@
 //     (bilinear, positions mirrored into the map). A stria, a line of a periodic lay, a land's
 //     shoulder runs along t and is its own background; a pit, a particle and a scratch that
 //     crosses the lay are not. A scratch within a few degrees of the lay is lost with it.
+// 1b–2 for curved lays (fieldSigma > 0; off by default): the method runs once as above, then
+//     again with a local lay field: the clipped tensor's components (jxx − jzz, 2jxz, jxx + jzz)
+//     of every sample, zero on the first pass's marks grown by `fieldExclude` samples (a deep
+//     scratch across the lay would turn the field along itself and become its own background),
+//     smoothed by a Gaussian of σ = fieldSigma; t at a sample is the smoothed tensor's minor
+//     eigenvector, or the global lay where its coherence is below `fieldCoherence`. B is then
+//     the median along the streamline of t through the sample (unit steps each way, the
+//     direction re-read at the nearest sample and kept pointing forward), which follows a
+//     face mill's arcs where a straight line leaves them. With layPasses > 1, steps 1–2 are
+//     repeated on h − B (a second lay crossing the first). Measured (DEV insertion seeds 101,
+//     both models, with layLength 161 and levelWindow 81): the Wyko arcs' recall 0.49/0.61 →
+//     0.69/0.93 (models A/B); a second pass lost scratches (periodic lines, model A, recall
+//     0.74 → 0.54) and stays off.
 //  3. Residual: r = (h − B) minus its separable running median over `levelWindow` samples
 //     (objective/DefectMap.h separableRunningMedian), σ = 1.4826 × median |r| over the samples
 //     outside the border.
@@ -51,6 +64,13 @@ namespace sl {
 struct LayMapOptions {
     int layLength = 81;             // samples of the median along the lay (odd, >= 3)
     double clipQuantile = 0.95;     // gradients clipped at this quantile of |g| (in (0, 1])
+    double fieldSigma = 0;          // σ (samples) of the local lay field's tensor (>= 0; 0: one
+                                    // lay for the map)
+    double fieldCoherence = 0.1;    // below this local coherence, the global lay (in [0, 1])
+    int layPasses = 1;              // the lay taken out this many times (>= 1; the second
+                                    // pass, on the residual, takes out a crossing lay)
+    int fieldExclude = 4;           // the field leaves out the first pass's marks grown by this
+                                    // many samples (>= 0)
     int levelWindow = 31;           // samples of the residual's running median (odd, >= 3)
     int macroWindow = 61;           // samples of the running median d is taken about (odd, >= 3)
     double seedSigma = 6.0;         // a region reaches |r| >= seedSigma·σ (> 0)
