@@ -1,5 +1,7 @@
 #include "app/Judge.h"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -9,6 +11,8 @@
 #include "app/Truth.h"
 #include "core/Color.h"
 #include "core/Error.h"
+#include "core/Rng.h"
+#include "core/Text.h"
 #include "objective/UnbiasedObjective.h"
 #include "scene/EnvMap.h"
 #include "scene/Scene.h"
@@ -16,11 +20,12 @@
 namespace sl {
 
 TransportSource judgeEstimate(const Scene& scene, const JudgeOptions& o) {
-    if (o.spp < 2 || o.spp % 2 != 0)
+    const int spp = o.spp == 0 ? kJudgeDefaultSpp : o.spp;
+    if (spp < 2 || spp % 2 != 0)
         throw inputError("judge spp", "must be an even number >= 2, got " + std::to_string(o.spp),
                          "use e.g. 1024");
     PrecomputeOptions p;
-    p.spp = o.spp;
+    p.spp = spp;
     p.seed = o.seed;
     p.maxDepth = o.maxDepth;
     p.rgb = o.rgb;
@@ -110,14 +115,32 @@ std::vector<double> Judge::meanImage(std::span<const double> E) const {
 JudgeScore Judge::score(std::span<const double> E, const std::string& name) const {
     const TransportMatrix& t = estimate_->file.matrix;
     const bool rgb = E.size() == 3 * t.cols();
-    JudgeScore s;
-    s.name = name;
     if (E.size() != t.cols() && !rgb)
         throw std::invalid_argument("Judge::score: E does not fit the judge's env-map grid");
     // One pass for the mean image (eq. 2) and one for both halves (U and the visibility).
-    std::vector<double> y(t.rows()), ya(t.rows()), yb(t.rows());
+    std::vector<double> y(t.rows()), ya(t.rows()), yb(t.rows()), w(t.rows());
     t.applyLuminance(E, y);
     t.applyLuminanceHalves(E, ya, yb);
+    const std::vector<double> one(E.size(), 1.0);
+    t.applyLuminance(one, w);
+    JudgeScore s = scoreImages(E, ya, yb, y, {}, {}, w);
+    s.name = name;
+    return s;
+}
+
+JudgeScore Judge::scoreImages(std::span<const double> E, std::span<const double> ya,
+                              std::span<const double> yb, std::span<const double> y,
+                              std::span<const double> wa, std::span<const double> wb,
+                              std::span<const double> w, bool withJnd) const {
+    const TransportMatrix& t = estimate_->file.matrix;
+    JudgeScore s;
+    s.spp = estimate_->file.provenance.spp;
+    std::vector<double> mean;
+    if (y.empty()) {
+        mean.resize(ya.size());
+        for (size_t p = 0; p < mean.size(); ++p) mean[p] = 0.5 * (ya[p] + yb[p]);
+        y = mean;
+    }
     s.eq2 = eq2_->evaluate(y, E);
     s.unbiased = unbiased_->evaluate(ya, yb, E);
     double sum = 0;
@@ -129,24 +152,167 @@ JudgeScore Judge::score(std::span<const double> E, const std::string& name) cons
     s.meanE = E.empty() ? 0 : sum / static_cast<double>(E.size());
     s.sparsity = E.empty() ? 0 : static_cast<double>(dark) / static_cast<double>(E.size());
     double white = 0, lit = 0;
-    {
-        const std::vector<double> one(E.size(), 1.0);
-        std::vector<double> w(t.rows());
-        t.applyLuminance(one, w);
-        for (size_t p = 0; p < y.size(); ++p)
-            if (partMask()[p]) lit += y[p], white += w[p];
-    }
+    for (size_t p = 0; p < y.size(); ++p)
+        if (partMask()[p]) lit += y[p], white += w.empty() ? 0.5 * (wa[p] + wb[p]) : w[p];
     s.brightness = white > 0 ? lit / white : 0.0;
     if (!labels_.empty()) {
         std::optional<JndViewing> viewing;
         const auto partPixels = static_cast<double>(
             std::count_if(partMask().begin(), partMask().end(), [](uint8_t m) { return m != 0; }));
-        if (options_.viewing && partPixels > 0)
+        if (withJnd && options_.viewing && partPixels > 0)
             viewing = JndViewing{*options_.viewing, white / partPixels};
         s.visibility = defectVisibility(t.width, t.height, ya, yb, partMask(), labels_, legend_,
                                         reference_, viewing ? &*viewing : nullptr);
     }
     return s;
+}
+
+JudgeScore Judge::scoreWithErrors(std::span<const double> E, const std::string& name,
+                                  int replicates) const {
+    JudgeScore s = score(E, name);
+    const TransportMatrix& t = estimate_->file.matrix;
+    const size_t n = t.rows();
+    std::vector<double> ya(n), yb(n), wa(n), wb(n);
+    t.applyLuminanceHalves(E, ya, yb);
+    const std::vector<double> one(E.size(), 1.0);
+    t.applyLuminanceHalves(one, wa, wb);
+    // d_p/√2 per pixel: the light's and the white furnace's (the same samples made both).
+    std::vector<double> d(n), dw(n);
+    for (size_t p = 0; p < n; ++p) {
+        d[p] = (ya[p] - yb[p]) * std::sqrt(0.5);
+        dw[p] = (wa[p] - wb[p]) * std::sqrt(0.5);
+    }
+    const size_t regions = s.visibility.size();
+    std::vector<double> eq2, unb, bright, comb;
+    std::vector<std::vector<double>> vis(regions), con(regions);
+    std::vector<double> ra(n), rb(n), rwa(n), rwb(n);
+    for (int r = 0; r < replicates; ++r) {
+        Pcg32 rng(mix64(options_.seed ^ 0x5345ULL), static_cast<uint64_t>(r));
+        for (size_t p = 0; p < n; ++p) {
+            const uint32_t bits = rng.nextU32();
+            const double sa = bits & 1u ? 1.0 : -1.0, sb = bits & 2u ? 1.0 : -1.0;
+            ra[p] = ya[p] + sa * d[p];
+            rb[p] = yb[p] + sb * d[p];
+            rwa[p] = wa[p] + sa * dw[p];
+            rwb[p] = wb[p] + sb * dw[p];
+        }
+        // The replicates' spread is taken for the ratio-type scores; JND (0.5 s a light at
+        // 512²) is not recomputed 32 times.
+        const JudgeScore x = scoreImages(E, ra, rb, {}, rwa, rwb, {}, /*withJnd=*/false);
+        eq2.push_back(x.eq2.total);
+        unb.push_back(x.unbiased.total);
+        bright.push_back(x.brightness);
+        comb.push_back(combinedVisibility(x.visibility));
+        for (size_t k = 0; k < regions && k < x.visibility.size(); ++k) {
+            vis[k].push_back(x.visibility[k].visibility);
+            con[k].push_back(x.visibility[k].contrast);
+        }
+    }
+    // The replicates' spread as a standard deviation, robustly: 1.4826 × their median absolute
+    // deviation (the standard deviation of a normal spread; a replicate whose denominator
+    // nearly vanished does not decide it). NaN when fewer than half could form the score.
+    auto sd = [replicates](std::vector<double> v) {
+        std::erase_if(v, [](double x) { return !std::isfinite(x); });
+        if (v.size() < 2 || 2 * v.size() < static_cast<size_t>(replicates))
+            return std::numeric_limits<double>::quiet_NaN();
+        auto median = [](std::vector<double>& x) {
+            std::sort(x.begin(), x.end());
+            const size_t m = x.size();
+            return m % 2 ? x[m / 2] : 0.5 * (x[m / 2 - 1] + x[m / 2]);
+        };
+        const double m = median(v);
+        for (double& x : v) x = std::abs(x - m);
+        return 1.4826 * median(v);
+    };
+    JudgeScore::Errors e;
+    e.replicates = replicates;
+    e.eq2 = sd(eq2);
+    e.unbiased = sd(unb);
+    e.brightness = sd(bright);
+    e.combinedVisibility = sd(comb);
+    for (size_t k = 0; k < regions; ++k) {
+        e.visibility.push_back(sd(vis[k]));
+        e.contrast.push_back(sd(con[k]));
+    }
+    s.se = std::move(e);
+    return s;
+}
+
+WorstError worstRelativeError(const JudgeScore& s) {
+    WorstError w;
+    if (!s.se) return w;
+    auto consider = [&](double value, double se, double floor, const std::string& what) {
+        if (!std::isfinite(value)) return;
+        // An SE that cannot be formed while the score can: as bad as it gets.
+        const double rel = std::isfinite(se) ? se / std::max(std::abs(value), floor)
+                                             : std::numeric_limits<double>::infinity();
+        if (rel > w.relative || w.score.empty()) {
+            w.relative = rel;
+            w.score = s.name.empty() ? what : s.name + ": " + what;
+        }
+    };
+    consider(s.eq2.total, s.se->eq2, 1e-3, "eq2");
+    consider(s.unbiased.total, s.se->unbiased, 1e-3, "U");
+    consider(s.brightness, s.se->brightness, 0.05, "brightness");
+    consider(combinedVisibility(s.visibility), s.se->combinedVisibility, 0.1,
+             "visibility (all regions)");
+    for (size_t k = 0; k < s.visibility.size() && k < s.se->visibility.size(); ++k) {
+        const RegionVisibility& r = s.visibility[k];
+        consider(r.visibility, s.se->visibility[k], 0.1, "visibility " + r.label.name);
+        consider(r.contrast, s.se->contrast[k], 0.01, "contrast " + r.label.name);
+    }
+    return w;
+}
+
+int nextJudgeSpp(int spp, double worstRelative, int cap, double target) {
+    if (!(worstRelative > target) || spp >= cap) return 0;
+    const double need =
+        std::isfinite(worstRelative)
+            ? static_cast<double>(spp) * (worstRelative / target) * (worstRelative / target)
+            : static_cast<double>(cap);
+    int next = 2 * spp;
+    while (next < cap && static_cast<double>(next) < need) next *= 2;
+    return std::min(next, cap);
+}
+
+std::string JudgedRounds::describe(double target) const {
+    if (rounds.empty()) return "not judged";
+    const JudgeRound& r = rounds.back();
+    const std::string worst = "worst " + formatNumber(100.0 * r.worst.relative, 2) + " %" +
+                              (r.worst.score.empty() ? std::string() : ", " + r.worst.score);
+    std::string spps;
+    for (const JudgeRound& x : rounds) spps += (spps.empty() ? "" : " -> ") + std::to_string(x.spp);
+    return std::to_string(r.spp) + " spp: " +
+           (met ? "every score's standard error <= " + formatNumber(100.0 * target, 2) + " % (" +
+                      worst + ")"
+                : "standard error above " + formatNumber(100.0 * target, 2) + " % at the most " +
+                      std::to_string(r.spp) + " spp (" + worst + ")") +
+           (rounds.size() > 1 ? "; rounds " + spps + " spp" : std::string());
+}
+
+JudgedRounds judgeInRounds(const std::function<const Judge&(int spp)>& judgeAt,
+                           const std::vector<std::pair<std::string, std::vector<double>>>& lights,
+                           int spp, int cap, double target) {
+    JudgedRounds out;
+    for (;;) {
+        const Judge& judge = judgeAt(spp);
+        out.scores.clear();
+        JudgeRound round;
+        round.spp = spp;
+        for (const auto& [name, e] : lights) {
+            out.scores.push_back(judge.scoreWithErrors(e, name));
+            const WorstError w = worstRelativeError(out.scores.back());
+            if (w.relative > round.worst.relative || round.worst.score.empty()) round.worst = w;
+        }
+        out.rounds.push_back(round);
+        out.met = !(round.worst.relative > target);
+        const int next = nextJudgeSpp(spp, round.worst.relative, cap, target);
+        if (next == 0) return out;
+        spdlog::info("judge: {} spp: standard error {} % ({}) > {} %: tracing again at {} spp", spp,
+                     formatNumber(100.0 * round.worst.relative, 2), round.worst.score,
+                     formatNumber(100.0 * target, 2), next);
+        spp = next;
+    }
 }
 
 namespace {
@@ -196,7 +362,37 @@ nlohmann::ordered_json toJson(const JudgeScore& s) {
     j["visibility"] = v;
     j["eq2_parts"] = parts(s.eq2);
     j["unbiased_parts"] = parts(s.unbiased);
+    if (s.spp > 0) j["spp"] = s.spp;
+    if (s.se) {
+        nlohmann::ordered_json e;
+        e["eq2"] = number(s.se->eq2);
+        e["unbiased"] = number(s.se->unbiased);
+        e["brightness"] = number(s.se->brightness);
+        e["combined_visibility"] = number(s.se->combinedVisibility);
+        nlohmann::ordered_json per = nlohmann::ordered_json::array();
+        for (size_t k = 0; k < s.visibility.size() && k < s.se->visibility.size(); ++k)
+            per.push_back({{"name", s.visibility[k].label.name},
+                           {"visibility", number(s.se->visibility[k])},
+                           {"contrast", number(s.se->contrast[k])}});
+        e["regions"] = per;
+        e["replicates"] = s.se->replicates;
+        const WorstError w = worstRelativeError(s);
+        e["worst_relative"] = number(w.relative);
+        e["worst_score"] = w.score;
+        j["se"] = e;
+    }
     return j;
+}
+
+nlohmann::ordered_json roundsJson(const JudgedRounds& rounds) {
+    nlohmann::ordered_json a = nlohmann::ordered_json::array();
+    for (const JudgeRound& r : rounds.rounds)
+        a.push_back({{"spp", r.spp},
+                     {"worst_relative_se", std::isfinite(r.worst.relative)
+                                               ? nlohmann::ordered_json(r.worst.relative)
+                                               : nlohmann::ordered_json(nullptr)},
+                     {"worst_score", r.worst.score}});
+    return a;
 }
 
 std::string formatJudgeTable(const std::vector<JudgeScore>& scores) {
@@ -225,30 +421,55 @@ std::string formatJudgeTable(const std::vector<JudgeScore>& scores) {
                          return firstVisibility(a) < firstVisibility(b);
                      });
     size_t nameWidth = 5;
-    for (const JudgeScore& s : scores) nameWidth = std::max(nameWidth, s.name.size());
+    bool errors = false;
+    for (const JudgeScore& s : scores) {
+        nameWidth = std::max(nameWidth, s.name.size());
+        errors |= s.se.has_value();
+    }
+    // The SE relative to the score, beside it ("±0.4%"), when estimated.
+    auto pm = [&](double value, const std::optional<double>& se) -> std::string {
+        if (!errors) return {};
+        char b[32];
+        if (!se || !std::isfinite(value) || value == 0 || !std::isfinite(*se))
+            std::snprintf(b, sizeof b, " %6s", "");
+        else
+            std::snprintf(b, sizeof b, " ±%4.1f%%", 100.0 * *se / std::abs(value));
+        return b;
+    };
+    const std::string pmHead = errors ? std::string(7, ' ') : std::string();
     std::ostringstream out;
     char buf[256];
-    std::snprintf(buf, sizeof buf, "%-*s %10s %10s %8s %9s %7s", static_cast<int>(nameWidth),
-                  "light", "eq2", "U", "mean E", "dark<1e-3", "bright");
+    std::snprintf(buf, sizeof buf, "%-*s %10s%s %10s%s %8s %9s %7s%s", static_cast<int>(nameWidth),
+                  "light", "eq2", pmHead.c_str(), "U", pmHead.c_str(), "mean E", "dark<1e-3",
+                  "bright", pmHead.c_str());
     out << buf;
     for (const std::string& r : regions) {
         if (jnd) {
             std::snprintf(buf, sizeof buf, " %14s", ("JND " + r).substr(0, 14).c_str());
             out << buf;
         }
-        std::snprintf(buf, sizeof buf, " %14s %8s", ("vis " + r).substr(0, 14).c_str(), "contrast");
+        std::snprintf(buf, sizeof buf, " %14s%s %8s%s", ("vis " + r).substr(0, 14).c_str(),
+                      pmHead.c_str(), "contrast", pmHead.c_str());
         out << buf;
     }
     out << '\n';
     for (const JudgeScore& s : scores) {
-        std::snprintf(buf, sizeof buf, "%-*s %10.4f %10.4f %8.4f %8.1f%% %7.3f",
-                      static_cast<int>(nameWidth), s.name.c_str(), s.eq2.total, s.unbiased.total,
-                      s.meanE, 100.0 * s.sparsity, s.brightness);
+        auto se = [&](double JudgeScore::Errors::*f) {
+            return s.se ? std::optional<double>((*s.se).*f) : std::nullopt;
+        };
+        std::snprintf(buf, sizeof buf, "%-*s %10.4f%s %10.4f%s %8.4f %8.1f%% %7.3f%s",
+                      static_cast<int>(nameWidth), s.name.c_str(), s.eq2.total,
+                      pm(s.eq2.total, se(&JudgeScore::Errors::eq2)).c_str(), s.unbiased.total,
+                      pm(s.unbiased.total, se(&JudgeScore::Errors::unbiased)).c_str(), s.meanE,
+                      100.0 * s.sparsity, s.brightness,
+                      pm(s.brightness, se(&JudgeScore::Errors::brightness)).c_str());
         out << buf;
         for (const std::string& r : regions) {
             const RegionVisibility* v = nullptr;
-            for (const RegionVisibility& x : s.visibility)
-                if (x.label.name == r) v = &x;
+            size_t k = 0;
+            for (size_t i = 0; i < s.visibility.size(); ++i)
+                if (s.visibility[i].label.name == r) v = &s.visibility[i], k = i;
+            const bool hasSe = s.se && k < s.se->visibility.size();
             if (jnd) {
                 if (v)
                     std::snprintf(buf, sizeof buf, " %14.2f", v->jnd);
@@ -257,9 +478,16 @@ std::string formatJudgeTable(const std::vector<JudgeScore>& scores) {
                 out << buf;
             }
             if (v)
-                std::snprintf(buf, sizeof buf, " %14.3f %8.4f", v->visibility, v->contrast);
+                std::snprintf(
+                    buf, sizeof buf, " %14.3f%s %8.4f%s", v->visibility,
+                    pm(v->visibility, hasSe ? std::optional(s.se->visibility[k]) : std::nullopt)
+                        .c_str(),
+                    v->contrast,
+                    pm(v->contrast, hasSe ? std::optional(s.se->contrast[k]) : std::nullopt)
+                        .c_str());
             else
-                std::snprintf(buf, sizeof buf, " %14s %8s", "-", "-");
+                std::snprintf(buf, sizeof buf, " %14s%s %8s%s", "-", pmHead.c_str(), "-",
+                              pmHead.c_str());
             out << buf;
         }
         out << '\n';

@@ -51,7 +51,8 @@ void writeJudgeReport(const std::filesystem::path& dir, const JudgeJobOptions& o
     ReportContent rc;
     rc.title = "scratchlight judge: " + o.scene.filename().string();
     rc.notes.push_back(
-        "Every light scored on the judge's own estimate (" + std::to_string(o.judge.spp) +
+        "Every light scored on the judge's own estimate (" +
+        std::to_string(judge.estimate().file.provenance.spp) +
         " spp in two independent halves, seed " + std::to_string(o.judge.seed) +
         "), not on the samples any optimizer saw. Visibility: the region's RMS image gradient "
         "(noise-unbiased, from the two halves) over the defect-free surface's; 1 means the "
@@ -164,28 +165,49 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
         std::optional<DefectRegions> regions;
         if (!o.defects.empty())
             regions = defectRegionsInImage(*scene, o.defects, jo.truth, o.reference);
+        // The regions in the image once (truth labels, or the defect region), then the judge
+        // in rounds (app/Judge.h judgeInRounds): the estimate's spp grows until every score's
+        // standard error is small, unless --spp is given.
+        std::vector<uint8_t> labels, reference;
+        std::vector<RegionLabel> legend;
+        if (regions) {
+            labels.resize(regions->defects.size());
+            for (size_t q = 0; q < labels.size(); ++q) labels[q] = regions->defects[q] ? 255 : 0;
+            legend = {{255, "defects"}};
+            reference = regions->reference;
+        } else if (!jo.truth.empty()) {
+            LabelMask m = projectTruth(*scene, jo.truth, jo.threads);
+            labels = std::move(m.labels);
+            legend = std::move(m.legend);
+        }
         std::optional<TransportSource> estimate;
         std::unique_ptr<Judge> judged;
-        if (regions) {
-            estimate = judgeEstimate(*scene, jo);
-            std::vector<uint8_t> labels(regions->defects.size());
-            for (size_t q = 0; q < labels.size(); ++q) labels[q] = regions->defects[q] ? 255 : 0;
-            judged = std::make_unique<Judge>(*estimate, jo, std::move(labels),
-                                             std::vector<RegionLabel>{{255, "defects"}},
-                                             regions->reference);
-        } else {
-            judged = std::make_unique<Judge>(*scene, jo);
+        auto judgeAt = [&](int spp) -> const Judge& {
+            if (judged && estimate->file.provenance.spp == spp) return *judged;
+            judged.reset();
+            JudgeOptions at = jo;
+            at.spp = spp;
+            estimate = judgeEstimate(*scene, at);
+            judged = std::make_unique<Judge>(*estimate, at, labels, legend, reference);
+            return *judged;
+        };
+        std::vector<std::pair<std::string, std::vector<double>>> lightE;
+        {
+            // E on the judge's grid (Judge::envVector needs a judge: the scene's grid is its).
+            const int cap = jo.spp == 0 ? kJudgeDefaultSpp : jo.spp;
+            const int first = jo.spp == 0 ? std::min(kJudgePilotSpp, cap) : jo.spp;
+            const Judge& pilot = judgeAt(first);
+            for (const auto& [name, env] : lights) lightE.emplace_back(name, pilot.envVector(env));
+            sum.rounds = judgeInRounds(judgeAt, lightE, first, cap);
         }
+        jo.spp = sum.rounds.spp();
         const Judge& judge = *judged;
         const TransportMatrix& t = judge.estimate().file.matrix;
 
         sum.estimate = judge.estimate();
+        sum.scores = sum.rounds.scores;
         std::vector<std::vector<double>> images;
-        for (const auto& [name, env] : lights) {
-            const std::vector<double> e = judge.envVector(env);
-            sum.scores.push_back(judge.score(e, name));
-            images.push_back(judge.meanImage(e));
-        }
+        for (const auto& [name, e] : lightE) images.push_back(judge.meanImage(e));
 
         nlohmann::ordered_json j;
         j["scratchlight"] = runProvenance(o.commandLine);
@@ -197,7 +219,11 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
                          {"max_depth", sum.estimate.file.provenance.maxDepth},
                          {"fingerprint", sum.estimate.file.provenance.fingerprint},
                          {"cache_hit", sum.estimate.cacheHit},
-                         {"image", {t.width, t.height}}};
+                         {"image", {t.width, t.height}},
+                         {"spp_rule", o.judge.spp == 0 ? "rounds" : "given"},
+                         {"max_relative_se", kJudgeMaxError},
+                         {"rounds", roundsJson(sum.rounds)},
+                         {"reason", sum.rounds.describe()}};
         j["lambda"] = jo.objective.lambda;
         j["viewing"] = viewingJson(*jo.viewing);
         if (!jo.truth.empty()) j["truth"] = jo.truth.string();

@@ -2,7 +2,8 @@
 // independent estimate of a scene, and writes what a person looks at.
 //
 // OUTDIR holds:
-//   judge.json    one entry per light (app/Judge.h toJson) plus the estimate's facts
+//   judge.json    one entry per light (app/Judge.h toJson, with its standard errors) plus the
+//                 estimate's facts (its spp and the rounds that chose it)
 //   judge.csv     one row per light: name, eq2, unbiased, mean_E, sparsity, brightness,
 //                 per-region visibility, contrast and Weber contrast
 //   renders.exr   the mean renders side by side (linear luminance, one panel per light, in
@@ -45,6 +46,7 @@ struct JudgeJobOptions {
 struct JudgeJobSummary {
     TransportSource estimate;
     std::vector<JudgeScore> scores;  // lights in the order given, then the references
+    JudgedRounds rounds;             // the spp the scores' standard errors asked for
     std::string json;                // the text of judge.json
 };
 

@@ -530,7 +530,10 @@ void loadHeldOut(const Plan& p, const Inputs& in, OptimizeJobSummary& job) {
             break;
         }
         case HeldOutMode::Judge:
-            job.heldOut = judgeEstimateFor(job.transport.file, *in.scene, o.heldOutSpp, p.cacheDir);
+            // The judge's first round (judgeRun adds rounds while the scores are too noisy).
+            job.heldOut =
+                judgeEstimateFor(job.transport.file, *in.scene,
+                                 o.heldOutSpp > 0 ? o.heldOutSpp : kJudgePilotSpp, p.cacheDir);
             break;
     }
     const uint64_t hs = job.heldOut->file.provenance.seed, ts = job.transport.file.provenance.seed;
@@ -964,18 +967,58 @@ ViewingModel viewingOf(const Inputs& in) {
 
 /// Stage 4c: the judge's scores (the held-out estimate, at this run's λ) of the answer, the
 /// user's lamp, the paper's light and, when a reference is the answer, E*; the warnings.
-void judgeRun(const Plan& p, const Inputs& in, const OptimizeJobSummary& job, LambdaResult& r) {
+void judgeRun(const Plan& p, const Inputs& in, OptimizeJobSummary& job, LambdaResult& r) {
     OptimizeRun& run = r.run;
     if (job.heldOut) {
         JudgeOptions jo;
         jo.objective = objectiveAt(p, run.lambda);
         jo.rgb = p.o.rgb;
         jo.viewing = viewingOf(in);
-        const Judge judge(*job.heldOut, jo, in.regionLabels, in.regionLegend, in.regionReference);
-        run.judged = judge.score(r.e, run.dir.filename().string());
-        run.judgedLamp = judge.score(in.lampE, "lamp");
-        run.judgedPaper = judge.score(in.paperE, "paper");
-        if (!r.optimizedE.empty()) run.judgedOptimized = judge.score(r.optimizedE, "optimized");
+        // In rounds (app/Judge.h judgeInRounds): the judge's estimate is traced again at more
+        // spp while a score's standard error is above 1 % (not for a given --heldout-spp or a
+        // given held-out file).
+        const int first = job.heldOut->file.provenance.spp;
+        const bool rounds = p.o.heldOut.mode == HeldOutMode::Judge && p.o.heldOutSpp == 0;
+        std::unique_ptr<Judge> judge;
+        auto judgeAt = [&](int spp) -> const Judge& {
+            if (!judge || spp != job.heldOut->file.provenance.spp) {
+                judge.reset();
+                if (spp != job.heldOut->file.provenance.spp)
+                    job.heldOut = judgeEstimateFor(job.transport.file, *in.scene, spp, p.cacheDir);
+                judge = std::make_unique<Judge>(*job.heldOut, jo, in.regionLabels, in.regionLegend,
+                                                in.regionReference);
+            }
+            return *judge;
+        };
+        std::vector<std::pair<std::string, std::vector<double>>> lights = {
+            {run.dir.filename().string(), r.e}, {"lamp", in.lampE}, {"paper", in.paperE}};
+        if (!r.optimizedE.empty()) lights.emplace_back("optimized", r.optimizedE);
+        run.judgeRounds = judgeInRounds(judgeAt, lights, first,
+                                        rounds ? std::max(first, kJudgeDefaultSpp) : first);
+        spdlog::info("lambda {}: judge estimate {}", run.lambda, run.judgeRounds.describe());
+        const std::vector<JudgeScore>& s = run.judgeRounds.scores;
+        run.judged = s[0];
+        run.judgedLamp = s[1];
+        run.judgedPaper = s[2];
+        if (s.size() > 3) run.judgedOptimized = s[3];
+        run.heldCurveSpp = first;
+        if (job.heldOut->file.provenance.spp != first && run.heldFinal) {
+            // The held-out figures of the start and of E* on the last round's estimate; the
+            // curve's earlier points stay on the first round's.
+            const HeldOutScorer scorer(job.heldOut->file.matrix, in.mask.pixels, jo.objective,
+                                       in.kind, p.o.rgb, in.defects, in.reference);
+            run.heldInitial = scorer.score(in.startValues.front());
+            run.heldFinal = scorer.score(r.optimizedE.empty() ? r.e : r.optimizedE);
+            if (!r.rows.empty()) {
+                std::string& last = r.rows.back();
+                for (int k = 0; k < 3; ++k) last.resize(last.rfind(','));
+                std::ostringstream tail;
+                tail << std::setprecision(10) << ',' << run.heldFinal->own.total << ','
+                     << run.heldFinal->paper.total << ',' << run.heldFinal->unbiased.total;
+                last += tail.str();
+            }
+            if (!r.curve.held.empty()) r.curve.held.back() = run.heldFinal->own.total;
+        }
     }
     run.warnings = resultWarnings(run, r.optimizedE.empty() ? r.e : r.optimizedE);
     if (run.answer && run.answer->referenceWon())
@@ -1127,7 +1170,8 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
         s["heldout_objective"] = objectiveKindName(in.kind);
         s["heldout"] = {{"initial", heldJson(*run.heldInitial)},
                         {"final", heldJson(*run.heldFinal)},
-                        {"transport", transportJson(*job.heldOut)}};
+                        {"transport", transportJson(*job.heldOut)},
+                        {"curve_spp", run.heldCurveSpp}};
     } else {
         s["heldout_loss"] = nullptr;
     }
@@ -1192,6 +1236,9 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
             optimized["judge"] = toJson(run.judgedOptimized ? *run.judgedOptimized : *run.judged);
             cmp["judge_spp"] = job.heldOut->file.provenance.spp;
             cmp["viewing"] = viewingJson(viewingOf(in));
+            cmp["judge_rounds"] = roundsJson(run.judgeRounds);
+            cmp["judge_reason"] = run.judgeRounds.describe();
+            cmp["judge_max_relative_se"] = kJudgeMaxError;
         }
         cmp["lamp"] = lamp;
         cmp["paper"] = paper;

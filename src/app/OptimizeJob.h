@@ -120,7 +120,9 @@ struct OptimizeJobOptions {
     bool keepInterrupted = false;
     bool rgb = false;
     HeldOutSource heldOut;  // default: the judge's estimate traced from the scene (cached)
-    int heldOutSpp = 0;     // 0: the judge's default (app/Judge.h)
+    /// 0: the judge's rounds (app/Judge.h judgeInRounds: from kJudgePilotSpp until the judged
+    /// scores' standard errors are <= 1 %, at most kJudgeDefaultSpp); else that spp.
+    int heldOutSpp = 0;
     int heldOutEvery = 50;  // held-out column of loss.csv every N iterations
     /// method: any row of optimize/Methods.h; iterations: 0 = the method's default budget.
     OptimizerOptions optimizer = optimizeJobOptimizerOptions();
@@ -191,6 +193,11 @@ struct OptimizeRun {
     std::optional<JudgeScore> judgedLamp, judgedPaper;
     /// The optimized light's judge scores when the answer is a reference (else `judged` is it).
     std::optional<JudgeScore> judgedOptimized;
+    /// The judge's rounds for these scores (app/Judge.h judgeInRounds): the spp their standard
+    /// errors asked for; the held-out curve before the last round is on the first round's
+    /// estimate (heldCurveSpp), the held-out figures of the start and of E* on the last.
+    JudgedRounds judgeRounds;
+    int heldCurveSpp = 0;
     /// E*'s figure (app/TrainingNoise.h trainingFigure) on the training and the validation
     /// estimate, and the rule's rounds (the first λ only; later λs keep its spp).
     std::optional<LossParts> validationFinal;

@@ -1,4 +1,4 @@
-// scratchlight judge SCENE.json [ENV.exr | OUTDIR ...] [--spp 1024] [--truth TRUTH.png]
+// scratchlight judge SCENE.json [ENV.exr | OUTDIR ...] [--spp N] [--truth TRUTH.png]
 //                   [--lambda 30] [--no-references] [-o DIR]
 // Scores env maps on the judge's independent estimate (app/Judge.h) and prints a table.
 #include <spdlog/spdlog.h>
@@ -33,8 +33,9 @@ int runJudge(const JudgeArgs& a) {
     o.commandLine = invokedCommandLine();
     JudgeJobSummary s = runJudgeJob(o);
     const auto& est = s.estimate;
-    spdlog::info("judge estimate: {} spp in two halves, seed {}, {} ({})", o.judge.spp,
-                 o.judge.seed, est.cacheHit ? "from the cache" : "traced", est.path.string());
+    spdlog::info("judge estimate: {} spp in two halves, seed {}, {} ({}); {}",
+                 est.file.provenance.spp, o.judge.seed, est.cacheHit ? "from the cache" : "traced",
+                 est.path.string(), s.rounds.describe());
     std::printf("%s", formatJudgeTable(s.scores).c_str());
     std::printf(
         "lower eq2 and U are better; bright: mean brightness over the white furnace's; "
@@ -54,9 +55,12 @@ void registerJudge(CLI::App& app, std::function<int()>& run) {
     c->add_option("scene", a->scene, "Scene file (.json)")->required();
     c->add_option("lights", a->lights,
                   "Env-map files, or optimize output directories (their envmap.exr)");
-    c->add_option("--spp", a->o.judge.spp, "Samples per pixel of the estimate (two halves)")
-        ->check(inRange(2, 1 << 20))
-        ->capture_default_str();
+    c->add_option("--spp", a->o.judge.spp,
+                  "Samples per pixel of the estimate (two halves); default: from " +
+                      std::to_string(kJudgePilotSpp) +
+                      " up, until every score's standard error is <= 1 % (at most " +
+                      std::to_string(kJudgeDefaultSpp) + ")")
+        ->check(inRange(2, 1 << 20));
     c->add_option("--seed", a->o.judge.seed, "The judge's seed (another judge: another seed)")
         ->capture_default_str();
     c->add_option("--max-depth", a->o.judge.maxDepth, "Mitsuba max_depth (default: the scene's)")

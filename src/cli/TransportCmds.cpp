@@ -201,12 +201,23 @@ int runOptimize(OptimizeArgs a) {
                 r.lambda, s.heldOut ? s.heldOut->file.provenance.spp : 0, r.objective.c_str(),
                 r.heldInitial->own.total, r.heldFinal->own.total, r.heldInitial->unbiased.total,
                 r.heldFinal->unbiased.total);
+    // The judge's scores with their standard errors (app/Judge.h), relative to each score.
+    auto pm = [](double v, const std::optional<JudgeScore::Errors>& se,
+                 double JudgeScore::Errors::*f) {
+        if (!se || !std::isfinite(v) || v == 0 || !std::isfinite((*se).*f)) return std::string();
+        return " ± " + formatNumber(100.0 * (*se).*f / std::abs(v), 2) + " %";
+    };
     for (const OptimizeRun& r : s.runs)
         if (r.judged)
-            std::printf("judge (lambda %g): eq2 %.4f, U %.4f, mean E %.4f, %.0f%% texels dark%s\n",
-                        r.lambda, r.judged->eq2.total, r.judged->unbiased.total, r.judged->meanE,
-                        100.0 * r.judged->sparsity,
-                        r.start.empty() ? "" : (", best start " + r.start).c_str());
+            std::printf(
+                "judge (lambda %g, %d spp): eq2 %.4f%s, U %.4f%s, mean E %.4f, %.0f%% texels "
+                "dark%s\n",
+                r.lambda, r.judged->spp, r.judged->eq2.total,
+                pm(r.judged->eq2.total, r.judged->se, &JudgeScore::Errors::eq2).c_str(),
+                r.judged->unbiased.total,
+                pm(r.judged->unbiased.total, r.judged->se, &JudgeScore::Errors::unbiased).c_str(),
+                r.judged->meanE, 100.0 * r.judged->sparsity,
+                r.start.empty() ? "" : (", best start " + r.start).c_str());
     // The report's first sentence (app/Report.h), here too.
     for (const OptimizeRun& r : s.runs) {
         std::string prefix;

@@ -1,0 +1,219 @@
+// The judge's standard errors and rounds (app/Judge.h scoreWithErrors, judgeInRounds): the
+// wild-bootstrap SE matches the spread of the scores over independent judge seeds and falls as
+// 1/sqrt(spp); the rounds stop earlier for an easy light than for a hard one, hold the cap, and
+// give the same numbers for the same seed; judge.json records the spp, the rounds and the SEs.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "TestUtil.h"
+#include "app/Judge.h"
+#include "core/Rng.h"
+#include "scene/Scene.h"
+
+using namespace sl;
+
+namespace {
+
+std::unique_ptr<Scene> wavyScene(int res, int n = 48) {
+    return std::make_unique<Scene>(test::bumpyPartDesc(res, res), n, n, test::bumpyHeightMap(n));
+}
+
+std::vector<double> randomLight(size_t n, uint64_t seed) {
+    Pcg32 rng(seed, 3);
+    std::vector<double> v(n);
+    for (double& x : v) x = rng.nextDouble();
+    return v;
+}
+
+/// Labels: a (2r)×(2r) block in the image's centre, the "defect" whose visibility is scored.
+std::vector<uint8_t> blockLabels(int w, int h, int r = 3) {
+    std::vector<uint8_t> l(size_t(w) * h, 0);
+    for (int y = h / 2 - r; y < h / 2 + r; ++y)
+        for (int x = w / 2 - r; x < w / 2 + r; ++x) l[size_t(y) * w + x] = 255;
+    return l;
+}
+
+double mean(const std::vector<double>& v) {
+    double m = 0;
+    for (double x : v) m += x;
+    return m / static_cast<double>(v.size());
+}
+
+double sd(const std::vector<double>& v) {
+    const double m = mean(v);
+    double q = 0;
+    for (double x : v) q += (x - m) * (x - m);
+    return std::sqrt(q / static_cast<double>(v.size() - 1));
+}
+
+}  // namespace
+
+// The SE of one estimate predicts how much the score moves between independent estimates:
+// over 16 judge seeds at 256 spp, the scores' standard deviation against the mean SE (the
+// spread of 16 values is itself known to about ±18 %).
+TEST(JudgeRounds, StandardErrorMatchesTheSpreadOverIndependentSeeds) {
+    auto scene = wavyScene(32);
+    const std::vector<double> e = randomLight(1250, 11);
+    std::vector<double> u, eq2, bright, seU, seEq2, seBright;
+    for (uint64_t k = 0; k < 16; ++k) {
+        JudgeOptions o;
+        o.spp = 256;
+        o.seed = kJudgeSeed + 100 + k;
+        const Judge judge(*scene, o);
+        const JudgeScore s = judge.scoreWithErrors(e, "random");
+        ASSERT_TRUE(s.se);
+        EXPECT_EQ(s.spp, 256);
+        EXPECT_EQ(s.se->replicates, kJudgeReplicates);
+        u.push_back(s.unbiased.total);
+        eq2.push_back(s.eq2.total);
+        bright.push_back(s.brightness);
+        seU.push_back(s.se->unbiased);
+        seEq2.push_back(s.se->eq2);
+        seBright.push_back(s.se->brightness);
+    }
+    EXPECT_NEAR(sd(u) / mean(seU), 1.0, 0.45) << sd(u) << " vs " << mean(seU);
+    EXPECT_NEAR(sd(eq2) / mean(seEq2), 1.0, 0.45) << sd(eq2) << " vs " << mean(seEq2);
+    EXPECT_NEAR(sd(bright) / mean(seBright), 1.0, 0.45) << sd(bright) << " vs " << mean(seBright);
+}
+
+// Sixteen times the samples: the standard error falls as 1/sqrt(spp) where the noise is small
+// (a quarter), faster where the noise's square still counts (U's and the visibility's
+// denominators are products of two noisy halves: that part falls as 1/spp, and the bootstrap,
+// whose replicates add noise to noise, over-states it there: a conservative SE). So: between a
+// quarter and a sixteenth, for every score (128 replicates; a 10×10 block). Measured on this
+// scene: U 7.1×, visibility 8.0×, eq. 2 and brightness about 4×.
+TEST(JudgeRounds, StandardErrorFallsAsOneOverSqrtSpp) {
+    auto scene = wavyScene(32);
+    const std::vector<double> e = randomLight(1250, 12);
+    const std::vector<uint8_t> labels = blockLabels(32, 32, 5);
+    JudgeScore::Errors lo, hi;
+    for (int spp : {512, 8192}) {
+        JudgeOptions o;
+        o.spp = spp;
+        const TransportSource est = judgeEstimate(*scene, o);
+        const Judge judge(est, o, labels, {{255, "block"}});
+        const JudgeScore s = judge.scoreWithErrors(e, "", 128);
+        ASSERT_TRUE(s.se);
+        (spp == 512 ? lo : hi) = *s.se;
+    }
+    auto between = [](double ratio, const char* what) {
+        EXPECT_GE(ratio, 3.2) << what;   // 1/sqrt(spp), less 20 % for the SEs' own spread
+        EXPECT_LE(ratio, 16.0) << what;  // 1/spp
+    };
+    between(lo.unbiased / hi.unbiased, "U");
+    EXPECT_NEAR(lo.eq2 / hi.eq2, 4.0, 1.2);
+    EXPECT_NEAR(lo.brightness / hi.brightness, 4.0, 1.2);
+    ASSERT_EQ(lo.visibility.size(), 1u);
+    between(lo.visibility[0] / hi.visibility[0], "visibility");
+}
+
+// The rule: on an easy scene (no region: U, eq. 2 and the brightness are sums over the whole
+// part) the rounds stop in the first; on a hard one (a 6×6 block's visibility: a ratio of
+// gradients over 36 pixels) they ask for more; a target no estimate meets stops at the cap,
+// not met; the same seed gives the same rounds and numbers.
+TEST(JudgeRounds, StopsEarlierOnAnEasySceneThanOnAHardOneAndHoldsTheCap) {
+    auto scene = wavyScene(32);
+    std::vector<std::unique_ptr<TransportSource>> kept;
+    std::unique_ptr<Judge> judge;
+    std::vector<uint8_t> labels;
+    auto judgeAt = [&](int spp) -> const Judge& {
+        JudgeOptions o;
+        o.spp = spp;
+        judge.reset();
+        kept.push_back(std::make_unique<TransportSource>(judgeEstimate(*scene, o)));
+        judge = std::make_unique<Judge>(
+            *kept.back(), o, labels,
+            labels.empty() ? std::vector<RegionLabel>{} : std::vector<RegionLabel>{{255, "block"}});
+        return *judge;
+    };
+    const std::vector<double> e = randomLight(1250, 13);
+    const double target = 0.05;
+    const JudgedRounds a = judgeInRounds(judgeAt, {{"easy", e}}, 64, 1024, target);
+    labels = blockLabels(32, 32);
+    const JudgedRounds b = judgeInRounds(judgeAt, {{"hard", e}}, 64, 1024, target);
+    ASSERT_EQ(a.scores.size(), 1u);
+    EXPECT_TRUE(a.met) << a.describe(target);
+    EXPECT_EQ(a.spp(), 64);
+    EXPECT_EQ(a.rounds.size(), 1u);
+    EXPECT_LE(a.rounds.back().worst.relative, target);
+    EXPECT_GT(b.spp(), a.spp()) << b.describe(target);
+    EXPECT_GT(b.rounds.size(), 1u);
+    EXPECT_GT(b.rounds.front().worst.relative, target);
+    EXPECT_EQ(b.rounds.front().worst.score.rfind("hard: ", 0), 0u) << b.rounds.front().worst.score;
+    EXPECT_NE(b.rounds.front().worst.score.find("block"), std::string::npos)
+        << b.rounds.front().worst.score;
+    for (size_t k = 1; k < b.rounds.size(); ++k)
+        EXPECT_GE(b.rounds[k].spp, 2 * b.rounds[k - 1].spp);  // at least twice a round
+    EXPECT_EQ(b.scores.front().spp, b.spp());
+
+    const JudgedRounds c = judgeInRounds(judgeAt, {{"hard", e}}, 16, 64, 1e-6);
+    EXPECT_EQ(c.spp(), 64);
+    EXPECT_FALSE(c.met);
+    EXPECT_NE(c.describe(1e-6).find("at the most 64 spp"), std::string::npos) << c.describe();
+    // A given spp is one round (spp == cap).
+    EXPECT_EQ(judgeInRounds(judgeAt, {{"hard", e}}, 32, 32, target).rounds.size(), 1u);
+
+    // Reproducible: the same seed, the same rounds and numbers, errors included.
+    const JudgedRounds b2 = judgeInRounds(judgeAt, {{"hard", e}}, 64, 1024, target);
+    ASSERT_EQ(b2.rounds.size(), b.rounds.size());
+    EXPECT_EQ(b2.spp(), b.spp());
+    EXPECT_EQ(b2.scores[0].unbiased.total, b.scores[0].unbiased.total);
+    EXPECT_EQ(b2.scores[0].visibility[0].visibility, b.scores[0].visibility[0].visibility);
+    EXPECT_EQ(b2.scores[0].se->visibility[0], b.scores[0].se->visibility[0]);
+}
+
+TEST(JudgeRounds, NextSppFollowsTheSquareOfTheErrorRatio) {
+    EXPECT_EQ(nextJudgeSpp(128, 0.009, 1024), 0);        // met
+    EXPECT_EQ(nextJudgeSpp(128, 0.012, 1024), 256);      // at least twice
+    EXPECT_EQ(nextJudgeSpp(128, 0.025, 1024), 1024);     // 128 · 6.25 = 800 → 1024
+    EXPECT_EQ(nextJudgeSpp(128, 0.017, 1024), 512);      // 128 · 2.89 = 370 → 512
+    EXPECT_EQ(nextJudgeSpp(1024, 0.5, 1024), 0);         // at the cap
+    EXPECT_EQ(nextJudgeSpp(128, INFINITY, 1024), 1024);  // an SE that could not be formed
+    JudgeScore s;
+    s.name = "x";
+    s.unbiased.total = 10;
+    s.brightness = 0.001;  // near zero: held to 0.05 · 1 %, not to 1 % of itself
+    s.se = JudgeScore::Errors{};
+    s.se->unbiased = 0.05;
+    s.se->brightness = 0.0002;
+    const WorstError w = worstRelativeError(s);
+    EXPECT_NEAR(w.relative, 0.005, 1e-12);  // U's 0.05/10; brightness 0.0002/0.05 = 0.004
+    EXPECT_EQ(w.score, "x: U");
+}
+
+// judge.json records the estimate's spp, the rounds that chose it, and every score's SE.
+TEST(JudgeRounds, JudgeJsonRecordsSppRoundsAndErrors) {
+    test::TempDir dir("judge-rounds");
+    const std::string part = (dir / "part.exr").string(), scene = (dir / "scene.json").string();
+    ASSERT_EQ(test::runCli("gen-surface -o " + part + " --width 96 --height 96 --scene " + scene +
+                           " --image-size 24 --spp 8 --max-depth 3")
+                  .exitCode,
+              0);
+    const auto r =
+        test::runCli("judge " + scene + " --truth " + (dir / "part-truth.png").string() +
+                     " --cache " + (dir / "cache").string() + " -o " + (dir / "j").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("±"), std::string::npos) << r.output;  // the SE beside each score
+    const nlohmann::json j = nlohmann::json::parse(test::readFile(dir / "j" / "judge.json"));
+    const nlohmann::json& est = j.at("estimate");
+    EXPECT_EQ(est.value("spp_rule", ""), "rounds");
+    ASSERT_GE(est.at("rounds").size(), 1u);
+    EXPECT_EQ(est.at("rounds").at(0).value("spp", 0), kJudgePilotSpp);
+    EXPECT_EQ(est.value("spp", 0), est.at("rounds").back().value("spp", -1));
+    EXPECT_LE(est.value("spp", 0), kJudgeDefaultSpp);
+    for (const auto& l : j.at("lights")) {
+        EXPECT_EQ(l.value("spp", 0), est.value("spp", -1));
+        ASSERT_TRUE(l.contains("se")) << l.dump();
+        EXPECT_TRUE(l["se"]["unbiased"].is_number());
+        EXPECT_GT(l["se"]["unbiased"].get<double>(), 0.0);
+        EXPECT_TRUE(l["se"]["brightness"].is_number());
+        EXPECT_EQ(l["se"].value("replicates", 0), kJudgeReplicates);
+        EXPECT_EQ(l["se"]["regions"].size(), l["visibility"].size());
+    }
+    // Met, or at the cap: never stopped early with an error above the target.
+    const double worst = est.at("rounds").back().value("worst_relative_se", 1.0);
+    EXPECT_TRUE(worst <= kJudgeMaxError || est.value("spp", 0) == kJudgeDefaultSpp) << worst;
+}
