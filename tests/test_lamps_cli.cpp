@@ -71,7 +71,10 @@ TEST(LampCli, FitsTheDefectsObjectiveAndJudgesIt) {
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("judge (defect visibility on the held-out estimate"), std::string::npos)
         << r.output;
-    EXPECT_NE(r.output.find("visibility of"), std::string::npos) << r.output;
+    // Each region's JND first (the lamps job's judge has the scene's viewing model), its
+    // visibility ratio beside it.
+    EXPECT_NE(r.output.find("JND under the lamps"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("(visibility ratio"), std::string::npos) << r.output;
     const auto summary = nlohmann::json::parse(readText(out / "summary.json"));
     EXPECT_EQ(summary["objective"], "defects");
     const auto& j = summary["judge"]["objective"];
