@@ -438,33 +438,31 @@ double num(const json& j, const char* key) {
     return j[key].get<double>();
 }
 
-/// All defect regions as one (objective/DefectVisibility.h combinedVisibility) from a judge
-/// score's JSON.
-double combinedVisibility(const json& judge) {
-    if (!judge.is_object() || !judge.contains("visibility")) return std::nan("");
+/// A judge score's regions from its JSON: pixels, visibility and JND (NaN where absent).
+std::vector<RegionVisibility> regionsOf(const json& judge) {
     std::vector<RegionVisibility> regions;
     for (const json& r : judge["visibility"]) {
         RegionVisibility v;
         v.visibility = num(r, "visibility");
-        const double p = num(r, "pixels");
-        v.pixels = std::isfinite(p) && p > 0 ? static_cast<size_t>(p) : 0;
-        regions.push_back(v);
-    }
-    return sl::combinedVisibility(std::span<const RegionVisibility>(regions));
-}
-
-/// The regions' JND as one (objective/DefectVisibility.h combinedJnd); NaN without JND.
-double combinedJnd(const json& judge) {
-    if (!judge.is_object() || !judge.contains("visibility")) return std::nan("");
-    std::vector<RegionVisibility> regions;
-    for (const json& r : judge["visibility"]) {
-        RegionVisibility v;
         v.jnd = num(r, "jnd");
         const double p = num(r, "pixels");
         v.pixels = std::isfinite(p) && p > 0 ? static_cast<size_t>(p) : 0;
         regions.push_back(v);
     }
-    return sl::combinedJnd(std::span<const RegionVisibility>(regions));
+    return regions;
+}
+
+/// All defect regions as one (objective/DefectVisibility.h combinedVisibility) from a judge
+/// score's JSON.
+double combinedVisibility(const json& judge) {
+    if (!judge.is_object() || !judge.contains("visibility")) return std::nan("");
+    return sl::combinedVisibility(regionsOf(judge));
+}
+
+/// The regions' JND as one (objective/DefectVisibility.h combinedJnd); NaN without JND.
+double combinedJnd(const json& judge) {
+    if (!judge.is_object() || !judge.contains("visibility")) return std::nan("");
+    return sl::combinedJnd(regionsOf(judge));
 }
 
 std::string fmt(double v, int digits = 3) {
