@@ -60,23 +60,6 @@ std::vector<double> convolve(int w, int h, const std::vector<double>& in,
 
 }  // namespace
 
-std::vector<double> partGaussian(int width, int height, std::span<const double> y,
-                                 std::span<const uint8_t> part, double sigma) {
-    const size_t n = static_cast<size_t>(width) * height;
-    if (y.size() != n || part.size() != n)
-        throw std::invalid_argument("partGaussian: image sizes differ");
-    std::vector<double> masked(n), weight(n);
-    for (size_t p = 0; p < n; ++p) {
-        weight[p] = part[p] ? 1.0 : 0.0;
-        masked[p] = part[p] ? y[p] : 0.0;
-    }
-    const std::vector<double> k = gaussianKernel(sigma);
-    std::vector<double> num = convolve(width, height, masked, k);
-    const std::vector<double> den = convolve(width, height, weight, k);
-    for (size_t p = 0; p < n; ++p) num[p] = den[p] > 1e-12 ? num[p] / den[p] : 0.0;
-    return num;
-}
-
 BandContrast::BandContrast(int width, int height, std::span<const double> Ya,
                            std::span<const double> Yb, std::span<const uint8_t> part, double white,
                            const ViewingModel& view)

@@ -57,7 +57,6 @@ class BandContrast {
     /// The JND of `region` (nonzero pixels) over the defect-free surface `clean`.
     JndScore score(std::span<const uint8_t> region, std::span<const uint8_t> clean) const;
 
-    double luminance() const { return luminance_; }
     /// The band's peak frequency in cycles/degree.
     double bandFrequency(int k) const;
 
@@ -67,10 +66,5 @@ class BandContrast {
     double luminance_ = 0;
     std::vector<std::vector<double>> productAB_;  // c_k,a · c_k,b per band (0 off the part)
 };
-
-/// Gaussian-weighted mean over the part (normalized convolution: Σ G·Y·M / Σ G·M; 0 where no
-/// part pixel is within reach). Exposed for tests.
-std::vector<double> partGaussian(int width, int height, std::span<const double> y,
-                                 std::span<const uint8_t> part, double sigma);
 
 }  // namespace sl
