@@ -21,14 +21,14 @@ namespace {
 constexpr int kW = 320, kH = 256;
 constexpr double kLayDeg = 20.0;  // the striae's direction, degrees from the x axis
 
-// Striae along the lay: 60 random sinusoids across it (wavelengths 3–40 samples) plus six deep
-// single striae (a Gaussian groove 2 samples wide, 2.5 units deep) running the whole map, and
-// white noise of 0.05; RMS ≈ 0.5.
-std::vector<float> striated(uint32_t seed = 5) {
+// Striae: 60 random sinusoids across the lay (wavelengths 3–40 samples) plus six deep single
+// striae (a Gaussian groove 2 samples wide, 2.5 units deep) at offset + [−150, 150] across it,
+// and white noise of 0.05; RMS ≈ 0.5. across(x, y): the sample's coordinate across the lay.
+template <class Across>
+std::vector<float> striae(uint32_t seed, double offset, Across across) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> u(0.0, 1.0);
     std::normal_distribution<double> nd(0.0, 0.05);
-    const double c = std::cos(kLayDeg * M_PI / 180), s = std::sin(kLayDeg * M_PI / 180);
     struct Wave {
         double k, a, phase;
     };
@@ -36,17 +36,24 @@ std::vector<float> striated(uint32_t seed = 5) {
     for (int i = 0; i < 60; ++i)
         waves.push_back({2 * M_PI / (3.0 + 37.0 * u(rng)), 0.08 * u(rng), 2 * M_PI * u(rng)});
     std::vector<double> deep;
-    for (int i = 0; i < 6; ++i) deep.push_back(-150.0 + 300.0 * u(rng));
+    for (int i = 0; i < 6; ++i) deep.push_back(offset - 150.0 + 300.0 * u(rng));
     std::vector<float> h(static_cast<size_t>(kW) * kH);
     for (int y = 0; y < kH; ++y)
         for (int x = 0; x < kW; ++x) {
-            const double across = -s * x + c * y;  // distance across the lay
+            const double q = across(x, y);
             double v = nd(rng);
-            for (const Wave& w : waves) v += w.a * std::sin(w.k * across + w.phase);
-            for (double d0 : deep) v -= 2.5 * std::exp(-0.5 * std::pow((across - d0) / 1.0, 2));
+            for (const Wave& w : waves) v += w.a * std::sin(w.k * q + w.phase);
+            for (double d0 : deep) v -= 2.5 * std::exp(-0.5 * std::pow((q - d0) / 1.0, 2));
             h[static_cast<size_t>(y) * kW + x] = static_cast<float>(v);
         }
     return h;
+}
+
+// Striae along the tilted lay (kLayDeg from the x axis), a few much deeper than the rest, as a
+// bullet land's are.
+std::vector<float> striated(uint32_t seed = 5) {
+    const double c = std::cos(kLayDeg * M_PI / 180), s = std::sin(kLayDeg * M_PI / 180);
+    return striae(seed, 0.0, [c, s](int x, int y) { return -s * x + c * y; });
 }
 
 // A paraboloid pit of radius rho and depth d at (cx, cy); returns its truth (within the radius).
@@ -81,28 +88,8 @@ void groove(std::vector<float>& h, std::vector<uint8_t>& t, double x0, double y0
 // Arced striae: the striated texture's profile along the radius of circles about (cx, cy)
 // (outside the map), as a face mill's or a Wyko part's tool marks: no single lay holds.
 std::vector<float> arced(double cx, double cy, uint32_t seed = 7) {
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
-    std::normal_distribution<double> nd(0.0, 0.05);
-    struct Wave {
-        double k, a, phase;
-    };
-    std::vector<Wave> waves;
-    for (int i = 0; i < 60; ++i)
-        waves.push_back({2 * M_PI / (3.0 + 37.0 * u(rng)), 0.08 * u(rng), 2 * M_PI * u(rng)});
-    std::vector<double> deep;
     const double r0 = std::hypot(cx - kW / 2.0, cy - kH / 2.0);
-    for (int i = 0; i < 6; ++i) deep.push_back(r0 - 150.0 + 300.0 * u(rng));
-    std::vector<float> h(static_cast<size_t>(kW) * kH);
-    for (int y = 0; y < kH; ++y)
-        for (int x = 0; x < kW; ++x) {
-            const double across = std::hypot(x - cx, y - cy);
-            double v = nd(rng);
-            for (const Wave& w : waves) v += w.a * std::sin(w.k * across + w.phase);
-            for (double d0 : deep) v -= 2.5 * std::exp(-0.5 * std::pow((across - d0) / 1.0, 2));
-            h[static_cast<size_t>(y) * kW + x] = static_cast<float>(v);
-        }
-    return h;
+    return striae(seed, r0, [cx, cy](int x, int y) { return std::hypot(x - cx, y - cy); });
 }
 
 // A dent with no rim: a spherical cap of lateral radius rho and depth d at (cx, cy), truth
