@@ -631,7 +631,7 @@ TEST(Interrupt, BenchCommandsStopAndWriteNothing) {
     const std::vector<std::vector<std::string>> runs = {
         {"bench", "transport", "--size", "32", "--spp", "4", "--repeats", "1", "--iterations",
          "1000000", "-o", csv.string()},
-        {"bench", "scratchmap", "--sizes", "2000", "--repeats", "50", "-o", csv.string()},
+        {"bench", "scratchmap", "--sizes", "2000", "--repeats", "10000", "-o", csv.string()},
         {"bench", "view", "--size", "32", "--repeats", "100000", "--no-cache", "-o", csv.string()}};
     for (const auto& args : runs) {
         SCOPED_TRACE(args[1]);

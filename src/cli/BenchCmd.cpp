@@ -457,7 +457,7 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
     sm->add_option("--threshold", m->o.map.threshold, "Patch range threshold in [0, 1]")
         ->capture_default_str();
     sm->add_option("--repeats", m->o.repeats, "Runs per size (median)")
-        ->check(inRange(1, 50))
+        ->check(inRange(1, 10000))
         ->capture_default_str();
     sm->add_option("-o,--output", m->csv, "CSV output")->capture_default_str();
     sm->callback([m, &run] { run = [m] { return runScratchMapBenchCmd(*m); }; });
