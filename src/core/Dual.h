@@ -1,6 +1,7 @@
 // Dual<N>: a forward-mode dual number (a value and N partial derivatives), the few functions
-// the lamps' membership needs (scene/Lamp.h). The same templates run with ceres::Jet in the
-// tests, so the two differentiations check each other.
+// the lamps' membership (scene/Lamp.h) and the eye's sensitivity as a function of luminance
+// (perception/ContrastSensitivity.h, for the JND objective's exact gradient) need. The same
+// templates run with ceres::Jet in the tests, so the two differentiations check each other.
 #pragma once
 
 #include <array>
@@ -92,6 +93,26 @@ Dual<N> operator/(const Dual<N>& a, double b) {
     return a * (1.0 / b);
 }
 template <int N>
+Dual<N> operator/(double a, const Dual<N>& b) {
+    return dual_detail::scaled(a / b.v, b, -a / (b.v * b.v));
+}
+template <int N>
+Dual<N>& operator+=(Dual<N>& a, const Dual<N>& b) {
+    return a = a + b;
+}
+template <int N>
+Dual<N>& operator-=(Dual<N>& a, const Dual<N>& b) {
+    return a = a - b;
+}
+template <int N>
+Dual<N>& operator*=(Dual<N>& a, const Dual<N>& b) {
+    return a = a * b;
+}
+template <int N>
+Dual<N>& operator/=(Dual<N>& a, const Dual<N>& b) {
+    return a = a / b;
+}
+template <int N>
 Dual<N> sin(const Dual<N>& x) {
     return dual_detail::scaled(std::sin(x.v), x, std::cos(x.v));
 }
@@ -114,6 +135,39 @@ template <int N>
 Dual<N> erf(const Dual<N>& x) {
     return dual_detail::scaled(std::erf(x.v), x,
                                2.0 * std::numbers::inv_sqrtpi * std::exp(-x.v * x.v));
+}
+
+template <int N>
+Dual<N> exp(const Dual<N>& x) {
+    const double e = std::exp(x.v);
+    return dual_detail::scaled(e, x, e);
+}
+template <int N>
+Dual<N> log(const Dual<N>& x) {
+    return dual_detail::scaled(std::log(x.v), x, 1.0 / x.v);
+}
+template <int N>
+Dual<N> log10(const Dual<N>& x) {
+    return dual_detail::scaled(std::log10(x.v), x, 1.0 / (x.v * std::numbers::ln10));
+}
+template <int N>
+Dual<N> sqrt(const Dual<N>& x) {
+    const double r = std::sqrt(x.v);
+    return dual_detail::scaled(r, x, 0.5 / r);
+}
+template <int N>
+Dual<N> tanh(const Dual<N>& x) {
+    const double t = std::tanh(x.v);
+    return dual_detail::scaled(t, x, 1.0 - t * t);
+}
+
+template <int N>
+bool operator>(const Dual<N>& a, double b) {
+    return a.v > b;
+}
+template <int N>
+bool operator<(const Dual<N>& a, double b) {
+    return a.v < b;
 }
 
 }  // namespace sl

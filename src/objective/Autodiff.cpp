@@ -113,8 +113,11 @@ AutodiffGradient autodiffThroughMatrix(const TransportMatrix& t, const ImageObje
     });
 }
 
-AutodiffGradient autodiffThroughHalves(const TransportMatrix& t, const DefectObjective& objective,
-                                       std::span<const double> E, int threads) {
+namespace {
+
+template <typename HalfObjective>
+AutodiffGradient halvesByChunks(const TransportMatrix& t, const HalfObjective& objective,
+                                std::span<const double> E, int threads) {
     if (t.channels != 1 || t.planes != 2)
         throw std::invalid_argument(
             "autodiffThroughHalves: needs a gray transport matrix with two planes");
@@ -124,8 +127,20 @@ AutodiffGradient autodiffThroughHalves(const TransportMatrix& t, const DefectObj
     if (static_cast<size_t>(objective.width()) * objective.height() != t.rows())
         throw std::invalid_argument("autodiffThroughHalves: objective image size != T's rows");
     return autodiffChunks(E, threads, [&](std::span<const Jet> ej) {
-        return lossThroughHalves<Jet>(t, objective, ej);
+        return lossThroughHalves<Jet, HalfObjective>(t, objective, ej);
     });
+}
+
+}  // namespace
+
+AutodiffGradient autodiffThroughHalves(const TransportMatrix& t, const DefectObjective& objective,
+                                       std::span<const double> E, int threads) {
+    return halvesByChunks(t, objective, E, threads);
+}
+
+AutodiffGradient autodiffThroughHalves(const TransportMatrix& t, const JndObjective& objective,
+                                       std::span<const double> E, int threads) {
+    return halvesByChunks(t, objective, E, threads);
 }
 
 GradientError compareGradients(std::span<const double> g, std::span<const double> ref) {

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "objective/DefectObjective.h"
+#include "objective/JndObjective.h"
 #include "objective/Objective.h"
 #include "render/PathSink.h"
 #include "scene/EnvMapBasis.h"
@@ -90,11 +91,11 @@ template <typename S>
 S lossThroughMatrix(const TransportMatrix& t, const ImageObjective& objective,
                     std::span<const S> E);
 
-/// Loss(E) of the defects objective through the halves of a gray T (channels 1, planes 2):
-/// Y_a = T_a·E, Y_b = T_b·E with T's float entries promoted to S, then objective.value<S>.
-template <typename S>
-S lossThroughHalves(const TransportMatrix& t, const DefectObjective& objective,
-                    std::span<const S> E);
+/// Loss(E) of a half-image objective (DefectObjective, JndObjective) through the halves of a
+/// gray T (channels 1, planes 2): Y_a = T_a·E, Y_b = T_b·E with T's float entries promoted to S,
+/// then objective.value<S>.
+template <typename S, typename HalfObjective>
+S lossThroughHalves(const TransportMatrix& t, const HalfObjective& objective, std::span<const S> E);
 
 struct AutodiffGradient {
     double loss = 0;
@@ -110,6 +111,8 @@ AutodiffGradient autodiffThroughPaths(const PathRecording& paths, const ImageObj
 AutodiffGradient autodiffThroughMatrix(const TransportMatrix& t, const ImageObjective& objective,
                                        std::span<const double> E, int threads = 0);
 AutodiffGradient autodiffThroughHalves(const TransportMatrix& t, const DefectObjective& objective,
+                                       std::span<const double> E, int threads = 0);
+AutodiffGradient autodiffThroughHalves(const TransportMatrix& t, const JndObjective& objective,
                                        std::span<const double> E, int threads = 0);
 
 /// Gradient comparison: relative L2 error ‖g − ref‖/‖ref‖ and cosine similarity g·ref/(‖g‖‖ref‖)
@@ -166,8 +169,8 @@ S lossThroughMatrix(const TransportMatrix& t, const ImageObjective& objective,
     return objective.value<S>(std::span<const S>(Y), E);
 }
 
-template <typename S>
-S lossThroughHalves(const TransportMatrix& t, const DefectObjective& objective,
+template <typename S, typename HalfObjective>
+S lossThroughHalves(const TransportMatrix& t, const HalfObjective& objective,
                     std::span<const S> E) {
     std::vector<S> Ya(t.rows(), S(0.0)), Yb(t.rows(), S(0.0));
     const size_t cols = t.cols();
@@ -188,7 +191,7 @@ S lossThroughHalves(const TransportMatrix& t, const DefectObjective& objective,
         Ya[r] = a;
         Yb[r] = b;
     }
-    return objective.value<S>(std::span<const S>(Ya), std::span<const S>(Yb), E);
+    return objective.template value<S>(std::span<const S>(Ya), std::span<const S>(Yb), E);
 }
 
 }  // namespace sl

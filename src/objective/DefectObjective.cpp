@@ -17,9 +17,10 @@ double pairCount(int W, int H, const std::vector<uint8_t>& mask) {
     return n;
 }
 
-/// The part pixels farther than `margin` pixels (Chebyshev) from every defect pixel.
-std::vector<uint8_t> defaultReference(int W, int H, const std::vector<uint8_t>& part,
-                                      const std::vector<uint8_t>& defects, int margin) {
+}  // namespace
+
+std::vector<uint8_t> defectFreeReference(int W, int H, const std::vector<uint8_t>& part,
+                                         const std::vector<uint8_t>& defects, int margin) {
     std::vector<uint8_t> near(part.size(), 0);
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) {
@@ -32,8 +33,6 @@ std::vector<uint8_t> defaultReference(int W, int H, const std::vector<uint8_t>& 
     for (size_t p = 0; p < r.size(); ++p) r[p] = part[p] && !near[p] ? 1 : 0;
     return r;
 }
-
-}  // namespace
 
 DefectObjective::DefectObjective(int width, int height, std::vector<uint8_t> part,
                                  std::vector<uint8_t> defects, std::vector<uint8_t> reference,
@@ -63,7 +62,7 @@ DefectObjective::DefectObjective(int width, int height, std::vector<uint8_t> par
     defects_.resize(n);
     for (size_t k = 0; k < n; ++k) defects_[k] = p[k] ? defects[k] : 0;
     if (reference.empty()) {
-        reference_ = defaultReference(width, height, p, defects_, 2);
+        reference_ = defectFreeReference(width, height, p, defects_, 2);
     } else {
         reference_.resize(n);
         for (size_t k = 0; k < n; ++k) reference_[k] = p[k] && reference[k] && !defects_[k];

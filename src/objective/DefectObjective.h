@@ -129,6 +129,11 @@ class DefectObjective final : public HalfImageObjective {
     DefectObjectiveOptions d_;
 };
 
+/// The defect-free reference of DefectObjective.h's default: the part pixels farther than
+/// `margin` pixels (Chebyshev) from every defect pixel.
+std::vector<uint8_t> defectFreeReference(int width, int height, const std::vector<uint8_t>& part,
+                                         const std::vector<uint8_t>& defects, int margin);
+
 /// The white-furnace brightness w: the mean over `mask` of the luminance of T·1 (E = 1). With
 /// `shard` distributed (core/Communicator.h), t holds this rank's rows and the image is put
 /// together over the ranks first, so every rank gets the whole image's w.

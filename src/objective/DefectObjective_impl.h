@@ -37,6 +37,22 @@ S labelSoftMin(const std::vector<S>& phi, double tau, std::vector<double>* weigh
             (*weights)[k] = std::exp(-(realPart(phi[k]) - realPart(phi[lo])) / tau) / realPart(sum);
     return phi[lo] - tau * log(sum / static_cast<double>(phi.size()));
 }
+/// L_exp + L_dark of DefectObjective.h at the part's mean brightness m and mean squared
+/// clipping `clip` (the JND objective keeps the same band and floor: objective/JndObjective.h).
+template <typename S>
+S exposureBand(const S& m, const S& clip, const DefectObjectiveOptions& d) {
+    const double w = d.whiteMean;
+    S loss = d.exposureWeight *
+             (hingeSquared(S((d.low * w - m) / w)) + hingeSquared(S((m - d.high * w) / w)) + clip);
+    const double floorM = d.darkFloor * w;
+    if (floorM > 0 && realPart(m) < floorM) {
+        using std::log;
+        const S dark =
+            realPart(m) > 1e-12 * w ? S(log(m / floorM)) : S(std::log(1e-12 * w / floorM));
+        loss += d.darkWeight * dark * dark;
+    }
+    return loss;
+}
 }  // namespace detail
 
 template <typename F>
@@ -80,15 +96,7 @@ S DefectObjective::value(std::span<const S> Ya, std::span<const S> Yb, std::span
     m /= partPixels_;
     clip /= partPixels_;
     const double w = d_.whiteMean;
-    loss += d_.exposureWeight * (detail::hingeSquared(S((d_.low * w - m) / w)) +
-                                 detail::hingeSquared(S((m - d_.high * w) / w)) + clip);
-    const double floorM = d_.darkFloor * w;
-    if (floorM > 0 && detail::realPart(m) < floorM) {
-        using std::log;
-        const S dark =
-            detail::realPart(m) > 1e-12 * w ? S(log(m / floorM)) : S(std::log(1e-12 * w / floorM));
-        loss += d_.darkWeight * dark * dark;
-    }
+    loss += detail::exposureBand(m, clip, d_);
     const double cf = d_.contrastFloor;
     if (cf > 0 && detail::realPart(m) > 1e-12 * w) {
         const S gDe = detail::realPart(gD) >= floor() ? gD : S(floor());

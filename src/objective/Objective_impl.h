@@ -35,13 +35,15 @@ inline void forEachMaskedPair(int width, int height, const uint8_t* mask, F&& f,
 }
 
 /// The real part of a scalar: itself for arithmetic types, `.a` (recursively) for
-/// ceres::Jet-like types.
+/// ceres::Jet-like types, `.v` for core/Dual.h.
 template <typename T>
 inline double realPart(const T& x) {
     if constexpr (std::is_arithmetic_v<T>) {
         return static_cast<double>(x);
-    } else {
+    } else if constexpr (requires { x.a; }) {
         return realPart(x.a);
+    } else {
+        return x.v;  // core/Dual.h
     }
 }
 

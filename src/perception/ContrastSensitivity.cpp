@@ -6,14 +6,12 @@
 namespace sl {
 
 double bartenPupilDiameter(double luminance, double x0Deg, double y0Deg) {
-    const double a = std::max(luminance * x0Deg * y0Deg, 1e-300) / (40.0 * 40.0);
-    return 5.0 - 3.0 * std::tanh(0.4 * std::log10(a));
+    return bartenPupilDiameterOf(std::max(luminance * x0Deg * y0Deg, 1e-300) / (x0Deg * y0Deg),
+                                 x0Deg, y0Deg);
 }
 
 double bartenRetinalIlluminance(double luminance, double pupilMm) {
-    const double d = pupilMm;
-    const double stilesCrawford = 1.0 - std::pow(d / 9.7, 2) + std::pow(d / 12.4, 4);
-    return std::numbers::pi * d * d / 4.0 * luminance * stilesCrawford;
+    return bartenRetinalIlluminanceOf(luminance, pupilMm);
 }
 
 BartenCondition bartenCondition(double luminance, double x0Deg, double y0Deg,
@@ -23,29 +21,15 @@ BartenCondition bartenCondition(double luminance, double x0Deg, double y0Deg,
     cond.y0Deg = y0Deg;
     if (!(luminance > 0)) return cond;
     const double d = bartenPupilDiameter(luminance, x0Deg, y0Deg);
-    cond.sigmaDeg = std::hypot(c.sigma0, c.cAb * d);
+    cond.sigmaDeg =
+        std::sqrt(c.sigma0 * c.sigma0 + (c.cAb * d) * (c.cAb * d));  // as bartenSensitivityAt
     cond.illuminance = bartenRetinalIlluminance(luminance, d);
     return cond;
 }
 
-namespace {
-
-/// 1 / X², X = (1/X0² + 1/X_max² + u²/N_max²)^(−1/2): the integration area's side.
-double inverseSquaredSide(double u, double side, double xMax, double nMax) {
-    return 1.0 / (side * side) + 1.0 / (xMax * xMax) + u * u / (nMax * nMax);
-}
-
-}  // namespace
-
 double bartenSensitivity(double u, const BartenCondition& cond, const BartenConstants& c) {
     if (!(u > 0) || !(cond.illuminance > 0) || !(cond.x0Deg > 0) || !(cond.y0Deg > 0)) return 0.0;
-    const double pi = std::numbers::pi;
-    const double mOpt = std::exp(-2.0 * pi * pi * cond.sigmaDeg * cond.sigmaDeg * u * u);
-    const double area = std::sqrt(inverseSquaredSide(u, cond.x0Deg, c.xMax, c.nMax) *
-                                  inverseSquaredSide(u, cond.y0Deg, c.xMax, c.nMax));
-    const double photonNoise = 1.0 / (c.eta * c.p * cond.illuminance);
-    const double neuralNoise = c.phi0 / (1.0 - std::exp(-(u / c.u0) * (u / c.u0)));
-    return (mOpt / c.k) / std::sqrt(2.0 / c.T * area * (photonNoise + neuralNoise));
+    return bartenSensitivityOf(u, cond.sigmaDeg, cond.illuminance, cond.x0Deg, cond.y0Deg, c);
 }
 
 double bartenSensitivity(double u, double luminance, double x0Deg, double y0Deg,

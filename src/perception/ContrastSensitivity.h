@@ -17,6 +17,9 @@
 // cd/m²), foveal, static viewing. The tests hold the formula against its published values.
 #pragma once
 
+#include <cmath>
+#include <numbers>
+
 namespace sl {
 
 struct BartenConstants {
@@ -60,5 +63,49 @@ struct SensitivityPeak {
     double sensitivity = 0;
 };
 SensitivityPeak bartenPeak(const BartenCondition& cond, const BartenConstants& c = {});
+
+// --- the formulas, in any scalar type S (double, core/Dual.h, ceres::Jet) --------------------
+// The JND objective (objective/JndObjective.h) differentiates them with respect to the
+// luminance; the double functions above are these with S = double. The caller keeps L > 0.
+
+/// d(L) of bartenPupilDiameter.
+template <typename S>
+S bartenPupilDiameterOf(const S& luminance, double x0Deg, double y0Deg) {
+    using std::log10;
+    using std::tanh;
+    return 5.0 - 3.0 * tanh(0.4 * log10(luminance * (x0Deg * y0Deg / (40.0 * 40.0))));
+}
+/// E(L, d) of bartenRetinalIlluminance.
+template <typename S>
+S bartenRetinalIlluminanceOf(const S& luminance, const S& d) {
+    const S a = d / 9.7, b = d / 12.4;
+    const S stilesCrawford = 1.0 - a * a + (b * b) * (b * b);
+    return (std::numbers::pi / 4.0) * d * d * luminance * stilesCrawford;
+}
+/// S(u) at σ (deg) and E (Td) of bartenSensitivity; u > 0, E > 0, X0, Y0 > 0.
+template <typename S>
+S bartenSensitivityOf(double u, const S& sigmaDeg, const S& illuminance, double x0Deg, double y0Deg,
+                      const BartenConstants& c = {}) {
+    using std::exp;
+    using std::sqrt;
+    const double pi = std::numbers::pi;
+    const S mOpt = exp(-2.0 * pi * pi * u * u * sigmaDeg * sigmaDeg);
+    const auto inverseSquaredSide = [&](double side) {
+        return 1.0 / (side * side) + 1.0 / (c.xMax * c.xMax) + u * u / (c.nMax * c.nMax);
+    };
+    const double area = std::sqrt(inverseSquaredSide(x0Deg) * inverseSquaredSide(y0Deg));
+    const S photonNoise = 1.0 / (c.eta * c.p * illuminance);
+    const double neuralNoise = c.phi0 / (1.0 - std::exp(-(u / c.u0) * (u / c.u0)));
+    return (mOpt / c.k) / sqrt(2.0 / c.T * area * (photonNoise + neuralNoise));
+}
+/// S(u) at luminance L > 0 over X0 × Y0 degrees (pupil, optics, illuminance from L).
+template <typename S>
+S bartenSensitivityAt(double u, const S& luminance, double x0Deg, double y0Deg,
+                      const BartenConstants& c = {}) {
+    using std::sqrt;
+    const S d = bartenPupilDiameterOf(luminance, x0Deg, y0Deg);
+    const S sigma = sqrt(c.sigma0 * c.sigma0 + (c.cAb * d) * (c.cAb * d));
+    return bartenSensitivityOf(u, sigma, bartenRetinalIlluminanceOf(luminance, d), x0Deg, y0Deg, c);
+}
 
 }  // namespace sl

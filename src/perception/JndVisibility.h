@@ -6,7 +6,8 @@
 //
 // From two independent estimates Y_a, Y_b of the same image (disjoint samples):
 //   bands     difference-of-Gaussian octaves (σ_k = 2^(k−1) px, k = 0..5, Gaussians of σ_k and
-//             2σ_k, normalized over the part), the band's peak frequency f_k = 0.153/σ_k
+//             2σ_k, normalized over the part: perception/BandFilters.h), the band's peak
+//             frequency f_k = 0.153/σ_k
 //             cycles/pixel → u_k = f_k · pixels per degree;
 //   contrast  Peli's band-limited local contrast (JOSA A 7(10), 1990):
 //             c_k = band_k / the Gaussian 2σ_k mean of Ȳ (at least 8 px wide, so that the
@@ -31,13 +32,28 @@
 #include <span>
 #include <vector>
 
+#include "perception/BandFilters.h"
+#include "perception/ContrastMasking.h"
 #include "perception/ViewingModel.h"
 
 namespace sl {
 
-inline constexpr int kJndBands = 6;
 inline constexpr double kJndPooling = 4.0;
-inline constexpr double kLocalMeanSigma = 8.0;  // px, the narrowest local mean of a band
+
+/// J_k⁴ of one band, from the signal's contrast energy s_k² = e_k(R) − e_k(F) (≥ 0), the
+/// mask's m_k² = e_k(F) (≥ 0) and the sensitivity S_k, in any scalar type:
+///   J_k⁴ = (√2·s_k·S_k)⁴ / TE(√2·m_k·S_k)⁴ = 4·s_k⁴·S_k⁴ / (1 + (2·m_k²·S_k²)^(b·ε/2))
+/// (TE of perception/ContrastMasking.h). The JND objective passes a floored s_k⁴ (its h(Δ)).
+template <typename S>
+S jndBandFourth(const S& signalFourth, const S& maskEnergy, const S& sensitivity) {
+    using std::exp;
+    using std::log;
+    const S s2 = sensitivity * sensitivity;
+    const S x = 2.0 * maskEnergy * s2;
+    const S elevation4 =
+        maskEnergy > 0.0 ? S(1.0 + exp(0.5 * kMaskingKnee * kMaskingExponent * log(x))) : S(1.0);
+    return 4.0 * signalFourth * s2 * s2 / elevation4;
+}
 
 struct JndScore {
     double jnd = 0;             // pooled over bands

@@ -1,0 +1,112 @@
+// The band filters of the JND model (perception/JndVisibility.h), written once for the judge's
+// scores (double) and the JND objective (objective/JndObjective.h: double with a hand-written
+// adjoint, and ceres::Jet for its autodiff check).
+//
+//   Gaussians  G_j = the Gaussian of σ_j = 2^(j−1) px (j = 0..kJndBands), truncated at 3σ,
+//              normalized over the part: G_j(Y) = conv(P·Y, K_j) / conv(P, K_j), 0 where the
+//              part's own weight conv(P, K_j) is ~0 (zero outside the image)
+//   band k     G_k(Y) − G_{k+1}(Y): a difference of Gaussians σ_k and 2σ_k (k = 0..kJndBands−1)
+//   local mean the Gaussian 2σ_k of Ȳ = (Y_a + Y_b)/2, at least kLocalMeanSigma wide
+//              (G_{localMeanGaussian(k)}), so its own noise does not bias the product
+//   product    c_k,a · c_k,b = band_k(Y_a) · band_k(Y_b) / local_k², 0 off the part and where
+//              the local mean is not positive
+//
+// The convolution with a symmetric kernel and zeros outside the image is its own adjoint, so the
+// gradient of anything built on G_j(Y) is conv(dG_j / conv(P, K_j), K_j) restricted to the part
+// (gaussianAdjoint).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace sl {
+
+inline constexpr int kJndBands = 6;
+inline constexpr double kLocalMeanSigma = 8.0;  // px, the narrowest local mean of a band
+
+/// σ_j of Gaussian j (px): 2^(j−1).
+inline double bandSigma(int j) {
+    return std::ldexp(0.5, j);
+}
+/// The index of the Gaussian that is band k's local mean: 2σ_k, at least kLocalMeanSigma.
+inline int localMeanGaussian(int band) {
+    return std::max(band + 1, 4);
+}
+static_assert(kLocalMeanSigma == 8.0, "σ_4 = 8 px is the narrowest local mean");
+
+/// The peak of the difference of Gaussians σ and 2σ (cycles per pixel).
+double bandPeakCyclesPerPixel(double sigma);
+
+/// A normalized Gaussian of σ px, truncated at 3σ (at least one tap each side).
+std::vector<double> gaussianKernel(double sigma);
+
+/// Separable convolution with `kernel` (odd length, centred), zero outside the image.
+template <typename S>
+std::vector<S> convolveSeparable(int w, int h, std::span<const S> in,
+                                 const std::vector<double>& kernel) {
+    const int r = static_cast<int>(kernel.size() / 2);
+    std::vector<S> rows(in.size(), S(0.0)), out(in.size(), S(0.0));
+    for (int y = 0; y < h; ++y) {
+        const S* src = in.data() + static_cast<size_t>(y) * w;
+        S* dst = rows.data() + static_cast<size_t>(y) * w;
+        for (int x = 0; x < w; ++x) {
+            S s(0.0);
+            for (int d = std::max(-r, -x); d <= std::min(r, w - 1 - x); ++d)
+                s += kernel[d + r] * src[x + d];
+            dst[x] = s;
+        }
+    }
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            S s(0.0);
+            for (int d = std::max(-r, -y); d <= std::min(r, h - 1 - y); ++d)
+                s += kernel[d + r] * rows[static_cast<size_t>(y + d) * w + x];
+            out[static_cast<size_t>(y) * w + x] = s;
+        }
+    return out;
+}
+
+/// The Gaussians G_0..G_kJndBands of one part mask: kernels and the part's own weights.
+class BandFilterBank {
+  public:
+    /// Builds the kernels and conv(P, K_j) (one task per σ).
+    BandFilterBank(int width, int height, std::span<const uint8_t> part);
+
+    int width() const { return width_; }
+    int height() const { return height_; }
+    const std::vector<uint8_t>& part() const { return part_; }
+
+    /// G_j(Y) of the header for an image Y (width*height; values off the part are ignored).
+    template <typename S>
+    std::vector<S> gaussian(int j, std::span<const S> y) const {
+        const size_t n = part_.size();
+        std::vector<S> masked(n, S(0.0));
+        for (size_t p = 0; p < n; ++p)
+            if (part_[p]) masked[p] = y[p];
+        std::vector<S> g = convolveSeparable<S>(width_, height_, masked, kernels_[j]);
+        for (size_t p = 0; p < n; ++p) g[p] = reached(j, p) ? S(g[p] / weight_[j][p]) : S(0.0);
+        return g;
+    }
+    /// The adjoint of gaussian(j, ·): d/dY (on the part, 0 off it) of Σ_p dG[p]·G_j(Y)[p].
+    std::vector<double> gaussianAdjoint(int j, std::span<const double> dG) const;
+
+  private:
+    bool reached(int j, size_t p) const { return weight_[j][p] > 1e-12; }
+    int width_, height_;
+    std::vector<uint8_t> part_;                 // 0/1
+    std::vector<std::vector<double>> kernels_;  // K_j
+    std::vector<std::vector<double>> weight_;   // conv(P, K_j)
+};
+
+/// c_k,a · c_k,b at one pixel from the band's Gaussians of both estimates and its local mean
+/// (the header's product); 0 when the local mean is not positive.
+template <typename S>
+S bandProduct(const S& gaK, const S& gaK1, const S& gbK, const S& gbK1, const S& local) {
+    if (!(local > 0.0)) return S(0.0);
+    return (gaK - gaK1) * (gbK - gbK1) / (local * local);
+}
+
+}  // namespace sl
