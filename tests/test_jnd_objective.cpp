@@ -6,7 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <initializer_list>
+#include <nlohmann/json.hpp>
 #include <vector>
 
 #include "TestUtil.h"
@@ -159,4 +161,33 @@ TEST(JndObjective, RegionsWithoutPixelsAreClearErrors) {
     const JndObjectiveOptions o = options(t);
     EXPECT_THROW(JndObjective(t.width, t.height, t.objectMask, none, {}, {}, o), InputError);
     EXPECT_THROW(JndObjective(t.width, t.height, t.objectMask, all, {}, {}, o), InputError);
+}
+
+// `optimize --defects-measure jnd` runs the JND objective through the whole job and says so in
+// summary.json; it lowers its own loss; a measure outside the table is a usage error naming both.
+TEST(JndObjective, OptimizeRunsItAndRecordsTheMeasure) {
+    test::TempDir dir("jnd-cli");
+    const std::string part = (dir.path() / "part.exr").string(),
+                      scene = (dir.path() / "scene.json").string(),
+                      truth = (dir.path() / "part-truth.png").string();
+    ASSERT_EQ(
+        test::runCli("gen-surface -o " + part + " --width 160 --height 160 --scratches 3 --scene " +
+                     scene + " --image-size 40 --spp 8 --max-depth 3")
+            .exitCode,
+        0);
+    const auto out = dir.path() / "out";
+    auto r =
+        test::runCli("optimize " + scene + " --truth " + truth +
+                     " --defects-measure jnd --heldout none --iterations 100 -o " + out.string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const auto summary = nlohmann::json::parse(test::readFile(out / "summary.json"));
+    EXPECT_EQ(summary.value("objective", ""), "defects");
+    EXPECT_EQ(summary.value("defects_measure", ""), "jnd");
+    EXPECT_TRUE(summary.value("improved", false)) << r.output;
+    r = test::runCli("optimize " + scene + " --truth " + truth + " --defects-measure eye -o " +
+                     (dir.path() / "bad").string());
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("jnd"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("ratio"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir.path() / "bad"));
 }

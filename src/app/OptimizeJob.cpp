@@ -735,14 +735,23 @@ struct LambdaResult {
     LossParts lampTraining, paperTraining;  // the lamp's and the paper's light on T at λ
 };
 
+/// The objective's options at λ; the jnd measure sees the image as the scene's viewing block
+/// says (app/Judge.h viewingFor), the judge's default for a .tm.
+ObjectiveOptions objectiveAt(const Plan& p, const Inputs& in, double lambda) {
+    ObjectiveOptions oo = p.o.objective;
+    oo.lambda = lambda;
+    if (!(oo.viewing.pixelsPerDegree > 0))
+        oo.viewing = in.scene ? viewingFor(*in.scene) : defaultViewing();
+    return oo;
+}
+
 /// Stage 4: one λ run (the search on T, or the black box through the renderer), its held-out
 /// scores and the judge's.
 LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
                             double lambda) {
     const OptimizeJobOptions& o = p.o;
     const TransportMatrix& t = job.transport.file.matrix;
-    ObjectiveOptions oo = o.objective;
-    oo.lambda = lambda;
+    const ObjectiveOptions oo = objectiveAt(p, in, lambda);
     const std::vector<uint8_t>& mask = in.mask.pixels;
     ImageObjective objective(t.width, t.height, mask, oo);  // the black box's (eq. 2)
     SearchInputs si;
@@ -922,11 +931,6 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
 }
 
 /// The objective options of a λ run.
-ObjectiveOptions objectiveAt(const Plan& p, double lambda) {
-    ObjectiveOptions oo = p.o.objective;
-    oo.lambda = lambda;
-    return oo;
-}
 
 /// Stage 4b: the self-checked answer (app/Answer.h) on the validation estimate: E*, every
 /// other start's result and the references; a reference that wins becomes the answer and E*
@@ -934,7 +938,7 @@ ObjectiveOptions objectiveAt(const Plan& p, double lambda) {
 void checkAnswer(const Plan& p, const Inputs& in, const OptimizeJobSummary& job, LambdaResult& r) {
     if (!job.validation || !p.o.selfCheck) return;
     JudgeOptions jo;
-    jo.objective = objectiveAt(p, r.run.lambda);
+    jo.objective = objectiveAt(p, in, r.run.lambda);
     jo.rgb = p.o.rgb;
     const Judge validation(*job.validation, jo, in.regionLabels, in.regionLegend,
                            in.regionReference);
@@ -971,7 +975,7 @@ void judgeRun(const Plan& p, const Inputs& in, OptimizeJobSummary& job, LambdaRe
     OptimizeRun& run = r.run;
     if (job.heldOut) {
         JudgeOptions jo;
-        jo.objective = objectiveAt(p, run.lambda);
+        jo.objective = objectiveAt(p, in, run.lambda);
         jo.rgb = p.o.rgb;
         jo.viewing = viewingOf(in);
         // In rounds (app/Judge.h judgeInRounds): the judge's estimate is traced again at more
@@ -1138,6 +1142,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     s["mask"] = o.mask.name();
     s["mask_pixels"] = job.maskPixels;
     if (in.kind == ObjectiveKind::Defects) {
+        s["defects_measure"] = defectMeasureName(o.objective.defectMeasure);
         s["defects"] = defectRegion(o).text();
         s["reference"] =
             o.reference.empty() ? "the part away from the defects" : o.reference.text();

@@ -225,6 +225,10 @@ std::vector<RaceConfig> defaultRaceConfigs() {
     c.push_back(config("default-defects-auto", d.objectiveWithDefects, d.method,
                        methodRow(d.method).defaultBudget, 16, 1, d.starts));
     c.back().autoDefects = true;
+    // ... and the defects objective on the judge's first figure, JND (objective/JndObjective.h).
+    c.push_back(config("default-defects-jnd", d.objectiveWithDefects, d.method,
+                       methodRow(d.method).defaultBudget, 16, 1, d.starts));
+    c.back().measure = DefectMeasure::Jnd;
     c.push_back(config("unbiased-lbfgs-16-multistart", K::Unbiased, M::Lbfgs, 2000, 16, 1,
                        {"const:0.5", "specular", "studio"}));
     c.push_back(config("unbiased-lbfgs-16-continuation", K::Unbiased, M::Lbfgs, 2000, 16, 1,
@@ -233,16 +237,20 @@ std::vector<RaceConfig> defaultRaceConfigs() {
     // The whole optimize job as a user runs it with the defects named (not raced by default:
     // each run traces T and the validation estimate at the rule's spp; `--configs` names them):
     // its default, and the same with one value per texel always (no coarser light).
-    for (const auto& [name, grid, automatic] :
-         {std::tuple{"optimize", std::optional<LightGrid>{}, false},
-          std::tuple{"optimize-auto", std::optional<LightGrid>{}, true},
-          std::tuple{"optimize-texels", std::optional<LightGrid>{LightGrid{}}, false}}) {
+    // ... and the job with the defects objective on JND.
+    for (const auto& [name, grid, automatic, measure] :
+         {std::tuple{"optimize", std::optional<LightGrid>{}, false, DefectMeasure::Ratio},
+          std::tuple{"optimize-auto", std::optional<LightGrid>{}, true, DefectMeasure::Ratio},
+          std::tuple{"optimize-texels", std::optional<LightGrid>{LightGrid{}}, false,
+                     DefectMeasure::Ratio},
+          std::tuple{"optimize-jnd", std::optional<LightGrid>{}, false, DefectMeasure::Jnd}}) {
         RaceConfig j;
         j.name = name;
         j.search.objective = d.objectiveWithDefects;
         j.wholeJob = true;
         j.jobLightGrid = grid;
         j.autoDefects = automatic;
+        j.measure = measure;
         c.push_back(j);
     }
     return c;
@@ -452,6 +460,7 @@ RaceSummary raceOnWorlds(const RaceOptions& o) {
                     opt.precompute.seed = static_cast<uint64_t>(seed) * 1000;
                     opt.precompute.threads = o.threads;
                     opt.lightGrid = c.jobLightGrid;
+                    opt.objective.defectMeasure = c.measure;
                     const Stopwatch job;
                     OptimizeJobSummary js;
                     try {
@@ -494,6 +503,8 @@ RaceSummary raceOnWorlds(const RaceOptions& o) {
                 for (const auto& s : set) in.set.push_back(&s.file.matrix);
                 in.mask = set.front().file.matrix.objectMask;  // as optimize: T's part mask
                 in.objective.lambda = o.lambda;
+                in.objective.defectMeasure = c.measure;
+                in.objective.viewing = viewingFor(*scene);
                 in.scene = scene.get();
                 in.maxDepth = set.front().file.provenance.maxDepth;
                 if (defects && regions) {  // the defect map names the defects

@@ -9,6 +9,7 @@
 #include "core/Stopwatch.h"
 #include "objective/CoarseLight.h"
 #include "objective/DefectObjective.h"
+#include "objective/JndObjective.h"
 #include "objective/TransportLoss.h"
 #include "objective/UnbiasedObjective.h"
 
@@ -31,8 +32,16 @@ ObjectiveOnT objectiveOnT(ObjectiveKind kind, const TransportMatrix& t, const Se
         case ObjectiveKind::Defects: {
             DefectObjectiveOptions d;
             d.whiteMean = whiteFurnaceMean(t, in.mask, in.shard);
-            r.halves = std::make_unique<DefectObjective>(t.width, t.height, in.mask, in.defects,
-                                                         in.reference, oo, d);
+            if (oo.defectMeasure == DefectMeasure::Jnd) {
+                JndObjectiveOptions j;
+                j.view = oo.viewing.pixelsPerDegree > 0 ? oo.viewing : defaultViewing();
+                j.band = d;
+                r.halves = std::make_unique<JndObjective>(t.width, t.height, in.mask, in.defects,
+                                                          in.reference, oo, j);
+            } else {
+                r.halves = std::make_unique<DefectObjective>(t.width, t.height, in.mask, in.defects,
+                                                             in.reference, oo, d);
+            }
             r.loss = std::make_unique<TransportLoss>(t, *r.halves, in.rgb);
             break;
         }

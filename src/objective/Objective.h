@@ -16,6 +16,9 @@
 #include <string>
 #include <vector>
 
+#include "objective/ObjectiveKind.h"
+#include "perception/ViewingModel.h"
+
 namespace sl {
 
 enum class RegTarget { EnvMap, Image };
@@ -25,6 +28,11 @@ struct ObjectiveOptions {
     RegTarget reg = RegTarget::EnvMap;  // where the L2 regulariser acts
     bool smoothAbs = false;             // |x| ≈ sqrt(x² + ε²) − ε, for quasi-Newton methods
     double smoothEps = 1e-4;            // ε of the smooth |x|, in luminance units
+    /// What the defects objective makes large (objective/ObjectiveKind.h DefectMeasure).
+    DefectMeasure defectMeasure = DefectMeasure::Ratio;
+    /// How the image is seen, for the jnd measure (pixelsPerDegree 0: the caller's default,
+    /// e.g. the scene's viewing block).
+    ViewingModel viewing{};
 };
 
 /// The value of the loss and its parts.

@@ -16,6 +16,12 @@ constexpr ObjectiveKindRow kKinds[] = {
      2},
 };
 
+constexpr DefectMeasureRow kMeasures[] = {
+    {DefectMeasure::Ratio, "ratio", "the defects' RMS gradient over the defect-free surface's"},
+    {DefectMeasure::Jnd, "jnd",
+     "the defects' visibility in just-noticeable differences (the judge's first figure)"},
+};
+
 }  // namespace
 
 std::span<const ObjectiveKindRow> objectiveKindTable() {
@@ -28,6 +34,18 @@ ObjectiveKind parseObjectiveKind(std::string_view name, const std::string& where
 
 const char* objectiveKindName(ObjectiveKind kind) {
     return registryRow(objectiveKindTable(), kind).name;
+}
+
+std::span<const DefectMeasureRow> defectMeasureTable() {
+    return kMeasures;
+}
+
+DefectMeasure parseDefectMeasure(std::string_view name, const std::string& where) {
+    return parseRegistryName(defectMeasureTable(), name, where).value;
+}
+
+const char* defectMeasureName(DefectMeasure measure) {
+    return registryRow(defectMeasureTable(), measure).name;
 }
 
 }  // namespace sl

@@ -17,6 +17,12 @@ namespace sl {
 
 enum class ObjectiveKind { Paper, Unbiased, Defects };
 
+/// What the defects objective makes large (its second table):
+///   ratio  the defects' RMS gradient over the defect-free surface's (objective/DefectObjective.h)
+///   jnd    the defects' visibility in just-noticeable differences, the judge's first figure
+///          (objective/JndObjective.h): contrast sensitivity, masking by the texture, luminance
+enum class DefectMeasure { Ratio, Jnd };
+
 struct ObjectiveKindRow {
     ObjectiveKind value;
     const char* name;
@@ -28,5 +34,15 @@ std::span<const ObjectiveKindRow> objectiveKindTable();
 /// The kind named `name`; InputError naming `where` and listing the table otherwise.
 ObjectiveKind parseObjectiveKind(std::string_view name, const std::string& where = "objective");
 const char* objectiveKindName(ObjectiveKind kind);
+
+struct DefectMeasureRow {
+    DefectMeasure value;
+    const char* name;
+    const char* help;
+};
+std::span<const DefectMeasureRow> defectMeasureTable();
+/// The measure named `name`; InputError naming `where` and listing the table otherwise.
+DefectMeasure parseDefectMeasure(std::string_view name, const std::string& where = "measure");
+const char* defectMeasureName(DefectMeasure measure);
 
 }  // namespace sl
