@@ -116,6 +116,9 @@ ViewerObjective readViewerObjective(const fs::path& dir, int width, int height) 
         o.options.smoothAbs = s.value("smooth_abs", false);
         o.options.reg =
             s.value("reg", std::string("envmap")) == "image" ? RegTarget::Image : RegTarget::EnvMap;
+        o.options.defectMeasure = parseDefectMeasure(
+            s.value("defects_measure", std::string(defectMeasureName(DefectMeasure::Ratio))),
+            file.string() + ": defects_measure");
     } catch (const json::exception& e) {
         throw inputError(file.string(), std::string("has no usable objective: ") + e.what(),
                          "run view on the output of a current optimize");
@@ -646,6 +649,7 @@ void ViewerSession::runOptimize(int slot, std::vector<double> start, int iterati
         if (made_) {  // the objective (and regions) that made the output
             kind = made_->kind;
             si.objective = made_->options;
+            si.objective.viewing = viewing_;  // the JND measure sees what the judge sees
             if (!made_->mask.empty()) si.mask = made_->mask;
             si.defects = made_->defects;
             si.reference = made_->reference;
