@@ -43,7 +43,9 @@ double bandPeakCyclesPerPixel(double sigma);
 /// A normalized Gaussian of σ px, truncated at 3σ (at least one tap each side).
 std::vector<double> gaussianKernel(double sigma);
 
-/// Separable convolution with `kernel` (odd length, centred), zero outside the image.
+/// Separable convolution with `kernel` (odd length, centred), zero outside the image. Both
+/// passes run over whole rows for one tap at a time (contiguous, vectorizable), the same sums for
+/// any scalar type.
 template <typename S>
 std::vector<S> convolveSeparable(int w, int h, std::span<const S> in,
                                  const std::vector<double>& kernel) {
@@ -52,20 +54,20 @@ std::vector<S> convolveSeparable(int w, int h, std::span<const S> in,
     for (int y = 0; y < h; ++y) {
         const S* src = in.data() + static_cast<size_t>(y) * w;
         S* dst = rows.data() + static_cast<size_t>(y) * w;
-        for (int x = 0; x < w; ++x) {
-            S s(0.0);
-            for (int d = std::max(-r, -x); d <= std::min(r, w - 1 - x); ++d)
-                s += kernel[d + r] * src[x + d];
-            dst[x] = s;
+        for (int d = -r; d <= r; ++d) {
+            const double k = kernel[d + r];
+            const int x0 = std::max(0, -d), x1 = std::min(w, w - d);
+            for (int x = x0; x < x1; ++x) dst[x] += k * src[x + d];
         }
     }
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            S s(0.0);
-            for (int d = std::max(-r, -y); d <= std::min(r, h - 1 - y); ++d)
-                s += kernel[d + r] * rows[static_cast<size_t>(y + d) * w + x];
-            out[static_cast<size_t>(y) * w + x] = s;
+    for (int y = 0; y < h; ++y) {
+        S* dst = out.data() + static_cast<size_t>(y) * w;
+        for (int d = std::max(-r, -y); d <= std::min(r, h - 1 - y); ++d) {
+            const double k = kernel[d + r];
+            const S* src = rows.data() + static_cast<size_t>(y + d) * w;
+            for (int x = 0; x < w; ++x) dst[x] += k * src[x];
         }
+    }
     return out;
 }
 
