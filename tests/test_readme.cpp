@@ -1,15 +1,20 @@
 // The README's "Scene file" table is the parser's own list of fields and defaults
 // (io/SceneFile.h sceneFileFields()), and each default is defined once: the parser applies the
 // defaults of the scene structs, and the renderer's options agree with the scene's render section;
-// the Layout section names every folder; the optimizer table names every registered method.
+// the Layout section names every folder; the optimizer table names every registered method;
+// every `scratchlight COMMAND ... --flag` the README shows names a command and flags it has.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <string>
+#include <vector>
 
+#include "TestUtil.h"
 #include "io/SceneFile.h"
 #include "optimize/Methods.h"
 #include "render/PathTracer.h"
@@ -19,11 +24,15 @@ using namespace sl;
 
 namespace {
 
-std::string readmeSection(const std::string& heading) {
+std::string readmeText() {
     std::ifstream in(SL_SOURCE_DIR "/README.md");
     std::stringstream ss;
     ss << in.rdbuf();
-    const std::string text = ss.str();
+    return ss.str();
+}
+
+std::string readmeSection(const std::string& heading) {
+    const std::string text = readmeText();
     const size_t start = text.find("\n" + heading + "\n");
     if (start == std::string::npos) return {};
     const size_t end = text.find("\n## ", start + 1);
@@ -46,7 +55,66 @@ std::string firstTable(const std::string& text) {
     return table;
 }
 
+/// The README's command lines: its code spans (across line breaks, whitespace collapsed) and the
+/// lines of its code blocks (fenced, or indented by 4 or more spaces) that start with
+/// `scratchlight `.
+std::vector<std::string> readmeCode(const std::string& text) {
+    std::vector<std::string> code;
+    std::string prose;  // the text outside fenced blocks, for the code spans
+    std::istringstream in(text);
+    bool fenced = false;
+    for (std::string line; std::getline(in, line);) {
+        const size_t first = line.find_first_not_of(' ');
+        const std::string stripped = first == std::string::npos ? "" : line.substr(first);
+        if (stripped.rfind("```", 0) == 0) {
+            fenced = !fenced;
+            continue;
+        }
+        if (fenced ||
+            (first != std::string::npos && first >= 4 && stripped.find('`') == std::string::npos)) {
+            if (stripped.rfind("scratchlight ", 0) == 0) code.push_back(stripped);
+            if (fenced) continue;
+        }
+        prose += line + "\n";
+    }
+    static const std::regex span("`([^`]+)`");
+    for (std::sregex_iterator it(prose.begin(), prose.end(), span), end; it != end; ++it)
+        code.push_back(std::regex_replace((*it)[1].str(), std::regex(R"(\s+)"), " "));
+    return code;
+}
+
 }  // namespace
+
+TEST(Readme, EveryCommandLineNamesACommandAndItsFlags) {
+    // `scratchlight WORD ...` (and `scratchlight bench WORD ...`): WORD must be a command whose
+    // --help lists each --flag that follows it in the same code span or line.
+    static const std::regex command(R"(scratchlight ([a-z][a-z-]*)((?: [a-z][a-z-]*)?))");
+    static const std::regex flag(R"((^|[^\w-])(--[a-z][a-z0-9-]*))");
+    std::map<std::string, test::RunResult> help;
+    int checked = 0;
+    for (const std::string& line : readmeCode(readmeText())) {
+        std::smatch m;
+        if (!std::regex_search(line, m, command)) continue;
+        std::string name = m[1];
+        const std::string next = m[2].str().empty() ? "" : m[2].str().substr(1);
+        if (name == "bench" && !next.empty()) name += " " + next;
+        if (!help.count(name)) help[name] = test::runCli(name + " --help");
+        const test::RunResult& h = help[name];
+        ASSERT_EQ(h.exitCode, 0) << "README: `" << line << "`: `scratchlight " << name
+                                 << " --help` fails:\n"
+                                 << h.output;
+        const std::string rest = m.suffix();
+        for (std::sregex_iterator it(rest.begin(), rest.end(), flag), end; it != end; ++it) {
+            const std::string f = (*it)[2];
+            const std::regex listed("(^|[^\\w-])" + f + "([^\\w-]|$)");
+            EXPECT_TRUE(std::regex_search(h.output, listed))
+                << "README: `" << line << "` gives `scratchlight " << name << "` " << f
+                << ", which its --help does not list";
+            ++checked;
+        }
+    }
+    EXPECT_GT(checked, 50) << "the README's command lines were not found";
+}
 
 TEST(Readme, SceneFileTableIsTheParsersListOfFieldsAndDefaults) {
     const std::string section = readmeSection("## Scene file");
