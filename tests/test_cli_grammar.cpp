@@ -69,6 +69,23 @@ Grammar grammarOf(const std::string& help) {
     return g;
 }
 
+/// Whether `s` is well-formed UTF-8 (lead bytes, continuation bytes, no truncation).
+bool validUtf8(const std::string& s) {
+    for (size_t i = 0; i < s.size();) {
+        const auto b = static_cast<unsigned char>(s[i]);
+        const size_t n = b < 0x80           ? 1
+                         : (b >> 5) == 0x6  ? 2
+                         : (b >> 4) == 0xE  ? 3
+                         : (b >> 3) == 0x1E ? 4
+                                            : 0;
+        if (n == 0 || i + n > s.size()) return false;
+        for (size_t k = 1; k < n; ++k)
+            if ((static_cast<unsigned char>(s[i + k]) >> 6) != 0x2) return false;
+        i += n;
+    }
+    return true;
+}
+
 }  // namespace
 
 TEST(CliGrammar, EveryCommandFollowsOneGrammar) {
@@ -114,6 +131,7 @@ TEST(CliGrammar, EveryCommandFollowsOneGrammar) {
         SCOPED_TRACE(c);
         const auto help = runCli(c + " --help");
         ASSERT_EQ(help.exitCode, 0) << help.output;
+        EXPECT_TRUE(validUtf8(help.output)) << "a default printed as a raw byte?\n" << help.output;
         const Grammar g = grammarOf(help.output);
         for (const auto& [name, use] : retired) {
             EXPECT_EQ(g.flags.count(name), 0u) << name << " is spelled " << use << " elsewhere";

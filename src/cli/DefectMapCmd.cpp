@@ -95,10 +95,12 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option_function<std::string>(
         "--score-output", [a](const std::string& v) { a->csv = v; },
         "CSV of the score (default: <output stem>-score.csv beside the map)");
+    std::string negatives;  // the default as numbers (uint8_t would print as a character)
+    for (uint8_t v : a->negatives) negatives += (negatives.empty() ? "" : ",") + std::to_string(v);
     c->add_option("--negatives", a->negatives,
                   "Truth values scored as defect-free (a mark there is a false positive)")
         ->delimiter(',')
-        ->capture_default_str();
+        ->default_str(negatives);
     DefectMapOptions& m = a->map;
     c->add_option("--notch-ratio", m.notchRatio,
                   "auto: a spectrum bin above this x its "
