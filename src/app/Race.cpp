@@ -225,10 +225,11 @@ std::vector<RaceConfig> defaultRaceConfigs() {
     c.push_back(config("default-defects-auto", d.objectiveWithDefects, d.method,
                        methodRow(d.method).defaultBudget, 16, 1, d.starts));
     c.back().autoDefects = true;
-    // ... and the defects objective on the judge's first figure, JND (objective/JndObjective.h).
-    c.push_back(config("default-defects-jnd", d.objectiveWithDefects, d.method,
+    // ... and the defects objective on the visibility ratio (the default before it was raced
+    // against JND, objective/DefectObjective.h).
+    c.push_back(config("defects-ratio", d.objectiveWithDefects, d.method,
                        methodRow(d.method).defaultBudget, 16, 1, d.starts));
-    c.back().measure = DefectMeasure::Jnd;
+    c.back().measure = DefectMeasure::Ratio;
     c.push_back(config("unbiased-lbfgs-16-multistart", K::Unbiased, M::Lbfgs, 2000, 16, 1,
                        {"const:0.5", "specular", "studio"}));
     c.push_back(config("unbiased-lbfgs-16-continuation", K::Unbiased, M::Lbfgs, 2000, 16, 1,
@@ -237,13 +238,13 @@ std::vector<RaceConfig> defaultRaceConfigs() {
     // The whole optimize job as a user runs it with the defects named (not raced by default:
     // each run traces T and the validation estimate at the rule's spp; `--configs` names them):
     // its default, and the same with one value per texel always (no coarser light).
-    // ... and the job with the defects objective on JND.
+    // ... and the job with the defects objective on the ratio.
+    const DefectMeasure byDefault = ObjectiveOptions{}.defectMeasure;
     for (const auto& [name, grid, automatic, measure] :
-         {std::tuple{"optimize", std::optional<LightGrid>{}, false, DefectMeasure::Ratio},
-          std::tuple{"optimize-auto", std::optional<LightGrid>{}, true, DefectMeasure::Ratio},
-          std::tuple{"optimize-texels", std::optional<LightGrid>{LightGrid{}}, false,
-                     DefectMeasure::Ratio},
-          std::tuple{"optimize-jnd", std::optional<LightGrid>{}, false, DefectMeasure::Jnd}}) {
+         {std::tuple{"optimize", std::optional<LightGrid>{}, false, byDefault},
+          std::tuple{"optimize-auto", std::optional<LightGrid>{}, true, byDefault},
+          std::tuple{"optimize-texels", std::optional<LightGrid>{LightGrid{}}, false, byDefault},
+          std::tuple{"optimize-ratio", std::optional<LightGrid>{}, false, DefectMeasure::Ratio}}) {
         RaceConfig j;
         j.name = name;
         j.search.objective = d.objectiveWithDefects;

@@ -48,8 +48,9 @@ struct RaceConfig {
     /// objective (defects).
     bool wholeJob = false;
     std::optional<LightGrid> jobLightGrid;  // the job's light grid (unset: its rule's)
-    /// What the defects objective makes large (the ratio, or JND as the judge sees it).
-    DefectMeasure measure = DefectMeasure::Ratio;
+    /// What the defects objective makes large (the ratio, or JND as the judge sees it; the
+    /// default: optimize's).
+    DefectMeasure measure = ObjectiveOptions{}.defectMeasure;
 };
 
 /// The configurations raced by default (paper-loop first: the baseline).

@@ -347,7 +347,8 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
         objectiveHelp += std::to_string(d.paperMinSpp) + " spp unless --spp)";
         addChoice(c, "--objective", j.objectiveKind, objectiveKindTable(), objectiveHelp);
         addChoice(c, "--defects-measure", j.objective.defectMeasure, defectMeasureTable(),
-                  "What the defects objective makes large (default: ratio)");
+                  std::string("What the defects objective makes large (default: ") +
+                      defectMeasureName(ObjectiveOptions{}.defectMeasure) + ")");
         std::string heldOutHelp = "Held-out estimate every result is scored on:";
         for (const HeldOutModeRow& r : heldOutModeTable())
             heldOutHelp += std::string("\n    ") + r.name + ": " + r.help;
