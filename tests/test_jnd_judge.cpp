@@ -120,3 +120,37 @@ TEST(JudgeJnd, TheAnswerLineLeadsWithJnd) {
         optimizeHeadline(s).rfind("Under the optimized light the defects are 43× as visible", 0),
         0u);
 }
+
+// When the lamp beat the optimized light in JND on the validation estimate (app/Answer.h), the
+// first line says the lamp is the answer, by the JND it was chosen on, and the judge's figures
+// follow in JND with the ratio beside them (here the ratio alone would have kept E*).
+TEST(JudgeJnd, WhenTheLampIsTheAnswerTheHeadlineSaysSoInJnd) {
+    auto judge = [](double jnd, double visibility) {
+        return nlohmann::json{
+            {"visibility",
+             {{{"name", "scratch"}, {"pixels", 100}, {"visibility", visibility}, {"jnd", jnd}}}}};
+    };
+    nlohmann::json s = {{"compare",
+                         {{"judge_spp", 1024},
+                          {"lamp", {{"name", "studio preset"}, {"judge", judge(2.11, 1.8)}}},
+                          {"paper", {{"judge", judge(0.5, 1.2)}}},
+                          {"optimized", {{"judge", judge(0.16, 1.9)}}},
+                          {"answer",
+                           {{"name", "studio preset"},
+                            {"merit", "JND"},
+                            {"merit_answer", 2.0},
+                            {"merit_optimized", 0.2},
+                            {"optimized_why", ""},
+                            {"judge", judge(2.11, 1.8)}}}}}};
+    const std::string h = optimizeHeadline(s);
+    EXPECT_EQ(h.rfind("The answer is studio preset, not the optimized light: on an independent "
+                      "validation estimate it showed the defects better (JND 2 vs 0.2)",
+                      0),
+              0u)
+        << h;
+    EXPECT_NE(h.find("Judge: the defects are 2.11 JND above threshold under studio preset, 0.16 "
+                     "JND under the optimized light (visibility ratio 1.8 vs 1.9), on an "
+                     "independent 1024-spp estimate."),
+              std::string::npos)
+        << h;
+}

@@ -727,7 +727,14 @@ std::string optimizeHeadline(const json& s) {
             const std::string spp = fmt(num(cmp, "judge_spp"), 6);
             const double va = combinedVisibility(ans["judge"]),
                          vo = combinedVisibility(opt["judge"]);
-            if (std::isfinite(va) && std::isfinite(vo))
+            const double ja = combinedJnd(ans["judge"]), jo = combinedJnd(opt["judge"]);
+            if (std::isfinite(ja) && std::isfinite(jo) && std::isfinite(va) && std::isfinite(vo))
+                out += " Judge: the defects are " + jndPhrase(ja) + " under " + name + ", " +
+                       fmt(jo, 3) + " JND under the optimized light (visibility ratio " +
+                       fmt(va, 3) + " vs " + fmt(vo, 3) + "), on an independent " + spp +
+                       "-spp estimate." +
+                       worstLabelSentence(ans["judge"], lamp.value("judge", json::object()));
+            else if (std::isfinite(va) && std::isfinite(vo))
                 out += " Judge: defect visibility " + fmt(va, 3) + " (" + name + ") vs " +
                        fmt(vo, 3) + " (optimized), on an independent " + spp + "-spp estimate." +
                        worstLabelSentence(ans["judge"], lamp.value("judge", json::object()));
