@@ -154,3 +154,46 @@ TEST(JudgeJnd, WhenTheLampIsTheAnswerTheHeadlineSaysSoInJnd) {
               std::string::npos)
         << h;
 }
+
+// The optimized light is returned, yet the judge sees the defects more under the lamp: the
+// headline says why the lamp was not the answer (a check it failed on the validation estimate,
+// or less JND there), so the first line and the selection agree.
+TEST(JudgeJnd, WhenTheLampShowsMoreButIsNotTheAnswerTheHeadlineSaysWhy) {
+    auto judge = [](double jnd, double visibility) {
+        return nlohmann::json{
+            {"visibility",
+             {{{"name", "scratch"}, {"pixels", 100}, {"visibility", visibility}, {"jnd", jnd}}}}};
+    };
+    auto candidate = [](const char* name, const char* kind, double merit, bool eligible,
+                        const char* why) {
+        return nlohmann::json{
+            {"name", name}, {"kind", kind}, {"merit", merit}, {"eligible", eligible}, {"why", why}};
+    };
+    nlohmann::json s = {
+        {"answer",
+         {{"light", "optimized"},
+          {"merit", "JND"},
+          {"candidates",
+           {candidate("optimized", "optimized", 0.29, true, ""),
+            candidate("studio preset", "reference", 0.26, false,
+                      "the defects barely show: their gradient is 0.0086 of the image's "
+                      "brightness, below 0.01")}}}},
+        {"compare",
+         {{"judge_spp", 1024},
+          {"lamp", {{"name", "studio preset"}, {"judge", judge(0.26, 0.74)}}},
+          {"paper", {{"judge", judge(0.13, 1.29)}}},
+          {"optimized", {{"judge", judge(0.1, 1.19)}}}}}};
+    const std::string h = optimizeHeadline(s);
+    EXPECT_NE(h.find("0.26 under your lamp (studio preset)"), std::string::npos) << h;
+    EXPECT_NE(h.find("Your lamp was not the answer: on the validation estimate it did not pass "
+                     "the checks (the defects barely show"),
+              std::string::npos)
+        << h;
+    // Eligible but less JND on the validation estimate: said with the figures.
+    s["answer"]["candidates"][1]["eligible"] = true;
+    EXPECT_NE(optimizeHeadline(s).find("it showed them less (JND 0.26 vs 0.29)"), std::string::npos)
+        << optimizeHeadline(s);
+    // The lamp shows less under the judge too: nothing to explain.
+    s["compare"]["lamp"]["judge"] = judge(0.05, 0.74);
+    EXPECT_EQ(optimizeHeadline(s).find("Your lamp was not the answer"), std::string::npos);
+}
