@@ -37,11 +37,13 @@ json readJson(const std::filesystem::path& p) {
 }
 
 /// A small bumpy part with one labelled scratch (a 3×12 stripe) and a 32-spp judge of it: the
-/// validation estimate the Answer tests score lights on.
+/// validation estimate the Answer tests score lights on. `judge` has no viewing model (the
+/// ratio); `jndJudge` is the same estimate seen on the default display (JND); `plainJudge`
+/// knows no regions (U).
 struct ScratchedPartJudge {
     std::unique_ptr<Scene> scene;
     TransportSource estimate;
-    std::unique_ptr<Judge> judge;
+    std::unique_ptr<Judge> judge, jndJudge, plainJudge;
     static std::unique_ptr<ScratchedPartJudge> make() {
         auto r = std::make_unique<ScratchedPartJudge>();
         r->scene =
@@ -54,6 +56,10 @@ struct ScratchedPartJudge {
         r->estimate = judgeEstimate(*r->scene, jo);
         r->judge = std::make_unique<Judge>(r->estimate, jo, labels,
                                            std::vector{RegionLabel{1, "scratch"}});
+        r->plainJudge = std::make_unique<Judge>(r->estimate, jo);
+        jo.viewing = defaultViewing();
+        r->jndJudge = std::make_unique<Judge>(r->estimate, jo, labels,
+                                              std::vector{RegionLabel{1, "scratch"}});
         return r;
     }
 };
@@ -215,6 +221,84 @@ TEST(Answer, ALightThatLeavesThePartBlackIsNotTheAnswer) {
     EXPECT_NE(d.reason.find("no light passes the checks"), std::string::npos) << d.reason;
 }
 
+// The answer is chosen on what the judge reports first. Of two lights that pass the checks,
+// one shows the scratch better by the visibility ratio (the defects' gradient over the
+// texture's) and worse in JND (a person sees it less: less contrast, a dimmer image, more
+// masking): with a viewing model the other is the answer, and when it is the lamp, the lamp is
+// returned; without a viewing model the ratio decides as before, and without regions U does.
+TEST(Answer, WithAViewingModelTheAnswerIsChosenInJnd) {
+    const auto part = ScratchedPartJudge::make();
+    const Judge &jnd = *part->jndJudge, &ratio = *part->judge;
+    // Lights of different character: random skies, bright bands over a dim sky, each also at
+    // 30 % (the same ratio, a dimmer image).
+    std::vector<std::vector<double>> lights;
+    for (uint64_t k = 1; k <= 6; ++k) lights.push_back(randomLight(1250, 40 + k));
+    for (size_t b = 0; b < 1250; b += 125) {
+        std::vector<double> band(1250, 0.05);
+        for (size_t i = b; i < b + 60; ++i) band[i] = 1.0;
+        lights.push_back(band);
+    }
+    for (size_t k = 0, n = lights.size(); k < n; ++k) lights.push_back(scaled(lights[k], 0.3));
+    struct Figures {
+        double visibility, jnd;
+    };
+    std::vector<Figures> f;
+    std::vector<size_t> eligible;
+    for (size_t k = 0; k < lights.size(); ++k) {
+        const JudgeScore s = jnd.score(lights[k]);
+        f.push_back({combinedVisibility(s.visibility), combinedJnd(s.visibility)});
+        if (s.brightness >= kMinVisibleBrightness &&
+            combinedContrast(s.visibility) >= kMinDefectContrast && f.back().jnd > 0)
+            eligible.push_back(k);
+    }
+    // The pair where the ratio and the JND disagree the most (by the JND's factor).
+    size_t opt = 0, lamp = 0;
+    double most = 1;
+    for (size_t a : eligible)
+        for (size_t b : eligible)
+            if (f[a].visibility > 1.05 * f[b].visibility && f[b].jnd / f[a].jnd > most) {
+                most = f[b].jnd / f[a].jnd;
+                opt = a;
+                lamp = b;
+            }
+    ASSERT_GT(most, 1.1) << "no two lights disagree: the test part cannot tell the rules apart";
+    const std::vector<AnswerCandidate> candidates = {
+        {"optimized", CandidateKind::Optimized, lights[opt]},
+        {"lamp", CandidateKind::Reference, lights[lamp]}};
+
+    const AnswerChoice c = chooseAnswer(jnd, candidates);
+    ASSERT_TRUE(c.scored[0].eligible && c.scored[1].eligible) << c.reason;
+    EXPECT_EQ(c.scored[0].merit.what, "JND");
+    EXPECT_NEAR(c.scored[0].merit.value, f[opt].jnd, 1e-9 * f[opt].jnd);
+    EXPECT_NEAR(c.scored[1].merit.value, f[lamp].jnd, 1e-9 * f[lamp].jnd);
+    // The ratio stays beside the JND.
+    EXPECT_NEAR(c.scored[0].merit.visibility, f[opt].visibility, 1e-9 * f[opt].visibility);
+    EXPECT_TRUE(c.referenceWon()) << c.reason;
+    EXPECT_EQ(c.answer().candidate.name, "lamp");
+    EXPECT_EQ(c.optimized, 0u);
+    EXPECT_NE(c.reason.find("reference light lamp shows the defects better"), std::string::npos)
+        << c.reason;
+    EXPECT_NE(c.reason.find("(JND "), std::string::npos) << c.reason;
+    EXPECT_NE(c.reason.find("visibility ratio"), std::string::npos) << c.reason;
+    const nlohmann::ordered_json j = answerJson(c);
+    EXPECT_EQ(j["merit"], "JND");
+    EXPECT_EQ(j["light"], "lamp");
+    EXPECT_DOUBLE_EQ(j["candidates"][0]["visibility"].get<double>(), c.scored[0].merit.visibility);
+    EXPECT_GE(j["seconds"].get<double>(), 0.0);
+
+    // No viewing model: the ratio, and the optimized light is the answer.
+    const AnswerChoice r = chooseAnswer(ratio, candidates);
+    EXPECT_EQ(r.scored[0].merit.what, "defect visibility");
+    EXPECT_NEAR(r.scored[0].merit.value, f[opt].visibility, 1e-9 * f[opt].visibility);
+    EXPECT_EQ(r.chosen, 0u) << r.reason;
+    EXPECT_EQ(r.reason.find("visibility ratio"), std::string::npos) << r.reason;
+    // No regions: U, viewing model or not.
+    const AnswerChoice u = chooseAnswer(*part->plainJudge, candidates);
+    EXPECT_EQ(u.scored[0].merit.what, "U");
+    EXPECT_DOUBLE_EQ(u.scored[0].merit.value, part->plainJudge->score(lights[opt]).unbiased.total);
+    EXPECT_TRUE(std::isnan(u.scored[0].merit.visibility));
+}
+
 // A finer light (searched before E* on a finer grid, its training figure over-fit) is the answer
 // only when no trusted optimized light passes the checks, and then only if it beats the
 // references on the validation estimate.
@@ -313,7 +397,9 @@ TEST(OptimizeAnswers, DefectsBelowTheTrainingNoiseRaiseTheSpp) {
     const json& a = s["answer"];
     ASSERT_TRUE(a.is_object());
     EXPECT_GE(a["candidates"].size(), 4u);
-    EXPECT_EQ(a["merit"], "defect visibility");
+    // The scene has the default viewing model: the answer is chosen in JND, the ratio beside.
+    EXPECT_EQ(a["merit"], "JND");
+    EXPECT_TRUE(a["candidates"][0]["visibility"].is_number()) << a.dump(2);
     bool found = false;
     for (const json& c : a["candidates"]) found |= c["name"] == a["light"];
     EXPECT_TRUE(found);

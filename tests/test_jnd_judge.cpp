@@ -120,3 +120,80 @@ TEST(JudgeJnd, TheAnswerLineLeadsWithJnd) {
         optimizeHeadline(s).rfind("Under the optimized light the defects are 43× as visible", 0),
         0u);
 }
+
+// When the lamp beat the optimized light in JND on the validation estimate (app/Answer.h), the
+// first line says the lamp is the answer, by the JND it was chosen on, and the judge's figures
+// follow in JND with the ratio beside them (here the ratio alone would have kept E*).
+TEST(JudgeJnd, WhenTheLampIsTheAnswerTheHeadlineSaysSoInJnd) {
+    auto judge = [](double jnd, double visibility) {
+        return nlohmann::json{
+            {"visibility",
+             {{{"name", "scratch"}, {"pixels", 100}, {"visibility", visibility}, {"jnd", jnd}}}}};
+    };
+    nlohmann::json s = {{"compare",
+                         {{"judge_spp", 1024},
+                          {"lamp", {{"name", "studio preset"}, {"judge", judge(2.11, 1.8)}}},
+                          {"paper", {{"judge", judge(0.5, 1.2)}}},
+                          {"optimized", {{"judge", judge(0.16, 1.9)}}},
+                          {"answer",
+                           {{"name", "studio preset"},
+                            {"merit", "JND"},
+                            {"merit_answer", 2.0},
+                            {"merit_optimized", 0.2},
+                            {"optimized_why", ""},
+                            {"judge", judge(2.11, 1.8)}}}}}};
+    const std::string h = optimizeHeadline(s);
+    EXPECT_EQ(h.rfind("The answer is studio preset, not the optimized light: on an independent "
+                      "validation estimate it showed the defects better (JND 2 vs 0.2)",
+                      0),
+              0u)
+        << h;
+    EXPECT_NE(h.find("Judge: the defects are 2.11 JND above threshold under studio preset, 0.16 "
+                     "JND under the optimized light (visibility ratio 1.8 vs 1.9), on an "
+                     "independent 1024-spp estimate."),
+              std::string::npos)
+        << h;
+}
+
+// The optimized light is returned, yet the judge sees the defects more under the lamp: the
+// headline says why the lamp was not the answer (a check it failed on the validation estimate,
+// or less JND there), so the first line and the selection agree.
+TEST(JudgeJnd, WhenTheLampShowsMoreButIsNotTheAnswerTheHeadlineSaysWhy) {
+    auto judge = [](double jnd, double visibility) {
+        return nlohmann::json{
+            {"visibility",
+             {{{"name", "scratch"}, {"pixels", 100}, {"visibility", visibility}, {"jnd", jnd}}}}};
+    };
+    auto candidate = [](const char* name, const char* kind, double merit, bool eligible,
+                        const char* why) {
+        return nlohmann::json{
+            {"name", name}, {"kind", kind}, {"merit", merit}, {"eligible", eligible}, {"why", why}};
+    };
+    nlohmann::json s = {
+        {"answer",
+         {{"light", "optimized"},
+          {"merit", "JND"},
+          {"candidates",
+           {candidate("optimized", "optimized", 0.29, true, ""),
+            candidate("studio preset", "reference", 0.26, false,
+                      "the defects barely show: their gradient is 0.0086 of the image's "
+                      "brightness, below 0.01")}}}},
+        {"compare",
+         {{"judge_spp", 1024},
+          {"lamp", {{"name", "studio preset"}, {"judge", judge(0.26, 0.74)}}},
+          {"paper", {{"judge", judge(0.13, 1.29)}}},
+          {"optimized", {{"judge", judge(0.1, 1.19)}}}}}};
+    const std::string h = optimizeHeadline(s);
+    EXPECT_NE(h.find("0.26 under your lamp (studio preset)"), std::string::npos) << h;
+    EXPECT_NE(h.find("Your lamp was not the answer: on the validation estimate it did not pass "
+                     "the checks (the defects barely show"),
+              std::string::npos)
+        << h;
+    // Eligible but less JND on the validation estimate: said with the figures.
+    s["answer"]["candidates"][1]["eligible"] = true;
+    EXPECT_NE(optimizeHeadline(s).find("it showed them less (JND 0.26 vs 0.29)"), std::string::npos)
+        << optimizeHeadline(s);
+    // The lamp shows less under the judge too: nothing to explain.
+    s["compare"]["lamp"]["judge"] = judge(0.05, 0.74);
+    EXPECT_EQ(optimizeHeadline(s).find("Your lamp was not the answer"), std::string::npos);
+}

@@ -1,5 +1,6 @@
 #include "app/Answer.h"
 
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
@@ -9,8 +10,9 @@
 namespace sl {
 
 AnswerMerit answerMerit(const JudgeScore& s) {
-    const double v = combinedVisibility(s.visibility);
-    if (std::isfinite(v)) return {v, true, "defect visibility"};
+    const double v = combinedVisibility(s.visibility), j = combinedJnd(s.visibility);
+    if (std::isfinite(j)) return {j, true, "JND", v};
+    if (std::isfinite(v)) return {v, true, "defect visibility", v};
     return {s.unbiased.total, false, "U"};
 }
 
@@ -35,6 +37,7 @@ const char* candidateKindName(CandidateKind kind) {
 
 AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> candidates,
                           const AnswerOptions& options) {
+    const auto t0 = std::chrono::steady_clock::now();
     AnswerChoice c;
     bool anyOptimized = false, anyEligible = false;
     for (AnswerCandidate& cand : candidates) {
@@ -60,6 +63,7 @@ AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> 
         s.candidate = std::move(cand);
         c.scored.push_back(std::move(s));
     }
+    c.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (!anyOptimized) throw std::invalid_argument("chooseAnswer: no optimized candidate");
     // A finer light competes only when no trusted optimized light passes the checks.
     bool trustedEligible = false;
@@ -96,9 +100,13 @@ AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> 
     }
     const ScoredCandidate& a = c.answer();
     const ScoredCandidate& o = c.scored[c.optimized];
-    const std::string on = " on the validation estimate (" + a.merit.what + " " +
-                           formatNumber(a.merit.value, 4) + " vs the optimized light's " +
-                           formatNumber(o.merit.value, 4) + ")";
+    std::string on = " on the validation estimate (" + a.merit.what + " " +
+                     formatNumber(a.merit.value, 4) + " vs the optimized light's " +
+                     formatNumber(o.merit.value, 4);
+    if (a.merit.what == "JND")  // the ratio beside it
+        on += "; visibility ratio " + formatNumber(a.merit.visibility, 4) + " vs " +
+              formatNumber(o.merit.visibility, 4);
+    on += ")";
     if (!anyEligible)
         c.reason = "no light passes the checks (brightness at least " +
                    formatNumber(options.minBrightness, 3) +
@@ -129,6 +137,7 @@ nlohmann::ordered_json answerJson(const AnswerChoice& a) {
         scored.push_back({{"name", c.candidate.name},
                           {"kind", candidateKindName(c.candidate.kind)},
                           {"merit", c.merit.value},
+                          {"visibility", c.merit.visibility},
                           {"brightness", c.score.brightness},
                           {"eligible", c.eligible},
                           {"why", c.why}});
@@ -137,6 +146,7 @@ nlohmann::ordered_json answerJson(const AnswerChoice& a) {
             {"merit", a.answer().merit.what},
             {"higher_is_better", a.answer().merit.higherIsBetter},
             {"reason", a.reason},
+            {"seconds", a.seconds},
             {"on", "the validation estimate (independent of training and the judge)"},
             {"candidates", scored}};
 }

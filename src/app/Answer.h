@@ -22,6 +22,7 @@
 #pragma once
 
 #include <cstddef>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -35,10 +36,14 @@ namespace sl {
 struct AnswerMerit {
     double value = 0;
     bool higherIsBetter = false;
-    std::string what;  // "defect visibility" or "U"
+    std::string what;  // "JND", "defect visibility" or "U"
+    /// The defects' combined visibility ratio, beside the JND (NaN without defect regions).
+    double visibility = std::numeric_limits<double>::quiet_NaN();
 };
-/// The answer line's figure of a judge's score: the combined visibility of its regions
-/// (objective/DefectVisibility.h combinedVisibility) when it has any with a finite value, else U.
+/// The figure the judge (and the answer line) reports first, of a judge's score: the combined
+/// JND of its regions (objective/DefectVisibility.h combinedJnd) when they have one (defect
+/// regions and a viewing model), else their combined visibility ratio (combinedVisibility)
+/// when finite, else U.
 AnswerMerit answerMerit(const JudgeScore& score);
 /// a better than b by their merit (the same `what`; NaN is never better).
 bool betterMerit(const AnswerMerit& a, const AnswerMerit& b);
@@ -76,10 +81,12 @@ struct AnswerChoice {
     const ScoredCandidate& answer() const { return scored[chosen]; }
     /// One line: what was chosen and why (the figures on the validation estimate).
     std::string reason;
+    double seconds = 0;  // scoring the candidates on the validation estimate (JND included)
 };
 
-/// summary.json's `answer`: the light chosen, its kind, the merit, the reason and every
-/// candidate (name, kind, merit, brightness, eligible, why), scored on the validation estimate.
+/// summary.json's `answer`: the light chosen, its kind, the merit, the reason, the seconds the
+/// scoring took and every candidate (name, kind, merit, visibility ratio, brightness, eligible,
+/// why), scored on the validation estimate.
 nlohmann::ordered_json answerJson(const AnswerChoice& choice);
 
 /// Scores every candidate on `validation` and picks the answer (header). At least one

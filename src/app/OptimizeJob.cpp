@@ -735,13 +735,17 @@ struct LambdaResult {
     LossParts lampTraining, paperTraining;  // the lamp's and the paper's light on T at λ
 };
 
-/// The objective's options at λ; the jnd measure sees the image as the scene's viewing block
-/// says (app/Judge.h viewingFor), the judge's default for a .tm.
+/// How a person sees the images (the judge's JND): the scene's viewing model, the default one
+/// when only T is at hand.
+ViewingModel viewingOf(const Inputs& in) {
+    return in.scene ? viewingFor(*in.scene) : defaultViewing();
+}
+
+/// The objective's options at λ; the jnd measure sees the image as the judge does (viewingOf).
 ObjectiveOptions objectiveAt(const Plan& p, const Inputs& in, double lambda) {
     ObjectiveOptions oo = p.o.objective;
     oo.lambda = lambda;
-    if (!(oo.viewing.pixelsPerDegree > 0))
-        oo.viewing = in.scene ? viewingFor(*in.scene) : defaultViewing();
+    if (!(oo.viewing.pixelsPerDegree > 0)) oo.viewing = viewingOf(in);
     return oo;
 }
 
@@ -930,8 +934,6 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
     return res;
 }
 
-/// The objective options of a λ run.
-
 /// Stage 4b: the self-checked answer (app/Answer.h) on the validation estimate: E*, every
 /// other start's result and the references; a reference that wins becomes the answer and E*
 /// is kept beside it.
@@ -940,6 +942,7 @@ void checkAnswer(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
     JudgeOptions jo;
     jo.objective = objectiveAt(p, in, r.run.lambda);
     jo.rgb = p.o.rgb;
+    jo.viewing = viewingOf(in);  // the answer is chosen on what the judge reports first: JND
     const Judge validation(*job.validation, jo, in.regionLabels, in.regionLegend,
                            in.regionReference);
     std::vector<AnswerCandidate> candidates;
@@ -959,14 +962,9 @@ void checkAnswer(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
         r.optimizedE = r.e;
         r.e = a.candidate.e;
     }
-    spdlog::info("lambda {}: answer: {}", r.run.lambda, choice.reason);
+    spdlog::info("lambda {}: answer: {} [{} candidates scored in {:.2f} s]", r.run.lambda,
+                 choice.reason, choice.scored.size(), choice.seconds);
     r.run.answer = std::move(choice);
-}
-
-/// How a person sees the images (the judge's JND): the scene's viewing model, the default one
-/// when only T is at hand.
-ViewingModel viewingOf(const Inputs& in) {
-    return in.scene ? viewingFor(*in.scene) : defaultViewing();
 }
 
 /// Stage 4c: the judge's scores (the held-out estimate, at this run's λ) of the answer, the
@@ -1259,6 +1257,8 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
                            {"merit", a.answer().merit.what},
                            {"merit_answer", a.answer().merit.value},
                            {"merit_optimized", a.scored[a.optimized].merit.value},
+                           {"visibility_answer", a.answer().merit.visibility},
+                           {"visibility_optimized", a.scored[a.optimized].merit.visibility},
                            {"optimized_why", a.scored[a.optimized].why},
                            {"on", "the validation estimate"}};
             if (run.judged) answer["judge"] = toJson(*run.judged);

@@ -698,6 +698,34 @@ std::string compareRow(const std::string& name, double lamp, double paper, doubl
 
 }  // namespace
 
+/// When the judge sees the defects more under the lamp than under the returned optimized light
+/// (JND), why the self-check did not return the lamp (app/Answer.h): it failed a check on the
+/// validation estimate, or it showed less there. Empty otherwise.
+std::string lampNotChosen(const json& s, double jndOptimized, double jndLamp,
+                          const std::string& lampName) {
+    if (!(jndLamp > jndOptimized) || !s.contains("answer") || !s["answer"].is_object() ||
+        !s["answer"].contains("candidates"))
+        return "";
+    for (const json& c : s["answer"]["candidates"]) {
+        if (c.value("name", std::string()) != lampName ||
+            c.value("kind", std::string()) != "reference")
+            continue;
+        if (!c.value("eligible", true))
+            return "Your lamp was not the answer: on the validation estimate it did not pass the "
+                   "checks (" +
+                   c.value("why", std::string()) + "). ";
+        const std::string merit = s["answer"].value("merit", std::string("figure"));
+        double mo = std::nan("");
+        for (const json& o : s["answer"]["candidates"])
+            if (o.value("name", std::string()) == s["answer"].value("light", std::string()))
+                mo = num(o, "merit");
+        return "Your lamp was not the answer: on the validation estimate, where the answer is "
+               "chosen, it showed them less (" +
+               merit + " " + fmt(num(c, "merit"), 3) + " vs " + fmt(mo, 3) + "). ";
+    }
+    return "";
+}
+
 std::string optimizeHeadline(const json& s) {
     if (!s.contains("compare") || !s["compare"].is_object())
         return "This output directory has no comparison with a lamp (it predates it).";
@@ -727,7 +755,14 @@ std::string optimizeHeadline(const json& s) {
             const std::string spp = fmt(num(cmp, "judge_spp"), 6);
             const double va = combinedVisibility(ans["judge"]),
                          vo = combinedVisibility(opt["judge"]);
-            if (std::isfinite(va) && std::isfinite(vo))
+            const double ja = combinedJnd(ans["judge"]), jo = combinedJnd(opt["judge"]);
+            if (std::isfinite(ja) && std::isfinite(jo) && std::isfinite(va) && std::isfinite(vo))
+                out += " Judge: the defects are " + jndPhrase(ja) + " under " + name + ", " +
+                       fmt(jo, 3) + " JND under the optimized light (visibility ratio " +
+                       fmt(va, 3) + " vs " + fmt(vo, 3) + "), on an independent " + spp +
+                       "-spp estimate." +
+                       worstLabelSentence(ans["judge"], lamp.value("judge", json::object()));
+            else if (std::isfinite(va) && std::isfinite(vo))
                 out += " Judge: defect visibility " + fmt(va, 3) + " (" + name + ") vs " +
                        fmt(vo, 3) + " (optimized), on an independent " + spp + "-spp estimate." +
                        worstLabelSentence(ans["judge"], lamp.value("judge", json::object()));
@@ -745,6 +780,8 @@ std::string optimizeHeadline(const json& s) {
         if (std::isfinite(vo) && std::isfinite(vl) && std::isfinite(vp)) {
             out = jndSentence(opt["judge"], lamp["judge"], paper["judge"], underLamp,
                               cmp.value("viewing", json::object()));
+            out += lampNotChosen(s, combinedJnd(opt["judge"]), combinedJnd(lamp["judge"]),
+                                 lamp.value("name", std::string()));
             out += (out.empty() ? "Under the optimized light the defects are "
                                 : "By the visibility ratio they are ") +
                    moreVisible(vo, vl, underLamp);
