@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cmath>
+#include <span>
 #include <vector>
 
 namespace sl {
@@ -36,6 +37,22 @@ S labelSoftMin(const std::vector<S>& phi, double tau, std::vector<double>* weigh
         for (size_t k = 0; k < phi.size(); ++k)
             (*weights)[k] = std::exp(-(realPart(phi[k]) - realPart(phi[lo])) / tau) / realPart(sum);
     return phi[lo] - tau * log(sum / static_cast<double>(phi.size()));
+}
+/// m = the mean over the part of Ȳ = (Y_a + Y_b)/2 and clip = the mean of max(0, Ȳ − 1)², the
+/// exposure band's inputs (`pixels`: the part's pixel count).
+template <typename S>
+void partBrightness(const std::vector<uint8_t>& part, double pixels, std::span<const S> Ya,
+                    std::span<const S> Yb, S& m, S& clip) {
+    m = S(0.0);
+    clip = S(0.0);
+    for (size_t p = 0; p < part.size(); ++p) {
+        if (!part[p]) continue;
+        const S y = (Ya[p] + Yb[p]) * 0.5;
+        m += y;
+        clip += hingeSquared(S(y - 1.0));
+    }
+    m /= pixels;
+    clip /= pixels;
 }
 /// L_exp + L_dark of DefectObjective.h at the part's mean brightness m and mean squared
 /// clipping `clip` (the JND objective keeps the same band and floor: objective/JndObjective.h).
@@ -85,16 +102,8 @@ S DefectObjective::value(std::span<const S> Ya, std::span<const S> Yb, std::span
     using std::log;
     S loss = (detail::realPart(gR) >= floor() ? S(log(gR)) : S(std::log(floor()))) -
              detail::labelSoftMin(phi, kLabelSoftMin);
-    S m(0.0), clip(0.0);
-    const std::vector<uint8_t>& part = mask();
-    for (size_t p = 0; p < part.size(); ++p) {
-        if (!part[p]) continue;
-        const S y = (Ya[p] + Yb[p]) * 0.5;
-        m += y;
-        clip += detail::hingeSquared(S(y - 1.0));
-    }
-    m /= partPixels_;
-    clip /= partPixels_;
+    S m, clip;
+    detail::partBrightness(mask(), partPixels_, Ya, Yb, m, clip);
     const double w = d_.whiteMean;
     loss += detail::exposureBand(m, clip, d_);
     const double cf = d_.contrastFloor;

@@ -77,16 +77,7 @@ LossParts JndObjective::evaluate(std::span<const double> Ya, std::span<const dou
     detail::checkFinite(E, "E", "evaluate");
 
     // Forward: the Gaussians of both estimates, one task per σ.
-    std::vector<std::vector<double>> ga(kJndBands + 1), gb(kJndBands + 1);
-    {
-        std::vector<std::future<void>> tasks;
-        for (int j = 0; j <= kJndBands; ++j)
-            tasks.push_back(std::async(std::launch::async, [&, j] {
-                ga[j] = bank_.gaussian<double>(j, Ya);
-                gb[j] = bank_.gaussian<double>(j, Yb);
-            }));
-        for (auto& t : tasks) t.get();
-    }
+    const auto [ga, gb] = bank_.gaussians(Ya, Yb);
     const size_t K = labels_.size();
     const std::vector<uint8_t>& part = base_.mask();
     auto counted = [&](size_t p) { return part[p] && (reference_[p] || labelOf_[p] >= 0); };
@@ -103,7 +94,7 @@ LossParts JndObjective::evaluate(std::span<const double> Ya, std::span<const dou
         eF[b] /= referencePixels_;
     }
     double m = 0, clip = 0;
-    brightness(Ya, Yb, m, clip);
+    detail::partBrightness(base_.mask(), partPixels_, Ya, Yb, m, clip);
     // L(m), m a variable: the sensitivities below carry dS/dm.
     const Dual<1> L = luminanceOf(Dual<1>::variable(m, 0));
 

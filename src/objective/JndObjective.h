@@ -83,9 +83,6 @@ class JndObjective final : public HalfImageObjective {
     /// The luminance L(m) of the header and dL/dm (0 where clamped).
     template <typename S>
     S luminanceOf(const S& m) const;
-    /// The part's mean of Ȳ and mean squared clipping.
-    template <typename S>
-    void brightness(std::span<const S> Ya, std::span<const S> Yb, S& m, S& clip) const;
 
     int width_, height_;
     ImageObjective base_;  // the part mask, options, the env-map regulariser

@@ -32,21 +32,6 @@ S JndObjective::luminanceOf(const S& m) const {
 }
 
 template <typename S>
-void JndObjective::brightness(std::span<const S> Ya, std::span<const S> Yb, S& m, S& clip) const {
-    m = S(0.0);
-    clip = S(0.0);
-    const std::vector<uint8_t>& part = base_.mask();
-    for (size_t p = 0; p < part.size(); ++p) {
-        if (!part[p]) continue;
-        const S y = (Ya[p] + Yb[p]) * 0.5;
-        m += y;
-        clip += detail::hingeSquared(S(y - 1.0));
-    }
-    m /= partPixels_;
-    clip /= partPixels_;
-}
-
-template <typename S>
 S JndObjective::value(std::span<const S> Ya, std::span<const S> Yb, std::span<const S> E) const {
     const size_t n = static_cast<size_t>(width_) * height_;
     std::vector<std::vector<S>> ga(kJndBands + 1), gb(kJndBands + 1);
@@ -69,7 +54,7 @@ S JndObjective::value(std::span<const S> Ya, std::span<const S> Yb, std::span<co
         eF[b] /= referencePixels_;
     }
     S m, clip;
-    brightness(Ya, Yb, m, clip);
+    detail::partBrightness(base_.mask(), partPixels_, Ya, Yb, m, clip);
     const S L = luminanceOf(m);
     std::vector<S> half(K, S(0.0));
     for (size_t k = 0; k < K; ++k) {

@@ -34,6 +34,19 @@ BandFilterBank::BandFilterBank(int width, int height, std::span<const uint8_t> p
     for (auto& t : tasks) t.get();
 }
 
+std::pair<std::vector<std::vector<double>>, std::vector<std::vector<double>>>
+BandFilterBank::gaussians(std::span<const double> ya, std::span<const double> yb) const {
+    std::vector<std::vector<double>> ga(kJndBands + 1), gb(kJndBands + 1);
+    std::vector<std::future<void>> tasks;
+    for (int j = 0; j <= kJndBands; ++j)
+        tasks.push_back(std::async(std::launch::async, [&, j] {
+            ga[j] = gaussian<double>(j, ya);
+            gb[j] = gaussian<double>(j, yb);
+        }));
+    for (auto& t : tasks) t.get();
+    return {std::move(ga), std::move(gb)};
+}
+
 std::vector<double> BandFilterBank::gaussianAdjoint(int j, std::span<const double> dG) const {
     const size_t n = part_.size();
     std::vector<double> scaled(n, 0.0);

@@ -20,6 +20,7 @@
 #include <cmath>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace sl {
@@ -92,6 +93,9 @@ class BandFilterBank {
         for (size_t p = 0; p < n; ++p) g[p] = reached(j, p) ? S(g[p] / weight_[j][p]) : S(0.0);
         return g;
     }
+    /// G_0..G_kJndBands of two images (two estimates), one task per σ: {G(Y_a), G(Y_b)}.
+    std::pair<std::vector<std::vector<double>>, std::vector<std::vector<double>>> gaussians(
+        std::span<const double> ya, std::span<const double> yb) const;
     /// The adjoint of gaussian(j, ·): d/dY (on the part, 0 off it) of Σ_p dG[p]·G_j(Y)[p].
     std::vector<double> gaussianAdjoint(int j, std::span<const double> dG) const;
 

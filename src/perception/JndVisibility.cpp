@@ -28,16 +28,7 @@ BandContrast::BandContrast(int width, int height, std::span<const double> Ya,
 
     // G_0 .. G_K of each estimate (perception/BandFilters.h), one task per σ.
     const BandFilterBank bank(width, height, part);
-    std::vector<std::vector<double>> ga(kJndBands + 1), gb(kJndBands + 1);
-    {
-        std::vector<std::future<void>> tasks;
-        for (int j = 0; j <= kJndBands; ++j)
-            tasks.push_back(std::async(std::launch::async, [&, j] {
-                ga[j] = bank.gaussian<double>(j, Ya);
-                gb[j] = bank.gaussian<double>(j, Yb);
-            }));
-        for (auto& t : tasks) t.get();
-    }
+    const auto [ga, gb] = bank.gaussians(Ya, Yb);
     productAB_.assign(kJndBands, std::vector<double>(n, 0.0));
     for (int k = 0; k < kJndBands; ++k) {
         const int l = localMeanGaussian(k);
