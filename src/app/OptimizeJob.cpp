@@ -1543,8 +1543,8 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                 // The gap's standard error, V's own noise (step 3).
                 const ObjectiveOnT onV =
                     validationObjective(in, job, objectiveAt(p, lambda), p.o.rgb);
-                nr.gapError = trainingGapError(in.kind, *onV.loss, r.e, nr.training,
-                                               job.validation->file.provenance.seed);
+                nr.gapError =
+                    trainingGapError(in.kind, *onV.loss, r.e, job.validation->file.provenance.seed);
                 // Step 4: V's noise: more V (T's spp for eq. 2, whose V must keep T's spp);
                 // over-fit: more T, then a coarser light (step 5).
                 const bool freeV = validationSppFree(in.kind);

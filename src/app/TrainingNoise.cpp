@@ -87,17 +87,16 @@ GapVerdict gapVerdict(double gap, double se, double maxGap, bool validationAtMos
 }
 
 double trainingGapError(ObjectiveKind kind, const TransportLoss& onValidation,
-                        std::span<const double> E, double training, uint64_t seed, int replicates) {
+                        std::span<const double> E, uint64_t seed, int replicates) {
     const std::vector<HalfImages> images{onValidation.halfImages(E)};
-    if (onValidation.evaluateImages(images.front(), E).clamped)
-        return std::numeric_limits<double>::quiet_NaN();
-    return wildBootstrapErrors(images, seed, replicates,
-                               [&](std::span<const HalfImages> r) {
-                                   const double v =
-                                       trainingFigure(kind, onValidation.evaluateImages(r[0], E));
-                                   return std::vector<double>{trainingGap(kind, training, v)};
-                               })
-        .front();
+    const LossParts parts = onValidation.evaluateImages(images.front(), E);
+    const double figure = trainingFigure(kind, parts);
+    if (parts.clamped || !(std::abs(figure) > 0)) return std::numeric_limits<double>::quiet_NaN();
+    const double se =
+        wildBootstrapErrors(images, seed, replicates, [&](std::span<const HalfImages> r) {
+            return std::vector<double>{trainingFigure(kind, onValidation.evaluateImages(r[0], E))};
+        }).front();
+    return se / std::abs(figure);
 }
 
 bool validationSppFree(ObjectiveKind kind) {

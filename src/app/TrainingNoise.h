@@ -15,8 +15,9 @@
 //        paper, unbiased (losses, lower is better):  gap = (L_V − L_T) / L_V
 //        defects (visibility exp(−L_vis/2), higher is better): gap = (v_T − v_V) / v_V
 //      and its standard error SE (trainingGapError) is V's own noise: the wild bootstrap on V's
-//      two halves that gives the judge's errors (core/WildBootstrap.h), each replicate's figure
-//      of E* turned into a gap against the same T figure. A gap can be large with no over-fit
+//      two halves that gives the judge's errors (core/WildBootstrap.h), SE(f_V)/|f_V|, the
+//      gap's SE when there is no over-fit (the hypothesis the verdict tests). A gap can be large
+//      with no over-fit
 //      at all when V's figure of E* is noisy (few defect pixels on a rough part), so the gap
 //      is weighed against its SE (gapVerdict, kGapSigmas = 2):
 //        over-fit          gap − 2·SE > maxGap: V's noise does not explain it (at 2 SE one-sided
@@ -192,15 +193,19 @@ bool figureHigherIsBetter(ObjectiveKind kind);
 /// the validation figure is 0 and the training one is not.
 double trainingGap(ObjectiveKind kind, double training, double validation);
 
-/// The standard error of E*'s gap (header, step 3): `onValidation` is the objective in use
-/// through V (two planes), E is E*, `training` its figure on T; the wild bootstrap of V's half
-/// images (core/WildBootstrap.h) with `replicates` replicates, each giving
-/// trainingGap(kind, training, figure of E* on the replicate). NaN when E*'s loss on V is
-/// clamped (a label's gradient, or G, below the objective's floor: V's estimate shows the
-/// defects no gradient, so its figure is the floor's, not a noisy measure) or when fewer than
-/// half the replicates give a finite gap.
+/// The standard error of E*'s gap (header, step 3) under the hypothesis the verdict tests (no
+/// over-fit: E*'s figure on T is one more estimate of its figure on V): the standard error of
+/// E*'s figure on V relative to that figure, SE(f_V)/|f_V|, the gap's at gap 0 by the delta
+/// method. (The gap's own spread at a large gap is (1 + gap) times this: a light that shows
+/// the defects nothing has a near-zero f_V whose relative noise is large, and that spread would
+/// excuse the very over-fit the rule is there to catch.) `onValidation` is the objective in use
+/// through V (two planes), E is E*; SE(f_V) is the wild bootstrap of V's half images
+/// (core/WildBootstrap.h) with `replicates` replicates. NaN when E*'s loss on V is clamped (a
+/// label's gradient, or G, below the objective's floor: V shows the defects no gradient, so its
+/// figure is the floor's, not a noisy measure), f_V is 0, or fewer than half the replicates
+/// give a finite figure.
 double trainingGapError(ObjectiveKind kind, const TransportLoss& onValidation,
-                        std::span<const double> E, double training, uint64_t seed,
+                        std::span<const double> E, uint64_t seed,
                         int replicates = kJudgeReplicates);
 
 /// Whether V may be traced at more spp than T (step 4): its figure's expectation does not
