@@ -1548,15 +1548,15 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                 // Step 4: V's noise: more V (T's spp for eq. 2, whose V must keep T's spp);
                 // over-fit: more T, then a coarser light (step 5).
                 const bool freeV = validationSppFree(in.kind);
-                const bool vAtMost = freeV ? !(p.noise.adapt || p.noise.adaptGrid) ||
-                                                 nr.validationSpp >= p.noise.maxValidationSpp
-                                           : !p.noise.adapt || nr.spp >= p.noise.maxSpp;
+                const bool vAtMost =
+                    freeV ? !p.noise.adapt || nr.validationSpp >= p.noise.maxValidationSpp
+                          : !p.noise.adapt || nr.spp >= p.noise.maxSpp;
                 nr.verdict = gapVerdict(nr.gap, nr.gapError, p.noise.maxGap, vAtMost);
                 nr.seconds = round.seconds() - notInRound;
                 noise.met = nr.verdict == GapVerdict::Within;
                 const bool vNoise = nr.verdict == GapVerdict::ValidationNoise;
                 const int nextV =
-                    vNoise && freeV && (p.noise.adapt || p.noise.adaptGrid)
+                    vNoise && freeV && p.noise.adapt
                         ? nextValidationSpp(nr.validationSpp, nr.gapError, p.noise).value_or(0)
                         : 0;
                 const int next = !p.noise.adapt || noise.met || (vNoise && freeV) ? 0

@@ -32,14 +32,15 @@
 //      two, at least 2×, at most maxValidationSpp, the judge's most) and E* is scored again on
 //      it, the same T, the same search; at that cap the run says the gap cannot be resolved at
 //      this cost and keeps the light (it does not chase V's noise with T's spp or a coarser
-//      light). The paper objective's eq. 2 is biased by noise (Σ|ΔY| grows with it), so its
-//      V keeps T's spp and T's spp rises instead. Over-fit: the part of the gap the noise
-//      makes falls as 1/spp
-//      (the optimizer's gain on noise is proportional to the noise's variance), so the next n is
-//      the smallest power of two ≥ 2n with gap·n/n' ≤ maxGap/2 (half the tolerance, so one more
-//      trace usually settles it), at most kMaxSppGrowth·n (a gap far above the tolerance is
-//      often a cliff the noise opened — e.g. the defect objective's reference energy pushed
-//      below its floor — which closes long before 1/spp predicts) and at most maxSpp; back to 1.
+//      light); with a given spp V keeps T's (the gap is only measured). The paper
+//      objective's eq. 2 is biased by noise (Σ|ΔY| grows with it), so its V keeps T's spp and
+//      T's spp rises instead.
+//      Over-fit: the part of the gap the noise makes falls as 1/spp (the optimizer's gain on noise
+//      is proportional to the noise's variance), so the next n is the smallest power of two ≥ 2n
+//      with gap·n/n' ≤ maxGap/2 (half the tolerance, so one more trace usually settles it), at most
+//      kMaxSppGrowth·n (a gap far above the tolerance is often a cliff the noise opened — e.g. the
+//      defect objective's reference energy pushed below its floor — which closes long before 1/spp
+//      predicts) and at most maxSpp; back to 1.
 //   5. Over-fit at maxSpp (or a given spp): the light's degrees of
 //      freedom are the other knob: the search runs again on the same T and V with the light on
 //      a coarser grid of nodes (objective/CoarseLight.h), each step √2 fewer nodes per side
