@@ -75,6 +75,20 @@ inline TransportMatrix tinyTransportMatrix() {
 }
 
 /// A file's bytes ("" when it cannot be read).
+/// The mean of a sample, and its standard deviation (n − 1): what a standard error is checked
+/// against over independent estimates.
+inline double sampleMean(const std::vector<double>& v) {
+    double m = 0;
+    for (double x : v) m += x;
+    return m / static_cast<double>(v.size());
+}
+inline double sampleSd(const std::vector<double>& v) {
+    const double m = sampleMean(v);
+    double q = 0;
+    for (double x : v) q += (x - m) * (x - m);
+    return std::sqrt(q / static_cast<double>(v.size() - 1));
+}
+
 inline std::string readFile(const std::filesystem::path& p) {
     std::ifstream in(p, std::ios::binary);
     return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());

@@ -10,6 +10,7 @@
 #include "TestUtil.h"
 #include "app/Answer.h"
 #include "app/Judge.h"
+#include "app/Search.h"
 #include "app/TrainingNoise.h"
 #include "core/Rng.h"
 #include "objective/DefectVisibility.h"
@@ -126,13 +127,151 @@ TEST(TrainingNoise, TheDescriptionNamesTheGridOfEachRound) {
     TrainingNoiseSummary s;
     s.adapted = true;
     s.maxGap = 0.05;
-    s.rounds = {{64, LightGrid{}, 3.0, 1.0, 2.0, 1.0},
-                {512, LightGrid{}, 2.0, 1.0, 1.0, 1.0},
-                {512, LightGrid{25, 13}, 1.04, 1.0, 0.04, 1.0}};
+    auto round = [](int spp, LightGrid grid, double training, double gap, double se,
+                    int validationSpp = 0) {
+        TrainingNoiseRound r;
+        r.spp = spp;
+        r.grid = grid;
+        r.training = training;
+        r.validation = 1.0;
+        r.gap = gap;
+        r.gapError = se;
+        r.validationSpp = validationSpp == 0 ? spp : validationSpp;
+        return r;
+    };
+    s.rounds = {round(64, LightGrid{}, 3.0, 2.0, 0.1), round(512, LightGrid{}, 2.0, 1.0, 0.1),
+                round(512, LightGrid{25, 13}, 1.04, 0.04, 0.02)};
     s.met = true;
-    const std::string d = describeTrainingNoise(s);
-    EXPECT_NE(d.find("512 spp, 25x13 nodes: train/validation gap 4 %"), std::string::npos) << d;
-    EXPECT_NE(d.find("-> 512 spp on 25x13 nodes (within 5 %)"), std::string::npos) << d;
+    std::string d = describeTrainingNoise(s);
+    EXPECT_NE(d.find("512 spp, 25x13 nodes: train/validation gap 4 % ± 2 %"), std::string::npos)
+        << d;
+    EXPECT_NE(d.find("-> 512 spp on 25x13 nodes (within 5 % plus what V's noise explains)"),
+              std::string::npos)
+        << d;
+    // V traced at more spp than T is named; a gap V cannot resolve at its most spp is said so.
+    s.rounds.push_back(round(512, LightGrid{25, 13}, 1.2, 0.2, 0.3, 1024));
+    s.met = false;
+    s.unresolved = true;
+    d = describeTrainingNoise(s);
+    EXPECT_NE(d.find("512 spp, 25x13 nodes, V 1024 spp: train/validation gap 20 % ± 30 %"),
+              std::string::npos)
+        << d;
+    EXPECT_NE(d.find("V at 1024 spp cannot resolve 5 %"), std::string::npos) << d;
+    EXPECT_EQ(d.find("no light is trusted"), std::string::npos) << d;
+}
+
+// Step 3's verdict: over-fit only beyond kGapSigmas standard errors above the tolerance;
+// otherwise V's noise when its SE is above the tolerance (or unknown); else within.
+TEST(TrainingNoise, TheVerdictWeighsTheGapAgainstItsError) {
+    EXPECT_EQ(kGapSigmas, 2.0);
+    EXPECT_EQ(gapVerdict(0.03, 0.01, 0.05, false), GapVerdict::Within);
+    EXPECT_EQ(gapVerdict(0.08, 0.02, 0.05, false), GapVerdict::Within);   // 0.08 − 0.04 ≤ 0.05
+    EXPECT_EQ(gapVerdict(0.10, 0.02, 0.05, false), GapVerdict::OverFit);  // 0.10 − 0.04 > 0.05
+    EXPECT_EQ(gapVerdict(0.50, 0.30, 0.05, false), GapVerdict::ValidationNoise);   // −0.10
+    EXPECT_EQ(gapVerdict(0.30, 0.10, 0.05, false), GapVerdict::OverFit);           // 0.10 > 0.05
+    EXPECT_EQ(gapVerdict(0.20, 0.10, 0.05, false), GapVerdict::ValidationNoise);   // 0, SE > 5 %
+    EXPECT_EQ(gapVerdict(-0.14, 0.30, 0.05, false), GapVerdict::ValidationNoise);  // noisy
+    // At V's most spp the verdict on a known SE is the same.
+    EXPECT_EQ(gapVerdict(0.20, 0.10, 0.05, true), GapVerdict::ValidationNoise);
+    // An unknown SE (V's figure on the floor): V's noise while V can grow, over-fit after.
+    const double inf = std::numeric_limits<double>::infinity();
+    EXPECT_EQ(gapVerdict(0.01, std::nan(""), 0.05, false), GapVerdict::ValidationNoise);
+    EXPECT_EQ(gapVerdict(inf, std::nan(""), 0.05, false), GapVerdict::ValidationNoise);
+    EXPECT_EQ(gapVerdict(inf, std::nan(""), 0.05, true), GapVerdict::OverFit);
+    // V's next spp: SE ∝ 1/sqrt(spp), spp·(SE/maxGap)² to a power of two, at least 2×, at most
+    // the cap; none at the cap.
+    TrainingNoiseOptions o;
+    EXPECT_EQ(o.maxValidationSpp, kJudgeDefaultSpp);
+    EXPECT_EQ(nextValidationSpp(64, 0.08, o), 256);   // 64·2.56 = 164 -> 256
+    EXPECT_EQ(nextValidationSpp(64, 0.06, o), 128);   // 92 -> 128
+    EXPECT_EQ(nextValidationSpp(512, 0.5, o), 1024);  // capped
+    EXPECT_EQ(nextValidationSpp(1024, 0.5, o), std::nullopt);
+    EXPECT_EQ(nextValidationSpp(16, std::nan(""), o), 1024);
+    EXPECT_TRUE(validationSppFree(ObjectiveKind::Defects));
+    EXPECT_TRUE(validationSppFree(ObjectiveKind::Unbiased));
+    EXPECT_FALSE(validationSppFree(ObjectiveKind::Paper));  // eq. 2 is biased by the noise
+}
+
+namespace {
+
+/// The defects objective through independent estimates of the bumpy part (the validation
+/// estimate's trace, seeds `seed0` + k), with an 8×8 block of labels in the image's centre:
+/// E's figure and the gap's SE against `training` on each.
+struct GapOnEstimates {
+    std::vector<double> figures, gaps, errors;
+};
+GapOnEstimates gapsOnEstimates(int spp, uint64_t seed0, int count, std::span<const double> e,
+                               double training) {
+    const Scene scene(test::bumpyPartDesc(32, 32), 48, 48, test::bumpyHeightMap(48));
+    std::vector<uint8_t> block(32 * 32, 0);
+    for (int y = 10; y < 22; ++y)
+        for (int x = 10; x < 22; ++x) block[size_t(y) * 32 + x] = 1;
+    GapOnEstimates out;
+    for (int k = 0; k < count; ++k) {
+        PrecomputeOptions o;
+        o.spp = spp;
+        const TransportSource v = validationEstimate(scene, o, seed0 + uint64_t(k), {});
+        SearchInputs si;
+        si.mask = v.file.matrix.objectMask;
+        si.defects = block;
+        const ObjectiveOnT onV = objectiveOnT(ObjectiveKind::Defects, v.file.matrix, si, {});
+        const LossParts parts = onV.loss->evaluate(e, {});
+        // The bootstrap's images are the loss's own: the loss at them is the loss at E.
+        EXPECT_NEAR(onV.loss->evaluateImages(onV.loss->halfImages(e), e).total, parts.total,
+                    1e-12 * std::abs(parts.total));
+        const double figure = trainingFigure(ObjectiveKind::Defects, parts);
+        out.figures.push_back(figure);
+        out.gaps.push_back(trainingGap(ObjectiveKind::Defects, training, figure));
+        out.errors.push_back(
+            trainingGapError(ObjectiveKind::Defects, *onV.loss, e, v.file.provenance.seed));
+    }
+    return out;
+}
+
+}  // namespace
+
+// The gap's SE is V's own noise: over 16 independent validation estimates of one light with no
+// over-fit (its training figure the mean of its figures: the hypothesis the verdict tests), the
+// gaps' standard deviation against the mean SE (the spread of 16 values is itself known to
+// about ±18 %, as the judge's test of the same bootstrap).
+TEST(TrainingNoise, TheGapsErrorMatchesItsSpreadOverValidationSeeds) {
+    const std::vector<double> e = randomLight(1250, 5);
+    const GapOnEstimates g = gapsOnEstimates(256, 9000, 16, e, /*training=*/1.0);
+    for (double se : g.errors) ASSERT_TRUE(std::isfinite(se) && se > 0) << se;
+    const double training = test::sampleMean(g.figures);
+    std::vector<double> gaps;
+    for (double f : g.figures) gaps.push_back(trainingGap(ObjectiveKind::Defects, training, f));
+    EXPECT_NEAR(test::sampleSd(gaps) / test::sampleMean(g.errors), 1.0, 0.45)
+        << test::sampleSd(gaps) << " vs " << test::sampleMean(g.errors);
+    // ... and it falls as V's spp rises: V at 4× the spp, about half where the noise is small,
+    // faster where its square counts (the ratio's denominator; the judge's SE does the same):
+    // measured 0.25, required between an eighth and three quarters.
+    const GapOnEstimates f = gapsOnEstimates(1024, 9000, 4, e, 1.0);
+    const double ratio = test::sampleMean(f.errors) /
+                         test::sampleMean(std::vector(g.errors.begin(), g.errors.begin() + 4));
+    EXPECT_GT(ratio, 0.125);
+    EXPECT_LT(ratio, 0.75);
+}
+
+// A light fitted to no estimate at all, scored on two independent ones: its gap is all
+// validation noise. At 64 spp some of 16 such gaps pass the tolerance (the rule before its SE
+// would have traced again), and weighed against their SE none is called over-fit. (At 32 spp
+// one of 8 is: the visibility ratio of a light that barely shows the block is heavy-tailed.)
+TEST(TrainingNoise, AGapThatIsAllValidationNoiseDoesNotRaiseTheSpp) {
+    const std::vector<double> e = randomLight(1250, 6);
+    // "Training" figures: the same light on other independent estimates.
+    const GapOnEstimates t = gapsOnEstimates(64, 7000, 16, e, 1.0);
+    int aboveTolerance = 0, measured = 0;
+    for (size_t k = 0; k < t.gaps.size(); ++k) {
+        const double training = 1.0 / (1.0 + t.gaps[k]);  // the figure on estimate 7000 + k
+        const GapOnEstimates v = gapsOnEstimates(64, 8000 + k, 1, e, training);
+        aboveTolerance += v.gaps[0] > 0.05;
+        measured += std::isfinite(v.errors[0]);  // NaN: V's figure on the floor
+        EXPECT_NE(gapVerdict(v.gaps[0], v.errors[0], 0.05, false), GapVerdict::OverFit)
+            << "estimate " << k << ": gap " << v.gaps[0] << " ± " << v.errors[0];
+    }
+    EXPECT_GE(aboveTolerance, 4) << "the gaps are too small to test the rule";
+    EXPECT_GE(measured, 6) << "too few gaps with a standard error to test it";
 }
 
 TEST(TrainingNoise, DefectPixelsTakeMoreSamplesWithinTheBudget) {
@@ -361,31 +500,59 @@ TEST(OptimizeAnswers, DefectsBelowTheTrainingNoiseRaiseTheSpp) {
     ASSERT_GE(n["rounds"].size(), 2u) << n.dump(2);
     EXPECT_EQ(n["rounds"][0]["spp"], 4);
     EXPECT_EQ(n["rounds"][0]["light_grid"], "texels");
-    EXPECT_GT(n["rounds"][0]["gap"].get<double>(), 0.05);
+    // A real over-fit: once V resolves it (V alone traced again while its noise hides the
+    // gap), the gap is more than its two standard errors above the tolerance (or V's figure is
+    // on the floor at V's most spp), and T's spp rises.
+    size_t firstOverFit = 0;
+    while (firstOverFit < n["rounds"].size() &&
+           n["rounds"][firstOverFit]["verdict"] == "validation noise")
+        ++firstOverFit;
+    ASSERT_LT(firstOverFit, n["rounds"].size()) << n.dump(2);
+    const json& over = n["rounds"][firstOverFit];
+    EXPECT_EQ(over["verdict"], "over-fit") << n.dump(2);
+    if (!over["gap_se"].is_null()) {
+        EXPECT_GT(over["gap"].get<double>() - kGapSigmas * over["gap_se"].get<double>(), 0.05);
+    } else {
+        EXPECT_EQ(over["validation_spp"], kJudgeDefaultSpp) << n.dump(2);
+    }
+    EXPECT_EQ(over["decision"].get<std::string>().substr(0, 5), "T at ") << n.dump(2);
     // The spp rises first (each round a new trace); at the most spp the light's grid gets
-    // coarser instead (step 5), on the same T.
+    // coarser instead (step 5), on the same T; V alone gets more spp when its noise hides the
+    // gap (step 4). Each round says what came next.
     for (size_t k = 1; k < n["rounds"].size(); ++k) {
         const json &a = n["rounds"][k - 1], &b = n["rounds"][k];
+        EXPECT_GE(b["validation_spp"].get<int>(), b["spp"].get<int>());
         if (b["spp"] != a["spp"]) {
+            EXPECT_EQ(a["verdict"], "over-fit");
+            EXPECT_EQ(a["decision"], "T at " + std::to_string(b["spp"].get<int>()) + " spp");
             EXPECT_GT(b["spp"].get<int>(), a["spp"].get<int>());
             EXPECT_EQ(b["light_grid"], "texels") << n.dump(2);
+        } else if (b["light_grid"] == a["light_grid"]) {
+            EXPECT_EQ(a["verdict"], "validation noise") << n.dump(2);
+            EXPECT_GT(b["validation_spp"].get<int>(), a["validation_spp"].get<int>());
+            EXPECT_EQ(b["training"], a["training"]);  // the same T and E*, V again
         } else {
+            EXPECT_EQ(a["verdict"], "over-fit");
             EXPECT_EQ(b["spp"], 64) << n.dump(2);
-            EXPECT_NE(b["light_grid"], a["light_grid"]);
         }
     }
     EXPECT_EQ(n["light_grid"], n["rounds"].back()["light_grid"]);
     EXPECT_EQ(s["light_grid"], n["light_grid"]);
     EXPECT_EQ(s["transport"]["spp"], n["spp"]);
-    EXPECT_EQ(s["validation"]["transport"]["spp"], n["spp"]);
+    EXPECT_EQ(s["validation"]["transport"]["spp"], n["rounds"].back()["validation_spp"]);
+    EXPECT_EQ(n["gap_se"], n["rounds"].back()["gap_se"]);
     // The truth marks chatter over half the part: too many pixels to supersample them.
     EXPECT_TRUE(s["transport"]["spp_scale"].is_null()) << s["transport"].dump(2);
     EXPECT_NE(s["validation"]["transport"]["seed"], s["transport"]["seed"]);
     const bool met = n["met"].get<bool>();
-    EXPECT_EQ(met, n["gap"].get<double>() <= 0.05);
-    if (!met) {
+    EXPECT_EQ(met, n["rounds"].back()["verdict"] == "within");
+    EXPECT_EQ(n["unresolved"].get<bool>(), n["rounds"].back()["verdict"] == "validation noise");
+    if (n["rounds"].back()["verdict"] == "over-fit") {
         EXPECT_EQ(n["spp"], 64);
         EXPECT_NE(r.output.find("no light is trusted"), std::string::npos) << r.output;
+    }
+    if (n["unresolved"].get<bool>()) {
+        EXPECT_NE(r.output.find("not resolved at this cost"), std::string::npos) << r.output;
     }
     // The gap is the figures' relative difference.
     const json& last = n["rounds"].back();
@@ -433,7 +600,10 @@ TEST(OptimizeAnswers, AGivenSppIsKeptAndItsGapWarnedAbout) {
     if (!n["met"].get<bool>()) {
         const std::string reason = n["reason"].get<std::string>();
         EXPECT_NE(reason.find("(the given spp"), std::string::npos) << reason;
-        EXPECT_NE(reason.find(": ABOVE 5 %"), std::string::npos) << reason;
+        EXPECT_NE(
+            reason.find(n["unresolved"].get<bool>() ? "not resolved at this cost" : ": ABOVE 5 %"),
+            std::string::npos)
+            << reason;
         bool warned = false;
         for (const json& w : s["warnings"])
             warned |= w.get<std::string>().find("training noise") != std::string::npos;

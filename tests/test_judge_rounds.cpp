@@ -37,16 +37,10 @@ std::vector<uint8_t> blockLabels(int w, int h, int r = 3) {
 }
 
 double mean(const std::vector<double>& v) {
-    double m = 0;
-    for (double x : v) m += x;
-    return m / static_cast<double>(v.size());
+    return test::sampleMean(v);
 }
-
 double sd(const std::vector<double>& v) {
-    const double m = mean(v);
-    double q = 0;
-    for (double x : v) q += (x - m) * (x - m);
-    return std::sqrt(q / static_cast<double>(v.size() - 1));
+    return test::sampleSd(v);
 }
 
 }  // namespace

@@ -11,8 +11,8 @@
 #include "app/Truth.h"
 #include "core/Color.h"
 #include "core/Error.h"
-#include "core/Rng.h"
 #include "core/Text.h"
+#include "core/WildBootstrap.h"
 #include "objective/UnbiasedObjective.h"
 #include "scene/EnvMap.h"
 #include "scene/Scene.h"
@@ -172,67 +172,37 @@ JudgeScore Judge::scoreWithErrors(std::span<const double> E, const std::string& 
     JudgeScore s = score(E, name);
     const TransportMatrix& t = estimate_->file.matrix;
     const size_t n = t.rows();
-    std::vector<double> ya(n), yb(n), wa(n), wb(n);
-    t.applyLuminanceHalves(E, ya, yb);
+    // The light's halves and the white furnace's: the same samples made both, so a replicate
+    // perturbs them with the same signs (core/WildBootstrap.h).
+    std::vector<HalfImages> images(2, HalfImages{std::vector<double>(n), std::vector<double>(n)});
+    t.applyLuminanceHalves(E, images[0].a, images[0].b);
     const std::vector<double> one(E.size(), 1.0);
-    t.applyLuminanceHalves(one, wa, wb);
-    // d_p/√2 per pixel: the light's and the white furnace's (the same samples made both).
-    std::vector<double> d(n), dw(n);
-    for (size_t p = 0; p < n; ++p) {
-        d[p] = (ya[p] - yb[p]) * std::sqrt(0.5);
-        dw[p] = (wa[p] - wb[p]) * std::sqrt(0.5);
-    }
+    t.applyLuminanceHalves(one, images[1].a, images[1].b);
     const size_t regions = s.visibility.size();
-    std::vector<double> eq2, unb, bright, comb;
-    std::vector<std::vector<double>> vis(regions), con(regions);
-    std::vector<double> ra(n), rb(n), rwa(n), rwb(n);
-    for (int r = 0; r < replicates; ++r) {
-        Pcg32 rng(mix64(options_.seed ^ 0x5345ULL), static_cast<uint64_t>(r));
-        for (size_t p = 0; p < n; ++p) {
-            const uint32_t bits = rng.nextU32();
-            const double sa = bits & 1u ? 1.0 : -1.0, sb = bits & 2u ? 1.0 : -1.0;
-            ra[p] = ya[p] + sa * d[p];
-            rb[p] = yb[p] + sb * d[p];
-            rwa[p] = wa[p] + sa * dw[p];
-            rwb[p] = wb[p] + sb * dw[p];
-        }
-        // The replicates' spread is taken for the ratio-type scores; JND (0.5 s a light at
-        // 512²) is not recomputed 32 times.
-        const JudgeScore x = scoreImages(E, ra, rb, {}, rwa, rwb, {}, /*withJnd=*/false);
-        eq2.push_back(x.eq2.total);
-        unb.push_back(x.unbiased.total);
-        bright.push_back(x.brightness);
-        comb.push_back(combinedVisibility(x.visibility));
-        for (size_t k = 0; k < regions && k < x.visibility.size(); ++k) {
-            vis[k].push_back(x.visibility[k].visibility);
-            con[k].push_back(x.visibility[k].contrast);
-        }
-    }
-    // The replicates' spread as a standard deviation, robustly: 1.4826 × their median absolute
-    // deviation (the standard deviation of a normal spread; a replicate whose denominator
-    // nearly vanished does not decide it). NaN when fewer than half could form the score.
-    auto sd = [replicates](std::vector<double> v) {
-        std::erase_if(v, [](double x) { return !std::isfinite(x); });
-        if (v.size() < 2 || 2 * v.size() < static_cast<size_t>(replicates))
-            return std::numeric_limits<double>::quiet_NaN();
-        auto median = [](std::vector<double>& x) {
-            std::sort(x.begin(), x.end());
-            const size_t m = x.size();
-            return m % 2 ? x[m / 2] : 0.5 * (x[m / 2 - 1] + x[m / 2]);
-        };
-        const double m = median(v);
-        for (double& x : v) x = std::abs(x - m);
-        return 1.4826 * median(v);
-    };
+    // Per replicate: eq2, U, brightness, the combined visibility, then each region's
+    // visibility and contrast. JND (0.5 s a light at 512²) is not recomputed per replicate.
+    const std::vector<double> se =
+        wildBootstrapErrors(images, options_.seed, replicates, [&](std::span<const HalfImages> r) {
+            const JudgeScore x =
+                scoreImages(E, r[0].a, r[0].b, {}, r[1].a, r[1].b, {}, /*withJnd=*/false);
+            std::vector<double> v{x.eq2.total, x.unbiased.total, x.brightness,
+                                  combinedVisibility(x.visibility)};
+            v.resize(4 + 2 * regions, std::numeric_limits<double>::quiet_NaN());
+            for (size_t k = 0; k < regions && k < x.visibility.size(); ++k) {
+                v[4 + k] = x.visibility[k].visibility;
+                v[4 + regions + k] = x.visibility[k].contrast;
+            }
+            return v;
+        });
     JudgeScore::Errors e;
     e.replicates = replicates;
-    e.eq2 = sd(eq2);
-    e.unbiased = sd(unb);
-    e.brightness = sd(bright);
-    e.combinedVisibility = sd(comb);
+    e.eq2 = se[0];
+    e.unbiased = se[1];
+    e.brightness = se[2];
+    e.combinedVisibility = se[3];
     for (size_t k = 0; k < regions; ++k) {
-        e.visibility.push_back(sd(vis[k]));
-        e.contrast.push_back(sd(con[k]));
+        e.visibility.push_back(se[4 + k]);
+        e.contrast.push_back(se[4 + regions + k]);
     }
     s.se = std::move(e);
     return s;

@@ -236,6 +236,8 @@ struct Plan {
     /// (the gap and the self-check need it); `noise.adapt` raises the training spp.
     bool validate = false;
     TrainingNoiseOptions noise;
+    /// V's spp when its own noise hides the gap (app/TrainingNoise.h step 4; 0: T's).
+    int validationSpp = 0;
     /// The defect pixels of the defects objective take more samples (app/TrainingNoise.h
     /// defectSppScale); not for black boxes (their renders take one spp) nor shards.
     bool superSampleDefects = false;
@@ -564,7 +566,20 @@ void loadValidation(const Plan& p, const Inputs& in, OptimizeJobSummary& job) {
         v.rgb = job.transport.file.matrix.channels == 3;
         seed = prov.seed;
     }
-    job.validation = validationEstimate(*in.scene, v, seed, p.cacheDir);
+    job.validation = validationEstimate(*in.scene, v, seed, p.cacheDir,
+                                        p.validationSpp > v.spp ? p.validationSpp : 0);
+}
+
+/// The objective in use through the validation estimate (its figure of E* and the gap's SE).
+ObjectiveOnT validationObjective(const Inputs& in, const OptimizeJobSummary& job,
+                                 const ObjectiveOptions& oo, bool rgb) {
+    SearchInputs si;
+    si.mask = in.mask.pixels;
+    si.rgb = rgb;
+    si.defects = in.defects;
+    si.reference = in.reference;
+    si.shard = in.shard;
+    return objectiveOnT(in.kind, job.validation->file.matrix, si, oo);
 }
 
 RegionSpec defectRegion(const OptimizeJobOptions& o) {
@@ -911,10 +926,8 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
         run.final = LossParts{};
         run.final.total = run.optimizer.finalLoss;
     }
-    if (job.validation) {
-        const ObjectiveOnT v = objectiveOnT(in.kind, job.validation->file.matrix, si, oo);
-        run.validationFinal = v.loss->evaluate(res.e, {});
-    }
+    if (job.validation)
+        run.validationFinal = validationObjective(in, job, oo, o.rgb).loss->evaluate(res.e, {});
     if (scorer) {
         run.heldFinal = scorer->score(res.e);
         // The last row always carries the held-out score of the returned E.
@@ -1193,6 +1206,10 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
                               {"training", nr.training},
                               {"validation", nr.validation},
                               {"gap", nr.gap},
+                              {"gap_se", nr.gapError},
+                              {"validation_spp", nr.validationSpp},
+                              {"verdict", gapVerdictName(nr.verdict)},
+                              {"decision", nr.decision},
                               {"seconds", nr.seconds}});
         s["training_noise"] = {
             {"figure", figureHigherIsBetter(in.kind) ? "defect visibility (higher is better)"
@@ -1204,6 +1221,9 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
             {"spp", run.noise.spp()},
             {"light_grid", run.noise.grid().name()},
             {"gap", run.noise.gap()},
+            {"gap_se", run.noise.gapError()},
+            {"gap_sigmas", kGapSigmas},
+            {"unresolved", run.noise.unresolved},
             {"seconds_added", run.noise.secondsAdded},
             {"rounds", rounds},
             {"reason", run.noise.reason}};
@@ -1521,33 +1541,68 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                 TrainingNoiseRound nr;
                 nr.spp = job.transport.file.provenance.spp;
                 nr.grid = p.o.lightGrid.value_or(LightGrid{});
+                nr.validationSpp = job.validation->file.provenance.spp;
                 nr.training = trainingFigure(in.kind, r.run.final);
                 nr.validation = trainingFigure(in.kind, *r.run.validationFinal);
                 nr.gap = trainingGap(in.kind, nr.training, nr.validation);
+                // The gap's standard error, V's own noise (step 3).
+                const ObjectiveOnT onV =
+                    validationObjective(in, job, objectiveAt(p, in, lambda), p.o.rgb);
+                nr.gapError =
+                    trainingGapError(in.kind, *onV.loss, r.e, job.validation->file.provenance.seed);
+                // Step 4: V's noise: more V (T's spp for eq. 2, whose V must keep T's spp);
+                // over-fit: more T, then a coarser light (step 5).
+                const bool freeV = validationSppFree(in.kind);
+                const bool vAtMost =
+                    freeV ? !p.noise.adapt || nr.validationSpp >= p.noise.maxValidationSpp
+                          : !p.noise.adapt || nr.spp >= p.noise.maxSpp;
+                nr.verdict = gapVerdict(nr.gap, nr.gapError, p.noise.maxGap, vAtMost);
                 nr.seconds = round.seconds() - notInRound;
-                noise.rounds.push_back(nr);
-                noise.met = nr.gap <= p.noise.maxGap;
-                const int next = p.noise.adapt && !noise.met
-                                     ? nextTrainingSpp(nr.spp, nr.gap, p.noise).value_or(0)
-                                     : 0;
-                // At the most spp (or a given one): a coarser light instead (step 5).
+                noise.met = nr.verdict == GapVerdict::Within;
+                const bool vNoise = nr.verdict == GapVerdict::ValidationNoise;
+                const int nextV =
+                    vNoise && freeV && p.noise.adapt
+                        ? nextValidationSpp(nr.validationSpp, nr.gapError, p.noise).value_or(0)
+                        : 0;
+                const int next = !p.noise.adapt || noise.met || (vNoise && freeV) ? 0
+                                 : vNoise
+                                     ? nextJudgeSpp(nr.spp,
+                                                    std::isnan(nr.gapError)
+                                                        ? std::numeric_limits<double>::infinity()
+                                                        : nr.gapError,
+                                                    p.noise.maxSpp, p.noise.maxGap)
+                                     : nextTrainingSpp(nr.spp, nr.gap, p.noise).value_or(0);
                 const std::optional<LightGrid> coarser =
-                    next == 0 && !noise.met && p.noise.adaptGrid
+                    nr.verdict == GapVerdict::OverFit && next == 0 && p.noise.adaptGrid
                         ? nextLightGrid(nr.grid, job.transport.file.matrix.envWidth,
                                         job.transport.file.matrix.envHeight)
                         : std::nullopt;
-                const std::string then =
-                    next > 0  ? ": tracing again at " + std::to_string(next) + " spp"
-                    : coarser ? ": searching again on " + coarser->name() + " (a coarser light)"
-                              : std::string();
+                noise.unresolved = vNoise && nextV == 0 && next == 0;
+                nr.decision = nextV > 0   ? "V at " + std::to_string(nextV) + " spp"
+                              : next > 0  ? "T at " + std::to_string(next) + " spp"
+                              : coarser   ? "a coarser light, " + coarser->name()
+                              : noise.met ? std::string("kept")
+                              : vNoise    ? std::string("kept: not resolved at this cost")
+                                          : std::string("kept: over-fit at the limits");
+                noise.rounds.push_back(nr);
                 spdlog::info(
-                    "training noise: {} spp, {}, E*'s {} {} on T and {} on the validation "
-                    "estimate: gap {} %{}",
-                    nr.spp, nr.grid.name(), figureHigherIsBetter(in.kind) ? "visibility" : "loss",
+                    "training noise: {} spp, {}, V {} spp, E*'s {} {} on T and {} on the "
+                    "validation estimate: gap {} % ± {} % ({}): {}",
+                    nr.spp, nr.grid.name(), nr.validationSpp,
+                    figureHigherIsBetter(in.kind) ? "visibility" : "loss",
                     formatNumber(nr.training, 4), formatNumber(nr.validation, 4),
-                    formatNumber(100.0 * nr.gap, 3),
-                    then.empty() ? std::string()
-                                 : " > " + formatNumber(100.0 * p.noise.maxGap, 3) + " %" + then);
+                    formatNumber(100.0 * nr.gap, 3), formatNumber(100.0 * nr.gapError, 3),
+                    gapVerdictName(nr.verdict), nr.decision);
+                if (nextV > 0) {
+                    // The same T and E*, scored again on V at more spp: this round goes on.
+                    p.validationSpp = nextV;
+                    noise.rounds.back().seconds = 0;  // counted in the round that goes on
+                    loadValidation(p, in, job);
+                    r.run.validationFinal =
+                        validationObjective(in, job, objectiveAt(p, in, lambda), p.o.rgb)
+                            .loss->evaluate(r.e, {});
+                    continue;
+                }
                 if (next == 0 && !coarser) break;
                 noise.secondsAdded += nr.seconds;
                 round.restart();

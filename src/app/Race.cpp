@@ -483,8 +483,13 @@ RaceSummary raceOnWorlds(const RaceOptions& o) {
                     log(partName + " seed " + std::to_string(seed) + " " + c.name + ": " +
                         run.answer->answer().candidate.name + ", " +
                         std::to_string(run.noise.spp()) + " spp, " + run.noise.grid().name() +
-                        ", gap " + formatNumber(100.0 * run.noise.gap(), 3) + " %, " +
-                        formatNumber(r.seconds, 3) + " s, visibility " + formatNumber(r.figure, 4));
+                        ", gap " + formatNumber(100.0 * run.noise.gap(), 3) + " % ± " +
+                        formatNumber(100.0 * run.noise.gapError(), 3) + " % (" +
+                        (run.noise.met          ? "within"
+                         : run.noise.unresolved ? "not resolved"
+                                                : "above") +
+                        "), " + formatNumber(r.seconds, 3) + " s, visibility " +
+                        formatNumber(r.figure, 4));
                     task.advance();
                     rows.push_back(r);
                     continue;

@@ -6,37 +6,62 @@
 // estimate does not share. The rule measures that directly, on the part and for the objective
 // in use:
 //
-//   1. T (the training estimate, spp n) and V (the validation estimate: the same scene, spp and
-//      path length, two sample sets, the seed training seed + kValidationSeedOffset, disjoint
-//      from every training seed and from the judge's) are traced (both cached);
+//   1. T (the training estimate, spp n) and V (the validation estimate: the same scene, spp (or
+//      more, step 4) and path length, two sample sets, the seed training seed +
+//      kValidationSeedOffset, disjoint from every training seed and from the judge's) are traced
+//      (both cached);
 //   2. the search runs on T as it would anyway; its E* is scored on T and on V;
 //   3. the gap (trainingGap) is how much better E* looks on T than on V, relative to V:
 //        paper, unbiased (losses, lower is better):  gap = (L_V − L_T) / L_V
 //        defects (visibility exp(−L_vis/2), higher is better): gap = (v_T − v_V) / v_V
-//   4. gap ≤ maxGap: n is kept. Otherwise, the part of the gap the noise makes falls as 1/spp
-//      (the optimizer's gain on noise is proportional to the noise's variance), so the next n is
-//      the smallest power of two ≥ 2n with gap·n/n' ≤ maxGap/2 (half the tolerance, so one more
-//      trace usually settles it), at most kMaxSppGrowth·n (a gap far above the tolerance is
-//      often a cliff the noise opened — e.g. the defect objective's reference energy pushed
-//      below its floor — which closes long before 1/spp predicts) and at most maxSpp; back to 1.
-//   5. At maxSpp (or a given spp) with the gap still above maxGap, the light's degrees of
+//      and its standard error SE (trainingGapError) is V's own noise: the wild bootstrap on V's
+//      two halves that gives the judge's errors (core/WildBootstrap.h), SE(f_V)/|f_V|, the
+//      gap's SE when there is no over-fit (the hypothesis the verdict tests). A gap can be large
+//      with no over-fit
+//      at all when V's figure of E* is noisy (few defect pixels on a rough part), so the gap
+//      is weighed against its SE (gapVerdict, kGapSigmas = 2):
+//        over-fit          gap − 2·SE > maxGap: V's noise does not explain it (at 2 SE one-sided
+//                          a light whose true gap is maxGap is sent on by V's noise 2.3 % of the
+//                          time; 2 rather than 1.64 since 32 replicates know the SE to ±13 %);
+//        validation noise  otherwise, while SE > maxGap: V cannot tell a gap of maxGap from 0
+//                          (or V's figure of E* is on the objective's floor: its gradient in
+//                          the defects below V's noise; at V's most spp that is over-fit);
+//        within            otherwise: the gap is within maxGap plus what V's noise explains.
+//   4. within: n (and the grid) is kept. Validation noise: V, not T, gets more samples — V's
+//      spp rises (nextValidationSpp: SE falls as 1/sqrt(spp), so spp·(SE/maxGap)², a power of
+//      two, at least 2×, at most maxValidationSpp, the judge's most) and E* is scored again on
+//      it, the same T, the same search; at that cap the run says the gap cannot be resolved at
+//      this cost and keeps the light (it does not chase V's noise with T's spp or a coarser
+//      light); with a given spp V keeps T's (the gap is only measured). The paper
+//      objective's eq. 2 is biased by noise (Σ|ΔY| grows with it), so its V keeps T's spp and
+//      T's spp rises instead.
+//      Over-fit: the part of the gap the noise makes falls as 1/spp (the optimizer's gain on noise
+//      is proportional to the noise's variance), so the next n is the smallest power of two ≥ 2n
+//      with gap·n/n' ≤ maxGap/2 (half the tolerance, so one more trace usually settles it), at most
+//      kMaxSppGrowth·n (a gap far above the tolerance is often a cliff the noise opened — e.g. the
+//      defect objective's reference energy pushed below its floor — which closes long before 1/spp
+//      predicts) and at most maxSpp; back to 1.
+//   5. Over-fit at maxSpp (or a given spp): the light's degrees of
 //      freedom are the other knob: the search runs again on the same T and V with the light on
 //      a coarser grid of nodes (objective/CoarseLight.h), each step √2 fewer nodes per side
-//      (nextLightGrid), until the gap is within maxGap or the grid has fewer than
+//      (nextLightGrid), until the gap is no longer over-fit or the grid has fewer than
 //      kCoarsestLightNodes nodes. The optimizer's gain on noise grows with the directions it
 //      can combine: on four held-out parts at 512 spp (defects objective) the gap was 17-166 %
 //      per texel and 0.1-7 % on 24×12 nodes, at 0.8-0.98 of the per-texel light's visibility
 //      by the judge. A search on fewer nodes is also faster (fewer, cheaper evaluations), so
 //      a step costs a few seconds and no trace.
 //
-// A given spp is kept: its gap is still measured, and a gap above maxGap is warned about. When
-// maxSpp is reached above maxGap, the run says the light is not trustworthy on its own and the
-// self-checked answer (app/Answer.h) decides against the references.
+// Every round (T's spp, the grid, V's spp, both figures, the gap, its SE and the verdict) is
+// printed and recorded. A given spp is kept: its gap is still measured, and a gap above
+// maxGap is warned about. When maxSpp is reached over-fit, the run says the light is not
+// trustworthy on its own and the self-checked answer (app/Answer.h) decides against the
+// references.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -45,6 +70,7 @@
 #include "objective/CoarseLight.h"
 #include "objective/Objective.h"
 #include "objective/ObjectiveKind.h"
+#include "objective/TransportLoss.h"
 
 namespace sl {
 
@@ -83,6 +109,10 @@ inline constexpr int kCoarsestLightNodes = 32;
 /// divided by √2 (rounded, the height at least 2); nullopt below kCoarsestLightNodes nodes.
 std::optional<LightGrid> nextLightGrid(const LightGrid& grid, int envWidth, int envHeight);
 
+/// How many of its standard errors a gap may exceed maxGap by before it counts as over-fit
+/// (header, step 3).
+inline constexpr double kGapSigmas = 2.0;
+
 struct TrainingNoiseOptions {
     /// Measure the gap and raise spp until it is within maxGap (false: keep the given spp and
     /// only warn).
@@ -94,14 +124,30 @@ struct TrainingNoiseOptions {
     /// Half the judge's default spp (app/Judge.h): T and V together never trace more samples
     /// than the judge's estimate does, so the rule at most about doubles a run's tracing.
     int maxSpp = kJudgeDefaultSpp / 2;
+    /// The most spp V is traced at when its own noise hides the gap (step 4): the judge's most,
+    /// so V never needs more samples than an estimate the judge itself trusts.
+    int maxValidationSpp = kJudgeDefaultSpp;
 };
 
 /// The validation estimate V for a training trace of `scene` made with `training` (its spp,
 /// path length, pixels and channels, already resolved) and seed `trainingSeed`: the same trace
 /// with two sample sets and the seed trainingSeed + kValidationSeedOffset, cached in cacheDir
 /// like transportForScene.
+/// `spp` > 0 traces V at that spp instead of the training trace's (step 4).
 TransportSource validationEstimate(const Scene& scene, const PrecomputeOptions& training,
-                                   uint64_t trainingSeed, const std::filesystem::path& cacheDir);
+                                   uint64_t trainingSeed, const std::filesystem::path& cacheDir,
+                                   int spp = 0);
+
+/// The verdict on a round's gap weighed against its standard error (header, step 3).
+enum class GapVerdict { Within, OverFit, ValidationNoise };
+/// "within", "over-fit", "validation noise".
+const char* gapVerdictName(GapVerdict verdict);
+/// Over-fit when gap − kGapSigmas·se > maxGap; else validation noise when se > maxGap; else
+/// within. An unknown SE (NaN: V's figure of E* is on the objective's floor, or the bootstrap
+/// could not form it in half its replicates) is validation noise while V can take more samples
+/// (`validationAtMost` false) and over-fit once it cannot: V's most samples do not see what T
+/// shows.
+GapVerdict gapVerdict(double gap, double se, double maxGap, bool validationAtMost);
 
 /// One training trace of the rule: its spp, E*'s figure on T and on V, the gap, the seconds
 /// the round cost (traces, the search and the scoring).
@@ -111,6 +157,10 @@ struct TrainingNoiseRound {
     double training = 0, validation = 0;  // trainingFigure of E* on T and on V
     double gap = 0;
     double seconds = 0;
+    int validationSpp = 0;  // V's spp (0: T's)
+    double gapError = 0;    // the gap's standard error, from V's noise (trainingGapError)
+    GapVerdict verdict = GapVerdict::Within;
+    std::string decision;  // what the rule did next: "kept", "T at 128 spp", "V at 1024 spp", ...
 };
 
 /// What the rule did.
@@ -118,7 +168,10 @@ struct TrainingNoiseSummary {
     std::vector<TrainingNoiseRound> rounds;
     bool adapted = false;      // the rule chose spp (false: a given spp was kept)
     bool gridAdapted = false;  // the rule may coarsen the light (false: a given grid was kept)
-    bool met = false;          // the last round's gap ≤ maxGap
+    bool met = false;          // the last round's verdict is within (step 3)
+    /// The last round's verdict is validation noise at V's most spp: the gap cannot be
+    /// resolved at this cost (the light is kept, not chased).
+    bool unresolved = false;
     double maxGap = 0.05;
     /// Seconds spent beyond the last round (the earlier rounds' traces and searches): what the
     /// rule added to a run that would have used the last round's spp from the start.
@@ -127,6 +180,7 @@ struct TrainingNoiseSummary {
     int spp() const { return rounds.empty() ? 0 : rounds.back().spp; }
     LightGrid grid() const { return rounds.empty() ? LightGrid{} : rounds.back().grid; }
     double gap() const { return rounds.empty() ? 0.0 : rounds.back().gap; }
+    double gapError() const { return rounds.empty() ? 0.0 : rounds.back().gapError; }
 };
 
 /// The figure of the objective the gap is measured on: the loss for paper and unbiased (lower
@@ -139,6 +193,28 @@ bool figureHigherIsBetter(ObjectiveKind kind);
 /// fraction of the validation figure (header, step 3); ≤ 0 when it looks no better. +inf when
 /// the validation figure is 0 and the training one is not.
 double trainingGap(ObjectiveKind kind, double training, double validation);
+
+/// The standard error of E*'s gap (header, step 3) under the hypothesis the verdict tests (no
+/// over-fit: E*'s figure on T is one more estimate of its figure on V): the standard error of
+/// E*'s figure on V relative to that figure, SE(f_V)/|f_V|, the gap's at gap 0 by the delta
+/// method. (The gap's own spread at a large gap is (1 + gap) times this: a light that shows
+/// the defects nothing has a near-zero f_V whose relative noise is large, and that spread would
+/// excuse the very over-fit the rule is there to catch.) `onValidation` is the objective in use
+/// through V (two planes), E is E*; SE(f_V) is the wild bootstrap of V's half images
+/// (core/WildBootstrap.h) with `replicates` replicates. NaN when E*'s loss on V is clamped (a
+/// label's gradient, or G, below the objective's floor: V shows the defects no gradient, so its
+/// figure is the floor's, not a noisy measure), f_V is 0, or fewer than half the replicates
+/// give a finite figure.
+double trainingGapError(ObjectiveKind kind, const TransportLoss& onValidation,
+                        std::span<const double> E, uint64_t seed,
+                        int replicates = kJudgeReplicates);
+
+/// Whether V may be traced at more spp than T (step 4): its figure's expectation does not
+/// depend on the spp (U and the defects' visibility are noise-unbiased; eq. 2 is not).
+bool validationSppFree(ObjectiveKind kind);
+/// V's next spp after a round whose gap's standard error is `se` with V at `spp` (step 4):
+/// nextJudgeSpp's rule with target maxGap and cap maxValidationSpp; nullopt at the cap.
+std::optional<int> nextValidationSpp(int spp, double se, const TrainingNoiseOptions& options);
 
 /// The next spp after a round at `spp` with `gap` (header, step 4); nullopt when spp is already
 /// at options.maxSpp.

@@ -307,6 +307,25 @@ std::vector<double> TransportLoss::image(std::span<const double> E) const {
     return y;
 }
 
+HalfImages TransportLoss::halfImages(std::span<const double> E) const {
+    if (t_.planes != 2) throw std::invalid_argument("TransportLoss::halfImages: T has no halves");
+    if (E.size() != dimension_) throw std::invalid_argument("TransportLoss: E has the wrong size");
+    HalfImages h{std::vector<double>(t_.rows()), std::vector<double>(t_.rows())};
+    t_.applyLuminanceHalves(E, h.a, h.b);
+    shard_.gatherImage(h.a, t_.width);
+    shard_.gatherImage(h.b, t_.width);
+    return h;
+}
+
+LossParts TransportLoss::evaluateImages(const HalfImages& images, std::span<const double> E) const {
+    if (images.a.size() != images.b.size())
+        throw std::invalid_argument("TransportLoss::evaluateImages: halves of different sizes");
+    if (unb_) return unb_->evaluate(images.a, images.b, E);
+    std::vector<double> y(images.a.size());
+    for (size_t p = 0; p < y.size(); ++p) y[p] = 0.5 * (images.a[p] + images.b[p]);
+    return obj_->evaluate(y, E);
+}
+
 Problem TransportLoss::problem(LossParts* last, bool fused) const {
     Problem p;
     p.dimension = dimension_;

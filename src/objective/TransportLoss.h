@@ -8,6 +8,7 @@
 
 #include "core/Communicator.h"
 #include "core/Problem.h"
+#include "core/WildBootstrap.h"
 #include "objective/HalfImageObjective.h"
 #include "objective/Objective.h"
 #include "transport/TransportColumns.h"
@@ -61,6 +62,12 @@ class TransportLoss {
 
     /// The luminance image T·E.
     std::vector<double> image(std::span<const double> E) const;
+    /// The half images Y_a = T_a·E, Y_b = T_b·E (T must have two planes), put together over
+    /// the ranks: what a bootstrap of this loss perturbs (core/WildBootstrap.h).
+    HalfImages halfImages(std::span<const double> E) const;
+    /// The loss (no gradient) at given half images and E: the halves' objective on them, or the
+    /// image objective on their mean; evaluate(E) is this at halfImages(E), to rounding.
+    LossParts evaluateImages(const HalfImages& images, std::span<const double> E) const;
 
     /// The box-constrained problem for the optimizers. `last` (optional) receives the parts
     /// of every evaluation.
