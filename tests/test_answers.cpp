@@ -194,9 +194,9 @@ TEST(TrainingNoise, TheVerdictWeighsTheGapAgainstItsError) {
 
 namespace {
 
-/// The defects objective through independent estimates of the bumpy part (the validation
-/// estimate's trace, seeds `seed0` + k), with an 8×8 block of labels in the image's centre:
-/// E's figure and the gap's SE against `training` on each.
+/// The defects objective (its ratio measure) through independent estimates of the bumpy part (the
+/// validation estimate's trace, seeds `seed0` + k), with an 8×8 block of labels in the image's
+/// centre: E's figure and the gap's SE against `training` on each.
 struct GapOnEstimates {
     std::vector<double> figures, gaps, errors;
 };
@@ -214,7 +214,11 @@ GapOnEstimates gapsOnEstimates(int spp, uint64_t seed0, int count, std::span<con
         SearchInputs si;
         si.mask = v.file.matrix.objectMask;
         si.defects = block;
-        const ObjectiveOnT onV = objectiveOnT(ObjectiveKind::Defects, v.file.matrix, si, {});
+        // The ratio measure: a random light shows the block far above its floors there (on
+        // JND most of these lights are below its 0.1-JND floor, V's figure then has no SE).
+        ObjectiveOptions ratio;
+        ratio.defectMeasure = DefectMeasure::Ratio;
+        const ObjectiveOnT onV = objectiveOnT(ObjectiveKind::Defects, v.file.matrix, si, ratio);
         const LossParts parts = onV.loss->evaluate(e, {});
         // The bootstrap's images are the loss's own: the loss at them is the loss at E.
         EXPECT_NEAR(onV.loss->evaluateImages(onV.loss->halfImages(e), e).total, parts.total,
