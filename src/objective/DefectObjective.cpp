@@ -19,6 +19,15 @@ double pairCount(int W, int H, const std::vector<uint8_t>& mask) {
 
 }  // namespace
 
+std::vector<uint8_t> referenceRegion(int W, int H, const std::vector<uint8_t>& part,
+                                     const std::vector<uint8_t>& defects,
+                                     const std::vector<uint8_t>& reference) {
+    if (reference.empty()) return defectFreeReference(W, H, part, defects, 2);
+    std::vector<uint8_t> r(part.size());
+    for (size_t k = 0; k < r.size(); ++k) r[k] = part[k] && reference[k] && !defects[k];
+    return r;
+}
+
 std::vector<uint8_t> defectFreeReference(int W, int H, const std::vector<uint8_t>& part,
                                          const std::vector<uint8_t>& defects, int margin) {
     std::vector<uint8_t> near(part.size(), 0);
@@ -61,12 +70,7 @@ DefectObjective::DefectObjective(int width, int height, std::vector<uint8_t> par
     const std::vector<uint8_t>& p = mask();
     defects_.resize(n);
     for (size_t k = 0; k < n; ++k) defects_[k] = p[k] ? defects[k] : 0;
-    if (reference.empty()) {
-        reference_ = defectFreeReference(width, height, p, defects_, 2);
-    } else {
-        reference_.resize(n);
-        for (size_t k = 0; k < n; ++k) reference_[k] = p[k] && reference[k] && !defects_[k];
-    }
+    reference_ = referenceRegion(width, height, p, defects_, reference);
     // The labels with a pair of neighbouring pixels of their own are measured.
     std::array<double, 256> pairsOf{};
     detail::forEachMaskedPair(width, height, defects_.data(), [&](size_t a, size_t b) {

@@ -134,6 +134,13 @@ class DefectObjective final : public HalfImageObjective {
 std::vector<uint8_t> defectFreeReference(int width, int height, const std::vector<uint8_t>& part,
                                          const std::vector<uint8_t>& defects, int margin);
 
+/// The region the defects objective (either measure) compares the defects with: `reference` on
+/// the part and off the defects, or, when empty, defectFreeReference at 2 px (kCleanMargin).
+/// `defects` holds the labels on the part only.
+std::vector<uint8_t> referenceRegion(int width, int height, const std::vector<uint8_t>& part,
+                                     const std::vector<uint8_t>& defects,
+                                     const std::vector<uint8_t>& reference);
+
 /// The white-furnace brightness w: the mean over `mask` of the luminance of T·1 (E = 1). With
 /// `shard` distributed (core/Communicator.h), t holds this rank's rows and the image is put
 /// together over the ranks first, so every rank gets the whole image's w.

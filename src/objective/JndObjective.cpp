@@ -8,7 +8,6 @@
 
 #include "core/Dual.h"
 #include "core/Error.h"
-#include "objective/DefectVisibility.h"
 
 namespace sl {
 
@@ -33,10 +32,7 @@ JndObjective::JndObjective(int width, int height, std::vector<uint8_t> part,
     const std::vector<uint8_t>& p = base_.mask();
     std::vector<uint8_t> onPart(n);
     for (size_t k = 0; k < n; ++k) onPart[k] = p[k] ? defects[k] : 0;
-    reference_ = reference.empty() ? defectFreeReference(width, height, p, onPart, kCleanMargin)
-                                   : std::vector<uint8_t>(n, 0);
-    if (!reference.empty())
-        for (size_t k = 0; k < n; ++k) reference_[k] = p[k] && reference[k] && !onPart[k];
+    reference_ = referenceRegion(width, height, p, onPart, reference);
     std::array<double, 256> count{};
     for (size_t k = 0; k < n; ++k) count[onPart[k]] += onPart[k] ? 1 : 0;
     std::array<int, 256> index{};
