@@ -13,6 +13,7 @@
 #include <sstream>
 #include <vector>
 
+#include "AutodiffCheck.h"
 #include "TestUtil.h"
 #include "app/Truth.h"
 #include "core/Error.h"
@@ -66,23 +67,6 @@ std::vector<uint8_t> stripe(const TransportMatrix& t, int x0, int x1) {
     return m;
 }
 
-/// The defects objective through T against autodiff, at random lights (texels in
-/// [0.2, 1]·scale, drawn from rng): the loss to 1e-12, the gradient to 1e-9 (relative L2).
-void expectMatchesAutodiff(const TransportMatrix& t, const DefectObjective& obj, Pcg32& rng,
-                           std::initializer_list<double> scales) {
-    const TransportLoss loss(t, obj, false);
-    for (double scale : scales) {
-        SCOPED_TRACE(scale);
-        std::vector<double> e(t.cols());
-        for (double& v : e) v = scale * (0.2 + 0.8 * rng.nextDouble());
-        std::vector<double> grad(t.cols());
-        const LossParts p = loss.evaluate(e, grad);
-        const AutodiffGradient ad = autodiffThroughHalves(t, obj, e);
-        EXPECT_NEAR(p.total, ad.loss, 1e-12 * std::abs(ad.loss));
-        EXPECT_LT(compareGradients(grad, ad.gradient).relativeL2, 1e-9);
-    }
-}
-
 }  // namespace
 
 TEST(DefectObjective, ExactGradientMatchesAutodiff) {
@@ -105,7 +89,7 @@ TEST(DefectObjective, ExactGradientMatchesAutodiff) {
         const DefectObjective obj(t.width, t.height, t.objectMask, stripe(t, 8, 12), {}, oo, o);
         Pcg32 rng(7, 1);
         // A mid light, a dark one (the band's lower edge is active) and a bright one (clipping).
-        expectMatchesAutodiff(t, obj, rng, {0.5, 0.02, 3.0});
+        test::expectMatchesAutodiff(t, obj, rng, {0.5, 0.02, 3.0}, 1e-12, 1e-9);
     }
 }
 
@@ -218,7 +202,7 @@ TEST(DefectObjective, TheWorstLabelCountsSoftlyAndIsNotBoughtByAnother) {
     const DefectObjective obj(t.width, t.height, t.objectMask, two, {}, to, tdopt);
     ASSERT_EQ(obj.labels().size(), 2u);
     Pcg32 rng(11, 1);
-    expectMatchesAutodiff(t, obj, rng, {0.5, 0.05});
+    test::expectMatchesAutodiff(t, obj, rng, {0.5, 0.05}, 1e-12, 1e-9);
 }
 
 // The dark floor L_dark (objective/DefectObjective.h): below darkFloor (2·kMinVisibleBrightness)

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "AutodiffCheck.h"
 #include "TestUtil.h"
 #include "core/Error.h"
 #include "core/Rng.h"
@@ -68,20 +69,10 @@ TEST(JndObjective, ExactGradientMatchesAutodiff) {
     oo.lambda = 3;
     const JndObjective obj(t.width, t.height, t.objectMask, twoStripes(t), {}, oo, options(t));
     ASSERT_EQ(obj.labels().size(), 2u);
-    const TransportLoss loss(t, obj, false);
     Pcg32 rng(11, 3);
     // A mid light, a dark one (the dark floor and the luminance clamp) and a bright one (the
     // band's upper edge, clipping and the white's clamp).
-    for (double scale : {0.5, 0.02, 3.0}) {
-        SCOPED_TRACE(scale);
-        std::vector<double> e(t.cols());
-        for (double& v : e) v = scale * (0.2 + 0.8 * rng.nextDouble());
-        std::vector<double> grad(t.cols());
-        const LossParts p = loss.evaluate(e, grad);
-        const AutodiffGradient ad = autodiffThroughHalves(t, obj, e);
-        EXPECT_NEAR(p.total, ad.loss, 1e-11 * std::abs(ad.loss));
-        EXPECT_LT(compareGradients(grad, ad.gradient).relativeL2, 1e-8);
-    }
+    test::expectMatchesAutodiff(t, obj, rng, {0.5, 0.02, 3.0}, 1e-11, 1e-8);
 }
 
 namespace {
