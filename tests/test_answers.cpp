@@ -442,6 +442,44 @@ TEST(Answer, WithAViewingModelTheAnswerIsChosenInJnd) {
     EXPECT_TRUE(std::isnan(u.scored[0].merit.visibility));
 }
 
+// With several defect kinds the answer is chosen on the least visible kind's JND (what the
+// defects objective maximizes), not the pooled JND, which follows the best-shown kind: a light
+// showing one kind at 10 JND and another at 0.9 (below threshold) loses to one showing both at
+// 2.5 or more. Regions without pixels do not count; equal values fall to the pooled JND.
+TEST(Answer, TheJndMeritIsTheLeastVisibleKinds) {
+    auto region = [](const char* name, size_t pixels, double jnd) {
+        RegionVisibility r;
+        r.label.name = name;
+        r.pixels = pixels;
+        r.jnd = jnd;
+        r.visibility = 1.5;
+        return r;
+    };
+    JudgeScore lamp, optimized;
+    lamp.visibility = {region("scratch", 400, 10.0), region("pit-chain", 60, 0.9),
+                       region("defect", 0, std::numeric_limits<double>::quiet_NaN())};
+    optimized.visibility = {region("scratch", 400, 3.0), region("pit-chain", 60, 2.5),
+                            region("defect", 0, std::numeric_limits<double>::quiet_NaN())};
+    size_t least = 9;
+    EXPECT_DOUBLE_EQ(leastVisibleJnd(lamp.visibility, &least), 0.9);
+    EXPECT_EQ(least, 1u);
+    const AnswerMerit ml = answerMerit(lamp), mo = answerMerit(optimized);
+    EXPECT_EQ(ml.what, "JND");
+    EXPECT_DOUBLE_EQ(ml.value, 0.9);
+    EXPECT_EQ(ml.leastVisible, "pit-chain");
+    EXPECT_NEAR(ml.pooled, std::pow(std::pow(10.0, 4) + std::pow(0.9, 4), 0.25), 1e-12);
+    EXPECT_GT(ml.pooled, mo.pooled);  // pooled, the lamp would win
+    EXPECT_TRUE(betterMerit(mo, ml));
+    EXPECT_FALSE(betterMerit(ml, mo));
+    // A tie on the least visible kind: the pooled JND decides.
+    optimized.visibility[1].jnd = 0.9;
+    EXPECT_TRUE(betterMerit(answerMerit(lamp), answerMerit(optimized)));
+    // No region with pixels and a JND: the merit falls back to the ratio.
+    for (RegionVisibility& r : lamp.visibility) r.jnd = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_TRUE(std::isnan(leastVisibleJnd(lamp.visibility)));
+    EXPECT_EQ(answerMerit(lamp).what, "defect visibility");
+}
+
 // A finer light (searched before E* on a finer grid, its training figure over-fit) is the answer
 // only when no trusted optimized light passes the checks, and then only if it beats the
 // references on the validation estimate.

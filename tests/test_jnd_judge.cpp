@@ -121,6 +121,32 @@ TEST(JudgeJnd, TheAnswerLineLeadsWithJnd) {
         0u);
 }
 
+// With two defect kinds the headline leads with the least visible kind's JND (the figure the
+// answer is chosen on), names it, and the report's table shows the pooled JND beside it.
+TEST(JudgeJnd, WithSeveralKindsTheHeadlineLeadsWithTheLeastVisible) {
+    auto judge = [](double scratch, double pits) {
+        return nlohmann::json{
+            {"visibility",
+             {{{"name", "scratch"}, {"pixels", 400}, {"visibility", 2.0}, {"jnd", scratch}},
+              {{"name", "pit-chain"}, {"pixels", 60}, {"visibility", 1.5}, {"jnd", pits}}}}};
+    };
+    nlohmann::json s = {{"compare",
+                         {{"judge_spp", 1024},
+                          {"lamp", {{"name", "studio preset"}, {"judge", judge(10, 0.88)}}},
+                          {"paper", {{"judge", judge(1.0, 0.5)}}},
+                          {"optimized", {{"judge", judge(3.0, 2.46)}}}}}};
+    const std::string h = optimizeHeadline(s);
+    EXPECT_EQ(h.rfind("Under the optimized light the least visible defect kind is 2.46 JND above "
+                      "threshold, 0.88 under your lamp (studio preset) and 0.5 under the paper's "
+                      "light",
+                      0),
+              0u)
+        << h;
+    EXPECT_NE(h.find("The least visible label is pit-chain: 2.46 JND (your lamp 0.88)."),
+              std::string::npos)
+        << h;
+}
+
 // When the lamp beat the optimized light in JND on the validation estimate (app/Answer.h), the
 // first line says the lamp is the answer, by the JND it was chosen on, and the judge's figures
 // follow in JND with the ratio beside them (here the ratio alone would have kept E*).

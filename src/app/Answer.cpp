@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "core/Text.h"
@@ -10,15 +11,24 @@
 namespace sl {
 
 AnswerMerit answerMerit(const JudgeScore& s) {
-    const double v = combinedVisibility(s.visibility), j = combinedJnd(s.visibility);
-    if (std::isfinite(j)) return {j, true, "JND", v};
-    if (std::isfinite(v)) return {v, true, "defect visibility", v};
-    return {s.unbiased.total, false, "U"};
+    const double v = combinedVisibility(s.visibility);
+    size_t least = 0;
+    const double j = leastVisibleJnd(s.visibility, &least);
+    const bool jnd = std::isfinite(j), ratio = std::isfinite(v);
+    AnswerMerit m{jnd ? j : ratio ? v : s.unbiased.total,          jnd || ratio,
+                  jnd ? "JND" : ratio ? "defect visibility" : "U", v,
+                  std::numeric_limits<double>::quiet_NaN(),        std::string()};
+    if (jnd) {
+        m.pooled = combinedJnd(s.visibility);
+        m.leastVisible = s.visibility[least].label.name;
+    }
+    return m;
 }
 
 bool betterMerit(const AnswerMerit& a, const AnswerMerit& b) {
     if (!std::isfinite(a.value)) return false;
     if (!std::isfinite(b.value)) return true;
+    if (a.value == b.value) return a.pooled > b.pooled;
     return a.higherIsBetter ? a.value > b.value : a.value < b.value;
 }
 
@@ -103,9 +113,11 @@ AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> 
     std::string on = " on the validation estimate (" + a.merit.what + " " +
                      formatNumber(a.merit.value, 4) + " vs the optimized light's " +
                      formatNumber(o.merit.value, 4);
-    if (a.merit.what == "JND")  // the ratio beside it
-        on += "; visibility ratio " + formatNumber(a.merit.visibility, 4) + " vs " +
-              formatNumber(o.merit.visibility, 4);
+    if (a.merit.what == "JND")  // which kind shows least, the pooled JND and the ratio beside it
+        on += ", of the least visible kind (" + a.merit.leastVisible + " vs " +
+              o.merit.leastVisible + "); all kinds pooled " + formatNumber(a.merit.pooled, 4) +
+              " vs " + formatNumber(o.merit.pooled, 4) + "; visibility ratio " +
+              formatNumber(a.merit.visibility, 4) + " vs " + formatNumber(o.merit.visibility, 4);
     on += ")";
     if (!anyEligible)
         c.reason = "no light passes the checks (brightness at least " +
@@ -138,12 +150,17 @@ nlohmann::ordered_json answerJson(const AnswerChoice& a) {
                           {"kind", candidateKindName(c.candidate.kind)},
                           {"merit", c.merit.value},
                           {"visibility", c.merit.visibility},
+                          {"jnd_pooled", c.merit.pooled},
+                          {"least_visible", c.merit.leastVisible},
                           {"brightness", c.score.brightness},
                           {"eligible", c.eligible},
                           {"why", c.why}});
     return {{"light", a.answer().candidate.name},
             {"kind", candidateKindName(a.answer().candidate.kind)},
             {"merit", a.answer().merit.what},
+            {"merit_of", a.answer().merit.what == "JND" ? "the least visible defect kind"
+                         : a.answer().merit.what == "U" ? "the image"
+                                                        : "all defect regions"},
             {"higher_is_better", a.answer().merit.higherIsBetter},
             {"reason", a.reason},
             {"seconds", a.seconds},

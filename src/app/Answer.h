@@ -5,13 +5,14 @@
 // light of every start, the user's lamp (or the studio preset), a uniform dome (const 0.5) and
 // the paper's light — is scored on the validation estimate (app/TrainingNoise.h: independent of
 // the training estimate and of the judge's), by the figure the answer line reports
-// (answerMerit: the defects' combined visibility when defect regions are known, else the judge's
-// U). A candidate whose image is darker than minBrightness of the white furnace, or (with
-// regions) whose defects' gradient is below minContrast of the image's brightness (a uniform
-// dome makes both gradients tiny and their ratio noise), is not eligible unless none is. The best
-// eligible candidate is the answer; when it is a reference, the run says so first and the
-// optimized light is kept beside it. The judge's estimate then reports on the answer, so the
-// selection does not bias the figures a person reads.
+// (answerMerit: the JND of the least visible defect kind when defect regions and a viewing
+// model are known, else the defects' combined visibility ratio, else the judge's U). A candidate
+// whose image is darker than minBrightness of the white furnace, or (with regions) whose defects'
+// gradient is below minContrast of the image's brightness (a uniform dome makes both gradients tiny
+// and their ratio noise), is not eligible unless none is. The best eligible candidate is the
+// answer; when it is a reference, the run says so first and the optimized light is kept beside it.
+// The judge's estimate then reports on the answer, so the selection does not bias the figures a
+// person reads.
 //
 // Finer lights (CandidateKind::Finer): the lights the noise rule searched on a finer grid at the
 // same spp before it settled on E*'s (app/TrainingNoise.h step 5). Their training figures fit
@@ -39,13 +40,17 @@ struct AnswerMerit {
     std::string what;  // "JND", "defect visibility" or "U"
     /// The defects' combined visibility ratio, beside the JND (NaN without defect regions).
     double visibility = std::numeric_limits<double>::quiet_NaN();
+    /// With JND: all kinds pooled (combinedJnd), the tie-break; and the least visible kind.
+    double pooled = std::numeric_limits<double>::quiet_NaN();
+    std::string leastVisible;
 };
-/// The figure the judge (and the answer line) reports first, of a judge's score: the combined
-/// JND of its regions (objective/DefectVisibility.h combinedJnd) when they have one (defect
-/// regions and a viewing model), else their combined visibility ratio (combinedVisibility)
-/// when finite, else U.
+/// The figure the judge (and the answer line) reports first, of a judge's score: the JND of
+/// the least visible defect kind (objective/DefectVisibility.h leastVisibleJnd, what the
+/// defects objective maximizes) when the regions have one (defect regions and a viewing
+/// model), else their combined visibility ratio (combinedVisibility) when finite, else U.
 AnswerMerit answerMerit(const JudgeScore& score);
-/// a better than b by their merit (the same `what`; NaN is never better).
+/// a better than b by their merit (the same `what`; NaN is never better); equal values are
+/// decided by the pooled JND.
 bool betterMerit(const AnswerMerit& a, const AnswerMerit& b);
 
 /// Where a candidate comes from.

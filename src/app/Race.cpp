@@ -361,7 +361,7 @@ void scoreRow(RaceRow& r, const JudgeScore& js, bool figureIsU) {
     r.visChatter = regionVisibility(js, "chatter");
     r.figureIsU = figureIsU;
     r.figure = figureIsU ? js.unbiased.total : combinedVisibility(js.visibility);
-    r.jnd = combinedJnd(js.visibility);
+    r.jnd = leastVisibleJnd(js.visibility);
 }
 
 RaceSummary raceOnWorlds(const RaceOptions& o) {

@@ -116,8 +116,9 @@ struct RaceRow {
     bool figureIsU = false;
     double figure = 0;
     double vsLamp = 0, vsPaper = 0;  // times better than the studio lamp, than paper-loop
-    /// The defects' JND as a person sees them (objective/DefectVisibility.h combinedJnd; the
-    /// scene's viewing model) and its ratio to the lamp's; NaN without defects in view.
+    /// The defects' JND as a person sees them: the least visible kind's
+    /// (objective/DefectVisibility.h leastVisibleJnd; the scene's viewing model) and its ratio to
+    /// the lamp's; NaN without defects in view.
     double jnd = std::numeric_limits<double>::quiet_NaN();
     double jndVsLamp = std::numeric_limits<double>::quiet_NaN();
 };

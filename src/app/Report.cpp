@@ -459,10 +459,25 @@ double combinedVisibility(const json& judge) {
     return sl::combinedVisibility(regionsOf(judge));
 }
 
-/// The regions' JND as one (objective/DefectVisibility.h combinedJnd); NaN without JND.
+/// The regions' JND pooled (objective/DefectVisibility.h combinedJnd); NaN without JND.
 double combinedJnd(const json& judge) {
     if (!judge.is_object() || !judge.contains("visibility")) return std::nan("");
     return sl::combinedJnd(regionsOf(judge));
+}
+
+/// The defects' JND as the answer is chosen on it: the least visible kind's
+/// (objective/DefectVisibility.h leastVisibleJnd); NaN without JND.
+double leastVisibleJnd(const json& judge) {
+    if (!judge.is_object() || !judge.contains("visibility")) return std::nan("");
+    return sl::leastVisibleJnd(regionsOf(judge));
+}
+
+/// How many defect kinds the judge scored (regions with pixels).
+size_t defectKinds(const json& judge) {
+    size_t n = 0;
+    if (judge.is_object() && judge.contains("visibility"))
+        for (const json& r : judge["visibility"]) n += num(r, "pixels") > 0;
+    return n;
 }
 
 std::string fmt(double v, int digits = 3) {
@@ -477,19 +492,22 @@ std::string fmt(double v, int digits = 3) {
 std::string worstLabelSentence(const json& answer, const json& lamp) {
     if (!answer.is_object() || !answer.contains("visibility") || answer["visibility"].size() < 2)
         return "";
+    // In JND where the judge has it (the answer is chosen on it), else the visibility ratio.
+    const bool jnd = std::isfinite(leastVisibleJnd(answer));
+    const char* key = jnd ? "jnd" : "visibility";
     const json* worst = nullptr;
     for (const json& r : answer["visibility"])
-        if (std::isfinite(num(r, "visibility")) &&
-            (!worst || num(r, "visibility") < num(*worst, "visibility")))
+        if (std::isfinite(num(r, key)) && num(r, "pixels") > 0 &&
+            (!worst || num(r, key) < num(*worst, key)))
             worst = &r;
     if (!worst) return "";
     const std::string name = worst->value("name", std::string("?"));
     double atLamp = std::nan("");
     if (lamp.is_object() && lamp.contains("visibility"))
         for (const json& r : lamp["visibility"])
-            if (r.value("name", std::string()) == name) atLamp = num(r, "visibility");
-    return " The least visible label is " + name + ": " + fmt(num(*worst, "visibility"), 3) +
-           " (your lamp " + fmt(atLamp, 3) + ").";
+            if (r.value("name", std::string()) == name) atLamp = num(r, key);
+    return " The least visible label is " + name + ": " + fmt(num(*worst, key), 3) +
+           (jnd ? " JND" : "") + " (your lamp " + fmt(atLamp, 3) + ").";
 }
 
 std::string degrees(const json& d, const char* key) {
@@ -564,9 +582,11 @@ std::string jndPhrase(double j) {
 /// Empty when the judge has no JND.
 std::string jndSentence(const json& opt, const json& lamp, const json& paper,
                         const std::string& underLamp, const json& viewing) {
-    const double jo = combinedJnd(opt), jl = combinedJnd(lamp), jp = combinedJnd(paper);
+    const double jo = leastVisibleJnd(opt), jl = leastVisibleJnd(lamp), jp = leastVisibleJnd(paper);
     if (!std::isfinite(jo) || !std::isfinite(jl)) return "";
-    std::string out = "Under the optimized light the defects are " + jndPhrase(jo) + ", " +
+    const std::string what =
+        defectKinds(opt) > 1 ? "the least visible defect kind is" : "the defects are";
+    std::string out = "Under the optimized light " + what + " " + jndPhrase(jo) + ", " +
                       fmt(jl, 3) + " " + underLamp;
     if (std::isfinite(jp)) out += " and " + fmt(jp, 3) + " under the paper's light";
     out += ", as a person sees the image";
@@ -755,12 +775,14 @@ std::string optimizeHeadline(const json& s) {
             const std::string spp = fmt(num(cmp, "judge_spp"), 6);
             const double va = combinedVisibility(ans["judge"]),
                          vo = combinedVisibility(opt["judge"]);
-            const double ja = combinedJnd(ans["judge"]), jo = combinedJnd(opt["judge"]);
+            const double ja = leastVisibleJnd(ans["judge"]), jo = leastVisibleJnd(opt["judge"]);
             if (std::isfinite(ja) && std::isfinite(jo) && std::isfinite(va) && std::isfinite(vo))
-                out += " Judge: the defects are " + jndPhrase(ja) + " under " + name + ", " +
-                       fmt(jo, 3) + " JND under the optimized light (visibility ratio " +
-                       fmt(va, 3) + " vs " + fmt(vo, 3) + "), on an independent " + spp +
-                       "-spp estimate." +
+                out += std::string(" Judge: ") +
+                       (defectKinds(ans["judge"]) > 1 ? "the least visible defect kind is "
+                                                      : "the defects are ") +
+                       jndPhrase(ja) + " under " + name + ", " + fmt(jo, 3) +
+                       " JND under the optimized light (visibility ratio " + fmt(va, 3) + " vs " +
+                       fmt(vo, 3) + "), on an independent " + spp + "-spp estimate." +
                        worstLabelSentence(ans["judge"], lamp.value("judge", json::object()));
             else if (std::isfinite(va) && std::isfinite(vo))
                 out += " Judge: defect visibility " + fmt(va, 3) + " (" + name + ") vs " +
@@ -780,7 +802,7 @@ std::string optimizeHeadline(const json& s) {
         if (std::isfinite(vo) && std::isfinite(vl) && std::isfinite(vp)) {
             out = jndSentence(opt["judge"], lamp["judge"], paper["judge"], underLamp,
                               cmp.value("viewing", json::object()));
-            out += lampNotChosen(s, combinedJnd(opt["judge"]), combinedJnd(lamp["judge"]),
+            out += lampNotChosen(s, leastVisibleJnd(opt["judge"]), leastVisibleJnd(lamp["judge"]),
                                  lamp.value("name", std::string()));
             out += (out.empty() ? "Under the optimized light the defects are "
                                 : "By the visibility ratio they are ") +
@@ -971,9 +993,13 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
     if (opt.contains("judge")) {
         const json &jl = lamp["judge"], &jp = paper["judge"], &jo = opt["judge"];
         // JND first (as a person sees it: README "Visibility in JND"), the ratio beside it.
-        if (std::isfinite(combinedJnd(jo)))
-            h << compareRow("judge: JND of the defects (all regions)", combinedJnd(jl),
-                            combinedJnd(jp), combinedJnd(jo), 0);
+        if (std::isfinite(leastVisibleJnd(jo))) {
+            h << compareRow("judge: JND of the least visible defect kind", leastVisibleJnd(jl),
+                            leastVisibleJnd(jp), leastVisibleJnd(jo), 0);
+            if (defectKinds(jo) > 1)
+                h << compareRow("judge: JND of all defect kinds pooled", combinedJnd(jl),
+                                combinedJnd(jp), combinedJnd(jo), 0);
+        }
         h << compareRow("judge: defect visibility (all regions)", combinedVisibility(jl),
                         combinedVisibility(jp), combinedVisibility(jo), 0);
         if (jo.contains("visibility"))

@@ -174,4 +174,15 @@ double combinedJnd(std::span<const RegionVisibility> regions) {
     return any ? std::pow(sum, 1.0 / kJndPooling) : kNaN;
 }
 
+double leastVisibleJnd(std::span<const RegionVisibility> regions, size_t* which) {
+    double least = kNaN;
+    for (size_t k = 0; k < regions.size(); ++k) {
+        const RegionVisibility& r = regions[k];
+        if (r.pixels == 0 || !std::isfinite(r.jnd) || r.jnd >= least) continue;
+        least = r.jnd;
+        if (which) *which = k;
+    }
+    return least;
+}
+
 }  // namespace sl

@@ -81,5 +81,11 @@ double combinedContrast(std::span<const RegionVisibility> regions);
 /// The regions' JND as one: their Minkowski sum (exponent kJndPooling, probability summation:
 /// several regions each at threshold are seen more surely than one). NaN when there is none.
 double combinedJnd(std::span<const RegionVisibility> regions);
+/// The defects' JND as the answer reports it: the least visible kind's (the least JND of the
+/// regions with pixels and a finite JND). Every kind of defect must be seen, so a light is as
+/// good as the kind it shows least; the defects objective maximizes a soft-min of the same
+/// (objective/JndObjective.h). `which`, when given, receives that region's index. NaN when
+/// there is none.
+double leastVisibleJnd(std::span<const RegionVisibility> regions, size_t* which = nullptr);
 
 }  // namespace sl
