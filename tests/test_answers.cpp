@@ -442,6 +442,31 @@ TEST(Answer, WithAViewingModelTheAnswerIsChosenInJnd) {
     EXPECT_TRUE(std::isnan(u.scored[0].merit.visibility));
 }
 
+// The contrast floor guards the visibility ratio (a ratio of two tiny gradients is noise); in
+// JND a light that barely shows the defects scores near 0 by itself, so a uniform dome stays
+// eligible there and competes on its JND.
+TEST(Answer, TheContrastFloorGuardsOnlyTheRatio) {
+    const auto part = ScratchedPartJudge::make();
+    const std::vector<double> uniform(1250, 0.5), lamp = randomLight(1250, 21);
+    const std::vector<AnswerCandidate> candidates = {
+        {"optimized", CandidateKind::Optimized, lamp},
+        {"uniform-0.5", CandidateKind::Reference, uniform}};
+    // A floor above the dome's contrast and below the other light's.
+    const double cu = combinedContrast(part->judge->score(uniform).visibility),
+                 cl = combinedContrast(part->judge->score(lamp).visibility);
+    ASSERT_LT(cu, cl);
+    AnswerOptions options;
+    options.minContrast = std::sqrt(cu * cl);
+    const AnswerChoice r = chooseAnswer(*part->judge, candidates, options);
+    EXPECT_FALSE(r.scored[1].eligible) << r.reason;
+    EXPECT_NE(r.scored[1].why.find("barely show"), std::string::npos) << r.scored[1].why;
+    const AnswerChoice j = chooseAnswer(*part->jndJudge, candidates, options);
+    EXPECT_EQ(j.scored[1].merit.what, "JND");
+    EXPECT_TRUE(j.scored[1].eligible) << j.scored[1].why;
+    EXPECT_TRUE(std::isfinite(j.scored[1].merit.value));
+    EXPECT_EQ(j.chosen, j.scored[1].merit.value > j.scored[0].merit.value ? 1u : 0u) << j.reason;
+}
+
 // With several defect kinds the answer is chosen on the least visible kind's JND (what the
 // defects objective maximizes), not the pooled JND, which follows the best-shown kind: a light
 // showing one kind at 10 JND and another at 0.9 (below threshold) loses to one showing both at
@@ -463,7 +488,7 @@ TEST(Answer, TheJndMeritIsTheLeastVisibleKinds) {
     size_t least = 9;
     EXPECT_DOUBLE_EQ(leastVisibleJnd(lamp.visibility, &least), 0.9);
     EXPECT_EQ(least, 1u);
-    const AnswerMerit ml = answerMerit(lamp), mo = answerMerit(optimized);
+    const AnswerMerit ml = answerMerit(lamp, true), mo = answerMerit(optimized, true);
     EXPECT_EQ(ml.what, "JND");
     EXPECT_DOUBLE_EQ(ml.value, 0.9);
     EXPECT_EQ(ml.leastVisible, "pit-chain");
@@ -473,11 +498,17 @@ TEST(Answer, TheJndMeritIsTheLeastVisibleKinds) {
     EXPECT_FALSE(betterMerit(ml, mo));
     // A tie on the least visible kind: the pooled JND decides.
     optimized.visibility[1].jnd = 0.9;
-    EXPECT_TRUE(betterMerit(answerMerit(lamp), answerMerit(optimized)));
-    // No region with pixels and a JND: the merit falls back to the ratio.
+    EXPECT_TRUE(betterMerit(answerMerit(lamp, true), answerMerit(optimized, true)));
+    // Without a viewing model: the ratio; a light whose JND cannot be formed is never better.
+    EXPECT_EQ(answerMerit(lamp, false).what, "defect visibility");
     for (RegionVisibility& r : lamp.visibility) r.jnd = std::numeric_limits<double>::quiet_NaN();
     EXPECT_TRUE(std::isnan(leastVisibleJnd(lamp.visibility)));
-    EXPECT_EQ(answerMerit(lamp).what, "defect visibility");
+    EXPECT_EQ(answerMerit(lamp, true).what, "JND");
+    EXPECT_FALSE(betterMerit(answerMerit(lamp, true), answerMerit(optimized, true)));
+    EXPECT_TRUE(betterMerit(answerMerit(optimized, true), answerMerit(lamp, true)));
+    // No region in view: U.
+    for (RegionVisibility& r : lamp.visibility) r.pixels = 0;
+    EXPECT_EQ(answerMerit(lamp, true).what, "U");
 }
 
 // A finer light (searched before E* on a finer grid, its training figure over-fit) is the answer

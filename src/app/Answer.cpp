@@ -1,5 +1,6 @@
 #include "app/Answer.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -10,15 +11,17 @@
 
 namespace sl {
 
-AnswerMerit answerMerit(const JudgeScore& s) {
+AnswerMerit answerMerit(const JudgeScore& s, bool inJnd) {
+    const bool regions = std::any_of(s.visibility.begin(), s.visibility.end(),
+                                     [](const RegionVisibility& r) { return r.pixels > 0; });
     const double v = combinedVisibility(s.visibility);
     size_t least = 0;
     const double j = leastVisibleJnd(s.visibility, &least);
-    const bool jnd = std::isfinite(j), ratio = std::isfinite(v);
-    AnswerMerit m{jnd ? j : ratio ? v : s.unbiased.total,          jnd || ratio,
-                  jnd ? "JND" : ratio ? "defect visibility" : "U", v,
-                  std::numeric_limits<double>::quiet_NaN(),        std::string()};
-    if (jnd) {
+    const bool jnd = regions && inJnd;
+    AnswerMerit m{jnd ? j : regions ? v : s.unbiased.total,          regions,
+                  jnd ? "JND" : regions ? "defect visibility" : "U", v,
+                  std::numeric_limits<double>::quiet_NaN(),          std::string()};
+    if (jnd && std::isfinite(j)) {
         m.pooled = combinedJnd(s.visibility);
         m.leastVisible = s.visibility[least].label.name;
     }
@@ -53,14 +56,16 @@ AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> 
     for (AnswerCandidate& cand : candidates) {
         ScoredCandidate s;
         s.score = validation.score(cand.e, cand.name);
-        s.merit = answerMerit(s.score);
+        s.merit = answerMerit(s.score, validation.options().viewing.has_value());
         if (!(s.score.brightness >= options.minBrightness)) {
             s.eligible = false;
             s.why = "too dark: brightness " + formatNumber(s.score.brightness, 3) +
                     " of the white furnace, below " + formatNumber(options.minBrightness, 3);
-        } else if (s.merit.higherIsBetter) {
+        } else if (s.merit.what == "defect visibility") {
             // A ratio of two gradients a light barely makes is noise over noise: the defects
-            // must also show against the image's brightness.
+            // must also show against the image's brightness. (JND needs no such floor: it is
+            // the defects' contrast over the eye's threshold at the image's luminance, so a
+            // light that barely shows them has a JND near 0 by itself.)
             const double contrast = combinedContrast(s.score.visibility);
             if (!(contrast >= options.minContrast)) {
                 s.eligible = false;

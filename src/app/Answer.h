@@ -7,9 +7,10 @@
 // the training estimate and of the judge's), by the figure the answer line reports
 // (answerMerit: the JND of the least visible defect kind when defect regions and a viewing
 // model are known, else the defects' combined visibility ratio, else the judge's U). A candidate
-// whose image is darker than minBrightness of the white furnace, or (with regions) whose defects'
-// gradient is below minContrast of the image's brightness (a uniform dome makes both gradients tiny
-// and their ratio noise), is not eligible unless none is. The best eligible candidate is the
+// whose image is darker than minBrightness of the white furnace, or (chosen by the visibility
+// ratio) whose defects' gradient is below minContrast of the image's brightness (a uniform dome
+// makes both gradients tiny and their ratio noise; JND needs no such floor: it is contrast over
+// the eye's threshold already), is not eligible unless none is. The best eligible candidate is the
 // answer; when it is a reference, the run says so first and the optimized light is kept beside it.
 // The judge's estimate then reports on the answer, so the selection does not bias the figures a
 // person reads.
@@ -44,11 +45,13 @@ struct AnswerMerit {
     double pooled = std::numeric_limits<double>::quiet_NaN();
     std::string leastVisible;
 };
-/// The figure the judge (and the answer line) reports first, of a judge's score: the JND of
-/// the least visible defect kind (objective/DefectVisibility.h leastVisibleJnd, what the
-/// defects objective maximizes) when the regions have one (defect regions and a viewing
-/// model), else their combined visibility ratio (combinedVisibility) when finite, else U.
-AnswerMerit answerMerit(const JudgeScore& score);
+/// The figure the judge (and the answer line) reports first, of a judge's score: with defect
+/// regions in view, the JND of the least visible defect kind (objective/DefectVisibility.h
+/// leastVisibleJnd, what the defects objective maximizes) when the judge has a viewing model
+/// (`inJnd`), else their combined visibility ratio (combinedVisibility); without, U. The kind
+/// depends on the judge alone, so every candidate of one choice is compared on the same figure
+/// (a light whose figure cannot be formed, e.g. a ratio of two vanishing gradients, gets NaN).
+AnswerMerit answerMerit(const JudgeScore& score, bool inJnd);
 /// a better than b by their merit (the same `what`; NaN is never better); equal values are
 /// decided by the pooled JND.
 bool betterMerit(const AnswerMerit& a, const AnswerMerit& b);
@@ -65,8 +68,8 @@ struct AnswerCandidate {
 
 struct AnswerOptions {
     double minBrightness = kMinVisibleBrightness;  // of the white furnace's mean over the part
-    /// With defect regions: the least combined contrast (RMS gradient in the regions over the
-    /// mean brightness; the eye needs about 0.01), below which a visibility ratio is noise.
+    /// Chosen by the visibility ratio: the least combined contrast (RMS gradient in the regions
+    /// over the mean brightness; the eye needs about 0.01), below which the ratio is noise.
     double minContrast = kMinDefectContrast;
 };
 
