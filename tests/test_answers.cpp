@@ -8,10 +8,10 @@
 #include <nlohmann/json.hpp>
 
 #include "TestUtil.h"
-#include "app/Answer.h"
-#include "app/Judge.h"
-#include "app/Search.h"
-#include "app/TrainingNoise.h"
+#include "app/pipeline/Answer.h"
+#include "app/pipeline/Judge.h"
+#include "app/pipeline/Search.h"
+#include "app/pipeline/TrainingNoise.h"
 #include "core/Rng.h"
 #include "objective/DefectVisibility.h"
 #include "scene/Scene.h"

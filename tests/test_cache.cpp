@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "TestUtil.h"
-#include "app/Cache.h"
+#include "app/pipeline/Cache.h"
 #include "io/TransportFile.h"
 #include "transport/TransportMatrix.h"
 

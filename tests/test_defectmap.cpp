@@ -22,9 +22,9 @@
 
 #include "TestUtil.h"
 #include "core/Error.h"
+#include "detect/DefectMap.h"
+#include "detect/ScratchMap.h"
 #include "io/ImageIO.h"
-#include "objective/DefectMap.h"
-#include "objective/ScratchMap.h"
 #include "synth/SurfaceGenerator.h"
 
 using namespace sl;

@@ -15,7 +15,7 @@
 
 #include "AutodiffCheck.h"
 #include "TestUtil.h"
-#include "app/Truth.h"
+#include "app/pipeline/Truth.h"
 #include "core/Error.h"
 #include "core/Rng.h"
 #include "io/ImageIO.h"

@@ -6,7 +6,7 @@
 #include <filesystem>
 
 #include "TestUtil.h"
-#include "app/DepthBench.h"
+#include "app/bench/DepthBench.h"
 #include "core/Error.h"
 #include "scene/Scene.h"
 

@@ -11,8 +11,8 @@
 #include <string>
 
 #include "TestUtil.h"
-#include "app/Canvas.h"
-#include "app/OptimizeFigures.h"
+#include "app/host/Canvas.h"
+#include "app/report/OptimizeFigures.h"
 #include "io/ImageIO.h"
 
 namespace fs = std::filesystem;

@@ -9,13 +9,13 @@
 #include <vector>
 
 #include "TestUtil.h"
-#include "app/InitialState.h"
-#include "app/OptimizeJob.h"
+#include "app/jobs/OptimizeJob.h"
+#include "app/pipeline/InitialState.h"
 #include "core/Error.h"
+#include "detect/ScratchMap.h"
 #include "io/TransportFile.h"
 #include "objective/Metrics.h"
 #include "objective/Objective.h"
-#include "objective/ScratchMap.h"
 #include "objective/TransportLoss.h"
 #include "objective/UnbiasedObjective.h"
 #include "optimize/BlackBox.h"

@@ -26,7 +26,6 @@
 #include <vector>
 
 #include "TestUtil.h"
-#include "app/Lamps.h"
 #include "core/Error.h"
 #include "core/Hash.h"
 #include "core/Image.h"
@@ -39,6 +38,7 @@
 #include "io/SceneFile.h"
 #include "io/TransportFile.h"
 #include "io/X3p.h"
+#include "optimize/LampFit.h"
 #include "render/PathTracer.h"
 #include "scene/Scene.h"
 #include "transport/TransportSink.h"

@@ -7,8 +7,8 @@
 #include <nlohmann/json.hpp>
 
 #include "TestUtil.h"
-#include "app/Judge.h"
-#include "app/Report.h"
+#include "app/pipeline/Judge.h"
+#include "app/report/Report.h"
 #include "core/Error.h"
 #include "io/SceneFile.h"
 #include "scene/Scene.h"

@@ -10,10 +10,10 @@
 #include <sstream>
 
 #include "TestUtil.h"
-#include "app/Judge.h"
-#include "app/Race.h"
-#include "app/Search.h"
-#include "app/Truth.h"
+#include "app/bench/Race.h"
+#include "app/pipeline/Judge.h"
+#include "app/pipeline/Search.h"
+#include "app/pipeline/Truth.h"
 #include "core/Error.h"
 #include "core/Rng.h"
 #include "io/ImageIO.h"

@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "TestUtil.h"
-#include "app/Judge.h"
+#include "app/pipeline/Judge.h"
 #include "core/Rng.h"
 #include "scene/Scene.h"
 

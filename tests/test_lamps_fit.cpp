@@ -9,9 +9,9 @@
 #include <random>
 
 #include "TestUtil.h"
-#include "app/Lamps.h"
 #include "core/Error.h"
 #include "objective/UnbiasedObjective.h"
+#include "optimize/LampFit.h"
 #include "scene/Scene.h"
 #include "transport/TransportSink.h"
 

@@ -58,10 +58,9 @@ std::vector<Source> sources() {
     for (const auto& e : fs::recursive_directory_iterator(SL_SOURCE_DIR "/src")) {
         const auto ext = e.path().extension();
         if (ext != ".h" && ext != ".cpp") continue;
-        out.push_back(
-            {e.path().parent_path().filename().string(),
-             e.path().parent_path().filename().string() + "/" + e.path().filename().string(),
-             readFile(e.path())});
+        // The folder is the first one under src/ (app/'s wings are checked as app).
+        const fs::path rel = fs::relative(e.path(), SL_SOURCE_DIR "/src");
+        out.push_back({rel.begin()->string(), rel.generic_string(), readFile(e.path())});
     }
     return out;
 }

@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "core/Error.h"
-#include "objective/DefectMap.h"
-#include "objective/LayMap.h"
+#include "detect/DefectMap.h"
+#include "detect/LayMap.h"
 
 using namespace sl;
 

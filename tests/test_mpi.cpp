@@ -11,7 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "TestUtil.h"
-#include "app/Mpi.h"
+#include "app/host/Mpi.h"
 
 namespace {
 

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "TestUtil.h"
-#include "app/InitialState.h"
+#include "app/pipeline/InitialState.h"
 #include "core/Color.h"
 #include "core/Error.h"
 #include "io/EnvMapIO.h"

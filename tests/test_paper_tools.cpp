@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "TestUtil.h"
-#include "app/InitialState.h"
-#include "app/Report.h"
-#include "app/Truth.h"
+#include "app/pipeline/InitialState.h"
+#include "app/pipeline/Truth.h"
+#include "app/report/Report.h"
 #include "core/Color.h"
 #include "core/Error.h"
 #include "io/ImageIO.h"

@@ -13,7 +13,7 @@
 #include <thread>
 
 #include "TestUtil.h"
-#include "app/ExternalRenderer.h"
+#include "app/host/ExternalRenderer.h"
 #include "core/Color.h"
 #include "core/Error.h"
 #include "core/Interrupt.h"

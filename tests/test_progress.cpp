@@ -11,7 +11,7 @@
 #include <thread>
 
 #include "TestUtil.h"
-#include "app/Console.h"
+#include "app/host/Console.h"
 #include "core/Progress.h"
 
 using namespace sl;

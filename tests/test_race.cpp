@@ -10,8 +10,8 @@
 #include <nlohmann/json.hpp>
 
 #include "TestUtil.h"
-#include "app/PartFiles.h"
-#include "app/Race.h"
+#include "app/bench/Race.h"
+#include "app/jobs/PartFiles.h"
 #include "core/Error.h"
 #include "core/Stats.h"
 #include "synth/SurfaceGenerator.h"

@@ -9,9 +9,9 @@
 #include <sstream>
 
 #include "TestUtil.h"
-#include "app/DepthBench.h"
-#include "app/RegionBench.h"
-#include "app/Transport.h"
+#include "app/bench/DepthBench.h"
+#include "app/bench/RegionBench.h"
+#include "app/pipeline/Transport.h"
 #include "core/Error.h"
 #include "io/ImageIO.h"
 #include "io/TransportFile.h"

@@ -14,7 +14,7 @@
 #include <string>
 
 #include "TestUtil.h"
-#include "app/Report.h"
+#include "app/report/Report.h"
 #include "core/Text.h"
 
 namespace fs = std::filesystem;

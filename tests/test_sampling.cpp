@@ -9,7 +9,7 @@
 #include <set>
 
 #include "TestUtil.h"
-#include "app/SamplingBench.h"
+#include "app/bench/SamplingBench.h"
 #include "core/Color.h"
 #include "core/Error.h"
 #include "core/Registry.h"

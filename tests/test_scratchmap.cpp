@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/Error.h"
-#include "objective/ScratchMap.h"
+#include "detect/ScratchMap.h"
 #include "synth/SurfaceGenerator.h"
 
 using namespace sl;

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "TestUtil.h"
-#include "app/PartFiles.h"
+#include "app/jobs/PartFiles.h"
 #include "core/Error.h"
 #include "core/Hash.h"
 #include "core/Registry.h"

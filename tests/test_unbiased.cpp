@@ -8,7 +8,7 @@
 #include <numbers>
 
 #include "TestUtil.h"
-#include "app/NoiseBench.h"
+#include "app/bench/NoiseBench.h"
 #include "core/Color.h"
 #include "core/Error.h"
 #include "core/Rng.h"

@@ -5,7 +5,7 @@
 #include <memory>
 #include <string>
 
-#include "app/Cache.h"
+#include "app/pipeline/Cache.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
 

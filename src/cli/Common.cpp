@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <mutex>
 
-#include "app/Plot.h"
+#include "app/host/Plot.h"
 #include "core/Error.h"
 #include "core/Text.h"
 #include "io/EnvMapIO.h"

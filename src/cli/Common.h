@@ -12,9 +12,9 @@
 #include <utility>
 #include <vector>
 
-#include "app/Cache.h"
-#include "app/ExternalRenderer.h"
-#include "app/Truth.h"
+#include "app/host/ExternalRenderer.h"
+#include "app/pipeline/Cache.h"
+#include "app/pipeline/Truth.h"
 #include "core/Communicator.h"
 #include "core/Error.h"
 #include "core/Registry.h"

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <memory>
 
-#include "app/DefectMapJob.h"
+#include "app/jobs/DefectMapJob.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
 

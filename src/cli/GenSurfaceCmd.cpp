@@ -17,7 +17,7 @@
 #include <utility>
 #include <vector>
 
-#include "app/PartFiles.h"
+#include "app/jobs/PartFiles.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
 #include "core/Error.h"

@@ -9,8 +9,8 @@
 #include <filesystem>
 #include <memory>
 
-#include "app/GradCheck.h"
-#include "app/Plot.h"
+#include "app/bench/GradCheck.h"
+#include "app/host/Plot.h"
 #include "cli/Common.h"
 #include "core/Error.h"
 #include "core/Interrupt.h"

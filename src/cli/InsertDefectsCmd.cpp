@@ -6,7 +6,7 @@
 #include <memory>
 #include <sstream>
 
-#include "app/InsertDefectsJob.h"
+#include "app/jobs/InsertDefectsJob.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
 #include "core/Registry.h"

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <memory>
 
-#include "app/JudgeJob.h"
+#include "app/jobs/JudgeJob.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
 

@@ -11,7 +11,7 @@
 #include <memory>
 #include <numbers>
 
-#include "app/LampsJob.h"
+#include "app/jobs/LampsJob.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
 #include "core/Text.h"

@@ -16,14 +16,14 @@
 #include <memory>
 #include <sstream>
 
-#include "app/Report.h"
+#include "app/report/Report.h"
 #include "cli/Common.h"
 #include "core/Error.h"
+#include "detect/ScratchMap.h"
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
 #include "io/SceneFile.h"
 #include "objective/ImageSpace.h"
-#include "objective/ScratchMap.h"
 #include "scene/EnvMapPresets.h"
 #include "scene/Scene.h"
 

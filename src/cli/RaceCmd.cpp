@@ -11,8 +11,8 @@
 #include <cstdio>
 #include <memory>
 
-#include "app/Plot.h"
-#include "app/Race.h"
+#include "app/bench/Race.h"
+#include "app/host/Plot.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
 #include "core/Interrupt.h"

@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <memory>
 
-#include "app/DepthBench.h"
-#include "app/ExternalRenderer.h"
+#include "app/bench/DepthBench.h"
+#include "app/host/ExternalRenderer.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
 #include "core/Interrupt.h"

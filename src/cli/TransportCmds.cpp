@@ -7,11 +7,11 @@
 #include <cmath>
 #include <memory>
 
-#include "app/Cache.h"
-#include "app/ExternalRenderer.h"
-#include "app/OptimizeJob.h"
-#include "app/Report.h"
-#include "app/Transport.h"
+#include "app/host/ExternalRenderer.h"
+#include "app/jobs/OptimizeJob.h"
+#include "app/pipeline/Cache.h"
+#include "app/pipeline/Transport.h"
+#include "app/report/Report.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
 #include "core/Error.h"

@@ -9,9 +9,9 @@
 #include <cstdlib>
 #include <memory>
 
-#include "app/Viewer.h"
-#include "app/ViewerBench.h"
-#include "app/ViewerServer.h"
+#include "app/bench/ViewerBench.h"
+#include "app/viewer/Viewer.h"
+#include "app/viewer/ViewerServer.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
 

@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "app/Console.h"
-#include "app/Mpi.h"
-#include "app/Version.h"
+#include "app/host/Console.h"
+#include "app/host/Mpi.h"
+#include "app/host/Version.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
 #include "cli/GradientCmds.h"

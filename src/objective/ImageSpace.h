@@ -15,7 +15,7 @@
 #include <span>
 #include <vector>
 
-#include "objective/ScratchMap.h"
+#include "detect/ScratchMap.h"
 
 namespace sl {
 

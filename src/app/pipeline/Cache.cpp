@@ -1,0 +1,241 @@
+#include "app/pipeline/Cache.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <vector>
+
+#include "io/AtomicFile.h"
+#include "io/TransportFile.h"
+
+namespace sl {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+bool hexDigits(std::string_view s) {
+    return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) {
+        return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
+    });
+}
+
+bool digits(std::string_view s) {
+    return !s.empty() &&
+           std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
+constexpr std::string_view kLightPrefix = "light-", kLightExt = ".json";
+
+/// A derived light's file: JSON whose "key" is `key` and whose "values" are numbers.
+std::optional<std::vector<double>> readLightFile(const fs::path& p, const std::string& key) {
+    std::error_code ec;
+    if (!fs::is_regular_file(p, ec) || fs::file_size(p, ec) > (64u << 20)) return std::nullopt;
+    std::ifstream in(p);
+    const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    if (j.is_discarded() || !j.is_object() || j.value("key", std::string()) != key ||
+        !j.contains("values") || !j["values"].is_array())
+        return std::nullopt;
+    std::vector<double> v;
+    v.reserve(j["values"].size());
+    for (const auto& x : j["values"]) {
+        if (!x.is_number()) return std::nullopt;
+        v.push_back(x.get<double>());
+    }
+    return v;
+}
+
+/// light-<key>.json holding that key: its first bytes are writeCachedLight's {"key":"<key>"
+/// (nlohmann writes the keys in order). Only the start is read: listing and trimming the cache
+/// parsed every light's values three times a run, ~0.06 s with fifty lights.
+bool isLightFile(const fs::path& p) {
+    const std::string name = p.filename().string();
+    if (name.size() != kLightPrefix.size() + 32 + kLightExt.size() ||
+        name.rfind(kLightPrefix, 0) != 0 || !name.ends_with(kLightExt))
+        return false;
+    const std::string key = name.substr(kLightPrefix.size(), 32);
+    if (!hexDigits(key)) return false;
+    const std::string head = "{\"key\":\"" + key + "\",";
+    std::string got(head.size(), '\0');
+    std::ifstream in(p, std::ios::binary);
+    return in.read(got.data(), static_cast<std::streamsize>(got.size())) && got == head;
+}
+
+/// A file this cache wrote, by its name and its content, never by the name alone:
+/// transport-<fingerprint>.tm whose header holds that fingerprint (the cache names each matrix
+/// by it), or the temporary of one while written (io/AtomicFile.h:
+/// .transport-<fingerprint>.tmp-<pid>-<n>.tm) that is empty or starts as a .tm file does; or a
+/// derived light, light-<key>.json holding that key.
+bool isCacheFile(const fs::path& p) {
+    if (isLightFile(p)) return true;
+    const std::string name = p.filename().string();
+    constexpr std::string_view kPrefix = "transport-", kExt = ".tm";
+    if (name.size() > kPrefix.size() + kExt.size() && name.rfind(kPrefix, 0) == 0 &&
+        name.ends_with(kExt)) {
+        const std::string fp =
+            name.substr(kPrefix.size(), name.size() - kPrefix.size() - kExt.size());
+        if (fp.size() != 32 || !hexDigits(fp)) return false;
+        std::string inFile;
+        return peekTransportFile(p, &inFile) == 2 && inFile == fp;
+    }
+    // .transport-<fp>.tmp-<pid>-<n>.tm
+    if (name.rfind(".transport-", 0) != 0 || !name.ends_with(kExt)) return false;
+    const std::string rest = name.substr(11, name.size() - 11 - kExt.size());
+    const size_t tmp = rest.find(".tmp-");
+    if (tmp != 32 || !hexDigits(rest.substr(0, 32))) return false;
+    const std::string ids = rest.substr(tmp + 5);
+    const size_t dash = ids.find('-');
+    if (dash == std::string::npos || !digits(ids.substr(0, dash)) || !digits(ids.substr(dash + 1)))
+        return false;
+    std::error_code ec;
+    return fs::file_size(p, ec) == 0 || peekTransportFile(p) > 0;
+}
+
+const char* env(const char* name) {
+    const char* v = std::getenv(name);
+    return v && *v ? v : nullptr;
+}
+
+}  // namespace
+
+namespace {
+
+fs::path locate(const CacheLocation& location) {
+    if (location.disabled) return {};
+    if (location.dir) return *location.dir;
+    if (const char* d = env("SCRATCHLIGHT_CACHE")) return d;
+    if (const char* x = env("XDG_CACHE_HOME")) return fs::path(x) / "scratchlight";
+    if (const char* h = env("HOME")) return fs::path(h) / ".cache" / "scratchlight";
+    return {};
+}
+
+}  // namespace
+
+fs::path cacheDirectory(const CacheLocation& location) {
+    const fs::path dir = locate(location);
+    const uintmax_t cap = location.maxBytes.value_or(kDefaultCacheMaxBytes);
+    const CacheContents removed = trimCache(dir, cap);
+    if (removed.files > 0)
+        spdlog::info(
+            "cache {}: removed the {} least recently used transport matri{} ({:.1f} MB) "
+            "to stay under its cap of {:.1f} MB",
+            dir.string(), removed.files, removed.files == 1 ? "x" : "ces",
+            static_cast<double>(removed.bytes) / 1e6, static_cast<double>(cap) / 1e6);
+    return dir;
+}
+
+namespace {
+
+/// The cache files of `dir` for which `count(path)` is true (it may remove the file first),
+/// with their sizes.
+template <class Count>
+CacheContents cacheFiles(const fs::path& dir, Count&& count) {
+    CacheContents c;
+    c.dir = dir;
+    std::error_code ec;
+    if (dir.empty() || !fs::is_directory(dir, ec)) return c;
+    for (const auto& e : fs::directory_iterator(dir, ec)) {
+        if (!e.is_regular_file(ec) || !isCacheFile(e.path())) continue;
+        const uintmax_t size = e.file_size(ec);
+        if (!count(e.path())) continue;
+        ++(e.path().extension() == ".tm" ? c.files : c.lights);
+        c.bytes += size;
+    }
+    return c;
+}
+
+}  // namespace
+
+CacheContents cacheContents(const fs::path& dir) {
+    return cacheFiles(dir, [](const fs::path&) { return true; });
+}
+
+CacheContents clearCache(const fs::path& dir) {
+    return cacheFiles(dir, [](const fs::path& p) {
+        std::error_code ec;
+        return fs::remove(p, ec);
+    });
+}
+
+CacheContents trimCache(const fs::path& dir, uintmax_t maxBytes) {
+    struct Entry {
+        fs::path path;
+        fs::file_time_type used;
+        uintmax_t bytes;
+    };
+    std::vector<Entry> entries;
+    uintmax_t total = 0;
+    cacheFiles(dir, [&](const fs::path& p) {
+        std::error_code ec;
+        const uintmax_t size = fs::file_size(p, ec);
+        if (ec) return false;
+        total += size;
+        if (p.extension() == ".tm" || isLightFile(p))
+            entries.push_back({p, fs::last_write_time(p, ec), size});
+        return true;
+    });
+    CacheContents removed;
+    removed.dir = dir;
+    std::sort(entries.begin(), entries.end(),
+              [](const Entry& a, const Entry& b) { return a.used < b.used; });
+    for (const Entry& e : entries) {
+        if (total <= maxBytes) break;
+        std::error_code ec;
+        if (!fs::remove(e.path, ec)) continue;
+        total -= e.bytes;
+        ++(e.path.extension() == ".tm" ? removed.files : removed.lights);
+        removed.bytes += e.bytes;
+    }
+    return removed;
+}
+
+std::optional<std::vector<double>> readCachedLight(const fs::path& dir, const std::string& key) {
+    if (dir.empty()) return std::nullopt;
+    const fs::path file = dir / (std::string(kLightPrefix) + key + std::string(kLightExt));
+    auto v = readLightFile(file, key);
+    if (v) touchCacheFile(file);
+    return v;
+}
+
+void writeCachedLight(const fs::path& dir, const std::string& key, const std::string& what,
+                      std::span<const double> values) {
+    if (dir.empty()) return;
+    const nlohmann::json j = {{"key", key},
+                              {"what", what},
+                              {"values", std::vector<double>(values.begin(), values.end())}};
+    try {
+        std::error_code ec;
+        fs::create_directories(dir, ec);
+        // nlohmann writes doubles so that they read back bit for bit.
+        writeTextAtomically(dir / (std::string(kLightPrefix) + key + std::string(kLightExt)),
+                            j.dump() + "\n");
+    } catch (const std::exception& e) {
+        spdlog::warn("cache {}: the {} was not stored: {}", dir.string(), what, e.what());
+    }
+}
+
+void touchCacheFile(const fs::path& file) {
+    std::error_code ec;
+    fs::last_write_time(file, fs::file_time_type::clock::now(), ec);
+}
+
+std::string describeCache(const CacheContents& c) {
+    if (c.dir.empty()) return "no cache";
+    char buf[96];
+    std::string lights;
+    if (c.lights > 0)
+        lights = ", " + std::to_string(c.lights) + " derived light" + (c.lights == 1 ? "" : "s");
+    std::snprintf(buf, sizeof buf, ": %zu transport matri%s", c.files, c.files == 1 ? "x" : "ces");
+    std::string out = c.dir.string() + buf + lights;
+    std::snprintf(buf, sizeof buf, ", %.1f MB", static_cast<double>(c.bytes) / 1e6);
+    return out + buf;
+}
+
+}  // namespace sl

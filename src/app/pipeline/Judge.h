@@ -1,0 +1,214 @@
+// The judge (README "The judge"): scores env maps on an estimate that no optimizer saw.
+//
+// The estimate is a transport matrix of the scene traced with the judge's own seed and two
+// independent sample sets (T_a, T_b), cached on disk by fingerprint, so judging ten lights costs
+// one trace; its spp is what the scores need (judgeInRounds: from 128 until every score's
+// standard error is <= 1 %, at most 1024). Per light E:
+//   eq2        the paper's eq. 2 (S/G + λ·mean(E²)) on the mean image Ȳ = (T_a + T_b)/2 · E
+//   unbiased   U = sqrt(S / Σ_pairs ΔY_a·ΔY_b) + λ·mean(E²)  (objective/UnbiasedObjective.h)
+//   mean_E     mean texel value;  sparsity: fraction of texel values < kDarkTexel
+//   visibility with a truth label mask (height-map space, projected through each pixel's centre
+//              ray): per region, the noise-unbiased RMS gradient inside it over that of the
+//              defect-free surface, and its Weber contrast (objective/DefectVisibility.h);
+//              with a viewing model, its JND: how many times its threshold a person sees it
+//              (perception/JndVisibility.h)
+// Both losses use the part mask (pixels whose every judge sample hit the part); lower is
+// better for both.
+//
+// CONVENTION (judge seed): the judge traces with kJudgeSeed. Optimizations trace with the
+// scene's render.seed (default 0, a small user-chosen number); a training seed equal to the
+// judge's is refused, so the judge's samples are disjoint from every optimization's.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "app/pipeline/Transport.h"
+#include "io/MaskIO.h"
+#include "objective/DefectVisibility.h"
+#include "objective/Objective.h"
+
+namespace sl {
+
+struct Scene;
+struct EnvMap;
+class UnbiasedObjective;
+
+inline constexpr uint64_t kJudgeSeed = 0x6A75646765ULL << 24;  // "judge"
+/// The most samples the judge's rounds trace (and the spp of `--heldout-spp`'s old default).
+inline constexpr int kJudgeDefaultSpp = 1024;
+/// The judge's first round (README "The judge"): rounds start here and stop when every score a
+/// person reads has a relative standard error of at most kJudgeMaxError (or at the cap).
+inline constexpr int kJudgePilotSpp = 128;
+inline constexpr double kJudgeMaxError = 0.01;
+/// Replicates of the standard-error estimate (Judge::scoreWithErrors): the SE itself is then
+/// known to about 1/sqrt(2·(R − 1)) = 13 % of its value.
+inline constexpr int kJudgeReplicates = 32;
+inline constexpr double kDarkTexel = 1e-3;
+
+struct JudgeOptions {
+    /// Samples per pixel of the estimate (both halves together); 0: in rounds from
+    /// kJudgePilotSpp until the scores' standard errors are small (judgeInRounds), at most
+    /// kJudgeDefaultSpp.
+    int spp = 0;
+    uint64_t seed = kJudgeSeed;      // the judge's seed (a second judge uses another)
+    std::optional<int> maxDepth;     // default: the scene's render.max_depth
+    ObjectiveOptions objective;      // λ and the regulariser of eq. 2 and U (λ = 30)
+    bool rgb = false;                // RGB T: RGB env maps are scored in colour
+    std::filesystem::path truth;     // label mask in height-map space (optional)
+    std::filesystem::path cacheDir;  // where the estimate is cached ("" = not stored)
+    int threads = 0;
+    /// How a person sees the image: with it, each region's visibility in JND too
+    /// (perception/JndVisibility.h). Judge(scene, ...) takes the scene's when unset.
+    std::optional<ViewingModel> viewing;
+};
+
+/// The scene's viewing model (its "viewing" block, perception/ViewingModel.h), one pixel of
+/// its camera spanning Camera::mmPerPixel of the part.
+ViewingModel viewingFor(const Scene& scene);
+
+struct JudgeScore {
+    std::string name;
+    LossParts eq2, unbiased;
+    double meanE = 0, sparsity = 0;
+    /// Mean luminance over the part relative to the white furnace (E = 1): 1 = as bright as a
+    /// white sky can make it (a well-exposed inspection image sits between 0.05 and 0.8).
+    double brightness = 0;
+    std::vector<RegionVisibility> visibility;  // one per truth region (empty without truth)
+    int spp = 0;                               // of the estimate it was scored on
+    /// Standard errors of the scores above (Judge::scoreWithErrors), when estimated.
+    struct Errors {
+        int replicates = 0;
+        double eq2 = 0, unbiased = 0, brightness = 0;
+        double combinedVisibility = 0;  // of combinedVisibility(visibility) (NaN without one)
+        std::vector<double> visibility, contrast;  // per region, in visibility's order
+    };
+    std::optional<Errors> se;
+};
+
+/// The score a person reads whose standard error is the largest relative to its size:
+/// SE / max(|score|, floor), the floor being the score's scale near zero (a score near 0 is
+/// held to an absolute SE of floor·kJudgeMaxError instead of an ever smaller relative one):
+/// eq. 2 and U 1e-3, brightness 0.05 (below it a light is not eligible as an answer), each
+/// region's visibility and the combined visibility 0.1, contrast 0.01 (about the least the eye
+/// sees). NaN scores are skipped. relative 0 without errors.
+struct WorstError {
+    double relative = 0;
+    std::string score;  // e.g. "lamp: visibility scratch"
+};
+WorstError worstRelativeError(const JudgeScore& score);
+
+/// The spp of the judge's next round: the standard error falls as 1/sqrt(spp), so
+/// spp·(worst/target)², to a power of two, at least twice spp and at most cap; 0 when the
+/// worst relative error is within target or spp is at the cap.
+int nextJudgeSpp(int spp, double worstRelative, int cap, double target = kJudgeMaxError);
+
+class Judge {
+  public:
+    /// Traces (or reads from options.cacheDir) the judge's estimate of `scene`, and projects
+    /// options.truth into the image. Throws InputError for a mismatched truth mask.
+    Judge(const Scene& scene, const JudgeOptions& options);
+    ~Judge();
+    Judge(const Judge&) = delete;
+    Judge& operator=(const Judge&) = delete;
+    /// A judge on a given two-plane estimate that outlives it (optimize's held-out estimate,
+    /// tests). `labels`: image-space labels (width*height) or empty; `reference`: where the
+    /// defect-free surface of the visibility may lie (width*height, nonzero) or empty (the part).
+    Judge(const TransportSource& estimate, const JudgeOptions& options,
+          std::vector<uint8_t> labels = {}, std::vector<RegionLabel> legend = {},
+          std::vector<uint8_t> reference = {});
+
+    /// Scores E (gray: one value per texel; RGB: three, needs options.rgb).
+    JudgeScore score(std::span<const double> E, const std::string& name = {}) const;
+    /// score() with the standard error of every score (JudgeScore::se), by a wild bootstrap on
+    /// the two halves: pixels' samples are independent, and d_p = Y_a,p − Y_b,p has mean 0
+    /// and variance 2·var(Y_a,p), so each of `replicates` replicates perturbs the halves by
+    /// ±d_p/√2 with independent signs per pixel and half (a fixed seed: the same E gives the
+    /// same errors) — the same light's white-furnace image with the same signs — and scores
+    /// them again; the SE is the replicates' spread (1.4826 × their median absolute deviation,
+    /// a standard deviation robust to a replicate whose denominator nearly vanished; to first
+    /// order the delta
+    /// method's, without the scores' derivatives). It falls as 1/sqrt(spp).
+    JudgeScore scoreWithErrors(std::span<const double> E, const std::string& name = {},
+                               int replicates = kJudgeReplicates) const;
+    /// The mean luminance image (T_a + T_b)/2 · E.
+    std::vector<double> meanImage(std::span<const double> E) const;
+    /// E for an env map on the judge's grid: gray maps as they are; RGB maps in colour with an
+    /// RGB judge, else by their luminance (exact for a gray conductor).
+    std::vector<double> envVector(const EnvMap& env) const;
+
+    const TransportSource& estimate() const { return *estimate_; }
+    const std::vector<uint8_t>& partMask() const { return estimate_->file.matrix.objectMask; }
+    const std::vector<uint8_t>& labels() const { return labels_; }
+    const std::vector<RegionLabel>& legend() const { return legend_; }
+    const JudgeOptions& options() const { return options_; }
+
+  private:
+    std::optional<TransportSource> owned_;
+    const TransportSource* estimate_ = nullptr;
+    JudgeOptions options_;
+    std::vector<uint8_t> labels_;
+    std::vector<RegionLabel> legend_;
+    std::vector<uint8_t> reference_;
+    std::unique_ptr<ImageObjective> eq2_;          // eq. 2 on the part mask, built once
+    std::unique_ptr<UnbiasedObjective> unbiased_;  // U on the part mask, built once
+
+    void buildObjectives();
+    /// The scores from the light's half images and the white furnace's (means: (a + b)/2
+    /// unless given).
+    JudgeScore scoreImages(std::span<const double> E, std::span<const double> ya,
+                           std::span<const double> yb, std::span<const double> y,
+                           std::span<const double> wa, std::span<const double> wb,
+                           std::span<const double> w, bool withJnd = true) const;
+};
+
+/// The judge in rounds (JudgeOptions::spp 0): scores `lights` (name, E) with their errors on
+/// judgeAt(spp) from `spp` on; while a score's relative error exceeds `target` and spp is below
+/// `cap`, asks judgeAt(nextJudgeSpp(...)) and scores again. judgeAt returns a judge on the
+/// estimate at that spp, which must outlive the next call. The scores are those of the last
+/// round (so the same seed gives the same numbers); with a fixed spp, spp == cap: one round.
+struct JudgeRound {
+    int spp = 0;
+    WorstError worst;
+};
+struct JudgedRounds {
+    std::vector<JudgeScore> scores;  // in the lights' order, of the last round
+    std::vector<JudgeRound> rounds;
+    bool met = false;  // every error within target
+    int spp() const { return rounds.empty() ? 0 : rounds.back().spp; }
+    /// "128 spp: SE <= 1 % (worst 0.62 %, lamp: U)" or "... at the cap 1024 spp: worst ..."
+    std::string describe(double target = kJudgeMaxError) const;
+};
+JudgedRounds judgeInRounds(const std::function<const Judge&(int spp)>& judgeAt,
+                           const std::vector<std::pair<std::string, std::vector<double>>>& lights,
+                           int spp, int cap, double target = kJudgeMaxError);
+
+/// The judge's estimate for a scene (cached by fingerprint in cacheDir, traced otherwise), at
+/// options.spp (0: kJudgeDefaultSpp).
+TransportSource judgeEstimate(const Scene& scene, const JudgeOptions& options);
+
+/// The viewing model as JSON: pixels_per_degree, white_cd_m2, text (ViewingModel::describe).
+nlohmann::ordered_json viewingJson(const ViewingModel& view);
+
+/// The score as JSON: name, eq2, unbiased, mean_E, sparsity, visibility (per region: name,
+/// value, pixels, visibility, rms_gradient, clean_rms_gradient, weber, jnd, jnd_frequency_cpd,
+/// mask_contrast, luminance_cd_m2), eq2_parts, unbiased_parts, spp, and with errors `se` (eq2,
+/// unbiased, brightness, combined_visibility, visibility and contrast per region, replicates).
+nlohmann::ordered_json toJson(const JudgeScore& score);
+
+/// The judge's rounds as JSON: [{spp, worst_relative_se, worst_score}, ...].
+nlohmann::ordered_json roundsJson(const JudgedRounds& rounds);
+
+/// A fixed-width table of scores, one row per light (for the terminal); the regions' columns
+/// worst first (by the first light's visibility, ascending). With errors, the standard error
+/// relative to each score is printed beside it ("±0.4%").
+std::string formatJudgeTable(const std::vector<JudgeScore>& scores);
+
+}  // namespace sl

@@ -1,0 +1,172 @@
+#include "app/pipeline/TrainingNoise.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/Text.h"
+
+namespace sl {
+
+TransportSource validationEstimate(const Scene& scene, const PrecomputeOptions& training,
+                                   uint64_t trainingSeed, const std::filesystem::path& cacheDir,
+                                   int spp) {
+    PrecomputeOptions o = training;
+    if (spp > 0) o.spp = spp;
+    o.seed = trainingSeed + kValidationSeedOffset;
+    o.sampleSets = 2;
+    o.label = "validation estimate";
+    return transportForScene(scene, o, cacheDir);
+}
+
+int defectSppFactor(size_t defectPixels, size_t partPixels) {
+    int f = kDefectSppScale;
+    while (f > 1 && static_cast<double>(defectPixels) * (f - 1) >
+                        kDefectSppBudget * static_cast<double>(partPixels))
+        f /= 2;
+    return defectPixels == 0 ? 1 : f;
+}
+
+std::vector<uint8_t> defectSppScale(const std::vector<uint8_t>& defects, int factor) {
+    if (factor <= 1) return {};
+    std::vector<uint8_t> s(defects.size(), 1);
+    for (size_t p = 0; p < s.size(); ++p)
+        if (defects[p]) s[p] = static_cast<uint8_t>(factor);
+    return s;
+}
+
+bool figureHigherIsBetter(ObjectiveKind kind) {
+    switch (kind) {
+        case ObjectiveKind::Paper:
+        case ObjectiveKind::Unbiased:
+            return false;
+        case ObjectiveKind::Defects:
+            return true;
+    }
+    return false;
+}
+
+double trainingFigure(ObjectiveKind kind, const LossParts& parts) {
+    switch (kind) {
+        case ObjectiveKind::Paper:
+        case ObjectiveKind::Unbiased:
+            return parts.total;
+        case ObjectiveKind::Defects:
+            // L_vis = ψ(g(R)) − φ(g(D)) = −2·log(visibility) with the objective's own floors: a
+            // light whose reference energy the estimate's noise pushed below the floor has an
+            // enormous visibility on that estimate, and this says so.
+            return std::exp(-0.5 * parts.lGrad);
+    }
+    return parts.total;
+}
+
+double trainingGap(ObjectiveKind kind, double training, double validation) {
+    const double better =
+        figureHigherIsBetter(kind) ? training - validation : validation - training;
+    if (validation == 0) return better > 0 ? std::numeric_limits<double>::infinity() : 0.0;
+    return better / std::abs(validation);
+}
+
+const char* gapVerdictName(GapVerdict v) {
+    switch (v) {
+        case GapVerdict::Within:
+            return "within";
+        case GapVerdict::OverFit:
+            return "over-fit";
+        case GapVerdict::ValidationNoise:
+            return "validation noise";
+    }
+    return "within";
+}
+
+GapVerdict gapVerdict(double gap, double se, double maxGap, bool validationAtMost) {
+    if (std::isnan(se)) return validationAtMost ? GapVerdict::OverFit : GapVerdict::ValidationNoise;
+    if (gap - kGapSigmas * se > maxGap) return GapVerdict::OverFit;
+    if (se > maxGap) return GapVerdict::ValidationNoise;
+    return GapVerdict::Within;
+}
+
+double trainingGapError(ObjectiveKind kind, const TransportLoss& onValidation,
+                        std::span<const double> E, uint64_t seed, int replicates) {
+    const std::vector<HalfImages> images{onValidation.halfImages(E)};
+    const LossParts parts = onValidation.evaluateImages(images.front(), E);
+    const double figure = trainingFigure(kind, parts);
+    if (parts.clamped || !(std::abs(figure) > 0)) return std::numeric_limits<double>::quiet_NaN();
+    const double se =
+        wildBootstrapErrors(images, seed, replicates, [&](std::span<const HalfImages> r) {
+            return std::vector<double>{trainingFigure(kind, onValidation.evaluateImages(r[0], E))};
+        }).front();
+    return se / std::abs(figure);
+}
+
+bool validationSppFree(ObjectiveKind kind) {
+    return kind != ObjectiveKind::Paper;
+}
+
+std::optional<int> nextValidationSpp(int spp, double se, const TrainingNoiseOptions& o) {
+    const int next =
+        nextJudgeSpp(spp, std::isnan(se) ? std::numeric_limits<double>::infinity() : se,
+                     o.maxValidationSpp, o.maxGap);
+    if (next <= spp) return std::nullopt;
+    return next;
+}
+
+std::optional<int> nextTrainingSpp(int spp, double gap, const TrainingNoiseOptions& o) {
+    if (spp >= o.maxSpp) return std::nullopt;
+    // The noise's share of the gap falls as 1/spp: aim at half the tolerance.
+    const double wanted = std::isfinite(gap) ? spp * gap / (0.5 * o.maxGap) : double(o.maxSpp);
+    int n = 2 * spp;
+    while (n < o.maxSpp && n < wanted && n < kMaxSppGrowth * spp) n *= 2;
+    return std::min(n, o.maxSpp);
+}
+
+std::optional<LightGrid> nextLightGrid(const LightGrid& grid, int envWidth, int envHeight) {
+    const int w = grid.perTexel() ? envWidth : grid.width;
+    const int h = grid.perTexel() ? envHeight : grid.height;
+    const int nw = std::max(1, static_cast<int>(std::lround(w / std::sqrt(2.0))));
+    const int nh = std::max(2, static_cast<int>(std::lround(h / std::sqrt(2.0))));
+    if (nw * nh < kCoarsestLightNodes || (nw == w && nh == h)) return std::nullopt;
+    return LightGrid{nw, nh};
+}
+
+std::string describeTrainingNoise(const TrainingNoiseSummary& s) {
+    if (s.rounds.empty()) return "not measured";
+    auto pct = [](double x) { return formatNumber(100.0 * x, 3) + " %"; };
+    std::string out;
+    for (size_t k = 0; k < s.rounds.size(); ++k) {
+        const TrainingNoiseRound& r = s.rounds[k];
+        out += (k ? "; " : "") + std::to_string(r.spp) + " spp" +
+               (r.grid.perTexel() ? std::string() : ", " + r.grid.name()) +
+               (r.validationSpp > r.spp ? ", V " + std::to_string(r.validationSpp) + " spp"
+                                        : std::string()) +
+               ": train/validation gap " + pct(r.gap) +
+               (std::isfinite(r.gapError) ? " ± " + pct(r.gapError) : std::string(" ± ?"));
+    }
+    const std::string on = s.grid().perTexel() ? std::string() : " on " + s.grid().name();
+    const std::string tol = pct(s.maxGap);
+    const std::string noise = "within " + tol + " plus what V's noise explains";
+    const std::string unresolved =
+        ": within what V's noise explains, but V at " +
+        std::to_string(std::max(s.rounds.back().validationSpp, s.spp())) + " spp cannot resolve " +
+        tol +
+        ", so the gap is not resolved at this cost (the light is "
+        "kept, V's noise not chased)";
+    if (!s.adapted)
+        out += s.met          ? " (the given spp" + on + "; " + noise + ")"
+               : s.unresolved ? " (the given spp" + on + ")" + unresolved
+                              : " (the given spp" + on + ": ABOVE " + tol +
+                                    ", so the light partly fits the training estimate's noise; "
+                                    "leave spp to the rule or raise it)";
+    else if (s.met)
+        out += " -> " + std::to_string(s.spp()) + " spp" + on + " (" + noise + ")";
+    else if (s.unresolved)
+        out += " -> " + std::to_string(s.spp()) + " spp" + on + unresolved;
+    else
+        out +=
+            " -> " + std::to_string(s.spp()) + " spp" + on + ", the most spp the rule traces" +
+            (s.gridAdapted ? " and the coarsest light it searches" : " on the light's given grid") +
+            ", still above " + tol + ": no light is trusted on its training estimate alone";
+    return out;
+}
+
+}  // namespace sl

@@ -1,0 +1,227 @@
+// Noise-aware training (docs/DESIGN.md "Noise is the trap"): how many samples per pixel the
+// training estimate of T needs so that the optimum does not fit its noise.
+//
+// An optimizer that minimizes a loss on one Monte Carlo estimate of T finds the light that is
+// best on that estimate: part of its score is the estimate's noise, which an independent
+// estimate does not share. The rule measures that directly, on the part and for the objective
+// in use:
+//
+//   1. T (the training estimate, spp n) and V (the validation estimate: the same scene, spp (or
+//      more, step 4) and path length, two sample sets, the seed training seed +
+//      kValidationSeedOffset, disjoint from every training seed and from the judge's) are traced
+//      (both cached);
+//   2. the search runs on T as it would anyway; its E* is scored on T and on V;
+//   3. the gap (trainingGap) is how much better E* looks on T than on V, relative to V:
+//        paper, unbiased (losses, lower is better):  gap = (L_V − L_T) / L_V
+//        defects (visibility exp(−L_vis/2), higher is better): gap = (v_T − v_V) / v_V
+//      and its standard error SE (trainingGapError) is V's own noise: the wild bootstrap on V's
+//      two halves that gives the judge's errors (core/WildBootstrap.h), SE(f_V)/|f_V|, the
+//      gap's SE when there is no over-fit (the hypothesis the verdict tests). A gap can be large
+//      with no over-fit
+//      at all when V's figure of E* is noisy (few defect pixels on a rough part), so the gap
+//      is weighed against its SE (gapVerdict, kGapSigmas = 2):
+//        over-fit          gap − 2·SE > maxGap: V's noise does not explain it (at 2 SE one-sided
+//                          a light whose true gap is maxGap is sent on by V's noise 2.3 % of the
+//                          time; 2 rather than 1.64 since 32 replicates know the SE to ±13 %);
+//        validation noise  otherwise, while SE > maxGap: V cannot tell a gap of maxGap from 0
+//                          (or V's figure of E* is on the objective's floor: its gradient in
+//                          the defects below V's noise; at V's most spp that is over-fit);
+//        within            otherwise: the gap is within maxGap plus what V's noise explains.
+//   4. within: n (and the grid) is kept. Validation noise: V, not T, gets more samples — V's
+//      spp rises (nextValidationSpp: SE falls as 1/sqrt(spp), so spp·(SE/maxGap)², a power of
+//      two, at least 2×, at most maxValidationSpp, the judge's most) and E* is scored again on
+//      it, the same T, the same search; at that cap the run says the gap cannot be resolved at
+//      this cost and keeps the light (it does not chase V's noise with T's spp or a coarser
+//      light); with a given spp V keeps T's (the gap is only measured). The paper
+//      objective's eq. 2 is biased by noise (Σ|ΔY| grows with it), so its V keeps T's spp and
+//      T's spp rises instead.
+//      Over-fit: the part of the gap the noise makes falls as 1/spp (the optimizer's gain on noise
+//      is proportional to the noise's variance), so the next n is the smallest power of two ≥ 2n
+//      with gap·n/n' ≤ maxGap/2 (half the tolerance, so one more trace usually settles it), at most
+//      kMaxSppGrowth·n (a gap far above the tolerance is often a cliff the noise opened — e.g. the
+//      defect objective's reference energy pushed below its floor — which closes long before 1/spp
+//      predicts) and at most maxSpp; back to 1.
+//   5. Over-fit at maxSpp (or a given spp): the light's degrees of
+//      freedom are the other knob: the search runs again on the same T and V with the light on
+//      a coarser grid of nodes (objective/CoarseLight.h), each step √2 fewer nodes per side
+//      (nextLightGrid), until the gap is no longer over-fit or the grid has fewer than
+//      kCoarsestLightNodes nodes. The optimizer's gain on noise grows with the directions it
+//      can combine: on four held-out parts at 512 spp (defects objective) the gap was 17-166 %
+//      per texel and 0.1-7 % on 24×12 nodes, at 0.8-0.98 of the per-texel light's visibility
+//      by the judge. A search on fewer nodes is also faster (fewer, cheaper evaluations), so
+//      a step costs a few seconds and no trace.
+//
+// Every round (T's spp, the grid, V's spp, both figures, the gap, its SE and the verdict) is
+// printed and recorded. A given spp is kept: its gap is still measured, and a gap above
+// maxGap is warned about. When maxSpp is reached over-fit, the run says the light is not
+// trustworthy on its own and the self-checked answer (app/Answer.h) decides against the
+// references.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "app/pipeline/Judge.h"
+#include "app/pipeline/Transport.h"
+#include "objective/CoarseLight.h"
+#include "objective/Objective.h"
+#include "objective/ObjectiveKind.h"
+#include "objective/TransportLoss.h"
+
+namespace sl {
+
+/// Region supersampling (docs/DESIGN.md "Noise is the trap"): the defects objective's g(D) is
+/// a mean over the few pixel pairs of the defect region (often 1-5 % of the part), so at any spp
+/// its noise dwarfs the reference's (thousands of pairs) and it is what the optimum fits. The
+/// defect pixels take kDefectSppScale times the spp (a per-pixel multiplier of the trace,
+/// RenderOptions::sppScale), or the largest power of two below it whose extra samples stay
+/// within kDefectSppBudget of the part's: the noise of g(D) falls by that factor for a fraction
+/// of the cost of raising spp everywhere.
+inline constexpr int kDefectSppScale = 32;
+inline constexpr double kDefectSppBudget = 0.5;
+
+/// The multiplier of the defect pixels by the rule above (1 when none is affordable):
+/// `defectPixels` of the `partPixels` the camera sees of the part.
+int defectSppFactor(size_t defectPixels, size_t partPixels);
+/// The per-pixel multipliers: `factor` on the nonzero pixels of `defects`, 1 elsewhere; empty
+/// when factor is 1 (the plain trace).
+std::vector<uint8_t> defectSppScale(const std::vector<uint8_t>& defects, int factor);
+
+/// The validation estimate's seed: the training seed plus this ("valid"). It is not in any
+/// training seed range a user can reach with --planes (< 2^20) and not the judge's seed.
+inline constexpr uint64_t kValidationSeedOffset = 0x76616C6964ULL << 20;
+
+/// The most one round multiplies the training spp by. 8: with the defect pixels supersampled
+/// the defects objective's gap at 64 spp still predicts thousands of spp, and every round is
+/// traced and searched from scratch (the last round's T and E* do not depend on the rounds
+/// before it), so a 64 → 256 → 512 ladder spent a third of its time on the 256 round.
+inline constexpr int kMaxSppGrowth = 8;
+
+/// The coarsest light grid the rule tries (step 5): below this many nodes a light cannot aim
+/// at a lay direction any more (a 9×4 grid's nodes are 40° apart in azimuth).
+inline constexpr int kCoarsestLightNodes = 32;
+
+/// The next coarser grid of step 5 after `grid` on an envWidth × envHeight env map: each side
+/// divided by √2 (rounded, the height at least 2); nullopt below kCoarsestLightNodes nodes.
+std::optional<LightGrid> nextLightGrid(const LightGrid& grid, int envWidth, int envHeight);
+
+/// How many of its standard errors a gap may exceed maxGap by before it counts as over-fit
+/// (header, step 3).
+inline constexpr double kGapSigmas = 2.0;
+
+struct TrainingNoiseOptions {
+    /// Measure the gap and raise spp until it is within maxGap (false: keep the given spp and
+    /// only warn).
+    bool adapt = true;
+    /// Coarsen the light's grid (step 5) when the spp cannot be raised and the gap is large
+    /// (false: the grid given is kept).
+    bool adaptGrid = true;
+    double maxGap = 0.05;
+    /// Half the judge's default spp (app/Judge.h): T and V together never trace more samples
+    /// than the judge's estimate does, so the rule at most about doubles a run's tracing.
+    int maxSpp = kJudgeDefaultSpp / 2;
+    /// The most spp V is traced at when its own noise hides the gap (step 4): the judge's most,
+    /// so V never needs more samples than an estimate the judge itself trusts.
+    int maxValidationSpp = kJudgeDefaultSpp;
+};
+
+/// The validation estimate V for a training trace of `scene` made with `training` (its spp,
+/// path length, pixels and channels, already resolved) and seed `trainingSeed`: the same trace
+/// with two sample sets and the seed trainingSeed + kValidationSeedOffset, cached in cacheDir
+/// like transportForScene.
+/// `spp` > 0 traces V at that spp instead of the training trace's (step 4).
+TransportSource validationEstimate(const Scene& scene, const PrecomputeOptions& training,
+                                   uint64_t trainingSeed, const std::filesystem::path& cacheDir,
+                                   int spp = 0);
+
+/// The verdict on a round's gap weighed against its standard error (header, step 3).
+enum class GapVerdict { Within, OverFit, ValidationNoise };
+/// "within", "over-fit", "validation noise".
+const char* gapVerdictName(GapVerdict verdict);
+/// Over-fit when gap − kGapSigmas·se > maxGap; else validation noise when se > maxGap; else
+/// within. An unknown SE (NaN: V's figure of E* is on the objective's floor, or the bootstrap
+/// could not form it in half its replicates) is validation noise while V can take more samples
+/// (`validationAtMost` false) and over-fit once it cannot: V's most samples do not see what T
+/// shows.
+GapVerdict gapVerdict(double gap, double se, double maxGap, bool validationAtMost);
+
+/// One training trace of the rule: its spp, E*'s figure on T and on V, the gap, the seconds
+/// the round cost (traces, the search and the scoring).
+struct TrainingNoiseRound {
+    int spp = 0;
+    LightGrid grid;                       // the grid E* was searched on
+    double training = 0, validation = 0;  // trainingFigure of E* on T and on V
+    double gap = 0;
+    double seconds = 0;
+    int validationSpp = 0;  // V's spp (0: T's)
+    double gapError = 0;    // the gap's standard error, from V's noise (trainingGapError)
+    GapVerdict verdict = GapVerdict::Within;
+    std::string decision;  // what the rule did next: "kept", "T at 128 spp", "V at 1024 spp", ...
+};
+
+/// What the rule did.
+struct TrainingNoiseSummary {
+    std::vector<TrainingNoiseRound> rounds;
+    bool adapted = false;      // the rule chose spp (false: a given spp was kept)
+    bool gridAdapted = false;  // the rule may coarsen the light (false: a given grid was kept)
+    bool met = false;          // the last round's verdict is within (step 3)
+    /// The last round's verdict is validation noise at V's most spp: the gap cannot be
+    /// resolved at this cost (the light is kept, not chased).
+    bool unresolved = false;
+    double maxGap = 0.05;
+    /// Seconds spent beyond the last round (the earlier rounds' traces and searches): what the
+    /// rule added to a run that would have used the last round's spp from the start.
+    double secondsAdded = 0;
+    std::string reason;  // one line for the log and summary.json
+    int spp() const { return rounds.empty() ? 0 : rounds.back().spp; }
+    LightGrid grid() const { return rounds.empty() ? LightGrid{} : rounds.back().grid; }
+    double gap() const { return rounds.empty() ? 0.0 : rounds.back().gap; }
+    double gapError() const { return rounds.empty() ? 0.0 : rounds.back().gapError; }
+};
+
+/// The figure of the objective the gap is measured on: the loss for paper and unbiased (lower
+/// is better), the defects' visibility exp(−L_vis/2) for defects (higher is better; L_vis =
+/// lGrad of the defects objective's LossParts, −log(g(D)/g(R)) with its floors, so this is
+/// sqrt(g(D)/g(R)) where both are above the floor).
+double trainingFigure(ObjectiveKind kind, const LossParts& parts);
+bool figureHigherIsBetter(ObjectiveKind kind);
+/// How much better E* looks on its training estimate than on the validation estimate, as a
+/// fraction of the validation figure (header, step 3); ≤ 0 when it looks no better. +inf when
+/// the validation figure is 0 and the training one is not.
+double trainingGap(ObjectiveKind kind, double training, double validation);
+
+/// The standard error of E*'s gap (header, step 3) under the hypothesis the verdict tests (no
+/// over-fit: E*'s figure on T is one more estimate of its figure on V): the standard error of
+/// E*'s figure on V relative to that figure, SE(f_V)/|f_V|, the gap's at gap 0 by the delta
+/// method. (The gap's own spread at a large gap is (1 + gap) times this: a light that shows
+/// the defects nothing has a near-zero f_V whose relative noise is large, and that spread would
+/// excuse the very over-fit the rule is there to catch.) `onValidation` is the objective in use
+/// through V (two planes), E is E*; SE(f_V) is the wild bootstrap of V's half images
+/// (core/WildBootstrap.h) with `replicates` replicates. NaN when E*'s loss on V is clamped (a
+/// label's gradient, or G, below the objective's floor: V shows the defects no gradient, so its
+/// figure is the floor's, not a noisy measure), f_V is 0, or fewer than half the replicates
+/// give a finite figure.
+double trainingGapError(ObjectiveKind kind, const TransportLoss& onValidation,
+                        std::span<const double> E, uint64_t seed,
+                        int replicates = kJudgeReplicates);
+
+/// Whether V may be traced at more spp than T (step 4): its figure's expectation does not
+/// depend on the spp (U and the defects' visibility are noise-unbiased; eq. 2 is not).
+bool validationSppFree(ObjectiveKind kind);
+/// V's next spp after a round whose gap's standard error is `se` with V at `spp` (step 4):
+/// nextJudgeSpp's rule with target maxGap and cap maxValidationSpp; nullopt at the cap.
+std::optional<int> nextValidationSpp(int spp, double se, const TrainingNoiseOptions& options);
+
+/// The next spp after a round at `spp` with `gap` (header, step 4); nullopt when spp is already
+/// at options.maxSpp.
+std::optional<int> nextTrainingSpp(int spp, double gap, const TrainingNoiseOptions& options);
+
+/// The summary's reason line: the rounds' spp, grids and gaps and the choice (the seconds the
+/// rule added are TrainingNoiseSummary::secondsAdded, printed beside it).
+std::string describeTrainingNoise(const TrainingNoiseSummary& summary);
+
+}  // namespace sl

@@ -1,0 +1,338 @@
+#include "app/pipeline/Transport.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "app/pipeline/Cache.h"
+#include "app/pipeline/HeldOut.h"
+#include "app/pipeline/Judge.h"
+#include "core/Error.h"
+#include "core/Progress.h"
+#include "core/Stopwatch.h"
+#include "core/Text.h"
+#include "io/SceneFile.h"
+#include "objective/Objective.h"
+#include "render/Render.h"
+#include "scene/Scene.h"
+#include "transport/TransportSink.h"
+
+namespace sl {
+
+namespace {
+
+TransportSource trace(const Scene& scene, const RenderOptions& ro, const TransportProvenance& prov,
+                      bool rgb, const std::string& label, const std::filesystem::path& out,
+                      const Stopwatch& clock, bool result = false) {
+    ProgressTask task(label + " (" + std::to_string(scene.camera.width()) + "x" +
+                          std::to_string(scene.camera.height()) + " px, " + std::to_string(ro.spp) +
+                          " spp)",
+                      1);
+    RenderOptions withProgress = ro;
+    withProgress.progress = task.fraction();
+    PrecomputeResult r = precomputeTransport(scene, withProgress, rgb ? 3 : 1);
+    TransportSource s;
+    s.secondsTrace = r.summary.seconds;
+    s.trace = r.summary;
+    if (!out.empty()) writeTransportFile(out, r.matrix, prov, result);
+    s.file.matrix = std::move(r.matrix);
+    s.file.provenance = prov;
+    s.path = out;
+    s.secondsTotal = clock.seconds();
+    return s;
+}
+
+}  // namespace
+
+std::vector<TransportSource> transportSetForScene(const Scene& scene,
+                                                  const PrecomputeOptions& options, int count,
+                                                  const std::filesystem::path& cacheDir) {
+    if (count < 1) throw inputError("planes", "must be >= 1, got " + std::to_string(count));
+    const uint64_t base = options.seed ? *options.seed : scene.desc.render.seed;
+    std::vector<TransportSource> set;
+    for (int k = 0; k < count; ++k) {
+        PrecomputeOptions o = options;
+        o.seed = base + static_cast<uint64_t>(k);
+        set.push_back(transportForScene(scene, o, cacheDir));
+    }
+    return set;
+}
+
+std::string describeTransport(const TransportSource& s) {
+    const TransportMatrix& t = s.file.matrix;
+    char buf[512];
+    std::snprintf(
+        buf, sizeof buf,
+        "transport matrix %dx%d px x %dx%d texels, %s T, %s, nnz %zu (density %.4f), %.1f MB",
+        t.width, t.height, t.envWidth, t.envHeight, t.channels == 3 ? "RGB" : "gray",
+        t.storage == TransportStorage::Sparse ? "CSR" : "dense", t.nnz(), t.density(),
+        static_cast<double>(t.bytes()) / 1e6);
+    std::string out = buf;
+    if (s.trace.rays) {
+        std::snprintf(buf, sizeof buf, "\ntraced %llu rays in %.3f s (%.2f Mrays/s), total %.3f s",
+                      static_cast<unsigned long long>(s.trace.rays), s.trace.seconds,
+                      s.trace.raysPerSecond() / 1e6, s.secondsTotal);
+        out += buf;
+    }
+    return out;
+}
+
+TransportFile readShardOfRank(const std::filesystem::path& list, const Communicator& ranks,
+                              RowShard* rows) {
+    if (!ranks.distributed()) {
+        TransportFile f = readTransportFile(list);
+        if (rows) *rows = RowShard{&ranks, 0, static_cast<size_t>(f.matrix.height)};
+        return f;
+    }
+    if (list.extension() != ".shards")
+        throw inputError(list.string(),
+                         "is one transport matrix; over " + std::to_string(ranks.size()) +
+                             " MPI ranks every rank needs a shard of it",
+                         "list " + std::to_string(ranks.size()) + " shards (`precompute " +
+                             option("rows") + " A:B`) in a .shards file");
+    const std::vector<std::filesystem::path> files = shardListFiles(list);
+    if (files.size() != static_cast<size_t>(ranks.size()))
+        throw inputError(list.string(),
+                         "lists " + std::to_string(files.size()) + " shards for " +
+                             std::to_string(ranks.size()) + " MPI ranks",
+                         "run one rank per shard: mpirun -np " + std::to_string(files.size()));
+    const auto me = static_cast<size_t>(ranks.rank());
+    TransportFile f = readTransportFile(files[me]);
+    const ShardOf mine = shardOf(f, files[me].string());
+    // Every rank's rows, dimensions and inputs' fingerprint (32 hex digits as 8 exact doubles).
+    constexpr size_t kFacts = 14;
+    std::vector<double> facts(kFacts);
+    const TransportMatrix& t = f.matrix;
+    facts[0] = mine.rowBegin;
+    facts[1] = mine.rowEnd;
+    facts[2] = t.width;
+    facts[3] = t.height;
+    facts[4] = static_cast<double>(t.cols());
+    facts[5] = t.channels * 16 + t.planes;
+    for (size_t k = 0; k < 8; ++k)
+        facts[6 + k] =
+            static_cast<double>(std::stoul(mine.fingerprint.substr(4 * k, 4), nullptr, 16));
+    const std::vector<double> all = allGather(ranks, facts);
+    std::vector<std::array<int, 2>> ranges;
+    std::vector<std::string> names;
+    for (size_t r = 0; r < files.size(); ++r) {
+        const double* x = all.data() + r * kFacts;
+        if (!std::equal(x + 2, x + kFacts, all.data() + 2))
+            throw inputError(
+                files[r].string(),
+                "was traced with other inputs than " + files[0].string() +
+                    " (scene, camera, material, spp, seed or max_depth)",
+                "trace every shard of " + list.string() + " with the same scene and options");
+        ranges.push_back({static_cast<int>(x[0]), static_cast<int>(x[1])});
+        names.push_back(files[r].string());
+    }
+    shardRowOwners(ranges, t.height, list.string(), names);
+    const RowShard shard{&ranks, static_cast<size_t>(mine.rowBegin),
+                         static_cast<size_t>(mine.rowEnd)};
+    std::vector<double> mask(f.matrix.objectMask.begin(), f.matrix.objectMask.end());
+    shard.gatherImage(mask, static_cast<size_t>(t.width));
+    for (size_t q = 0; q < mask.size(); ++q) f.matrix.objectMask[q] = mask[q] != 0 ? 1 : 0;
+    if (rows) *rows = shard;
+    f.provenance.inputs = mine.inputs;
+    f.provenance.fingerprint = mine.fingerprint;
+    return f;
+}
+
+bool isTransportFile(const std::filesystem::path& input) {
+    return input.extension() == ".tm" || input.extension() == ".shards";
+}
+
+std::optional<DepthChoice> resolveMaxDepth(const Scene& scene, PrecomputeOptions& o) {
+    if (!o.autoMaxDepth) return std::nullopt;
+    AutoDepthOptions a;
+    a.threads = o.threads;
+    DepthChoice c = autoMaxDepth(scene, a);
+    o.maxDepth = c.maxDepth;
+    o.autoMaxDepth = false;
+    return c;
+}
+
+std::optional<SppChoice> resolveSpp(const Scene& scene, PrecomputeOptions& o,
+                                    const std::vector<uint8_t>& region,
+                                    const std::filesystem::path& cacheDir) {
+    if (!o.autoSpp) return std::nullopt;
+    if (!(o.sppTolerance > 0 && o.sppTolerance < 1))
+        throw inputError(option("tolerance"), "is " + formatNumber(o.sppTolerance, 3),
+                         "use a relative noise in (0, 1), e.g. 0.05");
+    PrecomputeOptions pilot = o;
+    pilot.autoSpp = false;
+    pilot.spp = kSppAutoPilot;
+    pilot.sampleSets = 2;
+    pilot.rgb = false;
+    pilot.label = "spp auto: pilot";
+    const TransportSource src = transportForScene(scene, pilot, cacheDir);
+    const TransportMatrix& t = src.file.matrix;
+    std::vector<uint8_t> mask = t.objectMask;
+    if (!region.empty()) mask = intersectMasks(mask, region);
+    if (std::none_of(mask.begin(), mask.end(), [](uint8_t v) { return v != 0; }))
+        throw inputError("scene", "the pilot trace of spp auto sees none of the part",
+                         "point the camera at the part, or give " + option("spp"));
+    ObjectiveOptions oo;
+    oo.lambda = 0;  // the regulariser's gradient has no noise
+    const ImageObjective lgrad(t.width, t.height, mask, oo);
+    const std::vector<double> E(t.cols(), 0.5);
+    std::vector<double> y(t.rows()), dy(t.rows());
+    std::vector<std::vector<double>> g(2, std::vector<double>(t.cols()));
+    for (int plane = 0; plane < 2; ++plane) {
+        t.applyLuminance(E, y, plane);
+        lgrad.evaluate(y, E, dy);
+        t.applyTransposeLuminance(dy, g[static_cast<size_t>(plane)], plane);
+    }
+    double diff = 0, sum = 0;
+    for (size_t k = 0; k < t.cols(); ++k) {
+        diff += (g[0][k] - g[1][k]) * (g[0][k] - g[1][k]);
+        sum += (g[0][k] + g[1][k]) * (g[0][k] + g[1][k]);
+    }
+    SppChoice c;
+    c.pilotSpp = kSppAutoPilot;
+    c.pilotNoise = sum > 0 ? std::sqrt(diff / sum) : 1.0;
+    int n = kSppAutoPilot;
+    auto noiseAt = [&](int spp) { return c.pilotNoise * std::sqrt(double(kSppAutoPilot) / spp); };
+    while (n < kSppAutoMax && noiseAt(n) > o.sppTolerance) n *= 2;
+    c.spp = n;
+    c.chosenNoise = noiseAt(n);
+    c.reason = "the gradient's relative noise is " + formatNumber(c.pilotNoise, 3) + " at " +
+               std::to_string(kSppAutoPilot) + " spp (two independent halves of a pilot, " +
+               formatNumber(src.secondsTotal, 2) + " s), so " + formatNumber(c.chosenNoise, 3) +
+               " at " + std::to_string(n) + " spp";
+    c.reason += noiseAt(n) <= o.sppTolerance
+                    ? ", the fewest (a power of two) within the tolerance " +
+                          formatNumber(o.sppTolerance, 3)
+                    : ", above the tolerance " + formatNumber(o.sppTolerance, 3) +
+                          " but the most spp auto takes";
+    o.spp = n;
+    o.autoSpp = false;
+    return c;
+}
+
+RenderOptions traceOptions(const Scene& scene, const PrecomputeOptions& o) {
+    if (o.autoSpp) throw std::logic_error("traceOptions: resolve spp auto first (resolveSpp)");
+    if (o.autoMaxDepth)
+        throw std::logic_error("traceOptions: resolve max_depth auto first (resolveMaxDepth)");
+    RenderOptions r = renderOptionsFor(scene);
+    if (o.spp) r.spp = *o.spp;
+    if (o.maxDepth) r.maxDepth = *o.maxDepth;
+    if (o.sampling) r.sampling = *o.sampling;
+    if (!o.pixels.empty()) {  // their size is the tracer's to check
+        if (std::none_of(o.pixels.begin(), o.pixels.end(), [](uint8_t f) { return f != 0; }))
+            throw std::invalid_argument("traceOptions: no pixel to trace");
+        r.pixels = o.pixels;
+    }
+    r.sppScale = o.sppScale;  // its size is the tracer's to check
+    if (o.rowBegin != 0 || o.rowEnd != 0) {
+        const int H = scene.camera.height();
+        if (o.rowBegin < 0 || o.rowEnd > H || o.rowBegin >= o.rowEnd)
+            throw inputError(option("rows"),
+                             std::to_string(o.rowBegin) + ":" + std::to_string(o.rowEnd) +
+                                 " is not a row range of the " + std::to_string(H) + "-row image",
+                             "use A:B with 0 <= A < B <= " + std::to_string(H));
+        r.rowBegin = o.rowBegin;
+        r.rowEnd = o.rowEnd;
+    }
+    if (o.seed) r.seed = *o.seed;
+    r.threads = o.threads;
+    r.sampleSets = o.sampleSets;
+    return r;
+}
+
+TransportSource precomputeToFile(const std::filesystem::path& file,
+                                 const PrecomputeOptions& options, const std::filesystem::path& out,
+                                 const std::vector<std::string>& sceneOverrides) {
+    const Stopwatch clock;
+    auto scene = loadScene(file, sceneOverrides);
+    PrecomputeOptions resolved = options;
+    const auto depth = resolveMaxDepth(*scene, resolved);
+    const auto spp = resolveSpp(*scene, resolved, {}, {});
+    const RenderOptions ro = traceOptions(*scene, resolved);
+    TransportSource s = trace(*scene, ro, transportProvenance(*scene, ro, options.rgb ? 3 : 1),
+                              options.rgb, options.label, out, clock, /*result=*/true);
+    s.autoDepth = depth;
+    s.autoSpp = spp;
+    return s;
+}
+
+TransportSource transportForScene(const Scene& scene, const PrecomputeOptions& options,
+                                  const std::filesystem::path& cacheDir) {
+    const Stopwatch clock;
+    const RenderOptions ro = traceOptions(scene, options);
+    const TransportProvenance prov = transportProvenance(scene, ro, options.rgb ? 3 : 1);
+    if (cacheDir.empty()) return trace(scene, ro, prov, options.rgb, options.label, {}, clock);
+    const auto cached = cacheDir / ("transport-" + prov.fingerprint + ".tm");
+    if (std::filesystem::exists(cached)) {
+        try {
+            TransportSource s;
+            s.file = readTransportFile(cached, prov.fingerprint);
+            s.path = cached;
+            s.cacheHit = true;
+            touchCacheFile(cached);  // its last use, for the cache's size cap (app/Cache.h)
+            s.secondsTotal = clock.seconds();
+            spdlog::info("transport matrix from cache {}", cached.string());
+            return s;
+        } catch (const InputError& e) {
+            spdlog::warn("ignoring cached transport matrix: {}", e.what());
+        }
+    }
+    return trace(scene, ro, prov, options.rgb, options.label, cached, clock);
+}
+
+std::unique_ptr<Scene> sceneOfTransport(const TransportFile& f, const std::string& purpose) {
+    const auto in = nlohmann::json::parse(f.provenance.inputs);
+    if (!in.contains("scene_file"))
+        throw inputError(purpose, "needs the scene, and the transport matrix does not record it",
+                         "pass the scene file instead of the .tm");
+    auto sc = loadScene(std::filesystem::path(in.at("scene_file").get<std::string>()),
+                        in.value("scene_overrides", std::vector<std::string>{}));
+    if (sc->camera.width() != f.matrix.width || sc->camera.height() != f.matrix.height)
+        throw inputError(sc->desc.file.string(), "its camera does not match the transport matrix",
+                         "recompute the transport matrix");
+    return sc;
+}
+
+TransportSource judgeEstimateFor(const TransportFile& training, const Scene& scene, int spp,
+                                 const std::filesystem::path& cacheDir) {
+    using json = nlohmann::json;
+    const json trainingInputs = json::parse(training.provenance.inputs);
+    if (trainingInputs.value("tracer_revision", 1) != kTracerRevision)
+        throw inputError(
+            "transport matrix " + training.provenance.fingerprint,
+            "was traced by an older scratchlight tracer (revision " +
+                std::to_string(trainingInputs.value("tracer_revision", 1)) + ", this one is " +
+                std::to_string(kTracerRevision) +
+                "), so an estimate traced now would not be comparable",
+            "recompute it with `scratchlight precompute`, or pass " + option("heldout") + " none");
+    PrecomputeOptions o;
+    o.spp = spp > 0 ? spp : kJudgeDefaultSpp;
+    o.seed = kJudgeSeed;
+    o.maxDepth = training.provenance.maxDepth;
+    o.rgb = training.matrix.channels == 3;
+    o.sampleSets = 2;
+    o.label = "judge estimate (held out)";
+    TransportSource s = transportForScene(scene, o, cacheDir);
+    // Same scene, camera, material and height map: only the sampling may differ, and the
+    // renderer (a T from another renderer's basis renders, app/ExternalRenderer.h, is judged on
+    // our tracer's estimate: the cross-renderer check).
+    auto strip = [](json j) {
+        for (const char* k :
+             {"render", "planes", "scene_file", "scene_overrides", "renderer", "pixels"})
+            j.erase(k);
+        j["heightmap"].erase("file");
+        j["material"].erase("name");
+        return j;
+    };
+    if (strip(json::parse(s.file.provenance.inputs)) != strip(trainingInputs))
+        throw inputError(scene.desc.file.string(),
+                         "has changed since the transport matrix was computed (camera, material "
+                         "or height map differ)",
+                         "recompute the transport matrix, or pass " + option("heldout") + " none");
+    return s;
+}
+
+}  // namespace sl
