@@ -115,13 +115,15 @@ AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> 
     }
     const ScoredCandidate& a = c.answer();
     const ScoredCandidate& o = c.scored[c.optimized];
-    std::string on = " on the validation estimate (" + a.merit.what + " " +
-                     formatNumber(a.merit.value, 4) + " vs the optimized light's " +
-                     formatNumber(o.merit.value, 4);
-    if (a.merit.what == "JND")  // which kind shows least, the pooled JND and the ratio beside it
-        on += ", of the least visible kind (" + a.merit.leastVisible + " vs " +
-              o.merit.leastVisible + "); all kinds pooled " + formatNumber(a.merit.pooled, 4) +
-              " vs " + formatNumber(o.merit.pooled, 4) + "; visibility ratio " +
+    const bool jnd = a.merit.what == "JND";  // which kind shows least, pooled and ratio beside
+    std::string on = " on the validation estimate (" + a.merit.what +
+                     (jnd ? " of the least visible kind " : " ") + formatNumber(a.merit.value, 4) +
+                     (jnd ? " (" + a.merit.leastVisible + ")" : "") + " vs the optimized light's " +
+                     formatNumber(o.merit.value, 4) +
+                     (jnd ? " (" + o.merit.leastVisible + ")" : "");
+    if (jnd)
+        on += "; all kinds pooled " + formatNumber(a.merit.pooled, 4) + " vs " +
+              formatNumber(o.merit.pooled, 4) + "; visibility ratio " +
               formatNumber(a.merit.visibility, 4) + " vs " + formatNumber(o.merit.visibility, 4);
     on += ")";
     if (!anyEligible)
