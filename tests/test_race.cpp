@@ -151,6 +151,28 @@ TEST(Race, StandingsNameTheWinnerByItsWorstPart) {
     EXPECT_NE(formatRaceStandings(st).find("steady"), std::string::npos);
 }
 
+// Where every configuration has JND (the judge's first figure) the winner is the best worst
+// part in JND over the lamp's, even when the visibility ratio ranks them the other way; one
+// configuration without JND sends the rule back to the ratio for all.
+TEST(Race, TheWinnerIsChosenInJndWhereEveryConfigurationHasIt) {
+    auto row = [](const char* part, const char* config, double vsLamp, double jndVsLamp) {
+        RaceRow r = partRow(part, config, vsLamp, 1.0);
+        r.jndVsLamp = jndVsLamp;
+        return r;
+    };
+    std::vector<RaceRow> medians{
+        row("p1", "ratio-ish", 3.0, 0.7), row("p2", "ratio-ish", 2.0, 1.1),
+        row("p1", "eye", 1.1, 2.0),       row("p2", "eye", 0.9, 1.6),
+        row("p1", kLampConfig, 1.0, 1.0), row("p2", kLampConfig, 1.0, 1.0)};
+    auto st = raceStandings(medians, {"ratio-ish", "eye", kLampConfig});
+    EXPECT_DOUBLE_EQ(st[1].worstJndVsLamp, 1.6);
+    EXPECT_EQ(raceWinner(st), "eye");
+    for (RaceRow& r : medians)
+        if (r.config == std::string("eye")) r.jndVsLamp = std::numeric_limits<double>::quiet_NaN();
+    st = raceStandings(medians, {"ratio-ish", "eye", kLampConfig});
+    EXPECT_EQ(raceWinner(st), "ratio-ish");
+}
+
 // A tiny wide world: a generated part and a "real" texture (an X3P written here, defects
 // inserted as insert-defects does) at 32², two configurations; the lamp's reference row on
 // every part, the standings' median/worst are the median/min of the per-part rows.

@@ -646,12 +646,25 @@ std::vector<RaceStanding> raceStandings(const std::vector<RaceRow>& medians,
 }
 
 std::string raceWinner(const std::vector<RaceStanding>& standings) {
+    // JND when every configuration has it (the judge's first figure), else the ratio.
+    bool jnd = false;
+    for (const RaceStanding& s : standings) {
+        if (s.config == kLampConfig || s.parts == 0) continue;
+        if (!std::isfinite(s.worstJndVsLamp)) {
+            jnd = false;
+            break;
+        }
+        jnd = true;
+    }
+    const double RaceStanding::*worst =
+        jnd ? &RaceStanding::worstJndVsLamp : &RaceStanding::worstVsLamp;
+    const double RaceStanding::*med =
+        jnd ? &RaceStanding::medianJndVsLamp : &RaceStanding::medianVsLamp;
     const RaceStanding* best = nullptr;
     for (const RaceStanding& s : standings) {
         if (s.config == kLampConfig || s.parts == 0) continue;
-        if (!std::isfinite(s.worstVsLamp)) continue;
-        if (!best || s.worstVsLamp > best->worstVsLamp ||
-            (s.worstVsLamp == best->worstVsLamp && s.medianVsLamp > best->medianVsLamp))
+        if (!std::isfinite(s.*worst)) continue;
+        if (!best || s.*worst > best->*worst || (s.*worst == best->*worst && s.*med > best->*med))
             best = &s;
     }
     return best ? best->config : std::string();

@@ -127,8 +127,9 @@ struct RaceRow {
 inline constexpr const char* kLampConfig = "studio-lamp";
 /// How the race names its winner (printed with the table).
 inline constexpr const char* kRaceWinnerRule =
-    "winner: the configuration whose worst part is best (the highest minimum over parts of the "
-    "ratio to the studio lamp; ties: the higher median)";
+    "winner: the configuration whose worst part is best (the highest minimum over parts of its "
+    "JND over the studio lamp's, the judge's first figure; of its visibility ratio over the "
+    "lamp's where a configuration has no JND; ties: the higher median)";
 
 /// One configuration over the parts: the median and the worst (minimum) over parts of its
 /// per-part medians over seeds. A part where the configuration has no figure (no light returned:
@@ -141,8 +142,8 @@ struct RaceStanding {
     std::string worstLampPart;
     double medianVsPaper = 0, worstVsPaper = 0;
     std::string worstPaperPart;
-    /// The same over parts on JND (the lamp's JND over the light's is not the winner's rule;
-    /// shown beside it). NaN when no part has JND.
+    /// The same over parts on JND (the light's least visible kind's JND over the lamp's; the
+    /// winner's rule when every configuration has it). NaN when no part has JND.
     double medianJndVsLamp = std::numeric_limits<double>::quiet_NaN(),
            worstJndVsLamp = std::numeric_limits<double>::quiet_NaN();
     std::string worstJndPart;
