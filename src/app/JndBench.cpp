@@ -1,5 +1,7 @@
 #include "app/JndBench.h"
 
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -93,6 +95,16 @@ JndEvaluationRow evaluationRow(int size, const JndBenchOptions& o,
     return r;
 }
 
+/// User + system CPU seconds of this process so far (every thread).
+double cpuSeconds() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    auto sec = [](const timeval& t) {
+        return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec);
+    };
+    return sec(u.ru_utime) + sec(u.ru_stime);
+}
+
 double worstJnd(const std::optional<JudgeScore>& s) {
     double worst = std::numeric_limits<double>::quiet_NaN();
     if (!s) return worst;
@@ -114,9 +126,11 @@ JndOptimizeSample optimizeOnce(DefectMeasure measure, const JndBenchOptions& o,
     j.cache.dir = cache;
     j.commandLine = "bench jnd";
     const Stopwatch clock;
+    const double cpu0 = cpuSeconds();
     const OptimizeJobSummary s = runOptimizeJob(j);
     JndOptimizeSample x;
     x.seconds = clock.seconds();
+    x.cpuSeconds = cpuSeconds() - cpu0;
     const OptimizeRun& run = s.runs.front();
     x.trace = run.secondsTrace;
     x.search = run.secondsSearch;
@@ -141,6 +155,7 @@ JndOptimizeSample JndOptimizeRow::median() const {
         return v.empty() ? 0.0 : sl::median(v);
     };
     m.seconds = col(&JndOptimizeSample::seconds);
+    m.cpuSeconds = col(&JndOptimizeSample::cpuSeconds);
     m.trace = col(&JndOptimizeSample::trace);
     m.search = col(&JndOptimizeSample::search);
     m.gapError = col(&JndOptimizeSample::gapError);
@@ -199,18 +214,19 @@ std::string JndBenchResult::table() const {
         os << line;
     }
     if (optimize.empty()) return os.str();
-    std::snprintf(line, sizeof line, "  %-8s %8s %8s %8s %8s %8s %8s %8s %6s %6s %8s %8s\n",
-                  "measure", "total s", "trace", "search", "gap SE", "answer", "judge", "rest",
-                  "spp", "rounds", "JND", "lamp JND");
+    std::snprintf(line, sizeof line, "  %-8s %8s %8s %8s %8s %8s %8s %8s %8s %6s %6s %8s %8s\n",
+                  "measure", "total s", "cpu s", "trace", "search", "gap SE", "answer", "judge",
+                  "rest", "spp", "rounds", "JND", "lamp JND");
     os << "optimize --truth on the bundled part at " << options.optimizeSize << "², empty cache ("
        << options.repeats << " interleaved runs each, median per column):\n"
        << line;
     for (const JndOptimizeRow& row : optimize) {
         const JndOptimizeSample m = row.median();
-        std::snprintf(line, sizeof line,
-                      "  %-8s %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %6d %6d %8.3g %8.3g\n",
-                      row.measure.c_str(), m.seconds, m.trace, m.search, m.gapError, m.answer,
-                      m.judge, m.rest, m.spp, m.rounds, m.jnd, m.lampJnd);
+        std::snprintf(
+            line, sizeof line,
+            "  %-8s %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %6d %6d %8.3g %8.3g\n",
+            row.measure.c_str(), m.seconds, m.cpuSeconds, m.trace, m.search, m.gapError, m.answer,
+            m.judge, m.rest, m.spp, m.rounds, m.jnd, m.lampJnd);
         os << line;
     }
     return os.str();
@@ -218,19 +234,20 @@ std::string JndBenchResult::table() const {
 
 std::string JndBenchResult::csv() const {
     std::ostringstream os;
-    os << "row,size,measure,repeat,seconds,direct_s,fourier_s,ratio_s,loss_diff,grad_diff,trace_s,"
+    os << "row,size,measure,repeat,seconds,cpu_s,direct_s,fourier_s,ratio_s,loss_diff,grad_diff,"
+          "trace_s,"
           "search_s,gap_se_s,answer_s,judge_s,rest_s,spp,rounds,jnd,lamp_jnd\n";
     for (const JndEvaluationRow& r : evaluations)
-        os << "evaluation," << r.size << ",jnd,," << r.secondsFourier << ',' << r.secondsDirect
+        os << "evaluation," << r.size << ",jnd,," << r.secondsFourier << ",," << r.secondsDirect
            << ',' << r.secondsFourier << ',' << r.secondsRatio << ',' << r.lossDifference << ','
            << r.gradientDifference << ",,,,,,,,,,\n";
     for (const JndOptimizeRow& row : optimize)
         for (size_t k = 0; k < row.samples.size(); ++k) {
             const JndOptimizeSample& s = row.samples[k];
             os << "optimize," << options.optimizeSize << ',' << row.measure << ',' << k << ','
-               << s.seconds << ",,,,,," << s.trace << ',' << s.search << ',' << s.gapError << ','
-               << s.answer << ',' << s.judge << ',' << s.rest << ',' << s.spp << ',' << s.rounds
-               << ',' << s.jnd << ',' << s.lampJnd << '\n';
+               << s.seconds << ',' << s.cpuSeconds << ",,,,,," << s.trace << ',' << s.search << ','
+               << s.gapError << ',' << s.answer << ',' << s.judge << ',' << s.rest << ',' << s.spp
+               << ',' << s.rounds << ',' << s.jnd << ',' << s.lampJnd << '\n';
         }
     return os.str();
 }

@@ -8,7 +8,9 @@
 //   - The whole `optimize --truth` default on the bundled part at one size from an empty cache,
 //     `--defects-measure jnd` and `ratio` interleaved, with where the time went: tracing T and
 //     the validation estimate V, the searches, the gap's standard error, the self-check, the
-//     judge (its estimate and scoring) and the rest; and the judge's JND of the answer.
+//     judge (its estimate and scoring) and the rest, the CPU seconds beside the wall seconds (on
+//     a machine shared with other jobs the wall time is mostly the others'); and the judge's JND
+//     of the answer.
 #pragma once
 
 #include <filesystem>
@@ -38,16 +40,17 @@ struct JndEvaluationRow {
 /// One optimize run's phases (seconds).
 struct JndOptimizeSample {
     double seconds = 0;
-    double trace = 0;     // T (every round) and V
-    double search = 0;    // the searches of every round (the last one's held-out curve in it)
-    double gapError = 0;  // the gap's standard errors (the wild bootstrap on V)
-    double answer = 0;    // the self-check on V
-    double judge = 0;     // the judge's estimate and its scoring rounds
-    double rest = 0;      // loading, comparisons, figures, report, ...
-    int spp = 0;          // the training spp the rule kept
-    int rounds = 0;       // the noise rule's rounds
-    double jnd = 0;       // the judge's JND of the answer's light (worst label)
-    double lampJnd = 0;   // ... of the studio lamp
+    double cpuSeconds = 0;  // the process's user + system CPU seconds in it (every thread)
+    double trace = 0;       // T (every round) and V
+    double search = 0;      // the searches of every round (the last one's held-out curve in it)
+    double gapError = 0;    // the gap's standard errors (the wild bootstrap on V)
+    double answer = 0;      // the self-check on V
+    double judge = 0;       // the judge's estimate and its scoring rounds
+    double rest = 0;        // loading, comparisons, figures, report, ...
+    int spp = 0;            // the training spp the rule kept
+    int rounds = 0;         // the noise rule's rounds
+    double jnd = 0;         // the judge's JND of the answer's light (worst label)
+    double lampJnd = 0;     // ... of the studio lamp
 };
 
 struct JndOptimizeRow {

@@ -82,6 +82,11 @@ struct OptimizeDefaults {
     int paperMinSpp = 512;
     ObjectiveKind objective = ObjectiveKind::Unbiased;
     ObjectiveKind objectiveWithDefects = ObjectiveKind::Defects;
+    /// The defects objective's JND measure, when no budget is given: its search stops once the
+    /// loss (2·log of the worst label's JND) has fallen by less than the tolerance over that
+    /// many evaluations (OptimizerOptions::stallEvaluations), i.e. the JND grew < 0.5 % in them.
+    int jndStallEvaluations = 200;
+    double jndStallTolerance = 0.01;
 };
 OptimizeDefaults optimizeDefaults();
 
