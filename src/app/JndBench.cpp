@@ -136,7 +136,7 @@ JndOptimizeSample optimizeOnce(DefectMeasure measure, const JndBenchOptions& o,
     x.search = run.secondsSearch;
     for (const TrainingNoiseRound& nr : run.noise.rounds) x.gapError += nr.secondsGapError;
     x.answer = run.answer ? run.answer->seconds : 0.0;
-    x.judge = run.secondsJudge + (s.heldOut ? s.heldOut->secondsTotal : 0.0);
+    x.judge = run.secondsJudge;
     x.rest = x.seconds - x.trace - x.search - x.gapError - x.answer - x.judge;
     x.spp = run.noise.spp();
     x.rounds = static_cast<int>(run.noise.rounds.size());

@@ -241,7 +241,6 @@ struct Plan {
     /// The defect pixels of the defects objective take more samples (app/TrainingNoise.h
     /// defectSppScale); not for black boxes (their renders take one spp) nor shards.
     bool superSampleDefects = false;
-    bool budgetGiven = false;  // the optimizer's iterations were given (else its default)
     const Communicator* ranks = nullptr;  // MPI ranks holding shards of T (null: one process)
     bool writes() const { return !ranks || ranks->root(); }  // this process writes OUTDIR
     std::filesystem::path cacheDir;
@@ -286,7 +285,6 @@ Plan plan(const OptimizeJobOptions& options) {
     if (o.starts.empty())
         for (const std::string& spec : optimizeDefaults().starts)
             o.starts.push_back(parseInitialState(spec));
-    p.budgetGiven = o.optimizer.iterations != 0;
     if (o.optimizer.iterations == 0) o.optimizer.iterations = row.defaultBudget;
     if (o.planes == 0) o.planes = row.defaultPlanes;
     p.blackBox = row.gradient == GradientSource::Renderer;
@@ -905,11 +903,6 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
         so.objective = in.kind;
         so.optimizer = o.optimizer;
         so.optimizer.callback = nullptr;
-        if (!p.budgetGiven && in.kind == ObjectiveKind::Defects &&
-            o.objective.defectMeasure == DefectMeasure::Jnd && so.optimizer.stallEvaluations == 0) {
-            so.optimizer.stallEvaluations = optimizeDefaults().jndStallEvaluations;
-            so.optimizer.stallTolerance = optimizeDefaults().jndStallTolerance;
-        }
         so.planes = o.planes;
         so.starts = o.starts;
         so.continuation = o.continuation;
@@ -1536,6 +1529,7 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                                  "use another " + option("seed"));
             notInRound = judgeClock.seconds();
         }
+        const double secondsHeldOut = notInRound;  // the judge's first estimate
         if (!p.cacheDir.empty() && (!p.tmInput || p.o.heldOut.mode == HeldOutMode::Judge))
             spdlog::info("cache {}", describeCache(cacheContents(p.cacheDir)));
         spdlog::info("mask: {} pixels; writing {}", job.maskPixels, p.o.outDir.string());
@@ -1655,7 +1649,7 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
             checkAnswer(p, in, job, r);
             const Stopwatch judgeClock;
             judgeRun(p, in, job, r);
-            r.run.secondsJudge = judgeClock.seconds();
+            r.run.secondsJudge = secondsHeldOut + judgeClock.seconds();
             r.run.secondsTrace = secondsTrace;
             r.run.secondsSearch = secondsSearch;
             reportRuns.push_back(writeRunOutputs(p, in, job, r));

@@ -82,11 +82,6 @@ struct OptimizeDefaults {
     int paperMinSpp = 512;
     ObjectiveKind objective = ObjectiveKind::Unbiased;
     ObjectiveKind objectiveWithDefects = ObjectiveKind::Defects;
-    /// The defects objective's JND measure, when no budget is given: its search stops once the
-    /// loss (2·log of the worst label's JND) has fallen by less than the tolerance over that
-    /// many evaluations (OptimizerOptions::stallEvaluations), i.e. the JND grew < 0.5 % in them.
-    int jndStallEvaluations = 200;
-    double jndStallTolerance = 0.01;
 };
 OptimizeDefaults optimizeDefaults();
 
@@ -222,8 +217,8 @@ struct OptimizeRun {
     double secondsCollectives = 0;
     /// Where the job's seconds went (`bench jnd`), over every round of the noise rule: tracing
     /// or reading T and the validation estimate, the searches (with their held-out curves), and
-    /// the judge's scoring of the answer (its first estimate: OptimizeJobSummary::heldOut); the
-    /// trace and search seconds are the job's up to this λ.
+    /// the judge (its first estimate, and its rounds scoring the answer); the seconds are the
+    /// job's up to this λ.
     double secondsTrace = 0, secondsSearch = 0, secondsJudge = 0;
 };
 
