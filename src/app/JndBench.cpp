@@ -186,7 +186,7 @@ JndBenchResult runJndBench(const JndBenchOptions& o) {
         }
     }
     if (o.optimizeSize > 0) {
-        ProgressTask task("bench jnd: optimize --truth", 2.0 * o.repeats);
+        ProgressTask task("bench jnd: optimize with the truth labels", 2.0 * o.repeats);
         result.optimize = {{"jnd", {}}, {"ratio", {}}};
         for (int k = 0; k < o.repeats; ++k) {
             throwIfInterrupted();
@@ -217,8 +217,8 @@ std::string JndBenchResult::table() const {
     std::snprintf(line, sizeof line, "  %-8s %8s %8s %8s %8s %8s %8s %8s %8s %6s %6s %8s %8s\n",
                   "measure", "total s", "cpu s", "trace", "search", "gap SE", "answer", "judge",
                   "rest", "spp", "rounds", "JND", "lamp JND");
-    os << "optimize --truth on the bundled part at " << options.optimizeSize << "², empty cache ("
-       << options.repeats << " interleaved runs each, median per column):\n"
+    os << "optimize with the truth labels on the bundled part at " << options.optimizeSize
+       << "², empty cache (" << options.repeats << " interleaved runs each, median per column):\n"
        << line;
     for (const JndOptimizeRow& row : optimize) {
         const JndOptimizeSample m = row.median();
