@@ -11,6 +11,7 @@
 
 #include "TestUtil.h"
 #include "app/bench/GradCheck.h"
+#include "app/bench/JndBench.h"
 #include "app/bench/RenderBench.h"
 #include "app/bench/ScratchMapBench.h"
 #include "app/bench/TargetsBench.h"
@@ -303,6 +304,45 @@ TEST(TargetsBench, ARowPerTargetWithItsBoundAndPhasesInsideTheWallTime) {
     const std::string csv = r.csv();
     EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4);
     EXPECT_TRUE(std::filesystem::exists(dir.path() / "optimize" / "report.html"));
+}
+
+// bench jnd: one evaluation row per size whose two band-filter methods agree to rounding, and an
+// optimize row per measure whose phases lie inside its wall time.
+TEST(JndBench, EvaluationRowsAgreeAndOptimizePhasesFitTheWallTime) {
+    test::TempDir dir("jnd-bench");
+    JndBenchOptions o;
+    o.sizes = {48};
+    o.evaluationSpp = 2;
+    o.evaluations = 1;
+    o.optimizeSize = 48;
+    o.repeats = 1;
+    o.workDir = dir.path();
+    const JndBenchResult r = runJndBench(o);
+    ASSERT_EQ(r.evaluations.size(), 1u);
+    const JndEvaluationRow& e = r.evaluations[0];
+    EXPECT_EQ(e.size, 48);
+    EXPECT_GT(e.secondsDirect, 0);
+    EXPECT_GT(e.secondsFourier, 0);
+    EXPECT_GT(e.secondsRatio, 0);
+    EXPECT_LT(e.lossDifference, 1e-12);
+    EXPECT_LT(e.gradientDifference, 1e-10);
+    ASSERT_EQ(r.optimize.size(), 2u);
+    EXPECT_EQ(r.optimize[0].measure, "jnd");
+    EXPECT_EQ(r.optimize[1].measure, "ratio");
+    for (const JndOptimizeRow& row : r.optimize) {
+        SCOPED_TRACE(row.measure);
+        ASSERT_EQ(row.samples.size(), 1u);
+        const JndOptimizeSample& x = row.samples[0];
+        EXPECT_GT(x.trace, 0);
+        EXPECT_GT(x.search, 0);
+        EXPECT_GT(x.judge, 0);
+        EXPECT_GE(x.rest, 0);
+        EXPECT_GE(x.spp, 1);
+        EXPECT_GE(x.rounds, 1);
+        EXPECT_TRUE(std::isfinite(x.jnd));
+    }
+    const std::string csv = r.csv();
+    EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4);
 }
 
 TEST(ScratchMapBench, MarksTheScratchAndWritesOneRowPerSize) {

@@ -304,6 +304,41 @@ TEST(Optimize, CallbackSeesEveryIterationAndCanStop) {
     }
 }
 
+// The stall stop: a window of evaluations in which the best loss fell by less than the tolerance
+// ends any method ("stalled", not a failure); a tolerance of 0 never stops a run; Adam on a
+// quadratic stops once it has settled, near the minimum, long before its budget.
+TEST(Optimize, AWindowWithoutProgressStopsTheRun) {
+    const Quadratic q;
+    const Problem p = q.problem();
+    for (const std::string& method : optimizerMethods()) {
+        SCOPED_TRACE(method);
+        Options o(method, 400);
+        o.stallEvaluations = 3;
+        o.stallTolerance = 1e9;  // no window can fall that much: stops at the first full window
+        std::vector<double> x(p.dimension, 0.5);
+        OptimizerSummary s = minimize(p, x, o);
+        // (L-BFGS and TNEWTON may converge on the quadratic within the first window.)
+        if (s.evaluations > 3) {
+            EXPECT_EQ(s.termination.rfind("stalled", 0), 0u) << s.termination;
+        }
+        EXPECT_FALSE(s.failed);
+        EXPECT_LE(s.evaluations, 8);  // NLopt: checked at the next improving evaluation
+        EXPECT_DOUBLE_EQ(s.finalLoss, evalAt(p, x));
+    }
+    Options adam("adam", 20000);
+    adam.stallEvaluations = 50;
+    adam.stallTolerance = 0;  // off in effect: the best loss never rises
+    std::vector<double> x(p.dimension, 0.5);
+    OptimizerSummary s = minimize(p, x, adam);
+    EXPECT_EQ(s.evaluations, 20001);
+    adam.stallTolerance = 1e-9;
+    x.assign(p.dimension, 0.5);
+    s = minimize(p, x, adam);
+    EXPECT_EQ(s.termination.rfind("stalled", 0), 0u) << s.termination;
+    EXPECT_LT(s.evaluations, 20001);
+    EXPECT_LT(s.finalLoss - q.minimum(), 1e-6);
+}
+
 TEST(Optimize, RejectsUnknownMethodAndBadOptions) {
     const Problem p = Quadratic().problem();
     std::vector<double> x(p.dimension, 0.5);

@@ -12,6 +12,7 @@
 
 #include "app/bench/DefectMapBench.h"
 #include "app/bench/DepthBench.h"
+#include "app/bench/JndBench.h"
 #include "app/bench/LampsBench.h"
 #include "app/bench/NoiseBench.h"
 #include "app/bench/ReadBench.h"
@@ -144,6 +145,29 @@ int runTargetsBenchCmd(TargetsBenchArgs a) {
         "--heldout, and `lamps part.tm --count %d`\n",
         a.o.scene.empty() ? "the bundled part" : a.o.scene.c_str(), a.o.size, a.o.size, a.o.spp,
         r.precomputeSeconds, a.o.repeats, formatNumber(a.o.lambda).c_str(), a.o.lampCount);
+    writeBenchCsv(a.csv, r.csv());
+    std::printf("wrote %s\n", a.csv.c_str());
+    return kOk;
+}
+
+struct JndBenchArgs {
+    JndBenchOptions o;
+    std::string csv = "bench-jnd.csv";
+};
+
+int runJndBenchCmd(const JndBenchArgs& a) {
+    const JndBenchResult r = runJndBench(a.o);
+    std::printf("%s", r.table().c_str());
+    std::printf(
+        "(the bundled part; evaluation rows: T at %d spp with halves, E = 0.5, the JND objective "
+        "with its band filters direct and through the Fourier domain (the same operator: loss "
+        "diff and grad diff are their relative differences) and the ratio measure, interleaved; "
+        "optimize rows: `optimize scene.json --truth part-truth.png --size %d "
+        "--defects-measure M` from an empty cache, in this process, interleaved; trace: T and "
+        "V of every round; search: every round's; gap SE: the noise rule's standard errors; "
+        "answer: the self-check; judge: its estimate and scoring rounds; JND: the judge's, worst "
+        "label, of the answer and of the studio lamp)\n",
+        a.o.evaluationSpp, a.o.optimizeSize);
     writeBenchCsv(a.csv, r.csv());
     std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
@@ -522,6 +546,33 @@ void registerBench(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     tbc->add_option("-o,--output", tb->csv, "CSV output")->capture_default_str();
     tbc->callback([tb, &run] { run = [tb] { return runTargetsBenchCmd(*tb); }; });
+
+    auto jb = std::make_shared<JndBenchArgs>();
+    CLI::App* jbc = bench->add_subcommand(
+        "jnd",
+        "Seconds of one JND evaluation per image size (band filters direct vs Fourier, and the "
+        "ratio measure), and of optimize --truth on the bundled part, jnd vs ratio, by phase");
+    jbc->add_option("--sizes", jb->o.sizes, "Image sizes (N for NxN) of the evaluation rows")
+        ->delimiter(',')
+        ->check(inRange(16, 4096))
+        ->capture_default_str();
+    jbc->add_option("--spp", jb->o.evaluationSpp, "spp of T (two halves) for the evaluation rows")
+        ->check(inRange(2, 65536))
+        ->capture_default_str();
+    jbc->add_option("--evaluations", jb->o.evaluations, "Timed evaluations per size and method")
+        ->check(inRange(1, 100))
+        ->capture_default_str();
+    jbc->add_option("--optimize-size", jb->o.optimizeSize,
+                    "Image size of the optimize rows (0: no optimize rows)")
+        ->check(inRange(0, 4096))
+        ->capture_default_str();
+    jbc->add_option("--repeats", jb->o.repeats, "Interleaved optimize runs per measure")
+        ->check(inRange(1, 20))
+        ->capture_default_str();
+    jbc->add_option("--work", jb->o.workDir, "Folder for T, the caches and the runs' outputs")
+        ->capture_default_str();
+    jbc->add_option("-o,--output", jb->csv, "CSV output")->capture_default_str();
+    jbc->callback([jb, &run] { run = [jb] { return runJndBenchCmd(*jb); }; });
 
     auto dm = std::make_shared<DefectMapBenchArgs>();
     CLI::App* dmc = bench->add_subcommand(

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <future>
 #include <stdexcept>
 
 #include "core/Dual.h"
@@ -17,7 +16,7 @@ JndObjective::JndObjective(int width, int height, std::vector<uint8_t> part,
     : width_(width),
       height_(height),
       base_(width, height, std::move(part), options),
-      bank_(width, height, base_.mask()),
+      bank_(width, height, base_.mask(), jnd.gaussians),
       o_(jnd) {
     const size_t n = static_cast<size_t>(width) * height;
     if (defects.size() != n) throw inputError(option("defects"), "has the wrong size", "");
@@ -179,20 +178,10 @@ LossParts JndObjective::evaluate(std::span<const double> Ya, std::span<const dou
             dgb[l][p] += 0.5 * dLocal;
         }
     }
-    std::vector<std::vector<double>> da(kJndBands + 1), db(kJndBands + 1);
-    {
-        std::vector<std::future<void>> tasks;
-        for (int j = 0; j <= kJndBands; ++j)
-            tasks.push_back(std::async(std::launch::async, [&, j] {
-                da[j] = bank_.gaussianAdjoint(j, dga[j]);
-                db[j] = bank_.gaussianAdjoint(j, dgb[j]);
-            }));
-        for (auto& t : tasks) t.get();
-    }
+    const auto [da, db] = bank_.adjointSums(dga, dgb);
     const double kappa = o_.band.exposureWeight;
     for (size_t p = 0; p < n; ++p) {
-        double sa = 0, sb = 0;
-        for (int j = 0; j <= kJndBands; ++j) sa += da[j][p], sb += db[j][p];
+        double sa = da[p], sb = db[p];
         if (part[p]) {
             // m = mean_P (Y_a + Y_b)/2; the clip term per pixel (exposureBand's κ·clip).
             const double y = 0.5 * (Ya[p] + Yb[p]);

@@ -54,6 +54,9 @@ inline constexpr double kMinJndLuminance = 0.1;  // cd/m², the least luminance 
 struct JndObjectiveOptions {
     ViewingModel view;            // pixels per degree and the display's white (cd/m²)
     DefectObjectiveOptions band;  // whiteMean (> 0), the exposure band and the dark floor
+    /// How the band filters are computed (perception/BandFilters.h): the same operator either
+    /// way; Direct is the reference `bench jnd` times Fourier against.
+    GaussianMethod gaussians = GaussianMethod::Fourier;
 };
 
 class JndObjective final : public HalfImageObjective {

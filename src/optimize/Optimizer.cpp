@@ -34,6 +34,8 @@
 //                `iterations` = max_num_iterations.
 //
 // relativeFunctionTolerance (0 = off) is NLopt's ftol_rel and Ceres' function_tolerance.
+// stallEvaluations/stallTolerance (0 = off) stop any method once the best loss has fallen by less
+// than the tolerance over that many evaluations (termination "stalled: ..."; not a failure).
 // The callback sees every recorded iteration, iteration 0 first; returning false stops the run
 // with termination "stopped by callback" and x = the point the callback last saw.
 #include "optimize/Optimizer.h"
@@ -42,6 +44,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -120,6 +123,17 @@ bool Run::record(double loss, std::span<const double> x) {
         bestIteration_ = r.iteration;
         bestX_.assign(x.begin(), x.end());
     }
+    if (options_.stallEvaluations > 0 && evaluations_ >= options_.stallEvaluations) {
+        // The best loss recorded by evaluation (now − window), against the best now.
+        double before = std::numeric_limits<double>::infinity();
+        for (const IterationRecord& h : summary.history)
+            if (h.evaluations <= evaluations_ - options_.stallEvaluations)
+                before = std::min(before, h.loss);
+        if (std::isfinite(before) && before - bestLoss_ < options_.stallTolerance) {
+            stalled_ = true;
+            return false;
+        }
+    }
     return !options_.callback || options_.callback(r, x);
 }
 
@@ -190,6 +204,12 @@ void validate(const Problem& problem, const std::vector<double>& x, const Optimi
     if (!(o.relativeFunctionTolerance >= 0) || !std::isfinite(o.relativeFunctionTolerance))
         throw bad(option("relative-function-tolerance"),
                   "is " + formatNumber(o.relativeFunctionTolerance), "use a value >= 0 (0 = off)");
+    if (o.stallEvaluations < 0)
+        throw bad(option("stall-evaluations"), "is " + std::to_string(o.stallEvaluations),
+                  "use a count >= 0 (0 = off)");
+    if (!(o.stallTolerance >= 0) || !std::isfinite(o.stallTolerance))
+        throw bad(option("stall-tolerance"), "is " + formatNumber(o.stallTolerance),
+                  "use a finite value >= 0");
     if (o.population < 0)
         throw bad(option("population"), "is " + std::to_string(o.population),
                   "use a count >= 0 (0 = NLopt's default)");
@@ -291,6 +311,10 @@ OptimizerSummary minimize(const Problem& problem, std::vector<double>& x,
         return run.summary;
     }
     run.finish(x);
+    if (run.stalled())
+        run.summary.termination = "stalled: the loss fell less than " +
+                                  formatNumber(options.stallTolerance) + " over the last " +
+                                  std::to_string(options.stallEvaluations) + " evaluations";
     return run.summary;
 }
 

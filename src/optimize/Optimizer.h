@@ -29,6 +29,12 @@ struct OptimizerOptions {
     double beta1 = 0.9, beta2 = 0.999, epsilon = 1e-8;
     // NLopt / Ceres stopping tolerances (0 = off).
     double relativeFunctionTolerance = 0.0;
+    /// Any method: stop ("stalled") when the best loss has fallen by less than stallTolerance
+    /// over the last stallEvaluations evaluations (0 = off). Unlike a per-step tolerance, one
+    /// short step on a plateau does not end the run: only a window without progress does.
+    /// Checked at each recorded iteration (NLopt's: each improving evaluation).
+    int stallEvaluations = 0;
+    double stallTolerance = 0.0;
     // mlsl: seed of NLopt's random numbers (nlopt::srand, a process-wide generator). MLSL
     // samples a Sobol' sequence up to 1111 dimensions, which the seed does not change; above
     // that (a 25×50 map has 1250 texels) NLopt falls back to pseudo-random points, which it does.

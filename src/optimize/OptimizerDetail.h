@@ -57,6 +57,9 @@ class Run {
     }
     double seconds() const;
     bool progressed() const;  // a recorded loss below the initial one
+    /// record() stopped the run: the best loss fell by less than options().stallTolerance over
+    /// the last options().stallEvaluations evaluations.
+    bool stalled() const { return stalled_; }
 
     OptimizerSummary summary;
 
@@ -67,6 +70,7 @@ class Run {
         bool hasGrad = false;
         bool valid = false;
     };
+    bool stalled_ = false;
 
     const Problem& problem_;
     const OptimizerOptions& options_;

@@ -12,7 +12,7 @@ namespace sl {
 
 BandContrast::BandContrast(int width, int height, std::span<const double> Ya,
                            std::span<const double> Yb, std::span<const uint8_t> part, double white,
-                           const ViewingModel& view)
+                           const ViewingModel& view, GaussianMethod method)
     : width_(width), height_(height), view_(view) {
     const size_t n = static_cast<size_t>(width) * height;
     if (Ya.size() != n || Yb.size() != n || part.size() != n)
@@ -26,8 +26,8 @@ BandContrast::BandContrast(int width, int height, std::span<const double> Ya,
     const double partMean = count ? sum / static_cast<double>(count) : 0.0;
     luminance_ = white > 0 ? view.whiteLuminance * std::clamp(partMean / white, 0.0, 1.0) : 0.0;
 
-    // G_0 .. G_K of each estimate (perception/BandFilters.h), one task per σ.
-    const BandFilterBank bank(width, height, part);
+    // G_0 .. G_K of each estimate (perception/BandFilters.h), one task per estimate.
+    const BandFilterBank bank(width, height, part, method);
     const auto [ga, gb] = bank.gaussians(Ya, Yb);
     productAB_.assign(kJndBands, std::vector<double>(n, 0.0));
     for (int k = 0; k < kJndBands; ++k) {

@@ -66,9 +66,11 @@ struct JndScore {
 /// The band contrasts of one image pair, computed once, scored for any region.
 class BandContrast {
   public:
-    /// white: the image value shown at the display's white (the white furnace's part mean).
+    /// white: the image value shown at the display's white (the white furnace's part mean);
+    /// method: how the band filters are computed (the same operator, rounding apart).
     BandContrast(int width, int height, std::span<const double> Ya, std::span<const double> Yb,
-                 std::span<const uint8_t> part, double white, const ViewingModel& view);
+                 std::span<const uint8_t> part, double white, const ViewingModel& view,
+                 GaussianMethod method = GaussianMethod::Fourier);
 
     /// The JND of `region` (nonzero pixels) over the defect-free surface `clean`.
     JndScore score(std::span<const uint8_t> region, std::span<const uint8_t> clean) const;

@@ -1482,6 +1482,7 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
         // Context first, as each piece is known (the results follow the work).
         // T at `spp` (unset: the scene's or the given one), its validation estimate, and what
         // depends on T; the scene is loaded once.
+        double secondsTrace = 0, secondsSearch = 0;  // every round's (OptimizeRun)
         auto load = [&](int spp) {
             Inputs kept = std::move(in);
             in = Inputs{};
@@ -1498,12 +1499,16 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
             }
             in.sppScale = std::move(kept.sppScale);  // chosen with the regions, on the first load
             job.extraPlanes.clear();
+            const Stopwatch traceClock;
             loadTraining(p, in, job, spp);
+            secondsTrace += traceClock.seconds();
             if (job.transport.autoDepth && spp == 0)
                 spdlog::info("max_depth {}: {}", job.transport.autoDepth->maxDepth,
                              job.transport.autoDepth->reason);
             spdlog::info("{}", describeTransport(job.transport));
+            const Stopwatch validationClock;
             loadValidation(p, in, job);
+            secondsTrace += validationClock.seconds();
             prepareRuns(p, in, job);
             prepareComparisons(p, in, job);
         };
@@ -1524,6 +1529,7 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                                  "use another " + option("seed"));
             notInRound = judgeClock.seconds();
         }
+        const double secondsHeldOut = notInRound;  // the judge's first estimate
         if (!p.cacheDir.empty() && (!p.tmInput || p.o.heldOut.mode == HeldOutMode::Judge))
             spdlog::info("cache {}", describeCache(cacheContents(p.cacheDir)));
         spdlog::info("mask: {} pixels; writing {}", job.maskPixels, p.o.outDir.string());
@@ -1533,7 +1539,9 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
         noise.adapted = p.noise.adapt;
         noise.gridAdapted = p.noise.adaptGrid;
         for (double lambda : p.o.lambdas) {
+            Stopwatch searchClock;
             LambdaResult r = optimizeLambda(p, in, job, lambda);
+            secondsSearch += searchClock.seconds();
             // Noise-aware training (app/TrainingNoise.h), on the first λ: E* on T and on V;
             // the spp is raised (T, V and the comparisons traced again) while the gap is large.
             while (noise.rounds.size() < 16 && job.runs.empty() && r.run.validationFinal &&
@@ -1548,8 +1556,10 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                 // The gap's standard error, V's own noise (step 3).
                 const ObjectiveOnT onV =
                     validationObjective(in, job, objectiveAt(p, in, lambda), p.o.rgb);
+                const Stopwatch gapClock;
                 nr.gapError =
                     trainingGapError(in.kind, *onV.loss, r.e, job.validation->file.provenance.seed);
+                nr.secondsGapError = gapClock.seconds();
                 // Step 4: V's noise: more V (T's spp for eq. 2, whose V must keep T's spp);
                 // over-fit: more T, then a coarser light (step 5).
                 const bool freeV = validationSppFree(in.kind);
@@ -1597,7 +1607,9 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                     // The same T and E*, scored again on V at more spp: this round goes on.
                     p.validationSpp = nextV;
                     noise.rounds.back().seconds = 0;  // counted in the round that goes on
+                    const Stopwatch validationClock;
                     loadValidation(p, in, job);
+                    secondsTrace += validationClock.seconds();
                     r.run.validationFinal =
                         validationObjective(in, job, objectiveAt(p, in, lambda), p.o.rgb)
                             .loss->evaluate(r.e, {});
@@ -1617,7 +1629,9 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                                        r.optimizedE.empty() ? r.e : r.optimizedE);
                     p.o.lightGrid = *coarser;
                 }
+                searchClock.restart();
                 r = optimizeLambda(p, in, job, lambda);
+                secondsSearch += searchClock.seconds();
                 r.finer = std::move(finer);
             }
             // Ctrl-C keeps nothing (the previous OUTDIR stays) unless the user asked to keep
@@ -1633,7 +1647,11 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                                  : std::string());
             r.run.noise = noise;
             checkAnswer(p, in, job, r);
+            const Stopwatch judgeClock;
             judgeRun(p, in, job, r);
+            r.run.secondsJudge = secondsHeldOut + judgeClock.seconds();
+            r.run.secondsTrace = secondsTrace;
+            r.run.secondsSearch = secondsSearch;
             reportRuns.push_back(writeRunOutputs(p, in, job, r));
             job.runs.push_back(std::move(r.run));
             if (job.runs.back().interrupted) {  // the λs after it are not run

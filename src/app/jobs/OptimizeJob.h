@@ -215,6 +215,11 @@ struct OptimizeRun {
     /// Over MPI ranks: this rank's seconds inside the collectives during the optimization
     /// (part of optimizer.seconds).
     double secondsCollectives = 0;
+    /// Where the job's seconds went (`bench jnd`), over every round of the noise rule: tracing
+    /// or reading T and the validation estimate, the searches (with their held-out curves), and
+    /// the judge (its first estimate, and its rounds scoring the answer); the seconds are the
+    /// job's up to this λ.
+    double secondsTrace = 0, secondsSearch = 0, secondsJudge = 0;
 };
 
 struct OptimizeJobSummary {

@@ -157,8 +157,9 @@ struct TrainingNoiseRound {
     double training = 0, validation = 0;  // trainingFigure of E* on T and on V
     double gap = 0;
     double seconds = 0;
-    int validationSpp = 0;  // V's spp (0: T's)
-    double gapError = 0;    // the gap's standard error, from V's noise (trainingGapError)
+    int validationSpp = 0;       // V's spp (0: T's)
+    double gapError = 0;         // the gap's standard error, from V's noise (trainingGapError)
+    double secondsGapError = 0;  // computing gapError (part of `seconds`)
     GapVerdict verdict = GapVerdict::Within;
     std::string decision;  // what the rule did next: "kept", "T at 128 spp", "V at 1024 spp", ...
 };
