@@ -174,6 +174,19 @@ TEST(Readme, LayoutListsEveryFolder) {
         EXPECT_NE(layout.find(top), std::string::npos) << top << " is missing from Layout";
 }
 
+TEST(Readme, LayoutListsEveryWingOfApp) {
+    const std::string layout = readmeSection("## Layout");
+    ASSERT_FALSE(layout.empty()) << "README.md has no \"## Layout\" section";
+    int wings = 0;
+    for (const auto& e : std::filesystem::directory_iterator(SL_SOURCE_DIR "/src/app"))
+        if (e.is_directory()) {
+            ++wings;
+            const std::string name = "src/app/" + e.path().filename().string() + "/";
+            EXPECT_NE(layout.find(name), std::string::npos) << name << " is missing from Layout";
+        }
+    EXPECT_GE(wings, 1) << "src/app/ has no wings";
+}
+
 TEST(Readme, OptimizerTableNamesEveryRegisteredMethod) {
     const std::string section = readmeSection("### Optimizers (`--optimizer`)");
     ASSERT_FALSE(section.empty()) << "README.md has no \"### Optimizers\" section";

@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <memory>
 
-#include "app/bench/DepthBench.h"
 #include "app/host/ExternalRenderer.h"
+#include "app/pipeline/AutoDepth.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
 #include "core/Interrupt.h"

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <sstream>
 
-#include "app/bench/DepthBench.h"
 #include "app/host/Plot.h"
+#include "app/pipeline/AutoDepth.h"
 #include "app/pipeline/LossMask.h"
 #include "core/Error.h"
 #include "core/Interrupt.h"

@@ -12,6 +12,7 @@
 #include "app/host/Version.h"
 #include "app/jobs/OptimizeJob.h"
 #include "app/pipeline/InitialState.h"
+#include "app/pipeline/JudgeEstimate.h"
 #include "app/pipeline/LossMask.h"
 #include "app/pipeline/Search.h"
 #include "app/pipeline/TrainingNoise.h"

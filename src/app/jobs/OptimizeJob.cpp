@@ -13,6 +13,7 @@
 #include "app/host/Version.h"
 #include "app/pipeline/Cache.h"
 #include "app/pipeline/InitialState.h"
+#include "app/pipeline/JudgeEstimate.h"
 #include "app/pipeline/Search.h"
 #include "app/pipeline/Truth.h"
 #include "app/report/OptimizeFigures.h"

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "app/bench/DepthBench.h"
+#include "app/pipeline/AutoDepth.h"
 #include "core/Communicator.h"
 #include "io/TransportFile.h"
 #include "render/PathTracer.h"
@@ -20,8 +20,8 @@ struct Scene;
 
 struct PrecomputeOptions {
     std::optional<int> spp, maxDepth;
-    /// maxDepth from the measured energy per bounce (app/DepthBench.h autoMaxDepth) instead of
-    /// the scene's; resolveMaxDepth replaces it by the number before the trace.
+    /// maxDepth from the measured energy per bounce (app/pipeline/AutoDepth.h autoMaxDepth) instead
+    /// of the scene's; resolveMaxDepth replaces it by the number before the trace.
     bool autoMaxDepth = false;
     std::optional<Sampling> sampling;  // overrides render.sampling
     /// spp from the measured noise of the objective's gradient (resolveSpp) instead of the
@@ -110,13 +110,6 @@ std::vector<TransportSource> transportSetForScene(const Scene& scene,
 /// The scene a transport matrix records (its "scene_file"), checked against T's image size.
 /// `purpose` names what needs it, for the error message when the file records none.
 std::unique_ptr<Scene> sceneOfTransport(const TransportFile& t, const std::string& purpose);
-
-/// The judge's estimate (app/Judge.h) for a training T of `scene`: the same scene and path
-/// length traced with the judge's seed, two sample sets, `spp` samples (0: the judge's
-/// default), cached like transportForScene. The scene's inputs must match the training T's
-/// apart from the sampling.
-TransportSource judgeEstimateFor(const TransportFile& training, const Scene& scene, int spp,
-                                 const std::filesystem::path& cacheDir);
 
 /// "transport matrix 512x512 px x 50x25 texels, gray T, CSR, nnz ... MB", and on a second line
 /// the trace's rays and seconds when it was traced (not on a cache hit or a file read).

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "app/jobs/OptimizeJob.h"
+#include "app/pipeline/JudgeEstimate.h"
 #include "app/pipeline/LossMask.h"
 #include "app/pipeline/Search.h"
 #include "app/pipeline/Truth.h"
