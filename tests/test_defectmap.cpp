@@ -715,7 +715,7 @@ TEST(DefectMap, MethodRegistry) {
         parseDefectMethod("fancy", "option 'method'");
         ADD_FAILURE();
     } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("auto, lay, paper"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("auto, lay, selfsim, paper"), std::string::npos) << e.what();
     }
 }
 

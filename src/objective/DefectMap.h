@@ -8,6 +8,9 @@
 //   lay    a texture model learned from the part itself, for measured textures:
 //          objective/LayMap.h (the median along the texture's lay, thresholds against the
 //          residual's robust σ and the texture's RMS, no regions along the border);
+//   selfsim what the texture does not repeat: objective/SelfSimMap.h (each sample's copies at
+//          the texture's own offsets, their median its background, an a-contrario test on the
+//          residual at several scales);
 //   paper  the paper's scratch map, objective/ScratchMap.h computeScratchMap with
 //          DefectMapOptions::paper (patches whose detrended range is large).
 //
@@ -186,10 +189,11 @@
 #include "core/RegionLabel.h"
 #include "objective/LayMap.h"
 #include "objective/ScratchMap.h"
+#include "objective/SelfSimMap.h"
 
 namespace sl {
 
-enum class DefectMethod { Auto, Lay, Paper };
+enum class DefectMethod { Auto, Lay, SelfSim, Paper };
 
 struct DefectMethodRow {
     DefectMethod value;
@@ -267,8 +271,9 @@ struct DefectMapOptions {
     double growTail = 0.0;           // with seedTail: the grow thresholds are max(their σ value,
                             // growTail × the same quantile), not scaled with the seed (>= 0)
 
-    LayMapOptions lay;        // the `lay` method's options
-    ScratchMapOptions paper;  // the `paper` method's options
+    LayMapOptions lay;          // the `lay` method's options
+    SelfSimMapOptions selfsim;  // the `selfsim` method's options
+    ScratchMapOptions paper;    // the `paper` method's options
 };
 
 struct DefectMap {
@@ -295,6 +300,11 @@ struct DefectMap {
     // the texture's RMS (height units), regions kept and dropped (objective/LayMap.h)
     double layX = 0, layZ = 0, layCoherence = 0, layTextureRms = 0;
     size_t layRegions = 0, layDroppedShallow = 0, layDroppedBorder = 0;
+    // selfsim only: the offsets kept, the detection threshold (robust sigmas), samples
+    // detected, regions kept and dropped at the border (objective/SelfSimMap.h; σ_0 of the
+    // residual in sigmaLevel)
+    size_t selfsimOffsets = 0, selfsimDetections = 0, selfsimRegions = 0, selfsimDropped = 0;
+    double selfsimThreshold = 0;
     double seconds = 0;
 
     size_t markedCount() const;
