@@ -9,14 +9,17 @@
 // Our variant (h the heights, W×H, row-major; each parameter a field of SelfSimMapOptions):
 //  1. Level: g = h − its least-squares quadratic surface (a part's tilt and curve would make
 //     every offset copy differ by a slope).
-//  2. Offsets: the texture's own repeats. For every offset d with exclusion ≤ max(|dx|, |dz|)
-//     ≤ searchRadius (the patch's own neighbourhood left out, as in the paper), D(d) = the
-//     median of |g(x) − g(x + d)| over a grid of ~16 k samples x (both ends inside the map).
-//     The `offsets` offsets of least D are kept, greedily, each more than 2·refine + 1 samples
-//     (Chebyshev) from those kept before: the lay of striae, the period of chatter and of
-//     scallops, both signs. Global offsets, not a nearest-neighbour search per patch: a long
-//     scratch is similar to itself along its length (a per-patch search finds it there and
-//     explains it away); the texture's offsets leave it, except those along it.
+//  2. Offsets: the texture's own repeats, per tile of `tile` samples (the whole map with 0).
+//     For every offset d on a grid of refine + 1 samples with exclusion ≤ max(|dx|, |dz|) ≤
+//     searchRadius (the sample's own neighbourhood left out, as in the paper), D(d) = the
+//     median of |g(x) − g(x + d)| over ~1 k samples x of the tile grown by `context` (both ends
+//     inside the map). The `offsets` offsets of least D are kept, greedily: each more than
+//     2·refine + 1 samples (Chebyshev) from those kept before, at most `perSector` in each of
+//     `sectors` sectors of direction (mod 180°), and D at most `quality` × the tile's least:
+//     the lay of striae, the period of chatter and of scallops, both signs. Offsets of the
+//     texture, not a nearest-neighbour search per patch: a long scratch is similar to itself
+//     along its length (a per-patch search finds it there and explains it away); the
+//     texture's offsets leave it, except those along it (the sectors keep them few).
 //  3. Copies: for each kept offset d and sample x, the offset is refined within ±refine samples
 //     (each axis) to the d' whose patch (patch × patch samples centred on x and on x + d')
 //     differs least (sum of squared differences of g); the copy is g(x + d'). Copies whose
@@ -33,9 +36,13 @@
 //     outside the border × scales (the number of tests): on a Gaussian residual the expected
 //     number of detections is at most `nfa`.
 //  6. Regions: 8-connected regions of samples with |r_s|/σ_s ≥ growSigma at some scale
-//     s ≤ growScale, outside the border, that hold a detection and at least minRegion samples,
-//     are marked; with dropBorderRegions not when they reach the border's inner line (a region
-//     there continues beyond what the map can judge; no blocks along the border).
+//     s ≤ growScale, outside the border, are marked when they hold a detection (at any scale)
+//     and at least minRegion samples, their peak |r| is at least textureRms × the RMS of g
+//     (outside the border: a measured texture's own particles and wandering striae stand many
+//     σ above the residual but not above the texture's roughness), and, with
+//     dropBorderRegions, they do not reach the border's inner line (a region there continues
+//     beyond what the map can judge; no blocks along the border). A detection at a coarse
+//     scale alone marks nothing: its footprint (a blur of 2–4 samples) is not the defect's.
 // Every threshold is relative to σ_s, so the map is invariant to h → a·h + b (a ≠ 0) up to
 // rounding; a constant map marks nothing. Cost: offsets × (2·refine + 1)² box-filtered
 // difference passes over the map, parallel over rows (TBB); memory offsets + 6 float copies.
