@@ -45,7 +45,7 @@
 //     scale alone marks nothing: its footprint (a blur of 2–4 samples) is not the defect's.
 // Every threshold is relative to σ_s, so the map is invariant to h → a·h + b (a ≠ 0) up to
 // rounding; a constant map marks nothing. Cost: offsets × (2·refine + 1)² box-filtered
-// difference passes over the map, parallel over rows (TBB); memory offsets + 6 float copies.
+// difference passes over the map, parallel over tiles (TBB); memory 2 × offsets + 6 float copies.
 #pragma once
 
 #include <cstdint>
