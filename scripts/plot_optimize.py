@@ -9,7 +9,7 @@ and writes, each atomically:
                           brightest directions labelled) and a polar plot of the upper hemisphere
   OUTDIR/plot-loss.png    the loss on a log axis (when every value is > 0) with the held-out loss
   OUTDIR/overview.png     the renders under your lamp and under E*, the env map and the loss
-`optimize` draws the same figures itself, in-process (src/app/OptimizeFigures.h); run this by
+`optimize` draws the same figures itself, in-process (src/app/report/OptimizeFigures.h); run this by
 hand to redraw them with matplotlib (to restyle them, say). It prints nothing unless --print.
 The env-map convention is not restated here: plot-data.json carries each texel column's azimuth and row's elevation as
 scene/EnvMapBasis.h defines them. Exit code 3: matplotlib is missing (use Debian's

@@ -1,5 +1,5 @@
-// Answers that hold: the noise-aware training rule (app/TrainingNoise.h), the self-checked
-// answer (app/Answer.h) and what optimize's summary says its losses are.
+// Answers that hold: the noise-aware training rule (app/pipeline/TrainingNoise.h), the self-checked
+// answer (app/pipeline/Answer.h) and what optimize's summary says its losses are.
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// The transport-matrix cache (app/Cache.h): where it is, that optimize and judge use it and
+// The transport-matrix cache (app/pipeline/Cache.h): where it is, that optimize and judge use it and
 // say so, --cache/--no-cache, and `scratchlight cache [clear]`. This file also gives every
 // test process its own cache folder, so no test reads what another traced.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Defect map (objective/DefectMap.h, app/DefectMapJob.h, `scratchlight defectmap`): a periodic
+// Defect map (detect/DefectMap.h, app/jobs/DefectMapJob.h, `scratchlight defectmap`): a periodic
 // texture alone marks (almost) nothing, a ridge lattice leaves no copy of itself in the level,
 // a groove on it is found, a narrow one without a halo (robust edge fits), a faint one by the
 // line-valley score, the flat-end part's step along its feed marks is found (per-axis edge
@@ -715,7 +715,7 @@ TEST(DefectMap, MethodRegistry) {
         parseDefectMethod("fancy", "option 'method'");
         ADD_FAILURE();
     } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("auto, lay, paper"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("auto, lay, selfsim, paper"), std::string::npos) << e.what();
     }
 }
 

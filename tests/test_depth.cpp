@@ -1,4 +1,4 @@
-// `bench depth` (app/DepthBench.h): the rule that picks max_depth from the energy per bounce,
+// `bench depth` (app/bench/DepthBench.h): the rule that picks max_depth from the energy per bounce,
 // and the measurement it runs on (a sample's path is the same whatever the path length, so the
 // energy grows with max_depth and max_depth 1 shows nothing).
 #include <gtest/gtest.h>

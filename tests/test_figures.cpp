@@ -1,4 +1,4 @@
-// optimize's figures drawn in-process (app/OptimizeFigures.h on app/Canvas.h): each is a valid
+// optimize's figures drawn in-process (app/report/OptimizeFigures.h on app/host/Canvas.h): each is a valid
 // PNG of the expected size with a picture in it, the same input gives the same bytes, bad input
 // is refused with a reason and writes nothing, and optimize writes them (or, with
 // --no-figures, says in the report that they were not asked for).

@@ -147,7 +147,7 @@ TEST(JudgeJnd, WithSeveralKindsTheHeadlineLeadsWithTheLeastVisible) {
         << h;
 }
 
-// When the lamp beat the optimized light in JND on the validation estimate (app/Answer.h), the
+// When the lamp beat the optimized light in JND on the validation estimate (app/pipeline/Answer.h), the
 // first line says the lamp is the answer, by the JND it was chosen on, and the judge's figures
 // follow in JND with the ratio beside them (here the ratio alone would have kept E*).
 TEST(JudgeJnd, WhenTheLampIsTheAnswerTheHeadlineSaysSoInJnd) {

@@ -1,4 +1,4 @@
-// The judge's standard errors and rounds (app/Judge.h scoreWithErrors, judgeInRounds): the
+// The judge's standard errors and rounds (app/pipeline/Judge.h scoreWithErrors, judgeInRounds): the
 // wild-bootstrap SE matches the spread of the scores over independent judge seeds and falls as
 // 1/sqrt(spp); the rounds stop earlier for an easy light than for a hard one, hold the cap, and
 // give the same numbers for the same seed; judge.json records the spp, the rounds and the SEs.

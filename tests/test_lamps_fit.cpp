@@ -1,4 +1,4 @@
-// Lamps fitted through T (app/Lamps.h): the chain rule dLoss/dθ = (∂E/∂θ)ᵀ·dLoss/dE against
+// Lamps fitted through T (optimize/LampFit.h): the chain rule dLoss/dθ = (∂E/∂θ)ᵀ·dLoss/dE against
 // central differences of the whole chain, and greedy K on a small part reaching E*'s loss.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// The defect map's `lay` method (objective/LayMap.h) on synthetic measured-like textures with
+// The defect map's `lay` method (detect/LayMap.h) on synthetic measured-like textures with
 // exact ground truth: striae along a tilted lay (a few much deeper than the rest, as a bullet
 // land's are) with one pit and one scratch across the lay: the lay direction is found, the pit
 // and the scratch are marked, the striae are not; a rough patch at the border is not marked as a

@@ -1,4 +1,4 @@
-// optimize over MPI ranks (docs/CLUSTER.md, app/Mpi.h): two ranks, each holding one row shard of
+// optimize over MPI ranks (docs/CLUSTER.md, app/host/Mpi.h): two ranks, each holding one row shard of
 // T, give the light one process gives on the whole T (to 1e-12), with the default objective
 // (unbiased, on T's halves), with eq. 2 and with the defects objective; rank 0 alone writes. What
 // cannot run over ranks is refused, and every rank ends with a non-zero exit. Skipped in a build

@@ -383,7 +383,7 @@ TEST(PaperCli, EnvMapPresetIsAnRgbImageThatInitialisesThroughLStar) {
 }
 
 TEST(SpecularInit, KeptInTheCacheByTsFingerprintAndReadBackBitForBit) {
-    // The specular start of a run on a cached T comes from the cache (app/InitialState.h): the
+    // The specular start of a run on a cached T comes from the cache (app/pipeline/InitialState.h): the
     // second call traces no ray (the BVH of a fresh scene stays unbuilt) and gives the same
     // values; another fingerprint or max_depth is another entry.
     test::TempDir dir{"specular-cache"};

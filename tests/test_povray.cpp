@@ -1,4 +1,4 @@
-// POV-Ray as a black-box renderer (app/ExternalRenderer.h, io/PovrayExport.h): the exported
+// POV-Ray as a black-box renderer (app/host/ExternalRenderer.h, io/PovrayExport.h): the exported
 // scene renders what our tracer renders (a tilted mirror under a one-texel env map lights the
 // same pixels), the render is linear in the light, T from basis renders reproduces a direct
 // render, SPSA through POV-Ray lowers the loss, and failures are clear errors. Tiny images.

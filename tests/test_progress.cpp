@@ -1,4 +1,4 @@
-// Progress (core/Progress.h) and how the console shows it (app/Console.h): the status text,
+// Progress (core/Progress.h) and how the console shows it (app/host/Console.h): the status text,
 // the terminal bar and its tearing-free log lines, the piped plain lines, and the command line
 // printing progress live when piped.
 #include <gtest/gtest.h>

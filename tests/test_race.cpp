@@ -1,4 +1,4 @@
-// `bench race` (app/Race.h) on one part and seed with two configurations: the paper-loop
+// `bench race` (app/bench/Race.h) on one part and seed with two configurations: the paper-loop
 // baseline and optimize's defaults with the defects named. Every row is judged; ratios are to
 // the baseline in the same run; the defects objective sees the part's truth as its defects.
 #include <gtest/gtest.h>

@@ -185,7 +185,7 @@ TEST(ScratchMap, RecallAndPrecisionOnSyntheticSurfaceAtPaperParameters) {
     EXPECT_GT(st.precisionNoEdge, s.precisionNoEdge);
 }
 
-// The paper's size (its timing is `scratchlight bench scratchmap`, app/ScratchMapBench.h).
+// The paper's size (its timing is `scratchlight bench scratchmap`, app/bench/ScratchMapBench.h).
 TEST(ScratchMap, PaperSizeMapMarksItsScratch) {
     const int N = 5000;
     std::vector<float> h(static_cast<size_t>(N) * N);

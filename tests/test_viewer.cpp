@@ -1,4 +1,4 @@
-// The live relighting viewer (app/Viewer.h, app/ViewerServer.h): the session's relight is T·E,
+// The live relighting viewer (app/viewer/Viewer.h, app/viewer/ViewerServer.h): the session's relight is T·E,
 // its judge numbers are the Judge's, every request is validated; the server survives malformed
 // requests and connections closed mid-transfer; and the page, driven in headless Chromium,
 // paints a texel and shows the image and judge numbers that `relight` and `judge` give for the

@@ -1,8 +1,8 @@
 // scratchlight bench render | transport | scratchmap | defectmap | noise | sampling | depth |
 // regions | read | ...: parse
-// the options, run the benchmark in the library (app/RenderBench.h, app/TransportBench.h,
-// app/ScratchMapBench.h, app/NoiseBench.h, app/SamplingBench.h, app/DepthBench.h,
-// app/RegionBench.h), print its
+// the options, run the benchmark in the library (app/bench/RenderBench.h, app/bench/TransportBench.h,
+// app/bench/ScratchMapBench.h, app/bench/NoiseBench.h, app/bench/SamplingBench.h, app/bench/DepthBench.h,
+// app/bench/RegionBench.h), print its
 // table and write its CSV.
 #include <spdlog/spdlog.h>
 

@@ -32,7 +32,7 @@ inline std::string& invokedCommandLine() {
     return line;
 }
 
-/// The MPI ranks this process runs with (main.cpp sets them, app/Mpi.h; null before): only
+/// The MPI ranks this process runs with (main.cpp sets them, app/host/Mpi.h; null before): only
 /// `optimize` runs over several, and only rank 0 prints results.
 inline const Communicator*& worldRanks() {
     static const Communicator* ranks = nullptr;
@@ -64,14 +64,14 @@ EnvMap chooseEnvMap(const Scene& scene, const std::string& spec);
 /// (both) for the image, which are camera.width/height overrides.
 void addSceneOverrides(CLI::App* c, std::vector<std::string>& overrides, bool image);
 
-/// --defects and --reference of the defects objective (app/Truth.h RegionSpec) for a command
+/// --defects and --reference of the defects objective (app/pipeline/Truth.h RegionSpec) for a command
 /// that optimizes a light (optimize, lamps). Defined after addParsed below.
 void addDefectRegionOptions(CLI::App* c, RegionSpec& defects, RegionSpec& reference);
 
 /// --renderer, --renderer-cmd (implies --renderer command), --renderer-timeout.
 void addRendererOptions(CLI::App* c, RendererKind& kind, ExternalRendererOptions& external);
 
-/// --cache DIR and --no-cache of a command that keeps traced matrices (app/Cache.h).
+/// --cache DIR and --no-cache of a command that keeps traced matrices (app/pipeline/Cache.h).
 void addCacheOptions(CLI::App* c, CacheLocation& cache);
 
 /// A finite number > 0 (positiveNumber) or >= 0 (nonNegativeNumber), refused as "--flag: must be

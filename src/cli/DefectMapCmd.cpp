@@ -1,8 +1,8 @@
-// scratchlight defectmap (HEIGHTMAP | SCENE.json) [--method auto|lay|paper] [-o map.png]
+// scratchlight defectmap (HEIGHTMAP | SCENE.json) [--method auto|lay|selfsim|paper] [-o map.png]
 //                        [--image-output MASK.png] [--truth TRUTH.png] [--score-output FILE]
 //                        [tuning ...]
-// Parses the options and prints the result; the work is app/DefectMapJob.h and
-// objective/DefectMap.h.
+// Parses the options and prints the result; the work is app/jobs/DefectMapJob.h and
+// detect/DefectMap.h.
 #include <cstdio>
 #include <memory>
 
@@ -47,6 +47,13 @@ int runDefectMap(const DefectMapJobOptions& o) {
             "%zu regions kept, %zu below the texture's RMS and %zu at the border dropped\n",
             m.layX, m.layZ, m.layCoherence, m.sigmaLevel, m.layTextureRms, m.layRegions,
             m.layDroppedShallow, m.layDroppedBorder);
+    if (m.method == DefectMethod::SelfSim)
+        std::printf(
+            "  %zu texture offsets; residual sigma %.4g (height units), detection at %.3f "
+            "robust sigmas (NFA); %zu samples detected, %zu regions kept, %zu at the border "
+            "dropped\n",
+            m.selfsimOffsets, m.sigmaLevel, m.selfsimThreshold, m.selfsimDetections,
+            m.selfsimRegions, m.selfsimDropped);
     if (s.score) {
         const DefectScore& sc = *s.score;
         std::printf("%-18s %5s %10s %10s %10s %9s %7s %7s\n", "kind", "value", "truth", "hits",
@@ -287,6 +294,63 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--lay-border-regrow", l.borderRegrow,
                   "lay: a region reaching the border is split again at this x the texture-RMS "
                   "threshold; parts that do not reach it are kept")
+        ->capture_default_str();
+    SelfSimMapOptions& q = m.selfsim;
+    c->add_option("--selfsim-patch", q.patch, "selfsim: side of the patches compared (odd)")
+        ->capture_default_str();
+    c->add_option("--selfsim-offsets", q.offsets,
+                  "selfsim: texture offsets kept (copies of each sample)")
+        ->capture_default_str();
+    c->add_option("--selfsim-search-radius", q.searchRadius,
+                  "selfsim: largest offset searched, samples")
+        ->capture_default_str();
+    c->add_option("--selfsim-exclusion", q.exclusion,
+                  "selfsim: smallest offset (the sample's own neighbourhood), samples")
+        ->capture_default_str();
+    c->add_option("--selfsim-refine", q.refine,
+                  "selfsim: each copy's offset refined within this many samples per axis")
+        ->capture_default_str();
+    c->add_option("--selfsim-sectors", q.sectors,
+                  "selfsim: the offsets' directions (mod 180 deg) in this many sectors")
+        ->capture_default_str();
+    c->add_option("--selfsim-per-sector", q.perSector,
+                  "selfsim: at most this many offsets in each direction sector")
+        ->capture_default_str();
+    c->add_option("--selfsim-quality", q.quality,
+                  "selfsim: an offset's median difference at most this x the tile's best")
+        ->capture_default_str();
+    c->add_option("--selfsim-tile", q.tile,
+                  "selfsim: offsets chosen per tile of this side (0: one set for the map)")
+        ->capture_default_str();
+    c->add_option("--selfsim-context", q.context,
+                  "selfsim: ... on the tile grown by this many samples")
+        ->capture_default_str();
+    c->add_option("--selfsim-keep", q.keep,
+                  "selfsim: share of the copies (most similar patches) in the median")
+        ->capture_default_str();
+    c->add_option("--selfsim-scales", q.scales, "selfsim: detection scales (sigma 0, 1, 2, 4, ...)")
+        ->capture_default_str();
+    c->add_option("--selfsim-nfa", q.nfa,
+                  "selfsim: expected false detections on a Gaussian residual")
+        ->capture_default_str();
+    c->add_option("--selfsim-tail-quantile", q.tailQuantile,
+                  "selfsim: sigma at least this quantile of the residual over the Gaussian's (0: "
+                  "off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-texture-rms", q.textureRms,
+                  "selfsim: a region's peak residual at least this x the texture's RMS (0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-grow-sigma", q.growSigma,
+                  "selfsim: regions grow into this many robust sigmas")
+        ->capture_default_str();
+    c->add_option("--selfsim-grow-scale", q.growScale, "selfsim: ... at scales up to this index")
+        ->capture_default_str();
+    c->add_option("--selfsim-border", q.border, "selfsim: samples at the map's edges never marked")
+        ->capture_default_str();
+    c->add_option("--selfsim-min-region", q.minRegion, "selfsim: smallest region kept (samples)")
+        ->capture_default_str();
+    c->add_option("--selfsim-drop-border-regions", q.dropBorderRegions,
+                  "selfsim: drop regions that reach the border's inner line (true/false)")
         ->capture_default_str();
     c->add_option("--kernel", m.paper.kernel, "paper: moving-average window, samples")
         ->capture_default_str();

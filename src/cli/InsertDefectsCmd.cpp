@@ -1,6 +1,6 @@
 // scratchlight insert-defects HEIGHTMAP|SCENE.json [--model A|B] [--kinds K,K] [--seed S]
 //                            [--depth-sq X | --depth-um D] [--size N] -o OUT.exr
-// Parses the options and prints what was inserted; the work is app/InsertDefectsJob.h and
+// Parses the options and prints what was inserted; the work is app/jobs/InsertDefectsJob.h and
 // synth/DefectInsert.h.
 #include <cstdio>
 #include <memory>

@@ -1,6 +1,6 @@
 // scratchlight judge SCENE.json [ENV.exr | OUTDIR ...] [--spp N] [--truth TRUTH.png]
 //                   [--lambda 30] [--no-references] [-o DIR]
-// Scores env maps on the judge's independent estimate (app/Judge.h) and prints a table.
+// Scores env maps on the judge's independent estimate (app/pipeline/Judge.h) and prints a table.
 #include <spdlog/spdlog.h>
 
 #include <cstdio>

@@ -2,7 +2,7 @@
 //                    [--objective paper|unbiased|defects] [--truth T.png] [--distance MM]
 //                    [--min-elevation DEG]
 //                    [--max-elevation DEG] [--forbid-azimuth A:B ...] [-o OUTDIR]
-// Fits K physical lamps to the objective through T (app/LampsJob.h) and prints what each extra
+// Fits K physical lamps to the objective through T (app/jobs/LampsJob.h) and prints what each extra
 // lamp buys.
 #include <spdlog/spdlog.h>
 

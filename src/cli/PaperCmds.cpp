@@ -1,4 +1,4 @@
-// scratchlight scratchmap / report: see cli/PaperCmds.h, objective/ScratchMap.h, app/Report.h.
+// scratchlight scratchmap / report: see cli/PaperCmds.h, detect/ScratchMap.h, app/report/Report.h.
 //
 // report --spec FIGURES.json (paths relative to the spec file):
 //   {"title": "...", "notes": ["..."], "settings": {...},

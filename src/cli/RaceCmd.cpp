@@ -2,7 +2,7 @@
 //                        [--height-scales 1,2] [--seeds 3] [--configs NAME,...] [--threads N]
 //                        [-o DIR]
 // scratchlight bench settings [--spp 4,16,64] [--sampling ...] [--max-depth 2,3,4] [-o DIR]
-// The race that chooses optimize's defaults (app/Race.h): prints the median table and the
+// The race that chooses optimize's defaults (app/bench/Race.h): prints the median table and the
 // standings (median and worst part per configuration, the winner by the worst part), writes
 // race.csv (every run), race-median.csv, race-configs.csv (the standings) and a Pareto plot
 // (seconds vs U) race.png; settings

@@ -62,7 +62,7 @@ void warnIfBlack(const Image& img, const Scene& scene) {
             "the camera)");
 }
 
-/// The same scene and light through an external renderer (app/ExternalRenderer.h).
+/// The same scene and light through an external renderer (app/host/ExternalRenderer.h).
 int renderExternal(const RenderArgs& a, const Scene& scene, const EnvMap& env, uint64_t seed) {
     if (a.autoDepth || a.maxDepth || a.spp)
         throw UsageError(

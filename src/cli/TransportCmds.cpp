@@ -50,7 +50,7 @@ void addNumberOrAuto(CLI::App* c, const std::string& name, std::optional<int>& v
         });
 }
 
-/// The trace's options. noiseAware: optimize's spp auto (app/TrainingNoise.h) instead of
+/// The trace's options. noiseAware: optimize's spp auto (app/pipeline/TrainingNoise.h) instead of
 /// precompute's gradient-noise pilot.
 void addTraceOptions(CLI::App* c, PrecomputeOptions& p, std::vector<std::string>& overrides,
                      bool noiseAware = false) {
@@ -201,7 +201,7 @@ int runOptimize(OptimizeArgs a) {
                 r.lambda, s.heldOut ? s.heldOut->file.provenance.spp : 0, r.objective.c_str(),
                 r.heldInitial->own.total, r.heldFinal->own.total, r.heldInitial->unbiased.total,
                 r.heldFinal->unbiased.total);
-    // The judge's scores with their standard errors (app/Judge.h), relative to each score.
+    // The judge's scores with their standard errors (app/pipeline/Judge.h), relative to each score.
     auto pm = [](double v, const std::optional<JudgeScore::Errors>& se,
                  double JudgeScore::Errors::*f) {
         if (!se || !std::isfinite(v) || v == 0 || !std::isfinite((*se).*f)) return std::string();
@@ -218,7 +218,7 @@ int runOptimize(OptimizeArgs a) {
                 pm(r.judged->unbiased.total, r.judged->se, &JudgeScore::Errors::unbiased).c_str(),
                 r.judged->meanE, 100.0 * r.judged->sparsity,
                 r.start.empty() ? "" : (", best start " + r.start).c_str());
-    // The report's first sentence (app/Report.h), here too.
+    // The report's first sentence (app/report/Report.h), here too.
     for (const OptimizeRun& r : s.runs) {
         std::string prefix;
         if (s.runs.size() > 1) prefix = "lambda " + formatNumber(r.lambda) + ": ";

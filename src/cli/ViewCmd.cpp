@@ -1,8 +1,8 @@
 // scratchlight view (part.tm | SCENE.json | OUTDIR) [--port 8080] [--host H] [--open] [-o DIR]
 //                   [--lamps lamps.json]
 // scratchlight bench view [SCENE.json] [--size 512,2048] [--spp 1] [--repeats 20] [-o CSV]
-// The live relighting viewer (app/Viewer.h, app/ViewerServer.h) and its latency benchmark
-// (app/ViewerBench.h).
+// The live relighting viewer (app/viewer/Viewer.h, app/viewer/ViewerServer.h) and its latency benchmark
+// (app/bench/ViewerBench.h).
 #include <signal.h>
 
 #include <cstdio>

@@ -109,7 +109,7 @@ int main(int argc, char** argv) {
     app.set_help_all_flag("--help-all", "Show the help of every command");
     app.set_version_flag("--version", sl::versionText(),
                          "Print the version, its commit and the libraries' versions");
-    // How a command talks (app/Console.h); given before or after the command's name.
+    // How a command talks (app/host/Console.h); given before or after the command's name.
     bool quiet = false;
     int verbose = 0;
     double progressEvery = sl::ConsoleOptions{}.plainEvery;
@@ -154,7 +154,7 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "error: %s\n", withFlags(app, e.what()).c_str());
         return kRuntimeError;
     }
-    // MPI ranks (app/Mpi.h, docs/CLUSTER.md): only optimize runs over several; the ranks but
+    // MPI ranks (app/host/Mpi.h, docs/CLUSTER.md): only optimize runs over several; the ranks but
     // rank 0 print only errors, and an error on any rank ends them all.
     std::unique_ptr<sl::Communicator> world;
     try {
@@ -175,7 +175,7 @@ int main(int argc, char** argv) {
         world->abort(kUsageError);
     }
     if (!world->root()) quiet = true;
-    // Output: progress and log lines through one console (app/Console.h). Lines, not blocks,
+    // Output: progress and log lines through one console (app/host/Console.h). Lines, not blocks,
     // reach a pipe as they are printed (`| tee log` shows the run as it goes).
     std::setvbuf(stdout, nullptr, _IOLBF, 0);
     sl::ConsoleOptions co;

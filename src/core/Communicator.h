@@ -1,5 +1,5 @@
 // Communicator: the collectives a computation split over processes needs (MPI ranks, each
-// holding one row shard of T: objective/TransportLoss.h, docs/CLUSTER.md). Only app/Mpi.cpp
+// holding one row shard of T: objective/TransportLoss.h, docs/CLUSTER.md). Only app/host/Mpi.cpp
 // knows MPI; everything else sees this interface, and one process alone is a
 // SerialCommunicator, whose collectives do nothing.
 //

@@ -5,7 +5,7 @@
 //     throw Interrupted at the next pixel, lamp or stage;
 //   - optimizers stop at the next iteration through the optimize job's callback; the job then
 //     throws Interrupted too, unless the user asked to keep the best E so far
-//     (`optimize --keep-interrupted`: written marked "interrupted", app/OptimizeJob.h);
+//     (`optimize --keep-interrupted`: written marked "interrupted", app/jobs/OptimizeJob.h);
 //   - a command that writes its results calls enterCommit() just before they appear (the
 //     rename of a staged OUTDIR or of the output files): an interrupt before it throws, so
 //     nothing is written and a previous OUTDIR stays as it was; one after it lets the writing

@@ -1,7 +1,7 @@
 // Progress of long steps. The library says what it is doing: a ProgressTask names a step
 // (label), how much of it is done and of how much (total; 0 = unknown, only time is shown) and
 // an optional detail (e.g. the current loss). Whoever runs the library decides how to show it:
-// the command line installs a ProgressListener (app/Console.h: a bar with elapsed time and ETA
+// the command line installs a ProgressListener (app/host/Console.h: a bar with elapsed time and ETA
 // on a terminal, a plain line every few seconds when piped). With no listener (tests, library
 // use) a task costs one atomic load per call.
 //

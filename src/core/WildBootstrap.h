@@ -1,6 +1,6 @@
 // The standard error of scores formed from two independent half estimates of an image, by a
-// wild bootstrap on the halves: the judge's errors (app/Judge.h scoreWithErrors) and the noise
-// rule's gap (app/TrainingNoise.h trainingGapError) are this one estimate.
+// wild bootstrap on the halves: the judge's errors (app/pipeline/Judge.h scoreWithErrors) and the noise
+// rule's gap (app/pipeline/TrainingNoise.h trainingGapError) are this one estimate.
 //
 // A pixel's samples are independent of every other pixel's, and its two halves Y_a, Y_b are two
 // independent estimates of the same value, so d_p = Y_a,p − Y_b,p has mean 0 and variance

@@ -27,6 +27,9 @@ constexpr DefectMethodRow kMethods[] = {
     {DefectMethod::Lay, "lay",
      "measured textures: the median along the texture's own lay is its background; mark regions "
      "far above the residual's robust sigma and the texture's RMS, none along the border"},
+    {DefectMethod::SelfSim, "selfsim",
+     "what the texture does not repeat: each sample's background is the median of its copies at "
+     "the texture's own offsets; mark what an a-contrario test finds in the residual"},
     {DefectMethod::Paper, "paper",
      "the paper's scratch map: patches whose moving-average-detrended range is large"},
 };
@@ -1577,6 +1580,20 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
             r.layRegions = m.regions;
             r.layDroppedShallow = m.droppedShallow;
             r.layDroppedBorder = m.droppedBorder;
+            r.markedScore = r.markedCount();
+            r.seconds = clock.seconds();
+            return r;
+        }
+        case DefectMethod::SelfSim: {
+            checkInput(heights, width, height);
+            SelfSimMap m = detectSelfSimDefects(heights, width, height, o.selfsim);
+            r.map = std::move(m.map);
+            r.sigmaLevel = m.sigma;
+            r.selfsimOffsets = m.offsetX.size();
+            r.selfsimDetections = m.detections;
+            r.selfsimRegions = m.regions;
+            r.selfsimDropped = m.droppedBorder;
+            r.selfsimThreshold = m.threshold;
             r.markedScore = r.markedCount();
             r.seconds = clock.seconds();
             return r;

@@ -6,9 +6,12 @@
 //   auto   (default) model the nominal surface as macro shape + periodic tool-path texture and
 //          mark what that model cannot explain (below);
 //   lay    a texture model learned from the part itself, for measured textures:
-//          objective/LayMap.h (the median along the texture's lay, thresholds against the
+//          detect/LayMap.h (the median along the texture's lay, thresholds against the
 //          residual's robust σ and the texture's RMS, no regions along the border);
-//   paper  the paper's scratch map, objective/ScratchMap.h computeScratchMap with
+//   selfsim what the texture does not repeat: detect/SelfSimMap.h (each sample's copies at
+//          the texture's own offsets, their median its background, an a-contrario test on the
+//          residual at several scales);
+//   paper  the paper's scratch map, detect/ScratchMap.h computeScratchMap with
 //          DefectMapOptions::paper (patches whose detrended range is large).
 //
 // `auto`, step by step (h the heights, W×H, row-major; float storage, double sums). Each
@@ -186,10 +189,11 @@
 #include "core/RegionLabel.h"
 #include "detect/LayMap.h"
 #include "detect/ScratchMap.h"
+#include "detect/SelfSimMap.h"
 
 namespace sl {
 
-enum class DefectMethod { Auto, Lay, Paper };
+enum class DefectMethod { Auto, Lay, SelfSim, Paper };
 
 struct DefectMethodRow {
     DefectMethod value;
@@ -267,8 +271,9 @@ struct DefectMapOptions {
     double growTail = 0.0;           // with seedTail: the grow thresholds are max(their σ value,
                             // growTail × the same quantile), not scaled with the seed (>= 0)
 
-    LayMapOptions lay;        // the `lay` method's options
-    ScratchMapOptions paper;  // the `paper` method's options
+    LayMapOptions lay;          // the `lay` method's options
+    SelfSimMapOptions selfsim;  // the `selfsim` method's options
+    ScratchMapOptions paper;    // the `paper` method's options
 };
 
 struct DefectMap {
@@ -292,9 +297,14 @@ struct DefectMap {
     // step 7b: the thresholds used (the options' when the tail did not raise them)
     double seedUsed = 0, growUsed = 0, lineSeedUsed = 0;
     // lay only: the lay direction (x = column, z = row), its coherence, σ of the residual and
-    // the texture's RMS (height units), regions kept and dropped (objective/LayMap.h)
+    // the texture's RMS (height units), regions kept and dropped (detect/LayMap.h)
     double layX = 0, layZ = 0, layCoherence = 0, layTextureRms = 0;
     size_t layRegions = 0, layDroppedShallow = 0, layDroppedBorder = 0;
+    // selfsim only: the offsets kept, the detection threshold (robust sigmas), samples
+    // detected, regions kept and dropped at the border (detect/SelfSimMap.h; σ_0 of the
+    // residual in sigmaLevel)
+    size_t selfsimOffsets = 0, selfsimDetections = 0, selfsimRegions = 0, selfsimDropped = 0;
+    double selfsimThreshold = 0;
     double seconds = 0;
 
     size_t markedCount() const;
@@ -315,7 +325,7 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
 // surface without anomalies: check markedCount() before using it as a region.
 
 /// Step 1's separable running median of a W×H image over w samples (odd): along x (rows),
-/// then along z (columns); windows shrink at the borders. Shared with objective/LayMap.
+/// then along z (columns); windows shrink at the borders. Shared with detect/LayMap.
 std::vector<float> separableRunningMedian(const std::vector<float>& img, int W, int H, int w);
 
 /// Steps 1–3 alone: R = h − macro shape − periodic texture (width*height), for figures and

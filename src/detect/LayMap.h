@@ -1,4 +1,4 @@
-// The defect map's `lay` method (objective/DefectMap.h's method table): a texture model learned
+// The defect map's `lay` method (detect/DefectMap.h's method table): a texture model learned
 // from the part itself, for measured textures whose own structure (striae of a bullet land,
 // periodic laser lines) the `auto` method marks as defects.
 //
@@ -36,7 +36,7 @@
 //     0.69/0.93 (models A/B); a second pass lost scratches (periodic lines, model A, recall
 //     0.74 → 0.54) and stays off.
 //  3. Residual: r = (h − B) minus its separable running median over `levelWindow` samples
-//     (objective/DefectMap.h separableRunningMedian), σ = 1.4826 × median |r| over the samples
+//     (detect/DefectMap.h separableRunningMedian), σ = 1.4826 × median |r| over the samples
 //     outside the border.
 //  4. Regions: 8-connected regions of |r| ≥ growSigma·σ (outside the border) are kept when they
 //     reach seedSigma·σ, hold at least `minRegion` samples, and

@@ -1,7 +1,7 @@
 // What a second Ctrl-C (or SIGTERM), which ends the process at once (core/Interrupt.h), must
 // still undo: the staging directories and temporary files of outputs being written
 // (io/StagedDirectory.h, io/AtomicFile.h) are removed, and the process groups of external
-// programs we started (app/ExternalRenderer.h) are killed, so nothing of ours outlives the
+// programs we started (app/host/ExternalRenderer.h) are killed, so nothing of ours outlives the
 // process. Registration is cheap and thread-safe; exitAtOnce() is async-signal-safe (raw system
 // calls only: openat, getdents64, unlinkat, kill, _exit) and is what the command line's signal
 // handler calls on the second signal.

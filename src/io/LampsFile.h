@@ -1,4 +1,4 @@
-// lamps.json (written by `scratchlight lamps`, app/LampsJob.h) and the lamps as Mitsuba 3 area
+// lamps.json (written by `scratchlight lamps`, app/jobs/LampsJob.h) and the lamps as Mitsuba 3 area
 // emitters (`export-mitsuba --lamps`).
 //
 // lamps.json: {"distance_mm", "frame", "lamps": [ per lamp: "kind" (scene/Lamp.h's table),

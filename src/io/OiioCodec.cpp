@@ -1,5 +1,5 @@
 // The OpenImageIO module (io/ImageCodec.h): the only file that includes OpenImageIO's headers
-// apart from app/Version.cpp's version string. Built as libscratchlight-oiio.so (CMakeLists.txt),
+// apart from app/host/Version.cpp's version string. Built as libscratchlight-oiio.so (CMakeLists.txt),
 // loaded by imageCodec() when a file needs it; nothing else of this program is linked into it.
 #include <OpenImageIO/imageio.h>
 

@@ -1,4 +1,4 @@
-// POV-Ray 3.7 export: the scene as a POV-Ray scene that renders our image (app/ExternalRenderer.h
+// POV-Ray 3.7 export: the scene as a POV-Ray scene that renders our image (app/host/ExternalRenderer.h
 // runs it). OUTDIR/scene.pov, OUTDIR/heightfield.png, OUTDIR/envmap.exr. Every choice was
 // measured with POV-Ray 3.7.0.10 (Debian 12) and is checked by tests/test_povray.cpp:
 //

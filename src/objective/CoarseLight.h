@@ -4,7 +4,7 @@
 // image); an optimizer with one free value per texel can combine a few columns whose noise
 // happens to serve its objective, and the optimum then fits the estimate rather than the part
 // (docs/DESIGN.md "Noise is the trap"). Searching a light with fewer degrees of freedom fits
-// less noise: the resolution is the second knob of the noise rule (app/TrainingNoise.h) beside
+// less noise: the resolution is the second knob of the noise rule (app/pipeline/TrainingNoise.h) beside
 // the samples per pixel.
 //
 // The nodes sit on a coarse env-map grid of the same convention (scene/EnvMapBasis.h: rows at

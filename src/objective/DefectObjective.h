@@ -30,7 +30,7 @@
 //   L_dark = κ_f·log(max(m, 1e-12·w)/(f·w))² where m < f·w, else 0: a floor the band's soft
 //           pull cannot be traded against (a dark-field light can buy more visibility than
 //           L_exp costs and leave the part at 1/600 of white); f is twice the answer's
-//           brightness floor (app/Answer.h), so E* stays a light a person can see
+//           brightness floor (app/pipeline/Answer.h), so E* stays a light a person can see
 //   L_con = κ_c·(½·log(max(g(D), g0)/(f_c·c0·m)²))² where g(D) < (f_c·c0·m)², else 0: the
 //           defects' contrast sqrt(g(D))/m (their rms gradient over the part's brightness, the
 //           judge's contrast) kept above f_c = 2 times c0 = kMinDefectContrast, the answer's
@@ -57,7 +57,7 @@ namespace sl {
 
 /// The least mean brightness over the part, as a fraction of the white furnace's, of a light a
 /// person can see the part under: the defects objective's floor (L_dark) and the self-checked
-/// answer's eligibility (app/Answer.h).
+/// answer's eligibility (app/pipeline/Answer.h).
 inline constexpr double kMinVisibleBrightness = 0.05;
 /// The least combined contrast of the defects (rms gradient in their regions over the part's
 /// mean brightness; the eye needs about 0.01) at which a visibility ratio means something: the

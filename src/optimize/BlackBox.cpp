@@ -27,7 +27,7 @@ class NullSink : public PathSink {
 
 /// Runs f(j) for j in [0, n) on `threads` workers (0: all cores), one evaluation at a time per
 /// worker. Plain threads, not TBB's pool: an external renderer's process mostly waits
-/// (app/ExternalRenderer.h), so more evaluations than cores may run at once. The first
+/// (app/host/ExternalRenderer.h), so more evaluations than cores may run at once. The first
 /// exception is rethrown after every worker stopped.
 template <typename F>
 void parallelEvaluations(size_t n, int threads, F&& f) {

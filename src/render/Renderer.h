@@ -2,9 +2,9 @@
 // scene's EnvMapBasis grid, scene/EnvMapBasis.h), a linear RGB float image out (the camera's
 // width × height, 3 channels, top row first, background 0). Two kinds:
 //   * BuiltinRenderer (here): our path tracer through render() (render/Render.h);
-//   * external processes (POV-Ray, or any command line): app/ExternalRenderer.h, because
+//   * external processes (POV-Ray, or any command line): app/host/ExternalRenderer.h, because
 //     running a process and writing its files belongs to io/ and app/.
-// The black-box gradients (optimize/BlackBox.h) and the basis-render T (app/ExternalRenderer.h)
+// The black-box gradients (optimize/BlackBox.h) and the basis-render T (app/host/ExternalRenderer.h)
 // use only this interface.
 //
 // SEEDS: render(env, seed) draws its samples from `seed` when the renderer has one (seeded());

@@ -1,5 +1,5 @@
 // TransportColumns: a column-major (CSC) copy of a transport matrix's luminance, for products
-// where the env map is non-zero on a few texels only (physical lamps, app/Lamps.h). With E zero
+// where the env map is non-zero on a few texels only (physical lamps, optimize/LampFit.h). With E zero
 // outside a set A of texels,
 //     Y = T·E = Σ_{t∈A} E_t · T[:, t]          (a scatter of |A| columns)
 //     (Tᵀ·g)_t = T[:, t] · g   for t ∈ A        (|A| gathers)

@@ -1,5 +1,5 @@
-// `scratchlight bench defectmap`: seconds of the defect map (objective/DefectMap.h, method auto)
-// next to the paper's scratch map (objective/ScratchMap.h) on the same N×N height map in the
+// `scratchlight bench defectmap`: seconds of the defect map (detect/DefectMap.h, method auto)
+// next to the paper's scratch map (detect/ScratchMap.h) on the same N×N height map in the
 // same run: the ball-end test part (synth/SurfaceGenerator.h testPartSpec, every defect kind) at
 // N×N samples of 0.01 mm, seed 1. Medians over repeats, the two methods interleaved.
 #pragma once

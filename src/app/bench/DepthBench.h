@@ -17,7 +17,7 @@
 namespace sl {
 
 struct DepthBenchOptions {
-    std::filesystem::path scene;              // empty: the bundled default scene (app/Plot.h)
+    std::filesystem::path scene;              // empty: the bundled default scene (app/host/Plot.h)
     std::vector<std::string> sceneOverrides;  // -D key=value on the scene (io/SceneFile.h)
     int resolution = 128, spp = 16;           // image N×N, samples per pixel
     int maxDepth = 12;                        // the longest path length measured

@@ -3,7 +3,7 @@
 // with the products over the lamps' texels only (transport/TransportColumns.h) against the
 // products over all of T, measured one after the other in the same run on the same T and E*.
 //
-// Every run is the `lamps` job (app/LampsJob.h) at the parts' 256² view: E* optimized on T,
+// Every run is the `lamps` job (app/jobs/LampsJob.h) at the parts' 256² view: E* optimized on T,
 // lamps fitted greedily, both scored by the judge's held-out estimate with the objective itself
 // (eq. 2 or U, lower is better) or, for the defects objective, by the defect region's visibility
 // (higher is better); gap = how much worse the lamps are, relative; and by the visibility of
@@ -21,7 +21,7 @@
 namespace sl {
 
 struct LampsBenchOptions {
-    /// "bundled" (scenes/default) and race parts (app/Race.h raceParts).
+    /// "bundled" (scenes/default) and race parts (app/bench/Race.h raceParts).
     std::vector<std::string> parts{"bundled", "ballend-chatter", "facemill-scratches", "pocket"};
     std::vector<ObjectiveKind> objectives{ObjectiveKind::Unbiased, ObjectiveKind::Paper,
                                           ObjectiveKind::Defects};
@@ -39,7 +39,7 @@ struct LampsBenchRow {
     double speedup = 0;                  // secondsRows / secondsColumns
     double cpuRows = 0, cpuColumns = 0;  // the same fits' CPU seconds (all threads)
     double trainRatio = 0;               // the lamps' training loss over E*'s
-    std::string measure;                 // the judge's measure for the objective (app/LampsJob.h)
+    std::string measure;                 // the judge's measure for the objective (app/jobs/LampsJob.h)
     double judgeTarget = 0, judgeLamps = 0, judgeStudio = 0, gap = 0;
     std::string region;  // the first truth label the visibilities are of
     double visTarget = 0, visLamps = 0, visStudio = 0;

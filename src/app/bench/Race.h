@@ -1,6 +1,6 @@
 // `scratchlight bench race`: the measured race that chooses optimize's defaults. Every
 // configuration (objective × method × spp × planes × starts × continuation) runs on generated
-// parts × training seeds; every result is scored by the judge (app/Judge.h) on the part's
+// parts × training seeds; every result is scored by the judge (app/pipeline/Judge.h) on the part's
 // independent 1024-spp estimate; seconds are precompute (traced fresh, not cached) + search,
 // measured one after another in the same run. Ratios are to the paper-loop configuration on
 // the same part and seed.
@@ -10,7 +10,7 @@
 // material.alpha, heightmap.height_scale), beside the generated race parts the labelled test
 // parts of gen-surface, variants of any generated part with its defects shallower or deeper
 // than its texture's Sq, and real instrument textures with defects of known shape inserted
-// (app/InsertDefectsJob.h). Every part also scores the studio lamp (scene/EnvMapPresets.h) on
+// (app/jobs/InsertDefectsJob.h). Every part also scores the studio lamp (scene/EnvMapPresets.h) on
 // the same judge, and every result gets a figure: the defects' combined visibility
 // (objective/DefectVisibility.h combinedVisibility) where the part's truth has defects in view,
 // else U; its ratios to the lamp and to paper-loop are "times better" (visibility over the
@@ -39,9 +39,9 @@ struct RaceConfig {
     std::optional<Sampling> sampling;  // T's direction sampling (default: the part's scene's)
     std::optional<int> maxDepth;       // T's path length (default: the part's scene's)
     /// The defects objective's regions: false, the part's truth (every label); true, the
-    /// defect map found without labels (app/Truth.h RegionSpec "auto", as optimize's).
+    /// defect map found without labels (app/pipeline/Truth.h RegionSpec "auto", as optimize's).
     bool autoDefects = false;
-    /// Run the whole `optimize` job (app/OptimizeJob.h: the noise rule's spp and light grid,
+    /// Run the whole `optimize` job (app/jobs/OptimizeJob.h: the noise rule's spp and light grid,
     /// the defect pixels' samples, the self-checked answer) on the part with its defects named
     /// (the truth, or the defect map with autoDefects) instead of one search on a T at `spp`;
     /// the row's light is the job's answer and its seconds the job's. `search` only names the

@@ -19,7 +19,7 @@
 namespace sl {
 
 struct RegionBenchOptions {
-    std::filesystem::path scene;              // empty: the bundled default scene (app/Plot.h)
+    std::filesystem::path scene;              // empty: the bundled default scene (app/host/Plot.h)
     std::vector<std::string> sceneOverrides;  // -D key=value on the scene (io/SceneFile.h)
     int resolution = 512, spp = 16;           // image N×N, samples per pixel (two halves)
     int repeats = 3;                          // interleaved runs (median seconds)

@@ -23,7 +23,7 @@ namespace sl {
 inline constexpr Sampling kReferenceSampling = Sampling::Stratified;
 
 struct SamplingBenchOptions {
-    std::filesystem::path scene;              // empty: the bundled default scene (app/Plot.h)
+    std::filesystem::path scene;              // empty: the bundled default scene (app/host/Plot.h)
     std::vector<std::string> sceneOverrides;  // -D key=value on the scene (io/SceneFile.h)
     /// Parts: 0 = the scene's own material; a value > 0 = the scene with material.alpha set.
     std::vector<double> alphas{0.0, 0.02};

@@ -1,4 +1,4 @@
-// `scratchlight bench scratchmap`: seconds of the paper's scratch map (objective/ScratchMap.h)
+// `scratchlight bench scratchmap`: seconds of the paper's scratch map (detect/ScratchMap.h)
 // on synthetic N×N height maps (a sine of tool marks along x, a slight tilt along y and one
 // deep "scratch" sample at the centre), median over repeats.
 #pragma once

@@ -16,7 +16,7 @@
 namespace sl {
 
 struct TransportBenchOptions {
-    std::filesystem::path scene;              // empty: the bundled default scene (app/Plot.h)
+    std::filesystem::path scene;              // empty: the bundled default scene (app/host/Plot.h)
     std::vector<std::string> sceneOverrides;  // -D key=value on the scene (io/SceneFile.h)
     int resolution = 512, spp = 64;           // image N×N, samples per pixel
     int iterations = 100;                     // Adam iterations of the whole-run measurement

@@ -55,7 +55,7 @@ std::string versionText() {
         t += *ver;
         t += "\n";
     }
-    // MPI is optional (app/Mpi.h): optimize over MPI ranks.
+    // MPI is optional (app/host/Mpi.h): optimize over MPI ranks.
     t += "  MPI ";
     t += mpiBuilt() ? mpiLibraryVersion() : std::string("not built (optimize runs as one process)");
     t += "\n";

@@ -1,5 +1,5 @@
 // `scratchlight defectmap`: the defect map of a height map or a scene's height map
-// (objective/DefectMap.h), written in height-map space and, for a scene, projected into its
+// (detect/DefectMap.h), written in height-map space and, for a scene, projected into its
 // camera's image (objective/ImageSpace.h, as the truth masks are); scored against a truth
 // label mask (gen-surface's <stem>-truth.png) per kind when one is given.
 //

@@ -1,5 +1,5 @@
 // `scratchlight insert-defects`: defects of known shape (synth/DefectInsert.h) inserted into any
-// height map or a scene's height map, written as gen-surface writes a part (app/PartFiles.h):
+// height map or a scene's height map, written as gen-surface writes a part (app/jobs/PartFiles.h):
 // OUT.exr (float32 heights, mm), OUT-truth.png (labels, height-map space), OUT-truth.json (the
 // legend, plus "inserted": every defect with its kind, depth, box and whether it is labelled,
 // and "texture": the input's Sq and the depths used) and a scene file OUT.json that renders it

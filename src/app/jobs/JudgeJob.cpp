@@ -166,7 +166,7 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
         if (!o.defects.empty())
             regions = defectRegionsInImage(*scene, o.defects, jo.truth, o.reference);
         // The regions in the image once (truth labels, or the defect region), then the judge
-        // in rounds (app/Judge.h judgeInRounds): the estimate's spp grows until every score's
+        // in rounds (app/pipeline/Judge.h judgeInRounds): the estimate's spp grows until every score's
         // standard error is small, unless --spp is given.
         std::vector<uint8_t> labels, reference;
         std::vector<RegionLabel> legend;

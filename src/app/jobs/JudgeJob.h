@@ -2,7 +2,7 @@
 // independent estimate of a scene, and writes what a person looks at.
 //
 // OUTDIR holds:
-//   judge.json    one entry per light (app/Judge.h toJson, with its standard errors) plus the
+//   judge.json    one entry per light (app/pipeline/Judge.h toJson, with its standard errors) plus the
 //                 estimate's facts (its spp and the rounds that chose it)
 //   judge.csv     one row per light: name, eq2, unbiased, mean_E, sparsity, brightness,
 //                 per-region visibility, contrast and Weber contrast
@@ -31,14 +31,14 @@ struct JudgeJobOptions {
     /// Env-map files (EXR/HDR/PNG…), or optimize output directories (their envmap.exr).
     std::vector<std::filesystem::path> lights;
     bool references = true;  // also score uniform 0.5 and the studio preset
-    /// The defects objective's regions, as optimize takes them (app/Truth.h): with `defects`
+    /// The defects objective's regions, as optimize takes them (app/pipeline/Truth.h): with `defects`
     /// (a mask, TRUTH.png:LABEL,... with judge.truth, or auto: the defect map) the visibility is
     /// that of this one region, "defects", as optimize's held-out judge scores it, instead of
     /// the truth's labels; `reference` (optional) is the surface it is compared with (default:
     /// the part away from the defects).
     RegionSpec defects, reference;
     JudgeOptions judge;   // its cacheDir is set from `cache`
-    CacheLocation cache;  // where the estimate is cached (app/Cache.h)
+    CacheLocation cache;  // where the estimate is cached (app/pipeline/Cache.h)
     std::filesystem::path outDir = "out/judge";
     std::string commandLine;  // how the run was asked for: recorded in judge.json, not parsed
 };

@@ -1,5 +1,5 @@
 // The `lamps` job: from an optimized env map E* to K physical lamps an inspector can mount,
-// fitted through T (app/Lamps.h), with what each extra lamp buys and the judge's word on them.
+// fitted through T (optimize/LampFit.h), with what each extra lamp buys and the judge's word on them.
 //
 // OUTDIR (replaced as a unit, io/StagedDirectory.h) holds:
 //   lamps.json          per lamp: kind, azimuth/elevation in degrees in the part's frame
@@ -48,7 +48,7 @@ struct LampsJobOptions {
     /// unset: unbiased (needs T's halves), paper for a .tm without halves; defects when the
     /// defects are named (truth or defects), as optimize.
     std::optional<ObjectiveKind> objectiveKind;
-    /// The defects objective's regions, as optimize's (app/OptimizeJob.h): the truth (labels in
+    /// The defects objective's regions, as optimize's (app/jobs/OptimizeJob.h): the truth (labels in
     /// height-map space, also what the judge's per-region visibility is of), the defect region
     /// (empty: the truth, else auto) and the reference (empty: the part off the defects).
     std::filesystem::path truth;
@@ -57,7 +57,7 @@ struct LampsJobOptions {
     LampFitOptions fit;
     double distanceMm = 500;  // where the lamps are mounted, from the part's centre
     bool judge = true;        // score E*, the lamps and the studio lamp on the judge's estimate
-    /// The self-checked answer (app/Answer.h): the lamps of every K and the studio lamp scored
+    /// The self-checked answer (app/pipeline/Answer.h): the lamps of every K and the studio lamp scored
     /// on a validation estimate (the training trace again with its own seed); the best
     /// eligible one is the answer, said first. Needs the scene.
     bool selfCheck = true;

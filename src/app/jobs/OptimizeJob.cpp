@@ -148,7 +148,7 @@ std::vector<double> luminanceOf(const std::vector<double>& image, size_t pixels)
     return y;
 }
 
-/// A render exposed on its own as a camera would (app/Preview.h exposureScale on the part),
+/// A render exposed on its own as a camera would (app/report/Preview.h exposureScale on the part),
 /// written as a PNG; returned for the figures.
 Image writeExposedPng(const std::filesystem::path& png, const std::vector<double>& image,
                       const TransportMatrix& t) {
@@ -233,13 +233,13 @@ struct Plan {
     OptimizerMethod requested = OptimizerMethod::Lbfgs;  // the name the results carry
     bool blackBox = false;                               // gradients through the renderer
     bool tmInput = false;
-    /// Noise-aware training (app/TrainingNoise.h): `validate` traces the validation estimate
+    /// Noise-aware training (app/pipeline/TrainingNoise.h): `validate` traces the validation estimate
     /// (the gap and the self-check need it); `noise.adapt` raises the training spp.
     bool validate = false;
     TrainingNoiseOptions noise;
-    /// V's spp when its own noise hides the gap (app/TrainingNoise.h step 4; 0: T's).
+    /// V's spp when its own noise hides the gap (app/pipeline/TrainingNoise.h step 4; 0: T's).
     int validationSpp = 0;
-    /// The defect pixels of the defects objective take more samples (app/TrainingNoise.h
+    /// The defect pixels of the defects objective take more samples (app/pipeline/TrainingNoise.h
     /// defectSppScale); not for black boxes (their renders take one spp) nor shards.
     bool superSampleDefects = false;
     const Communicator* ranks = nullptr;  // MPI ranks holding shards of T (null: one process)
@@ -360,7 +360,7 @@ struct Inputs {
     ObjectiveKind kind = ObjectiveKind::Unbiased;
     bool onHalves() const { return registryRow(objectiveKindTable(), kind).planes == 2; }
     std::vector<uint8_t> defects, reference;  // the defects objective's regions (image)
-    /// The training trace's per-pixel sample multipliers (app/TrainingNoise.h defectSppScale;
+    /// The training trace's per-pixel sample multipliers (app/pipeline/TrainingNoise.h defectSppScale;
     /// empty: none), chosen on the first load from the scene and the regions, kept after.
     std::optional<std::vector<uint8_t>> sppScale;
     std::vector<const TransportMatrix*> set;  // the training estimates of T
@@ -422,7 +422,7 @@ std::vector<uint8_t> chooseDefectSppScale(const Scene& scene, const std::vector<
 }
 
 /// Stage 1: the scene and the training estimates of T (traced or cached, or the .tm); `spp`:
-/// the noise-aware rule's choice (app/TrainingNoise.h), over any other (0: none).
+/// the noise-aware rule's choice (app/pipeline/TrainingNoise.h), over any other (0: none).
 void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp) {
     const OptimizeJobOptions& o = p.o;
     // The objective: as given, else the defaults' (OptimizeDefaults): the defects objective when
@@ -466,7 +466,7 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp) {
             !p.blackBox && !pre.spp)
             pre.spp = std::max(in.scene->desc.render.spp, minSpp);
         if (spp > 0) pre.spp = spp;
-        // The defect pixels take more samples (app/TrainingNoise.h defectSppScale): the
+        // The defect pixels take more samples (app/pipeline/TrainingNoise.h defectSppScale): the
         // defects objective's regions are needed before T.
         if (in.kind == ObjectiveKind::Defects && p.superSampleDefects && !in.sppScale) {
             defectRegionsOnce(o, in);
@@ -545,7 +545,7 @@ void loadHeldOut(const Plan& p, const Inputs& in, OptimizeJobSummary& job) {
                          "use another " + option("seed"));
 }
 
-/// Stage 2b: the validation estimate (app/TrainingNoise.h): the training trace again with its
+/// Stage 2b: the validation estimate (app/pipeline/TrainingNoise.h): the training trace again with its
 /// own seed, two sample sets; for a .tm, T's recorded spp and path length on its scene.
 void loadValidation(const Plan& p, const Inputs& in, OptimizeJobSummary& job) {
     job.validation.reset();
@@ -628,7 +628,7 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
 /// The paper's light on our T: eq. 2 at the paper's λ 30 on mean(E²), Adam lr 0.02 × 100 from
 /// E0 = 0.5 (applyOptimizePreset's "paper" settings), on the training estimate T itself rather
 /// than 100 fresh estimates. It depends only on T, the loss mask and the channels, so it is
-/// kept in the cache beside T (app/Cache.h readCachedLight), keyed by T's fingerprint and those:
+/// kept in the cache beside T (app/pipeline/Cache.h readCachedLight), keyed by T's fingerprint and those:
 /// a run on a cached T does not optimize it again (the same values, bit for bit).
 std::vector<double> paperLight(const Plan& p, const Inputs& in, const TransportMatrix& t,
                                const std::string& fingerprint) {
@@ -740,11 +740,11 @@ constexpr const char* kLossCsvHeader =
 /// One λ's optimization: E* and loss.csv's rows.
 struct LambdaResult {
     OptimizeRun run;
-    std::vector<double> e;           // the answer (app/Answer.h): E*, or the reference that beat it
+    std::vector<double> e;           // the answer (app/pipeline/Answer.h): E*, or the reference that beat it
     std::vector<double> optimizedE;  // E* when the answer is a reference (else empty)
     std::vector<std::vector<double>> startResults;  // every start's E (multistart)
     /// The lights the noise rule searched on finer grids at this run's spp before E*'s
-    /// (app/TrainingNoise.h step 5), named with their grid and gap: the self-check's fallback.
+    /// (app/pipeline/TrainingNoise.h step 5), named with their grid and gap: the self-check's fallback.
     std::vector<std::pair<std::string, std::vector<double>>> finer;
     std::vector<std::string> rows;
     LossCurve curve;                        // loss.csv's loss and held-out loss, for the loss plot
@@ -887,7 +887,7 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
             const ExternalRenderer external(*in.scene, eo);
             const RenderLoss renderLoss(external, in.scene->basis.width(), in.scene->basis.height(),
                                         ro.seed, objective, o.rgb);
-            // POV-Ray's process mostly waits (app/ExternalRenderer.h): more renders than cores.
+            // POV-Ray's process mostly waits (app/host/ExternalRenderer.h): more renders than cores.
             BlackBoxOptions bb = o.blackBox;
             if (bb.fd.threads == 0) bb.fd.threads = concurrentRenders(eo);
             if (bb.spsa.threads == 0) bb.spsa.threads = concurrentRenders(eo);
@@ -948,7 +948,7 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
     return res;
 }
 
-/// Stage 4b: the self-checked answer (app/Answer.h) on the validation estimate: E*, every
+/// Stage 4b: the self-checked answer (app/pipeline/Answer.h) on the validation estimate: E*, every
 /// other start's result and the references; a reference that wins becomes the answer and E*
 /// is kept beside it.
 void checkAnswer(const Plan& p, const Inputs& in, const OptimizeJobSummary& job, LambdaResult& r) {
@@ -990,7 +990,7 @@ void judgeRun(const Plan& p, const Inputs& in, OptimizeJobSummary& job, LambdaRe
         jo.objective = objectiveAt(p, in, run.lambda);
         jo.rgb = p.o.rgb;
         jo.viewing = viewingOf(in);
-        // In rounds (app/Judge.h judgeInRounds): the judge's estimate is traced again at more
+        // In rounds (app/pipeline/Judge.h judgeInRounds): the judge's estimate is traced again at more
         // spp while a score's standard error is above 1 % (not for a given --heldout-spp or a
         // given held-out file).
         const int first = job.heldOut->file.provenance.spp;
@@ -1099,7 +1099,7 @@ json envDirectionsJson(const Inputs& in, const TransportMatrix& t, const std::ve
 }
 
 /// plot-data.json: the lights' texel luminances and the grid's directions, what the env-map
-/// plots are drawn from (app/OptimizeFigures.h here, scripts/plot_optimize.py by hand; neither
+/// plots are drawn from (app/report/OptimizeFigures.h here, scripts/plot_optimize.py by hand; neither
 /// restates the convention).
 json plotDataJson(const Inputs& in, const TransportMatrix& t, const std::vector<double>& e,
                   bool rgb) {
@@ -1236,7 +1236,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     }
     if (run.judged) s["judge"] = toJson(*run.judged);
     {
-        // The report's headline (app/Report.h optimizeHeadline): E* against the user's lamp
+        // The report's headline (app/report/Report.h optimizeHeadline): E* against the user's lamp
         // and the paper's light, on T and (with the held-out estimate) by the judge.
         json cmp;
         cmp["objective"] = objectiveKindName(in.kind);
@@ -1373,7 +1373,7 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
     }
     if (in.kind == ObjectiveKind::Defects) {
         // regions.png: the render with the defect region outlined red and, when one was given,
-        // the reference region blue (app/Preview.h).
+        // the reference region blue (app/report/Preview.h).
         std::vector<double> y(t.rows());
         for (size_t q = 0; q < y.size(); ++q)
             y[q] = ch == 3
@@ -1413,7 +1413,7 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
     const VisibilityMetrics metricsFinal = metricsFor(t, imageFinal, mask, r.e, o.rgb, in.truth);
     const json summary = runSummaryJson(p, in, job, r, metricsFinal);
     writeTextAtomically(dir / "summary.json", summary.dump(2) + "\n");
-    // The figures, drawn in-process (app/OptimizeFigures.h); when they fail the report says why.
+    // The figures, drawn in-process (app/report/OptimizeFigures.h); when they fail the report says why.
     std::string figureProblem;
     if (!o.figures) {
         figureProblem = "figures not asked for";
@@ -1543,7 +1543,7 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
             Stopwatch searchClock;
             LambdaResult r = optimizeLambda(p, in, job, lambda);
             secondsSearch += searchClock.seconds();
-            // Noise-aware training (app/TrainingNoise.h), on the first λ: E* on T and on V;
+            // Noise-aware training (app/pipeline/TrainingNoise.h), on the first λ: E* on T and on V;
             // the spp is raised (T, V and the comparisons traced again) while the gap is large.
             while (noise.rounds.size() < 16 && job.runs.empty() && r.run.validationFinal &&
                    !p.blackBox && !r.run.interrupted) {

@@ -9,7 +9,7 @@
 //                the held-out score (own objective and the paper's eq. 2)
 //   summary.json optimizer, lambda, iterations, initial/final loss and parts, timings, T's facts,
 //                held-out scores, visibility metrics (final and initial)
-//   report.html  one self-contained page for the inspector (app/Report.h
+//   report.html  one self-contained page for the inspector (app/report/Report.h
 //                renderOptimizeReportHtml): (1) a headline in words, how much better E* shows
 //                the defects than the user's lamp and the paper's light, with the judge's
 //                numbers; (2) full-size renders under the lamp and E* with an A/B slider, the
@@ -18,7 +18,7 @@
 //   initial-envmap.png, mask.png (the loss mask), scratchmap.png (with the scratch mask),
 //   regions.png (objective defects: the render with the defect region outlined red and a given
 //   reference region blue), regions-defects.png and regions-reference.png (the same regions as
-//   masks, app/Truth.h writeDefectRegions: what the viewer optimizes and judges with)
+//   masks, app/pipeline/Truth.h writeDefectRegions: what the viewer optimizes and judges with)
 // The comparisons (summary.json "compare": lamp, paper, optimized; each with its training loss
 // and, with the held-out estimate, the judge's scores):
 //   compare-lamp.{exr,png}    T·E under the user's lamp (--compare ENV; default: studio preset)
@@ -29,7 +29,7 @@
 //                             region, else a drawn loss mask) on a transparent layer
 //   plot-data.json            the lights' texel luminances and the grid's directions
 //   plot-envmap.png, plot-loss.png, overview.png  the report's figures, drawn in-process
-//                             (app/OptimizeFigures.h; absent with figures off, and the report
+//                             (app/report/OptimizeFigures.h; absent with figures off, and the report
 //                             says why); scripts/plot_optimize.py redraws them from the files
 // A sweep also writes OUTDIR/sweep.csv (one row per λ).
 //
@@ -78,7 +78,7 @@ namespace sl {
 /// only take eq. 2.
 struct OptimizeDefaults {
     OptimizerMethod method = OptimizerMethod::Lbfgs;
-    std::vector<std::string> starts{"specular"};  // specs of app/InitialState.h
+    std::vector<std::string> starts{"specular"};  // specs of app/pipeline/InitialState.h
     int paperMinSpp = 512;
     ObjectiveKind objective = ObjectiveKind::Unbiased;
     ObjectiveKind objectiveWithDefects = ObjectiveKind::Defects;
@@ -100,15 +100,15 @@ struct OptimizeJobOptions {
     /// The starts (several: multistart, the lowest training loss wins); empty: the defaults'
     /// (paper-loop: the paper's const:0.5).
     std::vector<InitialState> starts;
-    LossMaskSpec mask;            // the loss's region (app/LossMask.h)
+    LossMaskSpec mask;            // the loss's region (app/pipeline/LossMask.h)
     ScratchMapOptions scratch;    // for the scratch mask
     std::filesystem::path truth;  // ground-truth defect mask in height-map space (metrics)
     /// The user's current lamp, the report's "before": a light spec (io/EnvMapIO.h
     /// lightFromSpec: a file, const:V or a preset; empty: the "studio" preset), scored beside
     /// E* and the paper's light.
     std::string compare;
-    bool figures = true;  // the report's figures (app/OptimizeFigures.h)
-    /// The defects objective's regions in height-map space (app/Truth.h RegionSpec): the defects
+    bool figures = true;  // the report's figures (app/report/OptimizeFigures.h)
+    /// The defects objective's regions in height-map space (app/pipeline/Truth.h RegionSpec): the defects
     /// (empty: `truth`, else auto: the defect map of the scene's height map) and the
     /// defect-free reference (empty: the part away from the defects; auto: the part the defect
     /// map leaves unmarked, outside the defects).
@@ -120,45 +120,45 @@ struct OptimizeJobOptions {
     bool keepInterrupted = false;
     bool rgb = false;
     HeldOutSource heldOut;  // default: the judge's estimate traced from the scene (cached)
-    /// 0: the judge's rounds (app/Judge.h judgeInRounds: from kJudgePilotSpp until the judged
+    /// 0: the judge's rounds (app/pipeline/Judge.h judgeInRounds: from kJudgePilotSpp until the judged
     /// scores' standard errors are <= 1 %, at most kJudgeDefaultSpp); else that spp.
     int heldOutSpp = 0;
     int heldOutEvery = 50;  // held-out column of loss.csv every N iterations
     /// method: any row of optimize/Methods.h; iterations: 0 = the method's default budget.
     OptimizerOptions optimizer = optimizeJobOptimizerOptions();
     BlackBoxOptions blackBox;  // fd-adam / spsa: gradients through the renderer
-    /// The renderer fd-adam / spsa render through (app/ExternalRenderer.h); the training T,
+    /// The renderer fd-adam / spsa render through (app/host/ExternalRenderer.h); the training T,
     /// the held-out scores and the judge stay our tracer's.
     RendererKind renderer = RendererKind::Builtin;
     ExternalRendererOptions external;  // povray / command
     PrecomputeOptions precompute;      // used when input is a scene
-    /// Noise-aware training (app/TrainingNoise.h): without a given spp (precompute.spp unset, or
+    /// Noise-aware training (app/pipeline/TrainingNoise.h): without a given spp (precompute.spp unset, or
     /// precompute.autoSpp) the training spp is raised until E*'s train/validation gap is within
     /// precompute.sppTolerance; with a given spp the gap is measured and warned about. Off for
     /// the paper's loop (the paper's experiment), black-box optimizers and MPI ranks.
     int noiseMaxSpp = TrainingNoiseOptions{}.maxSpp;
     /// The defects objective's defect pixels take this many times the training spp (and the
-    /// validation estimate's); 0: the rule of app/TrainingNoise.h (defectSppFactor), 1: off.
+    /// validation estimate's); 0: the rule of app/pipeline/TrainingNoise.h (defectSppFactor), 1: off.
     int defectSppScale = 0;
-    /// The self-checked answer (app/Answer.h): the light returned is the best of E*, every
+    /// The self-checked answer (app/pipeline/Answer.h): the light returned is the best of E*, every
     /// start's result and the references on the validation estimate. False: E* is returned.
     bool selfCheck = true;
     /// Trace only the loss mask's pixels (a file or the scratch map; not `object`): the loss
     /// and E* are the same as with the whole image, for the rays of the region only. The
     /// renders from T are then dark outside the mask (the judge still traces the whole part).
     bool traceMaskOnly = false;
-    CacheLocation cache;  // where traced matrices are kept (app/Cache.h)
-    // The search (app/Search.h). planes: independent estimates of T cycled per step (0: the
+    CacheLocation cache;  // where traced matrices are kept (app/pipeline/Cache.h)
+    // The search (app/pipeline/Search.h). planes: independent estimates of T cycled per step (0: the
     // method's default); continuation: λ factors before λ.
     int planes = 0;
     std::vector<double> continuation;
     /// The grid the light is searched on (objective/CoarseLight.h). Unset: the noise rule's
-    /// (app/TrainingNoise.h: one value per texel, coarser while the gap stays large at the
+    /// (app/pipeline/TrainingNoise.h: one value per texel, coarser while the gap stays large at the
     /// most spp; per texel for a given T, .tm or .shards); set: that grid, the gap only
     /// measured.
     std::optional<LightGrid> lightGrid;
     /// MPI ranks (docs/CLUSTER.md): with more than one, `input` is a .shards list naming one
-    /// shard per rank, each rank holds only its own (app/Transport.h readShardOfRank), every
+    /// shard per rank, each rank holds only its own (app/pipeline/Transport.h readShardOfRank), every
     /// rank runs the same optimization in step and rank 0 alone writes OUTDIR. Null: one
     /// process. What needs the whole T in one place is refused (held-out estimates, the
     /// defects objective, black-box optimizers, several estimates of T).
@@ -193,16 +193,16 @@ struct OptimizeRun {
     std::optional<JudgeScore> judgedLamp, judgedPaper;
     /// The optimized light's judge scores when the answer is a reference (else `judged` is it).
     std::optional<JudgeScore> judgedOptimized;
-    /// The judge's rounds for these scores (app/Judge.h judgeInRounds): the spp their standard
+    /// The judge's rounds for these scores (app/pipeline/Judge.h judgeInRounds): the spp their standard
     /// errors asked for; the held-out curve before the last round is on the first round's
     /// estimate (heldCurveSpp), the held-out figures of the start and of E* on the last.
     JudgedRounds judgeRounds;
     int heldCurveSpp = 0;
-    /// E*'s figure (app/TrainingNoise.h trainingFigure) on the training and the validation
+    /// E*'s figure (app/pipeline/TrainingNoise.h trainingFigure) on the training and the validation
     /// estimate, and the rule's rounds (the first λ only; later λs keep its spp).
     std::optional<LossParts> validationFinal;
     TrainingNoiseSummary noise;
-    /// The self-check (app/Answer.h): absent without a validation estimate.
+    /// The self-check (app/pipeline/Answer.h): absent without a validation estimate.
     std::optional<AnswerChoice> answer;
     /// The training loss: the objective the optimizer minimized, through what (our T, or the
     /// renderer of a black-box optimizer: then initial/final hold only its totals).
@@ -226,7 +226,7 @@ struct OptimizeJobSummary {
     TransportSource transport;
     std::vector<TransportSource> extraPlanes;   // estimates 1..planes−1 of T
     std::optional<TransportSource> heldOut;     // the judge's estimate
-    std::optional<TransportSource> validation;  // the validation estimate (app/TrainingNoise.h)
+    std::optional<TransportSource> validation;  // the validation estimate (app/pipeline/TrainingNoise.h)
     size_t maskPixels = 0;
     std::vector<OptimizeRun> runs;
     bool interrupted = false;  // a run was interrupted; the λs after it were not run

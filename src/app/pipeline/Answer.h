@@ -3,7 +3,7 @@
 // The optimized light is best on its training estimate by construction, so the training
 // estimate cannot say whether it is better than a plain lamp. Every candidate — the optimized
 // light of every start, the user's lamp (or the studio preset), a uniform dome (const 0.5) and
-// the paper's light — is scored on the validation estimate (app/TrainingNoise.h: independent of
+// the paper's light — is scored on the validation estimate (app/pipeline/TrainingNoise.h: independent of
 // the training estimate and of the judge's), by the figure the answer line reports
 // (answerMerit: the JND of the least visible defect kind when defect regions and a viewing
 // model are known, else the defects' combined visibility ratio, else the judge's U). A candidate
@@ -16,7 +16,7 @@
 // person reads.
 //
 // Finer lights (CandidateKind::Finer): the lights the noise rule searched on a finer grid at the
-// same spp before it settled on E*'s (app/TrainingNoise.h step 5). Their training figures fit
+// same spp before it settled on E*'s (app/pipeline/TrainingNoise.h step 5). Their training figures fit
 // the estimate's noise, so they are not the answer while E* or a start passes the checks; when
 // none does (e.g. E*'s defects' gradient just under minContrast), the best of them on the
 // validation estimate competes with the references, since an independent estimate still says

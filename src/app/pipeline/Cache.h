@@ -1,5 +1,5 @@
 // The transport-matrix cache: where optimize and judge keep the matrices they trace from a
-// scene (transport-<fingerprint>.tm, app/Transport.h), so a second run with the same scene,
+// scene (transport-<fingerprint>.tm, app/pipeline/Transport.h), so a second run with the same scene,
 // camera, material, height map and sampling reads T instead of tracing it. A matrix's
 // fingerprint covers every input that changes it, so a stale entry is never used; an entry
 // that fails to read is traced again.

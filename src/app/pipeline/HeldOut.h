@@ -1,5 +1,5 @@
 // Held-out scoring (docs/DESIGN.md "Noise is the trap"): every optimization is also scored on
-// an independent estimate — for `optimize`, the judge's (app/Judge.h: its own seed, 1024 spp by
+// an independent estimate — for `optimize`, the judge's (app/pipeline/Judge.h: its own seed, 1024 spp by
 // default, two sample sets), so that both the paper's eq. 2 and the noise-unbiased objective
 // can be evaluated on it. The held-out objectives use the training mask intersected with the
 // held-out T's object mask (the judge's own scores use the part mask). The held-out figure of a
@@ -53,7 +53,7 @@ struct HeldOutScore {
 class HeldOutScorer {
   public:
     /// heldOut must have two planes. kind: the optimized objective; defects and reference: its
-    /// regions (image space, the defects objective's; app/Search.h SearchInputs). rgb: E has 3
+    /// regions (image space, the defects objective's; app/pipeline/Search.h SearchInputs). rgb: E has 3
     /// values per texel.
     HeldOutScorer(const TransportMatrix& heldOut, const std::vector<uint8_t>& trainingMask,
                   const ObjectiveOptions& options, ObjectiveKind kind, bool rgb,

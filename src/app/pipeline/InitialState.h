@@ -59,7 +59,7 @@ std::vector<double> initialEnvMap(const InitialState& start, int width, int heig
 std::vector<double> initialEnvMap(const InitialState& start, int width, int height, bool rgb,
                                   const Scene* scene, int maxDepth);
 
-/// The same, with the `specular` start kept in the cache beside T (app/Cache.h
+/// The same, with the `specular` start kept in the cache beside T (app/pipeline/Cache.h
 /// readCachedLight, keyed by T's fingerprint, which covers the scene, its camera and maxDepth,
 /// and by rgb): a run on a cached T then traces no ray (the same values, bit for bit). Empty
 /// cacheDir or fingerprint: as above.

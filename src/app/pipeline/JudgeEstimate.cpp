@@ -29,7 +29,7 @@ TransportSource judgeEstimateFor(const TransportFile& training, const Scene& sce
     o.label = "judge estimate (held out)";
     TransportSource s = transportForScene(scene, o, cacheDir);
     // Same scene, camera, material and height map: only the sampling may differ, and the
-    // renderer (a T from another renderer's basis renders, app/ExternalRenderer.h, is judged on
+    // renderer (a T from another renderer's basis renders, app/host/ExternalRenderer.h, is judged on
     // our tracer's estimate: the cross-renderer check).
     auto strip = [](json j) {
         for (const char* k :

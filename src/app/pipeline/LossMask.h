@@ -1,7 +1,7 @@
 // The region of the image the loss is measured on: one table (core/Registry.h) of the choices,
 // always within T's object mask (the part).
 //   object    the whole part
-//   scratch   the paper's scratch map (objective/ScratchMap.h) projected into the image
+//   scratch   the paper's scratch map (detect/ScratchMap.h) projected into the image
 //   FILE      a PNG/EXR in image space, white inside (io/MaskIO.h loadImageMask)
 #pragma once
 

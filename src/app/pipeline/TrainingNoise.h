@@ -54,7 +54,7 @@
 // Every round (T's spp, the grid, V's spp, both figures, the gap, its SE and the verdict) is
 // printed and recorded. A given spp is kept: its gap is still measured, and a gap above
 // maxGap is warned about. When maxSpp is reached over-fit, the run says the light is not
-// trustworthy on its own and the self-checked answer (app/Answer.h) decides against the
+// trustworthy on its own and the self-checked answer (app/pipeline/Answer.h) decides against the
 // references.
 #pragma once
 
@@ -121,7 +121,7 @@ struct TrainingNoiseOptions {
     /// (false: the grid given is kept).
     bool adaptGrid = true;
     double maxGap = 0.05;
-    /// Half the judge's default spp (app/Judge.h): T and V together never trace more samples
+    /// Half the judge's default spp (app/pipeline/Judge.h): T and V together never trace more samples
     /// than the judge's estimate does, so the rule at most about doubles a run's tracing.
     int maxSpp = kJudgeDefaultSpp / 2;
     /// The most spp V is traced at when its own noise hides the gap (step 4): the judge's most,

@@ -271,7 +271,7 @@ TransportSource transportForScene(const Scene& scene, const PrecomputeOptions& o
             s.file = readTransportFile(cached, prov.fingerprint);
             s.path = cached;
             s.cacheHit = true;
-            touchCacheFile(cached);  // its last use, for the cache's size cap (app/Cache.h)
+            touchCacheFile(cached);  // its last use, for the cache's size cap (app/pipeline/Cache.h)
             s.secondsTotal = clock.seconds();
             spdlog::info("transport matrix from cache {}", cached.string());
             return s;

@@ -25,7 +25,7 @@ LabelMask projectTruth(const Scene& scene, const std::filesystem::path& truth, i
 
 /// A region drawn in height-map space, given as "FILE" (a mask: nonzero inside) or
 /// "auto" (the defect map of the scene's own height map, found without labels:
-/// objective/DefectMap.h with its default method and options), or
+/// detect/DefectMap.h with its default method and options), or
 /// "FILE:LABEL[,LABEL...]" (the pixels of a truth label file, e.g. gen-surface's
 /// part-truth.png, whose label is one of those listed: by legend name or by value; 0 or
 /// "none" is the unlabelled surface). With labels, FILE is read with its legend
@@ -35,7 +35,7 @@ LabelMask projectTruth(const Scene& scene, const std::filesystem::path& truth, i
 struct RegionSpec {
     std::filesystem::path file;       // empty: no region given
     std::vector<std::string> labels;  // empty: the whole mask
-    bool automatic = false;           // "auto": the scene's defect map (objective/DefectMap.h)
+    bool automatic = false;           // "auto": the scene's defect map (detect/DefectMap.h)
     bool empty() const { return file.empty() && !automatic; }
     std::string text() const;  // as it was written
 };

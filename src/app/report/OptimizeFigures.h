@@ -1,4 +1,4 @@
-// The report's three figures of one optimize run, drawn in-process (app/Canvas.h) from what the
+// The report's three figures of one optimize run, drawn in-process (app/host/Canvas.h) from what the
 // run holds, with the content scripts/plot_optimize.py draws from an OUTDIR's files (the script
 // stays for a person who runs it by hand):
 //   plot-envmap.png  E* as a lat-long plot (azimuth 0..360° on x, elevation −90..90° on y, the

@@ -719,7 +719,7 @@ std::string compareRow(const std::string& name, double lamp, double paper, doubl
 }  // namespace
 
 /// When the judge sees the defects more under the lamp than under the returned optimized light
-/// (JND), why the self-check did not return the lamp (app/Answer.h): it failed a check on the
+/// (JND), why the self-check did not return the lamp (app/pipeline/Answer.h): it failed a check on the
 /// validation estimate, or it showed less there. Empty otherwise.
 std::string lampNotChosen(const json& s, double jndOptimized, double jndLamp,
                           const std::string& lampName) {
@@ -754,7 +754,7 @@ std::string optimizeHeadline(const json& s) {
                opt = cmp.value("optimized", json::object());
     const std::string underLamp = lampUnder(cmp), underPaper = "under the paper's light";
     std::string out;
-    // A reference that beat E* on the validation estimate is the answer (app/Answer.h): said
+    // A reference that beat E* on the validation estimate is the answer (app/pipeline/Answer.h): said
     // first, then the judge's figures of the answer beside E*'s.
     if (cmp.contains("answer") && cmp["answer"].is_object()) {
         const json& ans = cmp["answer"];
@@ -974,7 +974,7 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
              "</div>\n";
     h << "</section>\n";
 
-    // 3. The env map as a plot; 4. the loss curve (app/OptimizeFigures.h).
+    // 3. The env map as a plot; 4. the loss curve (app/report/OptimizeFigures.h).
     h << "<section id=\"envmap\"><h2>The light: env map with axes</h2>\n"
       << figureOrReason(dir, "plot-envmap.png", "env-map plot", figureProblem)
       << "<p class=\"caption\">Azimuth 0° points toward −z, 90° toward +x; elevation 90° is "

@@ -126,7 +126,7 @@ ViewerObjective readViewerObjective(const fs::path& dir, int width, int height) 
     }
     if (fs::exists(dir / "mask.png")) {
         o.mask = loadImageMask(dir / "mask.png", width, height);
-        for (uint8_t& v : o.mask) v = v ? 1 : 0;  // masks hold 0/1 (app/LossMask.h)
+        for (uint8_t& v : o.mask) v = v ? 1 : 0;  // masks hold 0/1 (app/pipeline/LossMask.h)
     }
     if (o.kind == ObjectiveKind::Defects) {
         auto regions = readDefectRegions(dir, width, height);
@@ -631,7 +631,7 @@ void ViewerSession::runOptimize(int slot, std::vector<double> start, int iterati
     try {
         const TransportMatrix& t = transport();
         const Stopwatch clock;
-        // optimize's defaults (app/OptimizeJob.h): objective, λ, loss mask, method and budget.
+        // optimize's defaults (app/jobs/OptimizeJob.h): objective, λ, loss mask, method and budget.
         const OptimizeDefaults defaults = optimizeDefaults();
         const OptimizeJobOptions job;
         SearchInputs si;

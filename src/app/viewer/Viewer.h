@@ -1,13 +1,13 @@
 // The live relighting viewer's library half (README "view"): a ViewerSession holds T, the
 // judge (when there is an estimate), two lights A and B, and answers the page's requests as
 // plain functions (handleViewerRequest: a request in, a response out), so everything but the
-// sockets is tested without a server (app/ViewerServer.h serves it over HTTP).
+// sockets is tested without a server (app/viewer/ViewerServer.h serves it over HTTP).
 //
 // Inputs (ViewerOptions::input):
 //   part.tm     T as stored; the judge scores on T's own halves when it has two (else none)
 //   SCENE.json  T traced at the scene's spp (or `spp`) as two halves (optimize's objectives
 //               need them; T·E is their mean), cached by fingerprint, and the judge's
-//               own estimate (app/Judge.h, `judgeSpp`), exactly as `judge SCENE.json` scores
+//               own estimate (app/pipeline/Judge.h, `judgeSpp`), exactly as `judge SCENE.json` scores
 //   OUTDIR      an optimize output directory: its summary.json's transport file, its E*
 //               (envmap.exr, the preset "optimized"; the paper's light, "paper"), its truth
 //               (when recorded) or else its defect regions' layer (view-regions.png), and the
@@ -18,10 +18,10 @@
 //   In a directory, lamps.json (or ViewerOptions::lamps) gives the preset "lamps": light A is
 //   E* when there is one and B the lamps, else A the lamps and B studio.
 // A truth label mask (height-map space) gives the judge per-region visibility and the page its
-// defect overlay (the regions' outlines, app/Preview.h colours).
+// defect overlay (the regions' outlines, app/report/Preview.h colours).
 //
 // The API (JSON unless said; every request validated, errors 400 {"error": "..."}):
-//   GET  /                 the page (src/app/ViewerPage.html, embedded at build time)
+//   GET  /                 the page (src/app/viewer/ViewerPage.html, embedded at build time)
 //   GET  /api/info         image and env-map size, presets, judge and overlay present, the
 //                          auto exposure of A, the texel that lights the most of the image,
 //                          "lamps" (how many lamps.json holds), "lamp_kinds"
@@ -41,7 +41,7 @@
 //                          disk radius, bar half-length, ring half-height; (0, 90]),
 //                          "width_deg" (bar half-width, (0, 90]), "roll_deg", "radiance" in
 //                          [0, 1e6]}; at most kViewerMaxLamps.
-//   POST /api/optimize     {"slot", "iterations"?: N}: starts optimize's search (app/Search.h,
+//   POST /api/optimize     {"slot", "iterations"?: N}: starts optimize's search (app/pipeline/Search.h,
 //                          optimize's default method and objective, below) on T from the slot's
 //                          current light, in a background thread, one at a time (409 while one
 //                          runs); {"stop": true} stops it at its next iteration (the best
@@ -59,7 +59,7 @@
 // The optimizer from the current light: on an optimize OUTDIR, the objective that made the
 // output (ViewerObjective: summary.json's objective, λ, smooth_abs, its mask.png and, for the
 // defects objective, its regions-defects.png / regions-reference.png); otherwise optimize's
-// defaults (app/OptimizeJob.h optimizeDefaults(): the defects objective when the session has
+// defaults (app/jobs/OptimizeJob.h optimizeDefaults(): the defects objective when the session has
 // defect labels (a truth) and T has halves, the noise-unbiased one with halves, eq. 2 without;
 // λ and the loss mask "object" as optimize's defaults). Always optimize's default method at its
 // default budget, one start: the slot's light clamped into the optimizer's box [0, 1], one
@@ -122,7 +122,7 @@ struct ViewerObjective {
     ObjectiveKind kind = ObjectiveKind::Unbiased;
     ObjectiveOptions options;                 // λ, smooth_abs (summary.json)
     std::vector<uint8_t> mask;                // the loss mask (mask.png; empty: the part)
-    std::vector<uint8_t> defects, reference;  // the defects objective's regions (app/Truth.h)
+    std::vector<uint8_t> defects, reference;  // the defects objective's regions (app/pipeline/Truth.h)
 };
 /// Reads it from an optimize OUTDIR (summary.json "objective", "lambda", "smooth_abs", mask.png,
 /// the region files) for a T of width×height; InputError naming the file when one is unfit.
@@ -187,7 +187,7 @@ class ViewerSession {
     std::vector<double> relight(int slot) const;
     /// The texel (row, column) that lights the most of the image: the largest column sum of T.
     std::array<int, 2> hotTexel() const;
-    /// The auto exposure of a slot's render (app/Preview.h exposureScale).
+    /// The auto exposure of a slot's render (app/report/Preview.h exposureScale).
     double autoExposure(int slot) const;
     /// The render as an 8-bit gray sRGB PNG at `exposure`.
     std::string imagePng(int slot, double exposure, ViewerTimings* timings = nullptr) const;
@@ -269,7 +269,7 @@ Lamp viewerLampFromJson(const nlohmann::ordered_json& j, const std::string& wher
 /// {"error": message}, an unknown path 404, anything else 500.
 ViewerResponse handleViewerRequest(ViewerSession& session, const ViewerRequest& request);
 
-/// The page (embedded at build time from src/app/ViewerPage.html).
+/// The page (embedded at build time from src/app/viewer/ViewerPage.html).
 const std::string& viewerPageHtml();
 
 }  // namespace sl

@@ -1,5 +1,5 @@
 // The viewer's HTTP server (cpp-httplib, plain HTTP): every request goes to
-// handleViewerRequest (app/Viewer.h); this file only moves bytes. Bound to 127.0.0.1 unless a
+// handleViewerRequest (app/viewer/Viewer.h); this file only moves bytes. Bound to 127.0.0.1 unless a
 // host is given (the command line then warns). Request bodies over kViewerMaxBody are refused
 // before they are read in full; a malformed request or a connection closed mid-transfer ends
 // that connection only. The port is bound exclusively (no SO_REUSEPORT: a second viewer on the

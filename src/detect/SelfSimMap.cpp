@@ -1,0 +1,458 @@
+#include "detect/SelfSimMap.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "core/Error.h"
+#include "core/Interrupt.h"
+
+namespace sl {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+inline int clampi(int v, int lo, int hi) {
+    return v < lo ? lo : (v > hi ? hi : v);
+}
+
+double medianOf(std::vector<float>& v) {
+    if (v.empty()) return 0.0;
+    const size_t m = v.size() / 2;
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(m), v.end());
+    return v[m];
+}
+
+// Step 1: g = h − the least-squares quadratic surface (coordinates scaled to [−1, 1]).
+std::vector<float> removeQuadratic(std::span<const float> h, int W, int H) {
+    std::array<double, 36> A{};
+    std::array<double, 6> b{};
+    auto basis = [&](int x, int y, std::array<double, 6>& f) {
+        const double u = W > 1 ? 2.0 * x / (W - 1) - 1.0 : 0.0;
+        const double v = H > 1 ? 2.0 * y / (H - 1) - 1.0 : 0.0;
+        f = {1.0, u, v, u * u, u * v, v * v};
+    };
+    std::array<double, 6> f{};
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            basis(x, y, f);
+            const double z = h[static_cast<size_t>(y) * W + x];
+            for (int i = 0; i < 6; ++i) {
+                b[i] += f[i] * z;
+                for (int j = 0; j < 6; ++j) A[i * 6 + j] += f[i] * f[j];
+            }
+        }
+    // Gaussian elimination with partial pivoting; a singular direction (a map one sample wide)
+    // keeps a zero coefficient
+    std::array<double, 6> c{};
+    std::array<int, 6> piv{0, 1, 2, 3, 4, 5};
+    for (int k = 0; k < 6; ++k) {
+        int p = k;
+        for (int i = k + 1; i < 6; ++i)
+            if (std::abs(A[i * 6 + k]) > std::abs(A[p * 6 + k])) p = i;
+        if (p != k) {
+            for (int j = 0; j < 6; ++j) std::swap(A[k * 6 + j], A[p * 6 + j]);
+            std::swap(b[k], b[p]);
+            std::swap(piv[k], piv[p]);
+        }
+        if (std::abs(A[k * 6 + k]) < 1e-12 * (1.0 + std::abs(A[0]))) continue;
+        for (int i = k + 1; i < 6; ++i) {
+            const double m = A[i * 6 + k] / A[k * 6 + k];
+            for (int j = k; j < 6; ++j) A[i * 6 + j] -= m * A[k * 6 + j];
+            b[i] -= m * b[k];
+        }
+    }
+    for (int k = 5; k >= 0; --k) {
+        if (std::abs(A[k * 6 + k]) < 1e-12 * (1.0 + std::abs(A[0]))) continue;
+        double s = b[k];
+        for (int j = k + 1; j < 6; ++j) s -= A[k * 6 + j] * c[j];
+        c[k] = s / A[k * 6 + k];
+    }
+    std::vector<float> g(h.size());
+    tbb::parallel_for(0, H, [&](int y) {
+        std::array<double, 6> fy{};
+        for (int x = 0; x < W; ++x) {
+            basis(x, y, fy);
+            double s = 0.0;
+            for (int i = 0; i < 6; ++i) s += c[i] * fy[i];
+            const size_t k = static_cast<size_t>(y) * W + x;
+            g[k] = static_cast<float>(h[k] - s);
+        }
+    });
+    return g;
+}
+
+// Separable Gaussian blur of σ (radius 3σ), edges replicated.
+std::vector<float> gaussianBlur(const std::vector<float>& img, int W, int H, double sigma) {
+    const int r = std::max(1, static_cast<int>(std::ceil(3.0 * sigma)));
+    std::vector<double> w(static_cast<size_t>(2 * r + 1));
+    double sum = 0.0;
+    for (int k = -r; k <= r; ++k) sum += w[k + r] = std::exp(-0.5 * k * k / (sigma * sigma));
+    for (double& v : w) v /= sum;
+    std::vector<float> tmp(img.size()), out(img.size());
+    tbb::parallel_for(0, H, [&](int y) {
+        const float* in = img.data() + static_cast<size_t>(y) * W;
+        for (int x = 0; x < W; ++x) {
+            double s = 0.0;
+            for (int k = -r; k <= r; ++k) s += w[k + r] * in[clampi(x + k, 0, W - 1)];
+            tmp[static_cast<size_t>(y) * W + x] = static_cast<float>(s);
+        }
+    });
+    tbb::parallel_for(0, H, [&](int y) {
+        for (int x = 0; x < W; ++x) {
+            double s = 0.0;
+            for (int k = -r; k <= r; ++k)
+                s += w[k + r] * tmp[static_cast<size_t>(clampi(y + k, 0, H - 1)) * W + x];
+            out[static_cast<size_t>(y) * W + x] = static_cast<float>(s);
+        }
+    });
+    return out;
+}
+
+}  // namespace
+
+double gaussianTailInverse(double p) {
+    // Φ̄(z) = erfc(z/√2)/2 decreases in z: bisection on [0, 40]
+    double lo = 0.0, hi = 40.0;
+    for (int i = 0; i < 200; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        if (0.5 * std::erfc(mid / std::sqrt(2.0)) > p)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
+    if (o.patch < 1 || o.patch % 2 == 0)
+        throw inputError(option("selfsim-patch"),
+                         "must be odd and >= 1 (got " + std::to_string(o.patch) + ")",
+                         "The default is 7 samples");
+    if (o.offsets < 3)
+        throw inputError(option("selfsim-offsets"), "must be >= 3", "The default is 16");
+    if (o.exclusion < 1)
+        throw inputError(option("selfsim-exclusion"), "must be >= 1", "The default is 16");
+    if (o.searchRadius <= o.exclusion)
+        throw inputError(option("selfsim-search-radius"),
+                         "must be larger than the exclusion (" + std::to_string(o.exclusion) + ")",
+                         "The default is 48 samples");
+    if (o.refine < 0)
+        throw inputError(option("selfsim-refine"), "must be >= 0", "The default is 2");
+    if (o.sectors < 1)
+        throw inputError(option("selfsim-sectors"), "must be >= 1", "The default is 8");
+    if (o.perSector < 1)
+        throw inputError(option("selfsim-per-sector"), "must be >= 1", "The default is 4");
+    if (!(o.quality >= 1.0))
+        throw inputError(option("selfsim-quality"), "must be >= 1", "The default is 2");
+    if (o.tile < 0)
+        throw inputError(option("selfsim-tile"), "must be >= 0", "The default is 64 samples");
+    if (o.context < 0)
+        throw inputError(option("selfsim-context"), "must be >= 0", "The default is 32 samples");
+    if (!(o.keep > 0.0 && o.keep <= 1.0))
+        throw inputError(option("selfsim-keep"), "must be in (0, 1]", "The default is 1");
+    if (o.scales < 1 || o.scales > 6)
+        throw inputError(option("selfsim-scales"), "must be in 1..6", "The default is 4");
+    if (!(o.nfa > 0.0)) throw inputError(option("selfsim-nfa"), "must be > 0", "The default is 1");
+    if (!(o.tailQuantile >= 0.0 && o.tailQuantile < 1.0))
+        throw inputError(option("selfsim-tail-quantile"), "must be in [0, 1)",
+                         "The default is 0 (off)");
+    if (!(o.textureRms >= 0.0))
+        throw inputError(option("selfsim-texture-rms"), "must be >= 0", "The default is 1");
+    if (!(o.growSigma > 0.0))
+        throw inputError(option("selfsim-grow-sigma"), "must be > 0", "The default is 3");
+    if (o.growScale < 0 || o.growScale >= o.scales)
+        throw inputError(option("selfsim-grow-scale"), "must be in 0..scales-1",
+                         "The default is 1");
+    if (o.border < 0)
+        throw inputError(option("selfsim-border"), "must be >= 0", "The default is 40");
+    if (o.minRegion < 1)
+        throw inputError(option("selfsim-min-region"), "must be >= 1", "The default is 12");
+}
+
+SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int height,
+                                const SelfSimMapOptions& o) {
+    checkSelfSimMapOptions(o);
+    const int W = width, H = height;
+    const size_t n = static_cast<size_t>(W) * static_cast<size_t>(H);
+    SelfSimMap out;
+    out.map.assign(n, 0);
+    out.residual.assign(n, 0.0f);
+    if (W < 2 || H < 2 || heights.size() != n) return out;
+
+    const std::vector<float> g = removeQuadratic(heights, W, H);
+    throwIfInterrupted();
+
+    // ---- steps 2–3, tile by tile: the texture's offsets and each sample's copies ----------
+    const int R = std::min(o.searchRadius, std::max(W, H) - 1);
+    const int T = o.tile > 0 ? o.tile : std::max(W, H);
+    const int tilesX = (W + T - 1) / T, tilesZ = (H + T - 1) / T;
+    const int K = o.offsets;
+    constexpr float kInf = std::numeric_limits<float>::infinity();
+    std::vector<float> copies(static_cast<size_t>(K) * n, kInf), copySsd(copies.size(), kInf);
+    std::vector<std::vector<int>> tileOffsets(static_cast<size_t>(tilesX) * tilesZ);
+    const int pr = o.patch / 2;
+    tbb::parallel_for(0, tilesX * tilesZ, [&](int tileIndex) {
+        const int tx0 = (tileIndex % tilesX) * T, tz0 = (tileIndex / tilesX) * T;
+        const int tx1 = std::min(W, tx0 + T), tz1 = std::min(H, tz0 + T);
+        // step 2 on the tile grown by `context` (samples on a grid of ~4 k)
+        const int cx0 = std::max(0, tx0 - o.context), cz0 = std::max(0, tz0 - o.context);
+        const int cx1 = std::min(W, tx1 + o.context), cz1 = std::min(H, tz1 + o.context);
+        const double area = static_cast<double>(cx1 - cx0) * (cz1 - cz0);
+        const int step = std::max(1, static_cast<int>(std::sqrt(area / 1024.0)));
+        struct Cand {
+            int dx, dz;
+            float score;
+        };
+        std::vector<Cand> cands;
+        std::vector<float> diff;
+        const int grid = o.refine + 1;  // offsets on a grid the refinement fills in
+        for (int dz = -R; dz <= R; dz += grid)
+            for (int dx = -R; dx <= R; dx += grid) {
+                if (std::max(std::abs(dx), std::abs(dz)) < o.exclusion) continue;
+                diff.clear();
+                for (int y = std::max(cz0, -dz); y < std::min(cz1, H - dz); y += step)
+                    for (int x = std::max(cx0, -dx); x < std::min(cx1, W - dx); x += step)
+                        diff.push_back(std::abs(g[static_cast<size_t>(y) * W + x] -
+                                                g[static_cast<size_t>(y + dz) * W + x + dx]));
+                if (diff.size() < 16) continue;
+                cands.push_back({dx, dz, static_cast<float>(medianOf(diff))});
+            }
+        std::stable_sort(cands.begin(), cands.end(),
+                         [](const Cand& a, const Cand& b) { return a.score < b.score; });
+        std::vector<int>& kept = tileOffsets[static_cast<size_t>(tileIndex)];
+        const int sep = 2 * o.refine + 1;
+        std::vector<int> perSector(static_cast<size_t>(o.sectors), 0);
+        const float worst =
+            cands.empty() ? 0.0f : static_cast<float>(o.quality) * cands.front().score;
+        for (const Cand& c : cands) {
+            if (static_cast<int>(kept.size()) / 2 >= K || c.score > worst) break;
+            // the direction of d modulo 180°, in `sectors` sectors centred on the x axis
+            double a = std::atan2(static_cast<double>(c.dz), static_cast<double>(c.dx));
+            if (a < 0) a += kPi;
+            const int sector = static_cast<int>(std::floor(a / kPi * o.sectors + 0.5)) % o.sectors;
+            if (perSector[static_cast<size_t>(sector)] >= o.perSector) continue;
+            bool far = true;
+            for (size_t k = 0; k + 1 < kept.size() && far; k += 2)
+                far = std::max(std::abs(c.dx - kept[k]), std::abs(c.dz - kept[k + 1])) > sep;
+            if (!far) continue;
+            kept.push_back(c.dx);
+            kept.push_back(c.dz);
+            ++perSector[static_cast<size_t>(sector)];
+        }
+        // step 3: the copies of the tile's samples, each offset refined per sample
+        const int ex0 = std::max(0, tx0 - pr), ez0 = std::max(0, tz0 - pr);
+        const int ex1 = std::min(W, tx1 + pr), ez1 = std::min(H, tz1 + pr);
+        const int ew = ex1 - ex0, eh = ez1 - ez0;
+        std::vector<float> e2(static_cast<size_t>(ew) * eh), rowSum(e2.size());
+        std::vector<double> colSum(static_cast<size_t>(ew));
+        for (size_t k = 0; k + 1 < kept.size(); k += 2) {
+            const int dx0 = kept[k], dz0 = kept[k + 1];
+            float* val = copies.data() + (k / 2) * n;
+            float* best = copySsd.data() + (k / 2) * n;
+            for (int ez = -o.refine; ez <= o.refine; ++ez)
+                for (int ex = -o.refine; ex <= o.refine; ++ex) {
+                    const int dx = dx0 + ex, dz = dz0 + ez;
+                    for (int y = ez0; y < ez1; ++y) {
+                        const int yy = clampi(y + dz, 0, H - 1);
+                        for (int x = ex0; x < ex1; ++x) {
+                            const float d =
+                                g[static_cast<size_t>(y) * W + x] -
+                                g[static_cast<size_t>(yy) * W + clampi(x + dx, 0, W - 1)];
+                            e2[static_cast<size_t>(y - ez0) * ew + (x - ex0)] = d * d;
+                        }
+                    }
+                    // the patch sums at the tile's samples (the patch clipped at the map's
+                    // edges): rows, then columns
+                    for (int y = 0; y < eh; ++y) {
+                        const float* in = e2.data() + static_cast<size_t>(y) * ew;
+                        float* sums = rowSum.data() + static_cast<size_t>(y) * ew;
+                        double acc = 0.0;
+                        for (int x = 0; x < std::min(ew, pr); ++x) acc += in[x];
+                        for (int x = 0; x < ew; ++x) {
+                            if (x + pr < ew) acc += in[x + pr];
+                            sums[x] = static_cast<float>(acc);
+                            if (x - pr >= 0) acc -= in[x - pr];
+                        }
+                    }
+                    std::fill(colSum.begin(), colSum.end(), 0.0);
+                    for (int y = 0; y < std::min(eh, pr); ++y)
+                        for (int x = 0; x < ew; ++x)
+                            colSum[x] += rowSum[static_cast<size_t>(y) * ew + x];
+                    for (int y = 0; y < eh; ++y) {
+                        if (y + pr < eh)
+                            for (int x = 0; x < ew; ++x)
+                                colSum[x] += rowSum[static_cast<size_t>(y + pr) * ew + x];
+                        const int my = ez0 + y;
+                        const int y0 = my + dz0, y1 = my + dz;
+                        if (my >= tz0 && my < tz1 && y0 >= 0 && y0 < H && y1 >= 0 && y1 < H)
+                            for (int mx = tx0; mx < tx1; ++mx) {
+                                const int x0 = mx + dx0, x1 = mx + dx;
+                                if (x0 < 0 || x0 >= W || x1 < 0 || x1 >= W) continue;
+                                const float ssd = static_cast<float>(colSum[mx - ex0]);
+                                const size_t i = static_cast<size_t>(my) * W + mx;
+                                if (ssd < best[i]) {
+                                    best[i] = ssd;
+                                    val[i] = g[static_cast<size_t>(y1) * W + x1];
+                                }
+                            }
+                        if (y - pr >= 0)
+                            for (int x = 0; x < ew; ++x)
+                                colSum[x] -= rowSum[static_cast<size_t>(y - pr) * ew + x];
+                    }
+                }
+            if (interruptRequested()) return;
+        }
+    });
+    throwIfInterrupted();
+    for (const std::vector<int>& kept : tileOffsets)
+        for (size_t k = 0; k + 1 < kept.size(); k += 2) {
+            out.offsetX.push_back(kept[k]);
+            out.offsetZ.push_back(kept[k + 1]);
+        }
+
+    // ---- step 4: the estimate and the residual -------------------------------------------
+    tbb::parallel_for(0, H, [&](int y) {
+        std::vector<std::pair<float, float>> c;  // (patch difference, copy)
+        std::vector<float> v;
+        for (int x = 0; x < W; ++x) {
+            const size_t i = static_cast<size_t>(y) * W + x;
+            c.clear();
+            for (int k = 0; k < K; ++k) {
+                const size_t j = static_cast<size_t>(k) * n + i;
+                if (std::isfinite(copySsd[j])) c.emplace_back(copySsd[j], copies[j]);
+            }
+            if (c.empty()) {
+                out.residual[i] = 0.0f;
+                continue;
+            }
+            size_t m = c.size();
+            if (o.keep < 1.0) {
+                m = std::max<size_t>(
+                    1, static_cast<size_t>(std::ceil(o.keep * static_cast<double>(c.size()))));
+                std::nth_element(c.begin(), c.begin() + static_cast<std::ptrdiff_t>(m - 1),
+                                 c.end());
+            }
+            v.clear();
+            for (size_t j = 0; j < m; ++j) v.push_back(c[j].second);
+            std::sort(v.begin(), v.end());
+            const float est =
+                v.size() % 2 ? v[v.size() / 2] : 0.5f * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+            out.residual[i] = g[i] - est;
+        }
+    });
+    copies.clear();
+    copies.shrink_to_fit();
+    copySsd.clear();
+    copySsd.shrink_to_fit();
+    throwIfInterrupted();
+
+    // ---- step 5: detection in noise at several scales -------------------------------------
+    const int b = std::min(o.border, (std::min(W, H) - 1) / 2);
+    auto inside = [&](int x, int y) { return x >= b && y >= b && x < W - b && y < H - b; };
+    size_t interior = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) interior += inside(x, y) ? 1 : 0;
+    if (interior == 0) return out;
+    const double tests = static_cast<double>(interior) * o.scales;
+    out.threshold = gaussianTailInverse(std::min(0.5, o.nfa / (2.0 * tests)));
+    // σ floor: 1e-3 of the levelled heights' RMS (a flat background, as a logo's, leaves a
+    // residual of rounding whose MAD is 0; that alone is no anomaly)
+    double rms = 0.0;
+    for (float v : g) rms += static_cast<double>(v) * v;
+    const double sigmaFloor = 1e-3 * std::sqrt(rms / static_cast<double>(n));
+    {
+        double sum = 0.0;
+        for (int y = b; y < H - b; ++y)
+            for (int x = b; x < W - b; ++x) {
+                const double v = g[static_cast<size_t>(y) * W + x];
+                sum += v * v;
+            }
+        out.textureRms = std::sqrt(sum / static_cast<double>(interior));
+    }
+    std::vector<float> zDetect(n, 0.0f), zGrow(n, 0.0f);
+    for (int s = 0; s < o.scales; ++s) {
+        const std::vector<float> rs =
+            s == 0 ? out.residual : gaussianBlur(out.residual, W, H, std::ldexp(1.0, s - 1));
+        std::vector<float> vals;
+        vals.reserve(interior);
+        for (int y = b; y < H - b; ++y)
+            for (int x = b; x < W - b; ++x) vals.push_back(rs[static_cast<size_t>(y) * W + x]);
+        const double med = medianOf(vals);
+        for (float& v : vals) v = static_cast<float>(std::abs(v - med));
+        double sigma = 1.4826 * medianOf(vals);
+        if (o.tailQuantile > 0.0) {
+            // the Gaussian whose tailQuantile-quantile of |r_s| is the residual's: a texture's
+            // heavy tail (particles, wandering striae) raises σ_s where the MAD does not see it
+            const size_t q =
+                std::min(vals.size() - 1,
+                         static_cast<size_t>(o.tailQuantile * static_cast<double>(vals.size())));
+            std::nth_element(vals.begin(), vals.begin() + static_cast<std::ptrdiff_t>(q),
+                             vals.end());
+            sigma = std::max(sigma, vals[q] / gaussianTailInverse(0.5 * (1.0 - o.tailQuantile)));
+        }
+        sigma = std::max(sigma, sigmaFloor);
+        if (s == 0) out.sigma = sigma;
+        if (!(sigma > 0.0)) continue;  // a constant residual: nothing stands out
+        for (size_t i = 0; i < n; ++i) {
+            const float z = static_cast<float>(std::abs(rs[i] - med) / sigma);
+            zDetect[i] = std::max(zDetect[i], z);
+            if (s <= o.growScale) zGrow[i] = std::max(zGrow[i], z);
+        }
+    }
+
+    // ---- step 6: regions -----------------------------------------------------------------
+    const float thr = static_cast<float>(out.threshold);
+    const float grow = static_cast<float>(std::min(o.growSigma, out.threshold));
+    std::vector<uint8_t> seen(n, 0);
+    std::vector<size_t> stack, region;
+    for (int y = b; y < H - b; ++y)
+        for (int x = b; x < W - b; ++x) {
+            const size_t i0 = static_cast<size_t>(y) * W + x;
+            if (zDetect[i0] >= thr) ++out.detections;
+            if (seen[i0] || !(zGrow[i0] >= grow)) continue;
+            stack.assign(1, i0);
+            region.clear();
+            seen[i0] = 1;
+            bool detected = false, atBorder = false;
+            while (!stack.empty()) {
+                const size_t i = stack.back();
+                stack.pop_back();
+                region.push_back(i);
+                const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
+                detected = detected || zDetect[i] >= thr;
+                if (px == b || py == b || px == W - b - 1 || py == H - b - 1) atBorder = true;
+                for (int qy = py - 1; qy <= py + 1; ++qy)
+                    for (int qx = px - 1; qx <= px + 1; ++qx) {
+                        if (!inside(qx, qy)) continue;
+                        const size_t q = static_cast<size_t>(qy) * W + qx;
+                        if (seen[q] || !(zGrow[q] >= grow)) continue;
+                        seen[q] = 1;
+                        stack.push_back(q);
+                    }
+            }
+            if (!detected || static_cast<int>(region.size()) < o.minRegion) continue;
+            if (o.textureRms > 0.0) {
+                float peak = 0.0f;
+                for (size_t i : region) peak = std::max(peak, std::abs(out.residual[i]));
+                if (peak < o.textureRms * out.textureRms) {
+                    ++out.droppedShallow;
+                    continue;
+                }
+            }
+            if (o.dropBorderRegions && b > 0 && atBorder) {
+                ++out.droppedBorder;
+                continue;
+            }
+            ++out.regions;
+            for (size_t i : region) out.map[i] = 255;
+        }
+    return out;
+}
+
+}  // namespace sl

@@ -1,0 +1,106 @@
+// The defect map's `selfsim` method (detect/DefectMap.h's method table): what the texture
+// does not repeat. After Davy, Ehret, Morel and Delbracio, "Reducing anomaly detection in images
+// to detection in noise" (ICIP 2018) and Ehret, Davy, Morel and Delbracio, "Image anomalies: a
+// review and synthesis of detection methods" (JMIV 2019): remove from the map what other places
+// of the same map explain (its self-similar part), and detect in the residual, which on a
+// texture of repeated tool marks is close to coloured Gaussian noise, with an a-contrario test
+// that bounds the expected number of false detections.
+//
+// Our variant (h the heights, W×H, row-major; each parameter a field of SelfSimMapOptions):
+//  1. Level: g = h − its least-squares quadratic surface (a part's tilt and curve would make
+//     every offset copy differ by a slope).
+//  2. Offsets: the texture's own repeats, per tile of `tile` samples (the whole map with 0).
+//     For every offset d on a grid of refine + 1 samples with exclusion ≤ max(|dx|, |dz|) ≤
+//     searchRadius (the sample's own neighbourhood left out, as in the paper), D(d) = the
+//     median of |g(x) − g(x + d)| over ~1 k samples x of the tile grown by `context` (both ends
+//     inside the map). The `offsets` offsets of least D are kept, greedily: each more than
+//     2·refine + 1 samples (Chebyshev) from those kept before, at most `perSector` in each of
+//     `sectors` sectors of direction (mod 180°), and D at most `quality` × the tile's least:
+//     the lay of striae, the period of chatter and of scallops, both signs. Offsets of the
+//     texture, not a nearest-neighbour search per patch: a long scratch is similar to itself
+//     along its length (a per-patch search finds it there and explains it away); the
+//     texture's offsets leave it, except those along it (the sectors keep them few).
+//  3. Copies: for each kept offset d and sample x, the offset is refined within ±refine samples
+//     (each axis) to the d' whose patch (patch × patch samples centred on x and on x + d')
+//     differs least (sum of squared differences of g); the copy is g(x + d'). Copies whose
+//     unrefined end falls outside the map are missing. A curved lay (a face mill's arcs) is
+//     followed locally by the refinement.
+//  4. Estimate: the median of the `keep` share of x's copies with the smallest patch
+//     differences (all of them by default). A copy landing on a defect is an outlier of the
+//     median; a defect at x is in none of its copies (it does not repeat), so r = g − estimate
+//     keeps it, and the texture leaves r close to noise.
+//  5. Detection in noise: at `scales` scales, r_0 = r and r_s = r blurred by a Gaussian of
+//     σ = 2^(s−1) samples; each is normalised by its own robust σ_s (1.4826 × the median
+//     absolute deviation, over the samples outside the border): the residual's colour is in
+//     σ_s. A sample is detected at scale s when NFA = N · 2Φ̄(|r_s|/σ_s) ≤ nfa, N = the samples
+//     outside the border × scales (the number of tests): on a Gaussian residual the expected
+//     number of detections is at most `nfa`.
+//  6. Regions: 8-connected regions of samples with |r_s|/σ_s ≥ growSigma at some scale
+//     s ≤ growScale, outside the border, are marked when they hold a detection (at any scale)
+//     and at least minRegion samples, their peak |r| is at least textureRms × the RMS of g
+//     (outside the border: a measured texture's own particles and wandering striae stand many
+//     σ above the residual but not above the texture's roughness), and, with
+//     dropBorderRegions, they do not reach the border's inner line (a region there continues
+//     beyond what the map can judge; no blocks along the border). A detection at a coarse
+//     scale alone marks nothing: its footprint (a blur of 2–4 samples) is not the defect's.
+// Every threshold is relative to σ_s, so the map is invariant to h → a·h + b (a ≠ 0) up to
+// rounding; a constant map marks nothing. Cost: offsets × (2·refine + 1)² box-filtered
+// difference passes over the map, parallel over tiles (TBB); memory 2 × offsets + 6 float copies.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace sl {
+
+struct SelfSimMapOptions {
+    int patch = 7;              // side of the patches compared (odd, >= 1)
+    int offsets = 16;           // texture offsets kept (copies per sample; >= 3)
+    int searchRadius = 48;      // largest offset, samples (Chebyshev; > exclusion)
+    int exclusion = 16;         // smallest offset: the sample's own neighbourhood (>= 1)
+    int refine = 2;             // each copy's offset refined within ± this per axis (>= 0)
+    int sectors = 8;            // offsets' directions (mod 180°) in this many sectors (>= 1) ...
+    int perSector = 4;          // ... at most this many offsets in each (>= 1)
+    double quality = 2.0;       // an offset's D at most this × the tile's best D (>= 1)
+    int tile = 64;              // offsets chosen per tile of this side (0: one set for the map)
+    int context = 32;           // ... on the tile grown by this many samples (>= 0)
+    double keep = 1.0;          // share of the copies (smallest patch difference) in the median
+                                // (in (0, 1])
+    int scales = 4;             // detection scales: σ = 0, 1, 2, 4, ... samples (1..6)
+    double nfa = 1.0;           // expected false detections on a Gaussian residual (> 0)
+    double tailQuantile = 0.0;  // σ_s at least the tail's: this quantile of |r_s| over the
+                                // Gaussian's (in [0, 1); 0: the MAD alone)
+    double growSigma = 3.0;     // regions grow into |r_s|/σ_s >= this (> 0)
+    int growScale = 1;          // ... at scales up to this index (0..scales-1)
+    double textureRms = 1.0;    // a region's peak |r| at least this × the texture's RMS (the
+                                // levelled heights' outside the border; >= 0, 0: off)
+    int border = 40;            // samples at the map's edges never marked (>= 0)
+    int minRegion = 12;         // smallest region kept, samples (>= 1)
+    bool dropBorderRegions = true;  // regions reaching the border's inner line are dropped
+};
+
+struct SelfSimMap {
+    std::vector<uint8_t> map;           // width*height: 255 marked, 0 not
+    std::vector<float> residual;        // r of step 4 (height units), width*height
+    std::vector<int> offsetX, offsetZ;  // the offsets kept, tile after tile (x = column, z = row)
+    double sigma = 0;                   // σ_0 of r (height units)
+    double threshold = 0;               // the detection's |r_s|/σ_s (from nfa and N)
+    size_t detections = 0;              // samples detected at some scale (NFA <= nfa)
+    size_t regions = 0;                 // regions kept
+    size_t droppedBorder = 0;           // regions dropped at the border
+    size_t droppedShallow = 0;          // regions dropped below the texture's RMS
+    double textureRms = 0;              // RMS of the levelled heights outside the border
+};
+
+/// Throws InputError naming the option for a bad value.
+void checkSelfSimMapOptions(const SelfSimMapOptions& o);
+
+/// The selfsim method's map of a width×height height map (finite heights; the caller checks).
+SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int height,
+                                const SelfSimMapOptions& o = {});
+
+/// The one-sided Gaussian tail's inverse: z with Φ̄(z) = p (p in (0, 0.5]).
+double gaussianTailInverse(double p);
+
+}  // namespace sl
