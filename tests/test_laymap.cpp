@@ -10,6 +10,7 @@
 #include <random>
 #include <vector>
 
+#include "SyntheticDefects.h"
 #include "core/Error.h"
 #include "detect/DefectMap.h"
 #include "detect/LayMap.h"
@@ -59,30 +60,13 @@ std::vector<float> striated(uint32_t seed = 5) {
 // A paraboloid pit of radius rho and depth d at (cx, cy); returns its truth (within the radius).
 std::vector<uint8_t> pit(std::vector<float>& h, double cx, double cy, double rho, double d) {
     std::vector<uint8_t> t(h.size(), 0);
-    for (int y = 0; y < kH; ++y)
-        for (int x = 0; x < kW; ++x) {
-            const double q = std::hypot(x - cx, y - cy) / rho;
-            if (q >= 1.0) continue;
-            h[static_cast<size_t>(y) * kW + x] -= static_cast<float>(d * (1 - q * q));
-            t[static_cast<size_t>(y) * kW + x] = 1;
-        }
+    test::paintPit(h, t, kW, cx, cy, rho, d);
     return t;
 }
 
-// A V groove `width` wide and `depth` deep along the segment (x0,y0)–(x1,y1), truth where it is
-// at least 10 % of its depth.
 void groove(std::vector<float>& h, std::vector<uint8_t>& t, double x0, double y0, double x1,
             double y1, double width, double depth) {
-    const double dx = x1 - x0, dy = y1 - y0, len2 = dx * dx + dy * dy;
-    for (int y = 0; y < kH; ++y)
-        for (int x = 0; x < kW; ++x) {
-            const double a = std::clamp(((x - x0) * dx + (y - y0) * dy) / len2, 0.0, 1.0);
-            const double dist = std::hypot(x - (x0 + a * dx), y - (y0 + a * dy));
-            const double off = depth * (1 - 2 * dist / width);
-            if (off <= 0) continue;
-            h[static_cast<size_t>(y) * kW + x] -= static_cast<float>(off);
-            if (off >= 0.1 * depth) t[static_cast<size_t>(y) * kW + x] = 1;
-        }
+    test::paintGroove(h, t, kW, x0, y0, x1, y1, width, depth);
 }
 
 // Arced striae: the striated texture's profile along the radius of circles about (cx, cy)

@@ -11,6 +11,7 @@
 #include <random>
 #include <vector>
 
+#include "SyntheticDefects.h"
 #include "core/Error.h"
 #include "detect/DefectMap.h"
 #include "detect/SelfSimMap.h"
@@ -40,32 +41,14 @@ std::vector<float> striations(uint32_t seed, double noise = 0.05) {
     return h;
 }
 
-// A paraboloid pit of radius rho and depth d at (cx, cy); truth within the radius.
 void pit(std::vector<float>& h, std::vector<uint8_t>& t, double cx, double cy, double rho,
          double d) {
-    for (int y = 0; y < kH; ++y)
-        for (int x = 0; x < kW; ++x) {
-            const double q = std::hypot(x - cx, y - cy) / rho;
-            if (q >= 1.0) continue;
-            h[static_cast<size_t>(y) * kW + x] -= static_cast<float>(d * (1 - q * q));
-            t[static_cast<size_t>(y) * kW + x] = 1;
-        }
+    test::paintPit(h, t, kW, cx, cy, rho, d);
 }
 
-// A V groove `width` wide and `depth` deep along the segment (x0,y0)–(x1,y1); truth where it is
-// at least 10 % of its depth.
 void groove(std::vector<float>& h, std::vector<uint8_t>& t, double x0, double y0, double x1,
             double y1, double width, double depth) {
-    const double dx = x1 - x0, dy = y1 - y0, len2 = dx * dx + dy * dy;
-    for (int y = 0; y < kH; ++y)
-        for (int x = 0; x < kW; ++x) {
-            const double a = std::clamp(((x - x0) * dx + (y - y0) * dy) / len2, 0.0, 1.0);
-            const double dist = std::hypot(x - (x0 + a * dx), y - (y0 + a * dy));
-            const double v = 1.0 - dist / (0.5 * width);
-            if (v <= 0.0) continue;
-            h[static_cast<size_t>(y) * kW + x] -= static_cast<float>(depth * v);
-            if (v >= 0.1) t[static_cast<size_t>(y) * kW + x] = 1;
-        }
+    test::paintGroove(h, t, kW, x0, y0, x1, y1, width, depth);
 }
 
 struct Counts {
