@@ -7,11 +7,15 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "core/Color.h"
+
 namespace sl {
 
 namespace {
 
-constexpr double kLum[3] = {0.2126, 0.7152, 0.0722};
+// The luminance weights of core/Color.h (its one rule), each exact: w·1 + 0 + 0.
+constexpr double kLum[3] = {luminance(1.0, 0.0, 0.0), luminance(0.0, 1.0, 0.0),
+                            luminance(0.0, 0.0, 1.0)};
 
 /// Σ term(k) over [k0, k1) in four interleaved partial sums (entry k into sum k mod 4, then
 /// (s0 + s2) + (s1 + s3)): the adds of one sum no longer wait on each other, and the order is

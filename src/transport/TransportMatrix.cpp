@@ -14,7 +14,9 @@ namespace sl {
 
 namespace {
 
-constexpr double kLum[3] = {0.2126, 0.7152, 0.0722};
+// The luminance weights of core/Color.h (its one rule), each exact: w·1 + 0 + 0.
+constexpr double kLum[3] = {luminance(1.0, 0.0, 0.0), luminance(0.0, 1.0, 0.0),
+                            luminance(0.0, 0.0, 1.0)};
 
 /// Runs f(chunk, rowBegin, rowEnd) over the fixed chunks [k·chunkRows, (k+1)·chunkRows) of
 /// rows, in parallel. (A blocked_range with a grain size would split anywhere, not at

@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/Color.h"
 #include "core/Error.h"
 
 namespace sl {
@@ -14,7 +15,9 @@ namespace sl {
 namespace {
 
 constexpr int L = TransportSlices::kLanes;
-constexpr double kLum[3] = {0.2126, 0.7152, 0.0722};  // core/Color.h, as TransportMatrix.cpp
+// The luminance weights of core/Color.h (its one rule), each exact: w·1 + 0 + 0.
+constexpr double kLum[3] = {luminance(1.0, 0.0, 0.0), luminance(0.0, 1.0, 0.0),
+                            luminance(0.0, 0.0, 1.0)};
 
 /// The floats of slot u for a plane: x[channel][lane]. blk points at the slot's planes·CH·L
 /// floats; offset selects a plane's block (Mean: the mean of the two planes, in float, as
