@@ -15,6 +15,18 @@
 
 using namespace sl;
 
+namespace {
+
+/// A judge score's JSON with one defect kind (a scratch of 100 px) at the given JND and ratio:
+/// what the headline tests feed optimizeHeadline.
+nlohmann::json oneKindJudge(double jnd, double visibility) {
+    return nlohmann::json{
+        {"visibility",
+         {{{"name", "scratch"}, {"pixels", 100}, {"visibility", visibility}, {"jnd", jnd}}}}};
+}
+
+}  // namespace
+
 TEST(Viewing, SceneFileBlockIsReadCheckedAndResolved) {
     const std::string head = R"({"heightmap": {"path": "x.exr", "pixel_pitch": 0.01}, "viewing": )";
     const SceneDesc d = parseScene(
@@ -93,11 +105,7 @@ TEST(JudgeJnd, TheSameLightDimmerHasTheSameRatioAndFewerJnd) {
 }
 
 TEST(JudgeJnd, TheAnswerLineLeadsWithJnd) {
-    auto judge = [](double jnd, double visibility) {
-        return nlohmann::json{
-            {"visibility",
-             {{{"name", "scratch"}, {"pixels", 100}, {"visibility", visibility}, {"jnd", jnd}}}}};
-    };
+    const auto judge = oneKindJudge;
     nlohmann::json s = {{"compare",
                          {{"judge_spp", 1024},
                           {"viewing", {{"text", "38.8 px/deg, white 200 cd/m²"}}},
@@ -147,15 +155,11 @@ TEST(JudgeJnd, WithSeveralKindsTheHeadlineLeadsWithTheLeastVisible) {
         << h;
 }
 
-// When the lamp beat the optimized light in JND on the validation estimate (app/pipeline/Answer.h), the
-// first line says the lamp is the answer, by the JND it was chosen on, and the judge's figures
+// When the lamp beat the optimized light in JND on the validation estimate (app/pipeline/Answer.h),
+// the first line says the lamp is the answer, by the JND it was chosen on, and the judge's figures
 // follow in JND with the ratio beside them (here the ratio alone would have kept E*).
 TEST(JudgeJnd, WhenTheLampIsTheAnswerTheHeadlineSaysSoInJnd) {
-    auto judge = [](double jnd, double visibility) {
-        return nlohmann::json{
-            {"visibility",
-             {{{"name", "scratch"}, {"pixels", 100}, {"visibility", visibility}, {"jnd", jnd}}}}};
-    };
+    const auto judge = oneKindJudge;
     nlohmann::json s = {{"compare",
                          {{"judge_spp", 1024},
                           {"lamp", {{"name", "studio preset"}, {"judge", judge(2.11, 1.8)}}},
@@ -185,11 +189,7 @@ TEST(JudgeJnd, WhenTheLampIsTheAnswerTheHeadlineSaysSoInJnd) {
 // headline says why the lamp was not the answer (a check it failed on the validation estimate,
 // or less JND there), so the first line and the selection agree.
 TEST(JudgeJnd, WhenTheLampShowsMoreButIsNotTheAnswerTheHeadlineSaysWhy) {
-    auto judge = [](double jnd, double visibility) {
-        return nlohmann::json{
-            {"visibility",
-             {{{"name", "scratch"}, {"pixels", 100}, {"visibility", visibility}, {"jnd", jnd}}}}};
-    };
+    const auto judge = oneKindJudge;
     auto candidate = [](const char* name, const char* kind, double merit, bool eligible,
                         const char* why) {
         return nlohmann::json{

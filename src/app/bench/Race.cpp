@@ -646,24 +646,19 @@ std::vector<RaceStanding> raceStandings(const std::vector<RaceRow>& medians,
 }
 
 std::string raceWinner(const std::vector<RaceStanding>& standings) {
+    auto raced = [](const RaceStanding& s) { return s.config != kLampConfig && s.parts > 0; };
     // JND when every configuration has it (the judge's first figure), else the ratio.
-    bool jnd = false;
-    for (const RaceStanding& s : standings) {
-        if (s.config == kLampConfig || s.parts == 0) continue;
-        if (!std::isfinite(s.worstJndVsLamp)) {
-            jnd = false;
-            break;
-        }
-        jnd = true;
-    }
+    const bool jnd = std::any_of(standings.begin(), standings.end(), raced) &&
+                     std::all_of(standings.begin(), standings.end(), [&](const RaceStanding& s) {
+                         return !raced(s) || std::isfinite(s.worstJndVsLamp);
+                     });
     const double RaceStanding::*worst =
         jnd ? &RaceStanding::worstJndVsLamp : &RaceStanding::worstVsLamp;
     const double RaceStanding::*med =
         jnd ? &RaceStanding::medianJndVsLamp : &RaceStanding::medianVsLamp;
     const RaceStanding* best = nullptr;
     for (const RaceStanding& s : standings) {
-        if (s.config == kLampConfig || s.parts == 0) continue;
-        if (!std::isfinite(s.*worst)) continue;
+        if (!raced(s) || !std::isfinite(s.*worst)) continue;
         if (!best || s.*worst > best->*worst || (s.*worst == best->*worst && s.*med > best->*med))
             best = &s;
     }
