@@ -177,6 +177,29 @@ TEST(InsertDefectsCli, WritesWhatEveryTruthCommandTakes) {
                (dir / "ins-truth.png").string() + " -o " + (dir / "map.png").string());
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("pit-chain"), std::string::npos) << r.output;
+    // a simulator's part: the tool-path model (auto), and its scene says nothing of measurement
+    EXPECT_EQ(r.output.find("measured texture"), std::string::npos) << r.output;
+    {
+        std::ifstream sin(dir / "ins.json");
+        EXPECT_FALSE(nlohmann::json::parse(sin)["heightmap"].contains("measured"));
+    }
+    // defects in a measured texture (an X3P): the scene written says so and defectmap's auto
+    // is the selfsim method
+    r = runCli("gen-surface --process turned --width 300 --height 300 --scratches 0 --gouges 0 "
+               "-o " +
+               (dir / "m.x3p").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    r = runCli("insert-defects " + (dir / "m.x3p").string() + " --seed 3 -o " +
+               (dir / "mins.exr").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    {
+        std::ifstream sin(dir / "mins.json");
+        EXPECT_EQ(nlohmann::json::parse(sin)["heightmap"]["measured"], true);
+    }
+    r = runCli("defectmap " + (dir / "mins.json").string() + " -o " + (dir / "m.png").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("defect map (selfsim)"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("measured texture"), std::string::npos) << r.output;
     // A bare EXR carries no pitch: the error names the fix; nothing is written.
     r = runCli("insert-defects " + (dir / "part.exr").string() + " -o " +
                (dir / "bad.exr").string());

@@ -214,6 +214,32 @@ TEST(Levelling, SceneFileFieldStringsObjectsAndOverrides) {
     EXPECT_EQ(j["levelling"]["mode"], "plane");
     EXPECT_EQ(j["levelling"]["auto"], true);
     EXPECT_EQ(j["size"][0], n);
+    EXPECT_EQ(j["measured"], true);
+}
+
+// heightmap.measured: unset, the file says (an X3P is a measurement); the scene overrides it
+// either way; anything but a boolean is refused naming the field. The defect map's auto follows
+// it: on a measurement it is the selfsim method (detect/DefectMap.h).
+TEST(Levelling, SceneFileSaysWhetherTheMapIsAMeasurement) {
+    test::TempDir dir("measured");
+    const int n = 16;
+    std::vector<float> mm(static_cast<size_t>(n * n), 0.0f);
+    writeX3p(dir / "m.x3p", n, n, mm, 0.01);
+    test::writeText(dir / "s.json", R"({"heightmap": {"path": "m.x3p"}})");
+    EXPECT_TRUE(loadScene(dir / "s.json")->load.measured);
+    EXPECT_FALSE(loadScene(dir / "s.json", {"heightmap.measured=false"})->load.measured);
+    EXPECT_FALSE(heightmapLoadJson(*loadScene(dir / "s.json", {"heightmap.measured=false"}))
+                     ["measured"]
+                         .get<bool>());
+    EXPECT_TRUE(loadHeightSource(dir / "m.x3p").measured());
+    EXPECT_TRUE(loadHeightSource(dir / "s.json").measured());
+    try {
+        readSceneFile(dir / "s.json", {"heightmap.measured=1"});
+        ADD_FAILURE() << "measured=1 was accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("heightmap.measured"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("true or false"), std::string::npos) << e.what();
+    }
 }
 
 // --- readers ------------------------------------------------------------------------------------

@@ -117,6 +117,26 @@ TEST(SelfSimMap, PureTextureFalseDetectionsAverageAtMostTheNfa) {
     EXPECT_GT(detectSelfSimDefects(striations(100), kW, kH, o).regions, 0u);
 }
 
+// The default method, auto, on a measured texture is the selfsim method: the same map, bit for
+// bit, and the result says so; on the same heights not marked measured it is the tool-path
+// model, another map.
+TEST(SelfSimMap, AutoOnAMeasuredTextureIsTheSelfSimMap) {
+    std::vector<float> h = striations(5);
+    std::vector<uint8_t> t(h.size(), 0);
+    pit(h, t, 120, 100, 6, 1.0);
+    DefectMapOptions o;
+    o.measured = true;
+    const DefectMap m = detectDefects(h, kW, kH, o);
+    EXPECT_EQ(m.method, DefectMethod::SelfSim);
+    EXPECT_TRUE(m.measuredTexture);
+    EXPECT_EQ(m.map, detectSelfSimDefects(h, kW, kH, o.selfsim).map);
+    EXPECT_GT(m.markedCount(), 0u);
+    const DefectMap machined = detectDefects(h, kW, kH);
+    EXPECT_EQ(machined.method, DefectMethod::Auto);
+    EXPECT_FALSE(machined.measuredTexture);
+    EXPECT_NE(machined.map, m.map);
+}
+
 TEST(SelfSimMap, GaussianTailInverseIsExact) {
     EXPECT_NEAR(gaussianTailInverse(0.5), 0.0, 1e-9);
     EXPECT_NEAR(gaussianTailInverse(0.05), 1.6448536269514722, 1e-9);

@@ -20,6 +20,10 @@ int runDefectMap(const DefectMapJobOptions& o) {
     std::printf("defect map (%s) of %dx%d samples: %zu marked (%.2f%% of the map), %.3f s\n",
                 defectMethodName(m.method), s.width, s.height, m.markedCount(),
                 100.0 * m.markedFraction(), m.seconds);
+    if (m.measuredTexture)
+        std::printf(
+            "  auto on a measured texture (an instrument's height map, or the scene's "
+            "heightmap.measured): the selfsim method, what the texture does not repeat\n");
     if (m.method == DefectMethod::Auto)
         std::printf(
             "  FFT %dx%d, %zu of %zu spectrum bins notched as texture; sigma level %.4g, edge "

@@ -1553,6 +1553,26 @@ std::vector<float> removeTexture(std::span<const float> heights, int width, int 
     return r;
 }
 
+namespace {
+
+// The selfsim method's map and statistics into r (the selfsim method, and auto on a measured
+// texture).
+void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int height,
+                 const SelfSimMapOptions& o) {
+    SelfSimMap m = detectSelfSimDefects(heights, width, height, o);
+    r.method = DefectMethod::SelfSim;
+    r.map = std::move(m.map);
+    r.sigmaLevel = m.sigma;
+    r.selfsimOffsets = m.offsetX.size();
+    r.selfsimDetections = m.detections;
+    r.selfsimRegions = m.regions;
+    r.selfsimDropped = m.droppedBorder;
+    r.selfsimThreshold = m.threshold;
+    r.markedScore = r.markedCount();
+}
+
+}  // namespace
+
 DefectMap detectDefects(std::span<const float> heights, int width, int height,
                         const DefectMapOptions& o) {
     const Stopwatch clock;
@@ -1584,22 +1604,19 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
             r.seconds = clock.seconds();
             return r;
         }
-        case DefectMethod::SelfSim: {
+        case DefectMethod::SelfSim:
             checkInput(heights, width, height);
-            SelfSimMap m = detectSelfSimDefects(heights, width, height, o.selfsim);
-            r.map = std::move(m.map);
-            r.sigmaLevel = m.sigma;
-            r.selfsimOffsets = m.offsetX.size();
-            r.selfsimDetections = m.detections;
-            r.selfsimRegions = m.regions;
-            r.selfsimDropped = m.droppedBorder;
-            r.selfsimThreshold = m.threshold;
-            r.markedScore = r.markedCount();
+            selfSimInto(r, heights, width, height, o.selfsim);
             r.seconds = clock.seconds();
             return r;
-        }
         case DefectMethod::Auto:
-            break;
+            if (!o.measured) break;
+            // a measured texture: the map is the selfsim method's (header, "auto")
+            checkInput(heights, width, height);
+            selfSimInto(r, heights, width, height, o.selfsim);
+            r.measuredTexture = true;
+            r.seconds = clock.seconds();
+            return r;
     }
     checkOptions(o);
     checkInput(heights, width, height);

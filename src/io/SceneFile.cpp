@@ -228,6 +228,12 @@ void parseHeightmap(Fields& f, const std::filesystem::path& baseDir, HeightmapDe
     h.heightScale = f.number("height_scale", h.heightScale);
     if (!(h.heightScale != 0)) f.fail("height_scale", "must be non-zero");
     if (const json* l = f.get("levelling")) h.levelling = parseLevelling(f, *l);
+    if (const json* m = f.get("measured")) {
+        if (!m->is_boolean())
+            f.fail("measured", "must be true or false, got " + jsonExcerpt(*m),
+                   "true: the map is a measurement (an instrument's); false: a simulator's");
+        h.measured = m->get<bool>();
+    }
     if (const json* r = f.get("height_range")) {
         if (!r->is_array() || r->size() != 2 || !(*r)[0].is_number() || !(*r)[1].is_number())
             f.fail("height_range", "must be [min, max], got " + jsonExcerpt(*r));
@@ -511,6 +517,7 @@ std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
         }
     }
     HeightmapLoad load = levelMap(map, d.heightmap.levelling, d.heightmap.pitch, sceneWhere);
+    load.measured = d.heightmap.measured.value_or(map.measured());
     auto scene =
         std::make_unique<Scene>(std::move(d), map.width, map.height, std::move(map.heights));
     scene->load = std::move(load);
@@ -605,6 +612,7 @@ nlohmann::ordered_json heightmapLoadJson(const Scene& scene) {
                                            : nlohmann::ordered_json(l.resampling);
     j["levelling"] = lev;
     j["warnings"] = l.warnings;
+    j["measured"] = l.measured;
     return j;
 }
 
@@ -636,6 +644,11 @@ std::vector<SceneFileField> sceneFileFields() {
          "circle arc across it), or `{\"mode\": \"cylinder\", \"axis\": \"y\"}`; `auto` is "
          "`plane` for measured maps (X3P, SDF, instrument formats), `none` for EXR, TIFF, PNG "
          "and .npy"},
+        {"heightmap.measured", "the file's",
+         "`true`: the map is a measurement (an instrument's), `false`: a simulator's or a "
+         "generator's; unset, X3P, SDF and instrument formats are measurements, EXR, TIFF, PNG "
+         "and .npy are not. The defect map's `auto` follows it: the tool-path model on a "
+         "simulator's part, `selfsim` on a measurement; insert-defects writes it"},
         {"material.type", code(d.material.type),
          "or `conductor` (smooth mirror) — Mitsuba 3's plugins"},
         {"material.distribution", code(microfacetName(m.distribution)),

@@ -55,6 +55,8 @@ struct HeightSource {
     const std::vector<float>& heights() const { return scene ? scene->heights : map.heights; }
     int width() const { return scene ? scene->mapWidth : map.width; }
     int height() const { return scene ? scene->mapHeight : map.height; }
+    /// A measurement: the scene's heightmap.measured, else the file's (HeightmapData::measured).
+    bool measured() const { return scene ? scene->load.measured : map.measured(); }
 };
 HeightSource loadHeightSource(const std::filesystem::path& file,
                               const std::vector<std::string>& overrides = {});

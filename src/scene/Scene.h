@@ -28,6 +28,10 @@ struct HeightmapDesc {
     std::optional<std::array<double, 2>> heightRange;  // integer maps: [min, max] in mm
     double heightScale = 1.0;                          // float maps: multiplier
     LevellingDesc levelling;  // form removal when loaded (scene/Levelling.h)
+    /// heightmap.measured: the map is a measurement (an instrument's), or not (a simulator's
+    /// or a generator's), whatever its file format; unset: the file says (io/HeightmapIO.h
+    /// HeightmapData::measured). The defect map's auto method follows it (detect/DefectMap.h).
+    std::optional<bool> measured;
 };
 
 /// What loading the height map did (io/SceneFile.h loadScene): printed when the part is loaded,
@@ -38,6 +42,7 @@ struct HeightmapLoad {
     std::string resampling;     // "" or how non-square pixels were made square
     LevellingResult levelling;  // what was removed
     std::vector<std::string> warnings;  // the reader's
+    bool measured = false;              // HeightmapDesc::measured, else the file's
     /// "736x560 at 1.634 um, gwyddion opdfile, ...; levelled: plane ...".
     std::string text(int width, int height, double pitch) const;
 };

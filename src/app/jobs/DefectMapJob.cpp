@@ -48,7 +48,9 @@ DefectMapJobSummary runDefectMapJob(const DefectMapJobOptions& o) {
     {
         const ProgressTask task("defect map (" + std::to_string(s.width) + "x" +
                                 std::to_string(s.height) + ")");
-        s.map = detectDefects(h, s.width, s.height, o.map);
+        DefectMapOptions mo = o.map;
+        mo.measured = src.measured();
+        s.map = detectDefects(h, s.width, s.height, mo);
     }
     if (truth) s.score = scoreDefectMap(s.map.map, truth->labels, truth->legend, o.negatives);
     std::vector<uint8_t> image;

@@ -24,8 +24,10 @@ InsertDefectsJobSummary runInsertDefectsJob(const InsertDefectsJobOptions& o) {
     std::vector<float> h;
     int W = 0, H = 0;
     double pitch = 0;
+    bool measured = false;  // the texture is a measurement: so is the map with defects in it
     if (o.input.extension() == ".json") {
         const std::unique_ptr<Scene> scene = loadScene(o.input, o.sceneOverrides);
+        measured = scene->load.measured;
         h = scene->heights;
         W = scene->mapWidth;
         H = scene->mapHeight;
@@ -35,6 +37,7 @@ InsertDefectsJobSummary runInsertDefectsJob(const InsertDefectsJobOptions& o) {
             throw inputError(o.input.string(), "scene overrides need a scene file",
                              "Give SCENE.json, or leave out the overrides");
         HeightmapData d = loadHeightmap(o.input, HeightmapOptions{});
+        measured = d.measured();
         h = std::move(d.heights);
         W = d.width;
         H = d.height;
@@ -80,6 +83,7 @@ InsertDefectsJobSummary runInsertDefectsJob(const InsertDefectsJobOptions& o) {
     PartFileOptions po;
     po.scene = o.output.parent_path() / (o.output.stem().string() + ".json");
     po.imageSize = o.imageSize;
+    po.measured = measured;
     nlohmann::ordered_json tex;
     tex["source"] = o.input.string();
     tex["model"] = spec.model == DefectModel::A ? "A" : "B";

@@ -87,6 +87,9 @@ PartFiles writePartFiles(const GeneratedSurface& g, const std::filesystem::path&
                           .generic_string();
         if (ext != ".x3p") hmj["pixel_pitch"] = g.pitch;  // an X3P file carries its pitch
         if (ext == ".png") hmj["height_range"] = {f.lo, f.hi};
+        // an X3P file reads as a measurement, the other formats as a simulator's: say so only
+        // where the part is the other (a generated part in X3P, defects in a measured texture)
+        if (o.measured != (ext == ".x3p")) hmj["measured"] = o.measured;
         nlohmann::ordered_json j;
         j["description"] = g.description;
         j["heightmap"] = hmj;

@@ -14,6 +14,7 @@ struct PartFileOptions {
     int imageSize = 0;            // scene camera width = height in pixels (0: the scene default)
     int spp = 64;                 // scene render.spp
     int maxDepth = 4;             // scene render.max_depth
+    bool measured = false;        // scene heightmap.measured: true (the map is a measurement's)
     // Members added to the legend file after "labels" (e.g. insert-defects' list of the
     // defects it inserted); readers of the legend read "labels" only.
     nlohmann::ordered_json legendExtra = nlohmann::ordered_json::object();

@@ -86,11 +86,13 @@ RegionSpec parseRegionSpec(std::string_view text, std::string_view optionName) {
 }
 
 std::vector<uint8_t> regionInHeightMap(const RegionSpec& region, int mapWidth, int mapHeight,
-                                       std::span<const float> heights) {
+                                       std::span<const float> heights, bool measured) {
     if (region.automatic) {
         if (heights.size() != static_cast<size_t>(mapWidth) * static_cast<size_t>(mapHeight))
             throw std::invalid_argument("regionInHeightMap: auto needs the height map");
-        return detectDefects(heights, mapWidth, mapHeight).map;
+        DefectMapOptions o;
+        o.measured = measured;
+        return detectDefects(heights, mapWidth, mapHeight, o).map;
     }
     if (region.labels.empty()) return loadHeightMapMask(region.file, mapWidth, mapHeight);
     const LabelMask m = readLabelMask(region.file, mapWidth, mapHeight);
@@ -124,7 +126,8 @@ std::vector<uint8_t> regionInHeightMap(const RegionSpec& region, int mapWidth, i
 
 std::vector<uint8_t> projectRegion(const Scene& scene, const RegionSpec& region, int threads) {
     const std::vector<uint8_t> m =
-        regionInHeightMap(region, scene.mapWidth, scene.mapHeight, scene.heights);
+        regionInHeightMap(region, scene.mapWidth, scene.mapHeight, scene.heights,
+                          scene.load.measured);
     return projectToImage(tracePrimaryHits(scene, threads), m);
 }
 

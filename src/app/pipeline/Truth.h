@@ -49,8 +49,10 @@ RegionSpec parseRegionSpec(std::string_view text, std::string_view optionName);
 /// the defect map of `heights` (mapWidth×mapHeight; needed only for auto). Throws InputError
 /// naming the file for a label its legend does not have, or when the file cannot be read or has
 /// the wrong size.
+/// `measured`: the map is a measurement (Scene's load.measured), which auto's method follows.
 std::vector<uint8_t> regionInHeightMap(const RegionSpec& region, int mapWidth, int mapHeight,
-                                       std::span<const float> heights = {});
+                                       std::span<const float> heights = {},
+                                       bool measured = false);
 
 /// regionInHeightMap projected into the scene's image through the centre rays (255/0).
 std::vector<uint8_t> projectRegion(const Scene& scene, const RegionSpec& region, int threads = 0);
