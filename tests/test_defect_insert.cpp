@@ -185,9 +185,10 @@ TEST(InsertDefectsCli, WritesWhatEveryTruthCommandTakes) {
     }
     // defects in a measured texture (an X3P): the scene written says so and defectmap's auto
     // is the selfsim method
-    r = runCli("gen-surface --process turned --width 300 --height 300 --scratches 0 --gouges 0 "
-               "-o " +
-               (dir / "m.x3p").string());
+    r = runCli(
+        "gen-surface --process turned --width 300 --height 300 --scratches 0 --gouges 0 "
+        "-o " +
+        (dir / "m.x3p").string());
     ASSERT_EQ(r.exitCode, 0) << r.output;
     r = runCli("insert-defects " + (dir / "m.x3p").string() + " --seed 3 -o " +
                (dir / "mins.exr").string());

@@ -228,9 +228,9 @@ TEST(Levelling, SceneFileSaysWhetherTheMapIsAMeasurement) {
     test::writeText(dir / "s.json", R"({"heightmap": {"path": "m.x3p"}})");
     EXPECT_TRUE(loadScene(dir / "s.json")->load.measured);
     EXPECT_FALSE(loadScene(dir / "s.json", {"heightmap.measured=false"})->load.measured);
-    EXPECT_FALSE(heightmapLoadJson(*loadScene(dir / "s.json", {"heightmap.measured=false"}))
-                     ["measured"]
-                         .get<bool>());
+    EXPECT_FALSE(
+        heightmapLoadJson(*loadScene(dir / "s.json", {"heightmap.measured=false"}))["measured"]
+            .get<bool>());
     EXPECT_TRUE(loadHeightSource(dir / "m.x3p").measured());
     EXPECT_TRUE(loadHeightSource(dir / "s.json").measured());
     try {

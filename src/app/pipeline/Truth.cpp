@@ -125,9 +125,8 @@ std::vector<uint8_t> regionInHeightMap(const RegionSpec& region, int mapWidth, i
 }
 
 std::vector<uint8_t> projectRegion(const Scene& scene, const RegionSpec& region, int threads) {
-    const std::vector<uint8_t> m =
-        regionInHeightMap(region, scene.mapWidth, scene.mapHeight, scene.heights,
-                          scene.load.measured);
+    const std::vector<uint8_t> m = regionInHeightMap(region, scene.mapWidth, scene.mapHeight,
+                                                     scene.heights, scene.load.measured);
     return projectToImage(tracePrimaryHits(scene, threads), m);
 }
 

@@ -51,8 +51,7 @@ RegionSpec parseRegionSpec(std::string_view text, std::string_view optionName);
 /// the wrong size.
 /// `measured`: the map is a measurement (Scene's load.measured), which auto's method follows.
 std::vector<uint8_t> regionInHeightMap(const RegionSpec& region, int mapWidth, int mapHeight,
-                                       std::span<const float> heights = {},
-                                       bool measured = false);
+                                       std::span<const float> heights = {}, bool measured = false);
 
 /// regionInHeightMap projected into the scene's image through the centre rays (255/0).
 std::vector<uint8_t> projectRegion(const Scene& scene, const RegionSpec& region, int threads = 0);
