@@ -11,6 +11,7 @@
 #include "app/host/Plot.h"
 #include "app/host/Version.h"
 #include "app/jobs/OptimizeJob.h"
+#include "app/pipeline/Defaults.h"
 #include "app/pipeline/InitialState.h"
 #include "app/pipeline/JudgeEstimate.h"
 #include "app/pipeline/LossMask.h"
@@ -79,11 +80,10 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         const bool tmInput = isTransportFile(o.input);
         std::unique_ptr<Scene> scene;
         std::optional<PrecomputeOptions> trained;  // T's trace options (a scene given)
+        // The objective: as given, else the defaults' (app/pipeline/Defaults.h), for a .tm
+        // settled once its planes are read.
         const bool defectsNamed = !o.truth.empty() || !o.defects.empty();
-        ObjectiveKind kind = o.objectiveKind ? *o.objectiveKind
-                             : defectsNamed  ? ObjectiveKind::Defects
-                             : tmInput       ? ObjectiveKind::Paper
-                                             : ObjectiveKind::Unbiased;
+        ObjectiveKind kind = o.objectiveKind ? *o.objectiveKind : defaultObjective(defectsNamed);
         const bool halves = kind != ObjectiveKind::Paper;
         checkLampFitOptions(o.fit);  // before any work
         std::vector<double> target;
@@ -92,18 +92,17 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
             target.assign(m.texels.begin(), m.texels.end());
         }
         const std::filesystem::path cacheDir = cacheDirectory(o.cache);
-        if (tmInput) {
-            job.transport.file = readTransportFile(o.input);
-            job.transport.path = o.input;
-            if (!o.objectiveKind && !defectsNamed && job.transport.file.matrix.planes == 2)
-                kind = ObjectiveKind::Unbiased;
-        } else {
-            scene = loadScene(o.input, o.sceneOverrides);
+        if (!tmInput) {
             trained = o.precompute;
             trained->rgb = false;
             if (halves) trained->sampleSets = 2;
-            job.transport = transportForScene(*scene, *trained, cacheDir);
         }
+        InputTransport input =
+            transportOfInput(o.input, o.sceneOverrides, trained.value_or(o.precompute), cacheDir);
+        job.transport = std::move(input.transport);
+        scene = std::move(input.scene);
+        if (tmInput && !o.objectiveKind)
+            kind = defaultObjective(defectsNamed, job.transport.file.matrix.planes);
         const TransportMatrix& t = job.transport.file.matrix;
         spdlog::info("{}", describeTransport(job.transport));
         if (t.channels != 1 || t.envWidth != 50 || t.envHeight != 25)
@@ -145,8 +144,7 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
             const Stopwatch clock;
             SearchOptions so;
             so.objective = kind;
-            so.optimizer.method = OptimizerMethod::Lbfgs;
-            so.optimizer.iterations = methodRow(OptimizerMethod::Lbfgs).defaultBudget;
+            so.optimizer = resolveOptimizer(optimizeJobOptimizerOptions());
             so.starts = {parseInitialState(scene ? "specular" : "const:0.5", option("from"))};
             target = search(in, so).e;
             job.secondsTarget = clock.seconds();

@@ -211,17 +211,6 @@ void applyOptimizePreset(OptimizePreset preset, OptimizeJobOptions& o) {
     }
 }
 
-OptimizeDefaults optimizeDefaults() {
-    return {};
-}
-
-OptimizerOptions optimizeJobOptimizerOptions() {
-    OptimizerOptions o;
-    o.method = optimizeDefaults().method;
-    o.iterations = 0;
-    return o;
-}
-
 namespace {
 
 // ---- The stages of the job, in the order runOptimizeJob calls them. ----
@@ -271,7 +260,7 @@ Plan plan(const OptimizeJobOptions& options) {
         o.objectiveKind = ObjectiveKind::Paper;
         if (o.starts.empty()) o.starts = {parseInitialState("const:0.5")};
     }
-    o.optimizer.method = row.runs;
+    o.optimizer = resolveOptimizer(o.optimizer);
     if (p.requested != OptimizerMethod::PaperLoop && row.gradient == GradientSource::Renderer) {
         // A black box minimizes eq. 2 through the renderer (optimize/BlackBox.h RenderLoss): the
         // run's loss is that objective, and nothing else is reported as its loss.
@@ -286,7 +275,6 @@ Plan plan(const OptimizeJobOptions& options) {
     if (o.starts.empty())
         for (const std::string& spec : optimizeDefaults().starts)
             o.starts.push_back(parseInitialState(spec));
-    if (o.optimizer.iterations == 0) o.optimizer.iterations = row.defaultBudget;
     if (o.planes == 0) o.planes = row.defaultPlanes;
     p.blackBox = row.gradient == GradientSource::Renderer;
     p.tmInput = isTransportFile(o.input);
@@ -425,12 +413,11 @@ std::vector<uint8_t> chooseDefectSppScale(const Scene& scene, const std::vector<
 /// the noise-aware rule's choice (app/pipeline/TrainingNoise.h), over any other (0: none).
 void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp) {
     const OptimizeJobOptions& o = p.o;
-    // The objective: as given, else the defaults' (OptimizeDefaults): the defects objective when
-    // the defects are named, the noise-unbiased one otherwise, eq. 2 for a .tm without halves.
-    const OptimizeDefaults defaults = optimizeDefaults();
-    const ObjectiveKind byDefault =
-        o.truth.empty() && o.defects.empty() ? defaults.objective : defaults.objectiveWithDefects;
-    in.kind = o.objectiveKind ? *o.objectiveKind : (p.tmInput ? ObjectiveKind::Paper : byDefault);
+    // The objective: as given, else the defaults' (app/pipeline/Defaults.h defaultObjective);
+    // for a .tm settled once its planes are read.
+    const bool defectsNamed = !o.truth.empty() || !o.defects.empty();
+    in.kind = o.objectiveKind ? *o.objectiveKind
+                              : (p.tmInput ? ObjectiveKind::Paper : defaultObjective(defectsNamed));
     if (!o.objectiveKind && in.kind == ObjectiveKind::Defects &&
         o.objective.reg != RegTarget::EnvMap)
         throw inputError(option("reg") + " image",
@@ -445,7 +432,8 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp) {
             p.ranks ? readShardOfRank(o.input, *p.ranks, &in.shard) : readTransportFile(o.input);
         job.transport.path = o.input;
         job.transport.secondsTotal = clock.seconds();
-        if (!o.objectiveKind && job.transport.file.matrix.planes == 2) in.kind = byDefault;
+        if (!o.objectiveKind)
+            in.kind = defaultObjective(defectsNamed, job.transport.file.matrix.planes);
     } else {
         if (!in.scene) in.scene = loadScene(o.input, o.sceneOverrides);
         PrecomputeOptions pre = o.precompute;

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "app/jobs/OptimizeJob.h"
+#include "app/pipeline/Defaults.h"
 #include "app/pipeline/JudgeEstimate.h"
 #include "app/pipeline/LossMask.h"
 #include "app/pipeline/Search.h"
@@ -314,23 +315,21 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
             estimate_ = std::make_unique<TransportSource>(
                 judgeEstimateFor(t_->file, *scene, spp, jo.cacheDir));
         }
-    } else if (isTransportFile(in)) {
-        t_ = std::make_unique<TransportSource>();
-        t_->file = readTransportFile(in);
-        t_->path = in;
-        if (options.judge && t_->file.matrix.planes == 2)
-            estimate_ = std::make_unique<TransportSource>(*t_);
-        if (!truth.empty()) scene = sceneOfTransport(t_->file, "the truth's projection");
     } else {
-        scene = loadScene(in, options.sceneOverrides);
-        PrecomputeOptions po;
+        PrecomputeOptions po;  // a scene's trace
         po.spp = options.spp;
         po.threads = options.threads;
         po.label = "view: trace T";
         po.sampleSets = 2;  // the halves: the optimizer's objective is optimize's default
-        t_ = std::make_unique<TransportSource>(
-            transportForScene(*scene, po, cacheDirectory(options.cache)));
-        if (options.judge) {
+        InputTransport input =
+            transportOfInput(in, options.sceneOverrides, po, cacheDirectory(options.cache));
+        t_ = std::make_unique<TransportSource>(std::move(input.transport));
+        scene = std::move(input.scene);
+        if (!scene) {  // a .tm
+            if (options.judge && t_->file.matrix.planes == 2)
+                estimate_ = std::make_unique<TransportSource>(*t_);
+            if (!truth.empty()) scene = sceneOfTransport(t_->file, "the truth's projection");
+        } else if (options.judge) {
             JudgeOptions sj = jo;
             sj.truth.clear();  // projected below, once
             estimate_ = std::make_unique<TransportSource>(judgeEstimate(*scene, sj));
@@ -631,8 +630,8 @@ void ViewerSession::runOptimize(int slot, std::vector<double> start, int iterati
     try {
         const TransportMatrix& t = transport();
         const Stopwatch clock;
-        // optimize's defaults (app/jobs/OptimizeJob.h): objective, λ, loss mask, method and budget.
-        const OptimizeDefaults defaults = optimizeDefaults();
+        // optimize's defaults: objective, method and budget (app/pipeline/Defaults.h), λ and loss
+        // mask (app/jobs/OptimizeJob.h).
         const OptimizeJobOptions job;
         SearchInputs si;
         si.set = {&t};
@@ -641,8 +640,7 @@ void ViewerSession::runOptimize(int slot, std::vector<double> start, int iterati
         si.objective.lambda = job.lambdas.front();
         const bool labelled =
             std::any_of(labels_.begin(), labels_.end(), [](uint8_t v) { return v != 0; });
-        ObjectiveKind kind = ObjectiveKind::Paper;
-        if (t.planes == 2) kind = labelled ? defaults.objectiveWithDefects : defaults.objective;
+        ObjectiveKind kind = defaultObjective(labelled, t.planes);
         if (kind == ObjectiveKind::Defects) {
             si.defects.resize(labels_.size());
             for (size_t p = 0; p < labels_.size(); ++p) si.defects[p] = labels_[p];  // the labels
@@ -659,10 +657,10 @@ void ViewerSession::runOptimize(int slot, std::vector<double> start, int iterati
         si.startValues = {start};
         SearchOptions so;
         so.objective = kind;
-        so.optimizer = optimizeJobOptimizerOptions();
-        const OptimizerMethodRow& row = methodRow(so.optimizer.method);
-        so.optimizer.method = row.runs;
-        so.optimizer.iterations = iterations > 0 ? iterations : row.defaultBudget;
+        OptimizerOptions requested = optimizeJobOptimizerOptions();
+        requested.iterations = iterations;  // 0: the method's default budget
+        const OptimizerMethodRow& row = methodRow(requested.method);
+        so.optimizer = resolveOptimizer(requested);
         so.planes = 1;
         InitialState s0;
         s0.kind = InitialKind::EnvMapFile;
