@@ -30,6 +30,7 @@
 #include "io/SceneFile.h"
 #include "io/StagedDirectory.h"
 #include "io/TransportFile.h"
+#include "scene/EnvMapToE.h"
 #include "scene/Scene.h"
 
 namespace sl {
@@ -89,7 +90,7 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         std::vector<double> target;
         if (!o.from.empty()) {
             const EnvMap m = lightFromSpec(o.from, 50, 25, 1, option("from"));
-            target.assign(m.texels.begin(), m.texels.end());
+            target = envMapToE(m, 1);
         }
         const std::filesystem::path cacheDir = cacheDirectory(o.cache);
         if (!tmInput) {

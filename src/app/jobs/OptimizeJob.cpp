@@ -44,6 +44,7 @@
 #include "render/Render.h"
 #include "scene/EnvMapBasis.h"
 #include "scene/EnvMapPresets.h"
+#include "scene/EnvMapToE.h"
 #include "scene/Scene.h"
 
 namespace sl {
@@ -669,19 +670,7 @@ void prepareComparisons(const Plan& p, Inputs& in, const OptimizeJobSummary& job
                                                               o.rgb ? 3 : 0, option("compare"));
         in.lampName = o.compare.empty() ? std::string("studio preset")
                                         : std::filesystem::path(o.compare).filename().string();
-        // As the judge reads a light (Judge::envVector): RGB maps by their luminance on a gray T.
-        const size_t n = lamp.texelCount();
-        if (lamp.channels == 1 && o.rgb) {
-            in.lampE.resize(3 * n);
-            for (size_t i = 0; i < 3 * n; ++i) in.lampE[i] = lamp.texels[i / 3];
-        } else if (lamp.channels == 3 && !o.rgb) {
-            in.lampE.resize(n);
-            for (size_t i = 0; i < n; ++i)
-                in.lampE[i] = luminance(double(lamp.texels[3 * i]), double(lamp.texels[3 * i + 1]),
-                                        double(lamp.texels[3 * i + 2]));
-        } else {
-            in.lampE.assign(lamp.texels.begin(), lamp.texels.end());
-        }
+        in.lampE = envMapToE(lamp, o.rgb ? 3 : 1);  // as the judge reads a light
         if (!o.truth.empty()) in.truthLabels = projectTruth(*in.scene, o.truth);
         in.sceneParts = true;
     }

@@ -28,6 +28,7 @@
 #include "io/PngBuffer.h"
 #include "io/SceneFile.h"
 #include "scene/EnvMapPresets.h"
+#include "scene/EnvMapToE.h"
 #include "scene/Scene.h"
 
 namespace sl {
@@ -38,19 +39,6 @@ using json = nlohmann::ordered_json;
 namespace {
 
 #include "ViewerPage.inc"
-
-std::vector<double> toVector(const EnvMap& env) {
-    std::vector<double> e(env.texelCount());
-    for (size_t k = 0; k < e.size(); ++k) {
-        if (env.channels == 3) {
-            const float* c = &env.texels[3 * k];
-            e[k] = luminance(c[0], c[1], c[2]);
-        } else {
-            e[k] = env.texels[k];
-        }
-    }
-    return e;
-}
 
 json readJsonFile(const fs::path& file) {
     return readJsonInput(file, "a summary");
@@ -292,7 +280,8 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
              {std::pair<std::string, std::string>{"optimized", "envmap.exr"},
               {"paper", "compare-paper-envmap.exr"}})
             if (fs::exists(in / file))
-                extraPresets_[name] = toVector(loadEnvMap(in / file, t.envWidth, t.envHeight, 1));
+                extraPresets_[name] =
+                    envMapToE(loadEnvMap(in / file, t.envWidth, t.envHeight, 1), 1);
         // The objective (and regions) that made the output: the optimizer's, and the judge's
         // regions when there is no truth (as optimize's judge scored them).
         made_ = readViewerObjective(in, t.width, t.height);
@@ -338,7 +327,7 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
     if (!lampsDir.empty() && fs::exists(lampsDir / "target-envmap.exr")) {
         const auto& t = t_->file.matrix;
         extraPresets_["optimized"] =
-            toVector(loadEnvMap(lampsDir / "target-envmap.exr", t.envWidth, t.envHeight, 1));
+            envMapToE(loadEnvMap(lampsDir / "target-envmap.exr", t.envWidth, t.envHeight, 1), 1);
     }
     if (!truth.empty() && scene) {
         LabelMask m = projectTruth(*scene, truth, options.threads);
@@ -479,7 +468,7 @@ void ViewerSession::setPreset(int slot, const std::string& name) {
         throw inputError("preset", "\"" + name.substr(0, 32) + "\" is not a preset",
                          "use one of: " + list);
     }
-    lights_.at(slot) = toVector(presetEnvMap(name, t.envWidth, t.envHeight));
+    lights_.at(slot) = envMapToE(presetEnvMap(name, t.envWidth, t.envHeight), 1);
 }
 
 std::vector<double> ViewerSession::relight(int slot) const {
