@@ -25,6 +25,7 @@
 #include "io/ImageIO.h"
 #include "io/InputFile.h"
 #include "io/LampsFile.h"
+#include "io/OptimizeOutDir.h"
 #include "io/PngBuffer.h"
 #include "io/SceneFile.h"
 #include "scene/EnvMapPresets.h"
@@ -97,7 +98,7 @@ const std::string& viewerPageHtml() {
 }
 
 ViewerObjective readViewerObjective(const fs::path& dir, int width, int height) {
-    const fs::path file = dir / "summary.json";
+    const fs::path file = dir / outdir::kSummary;
     const json s = readJsonFile(file);
     ViewerObjective o;
     try {
@@ -113,8 +114,8 @@ ViewerObjective readViewerObjective(const fs::path& dir, int width, int height) 
         throw inputError(file.string(), std::string("has no usable objective: ") + e.what(),
                          "run view on the output of a current optimize");
     }
-    if (fs::exists(dir / "mask.png")) {
-        o.mask = loadImageMask(dir / "mask.png", width, height);
+    if (fs::exists(dir / outdir::kMaskPng)) {
+        o.mask = loadImageMask(dir / outdir::kMaskPng, width, height);
         for (uint8_t& v : o.mask) v = v ? 1 : 0;  // masks hold 0/1 (app/pipeline/LossMask.h)
     }
     if (o.kind == ObjectiveKind::Defects) {
@@ -255,7 +256,7 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
     fs::path truth = options.truth;
     std::unique_ptr<Scene> scene;
     if (fs::is_directory(in)) {
-        const fs::path summaryFile = in / "summary.json";
+        const fs::path summaryFile = in / outdir::kSummary;
         if (!fs::exists(summaryFile))
             throw inputError(in.string(), "is a directory without summary.json",
                              "give an optimize output directory, a .tm or a scene file");
@@ -277,8 +278,8 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
             truth = s["truth"].get<std::string>();
         const auto& t = t_->file.matrix;
         for (const auto& [name, file] :
-             {std::pair<std::string, std::string>{"optimized", "envmap.exr"},
-              {"paper", "compare-paper-envmap.exr"}})
+             {std::pair<std::string, std::string>{"optimized", outdir::kEnvMap},
+              {"paper", outdir::kPaperEnvMap}})
             if (fs::exists(in / file))
                 extraPresets_[name] =
                     envMapToE(loadEnvMap(in / file, t.envWidth, t.envHeight, 1), 1);
@@ -292,8 +293,8 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
             reference_ = made_->reference;
         }
         // The regions optimize outlined (a transparent layer), when there are no labels here.
-        if (truth.empty() && labels_.empty() && fs::exists(in / "view-regions.png")) {
-            overlay_ = readInputFile(in / "view-regions.png", "the regions' overlay", 1ull << 28);
+        if (truth.empty() && labels_.empty() && fs::exists(in / outdir::kViewRegions)) {
+            overlay_ = readInputFile(in / outdir::kViewRegions, "the regions' overlay", 1ull << 28);
         }
         if (options.judge) {
             // The optimization's held-out estimate (cached by optimize), as its report scores.
