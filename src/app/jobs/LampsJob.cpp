@@ -87,11 +87,6 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         ObjectiveKind kind = o.objectiveKind ? *o.objectiveKind : defaultObjective(defectsNamed);
         const bool halves = kind != ObjectiveKind::Paper;
         checkLampFitOptions(o.fit);  // before any work
-        std::vector<double> target;
-        if (!o.from.empty()) {
-            const EnvMap m = lightFromSpec(o.from, 50, 25, 1, option("from"));
-            target = envMapToE(m, 1);
-        }
         const std::filesystem::path cacheDir = cacheDirectory(o.cache);
         if (!tmInput) {
             trained = o.precompute;
@@ -106,10 +101,13 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
             kind = defaultObjective(defectsNamed, job.transport.file.matrix.planes);
         const TransportMatrix& t = job.transport.file.matrix;
         spdlog::info("{}", describeTransport(job.transport));
-        if (t.channels != 1 || t.envWidth != 50 || t.envHeight != 25)
-            throw inputError(o.input.string(),
-                             "is not a gray transport matrix on the 50x25 env-map grid",
-                             "precompute it without " + option("rgb") + " on the default grid");
+        if (t.channels != 1)
+            throw inputError(o.input.string(), "is not a gray transport matrix",
+                             "precompute it without " + option("rgb"));
+        std::vector<double> target;  // E*, on T's env-map grid
+        if (!o.from.empty())
+            target =
+                envMapToE(lightFromSpec(o.from, t.envWidth, t.envHeight, 1, option("from")), 1);
         if (kind != ObjectiveKind::Paper && t.planes != 2)
             throw inputError(o.input.string(),
                              std::string("has no half-sample matrices; the ") +
