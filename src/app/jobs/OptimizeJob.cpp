@@ -262,7 +262,6 @@ Plan plan(const OptimizeJobOptions& options) {
         o.objectiveKind = ObjectiveKind::Paper;
         if (o.starts.empty()) o.starts = {parseInitialState("const:0.5")};
     }
-    o.optimizer = resolveOptimizer(o.optimizer);
     if (p.requested != OptimizerMethod::PaperLoop && row.gradient == GradientSource::Renderer) {
         // A black box minimizes eq. 2 through the renderer (optimize/BlackBox.h RenderLoss): the
         // run's loss is that objective, and nothing else is reported as its loss.
@@ -277,6 +276,7 @@ Plan plan(const OptimizeJobOptions& options) {
     if (o.starts.empty())
         for (const std::string& spec : optimizeDefaults().starts)
             o.starts.push_back(parseInitialState(spec));
+    o.optimizer = resolveOptimizer(o.optimizer);  // the method that runs; iterations 0: its budget
     if (o.planes == 0) o.planes = row.defaultPlanes;
     p.blackBox = row.gradient == GradientSource::Renderer;
     p.tmInput = isTransportFile(o.input);
