@@ -204,4 +204,33 @@ TEST(LampFit, RefusesBadOptions) {
     EXPECT_THROW(fitLamps(loss, target, o), InputError);
 }
 
+TEST(LampFit, FitsOnTheEnvMapGridOfT) {
+    // A T on a 24x12 env-map grid, not the default 50x25: the lamps are rasterized on T's grid,
+    // and the loss the fit reports is T's loss under them.
+    const int n = 40;
+    SceneDesc d = test::bumpyPartDesc(16, 16);
+    d.envmap.width = 24;
+    d.envmap.height = 12;
+    const Scene scene(d, n, n, test::bumpyHeightMap(n));
+    RenderOptions ro;
+    ro.spp = 8;
+    ro.maxDepth = 3;
+    ro.sampleSets = 2;
+    const TransportMatrix t = precomputeTransport(scene, ro, 1).matrix;
+    ASSERT_EQ(t.envWidth, 24);
+    ASSERT_EQ(t.envHeight, 12);
+    UnbiasedObjective obj(t.width, t.height, t.objectMask, SmallProblem::options(0.5));
+    TransportLoss loss{t, obj, false};
+    ASSERT_EQ(loss.dimension(), 24u * 12u);
+    LampFitOptions o;
+    o.count = 1;
+    o.residualPeaks = 1;
+    o.kinds = {LampKind::Disk};
+    const LampFitResult r = fitLamps(loss, std::vector<double>(loss.dimension(), 0.5), o);
+    ASSERT_EQ(r.steps.size(), 1u);
+    const LampRasterizer raster(EnvMapBasis(24, 12), o.raster);
+    const std::vector<double> E = raster.rasterize(r.steps[0].lamps);
+    EXPECT_NEAR(loss.evaluate(E, {}).total, r.steps[0].loss, 1e-12 * std::abs(r.steps[0].loss));
+}
+
 }  // namespace

@@ -166,6 +166,23 @@ TEST(Colour, ChromaIsZeroForGrayAndKnownForSrgbPrimaries) {
     EXPECT_NEAR(chromaUv01(0, 0, 1), 1.3068, 1e-3);  // sRGB blue: 130.68
 }
 
+TEST(Colour, XyzIsIec61966MatrixWithTheLuminanceAsItsYRow) {
+    // One source for the luminance weights: XYZ's Y row is luminance(), bit for bit.
+    for (const auto& c : {Rgb(1, 0, 0), Rgb(0, 1, 0), Rgb(0, 0, 1), Rgb(0.3f, 0.7f, 0.11f)}) {
+        double X, Y, Z;
+        rgbToXyz(c.x, c.y, c.z, X, Y, Z);
+        EXPECT_EQ(Y, luminance<double>(c.x, c.y, c.z));
+    }
+    double X, Y, Z;
+    rgbToXyz(1, 1, 1, X, Y, Z);  // D65 white as IEC 61966-2-1 tabulates it
+    EXPECT_NEAR(X, 0.9505, 1e-12);
+    EXPECT_NEAR(Y, 1.0, 1e-12);
+    EXPECT_NEAR(Z, 1.0890, 1e-12);
+    // sRGB red's C*uv/100 with this matrix (computed independently in numpy: 1.790787; the
+    // seven-digit matrix gives 1.790414).
+    EXPECT_NEAR(chromaUv01(1, 0, 0), 1.790787, 1e-6);
+}
+
 // Hand-made 3×3 luminance image (values chosen so every metric is a short fraction):
 //   0.0 0.2 0.4
 //   0.0 0.5 1.0

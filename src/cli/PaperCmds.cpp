@@ -101,7 +101,7 @@ int runReport(const ReportArgs& a) {
 
 struct PresetArgs {
     std::string name = "studio", out = "studio.exr";
-    int width = 50, height = 25;
+    int width = EnvMapDesc{}.width, height = EnvMapDesc{}.height;  // the scene file's default
 };
 
 int runPreset(const PresetArgs& a) {

@@ -23,6 +23,7 @@
 #include "io/SceneFile.h"
 #include "optimize/BlackBox.h"
 #include "optimize/Methods.h"
+#include "scene/EnvMapToE.h"
 
 namespace sl::cli {
 
@@ -150,8 +151,8 @@ int runRelight(const RelightArgs& a) {
         spdlog::warn(
             "gray transport matrix: the env map is used as its luminance; the result equals a "
             "render only for gray maps (precompute with --rgb)");
-    const std::vector<double> e(m.texels.begin(), m.texels.end());
     const int ch = t.channels == 3 ? 3 : 1;
+    const std::vector<double> e = envMapToE(m, ch);
     std::vector<double> img(t.rows() * ch);
     if (ch == 3)
         t.applyRgb(e, img);

@@ -1,6 +1,7 @@
 // CONVENTION (colour): all radiance is linear Rec.709 RGB. Luminance
 // Y = 0.2126 R + 0.7152 G + 0.0722 B. A grayscale env map drives all three channels.
 // An RGB map becomes a gray initial E by CIE L* (LUV lightness) / 100, as the paper does.
+// CIE XYZ (the metrics' chroma): IEC 61966-2-1's matrix, its Y row the luminance above.
 // PNG previews are sRGB-encoded (IEC 61966-2-1) after clamping to [0, 1].
 #pragma once
 
@@ -19,6 +20,16 @@ constexpr T luminance(T r, T g, T b) {
 }
 inline float luminance(const Rgb& c) {
     return luminance(c.x, c.y, c.z);
+}
+
+/// Linear Rec.709 RGB (sRGB primaries, D65 white) to CIE XYZ: the matrix of IEC 61966-2-1
+/// (sRGB), whose middle row is the luminance above, so the luminance weights are written once
+/// and white (1, 1, 1) has Y = 1 exactly. (The seven-digit matrix derived from the primaries'
+/// chromaticities has the Y row 0.2126729, 0.7151522, 0.0721750; its chroma differs by < 0.05 %.)
+inline void rgbToXyz(double r, double g, double b, double& X, double& Y, double& Z) {
+    X = 0.4124 * r + 0.3576 * g + 0.1805 * b;
+    Y = luminance(r, g, b);
+    Z = 0.0193 * r + 0.1192 * g + 0.9505 * b;
 }
 
 /// sRGB transfer function, linear -> encoded, input clamped to [0, 1].

@@ -24,13 +24,6 @@ struct PairSum {
     double mean() const { return n ? sum / static_cast<double>(n) : kNaN; }
 };
 
-// Linear Rec.709 (sRGB primaries, D65) to CIE XYZ.
-void rgbToXyz(double r, double g, double b, double& X, double& Y, double& Z) {
-    X = 0.4124564 * r + 0.3575761 * g + 0.1804375 * b;
-    Y = 0.2126729 * r + 0.7151522 * g + 0.0721750 * b;
-    Z = 0.0193339 * r + 0.1191920 * g + 0.9503041 * b;
-}
-
 nlohmann::json num(double v) {
     return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
 }

@@ -14,7 +14,8 @@
 //  * envSparsity: fraction of the env map's values (all texels × channels) below 1e-3.
 //  * envMeanChroma: mean over texels of the CIE 1976 LUV chroma C*_uv / 100 of the texel's
 //    linear Rec.709 RGB (white Y = 1, white point = RGB (1, 1, 1), i.e. D65), so gray texels are
-//    exactly 0 and sRGB red (1, 0, 0) is 1.7904; a 1-channel (gray) E gives 0.
+//    exactly 0 and sRGB red (1, 0, 0) is 1.7908 (XYZ by core/Color.h rgbToXyz, IEC 61966-2-1's
+//    matrix); a 1-channel (gray) E gives 0.
 //  * truth (only with a ground-truth defect mask projected into the image, objective/
 //    ImageSpace.h): the object-mask pairs are split into DEFECT pairs (at least one pixel in the
 //    truth mask) and BACKGROUND pairs (neither pixel in it):

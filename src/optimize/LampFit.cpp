@@ -405,11 +405,12 @@ LampFitResult fitLamps(const TransportLoss& loss, std::span<const double> target
     checkLampFitOptions(o);
     const Stopwatch clock;
     const CpuStopwatch cpu;
-    const EnvMapBasis basis(50, 25);
+    // The lamps are rasterized on T's own env-map grid.
+    const EnvMapBasis basis(loss.matrix().envWidth, loss.matrix().envHeight);
     if (loss.dimension() != static_cast<size_t>(basis.texelCount()) ||
         target.size() != loss.dimension())
-        throw inputError("lamps", "the transport matrix is not a gray 50x25 env map",
-                         "use a gray T on the default 50x25 grid");
+        throw inputError("lamps", "the transport matrix is not gray, or E* is not on its grid",
+                         "use a gray T and E* on its env-map grid");
     const LampRasterizer raster(basis, o.raster);
     LampRasterOptions coarse = o.raster;
     coarse.subsamples = std::min(coarse.subsamples, o.screenSubsamples);

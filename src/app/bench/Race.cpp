@@ -212,7 +212,7 @@ std::vector<RaceConfig> defaultRaceConfigs() {
     c.push_back(config("unbiased-adam-planes8", K::Unbiased, M::Adam, 300, 16, 8));
     c.push_back(config("unbiased-lbfgs-16", K::Unbiased, M::Lbfgs, 2000, 16));
     c.push_back(config("unbiased-lbfgs-32", K::Unbiased, M::Lbfgs, 2000, 32));
-    // optimize's defaults (app/jobs/OptimizeJob.h optimizeDefaults), for each objective.
+    // optimize's defaults (app/pipeline/Defaults.h optimizeDefaults), for each objective.
     const OptimizeDefaults d = optimizeDefaults();
     c.push_back(config("default-unbiased", K::Unbiased, d.method, methodRow(d.method).defaultBudget,
                        16, 1, d.starts));

@@ -15,6 +15,7 @@
 #include "io/AtomicFile.h"
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
+#include "io/OptimizeOutDir.h"
 #include "io/SceneFile.h"
 #include "io/StagedDirectory.h"
 #include "scene/EnvMapPresets.h"
@@ -26,9 +27,10 @@ namespace {
 
 std::filesystem::path envFileOf(const std::filesystem::path& light) {
     if (std::filesystem::is_directory(light)) {
-        auto f = light / "envmap.exr";
+        auto f = light / outdir::kEnvMap;
         if (!std::filesystem::exists(f))
-            throw inputError(light.string(), "is a directory without envmap.exr",
+            throw inputError(light.string(),
+                             std::string("is a directory without ") + outdir::kEnvMap,
                              "give an env-map file or an optimize output directory");
         return f;
     }

@@ -11,6 +11,7 @@
 #include "app/host/Plot.h"
 #include "app/host/Version.h"
 #include "app/jobs/OptimizeJob.h"
+#include "app/pipeline/Defaults.h"
 #include "app/pipeline/InitialState.h"
 #include "app/pipeline/JudgeEstimate.h"
 #include "app/pipeline/LossMask.h"
@@ -29,6 +30,7 @@
 #include "io/SceneFile.h"
 #include "io/StagedDirectory.h"
 #include "io/TransportFile.h"
+#include "scene/EnvMapToE.h"
 #include "scene/Scene.h"
 
 namespace sl {
@@ -79,37 +81,33 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         const bool tmInput = isTransportFile(o.input);
         std::unique_ptr<Scene> scene;
         std::optional<PrecomputeOptions> trained;  // T's trace options (a scene given)
+        // The objective: as given, else the defaults' (app/pipeline/Defaults.h), for a .tm
+        // settled once its planes are read.
         const bool defectsNamed = !o.truth.empty() || !o.defects.empty();
-        ObjectiveKind kind = o.objectiveKind ? *o.objectiveKind
-                             : defectsNamed  ? ObjectiveKind::Defects
-                             : tmInput       ? ObjectiveKind::Paper
-                                             : ObjectiveKind::Unbiased;
+        ObjectiveKind kind = o.objectiveKind ? *o.objectiveKind : defaultObjective(defectsNamed);
         const bool halves = kind != ObjectiveKind::Paper;
         checkLampFitOptions(o.fit);  // before any work
-        std::vector<double> target;
-        if (!o.from.empty()) {
-            const EnvMap m = lightFromSpec(o.from, 50, 25, 1, option("from"));
-            target.assign(m.texels.begin(), m.texels.end());
-        }
         const std::filesystem::path cacheDir = cacheDirectory(o.cache);
-        if (tmInput) {
-            job.transport.file = readTransportFile(o.input);
-            job.transport.path = o.input;
-            if (!o.objectiveKind && !defectsNamed && job.transport.file.matrix.planes == 2)
-                kind = ObjectiveKind::Unbiased;
-        } else {
-            scene = loadScene(o.input, o.sceneOverrides);
+        if (!tmInput) {
             trained = o.precompute;
             trained->rgb = false;
             if (halves) trained->sampleSets = 2;
-            job.transport = transportForScene(*scene, *trained, cacheDir);
         }
+        InputTransport input =
+            transportOfInput(o.input, o.sceneOverrides, trained.value_or(o.precompute), cacheDir);
+        job.transport = std::move(input.transport);
+        scene = std::move(input.scene);
+        if (tmInput && !o.objectiveKind)
+            kind = defaultObjective(defectsNamed, job.transport.file.matrix.planes);
         const TransportMatrix& t = job.transport.file.matrix;
         spdlog::info("{}", describeTransport(job.transport));
-        if (t.channels != 1 || t.envWidth != 50 || t.envHeight != 25)
-            throw inputError(o.input.string(),
-                             "is not a gray transport matrix on the 50x25 env-map grid",
-                             "precompute it without " + option("rgb") + " on the default grid");
+        if (t.channels != 1)
+            throw inputError(o.input.string(), "is not a gray transport matrix",
+                             "precompute it without " + option("rgb"));
+        std::vector<double> target;  // E*, on T's env-map grid
+        if (!o.from.empty())
+            target =
+                envMapToE(lightFromSpec(o.from, t.envWidth, t.envHeight, 1, option("from")), 1);
         if (kind != ObjectiveKind::Paper && t.planes != 2)
             throw inputError(o.input.string(),
                              std::string("has no half-sample matrices; the ") +
@@ -145,8 +143,7 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
             const Stopwatch clock;
             SearchOptions so;
             so.objective = kind;
-            so.optimizer.method = OptimizerMethod::Lbfgs;
-            so.optimizer.iterations = methodRow(OptimizerMethod::Lbfgs).defaultBudget;
+            so.optimizer = resolveOptimizer(optimizeJobOptimizerOptions());
             so.starts = {parseInitialState(scene ? "specular" : "const:0.5", option("from"))};
             target = search(in, so).e;
             job.secondsTarget = clock.seconds();

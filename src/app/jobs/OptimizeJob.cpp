@@ -32,6 +32,7 @@
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
 #include "io/MaskIO.h"
+#include "io/OptimizeOutDir.h"
 #include "io/SceneFile.h"
 #include "io/StagedDirectory.h"
 #include "io/TransportFile.h"
@@ -44,6 +45,7 @@
 #include "render/Render.h"
 #include "scene/EnvMapBasis.h"
 #include "scene/EnvMapPresets.h"
+#include "scene/EnvMapToE.h"
 #include "scene/Scene.h"
 
 namespace sl {
@@ -211,17 +213,6 @@ void applyOptimizePreset(OptimizePreset preset, OptimizeJobOptions& o) {
     }
 }
 
-OptimizeDefaults optimizeDefaults() {
-    return {};
-}
-
-OptimizerOptions optimizeJobOptimizerOptions() {
-    OptimizerOptions o;
-    o.method = optimizeDefaults().method;
-    o.iterations = 0;
-    return o;
-}
-
 namespace {
 
 // ---- The stages of the job, in the order runOptimizeJob calls them. ----
@@ -271,7 +262,6 @@ Plan plan(const OptimizeJobOptions& options) {
         o.objectiveKind = ObjectiveKind::Paper;
         if (o.starts.empty()) o.starts = {parseInitialState("const:0.5")};
     }
-    o.optimizer.method = row.runs;
     if (p.requested != OptimizerMethod::PaperLoop && row.gradient == GradientSource::Renderer) {
         // A black box minimizes eq. 2 through the renderer (optimize/BlackBox.h RenderLoss): the
         // run's loss is that objective, and nothing else is reported as its loss.
@@ -286,7 +276,7 @@ Plan plan(const OptimizeJobOptions& options) {
     if (o.starts.empty())
         for (const std::string& spec : optimizeDefaults().starts)
             o.starts.push_back(parseInitialState(spec));
-    if (o.optimizer.iterations == 0) o.optimizer.iterations = row.defaultBudget;
+    o.optimizer = resolveOptimizer(o.optimizer);  // the method that runs; iterations 0: its budget
     if (o.planes == 0) o.planes = row.defaultPlanes;
     p.blackBox = row.gradient == GradientSource::Renderer;
     p.tmInput = isTransportFile(o.input);
@@ -425,12 +415,11 @@ std::vector<uint8_t> chooseDefectSppScale(const Scene& scene, const std::vector<
 /// the noise-aware rule's choice (app/pipeline/TrainingNoise.h), over any other (0: none).
 void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp) {
     const OptimizeJobOptions& o = p.o;
-    // The objective: as given, else the defaults' (OptimizeDefaults): the defects objective when
-    // the defects are named, the noise-unbiased one otherwise, eq. 2 for a .tm without halves.
-    const OptimizeDefaults defaults = optimizeDefaults();
-    const ObjectiveKind byDefault =
-        o.truth.empty() && o.defects.empty() ? defaults.objective : defaults.objectiveWithDefects;
-    in.kind = o.objectiveKind ? *o.objectiveKind : (p.tmInput ? ObjectiveKind::Paper : byDefault);
+    // The objective: as given, else the defaults' (app/pipeline/Defaults.h defaultObjective);
+    // for a .tm settled once its planes are read.
+    const bool defectsNamed = !o.truth.empty() || !o.defects.empty();
+    in.kind = o.objectiveKind ? *o.objectiveKind
+                              : (p.tmInput ? ObjectiveKind::Paper : defaultObjective(defectsNamed));
     if (!o.objectiveKind && in.kind == ObjectiveKind::Defects &&
         o.objective.reg != RegTarget::EnvMap)
         throw inputError(option("reg") + " image",
@@ -445,7 +434,8 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp) {
             p.ranks ? readShardOfRank(o.input, *p.ranks, &in.shard) : readTransportFile(o.input);
         job.transport.path = o.input;
         job.transport.secondsTotal = clock.seconds();
-        if (!o.objectiveKind && job.transport.file.matrix.planes == 2) in.kind = byDefault;
+        if (!o.objectiveKind)
+            in.kind = defaultObjective(defectsNamed, job.transport.file.matrix.planes);
     } else {
         if (!in.scene) in.scene = loadScene(o.input, o.sceneOverrides);
         PrecomputeOptions pre = o.precompute;
@@ -681,19 +671,7 @@ void prepareComparisons(const Plan& p, Inputs& in, const OptimizeJobSummary& job
                                                               o.rgb ? 3 : 0, option("compare"));
         in.lampName = o.compare.empty() ? std::string("studio preset")
                                         : std::filesystem::path(o.compare).filename().string();
-        // As the judge reads a light (Judge::envVector): RGB maps by their luminance on a gray T.
-        const size_t n = lamp.texelCount();
-        if (lamp.channels == 1 && o.rgb) {
-            in.lampE.resize(3 * n);
-            for (size_t i = 0; i < 3 * n; ++i) in.lampE[i] = lamp.texels[i / 3];
-        } else if (lamp.channels == 3 && !o.rgb) {
-            in.lampE.resize(n);
-            for (size_t i = 0; i < n; ++i)
-                in.lampE[i] = luminance(double(lamp.texels[3 * i]), double(lamp.texels[3 * i + 1]),
-                                        double(lamp.texels[3 * i + 2]));
-        } else {
-            in.lampE.assign(lamp.texels.begin(), lamp.texels.end());
-        }
+        in.lampE = envMapToE(lamp, o.rgb ? 3 : 1);  // as the judge reads a light
         if (!o.truth.empty()) in.truthLabels = projectTruth(*in.scene, o.truth);
         in.sceneParts = true;
     }
@@ -1232,7 +1210,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     if (run.answer) {
         const AnswerChoice& a = *run.answer;
         s["answer"] = answerJson(a);
-        if (a.referenceWon()) s["answer"]["optimized_envmap"] = "envmap-optimized.exr";
+        if (a.referenceWon()) s["answer"]["optimized_envmap"] = outdir::kEnvMapOptimized;
     }
     if (run.judged) s["judge"] = toJson(*run.judged);
     {
@@ -1243,17 +1221,18 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
         cmp["regions"] = in.regionSource;
         json lamp = {{"name", in.lampName},
                      {"spec", o.compare.empty() ? std::string("studio") : o.compare},
-                     {"render", "compare-lamp.png"},
+                     {"render", outdir::kCompareLampPng},
                      {"training", partsJson(r.lampTraining)}};
         json paper = {{"name", "paper's light"},
                       {"method",
                        "the paper's method run on this T: eq. 2, lambda 30 on mean(E^2), Adam lr "
                        "0.02 x 100 from E0 = 0.5"},
-                      {"render", "compare-paper.png"},
-                      {"envmap", "compare-paper-envmap.exr"},
+                      {"render", outdir::kComparePaperPng},
+                      {"envmap", outdir::kPaperEnvMap},
                       {"training", partsJson(r.paperTraining)}};
-        json optimized = {{"render", r.optimizedE.empty() ? "render.png" : "render-optimized.png"},
-                          {"training", partsJson(run.final)}};
+        json optimized = {
+            {"render", r.optimizedE.empty() ? outdir::kRenderPng : outdir::kRenderOptimizedPng},
+            {"training", partsJson(run.final)}};
         if (run.judged) {
             lamp["judge"] = toJson(*run.judgedLamp);
             paper["judge"] = toJson(*run.judgedPaper);
@@ -1273,7 +1252,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
             // validation.
             const AnswerChoice& a = *run.answer;
             json answer = {{"name", a.answer().candidate.name},
-                           {"render", "render.png"},
+                           {"render", outdir::kRenderPng},
                            {"reason", a.reason},
                            {"merit", a.answer().merit.what},
                            {"merit_answer", a.answer().merit.value},
@@ -1346,30 +1325,31 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
     if (!p.writes()) return {};
     const std::filesystem::path dir = p.staged(run.dir);
     std::filesystem::create_directories(dir);
-    writeEnvMap(dir / "envmap.exr", toEnvMap(r.e, t, o.rgb));
-    writePng(dir / "envmap.png", envMapPreview(toEnvMap(r.e, t, o.rgb), 16));
+    writeEnvMap(dir / outdir::kEnvMap, toEnvMap(r.e, t, o.rgb));
+    writePng(dir / outdir::kEnvMapPng, envMapPreview(toEnvMap(r.e, t, o.rgb), 16));
     const int ch = t.channels == 3 ? 3 : 1;
-    writeRender(dir / "render.exr", imageFinal, t.width, t.height, ch);
+    writeRender(dir / outdir::kRender, imageFinal, t.width, t.height, ch);
     if (!r.optimizedE.empty()) {  // a reference is the answer: E* beside it
-        writeEnvMap(dir / "envmap-optimized.exr", toEnvMap(r.optimizedE, t, o.rgb));
-        writePng(dir / "envmap-optimized.png", envMapPreview(toEnvMap(r.optimizedE, t, o.rgb), 16));
-        writeRender(dir / "render-optimized.exr", imageOptimized, t.width, t.height, ch);
+        writeEnvMap(dir / outdir::kEnvMapOptimized, toEnvMap(r.optimizedE, t, o.rgb));
+        writePng(dir / outdir::kEnvMapOptimizedPng,
+                 envMapPreview(toEnvMap(r.optimizedE, t, o.rgb), 16));
+        writeRender(dir / outdir::kRenderOptimized, imageOptimized, t.width, t.height, ch);
     }
     {
         Image i0(t.width, t.height, ch);
         for (size_t i = 0; i < in.image0.size(); ++i) i0.data[i] = static_cast<float>(in.image0[i]);
-        writePng(dir / "initial.png", i0);
+        writePng(dir / outdir::kInitialPng, i0);
     }
     std::ostringstream csv;
     csv << kLossCsvHeader << '\n';
     for (const auto& row : r.rows) csv << row << '\n';
-    writeTextAtomically(dir / "loss.csv", csv.str());
-    writePng(dir / "initial-envmap.png",
+    writeTextAtomically(dir / outdir::kLossCsv, csv.str());
+    writePng(dir / outdir::kInitialEnvMapPng,
              envMapPreview(toEnvMap(in.startValues.front(), t, o.rgb), 16));
     {
         std::vector<uint8_t> visible(mask.size());  // masks hold 0/1; the PNG 0/255
         for (size_t i = 0; i < mask.size(); ++i) visible[i] = mask[i] ? 255 : 0;
-        writeMaskPng(dir / "mask.png", visible, t.width, t.height);
+        writeMaskPng(dir / outdir::kMaskPng, visible, t.width, t.height);
     }
     if (in.kind == ObjectiveKind::Defects) {
         // regions.png: the render with the defect region outlined red and, when one was given,
@@ -1382,20 +1362,20 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
         std::vector<uint8_t> labels(t.rows(), 0);
         for (size_t q = 0; q < labels.size(); ++q)
             labels[q] = in.defects[q] ? 255 : (!in.reference.empty() && in.reference[q] ? 128 : 0);
-        writePng(dir / "regions.png", outlinedRender(y, t.width, t.height, mask, labels));
+        writePng(dir / outdir::kRegionsPng, outlinedRender(y, t.width, t.height, mask, labels));
         writeDefectRegions(dir, {in.defects, in.reference}, t.width, t.height);
     }
     if (!in.mask.scratchCells.empty())
-        writeMaskPng(dir / "scratchmap.png", in.mask.scratchCells, in.scene->mapWidth,
+        writeMaskPng(dir / outdir::kScratchMapPng, in.mask.scratchCells, in.scene->mapWidth,
                      in.scene->mapHeight);
     // The comparisons: the user's lamp and the paper's light under T, and what the report shows
     // (each render exposed on its own, the regions' outlines as a transparent layer).
-    writeRender(dir / "compare-lamp.exr", imageLamp, t.width, t.height, ch);
-    writeRender(dir / "compare-paper.exr", imagePaper, t.width, t.height, ch);
-    writeEnvMap(dir / "compare-paper-envmap.exr", toEnvMap(in.paperE, t, o.rgb));
-    Image lampView = writeExposedPng(dir / "view-lamp.png", imageLamp, t);
-    Image optimizedView = writeExposedPng(dir / "view-optimized.png", imageOptimized, t);
-    writeExposedPng(dir / "view-paper.png", imagePaper, t);
+    writeRender(dir / outdir::kCompareLamp, imageLamp, t.width, t.height, ch);
+    writeRender(dir / outdir::kComparePaper, imagePaper, t.width, t.height, ch);
+    writeEnvMap(dir / outdir::kPaperEnvMap, toEnvMap(in.paperE, t, o.rgb));
+    Image lampView = writeExposedPng(dir / outdir::kViewLamp, imageLamp, t);
+    Image optimizedView = writeExposedPng(dir / outdir::kViewOptimized, imageOptimized, t);
+    writeExposedPng(dir / outdir::kViewPaper, imagePaper, t);
     if (!in.regionLabels.empty()) {
         const Image outlined = outlinedRender(std::vector<double>(t.rows(), 0.0), t.width, t.height,
                                               {}, in.regionLabels);
@@ -1406,13 +1386,13 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
             for (int c = 0; c < 3; ++c) layer.data[4 * q + c] = outlined.data[3 * q + c];
             layer.data[4 * q + 3] = edge ? 1.0f : 0.0f;
         }
-        writePng(dir / "view-regions.png", layer);
+        writePng(dir / outdir::kViewRegions, layer);
     }
     const json plotData = plotDataJson(in, t, r.e, o.rgb);
-    writeTextAtomically(dir / "plot-data.json", plotData.dump() + "\n");
+    writeTextAtomically(dir / outdir::kPlotData, plotData.dump() + "\n");
     const VisibilityMetrics metricsFinal = metricsFor(t, imageFinal, mask, r.e, o.rgb, in.truth);
     const json summary = runSummaryJson(p, in, job, r, metricsFinal);
-    writeTextAtomically(dir / "summary.json", summary.dump(2) + "\n");
+    writeTextAtomically(dir / outdir::kSummary, summary.dump(2) + "\n");
     // The figures, drawn in-process (app/report/OptimizeFigures.h); when they fail the report says why.
     std::string figureProblem;
     if (!o.figures) {
@@ -1429,7 +1409,7 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
             spdlog::warn("figures not made: {}", figureProblem);
         }
     }
-    writeTextAtomically(dir / "report.html", renderOptimizeReportHtml(dir, figureProblem));
+    writeTextAtomically(dir / outdir::kReport, renderOptimizeReportHtml(dir, figureProblem));
     std::ostringstream title;
     title << "λ = " << run.lambda << ", " << run.optimizer.method << ", "
           << objectiveKindName(in.kind);

@@ -49,6 +49,7 @@
 #include "app/host/ExternalRenderer.h"
 #include "app/pipeline/Answer.h"
 #include "app/pipeline/Cache.h"
+#include "app/pipeline/Defaults.h"
 #include "app/pipeline/HeldOut.h"
 #include "app/pipeline/InitialState.h"
 #include "app/pipeline/Judge.h"
@@ -65,37 +66,13 @@
 
 namespace sl {
 
-/// optimize's defaults, chosen by `scratchlight bench race` (README "The judge, and defaults
-/// chosen by a race"): on three generated parts × three seeds, the noise-unbiased objective with
-/// L-BFGS from the paper's specular state beat the paper's loop by 41–51 % on U and eq. 2 in
-/// about a quarter of its time, with a train/judge gap of ~1 %. The paper objective rewards
-/// noise, so it trains at no fewer than paperMinSpp samples (its gap in the race: ~80 % at
-/// 16 spp, 5.3 % at 256, ≤ 3.1 % at 512). The budget is the method's (optimize/Methods.h).
-/// The objective: unbiased (the race's winner on eq. 2 and U); when the user names the defects
-/// (a truth or a defect region), the defects objective, which on twelve held-out generated
-/// parts made them a median 6.6x as visible as the eq. 2 light and 6.5x as the studio lamp
-/// (docs/RESEARCH.md "The defects objective", scripts/eval-defects). A .tm without halves can
-/// only take eq. 2.
-struct OptimizeDefaults {
-    OptimizerMethod method = OptimizerMethod::Lbfgs;
-    std::vector<std::string> starts{"specular"};  // specs of app/pipeline/InitialState.h
-    int paperMinSpp = 512;
-    ObjectiveKind objective = ObjectiveKind::Unbiased;
-    ObjectiveKind objectiveWithDefects = ObjectiveKind::Defects;
-};
-OptimizeDefaults optimizeDefaults();
-
-/// The optimizer options optimize starts from: the defaults' method, iterations 0 (= the
-/// method's default budget).
-OptimizerOptions optimizeJobOptimizerOptions();
-
 struct OptimizeJobOptions {
     std::filesystem::path input;              // scene (.json) or transport matrix (.tm)
     std::vector<std::string> sceneOverrides;  // -D key=value on the scene (io/SceneFile.h)
     std::filesystem::path outDir = "out/optimize";
     std::vector<double> lambdas{30.0};
     ObjectiveOptions objective;  // lambda is taken from `lambdas`
-    /// unset: unbiased (it needs T's two halves), or paper for a .tm without halves.
+    /// unset: the default (app/pipeline/Defaults.h defaultObjective).
     std::optional<ObjectiveKind> objectiveKind;
     /// The starts (several: multistart, the lowest training loss wins); empty: the defaults'
     /// (paper-loop: the paper's const:0.5).

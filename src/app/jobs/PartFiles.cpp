@@ -11,6 +11,7 @@
 #include "io/ImageIO.h"
 #include "io/InputFile.h"
 #include "io/X3p.h"
+#include "scene/Scene.h"
 
 namespace sl {
 
@@ -98,7 +99,8 @@ PartFiles writePartFiles(const GeneratedSurface& g, const std::filesystem::path&
                          {"alpha", 0.05},
                          {"material", "Al"}};
         if (o.imageSize > 0) j["camera"] = {{"width", o.imageSize}, {"height", o.imageSize}};
-        j["envmap"] = {{"width", 50}, {"height", 25}};
+        const EnvMapDesc grid;  // the default env-map grid (scene/Scene.h)
+        j["envmap"] = {{"width", grid.width}, {"height", grid.height}};
         j["render"] = {{"spp", o.spp}, {"max_depth", o.maxDepth}, {"seed", 0}};
         writeTextAtomically(sceneOut->tempPath(), j.dump(2) + "\n");
     }

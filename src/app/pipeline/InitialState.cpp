@@ -12,6 +12,7 @@
 #include "io/EnvMapIO.h"
 #include "optimize/SpecularInit.h"
 #include "scene/EnvMapPresets.h"
+#include "scene/EnvMapToE.h"
 
 namespace sl {
 
@@ -102,19 +103,17 @@ InitialState parseInitialState(std::string_view spec, const std::string& where) 
 }
 
 std::vector<double> initialEnvMapFrom(const EnvMap& m, bool rgb) {
-    const size_t texels = m.texelCount(), n = texels * (rgb ? 3 : 1);
-    std::vector<double> e(n);
-    for (size_t t = 0; t < texels; ++t) {
-        const float* c = &m.texels[t * static_cast<size_t>(m.channels)];
-        if (m.channels == 1) {
-            const double v = std::clamp<double>(c[0], 0.0, 1.0);
-            for (int k = 0; k < (rgb ? 3 : 1); ++k) e[(rgb ? 3 * t : t) + k] = v;
-        } else if (rgb) {
-            for (int k = 0; k < 3; ++k) e[3 * t + k] = std::clamp<double>(c[k], 0.0, 1.0);
-        } else {
-            e[t] = std::clamp(lightnessLStar01(c[0], c[1], c[2]), 0.0, 1.0);
+    std::vector<double> e;
+    if (m.channels == 3 && !rgb) {  // a colour photo: gray by CIE L*/100, the paper's start
+        e.resize(m.texelCount());
+        for (size_t t = 0; t < e.size(); ++t) {
+            const float* c = &m.texels[3 * t];
+            e[t] = lightnessLStar01(c[0], c[1], c[2]);
         }
+    } else {
+        e = envMapToE(m, rgb ? 3 : 1);  // as a light (scene/EnvMapToE.h)
     }
+    for (double& v : e) v = std::clamp(v, 0.0, 1.0);  // the optimizer's box
     return e;
 }
 

@@ -15,6 +15,7 @@
 #include "core/WildBootstrap.h"
 #include "objective/UnbiasedObjective.h"
 #include "scene/EnvMap.h"
+#include "scene/EnvMapToE.h"
 #include "scene/Scene.h"
 
 namespace sl {
@@ -90,19 +91,7 @@ std::vector<double> Judge::envVector(const EnvMap& env) const {
     const TransportMatrix& t = estimate_->file.matrix;
     if (env.width != t.envWidth || env.height != t.envHeight)
         throw std::invalid_argument("Judge::envVector: env map is not on the judge's grid");
-    const size_t n = env.texelCount();
-    std::vector<double> e;
-    if (env.channels == 1) {
-        e.assign(env.texels.begin(), env.texels.end());
-    } else if (options_.rgb) {
-        e.assign(env.texels.begin(), env.texels.end());
-    } else {
-        e.resize(n);
-        for (size_t i = 0; i < n; ++i)
-            e[i] = luminance(double(env.texels[3 * i]), double(env.texels[3 * i + 1]),
-                             double(env.texels[3 * i + 2]));
-    }
-    return e;
+    return envMapToE(env, options_.rgb ? 3 : 1);
 }
 
 std::vector<double> Judge::meanImage(std::span<const double> E) const {

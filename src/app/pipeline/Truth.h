@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "io/MaskIO.h"
+#include "io/OptimizeOutDir.h"
 
 namespace sl {
 
@@ -75,8 +76,8 @@ DefectRegions defectRegionsInImage(const Scene& scene, const RegionSpec& defects
 /// regions-defects.png (the label values, 8-bit, tagged linear) and (when not the default)
 /// regions-reference.png (255/0), written losslessly, so the viewer runs the objective on the
 /// regions that made the output.
-inline constexpr const char* kRegionsDefectsFile = "regions-defects.png";
-inline constexpr const char* kRegionsReferenceFile = "regions-reference.png";
+inline constexpr const char* kRegionsDefectsFile = outdir::kRegionsDefects;
+inline constexpr const char* kRegionsReferenceFile = outdir::kRegionsReference;
 void writeDefectRegions(const std::filesystem::path& dir, const DefectRegions& regions, int width,
                         int height);
 /// The regions writeDefectRegions wrote into dir (nullopt when dir has no regions-defects.png);

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "io/AtomicFile.h"
+#include "io/OptimizeOutDir.h"
 
 namespace sl {
 
@@ -412,8 +413,8 @@ std::vector<std::filesystem::path> writeOptimizeFigures(const std::filesystem::p
     const std::vector<uint8_t> overview = overviewFigure(in).png();
     std::vector<std::filesystem::path> wrote;
     for (const auto& [name, bytes] :
-         {std::pair{"plot-envmap.png", &envmap}, std::pair{"plot-loss.png", &loss},
-          std::pair{"overview.png", &overview}}) {
+         {std::pair{outdir::kPlotEnvMap, &envmap}, std::pair{outdir::kPlotLoss, &loss},
+          std::pair{outdir::kOverview, &overview}}) {
         writeBytesAtomically(dir / name, bytes->data(), bytes->size());
         wrote.push_back(dir / name);
     }

@@ -11,6 +11,7 @@
 #include "core/Text.h"
 #include "io/AtomicFile.h"
 #include "io/InputFile.h"
+#include "io/OptimizeOutDir.h"
 #include "objective/DefectVisibility.h"
 
 namespace sl {
@@ -248,7 +249,7 @@ namespace {
 
 /// An optimize OUTDIR's summary.json; InputError naming it when missing or malformed.
 json readOptimizeSummary(const std::filesystem::path& dir) {
-    const auto summaryPath = dir / "summary.json";
+    const auto summaryPath = dir / outdir::kSummary;
     json s = parseJsonInput(readInputFile(summaryPath, "the optimize summary", kMaxJsonFileBytes,
                                           "Check that the file exists (re-run the "
                                           "command that writes it)"),
@@ -280,19 +281,19 @@ ReportRun reportRunFromOutDir(const std::filesystem::path& dir, const std::strin
         if (std::filesystem::exists(dir / file)) r.images.push_back({caption, dir / file});
     };
     if (fin) {
-        add("initial.png", "before: T·E₀ (initial env map)");
-        add("render.png", "after: T·E* (optimized)");
-        add("envmap.png", "optimized env map E*");
-        add("initial-envmap.png", "initial env map E₀");
+        add(outdir::kInitialPng, "before: T·E₀ (initial env map)");
+        add(outdir::kRenderPng, "after: T·E* (optimized)");
+        add(outdir::kEnvMapPng, "optimized env map E*");
+        add(outdir::kInitialEnvMapPng, "initial env map E₀");
     } else {
-        add("initial.png", "render under E₀");
-        add("initial-envmap.png", "env map E₀");
+        add(outdir::kInitialPng, "render under E₀");
+        add(outdir::kInitialEnvMapPng, "env map E₀");
     }
-    add("regions.png", "defects objective: defect region red, reference blue");
-    add("scratchmap.png", "scratch map");
-    add("mask.png", "loss mask");
-    if (fin && std::filesystem::exists(dir / "loss.csv")) {
-        r.loss = readLossCsv(dir / "loss.csv");
+    add(outdir::kRegionsPng, "defects objective: defect region red, reference blue");
+    add(outdir::kScratchMapPng, "scratch map");
+    add(outdir::kMaskPng, "loss mask");
+    if (fin && std::filesystem::exists(dir / outdir::kLossCsv)) {
+        r.loss = readLossCsv(dir / outdir::kLossCsv);
         r.loss.label = r.title;
     }
     return r;
@@ -926,9 +927,9 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
 
     // 2. The renders: A/B slider, the regions' outline, 1:1 crops.
     h << "<section id=\"renders\"><h2>Before (your lamp) and after (optimized), full size</h2>\n";
-    const bool regions = std::filesystem::exists(dir / "view-regions.png");
-    if (std::filesystem::exists(dir / "view-lamp.png") &&
-        std::filesystem::exists(dir / "view-optimized.png")) {
+    const bool regions = std::filesystem::exists(dir / outdir::kViewRegions);
+    if (std::filesystem::exists(dir / outdir::kViewLamp) &&
+        std::filesystem::exists(dir / outdir::kViewOptimized)) {
         h << "<div class=\"controls\"><label>your lamp ◀ <input type=\"range\" id=\"ab-slider\" "
              "min=\"0\" max=\"100\" value=\"50\" aria-label=\"A/B position\"> ▶ "
              "optimized</label>";
@@ -945,12 +946,12 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
             size = " style=\"width:" + std::to_string(400 / width * width) + "px\"";
         h << " &nbsp; click the render for a 4× crop</div>\n<div class=\"viewer\"><div "
              "class=\"ab\" id=\"ab\"><img id=\"ab-bottom\" alt=\"after: optimized light\""
-          << size << " src=\"" << dataUri(dir / "view-optimized.png")
+          << size << " src=\"" << dataUri(dir / outdir::kViewOptimized)
           << "\"><img id=\"ab-top\" class=\"top\" alt=\"before: your lamp\"" << size << " src=\""
-          << dataUri(dir / "view-lamp.png") << "\">";
+          << dataUri(dir / outdir::kViewLamp) << "\">";
         if (regions)
             h << "<img class=\"regions\" alt=\"defect regions outlined\"" << size << " src=\""
-              << dataUri(dir / "view-regions.png") << "\">";
+              << dataUri(dir / outdir::kViewRegions) << "\">";
         h << "<div class=\"bar\" id=\"ab-bar\"></div><span class=\"tag\" style=\"left:6px\">"
           << escapeXml(lampName)
           << "</span><span class=\"tag\" style=\"right:6px\">optimized</span></div>\n";
@@ -967,21 +968,21 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
         h << " Outlines: " << escapeXml(cmp.value("regions", std::string("defect regions")))
           << " (red 255, orange 224, magenta 192, yellow 160, cyan 144, blue 128).";
     h << "</p>\n";
-    if (std::filesystem::exists(dir / "view-paper.png"))
+    if (std::filesystem::exists(dir / outdir::kViewPaper))
         h << "<div class=\"stills\"><figure><img alt=\"the paper's light\" src=\""
-          << dataUri(dir / "view-paper.png")
+          << dataUri(dir / outdir::kViewPaper)
           << "\"><figcaption>under the paper's light (its method on our T)</figcaption></figure>"
              "</div>\n";
     h << "</section>\n";
 
     // 3. The env map as a plot; 4. the loss curve (app/report/OptimizeFigures.h).
     h << "<section id=\"envmap\"><h2>The light: env map with axes</h2>\n"
-      << figureOrReason(dir, "plot-envmap.png", "env-map plot", figureProblem)
+      << figureOrReason(dir, outdir::kPlotEnvMap, "env-map plot", figureProblem)
       << "<p class=\"caption\">Azimuth 0° points toward −z, 90° toward +x; elevation 90° is "
          "straight up (+Y), 0° the horizon (scene/EnvMapBasis.h). The camera and the mirror "
          "direction (what a flat part reflects into the camera) are marked.</p></section>\n";
     h << "<section id=\"loss\"><h2>Loss during the optimization</h2>\n"
-      << figureOrReason(dir, "plot-loss.png", "loss plot", figureProblem)
+      << figureOrReason(dir, outdir::kPlotLoss, "loss plot", figureProblem)
       << "<p class=\"caption\">The optimizer's loss on its training estimate and, every few "
          "iterations, the same objective on the held-out estimate (lower is better; "
          "summary.json heldout_U has the noise-unbiased U there).</p></section>\n";
@@ -1057,7 +1058,7 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
     if (!st.empty()) h << "<details><summary>Settings</summary>" << st << "</details>\n";
     h << "</section>\n";
     h << "<section id=\"overview\"><h2>Overview figure</h2>\n"
-      << figureOrReason(dir, "overview.png", "overview", figureProblem) << "</section>\n";
+      << figureOrReason(dir, outdir::kOverview, "overview", figureProblem) << "</section>\n";
     h << "<pre id=\"selfcheck\">selfcheck: the page's script did not run</pre>\n";
     h << "<script>" << kOptimizeScript << "</script>\n</body></html>\n";
     return h.str();

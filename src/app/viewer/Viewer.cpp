@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "app/jobs/OptimizeJob.h"
+#include "app/pipeline/Defaults.h"
 #include "app/pipeline/JudgeEstimate.h"
 #include "app/pipeline/LossMask.h"
 #include "app/pipeline/Search.h"
@@ -24,9 +25,11 @@
 #include "io/ImageIO.h"
 #include "io/InputFile.h"
 #include "io/LampsFile.h"
+#include "io/OptimizeOutDir.h"
 #include "io/PngBuffer.h"
 #include "io/SceneFile.h"
 #include "scene/EnvMapPresets.h"
+#include "scene/EnvMapToE.h"
 #include "scene/Scene.h"
 
 namespace sl {
@@ -37,19 +40,6 @@ using json = nlohmann::ordered_json;
 namespace {
 
 #include "ViewerPage.inc"
-
-std::vector<double> toVector(const EnvMap& env) {
-    std::vector<double> e(env.texelCount());
-    for (size_t k = 0; k < e.size(); ++k) {
-        if (env.channels == 3) {
-            const float* c = &env.texels[3 * k];
-            e[k] = luminance(c[0], c[1], c[2]);
-        } else {
-            e[k] = env.texels[k];
-        }
-    }
-    return e;
-}
 
 json readJsonFile(const fs::path& file) {
     return readJsonInput(file, "a summary");
@@ -108,7 +98,7 @@ const std::string& viewerPageHtml() {
 }
 
 ViewerObjective readViewerObjective(const fs::path& dir, int width, int height) {
-    const fs::path file = dir / "summary.json";
+    const fs::path file = dir / outdir::kSummary;
     const json s = readJsonFile(file);
     ViewerObjective o;
     try {
@@ -124,8 +114,8 @@ ViewerObjective readViewerObjective(const fs::path& dir, int width, int height) 
         throw inputError(file.string(), std::string("has no usable objective: ") + e.what(),
                          "run view on the output of a current optimize");
     }
-    if (fs::exists(dir / "mask.png")) {
-        o.mask = loadImageMask(dir / "mask.png", width, height);
+    if (fs::exists(dir / outdir::kMaskPng)) {
+        o.mask = loadImageMask(dir / outdir::kMaskPng, width, height);
         for (uint8_t& v : o.mask) v = v ? 1 : 0;  // masks hold 0/1 (app/pipeline/LossMask.h)
     }
     if (o.kind == ObjectiveKind::Defects) {
@@ -266,7 +256,7 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
     fs::path truth = options.truth;
     std::unique_ptr<Scene> scene;
     if (fs::is_directory(in)) {
-        const fs::path summaryFile = in / "summary.json";
+        const fs::path summaryFile = in / outdir::kSummary;
         if (!fs::exists(summaryFile))
             throw inputError(in.string(), "is a directory without summary.json",
                              "give an optimize output directory, a .tm or a scene file");
@@ -288,10 +278,11 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
             truth = s["truth"].get<std::string>();
         const auto& t = t_->file.matrix;
         for (const auto& [name, file] :
-             {std::pair<std::string, std::string>{"optimized", "envmap.exr"},
-              {"paper", "compare-paper-envmap.exr"}})
+             {std::pair<std::string, std::string>{"optimized", outdir::kEnvMap},
+              {"paper", outdir::kPaperEnvMap}})
             if (fs::exists(in / file))
-                extraPresets_[name] = toVector(loadEnvMap(in / file, t.envWidth, t.envHeight, 1));
+                extraPresets_[name] =
+                    envMapToE(loadEnvMap(in / file, t.envWidth, t.envHeight, 1), 1);
         // The objective (and regions) that made the output: the optimizer's, and the judge's
         // regions when there is no truth (as optimize's judge scored them).
         made_ = readViewerObjective(in, t.width, t.height);
@@ -302,8 +293,8 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
             reference_ = made_->reference;
         }
         // The regions optimize outlined (a transparent layer), when there are no labels here.
-        if (truth.empty() && labels_.empty() && fs::exists(in / "view-regions.png")) {
-            overlay_ = readInputFile(in / "view-regions.png", "the regions' overlay", 1ull << 28);
+        if (truth.empty() && labels_.empty() && fs::exists(in / outdir::kViewRegions)) {
+            overlay_ = readInputFile(in / outdir::kViewRegions, "the regions' overlay", 1ull << 28);
         }
         if (options.judge) {
             // The optimization's held-out estimate (cached by optimize), as its report scores.
@@ -314,23 +305,21 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
             estimate_ = std::make_unique<TransportSource>(
                 judgeEstimateFor(t_->file, *scene, spp, jo.cacheDir));
         }
-    } else if (isTransportFile(in)) {
-        t_ = std::make_unique<TransportSource>();
-        t_->file = readTransportFile(in);
-        t_->path = in;
-        if (options.judge && t_->file.matrix.planes == 2)
-            estimate_ = std::make_unique<TransportSource>(*t_);
-        if (!truth.empty()) scene = sceneOfTransport(t_->file, "the truth's projection");
     } else {
-        scene = loadScene(in, options.sceneOverrides);
-        PrecomputeOptions po;
+        PrecomputeOptions po;  // a scene's trace
         po.spp = options.spp;
         po.threads = options.threads;
         po.label = "view: trace T";
         po.sampleSets = 2;  // the halves: the optimizer's objective is optimize's default
-        t_ = std::make_unique<TransportSource>(
-            transportForScene(*scene, po, cacheDirectory(options.cache)));
-        if (options.judge) {
+        InputTransport input =
+            transportOfInput(in, options.sceneOverrides, po, cacheDirectory(options.cache));
+        t_ = std::make_unique<TransportSource>(std::move(input.transport));
+        scene = std::move(input.scene);
+        if (!scene) {  // a .tm
+            if (options.judge && t_->file.matrix.planes == 2)
+                estimate_ = std::make_unique<TransportSource>(*t_);
+            if (!truth.empty()) scene = sceneOfTransport(t_->file, "the truth's projection");
+        } else if (options.judge) {
             JudgeOptions sj = jo;
             sj.truth.clear();  // projected below, once
             estimate_ = std::make_unique<TransportSource>(judgeEstimate(*scene, sj));
@@ -339,7 +328,7 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
     if (!lampsDir.empty() && fs::exists(lampsDir / "target-envmap.exr")) {
         const auto& t = t_->file.matrix;
         extraPresets_["optimized"] =
-            toVector(loadEnvMap(lampsDir / "target-envmap.exr", t.envWidth, t.envHeight, 1));
+            envMapToE(loadEnvMap(lampsDir / "target-envmap.exr", t.envWidth, t.envHeight, 1), 1);
     }
     if (!truth.empty() && scene) {
         LabelMask m = projectTruth(*scene, truth, options.threads);
@@ -480,7 +469,7 @@ void ViewerSession::setPreset(int slot, const std::string& name) {
         throw inputError("preset", "\"" + name.substr(0, 32) + "\" is not a preset",
                          "use one of: " + list);
     }
-    lights_.at(slot) = toVector(presetEnvMap(name, t.envWidth, t.envHeight));
+    lights_.at(slot) = envMapToE(presetEnvMap(name, t.envWidth, t.envHeight), 1);
 }
 
 std::vector<double> ViewerSession::relight(int slot) const {
@@ -631,8 +620,8 @@ void ViewerSession::runOptimize(int slot, std::vector<double> start, int iterati
     try {
         const TransportMatrix& t = transport();
         const Stopwatch clock;
-        // optimize's defaults (app/jobs/OptimizeJob.h): objective, λ, loss mask, method and budget.
-        const OptimizeDefaults defaults = optimizeDefaults();
+        // optimize's defaults: objective, method and budget (app/pipeline/Defaults.h), λ and loss
+        // mask (app/jobs/OptimizeJob.h).
         const OptimizeJobOptions job;
         SearchInputs si;
         si.set = {&t};
@@ -641,8 +630,7 @@ void ViewerSession::runOptimize(int slot, std::vector<double> start, int iterati
         si.objective.lambda = job.lambdas.front();
         const bool labelled =
             std::any_of(labels_.begin(), labels_.end(), [](uint8_t v) { return v != 0; });
-        ObjectiveKind kind = ObjectiveKind::Paper;
-        if (t.planes == 2) kind = labelled ? defaults.objectiveWithDefects : defaults.objective;
+        ObjectiveKind kind = defaultObjective(labelled, t.planes);
         if (kind == ObjectiveKind::Defects) {
             si.defects.resize(labels_.size());
             for (size_t p = 0; p < labels_.size(); ++p) si.defects[p] = labels_[p];  // the labels
@@ -659,10 +647,10 @@ void ViewerSession::runOptimize(int slot, std::vector<double> start, int iterati
         si.startValues = {start};
         SearchOptions so;
         so.objective = kind;
-        so.optimizer = optimizeJobOptimizerOptions();
-        const OptimizerMethodRow& row = methodRow(so.optimizer.method);
-        so.optimizer.method = row.runs;
-        so.optimizer.iterations = iterations > 0 ? iterations : row.defaultBudget;
+        OptimizerOptions requested = optimizeJobOptimizerOptions();
+        requested.iterations = iterations;  // 0: the method's default budget
+        const OptimizerMethodRow& row = methodRow(requested.method);
+        so.optimizer = resolveOptimizer(requested);
         so.planes = 1;
         InitialState s0;
         s0.kind = InitialKind::EnvMapFile;

@@ -59,7 +59,7 @@
 // The optimizer from the current light: on an optimize OUTDIR, the objective that made the
 // output (ViewerObjective: summary.json's objective, λ, smooth_abs, its mask.png and, for the
 // defects objective, its regions-defects.png / regions-reference.png); otherwise optimize's
-// defaults (app/jobs/OptimizeJob.h optimizeDefaults(): the defects objective when the session has
+// defaults (app/pipeline/Defaults.h defaultObjective: the defects objective when the session has
 // defect labels (a truth) and T has halves, the noise-unbiased one with halves, eq. 2 without;
 // λ and the loss mask "object" as optimize's defaults). Always optimize's default method at its
 // default budget, one start: the slot's light clamped into the optimizer's box [0, 1], one

@@ -1,0 +1,78 @@
+#include "io/OptimizeOutDir.h"
+
+namespace sl::outdir {
+
+namespace {
+
+constexpr const char* kPlot = "scripts/plot_optimize.py";
+constexpr const char* kPlots = "scripts/plot_optimize.py, scripts/plot_before_after.py";
+
+constexpr OutDirFile kFiles[] = {
+    {kReport, Written::Always, ""},
+    {kEnvMap, Written::Always, "view, judge OUTDIR"},
+    {kEnvMapPng, Written::Always, "report, scripts/plot_optimize.py"},
+    {kRender, Written::Always, ""},
+    {kRenderPng, Written::Always, "report, scripts/plot_optimize.py"},
+    {kEnvMapOptimized, Written::ReferenceWon, ""},
+    {kEnvMapOptimizedPng, Written::ReferenceWon, ""},
+    {kRenderOptimized, Written::ReferenceWon, ""},
+    {kRenderOptimizedPng, Written::ReferenceWon, ""},
+    {kCompareLamp, Written::Always, ""},
+    {kCompareLampPng, Written::Always, ""},
+    {kComparePaper, Written::Always, ""},
+    {kComparePaperPng, Written::Always, ""},
+    {kPaperEnvMap, Written::Always, "view"},
+    {kPlotEnvMap, Written::Figures, "report"},
+    {kPlotLoss, Written::Figures, "report"},
+    {kOverview, Written::Figures, "report"},
+    {kSummary, Written::Always,
+     "view, report, scripts/plot_optimize.py, scripts/plot_before_after.py"},
+    {kLossCsv, Written::Always, "report, scripts/plot_optimize.py"},
+    {kRegionsPng, Written::DefectsObjective, "report"},
+    {kMaskPng, Written::Always, "view, report"},
+    {kInitialPng, Written::Always, "report, scripts/plot_optimize.py"},
+    {kInitialEnvMapPng, Written::Always, "report"},
+    {kScratchMapPng, Written::ScratchMask, "report"},
+    {kRegionsDefects, Written::DefectsObjective, "view"},
+    {kRegionsReference, Written::Reference, "view"},
+    {kViewLamp, Written::Always, "report, scripts/plot_optimize.py, scripts/plot_before_after.py"},
+    {kViewOptimized, Written::Always,
+     "report, scripts/plot_optimize.py, scripts/plot_before_after.py"},
+    {kViewPaper, Written::Always, "report, scripts/plot_before_after.py"},
+    {kViewRegions, Written::Regions, "view, report"},
+    {kPlotData, Written::Always, kPlot},
+};
+
+constexpr SummaryKey kKeys[] = {
+    {"/objective", true, "view, scripts/plot_optimize.py"},
+    {"/lambda", true, "view, scripts/plot_optimize.py"},
+    {"/smooth_abs", true, "view"},
+    {"/reg", true, "view"},
+    {"/defects_measure", false, "view"},
+    {"/optimizer", true, kPlot},
+    {"/transport/file", true, "view"},
+    {"/truth", false, "view"},
+    {"/initial_loss", true, "report, scripts/plot_optimize.py"},
+    {"/final_loss", true, "report, scripts/plot_optimize.py"},
+    {"/metrics", true, "report"},
+    {"/metrics_initial", true, "report"},
+    {"/envmap_directions", true, kPlot},
+    {"/compare", true, "report, scripts/plot_optimize.py, scripts/plot_before_after.py"},
+    {"/compare/lamp/name", true, kPlots},
+    {"/compare/lamp/judge", false, "report, scripts/plot_before_after.py"},
+    {"/compare/paper/judge", false, "report, scripts/plot_before_after.py"},
+    {"/compare/optimized/judge", false, "report, scripts/plot_before_after.py"},
+    {"/compare/judge_spp", false, "view, scripts/plot_before_after.py"},
+};
+
+}  // namespace
+
+std::span<const OutDirFile> optimizeOutDirFiles() {
+    return kFiles;
+}
+
+std::span<const SummaryKey> optimizeSummaryKeys() {
+    return kKeys;
+}
+
+}  // namespace sl::outdir
