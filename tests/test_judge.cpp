@@ -329,6 +329,29 @@ TEST(Search, MultistartKeepsTheLowestTrainingLoss) {
     }
 }
 
+// The JND measure's stall stop is optimize's default only there: the defects objective on the
+// JND measure, when the optimizer has no stall stop of its own; the ratio measure and the
+// other objectives run to their budget.
+TEST(Search, TheStallStopIsTheJndMeasuresOnly) {
+    ObjectiveOptions jnd, ratio;
+    jnd.defectMeasure = DefectMeasure::Jnd;
+    ratio.defectMeasure = DefectMeasure::Ratio;
+    const OptimizerOptions none;
+    const OptimizerOptions s = withJndStall(none, ObjectiveKind::Defects, jnd);
+    EXPECT_EQ(s.stallEvaluations, kJndStallEvaluations);
+    EXPECT_EQ(s.stallTolerance, kJndStallTolerance);
+    EXPECT_EQ(s.iterations, none.iterations);
+    EXPECT_EQ(withJndStall(none, ObjectiveKind::Defects, ratio).stallEvaluations, 0);
+    EXPECT_EQ(withJndStall(none, ObjectiveKind::Unbiased, jnd).stallEvaluations, 0);
+    EXPECT_EQ(withJndStall(none, ObjectiveKind::Paper, jnd).stallEvaluations, 0);
+    OptimizerOptions own;
+    own.stallEvaluations = 7;
+    own.stallTolerance = 0.5;
+    const OptimizerOptions kept = withJndStall(own, ObjectiveKind::Defects, jnd);
+    EXPECT_EQ(kept.stallEvaluations, 7);
+    EXPECT_EQ(kept.stallTolerance, 0.5);
+}
+
 TEST(Synth, ConfinedChatterIsLabelledOnItsSideOnly) {
     SurfaceSpec s;
     s.width = s.height = 64;

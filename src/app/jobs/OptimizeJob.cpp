@@ -224,8 +224,8 @@ struct Plan {
     OptimizerMethod requested = OptimizerMethod::Lbfgs;  // the name the results carry
     bool blackBox = false;                               // gradients through the renderer
     bool tmInput = false;
-    /// Noise-aware training (app/pipeline/TrainingNoise.h): `validate` traces the validation estimate
-    /// (the gap and the self-check need it); `noise.adapt` raises the training spp.
+    /// Noise-aware training (app/pipeline/TrainingNoise.h): `validate` traces the validation
+    /// estimate (the gap and the self-check need it); `noise.adapt` raises the training spp.
     bool validate = false;
     TrainingNoiseOptions noise;
     /// V's spp when its own noise hides the gap (app/pipeline/TrainingNoise.h step 4; 0: T's).
@@ -233,6 +233,9 @@ struct Plan {
     /// The defect pixels of the defects objective take more samples (app/pipeline/TrainingNoise.h
     /// defectSppScale); not for black boxes (their renders take one spp) nor shards.
     bool superSampleDefects = false;
+    /// The user gave the optimizer's budget: the JND search then runs to it (no stall stop,
+    /// app/pipeline/Search.h withJndStall).
+    bool budgetGiven = false;
     const Communicator* ranks = nullptr;  // MPI ranks holding shards of T (null: one process)
     bool writes() const { return !ranks || ranks->root(); }  // this process writes OUTDIR
     std::filesystem::path cacheDir;
@@ -276,6 +279,7 @@ Plan plan(const OptimizeJobOptions& options) {
     if (o.starts.empty())
         for (const std::string& spec : optimizeDefaults().starts)
             o.starts.push_back(parseInitialState(spec));
+    p.budgetGiven = o.optimizer.iterations != 0;
     o.optimizer = resolveOptimizer(o.optimizer);  // the method that runs; iterations 0: its budget
     if (o.planes == 0) o.planes = row.defaultPlanes;
     p.blackBox = row.gradient == GradientSource::Renderer;
@@ -350,8 +354,9 @@ struct Inputs {
     ObjectiveKind kind = ObjectiveKind::Unbiased;
     bool onHalves() const { return registryRow(objectiveKindTable(), kind).planes == 2; }
     std::vector<uint8_t> defects, reference;  // the defects objective's regions (image)
-    /// The training trace's per-pixel sample multipliers (app/pipeline/TrainingNoise.h defectSppScale;
-    /// empty: none), chosen on the first load from the scene and the regions, kept after.
+    /// The training trace's per-pixel sample multipliers (app/pipeline/TrainingNoise.h
+    /// defectSppScale; empty: none), chosen on the first load from the scene and the regions, kept
+    /// after.
     std::optional<std::vector<uint8_t>> sppScale;
     std::vector<const TransportMatrix*> set;  // the training estimates of T
     LossMask mask;
@@ -535,8 +540,8 @@ void loadHeldOut(const Plan& p, const Inputs& in, OptimizeJobSummary& job) {
                          "use another " + option("seed"));
 }
 
-/// Stage 2b: the validation estimate (app/pipeline/TrainingNoise.h): the training trace again with its
-/// own seed, two sample sets; for a .tm, T's recorded spp and path length on its scene.
+/// Stage 2b: the validation estimate (app/pipeline/TrainingNoise.h): the training trace again with
+/// its own seed, two sample sets; for a .tm, T's recorded spp and path length on its scene.
 void loadValidation(const Plan& p, const Inputs& in, OptimizeJobSummary& job) {
     job.validation.reset();
     if (!p.validate) return;
@@ -618,8 +623,8 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
 /// The paper's light on our T: eq. 2 at the paper's λ 30 on mean(E²), Adam lr 0.02 × 100 from
 /// E0 = 0.5 (applyOptimizePreset's "paper" settings), on the training estimate T itself rather
 /// than 100 fresh estimates. It depends only on T, the loss mask and the channels, so it is
-/// kept in the cache beside T (app/pipeline/Cache.h readCachedLight), keyed by T's fingerprint and those:
-/// a run on a cached T does not optimize it again (the same values, bit for bit).
+/// kept in the cache beside T (app/pipeline/Cache.h readCachedLight), keyed by T's fingerprint and
+/// those: a run on a cached T does not optimize it again (the same values, bit for bit).
 std::vector<double> paperLight(const Plan& p, const Inputs& in, const TransportMatrix& t,
                                const std::string& fingerprint) {
     OptimizeJobOptions paper;
@@ -718,11 +723,12 @@ constexpr const char* kLossCsvHeader =
 /// One λ's optimization: E* and loss.csv's rows.
 struct LambdaResult {
     OptimizeRun run;
-    std::vector<double> e;           // the answer (app/pipeline/Answer.h): E*, or the reference that beat it
+    std::vector<double> e;  // the answer (app/pipeline/Answer.h): E*, or the reference that beat it
     std::vector<double> optimizedE;  // E* when the answer is a reference (else empty)
     std::vector<std::vector<double>> startResults;  // every start's E (multistart)
     /// The lights the noise rule searched on finer grids at this run's spp before E*'s
-    /// (app/pipeline/TrainingNoise.h step 5), named with their grid and gap: the self-check's fallback.
+    /// (app/pipeline/TrainingNoise.h step 5), named with their grid and gap: the self-check's
+    /// fallback.
     std::vector<std::pair<std::string, std::vector<double>>> finer;
     std::vector<std::string> rows;
     LossCurve curve;                        // loss.csv's loss and held-out loss, for the loss plot
@@ -865,7 +871,8 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
             const ExternalRenderer external(*in.scene, eo);
             const RenderLoss renderLoss(external, in.scene->basis.width(), in.scene->basis.height(),
                                         ro.seed, objective, o.rgb);
-            // POV-Ray's process mostly waits (app/host/ExternalRenderer.h): more renders than cores.
+            // POV-Ray's process mostly waits (app/host/ExternalRenderer.h): more renders than
+            // cores.
             BlackBoxOptions bb = o.blackBox;
             if (bb.fd.threads == 0) bb.fd.threads = concurrentRenders(eo);
             if (bb.spsa.threads == 0) bb.spsa.threads = concurrentRenders(eo);
@@ -880,7 +887,7 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
         si.callback = callback;
         SearchOptions so;
         so.objective = in.kind;
-        so.optimizer = o.optimizer;
+        so.optimizer = p.budgetGiven ? o.optimizer : withJndStall(o.optimizer, in.kind, oo);
         so.optimizer.callback = nullptr;
         so.planes = o.planes;
         so.starts = o.starts;
@@ -968,8 +975,8 @@ void judgeRun(const Plan& p, const Inputs& in, OptimizeJobSummary& job, LambdaRe
         jo.objective = objectiveAt(p, in, run.lambda);
         jo.rgb = p.o.rgb;
         jo.viewing = viewingOf(in);
-        // In rounds (app/pipeline/Judge.h judgeInRounds): the judge's estimate is traced again at more
-        // spp while a score's standard error is above 1 % (not for a given --heldout-spp or a
+        // In rounds (app/pipeline/Judge.h judgeInRounds): the judge's estimate is traced again at
+        // more spp while a score's standard error is above 1 % (not for a given --heldout-spp or a
         // given held-out file).
         const int first = job.heldOut->file.provenance.spp;
         const bool rounds = p.o.heldOut.mode == HeldOutMode::Judge && p.o.heldOutSpp == 0;
@@ -1077,8 +1084,8 @@ json envDirectionsJson(const Inputs& in, const TransportMatrix& t, const std::ve
 }
 
 /// plot-data.json: the lights' texel luminances and the grid's directions, what the env-map
-/// plots are drawn from (app/report/OptimizeFigures.h here, scripts/plot_optimize.py by hand; neither
-/// restates the convention).
+/// plots are drawn from (app/report/OptimizeFigures.h here, scripts/plot_optimize.py by hand;
+/// neither restates the convention).
 json plotDataJson(const Inputs& in, const TransportMatrix& t, const std::vector<double>& e,
                   bool rgb) {
     const EnvMapBasis basis(t.envWidth, t.envHeight);
@@ -1156,6 +1163,13 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     s["transport_cache_hit"] = job.transport.cacheHit;
     s["seconds_optimize"] = run.optimizer.seconds;
     s["seconds_heldout_scoring"] = run.secondsHeldOutScoring;
+    // Where the run's seconds went, every round of the noise rule included (issue 29's speed:
+    // scripts/bench-first-answer reads it): tracing T and V, the searches, the self-check, the
+    // judge (its first estimate and its rounds).
+    s["seconds_phases"] = {{"trace", run.secondsTrace},
+                           {"search", run.secondsSearch},
+                           {"self_check", run.answer ? run.answer->seconds : 0.0},
+                           {"judge", run.secondsJudge}};
     if (run.heldFinal) {
         s["heldout_loss"] = run.heldFinal->own.total;
         s["heldout_L_grad"] = run.heldFinal->own.lGrad;
@@ -1393,7 +1407,8 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
     const VisibilityMetrics metricsFinal = metricsFor(t, imageFinal, mask, r.e, o.rgb, in.truth);
     const json summary = runSummaryJson(p, in, job, r, metricsFinal);
     writeTextAtomically(dir / outdir::kSummary, summary.dump(2) + "\n");
-    // The figures, drawn in-process (app/report/OptimizeFigures.h); when they fail the report says why.
+    // The figures, drawn in-process (app/report/OptimizeFigures.h); when they fail the report says
+    // why.
     std::string figureProblem;
     if (!o.figures) {
         figureProblem = "figures not asked for";
@@ -1523,8 +1538,8 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
             Stopwatch searchClock;
             LambdaResult r = optimizeLambda(p, in, job, lambda);
             secondsSearch += searchClock.seconds();
-            // Noise-aware training (app/pipeline/TrainingNoise.h), on the first λ: E* on T and on V;
-            // the spp is raised (T, V and the comparisons traced again) while the gap is large.
+            // Noise-aware training (app/pipeline/TrainingNoise.h), on the first λ: E* on T and on
+            // V; the spp is raised (T, V and the comparisons traced again) while the gap is large.
             while (noise.rounds.size() < 16 && job.runs.empty() && r.run.validationFinal &&
                    !p.blackBox && !r.run.interrupted) {
                 TrainingNoiseRound nr;
@@ -1633,7 +1648,15 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
             r.run.secondsJudge = secondsHeldOut + judgeClock.seconds();
             r.run.secondsTrace = secondsTrace;
             r.run.secondsSearch = secondsSearch;
+            const Stopwatch outputsClock;
             reportRuns.push_back(writeRunOutputs(p, in, job, r));
+            spdlog::info(
+                "lambda {}: seconds: tracing T and V {}, searching {}, self-check {}, judge {}, "
+                "figures and report {}",
+                r.run.lambda, formatNumber(r.run.secondsTrace, 3),
+                formatNumber(r.run.secondsSearch, 3),
+                formatNumber(r.run.answer ? r.run.answer->seconds : 0.0, 3),
+                formatNumber(r.run.secondsJudge, 3), formatNumber(outputsClock.seconds(), 3));
             job.runs.push_back(std::move(r.run));
             if (job.runs.back().interrupted) {  // the λs after it are not run
                 job.interrupted = true;
