@@ -120,6 +120,16 @@ TEST(JudgeJnd, TheAnswerLineLeadsWithJnd) {
                       0),
               0u)
         << h;
+    // With the JND's standard errors (judge.json's se.least_visible_jnd), beside each figure.
+    nlohmann::json withSe = s;
+    withSe["compare"]["optimized"]["judge"]["se"] = {{"least_visible_jnd", 0.12}};
+    withSe["compare"]["lamp"]["judge"]["se"] = {{"least_visible_jnd", 0.05}};
+    EXPECT_EQ(optimizeHeadline(withSe).rfind(
+                  "Under the optimized light the defects are 8.9 ± 0.12 JND above threshold, "
+                  "3.1 ± 0.05 under your lamp (studio preset) and 2 under the paper's light",
+                  0),
+              0u)
+        << optimizeHeadline(withSe);
     s["compare"]["optimized"]["judge"] = judge(0.4, 26);
     EXPECT_NE(optimizeHeadline(s).find("below threshold (0.4 JND)"), std::string::npos);
     // Without JND (an output from before it): the ratio sentence as before.

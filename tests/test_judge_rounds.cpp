@@ -1,13 +1,16 @@
 // The judge's standard errors and rounds (app/pipeline/Judge.h scoreWithErrors, judgeInRounds): the
 // wild-bootstrap SE matches the spread of the scores over independent judge seeds and falls as
-// 1/sqrt(spp); the rounds stop earlier for an easy light than for a hard one, hold the cap, and
-// give the same numbers for the same seed; judge.json records the spp, the rounds and the SEs.
+// 1/sqrt(spp), JND figures included; the rounds stop earlier for an easy light than for a hard
+// one, trace more when the least visible kind's JND is noisy, hold the cap, and give the same
+// numbers for the same seed; judge.json records the spp, the rounds and the SEs (JND's too).
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
 
+#include "SyntheticDefects.h"
 #include "TestUtil.h"
 #include "app/pipeline/Judge.h"
 #include "core/Rng.h"
@@ -34,6 +37,30 @@ std::vector<uint8_t> blockLabels(int w, int h, int r = 3) {
     for (int y = h / 2 - r; y < h / 2 + r; ++y)
         for (int x = w / 2 - r; x < w / 2 + r; ++x) l[size_t(y) * w + x] = 255;
     return l;
+}
+
+/// The wavy part (its bumps halved) with a V groove across it (SyntheticDefects.h), image-space
+/// labels over where it shows (the part fills the view: height-map sample i is near pixel
+/// i·res/n), and a light of narrow bands (5 texels in 50) under which the groove is ~1.8 JND: well
+/// above 0, so its estimates are not held at the floor max(·, 0).
+struct GroovedPart {
+    std::unique_ptr<Scene> scene;
+    std::vector<uint8_t> labels;
+    std::vector<double> light;
+};
+GroovedPart groovedPart(int res = 32, int n = 48) {
+    std::vector<float> h = test::bumpyHeightMap(n);
+    for (float& v : h) v *= 0.5f;
+    std::vector<uint8_t> truth(h.size(), 0);
+    test::paintGroove(h, truth, n, n / 2, n / 6, n / 2, 5 * n / 6, 3.0, 0.1);
+    GroovedPart g;
+    g.scene = std::make_unique<Scene>(test::bumpyPartDesc(res, res), n, n, h);
+    g.labels.assign(size_t(res) * res, 0);
+    for (int y = res / 6 + 1; y < 5 * res / 6; ++y)
+        for (int x = res / 2 - 2; x <= res / 2 + 1; ++x) g.labels[size_t(y) * res + x] = 255;
+    g.light.resize(1250);
+    for (size_t i = 0; i < g.light.size(); ++i) g.light[i] = i % 50 < 5 ? 1.0 : 0.0;
+    return g;
 }
 
 double mean(const std::vector<double>& v) {
@@ -179,6 +206,117 @@ TEST(JudgeRounds, NextSppFollowsTheSquareOfTheErrorRatio) {
 }
 
 // judge.json records the estimate's spp, the rounds that chose it, and every score's SE.
+// The JND figures (perception/JndVisibility.h) have standard errors by the same bootstrap: over
+// 16 judge seeds at 256 spp, the region's JND moves by what one estimate's SE says (±45 %, as
+// above); with one region the least visible kind's JND is that region's, SE included.
+TEST(JudgeRounds, JndStandardErrorMatchesTheSpreadOverIndependentSeeds) {
+    const GroovedPart part = groovedPart();
+    const Scene* scene = part.scene.get();
+    const std::vector<uint8_t>& labels = part.labels;
+    const std::vector<double>& e = part.light;
+    std::vector<double> jnd, seJnd;
+    for (uint64_t k = 0; k < 16; ++k) {
+        JudgeOptions o;
+        o.spp = 256;
+        o.seed = kJudgeSeed + 200 + k;
+        o.viewing = viewingFor(*scene);
+        const TransportSource est = judgeEstimate(*scene, o);
+        const Judge judge(est, o, labels, {{255, "groove"}});
+        const JudgeScore s = judge.scoreWithErrors(e, "random");
+        ASSERT_TRUE(s.se);
+        ASSERT_EQ(s.se->jnd.size(), 1u);
+        ASSERT_TRUE(std::isfinite(s.visibility[0].jnd));
+        jnd.push_back(s.visibility[0].jnd);
+        seJnd.push_back(s.se->jnd[0]);
+        EXPECT_EQ(s.se->leastVisibleJnd, s.se->jnd[0]);
+    }
+    EXPECT_GT(mean(jnd), 3.0 * sd(jnd)) << "the JND should be well away from its floor at 0";
+    EXPECT_NEAR(sd(jnd) / mean(seJnd), 1.0, 0.45) << sd(jnd) << " vs " << mean(seJnd);
+}
+
+// The stop rule counts the figure the answer is chosen on: a least visible kind's JND whose SE
+// is the largest relative error decides the rounds (its floor is one JND, the threshold).
+TEST(JudgeRounds, TheLeastVisibleJndDecidesTheRoundsWhenItIsTheNoisiest) {
+    JudgeScore s;
+    s.name = "lamp";
+    s.eq2.total = 1.0;
+    s.unbiased.total = 1.0;
+    s.brightness = 0.5;
+    RegionVisibility scratch, pit;
+    scratch.label = {1, "scratch"};
+    pit.label = {2, "pit"};
+    scratch.pixels = pit.pixels = 100;
+    scratch.visibility = pit.visibility = 2.0;
+    scratch.contrast = pit.contrast = 0.1;
+    scratch.jnd = 5.0;
+    pit.jnd = 2.0;  // the least visible kind
+    s.visibility = {scratch, pit};
+    JudgeScore::Errors e;
+    e.replicates = kJudgeReplicates;
+    e.eq2 = e.unbiased = 0.001;
+    e.brightness = 0.0005;
+    e.combinedVisibility = 0.002;
+    e.visibility = {0.002, 0.002};
+    e.contrast = {0.0001, 0.0001};
+    e.jnd = {0.5, 0.002};
+    e.leastVisibleJnd = 0.002;
+    s.se = e;
+    // The table prints each JND's error beside it: scratch 5 JND ± 0.5.
+    EXPECT_NE(formatJudgeTable({s}).find("5.00 ±10.0%"), std::string::npos)
+        << formatJudgeTable({s});
+    // Quiet: within 1 %, whatever the most visible kind's JND does (it is not the answer's).
+    EXPECT_LE(worstRelativeError(s).relative, kJudgeMaxError) << worstRelativeError(s).score;
+    EXPECT_EQ(nextJudgeSpp(128, worstRelativeError(s).relative, 1024), 0);
+    // Noisy: 0.1 JND on 2 is 5 %: it is the worst score, and the next round has 25 times the
+    // samples (to the cap).
+    s.se->leastVisibleJnd = 0.1;
+    const WorstError w = worstRelativeError(s);
+    EXPECT_DOUBLE_EQ(w.relative, 0.05);
+    EXPECT_EQ(w.score, "lamp: JND pit");
+    EXPECT_EQ(nextJudgeSpp(128, w.relative, 4096), 4096);
+    // Below threshold the floor is one JND: 0.005 JND of error on 0.2 JND is 0.5 %, within 1 %.
+    s.visibility[1].jnd = 0.2;
+    s.se->leastVisibleJnd = 0.005;
+    EXPECT_LE(worstRelativeError(s).relative, kJudgeMaxError);
+    // Without a JND (no viewing model) the rule is as before.
+    s.visibility[0].jnd = s.visibility[1].jnd = std::nan("");
+    s.se->leastVisibleJnd = std::nan("");
+    EXPECT_LE(worstRelativeError(s).relative, kJudgeMaxError);
+}
+
+// On a traced estimate: the same light and region, judged with a viewing model (its JND in the
+// rule) and without. On this part the groove's JND (1.8) is the noisiest figure (4.7 % at 128 spp,
+// measured; the visibility ratio and contrast 1.4 %): with a target of 3 % the rounds stop at
+// once without it and trace more with it, until it is met.
+TEST(JudgeRounds, TracesMoreWhenTheJndFigureIsNoisy) {
+    const GroovedPart part = groovedPart();
+    const Scene* scene = part.scene.get();
+    std::vector<std::unique_ptr<TransportSource>> kept;
+    std::unique_ptr<Judge> judge;
+    bool withJnd = false;
+    auto judgeAt = [&](int spp) -> const Judge& {
+        JudgeOptions o;
+        o.spp = spp;
+        if (withJnd) o.viewing = viewingFor(*scene);
+        judge.reset();
+        kept.push_back(std::make_unique<TransportSource>(judgeEstimate(*scene, o)));
+        judge = std::make_unique<Judge>(*kept.back(), o, part.labels,
+                                        std::vector<RegionLabel>{{255, "groove"}});
+        return *judge;
+    };
+    const double target = 0.03;
+    const JudgedRounds without = judgeInRounds(judgeAt, {{"bands", part.light}}, 128, 4096, target);
+    withJnd = true;
+    const JudgedRounds with = judgeInRounds(judgeAt, {{"bands", part.light}}, 128, 4096, target);
+    EXPECT_EQ(without.spp(), 128) << without.describe(target);
+    EXPECT_TRUE(without.met);
+    EXPECT_GT(with.spp(), 128) << with.describe(target);
+    EXPECT_EQ(with.rounds.front().worst.score, "bands: JND groove") << with.describe(target);
+    EXPECT_TRUE(with.met) << with.describe(target);
+    ASSERT_TRUE(with.scores.at(0).se);
+    EXPECT_LE(with.scores[0].se->leastVisibleJnd, target * with.scores[0].visibility[0].jnd);
+}
+
 TEST(JudgeRounds, JudgeJsonRecordsSppRoundsAndErrors) {
     test::TempDir dir("judge-rounds");
     const std::string part = (dir / "part.exr").string(), scene = (dir / "scene.json").string();
@@ -206,6 +344,12 @@ TEST(JudgeRounds, JudgeJsonRecordsSppRoundsAndErrors) {
         EXPECT_TRUE(l["se"]["brightness"].is_number());
         EXPECT_EQ(l["se"].value("replicates", 0), kJudgeReplicates);
         EXPECT_EQ(l["se"]["regions"].size(), l["visibility"].size());
+        // The JND figures' errors (the scene's default viewing model gives every region a JND).
+        EXPECT_TRUE(l["se"]["least_visible_jnd"].is_number()) << l["se"].dump();
+        for (size_t k = 0; k < l["visibility"].size(); ++k)
+            if (l["visibility"][k]["jnd"].is_number()) {
+                EXPECT_TRUE(l["se"]["regions"][k]["jnd"].is_number()) << l["se"].dump();
+            }
     }
     // Met, or at the cap: never stopped early with an error above the target.
     const double worst = est.at("rounds").back().value("worst_relative_se", 1.0);

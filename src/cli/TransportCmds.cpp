@@ -209,16 +209,27 @@ int runOptimize(OptimizeArgs a) {
         return " ± " + formatNumber(100.0 * (*se).*f / std::abs(v), 2) + " %";
     };
     for (const OptimizeRun& r : s.runs)
-        if (r.judged)
+        if (r.judged) {
+            // The figure the answer is chosen on, when the judge has it: the least visible
+            // defect kind's JND.
+            size_t least = 0;
+            const double jnd = leastVisibleJnd(r.judged->visibility, &least);
+            const std::string jndPart =
+                std::isfinite(jnd)
+                    ? ", JND " + formatNumber(jnd, 3) +
+                          pm(jnd, r.judged->se, &JudgeScore::Errors::leastVisibleJnd) +
+                          " (least visible: " + r.judged->visibility[least].label.name + ")"
+                    : std::string();
             std::printf(
-                "judge (lambda %g, %d spp): eq2 %.4f%s, U %.4f%s, mean E %.4f, %.0f%% texels "
+                "judge (lambda %g, %d spp): eq2 %.4f%s, U %.4f%s%s, mean E %.4f, %.0f%% texels "
                 "dark%s\n",
                 r.lambda, r.judged->spp, r.judged->eq2.total,
                 pm(r.judged->eq2.total, r.judged->se, &JudgeScore::Errors::eq2).c_str(),
                 r.judged->unbiased.total,
                 pm(r.judged->unbiased.total, r.judged->se, &JudgeScore::Errors::unbiased).c_str(),
-                r.judged->meanE, 100.0 * r.judged->sparsity,
+                jndPart.c_str(), r.judged->meanE, 100.0 * r.judged->sparsity,
                 r.start.empty() ? "" : (", best start " + r.start).c_str());
+        }
     // The report's first sentence (app/report/Report.h), here too.
     for (const OptimizeRun& r : s.runs) {
         std::string prefix;

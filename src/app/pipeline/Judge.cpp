@@ -168,18 +168,22 @@ JudgeScore Judge::scoreWithErrors(std::span<const double> E, const std::string& 
     const std::vector<double> one(E.size(), 1.0);
     t.applyLuminanceHalves(one, images[1].a, images[1].b);
     const size_t regions = s.visibility.size();
-    // Per replicate: eq2, U, brightness, the combined visibility, then each region's
-    // visibility and contrast. JND (0.5 s a light at 512²) is not recomputed per replicate.
+    // The JND figures have errors only where they were formed (a viewing model and regions).
+    const bool jnd = std::any_of(s.visibility.begin(), s.visibility.end(),
+                                 [](const RegionVisibility& r) { return std::isfinite(r.jnd); });
+    // Per replicate: eq2, U, brightness, the combined visibility, the least visible kind's JND,
+    // then each region's visibility, contrast and JND.
+    constexpr size_t kHead = 5;
     const std::vector<double> se =
         wildBootstrapErrors(images, options_.seed, replicates, [&](std::span<const HalfImages> r) {
-            const JudgeScore x =
-                scoreImages(E, r[0].a, r[0].b, {}, r[1].a, r[1].b, {}, /*withJnd=*/false);
+            const JudgeScore x = scoreImages(E, r[0].a, r[0].b, {}, r[1].a, r[1].b, {}, jnd);
             std::vector<double> v{x.eq2.total, x.unbiased.total, x.brightness,
-                                  combinedVisibility(x.visibility)};
-            v.resize(4 + 2 * regions, std::numeric_limits<double>::quiet_NaN());
+                                  combinedVisibility(x.visibility), leastVisibleJnd(x.visibility)};
+            v.resize(kHead + 3 * regions, std::numeric_limits<double>::quiet_NaN());
             for (size_t k = 0; k < regions && k < x.visibility.size(); ++k) {
-                v[4 + k] = x.visibility[k].visibility;
-                v[4 + regions + k] = x.visibility[k].contrast;
+                v[kHead + k] = x.visibility[k].visibility;
+                v[kHead + regions + k] = x.visibility[k].contrast;
+                v[kHead + 2 * regions + k] = x.visibility[k].jnd;
             }
             return v;
         });
@@ -189,9 +193,11 @@ JudgeScore Judge::scoreWithErrors(std::span<const double> E, const std::string& 
     e.unbiased = se[1];
     e.brightness = se[2];
     e.combinedVisibility = se[3];
+    e.leastVisibleJnd = se[4];
     for (size_t k = 0; k < regions; ++k) {
-        e.visibility.push_back(se[4 + k]);
-        e.contrast.push_back(se[4 + regions + k]);
+        e.visibility.push_back(se[kHead + k]);
+        e.contrast.push_back(se[kHead + regions + k]);
+        e.jnd.push_back(se[kHead + 2 * regions + k]);
     }
     s.se = std::move(e);
     return s;
@@ -220,6 +226,10 @@ WorstError worstRelativeError(const JudgeScore& s) {
         consider(r.visibility, s.se->visibility[k], 0.1, "visibility " + r.label.name);
         consider(r.contrast, s.se->contrast[k], 0.01, "contrast " + r.label.name);
     }
+    size_t least = 0;
+    const double j = leastVisibleJnd(s.visibility, &least);
+    if (std::isfinite(j))
+        consider(j, s.se->leastVisibleJnd, 1.0, "JND " + s.visibility[least].label.name);
     return w;
 }
 
@@ -328,11 +338,13 @@ nlohmann::ordered_json toJson(const JudgeScore& s) {
         e["unbiased"] = number(s.se->unbiased);
         e["brightness"] = number(s.se->brightness);
         e["combined_visibility"] = number(s.se->combinedVisibility);
+        e["least_visible_jnd"] = number(s.se->leastVisibleJnd);
         nlohmann::ordered_json per = nlohmann::ordered_json::array();
         for (size_t k = 0; k < s.visibility.size() && k < s.se->visibility.size(); ++k)
             per.push_back({{"name", s.visibility[k].label.name},
                            {"visibility", number(s.se->visibility[k])},
-                           {"contrast", number(s.se->contrast[k])}});
+                           {"contrast", number(s.se->contrast[k])},
+                           {"jnd", number(k < s.se->jnd.size() ? s.se->jnd[k] : std::nan(""))}});
         e["regions"] = per;
         e["replicates"] = s.se->replicates;
         const WorstError w = worstRelativeError(s);
@@ -404,7 +416,8 @@ std::string formatJudgeTable(const std::vector<JudgeScore>& scores) {
     out << buf;
     for (const std::string& r : regions) {
         if (jnd) {
-            std::snprintf(buf, sizeof buf, " %14s", ("JND " + r).substr(0, 14).c_str());
+            std::snprintf(buf, sizeof buf, " %14s%s", ("JND " + r).substr(0, 14).c_str(),
+                          pmHead.c_str());
             out << buf;
         }
         std::snprintf(buf, sizeof buf, " %14s%s %8s%s", ("vis " + r).substr(0, 14).c_str(),
@@ -430,10 +443,13 @@ std::string formatJudgeTable(const std::vector<JudgeScore>& scores) {
                 if (s.visibility[i].label.name == r) v = &s.visibility[i], k = i;
             const bool hasSe = s.se && k < s.se->visibility.size();
             if (jnd) {
+                const bool hasJndSe = s.se && k < s.se->jnd.size();
                 if (v)
-                    std::snprintf(buf, sizeof buf, " %14.2f", v->jnd);
+                    std::snprintf(
+                        buf, sizeof buf, " %14.2f%s", v->jnd,
+                        pm(v->jnd, hasJndSe ? std::optional(s.se->jnd[k]) : std::nullopt).c_str());
                 else
-                    std::snprintf(buf, sizeof buf, " %14s", "-");
+                    std::snprintf(buf, sizeof buf, " %14s%s", "-", pmHead.c_str());
                 out << buf;
             }
             if (v)

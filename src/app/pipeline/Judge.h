@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -89,6 +90,10 @@ struct JudgeScore {
         double eq2 = 0, unbiased = 0, brightness = 0;
         double combinedVisibility = 0;  // of combinedVisibility(visibility) (NaN without one)
         std::vector<double> visibility, contrast;  // per region, in visibility's order
+        /// With a viewing model: each region's JND, and the least visible kind's JND
+        /// (leastVisibleJnd: the figure the answer is chosen on; NaN without one).
+        std::vector<double> jnd;
+        double leastVisibleJnd = std::numeric_limits<double>::quiet_NaN();
     };
     std::optional<Errors> se;
 };
@@ -98,7 +103,8 @@ struct JudgeScore {
 /// held to an absolute SE of floor·kJudgeMaxError instead of an ever smaller relative one):
 /// eq. 2 and U 1e-3, brightness 0.05 (below it a light is not eligible as an answer), each
 /// region's visibility and the combined visibility 0.1, contrast 0.01 (about the least the eye
-/// sees). NaN scores are skipped. relative 0 without errors.
+/// sees), the least visible kind's JND (the answer's figure) 1 (the threshold: below it the SE
+/// is held to kJudgeMaxError of one JND). NaN scores are skipped. relative 0 without errors.
 struct WorstError {
     double relative = 0;
     std::string score;  // e.g. "lamp: visibility scratch"
@@ -132,7 +138,9 @@ class Judge {
     /// and variance 2·var(Y_a,p), so each of `replicates` replicates perturbs the halves by
     /// ±d_p/√2 with independent signs per pixel and half (a fixed seed: the same E gives the
     /// same errors) — the same light's white-furnace image with the same signs — and scores
-    /// them again; the SE is the replicates' spread (1.4826 × their median absolute deviation,
+    /// them again (each region's JND too, with a viewing model: its band contrasts are formed
+    /// anew per replicate, the dearest part); the SE is the replicates' spread (1.4826 × their
+    /// median absolute deviation,
     /// a standard deviation robust to a replicate whose denominator nearly vanished; to first
     /// order the delta
     /// method's, without the scores' derivatives). It falls as 1/sqrt(spp).
@@ -200,7 +208,8 @@ nlohmann::ordered_json viewingJson(const ViewingModel& view);
 /// The score as JSON: name, eq2, unbiased, mean_E, sparsity, visibility (per region: name,
 /// value, pixels, visibility, rms_gradient, clean_rms_gradient, weber, jnd, jnd_frequency_cpd,
 /// mask_contrast, luminance_cd_m2), eq2_parts, unbiased_parts, spp, and with errors `se` (eq2,
-/// unbiased, brightness, combined_visibility, visibility and contrast per region, replicates).
+/// unbiased, brightness, combined_visibility, least_visible_jnd, visibility, contrast and jnd
+/// per region, replicates).
 nlohmann::ordered_json toJson(const JudgeScore& score);
 
 /// The judge's rounds as JSON: [{spp, worst_relative_se, worst_score}, ...].

@@ -473,6 +473,19 @@ double leastVisibleJnd(const json& judge) {
     return sl::leastVisibleJnd(regionsOf(judge));
 }
 
+/// " ± 0.12": the standard error of the least visible kind's JND in a judge score's JSON
+/// (app/pipeline/Judge.h toJson, se.least_visible_jnd); empty when it was not estimated.
+std::string leastVisibleJndError(const json& judge) {
+    if (!judge.is_object() || !judge.contains("se") || !judge["se"].is_object()) return "";
+    const json& se = judge["se"];
+    if (!se.contains("least_visible_jnd") || !se["least_visible_jnd"].is_number()) return "";
+    const double e = se["least_visible_jnd"].get<double>();
+    if (!std::isfinite(e)) return "";
+    char buf[64];
+    std::snprintf(buf, sizeof buf, " ± %.2g", e);
+    return buf;
+}
+
 /// How many defect kinds the judge scored (regions with pixels).
 size_t defectKinds(const json& judge) {
     size_t n = 0;
@@ -571,10 +584,11 @@ std::string lowerLoss(double opt, double other, const std::string& under) {
 }
 
 /// "1.9 JND above threshold" / "below threshold (0.4 JND)": 1 JND is the threshold of seeing.
-std::string jndPhrase(double j) {
+/// se: " ± 0.12" or empty (leastVisibleJndError).
+std::string jndPhrase(double j, const std::string& se = {}) {
     if (!std::isfinite(j)) return "—";
-    if (j >= 1.0) return fmt(j, 3) + " JND above threshold";
-    return "below threshold (" + fmt(j, 2) + " JND)";
+    if (j >= 1.0) return fmt(j, 3) + se + " JND above threshold";
+    return "below threshold (" + fmt(j, 2) + se + " JND)";
 }
 
 /// The headline's first sentence in the units of the eye (perception/JndVisibility.h): "Under
@@ -587,9 +601,11 @@ std::string jndSentence(const json& opt, const json& lamp, const json& paper,
     if (!std::isfinite(jo) || !std::isfinite(jl)) return "";
     const std::string what =
         defectKinds(opt) > 1 ? "the least visible defect kind is" : "the defects are";
-    std::string out = "Under the optimized light " + what + " " + jndPhrase(jo) + ", " +
-                      fmt(jl, 3) + " " + underLamp;
-    if (std::isfinite(jp)) out += " and " + fmt(jp, 3) + " under the paper's light";
+    std::string out = "Under the optimized light " + what + " " +
+                      jndPhrase(jo, leastVisibleJndError(opt)) + ", " + fmt(jl, 3) +
+                      leastVisibleJndError(lamp) + " " + underLamp;
+    if (std::isfinite(jp))
+        out += " and " + fmt(jp, 3) + leastVisibleJndError(paper) + " under the paper's light";
     out += ", as a person sees the image";
     if (viewing.contains("text") && viewing["text"].is_string())
         out += " (" + viewing["text"].get<std::string>() + ")";
@@ -720,8 +736,8 @@ std::string compareRow(const std::string& name, double lamp, double paper, doubl
 }  // namespace
 
 /// When the judge sees the defects more under the lamp than under the returned optimized light
-/// (JND), why the self-check did not return the lamp (app/pipeline/Answer.h): it failed a check on the
-/// validation estimate, or it showed less there. Empty otherwise.
+/// (JND), why the self-check did not return the lamp (app/pipeline/Answer.h): it failed a check on
+/// the validation estimate, or it showed less there. Empty otherwise.
 std::string lampNotChosen(const json& s, double jndOptimized, double jndLamp,
                           const std::string& lampName) {
     if (!(jndLamp > jndOptimized) || !s.contains("answer") || !s["answer"].is_object() ||
@@ -755,8 +771,8 @@ std::string optimizeHeadline(const json& s) {
                opt = cmp.value("optimized", json::object());
     const std::string underLamp = lampUnder(cmp), underPaper = "under the paper's light";
     std::string out;
-    // A reference that beat E* on the validation estimate is the answer (app/pipeline/Answer.h): said
-    // first, then the judge's figures of the answer beside E*'s.
+    // A reference that beat E* on the validation estimate is the answer (app/pipeline/Answer.h):
+    // said first, then the judge's figures of the answer beside E*'s.
     if (cmp.contains("answer") && cmp["answer"].is_object()) {
         const json& ans = cmp["answer"];
         const std::string name = ans.value("name", std::string("a reference light"));

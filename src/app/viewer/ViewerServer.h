@@ -1,23 +1,23 @@
 // The viewer's HTTP server (cpp-httplib, plain HTTP): every request goes to
-// handleViewerRequest (app/viewer/Viewer.h); this file only moves bytes. Bound to 127.0.0.1 unless a
-// host is given (the command line then warns). Request bodies over kViewerMaxBody are refused
-// before they are read in full; a malformed request or a connection closed mid-transfer ends
-// that connection only. The port is bound exclusively (no SO_REUSEPORT: a second viewer on the
-// same port is refused); 32 connections are served at once, each closed after 1 s idle or 2 s
-// without a byte, so idle or slow clients delay the others by seconds at most.
+// handleViewerRequest (app/viewer/Viewer.h); this file only moves bytes. Bound to 127.0.0.1 unless
+// a host is given (the command line then warns). The port is bound exclusively (no SO_REUSEPORT: a
+// second viewer on the same port is refused). httplib accepts and parses; the connections
+// themselves are ours (app/viewer/ConnectionLoop.h): one thread reads every socket and a worker
+// gets a connection only with a whole request buffered, so idle, slow or non-reading clients hold
+// no worker, and pipelined requests are answered in order. Request bodies over kViewerMaxBody are
+// refused before they are read; a malformed request or a connection closed mid-transfer ends that
+// connection only.
 #pragma once
 
 #include <memory>
 #include <string>
 #include <thread>
 
-namespace httplib {
-class Server;
-}
-
 namespace sl {
 
 class ViewerSession;
+class ConnectionLoop;
+class ViewerHttp;
 
 class ViewerServer {
   public:
@@ -43,7 +43,8 @@ class ViewerServer {
     ViewerSession& session_;
     std::string host_;
     int port_ = 0;
-    std::unique_ptr<httplib::Server> server_;
+    std::unique_ptr<ViewerHttp> server_;
+    std::unique_ptr<ConnectionLoop> connections_;
     std::thread thread_;
 };
 
