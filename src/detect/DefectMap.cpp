@@ -22,8 +22,9 @@ namespace {
 
 constexpr DefectMethodRow kMethods[] = {
     {DefectMethod::Auto, "auto",
-     "remove the periodic tool-path texture (spectral notch) and a robust local level; mark what "
-     "stands out (levels, edges, texture-change regions)"},
+     "a simulator's part: remove the periodic tool-path texture (spectral notch) and a robust "
+     "local level, mark what stands out (levels, edges, texture-change regions); a measurement "
+     "(an instrument's file, or heightmap.measured): selfsim"},
     {DefectMethod::Lay, "lay",
      "measured textures: the median along the texture's own lay is its background; mark regions "
      "far above the residual's robust sigma and the texture's RMS, none along the border"},
