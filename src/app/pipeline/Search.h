@@ -2,10 +2,10 @@
 // independent estimates of T, from which starts, through which λ continuation. `optimize`
 // runs one search per λ; `bench race` runs many and the judge scores them.
 //
-//   planes        K ≥ 1 independent estimates of T (app/pipeline/Transport.h transportSetForScene).
-//   With
-//                 K > 1 every gradient evaluation uses the next estimate (objective/
-//                 TransportLoss.h CyclingLoss): a fresh sample set per step, as the paper's loop.
+//   planes        K ≥ 1 independent estimates of T (app/pipeline/Transport.h
+//                 transportSetForScene). With K > 1 every gradient evaluation uses the next
+//                 estimate (objective/TransportLoss.h CyclingLoss): a fresh sample set per
+//                 step, as the paper's loop.
 //   starts        every start is optimized in turn and the lowest training loss wins
 //                 (multistart); the specs of app/pipeline/InitialState.h.
 //   continuation  λ factors run in turn before λ itself, each stage starting where the last
