@@ -165,10 +165,10 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.textureRms >= 0.0))
         throw inputError(option("selfsim-texture-rms"), "must be >= 0", "The default is 1");
     if (!(o.growSigma > 0.0))
-        throw inputError(option("selfsim-grow-sigma"), "must be > 0", "The default is 3");
+        throw inputError(option("selfsim-grow-sigma"), "must be > 0", "The default is 2.5");
     if (o.growScale < 0 || o.growScale >= o.scales)
         throw inputError(option("selfsim-grow-scale"), "must be in 0..scales-1",
-                         "The default is 1");
+                         "The default is 0");
     if (o.border < 0)
         throw inputError(option("selfsim-border"), "must be >= 0", "The default is 40");
     if (o.minRegion < 1)
