@@ -862,6 +862,27 @@ TEST(ViewerServer, OwnsItsPortOutlastsIdleClientsAndChecksItsFolder) {
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("is taken"), std::string::npos) << e.what();
     }
+    // ... and `view` asks before its setup: the same answer, at once
+    try {
+        checkViewerPort("127.0.0.1", server.port());
+        ADD_FAILURE() << "checkViewerPort passed a taken port " << server.port();
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("is taken"), std::string::npos) << e.what();
+    }
+    EXPECT_NO_THROW(checkViewerPort("127.0.0.1", 0));
+    // a port nobody holds passes (an ephemeral port, bound and let go)
+    const int free = [] {
+        const int fd = socket(AF_INET, SOCK_STREAM, 0);
+        sockaddr_in a{};
+        a.sin_family = AF_INET;
+        a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+        socklen_t n = sizeof(a);
+        bind(fd, reinterpret_cast<sockaddr*>(&a), n);
+        getsockname(fd, reinterpret_cast<sockaddr*>(&a), &n);
+        close(fd);
+        return static_cast<int>(ntohs(a.sin_port));
+    }();
+    EXPECT_NO_THROW(checkViewerPort("127.0.0.1", free)) << free;
     // 40 idle connections (more than the workers), then a request: answered within seconds.
     std::vector<int> idle;
     for (int k = 0; k < 40; ++k) idle.push_back(connectTo(server.port()));

@@ -36,6 +36,7 @@ int runView(const ViewArgs& a) {
                      "authentication and anyone who reaches it can change the light and save "
                      "files into %s\n",
                      a.host.c_str(), o.outDir.string().c_str());
+    checkViewerPort(host, a.port);  // before minutes of tracing, not after
     ViewerSession session(o);
     const auto& t = session.transport();
     ViewerServer server(session, host, a.port);

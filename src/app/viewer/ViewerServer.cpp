@@ -2,8 +2,10 @@
 
 #include <arpa/inet.h>
 #include <httplib.h>
+#include <netdb.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -125,6 +127,39 @@ class ViewerHttp final : public httplib::Server {
     ConnectionLoop* loop_ = nullptr;
 };
 
+namespace {
+
+InputError portTaken(const std::string& host, int port) {
+    return inputError(option("port"),
+                      "port " + std::to_string(port) + " is taken (or not allowed) on " + host,
+                      "stop the program that uses it, or give another (0: any free port)");
+}
+
+}  // namespace
+
+void checkViewerPort(const std::string& host, int port) {
+    if (port == 0) return;
+    addrinfo hints{};
+    hints.ai_family = AF_UNSPEC;
+    hints.ai_socktype = SOCK_STREAM;
+    hints.ai_flags = AI_PASSIVE;
+    addrinfo* found = nullptr;
+    if (getaddrinfo(host.c_str(), std::to_string(port).c_str(), &hints, &found) != 0 || !found)
+        throw inputError(option("host"), "cannot listen on " + host,
+                         "give a local address such as 127.0.0.1");
+    bool bound = false;
+    for (addrinfo* a = found; a && !bound; a = a->ai_next) {
+        const int fd = socket(a->ai_family, a->ai_socktype, a->ai_protocol);
+        if (fd < 0) continue;
+        int yes = 1;  // as the server binds: SO_REUSEADDR, not SO_REUSEPORT
+        setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
+        bound = bind(fd, a->ai_addr, a->ai_addrlen) == 0 && listen(fd, 1) == 0;
+        close(fd);
+    }
+    freeaddrinfo(found);
+    if (!bound) throw portTaken(host, port);
+}
+
 ViewerServer::ViewerServer(ViewerSession& session, const std::string& host, int port)
     : session_(session), host_(host), server_(std::make_unique<ViewerHttp>()) {
     ConnectionLoopOptions co;
@@ -163,11 +198,7 @@ ViewerServer::ViewerServer(ViewerSession& session, const std::string& host, int 
             throw inputError(option("host"), "cannot listen on " + host,
                              "give a local address such as 127.0.0.1");
     } else {
-        if (!s.bind_to_port(host, port))
-            throw inputError(
-                option("port"),
-                "port " + std::to_string(port) + " is taken (or not allowed) on " + host,
-                "stop the program that uses it, or give another (0: any free port)");
+        if (!s.bind_to_port(host, port)) throw portTaken(host, port);
         port_ = port;
     }
     s.widenBacklog();

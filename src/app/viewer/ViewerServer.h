@@ -19,6 +19,12 @@ class ViewerSession;
 class ConnectionLoop;
 class ViewerHttp;
 
+/// Throws InputError naming option 'port' when host:port cannot be bound now (another program
+/// holds it, or the address is not this machine's). `view` asks before it traces T and the judge,
+/// so a taken port is said at once, not minutes later; ViewerServer binds again (and says the
+/// same should the port be taken in between). Port 0 (any free port) always passes.
+void checkViewerPort(const std::string& host, int port);
+
 class ViewerServer {
   public:
     /// Binds host:port (port 0: an ephemeral port, see port()). Throws InputError naming
