@@ -870,6 +870,9 @@ TEST(ViewerServer, OwnsItsPortOutlastsIdleClientsAndChecksItsFolder) {
         EXPECT_NE(std::string(e.what()).find("is taken"), std::string::npos) << e.what();
     }
     EXPECT_NO_THROW(checkViewerPort("127.0.0.1", 0));
+    // a server bound and never run lets its port go
+    const int let = [&] { return std::make_unique<ViewerServer>(s, "127.0.0.1", 0)->port(); }();
+    EXPECT_NO_THROW(checkViewerPort("127.0.0.1", let)) << let;
     // a port nobody holds passes (an ephemeral port, bound and let go)
     const int free = [] {
         const int fd = socket(AF_INET, SOCK_STREAM, 0);

@@ -110,6 +110,13 @@ class ViewerHttp final : public httplib::Server {
     /// client's SYN to be resent (1 s, 3 s, ...) before the acceptor sees it. Listening again
     /// sets the backlog (Linux).
     void widenBacklog() { ::listen(svr_sock_.load(), SOMAXCONN); }
+    /// httplib's stop() closes the listening socket only while it serves: a server bound and
+    /// never run (a setup that failed after the bind, a test) kept its port until the process
+    /// ended.
+    ~ViewerHttp() override {
+        const socket_t sock = svr_sock_.exchange(INVALID_SOCKET);
+        if (sock != INVALID_SOCKET) ::close(sock);
+    }
 
     ServedRequest serve(int fd, std::string_view request) {
         RequestStream stream(fd, request);
