@@ -1,6 +1,7 @@
 #include "app/bench/TransportBench.h"
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 #include <tuple>
 #include <utility>
@@ -16,10 +17,12 @@
 #include "core/Stopwatch.h"
 #include "io/SceneFile.h"
 #include "objective/TransportLoss.h"
+#include "objective/UnbiasedObjective.h"
 #include "optimize/Optimizer.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
 #include "transport/TransportColumns.h"
+#include "transport/TransportGram.h"
 #include "transport/TransportSink.h"
 #include "transport/TransportSlices.h"
 
@@ -155,6 +158,56 @@ TransportBenchResult runTransportBench(const TransportBenchOptions& a) {
     };
     std::tie(r.adam, r.adamSlices) = medianSecondsInterleaved(
         a.repeats, [&] { adam(csr); }, [&] { adam(blk); });
+
+    // 3. The unbiased objective on the halves: the slices' products against the Gram.
+    {
+        const ProgressTask halves("bench transport: the unbiased objective on T's halves");
+        RenderOptions two = opt;
+        two.sampleSets = 2;
+        TransportMatrix H = precomputeTransport(*scene, two, 1).matrix;
+        H.threads = a.threads;
+        r.halvesNnz = H.nnz();
+        r.halvesBytes = H.bytes();
+        r.halvesRead = medianSeconds(reps, [&] { sink = sink + streamingRead(H); });
+        UnbiasedObjective unb(H.width, H.height, H.objectMask, oo);
+        TransportLoss viaSlices(H, unb, false), viaGram(H, unb, false);
+        viaSlices.setLayout(TransportLayout::Slices);
+        viaGram.setLayout(TransportLayout::Gram);
+        viaSlices.slices();
+        if (viaGram.gramEligible()) {
+            r.gramBuildWork = TransportGram::buildWork(H, unb.pairMask(), unb.usesProducts());
+            r.gramBuild = timeSeconds([&] { viaGram.gram(); });
+            r.gramBytes = viaGram.gram().bytes();
+            std::tie(r.unbiasedSlices, r.unbiasedGram) = medianSecondsInterleaved(
+                reps, [&] { sink = sink + viaSlices.evaluateFused(e, g).total; },
+                [&] { sink = sink + viaGram.evaluateFused(e, g).total; });
+            RenderOptions other = two;
+            other.seed = two.seed + 1;
+            TransportMatrix V = precomputeTransport(*scene, other, 1).matrix;
+            V.threads = a.threads;
+            TransportLoss heldOut(V, unb, false);
+            heldOut.setLayout(TransportLayout::Csr);
+            auto lbfgs = [&](const TransportLoss& loss, std::vector<double>& x) {
+                x = e;
+                OptimizerOptions oopt;
+                oopt.method = OptimizerMethod::Lbfgs;
+                oopt.iterations = 2000;  // optimize's default budget for lbfgs
+                const OptimizerSummary sum = minimize(loss.problem(), x, oopt);
+                throwIfInterrupted();
+                TransportBenchResult::LbfgsRun run;
+                run.seconds = sum.seconds;
+                run.evaluations = sum.evaluations;
+                run.finalLoss = sum.finalLoss;
+                run.heldOutLoss = heldOut.evaluate(x, {}).total;
+                return run;
+            };
+            std::vector<double> xs, xg;
+            r.lbfgsSlices = lbfgs(viaSlices, xs);
+            r.lbfgsGram = lbfgs(viaGram, xg);
+            for (size_t i = 0; i < xs.size(); ++i)
+                r.lbfgsMaxDifference = std::max(r.lbfgsMaxDifference, std::abs(xs[i] - xg[i]));
+        }
+    }
     return r;
 }
 
@@ -173,7 +226,11 @@ std::string TransportBenchResult::csv() const {
           "iteration_two_pass_slices_s,iteration_fused_s,iteration_fused_slices_s,"
           "iteration_fused_ratio,iteration_fused_slices_ratio,"
           "evaluation_slices_vs_nonzeros_read,adam_iterations,adam_s,adam_slices_s,"
-          "transpose_slices_s,transpose_columns_s,columns_bytes\n";
+          "transpose_slices_s,transpose_columns_s,columns_bytes,halves_nnz,halves_bytes,"
+          "halves_read_s,unbiased_slices_s,unbiased_gram_s,gram_build_s,gram_build_work,"
+          "gram_bytes,lbfgs_slices_s,lbfgs_slices_evaluations,lbfgs_slices_loss,"
+          "lbfgs_slices_heldout_loss,lbfgs_gram_s,lbfgs_gram_evaluations,lbfgs_gram_loss,"
+          "lbfgs_gram_heldout_loss,lbfgs_max_abs_difference\n";
     os << options.scene.string() << ',' << width << ',' << height << ',' << options.spp << ','
        << renderer.raysPerSecond() << ',' << precompute.raysPerSecond() << ',' << precomputeRatio()
        << ',' << bare.raysPerSecond() << ',' << precomputeVsBare() << ','
@@ -184,6 +241,11 @@ std::string TransportBenchResult::csv() const {
        << iterationFused / streamingRead << ',' << iterationFusedSlices / streamingRead << ','
        << iterationFusedSlices / nonZerosRead() << ',' << options.iterations << ',' << adam << ','
        << adamSlices << ',' << transposeSlices << ',' << transposeColumns << ',' << columnsBytes
+       << ',' << halvesNnz << ',' << halvesBytes << ',' << halvesRead << ',' << unbiasedSlices
+       << ',' << unbiasedGram << ',' << gramBuild << ',' << gramBuildWork << ',' << gramBytes << ','
+       << lbfgsSlices.seconds << ',' << lbfgsSlices.evaluations << ',' << lbfgsSlices.finalLoss
+       << ',' << lbfgsSlices.heldOutLoss << ',' << lbfgsGram.seconds << ',' << lbfgsGram.evaluations
+       << ',' << lbfgsGram.finalLoss << ',' << lbfgsGram.heldOutLoss << ',' << lbfgsMaxDifference
        << '\n';
     return os.str();
 }
