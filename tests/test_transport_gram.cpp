@@ -75,11 +75,21 @@ TEST(TransportGram, FormsEqualTheHalfImagesSums) {
         const TransportGram g(t, mask, true);
         ASSERT_EQ(g.cols(), t.cols());
         const size_t n = g.cols();
+        // P and Q cover the texels some pixel sees: T's non-empty columns.
+        std::vector<uint16_t> seen;
+        std::vector<bool> used(n, false);
+        for (uint16_t c : t.colIdx) used[c] = true;
+        for (size_t c = 0; c < n; ++c)
+            if (used[c]) seen.push_back(static_cast<uint16_t>(c));
+        ASSERT_TRUE(std::equal(seen.begin(), seen.end(), g.seen().begin(), g.seen().end()));
+        ASSERT_LT(seen.size(), n);  // the test covers unseen texels
+        const size_t m = seen.size();
         const auto P = g.pairMatrix(), Q = g.productMatrix();
-        for (size_t i = 0; i < n; ++i)
+        ASSERT_EQ(P.size(), m * m);
+        for (size_t i = 0; i < m; ++i)
             for (size_t j = 0; j < i; ++j) {
-                ASSERT_EQ(P[i * n + j], P[j * n + i]);
-                ASSERT_EQ(Q[i * n + j], Q[j * n + i]);
+                ASSERT_EQ(P[i * m + j], P[j * m + i]);
+                ASSERT_EQ(Q[i * m + j], Q[j * m + i]);
             }
         for (uint64_t seed : {1u, 2u, 3u}) {
             const std::vector<double> e = randomVec(n, seed);
@@ -114,7 +124,7 @@ TEST(TransportGram, FormsEqualTheHalfImagesSums) {
         t.threads = 1;
         const TransportGram one(t, mask, false, 1);
         EXPECT_FALSE(one.hasProducts());
-        EXPECT_EQ(0, std::memcmp(one.pairMatrix().data(), P.data(), n * n * sizeof(double)));
+        EXPECT_EQ(0, std::memcmp(one.pairMatrix().data(), P.data(), m * m * sizeof(double)));
         EXPECT_THROW(one.productForm(randomVec(n, 1), {}), std::logic_error);
     }
 }

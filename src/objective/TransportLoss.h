@@ -57,11 +57,12 @@ class TransportLoss {
     /// the halves, a gray E, a sparse T, one process.
     bool gramEligible() const;
     /// Whether Auto builds the Gram matrices (when eligible): their build's multiply-adds
-    /// (TransportGram::buildWork) at most kGramWorkPerNonZero per non-zero of T (the sparse
-    /// products make 4 per non-zero an evaluation, at several times the cost of the build's),
-    /// and the matrices at most kGramMaxBytes.
+    /// (TransportGram::buildWork) at most kGramWorkPerNonZero per non-zero of T, and the
+    /// matrices at most kGramMaxBytes. The bundled part at 256², 16 spp needs 113 per non-zero,
+    /// a build of some tens of sparse evaluations (`bench transport`), which L-BFGS's ~180
+    /// evaluations repay; its answer equals the products' to rounding.
     bool gramPays() const;
-    static constexpr double kGramWorkPerNonZero = 96;
+    static constexpr double kGramWorkPerNonZero = 256;
     static constexpr size_t kGramMaxBytes = size_t{256} << 20;
     /// The Gram matrices of T for this loss's objective (built on first use; gramEligible()).
     const TransportGram& gram() const;

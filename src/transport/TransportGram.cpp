@@ -65,41 +65,6 @@ void check(const TransportMatrix& t, std::span<const uint8_t> pairMask) {
                                     std::to_string(t.rows()) + " rows");
 }
 
-/// Symmetric form v = M·E on all rows, and Eᵀ·M·E.
-double form(const std::vector<double>& m, size_t n, std::span<const double> E, std::span<double> ME,
-            int threads) {
-    if (E.size() != n) throw std::invalid_argument("TransportGram: E has the wrong size");
-    if (!ME.empty() && ME.size() != n)
-        throw std::invalid_argument("TransportGram: the product has the wrong size");
-    thread_local std::vector<double> own;
-    double* v = ME.data();
-    if (ME.empty()) {
-        own.resize(n);
-        v = own.data();
-    }
-    forRowBlocks(n, 64, threads, [&](size_t i0, size_t i1) {
-        for (size_t i = i0; i < i1; ++i) v[i] = dot(m.data() + i * n, E.data(), n);
-    });
-    return dot(E.data(), v, n);
-}
-
-double formOn(const std::vector<double>& m, size_t n, std::span<const double> E,
-              std::span<const uint16_t> active, std::span<double> ME) {
-    if (E.size() != n) throw std::invalid_argument("TransportGram: E has the wrong size");
-    if (!ME.empty() && ME.size() != n)
-        throw std::invalid_argument("TransportGram: the product has the wrong size");
-    double g = 0;
-    for (uint16_t i : active) {
-        if (i >= n) throw std::invalid_argument("TransportGram: active texel out of range");
-        const double* row = m.data() + size_t(i) * n;
-        double s = 0;
-        for (uint16_t j : active) s += row[j] * E[j];
-        if (!ME.empty()) ME[i] = s;
-        g += E[i] * s;
-    }
-    return g;
-}
-
 }  // namespace
 
 double TransportGram::buildWork(const TransportMatrix& t, std::span<const uint8_t> pairMask,
@@ -140,6 +105,13 @@ TransportGram::TransportGram(const TransportMatrix& t, std::span<const uint8_t> 
     // Column-major T_a (rows ascending in each column): the rows of P are summed over it.
     std::vector<uint64_t> colPtr(n_ + 1, 0);
     for (uint64_t k = 0; k < t.rowPtr[rows]; ++k) ++colPtr[t.colIdx[k] + 1u];
+    index_.assign(n_, -1);
+    for (size_t c = 0; c < n_; ++c)
+        if (colPtr[c + 1] > 0) {
+            index_[c] = static_cast<int32_t>(seen_.size());
+            seen_.push_back(static_cast<uint16_t>(c));
+        }
+    m_ = seen_.size();
     for (size_t c = 0; c < n_; ++c) colPtr[c + 1] += colPtr[c];
     std::vector<uint32_t> rowOf(t.rowPtr[rows]);
     std::vector<double> a(t.rowPtr[rows]);
@@ -154,16 +126,18 @@ TransportGram::TransportGram(const TransportMatrix& t, std::span<const uint8_t> 
     }
     // acc += s · lum(T_b row q).
     auto addRow = [&](double* acc, size_t q, double s) {
-        for (uint64_t k = t.rowPtr[q]; k < t.rowPtr[q + 1]; ++k) acc[t.colIdx[k]] += s * lum(k, 1);
+        for (uint64_t k = t.rowPtr[q]; k < t.rowPtr[q + 1]; ++k)
+            acc[index_[t.colIdx[k]]] += s * lum(k, 1);
     };
-    p_.assign(n_ * n_, 0.0);
-    if (products) q_.assign(n_ * n_, 0.0);
+    p_.assign(m_ * m_, 0.0);
+    if (products) q_.assign(m_ * m_, 0.0);
     const uint8_t* mask = pairMask.data();
-    forRowBlocks(n_, 8, threads, [&](size_t i0, size_t i1) {
+    forRowBlocks(m_, 8, threads, [&](size_t i0, size_t i1) {
         for (size_t i = i0; i < i1; ++i) {
-            double* pr = p_.data() + i * n_;
-            double* qr = products ? q_.data() + i * n_ : nullptr;
-            for (uint64_t u = colPtr[i]; u < colPtr[i + 1]; ++u) {
+            double* pr = p_.data() + i * m_;
+            double* qr = products ? q_.data() + i * m_ : nullptr;
+            const size_t c = seen_[i];
+            for (uint64_t u = colPtr[c]; u < colPtr[c + 1]; ++u) {
                 const size_t p = rowOf[u];
                 const double ai = a[u];
                 if (qr) addRow(qr, p, ai);
@@ -180,12 +154,12 @@ TransportGram::TransportGram(const TransportMatrix& t, std::span<const uint8_t> 
     });
     // sym(M) in place: the pairs (i, j), (j, i) get their mean, so P is exactly symmetric.
     auto symmetrise = [&](std::vector<double>& m) {
-        forRowBlocks(n_, 16, threads, [&](size_t i0, size_t i1) {
+        forRowBlocks(m_, 16, threads, [&](size_t i0, size_t i1) {
             for (size_t i = i0; i < i1; ++i)
-                for (size_t j = i + 1; j < n_; ++j) {
-                    const double s = 0.5 * (m[i * n_ + j] + m[j * n_ + i]);
-                    m[i * n_ + j] = s;
-                    m[j * n_ + i] = s;
+                for (size_t j = i + 1; j < m_; ++j) {
+                    const double s = 0.5 * (m[i * m_ + j] + m[j * m_ + i]);
+                    m[i * m_ + j] = s;
+                    m[j * m_ + i] = s;
                 }
         });
     };
@@ -193,25 +167,79 @@ TransportGram::TransportGram(const TransportMatrix& t, std::span<const uint8_t> 
     if (products) symmetrise(q_);
 }
 
+double TransportGram::form(const std::vector<double>& m, std::span<const double> E,
+                           std::span<double> ME, int threads) const {
+    if (E.size() != n_) throw std::invalid_argument("TransportGram: E has the wrong size");
+    if (!ME.empty() && ME.size() != n_)
+        throw std::invalid_argument("TransportGram: the product has the wrong size");
+    thread_local std::vector<double> e, v;
+    e.resize(m_);
+    v.resize(m_);
+    for (size_t k = 0; k < m_; ++k) e[k] = E[seen_[k]];
+    const double* x = e.data();
+    double* out = v.data();  // the calling thread's vectors: workers use them through pointers
+    auto rows = [&](size_t i0, size_t i1) {
+        for (size_t i = i0; i < i1; ++i) out[i] = dot(m.data() + i * m_, x, m_);
+    };
+    if (m_ * m_ <= kSerialEntries)
+        rows(0, m_);
+    else
+        forRowBlocks(m_, 64, threads, rows);
+    if (!ME.empty()) {
+        std::fill(ME.begin(), ME.end(), 0.0);
+        for (size_t k = 0; k < m_; ++k) ME[seen_[k]] = out[k];
+    }
+    return dot(x, out, m_);
+}
+
+double TransportGram::formOn(const std::vector<double>& m, std::span<const double> E,
+                             std::span<const uint16_t> active, std::span<double> ME) const {
+    if (E.size() != n_) throw std::invalid_argument("TransportGram: E has the wrong size");
+    if (!ME.empty() && ME.size() != n_)
+        throw std::invalid_argument("TransportGram: the product has the wrong size");
+    thread_local std::vector<uint32_t> at;  // the active seen texels' places in seen_
+    thread_local std::vector<uint16_t> texel;
+    at.clear();
+    texel.clear();
+    for (uint16_t i : active) {
+        if (i >= n_) throw std::invalid_argument("TransportGram: active texel out of range");
+        if (index_[i] < 0) {
+            if (!ME.empty()) ME[i] = 0.0;  // a texel no pixel sees
+            continue;
+        }
+        at.push_back(static_cast<uint32_t>(index_[i]));
+        texel.push_back(i);
+    }
+    double g = 0;
+    for (size_t a = 0; a < at.size(); ++a) {
+        const double* row = m.data() + size_t(at[a]) * m_;
+        double s = 0;
+        for (size_t b = 0; b < at.size(); ++b) s += row[at[b]] * E[texel[b]];
+        if (!ME.empty()) ME[texel[a]] = s;
+        g += E[texel[a]] * s;
+    }
+    return g;
+}
+
 double TransportGram::pairForm(std::span<const double> E, std::span<double> PE, int threads) const {
-    return form(p_, n_, E, PE, threads);
+    return form(p_, E, PE, threads);
 }
 
 double TransportGram::productForm(std::span<const double> E, std::span<double> QE,
                                   int threads) const {
     if (q_.empty()) throw std::logic_error("TransportGram: built without the product form");
-    return form(q_, n_, E, QE, threads);
+    return form(q_, E, QE, threads);
 }
 
 double TransportGram::pairFormOn(std::span<const double> E, std::span<const uint16_t> active,
                                  std::span<double> PE) const {
-    return formOn(p_, n_, E, active, PE);
+    return formOn(p_, E, active, PE);
 }
 
 double TransportGram::productFormOn(std::span<const double> E, std::span<const uint16_t> active,
                                     std::span<double> QE) const {
     if (q_.empty()) throw std::logic_error("TransportGram: built without the product form");
-    return formOn(q_, n_, E, active, QE);
+    return formOn(q_, E, active, QE);
 }
 
 }  // namespace sl

@@ -52,6 +52,24 @@ std::pair<double, double> medianSecondsInterleaved(int repeats, F&& f, G&& g) {
     return {median(a), median(b)};
 }
 
+/// Medians of the process CPU seconds of f and g, each timed over batches of `batch` calls,
+/// alternately; per call.
+template <typename F, typename G>
+std::pair<double, double> medianCpuInterleaved(int repeats, int batch, F&& f, G&& g) {
+    std::vector<double> a, b;
+    auto time = [&](auto&& h) {
+        const CpuStopwatch clock;
+        for (int k = 0; k < batch; ++k) h();
+        return clock.seconds() / batch;
+    };
+    for (int i = 0; i < repeats; ++i) {
+        throwIfInterrupted();
+        a.push_back(time(f));
+        b.push_back(time(g));
+    }
+    return {median(a), median(b)};
+}
+
 }  // namespace
 
 double TransportBenchResult::precomputeRatio() const {
@@ -164,6 +182,7 @@ TransportBenchResult runTransportBench(const TransportBenchOptions& a) {
         const ProgressTask halves("bench transport: the unbiased objective on T's halves");
         RenderOptions two = opt;
         two.sampleSets = 2;
+        two.spp = std::max(2, opt.spp + opt.spp % 2);  // two sets need an even spp
         TransportMatrix H = precomputeTransport(*scene, two, 1).matrix;
         H.threads = a.threads;
         r.halvesNnz = H.nnz();
@@ -176,10 +195,17 @@ TransportBenchResult runTransportBench(const TransportBenchOptions& a) {
         viaSlices.slices();
         if (viaGram.gramEligible()) {
             r.gramBuildWork = TransportGram::buildWork(H, unb.pairMask(), unb.usesProducts());
-            r.gramBuild = timeSeconds([&] { viaGram.gram(); });
+            {
+                const CpuStopwatch cpu;
+                r.gramBuild = timeSeconds([&] { viaGram.gram(); });
+                r.gramBuildCpu = cpu.seconds();
+            }
             r.gramBytes = viaGram.gram().bytes();
             std::tie(r.unbiasedSlices, r.unbiasedGram) = medianSecondsInterleaved(
                 reps, [&] { sink = sink + viaSlices.evaluateFused(e, g).total; },
+                [&] { sink = sink + viaGram.evaluateFused(e, g).total; });
+            std::tie(r.unbiasedSlicesCpu, r.unbiasedGramCpu) = medianCpuInterleaved(
+                reps, 10, [&] { sink = sink + viaSlices.evaluateFused(e, g).total; },
                 [&] { sink = sink + viaGram.evaluateFused(e, g).total; });
             RenderOptions other = two;
             other.seed = two.seed + 1;
@@ -192,10 +218,13 @@ TransportBenchResult runTransportBench(const TransportBenchOptions& a) {
                 OptimizerOptions oopt;
                 oopt.method = OptimizerMethod::Lbfgs;
                 oopt.iterations = 2000;  // optimize's default budget for lbfgs
+                const CpuStopwatch cpu;
                 const OptimizerSummary sum = minimize(loss.problem(), x, oopt);
+                const double cpuSeconds = cpu.seconds();
                 throwIfInterrupted();
                 TransportBenchResult::LbfgsRun run;
                 run.seconds = sum.seconds;
+                run.cpuSeconds = cpuSeconds;
                 run.evaluations = sum.evaluations;
                 run.finalLoss = sum.finalLoss;
                 run.heldOutLoss = heldOut.evaluate(x, {}).total;
@@ -230,7 +259,8 @@ std::string TransportBenchResult::csv() const {
           "halves_read_s,unbiased_slices_s,unbiased_gram_s,gram_build_s,gram_build_work,"
           "gram_bytes,lbfgs_slices_s,lbfgs_slices_evaluations,lbfgs_slices_loss,"
           "lbfgs_slices_heldout_loss,lbfgs_gram_s,lbfgs_gram_evaluations,lbfgs_gram_loss,"
-          "lbfgs_gram_heldout_loss,lbfgs_max_abs_difference\n";
+          "lbfgs_gram_heldout_loss,lbfgs_max_abs_difference,unbiased_slices_cpu_s,"
+          "unbiased_gram_cpu_s,gram_build_cpu_s,lbfgs_slices_cpu_s,lbfgs_gram_cpu_s\n";
     os << options.scene.string() << ',' << width << ',' << height << ',' << options.spp << ','
        << renderer.raysPerSecond() << ',' << precompute.raysPerSecond() << ',' << precomputeRatio()
        << ',' << bare.raysPerSecond() << ',' << precomputeVsBare() << ','
@@ -246,7 +276,8 @@ std::string TransportBenchResult::csv() const {
        << lbfgsSlices.seconds << ',' << lbfgsSlices.evaluations << ',' << lbfgsSlices.finalLoss
        << ',' << lbfgsSlices.heldOutLoss << ',' << lbfgsGram.seconds << ',' << lbfgsGram.evaluations
        << ',' << lbfgsGram.finalLoss << ',' << lbfgsGram.heldOutLoss << ',' << lbfgsMaxDifference
-       << '\n';
+       << ',' << unbiasedSlicesCpu << ',' << unbiasedGramCpu << ',' << gramBuildCpu << ','
+       << lbfgsSlices.cpuSeconds << ',' << lbfgsGram.cpuSeconds << '\n';
     return os.str();
 }
 
