@@ -162,6 +162,33 @@ TEST(Transport, PrecomputeIsBitIdenticalForAnyThreadCount) {
     EXPECT_EQ(ta.values, tb.values);
 }
 
+TEST(Transport, RowsHoldEachTexelOnceInColumnOrderAndHalvesAverageToT) {
+    // The sink sums a texel's paths in a per-thread dense accumulator: every row lists each
+    // texel once, ascending, for gray and RGB T, one plane and halves; and the halves' mean
+    // renders as T does (the same paths, split by sample set).
+    auto s = smallScene();
+    for (int channels : {1, 3})
+        for (int sets : {1, 2}) {
+            RenderOptions o = opts(4);
+            o.sampleSets = sets;
+            const TransportMatrix t = precomputeTransport(*s, o, channels).matrix;
+            ASSERT_EQ(t.storage, TransportStorage::Sparse);
+            for (size_t r = 0; r < t.rows(); ++r)
+                for (uint64_t k = t.rowPtr[r] + 1; k < t.rowPtr[r + 1]; ++k)
+                    ASSERT_LT(t.colIdx[k - 1], t.colIdx[k]) << "row " << r;
+            if (sets == 1) continue;
+            const std::vector<double> e = randomVec(t.cols(), 5);
+            std::vector<double> y(t.rows());
+            t.applyLuminance(e, y);
+            Image img = render(*s, asEnvMap(e, 50, 25, 1), o).image;
+            std::vector<double> ref(t.rows());
+            for (size_t i = 0; i < ref.size(); ++i)
+                ref[i] =
+                    luminance<double>(img.data[3 * i], img.data[3 * i + 1], img.data[3 * i + 2]);
+            EXPECT_LE(maxRelDiff(y, ref), 1e-5) << channels;
+        }
+}
+
 TEST(TransportFile, RoundTripsAndRefusesDamagedOrStaleFiles) {
     test::TempDir dir("tm");
     auto s = smallScene();

@@ -4,7 +4,9 @@
 // T_aᵀ·dL/dY_a + T_bᵀ·dL/dY_b + dL/dE.
 #pragma once
 
+#include <cstdint>
 #include <span>
+#include <stdexcept>
 
 #include "objective/Objective.h"
 
@@ -20,6 +22,22 @@ class HalfImageObjective {
                                std::span<double> dLdYb = {}, std::span<double> dLdE = {}) const = 0;
     virtual int imageWidth() const = 0;
     virtual int imageHeight() const = 0;
+
+    /// Whether the loss depends on the halves only through the two quadratic forms
+    ///   G = Σ_pairs (Ya_q − Ya_p)·(Yb_q − Yb_p)   (right and down neighbours, both in pairMask())
+    ///   R = Σ_p Ya_p·Yb_p                         (every pixel; read only when usesProducts())
+    /// and E: then TransportLoss may evaluate it through T's Gram matrices
+    /// (transport/TransportGram.h) with fromForms. The defaults say it does not.
+    virtual bool quadraticInHalves() const { return false; }
+    virtual std::span<const uint8_t> pairMask() const { return {}; }
+    virtual bool usesProducts() const { return false; }
+    /// The loss from G, R and E, as evaluate() forms it from the halves; dLdG, dLdR receive
+    /// dLoss/dG and dLoss/dR, dLdE (when non-empty) the loss's direct dLoss/dE.
+    virtual LossParts fromForms(double G, double R, std::span<const double> E, double& dLdG,
+                                double& dLdR, std::span<double> dLdE) const {
+        (void)G, (void)R, (void)E, (void)dLdG, (void)dLdR, (void)dLdE;
+        throw std::logic_error("HalfImageObjective::fromForms: the loss is not quadratic");
+    }
 };
 
 }  // namespace sl

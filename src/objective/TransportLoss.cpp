@@ -32,13 +32,20 @@ struct TransportLoss::SlicesCache {
     std::unique_ptr<TransportSlices> slices;
 };
 
+struct TransportLoss::GramCache {
+    std::once_flag once, decided;
+    std::unique_ptr<TransportGram> gram;
+    bool pays = false;
+};
+
 TransportLoss::TransportLoss(const TransportMatrix& t, const ImageObjective& objective, bool rgb)
     : t_(t),
       obj_(&objective),
       dimension_(t.cols() * (rgb ? 3 : 1)),
       y_(t.rows()),
       dLdY_(t.rows()),
-      slices_(std::make_shared<SlicesCache>()) {
+      slices_(std::make_shared<SlicesCache>()),
+      gram_(std::make_shared<GramCache>()) {
     if (rgb && t.channels != 3)
         throw std::invalid_argument("an RGB env map needs an RGB transport matrix (" +
                                     option("rgb") + ")");
@@ -55,7 +62,8 @@ TransportLoss::TransportLoss(const TransportMatrix& t, const HalfImageObjective&
       dLdY_(t.rows()),
       yb_(t.rows()),
       dLdYb_(t.rows()),
-      slices_(std::make_shared<SlicesCache>()) {
+      slices_(std::make_shared<SlicesCache>()),
+      gram_(std::make_shared<GramCache>()) {
     if (rgb && t.channels != 3)
         throw std::invalid_argument("an RGB env map needs an RGB transport matrix (" +
                                     option("rgb") + ")");
@@ -73,6 +81,7 @@ const TransportSlices* TransportLoss::productSlices() const {
         case TransportLayout::Slices:
             return &slices();
         case TransportLayout::Auto:
+        case TransportLayout::Gram:
             if (t_.bytes() > kAutoSlicesMaxBytes) return nullptr;
             return evaluations_++ < kAutoSlicesAfter ? nullptr : &slices();
     }
@@ -110,12 +119,73 @@ void TransportLoss::Products::transposeHalves(std::span<const double> dya,
         t.applyTransposeLuminanceHalves(dya, dyb, g);
 }
 
+bool TransportLoss::gramEligible() const {
+    return unb_ && unb_->quadraticInHalves() && dimension_ == t_.cols() && !distributed() &&
+           t_.storage == TransportStorage::Sparse && t_.planes == 2;
+}
+
+bool TransportLoss::gramPays() const {
+    if (!gramEligible()) return false;
+    std::call_once(gram_->decided, [&] {
+        const double n = static_cast<double>(t_.cols());
+        const double matrices = unb_->usesProducts() ? 2 : 1;
+        gram_->pays = matrices * n * n * static_cast<double>(sizeof(double)) <=
+                          static_cast<double>(kGramMaxBytes) &&
+                      TransportGram::buildWork(t_, unb_->pairMask(), unb_->usesProducts()) <=
+                          kGramWorkPerNonZero * static_cast<double>(t_.nnz());
+    });
+    return gram_->pays;
+}
+
+const TransportGram& TransportLoss::gram() const {
+    if (!gramEligible())
+        throw std::logic_error("TransportLoss::gram: the loss is not quadratic in T's halves");
+    std::call_once(gram_->once, [&] {
+        gram_->gram =
+            std::make_unique<TransportGram>(t_, unb_->pairMask(), unb_->usesProducts(), t_.threads);
+    });
+    return *gram_->gram;
+}
+
+const TransportGram* TransportLoss::evaluationGram() const {
+    if (!gramEligible()) return nullptr;
+    if (layout_ == TransportLayout::Gram) return &gram();
+    if (layout_ == TransportLayout::Auto && evaluations_ >= kAutoSlicesAfter && gramPays())
+        return &gram();
+    return nullptr;
+}
+
+LossParts TransportLoss::evaluateGram(const TransportGram& g, std::span<const double> E,
+                                      std::span<const uint16_t> active, bool onActive,
+                                      std::span<double> grad) const {
+    const bool want = !grad.empty(), products = unb_->usesProducts();
+    pe_.resize(want ? dimension_ : 0);
+    qe_.resize(want && products ? dimension_ : 0);
+    const double G = onActive ? g.pairFormOn(E, active, pe_) : g.pairForm(E, pe_, t_.threads);
+    const double R = !products  ? 0.0
+                     : onActive ? g.productFormOn(E, active, qe_)
+                                : g.productForm(E, qe_, t_.threads);
+    double dLdG = 0, dLdR = 0;
+    const LossParts parts = unb_->fromForms(G, R, E, dLdG, dLdR, grad);
+    if (!want) return parts;
+    // ∇G = 2·P·E, ∇R = 2·Q·E (P, Q symmetric); grad holds dLoss/dE of the regulariser.
+    auto add = [&](size_t i) {
+        grad[i] += 2 * dLdG * pe_[i] + (products ? 2 * dLdR * qe_[i] : 0.0);
+    };
+    if (onActive)
+        for (uint16_t c : active) add(c);
+    else
+        for (size_t i = 0; i < dimension_; ++i) add(i);
+    return parts;
+}
+
 const TransportSlices& TransportLoss::slices() const {
     std::call_once(slices_->once, [&] { slices_->slices = std::make_unique<TransportSlices>(t_); });
     return *slices_->slices;
 }
 
 LossParts TransportLoss::evaluateUnbiased(std::span<const double> E, std::span<double> grad) const {
+    if (const TransportGram* g = evaluationGram()) return evaluateGram(*g, E, {}, false, grad);
     const Products product{t_, productSlices()};
     product.luminanceHalves(E, y_, yb_);
     shard_.gatherImage(y_, t_.width);
@@ -278,6 +348,18 @@ LossParts TransportLoss::evaluateOnColumns(const TransportColumns& columns,
         throw std::invalid_argument("TransportLoss::evaluateOnColumns: columns of another T");
     if (!grad.empty() && grad.size() != dimension_)
         throw std::invalid_argument("TransportLoss: gradient has the wrong size");
+    if (unb_) {
+        // Auto: from the first evaluation on when the build pays (a lamp fit evaluates many
+        // short-lived copies of this loss, which share one Gram; counting each copy's
+        // evaluations would leave most of them on the columns).
+        const bool useGram = gramEligible() && (layout_ == TransportLayout::Gram ||
+                                                (layout_ == TransportLayout::Auto && gramPays()));
+        if (useGram) {
+            const TransportGram& g = gram();
+            if (!grad.empty()) std::fill(grad.begin(), grad.end(), 0.0);
+            return evaluateGram(g, E, active, true, grad);
+        }
+    }
     std::vector<double> dLdE(grad.empty() ? 0 : dimension_);
     LossParts parts;
     if (unb_) {

@@ -12,6 +12,7 @@
 #include "objective/HalfImageObjective.h"
 #include "objective/Objective.h"
 #include "transport/TransportColumns.h"
+#include "transport/TransportGram.h"
 #include "transport/TransportMatrix.h"
 #include "transport/TransportSlices.h"
 
@@ -52,11 +53,26 @@ class TransportLoss {
     TransportLayout layout() const { return layout_; }
     /// The slices layout of T (built on first use).
     const TransportSlices& slices() const;
+    /// Whether this loss can be evaluated through T's Gram matrices: an objective quadratic in
+    /// the halves, a gray E, a sparse T, one process.
+    bool gramEligible() const;
+    /// Whether Auto builds the Gram matrices (when eligible): their build's multiply-adds
+    /// (TransportGram::buildWork) at most kGramWorkPerNonZero per non-zero of T, and the
+    /// matrices at most kGramMaxBytes. The bundled part at 256², 16 spp needs 113 per non-zero,
+    /// a build of some tens of sparse evaluations (`bench transport`), which L-BFGS's ~180
+    /// evaluations repay; its answer equals the products' to rounding.
+    bool gramPays() const;
+    static constexpr double kGramWorkPerNonZero = 256;
+    static constexpr size_t kGramMaxBytes = size_t{256} << 20;
+    /// The Gram matrices of T for this loss's objective (built on first use; gramEligible()).
+    const TransportGram& gram() const;
 
     /// The same loss for an E that is zero outside the texels `active` (a gray E), through
     /// `columns` (a TransportColumns of this loss's matrix): the products read only the active
     /// columns. grad (when non-empty) is exact on the active texels; on the others it holds
-    /// only the objective's direct dLoss/dE (the regulariser), not Tᵀ·dLoss/dY.
+    /// only the objective's direct dLoss/dE (the regulariser), not Tᵀ·dLoss/dY. An objective
+    /// quadratic in the halves reads the Gram's active rows and columns instead (layout Gram,
+    /// or Auto when gramPays(), from the first evaluation).
     LossParts evaluateOnColumns(const TransportColumns& columns, std::span<const double> E,
                                 std::span<const uint16_t> active, std::span<double> grad) const;
 
@@ -101,6 +117,15 @@ class TransportLoss {
     };
     struct SlicesCache;
     std::shared_ptr<SlicesCache> slices_;
+    struct GramCache;
+    std::shared_ptr<GramCache> gram_;
+    mutable std::vector<double> pe_, qe_;  // P·E, Q·E of a Gram evaluation
+    /// The Gram matrices an evaluation reads, or nullptr for the products (for Auto: from the
+    /// kAutoSlicesAfter-th evaluation on, counted by productSlices()).
+    const TransportGram* evaluationGram() const;
+    LossParts evaluateGram(const TransportGram& g, std::span<const double> E,
+                           std::span<const uint16_t> active, bool onActive,
+                           std::span<double> grad) const;
     RowShard shard_;
 
     LossParts evaluateUnbiased(std::span<const double> E, std::span<double> grad) const;

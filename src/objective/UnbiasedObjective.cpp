@@ -29,28 +29,14 @@ LossParts UnbiasedObjective::evaluate(std::span<const double> Ya, std::span<cons
     if ((!dLdYa.empty() && dLdYa.size() != n) || (!dLdYb.empty() && dLdYb.size() != n) ||
         (!dLdE.empty() && dLdE.size() != E.size()))
         throw std::invalid_argument("UnbiasedObjective: gradient spans have the wrong size");
-    const ObjectiveOptions& opt = options();
-    const double S = maskSize();
-    if (opt.reg == RegTarget::EnvMap && E.empty())
-        throw std::invalid_argument(
-            "UnbiasedObjective: E is empty but the regulariser is mean(E^2)");
     detail::checkFinite(Ya, "Ya", "evaluate");
     detail::checkFinite(Yb, "Yb", "evaluate");
-    detail::checkFinite(E, "E", "evaluate");
-
-    LossParts r;
-    r.S = S;
-    r.G = energy(Ya, Yb);
-    // Above the floor: sqrt(S/G). Below it (G_u <= 0 is possible): the tangent line at the
-    // floor, so the loss stays finite, C¹ and strictly decreasing in G_u, and its gradient
-    // still points toward more gradient energy (see the header).
-    const double floor = base_.gFloor();
-    r.clamped = r.G < floor;
-    const double G = r.clamped ? floor : r.G;
-    const double dLdG = -0.5 * std::sqrt(S) / (G * std::sqrt(G));
-    r.lGrad = std::sqrt(S / G) + (r.clamped ? dLdG * (r.G - floor) : 0.0);
-    const bool want = !dLdYa.empty() && !dLdYb.empty();
-    if (want) {
+    double R = 0;
+    if (usesProducts())
+        for (size_t i = 0; i < n; ++i) R += Ya[i] * Yb[i];
+    double dLdG = 0, dLdR = 0;
+    const LossParts r = fromForms(energy(Ya, Yb), R, E, dLdG, dLdR, dLdE);
+    if (!dLdYa.empty() && !dLdYb.empty()) {
         std::fill(dLdYa.begin(), dLdYa.end(), 0.0);
         std::fill(dLdYb.begin(), dLdYb.end(), 0.0);
         detail::forEachMaskedPair(width(), height(), mask().data(), [&](size_t p, size_t q) {
@@ -60,21 +46,45 @@ LossParts UnbiasedObjective::evaluate(std::span<const double> Ya, std::span<cons
             dLdYb[q] += dLdG * da;
             dLdYb[p] -= dLdG * da;
         });
+        if (usesProducts())
+            for (size_t i = 0; i < n; ++i) {
+                dLdYa[i] += dLdR * Yb[i];
+                dLdYb[i] += dLdR * Ya[i];
+            }
     }
+    return r;
+}
+
+LossParts UnbiasedObjective::fromForms(double G, double R, std::span<const double> E, double& dLdG,
+                                       double& dLdR, std::span<double> dLdE) const {
+    const ObjectiveOptions& opt = options();
+    const double S = maskSize();
+    if (opt.reg == RegTarget::EnvMap && E.empty())
+        throw std::invalid_argument(
+            "UnbiasedObjective: E is empty but the regulariser is mean(E^2)");
+    if (!dLdE.empty() && dLdE.size() != E.size())
+        throw std::invalid_argument("UnbiasedObjective: gradient spans have the wrong size");
+    detail::checkFinite(E, "E", "evaluate");
+
+    LossParts r;
+    r.S = S;
+    r.G = G;
+    // Above the floor: sqrt(S/G). Below it (G_u <= 0 is possible): the tangent line at the
+    // floor, so the loss stays finite, C¹ and strictly decreasing in G_u, and its gradient
+    // still points toward more gradient energy (see the header).
+    const double floor = base_.gFloor();
+    r.clamped = r.G < floor;
+    const double Gc = r.clamped ? floor : r.G;
+    dLdG = -0.5 * std::sqrt(S) / (Gc * std::sqrt(Gc));
+    r.lGrad = std::sqrt(S / Gc) + (r.clamped ? dLdG * (r.G - floor) : 0.0);
     const double lambda = opt.lambda;
+    dLdR = 0;
     if (opt.reg == RegTarget::EnvMap) {
         r.lReg = base_.envMapRegulariser(E, dLdE);
     } else {
-        double s = 0;
-        for (size_t i = 0; i < n; ++i) s += Ya[i] * Yb[i];
-        const double N = static_cast<double>(n);
-        r.lReg = s / N;
-        if (want) {
-            for (size_t i = 0; i < n; ++i) {
-                dLdYa[i] += lambda * Yb[i] / N;
-                dLdYb[i] += lambda * Ya[i] / N;
-            }
-        }
+        const double N = static_cast<double>(width()) * static_cast<double>(height());
+        r.lReg = R / N;
+        dLdR = lambda / N;
         std::fill(dLdE.begin(), dLdE.end(), 0.0);
     }
     r.total = r.lGrad + lambda * r.lReg;

@@ -44,6 +44,13 @@ class UnbiasedObjective final : public HalfImageObjective {
                        std::span<double> dLdYb = {}, std::span<double> dLdE = {}) const override;
     int imageWidth() const override { return width(); }
     int imageHeight() const override { return height(); }
+    /// The loss is sqrt(S/G_u) (or its tangent) + λ·(mean(E²) or R/(W·H)): quadratic in the
+    /// halves, so TransportLoss may evaluate it through T's Gram matrices.
+    bool quadraticInHalves() const override { return true; }
+    std::span<const uint8_t> pairMask() const override { return mask(); }
+    bool usesProducts() const override { return options().reg == RegTarget::Image; }
+    LossParts fromForms(double G, double R, std::span<const double> E, double& dLdG, double& dLdR,
+                        std::span<double> dLdE) const override;
 
     /// G_u alone (for tests and scoring).
     double energy(std::span<const double> Ya, std::span<const double> Yb) const;

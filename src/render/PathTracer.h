@@ -61,9 +61,11 @@ struct Scene;
 
 /// Revision of what the tracer computes for given inputs. Transport-matrix fingerprints include
 /// it, so cached matrices from an older tracer are recomputed. Bump it whenever the same scene,
-/// spp and seed would trace differently (2: watertight intersection).
-/// Sampling is recorded beside it in the fingerprint: `bsdf` traces as revision 2 did.
-inline constexpr int kTracerRevision = 2;
+/// spp and seed would trace differently (2: watertight intersection; 3: the transport sink sums
+/// a texel's paths in path order, which changes T in the last bit of some floats).
+/// Sampling is recorded beside it in the fingerprint: `bsdf` traces as revision 2 did (but for
+/// revision 3's order of sums).
+inline constexpr int kTracerRevision = 3;
 
 /// The largest per-pixel sample multiplier (RenderOptions::sppScale).
 inline constexpr int kMaxSppScale = 64;

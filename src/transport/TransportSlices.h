@@ -39,8 +39,11 @@ namespace sl {
 /// about as much as 15–80 evaluations save, so a loss evaluated a few times never builds them).
 /// Auto keeps CSR for a T of more than kAutoSlicesMaxBytes: the copy adds about 0.9× T's
 /// memory, and a big image's T must fit beside it (4096² at 64 spp with halves: T 2.5 GB, peak
-/// 7.0 GB on CSR; the copy would take it past 8 GB).
-enum class TransportLayout { Csr, Slices, Auto };
+/// 7.0 GB on CSR; the copy would take it past 8 GB). Gram: a loss quadratic in T's halves
+/// (objective/HalfImageObjective.h) is evaluated through T's Gram matrices
+/// (transport/TransportGram.h), any other as Auto; Auto does the same from its
+/// kAutoSlicesAfter-th evaluation on when the build pays (TransportLoss::gramPays).
+enum class TransportLayout { Csr, Slices, Auto, Gram };
 inline constexpr int kAutoSlicesAfter = 16;
 inline constexpr size_t kAutoSlicesMaxBytes = size_t{1} << 30;
 

@@ -1,6 +1,7 @@
 #include "app/bench/TransportBench.h"
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 #include <tuple>
 #include <utility>
@@ -16,10 +17,12 @@
 #include "core/Stopwatch.h"
 #include "io/SceneFile.h"
 #include "objective/TransportLoss.h"
+#include "objective/UnbiasedObjective.h"
 #include "optimize/Optimizer.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
 #include "transport/TransportColumns.h"
+#include "transport/TransportGram.h"
 #include "transport/TransportSink.h"
 #include "transport/TransportSlices.h"
 
@@ -45,6 +48,24 @@ std::pair<double, double> medianSecondsInterleaved(int repeats, F&& f, G&& g) {
         throwIfInterrupted();
         a.push_back(timeSeconds(f));
         b.push_back(timeSeconds(g));
+    }
+    return {median(a), median(b)};
+}
+
+/// Medians of the process CPU seconds of f and g, each timed over batches of `batch` calls,
+/// alternately; per call.
+template <typename F, typename G>
+std::pair<double, double> medianCpuInterleaved(int repeats, int batch, F&& f, G&& g) {
+    std::vector<double> a, b;
+    auto time = [&](auto&& h) {
+        const CpuStopwatch clock;
+        for (int k = 0; k < batch; ++k) h();
+        return clock.seconds() / batch;
+    };
+    for (int i = 0; i < repeats; ++i) {
+        throwIfInterrupted();
+        a.push_back(time(f));
+        b.push_back(time(g));
     }
     return {median(a), median(b)};
 }
@@ -155,6 +176,67 @@ TransportBenchResult runTransportBench(const TransportBenchOptions& a) {
     };
     std::tie(r.adam, r.adamSlices) = medianSecondsInterleaved(
         a.repeats, [&] { adam(csr); }, [&] { adam(blk); });
+
+    // 3. The unbiased objective on the halves: the slices' products against the Gram.
+    {
+        const ProgressTask halves("bench transport: the unbiased objective on T's halves");
+        RenderOptions two = opt;
+        two.sampleSets = 2;
+        two.spp = std::max(2, opt.spp + opt.spp % 2);  // two sets need an even spp
+        TransportMatrix H = precomputeTransport(*scene, two, 1).matrix;
+        H.threads = a.threads;
+        r.halvesNnz = H.nnz();
+        r.halvesBytes = H.bytes();
+        r.halvesRead = medianSeconds(reps, [&] { sink = sink + streamingRead(H); });
+        UnbiasedObjective unb(H.width, H.height, H.objectMask, oo);
+        TransportLoss viaSlices(H, unb, false), viaGram(H, unb, false);
+        viaSlices.setLayout(TransportLayout::Slices);
+        viaGram.setLayout(TransportLayout::Gram);
+        viaSlices.slices();
+        if (viaGram.gramEligible()) {
+            r.gramBuildWork = TransportGram::buildWork(H, unb.pairMask(), unb.usesProducts());
+            {
+                const CpuStopwatch cpu;
+                r.gramBuild = timeSeconds([&] { viaGram.gram(); });
+                r.gramBuildCpu = cpu.seconds();
+            }
+            r.gramBytes = viaGram.gram().bytes();
+            std::tie(r.unbiasedSlices, r.unbiasedGram) = medianSecondsInterleaved(
+                reps, [&] { sink = sink + viaSlices.evaluateFused(e, g).total; },
+                [&] { sink = sink + viaGram.evaluateFused(e, g).total; });
+            std::tie(r.unbiasedSlicesCpu, r.unbiasedGramCpu) = medianCpuInterleaved(
+                reps, 10, [&] { sink = sink + viaSlices.evaluateFused(e, g).total; },
+                [&] { sink = sink + viaGram.evaluateFused(e, g).total; });
+            RenderOptions other = two;
+            other.seed = two.seed + 1;
+            TransportMatrix V = precomputeTransport(*scene, other, 1).matrix;
+            V.threads = a.threads;
+            TransportLoss heldOut(V, unb, false);
+            heldOut.setLayout(TransportLayout::Csr);
+            auto lbfgs = [&](const TransportLoss& loss, std::vector<double>& x) {
+                x = e;
+                OptimizerOptions oopt;
+                oopt.method = OptimizerMethod::Lbfgs;
+                oopt.iterations = 2000;  // optimize's default budget for lbfgs
+                const CpuStopwatch cpu;
+                const OptimizerSummary sum = minimize(loss.problem(), x, oopt);
+                const double cpuSeconds = cpu.seconds();
+                throwIfInterrupted();
+                TransportBenchResult::LbfgsRun run;
+                run.seconds = sum.seconds;
+                run.cpuSeconds = cpuSeconds;
+                run.evaluations = sum.evaluations;
+                run.finalLoss = sum.finalLoss;
+                run.heldOutLoss = heldOut.evaluate(x, {}).total;
+                return run;
+            };
+            std::vector<double> xs, xg;
+            r.lbfgsSlices = lbfgs(viaSlices, xs);
+            r.lbfgsGram = lbfgs(viaGram, xg);
+            for (size_t i = 0; i < xs.size(); ++i)
+                r.lbfgsMaxDifference = std::max(r.lbfgsMaxDifference, std::abs(xs[i] - xg[i]));
+        }
+    }
     return r;
 }
 
@@ -173,7 +255,12 @@ std::string TransportBenchResult::csv() const {
           "iteration_two_pass_slices_s,iteration_fused_s,iteration_fused_slices_s,"
           "iteration_fused_ratio,iteration_fused_slices_ratio,"
           "evaluation_slices_vs_nonzeros_read,adam_iterations,adam_s,adam_slices_s,"
-          "transpose_slices_s,transpose_columns_s,columns_bytes\n";
+          "transpose_slices_s,transpose_columns_s,columns_bytes,halves_nnz,halves_bytes,"
+          "halves_read_s,unbiased_slices_s,unbiased_gram_s,gram_build_s,gram_build_work,"
+          "gram_bytes,lbfgs_slices_s,lbfgs_slices_evaluations,lbfgs_slices_loss,"
+          "lbfgs_slices_heldout_loss,lbfgs_gram_s,lbfgs_gram_evaluations,lbfgs_gram_loss,"
+          "lbfgs_gram_heldout_loss,lbfgs_max_abs_difference,unbiased_slices_cpu_s,"
+          "unbiased_gram_cpu_s,gram_build_cpu_s,lbfgs_slices_cpu_s,lbfgs_gram_cpu_s\n";
     os << options.scene.string() << ',' << width << ',' << height << ',' << options.spp << ','
        << renderer.raysPerSecond() << ',' << precompute.raysPerSecond() << ',' << precomputeRatio()
        << ',' << bare.raysPerSecond() << ',' << precomputeVsBare() << ','
@@ -184,7 +271,13 @@ std::string TransportBenchResult::csv() const {
        << iterationFused / streamingRead << ',' << iterationFusedSlices / streamingRead << ','
        << iterationFusedSlices / nonZerosRead() << ',' << options.iterations << ',' << adam << ','
        << adamSlices << ',' << transposeSlices << ',' << transposeColumns << ',' << columnsBytes
-       << '\n';
+       << ',' << halvesNnz << ',' << halvesBytes << ',' << halvesRead << ',' << unbiasedSlices
+       << ',' << unbiasedGram << ',' << gramBuild << ',' << gramBuildWork << ',' << gramBytes << ','
+       << lbfgsSlices.seconds << ',' << lbfgsSlices.evaluations << ',' << lbfgsSlices.finalLoss
+       << ',' << lbfgsSlices.heldOutLoss << ',' << lbfgsGram.seconds << ',' << lbfgsGram.evaluations
+       << ',' << lbfgsGram.finalLoss << ',' << lbfgsGram.heldOutLoss << ',' << lbfgsMaxDifference
+       << ',' << unbiasedSlicesCpu << ',' << unbiasedGramCpu << ',' << gramBuildCpu << ','
+       << lbfgsSlices.cpuSeconds << ',' << lbfgsGram.cpuSeconds << '\n';
     return os.str();
 }
 

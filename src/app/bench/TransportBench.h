@@ -3,7 +3,9 @@
 // the same camera rays (all three interleaved), T's size, and what an
 // iteration on T costs against one streaming read of T's bytes (products, one loss-and-gradient
 // evaluation in two passes and fused, a whole Adam run), each on T's CSR arrays and on the
-// slices layout (transport/TransportSlices.h) side by side.
+// slices layout (transport/TransportSlices.h) side by side; and the noise-unbiased objective's
+// evaluation on T's halves through the slices and through T's Gram matrices
+// (transport/TransportGram.h).
 #pragma once
 
 #include <cstddef>
@@ -50,6 +52,27 @@ struct TransportBenchResult {
     /// transposeAll), interleaved; and the columns' bytes.
     double transposeSlices = 0, transposeColumns = 0;
     size_t columnsBytes = 0;
+    /// The noise-unbiased objective on T's halves (optimize's default; T traced once more
+    /// with two sample sets): one loss-and-gradient evaluation through the slices' products
+    /// and through T's Gram matrices (transport/TransportGram.h), interleaved; the Gram's
+    /// build (seconds, multiply-adds) and bytes; the halves' non-zeros and one streaming read
+    /// of their bytes.
+    size_t halvesNnz = 0, halvesBytes = 0, gramBytes = 0;
+    double halvesRead = 0, gramBuild = 0, gramBuildWork = 0;
+    double unbiasedSlices = 0, unbiasedGram = 0;
+    /// The same in process CPU seconds (medians of batches of 10, interleaved): on a machine
+    /// shared with other work a sub-millisecond step's wall time is mostly the scheduler's.
+    double unbiasedSlicesCpu = 0, unbiasedGramCpu = 0, gramBuildCpu = 0;
+    /// L-BFGS (optimize's default method, its default budget) from the same start through
+    /// each: seconds, evaluations, final loss on T, and the loss of its E* on an independent
+    /// estimate of T's halves (another seed: a held-out check that the answers are as good);
+    /// the largest difference between the two E*.
+    struct LbfgsRun {
+        double seconds = 0, cpuSeconds = 0, finalLoss = 0, heldOutLoss = 0;
+        int evaluations = 0;
+    };
+    LbfgsRun lbfgsSlices, lbfgsGram;
+    double lbfgsMaxDifference = 0;
 
     /// The time one streaming read of T's non-zeros alone takes, nnz·(2 + 4·stride) bytes at
     /// the measured streaming read's bandwidth (the row pointers left out).

@@ -1,0 +1,245 @@
+#include "transport/TransportGram.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <stdexcept>
+#include <string>
+
+#include "core/Color.h"
+
+namespace sl {
+
+namespace {
+
+// The luminance weights of core/Color.h (its one rule), each exact: w·1 + 0 + 0.
+constexpr double kLum[3] = {luminance(1.0, 0.0, 0.0), luminance(0.0, 1.0, 0.0),
+                            luminance(0.0, 0.0, 1.0)};
+
+/// f(i0, i1) over blocks of rows, in an arena of `threads` (0: all).
+template <typename F>
+void forRowBlocks(size_t n, size_t grain, int threads, F&& f) {
+    auto body = [&] {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, grain),
+                          [&](const tbb::blocked_range<size_t>& r) { f(r.begin(), r.end()); });
+    };
+    if (threads > 0) {
+        tbb::task_arena arena(threads);
+        arena.execute(body);
+    } else {
+        body();
+    }
+}
+
+/// Σ_k a[k]·b[k] over n values in four interleaved sums (fixed order).
+inline double dot(const double* a, const double* b, size_t n) {
+    double s[4] = {0, 0, 0, 0};
+    size_t k = 0;
+    for (; k + 4 <= n; k += 4)
+        for (int l = 0; l < 4; ++l) s[l] += a[k + l] * b[k + l];
+    for (int l = 0; k < n; ++k, ++l) s[l] += a[k] * b[k];
+    return (s[0] + s[2]) + (s[1] + s[3]);
+}
+
+/// The masked right/down/left/up neighbours of pixel p (itself masked): f(q) for each.
+template <typename F>
+inline void forNeighbours(const uint8_t* mask, size_t w, size_t h, size_t p, F&& f) {
+    const size_t x = p % w, y = p / w;
+    if (x + 1 < w && mask[p + 1]) f(p + 1);
+    if (y + 1 < h && mask[p + w]) f(p + w);
+    if (x > 0 && mask[p - 1]) f(p - 1);
+    if (y > 0 && mask[p - w]) f(p - w);
+}
+
+void check(const TransportMatrix& t, std::span<const uint8_t> pairMask) {
+    if (t.storage != TransportStorage::Sparse)
+        throw std::invalid_argument("TransportGram: needs a sparse T");
+    if (t.planes != 2) throw std::invalid_argument("TransportGram: needs the two halves of T");
+    if (t.channels != 1 && t.channels != 3)
+        throw std::invalid_argument("TransportGram: T has " + std::to_string(t.channels) +
+                                    " channels");
+    if (pairMask.size() != t.rows())
+        throw std::invalid_argument("TransportGram: the pair mask has " +
+                                    std::to_string(pairMask.size()) + " pixels, T " +
+                                    std::to_string(t.rows()) + " rows");
+}
+
+}  // namespace
+
+double TransportGram::buildWork(const TransportMatrix& t, std::span<const uint8_t> pairMask,
+                                bool products) {
+    check(t, pairMask);
+    const size_t w = static_cast<size_t>(t.width), h = static_cast<size_t>(t.height);
+    auto k = [&](size_t p) { return static_cast<double>(t.rowPtr[p + 1] - t.rowPtr[p]); };
+    double work = 0;
+    for (size_t p = 0; p < t.rows(); ++p) {
+        const double kp = k(p);
+        if (kp == 0) continue;
+        if (products) work += kp * kp;
+        if (!pairMask[p]) continue;
+        double around = 0;
+        int deg = 0;
+        forNeighbours(pairMask.data(), w, h, p, [&](size_t q) {
+            around += k(q);
+            ++deg;
+        });
+        if (deg > 0) work += kp * (around + kp);
+    }
+    return work;
+}
+
+TransportGram::TransportGram(const TransportMatrix& t, std::span<const uint8_t> pairMask,
+                             bool products, int threads)
+    : n_(t.cols()) {
+    check(t, pairMask);
+    const size_t w = static_cast<size_t>(t.width), h = static_cast<size_t>(t.height);
+    const size_t rows = t.rows(), st = static_cast<size_t>(t.stride());
+    const int ch = t.channels;
+    // The luminance of an entry's plane (gray E), in double from T's floats.
+    auto lum = [&](uint64_t k, int plane) {
+        const float* v = t.values.data() + k * st + static_cast<size_t>(plane * ch);
+        if (ch == 1) return double(v[0]);
+        return kLum[0] * v[0] + kLum[1] * v[1] + kLum[2] * v[2];
+    };
+    // Column-major T_a (rows ascending in each column): the rows of P are summed over it.
+    std::vector<uint64_t> colPtr(n_ + 1, 0);
+    for (uint64_t k = 0; k < t.rowPtr[rows]; ++k) ++colPtr[t.colIdx[k] + 1u];
+    index_.assign(n_, -1);
+    for (size_t c = 0; c < n_; ++c)
+        if (colPtr[c + 1] > 0) {
+            index_[c] = static_cast<int32_t>(seen_.size());
+            seen_.push_back(static_cast<uint16_t>(c));
+        }
+    m_ = seen_.size();
+    for (size_t c = 0; c < n_; ++c) colPtr[c + 1] += colPtr[c];
+    std::vector<uint32_t> rowOf(t.rowPtr[rows]);
+    std::vector<double> a(t.rowPtr[rows]);
+    {
+        std::vector<uint64_t> next(colPtr.begin(), colPtr.end() - 1);
+        for (size_t p = 0; p < rows; ++p)
+            for (uint64_t k = t.rowPtr[p]; k < t.rowPtr[p + 1]; ++k) {
+                const uint64_t u = next[t.colIdx[k]]++;
+                rowOf[u] = static_cast<uint32_t>(p);
+                a[u] = lum(k, 0);
+            }
+    }
+    // acc += s · lum(T_b row q).
+    auto addRow = [&](double* acc, size_t q, double s) {
+        for (uint64_t k = t.rowPtr[q]; k < t.rowPtr[q + 1]; ++k)
+            acc[index_[t.colIdx[k]]] += s * lum(k, 1);
+    };
+    p_.assign(m_ * m_, 0.0);
+    if (products) q_.assign(m_ * m_, 0.0);
+    const uint8_t* mask = pairMask.data();
+    forRowBlocks(m_, 8, threads, [&](size_t i0, size_t i1) {
+        for (size_t i = i0; i < i1; ++i) {
+            double* pr = p_.data() + i * m_;
+            double* qr = products ? q_.data() + i * m_ : nullptr;
+            const size_t c = seen_[i];
+            for (uint64_t u = colPtr[c]; u < colPtr[c + 1]; ++u) {
+                const size_t p = rowOf[u];
+                const double ai = a[u];
+                if (qr) addRow(qr, p, ai);
+                if (!mask[p]) continue;
+                // Row p of Lap·T_b: deg(p)·T_b[p] − Σ_{q ~ p} T_b[q].
+                int deg = 0;
+                forNeighbours(mask, w, h, p, [&](size_t q) {
+                    addRow(pr, q, -ai);
+                    ++deg;
+                });
+                if (deg > 0) addRow(pr, p, deg * ai);
+            }
+        }
+    });
+    // sym(M) in place: the pairs (i, j), (j, i) get their mean, so P is exactly symmetric.
+    auto symmetrise = [&](std::vector<double>& m) {
+        forRowBlocks(m_, 16, threads, [&](size_t i0, size_t i1) {
+            for (size_t i = i0; i < i1; ++i)
+                for (size_t j = i + 1; j < m_; ++j) {
+                    const double s = 0.5 * (m[i * m_ + j] + m[j * m_ + i]);
+                    m[i * m_ + j] = s;
+                    m[j * m_ + i] = s;
+                }
+        });
+    };
+    symmetrise(p_);
+    if (products) symmetrise(q_);
+}
+
+double TransportGram::form(const std::vector<double>& m, std::span<const double> E,
+                           std::span<double> ME, int threads) const {
+    if (E.size() != n_) throw std::invalid_argument("TransportGram: E has the wrong size");
+    if (!ME.empty() && ME.size() != n_)
+        throw std::invalid_argument("TransportGram: the product has the wrong size");
+    thread_local std::vector<double> e, v;
+    e.resize(m_);
+    v.resize(m_);
+    for (size_t k = 0; k < m_; ++k) e[k] = E[seen_[k]];
+    const double* x = e.data();
+    double* out = v.data();  // the calling thread's vectors: workers use them through pointers
+    auto rows = [&](size_t i0, size_t i1) {
+        for (size_t i = i0; i < i1; ++i) out[i] = dot(m.data() + i * m_, x, m_);
+    };
+    if (m_ * m_ <= kSerialEntries)
+        rows(0, m_);
+    else
+        forRowBlocks(m_, 64, threads, rows);
+    if (!ME.empty()) {
+        std::fill(ME.begin(), ME.end(), 0.0);
+        for (size_t k = 0; k < m_; ++k) ME[seen_[k]] = out[k];
+    }
+    return dot(x, out, m_);
+}
+
+double TransportGram::formOn(const std::vector<double>& m, std::span<const double> E,
+                             std::span<const uint16_t> active, std::span<double> ME) const {
+    if (E.size() != n_) throw std::invalid_argument("TransportGram: E has the wrong size");
+    if (!ME.empty() && ME.size() != n_)
+        throw std::invalid_argument("TransportGram: the product has the wrong size");
+    thread_local std::vector<uint32_t> at;  // the active seen texels' places in seen_
+    thread_local std::vector<uint16_t> texel;
+    at.clear();
+    texel.clear();
+    for (uint16_t i : active) {
+        if (i >= n_) throw std::invalid_argument("TransportGram: active texel out of range");
+        if (index_[i] < 0) {
+            if (!ME.empty()) ME[i] = 0.0;  // a texel no pixel sees
+            continue;
+        }
+        at.push_back(static_cast<uint32_t>(index_[i]));
+        texel.push_back(i);
+    }
+    double g = 0;
+    for (size_t a = 0; a < at.size(); ++a) {
+        const double* row = m.data() + size_t(at[a]) * m_;
+        double s = 0;
+        for (size_t b = 0; b < at.size(); ++b) s += row[at[b]] * E[texel[b]];
+        if (!ME.empty()) ME[texel[a]] = s;
+        g += E[texel[a]] * s;
+    }
+    return g;
+}
+
+double TransportGram::pairForm(std::span<const double> E, std::span<double> PE, int threads) const {
+    return form(p_, E, PE, threads);
+}
+
+double TransportGram::productForm(std::span<const double> E, std::span<double> QE,
+                                  int threads) const {
+    if (q_.empty()) throw std::logic_error("TransportGram: built without the product form");
+    return form(q_, E, QE, threads);
+}
+
+double TransportGram::pairFormOn(std::span<const double> E, std::span<const uint16_t> active,
+                                 std::span<double> PE) const {
+    return formOn(p_, E, active, PE);
+}
+
+double TransportGram::productFormOn(std::span<const double> E, std::span<const uint16_t> active,
+                                    std::span<double> QE) const {
+    if (q_.empty()) throw std::logic_error("TransportGram: built without the product form");
+    return formOn(q_, E, active, QE);
+}
+
+}  // namespace sl

@@ -1,0 +1,247 @@
+// TransportGram (transport/TransportGram.h): the quadratic forms of T's halves equal the
+// unbiased objective's G_u and Σ Ya·Yb computed from the half images, the matrices are exactly
+// symmetric and do not depend on the number of threads, the forms over a set of active texels
+// equal the whole forms of an E that is zero elsewhere, and the loss through them (whole, on
+// columns, Auto's switch) equals the loss through T's products to rounding.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "TestUtil.h"
+#include "core/Rng.h"
+#include "objective/TransportLoss.h"
+#include "objective/UnbiasedObjective.h"
+#include "render/Render.h"
+#include "scene/Scene.h"
+#include "transport/TransportColumns.h"
+#include "transport/TransportGram.h"
+#include "transport/TransportSink.h"
+
+using namespace sl;
+
+namespace {
+
+std::unique_ptr<Scene> smallScene(int res) {
+    SceneDesc d = test::bumpyPartDesc(res, res);
+    d.material.params.alphaU = 0.15f;
+    d.material.params.alphaV = 0.05f;
+    const int n = 40;
+    return std::make_unique<Scene>(d, n, n, test::bumpyHeightMap(n));
+}
+
+TransportMatrix halves(const Scene& s, int channels) {
+    RenderOptions o;
+    o.spp = 4;
+    o.maxDepth = 3;
+    o.seed = 9;
+    o.sampleSets = 2;
+    return precomputeTransport(s, o, channels).matrix;
+}
+
+std::vector<double> randomVec(size_t n, uint64_t seed) {
+    Pcg32 rng(seed, 3);
+    std::vector<double> v(n);
+    for (double& x : v) x = rng.nextDouble();
+    return v;
+}
+
+double maxRelDiff(std::span<const double> a, std::span<const double> b) {
+    double scale = 0, diff = 0;
+    for (size_t i = 0; i < a.size(); ++i) {
+        scale = std::max(scale, std::abs(b[i]));
+        diff = std::max(diff, std::abs(a[i] - b[i]));
+    }
+    return diff / std::max(scale, 1e-300);
+}
+
+/// A mask with holes: the object mask with every 7th pixel dropped (pairs at its edges).
+std::vector<uint8_t> holedMask(const TransportMatrix& t) {
+    std::vector<uint8_t> m = t.objectMask;
+    for (size_t p = 0; p < m.size(); p += 7) m[p] = 0;
+    return m;
+}
+
+}  // namespace
+
+TEST(TransportGram, FormsEqualTheHalfImagesSums) {
+    auto s = smallScene(23);
+    for (int channels : {1, 3}) {
+        TransportMatrix t = halves(*s, channels);
+        ASSERT_EQ(t.storage, TransportStorage::Sparse);
+        const std::vector<uint8_t> mask = holedMask(t);
+        UnbiasedObjective obj(t.width, t.height, mask, ObjectiveOptions{});
+        const TransportGram g(t, mask, true);
+        ASSERT_EQ(g.cols(), t.cols());
+        const size_t n = g.cols();
+        // P and Q cover the texels some pixel sees: T's non-empty columns.
+        std::vector<uint16_t> seen;
+        std::vector<bool> used(n, false);
+        for (uint16_t c : t.colIdx) used[c] = true;
+        for (size_t c = 0; c < n; ++c)
+            if (used[c]) seen.push_back(static_cast<uint16_t>(c));
+        ASSERT_TRUE(std::equal(seen.begin(), seen.end(), g.seen().begin(), g.seen().end()));
+        ASSERT_LT(seen.size(), n);  // the test covers unseen texels
+        const size_t m = seen.size();
+        const auto P = g.pairMatrix(), Q = g.productMatrix();
+        ASSERT_EQ(P.size(), m * m);
+        for (size_t i = 0; i < m; ++i)
+            for (size_t j = 0; j < i; ++j) {
+                ASSERT_EQ(P[i * m + j], P[j * m + i]);
+                ASSERT_EQ(Q[i * m + j], Q[j * m + i]);
+            }
+        for (uint64_t seed : {1u, 2u, 3u}) {
+            const std::vector<double> e = randomVec(n, seed);
+            std::vector<double> ya(t.rows()), yb(t.rows());
+            t.applyLuminanceHalves(e, ya, yb);
+            double R = 0;
+            for (size_t p = 0; p < ya.size(); ++p) R += ya[p] * yb[p];
+            const double G = obj.energy(ya, yb);
+            std::vector<double> pe(n), qe(n);
+            EXPECT_NEAR(g.pairForm(e, pe), G, 1e-12 * std::abs(G)) << channels;
+            EXPECT_NEAR(g.productForm(e, qe), R, 1e-12 * R) << channels;
+            // ∇G = 2·P·E against the products' gradient Tₐᵀ·Lap·T_b·E + T_bᵀ·Lap·Tₐ·E.
+            std::vector<double> da(t.rows(), 0.0), db(t.rows(), 0.0), grad(n);
+            for (size_t p = 0; p < t.rows(); ++p) {
+                if (!mask[p]) continue;
+                const size_t w = static_cast<size_t>(t.width), x = p % w, y = p / w;
+                for (size_t q : {p + 1, p + w}) {
+                    if ((q == p + 1 && x + 1 >= w) || (q == p + w && y + 1 >= size_t(t.height)))
+                        continue;
+                    if (!mask[q]) continue;
+                    da[q] += yb[q] - yb[p];
+                    da[p] -= yb[q] - yb[p];
+                    db[q] += ya[q] - ya[p];
+                    db[p] -= ya[q] - ya[p];
+                }
+            }
+            t.applyTransposeLuminanceHalves(da, db, grad);
+            for (double& v : pe) v *= 2;
+            EXPECT_LE(maxRelDiff(pe, grad), 1e-12) << channels;
+        }
+        // Threads do not change a bit.
+        t.threads = 1;
+        const TransportGram one(t, mask, false, 1);
+        EXPECT_FALSE(one.hasProducts());
+        EXPECT_EQ(0, std::memcmp(one.pairMatrix().data(), P.data(), m * m * sizeof(double)));
+        EXPECT_THROW(one.productForm(randomVec(n, 1), {}), std::logic_error);
+    }
+}
+
+TEST(TransportGram, FormsOnActiveTexelsEqualTheWholeFormsOfAnEnvMapZeroElsewhere) {
+    auto s = smallScene(19);
+    const TransportMatrix t = halves(*s, 1);
+    const TransportGram g(t, t.objectMask, true);
+    const size_t n = g.cols();
+    std::vector<uint16_t> active;
+    for (size_t c = 3; c < n; c += 5) active.push_back(static_cast<uint16_t>(c));
+    std::vector<double> e(n, 0.0);
+    const std::vector<double> r = randomVec(n, 4);
+    for (uint16_t c : active) e[c] = r[c];
+    std::vector<double> pe(n), pa(n, -1.0), qe(n), qa(n, -1.0);
+    const double G = g.pairForm(e, pe), Ga = g.pairFormOn(e, active, pa);
+    const double R = g.productForm(e, qe), Ra = g.productFormOn(e, active, qa);
+    EXPECT_NEAR(Ga, G, 1e-13 * std::abs(G));
+    EXPECT_NEAR(Ra, R, 1e-13 * std::abs(R));
+    for (uint16_t c : active) {
+        EXPECT_NEAR(pa[c], pe[c], 1e-13 * std::abs(G));
+        EXPECT_NEAR(qa[c], qe[c], 1e-13 * std::abs(R));
+    }
+    EXPECT_EQ(pa[0], -1.0);  // only the active texels are written
+}
+
+TEST(TransportGram, RefusesWhatItCannotRepresent) {
+    auto s = smallScene(12);
+    TransportMatrix t = halves(*s, 1);
+    EXPECT_THROW(TransportGram(t, std::vector<uint8_t>(3, 1), false), std::invalid_argument);
+    RenderOptions o;
+    o.spp = 2;
+    o.maxDepth = 2;
+    const TransportMatrix one = precomputeTransport(*s, o, 1).matrix;
+    EXPECT_THROW(TransportGram(one, one.objectMask, false), std::invalid_argument);
+    t.toDense();
+    EXPECT_THROW(TransportGram(t, t.objectMask, false), std::invalid_argument);
+}
+
+TEST(TransportGram, BuildWorkCountsTheBuildsMultiplyAdds) {
+    auto s = smallScene(15);
+    const TransportMatrix t = halves(*s, 1);
+    const std::vector<uint8_t> none(t.rows(), 0);
+    EXPECT_EQ(TransportGram::buildWork(t, none, false), 0.0);
+    double squares = 0;
+    for (size_t p = 0; p < t.rows(); ++p) {
+        const double k = static_cast<double>(t.rowPtr[p + 1] - t.rowPtr[p]);
+        squares += k * k;
+    }
+    EXPECT_EQ(TransportGram::buildWork(t, none, true), squares);
+    EXPECT_GT(TransportGram::buildWork(t, t.objectMask, false), 0.0);
+}
+
+TEST(TransportGram, LossThroughTheGramEqualsTheLossThroughTheProducts) {
+    auto s = smallScene(21);
+    for (int channels : {1, 3}) {
+        const TransportMatrix t = halves(*s, channels);
+        for (RegTarget reg : {RegTarget::EnvMap, RegTarget::Image}) {
+            ObjectiveOptions oo;
+            oo.reg = reg;
+            oo.lambda = 3;
+            UnbiasedObjective obj(t.width, t.height, t.objectMask, oo);
+            TransportLoss csr(t, obj, false), gram(t, obj, false);
+            csr.setLayout(TransportLayout::Csr);
+            gram.setLayout(TransportLayout::Gram);
+            ASSERT_TRUE(gram.gramEligible());
+            const std::string tag =
+                "channels " + std::to_string(channels) + " reg " + std::to_string(int(reg));
+            const std::vector<double> e = randomVec(csr.dimension(), 7);
+            std::vector<double> g0(e.size()), g1(e.size());
+            const LossParts a = csr.evaluateFused(e, g0), b = gram.evaluateFused(e, g1);
+            EXPECT_NEAR(a.total, b.total, 1e-12 * a.total) << tag;
+            EXPECT_NEAR(a.G, b.G, 1e-12 * std::abs(a.G)) << tag;
+            EXPECT_LE(maxRelDiff(g1, g0), 1e-11) << tag;
+            EXPECT_NEAR(gram.evaluate(e, {}).total, a.total, 1e-12 * a.total) << tag;
+            // On columns (the lamp fit's products): the active texels' gradient, and only the
+            // regulariser's elsewhere, as the column products give them.
+            const TransportColumns cols(t);
+            std::vector<uint16_t> active;
+            std::vector<double> ez(e.size(), 0.0);
+            for (size_t c = 0; c < e.size(); c += 3) {
+                active.push_back(static_cast<uint16_t>(c));
+                ez[c] = e[c];
+            }
+            std::vector<double> c0(e.size()), c1(e.size());
+            const LossParts ca = csr.evaluateOnColumns(cols, ez, active, c0);
+            const LossParts cb = gram.evaluateOnColumns(cols, ez, active, c1);
+            EXPECT_NEAR(ca.total, cb.total, 1e-12 * ca.total) << tag;
+            EXPECT_LE(maxRelDiff(c1, c0), 1e-11) << tag;
+        }
+    }
+}
+
+TEST(TransportGram, AutoSwitchesToTheGramWhenItPays) {
+    auto s = smallScene(21);
+    const TransportMatrix t = halves(*s, 1);
+    UnbiasedObjective obj(t.width, t.height, t.objectMask, ObjectiveOptions{});
+    TransportLoss aut(t, obj, false), gram(t, obj, false), csr(t, obj, false);
+    gram.setLayout(TransportLayout::Gram);
+    csr.setLayout(TransportLayout::Csr);
+    ASSERT_TRUE(aut.gramPays());  // a small T: its build costs a few evaluations
+    const std::vector<double> e = randomVec(aut.dimension(), 5);
+    std::vector<double> ga(e.size()), gg(e.size()), gc(e.size());
+    gram.evaluateFused(e, gg);
+    csr.evaluateFused(e, gc);
+    ASSERT_NE(0, std::memcmp(gg.data(), gc.data(), gg.size() * sizeof(double)))
+        << "the Gram's and the products' gradients round alike: this test cannot tell them apart";
+    for (int i = 0; i < kAutoSlicesAfter + 2; ++i) {
+        aut.evaluateFused(e, ga);
+        if (i >= kAutoSlicesAfter)
+            EXPECT_EQ(0, std::memcmp(ga.data(), gg.data(), ga.size() * sizeof(double))) << i;
+        else
+            EXPECT_NE(0, std::memcmp(ga.data(), gg.data(), ga.size() * sizeof(double))) << i;
+    }
+    // The paper's objective (not quadratic) never uses it.
+    ImageObjective paper(t.width, t.height, t.objectMask, ObjectiveOptions{});
+    const TransportLoss p(t, paper, false);
+    EXPECT_FALSE(p.gramEligible());
+    EXPECT_THROW(p.gram(), std::logic_error);
+}
