@@ -163,12 +163,11 @@ std::vector<float> removeTexture(std::span<const float> heights, int width, int 
                                  const DefectMapOptions& options) {
     checkOptions(options);
     checkInput(heights, width, height);
-    std::vector<float> delta;
-    std::vector<float> r =
-        textureResidual(heights, width, height, options, nullptr, nullptr, nullptr, nullptr,
-                        nullptr, options.levelWiener ? &delta : nullptr);
-    for (size_t k = 0; k < delta.size(); ++k) r[k] += delta[k];
-    return r;
+    TextureRequest want;
+    want.levelDelta = true;
+    TextureResidual tr = textureResidual(heights, width, height, options, nullptr, want);
+    for (size_t k = 0; k < tr.levelDelta.size(); ++k) tr.residual[k] += tr.levelDelta[k];
+    return std::move(tr.residual);
 }
 
 namespace {
@@ -251,17 +250,19 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
     for (size_t k = 0; k < n; ++k) centred[k] = static_cast<float>(heights[k] - hmean);
     const double floorSigma = 1e-3 * 1.4826 * medianAbs(centred);
     centred = {};
-    std::vector<float> macro;
-
-    std::vector<float> texture;
-    std::vector<std::vector<float>> sectors;
     const bool wantTexture = o.energyWindow > 0 && o.textureEnergy;
-    double period = 0.0;            // of h − macro, the ring model's pitch
-    std::vector<float> levelDelta;  // step 4: the Wiener estimate's level minus A (levelWiener)
-    std::vector<float> R = textureResidual(
-        heights, W, H, o, &r, &macro, wantTexture && o.textureSectors == 1 ? &texture : nullptr,
-        wantTexture && o.textureSectors > 1 ? &sectors : nullptr,
-        o.ringWindow > 0 ? &period : nullptr, o.levelWiener ? &levelDelta : nullptr);
+    // steps 1–3; period: of h − macro, the ring model's pitch; levelDelta: step 4's Wiener
+    // estimate's level minus A (levelWiener)
+    TextureRequest want;
+    want.texture = wantTexture && o.textureSectors == 1;
+    want.sectors = wantTexture && o.textureSectors > 1;
+    want.period = o.ringWindow > 0;
+    want.levelDelta = o.levelWiener;
+    TextureResidual tr = textureResidual(heights, W, H, o, &r, want);
+    std::vector<float> R = std::move(tr.residual), macro = std::move(tr.macro);
+    std::vector<float> texture = std::move(tr.texture), levelDelta = std::move(tr.levelDelta);
+    std::vector<std::vector<float>> sectors = std::move(tr.sectors);
+    const double period = tr.period;
     throwIfInterrupted();  // Ctrl-C between the steps (core/Interrupt.h)
     RingFit rings;
     if (o.ringWindow > 0) {
@@ -272,13 +273,15 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
             // macro shape (the pocket wall's foot and top)
             std::vector<float> T(n);
             for (size_t k = 0; k < n; ++k) T[k] = heights[k] - macro[k] - R[k];
-            texture.clear();
-            sectors.clear();
-            levelDelta.clear();
-            R = textureResidual(heights, W, H, o, &r, &macro,
-                                wantTexture && o.textureSectors == 1 ? &texture : nullptr,
-                                wantTexture && o.textureSectors > 1 ? &sectors : nullptr, nullptr,
-                                o.levelWiener ? &levelDelta : nullptr, &T, 1);
+            want.period = false;
+            want.prior = std::move(T);
+            want.passes = 1;
+            tr = textureResidual(heights, W, H, o, &r, std::move(want));
+            R = std::move(tr.residual);
+            macro = std::move(tr.macro);
+            texture = std::move(tr.texture);
+            levelDelta = std::move(tr.levelDelta);
+            sectors = std::move(tr.sectors);
         }
     }
     throwIfInterrupted();  // Ctrl-C between the steps (core/Interrupt.h)

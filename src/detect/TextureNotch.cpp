@@ -209,16 +209,12 @@ std::vector<float> notchPass(const std::vector<float>& d, int W, int H, const De
 
 }  // namespace
 
-std::vector<float> textureResidual(std::span<const float> h, int W, int H,
-                                   const DefectMapOptions& o, DefectMap* info,
-                                   std::vector<float>* macroOut, std::vector<float>* textureOut,
-                                   std::vector<std::vector<float>>* sectorsOut, double* periodOut,
-                                   std::vector<float>* levelDeltaOut, std::vector<float>* prior,
-                                   int passes) {
+TextureResidual textureResidual(std::span<const float> h, int W, int H, const DefectMapOptions& o,
+                                DefectMap* info, TextureRequest request) {
     const size_t n = h.size();
-    if (passes <= 0) passes = o.passes;
-    std::vector<float> macro(h.begin(), h.end()), d(n), texture;
-    if (prior) texture = std::move(*prior);
+    const int passes = request.passes > 0 ? request.passes : o.passes;
+    TextureResidual res;
+    std::vector<float> macro(h.begin(), h.end()), d(n), texture = std::move(request.prior);
     for (int pass = 0; pass < passes; ++pass) {
         // the macro shape: the separable running median of h minus the texture found so far
         if (!texture.empty())
@@ -226,13 +222,15 @@ std::vector<float> textureResidual(std::span<const float> h, int W, int H,
         macro = separableMedian(macro, W, H, o.macroWindow);
         for (size_t k = 0; k < n; ++k) d[k] = h[k] - macro[k];
         const bool last = pass + 1 == passes;
-        texture = notchPass(d, W, H, o, info, last ? sectorsOut : nullptr,
-                            last ? periodOut : nullptr, last ? levelDeltaOut : nullptr);
+        texture = notchPass(d, W, H, o, info, last && request.sectors ? &res.sectors : nullptr,
+                            last && request.period ? &res.period : nullptr,
+                            last && request.levelDelta ? &res.levelDelta : nullptr);
     }
-    if (textureOut) *textureOut = texture;
+    if (request.texture) res.texture = texture;
     for (size_t k = 0; k < n; ++k) texture[k] = d[k] - texture[k];
-    if (macroOut) *macroOut = std::move(macro);
-    return texture;
+    res.residual = std::move(texture);
+    res.macro = std::move(macro);
+    return res;
 }
 
 }  // namespace sl::defectmap
