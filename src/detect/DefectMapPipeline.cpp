@@ -1,6 +1,6 @@
 // The defect map's pipeline (detect/DefectMap.h): the methods' dispatch and the auto
 // method's steps in order, each in its own file (TextureNotch, RingModel, StepLines, LineValleys,
-// Hysteresis; the filters in ImageFilters).
+// Hysteresis, TextureChange; the filters in ImageFilters).
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -15,6 +15,7 @@
 #include "detect/LineValleys.h"
 #include "detect/RingModel.h"
 #include "detect/StepLines.h"
+#include "detect/TextureChange.h"
 #include "detect/TextureNotch.h"
 
 namespace sl {
@@ -360,94 +361,15 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
     Nz = {};
     if (o.energyWindow > 0) {
         // step 8 on |A| and, with textureEnergy, on |T|
-        // the distance of a sample to the map's nearest edge (its layer of the border)
-        auto layer = [&](int x, int y) {
-            return std::min(std::min(x, W - 1 - x), std::min(y, H - 1 - y));
-        };
-        // lineExcess: the threshold in the border is raised by the excess of the median of E
-        // along the sample's pooled row (top and bottom border) or column (left and right) over
-        // median(E)
-        auto markTextureChange = [&](std::vector<float>& v, double ratio, bool lineExcess) {
-            for (float& x : v) x = std::abs(x);
-            // on the 2×2-pooled values (window halved): a quarter of the work
-            int W2 = 0, H2 = 0;
-            const std::vector<float> pooled = pool2(v.data(), W, H, W2, H2);
-            v = {};
-            const std::vector<float> E2 =
-                separableMedian(pooled, W2, H2, std::max(3, (o.energyWindow / 2) | 1));
-            const double medE = std::max(medianAbs(E2), floorSigma);
-            if (!(medE > 0.0)) return;
-            double base = ratio * medE;  // the threshold on E
-            auto energy = [&](int x, int y) { return E2[static_cast<size_t>(y / 2) * W2 + x / 2]; };
-            const bool grow = o.energyGrowBorder && o.border > 0;
-            std::vector<uint8_t> own(n, 0);  // this test's marks
-            for (size_t k = 0; k < n; ++k) {
-                const int x = static_cast<int>(k % static_cast<size_t>(W));
-                const int y = static_cast<int>(k / static_cast<size_t>(W));
-                if (layer(x, y) >= o.border && energy(x, y) >= base) own[k] = 1;
-            }
-            if (grow) {
-                std::vector<double> rowExcess(H2, 0.0), colExcess(W2, 0.0);
-                if (lineExcess) {
-                    std::vector<float> line;
-                    for (int py = 0; py < H2; ++py)
-                        if (2 * py < o.border || 2 * py + 1 >= H - o.border) {
-                            line.assign(E2.begin() + static_cast<size_t>(py) * W2,
-                                        E2.begin() + static_cast<size_t>(py + 1) * W2);
-                            rowExcess[py] = std::max(0.0, medianAbs(line) - medE);
-                        }
-                    line.resize(H2);
-                    for (int px = 0; px < W2; ++px)
-                        if (2 * px < o.border || 2 * px + 1 >= W - o.border) {
-                            for (int py = 0; py < H2; ++py)
-                                line[py] = E2[static_cast<size_t>(py) * W2 + px];
-                            colExcess[px] = std::max(0.0, medianAbs(line) - medE);
-                        }
-                }
-                // grow outward, layer by layer: a sample at distance j from the edge joins when
-                // its E passes and an 8-neighbour at distance j + 1 is marked by this test
-                auto visit = [&](int x, int y, int j) {
-                    const size_t k = static_cast<size_t>(y) * W + x;
-                    double excess = 0.0;
-                    if (y < o.border || y >= H - o.border) excess = rowExcess[y / 2];
-                    if (x < o.border || x >= W - o.border)
-                        excess = std::max(excess, colExcess[x / 2]);
-                    const double threshold = base + excess;
-                    if (own[k] || energy(x, y) < threshold) return;
-                    for (int dy = -1; dy <= 1; ++dy)
-                        for (int dx = -1; dx <= 1; ++dx) {
-                            const int xx = x + dx, yy = y + dy;
-                            if (xx < 0 || yy < 0 || xx >= W || yy >= H || layer(xx, yy) != j + 1 ||
-                                !own[static_cast<size_t>(yy) * W + xx])
-                                continue;
-                            own[k] = 1;
-                            return;
-                        }
-                };
-                for (int j = o.border - 1; j >= 0; --j) {
-                    if (2 * j + 1 >= W || 2 * j + 1 >= H) continue;  // no sample at distance j
-                    for (int x = j; x < W - j; ++x) {
-                        visit(x, j, j);
-                        visit(x, H - 1 - j, j);
-                    }
-                    for (int y = j + 1; y < H - 1 - j; ++y) {
-                        visit(j, y, j);
-                        visit(W - 1 - j, y, j);
-                    }
-                }
-            }
-            for (size_t k = 0; k < n; ++k)
-                if (own[k]) {
-                    if (!r.map[k]) ++r.markedEnergy;
-                    r.map[k] = 255;
-                }
-        };
         for (size_t k = 0; k < levelDelta.size(); ++k) A[k] -= levelDelta[k];
         levelDelta = {};
-        markTextureChange(A, o.energyRatio, true);
+        auto mark = [&](std::vector<float>& v, double ratio, bool lineExcess) {
+            r.markedEnergy += markTextureChange(v, W, H, o, floorSigma, ratio, lineExcess, r.map);
+        };
+        mark(A, o.energyRatio, true);
         if (o.textureEnergy) {
-            if (sectors.empty()) markTextureChange(texture, o.textureEnergyRatio, false);
-            for (std::vector<float>& t : sectors) markTextureChange(t, o.textureEnergyRatio, false);
+            if (sectors.empty()) mark(texture, o.textureEnergyRatio, false);
+            for (std::vector<float>& t : sectors) mark(t, o.textureEnergyRatio, false);
         }
     }
     r.seconds = clock.seconds();
