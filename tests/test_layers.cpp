@@ -222,9 +222,6 @@ TEST(Layers, ModulesIncludeEachOtherInNoCycle) {
     // Cycles not yet broken, each with what breaks it; the test fails when one is gone too, so
     // the list stays true.
     const std::set<std::string> known = {
-        // LayMap.cpp takes DefectMap's separableRunningMedian, DefectMap.h takes
-        // LayMapOptions: broken when DefectMap.cpp is split into one file per stage (issue 33).
-        "detect/DefectMap <-> detect/LayMap",
         // HeightmapIO.cpp dispatches to each format's reader, whose header returns
         // HeightmapIO.h's HeightmapData: broken when HeightmapData has a header of its own.
         "io/GwyddionReader <-> io/HeightmapIO <-> io/Sdf <-> io/X3p",

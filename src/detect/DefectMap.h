@@ -340,10 +340,6 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
 // intersect with the object mask as for any loss mask. m.map is empty of marks (all 0) on a
 // surface without anomalies: check markedCount() before using it as a region.
 
-/// Step 1's separable running median of a W×H image over w samples (odd): along x (rows),
-/// then along z (columns); windows shrink at the borders. Shared with detect/LayMap.
-std::vector<float> separableRunningMedian(const std::vector<float>& img, int W, int H, int w);
-
 /// Steps 1–3 alone: R = h − macro shape − periodic texture (width*height), for figures and
 /// tests; with levelWiener the notched bins hold their Wiener estimate (R + Δ of step 4).
 std::vector<float> removeTexture(std::span<const float> heights, int width, int height,

@@ -8,7 +8,7 @@
 
 #include "core/Error.h"
 #include "core/Interrupt.h"
-#include "detect/DefectMap.h"
+#include "detect/ImageFilters.h"
 
 namespace sl {
 

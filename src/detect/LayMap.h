@@ -36,7 +36,7 @@
 //     0.69/0.93 (models A/B); a second pass lost scratches (periodic lines, model A, recall
 //     0.74 → 0.54) and stays off.
 //  3. Residual: r = (h − B) minus its separable running median over `levelWindow` samples
-//     (detect/DefectMap.h separableRunningMedian), σ = 1.4826 × median |r| over the samples
+//     (detect/ImageFilters.h separableRunningMedian), σ = 1.4826 × median |r| over the samples
 //     outside the border.
 //  4. Regions: 8-connected regions of |r| ≥ growSigma·σ (outside the border) are kept when they
 //     reach seedSigma·σ, hold at least `minRegion` samples, and

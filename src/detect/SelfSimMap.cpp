@@ -10,6 +10,7 @@
 
 #include "core/Error.h"
 #include "core/Interrupt.h"
+#include "core/PolynomialFit.h"
 
 namespace sl {
 
@@ -30,58 +31,17 @@ double medianOf(std::vector<float>& v) {
 
 // Step 1: g = h − the least-squares quadratic surface (coordinates scaled to [−1, 1]).
 std::vector<float> removeQuadratic(std::span<const float> h, int W, int H) {
-    std::array<double, 36> A{};
-    std::array<double, 6> b{};
-    auto basis = [&](int x, int y, std::array<double, 6>& f) {
-        const double u = W > 1 ? 2.0 * x / (W - 1) - 1.0 : 0.0;
-        const double v = H > 1 ? 2.0 * y / (H - 1) - 1.0 : 0.0;
-        f = {1.0, u, v, u * u, u * v, v * v};
-    };
-    std::array<double, 6> f{};
-    for (int y = 0; y < H; ++y)
-        for (int x = 0; x < W; ++x) {
-            basis(x, y, f);
-            const double z = h[static_cast<size_t>(y) * W + x];
-            for (int i = 0; i < 6; ++i) {
-                b[i] += f[i] * z;
-                for (int j = 0; j < 6; ++j) A[i * 6 + j] += f[i] * f[j];
-            }
-        }
-    // Gaussian elimination with partial pivoting; a singular direction (a map one sample wide)
-    // keeps a zero coefficient
-    std::array<double, 6> c{};
-    std::array<int, 6> piv{0, 1, 2, 3, 4, 5};
-    for (int k = 0; k < 6; ++k) {
-        int p = k;
-        for (int i = k + 1; i < 6; ++i)
-            if (std::abs(A[i * 6 + k]) > std::abs(A[p * 6 + k])) p = i;
-        if (p != k) {
-            for (int j = 0; j < 6; ++j) std::swap(A[k * 6 + j], A[p * 6 + j]);
-            std::swap(b[k], b[p]);
-            std::swap(piv[k], piv[p]);
-        }
-        if (std::abs(A[k * 6 + k]) < 1e-12 * (1.0 + std::abs(A[0]))) continue;
-        for (int i = k + 1; i < 6; ++i) {
-            const double m = A[i * 6 + k] / A[k * 6 + k];
-            for (int j = k; j < 6; ++j) A[i * 6 + j] -= m * A[k * 6 + j];
-            b[i] -= m * b[k];
-        }
-    }
-    for (int k = 5; k >= 0; --k) {
-        if (std::abs(A[k * 6 + k]) < 1e-12 * (1.0 + std::abs(A[0]))) continue;
-        double s = b[k];
-        for (int j = k + 1; j < 6; ++j) s -= A[k * 6 + j] * c[j];
-        c[k] = s / A[k * 6 + k];
-    }
+    // core/PolynomialFit.h; on a map one or two samples wide the terms it cannot tell apart
+    // are left out (the same surface)
+    const std::optional<PolynomialSurface> s =
+        fitPolynomialSurface(h, static_cast<size_t>(W), static_cast<size_t>(H), 2);
     std::vector<float> g(h.size());
     tbb::parallel_for(0, H, [&](int y) {
-        std::array<double, 6> fy{};
+        std::vector<double> f(static_cast<size_t>(W), 0.0);
+        if (s) s->row(static_cast<size_t>(y), f);
         for (int x = 0; x < W; ++x) {
-            basis(x, y, fy);
-            double s = 0.0;
-            for (int i = 0; i < 6; ++i) s += c[i] * fy[i];
             const size_t k = static_cast<size_t>(y) * W + x;
-            g[k] = static_cast<float>(h[k] - s);
+            g[k] = static_cast<float>(h[k] - f[static_cast<size_t>(x)]);
         }
     });
     return g;

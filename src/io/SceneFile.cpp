@@ -17,6 +17,7 @@
 #include "core/Text.h"
 #include "io/HeightmapIO.h"
 #include "io/InputFile.h"
+#include "scene/EnvMapBasis.h"
 #include "scene/Materials.h"
 #include "transport/TransportMatrix.h"
 
@@ -308,7 +309,9 @@ void parseEnvmap(Fields& f, const std::filesystem::path& baseDir, EnvMapDesc& e)
                    std::to_string(static_cast<long long>(e.width) * e.height) +
                    " texels is more than the limit of " + std::to_string(kMaxTransportTexels) +
                    " (a transport matrix's 16-bit column indices)",
-               "use a smaller env-map grid, e.g. the default 50x25 or at most 362x181");
+               "use a smaller env-map grid, e.g. the default " +
+                   std::to_string(kDefaultEnvMapGrid.width) + "x" +
+                   std::to_string(kDefaultEnvMapGrid.height) + " or at most 362x181");
     std::string path = f.string("path", "");
     if (!path.empty())
         e.path = std::filesystem::path(path).is_absolute() ? std::filesystem::path(path)

@@ -7,11 +7,12 @@
 #include <vector>
 
 #include "core/Image.h"
+#include "scene/EnvMapBasis.h"
 
 namespace sl {
 
 struct EnvMap {
-    int width = 50, height = 25, channels = 1;
+    int width = kDefaultEnvMapGrid.width, height = kDefaultEnvMapGrid.height, channels = 1;
     std::vector<float> texels;  // row-major, row 0 = +Y (top), channels interleaved
 
     static EnvMap constant(int w, int h, float value, int channels = 1) {

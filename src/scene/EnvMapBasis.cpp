@@ -15,7 +15,8 @@ EnvMapBasis::EnvMapBasis(int width, int height) : width_(width), height_(height)
         throw inputError(
             "envmap",
             "size " + std::to_string(width) + "x" + std::to_string(height) + " is too small",
-            "use width >= 2 and height >= 3 (default 50x25)");
+            "use width >= 2 and height >= 3 (default " + std::to_string(kDefaultEnvMapGrid.width) +
+                "x" + std::to_string(kDefaultEnvMapGrid.height) + ")");
 }
 
 std::array<double, 2> EnvMapBasis::directionToUv(const Vec3d& d) {

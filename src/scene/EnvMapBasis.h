@@ -27,9 +27,19 @@ struct TexelWeights {
     std::array<float, 4> weight{};    // bilinear weights, sum to 1
 };
 
+/// An env map's texel grid: width × height texels (columns in u, rows in v).
+struct EnvMapGrid {
+    int width, height;
+};
+
+/// The default grid, wherever neither the scene file (`envmap.width/height`) nor a traced T
+/// names one: the paper's 25 rows of 50 texels (Motegi et al.). The one place these numbers
+/// are written.
+inline constexpr EnvMapGrid kDefaultEnvMapGrid{50, 25};
+
 class EnvMapBasis {
   public:
-    EnvMapBasis(int width = 50, int height = 25);
+    EnvMapBasis(int width = kDefaultEnvMapGrid.width, int height = kDefaultEnvMapGrid.height);
 
     int width() const { return width_; }
     int height() const { return height_; }

@@ -7,56 +7,13 @@
 #include <limits>
 
 #include "core/Error.h"
+#include "core/PolynomialFit.h"
 
 namespace sl {
 
 namespace {
 
 using Matrix = std::vector<double>;  // K×K row-major
-
-/// Solves the symmetric positive definite system A·x = b (K×K) by Cholesky; false when A is
-/// not positive definite to working precision.
-bool solveSpd(Matrix a, std::vector<double>& b, size_t k) {
-    double scale = 0.0;
-    for (size_t i = 0; i < k; ++i) scale = std::max(scale, std::abs(a[i * k + i]));
-    if (!(scale > 0)) return false;
-    for (size_t j = 0; j < k; ++j) {
-        double d = a[j * k + j];
-        for (size_t m = 0; m < j; ++m) d -= a[j * k + m] * a[j * k + m];
-        if (!(d > 1e-13 * scale)) return false;
-        const double l = std::sqrt(d);
-        a[j * k + j] = l;
-        for (size_t i = j + 1; i < k; ++i) {
-            double s = a[i * k + j];
-            for (size_t m = 0; m < j; ++m) s -= a[i * k + m] * a[j * k + m];
-            a[i * k + j] = s / l;
-        }
-    }
-    for (size_t i = 0; i < k; ++i) {  // L·y = b
-        double s = b[i];
-        for (size_t m = 0; m < i; ++m) s -= a[i * k + m] * b[m];
-        b[i] = s / a[i * k + i];
-    }
-    for (size_t i = k; i-- > 0;) {  // Lᵀ·x = y
-        double s = b[i];
-        for (size_t m = i + 1; m < k; ++m) s -= a[m * k + i] * b[m];
-        b[i] = s / a[i * k + i];
-    }
-    return true;
-}
-
-/// P_0..P_n at u (Legendre, by the three-term recurrence).
-void legendre(double u, int n, double* out) {
-    out[0] = 1.0;
-    if (n >= 1) out[1] = u;
-    for (int m = 2; m <= n; ++m)
-        out[m] = ((2.0 * m - 1.0) * u * out[m - 1] - (m - 1.0) * out[m - 2]) / m;
-}
-
-/// Samples 0..n−1 scaled to [−1, 1] (all 0 for n = 1).
-double unit(size_t i, size_t n) {
-    return n < 2 ? 0.0 : 2.0 * static_cast<double>(i) / static_cast<double>(n - 1) - 1.0;
-}
 
 struct Grid {
     const std::vector<float>& z;
@@ -71,77 +28,26 @@ std::string fixFor(const LevellingDesc& d) {
                : "use a lower degree, or \"levelling\": \"none\"";
 }
 
-/// Polynomial of degree n (plane: 1) in the Legendre basis; returns the coefficients.
+/// Polynomial of degree n (plane: 1) in the Legendre basis (core/PolynomialFit.h); returns the
+/// coefficients.
 std::vector<double> levelPolynomial(const Grid& g, std::vector<float>& z, int n,
                                     const std::string& where, const LevellingDesc& d) {
-    std::vector<std::array<int, 2>> terms;  // (a, b): P_a(u)·P_b(v)
-    for (int tot = 0; tot <= n; ++tot)
-        for (int a = tot; a >= 0; --a) terms.push_back({a, tot - a});
-    const size_t k = terms.size();
-    const size_t np = static_cast<size_t>(n) + 1;
-    std::vector<double> pu(g.w * np), pv(g.h * np);
-    for (size_t i = 0; i < g.w; ++i) legendre(unit(i, g.w), n, &pu[i * np]);
-    for (size_t j = 0; j < g.h; ++j) legendre(unit(j, g.h), n, &pv[j * np]);
-    Matrix ata(k * k, 0.0);
-    std::vector<double> atz(k, 0.0), row(k);
-    // Per image row: the sums over its valid points of P_a(u)·P_c(u) (and ·z) are combined with
-    // the row's P_b(v)·P_d(v), so the cost per point is (n+1)² not K².
-    const size_t nn = np * np;
-    std::vector<double> su(nn), sz(np);
-    for (size_t j = 0; j < g.h; ++j) {
-        std::fill(su.begin(), su.end(), 0.0);
-        std::fill(sz.begin(), sz.end(), 0.0);
-        bool any = false;
-        for (size_t i = 0; i < g.w; ++i) {
-            const size_t idx = j * g.w + i;
-            if (!g.valid(idx)) continue;
-            any = true;
-            const double* p = &pu[i * np];
-            const double zv = g.z[idx];
-            for (size_t a = 0; a < np; ++a) {
-                sz[a] += p[a] * zv;
-                for (size_t c = a; c < np; ++c) su[a * np + c] += p[a] * p[c];
-            }
-        }
-        if (!any) continue;
-        const double* q = &pv[j * np];
-        for (size_t r = 0; r < k; ++r) {
-            const size_t a = static_cast<size_t>(terms[r][0]), b = static_cast<size_t>(terms[r][1]);
-            atz[r] += sz[a] * q[b];
-            for (size_t c2 = r; c2 < k; ++c2) {
-                const size_t c = static_cast<size_t>(terms[c2][0]),
-                             e = static_cast<size_t>(terms[c2][1]);
-                const double uu = a <= c ? su[a * np + c] : su[c * np + a];
-                ata[r * k + c2] += uu * q[b] * q[e];
-            }
-        }
-    }
-    for (size_t r = 0; r < k; ++r)
-        for (size_t c = 0; c < r; ++c) ata[r * k + c] = ata[c * k + r];
-    std::vector<double> coef = atz;
-    if (!solveSpd(ata, coef, k))
+    const std::optional<PolynomialSurface> s = fitPolynomialSurface(g.z, g.w, g.h, n, g.invalid);
+    if (!s)
         throw inputError(where,
                          "heightmap.levelling " + levellingName(d) +
                              ": the valid points do not determine the fit (too few, or all on "
                              "a line)",
                          fixFor(d));
-    std::vector<double> fu(np);
+    std::vector<double> f;
     for (size_t j = 0; j < g.h; ++j) {
-        const double* q = &pv[j * np];
-        // the fit along this row as a polynomial in u: Σ_a (Σ_b c_ab P_b(v)) P_a(u)
-        std::fill(fu.begin(), fu.end(), 0.0);
-        for (size_t r = 0; r < k; ++r)
-            fu[static_cast<size_t>(terms[r][0])] += coef[r] * q[static_cast<size_t>(terms[r][1])];
+        s->row(j, f);
         for (size_t i = 0; i < g.w; ++i) {
-            const double* p = &pu[i * np];
-            double f = 0.0;
-            for (size_t a = 0; a < np; ++a) f += fu[a] * p[a];
             float& zz = z[j * g.w + i];
-            zz = static_cast<float>(static_cast<double>(zz) - f);
+            zz = static_cast<float>(static_cast<double>(zz) - f[i]);
         }
     }
-    (void)row;
-    return coef;
+    return s->coefficients;
 }
 
 /// Cylinder along `axis`; returns {a, c, R·σ, b}.

@@ -48,7 +48,7 @@ struct HeightmapLoad {
 };
 
 struct EnvMapDesc {
-    int width = 50, height = 25;
+    int width = kDefaultEnvMapGrid.width, height = kDefaultEnvMapGrid.height;
     std::filesystem::path path;     // optional default env map for `render`
     std::optional<float> constant;  // optional constant value (used when no path)
     std::string preset;             // optional built-in map, see scene/EnvMapPresets.h

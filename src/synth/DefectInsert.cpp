@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "core/Error.h"
+#include "core/PolynomialFit.h"
 #include "core/Registry.h"
 #include "core/Rng.h"
 #include "synth/SurfaceGenerator.h"
@@ -159,53 +160,16 @@ double pitProfile(double radius, double depth, double pileUp, double rho) {
 }
 
 double textureSq(std::span<const float> h, int W, int H) {
-    // Normal equations of the quadratic surface in centred, scaled coordinates.
-    const double cx = (W - 1) / 2.0, cz = (H - 1) / 2.0, sx = std::max(cx, 1.0),
-                 sz = std::max(cz, 1.0);
-    std::array<double, 36> A{};
-    std::array<double, 6> b{};
-    auto basis = [&](int i, int j, std::array<double, 6>& f) {
-        const double x = (i - cx) / sx, z = (j - cz) / sz;
-        f = {1, x, z, x * x, x * z, z * z};
-    };
-    std::array<double, 6> f{};
-    for (int j = 0; j < H; ++j)
-        for (int i = 0; i < W; ++i) {
-            basis(i, j, f);
-            const double y = h[static_cast<size_t>(j) * W + i];
-            for (int r = 0; r < 6; ++r) {
-                b[r] += f[r] * y;
-                for (int c = 0; c < 6; ++c) A[r * 6 + c] += f[r] * f[c];
-            }
-        }
-    // Gaussian elimination with partial pivoting.
-    std::array<double, 6> coef{};
-    for (int c = 0; c < 6; ++c) {
-        int p = c;
-        for (int r = c + 1; r < 6; ++r)
-            if (std::abs(A[r * 6 + c]) > std::abs(A[p * 6 + c])) p = r;
-        for (int k = 0; k < 6; ++k) std::swap(A[c * 6 + k], A[p * 6 + k]);
-        std::swap(b[c], b[p]);
-        if (std::abs(A[c * 6 + c]) < 1e-300) continue;
-        for (int r = c + 1; r < 6; ++r) {
-            const double m = A[r * 6 + c] / A[c * 6 + c];
-            for (int k = c; k < 6; ++k) A[r * 6 + k] -= m * A[c * 6 + k];
-            b[r] -= m * b[c];
-        }
+    // The form: the least-squares quadratic surface (core/PolynomialFit.h).
+    const std::optional<PolynomialSurface> form =
+        fitPolynomialSurface(h, static_cast<size_t>(W), static_cast<size_t>(H), 2);
+    std::vector<double> res(static_cast<size_t>(W) * H), fit(static_cast<size_t>(W), 0.0);
+    for (int j = 0; j < H; ++j) {
+        if (form) form->row(static_cast<size_t>(j), fit);
+        for (int i = 0; i < W; ++i)
+            res[static_cast<size_t>(j) * W + i] =
+                h[static_cast<size_t>(j) * W + i] - fit[static_cast<size_t>(i)];
     }
-    for (int c = 5; c >= 0; --c) {
-        double s = b[c];
-        for (int k = c + 1; k < 6; ++k) s -= A[c * 6 + k] * coef[k];
-        coef[c] = std::abs(A[c * 6 + c]) < 1e-300 ? 0 : s / A[c * 6 + c];
-    }
-    std::vector<double> res(static_cast<size_t>(W) * H);
-    for (int j = 0; j < H; ++j)
-        for (int i = 0; i < W; ++i) {
-            basis(i, j, f);
-            double fit = 0;
-            for (int r = 0; r < 6; ++r) fit += coef[r] * f[r];
-            res[static_cast<size_t>(j) * W + i] = h[static_cast<size_t>(j) * W + i] - fit;
-        }
     // The L-filter: twice a separable box mean of min(W, H)/5 samples (edges clamped).
     std::vector<double> low = res, tmp(res.size());
     const int half = std::max(1, std::min(W, H) / 10);
