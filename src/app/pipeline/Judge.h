@@ -41,6 +41,7 @@ namespace sl {
 struct Scene;
 struct EnvMap;
 class UnbiasedObjective;
+class BandFilterBank;
 
 inline constexpr uint64_t kJudgeSeed = 0x6A75646765ULL << 24;  // "judge"
 /// The most samples the judge's rounds trace (and the spp of `--heldout-spp`'s old default).
@@ -139,7 +140,8 @@ class Judge {
     /// ±d_p/√2 with independent signs per pixel and half (a fixed seed: the same E gives the
     /// same errors) — the same light's white-furnace image with the same signs — and scores
     /// them again (each region's JND too, with a viewing model: its band contrasts are formed
-    /// anew per replicate, the dearest part); the SE is the replicates' spread (1.4826 × their
+    /// anew per replicate on one bank of band filters, the dearest part; the replicates run on
+    /// every core, core/WildBootstrap.h); the SE is the replicates' spread (1.4826 × their
     /// median absolute deviation,
     /// a standard deviation robust to a replicate whose denominator nearly vanished; to first
     /// order the delta
@@ -170,11 +172,12 @@ class Judge {
 
     void buildObjectives();
     /// The scores from the light's half images and the white furnace's (means: (a + b)/2
-    /// unless given).
+    /// unless given); `bank`: the JND's band filters on the part, built once (null: per call).
     JudgeScore scoreImages(std::span<const double> E, std::span<const double> ya,
                            std::span<const double> yb, std::span<const double> y,
                            std::span<const double> wa, std::span<const double> wb,
-                           std::span<const double> w, bool withJnd = true) const;
+                           std::span<const double> w, bool withJnd = true,
+                           const BandFilterBank* bank = nullptr) const;
 };
 
 /// The judge in rounds (JudgeOptions::spp 0): scores `lights` (name, E) with their errors on
