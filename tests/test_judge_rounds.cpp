@@ -448,3 +448,31 @@ TEST(JudgeRounds, JndErrorsOnASharedBankAndThreadsAreTheSerialOnes) {
         1);
     EXPECT_EQ(serial.at(0), scores[0].se->jnd[0]);
 }
+
+// The rounds start at kJudgePilotSpp (64): the rule may stop there only if the bootstrap's SE
+// still predicts how far an estimate at that spp moves. Over 16 judge seeds at the pilot's spp,
+// the scores' spread against the mean SE (as at 256 spp above), for U, eq. 2 and the brightness.
+// Measured on this scene: at 64 and 128 spp within the bound; at 32 spp not (U's SE 2.1× its
+// spread, eq. 2's 0.55×), which is why the pilot is not lower.
+TEST(JudgeRounds, StandardErrorHoldsAtThePilotSpp) {
+    auto scene = wavyScene(32);
+    const std::vector<double> e = randomLight(1250, 13);
+    std::vector<double> u, eq2, bright, seU, seEq2, seBright;
+    for (uint64_t k = 0; k < 16; ++k) {
+        JudgeOptions o;
+        o.spp = kJudgePilotSpp;
+        o.seed = kJudgeSeed + 300 + k;
+        const Judge judge(*scene, o);
+        const JudgeScore s = judge.scoreWithErrors(e, "random");
+        ASSERT_TRUE(s.se);
+        u.push_back(s.unbiased.total);
+        eq2.push_back(s.eq2.total);
+        bright.push_back(s.brightness);
+        seU.push_back(s.se->unbiased);
+        seEq2.push_back(s.se->eq2);
+        seBright.push_back(s.se->brightness);
+    }
+    EXPECT_NEAR(sd(u) / mean(seU), 1.0, 0.45) << sd(u) << " vs " << mean(seU);
+    EXPECT_NEAR(sd(eq2) / mean(seEq2), 1.0, 0.45) << sd(eq2) << " vs " << mean(seEq2);
+    EXPECT_NEAR(sd(bright) / mean(seBright), 1.0, 0.45) << sd(bright) << " vs " << mean(seBright);
+}
