@@ -2,7 +2,7 @@
 //
 // The estimate is a transport matrix of the scene traced with the judge's own seed and two
 // independent sample sets (T_a, T_b), cached on disk by fingerprint, so judging ten lights costs
-// one trace; its spp is what the scores need (judgeInRounds: from kJudgePilotSpp (64) until every
+// one trace; its spp is what the scores need (judgeInRounds: from kJudgePilotSpp (128) until every
 // score's standard error is <= 1 %, at most 1024). Per light E:
 //   eq2        the paper's eq. 2 (S/G + λ·mean(E²)) on the mean image Ȳ = (T_a + T_b)/2 · E
 //   unbiased   U = sqrt(S / Σ_pairs ΔY_a·ΔY_b) + λ·mean(E²)  (objective/UnbiasedObjective.h)
@@ -48,13 +48,11 @@ inline constexpr uint64_t kJudgeSeed = 0x6A75646765ULL << 24;  // "judge"
 inline constexpr int kJudgeDefaultSpp = 1024;
 /// The judge's first round (README "The judge"): rounds start here and stop when every score a
 /// person reads has a relative standard error of at most kJudgeMaxError (or at the cap). 64
-/// spp: without a truth the scores' worst SE was 0.06-0.08 % at 128 spp on new parts at 512²
-/// and 256² (docs/BENCHMARKS.md), √2 times that at 64, still one round; with a truth the JND's
-/// SE asks for more rounds at any pilot, and a 64-spp pilot costs 1/16 of a 1024-spp round. At
-/// 32 spp the bootstrap's SE no longer matched the spread over independent seeds on a small
-/// test part (tests/test_judge_rounds.cpp StandardErrorHoldsAtThePilotSpp). eq. 2 on the mean
-/// image is biased by the noise (the rule does not count a bias): more at 64 spp than at 128.
-inline constexpr int kJudgePilotSpp = 64;
+/// was tried (docs/BENCHMARKS.md, issue 31's third pass): on a held-out 512² part the paper's
+/// light's U had a bootstrap SE of 7.4 % at 64 spp against 1.4 % at 128 (the SE of a ratio with
+/// a noisy denominator is over-stated at low spp), so the rounds went to 1024 spp instead of 512
+/// and the run cost 1.6× the CPU.
+inline constexpr int kJudgePilotSpp = 128;
 inline constexpr double kJudgeMaxError = 0.01;
 /// Replicates of the standard-error estimate (Judge::scoreWithErrors): the SE itself is then
 /// known to about 1/sqrt(2·(R − 1)) = 13 % of its value.
