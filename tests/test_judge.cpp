@@ -11,6 +11,7 @@
 
 #include "TestUtil.h"
 #include "app/bench/Race.h"
+#include "app/pipeline/Defaults.h"
 #include "app/pipeline/Judge.h"
 #include "app/pipeline/Search.h"
 #include "app/pipeline/Truth.h"
@@ -350,6 +351,38 @@ TEST(Search, TheStallStopIsTheJndMeasuresOnly) {
     const OptimizerOptions kept = withJndStall(own, ObjectiveKind::Defects, jnd);
     EXPECT_EQ(kept.stallEvaluations, 7);
     EXPECT_EQ(kept.stallTolerance, 0.5);
+}
+
+// The stall stop belongs to the default budget (app/pipeline/Defaults.h resolveOptimizer), so
+// every command that searches with it gets it: optimize and the viewer's "optimize from this
+// light" alike. No budget given: the method's default budget and, on the JND measure, the stall
+// stop; a given budget runs to its end; other objectives and the ratio measure run to their
+// budget; the method that stands for a set-up resolves to the one that runs.
+TEST(Defaults, TheDefaultBudgetCarriesTheJndStallStop) {
+    ObjectiveOptions jnd, ratio;
+    jnd.defectMeasure = DefectMeasure::Jnd;
+    ratio.defectMeasure = DefectMeasure::Ratio;
+    OptimizerOptions asked = optimizeJobOptimizerOptions();
+    ASSERT_EQ(asked.iterations, 0);
+    const OptimizerOptions d = resolveOptimizer(asked, ObjectiveKind::Defects, jnd);
+    EXPECT_EQ(d.iterations, methodRow(asked.method).defaultBudget);
+    EXPECT_EQ(d.method, resolveOptimizer(asked).method);
+    EXPECT_EQ(d.stallEvaluations, kJndStallEvaluations);
+    EXPECT_EQ(d.stallTolerance, kJndStallTolerance);
+    EXPECT_EQ(resolveOptimizer(asked, ObjectiveKind::Defects, ratio).stallEvaluations, 0);
+    EXPECT_EQ(resolveOptimizer(asked, ObjectiveKind::Unbiased, jnd).stallEvaluations, 0);
+    OptimizerOptions given = asked;
+    given.iterations = 50;
+    const OptimizerOptions g = resolveOptimizer(given, ObjectiveKind::Defects, jnd);
+    EXPECT_EQ(g.iterations, 50);
+    EXPECT_EQ(g.stallEvaluations, 0);
+    OptimizerOptions loop;
+    loop.method = OptimizerMethod::PaperLoop;
+    loop.iterations = 0;
+    const OptimizerOptions l = resolveOptimizer(loop, ObjectiveKind::Defects, jnd);
+    EXPECT_EQ(l.method, OptimizerMethod::Adam);
+    EXPECT_EQ(l.iterations, methodRow(OptimizerMethod::PaperLoop).defaultBudget);
+    EXPECT_EQ(l.stallEvaluations, kJndStallEvaluations);
 }
 
 TEST(Synth, ConfinedChatterIsLabelledOnItsSideOnly) {

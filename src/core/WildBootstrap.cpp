@@ -1,9 +1,13 @@
 #include "core/WildBootstrap.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <exception>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
+#include <thread>
 
 #include "core/Rng.h"
 
@@ -24,7 +28,8 @@ double robustSpread(std::vector<double> v, int replicates) {
 }
 
 std::vector<double> wildBootstrapErrors(std::span<const HalfImages> images, uint64_t seed,
-                                        int replicates, const ReplicateScores& scores) {
+                                        int replicates, const ReplicateScores& scores,
+                                        int threads) {
     if (images.empty()) throw std::invalid_argument("wildBootstrapErrors: no image");
     const size_t n = images.front().a.size();
     for (const HalfImages& h : images)
@@ -34,10 +39,10 @@ std::vector<double> wildBootstrapErrors(std::span<const HalfImages> images, uint
     std::vector<std::vector<double>> d(images.size(), std::vector<double>(n));
     for (size_t k = 0; k < images.size(); ++k)
         for (size_t p = 0; p < n; ++p) d[k][p] = (images[k].a[p] - images[k].b[p]) * std::sqrt(0.5);
-    std::vector<HalfImages> r(images.size(),
-                              HalfImages{std::vector<double>(n), std::vector<double>(n)});
-    std::vector<std::vector<double>> values;  // [score][replicate]
-    for (int rep = 0; rep < replicates; ++rep) {
+    const int count = std::max(replicates, 0);
+    std::vector<std::vector<double>> byReplicate(static_cast<size_t>(count));  // [rep][score]
+    // Replicate `rep` into the worker's own images `r`, then its scores.
+    auto one = [&](int rep, std::vector<HalfImages>& r) {
         Pcg32 rng(mix64(seed ^ 0x5345ULL), static_cast<uint64_t>(rep));
         for (size_t p = 0; p < n; ++p) {
             const uint32_t bits = rng.nextU32();
@@ -47,7 +52,34 @@ std::vector<double> wildBootstrapErrors(std::span<const HalfImages> images, uint
                 r[k].b[p] = images[k].b[p] + sb * d[k][p];
             }
         }
-        const std::vector<double> s = scores(r);
+        byReplicate[static_cast<size_t>(rep)] = scores(r);
+    };
+    const int workers = std::clamp(
+        threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())),
+        1, std::max(count, 1));
+    std::atomic<int> next{0};
+    std::exception_ptr failure;
+    std::mutex failureMutex;
+    auto work = [&] {
+        std::vector<HalfImages> r(images.size(),
+                                  HalfImages{std::vector<double>(n), std::vector<double>(n)});
+        for (int rep; (rep = next.fetch_add(1)) < count;) {
+            try {
+                one(rep, r);
+            } catch (...) {
+                const std::lock_guard<std::mutex> lock(failureMutex);
+                if (!failure) failure = std::current_exception();
+                next = count;  // the others stop after their replicate
+            }
+        }
+    };
+    std::vector<std::thread> pool;
+    for (int w = 1; w < workers; ++w) pool.emplace_back(work);
+    work();
+    for (std::thread& t : pool) t.join();
+    if (failure) std::rethrow_exception(failure);
+    std::vector<std::vector<double>> values;  // [score][replicate]
+    for (const std::vector<double>& s : byReplicate) {
         if (values.empty()) values.resize(s.size());
         if (s.size() != values.size())
             throw std::invalid_argument("wildBootstrapErrors: a replicate gave another count");

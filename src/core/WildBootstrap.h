@@ -1,6 +1,6 @@
 // The standard error of scores formed from two independent half estimates of an image, by a
-// wild bootstrap on the halves: the judge's errors (app/pipeline/Judge.h scoreWithErrors) and the noise
-// rule's gap (app/pipeline/TrainingNoise.h trainingGapError) are this one estimate.
+// wild bootstrap on the halves: the judge's errors (app/pipeline/Judge.h scoreWithErrors) and the
+// noise rule's gap (app/pipeline/TrainingNoise.h trainingGapError) are this one estimate.
 //
 // A pixel's samples are independent of every other pixel's, and its two halves Y_a, Y_b are two
 // independent estimates of the same value, so d_p = Y_a,p − Y_b,p has mean 0 and variance
@@ -34,8 +34,12 @@ double robustSpread(std::vector<double> values, int replicates);
 using ReplicateScores = std::function<std::vector<double>(std::span<const HalfImages> images)>;
 
 /// The standard error of each score `scores` returns (always the same count), over `replicates`
-/// replicates of `images` (all of the same size) drawn with `seed`.
+/// replicates of `images` (all of the same size) drawn with `seed`. The replicates run on
+/// `threads` threads at once (0: one per core; `scores` is then called concurrently, each call
+/// with its own images); replicate r's signs depend on (seed, r) only and the spread on the
+/// set of replicates, so the errors are the same, bit for bit, on any number of threads.
 std::vector<double> wildBootstrapErrors(std::span<const HalfImages> images, uint64_t seed,
-                                        int replicates, const ReplicateScores& scores);
+                                        int replicates, const ReplicateScores& scores,
+                                        int threads = 0);
 
 }  // namespace sl

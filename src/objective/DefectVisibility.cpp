@@ -108,7 +108,10 @@ std::vector<RegionVisibility> defectVisibility(int w, int h, std::span<const dou
     for (size_t p = 0; p < n; ++p) part[p] = partMask[p] != 0;
     const double partMean = meanOver(Ya, Yb, part);
     std::optional<BandContrast> bands;
-    if (viewing) bands.emplace(w, h, Ya, Yb, partMask, viewing->white, viewing->view);
+    if (viewing && viewing->bank)
+        bands.emplace(Ya, Yb, partMask, viewing->white, viewing->view, *viewing->bank);
+    else if (viewing)
+        bands.emplace(w, h, Ya, Yb, partMask, viewing->white, viewing->view);
 
     std::vector<RegionVisibility> out;
     for (const RegionLabel& r : regions) {

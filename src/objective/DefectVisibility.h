@@ -52,11 +52,15 @@ struct RegionVisibility {
     double luminance = std::numeric_limits<double>::quiet_NaN();  // cd/m², the part's mean
 };
 
+class BandFilterBank;
+
 /// How the JND is seen: the viewing model and the image value shown at the display's white
-/// (the white furnace's mean over the part).
+/// (the white furnace's mean over the part); `bank`: the band filters built once for this part
+/// (perception/BandFilters.h; the judge's bootstrap replicates share one), or null (built here).
 struct JndViewing {
     ViewingModel view;
     double white = 0;
+    const BandFilterBank* bank = nullptr;
 };
 
 /// Per-label visibility. labels: width*height label image (image space); partMask: nonzero

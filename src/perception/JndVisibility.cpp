@@ -13,10 +13,18 @@ namespace sl {
 BandContrast::BandContrast(int width, int height, std::span<const double> Ya,
                            std::span<const double> Yb, std::span<const uint8_t> part, double white,
                            const ViewingModel& view, GaussianMethod method)
-    : width_(width), height_(height), view_(view) {
-    const size_t n = static_cast<size_t>(width) * height;
+    : BandContrast(Ya, Yb, part, white, view, BandFilterBank(width, height, part, method)) {}
+
+BandContrast::BandContrast(std::span<const double> Ya, std::span<const double> Yb,
+                           std::span<const uint8_t> part, double white, const ViewingModel& view,
+                           const BandFilterBank& bank)
+    : width_(bank.width()), height_(bank.height()), view_(view) {
+    const size_t n = static_cast<size_t>(width_) * height_;
     if (Ya.size() != n || Yb.size() != n || part.size() != n)
         throw std::invalid_argument("BandContrast: image sizes differ");
+    for (size_t p = 0; p < n; ++p)
+        if ((part[p] != 0) != (bank.part()[p] != 0))
+            throw std::invalid_argument("BandContrast: the bank was built for another part");
     if (!(view.pixelsPerDegree > 0) || !(view.whiteLuminance > 0))
         throw std::invalid_argument("BandContrast: the viewing model needs px/deg and a white");
     double sum = 0;
@@ -27,7 +35,6 @@ BandContrast::BandContrast(int width, int height, std::span<const double> Ya,
     luminance_ = white > 0 ? view.whiteLuminance * std::clamp(partMean / white, 0.0, 1.0) : 0.0;
 
     // G_0 .. G_K of each estimate (perception/BandFilters.h), one task per estimate.
-    const BandFilterBank bank(width, height, part, method);
     const auto [ga, gb] = bank.gaussians(Ya, Yb);
     productAB_.assign(kJndBands, std::vector<double>(n, 0.0));
     for (int k = 0; k < kJndBands; ++k) {

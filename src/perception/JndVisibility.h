@@ -71,6 +71,12 @@ class BandContrast {
     BandContrast(int width, int height, std::span<const double> Ya, std::span<const double> Yb,
                  std::span<const uint8_t> part, double white, const ViewingModel& view,
                  GaussianMethod method = GaussianMethod::Fourier);
+    /// The same on a bank built once for this part (bank.part() nonzero where `part` is): the
+    /// same numbers, without building its kernels, plans and part weights again (the judge's
+    /// bootstrap replicates share one). Throws std::invalid_argument for another part or size.
+    BandContrast(std::span<const double> Ya, std::span<const double> Yb,
+                 std::span<const uint8_t> part, double white, const ViewingModel& view,
+                 const BandFilterBank& bank);
 
     /// The JND of `region` (nonzero pixels) over the defect-free surface `clean`.
     JndScore score(std::span<const uint8_t> region, std::span<const uint8_t> clean) const;

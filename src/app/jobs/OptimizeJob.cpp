@@ -233,9 +233,10 @@ struct Plan {
     /// The defect pixels of the defects objective take more samples (app/pipeline/TrainingNoise.h
     /// defectSppScale); not for black boxes (their renders take one spp) nor shards.
     bool superSampleDefects = false;
-    /// The user gave the optimizer's budget: the JND search then runs to it (no stall stop,
-    /// app/pipeline/Search.h withJndStall).
-    bool budgetGiven = false;
+    /// The optimizer as asked for, before its default budget was filled in: a search resolves
+    /// it for its objective (app/pipeline/Defaults.h resolveOptimizer: the default budget's
+    /// stall stop; a given budget runs to its end).
+    OptimizerOptions requestedOptimizer;
     const Communicator* ranks = nullptr;  // MPI ranks holding shards of T (null: one process)
     bool writes() const { return !ranks || ranks->root(); }  // this process writes OUTDIR
     std::filesystem::path cacheDir;
@@ -279,7 +280,7 @@ Plan plan(const OptimizeJobOptions& options) {
     if (o.starts.empty())
         for (const std::string& spec : optimizeDefaults().starts)
             o.starts.push_back(parseInitialState(spec));
-    p.budgetGiven = o.optimizer.iterations != 0;
+    p.requestedOptimizer = o.optimizer;
     o.optimizer = resolveOptimizer(o.optimizer);  // the method that runs; iterations 0: its budget
     if (o.planes == 0) o.planes = row.defaultPlanes;
     p.blackBox = row.gradient == GradientSource::Renderer;
@@ -887,7 +888,7 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
         si.callback = callback;
         SearchOptions so;
         so.objective = in.kind;
-        so.optimizer = p.budgetGiven ? o.optimizer : withJndStall(o.optimizer, in.kind, oo);
+        so.optimizer = resolveOptimizer(p.requestedOptimizer, in.kind, oo);
         so.optimizer.callback = nullptr;
         so.planes = o.planes;
         so.starts = o.starts;

@@ -29,6 +29,23 @@ OptimizerOptions resolveOptimizer(OptimizerOptions requested) {
     return requested;
 }
 
+OptimizerOptions withJndStall(OptimizerOptions opt, ObjectiveKind kind,
+                              const ObjectiveOptions& objective) {
+    if (kind == ObjectiveKind::Defects && objective.defectMeasure == DefectMeasure::Jnd &&
+        opt.stallEvaluations == 0) {
+        opt.stallEvaluations = kJndStallEvaluations;
+        opt.stallTolerance = kJndStallTolerance;
+    }
+    return opt;
+}
+
+OptimizerOptions resolveOptimizer(OptimizerOptions requested, ObjectiveKind kind,
+                                  const ObjectiveOptions& objective) {
+    const bool budgetGiven = requested.iterations != 0;
+    const OptimizerOptions resolved = resolveOptimizer(requested);
+    return budgetGiven ? resolved : withJndStall(resolved, kind, objective);
+}
+
 InputTransport transportOfInput(const std::filesystem::path& input,
                                 const std::vector<std::string>& sceneOverrides,
                                 const PrecomputeOptions& trace,

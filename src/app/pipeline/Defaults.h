@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "app/pipeline/Transport.h"
+#include "objective/Objective.h"
 #include "objective/ObjectiveKind.h"
 #include "optimize/Methods.h"
 #include "optimize/Optimizer.h"
@@ -52,6 +53,27 @@ OptimizerOptions optimizeJobOptimizerOptions();
 /// An optimizer's row resolved into what runs: the method that does the work (paper-loop:
 /// adam) and, for iterations 0, the requested method's default budget (optimize/Methods.h).
 OptimizerOptions resolveOptimizer(OptimizerOptions requested);
+
+/// The JND measure's stall stop, part of the default budget (docs/DESIGN.md "The defects
+/// objective"; issue 29's speed): L-BFGS on the JND measure keeps lowering its training loss by
+/// a few thousandths per hundred evaluations long after the light has settled (the bundled
+/// part at 256²: -7.818 at evaluation 449, -7.851 at its budget of 2000, 5 of its 6.5
+/// minutes), while the noise rule searches again at every round. It stops once the best loss
+/// fell by less than kJndStallTolerance (2·log JND: 0.5 % of JND) over the last
+/// kJndStallEvaluations evaluations (optimize/Optimizer.h stallEvaluations).
+inline constexpr int kJndStallEvaluations = 200;
+inline constexpr double kJndStallTolerance = 0.01;
+/// `opt` with the stall stop above when `kind` is the defects objective on the JND measure and
+/// opt has no stall stop of its own; otherwise `opt` as it is.
+OptimizerOptions withJndStall(OptimizerOptions opt, ObjectiveKind kind,
+                              const ObjectiveOptions& objective);
+
+/// The optimizer a search of `kind` on `objective` runs, for every command that searches
+/// (optimize, the viewer's "optimize from this light"): resolveOptimizer(requested), and when
+/// no budget was given (iterations 0) the default budget's stall stop (withJndStall). A given
+/// budget runs to its end.
+OptimizerOptions resolveOptimizer(OptimizerOptions requested, ObjectiveKind kind,
+                                  const ObjectiveOptions& objective);
 
 /// T of an input as a command names it: a transport matrix (.tm, or a .shards list merged) read
 /// as it is, else a scene file loaded with its overrides (io/SceneFile.h) and T traced with

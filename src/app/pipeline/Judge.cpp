@@ -14,6 +14,7 @@
 #include "core/Text.h"
 #include "core/WildBootstrap.h"
 #include "objective/UnbiasedObjective.h"
+#include "perception/BandFilters.h"
 #include "scene/EnvMap.h"
 #include "scene/EnvMapToE.h"
 #include "scene/Scene.h"
@@ -120,7 +121,8 @@ JudgeScore Judge::score(std::span<const double> E, const std::string& name) cons
 JudgeScore Judge::scoreImages(std::span<const double> E, std::span<const double> ya,
                               std::span<const double> yb, std::span<const double> y,
                               std::span<const double> wa, std::span<const double> wb,
-                              std::span<const double> w, bool withJnd) const {
+                              std::span<const double> w, bool withJnd,
+                              const BandFilterBank* bank) const {
     const TransportMatrix& t = estimate_->file.matrix;
     JudgeScore s;
     s.spp = estimate_->file.provenance.spp;
@@ -149,7 +151,7 @@ JudgeScore Judge::scoreImages(std::span<const double> E, std::span<const double>
         const auto partPixels = static_cast<double>(
             std::count_if(partMask().begin(), partMask().end(), [](uint8_t m) { return m != 0; }));
         if (withJnd && options_.viewing && partPixels > 0)
-            viewing = JndViewing{*options_.viewing, white / partPixels};
+            viewing = JndViewing{*options_.viewing, white / partPixels, bank};
         s.visibility = defectVisibility(t.width, t.height, ya, yb, partMask(), labels_, legend_,
                                         reference_, viewing ? &*viewing : nullptr);
     }
@@ -174,9 +176,15 @@ JudgeScore Judge::scoreWithErrors(std::span<const double> E, const std::string& 
     // Per replicate: eq2, U, brightness, the combined visibility, the least visible kind's JND,
     // then each region's visibility, contrast and JND.
     constexpr size_t kHead = 5;
-    const std::vector<double> se =
-        wildBootstrapErrors(images, options_.seed, replicates, [&](std::span<const HalfImages> r) {
-            const JudgeScore x = scoreImages(E, r[0].a, r[0].b, {}, r[1].a, r[1].b, {}, jnd);
+    // The band filters depend on the part alone: one bank for every replicate.
+    std::optional<BandFilterBank> bank;
+    if (jnd) bank.emplace(t.width, t.height, partMask());
+    const BandFilterBank* shared = bank ? &*bank : nullptr;
+    const std::vector<double> se = wildBootstrapErrors(
+        images, options_.seed, replicates,
+        [&](std::span<const HalfImages> r) {
+            const JudgeScore x =
+                scoreImages(E, r[0].a, r[0].b, {}, r[1].a, r[1].b, {}, jnd, shared);
             std::vector<double> v{x.eq2.total, x.unbiased.total, x.brightness,
                                   combinedVisibility(x.visibility), leastVisibleJnd(x.visibility)};
             v.resize(kHead + 3 * regions, std::numeric_limits<double>::quiet_NaN());
@@ -186,7 +194,8 @@ JudgeScore Judge::scoreWithErrors(std::span<const double> E, const std::string& 
                 v[kHead + 2 * regions + k] = x.visibility[k].jnd;
             }
             return v;
-        });
+        },
+        options_.threads);
     JudgeScore::Errors e;
     e.replicates = replicates;
     e.eq2 = se[0];

@@ -2,8 +2,8 @@
 //
 // The estimate is a transport matrix of the scene traced with the judge's own seed and two
 // independent sample sets (T_a, T_b), cached on disk by fingerprint, so judging ten lights costs
-// one trace; its spp is what the scores need (judgeInRounds: from 128 until every score's
-// standard error is <= 1 %, at most 1024). Per light E:
+// one trace; its spp is what the scores need (judgeInRounds: from kJudgePilotSpp (128) until every
+// score's standard error is <= 1 %, at most 1024). Per light E:
 //   eq2        the paper's eq. 2 (S/G + λ·mean(E²)) on the mean image Ȳ = (T_a + T_b)/2 · E
 //   unbiased   U = sqrt(S / Σ_pairs ΔY_a·ΔY_b) + λ·mean(E²)  (objective/UnbiasedObjective.h)
 //   mean_E     mean texel value;  sparsity: fraction of texel values < kDarkTexel
@@ -41,12 +41,17 @@ namespace sl {
 struct Scene;
 struct EnvMap;
 class UnbiasedObjective;
+class BandFilterBank;
 
 inline constexpr uint64_t kJudgeSeed = 0x6A75646765ULL << 24;  // "judge"
 /// The most samples the judge's rounds trace (and the spp of `--heldout-spp`'s old default).
 inline constexpr int kJudgeDefaultSpp = 1024;
 /// The judge's first round (README "The judge"): rounds start here and stop when every score a
-/// person reads has a relative standard error of at most kJudgeMaxError (or at the cap).
+/// person reads has a relative standard error of at most kJudgeMaxError (or at the cap). 64
+/// was tried (docs/BENCHMARKS.md, issue 31's third pass): on a held-out 512² part the paper's
+/// light's U had a bootstrap SE of 7.4 % at 64 spp against 1.4 % at 128 (the SE of a ratio with
+/// a noisy denominator is over-stated at low spp), so the rounds went to 1024 spp instead of 512
+/// and the run cost 1.6× the CPU.
 inline constexpr int kJudgePilotSpp = 128;
 inline constexpr double kJudgeMaxError = 0.01;
 /// Replicates of the standard-error estimate (Judge::scoreWithErrors): the SE itself is then
@@ -139,7 +144,8 @@ class Judge {
     /// ±d_p/√2 with independent signs per pixel and half (a fixed seed: the same E gives the
     /// same errors) — the same light's white-furnace image with the same signs — and scores
     /// them again (each region's JND too, with a viewing model: its band contrasts are formed
-    /// anew per replicate, the dearest part); the SE is the replicates' spread (1.4826 × their
+    /// anew per replicate on one bank of band filters, the dearest part; the replicates run on
+    /// every core, core/WildBootstrap.h); the SE is the replicates' spread (1.4826 × their
     /// median absolute deviation,
     /// a standard deviation robust to a replicate whose denominator nearly vanished; to first
     /// order the delta
@@ -170,11 +176,12 @@ class Judge {
 
     void buildObjectives();
     /// The scores from the light's half images and the white furnace's (means: (a + b)/2
-    /// unless given).
+    /// unless given); `bank`: the JND's band filters on the part, built once (null: per call).
     JudgeScore scoreImages(std::span<const double> E, std::span<const double> ya,
                            std::span<const double> yb, std::span<const double> y,
                            std::span<const double> wa, std::span<const double> wb,
-                           std::span<const double> w, bool withJnd = true) const;
+                           std::span<const double> w, bool withJnd = true,
+                           const BandFilterBank* bank = nullptr) const;
 };
 
 /// The judge in rounds (JudgeOptions::spp 0): scores `lights` (name, E) with their errors on

@@ -15,16 +15,6 @@
 
 namespace sl {
 
-OptimizerOptions withJndStall(OptimizerOptions opt, ObjectiveKind kind,
-                              const ObjectiveOptions& objective) {
-    if (kind == ObjectiveKind::Defects && objective.defectMeasure == DefectMeasure::Jnd &&
-        opt.stallEvaluations == 0) {
-        opt.stallEvaluations = kJndStallEvaluations;
-        opt.stallTolerance = kJndStallTolerance;
-    }
-    return opt;
-}
-
 ObjectiveOnT objectiveOnT(ObjectiveKind kind, const TransportMatrix& t, const SearchInputs& in,
                           const ObjectiveOptions& oo) {
     ObjectiveOnT r;

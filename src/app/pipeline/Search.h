@@ -47,20 +47,6 @@ struct SearchOptions {
     LightGrid lightGrid;
 };
 
-/// The JND measure's stall stop, optimize's default when no budget is given (docs/DESIGN.md
-/// "The defects objective"; issue 29's speed): L-BFGS on the JND measure keeps lowering its
-/// training loss by a few thousandths per hundred evaluations long after the light has settled
-/// (the bundled part at 256²: -7.818 at evaluation 449, -7.851 at its budget of 2000, 5 of its
-/// 6.5 minutes), while the noise rule searches again at every round. It stops once the best
-/// loss fell by less than kJndStallTolerance (2·log JND: 0.5 % of JND) over the last
-/// kJndStallEvaluations evaluations (optimize/Optimizer.h stallEvaluations).
-inline constexpr int kJndStallEvaluations = 200;
-inline constexpr double kJndStallTolerance = 0.01;
-/// `opt` with the stall stop above when `kind` is the defects objective on the JND measure and
-/// opt has no stall stop of its own; otherwise `opt` as it is.
-OptimizerOptions withJndStall(OptimizerOptions opt, ObjectiveKind kind,
-                              const ObjectiveOptions& objective);
-
 struct SearchInputs {
     /// The estimates of T (at least options.planes; set[0] is the main T). The unbiased
     /// objective needs two planes in each.
