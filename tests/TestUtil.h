@@ -3,6 +3,7 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -10,6 +11,7 @@
 #include <fstream>
 #include <iterator>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -77,6 +79,16 @@ inline TransportMatrix tinyTransportMatrix() {
 /// A file's bytes ("" when it cannot be read).
 /// The mean of a sample, and its standard deviation (n − 1): what a standard error is checked
 /// against over independent estimates.
+/// max |a − b| over max |b|: the relative difference of two vectors in the larger one's scale.
+inline double maxRelDiff(std::span<const double> a, std::span<const double> b) {
+    double scale = 0, diff = 0;
+    for (size_t i = 0; i < a.size(); ++i) {
+        scale = std::max(scale, std::abs(b[i]));
+        diff = std::max(diff, std::abs(a[i] - b[i]));
+    }
+    return diff / std::max(scale, 1e-300);
+}
+
 inline double sampleMean(const std::vector<double>& v) {
     double m = 0;
     for (double x : v) m += x;

@@ -17,6 +17,7 @@
 #include "transport/TransportSink.h"
 
 using namespace sl;
+using test::maxRelDiff;
 
 namespace {
 
@@ -51,15 +52,6 @@ EnvMap asEnvMap(const std::vector<double>& e, int w, int h, int ch) {
     EnvMap m = EnvMap::constant(w, h, 0.0f, ch);
     for (size_t i = 0; i < e.size(); ++i) m.texels[i] = static_cast<float>(e[i]);
     return m;
-}
-
-double maxRelDiff(std::span<const double> a, std::span<const double> b) {
-    double scale = 0, diff = 0;
-    for (size_t i = 0; i < a.size(); ++i) {
-        scale = std::max(scale, std::abs(b[i]));
-        diff = std::max(diff, std::abs(a[i] - b[i]));
-    }
-    return diff / std::max(scale, 1e-300);
 }
 
 }  // namespace

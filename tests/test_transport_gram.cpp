@@ -20,6 +20,7 @@
 #include "transport/TransportSink.h"
 
 using namespace sl;
+using test::maxRelDiff;
 
 namespace {
 
@@ -45,15 +46,6 @@ std::vector<double> randomVec(size_t n, uint64_t seed) {
     std::vector<double> v(n);
     for (double& x : v) x = rng.nextDouble();
     return v;
-}
-
-double maxRelDiff(std::span<const double> a, std::span<const double> b) {
-    double scale = 0, diff = 0;
-    for (size_t i = 0; i < a.size(); ++i) {
-        scale = std::max(scale, std::abs(b[i]));
-        diff = std::max(diff, std::abs(a[i] - b[i]));
-    }
-    return diff / std::max(scale, 1e-300);
 }
 
 /// A mask with holes: the object mask with every 7th pixel dropped (pairs at its edges).

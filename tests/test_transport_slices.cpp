@@ -19,6 +19,7 @@
 #include "transport/TransportSlices.h"
 
 using namespace sl;
+using test::maxRelDiff;
 
 namespace {
 
@@ -45,15 +46,6 @@ std::vector<double> randomVec(size_t n, uint64_t seed, double shift = 0.0) {
     std::vector<double> v(n);
     for (double& x : v) x = rng.nextDouble() - shift;
     return v;
-}
-
-double maxRelDiff(std::span<const double> a, std::span<const double> b) {
-    double scale = 0, diff = 0;
-    for (size_t i = 0; i < a.size(); ++i) {
-        scale = std::max(scale, std::abs(b[i]));
-        diff = std::max(diff, std::abs(a[i] - b[i]));
-    }
-    return diff / std::max(scale, 1e-300);
 }
 
 size_t countDifferent(std::span<const double> a, std::span<const double> b) {

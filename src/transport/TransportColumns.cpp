@@ -1,13 +1,10 @@
 #include "transport/TransportColumns.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include <algorithm>
 #include <stdexcept>
 
 #include "core/Color.h"
+#include "transport/BlockParallel.h"
 
 namespace sl {
 
@@ -32,21 +29,6 @@ inline double columnSum(uint64_t k0, uint64_t k1, F&& term) {
     }
     for (int l = 0; k < k1; ++k, ++l) s[l] += term(k);
     return (s[0] + s[2]) + (s[1] + s[3]);
-}
-
-/// f(c0, c1) over blocks of columns, in an arena of `threads` (0: all).
-template <typename F>
-void forColumnBlocks(size_t cols, int threads, F&& f) {
-    auto body = [&] {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, cols, 16),
-                          [&](const tbb::blocked_range<size_t>& r) { f(r.begin(), r.end()); });
-    };
-    if (threads > 0) {
-        tbb::task_arena arena(threads);
-        arena.execute(body);
-    } else {
-        body();
-    }
 }
 
 }  // namespace
@@ -194,7 +176,7 @@ void TransportColumns::transposeAll(std::span<const double> g, std::span<double>
     const float* val = value_.data();
     const uint32_t* row = row_.data();
     const double* gd = g.data();
-    forColumnBlocks(cols_, threads, [&](size_t c0, size_t c1) {
+    forBlocks(cols_, 16, threads, [&](size_t c0, size_t c1) {
         for (size_t c = c0; c < c1; ++c) {
             const uint64_t k1 = colPtr_[c + 1];
             auto term = [&](uint64_t k) {
@@ -216,7 +198,7 @@ void TransportColumns::transposeHalvesAll(std::span<const double> ga, std::span<
     const uint32_t* row = row_.data();
     const double* a = ga.data();
     const double* b = gb.data();
-    forColumnBlocks(cols_, threads, [&](size_t c0, size_t c1) {
+    forBlocks(cols_, 16, threads, [&](size_t c0, size_t c1) {
         for (size_t c = c0; c < c1; ++c) {
             out[c] = columnSum(colPtr_[c], colPtr_[c + 1], [&](uint64_t k) {
                 const uint32_t r = row[k];

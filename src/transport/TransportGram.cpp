@@ -1,13 +1,10 @@
 #include "transport/TransportGram.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include <stdexcept>
 #include <string>
 
 #include "core/Color.h"
+#include "transport/BlockParallel.h"
 
 namespace sl {
 
@@ -16,21 +13,6 @@ namespace {
 // The luminance weights of core/Color.h (its one rule), each exact: w·1 + 0 + 0.
 constexpr double kLum[3] = {luminance(1.0, 0.0, 0.0), luminance(0.0, 1.0, 0.0),
                             luminance(0.0, 0.0, 1.0)};
-
-/// f(i0, i1) over blocks of rows, in an arena of `threads` (0: all).
-template <typename F>
-void forRowBlocks(size_t n, size_t grain, int threads, F&& f) {
-    auto body = [&] {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, grain),
-                          [&](const tbb::blocked_range<size_t>& r) { f(r.begin(), r.end()); });
-    };
-    if (threads > 0) {
-        tbb::task_arena arena(threads);
-        arena.execute(body);
-    } else {
-        body();
-    }
-}
 
 /// Σ_k a[k]·b[k] over n values in four interleaved sums (fixed order).
 inline double dot(const double* a, const double* b, size_t n) {
@@ -132,7 +114,7 @@ TransportGram::TransportGram(const TransportMatrix& t, std::span<const uint8_t> 
     p_.assign(m_ * m_, 0.0);
     if (products) q_.assign(m_ * m_, 0.0);
     const uint8_t* mask = pairMask.data();
-    forRowBlocks(m_, 8, threads, [&](size_t i0, size_t i1) {
+    forBlocks(m_, 8, threads, [&](size_t i0, size_t i1) {
         for (size_t i = i0; i < i1; ++i) {
             double* pr = p_.data() + i * m_;
             double* qr = products ? q_.data() + i * m_ : nullptr;
@@ -154,7 +136,7 @@ TransportGram::TransportGram(const TransportMatrix& t, std::span<const uint8_t> 
     });
     // sym(M) in place: the pairs (i, j), (j, i) get their mean, so P is exactly symmetric.
     auto symmetrise = [&](std::vector<double>& m) {
-        forRowBlocks(m_, 16, threads, [&](size_t i0, size_t i1) {
+        forBlocks(m_, 16, threads, [&](size_t i0, size_t i1) {
             for (size_t i = i0; i < i1; ++i)
                 for (size_t j = i + 1; j < m_; ++j) {
                     const double s = 0.5 * (m[i * m_ + j] + m[j * m_ + i]);
@@ -184,7 +166,7 @@ double TransportGram::form(const std::vector<double>& m, std::span<const double>
     if (m_ * m_ <= kSerialEntries)
         rows(0, m_);
     else
-        forRowBlocks(m_, 64, threads, rows);
+        forBlocks(m_, 64, threads, rows);
     if (!ME.empty()) {
         std::fill(ME.begin(), ME.end(), 0.0);
         for (size_t k = 0; k < m_; ++k) ME[seen_[k]] = out[k];
