@@ -74,24 +74,24 @@ double sd(const std::vector<double>& v) {
     return test::sampleSd(v);
 }
 
-}  // namespace
-
-// The SE of one estimate predicts how much the score moves between independent estimates:
-// over 16 judge seeds at 256 spp, the scores' standard deviation against the mean SE (the
-// spread of 16 values is itself known to about ±18 %).
-TEST(JudgeRounds, StandardErrorMatchesTheSpreadOverIndependentSeeds) {
-    auto scene = wavyScene(32);
-    const std::vector<double> e = randomLight(1250, 11);
-    std::vector<double> u, eq2, bright, seU, seEq2, seBright;
+// The scores, with their errors, of one light on 16 independent judge estimates at `spp`
+// (seeds kJudgeSeed + seedOffset + k).
+std::vector<JudgeScore> scoresOverSeeds(const Scene& scene, const std::vector<double>& e, int spp,
+                                        uint64_t seedOffset) {
+    std::vector<JudgeScore> scores;
     for (uint64_t k = 0; k < 16; ++k) {
         JudgeOptions o;
-        o.spp = 256;
-        o.seed = kJudgeSeed + 100 + k;
-        const Judge judge(*scene, o);
-        const JudgeScore s = judge.scoreWithErrors(e, "random");
-        ASSERT_TRUE(s.se);
-        EXPECT_EQ(s.spp, 256);
-        EXPECT_EQ(s.se->replicates, kJudgeReplicates);
+        o.spp = spp;
+        o.seed = kJudgeSeed + seedOffset + k;
+        scores.push_back(Judge(scene, o).scoreWithErrors(e, "random"));
+    }
+    return scores;
+}
+
+// U's, eq. 2's and the brightness's spread over the estimates is their mean SE, within ±45 %.
+void expectSpreadMatchesErrors(const std::vector<JudgeScore>& scores) {
+    std::vector<double> u, eq2, bright, seU, seEq2, seBright;
+    for (const JudgeScore& s : scores) {
         u.push_back(s.unbiased.total);
         eq2.push_back(s.eq2.total);
         bright.push_back(s.brightness);
@@ -102,6 +102,23 @@ TEST(JudgeRounds, StandardErrorMatchesTheSpreadOverIndependentSeeds) {
     EXPECT_NEAR(sd(u) / mean(seU), 1.0, 0.45) << sd(u) << " vs " << mean(seU);
     EXPECT_NEAR(sd(eq2) / mean(seEq2), 1.0, 0.45) << sd(eq2) << " vs " << mean(seEq2);
     EXPECT_NEAR(sd(bright) / mean(seBright), 1.0, 0.45) << sd(bright) << " vs " << mean(seBright);
+}
+
+}  // namespace
+
+// The SE of one estimate predicts how much the score moves between independent estimates:
+// over 16 judge seeds at 256 spp, the scores' standard deviation against the mean SE (the
+// spread of 16 values is itself known to about ±18 %).
+TEST(JudgeRounds, StandardErrorMatchesTheSpreadOverIndependentSeeds) {
+    auto scene = wavyScene(32);
+    const std::vector<double> e = randomLight(1250, 11);
+    const std::vector<JudgeScore> scores = scoresOverSeeds(*scene, e, 256, 100);
+    for (const JudgeScore& s : scores) {
+        ASSERT_TRUE(s.se);
+        EXPECT_EQ(s.spp, 256);
+        EXPECT_EQ(s.se->replicates, kJudgeReplicates);
+    }
+    expectSpreadMatchesErrors(scores);
 }
 
 // Sixteen times the samples: the standard error falls as 1/sqrt(spp) where the noise is small
@@ -457,22 +474,7 @@ TEST(JudgeRounds, JndErrorsOnASharedBankAndThreadsAreTheSerialOnes) {
 TEST(JudgeRounds, StandardErrorHoldsAtThePilotSpp) {
     auto scene = wavyScene(32);
     const std::vector<double> e = randomLight(1250, 13);
-    std::vector<double> u, eq2, bright, seU, seEq2, seBright;
-    for (uint64_t k = 0; k < 16; ++k) {
-        JudgeOptions o;
-        o.spp = kJudgePilotSpp;
-        o.seed = kJudgeSeed + 300 + k;
-        const Judge judge(*scene, o);
-        const JudgeScore s = judge.scoreWithErrors(e, "random");
-        ASSERT_TRUE(s.se);
-        u.push_back(s.unbiased.total);
-        eq2.push_back(s.eq2.total);
-        bright.push_back(s.brightness);
-        seU.push_back(s.se->unbiased);
-        seEq2.push_back(s.se->eq2);
-        seBright.push_back(s.se->brightness);
-    }
-    EXPECT_NEAR(sd(u) / mean(seU), 1.0, 0.45) << sd(u) << " vs " << mean(seU);
-    EXPECT_NEAR(sd(eq2) / mean(seEq2), 1.0, 0.45) << sd(eq2) << " vs " << mean(seEq2);
-    EXPECT_NEAR(sd(bright) / mean(seBright), 1.0, 0.45) << sd(bright) << " vs " << mean(seBright);
+    const std::vector<JudgeScore> scores = scoresOverSeeds(*scene, e, kJudgePilotSpp, 300);
+    for (const JudgeScore& s : scores) ASSERT_TRUE(s.se);
+    expectSpreadMatchesErrors(scores);
 }
