@@ -166,12 +166,20 @@ std::vector<float> removeTexture(std::span<const float> heights, int width, int 
     checkInput(heights, width, height);
     TextureRequest want;
     want.levelDelta = true;
-    TextureResidual tr = textureResidual(heights, width, height, options, nullptr, want);
+    TextureResidual tr = textureResidual(heights, width, height, options, want);
     for (size_t k = 0; k < tr.levelDelta.size(); ++k) tr.residual[k] += tr.levelDelta[k];
     return std::move(tr.residual);
 }
 
 namespace {
+
+// The notch's statistics of steps 1–3 into r (auto's summary).
+void recordNotch(const NotchStats& notch, DefectMap& r) {
+    r.notchedBins = notch.notchedBins;
+    r.spectrumBins = notch.spectrumBins;
+    r.fftWidth = notch.fftWidth;
+    r.fftHeight = notch.fftHeight;
+}
 
 // The selfsim method's map and statistics into r (the selfsim method, and auto on a measured
 // texture).
@@ -259,7 +267,8 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
     want.sectors = wantTexture && o.textureSectors > 1;
     want.period = o.ringWindow > 0;
     want.levelDelta = o.levelWiener;
-    TextureResidual tr = textureResidual(heights, W, H, o, &r, want);
+    TextureResidual tr = textureResidual(heights, W, H, o, want);
+    recordNotch(tr.notch, r);
     std::vector<float> R = std::move(tr.residual), macro = std::move(tr.macro);
     std::vector<float> texture = std::move(tr.texture), levelDelta = std::move(tr.levelDelta);
     std::vector<std::vector<float>> sectors = std::move(tr.sectors);
@@ -277,7 +286,8 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
             want.period = false;
             want.prior = std::move(T);
             want.passes = 1;
-            tr = textureResidual(heights, W, H, o, &r, std::move(want));
+            tr = textureResidual(heights, W, H, o, std::move(want));
+            recordNotch(tr.notch, r);
             R = std::move(tr.residual);
             macro = std::move(tr.macro);
             texture = std::move(tr.texture);

@@ -157,8 +157,9 @@ double dominantPeriod(const Spectrum& s, double maxPeriod) {
 /// by the orientation of its wave-vector into textureSectors parts (their sum is the texture);
 /// with `periodOut`, d's dominantPeriod below macroWindow/2 (from the same spectrum); with
 /// `levelDeltaOut` (and levelWiener), the level's Wiener residual minus d − texture (step 4).
+/// `stats`: the notch's statistics.
 std::vector<float> notchPass(const std::vector<float>& d, int W, int H, const DefectMapOptions& o,
-                             DefectMap* info, std::vector<std::vector<float>>* sectorsOut,
+                             NotchStats& stats, std::vector<std::vector<float>>* sectorsOut,
                              double* periodOut, std::vector<float>* levelDeltaOut) {
     const Padded p = padMap(d, W, H, o.pad, 0.0);
     Spectrum s = forward(p);
@@ -180,12 +181,10 @@ std::vector<float> notchPass(const std::vector<float>& d, int W, int H, const De
     }
     for (size_t k = 0; k < s.bins.size(); ++k) s.bins[k] -= kept.bins[k];
     kept = {};
-    if (info) {
-        info->notchedBins = notched;
-        info->spectrumBins = s.bins.size();
-        info->fftWidth = p.W;
-        info->fftHeight = p.H;
-    }
+    stats.notchedBins = notched;
+    stats.spectrumBins = s.bins.size();
+    stats.fftWidth = p.W;
+    stats.fftHeight = p.H;
     if (!sectorsOut || o.textureSectors < 2) return inverse(s, p, W, H);
     // sectors 0 … K−2 from their bins; the last is the texture minus them (one FFT fewer)
     sectorsOut->clear();
@@ -210,7 +209,7 @@ std::vector<float> notchPass(const std::vector<float>& d, int W, int H, const De
 }  // namespace
 
 TextureResidual textureResidual(std::span<const float> h, int W, int H, const DefectMapOptions& o,
-                                DefectMap* info, TextureRequest request) {
+                                TextureRequest request) {
     const size_t n = h.size();
     const int passes = request.passes > 0 ? request.passes : o.passes;
     TextureResidual res;
@@ -222,7 +221,7 @@ TextureResidual textureResidual(std::span<const float> h, int W, int H, const De
         macro = separableMedian(macro, W, H, o.macroWindow);
         for (size_t k = 0; k < n; ++k) d[k] = h[k] - macro[k];
         const bool last = pass + 1 == passes;
-        texture = notchPass(d, W, H, o, info, last && request.sectors ? &res.sectors : nullptr,
+        texture = notchPass(d, W, H, o, res.notch, last && request.sectors ? &res.sectors : nullptr,
                             last && request.period ? &res.period : nullptr,
                             last && request.levelDelta ? &res.levelDelta : nullptr);
     }

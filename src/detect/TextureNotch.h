@@ -2,6 +2,7 @@
 // (a separable running median) and the periodic tool-path texture (the spectral notch).
 #pragma once
 
+#include <cstddef>
 #include <span>
 #include <vector>
 
@@ -19,6 +20,12 @@ struct TextureRequest {
     int passes = 0;            // 0: o.passes
 };
 
+/// The notch's statistics: the spectrum's bins notched of all, the padded FFT's size.
+struct NotchStats {
+    size_t notchedBins = 0, spectrumBins = 0;
+    int fftWidth = 0, fftHeight = 0;
+};
+
 /// Steps 1–3's results (W×H each; a field not requested stays empty, or 0).
 struct TextureResidual {
     std::vector<float> residual;              // R = h − macro − texture
@@ -27,11 +34,12 @@ struct TextureResidual {
     std::vector<std::vector<float>> sectors;  // T by orientation, their sum T (request.sectors)
     double period = 0;                        // samples (request.period)
     std::vector<float> levelDelta;            // the Wiener estimate's level minus A
+    NotchStats notch;                         // the last pass's notch
 };
 
-/// Steps 1–3: R = h − macro − texture, with what `request` asks for; `info` (if given)
-/// receives the notch's statistics (bins notched, FFT size).
+/// Steps 1–3: R = h − macro − texture, with what `request` asks for, and the notch's
+/// statistics.
 TextureResidual textureResidual(std::span<const float> h, int W, int H, const DefectMapOptions& o,
-                                DefectMap* info, TextureRequest request = {});
+                                TextureRequest request = {});
 
 }  // namespace sl::defectmap
