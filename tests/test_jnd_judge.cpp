@@ -116,7 +116,8 @@ TEST(JudgeJnd, TheAnswerLineLeadsWithJnd) {
     EXPECT_EQ(h.rfind("Under the optimized light the defects are 8.9 JND above threshold, 3.1 "
                       "under your lamp (studio preset) and 2 under the paper's light, as a person "
                       "sees the image (38.8 px/deg, white 200 cd/m²). By the visibility ratio "
-                      "they are 43× as visible",
+                      "(their gradient over the texture's) they stand out of the texture 43× as "
+                      "much as under your lamp (studio preset)",
                       0),
               0u)
         << h;
@@ -130,6 +131,20 @@ TEST(JudgeJnd, TheAnswerLineLeadsWithJnd) {
                   0),
               0u)
         << optimizeHeadline(withSe);
+    // Above the lamp in JND but below it by the ratio: the light shows the texture more too;
+    // the line says so in the ratio's own terms, and never calls it less visible (the JND is
+    // the visibility).
+    nlohmann::json texture = s;
+    texture["compare"]["optimized"]["judge"] = judge(8.9, 0.5);
+    const std::string t = optimizeHeadline(texture);
+    EXPECT_NE(
+        t.find("they stand out of the texture LESS than under your lamp (studio preset) "
+               "(0.83× as much) and LESS than under the paper's light (0.42× as much): this light "
+               "shows the texture more strongly too. Judge: visibility ratio 0.5 "
+               "(optimized) vs 0.6 (your lamp) vs 1.2 (paper's light)"),
+        std::string::npos)
+        << t;
+    EXPECT_EQ(t.find("LESS visible"), std::string::npos) << t;
     s["compare"]["optimized"]["judge"] = judge(0.4, 26);
     EXPECT_NE(optimizeHeadline(s).find("below threshold (0.4 JND)"), std::string::npos);
     // Without JND (an output from before it): the ratio sentence as before.

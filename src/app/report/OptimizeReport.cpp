@@ -146,6 +146,16 @@ std::string moreVisible(double opt, double other, const std::string& under) {
     return out;
 }
 
+/// With the JND first, the visibility ratio says how far the defects stand out of the texture:
+/// "2.6× as much as under X" / "as much as under X" / "LESS than under X (0.81× as much)".
+std::string standOut(double opt, double other, const std::string& under) {
+    const double r = opt / other;
+    if (!std::isfinite(r)) return "(no comparison with " + under + ")";
+    if (r >= 1.005) return fmt(r, 2) + "× as much as " + under;
+    if (r > 0.995) return "as much as " + under;
+    return "LESS than " + under + " (" + fmt(r, 2) + "× as much)";
+}
+
 /// "X % lower than under Y" for a loss (lower is better), honest when it is not lower. A loss
 /// that can be negative (the defects objective's) has no meaningful ratio: then the difference.
 std::string lowerLoss(double opt, double other, const std::string& under) {
@@ -407,12 +417,21 @@ std::string optimizeHeadline(const json& s) {
                               cmp.value("viewing", json::object()));
             out += lampNotChosen(s, leastVisibleJnd(opt["judge"]), leastVisibleJnd(lamp["judge"]),
                                  lamp.value("name", std::string()));
-            out += (out.empty() ? "Under the optimized light the defects are "
-                                : "By the visibility ratio they are ") +
-                   moreVisible(vo, vl, underLamp);
-            out += " and " + moreVisible(vo, vp, "under the paper's light");
-            out += ". Judge: defect visibility " + fmt(vo, 3) + " (optimized) vs " + fmt(vl, 3) +
-                   " (your lamp) vs " + fmt(vp, 3);
+            if (out.empty()) {  // no JND: the visibility ratio is the visibility
+                out = "Under the optimized light the defects are " + moreVisible(vo, vl, underLamp);
+                out += " and " + moreVisible(vo, vp, "under the paper's light");
+                out += ". Judge: defect visibility " + fmt(vo, 3) + " (optimized) vs " +
+                       fmt(vl, 3) + " (your lamp) vs " + fmt(vp, 3);
+            } else {  // JND first; the ratio says how far they stand out of the texture
+                out +=
+                    "By the visibility ratio (their gradient over the texture's) they stand "
+                    "out of the texture " +
+                    standOut(vo, vl, underLamp) + " and " +
+                    standOut(vo, vp, "under the paper's light");
+                if (vo < vl / 1.005) out += ": this light shows the texture more strongly too";
+                out += ". Judge: visibility ratio " + fmt(vo, 3) + " (optimized) vs " + fmt(vl, 3) +
+                       " (your lamp) vs " + fmt(vp, 3);
+            }
             out += " (paper's light), on an independent " + spp + "-spp estimate.";
             out += worstLabelSentence(opt["judge"], lamp["judge"]);
             return out;
