@@ -498,8 +498,16 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
                opt = cmp.value("optimized", json::object());
     const std::string lampName = lamp.value("name", std::string("studio preset"));
     const std::string headline = optimizeHeadline(s);
-    const bool worse =
-        headline.find("LESS") != std::string::npos || headline.find("HIGHER") != std::string::npos;
+    // Worse than the lamp: in JND when the judge has it (the visibility; a ratio below the
+    // lamp's only says the texture shows more too), else by the ratio or U.
+    const double jndOpt = opt.contains("judge") ? leastVisibleJnd(opt["judge"]) : std::nan(""),
+                 jndLamp = lamp.contains("judge") ? leastVisibleJnd(lamp["judge"]) : std::nan("");
+    const bool referenceWon = s.contains("answer") && s["answer"].is_object() &&
+                              s["answer"].value("kind", std::string()) == "reference";
+    const bool worse = std::isfinite(jndOpt) && std::isfinite(jndLamp)
+                           ? !referenceWon && jndOpt < jndLamp
+                           : headline.find("LESS visible") != std::string::npos ||
+                                 headline.find("HIGHER") != std::string::npos;
     std::ostringstream h;
     std::string title = "scratchlight optimize: the light that shows the defects";
     if (s.contains("lambda") && s["lambda"].is_number())
