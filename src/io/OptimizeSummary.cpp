@@ -10,62 +10,28 @@ namespace {
 
 using json = nlohmann::json;
 
-/// The value at `pointer`, or nullptr when absent or null.
-const json* at(const json& d, const char* pointer) {
+/// What a typed key may hold: the check of its value and its name in a message.
+struct Kind {
+    bool (*fits)(const json&);
+    const char* name;
+};
+constexpr Kind kString{[](const json& v) { return v.is_string(); }, "a string"};
+constexpr Kind kNumber{[](const json& v) { return v.is_number(); }, "a number"};
+constexpr Kind kBool{[](const json& v) { return v.is_boolean(); }, "true or false"};
+constexpr Kind kInteger{[](const json& v) { return v.is_number_integer(); }, "an integer"};
+constexpr Kind kObject{[](const json& v) { return v.is_object(); }, "an object"};
+
+/// The value at `pointer`, or nullptr when absent or null; InputError naming `where` and the
+/// pointer when it is not of `kind`.
+const json* take(const json& d, const char* pointer, const std::string& where, const Kind& kind) {
     const json::json_pointer p(pointer);
-    if (!d.contains(p)) return nullptr;
+    if (!d.contains(p) || d.at(p).is_null()) return nullptr;
     const json& v = d.at(p);
-    return v.is_null() ? nullptr : &v;
-}
-
-[[noreturn]] void wrongType(const std::string& where, const char* pointer, const char* type,
-                            const json& v) {
-    throw inputError(where + " " + pointer,
-                     std::string("must be ") + type + ", got " + jsonExcerpt(v, 40),
-                     "write the output again with a current optimize");
-}
-
-void take(const json& d, const char* pointer, const std::string& where, std::string& out) {
-    if (const json* v = at(d, pointer)) {
-        if (!v->is_string()) wrongType(where, pointer, "a string", *v);
-        out = v->get<std::string>();
-    }
-}
-
-void take(const json& d, const char* pointer, const std::string& where, double& out) {
-    if (const json* v = at(d, pointer)) {
-        if (!v->is_number()) wrongType(where, pointer, "a number", *v);
-        out = v->get<double>();
-    }
-}
-
-void take(const json& d, const char* pointer, const std::string& where, bool& out) {
-    if (const json* v = at(d, pointer)) {
-        if (!v->is_boolean()) wrongType(where, pointer, "true or false", *v);
-        out = v->get<bool>();
-    }
-}
-
-void take(const json& d, const char* pointer, const std::string& where, std::optional<int>& out) {
-    if (const json* v = at(d, pointer)) {
-        if (!v->is_number_integer()) wrongType(where, pointer, "an integer", *v);
-        out = v->get<int>();
-    }
-}
-
-/// A number or null (a loss that was not finite is written as null).
-void takeNumber(const json& d, const char* pointer, const std::string& where, json& out) {
-    if (const json* v = at(d, pointer)) {
-        if (!v->is_number()) wrongType(where, pointer, "a number or null", *v);
-        out = *v;
-    }
-}
-
-void takeObject(const json& d, const char* pointer, const std::string& where, json& out) {
-    if (const json* v = at(d, pointer)) {
-        if (!v->is_object()) wrongType(where, pointer, "an object", *v);
-        out = *v;
-    }
+    if (!kind.fits(v))
+        throw inputError(where + " " + pointer,
+                         std::string("must be ") + kind.name + ", got " + jsonExcerpt(v, 40),
+                         "write the output again with a current optimize");
+    return &v;
 }
 
 }  // namespace
@@ -73,22 +39,25 @@ void takeObject(const json& d, const char* pointer, const std::string& where, js
 OptimizeSummary optimizeSummaryFromJson(json document, const std::string& where) {
     if (!document.is_object()) throw inputError(where, "not a JSON object");
     OptimizeSummary s;
-    take(document, "/objective", where, s.objective);
-    take(document, "/lambda", where, s.lambda);
-    take(document, "/smooth_abs", where, s.smoothAbs);
-    take(document, "/reg", where, s.reg);
-    take(document, "/defects_measure", where, s.defectsMeasure);
-    take(document, "/optimizer", where, s.optimizer);
-    if (const json* t = at(document, "/transport"); t && !t->is_object())
-        wrongType(where, "/transport", "an object", *t);
-    take(document, "/transport/file", where, s.transportFile);
-    take(document, "/truth", where, s.truth);
-    takeNumber(document, "/initial_loss", where, s.initialLoss);
-    takeNumber(document, "/final_loss", where, s.finalLoss);
-    takeObject(document, "/metrics", where, s.metrics);
-    takeObject(document, "/metrics_initial", where, s.metricsInitial);
-    takeObject(document, "/compare", where, s.compare);
-    take(document, "/compare/judge_spp", where, s.judgeSpp);
+    const json& d = document;
+    if (const json* v = take(d, "/objective", where, kString)) s.objective = v->get<std::string>();
+    if (const json* v = take(d, "/lambda", where, kNumber)) s.lambda = v->get<double>();
+    if (const json* v = take(d, "/smooth_abs", where, kBool)) s.smoothAbs = v->get<bool>();
+    if (const json* v = take(d, "/reg", where, kString)) s.reg = v->get<std::string>();
+    if (const json* v = take(d, "/defects_measure", where, kString))
+        s.defectsMeasure = v->get<std::string>();
+    if (const json* v = take(d, "/optimizer", where, kString)) s.optimizer = v->get<std::string>();
+    take(d, "/transport", where, kObject);
+    if (const json* v = take(d, "/transport/file", where, kString))
+        s.transportFile = v->get<std::string>();
+    if (const json* v = take(d, "/truth", where, kString)) s.truth = v->get<std::string>();
+    // a loss that was not finite is written as null
+    if (const json* v = take(d, "/initial_loss", where, kNumber)) s.initialLoss = *v;
+    if (const json* v = take(d, "/final_loss", where, kNumber)) s.finalLoss = *v;
+    if (const json* v = take(d, "/metrics", where, kObject)) s.metrics = *v;
+    if (const json* v = take(d, "/metrics_initial", where, kObject)) s.metricsInitial = *v;
+    if (const json* v = take(d, "/compare", where, kObject)) s.compare = *v;
+    if (const json* v = take(d, "/compare/judge_spp", where, kInteger)) s.judgeSpp = v->get<int>();
     s.document = std::move(document);
     return s;
 }
