@@ -1,16 +1,20 @@
 // The OUTDIR contract (io/OptimizeOutDir.h): optimize writes every file and summary.json key the
-// contract lists, the plot scripts open no file it does not list, and README's "What you get"
-// names every file in it.
+// contract lists, the plot scripts open no file it does not list, README's "What you get"
+// names every file in it, and the typed summary its C++ readers read reads only listed keys.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
 #include <string>
+#include <vector>
 
 #include "TestUtil.h"
+#include "core/Error.h"
 #include "io/OptimizeOutDir.h"
+#include "io/OptimizeSummary.h"
 
 namespace sl {
 namespace {
@@ -40,6 +44,82 @@ TEST(OutDir, OptimizeWritesEveryFileAndKeyTheContractLists) {
     const auto s = nlohmann::json::parse(test::readFile(dir / "out" / outdir::kSummary));
     for (const outdir::SummaryKey& k : outdir::optimizeSummaryKeys())
         EXPECT_TRUE(s.contains(nlohmann::json::json_pointer(k.pointer))) << k.pointer;
+}
+
+// The typed summary (io/OptimizeSummary.h): each key it types is one the contract lists, is
+// read with its type, keeps its default when absent, and is refused by name with another type.
+TEST(OutDir, TheTypedSummaryReadsListedKeysAndRefusesAWrongTypeByName) {
+    const std::vector<std::string> typed = {
+        "/objective",       "/lambda",           "/smooth_abs",     "/reg",
+        "/defects_measure", "/optimizer",        "/transport/file", "/truth",
+        "/initial_loss",    "/final_loss",       "/metrics",        "/metrics_initial",
+        "/compare",         "/compare/judge_spp"};
+    std::set<std::string> listed;
+    for (const outdir::SummaryKey& k : outdir::optimizeSummaryKeys()) listed.insert(k.pointer);
+    for (const std::string& p : typed) EXPECT_TRUE(listed.count(p)) << p << " is not listed";
+
+    const nlohmann::json full = {{"objective", "defects"},
+                                 {"lambda", 12.5},
+                                 {"smooth_abs", true},
+                                 {"reg", "image"},
+                                 {"defects_measure", "jnd"},
+                                 {"optimizer", "adam"},
+                                 {"transport", {{"file", "/tmp/t.tm"}}},
+                                 {"truth", "part-truth.png"},
+                                 {"initial_loss", 3.25},
+                                 {"final_loss", nullptr},
+                                 {"metrics", {{"U", 1.5}}},
+                                 {"metrics_initial", {{"U", 2.5}}},
+                                 {"compare", {{"judge_spp", 256}}},
+                                 {"other", 1}};
+    const outdir::OptimizeSummary s = outdir::optimizeSummaryFromJson(full, "summary.json");
+    EXPECT_EQ(s.objective, "defects");
+    EXPECT_EQ(s.lambda, 12.5);
+    EXPECT_TRUE(s.smoothAbs);
+    EXPECT_EQ(s.reg, "image");
+    EXPECT_EQ(s.defectsMeasure, "jnd");
+    EXPECT_EQ(s.optimizer, "adam");
+    EXPECT_EQ(s.transportFile, "/tmp/t.tm");
+    EXPECT_EQ(s.truth, "part-truth.png");
+    EXPECT_EQ(s.initialLoss, 3.25);
+    EXPECT_TRUE(s.finalLoss.is_null());
+    EXPECT_EQ(s.metrics["U"], 1.5);
+    EXPECT_EQ(s.metricsInitial["U"], 2.5);
+    ASSERT_TRUE(s.judgeSpp.has_value());
+    EXPECT_EQ(*s.judgeSpp, 256);
+    EXPECT_EQ(s.document, full);
+
+    const outdir::OptimizeSummary empty =
+        outdir::optimizeSummaryFromJson(nlohmann::json::object(), "summary.json");
+    EXPECT_TRUE(empty.objective.empty());
+    EXPECT_TRUE(std::isnan(empty.lambda));
+    EXPECT_FALSE(empty.smoothAbs);
+    EXPECT_EQ(empty.reg, "envmap");
+    EXPECT_TRUE(empty.transportFile.empty());
+    EXPECT_TRUE(empty.compare.is_null());
+    EXPECT_FALSE(empty.judgeSpp.has_value());
+
+    // Every typed key with a value of another type (an array fits none of them).
+    for (const std::string& p : typed) {
+        nlohmann::json bad = full;
+        bad[nlohmann::json::json_pointer(p)] = nlohmann::json::array({1});
+        try {
+            outdir::optimizeSummaryFromJson(bad, "summary.json");
+            ADD_FAILURE() << p << " with an array was accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("summary.json " + p), std::string::npos)
+                << e.what();
+        }
+    }
+    EXPECT_THROW(outdir::optimizeSummaryFromJson(nlohmann::json::array(), "summary.json"),
+                 InputError);
+    test::TempDir dir("outdir-summary");
+    try {
+        outdir::readOptimizeSummary(dir.path());
+        ADD_FAILURE() << "a folder without summary.json was read";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find(outdir::kSummary), std::string::npos) << e.what();
+    }
 }
 
 TEST(OutDir, ThePlotScriptsOpenOnlyFilesTheContractLists) {

@@ -2,12 +2,13 @@
 // writer (app/jobs/OptimizeJob.cpp, the figures app/report/OptimizeFigures.cpp) names its files
 // by these constants, and its readers read through them: the viewer (app/viewer/Viewer.cpp:
 // the objective that made the output, T, the lights), the report (app/report/Report.cpp: a run's
-// pictures, loss and metrics), judge (an OUTDIR as a light: its envmap.exr) and the plot scripts
-// (scripts/plot_optimize.py, scripts/plot_before_after.py), which cannot include this header:
-// the names they open and the summary keys they read are listed in optimizeOutDirFiles() and
-// optimizeSummaryKeys(), and README's "What you get" table documents every file listed
-// (tests/test_outdir.cpp checks that optimize writes what the tables say, that the scripts read
-// nothing the tables do not list, and that README names every file).
+// pictures, loss and metrics; OptimizeReport.cpp: optimize's page), both reading summary.json
+// through its typed reader (io/OptimizeSummary.h), judge (an OUTDIR as a light: its envmap.exr) and
+// the plot scripts (scripts/plot_optimize.py, scripts/plot_before_after.py), which cannot include
+// this header: the names they open and the summary keys they read are listed in
+// optimizeOutDirFiles() and optimizeSummaryKeys(), and README's "What you get" table documents
+// every file listed (tests/test_outdir.cpp checks that optimize writes what the tables say, that
+// the scripts read nothing the tables do not list, and that README names every file).
 #pragma once
 
 #include <span>

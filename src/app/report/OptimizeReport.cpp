@@ -10,12 +10,12 @@
 #include "core/Error.h"
 #include "core/Text.h"
 #include "io/OptimizeOutDir.h"
+#include "io/OptimizeSummary.h"
 #include "objective/DefectVisibility.h"
 
 namespace sl {
 
 using nlohmann::json;
-using report::readOptimizeSummary;
 using report::table;
 
 namespace {
@@ -487,13 +487,14 @@ std::string heightmapSentence(const json& hm) {
 }
 
 std::string optimizeHeadlineOf(const std::filesystem::path& outDir) {
-    return optimizeHeadline(readOptimizeSummary(outDir));
+    return optimizeHeadline(outdir::readOptimizeSummary(outDir).document);
 }
 
 std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
                                      const std::string& figureProblem) {
-    const json s = readOptimizeSummary(dir);
-    const json cmp = s.value("compare", json::object());
+    const outdir::OptimizeSummary summary = outdir::readOptimizeSummary(dir);
+    const json& s = summary.document;
+    const json cmp = summary.compare.is_object() ? summary.compare : json::object();
     const json lamp = cmp.value("lamp", json::object()), paper = cmp.value("paper", json::object()),
                opt = cmp.value("optimized", json::object());
     const std::string lampName = lamp.value("name", std::string("studio preset"));

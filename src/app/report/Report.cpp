@@ -13,11 +13,11 @@
 #include "io/AtomicFile.h"
 #include "io/InputFile.h"
 #include "io/OptimizeOutDir.h"
+#include "io/OptimizeSummary.h"
 
 namespace sl {
 
 using nlohmann::json;
-using report::readOptimizeSummary;
 using report::table;
 
 namespace {
@@ -255,24 +255,10 @@ std::string lossCurveSvg(const std::vector<LossSeries>& series, int width, int h
     return o.str();
 }
 
-namespace report {
-
-/// An optimize OUTDIR's summary.json; InputError naming it when missing or malformed.
-json readOptimizeSummary(const std::filesystem::path& dir) {
-    const auto summaryPath = dir / outdir::kSummary;
-    json s = parseJsonInput(readInputFile(summaryPath, "the optimize summary", kMaxJsonFileBytes,
-                                          "Check that the file exists (re-run the "
-                                          "command that writes it)"),
-                            summaryPath.string());
-    if (!s.is_object()) throw inputError(summaryPath.string(), "not a JSON object");
-    return s;
-}
-
-}  // namespace report
-
 ReportRun reportRunFromOutDir(const std::filesystem::path& dir, const std::string& title,
                               RunState state) {
-    const json s = readOptimizeSummary(dir);
+    const outdir::OptimizeSummary summary = outdir::readOptimizeSummary(dir);
+    const json& s = summary.document;
     ReportRun r;
     r.title = title.empty() ? dir.filename().string() : title;
     if (r.title.empty()) r.title = dir.string();
@@ -283,9 +269,9 @@ ReportRun reportRunFromOutDir(const std::filesystem::path& dir, const std::strin
     const bool fin = state == RunState::Final;
     if (s.contains("initial_loss")) r.metrics["loss_initial"] = s["initial_loss"];
     if (fin && s.contains("final_loss")) r.metrics["loss_final"] = s["final_loss"];
-    const char* key = fin ? "metrics" : "metrics_initial";
-    if (s.contains(key) && s[key].is_object())
-        for (auto it = s[key].begin(); it != s[key].end(); ++it) r.metrics[it.key()] = *it;
+    const json& m = fin ? summary.metrics : summary.metricsInitial;
+    if (m.is_object())
+        for (auto it = m.begin(); it != m.end(); ++it) r.metrics[it.key()] = *it;
 
     auto add = [&](const char* file, const char* caption) {
         if (std::filesystem::exists(dir / file)) r.images.push_back({caption, dir / file});

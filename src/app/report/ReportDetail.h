@@ -2,7 +2,6 @@
 // (the figures page, `report` and `judge`) and OptimizeReport.cpp (optimize's own page).
 #pragma once
 
-#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -12,8 +11,5 @@ namespace sl::report {
 // Table: one row per key (union over runs), one column per run.
 std::string table(const std::vector<std::string>& columns,
                   const std::vector<nlohmann::json>& objects, const std::string& cls);
-
-/// An optimize OUTDIR's summary.json; InputError naming it when missing or malformed.
-nlohmann::json readOptimizeSummary(const std::filesystem::path& dir);
 
 }  // namespace sl::report

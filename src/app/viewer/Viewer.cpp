@@ -26,6 +26,7 @@
 #include "io/InputFile.h"
 #include "io/LampsFile.h"
 #include "io/OptimizeOutDir.h"
+#include "io/OptimizeSummary.h"
 #include "io/PngBuffer.h"
 #include "io/SceneFile.h"
 #include "scene/EnvMapPresets.h"
@@ -67,21 +68,19 @@ std::string outlinePng(const std::vector<uint8_t>& labels, int w, int h) {
 
 ViewerObjective readViewerObjective(const fs::path& dir, int width, int height) {
     const fs::path file = dir / outdir::kSummary;
-    const json s = readJsonFile(file);
-    ViewerObjective o;
-    try {
-        o.kind = parseObjectiveKind(s.at("objective").get<std::string>(), file.string());
-        o.options.lambda = s.at("lambda").get<double>();
-        o.options.smoothAbs = s.value("smooth_abs", false);
-        o.options.reg =
-            s.value("reg", std::string("envmap")) == "image" ? RegTarget::Image : RegTarget::EnvMap;
-        o.options.defectMeasure = parseDefectMeasure(
-            s.value("defects_measure", std::string(defectMeasureName(DefectMeasure::Ratio))),
-            file.string() + ": defects_measure");
-    } catch (const json::exception& e) {
-        throw inputError(file.string(), std::string("has no usable objective: ") + e.what(),
+    const outdir::OptimizeSummary s = outdir::readOptimizeSummary(dir);
+    if (s.objective.empty() || !std::isfinite(s.lambda))
+        throw inputError(file.string(), "has no usable objective: no objective or no lambda",
                          "run view on the output of a current optimize");
-    }
+    ViewerObjective o;
+    o.kind = parseObjectiveKind(s.objective, file.string());
+    o.options.lambda = s.lambda;
+    o.options.smoothAbs = s.smoothAbs;
+    o.options.reg = s.reg == "image" ? RegTarget::Image : RegTarget::EnvMap;
+    o.options.defectMeasure = parseDefectMeasure(
+        s.defectsMeasure.empty() ? std::string(defectMeasureName(DefectMeasure::Ratio))
+                                 : s.defectsMeasure,
+        file.string() + ": defects_measure");
     if (fs::exists(dir / outdir::kMaskPng)) {
         o.mask = loadImageMask(dir / outdir::kMaskPng, width, height);
         for (uint8_t& v : o.mask) v = v ? 1 : 0;  // masks hold 0/1 (app/pipeline/LossMask.h)
@@ -169,13 +168,11 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
         if (!fs::exists(summaryFile))
             throw inputError(in.string(), "is a directory without summary.json",
                              "give an optimize output directory, a .tm or a scene file");
-        const json s = readJsonFile(summaryFile);
-        if (!s.contains("transport") || !s["transport"].contains("file") ||
-            !s["transport"]["file"].is_string() ||
-            s["transport"]["file"].get<std::string>().empty())
+        const outdir::OptimizeSummary s = outdir::readOptimizeSummary(in);
+        if (s.transportFile.empty())
             throw inputError(summaryFile.string(), "records no transport file",
                              "run view on the scene or the .tm the optimization used");
-        const fs::path tm = s["transport"]["file"].get<std::string>();
+        const fs::path tm = s.transportFile;
         if (!fs::exists(tm))
             throw inputError(summaryFile.string(),
                              "names the transport file " + tm.string() + ", which is gone",
@@ -183,8 +180,7 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
         t_ = std::make_unique<TransportSource>();
         t_->file = readTransportFile(tm);
         t_->path = tm;
-        if (truth.empty() && s.contains("truth") && s["truth"].is_string())
-            truth = s["truth"].get<std::string>();
+        if (truth.empty() && !s.truth.empty()) truth = s.truth;
         const auto& t = t_->file.matrix;
         for (const auto& [name, file] :
              {std::pair<std::string, std::string>{"optimized", outdir::kEnvMap},
@@ -207,9 +203,7 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
         }
         if (options.judge) {
             // The optimization's held-out estimate (cached by optimize), as its report scores.
-            int spp = options.judgeSpp;
-            if (s.contains("compare") && s["compare"].contains("judge_spp"))
-                spp = s["compare"]["judge_spp"].get<int>();
+            const int spp = s.judgeSpp.value_or(options.judgeSpp);
             scene = sceneOfTransport(t_->file, "the viewer's judge");
             estimate_ = std::make_unique<TransportSource>(
                 judgeEstimateFor(t_->file, *scene, spp, jo.cacheDir));
