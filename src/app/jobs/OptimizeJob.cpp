@@ -9,6 +9,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <utility>
 
 #include "app/host/Version.h"
 #include "app/pipeline/Cache.h"
@@ -418,8 +419,10 @@ std::vector<uint8_t> chooseDefectSppScale(const Scene& scene, const std::vector<
 }
 
 /// Stage 1: the scene and the training estimates of T (traced or cached, or the .tm); `spp`:
-/// the noise-aware rule's choice (app/pipeline/TrainingNoise.h), over any other (0: none).
-void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp) {
+/// the noise-aware rule's choice (app/pipeline/TrainingNoise.h), over any other (0: none);
+/// `extendFrom` > 0: the rule's first spp, which a T the rule raised extends
+/// (app/pipeline/Transport.h transportInDoublings) instead of being traced anew.
+void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp, int extendFrom = 0) {
     const OptimizeJobOptions& o = p.o;
     // The objective: as given, else the defaults' (app/pipeline/Defaults.h defaultObjective);
     // for a .tm settled once its planes are read.
@@ -469,8 +472,11 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp) {
             in.sppScale = chooseDefectSppScale(*in.scene, in.defects, o.defectSppScale);
         }
         if (in.sppScale) pre.sppScale = *in.sppScale;
-        std::vector<TransportSource> set =
-            transportSetForScene(*in.scene, pre, o.planes, p.cacheDir);
+        std::vector<TransportSource> set;
+        if (extendFrom > 0 && o.planes == 1)
+            set.push_back(transportInDoublings(*in.scene, pre, extendFrom, p.cacheDir));
+        else
+            set = transportSetForScene(*in.scene, pre, o.planes, p.cacheDir);
         job.transport = std::move(set.front());
         job.transport.autoDepth = depth;
         if (!pre.spp) pre.spp = job.transport.file.provenance.spp;
@@ -563,8 +569,12 @@ void loadValidation(const Plan& p, const Inputs& in, OptimizeJobSummary& job) {
         v.rgb = job.transport.file.matrix.channels == 3;
         seed = prov.seed;
     }
-    job.validation = validationEstimate(*in.scene, v, seed, p.cacheDir,
-                                        p.validationSpp > v.spp ? p.validationSpp : 0);
+    // V's first round (app/pipeline/TrainingNoise.h step 1): a quarter of T's spp where its
+    // figure does not depend on its spp and the rule adapts; more once its rounds asked for it.
+    const int tSpp = job.transport.file.provenance.spp;
+    const int first = p.noise.adapt && validationSppFree(in.kind) ? validationPilotSpp(tSpp) : tSpp;
+    job.validation =
+        validationEstimate(*in.scene, v, seed, p.cacheDir, std::max(first, p.validationSpp));
 }
 
 /// The objective in use through the validation estimate (its figure of E* and the gap's SE).
@@ -957,6 +967,7 @@ void checkAnswer(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
         {"uniform-0.5", CandidateKind::Reference, std::vector<double>(in.lampE.size(), 0.5)});
     candidates.push_back({"paper's light", CandidateKind::Reference, in.paperE});
     AnswerChoice choice = chooseAnswer(validation, std::move(candidates));
+    choice.validationSpp = job.validation->file.provenance.spp;
     const ScoredCandidate& a = choice.answer();
     if (choice.chosen != 0) {
         r.optimizedE = r.e;
@@ -1480,6 +1491,7 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
         // T at `spp` (unset: the scene's or the given one), its validation estimate, and what
         // depends on T; the scene is loaded once.
         double secondsTrace = 0, secondsSearch = 0;  // every round's (OptimizeRun)
+        int firstSpp = 0;                            // the rule's first T, which a raised T extends
         auto load = [&](int spp) {
             Inputs kept = std::move(in);
             in = Inputs{};
@@ -1497,7 +1509,7 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
             in.sppScale = std::move(kept.sppScale);  // chosen with the regions, on the first load
             job.extraPlanes.clear();
             const Stopwatch traceClock;
-            loadTraining(p, in, job, spp);
+            loadTraining(p, in, job, spp, spp > 0 && p.noise.adapt ? firstSpp : 0);
             secondsTrace += traceClock.seconds();
             if (job.transport.autoDepth && spp == 0)
                 spdlog::info("max_depth {}: {}", job.transport.autoDepth->maxDepth,
@@ -1512,6 +1524,7 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
         Stopwatch round;
         double notInRound = 0;  // the judge's estimate is not part of a training round
         load(0);
+        firstSpp = job.transport.file.provenance.spp;
         {
             const Stopwatch judgeClock;
             loadHeldOut(p, in, job);
@@ -1554,8 +1567,9 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                 const ObjectiveOnT onV =
                     validationObjective(in, job, objectiveAt(p, in, lambda), p.o.rgb);
                 const Stopwatch gapClock;
-                nr.gapError =
-                    trainingGapError(in.kind, *onV.loss, r.e, job.validation->file.provenance.seed);
+                nr.gapError = trainingGapError(
+                    in.kind, *onV.loss, r.e, job.validation->file.provenance.seed, kJudgeReplicates,
+                    dynamic_cast<const UnbiasedObjective*>(onV.halves.get()));
                 nr.secondsGapError = gapClock.seconds();
                 // Step 4: V's noise: more V (T's spp for eq. 2, whose V must keep T's spp);
                 // over-fit: more T, then a coarser light (step 5).
@@ -1644,6 +1658,23 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                                  : std::string());
             r.run.noise = noise;
             checkAnswer(p, in, job, r);
+            // V's first round may be below T's spp (app/pipeline/TrainingNoise.h step 1): a
+            // choice within V's noise there is made again on V at T's spp.
+            if (r.run.answer && job.validation && !noise.rounds.empty() &&
+                job.validation->file.provenance.spp < job.transport.file.provenance.spp &&
+                !answerDecided(*r.run.answer, noise.rounds.back().gapError)) {
+                p.validationSpp = job.transport.file.provenance.spp;
+                spdlog::info(
+                    "lambda {}: the answer is within {} standard errors on V at {} spp: V at {} "
+                    "spp",
+                    lambda, formatNumber(kAnswerMarginSigmas, 2),
+                    job.validation->file.provenance.spp, p.validationSpp);
+                const Stopwatch validationClock;
+                loadValidation(p, in, job);
+                secondsTrace += validationClock.seconds();
+                if (!r.optimizedE.empty()) r.e = std::exchange(r.optimizedE, {});
+                checkAnswer(p, in, job, r);
+            }
             const Stopwatch judgeClock;
             judgeRun(p, in, job, r);
             r.run.secondsJudge = secondsHeldOut + judgeClock.seconds();
