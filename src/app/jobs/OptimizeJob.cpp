@@ -419,10 +419,8 @@ std::vector<uint8_t> chooseDefectSppScale(const Scene& scene, const std::vector<
 }
 
 /// Stage 1: the scene and the training estimates of T (traced or cached, or the .tm); `spp`:
-/// the noise-aware rule's choice (app/pipeline/TrainingNoise.h), over any other (0: none);
-/// `extendFrom` > 0: the rule's first spp, which a T the rule raised extends
-/// (app/pipeline/Transport.h transportInDoublings) instead of being traced anew.
-void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp, int extendFrom = 0) {
+/// the noise-aware rule's choice (app/pipeline/TrainingNoise.h), over any other (0: none).
+void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp) {
     const OptimizeJobOptions& o = p.o;
     // The objective: as given, else the defaults' (app/pipeline/Defaults.h defaultObjective);
     // for a .tm settled once its planes are read.
@@ -472,11 +470,8 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp, i
             in.sppScale = chooseDefectSppScale(*in.scene, in.defects, o.defectSppScale);
         }
         if (in.sppScale) pre.sppScale = *in.sppScale;
-        std::vector<TransportSource> set;
-        if (extendFrom > 0 && o.planes == 1)
-            set.push_back(transportInDoublings(*in.scene, pre, extendFrom, p.cacheDir));
-        else
-            set = transportSetForScene(*in.scene, pre, o.planes, p.cacheDir);
+        std::vector<TransportSource> set =
+            transportSetForScene(*in.scene, pre, o.planes, p.cacheDir);
         job.transport = std::move(set.front());
         job.transport.autoDepth = depth;
         if (!pre.spp) pre.spp = job.transport.file.provenance.spp;
@@ -1491,7 +1486,6 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
         // T at `spp` (unset: the scene's or the given one), its validation estimate, and what
         // depends on T; the scene is loaded once.
         double secondsTrace = 0, secondsSearch = 0;  // every round's (OptimizeRun)
-        int firstSpp = 0;                            // the rule's first T, which a raised T extends
         auto load = [&](int spp) {
             Inputs kept = std::move(in);
             in = Inputs{};
@@ -1509,7 +1503,7 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
             in.sppScale = std::move(kept.sppScale);  // chosen with the regions, on the first load
             job.extraPlanes.clear();
             const Stopwatch traceClock;
-            loadTraining(p, in, job, spp, spp > 0 && p.noise.adapt ? firstSpp : 0);
+            loadTraining(p, in, job, spp);
             secondsTrace += traceClock.seconds();
             if (job.transport.autoDepth && spp == 0)
                 spdlog::info("max_depth {}: {}", job.transport.autoDepth->maxDepth,
@@ -1524,7 +1518,6 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
         Stopwatch round;
         double notInRound = 0;  // the judge's estimate is not part of a training round
         load(0);
-        firstSpp = job.transport.file.provenance.spp;
         {
             const Stopwatch judgeClock;
             loadHeldOut(p, in, job);

@@ -43,9 +43,9 @@
 //      with gap·n/n' ≤ maxGap/2 (half the tolerance, so one more trace usually settles it), at most
 //      kMaxSppGrowth·n (a gap far above the tolerance is often a cliff the noise opened — e.g. the
 //      defect objective's reference energy pushed below its floor — which closes long before 1/spp
-//      predicts) and at most maxSpp; back to 1. The new T extends the round's T
-//      (app/pipeline/Transport.h transportInDoublings: n' − n more samples on seeds of their
-//      own, not a trace of n' anew).
+//      predicts) and at most maxSpp; back to 1. The new T is traced anew: extended
+//      (app/pipeline/Transport.h transportInDoublings) it would be noisier than a trace of n'
+//      (each chunk is stratified on its own; docs/BENCHMARKS.md, issue 31's fourth pass).
 //   5. Over-fit at maxSpp (or a given spp): the light's degrees of
 //      freedom are the other knob: the search runs again on the same T and V with the light on
 //      a coarser grid of nodes (objective/CoarseLight.h), each step √2 fewer nodes per side
@@ -103,8 +103,8 @@ inline constexpr uint64_t kValidationSeedOffset = 0x76616C6964ULL << 20;
 
 /// The most one round multiplies the training spp by. 8: with the defect pixels supersampled
 /// the defects objective's gap at 64 spp still predicts thousands of spp, and every round is
-/// searched from scratch (the last round's E* does not depend on the rounds before it), so a
-/// 64 → 256 → 512 ladder spent a third of its time on the 256 round.
+/// traced and searched from scratch (the last round's T and E* do not depend on the rounds
+/// before it), so a 64 → 256 → 512 ladder spent a third of its time on the 256 round.
 inline constexpr int kMaxSppGrowth = 8;
 
 /// The coarsest light grid the rule tries (step 5): below this many nodes a light cannot aim
