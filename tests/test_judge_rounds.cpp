@@ -469,11 +469,11 @@ TEST(JudgeRounds, JndErrorsOnASharedBankAndThreadsAreTheSerialOnes) {
     EXPECT_EQ(serial.at(0), scores[0].se->jnd[0]);
 }
 
-// The rounds start at kJudgePilotSpp (128): the rule may stop there only if the bootstrap's SE
-// still predicts how far an estimate at that spp moves. Over 16 judge seeds at the pilot's spp,
-// the scores' spread against the mean SE (as at 256 spp above), for U, eq. 2 and the brightness.
-// Measured on this scene: within the bound at 64 and 128 spp; at 32 spp not (U's SE 2.1× its
-// spread, eq. 2's 0.55×).
+// The rounds start at kJudgePilotSpp (64): the rule may stop there only if the SE still
+// predicts how far an estimate at that spp moves. Over 16 judge seeds at the pilot's spp, the
+// scores' spread against the mean SE (as at 256 spp above), for U, eq. 2 and the brightness.
+// Measured on this scene with the bootstrap: within the bound at 64 and 128 spp; at 32 spp not
+// (U's SE 2.1× its spread, now the delta method's, below; eq. 2's 0.55×).
 TEST(JudgeRounds, StandardErrorHoldsAtThePilotSpp) {
     auto scene = wavyScene(32);
     const std::vector<double> e = randomLight(1250, 13);
