@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -15,6 +17,7 @@
 #include "SyntheticDefects.h"
 #include "TestUtil.h"
 #include "app/pipeline/Judge.h"
+#include "app/pipeline/TrainingNoise.h"
 #include "core/Rng.h"
 #include "core/WildBootstrap.h"
 #include "objective/DefectVisibility.h"
@@ -466,15 +469,143 @@ TEST(JudgeRounds, JndErrorsOnASharedBankAndThreadsAreTheSerialOnes) {
     EXPECT_EQ(serial.at(0), scores[0].se->jnd[0]);
 }
 
-// The rounds start at kJudgePilotSpp (128): the rule may stop there only if the bootstrap's SE
-// still predicts how far an estimate at that spp moves. Over 16 judge seeds at the pilot's spp,
-// the scores' spread against the mean SE (as at 256 spp above), for U, eq. 2 and the brightness.
-// Measured on this scene: within the bound at 64 and 128 spp; at 32 spp not (U's SE 2.1× its
-// spread, eq. 2's 0.55×).
+// The rounds start at kJudgePilotSpp (64): the rule may stop there only if the SE still
+// predicts how far an estimate at that spp moves. Over 16 judge seeds at the pilot's spp, the
+// scores' spread against the mean SE (as at 256 spp above), for U, eq. 2 and the brightness.
+// Measured on this scene with the bootstrap: within the bound at 64 and 128 spp; at 32 spp not
+// (U's SE 2.1× its spread, now the delta method's, below; eq. 2's 0.55×).
 TEST(JudgeRounds, StandardErrorHoldsAtThePilotSpp) {
     auto scene = wavyScene(32);
     const std::vector<double> e = randomLight(1250, 13);
     const std::vector<JudgeScore> scores = scoresOverSeeds(*scene, e, kJudgePilotSpp, 300);
     for (const JudgeScore& s : scores) ASSERT_TRUE(s.se);
     expectSpreadMatchesErrors(scores);
+}
+
+// U's SE is the delta method's on the halves' product (objective/UnbiasedObjective.h
+// lossStandardError), not the bootstrap's, which perturbs noisy differences and over-states it
+// where the noise's square counts (at 32 spp on this scene: 2.1× the spread). Over 16 judge seeds
+// at 16 and 32 spp, U's spread against its mean SE, within ±45 % (as above).
+TEST(JudgeRounds, UStandardErrorHoldsAtAFewSpp) {
+    auto scene = wavyScene(32);
+    const std::vector<double> e = randomLight(1250, 13);
+    for (int spp : {16, 32}) {
+        std::vector<double> u, se;
+        for (const JudgeScore& s : scoresOverSeeds(*scene, e, spp, 500)) {
+            ASSERT_TRUE(s.se);
+            u.push_back(s.unbiased.total);
+            se.push_back(s.se->unbiased);
+        }
+        std::printf("[ measured ] %d spp: U's spread %.4g, its mean SE %.4g (%.2fx)\n", spp, sd(u),
+                    mean(se), mean(se) / sd(u));
+        EXPECT_NEAR(sd(u) / mean(se), 1.0, 0.45) << spp << " spp: " << sd(u) << " vs " << mean(se);
+    }
+}
+
+namespace {
+
+/// Y_a, Y_b of E through a two-plane estimate.
+HalfImages halvesOf(const TransportMatrix& t, const std::vector<double>& e) {
+    HalfImages h{std::vector<double>(t.rows()), std::vector<double>(t.rows())};
+    t.applyLuminanceHalves(e, h.a, h.b);
+    return h;
+}
+
+}  // namespace
+
+// A round extends the estimate before it (app/pipeline/Transport.h transportInDoublings): at
+// 4× the base spp the estimate is the base estimate, a chunk of base spp and a chunk of 2× base
+// spp, each half the mean of the same half of its pieces (so half a never holds half b's
+// samples), every chunk on a seed of its own (not the estimate's, not the other chunk's, not a
+// training, validation or judge seed); a round at 2n after one at n traces n samples, not 2n
+// (no fresh trace at 4× base appears in the cache); the same options give the same numbers,
+// from the cache too.
+TEST(JudgeRounds, ARoundExtendsTheEstimateBeforeIt) {
+    test::TempDir dir("doublings");
+    auto scene = wavyScene(16);
+    PrecomputeOptions o;
+    o.sampleSets = 2;
+    o.seed = kJudgeSeed;
+    auto at = [&](int spp, uint64_t seed) {
+        PrecomputeOptions x = o;
+        x.spp = spp;
+        x.seed = seed;
+        return x;
+    };
+    const TransportSource half = transportInDoublings(*scene, at(16, kJudgeSeed), 8, dir.path());
+    const TransportSource whole = transportInDoublings(*scene, at(32, kJudgeSeed), 8, dir.path());
+    EXPECT_EQ(whole.file.provenance.spp, 32);
+    EXPECT_EQ(whole.file.provenance.seed, kJudgeSeed);
+    const uint64_t s8 = doublingSeed(kJudgeSeed, 8), s16 = doublingSeed(kJudgeSeed, 16);
+    for (uint64_t s : {s8, s16}) {
+        EXPECT_NE(s, kJudgeSeed);
+        EXPECT_GT(s, uint64_t{1} << 32);  // no training seed a user can reach
+        EXPECT_NE(s, kJudgeSeed + kValidationSeedOffset);
+    }
+    EXPECT_NE(s8, s16);
+    // The pieces, traced on their own (cache hits).
+    const TransportSource base = transportForScene(*scene, at(8, kJudgeSeed), dir.path());
+    const TransportSource c8 = transportForScene(*scene, at(8, s8), dir.path());
+    const TransportSource c16 = transportForScene(*scene, at(16, s16), dir.path());
+    EXPECT_TRUE(base.cacheHit && c8.cacheHit && c16.cacheHit);
+    const std::vector<double> e = randomLight(1250, 21);
+    const HalfImages w = halvesOf(whole.file.matrix, e), b = halvesOf(base.file.matrix, e),
+                     x = halvesOf(c8.file.matrix, e), y = halvesOf(c16.file.matrix, e);
+    double worst = 0, scale = 0;
+    for (size_t p = 0; p < w.a.size(); ++p) {
+        worst = std::max(worst, std::abs(w.a[p] - (0.25 * (b.a[p] + x.a[p]) + 0.5 * y.a[p])));
+        worst = std::max(worst, std::abs(w.b[p] - (0.25 * (b.b[p] + x.b[p]) + 0.5 * y.b[p])));
+        scale = std::max({scale, std::abs(w.a[p]), std::abs(w.b[p])});
+    }
+    EXPECT_GT(scale, 0.0);
+    EXPECT_LT(worst, 1e-5 * scale);
+    // A pixel is on the part where every piece says so.
+    for (size_t p = 0; p < w.a.size(); ++p)
+        EXPECT_EQ(whole.file.matrix.objectMask[p], base.file.matrix.objectMask[p] &&
+                                                       c8.file.matrix.objectMask[p] &&
+                                                       c16.file.matrix.objectMask[p]);
+    // No fresh trace at 32 spp: the cache holds the base, two chunks and the two means.
+    const TransportProvenance fresh =
+        transportProvenance(*scene, traceOptions(*scene, at(32, kJudgeSeed)), 1);
+    EXPECT_FALSE(std::filesystem::exists(dir.path() / ("transport-" + fresh.fingerprint + ".tm")));
+    size_t files = 0;
+    for (const auto& f : std::filesystem::directory_iterator(dir.path()))
+        files += f.path().extension() == ".tm";
+    EXPECT_EQ(files, 5u);
+    EXPECT_NE(half.file.provenance.fingerprint, whole.file.provenance.fingerprint);
+    // The same options, the same numbers: from the cache, and traced anew without one.
+    const TransportSource again = transportInDoublings(*scene, at(32, kJudgeSeed), 8, dir.path());
+    EXPECT_TRUE(again.cacheHit);
+    EXPECT_EQ(again.file.matrix.values, whole.file.matrix.values);
+    const TransportSource uncached = transportInDoublings(*scene, at(32, kJudgeSeed), 8, {});
+    EXPECT_EQ(uncached.file.matrix.values, whole.file.matrix.values);
+    EXPECT_EQ(uncached.file.provenance.fingerprint, whole.file.provenance.fingerprint);
+    // An spp of no form base·2^k is one trace.
+    const TransportSource odd = transportInDoublings(*scene, at(24, kJudgeSeed), 8, {});
+    EXPECT_EQ(odd.file.provenance.fingerprint,
+              transportProvenance(*scene, traceOptions(*scene, at(24, kJudgeSeed)), 1).fingerprint);
+}
+
+// The mean of two estimates: each entry the mean of the two (a texel only one of them reached
+// at half its value), dense or sparse alike; estimates of another shape are refused.
+TEST(JudgeRounds, TheMeanOfTwoEstimatesIsTheirEntriesMean) {
+    auto scene = wavyScene(12);
+    PrecomputeOptions o;
+    o.sampleSets = 2;
+    o.spp = 8;
+    o.seed = 3;
+    const TransportSource a = transportForScene(*scene, o, {});
+    o.seed = 4;
+    const TransportSource b = transportForScene(*scene, o, {});
+    TransportMatrix da = a.file.matrix, db = b.file.matrix;
+    da.toDense();
+    db.toDense();
+    TransportMatrix m = meanOfEstimates(a.file.matrix, db);
+    m.toDense();
+    ASSERT_EQ(m.values.size(), da.values.size());
+    for (size_t k = 0; k < m.values.size(); ++k)
+        EXPECT_FLOAT_EQ(m.values[k], 0.5f * (da.values[k] + db.values[k])) << k;
+    TransportMatrix other = a.file.matrix;
+    other.planes = 1;
+    EXPECT_THROW(meanOfEstimates(a.file.matrix, other), std::invalid_argument);
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -18,6 +19,42 @@ double UnbiasedObjective::energy(std::span<const double> Ya, std::span<const dou
     detail::forEachMaskedPair(width(), height(), mask().data(),
                               [&](size_t p, size_t q) { G += (Ya[q] - Ya[p]) * (Yb[q] - Yb[p]); });
     return G;
+}
+
+double UnbiasedObjective::energyStandardError(std::span<const double> Ya,
+                                              std::span<const double> Yb) const {
+    const size_t n = static_cast<size_t>(width()) * static_cast<size_t>(height());
+    if (Ya.size() != n || Yb.size() != n)
+        throw std::invalid_argument("UnbiasedObjective: half images must have width*height values");
+    // M·Y_a, M·Y_b (∂G/∂Y_b and ∂G/∂Y_a) and each pixel's pair count; the pairs' σ²σ² term.
+    std::vector<double> ma(n, 0.0), mb(n, 0.0), degree(n, 0.0);
+    auto v = [&](size_t p) { return 0.5 * (Ya[p] - Yb[p]) * (Ya[p] - Yb[p]); };
+    double pairs = 0;
+    detail::forEachMaskedPair(width(), height(), mask().data(), [&](size_t p, size_t q) {
+        const double da = Ya[q] - Ya[p], db = Yb[q] - Yb[p];
+        ma[q] += da;
+        ma[p] -= da;
+        mb[q] += db;
+        mb[p] -= db;
+        degree[p] += 1;
+        degree[q] += 1;
+        pairs += v(p) * v(q);
+    });
+    double var = 2.0 * pairs;
+    for (size_t p = 0; p < n; ++p)
+        if (degree[p] > 0) {
+            const double vp = v(p);
+            var += 2.0 * vp * ma[p] * mb[p] + degree[p] * degree[p] * vp * vp;
+        }
+    return var > 0 ? std::sqrt(var) : 0.0;
+}
+
+double UnbiasedObjective::lossStandardError(std::span<const double> Ya,
+                                            std::span<const double> Yb) const {
+    const double G = energy(Ya, Yb);
+    if (options().reg != RegTarget::EnvMap || G < base_.gFloor())
+        return std::numeric_limits<double>::quiet_NaN();
+    return 0.5 * std::sqrt(maskSize()) / (G * std::sqrt(G)) * energyStandardError(Ya, Yb);
 }
 
 LossParts UnbiasedObjective::evaluate(std::span<const double> Ya, std::span<const double> Yb,

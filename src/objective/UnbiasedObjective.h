@@ -54,6 +54,22 @@ class UnbiasedObjective final : public HalfImageObjective {
 
     /// G_u alone (for tests and scoring).
     double energy(std::span<const double> Ya, std::span<const double> Yb) const;
+    /// The standard error of G_u from its two halves' own noise, by the delta method on the
+    /// halves' product (exact for a bilinear form): with Y_a = μ + n, Y_b = μ + m, every
+    /// pixel's noise independent, var n_p = var m_p = σ_p², and G_u = Y_aᵀ·M·Y_b (M the
+    /// Laplacian of the counted pairs: M_pp the pixel's pair count, −1 per pair),
+    ///   var G_u = Σ_p 2σ_p²·(Mμ)_p²  +  Σ_p M_pp²·σ_p⁴ + 2·Σ_pairs σ_p²·σ_q²,
+    /// estimated without the noise's square counting twice: σ_p² by v_p = (Y_a,p − Y_b,p)²/2,
+    /// (Mμ)_p² by (M·Y_a)_p·(M·Y_b)_p (independent halves: unbiased), and σ_p⁴ on the diagonal
+    /// by v_p² (its own bias against v_p·(M·Y_a)_p·(M·Y_b)_p included: exact for a normal
+    /// noise). A wild bootstrap (core/WildBootstrap.h) perturbs the observed, noisy
+    /// differences instead of their means, which adds the quadratic part twice more: at a few
+    /// spp, where that part dominates, its SE is several times the spread over independent
+    /// estimates. 0 for a negative estimate (only possible when noise dominates).
+    double energyStandardError(std::span<const double> Ya, std::span<const double> Yb) const;
+    /// The standard error of lGrad = sqrt(S/G_u) by energyStandardError (|dL/dG|·SE(G_u)); the
+    /// regulariser mean(E²) has none (reg envmap; NaN for reg image or a clamped G_u).
+    double lossStandardError(std::span<const double> Ya, std::span<const double> Yb) const;
 
     int width() const { return base_.width(); }
     int height() const { return base_.height(); }

@@ -9,6 +9,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <utility>
 
 #include "app/host/Version.h"
 #include "app/pipeline/Cache.h"
@@ -563,8 +564,12 @@ void loadValidation(const Plan& p, const Inputs& in, OptimizeJobSummary& job) {
         v.rgb = job.transport.file.matrix.channels == 3;
         seed = prov.seed;
     }
-    job.validation = validationEstimate(*in.scene, v, seed, p.cacheDir,
-                                        p.validationSpp > v.spp ? p.validationSpp : 0);
+    // V's first round (app/pipeline/TrainingNoise.h step 1): a quarter of T's spp where its
+    // figure does not depend on its spp and the rule adapts; more once its rounds asked for it.
+    const int tSpp = job.transport.file.provenance.spp;
+    const int first = p.noise.adapt && validationSppFree(in.kind) ? validationPilotSpp(tSpp) : tSpp;
+    job.validation =
+        validationEstimate(*in.scene, v, seed, p.cacheDir, std::max(first, p.validationSpp));
 }
 
 /// The objective in use through the validation estimate (its figure of E* and the gap's SE).
@@ -957,6 +962,7 @@ void checkAnswer(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
         {"uniform-0.5", CandidateKind::Reference, std::vector<double>(in.lampE.size(), 0.5)});
     candidates.push_back({"paper's light", CandidateKind::Reference, in.paperE});
     AnswerChoice choice = chooseAnswer(validation, std::move(candidates));
+    choice.validationSpp = job.validation->file.provenance.spp;
     const ScoredCandidate& a = choice.answer();
     if (choice.chosen != 0) {
         r.optimizedE = r.e;
@@ -1554,8 +1560,9 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                 const ObjectiveOnT onV =
                     validationObjective(in, job, objectiveAt(p, in, lambda), p.o.rgb);
                 const Stopwatch gapClock;
-                nr.gapError =
-                    trainingGapError(in.kind, *onV.loss, r.e, job.validation->file.provenance.seed);
+                nr.gapError = trainingGapError(
+                    in.kind, *onV.loss, r.e, job.validation->file.provenance.seed, kJudgeReplicates,
+                    dynamic_cast<const UnbiasedObjective*>(onV.halves.get()));
                 nr.secondsGapError = gapClock.seconds();
                 // Step 4: V's noise: more V (T's spp for eq. 2, whose V must keep T's spp);
                 // over-fit: more T, then a coarser light (step 5).
@@ -1644,6 +1651,23 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                                  : std::string());
             r.run.noise = noise;
             checkAnswer(p, in, job, r);
+            // V's first round may be below T's spp (app/pipeline/TrainingNoise.h step 1): a
+            // choice within V's noise there is made again on V at T's spp.
+            if (r.run.answer && job.validation && !noise.rounds.empty() &&
+                job.validation->file.provenance.spp < job.transport.file.provenance.spp &&
+                !answerDecided(*r.run.answer, noise.rounds.back().gapError)) {
+                p.validationSpp = job.transport.file.provenance.spp;
+                spdlog::info(
+                    "lambda {}: the answer is within {} standard errors on V at {} spp: V at {} "
+                    "spp",
+                    lambda, formatNumber(kAnswerMarginSigmas, 2),
+                    job.validation->file.provenance.spp, p.validationSpp);
+                const Stopwatch validationClock;
+                loadValidation(p, in, job);
+                secondsTrace += validationClock.seconds();
+                if (!r.optimizedE.empty()) r.e = std::exchange(r.optimizedE, {});
+                checkAnswer(p, in, job, r);
+            }
             const Stopwatch judgeClock;
             judgeRun(p, in, job, r);
             r.run.secondsJudge = secondsHeldOut + judgeClock.seconds();

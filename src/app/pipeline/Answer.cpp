@@ -150,6 +150,21 @@ AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> 
     return c;
 }
 
+bool answerDecided(const AnswerChoice& c, double relativeSe) {
+    if (!std::isfinite(relativeSe)) return false;
+    const ScoredCandidate& a = c.answer();
+    const bool reference = a.candidate.kind == CandidateKind::Reference;
+    const ScoredCandidate* rival = nullptr;
+    for (const ScoredCandidate& s : c.scored)
+        if (s.eligible && (s.candidate.kind == CandidateKind::Reference) != reference &&
+            std::isfinite(s.merit.value) && (!rival || betterMerit(s.merit, rival->merit)))
+            rival = &s;
+    if (!rival || !std::isfinite(a.merit.value)) return true;
+    const double scale = std::max(std::abs(a.merit.value), std::abs(rival->merit.value));
+    return std::abs(a.merit.value - rival->merit.value) >
+           kAnswerMarginSigmas * std::sqrt(2.0) * relativeSe * scale;
+}
+
 nlohmann::ordered_json answerJson(const AnswerChoice& a) {
     nlohmann::ordered_json scored = nlohmann::ordered_json::array();
     for (const ScoredCandidate& c : a.scored)
@@ -162,17 +177,20 @@ nlohmann::ordered_json answerJson(const AnswerChoice& a) {
                           {"brightness", c.score.brightness},
                           {"eligible", c.eligible},
                           {"why", c.why}});
-    return {{"light", a.answer().candidate.name},
-            {"kind", candidateKindName(a.answer().candidate.kind)},
-            {"merit", a.answer().merit.what},
-            {"merit_of", a.answer().merit.what == "JND" ? "the least visible defect kind"
-                         : a.answer().merit.what == "U" ? "the image"
-                                                        : "all defect regions"},
-            {"higher_is_better", a.answer().merit.higherIsBetter},
-            {"reason", a.reason},
-            {"seconds", a.seconds},
-            {"on", "the validation estimate (independent of training and the judge)"},
-            {"candidates", scored}};
+    nlohmann::ordered_json j = {
+        {"light", a.answer().candidate.name},
+        {"kind", candidateKindName(a.answer().candidate.kind)},
+        {"merit", a.answer().merit.what},
+        {"merit_of", a.answer().merit.what == "JND" ? "the least visible defect kind"
+                     : a.answer().merit.what == "U" ? "the image"
+                                                    : "all defect regions"},
+        {"higher_is_better", a.answer().merit.higherIsBetter},
+        {"reason", a.reason},
+        {"seconds", a.seconds},
+        {"on", "the validation estimate (independent of training and the judge)"},
+        {"candidates", scored}};
+    if (a.validationSpp > 0) j["validation_spp"] = a.validationSpp;
+    return j;
 }
 
 }  // namespace sl

@@ -3,8 +3,8 @@
 // The optimized light is best on its training estimate by construction, so the training
 // estimate cannot say whether it is better than a plain lamp. Every candidate — the optimized
 // light of every start, the user's lamp (or the studio preset), a uniform dome (const 0.5) and
-// the paper's light — is scored on the validation estimate (app/pipeline/TrainingNoise.h: independent of
-// the training estimate and of the judge's), by the figure the answer line reports
+// the paper's light — is scored on the validation estimate (app/pipeline/TrainingNoise.h:
+// independent of the training estimate and of the judge's), by the figure the answer line reports
 // (answerMerit: the JND of the least visible defect kind when defect regions and a viewing
 // model are known, else the defects' combined visibility ratio, else the judge's U). A candidate
 // whose image is darker than minBrightness of the white furnace, or (chosen by the visibility
@@ -16,8 +16,8 @@
 // person reads.
 //
 // Finer lights (CandidateKind::Finer): the lights the noise rule searched on a finer grid at the
-// same spp before it settled on E*'s (app/pipeline/TrainingNoise.h step 5). Their training figures fit
-// the estimate's noise, so they are not the answer while E* or a start passes the checks; when
+// same spp before it settled on E*'s (app/pipeline/TrainingNoise.h step 5). Their training figures
+// fit the estimate's noise, so they are not the answer while E* or a start passes the checks; when
 // none does (e.g. E*'s defects' gradient just under minContrast), the best of them on the
 // validation estimate competes with the references, since an independent estimate still says
 // fairly which shows the defects better.
@@ -89,8 +89,19 @@ struct AnswerChoice {
     const ScoredCandidate& answer() const { return scored[chosen]; }
     /// One line: what was chosen and why (the figures on the validation estimate).
     std::string reason;
-    double seconds = 0;  // scoring the candidates on the validation estimate (JND included)
+    double seconds = 0;     // scoring the candidates on the validation estimate (JND included)
+    int validationSpp = 0;  // the validation estimate's spp (0: not recorded)
 };
+
+/// How many standard errors of the difference of two merits on the validation estimate the
+/// answer must win by for its choice to stand on V's first spp (answerDecided).
+inline constexpr double kAnswerMarginSigmas = 3.0;
+/// Whether the choice would stand on another estimate: the answer's merit and the best eligible
+/// merit of the other side (the references when an optimized light won, the optimized lights
+/// when a reference did) differ by more than kAnswerMarginSigmas·√2·relativeSe of the larger
+/// (relativeSe: the validation estimate's relative standard error of a merit, e.g. the noise
+/// rule's gap SE). True when there is no other side to lose to. NaN relativeSe: not decided.
+bool answerDecided(const AnswerChoice& choice, double relativeSe);
 
 /// summary.json's `answer`: the light chosen, its kind, the merit, the reason, the seconds the
 /// scoring took and every candidate (name, kind, merit, visibility ratio, brightness, eligible,

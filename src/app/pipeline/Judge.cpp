@@ -34,7 +34,7 @@ TransportSource judgeEstimate(const Scene& scene, const JudgeOptions& o) {
     p.sampleSets = 2;
     p.threads = o.threads;
     p.label = "judge estimate";
-    return transportForScene(scene, p, o.cacheDir);
+    return transportInDoublings(scene, p, kJudgePilotSpp, o.cacheDir);
 }
 
 ViewingModel viewingFor(const Scene& scene) {
@@ -199,7 +199,11 @@ JudgeScore Judge::scoreWithErrors(std::span<const double> E, const std::string& 
     JudgeScore::Errors e;
     e.replicates = replicates;
     e.eq2 = se[0];
-    e.unbiased = se[1];
+    // U's by the delta method on the halves' product (objective/UnbiasedObjective.h
+    // lossStandardError): the bootstrap's over-states it at a few spp; the bootstrap's where
+    // the delta method has none (a clamped G, the image regulariser).
+    const double uSe = unbiased_->lossStandardError(images[0].a, images[0].b);
+    e.unbiased = std::isfinite(uSe) ? uSe : se[1];
     e.brightness = se[2];
     e.combinedVisibility = se[3];
     e.leastVisibleJnd = se[4];

@@ -2,8 +2,10 @@
 //
 // The estimate is a transport matrix of the scene traced with the judge's own seed and two
 // independent sample sets (T_a, T_b), cached on disk by fingerprint, so judging ten lights costs
-// one trace; its spp is what the scores need (judgeInRounds: from kJudgePilotSpp (128) until every
-// score's standard error is <= 1 %, at most 1024). Per light E:
+// one trace; its spp is what the scores need (judgeInRounds: from kJudgePilotSpp (64) until every
+// score's standard error is <= 1 %, at most 1024), each round extending the last one's estimate
+// by as many samples again (app/pipeline/Transport.h transportInDoublings), not tracing anew.
+// Per light E:
 //   eq2        the paper's eq. 2 (S/G + λ·mean(E²)) on the mean image Ȳ = (T_a + T_b)/2 · E
 //   unbiased   U = sqrt(S / Σ_pairs ΔY_a·ΔY_b) + λ·mean(E²)  (objective/UnbiasedObjective.h)
 //   mean_E     mean texel value;  sparsity: fraction of texel values < kDarkTexel
@@ -48,11 +50,13 @@ inline constexpr uint64_t kJudgeSeed = 0x6A75646765ULL << 24;  // "judge"
 inline constexpr int kJudgeDefaultSpp = 1024;
 /// The judge's first round (README "The judge"): rounds start here and stop when every score a
 /// person reads has a relative standard error of at most kJudgeMaxError (or at the cap). 64
-/// was tried (docs/BENCHMARKS.md, issue 31's third pass): on a held-out 512² part the paper's
-/// light's U had a bootstrap SE of 7.4 % at 64 spp against 1.4 % at 128 (the SE of a ratio with
-/// a noisy denominator is over-stated at low spp), so the rounds went to 1024 spp instead of 512
-/// and the run cost 1.6× the CPU.
-inline constexpr int kJudgePilotSpp = 128;
+/// was tried before with U's SE from the wild bootstrap (docs/BENCHMARKS.md, issue 31's third
+/// pass): on a held-out 512² part the paper's light's U had a bootstrap SE of 7.4 % at 64 spp
+/// against 1.4 % at 128 (the bootstrap over-states the SE of a product of two noisy halves at
+/// low spp), so the rounds went to 1024 spp instead of 512. U's SE is now the delta method's
+/// (scoreWithErrors), and a round extends the estimate before it (transportInDoublings), so
+/// starting at 64 never traces more than starting at 128 did.
+inline constexpr int kJudgePilotSpp = 64;
 inline constexpr double kJudgeMaxError = 0.01;
 /// Replicates of the standard-error estimate (Judge::scoreWithErrors): the SE itself is then
 /// known to about 1/sqrt(2·(R − 1)) = 13 % of its value.
@@ -143,7 +147,9 @@ class Judge {
     /// and variance 2·var(Y_a,p), so each of `replicates` replicates perturbs the halves by
     /// ±d_p/√2 with independent signs per pixel and half (a fixed seed: the same E gives the
     /// same errors) — the same light's white-furnace image with the same signs — and scores
-    /// them again (each region's JND too, with a viewing model: its band contrasts are formed
+    /// them again (U's SE is the delta method's on the halves' product instead,
+    /// objective/UnbiasedObjective.h lossStandardError, which the bootstrap over-states at a few
+    /// spp; each region's JND too, with a viewing model: its band contrasts are formed
     /// anew per replicate on one bank of band filters, the dearest part; the replicates run on
     /// every core, core/WildBootstrap.h); the SE is the replicates' spread (1.4826 × their
     /// median absolute deviation,

@@ -27,13 +27,13 @@ TransportSource judgeEstimateFor(const TransportFile& training, const Scene& sce
     o.rgb = training.matrix.channels == 3;
     o.sampleSets = 2;
     o.label = "judge estimate (held out)";
-    TransportSource s = transportForScene(scene, o, cacheDir);
+    TransportSource s = transportInDoublings(scene, o, kJudgePilotSpp, cacheDir);
     // Same scene, camera, material and height map: only the sampling may differ, and the
-    // renderer (a T from another renderer's basis renders, app/host/ExternalRenderer.h, is judged on
-    // our tracer's estimate: the cross-renderer check).
+    // renderer (a T from another renderer's basis renders, app/host/ExternalRenderer.h, is judged
+    // on our tracer's estimate: the cross-renderer check).
     auto strip = [](json j) {
         for (const char* k :
-             {"render", "planes", "scene_file", "scene_overrides", "renderer", "pixels"})
+             {"render", "planes", "scene_file", "scene_overrides", "renderer", "pixels", "doubled"})
             j.erase(k);
         j["heightmap"].erase("file");
         j["material"].erase("name");

@@ -19,6 +19,11 @@ TransportSource validationEstimate(const Scene& scene, const PrecomputeOptions& 
     return transportForScene(scene, o, cacheDir);
 }
 
+int validationPilotSpp(int trainingSpp) {
+    const int quarter = (trainingSpp / 4) & ~1;
+    return std::min(trainingSpp, std::max(kValidationPilotSpp, quarter));
+}
+
 int defectSppFactor(size_t defectPixels, size_t partPixels) {
     int f = kDefectSppScale;
     while (f > 1 && static_cast<double>(defectPixels) * (f - 1) >
@@ -87,11 +92,16 @@ GapVerdict gapVerdict(double gap, double se, double maxGap, bool validationAtMos
 }
 
 double trainingGapError(ObjectiveKind kind, const TransportLoss& onValidation,
-                        std::span<const double> E, uint64_t seed, int replicates) {
+                        std::span<const double> E, uint64_t seed, int replicates,
+                        const UnbiasedObjective* unbiased) {
     const std::vector<HalfImages> images{onValidation.halfImages(E)};
     const LossParts parts = onValidation.evaluateImages(images.front(), E);
     const double figure = trainingFigure(kind, parts);
     if (parts.clamped || !(std::abs(figure) > 0)) return std::numeric_limits<double>::quiet_NaN();
+    if (unbiased && kind == ObjectiveKind::Unbiased) {
+        const double se = unbiased->lossStandardError(images[0].a, images[0].b);
+        if (std::isfinite(se)) return se / std::abs(figure);
+    }
     const double se =
         wildBootstrapErrors(images, seed, replicates, [&](std::span<const HalfImages> r) {
             return std::vector<double>{trainingFigure(kind, onValidation.evaluateImages(r[0], E))};
@@ -137,8 +147,9 @@ std::string describeTrainingNoise(const TrainingNoiseSummary& s) {
         const TrainingNoiseRound& r = s.rounds[k];
         out += (k ? "; " : "") + std::to_string(r.spp) + " spp" +
                (r.grid.perTexel() ? std::string() : ", " + r.grid.name()) +
-               (r.validationSpp > r.spp ? ", V " + std::to_string(r.validationSpp) + " spp"
-                                        : std::string()) +
+               (r.validationSpp > 0 && r.validationSpp != r.spp
+                    ? ", V " + std::to_string(r.validationSpp) + " spp"
+                    : std::string()) +
                ": train/validation gap " + pct(r.gap) +
                (std::isfinite(r.gapError) ? " ± " + pct(r.gapError) : std::string(" ± ?"));
     }

@@ -6,10 +6,13 @@
 // estimate does not share. The rule measures that directly, on the part and for the objective
 // in use:
 //
-//   1. T (the training estimate, spp n) and V (the validation estimate: the same scene, spp (or
-//      more, step 4) and path length, two sample sets, the seed training seed +
-//      kValidationSeedOffset, disjoint from every training seed and from the judge's) are traced
-//      (both cached);
+//   1. T (the training estimate, spp n) and V (the validation estimate: the same scene and path
+//      length, two sample sets, the seed training seed + kValidationSeedOffset, disjoint from
+//      every training seed and from the judge's) are traced (both cached). V starts at
+//      validationPilotSpp(n) (n/4, at least kValidationPilotSpp) where its figure does not depend
+//      on its spp (validationSppFree) and the rule adapts, else at n; it rises in rounds to the
+//      standard error its decisions need: the gap's (step 4) and the answer's
+//      (app/pipeline/Answer.h answerDecided: else V is traced again at n);
 //   2. the search runs on T as it would anyway; its E* is scored on T and on V;
 //   3. the gap (trainingGap) is how much better E* looks on T than on V, relative to V:
 //        paper, unbiased (losses, lower is better):  gap = (L_V − L_T) / L_V
@@ -40,7 +43,9 @@
 //      with gap·n/n' ≤ maxGap/2 (half the tolerance, so one more trace usually settles it), at most
 //      kMaxSppGrowth·n (a gap far above the tolerance is often a cliff the noise opened — e.g. the
 //      defect objective's reference energy pushed below its floor — which closes long before 1/spp
-//      predicts) and at most maxSpp; back to 1.
+//      predicts) and at most maxSpp; back to 1. The new T is traced anew: extended
+//      (app/pipeline/Transport.h transportInDoublings) it would be noisier than a trace of n'
+//      (each chunk is stratified on its own; docs/BENCHMARKS.md, issue 31's fourth pass).
 //   5. Over-fit at maxSpp (or a given spp): the light's degrees of
 //      freedom are the other knob: the search runs again on the same T and V with the light on
 //      a coarser grid of nodes (objective/CoarseLight.h), each step √2 fewer nodes per side
@@ -71,6 +76,7 @@
 #include "objective/Objective.h"
 #include "objective/ObjectiveKind.h"
 #include "objective/TransportLoss.h"
+#include "objective/UnbiasedObjective.h"
 
 namespace sl {
 
@@ -121,8 +127,8 @@ struct TrainingNoiseOptions {
     /// (false: the grid given is kept).
     bool adaptGrid = true;
     double maxGap = 0.05;
-    /// Half the judge's default spp (app/pipeline/Judge.h): T and V together never trace more samples
-    /// than the judge's estimate does, so the rule at most about doubles a run's tracing.
+    /// Half the judge's default spp (app/pipeline/Judge.h): T and V together never trace more
+    /// samples than the judge's estimate does, so the rule at most about doubles a run's tracing.
     int maxSpp = kJudgeDefaultSpp / 2;
     /// The most spp V is traced at when its own noise hides the gap (step 4): the judge's most,
     /// so V never needs more samples than an estimate the judge itself trusts.
@@ -137,6 +143,13 @@ struct TrainingNoiseOptions {
 TransportSource validationEstimate(const Scene& scene, const PrecomputeOptions& training,
                                    uint64_t trainingSeed, const std::filesystem::path& cacheDir,
                                    int spp = 0);
+
+/// V's least first round (header, step 1): at 16 spp V's figure of E* has a standard error of
+/// ~0.2 % on a 512² part without defects (the gap's tolerance is 5 %).
+inline constexpr int kValidationPilotSpp = 16;
+/// V's first spp for a training T at `trainingSpp` (header, step 1): a quarter of it, even, at
+/// least kValidationPilotSpp, at most trainingSpp.
+int validationPilotSpp(int trainingSpp);
 
 /// The verdict on a round's gap weighed against its standard error (header, step 3).
 enum class GapVerdict { Within, OverFit, ValidationNoise };
@@ -205,10 +218,13 @@ double trainingGap(ObjectiveKind kind, double training, double validation);
 /// (core/WildBootstrap.h) with `replicates` replicates. NaN when E*'s loss on V is clamped (a
 /// label's gradient, or G, below the objective's floor: V shows the defects no gradient, so its
 /// figure is the floor's, not a noisy measure), f_V is 0, or fewer than half the replicates
-/// give a finite figure.
+/// give a finite figure. `unbiased` (the unbiased objective of `onValidation`, kind Unbiased):
+/// SE(f_V) by the delta method on V's halves (objective/UnbiasedObjective.h lossStandardError)
+/// instead, which the bootstrap over-states at a few spp (on a held-out 512² part at 16 spp:
+/// 10 % against 0.25 % at 128).
 double trainingGapError(ObjectiveKind kind, const TransportLoss& onValidation,
-                        std::span<const double> E, uint64_t seed,
-                        int replicates = kJudgeReplicates);
+                        std::span<const double> E, uint64_t seed, int replicates = kJudgeReplicates,
+                        const UnbiasedObjective* unbiased = nullptr);
 
 /// Whether V may be traced at more spp than T (step 4): its figure's expectation does not
 /// depend on the spp (U and the defects' visibility are noise-unbiased; eq. 2 is not).

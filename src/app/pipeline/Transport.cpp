@@ -10,7 +10,9 @@
 #include "app/pipeline/Cache.h"
 #include "app/pipeline/HeldOut.h"
 #include "core/Error.h"
+#include "core/Md5.h"
 #include "core/Progress.h"
+#include "core/Rng.h"
 #include "core/Stopwatch.h"
 #include "core/Text.h"
 #include "io/SceneFile.h"
@@ -271,7 +273,8 @@ TransportSource transportForScene(const Scene& scene, const PrecomputeOptions& o
             s.file = readTransportFile(cached, prov.fingerprint);
             s.path = cached;
             s.cacheHit = true;
-            touchCacheFile(cached);  // its last use, for the cache's size cap (app/pipeline/Cache.h)
+            touchCacheFile(
+                cached);  // its last use, for the cache's size cap (app/pipeline/Cache.h)
             s.secondsTotal = clock.seconds();
             spdlog::info("transport matrix from cache {}", cached.string());
             return s;
@@ -280,6 +283,135 @@ TransportSource transportForScene(const Scene& scene, const PrecomputeOptions& o
         }
     }
     return trace(scene, ro, prov, options.rgb, options.label, cached, clock);
+}
+
+TransportMatrix meanOfEstimates(const TransportMatrix& a0, const TransportMatrix& b0) {
+    if (a0.width != b0.width || a0.height != b0.height || a0.envWidth != b0.envWidth ||
+        a0.envHeight != b0.envHeight || a0.channels != b0.channels || a0.planes != b0.planes)
+        throw std::invalid_argument("meanOfEstimates: the estimates are not of the same T");
+    // Sparse views (a dense one converted on a copy).
+    std::optional<TransportMatrix> ca, cb;
+    if (a0.storage != TransportStorage::Sparse) (ca = a0)->toSparse();
+    if (b0.storage != TransportStorage::Sparse) (cb = b0)->toSparse();
+    const TransportMatrix& a = ca ? *ca : a0;
+    const TransportMatrix& b = cb ? *cb : b0;
+    TransportMatrix t;
+    t.width = a.width;
+    t.height = a.height;
+    t.envWidth = a.envWidth;
+    t.envHeight = a.envHeight;
+    t.channels = a.channels;
+    t.planes = a.planes;
+    t.threads = a.threads;
+    t.storage = TransportStorage::Sparse;
+    const size_t rows = a.rows(), st = static_cast<size_t>(a.stride());
+    t.rowPtr.assign(rows + 1, 0);
+    t.colIdx.reserve(a.colIdx.size() + b.colIdx.size());
+    t.values.reserve(a.values.size() + b.values.size());
+    t.objectMask.resize(rows);
+    auto push = [&](uint16_t col, const float* va, const float* vb) {
+        t.colIdx.push_back(col);
+        for (size_t k = 0; k < st; ++k)
+            t.values.push_back(static_cast<float>(
+                0.5 * ((va ? double(va[k]) : 0.0) + (vb ? double(vb[k]) : 0.0))));
+    };
+    for (size_t r = 0; r < rows; ++r) {
+        uint64_t i = a.rowPtr[r], j = b.rowPtr[r];
+        const uint64_t ie = a.rowPtr[r + 1], je = b.rowPtr[r + 1];
+        while (i < ie || j < je) {
+            const bool takeA = j >= je || (i < ie && a.colIdx[i] <= b.colIdx[j]);
+            const bool takeB = i >= ie || (j < je && b.colIdx[j] <= a.colIdx[i]);
+            push(takeA ? a.colIdx[i] : b.colIdx[j], takeA ? &a.values[i * st] : nullptr,
+                 takeB ? &b.values[j * st] : nullptr);
+            i += takeA;
+            j += takeB;
+        }
+        t.rowPtr[r + 1] = t.colIdx.size();
+        t.objectMask[r] = a.objectMask[r] && b.objectMask[r] ? 1 : 0;
+    }
+    chooseStorage(t);
+    return t;
+}
+
+uint64_t doublingSeed(uint64_t seed, int spp) {
+    return mix64(seed ^ mix64(0x646F75626C65ULL + static_cast<uint64_t>(spp)));  // "double"
+}
+
+namespace {
+
+/// The chunks of transportInDoublings: how many doublings from base to spp (0: none).
+int doublings(int spp, int base) {
+    int k = 0;
+    if (base < 2 || spp <= base) return 0;
+    while (spp > base && spp % 2 == 0) spp /= 2, ++k;
+    return spp == base ? k : 0;
+}
+
+/// The provenance of the estimate transportInDoublings gives, without tracing.
+TransportProvenance doubledProvenance(const Scene& scene, const PrecomputeOptions& o, int base) {
+    const int spp = o.spp.value_or(scene.desc.render.spp);
+    if (doublings(spp, base) == 0)
+        return transportProvenance(scene, traceOptions(scene, o), o.rgb ? 3 : 1);
+    PrecomputeOptions half = o, chunk = o;
+    half.spp = chunk.spp = spp / 2;
+    const uint64_t seed = o.seed.value_or(scene.desc.render.seed);
+    chunk.seed = doublingSeed(seed, spp / 2);
+    const TransportProvenance ph = doubledProvenance(scene, half, base);
+    const TransportProvenance pc =
+        transportProvenance(scene, traceOptions(scene, chunk), o.rgb ? 3 : 1);
+    TransportProvenance p = ph;
+    p.spp = spp;
+    const std::string both = ph.fingerprint + "+" + pc.fingerprint;
+    p.fingerprint = md5Hex(both.data(), both.size());
+    nlohmann::json in = nlohmann::json::parse(ph.inputs);
+    if (in.contains("render")) in["render"]["spp"] = spp;
+    in["doubled"] = {
+        {"of", ph.fingerprint}, {"chunk", pc.fingerprint}, {"chunk_seed", *chunk.seed}};
+    p.inputs = in.dump();
+    return p;
+}
+
+}  // namespace
+
+TransportSource transportInDoublings(const Scene& scene, const PrecomputeOptions& options, int base,
+                                     const std::filesystem::path& cacheDir) {
+    const int spp = options.spp.value_or(scene.desc.render.spp);
+    if (doublings(spp, base) == 0) return transportForScene(scene, options, cacheDir);
+    const Stopwatch clock;
+    const TransportProvenance prov = doubledProvenance(scene, options, base);
+    const auto cached = cacheDir.empty() ? std::filesystem::path()
+                                         : cacheDir / ("transport-" + prov.fingerprint + ".tm");
+    if (!cached.empty() && std::filesystem::exists(cached)) {
+        try {
+            TransportSource s;
+            s.file = readTransportFile(cached, prov.fingerprint);
+            s.path = cached;
+            s.cacheHit = true;
+            touchCacheFile(cached);
+            s.secondsTotal = clock.seconds();
+            spdlog::info("transport matrix from cache {}", cached.string());
+            return s;
+        } catch (const InputError& e) {
+            spdlog::warn("ignoring cached transport matrix: {}", e.what());
+        }
+    }
+    PrecomputeOptions half = options, chunk = options;
+    half.spp = chunk.spp = spp / 2;
+    chunk.seed = doublingSeed(options.seed.value_or(scene.desc.render.seed), spp / 2);
+    const TransportSource h = transportInDoublings(scene, half, base, cacheDir);
+    const TransportSource c = transportForScene(scene, chunk, cacheDir);
+    TransportSource s;
+    s.file.matrix = meanOfEstimates(h.file.matrix, c.file.matrix);
+    s.file.provenance = prov;
+    s.cacheHit = h.cacheHit && c.cacheHit;
+    s.secondsTrace = h.secondsTrace + c.secondsTrace;
+    s.trace = c.trace;
+    if (!cached.empty()) {
+        writeTransportFile(cached, s.file.matrix, prov);
+        s.path = cached;
+    }
+    s.secondsTotal = clock.seconds();
+    return s;
 }
 
 std::unique_ptr<Scene> sceneOfTransport(const TransportFile& f, const std::string& purpose) {

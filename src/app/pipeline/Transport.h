@@ -107,6 +107,28 @@ std::vector<TransportSource> transportSetForScene(const Scene& scene,
                                                   const PrecomputeOptions& options, int count,
                                                   const std::filesystem::path& cacheDir);
 
+/// Two independent estimates of the same T at the same spp (same image, grid, channels and
+/// planes) as one at twice the spp: each entry the mean of the two (plane by plane, so two
+/// halves stay two halves, each from its own samples); a pixel is on the part where both say
+/// so. Stored as chooseStorage picks.
+TransportMatrix meanOfEstimates(const TransportMatrix& a, const TransportMatrix& b);
+
+/// The seed of the chunk that takes an estimate of seed `seed` from `spp` to 2·spp
+/// (transportInDoublings): a mix of both, so no two chunks of one estimate share samples, and
+/// none is a training seed (small numbers), the validation seed or the judge's.
+uint64_t doublingSeed(uint64_t seed, int spp);
+
+/// An estimate extended instead of traced anew (the judge's rounds): at options.spp = base·2^k,
+/// k >= 1, the estimate at options.spp/2 (the same way) and an independent chunk of
+/// options.spp/2 samples (seed doublingSeed(seed, options.spp/2); the other options the same),
+/// averaged by meanOfEstimates; at base, or at an spp of no such form, transportForScene. A
+/// round at 2n thus traces n more samples where a new trace took 2n, and the same options give
+/// the same numbers however the rounds got there. Every chunk and the result are cached in
+/// cacheDir (the result's fingerprint over its pieces'); provenance: options.spp, the first
+/// chunk's seed and path length.
+TransportSource transportInDoublings(const Scene& scene, const PrecomputeOptions& options, int base,
+                                     const std::filesystem::path& cacheDir);
+
 /// The scene a transport matrix records (its "scene_file"), checked against T's image size.
 /// `purpose` names what needs it, for the error message when the file records none.
 std::unique_ptr<Scene> sceneOfTransport(const TransportFile& t, const std::string& purpose);
