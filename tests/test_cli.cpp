@@ -290,6 +290,17 @@ TEST_F(CliTest, OptionMessagesNameTheFlagReadably) {
     EXPECT_EQ(r.exitCode, 2) << r.output;
     EXPECT_NE(r.output.find("--lambda"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("an empty entry"), std::string::npos) << r.output;
+    // CLI11 dropped the empty entries of every other list (--starts a,,b was read as a,b).
+    for (const std::string& list :
+         {"optimize " + s + " --starts const:0.5,,random:1",
+          "optimize " + s + " --continuation=4,2,", "lamps " + s + " --kinds disk,,bar",
+          "defectmap " + s + " --negatives ,128"}) {
+        r = runCli(list);
+        EXPECT_EQ(r.exitCode, 2) << list << "\n" << r.output;
+        EXPECT_NE(r.output.find("an empty entry"), std::string::npos) << list << "\n" << r.output;
+    }
+    r = runCli("optimize " + s + " --starts const:0.5,random:1");
+    EXPECT_EQ(r.exitCode, 1) << r.output;  // whole lists pass: the run stops at the scene
     r = runCli("optimize " + s + " --lambda 1,x");
     EXPECT_EQ(r.exitCode, 2) << r.output;
     EXPECT_NE(r.output.find("'x' is not a finite number"), std::string::npos) << r.output;
@@ -317,6 +328,9 @@ TEST_F(CliTest, OptionMessagesNameTheFlagReadably) {
              {"lamps " + s + " --min-elevation nan",
               "--min-elevation: must be a number in -90..90, got 'nan'"},
              {"bench race --alphas 2", "--alphas: must be a number in 0.0001..1, got '2'"},
+             // named --threshold (scratchmap's flag) and checked only after the trace
+             {"optimize " + s + " --scratch-threshold 5",
+              "--scratch-threshold: must be a number in 0..1, got '5'"},
              {"optimize " + s + " --cache-max 5XB", "--cache-max: '5XB' is not a size"}}) {
         r = runCli(c.args);
         EXPECT_EQ(r.exitCode, 2) << c.args << "\n" << r.output;
