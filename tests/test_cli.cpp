@@ -387,3 +387,50 @@ TEST_F(CliTest, RenderChecksItsOutputsAndSaysWhenItIsBlack) {
         EXPECT_NE(r.output.find("height map's units"), std::string::npos) << r.output;
     }
 }
+
+// Issue 35 (second pass): defectmap wrote its map, then found a directory where the score CSV
+// goes and failed with the map left behind; `defectmap -o` replaced its own truth and
+// `--score-output` its height map, `scratchmap -o` a PNG height map it read (exit 0). Their
+// outputs are checked against the run's inputs, staged before the work and appear together.
+TEST_F(CliTest, MapCommandsWriteAllOrNothingAndNeverOverTheirInputs) {
+    const std::string g = (dir / "g.exr").string(), truth = (dir / "g-truth.png").string();
+    ASSERT_EQ(runCli("gen-surface -o " + g + " --width 64 --height 64").exitCode, 0);
+    const std::string map = (dir / "m.png").string();
+    const std::string run = "defectmap " + g + " --truth " + truth + " -o " + map;
+    std::filesystem::create_directories(dir / "m-score.csv");
+    auto r = runCli(run);
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("m-score.csv"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("is a directory"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(map));
+    std::filesystem::remove(dir / "m-score.csv");
+    const std::string mapBytes = test::readFile(g), truthBytes = test::readFile(truth),
+                      legendBytes = test::readFile(dir / "g-truth.json");
+    for (const std::string& over :
+         {"defectmap " + g + " --truth " + truth + " -o " + truth, run + " --score-output " + g,
+          run + " --score-output " + (dir / "g-truth.json").string()}) {
+        r = runCli(over);
+        EXPECT_NE(r.exitCode, 0) << over << "\n" << r.output;
+        EXPECT_EQ(test::readFile(g), mapBytes) << over;
+        EXPECT_EQ(test::readFile(truth), truthBytes) << over;
+        EXPECT_EQ(test::readFile(dir / "g-truth.json"), legendBytes) << over;
+        EXPECT_FALSE(std::filesystem::exists(map)) << over;
+    }
+    r = runCli(run);
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(std::filesystem::exists(map));
+    EXPECT_TRUE(std::filesystem::exists(dir / "m-score.csv"));
+    // scratchmap of a scene whose height map is a PNG: neither output may be that PNG.
+    const std::string p = (dir / "p.png").string(), ps = (dir / "p.json").string();
+    ASSERT_EQ(runCli("gen-surface -o " + p + " --width 64 --height 64 --scene " + ps).exitCode, 0);
+    const std::string pngBytes = test::readFile(p);
+    for (const std::string& over :
+         {"scratchmap " + ps + " -o " + p,
+          "scratchmap " + ps + " -o " + (dir / "s.png").string() + " --image-output " + p}) {
+        r = runCli(over);
+        EXPECT_EQ(r.exitCode, 1) << over << "\n" << r.output;
+        EXPECT_NE(r.output.find("is an input of this run"), std::string::npos) << r.output;
+        EXPECT_EQ(test::readFile(p), pngBytes) << over;
+        EXPECT_FALSE(std::filesystem::exists(dir / "s.png")) << over;
+    }
+}
