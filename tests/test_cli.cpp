@@ -290,6 +290,17 @@ TEST_F(CliTest, OptionMessagesNameTheFlagReadably) {
     EXPECT_EQ(r.exitCode, 2) << r.output;
     EXPECT_NE(r.output.find("--lambda"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("an empty entry"), std::string::npos) << r.output;
+    // CLI11 dropped the empty entries of every other list (--starts a,,b was read as a,b).
+    for (const std::string& list :
+         {"optimize " + s + " --starts const:0.5,,random:1",
+          "optimize " + s + " --continuation=4,2,", "lamps " + s + " --kinds disk,,bar",
+          "defectmap " + s + " --negatives ,128"}) {
+        r = runCli(list);
+        EXPECT_EQ(r.exitCode, 2) << list << "\n" << r.output;
+        EXPECT_NE(r.output.find("an empty entry"), std::string::npos) << list << "\n" << r.output;
+    }
+    r = runCli("optimize " + s + " --starts const:0.5,random:1");
+    EXPECT_EQ(r.exitCode, 1) << r.output;  // whole lists pass: the run stops at the scene
     r = runCli("optimize " + s + " --lambda 1,x");
     EXPECT_EQ(r.exitCode, 2) << r.output;
     EXPECT_NE(r.output.find("'x' is not a finite number"), std::string::npos) << r.output;
@@ -317,6 +328,9 @@ TEST_F(CliTest, OptionMessagesNameTheFlagReadably) {
              {"lamps " + s + " --min-elevation nan",
               "--min-elevation: must be a number in -90..90, got 'nan'"},
              {"bench race --alphas 2", "--alphas: must be a number in 0.0001..1, got '2'"},
+             // named --threshold (scratchmap's flag) and checked only after the trace
+             {"optimize " + s + " --scratch-threshold 5",
+              "--scratch-threshold: must be a number in 0..1, got '5'"},
              {"optimize " + s + " --cache-max 5XB", "--cache-max: '5XB' is not a size"}}) {
         r = runCli(c.args);
         EXPECT_EQ(r.exitCode, 2) << c.args << "\n" << r.output;
@@ -361,7 +375,7 @@ TEST_F(CliTest, RenderChecksItsOutputsAndSaysWhenItIsBlack) {
     std::filesystem::remove(png());
     r = runCli("render " + s + " --spp 1 --envmap const:1e39 -o " + out());
     EXPECT_EQ(r.exitCode, 1) << r.output;
-    EXPECT_NE(r.output.find("more than 1e6"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("more than 1e+06"), std::string::npos) << r.output;
     EXPECT_FALSE(std::filesystem::exists(out()));
     // Heights of 1e30: a black render, and a word about it.
     std::vector<float> h(16 * 12, 0.0f);
@@ -371,5 +385,52 @@ TEST_F(CliTest, RenderChecksItsOutputsAndSaysWhenItIsBlack) {
     EXPECT_NE(r.output.find("the render is black"), std::string::npos) << r.output;
     if (r.exitCode == 0) {
         EXPECT_NE(r.output.find("height map's units"), std::string::npos) << r.output;
+    }
+}
+
+// Issue 35 (second pass): defectmap wrote its map, then found a directory where the score CSV
+// goes and failed with the map left behind; `defectmap -o` replaced its own truth and
+// `--score-output` its height map, `scratchmap -o` a PNG height map it read (exit 0). Their
+// outputs are checked against the run's inputs, staged before the work and appear together.
+TEST_F(CliTest, MapCommandsWriteAllOrNothingAndNeverOverTheirInputs) {
+    const std::string g = (dir / "g.exr").string(), truth = (dir / "g-truth.png").string();
+    ASSERT_EQ(runCli("gen-surface -o " + g + " --width 64 --height 64").exitCode, 0);
+    const std::string map = (dir / "m.png").string();
+    const std::string run = "defectmap " + g + " --truth " + truth + " -o " + map;
+    std::filesystem::create_directories(dir / "m-score.csv");
+    auto r = runCli(run);
+    EXPECT_EQ(r.exitCode, 1) << r.output;
+    EXPECT_NE(r.output.find("m-score.csv"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("is a directory"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(map));
+    std::filesystem::remove(dir / "m-score.csv");
+    const std::string mapBytes = test::readFile(g), truthBytes = test::readFile(truth),
+                      legendBytes = test::readFile(dir / "g-truth.json");
+    for (const std::string& over :
+         {"defectmap " + g + " --truth " + truth + " -o " + truth, run + " --score-output " + g,
+          run + " --score-output " + (dir / "g-truth.json").string()}) {
+        r = runCli(over);
+        EXPECT_NE(r.exitCode, 0) << over << "\n" << r.output;
+        EXPECT_EQ(test::readFile(g), mapBytes) << over;
+        EXPECT_EQ(test::readFile(truth), truthBytes) << over;
+        EXPECT_EQ(test::readFile(dir / "g-truth.json"), legendBytes) << over;
+        EXPECT_FALSE(std::filesystem::exists(map)) << over;
+    }
+    r = runCli(run);
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(std::filesystem::exists(map));
+    EXPECT_TRUE(std::filesystem::exists(dir / "m-score.csv"));
+    // scratchmap of a scene whose height map is a PNG: neither output may be that PNG.
+    const std::string p = (dir / "p.png").string(), ps = (dir / "p.json").string();
+    ASSERT_EQ(runCli("gen-surface -o " + p + " --width 64 --height 64 --scene " + ps).exitCode, 0);
+    const std::string pngBytes = test::readFile(p);
+    for (const std::string& over :
+         {"scratchmap " + ps + " -o " + p,
+          "scratchmap " + ps + " -o " + (dir / "s.png").string() + " --image-output " + p}) {
+        r = runCli(over);
+        EXPECT_EQ(r.exitCode, 1) << over << "\n" << r.output;
+        EXPECT_NE(r.output.find("is an input of this run"), std::string::npos) << r.output;
+        EXPECT_EQ(test::readFile(p), pngBytes) << over;
+        EXPECT_FALSE(std::filesystem::exists(dir / "s.png")) << over;
     }
 }

@@ -342,6 +342,31 @@ TEST(Interrupt, GenSurfaceStopsAndWritesNothing) {
     EXPECT_EQ(entries(dir.path()), std::vector<std::string>{"log.txt"}) << test::readFile(log);
 }
 
+// Issue 35: defectmap ignored Ctrl-C and finished; then its selfsim method (issue 35's second
+// pass) took 6-9 s to stop after SIGTERM: a tile's offset search (~1 s each on a loaded core)
+// polled only after its copies. Every method now stops within seconds and writes nothing.
+TEST(Interrupt, DefectMapStopsAndWritesNothing) {
+    test::TempDir dir("int-defectmap");
+    const fs::path part = fs::path(SL_SOURCE_DIR) / "scenes/default/part.exr";
+    const fs::path log = dir.path() / "log.txt";
+    for (const char* method : {"auto", "lay", "selfsim"}) {
+        SCOPED_TRACE(method);
+        const pid_t pid = spawnCli({"defectmap", part.string(), "--method", method, "-o",
+                                    (dir.path() / "map.png").string()},
+                                   log);
+        ASSERT_TRUE(waitForHandler(pid, 10));
+        std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+        const auto t0 = std::chrono::steady_clock::now();
+        ::kill(pid, SIGTERM);
+        const int code = waitExit(pid);
+        const double seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        EXPECT_EQ(code, 143) << test::readFile(log);
+        EXPECT_LT(seconds, 3.0) << test::readFile(log);
+        EXPECT_EQ(entries(dir.path()), std::vector<std::string>{"log.txt"}) << test::readFile(log);
+    }
+}
+
 namespace {
 
 /// A finished `optimize` run in `out` from the small T `tm` (precomputed here): the "previous

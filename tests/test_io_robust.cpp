@@ -498,6 +498,15 @@ TEST(RobustIO, LampsFileRefusesWhatNoLampIs) {
     lamps(R"({"kind": "disk", "radiance": 1, "azimuth_deg": 0, "elevation_deg": 40,
               "angular_radius_deg": 0})");
     expectRefused([&] { readLampsFile(file); }, {"angular_radius_deg", "(0, 90]"});
+    // A radiance of 1e39 (inf as a float) was read; the bound is a constant light's (const:V).
+    const std::string disk =
+        R"({"kind": "disk", "azimuth_deg": 0, "elevation_deg": 40, "angular_radius_deg": 5, )";
+    lamps(disk + R"("radiance": 1e6})");
+    EXPECT_EQ(readLampsFile(file).lamps.size(), 1u);
+    for (const std::string r : {"1e39", "1000001", "-1"}) {
+        lamps(disk + R"("radiance": )" + r + "}");
+        expectRefused([&] { readLampsFile(file); }, {"lamps[0] radiance", "[0, 1e+06]"});
+    }
 }
 
 // --forbid-azimuth 0:360 forbade nothing (lamps still placed at 0 degrees).
@@ -527,7 +536,7 @@ TEST(RobustIO, RoughnessAndConstantLightRangesAreChecked) {
         expectRefused([&] { parseScene(hm + bad + "}", "."); },
                       {"material.alpha", "must be in (0, 1]"});
     expectRefused([&] { lightFromSpec("const:1e39", 50, 25, 1, "--envmap"); },
-                  {"const:1e39", "more than 1e6"});
+                  {"const:1e39", "more than 1e+06"});
     EXPECT_NO_THROW(lightFromSpec("const:2", 50, 25, 1, "--envmap"));
 }
 

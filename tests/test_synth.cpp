@@ -1151,6 +1151,10 @@ TEST(Synth, ValidationNamesTheNewFields) {
     s = base;
     s.spikeCount = -1;
     expectField(s, "spikeCount");
+    s = base;  // issue 35: a negative largest spike was read (each spike's sign is random)
+    s.spikeCount = 1;
+    s.spikeHeight = -1;
+    expectField(s, "spikeHeight");
 }
 
 TEST(GenSurface, PartFilesLegendNamesEveryLabelOfTheTruth) {

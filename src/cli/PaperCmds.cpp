@@ -14,14 +14,18 @@
 #include <spdlog/spdlog.h>
 
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "app/report/Report.h"
 #include "cli/Common.h"
 #include "core/Error.h"
+#include "core/Interrupt.h"
 #include "detect/ScratchMap.h"
+#include "io/AtomicFile.h"
 #include "io/EnvMapIO.h"
 #include "io/ImageIO.h"
+#include "io/InputFile.h"
 #include "io/SceneFile.h"
 #include "objective/ImageSpace.h"
 #include "scene/EnvMapPresets.h"
@@ -46,25 +50,42 @@ int runScratchMap(const ScratchArgs& a) {
     const bool isScene = in.extension() == ".json";
     if (!a.imageMask.empty() && !isScene)
         throw UsageError("--image-output needs a scene file (its camera), not a bare height map");
+    // Neither output replaces what this run reads; both are staged and appear together.
+    std::vector<std::filesystem::path> inputs{in};
+    if (isScene)
+        for (const auto& f : sceneInputFiles(readSceneFile(in, a.overrides))) inputs.push_back(f);
+    refuseOutputOverInput(a.out, "-o", inputs);
+    refuseOutputOverInput(a.imageMask, "--image-output", inputs);
+    AtomicOutput mapOut(a.out);
+    std::optional<AtomicOutput> imageOut;
+    if (!a.imageMask.empty()) imageOut.emplace(a.imageMask);
     const HeightSource src = loadHeightSource(in, a.overrides);
     const std::vector<float>& h = src.heights();
     const int W = src.width(), H = src.height();
     ScratchMap m = computeScratchMap(h, W, H, a.opt);
-    writeMaskPng(a.out, m.map, W, H);
+    writeMaskPng(mapOut.tempPath(), m.map, W, H);
+    size_t inside = 0, partPixels = 0;
+    int imageW = 0, imageH = 0;
+    if (imageOut) {
+        PrimaryHits hits = tracePrimaryHits(*src.scene);
+        std::vector<uint8_t> img = projectToImage(hits, m.map);
+        for (uint8_t v : img) inside += v != 0;
+        partPixels = hits.hitCount();
+        imageW = hits.width;
+        imageH = hits.height;
+        writeMaskPng(imageOut->tempPath(), img, hits.width, hits.height);
+    }
+    enterCommit();  // Ctrl-C before the files appear: none does; after: both (core/Interrupt.h)
+    mapOut.commit();
+    if (imageOut) imageOut->commit();
     std::printf(
         "scratch map of %dx%d samples (kernel %d, patch %d, threshold %g): %d of %d patches "
         "marked (%.1f%% of the map), detrended range %.6g, %.3f s\nwrote %s\n",
         W, H, a.opt.kernel, a.opt.patch, a.opt.threshold, m.patchesMarked, m.patchesX * m.patchesY,
         100.0 * m.markedFraction(), m.detrendedMax - m.detrendedMin, m.seconds, a.out.c_str());
-    if (!a.imageMask.empty()) {
-        PrimaryHits hits = tracePrimaryHits(*src.scene);
-        std::vector<uint8_t> img = projectToImage(hits, m.map);
-        size_t inside = 0;
-        for (uint8_t v : img) inside += v != 0;
-        writeMaskPng(a.imageMask, img, hits.width, hits.height);
-        std::printf("image-space mask %dx%d: %zu of %zu part pixels inside\nwrote %s\n", hits.width,
-                    hits.height, inside, hits.hitCount(), a.imageMask.c_str());
-    }
+    if (imageOut)
+        std::printf("image-space mask %dx%d: %zu of %zu part pixels inside\nwrote %s\n", imageW,
+                    imageH, inside, partPixels, a.imageMask.c_str());
     return kOk;
 }
 

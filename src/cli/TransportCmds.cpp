@@ -340,6 +340,7 @@ void registerTransport(CLI::App& app, std::function<int()>& run) {
             ->capture_default_str();
         c->add_option("--scratch-threshold", j.scratch.threshold,
                       "Scratch map: max-min threshold of a patch (of the [0,1] detrended range)")
+            ->check(numberInRange(0, 1))  // before the trace (detect/ScratchMap.h checks too)
             ->capture_default_str();
         c->add_option("--truth", j.truth,
                       "Ground-truth defect mask in height-map space (e.g. part-truth.png): "

@@ -93,6 +93,40 @@ void suggestOptions(const CLI::App& app, int argc, char** argv) {
     }
 }
 
+/// CLI11 drops the empty entries of a comma-separated list ("--starts a,,b" read as a,b; issue
+/// 35): after the parse, every value given to a list option of the chosen commands is checked
+/// for one. Returns the message, or "" when every list is whole.
+std::string emptyListEntry(const CLI::App& app, int argc, char** argv) {
+    std::vector<const CLI::Option*> lists;
+    for (const CLI::App* c = &app;;) {
+        for (const CLI::Option* o : c->get_options())
+            if (o->get_delimiter() == ',' && o->count() > 0) lists.push_back(o);
+        const auto chosen = c->get_subcommands();
+        if (chosen.empty()) break;
+        c = chosen.front();
+    }
+    for (int k = 1; k < argc; ++k) {
+        const std::string word = argv[k];
+        if (word == "--") break;
+        for (const CLI::Option* o : lists)
+            for (const std::string& n : o->get_lnames()) {
+                const std::string flag = "--" + n;
+                std::string value;
+                if (word.rfind(flag + "=", 0) == 0)
+                    value = word.substr(flag.size() + 1);
+                else if (word == flag && k + 1 < argc)
+                    value = argv[k + 1];
+                else
+                    continue;
+                if (value.empty() || value.front() == ',' || value.back() == ',' ||
+                    value.find(",,") != std::string::npos)
+                    return flag + ": '" + value +
+                           "': an empty entry; give the entries separated by single commas";
+            }
+    }
+    return "";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -153,6 +187,10 @@ int main(int argc, char** argv) {
     } catch (const sl::InputError& e) {  // a value the library's parser refused (cli/Common.h)
         std::fprintf(stderr, "error: %s\n", withFlags(app, e.what()).c_str());
         return kRuntimeError;
+    }
+    if (const std::string empty = emptyListEntry(app, argc, argv); !empty.empty()) {
+        std::fprintf(stderr, "error: %s\n", empty.c_str());
+        return kUsageError;
     }
     // MPI ranks (app/host/Mpi.h, docs/CLUSTER.md): only optimize runs over several; the ranks but
     // rank 0 print only errors, and an error on any rank ends them all.

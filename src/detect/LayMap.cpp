@@ -265,6 +265,7 @@ LayPass removeLay(std::span<const float> heights, int W, int H, const LayMapOpti
     std::vector<float> res(n);
     const int half = o.layLength / 2;
     tbb::parallel_for(0, H, [&](int y) {
+        if (interruptRequested()) return;  // a row at a time: the whole loop takes seconds
         thread_local std::vector<float> line;
         line.resize(static_cast<size_t>(o.layLength));
         for (int x = 0; x < W; ++x) {
@@ -303,6 +304,7 @@ LayPass removeLay(std::span<const float> heights, int W, int H, const LayMapOpti
             res[k] = heights[k] - *mid;
         }
     });
+    throwIfInterrupted();
     r.res = std::move(res);
     return r;
 }

@@ -172,7 +172,8 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
         std::vector<Cand> cands;
         std::vector<float> diff;
         const int grid = o.refine + 1;  // offsets on a grid the refinement fills in
-        for (int dz = -R; dz <= R; dz += grid)
+        for (int dz = -R; dz <= R; dz += grid) {
+            if (interruptRequested()) return;  // a tile's search takes ~1 s on a loaded core
             for (int dx = -R; dx <= R; dx += grid) {
                 if (std::max(std::abs(dx), std::abs(dz)) < o.exclusion) continue;
                 diff.clear();
@@ -183,6 +184,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                 if (diff.size() < 16) continue;
                 cands.push_back({dx, dz, static_cast<float>(medianOf(diff))});
             }
+        }
         std::stable_sort(cands.begin(), cands.end(),
                          [](const Cand& a, const Cand& b) { return a.score < b.score; });
         std::vector<int>& kept = tileOffsets[static_cast<size_t>(tileIndex)];
@@ -337,6 +339,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     }
     std::vector<float> zDetect(n, 0.0f), zGrow(n, 0.0f);
     for (int s = 0; s < o.scales; ++s) {
+        throwIfInterrupted();
         const std::vector<float> rs =
             s == 0 ? out.residual : gaussianBlur(out.residual, W, H, std::ldexp(1.0, s - 1));
         std::vector<float> vals;

@@ -315,9 +315,11 @@ EnvMap lightFromSpec(const std::string& spec, int w, int h, int channels,
         if (!(value >= 0) || !std::isfinite(value))
             throw inputError(where + " " + spec, "'" + v + "' is not a number >= 0",
                              "use " + lightSpecForms());
-        if (value > 1e6)  // radiance relative to the env map's [0, 1]; float overflows at 3.4e38
-            throw inputError(where + " " + spec, "'" + v + "' is more than 1e6",
-                             "give a radiance in [0, 1e6] (1 is the optimizer's brightest)");
+        if (value > kMaxRadiance)  // scene/EnvMap.h
+            throw inputError(where + " " + spec,
+                             "'" + v + "' is more than " + formatNumber(kMaxRadiance),
+                             "give a radiance in [0, " + formatNumber(kMaxRadiance) +
+                                 "] (1 is the optimizer's brightest)");
         return EnvMap::constant(w, h, static_cast<float>(value), channels == 3 ? 3 : 1);
     }
     if (spec.rfind("envmap:", 0) == 0) return loadEnvMap(spec.substr(7), w, h, channels);

@@ -10,6 +10,7 @@
 #include "core/Text.h"
 #include "io/AtomicFile.h"
 #include "io/InputFile.h"
+#include "scene/EnvMap.h"
 
 namespace sl {
 
@@ -153,7 +154,8 @@ LampsFile readLampsFile(const std::filesystem::path& file) {
             throw inputError(at + " " + field, "is " + formatNumber(value) + ", outside " + range,
                              "write it as `scratchlight lamps` does");
         };
-        if (!(l.radiance >= 0)) refuse("radiance", l.radiance, "[0, inf)");
+        if (!(l.radiance >= 0 && l.radiance <= kMaxRadiance))  // scene/EnvMap.h
+            refuse("radiance", l.radiance, ("[0, " + formatNumber(kMaxRadiance) + "]").c_str());
         if (std::abs(l.elevation) > kPi / 2 + 1e-9)
             refuse("elevation_deg", l.elevation * kDeg, "[-90, 90] degrees");
         if (l.kind == LampKind::Disk && !(l.size > 0 && l.size <= kPi / 2 + 1e-9))

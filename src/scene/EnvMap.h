@@ -11,6 +11,11 @@
 
 namespace sl {
 
+/// The brightest radiance a light may give, relative to the optimizer's [0, 1] (1 is its
+/// brightest texel): a constant light (`const:V`) and a lamp in lamps.json are refused above it.
+/// float overflows at 3.4e38, and a render sums many texels, so far below that.
+constexpr double kMaxRadiance = 1e6;
+
 struct EnvMap {
     int width = kDefaultEnvMapGrid.width, height = kDefaultEnvMapGrid.height, channels = 1;
     std::vector<float> texels;  // row-major, row 0 = +Y (top), channels interleaved

@@ -283,7 +283,12 @@ void validate(const SurfaceSpec& s) {
             "Use 0 for no measurement noise");
     require(s.spikeCount >= 0 && s.spikeCount <= 1000000, "spikeCount",
             "must be in [0, 1000000], got " + std::to_string(s.spikeCount), "Use 0 for no spikes");
-    if (s.spikeCount > 0) requireFinite(s.spikeHeight, "spikeHeight");
+    if (s.spikeCount > 0) {
+        requireFinite(s.spikeHeight, "spikeHeight");
+        require(s.spikeHeight >= 0, "spikeHeight",
+                "must be >= 0 mm, got " + formatNumber(s.spikeHeight),
+                "It is the largest spike's height; each spike's sign is random");
+    }
     if (s.pocketEdge) {
         requireFinite(s.pocketDepth, "pocketDepth");
         require(s.pocketDepth >= 0, "pocketDepth",

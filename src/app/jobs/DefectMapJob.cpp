@@ -1,5 +1,6 @@
 #include "app/jobs/DefectMapJob.h"
 
+#include <optional>
 #include <sstream>
 
 #include "core/Error.h"
@@ -8,6 +9,7 @@
 #include "core/Stopwatch.h"
 #include "io/AtomicFile.h"
 #include "io/ImageIO.h"
+#include "io/InputFile.h"
 #include "io/MaskIO.h"
 #include "io/SceneFile.h"
 #include "objective/ImageSpace.h"
@@ -37,6 +39,28 @@ DefectMapJobSummary runDefectMapJob(const DefectMapJobOptions& o) {
                 "needs a scene file (its camera), not a bare height map '" + o.input.string() + "'",
                 "Give SCENE.json as the input");
     }
+    // No output replaces what this run reads (the height map, the truth or its legend).
+    std::vector<std::filesystem::path> inputs{o.input};
+    if (isScene)
+        for (const auto& f : sceneInputFiles(readSceneFile(o.input, o.sceneOverrides)))
+            inputs.push_back(f);
+    if (!o.truth.empty()) {
+        inputs.push_back(o.truth);
+        inputs.push_back(std::filesystem::path(o.truth).replace_extension(".json"));  // legend
+    }
+    const std::filesystem::path csv =
+        o.truth.empty()  ? std::filesystem::path()
+        : !o.csv.empty() ? o.csv
+                         : o.output.parent_path() / (o.output.stem().string() + "-score.csv");
+    refuseOutputOverInput(o.output, option("output"), inputs);
+    refuseOutputOverInput(o.imageOutput, option("image-output"), inputs);
+    refuseOutputOverInput(csv, option("score-output"), inputs);
+    // Every output staged before the work (a directory in the way is refused now, not after
+    // it), renamed into place together at the end: none appears unless all do.
+    AtomicOutput mapOut(o.output);
+    std::optional<AtomicOutput> imageOut, csvOut;
+    if (!o.imageOutput.empty()) imageOut.emplace(o.imageOutput);
+    if (!csv.empty()) csvOut.emplace(csv);
     const HeightSource src = loadHeightSource(o.input, o.sceneOverrides);
     const std::vector<float>& h = src.heights();
     DefectMapJobSummary s;
@@ -63,19 +87,16 @@ DefectMapJobSummary runDefectMapJob(const DefectMapJobOptions& o) {
         for (uint8_t v : image) s.imageMarked += v != 0;
     }
 
+    writeMaskPng(mapOut.tempPath(), s.map.map, s.width, s.height);
+    if (imageOut) writeMaskPng(imageOut->tempPath(), image, s.imageWidth, s.imageHeight);
+    if (csvOut) writeTextAtomically(csvOut->tempPath(), defectScoreCsv(*s.score));
     enterCommit();  // Ctrl-C before the files appear: none does; after: all (core/Interrupt.h)
-    writeMaskPng(o.output, s.map.map, s.width, s.height);
-    s.written.push_back(o.output);
-    if (!o.imageOutput.empty()) {
-        writeMaskPng(o.imageOutput, image, s.imageWidth, s.imageHeight);
-        s.written.push_back(o.imageOutput);
-    }
-    if (s.score) {
-        std::filesystem::path csv = o.csv;
-        if (csv.empty()) csv = o.output.parent_path() / (o.output.stem().string() + "-score.csv");
-        writeTextAtomically(csv, defectScoreCsv(*s.score));
-        s.written.push_back(csv);
-    }
+    for (AtomicOutput* out :
+         {&mapOut, imageOut ? &*imageOut : nullptr, csvOut ? &*csvOut : nullptr})
+        if (out) {
+            out->commit();
+            s.written.push_back(out->finalPath());
+        }
     s.seconds = clock.seconds();
     return s;
 }

@@ -71,6 +71,7 @@ PartFiles writePartFiles(const GeneratedSurface& g, const std::filesystem::path&
             hm.data[i] = static_cast<float>((g.heights[i] - f.lo) / (f.hi - f.lo));
         writePng16(hmOut.tempPath(), hm);
     }
+    throwIfInterrupted();  // between the files: a big map's encoding takes seconds
     // The legend of the truth labels (judge --truth reads it to name the regions): every label
     // present (synth/SurfaceGenerator.h truthLegend).
     nlohmann::ordered_json legend;
