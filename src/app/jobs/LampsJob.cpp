@@ -77,6 +77,11 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
     StagedDirectory out(o.outDir);
     const std::filesystem::path dir = out.path();
     LampsJobSummary job;
+    Stopwatch phase;
+    auto lap = [&phase](double& into) {
+        into = phase.seconds();
+        phase.restart();
+    };
     try {
         const bool tmInput = isTransportFile(o.input);
         std::unique_ptr<Scene> scene;
@@ -123,6 +128,8 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
             }
         }
 
+        lap(job.phases.load);
+
         // The objective on T.
         SearchInputs in;
         in.set = {&t};
@@ -151,6 +158,8 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
                          job.secondsTarget);
         }
 
+        lap(job.phases.target);
+
         // The lamps, kept out of the camera's cone (seen from the part's centre, the camera's
         // target).
         LampFitOptions fit = o.fit;
@@ -168,6 +177,7 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         job.fit = fitLamps(*objective.loss, target, fit);
         job.targetLoss = job.fit.targetLoss;
         const std::vector<Lamp>& lamps = job.fit.steps.back().lamps;
+        lap(job.phases.fit);
 
         // What the judge and the self-check score: per-region visibility of the defects
         // objective's defect region, else of the truth's labels.
@@ -217,6 +227,8 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
             job.judgement = jd;
         }
 
+        lap(job.phases.judge);
+
         // The self-check: every K's lamps and the studio lamp on the validation estimate.
         if (o.selfCheck && scene) {
             PrecomputeOptions v;
@@ -249,6 +261,8 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
                           fitted + "; greedy.csv has each K): " + a.reason
                     : "The answer is the " + fitted + ": " + a.reason;
         }
+
+        lap(job.phases.selfCheck);
 
         // Outputs.
         const json lj = lampsToJson(lamps, o.distanceMm);
@@ -294,6 +308,7 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
             job.plotMessage = "figures off";
         }
 
+        lap(job.phases.outputs);
         json s;
         s["provenance"] = runProvenance(o.commandLine);
         s["input"] = o.input.string();
@@ -303,6 +318,12 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         s["from"] = o.from.empty() ? "optimized on T" : o.from;
         s["seconds_target"] = job.secondsTarget;
         s["seconds_fit"] = job.fit.seconds;
+        s["seconds_phases"] = {{"load", job.phases.load},
+                               {"target", job.phases.target},
+                               {"fit", job.phases.fit},
+                               {"judge", job.phases.judge},
+                               {"self_check", job.phases.selfCheck},
+                               {"outputs", job.phases.outputs}};
         s["target_loss"] = job.targetLoss;
         json steps = json::array();
         for (const LampFitStep& st : job.fit.steps)
