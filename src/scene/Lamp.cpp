@@ -103,7 +103,7 @@ struct QuickMembership {
 /// as the Dual step is.
 struct NodeDerivatives {
     LampKind kind;
-    double h, a, b, lo, hi, cosA, sinA, hSinA, cotA;
+    double h, a, b, lo, hi, cosA, sinA, hSinA, cotA, sinYLimit;
     lamp_detail::Frame<double> f;
     // ∂c, ∂e1, ∂e2 by (φ, ε, ρ) (vectors), from frame<Dual<3>>.
     double dc[3][3], de1[3][3], de2[3][3];
@@ -119,6 +119,7 @@ struct NodeDerivatives {
           sinA(std::sin(l.size)),
           hSinA(edge * std::sin(l.size)),
           cotA(std::cos(l.size) / std::sin(l.size)),
+          sinYLimit(l.width + kTail * edge < kPi / 2 ? std::sin(l.width + kTail * edge) : 2.0),
           f(lamp_detail::frame<double>(l.azimuth, l.elevation, l.roll)) {
         using D3 = Dual<3>;
         const auto fd = lamp_detail::frame<D3>(
@@ -147,7 +148,7 @@ struct NodeDerivatives {
             ds = kInvSqrtPi * std::exp(-t * t);
         }
     }
-    /// m and, into g, ∂m/∂(φ, ε, a, b, ρ). Call only where m is strictly between its tails.
+    /// m and, into g, ∂m/∂(φ, ε, a, b, ρ) (zero where m is exactly 0 or 1).
     double operator()(const Vec3d& d, double elevation, double g[5]) const {
         switch (kind) {
             case LampKind::Disk: {
@@ -162,14 +163,21 @@ struct NodeDerivatives {
                 return s;
             }
             case LampKind::Bar: {
-                const double p = dot3(f.e1, d), q = dot3(f.c, d), r = dot3(f.e2, d);
-                const double x = std::atan2(p, q), y = std::asin(r);
-                double sa1, da1, sa2, da2, sb1, db1, sb2, db2;
-                stepAndSlope((a - x) / h, sa1, da1);
-                stepAndSlope((a + x) / h, sa2, da2);
+                const double r = dot3(f.e2, d);
+                for (int k = 0; k < 5; ++k) g[k] = 0;
+                if (std::abs(r) >= sinYLimit) return 0.0;  // across the bar, beyond its edge
+                const double y = std::asin(r);
+                double sb1, db1, sb2, db2;
                 stepAndSlope((b - y) / h, sb1, db1);
                 stepAndSlope((b + y) / h, sb2, db2);
-                const double sa = sa1 * sa2, sb = sb1 * sb2;
+                const double sb = sb1 * sb2;
+                if (sb == 0) return 0.0;
+                const double p = dot3(f.e1, d), q = dot3(f.c, d);
+                const double x = std::atan2(p, q);
+                double sa1, da1, sa2, da2;
+                stepAndSlope((a - x) / h, sa1, da1);
+                stepAndSlope((a + x) / h, sa2, da2);
+                const double sa = sa1 * sa2;
                 const double mx = (-da1 * sa2 + sa1 * da2) * sb / h;
                 const double my = sa * (-db1 * sb2 + sb1 * db2) / h;
                 const double pq = p * p + q * q, ry = 1 / std::sqrt(1 - r * r);
@@ -383,7 +391,11 @@ void LampRasterizer::coverage(const Lamp& lamp, std::vector<double>& c, std::vec
             double cs[4] = {0, 0, 0, 0}, gs[4][5] = {};
             for (int s = 0; s < n_; ++s) {
                 const size_t k = static_cast<size_t>(cell) * n_ + s;
-                const double mv = quick(dir_[k], elev_[k]);
+                // With derivatives asked for, the hand-written ones give the value too (one erf
+                // per factor for both).
+                double g[5] = {0, 0, 0, 0, 0};
+                const double mv =
+                    dc && !byDual ? fast(dir_[k], elev_[k], g) : quick(dir_[k], elev_[k]);
                 // Far outside (m < 1e-15) or deep inside (m > 1 − 1e-15) the edge the
                 // derivatives are below 1e-13 of the edge's: the value alone.
                 if (mv < 1e-15) continue;
@@ -392,13 +404,11 @@ void LampRasterizer::coverage(const Lamp& lamp, std::vector<double>& c, std::vec
                     for (int q = 0; q < 4; ++q) cs[q] += wt[q] * dw_[k] * mv;
                     continue;
                 }
-                double m, g[5];
+                double m = mv;
                 if (byDual) {
                     const D md = lamp_detail::membership<D>(lamp.kind, fj, el, a, b, dir_[k], h);
                     m = md.v;
                     for (size_t p = 0; p < 5; ++p) g[p] = md.d[p];
-                } else {
-                    m = fast(dir_[k], elev_[k], g);
                 }
                 for (int q = 0; q < 4; ++q) {
                     const double f = wt[q] * dw_[k];

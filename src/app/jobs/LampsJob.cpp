@@ -8,7 +8,6 @@
 #include <numbers>
 #include <sstream>
 
-#include "app/host/Plot.h"
 #include "app/host/Version.h"
 #include "app/jobs/OptimizeJob.h"
 #include "app/pipeline/Defaults.h"
@@ -17,6 +16,7 @@
 #include "app/pipeline/LossMask.h"
 #include "app/pipeline/Search.h"
 #include "app/pipeline/TrainingNoise.h"
+#include "app/report/LampsFigure.h"
 #include "app/report/PartSummary.h"
 #include "app/report/Preview.h"
 #include "app/report/Report.h"
@@ -144,6 +144,9 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         }
         job.objective = kind;
         const ObjectiveOnT objective = objectiveOnT(kind, t, in, o.objective);
+        // T's Gram matrices, built once for E*'s search and the fit: a loss on the same T and
+        // mask shares them while one holds them (objective/TransportLoss.h gram()).
+        if (objective.loss->gramPays()) objective.loss->gram();
 
         // E*.
         if (o.from.empty()) {
@@ -298,12 +301,21 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         pd["lamps"] = lj["lamps"];
         writeTextAtomically(dir / "plot-lamps.json", pd.dump() + "\n");
         if (o.figures) {
-            const PlotOutcome plot = runPlotScript("plot_lamps.py", {dir.string()});
-            if (!plot.ran)
-                job.plotMessage = plot.message;
-            else if (plot.exitCode != 0)
-                job.plotMessage =
-                    "scripts/plot_lamps.py exited with " + std::to_string(plot.exitCode);
+            // In-process (app/report/LampsFigure.h); scripts/plot_lamps.py draws the same from
+            // plot-lamps.json for a person who runs it by hand.
+            auto plotOf = [&](std::span<const double> e) {
+                EnvMapPlot p;
+                p.width = t.envWidth;
+                p.height = t.envHeight;
+                for (const auto& a : az) p.azimuthDeg.push_back(a.get<double>());
+                for (const auto& v : el) p.elevationDeg.push_back(v.get<double>());
+                p.luminance.assign(e.begin(), e.end());
+                for (double& v : p.luminance) v = std::max(v, 0.0);
+                return p;
+            };
+            const std::vector<uint8_t> png =
+                lampsFigure(plotOf(target), plotOf(job.fit.envMap), lamps).png();
+            writeBytesAtomically(dir / "plot-lamps.png", png.data(), png.size());
         } else {
             job.plotMessage = "figures off";
         }

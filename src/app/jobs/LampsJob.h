@@ -19,8 +19,9 @@
 //                       held-out estimate, and eq. 2, U, brightness and per-region visibility) when
 //                       the judge's estimate is available, the timings (seconds_phases: load,
 //                       target, fit, judge, self_check, outputs)
-//   plot-lamps.json, plot-lamps.png   the polar hemisphere plot of the lamps over E*
-//                       (scripts/plot_lamps.py; absent, and said why, without matplotlib)
+//   plot-lamps.json, plot-lamps.png   the polar hemisphere plot of the lamps over E*, drawn
+//                       in-process (app/report/LampsFigure.h; scripts/plot_lamps.py draws the
+//                       same from plot-lamps.json by hand)
 //   report.html         the renders side by side, the plot, the table
 #pragma once
 
@@ -63,7 +64,7 @@ struct LampsJobOptions {
     /// scored on a validation estimate (the training trace again with its own seed); the best
     /// eligible one is the answer, said first. Needs the scene.
     bool selfCheck = true;
-    bool figures = true;  // scripts/plot_lamps.py
+    bool figures = true;  // plot-lamps.png (app/report/LampsFigure.h)
     std::string commandLine;
     PrecomputeOptions precompute;
     CacheLocation cache;
