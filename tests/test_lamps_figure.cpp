@@ -96,12 +96,11 @@ TEST(LampsFigure, DrawsEachOutlineWhereTheHemispherePutsIt) {
             }
         return false;
     };
-    // The left panel's centre and radius as lampsFigure draws it.
     const auto outline = lampOutline(disk).at(0);
     int found = 0;
     for (size_t k = 0; k < outline.size(); k += 10) {
-        const Point p =
-            hemispherePoint({280, 290}, 160, outline[k].azimuthDeg, outline[k].elevationDeg);
+        const Point p = hemispherePoint(kLampsFigureCentre, kLampsFigureRadius,
+                                        outline[k].azimuthDeg, outline[k].elevationDeg);
         found += cyanNear(a, p);
         EXPECT_FALSE(cyanNear(b, p)) << k;
     }

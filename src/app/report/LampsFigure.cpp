@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 #include <string>
 
 namespace sl {
@@ -61,9 +62,13 @@ std::vector<std::vector<PlotDirection>> lampOutline(const Lamp& lamp) {
 Canvas lampsFigure(const EnvMapPlot& target, const EnvMapPlot& lampsEnvMap,
                    std::span<const Lamp> lamps) {
     Canvas c(1100, 550);  // the script's 10 × 5 in at 110 dpi
-    const double radius = 160,
-                 vmax = *std::max_element(target.luminance.begin(), target.luminance.end());
-    const Point centres[2] = {{280, 290}, {780, 290}};
+    if (target.width != lampsEnvMap.width || target.height != lampsEnvMap.height)
+        throw std::invalid_argument("lamps plot: E* and the lamps' env map are on other grids");
+    const double radius = kLampsFigureRadius;
+    double vmax = 0;  // E*'s, the scale of both (each panel checks its plot)
+    for (double v : target.luminance) vmax = std::max(vmax, v);
+    const Point centres[2] = {kLampsFigureCentre,
+                              {kLampsFigureCentre.x + 520, kLampsFigureCentre.y}};
     drawEnvMapHemisphere(c, target, centres[0], radius, vmax, "E* and the lamps");
     drawEnvMapHemisphere(c, lampsEnvMap, centres[1], radius, vmax, "the lamps' env map");
     for (const Point& p : centres)

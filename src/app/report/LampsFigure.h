@@ -21,6 +21,11 @@ namespace sl {
 /// and lower edges, clamped to ±90°) for a ring.
 std::vector<std::vector<PlotDirection>> lampOutline(const Lamp& lamp);
 
+/// Where lampsFigure draws E*'s panel, the one with the outlines (pixels): the zenith and the
+/// horizon's radius; the lamps' own panel is the same 520 pixels to the right.
+inline constexpr Point kLampsFigureCentre{265, 290};
+inline constexpr double kLampsFigureRadius = 150;
+
 /// The figure. target and lamps: E* and the lamps' env map on one grid (as EnvMapPlot);
 /// throws std::invalid_argument as envMapFigure does for a plot it cannot draw.
 Canvas lampsFigure(const EnvMapPlot& target, const EnvMapPlot& lampsEnvMap,
