@@ -1,7 +1,8 @@
 // Lamps rasterized into the env-map basis (scene/Lamp.h): the total weight Σ_t E_t Ω_t of a
 // lamp of radiance R is R times its solid angle ∫ m dω, checked against 1-D integrals of the
 // same membership and the sharp shapes' closed forms; smooth in its parameters (the analytic
-// gradient against central differences and ceres::Jet); the same anywhere (the pole, the
+// gradient against central differences and ceres::Jet, its hand-written derivatives against
+// Dual numbers); the same anywhere (the pole, the
 // azimuth seam, a turn by one texel is a shift by one column).
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
@@ -253,6 +254,48 @@ TEST(LampRaster, DualDerivativesMatchCeresJet) {
             for (int k = 0; k < 5; ++k)
                 ASSERT_NEAR(md.d[static_cast<size_t>(k)], mj.v[k], 1e-9 * (1 + std::abs(mj.v[k])));
         }
+}
+
+TEST(LampRaster, HandWrittenDerivativesEqualTheDualReference) {
+    // jacobian()'s derivatives, written out by hand, against membership<Dual<5>> at every node,
+    // on random lamps of every kind anywhere (the pole, the seam, grazing the horizon), on the
+    // fit's three quadratures.
+    const EnvMapBasis basis(50, 25);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> U(0, 1);
+    const size_t texels = static_cast<size_t>(basis.texelCount());
+    for (int subsamples : {8, 12, 16}) {
+        LampRasterOptions ro;
+        ro.subsamples = subsamples;
+        const LampRasterizer r(basis, ro);
+        for (int n = 0; n < 60; ++n) {
+            Lamp l;
+            l.kind = n % 3 == 0 ? LampKind::Disk : (n % 3 == 1 ? LampKind::Bar : LampKind::Ring);
+            l.radiance = 0.1 + 0.9 * U(rng);
+            l.azimuth = (U(rng) * 720 - 360) * kDeg;
+            l.elevation = (U(rng) * 180 - 90) * kDeg;
+            if (n % 10 == 3) l.elevation = 89.5 * kDeg;  // at the pole
+            if (n % 10 == 6) l.azimuth = 0.01 * kDeg;    // across the seam
+            l.size = (4 + 50 * U(rng)) * kDeg;
+            l.width = (2 + 18 * U(rng)) * kDeg;
+            l.roll = (U(rng) * 360 - 180) * kDeg;
+            std::vector<double> J(texels * kLampParams), E(texels), Jr(J.size()), Er(E.size());
+            r.jacobian(l, J, E);
+            r.jacobianByDual(l, Jr, Er);
+            double scale[kLampParams] = {};
+            for (size_t t = 0; t < texels; ++t)
+                for (size_t k = 0; k < kLampParams; ++k)
+                    scale[k] = std::max(scale[k], std::abs(Jr[t * kLampParams + k]));
+            for (size_t t = 0; t < texels; ++t) {
+                ASSERT_NEAR(E[t], Er[t], 1e-13) << lampKindName(l.kind) << " lamp " << n;
+                for (size_t k = 0; k < kLampParams; ++k)
+                    ASSERT_NEAR(J[t * kLampParams + k], Jr[t * kLampParams + k],
+                                1e-12 * std::max(scale[k], 1.0))
+                        << lampKindName(l.kind) << " lamp " << n << " texel " << t << " param "
+                        << k;
+            }
+        }
+    }
 }
 
 TEST(LampRaster, KindsParseFromTheirTable) {

@@ -34,9 +34,12 @@ TEST(LampCli, WritesTheLampsTheirLightAndTheReport) {
     EXPECT_NE(r.output.find("of E*'s"), std::string::npos) << r.output;
     for (const char* f : {"lamps.json", "lamps-envmap.exr", "lamps-envmap.png", "target-envmap.exr",
                           "render-lamps.exr", "render-target.png", "renders.png", "greedy.csv",
-                          "summary.json", "report.html", "plot-lamps.json"})
+                          "summary.json", "report.html", "plot-lamps.json", "plot-lamps.png"})
         EXPECT_TRUE(fs::exists(out / f)) << f;
     const auto summary = nlohmann::json::parse(readText(out / "summary.json"));
+    EXPECT_EQ(summary["plot"], "plot-lamps.png");  // drawn in-process: no Python needed
+    for (const char* phase : {"load", "target", "fit", "judge", "self_check", "outputs"})
+        EXPECT_GE(summary["seconds_phases"][phase].get<double>(), 0.0) << phase;
     EXPECT_EQ(summary["greedy"].size(), 2u);
     const LampsFile lamps = readLampsFile(out / "lamps.json");
     EXPECT_GE(lamps.lamps.size(), 1u);

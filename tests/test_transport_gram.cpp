@@ -237,3 +237,24 @@ TEST(TransportGram, AutoSwitchesToTheGramWhenItPays) {
     EXPECT_FALSE(p.gramEligible());
     EXPECT_THROW(p.gram(), std::logic_error);
 }
+
+TEST(TransportGram, LossesOnTheSameTAndMaskShareOneGram) {
+    // Built once for every loss on the same T and pair mask alive in the process (a lamps run's
+    // E* search and its fit), not for another mask nor another T.
+    auto s = smallScene(17);
+    const TransportMatrix t = halves(*s, 1), other = halves(*s, 1);
+    const std::vector<uint8_t> holed = holedMask(t);
+    UnbiasedObjective a(t.width, t.height, t.objectMask, ObjectiveOptions{});
+    UnbiasedObjective b(t.width, t.height, t.objectMask, ObjectiveOptions{});
+    UnbiasedObjective c(t.width, t.height, holed, ObjectiveOptions{});
+    const TransportLoss la(t, a, false), lb(t, b, false), lc(t, c, false), lo(other, a, false);
+    EXPECT_EQ(&la.gram(), &lb.gram());  // two objectives with the same mask
+    EXPECT_NE(&la.gram(), &lc.gram());  // another mask
+    EXPECT_NE(&la.gram(), &lo.gram());  // another T
+    // The shared one gives the same forms as a Gram of its own.
+    const TransportGram own(t, t.objectMask, a.usesProducts());
+    const std::vector<double> E = randomVec(t.cols(), 5);
+    EXPECT_EQ(lb.gram().pairForm(E, {}), own.pairForm(E, {}));
+    EXPECT_TRUE(std::equal(lb.gram().pairMatrix().begin(), lb.gram().pairMatrix().end(),
+                           own.pairMatrix().begin(), own.pairMatrix().end()));
+}

@@ -169,7 +169,7 @@ void registerLamps(CLI::App& app, std::function<int()>& run) {
         "--no-self-check", [&j](std::int64_t) { j.selfCheck = false; },
         "Do not score every K's lamps and the studio lamp on a validation estimate (by default "
         "the best of them is named as the answer, first)");
-    c->add_flag("--no-figures", a->noFigures, "Do not run scripts/plot_lamps.py");
+    c->add_flag("--no-figures", a->noFigures, "Do not draw plot-lamps.png");
     addSceneOverrides(c, j.sceneOverrides, true);
     c->add_option("--spp", j.precompute.spp, "Samples per pixel (overrides render.spp)")
         ->check(inRange(1, 1 << 20));

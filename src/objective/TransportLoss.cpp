@@ -34,9 +34,39 @@ struct TransportLoss::SlicesCache {
 
 struct TransportLoss::GramCache {
     std::once_flag once, decided;
-    std::unique_ptr<TransportGram> gram;
+    std::shared_ptr<const TransportGram> gram;
     bool pays = false;
 };
+
+namespace {
+
+/// The Gram matrices of one T for one pair mask, shared by every loss on that T in the process
+/// while any of them lives (a lamps run's E* search and its fit, the viewer's searches): built
+/// once, not once per loss. Keyed by the matrix's identity and size and the mask's values.
+struct GramKey {
+    const TransportMatrix* t = nullptr;
+    size_t nnz = 0;
+    std::vector<uint8_t> mask;
+    bool products = false;
+    bool operator==(const GramKey&) const = default;
+};
+std::mutex gramRegistryMutex;
+std::vector<std::pair<GramKey, std::weak_ptr<const TransportGram>>> gramRegistry;
+
+std::shared_ptr<const TransportGram> sharedGram(const TransportMatrix& t,
+                                                std::span<const uint8_t> mask, bool products) {
+    GramKey key{&t, t.nnz(), std::vector<uint8_t>(mask.begin(), mask.end()), products};
+    const std::lock_guard lock(gramRegistryMutex);
+    std::erase_if(gramRegistry, [](const auto& e) { return e.second.expired(); });
+    for (const auto& [k, g] : gramRegistry)
+        if (k == key)
+            if (auto shared = g.lock()) return shared;
+    auto g = std::make_shared<const TransportGram>(t, mask, products, t.threads);
+    gramRegistry.emplace_back(std::move(key), g);
+    return g;
+}
+
+}  // namespace
 
 TransportLoss::TransportLoss(const TransportMatrix& t, const ImageObjective& objective, bool rgb)
     : t_(t),
@@ -140,10 +170,8 @@ bool TransportLoss::gramPays() const {
 const TransportGram& TransportLoss::gram() const {
     if (!gramEligible())
         throw std::logic_error("TransportLoss::gram: the loss is not quadratic in T's halves");
-    std::call_once(gram_->once, [&] {
-        gram_->gram =
-            std::make_unique<TransportGram>(t_, unb_->pairMask(), unb_->usesProducts(), t_.threads);
-    });
+    std::call_once(gram_->once,
+                   [&] { gram_->gram = sharedGram(t_, unb_->pairMask(), unb_->usesProducts()); });
     return *gram_->gram;
 }
 

@@ -64,7 +64,9 @@ class TransportLoss {
     bool gramPays() const;
     static constexpr double kGramWorkPerNonZero = 256;
     static constexpr size_t kGramMaxBytes = size_t{256} << 20;
-    /// The Gram matrices of T for this loss's objective (built on first use; gramEligible()).
+    /// The Gram matrices of T for this loss's objective (built on first use; gramEligible()),
+    /// shared with every other loss on the same T and pair mask alive in the process (a lamps
+    /// run's E* search and its fit build them once).
     const TransportGram& gram() const;
 
     /// The same loss for an E that is zero outside the texels `active` (a gray E), through

@@ -96,6 +96,121 @@ struct QuickMembership {
     }
 };
 
+/// The membership's value and its five derivatives ∂m/∂(φ, ε, a, b, ρ) at a node, written out
+/// by hand (the chain rule through S' (t) = exp(−t²)/√π and the frame's derivatives), with
+/// the same early outs as QuickMembership: the hot loop of a lamp fit. It equals
+/// membership<Dual<5>> to rounding (tests/test_lamps.cpp); S' is cut where S is (|t| > kTail),
+/// as the Dual step is.
+struct NodeDerivatives {
+    LampKind kind;
+    double h, a, b, lo, hi, cosA, sinA, hSinA, cotA, sinYLimit;
+    lamp_detail::Frame<double> f;
+    // ∂c, ∂e1, ∂e2 by (φ, ε, ρ) (vectors), from frame<Dual<3>>.
+    double dc[3][3], de1[3][3], de2[3][3];
+
+    NodeDerivatives(const Lamp& l, double edge)
+        : kind(l.kind),
+          h(edge),
+          a(l.size),
+          b(l.width),
+          lo(l.elevation - l.size),
+          hi(l.elevation + l.size),
+          cosA(std::cos(l.size)),
+          sinA(std::sin(l.size)),
+          hSinA(edge * std::sin(l.size)),
+          cotA(std::cos(l.size) / std::sin(l.size)),
+          sinYLimit(l.width + kTail * edge < kPi / 2 ? std::sin(l.width + kTail * edge) : 2.0),
+          f(lamp_detail::frame<double>(l.azimuth, l.elevation, l.roll)) {
+        using D3 = Dual<3>;
+        const auto fd = lamp_detail::frame<D3>(
+            D3::variable(l.azimuth, 0), D3::variable(l.elevation, 1), D3::variable(l.roll, 2));
+        for (size_t p = 0; p < 3; ++p)
+            for (int k = 0; k < 3; ++k) {
+                dc[p][k] = fd.c[k].d[p];
+                de1[p][k] = fd.e1[k].d[p];
+                de2[p][k] = fd.e2[k].d[p];
+            }
+    }
+    static double dot3(const double v[3], const Vec3d& d) {
+        return v[0] * d.x + v[1] * d.y + v[2] * d.z;
+    }
+    /// S and S' at t (0 beyond the tails, as stepFast).
+    static void stepAndSlope(double t, double& s, double& ds) {
+        constexpr double kInvSqrtPi = 0.5641895835477562869;
+        if (t < -kTail) {
+            s = 0;
+            ds = 0;
+        } else if (t > kTail) {
+            s = 1;
+            ds = 0;
+        } else {
+            s = lamp_detail::smoothStep(t);
+            ds = kInvSqrtPi * std::exp(-t * t);
+        }
+    }
+    /// m and, into g, ∂m/∂(φ, ε, a, b, ρ) (zero where m is exactly 0 or 1).
+    double operator()(const Vec3d& d, double elevation, double g[5]) const {
+        switch (kind) {
+            case LampKind::Disk: {
+                const double t = (dot3(f.c, d) - cosA) / hSinA;
+                double s, ds;
+                stepAndSlope(t, s, ds);
+                g[0] = ds * dot3(dc[0], d) / hSinA;
+                g[1] = ds * dot3(dc[1], d) / hSinA;
+                g[2] = ds * (1 / h - t * cotA);
+                g[3] = 0;
+                g[4] = ds * dot3(dc[2], d) / hSinA;
+                return s;
+            }
+            case LampKind::Bar: {
+                const double r = dot3(f.e2, d);
+                for (int k = 0; k < 5; ++k) g[k] = 0;
+                if (std::abs(r) >= sinYLimit) return 0.0;  // across the bar, beyond its edge
+                const double y = std::asin(r);
+                double sb1, db1, sb2, db2;
+                stepAndSlope((b - y) / h, sb1, db1);
+                stepAndSlope((b + y) / h, sb2, db2);
+                const double sb = sb1 * sb2;
+                if (sb == 0) return 0.0;
+                const double p = dot3(f.e1, d), q = dot3(f.c, d);
+                const double x = std::atan2(p, q);
+                double sa1, da1, sa2, da2;
+                stepAndSlope((a - x) / h, sa1, da1);
+                stepAndSlope((a + x) / h, sa2, da2);
+                const double sa = sa1 * sa2;
+                const double mx = (-da1 * sa2 + sa1 * da2) * sb / h;
+                const double my = sa * (-db1 * sb2 + sb1 * db2) / h;
+                const double pq = p * p + q * q, ry = 1 / std::sqrt(1 - r * r);
+                double dm[3];
+                for (int k = 0; k < 3; ++k) {
+                    const double dx = (q * dot3(de1[k], d) - p * dot3(dc[k], d)) / pq;
+                    const double dy = dot3(de2[k], d) * ry;
+                    dm[k] = mx * dx + my * dy;
+                }
+                g[0] = dm[0];
+                g[1] = dm[1];
+                g[2] = (da1 * sa2 + sa1 * da2) * sb / h;
+                g[3] = sa * (db1 * sb2 + sb1 * db2) / h;
+                g[4] = dm[2];
+                return sa * sb;
+            }
+            case LampKind::Ring: {
+                double s1, d1, s2, d2;
+                stepAndSlope((elevation - lo) / h, s1, d1);
+                stepAndSlope((elevation - hi) / h, s2, d2);
+                g[0] = 0;
+                g[1] = (-d1 + d2) / h;
+                g[2] = (d1 + d2) / h;
+                g[3] = 0;
+                g[4] = 0;
+                return s1 - s2;
+            }
+        }
+        for (int k = 0; k < 5; ++k) g[k] = 0;
+        return 0.0;
+    }
+};
+
 double angleBetween(const Vec3d& a, const Vec3d& b) {
     return std::acos(std::clamp(dot(a, b), -1.0, 1.0));
 }
@@ -166,6 +281,9 @@ LampRasterizer::LampRasterizer(const EnvMapBasis& basis, LampRasterOptions optio
             gy_.push_back(x[static_cast<size_t>(b)]);
             wxy[static_cast<size_t>(a * N + b)] =
                 w[static_cast<size_t>(a)] * w[static_cast<size_t>(b)];
+            const double fx = x[static_cast<size_t>(a)], fy = x[static_cast<size_t>(b)];
+            for (double v : {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy})
+                wt_.push_back(v);
         }
     const size_t cells = static_cast<size_t>(W) * (H - 1);
     dir_.resize(cells * n_);
@@ -173,6 +291,8 @@ LampRasterizer::LampRasterizer(const EnvMapBasis& basis, LampRasterOptions optio
     elev_.resize(cells * n_);
     cellCentre_.resize(cells);
     cellRadius_.resize(cells);
+    cellCosRadius_.resize(cells);
+    cellSinRadius_.resize(cells);
     cellElLo_.resize(cells);
     cellElHi_.resize(cells);
     omega_.assign(static_cast<size_t>(W) * H, 0.0);
@@ -209,27 +329,44 @@ LampRasterizer::LampRasterizer(const EnvMapBasis& basis, LampRasterOptions optio
                 omega_[t11] += fx * fy * dw;
             }
             cellRadius_[cell] = radius;
+            cellCosRadius_[cell] = std::cos(radius);
+            cellSinRadius_[cell] = std::sin(radius);
         }
 }
 
-bool LampRasterizer::cellMayTouch(const Lamp& lamp, const Vec3d& centre, int cell) const {
-    const double reach = kReach * options_.edge;
-    const size_t c = static_cast<size_t>(cell);
+LampRasterizer::Reach LampRasterizer::reach(const Lamp& lamp) const {
+    const double margin = kReach * options_.edge;
+    Reach r;
     switch (lamp.kind) {
         case LampKind::Disk:
-            return angleBetween(centre, cellCentre_[c]) - cellRadius_[c] <= lamp.size + reach;
+            r.angle = lamp.size + margin;
+            break;
         case LampKind::Bar:
-            return angleBetween(centre, cellCentre_[c]) - cellRadius_[c] <=
-                   std::abs(lamp.size) + std::abs(lamp.width) + reach;
+            r.angle = std::abs(lamp.size) + std::abs(lamp.width) + margin;
+            break;
         case LampKind::Ring:
-            return cellElHi_[c] >= lamp.elevation - lamp.size - reach &&
-                   cellElLo_[c] <= lamp.elevation + lamp.size + reach;
+            r.lo = lamp.elevation - lamp.size - margin;
+            r.hi = lamp.elevation + lamp.size + margin;
+            return r;
     }
-    return true;
+    r.cosAngle = std::cos(r.angle);
+    r.sinAngle = std::sin(r.angle);
+    return r;
 }
 
-void LampRasterizer::coverage(const Lamp& lamp, std::vector<double>& c,
-                              std::vector<double>* dc) const {
+bool LampRasterizer::cellMayTouch(const Lamp& lamp, const Vec3d& centre, const Reach& reach,
+                                  int cell) const {
+    const size_t c = static_cast<size_t>(cell);
+    if (lamp.kind == LampKind::Ring) return cellElHi_[c] >= reach.lo && cellElLo_[c] <= reach.hi;
+    // The angle between the lamp's and the cell's centres is at most reach + the cell's
+    // radius: cos(angle) >= cos(reach + radius), unless that sum passes π (every cell).
+    if (reach.angle + cellRadius_[c] >= kPi) return true;
+    return dot(centre, cellCentre_[c]) >=
+           reach.cosAngle * cellCosRadius_[c] - reach.sinAngle * cellSinRadius_[c];
+}
+
+void LampRasterizer::coverage(const Lamp& lamp, std::vector<double>& c, std::vector<double>* dc,
+                              bool byDual) const {
     using D = Dual<5>;
     const int W = basis_.width(), H = basis_.height();
     const double h = options_.edge;
@@ -237,37 +374,52 @@ void LampRasterizer::coverage(const Lamp& lamp, std::vector<double>& c,
     if (dc) dc->assign(c.size() * 5, 0.0);
     const Vec3d centre = lampDirection(lamp.azimuth, lamp.elevation);
     const QuickMembership quick(lamp, h);
+    const NodeDerivatives fast(lamp, h);
     const D az = D::variable(lamp.azimuth, 0), el = D::variable(lamp.elevation, 1),
             a = D::variable(lamp.size, 2), b = D::variable(lamp.width, 3),
             roll = D::variable(lamp.roll, 4);
     const auto fj = lamp_detail::frame<D>(az, el, roll);
+    const Reach reach = this->reach(lamp);
     for (int j = 0; j < H - 1; ++j)
         for (int i = 0; i < W; ++i) {
             const int cell = j * W + i;
-            if (!cellMayTouch(lamp, centre, cell)) continue;
+            if (!cellMayTouch(lamp, centre, reach, cell)) continue;
             const size_t t[4] = {static_cast<size_t>(j * W + i),
                                  static_cast<size_t>(j * W + (i + 1) % W),
                                  static_cast<size_t>((j + 1) * W + i),
                                  static_cast<size_t>((j + 1) * W + (i + 1) % W)};
+            double cs[4] = {0, 0, 0, 0}, gs[4][5] = {};
             for (int s = 0; s < n_; ++s) {
                 const size_t k = static_cast<size_t>(cell) * n_ + s;
-                const double fx = gx_[static_cast<size_t>(s)], fy = gy_[static_cast<size_t>(s)];
-                const double wt[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
-                const double mv = quick(dir_[k], elev_[k]);
+                // With derivatives asked for, the hand-written ones give the value too (one erf
+                // per factor for both).
+                double g[5] = {0, 0, 0, 0, 0};
+                const double mv =
+                    dc && !byDual ? fast(dir_[k], elev_[k], g) : quick(dir_[k], elev_[k]);
                 // Far outside (m < 1e-15) or deep inside (m > 1 − 1e-15) the edge the
                 // derivatives are below 1e-13 of the edge's: the value alone.
                 if (mv < 1e-15) continue;
+                const double* wt = wt_.data() + static_cast<size_t>(s) * 4;
                 if (!dc || mv > 1 - 1e-15) {
-                    for (int q = 0; q < 4; ++q) c[t[q]] += wt[q] * dw_[k] * mv;
+                    for (int q = 0; q < 4; ++q) cs[q] += wt[q] * dw_[k] * mv;
                     continue;
                 }
-                const D m = lamp_detail::membership<D>(lamp.kind, fj, el, a, b, dir_[k], h);
+                double m = mv;
+                if (byDual) {
+                    const D md = lamp_detail::membership<D>(lamp.kind, fj, el, a, b, dir_[k], h);
+                    m = md.v;
+                    for (size_t p = 0; p < 5; ++p) g[p] = md.d[p];
+                }
                 for (int q = 0; q < 4; ++q) {
                     const double f = wt[q] * dw_[k];
-                    c[t[q]] += f * m.v;
-                    double* g = dc->data() + t[q] * 5;
-                    for (size_t p = 0; p < 5; ++p) g[p] += f * m.d[p];
+                    cs[q] += f * m;
+                    for (size_t p = 0; p < 5; ++p) gs[q][p] += f * g[p];
                 }
+            }
+            for (int q = 0; q < 4; ++q) {
+                c[t[q]] += cs[q];
+                if (dc)
+                    for (size_t p = 0; p < 5; ++p) (*dc)[t[q] * 5 + p] += gs[q][p];
             }
         }
 }
@@ -298,8 +450,18 @@ void LampRasterizer::gradient(const Lamp& lamp, std::span<const double> dLdE,
 }
 
 void LampRasterizer::jacobian(const Lamp& lamp, std::span<double> J, std::span<double> E) const {
+    jacobianOf(lamp, J, E, false);
+}
+
+void LampRasterizer::jacobianByDual(const Lamp& lamp, std::span<double> J,
+                                    std::span<double> E) const {
+    jacobianOf(lamp, J, E, true);
+}
+
+void LampRasterizer::jacobianOf(const Lamp& lamp, std::span<double> J, std::span<double> E,
+                                bool byDual) const {
     std::vector<double> c, dc;
-    coverage(lamp, c, &dc);
+    coverage(lamp, c, &dc, byDual);
     for (size_t t = 0; t < c.size(); ++t) {
         E[t] = lamp.radiance * c[t] / omega_[t];
         J[t * kLampParams] = c[t] / omega_[t];

@@ -1,7 +1,10 @@
 #include "app/bench/TargetsBench.h"
 
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <sstream>
 
 #include "app/host/Plot.h"
@@ -22,16 +25,35 @@ namespace {
 constexpr double kReoptimizeTarget = 0.2, kLampsTarget = 1.0;  // issue 32, seconds
 
 struct Sample {
-    double seconds = 0, optimizer = 0, evaluations = 0, target = 0;
+    double seconds = 0, optimizer = 0, evaluations = 0, target = 0, cpu = 0;
 };
+
+/// CPU seconds of this process (all threads) and of its children that were waited for (the
+/// plot scripts).
+double cpuSecondsWithChildren() {
+    double s = 0;
+    for (int who : {RUSAGE_SELF, RUSAGE_CHILDREN}) {
+        rusage u{};
+        if (getrusage(who, &u) != 0) continue;
+        s += static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+             1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+    }
+    return s;
+}
+
+double loadAverage1() {
+    double l[1] = {0};
+    return getloadavg(l, 1) == 1 ? l[0] : 0.0;
+}
 
 TargetsBenchRow rowOf(const std::string& what, double targetSeconds,
                       const std::vector<Sample>& samples) {
     TargetsBenchRow r;
     r.target = what;
     r.targetSeconds = targetSeconds;
-    std::vector<double> s, o, e, t;
+    std::vector<double> s, o, e, t, c;
     for (const Sample& x : samples) {
+        c.push_back(x.cpu);
         s.push_back(x.seconds);
         o.push_back(x.optimizer);
         e.push_back(x.evaluations);
@@ -43,6 +65,8 @@ TargetsBenchRow rowOf(const std::string& what, double targetSeconds,
     r.optimizerSeconds = median(o);
     r.evaluations = median(e);
     r.secondsTarget = median(t);
+    r.cpuSeconds = median(c);
+    r.loadAverage = loadAverage1();
     return r;
 }
 
@@ -76,9 +100,11 @@ TargetsBenchResult runTargetsBench(const TargetsBenchOptions& o) {
         j.cache.dir = cache;
         j.commandLine = "bench targets";
         const Stopwatch clock;
+        const double cpu0 = cpuSecondsWithChildren();
         const OptimizeJobSummary s = runOptimizeJob(j);
         Sample x;
         x.seconds = clock.seconds();
+        x.cpu = cpuSecondsWithChildren() - cpu0;
         for (const OptimizeRun& r : s.runs) {
             x.optimizer += r.optimizer.seconds;
             x.evaluations += r.optimizer.evaluations;
@@ -93,9 +119,11 @@ TargetsBenchResult runTargetsBench(const TargetsBenchOptions& o) {
         j.cache.dir = cache;
         j.commandLine = "bench targets";
         const Stopwatch clock;
+        const double cpu0 = cpuSecondsWithChildren();
         const LampsJobSummary s = runLampsJob(j);
         Sample x;
         x.seconds = clock.seconds();
+        x.cpu = cpuSecondsWithChildren() - cpu0;
         x.optimizer = s.fit.seconds;
         for (const LampFitStep& k : s.fit.steps) x.evaluations += k.evaluations;
         x.target = s.secondsTarget;
@@ -132,16 +160,17 @@ TargetsBenchResult runTargetsBench(const TargetsBenchOptions& o) {
 std::string TargetsBenchResult::table() const {
     std::ostringstream os;
     char line[512];
-    std::snprintf(line, sizeof line, "  %-44s %8s %8s %7s %15s %10s %7s %9s %8s\n", "target",
-                  "bound s", "median s", "ratio", "min..max s", "optimizer", "evals", "ms/eval",
-                  "rest s");
+    std::snprintf(line, sizeof line, "  %-44s %8s %8s %7s %15s %7s %5s %10s %7s %9s %8s\n",
+                  "target", "bound s", "median s", "ratio", "min..max s", "CPU s", "load",
+                  "optimizer", "evals", "ms/eval", "rest s");
     os << line;
     for (const TargetsBenchRow& r : rows) {
         std::snprintf(line, sizeof line,
-                      "  %-44s %8.2f %8.3f %6.2fx %7.3f..%-7.3f %10.3f %7.0f %9.2f %8.3f%s\n",
+                      "  %-44s %8.2f %8.3f %6.2fx %7.3f..%-7.3f %7.3f %5.1f %10.3f %7.0f %9.2f "
+                      "%8.3f%s\n",
                       r.target.c_str(), r.targetSeconds, r.seconds, r.ratio(), r.secondsMin,
-                      r.secondsMax, r.optimizerSeconds, r.evaluations, r.msPerEvaluation(),
-                      r.rest(), r.ratio() <= 1 ? "  met" : "  NOT MET");
+                      r.secondsMax, r.cpuSeconds, r.loadAverage, r.optimizerSeconds, r.evaluations,
+                      r.msPerEvaluation(), r.rest(), r.ratio() <= 1 ? "  met" : "  NOT MET");
         os << line;
     }
     return os.str();
@@ -150,13 +179,13 @@ std::string TargetsBenchResult::table() const {
 std::string TargetsBenchResult::csv() const {
     std::ostringstream os;
     os << "target,target_s,median_s,ratio,min_s,max_s,optimizer_s,evaluations,ms_per_evaluation,"
-          "target_light_s,rest_s,size,spp,repeats,precompute_s\n";
+          "target_light_s,rest_s,cpu_s,load,size,spp,repeats,precompute_s\n";
     for (const TargetsBenchRow& r : rows)
         os << '"' << r.target << "\"," << r.targetSeconds << ',' << r.seconds << ',' << r.ratio()
            << ',' << r.secondsMin << ',' << r.secondsMax << ',' << r.optimizerSeconds << ','
            << r.evaluations << ',' << r.msPerEvaluation() << ',' << r.secondsTarget << ','
-           << r.rest() << ',' << options.size << ',' << options.spp << ',' << options.repeats << ','
-           << precomputeSeconds << '\n';
+           << r.rest() << ',' << r.cpuSeconds << ',' << r.loadAverage << ',' << options.size << ','
+           << options.spp << ',' << options.repeats << ',' << precomputeSeconds << '\n';
     return os.str();
 }
 

@@ -7,7 +7,8 @@
 //   - lamps on T, K = 3 (target 1 s).
 // Each is run `repeats` times, interleaved, in this process (no process start-up: ~0.03 s),
 // as the command runs it (the job with the command's defaults, figures and report included).
-// A row: the median wall seconds and its ratio to the target, and where the time went: the
+// A row: the median wall seconds and its ratio to the target, the median CPU seconds and the
+// load beside it, and where the time went: the
 // optimizer's (or the lamp fit's) seconds, its evaluations and ms per evaluation, and the rest
 // (loading, the comparison lights, the self-check, renders, figures, report).
 #pragma once
@@ -38,6 +39,10 @@ struct TargetsBenchRow {
     double optimizerSeconds = 0;  // median: the optimizer (optimize) or the fits K = 1..K (lamps)
     double evaluations = 0;       // median: loss-and-gradient evaluations in it
     double secondsTarget = 0;     // lamps: optimizing E* first (median; 0 for optimize)
+    /// Median CPU seconds of the job (all threads, and the plot script it waits for): on a
+    /// shared machine the wall time is mostly the scheduler's, the CPU time the work's.
+    double cpuSeconds = 0;
+    double loadAverage = 0;  // the 1-minute load average when the row's last run ended
     double msPerEvaluation() const {
         return evaluations > 0 ? 1e3 * optimizerSeconds / evaluations : 0;
     }

@@ -8,7 +8,6 @@
 #include <numbers>
 #include <sstream>
 
-#include "app/host/Plot.h"
 #include "app/host/Version.h"
 #include "app/jobs/OptimizeJob.h"
 #include "app/pipeline/Defaults.h"
@@ -17,6 +16,7 @@
 #include "app/pipeline/LossMask.h"
 #include "app/pipeline/Search.h"
 #include "app/pipeline/TrainingNoise.h"
+#include "app/report/LampsFigure.h"
 #include "app/report/PartSummary.h"
 #include "app/report/Preview.h"
 #include "app/report/Report.h"
@@ -77,6 +77,11 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
     StagedDirectory out(o.outDir);
     const std::filesystem::path dir = out.path();
     LampsJobSummary job;
+    Stopwatch phase;
+    auto lap = [&phase](double& into) {
+        into = phase.seconds();
+        phase.restart();
+    };
     try {
         const bool tmInput = isTransportFile(o.input);
         std::unique_ptr<Scene> scene;
@@ -123,6 +128,8 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
             }
         }
 
+        lap(job.phases.load);
+
         // The objective on T.
         SearchInputs in;
         in.set = {&t};
@@ -137,6 +144,9 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         }
         job.objective = kind;
         const ObjectiveOnT objective = objectiveOnT(kind, t, in, o.objective);
+        // T's Gram matrices, built once for E*'s search and the fit: a loss on the same T and
+        // mask shares them while one holds them (objective/TransportLoss.h gram()).
+        if (objective.loss->gramPays()) objective.loss->gram();
 
         // E*.
         if (o.from.empty()) {
@@ -150,6 +160,8 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
             spdlog::info("E* optimized on T ({}, L-BFGS) in {:.2f} s", objectiveKindName(kind),
                          job.secondsTarget);
         }
+
+        lap(job.phases.target);
 
         // The lamps, kept out of the camera's cone (seen from the part's centre, the camera's
         // target).
@@ -168,6 +180,7 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         job.fit = fitLamps(*objective.loss, target, fit);
         job.targetLoss = job.fit.targetLoss;
         const std::vector<Lamp>& lamps = job.fit.steps.back().lamps;
+        lap(job.phases.fit);
 
         // What the judge and the self-check score: per-region visibility of the defects
         // objective's defect region, else of the truth's labels.
@@ -217,6 +230,8 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
             job.judgement = jd;
         }
 
+        lap(job.phases.judge);
+
         // The self-check: every K's lamps and the studio lamp on the validation estimate.
         if (o.selfCheck && scene) {
             PrecomputeOptions v;
@@ -249,6 +264,8 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
                           fitted + "; greedy.csv has each K): " + a.reason
                     : "The answer is the " + fitted + ": " + a.reason;
         }
+
+        lap(job.phases.selfCheck);
 
         // Outputs.
         const json lj = lampsToJson(lamps, o.distanceMm);
@@ -284,16 +301,26 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         pd["lamps"] = lj["lamps"];
         writeTextAtomically(dir / "plot-lamps.json", pd.dump() + "\n");
         if (o.figures) {
-            const PlotOutcome plot = runPlotScript("plot_lamps.py", {dir.string()});
-            if (!plot.ran)
-                job.plotMessage = plot.message;
-            else if (plot.exitCode != 0)
-                job.plotMessage =
-                    "scripts/plot_lamps.py exited with " + std::to_string(plot.exitCode);
+            // In-process (app/report/LampsFigure.h); scripts/plot_lamps.py draws the same from
+            // plot-lamps.json for a person who runs it by hand.
+            auto plotOf = [&](std::span<const double> e) {
+                EnvMapPlot p;
+                p.width = t.envWidth;
+                p.height = t.envHeight;
+                for (const auto& a : az) p.azimuthDeg.push_back(a.get<double>());
+                for (const auto& v : el) p.elevationDeg.push_back(v.get<double>());
+                p.luminance.assign(e.begin(), e.end());
+                for (double& v : p.luminance) v = std::max(v, 0.0);
+                return p;
+            };
+            const std::vector<uint8_t> png =
+                lampsFigure(plotOf(target), plotOf(job.fit.envMap), lamps).png();
+            writeBytesAtomically(dir / "plot-lamps.png", png.data(), png.size());
         } else {
             job.plotMessage = "figures off";
         }
 
+        lap(job.phases.outputs);
         json s;
         s["provenance"] = runProvenance(o.commandLine);
         s["input"] = o.input.string();
@@ -303,6 +330,12 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         s["from"] = o.from.empty() ? "optimized on T" : o.from;
         s["seconds_target"] = job.secondsTarget;
         s["seconds_fit"] = job.fit.seconds;
+        s["seconds_phases"] = {{"load", job.phases.load},
+                               {"target", job.phases.target},
+                               {"fit", job.phases.fit},
+                               {"judge", job.phases.judge},
+                               {"self_check", job.phases.selfCheck},
+                               {"outputs", job.phases.outputs}};
         s["target_loss"] = job.targetLoss;
         json steps = json::array();
         for (const LampFitStep& st : job.fit.steps)

@@ -1,5 +1,6 @@
 // The `lamps` job: from an optimized env map E* to K physical lamps an inspector can mount,
-// fitted through T (optimize/LampFit.h), with what each extra lamp buys and the judge's word on them.
+// fitted through T (optimize/LampFit.h), with what each extra lamp buys and the judge's word on
+// them.
 //
 // OUTDIR (replaced as a unit, io/StagedDirectory.h) holds:
 //   lamps.json          per lamp: kind, azimuth/elevation in degrees in the part's frame
@@ -16,9 +17,11 @@
 //                       or the studio lamp, is best on a validation estimate), the judge's scores
 //                       (E*, the lamps, the studio lamp: the objective itself on the judge's
 //                       held-out estimate, and eq. 2, U, brightness and per-region visibility) when
-//                       the judge's estimate is available, the timings
-//   plot-lamps.json, plot-lamps.png   the polar hemisphere plot of the lamps over E*
-//                       (scripts/plot_lamps.py; absent, and said why, without matplotlib)
+//                       the judge's estimate is available, the timings (seconds_phases: load,
+//                       target, fit, judge, self_check, outputs)
+//   plot-lamps.json, plot-lamps.png   the polar hemisphere plot of the lamps over E*, drawn
+//                       in-process (app/report/LampsFigure.h; scripts/plot_lamps.py draws the
+//                       same from plot-lamps.json by hand)
 //   report.html         the renders side by side, the plot, the table
 #pragma once
 
@@ -48,8 +51,8 @@ struct LampsJobOptions {
     /// unset: unbiased (needs T's halves), paper for a .tm without halves; defects when the
     /// defects are named (truth or defects), as optimize.
     std::optional<ObjectiveKind> objectiveKind;
-    /// The defects objective's regions, as optimize's (app/jobs/OptimizeJob.h): the truth (labels in
-    /// height-map space, also what the judge's per-region visibility is of), the defect region
+    /// The defects objective's regions, as optimize's (app/jobs/OptimizeJob.h): the truth (labels
+    /// in height-map space, also what the judge's per-region visibility is of), the defect region
     /// (empty: the truth, else auto) and the reference (empty: the part off the defects).
     std::filesystem::path truth;
     RegionSpec defects, reference;
@@ -57,11 +60,11 @@ struct LampsJobOptions {
     LampFitOptions fit;
     double distanceMm = 500;  // where the lamps are mounted, from the part's centre
     bool judge = true;        // score E*, the lamps and the studio lamp on the judge's estimate
-    /// The self-checked answer (app/pipeline/Answer.h): the lamps of every K and the studio lamp scored
-    /// on a validation estimate (the training trace again with its own seed); the best
+    /// The self-checked answer (app/pipeline/Answer.h): the lamps of every K and the studio lamp
+    /// scored on a validation estimate (the training trace again with its own seed); the best
     /// eligible one is the answer, said first. Needs the scene.
     bool selfCheck = true;
-    bool figures = true;  // scripts/plot_lamps.py
+    bool figures = true;  // plot-lamps.png (app/report/LampsFigure.h)
     std::string commandLine;
     PrecomputeOptions precompute;
     CacheLocation cache;
@@ -84,6 +87,16 @@ struct LampsJudgement {
     }
 };
 
+/// Where a lamps run's wall seconds went (summary.json "seconds_phases").
+struct LampsPhases {
+    double load = 0;       // T (from the file or the cache, or traced) and the scene
+    double target = 0;     // E* (optimized on T, or read)
+    double fit = 0;        // the lamps, K = 1..count
+    double judge = 0;      // the judge's estimate and its scores
+    double selfCheck = 0;  // the validation estimate and the candidates' scores
+    double outputs = 0;    // the files and the figure (the summary and the report after it)
+};
+
 struct LampsJobSummary {
     ObjectiveKind objective = ObjectiveKind::Unbiased;
     TransportSource transport;
@@ -97,6 +110,7 @@ struct LampsJobSummary {
     /// "studio preset"; answerLine says what the answer is, first.
     std::optional<AnswerChoice> answer;
     std::string answerLine;
+    LampsPhases phases;
 };
 
 LampsJobSummary runLampsJob(const LampsJobOptions& options);

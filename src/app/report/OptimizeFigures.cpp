@@ -213,12 +213,11 @@ void drawColourBar(Canvas& c, double vmax, double x, double y, double w, double 
 }
 
 /// The upper hemisphere seen from above: zenith at the centre, the horizon on the circle,
-/// azimuth 0° (−z) at the top, clockwise.
+/// azimuth 0° (−z) at the top, clockwise; colours over [0, vmax].
 void drawHemisphere(Canvas& c, const EnvMapPlot& e, const PlotDirections& dirs, Point centre,
-                    double radius, const Scale& s) {
+                    double radius, const Scale& s, double vmax, const std::string& titleText) {
     auto pos = [&](double azDeg, double elDeg) {
-        const double r = (90 - elDeg) / 90 * radius, a = azDeg * std::numbers::pi / 180;
-        return Point{centre.x + r * std::sin(a), centre.y - r * std::cos(a)};
+        return hemispherePoint(centre, radius, azDeg, elDeg);
     };
     const std::vector<double> xe = edges(e.azimuthDeg, 0, 360);
     std::vector<int> rows;
@@ -228,7 +227,6 @@ void drawHemisphere(Canvas& c, const EnvMapPlot& e, const PlotDirections& dirs, 
             rows.push_back(j);
             el.push_back(e.elevationDeg[j]);
         }
-    const double vmax = maxOf(e.luminance);
     c.fill(std::vector<Point>{pos(0, 0), pos(90, 0), pos(180, 0), pos(270, 0)}, kWhite);
     if (!rows.empty()) {
         const std::vector<double> ye = edges(el, 0, 90);
@@ -274,8 +272,7 @@ void drawHemisphere(Canvas& c, const EnvMapPlot& e, const PlotDirections& dirs, 
     TextStyle title{s.title, kBlack};
     title.h = Align::Centre;
     title.v = Align::End;
-    c.text({centre.x, centre.y - radius - 1.9 * s.small - 0.4 * s.title},
-           "upper hemisphere seen from above", title);
+    c.text({centre.x, centre.y - radius - 1.9 * s.small - 0.4 * s.title}, titleText, title);
     markDirections(
         c, dirs, [&](const PlotDirection& d) { return pos(d.azimuthDeg, d.elevationDeg); }, true,
         s.small, s.small / 8, [&] { c.clipCircle(centre, radius + 6); }, radialBoxes);
@@ -361,6 +358,22 @@ void checkView(const Image& img, const char* what) {
 
 }  // namespace
 
+Point hemispherePoint(Point centre, double radius, double azimuthDeg, double elevationDeg) {
+    const double r = (90 - elevationDeg) / 90 * radius, a = azimuthDeg * std::numbers::pi / 180;
+    return Point{centre.x + r * std::sin(a), centre.y - r * std::cos(a)};
+}
+
+void drawEnvMapHemisphere(Canvas& c, const EnvMapPlot& envmap, Point centre, double radius,
+                          double vmax, const std::string& title) {
+    check(envmap);
+    drawHemisphere(c, envmap, PlotDirections{}, centre, radius, Scale{12.5, 10.0, 15.0},
+                   vmax > 0 ? vmax : maxOf(envmap.luminance), title);
+}
+
+void drawEnvMapColourBar(Canvas& c, double vmax, double x, double y, double w, double h) {
+    drawColourBar(c, std::max(vmax, 1e-9), x, y, w, h, 12.5);
+}
+
 Canvas envMapFigure(const EnvMapPlot& envmap, const PlotDirections& directions) {
     check(envmap);
     Canvas c(1170, 432);  // matplotlib's 13 × 4.8 in at 90 dpi
@@ -368,7 +381,8 @@ Canvas envMapFigure(const EnvMapPlot& envmap, const PlotDirections& directions) 
     const Scale s{12.5, 10.0, 15.0};
     drawLatLong(c, envmap, directions, 67, 32, 606, 348, s, unit, true);
     drawColourBar(c, maxOf(envmap.luminance), 686, 32, 20, 348, s.font);
-    drawHemisphere(c, envmap, directions, {963, 222}, 150, s);
+    drawHemisphere(c, envmap, directions, {963, 222}, 150, s, maxOf(envmap.luminance),
+                   "upper hemisphere seen from above");
     return c;
 }
 

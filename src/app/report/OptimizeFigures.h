@@ -1,5 +1,5 @@
-// The report's three figures of one optimize run, drawn in-process (app/host/Canvas.h) from what the
-// run holds, with the content scripts/plot_optimize.py draws from an OUTDIR's files (the script
+// The report's three figures of one optimize run, drawn in-process (app/host/Canvas.h) from what
+// the run holds, with the content scripts/plot_optimize.py draws from an OUTDIR's files (the script
 // stays for a person who runs it by hand):
 //   plot-envmap.png  E* as a lat-long plot (azimuth 0..360° on x, elevation −90..90° on y, the
 //                    horizon, the camera and mirror directions, the brightest directions
@@ -64,6 +64,16 @@ struct OptimizeFiguresInput {
 Canvas envMapFigure(const EnvMapPlot& envmap, const PlotDirections& directions);
 Canvas lossFigure(const LossCurve& loss, const std::string& title);
 Canvas overviewFigure(const OptimizeFiguresInput& in);
+
+/// envMapFigure's polar panel alone, for other figures (the lamps' plot): the upper hemisphere of
+/// `envmap` seen from above, zenith at `centre`, the horizon on the circle of `radius`,
+/// colours over [0, vmax] (vmax ≤ 0: the light's own maximum), `title` above it; and where a
+/// direction lies on it.
+void drawEnvMapHemisphere(Canvas& c, const EnvMapPlot& envmap, Point centre, double radius,
+                          double vmax, const std::string& title);
+Point hemispherePoint(Point centre, double radius, double azimuthDeg, double elevationDeg);
+/// The figures' colour bar of [0, vmax] in (x, y, w, h), labelled "E (luminance)".
+void drawEnvMapColourBar(Canvas& c, double vmax, double x, double y, double w, double h);
 
 /// Writes plot-envmap.png, plot-loss.png and overview.png into `dir` (each atomically) and
 /// returns their paths; throws as above (nothing written then) or when a file cannot be written.
