@@ -6,6 +6,7 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <limits>
 #include <numbers>
 #include <string>
@@ -1123,6 +1124,26 @@ TEST(Synth, ValidationNamesTheNewFields) {
     s.chatterBandWidth = 0.5;
     s.chatterBandAmplitude = -1;
     expectField(s, "chatterBandAmplitude");
+    // A length the process does not use is still refused when negative or infinite (a
+    // ball-end part given a nose radius of -5, a map without dents given a dent depth of -1),
+    // and 0 there is allowed: it says "none".
+    for (auto [field, set] :
+         std::vector<std::pair<std::string, std::function<void(SurfaceSpec&, double)>>>{
+             {"insertNoseRadius", [](SurfaceSpec&t, double v) { t.insertNoseRadius = v; }},
+             {"toolCornerRadius", [](SurfaceSpec&t, double v) { t.toolCornerRadius = v; }},
+             {"dentDepth", [](SurfaceSpec&t, double v) { t.dentDepth = v; }},
+             {"gougeLength", [](SurfaceSpec&t, double v) { t.gougeLength = v; }},
+             {"chatterWavelength", [](SurfaceSpec&t, double v) { t.chatterWavelength = v; }}}) {
+        s = base;  // ball-end, no dents, no gouges, no chatter: none of them used
+        s.dentCount = s.gougeCount = s.chatterBands = 0;
+        s.chatterAmplitude = 0;
+        set(s, -5);
+        expectField(s, field);
+        set(s, std::numeric_limits<double>::infinity());
+        expectField(s, field);
+        set(s, 0);
+        EXPECT_EQ(errorOf(s), "") << field;
+    }
     s = base;
     s.scratchDepthMin = 1.5;
     expectField(s, "scratchDepthMin");

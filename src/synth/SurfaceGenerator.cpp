@@ -130,6 +130,23 @@ void validate(const SurfaceSpec& s) {
         requireFinite(s.turnCentreX, "turnCentreX");
         requireFinite(s.turnCentreZ, "turnCentreZ");
     }
+    // A length the chosen process or defect count does not use is still never negative or
+    // infinite: a value given for it is a mistake, so it is refused by its name too (0 stays
+    // allowed: it is how a scene says "none").
+    for (auto [v, field] :
+         {std::pair{s.insertNoseRadius, "insertNoseRadius"},
+          std::pair{s.toolCornerRadius, "toolCornerRadius"},
+          std::pair{s.chatterWavelength, "chatterWavelength"},
+          std::pair{s.chatterBandWidth, "chatterBandWidth"},
+          std::pair{s.chatterBandAmplitude, "chatterBandAmplitude"},
+          std::pair{s.roughnessCorrelation, "roughnessCorrelation"},
+          std::pair{s.scratchDepth, "scratchDepth"}, std::pair{s.scratchWidth, "scratchWidth"},
+          std::pair{s.gougeDepth, "gougeDepth"}, std::pair{s.gougeLength, "gougeLength"},
+          std::pair{s.dentDepth, "dentDepth"}, std::pair{s.dentRadius, "dentRadius"}}) {
+        requireFinite(v, field);
+        require(v >= 0, field, "must be >= 0 mm, got " + formatNumber(v),
+                "A length is never negative (this run may not use it: leave it out)");
+    }
     requireFinite(s.chatterAmplitude, "chatterAmplitude");
     require(s.chatterAmplitude >= 0, "chatterAmplitude",
             "must be >= 0 mm, got " + formatNumber(s.chatterAmplitude), "Use 0 to disable chatter");
