@@ -93,6 +93,16 @@ bool waitForHandler(pid_t pid, double seconds) {
     return false;
 }
 
+/// Waits until the file `log` holds `text` (or `seconds` pass).
+bool waitForLogText(const fs::path& log, const std::string& text, double seconds) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (std::chrono::steady_clock::now() < end) {
+        if (fs::exists(log) && test::readFile(log).find(text) != std::string::npos) return true;
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return false;
+}
+
 /// Waits until `path` exists (or `seconds` pass).
 bool waitForPath(const fs::path& path, double seconds) {
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
@@ -355,7 +365,11 @@ TEST(Interrupt, DefectMapStopsAndWritesNothing) {
                                     (dir.path() / "map.png").string()},
                                    log);
         ASSERT_TRUE(waitForHandler(pid, 10));
-        std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+        // The part is read (its line printed) before the detection starts, which takes 1-2 s
+        // on an idle machine: the signal lands inside it, loaded or not (a fixed 1.5 s from
+        // the start let an idle machine finish first).
+        ASSERT_TRUE(waitForLogText(log, "invalid points filled", 30)) << test::readFile(log);
+        std::this_thread::sleep_for(std::chrono::milliseconds(200));
         const auto t0 = std::chrono::steady_clock::now();
         ::kill(pid, SIGTERM);
         const int code = waitExit(pid);
