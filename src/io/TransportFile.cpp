@@ -219,24 +219,14 @@ TransportFile mergeTransportShards(std::vector<TransportFile> shards, const std:
     const size_t rows = first.rows();
     for (size_t k = 0; k < shards.size(); ++k) {
         const TransportMatrix& t = shards[k].matrix;
-        if (t.width != first.width || t.height != first.height || t.channels != first.channels ||
-            t.planes != first.planes || t.cols() != first.cols())
+        if (!sameShape(t, first))
             throw inputError(shardName(k), "has other dimensions than the first shard",
                              "trace every shard alike");
     }
     const std::vector<int> owner = shardRowOwners(ranges, first.height, where, names);
     for (TransportFile& f : shards)
         if (f.matrix.storage == TransportStorage::Dense) f.matrix.toSparse();
-    TransportMatrix m;
-    m.width = first.width;
-    m.height = first.height;
-    m.envWidth = first.envWidth;
-    m.envHeight = first.envHeight;
-    m.channels = first.channels;
-    m.planes = first.planes;
-    m.storage = TransportStorage::Sparse;
-    m.rowPtr.assign(rows + 1, 0);
-    m.objectMask.assign(rows, 0);
+    TransportMatrix m = emptySparseOfShape(first);
     const size_t st = static_cast<size_t>(m.stride()), W = static_cast<size_t>(m.width);
     for (size_t r = 0; r < rows; ++r) {
         const TransportMatrix& t = shards[static_cast<size_t>(owner[r / W])].matrix;

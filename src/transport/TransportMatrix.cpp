@@ -84,6 +84,25 @@ EKind checkE(const TransportMatrix& t, size_t size, const char* what) {
 
 }  // namespace
 
+bool sameShape(const TransportMatrix& a, const TransportMatrix& b) {
+    return a.width == b.width && a.height == b.height && a.envWidth == b.envWidth &&
+           a.envHeight == b.envHeight && a.channels == b.channels && a.planes == b.planes;
+}
+
+TransportMatrix emptySparseOfShape(const TransportMatrix& shape) {
+    TransportMatrix t;
+    t.width = shape.width;
+    t.height = shape.height;
+    t.envWidth = shape.envWidth;
+    t.envHeight = shape.envHeight;
+    t.channels = shape.channels;
+    t.planes = shape.planes;
+    t.storage = TransportStorage::Sparse;
+    t.rowPtr.assign(t.rows() + 1, 0);
+    t.objectMask.assign(t.rows(), 0);
+    return t;
+}
+
 size_t TransportMatrix::nnz() const {
     return storage == TransportStorage::Sparse ? colIdx.size() : rows() * cols();
 }

@@ -86,6 +86,12 @@ struct TransportMatrix {
     void toSparse();
 };
 
+/// The same image, env-map grid, channels and planes (rows and columns mean the same things).
+bool sameShape(const TransportMatrix& a, const TransportMatrix& b);
+/// A sparse T of `shape`'s image, grid, channels and planes with no entries yet: rowPtr all 0
+/// (rows() + 1), objectMask all 0; the rows are appended in order by the caller.
+TransportMatrix emptySparseOfShape(const TransportMatrix& shape);
+
 /// Picks the storage that takes fewer bytes for T's measured density and converts T to it.
 void chooseStorage(TransportMatrix& t);
 

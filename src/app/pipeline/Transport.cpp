@@ -286,8 +286,7 @@ TransportSource transportForScene(const Scene& scene, const PrecomputeOptions& o
 }
 
 TransportMatrix meanOfEstimates(const TransportMatrix& a0, const TransportMatrix& b0) {
-    if (a0.width != b0.width || a0.height != b0.height || a0.envWidth != b0.envWidth ||
-        a0.envHeight != b0.envHeight || a0.channels != b0.channels || a0.planes != b0.planes)
+    if (!sameShape(a0, b0))
         throw std::invalid_argument("meanOfEstimates: the estimates are not of the same T");
     // Sparse views (a dense one converted on a copy).
     std::optional<TransportMatrix> ca, cb;
@@ -295,20 +294,11 @@ TransportMatrix meanOfEstimates(const TransportMatrix& a0, const TransportMatrix
     if (b0.storage != TransportStorage::Sparse) (cb = b0)->toSparse();
     const TransportMatrix& a = ca ? *ca : a0;
     const TransportMatrix& b = cb ? *cb : b0;
-    TransportMatrix t;
-    t.width = a.width;
-    t.height = a.height;
-    t.envWidth = a.envWidth;
-    t.envHeight = a.envHeight;
-    t.channels = a.channels;
-    t.planes = a.planes;
+    TransportMatrix t = emptySparseOfShape(a);
     t.threads = a.threads;
-    t.storage = TransportStorage::Sparse;
     const size_t rows = a.rows(), st = static_cast<size_t>(a.stride());
-    t.rowPtr.assign(rows + 1, 0);
     t.colIdx.reserve(a.colIdx.size() + b.colIdx.size());
     t.values.reserve(a.values.size() + b.values.size());
-    t.objectMask.resize(rows);
     auto push = [&](uint16_t col, const float* va, const float* vb) {
         t.colIdx.push_back(col);
         for (size_t k = 0; k < st; ++k)
