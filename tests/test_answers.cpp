@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "TestUtil.h"
 #include "app/pipeline/Answer.h"
@@ -485,6 +486,69 @@ TEST(Answer, WithAViewingModelTheAnswerIsChosenInJnd) {
     EXPECT_EQ(u.scored[0].merit.what, "U");
     EXPECT_DOUBLE_EQ(u.scored[0].merit.value, part->plainJudge->score(lights[opt]).unbiased.total);
     EXPECT_TRUE(std::isnan(u.scored[0].merit.visibility));
+}
+
+// With the `both` measure the merit is a gain over the lamp: the smaller of the least visible
+// kind's JND over the lamp's and the visibility ratio over the lamp's. A light that shows the
+// defects more in JND but less out of the texture than the lamp loses to it; one above it by
+// both wins, with the smaller gain as its merit.
+TEST(Answer, TheGainOverTheLampNeedsBothMeasures) {
+    const auto part = ScratchedPartJudge::make();
+    const Judge& jnd = *part->jndJudge;
+    std::vector<std::vector<double>> lights;
+    for (uint64_t k = 1; k <= 8; ++k) lights.push_back(randomLight(1250, 60 + k));
+    for (size_t b = 0; b < 1250; b += 125) {
+        std::vector<double> band(1250, 0.05);
+        for (size_t i = b; i < b + 60; ++i) band[i] = 1.0;
+        lights.push_back(band);
+    }
+    struct Figures {
+        double jnd, visibility;
+    };
+    std::vector<Figures> f;
+    for (const auto& e : lights) {
+        const AnswerMerit m = answerMerit(jnd.score(e), true);
+        const bool ok = jnd.score(e).brightness >= kMinVisibleBrightness;
+        f.push_back({ok ? m.value : std::nan(""), m.visibility});
+    }
+    // A pair that disagrees (a: more JND, less ratio than b) and one that agrees (a above b by
+    // both by at least 5 %).
+    std::optional<std::pair<size_t, size_t>> disagree, agree;
+    for (size_t a = 0; a < f.size(); ++a)
+        for (size_t b = 0; b < f.size(); ++b) {
+            if (!(f[a].jnd > 0) || !(f[b].jnd > 0)) continue;
+            if (f[a].jnd > 1.05 * f[b].jnd && f[a].visibility < f[b].visibility / 1.05)
+                disagree = {a, b};
+            if (f[a].jnd > 1.05 * f[b].jnd && f[a].visibility > 1.05 * f[b].visibility)
+                agree = {a, b};
+        }
+    ASSERT_TRUE(disagree && agree) << "the test part's lights cannot tell the rules apart";
+    AnswerOptions o;
+    o.gainOver = "lamp";
+    {
+        const auto [a, b] = *disagree;
+        const std::vector<AnswerCandidate> candidates = {
+            {"optimized", CandidateKind::Optimized, lights[a]},
+            {"lamp", CandidateKind::Reference, lights[b]}};
+        EXPECT_EQ(chooseAnswer(jnd, candidates).chosen, 0u);  // by JND alone
+        const AnswerChoice c = chooseAnswer(jnd, candidates, o);
+        EXPECT_EQ(c.scored[0].merit.what, "gain over lamp");
+        EXPECT_NEAR(c.scored[0].merit.value, f[a].visibility / f[b].visibility, 1e-9);
+        EXPECT_NEAR(c.scored[0].merit.jnd, f[a].jnd, 1e-9 * f[a].jnd);
+        EXPECT_NEAR(c.scored[1].merit.value, 1.0, 1e-12);
+        EXPECT_TRUE(c.referenceWon()) << c.reason;
+        EXPECT_NE(c.reason.find("gains over lamp"), std::string::npos) << c.reason;
+    }
+    {
+        const auto [a, b] = *agree;
+        const std::vector<AnswerCandidate> candidates = {
+            {"optimized", CandidateKind::Optimized, lights[a]},
+            {"lamp", CandidateKind::Reference, lights[b]}};
+        const AnswerChoice c = chooseAnswer(jnd, candidates, o);
+        EXPECT_EQ(c.chosen, 0u) << c.reason;
+        EXPECT_NEAR(c.scored[0].merit.value,
+                    std::min(f[a].jnd / f[b].jnd, f[a].visibility / f[b].visibility), 1e-9);
+    }
 }
 
 // The contrast floor guards the visibility ratio (a ratio of two tiny gradients is noise); in

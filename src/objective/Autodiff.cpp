@@ -143,6 +143,12 @@ AutodiffGradient autodiffThroughHalves(const TransportMatrix& t, const JndObject
     return halvesByChunks(t, objective, E, threads);
 }
 
+AutodiffGradient autodiffThroughHalves(const TransportMatrix& t,
+                                       const BothMeasuresObjective& objective,
+                                       std::span<const double> E, int threads) {
+    return halvesByChunks(t, objective, E, threads);
+}
+
 GradientError compareGradients(std::span<const double> g, std::span<const double> ref) {
     if (g.size() != ref.size())
         throw std::invalid_argument("compareGradients: sizes differ (" + std::to_string(g.size()) +

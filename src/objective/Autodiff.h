@@ -30,6 +30,7 @@
 #include <span>
 #include <vector>
 
+#include "objective/BothMeasuresObjective.h"
 #include "objective/DefectObjective.h"
 #include "objective/JndObjective.h"
 #include "objective/Objective.h"
@@ -91,9 +92,9 @@ template <typename S>
 S lossThroughMatrix(const TransportMatrix& t, const ImageObjective& objective,
                     std::span<const S> E);
 
-/// Loss(E) of a half-image objective (DefectObjective, JndObjective) through the halves of a
-/// gray T (channels 1, planes 2): Y_a = T_a·E, Y_b = T_b·E with T's float entries promoted to S,
-/// then objective.value<S>.
+/// Loss(E) of a half-image objective (DefectObjective, JndObjective, BothMeasuresObjective) through
+/// the halves of a gray T (channels 1, planes 2): Y_a = T_a·E, Y_b = T_b·E with T's float entries
+/// promoted to S, then objective.value<S>.
 template <typename S, typename HalfObjective>
 S lossThroughHalves(const TransportMatrix& t, const HalfObjective& objective, std::span<const S> E);
 
@@ -113,6 +114,9 @@ AutodiffGradient autodiffThroughMatrix(const TransportMatrix& t, const ImageObje
 AutodiffGradient autodiffThroughHalves(const TransportMatrix& t, const DefectObjective& objective,
                                        std::span<const double> E, int threads = 0);
 AutodiffGradient autodiffThroughHalves(const TransportMatrix& t, const JndObjective& objective,
+                                       std::span<const double> E, int threads = 0);
+AutodiffGradient autodiffThroughHalves(const TransportMatrix& t,
+                                       const BothMeasuresObjective& objective,
                                        std::span<const double> E, int threads = 0);
 
 /// Gradient comparison: relative L2 error ‖g − ref‖/‖ref‖ and cosine similarity g·ref/(‖g‖‖ref‖)

@@ -35,6 +35,10 @@ struct ObjectiveOptions {
     /// How the image is seen, for the jnd measure (pixelsPerDegree 0: the caller's default,
     /// e.g. the scene's viewing block).
     ViewingModel viewing{};
+    /// The light the `both` measure's gains are over (objective/BothMeasuresObjective.h): the
+    /// user's lamp, as E (one value per texel and channel); empty: the studio preset
+    /// (app/pipeline/Search.h objectiveOnT). Unused by the other measures.
+    std::vector<double> anchorLight;
 };
 
 /// The value of the loss and its parts.

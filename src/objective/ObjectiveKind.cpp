@@ -20,6 +20,9 @@ constexpr DefectMeasureRow kMeasures[] = {
     {DefectMeasure::Ratio, "ratio", "the defects' RMS gradient over the defect-free surface's"},
     {DefectMeasure::Jnd, "jnd",
      "the defects' visibility in just-noticeable differences (the judge's first figure)"},
+    {DefectMeasure::Both, "both",
+     "the worse of the two measures' gains over the user's lamp: seen more in JND and standing "
+     "out of the texture more"},
 };
 
 }  // namespace

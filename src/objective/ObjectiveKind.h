@@ -21,7 +21,8 @@ enum class ObjectiveKind { Paper, Unbiased, Defects };
 ///   ratio  the defects' RMS gradient over the defect-free surface's (objective/DefectObjective.h)
 ///   jnd    the defects' visibility in just-noticeable differences, the judge's first figure
 ///          (objective/JndObjective.h): contrast sensitivity, masking by the texture, luminance
-enum class DefectMeasure { Ratio, Jnd };
+///   both   the worse of the two's gains over the user's lamp (objective/BothMeasuresObjective.h)
+enum class DefectMeasure { Ratio, Jnd, Both };
 
 struct ObjectiveKindRow {
     ObjectiveKind value;

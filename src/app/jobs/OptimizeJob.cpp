@@ -752,6 +752,7 @@ ObjectiveOptions objectiveAt(const Plan& p, const Inputs& in, double lambda) {
     ObjectiveOptions oo = p.o.objective;
     oo.lambda = lambda;
     if (!(oo.viewing.pixelsPerDegree > 0)) oo.viewing = viewingOf(in);
+    if (oo.defectMeasure == DefectMeasure::Both && oo.anchorLight.empty()) oo.anchorLight = in.lampE;
     return oo;
 }
 
@@ -961,7 +962,9 @@ void checkAnswer(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
     candidates.push_back(
         {"uniform-0.5", CandidateKind::Reference, std::vector<double>(in.lampE.size(), 0.5)});
     candidates.push_back({"paper's light", CandidateKind::Reference, in.paperE});
-    AnswerChoice choice = chooseAnswer(validation, std::move(candidates));
+    AnswerOptions ao;
+    if (jo.objective.defectMeasure == DefectMeasure::Both) ao.gainOver = in.lampName;
+    AnswerChoice choice = chooseAnswer(validation, std::move(candidates), ao);
     choice.validationSpp = job.validation->file.provenance.spp;
     const ScoredCandidate& a = choice.answer();
     if (choice.chosen != 0) {

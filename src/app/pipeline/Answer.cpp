@@ -79,6 +79,19 @@ AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> 
         c.scored.push_back(std::move(s));
     }
     c.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (!options.gainOver.empty()) {
+        const auto anchor = std::find_if(
+            c.scored.begin(), c.scored.end(),
+            [&](const ScoredCandidate& s) { return s.candidate.name == options.gainOver; });
+        if (anchor != c.scored.end() && anchor->merit.what == "JND") {
+            const double j0 = anchor->merit.value, v0 = anchor->merit.visibility;
+            for (ScoredCandidate& s : c.scored) {
+                s.merit.jnd = s.merit.value;
+                s.merit.value = std::min(s.merit.jnd / j0, s.merit.visibility / v0);
+                s.merit.what = "gain over " + options.gainOver;
+            }
+        }
+    }
     if (!anyOptimized) throw std::invalid_argument("chooseAnswer: no optimized candidate");
     // A finer light competes only when no trusted optimized light passes the checks.
     bool trustedEligible = false;
@@ -116,11 +129,19 @@ AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> 
     const ScoredCandidate& a = c.answer();
     const ScoredCandidate& o = c.scored[c.optimized];
     const bool jnd = a.merit.what == "JND";  // which kind shows least, pooled and ratio beside
-    std::string on = " on the validation estimate (" + a.merit.what +
-                     (jnd ? " of the least visible kind " : " ") + formatNumber(a.merit.value, 4) +
+    const bool gain = std::isfinite(a.merit.jnd);
+    std::string on = " on the validation estimate (" +
+                     (gain ? "the smaller of the JND's and the visibility ratio's gains over " +
+                                 options.gainOver + " "
+                           : a.merit.what + (jnd ? " of the least visible kind " : " ")) +
+                     formatNumber(a.merit.value, 4) +
                      (jnd ? " (" + a.merit.leastVisible + ")" : "") + " vs the optimized light's " +
                      formatNumber(o.merit.value, 4) +
                      (jnd ? " (" + o.merit.leastVisible + ")" : "");
+    if (gain)
+        on += "; JND of the least visible kind " + formatNumber(a.merit.jnd, 4) + " vs " +
+              formatNumber(o.merit.jnd, 4) + "; visibility ratio " +
+              formatNumber(a.merit.visibility, 4) + " vs " + formatNumber(o.merit.visibility, 4);
     if (jnd)
         on += "; all kinds pooled " + formatNumber(a.merit.pooled, 4) + " vs " +
               formatNumber(o.merit.pooled, 4) + "; visibility ratio " +

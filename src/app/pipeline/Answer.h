@@ -38,12 +38,15 @@ namespace sl {
 struct AnswerMerit {
     double value = 0;
     bool higherIsBetter = false;
-    std::string what;  // "JND", "defect visibility" or "U"
+    std::string what;  // "JND", "defect visibility", "U" or "gain over <lamp>"
     /// The defects' combined visibility ratio, beside the JND (NaN without defect regions).
     double visibility = std::numeric_limits<double>::quiet_NaN();
     /// With JND: all kinds pooled (combinedJnd), the tie-break; and the least visible kind.
     double pooled = std::numeric_limits<double>::quiet_NaN();
     std::string leastVisible;
+    /// With a gain merit (AnswerOptions::gainOver): the least visible kind's JND, the value's
+    /// numerator beside the visibility ratio's.
+    double jnd = std::numeric_limits<double>::quiet_NaN();
 };
 /// The figure the judge (and the answer line) reports first, of a judge's score: with defect
 /// regions in view, the JND of the least visible defect kind (objective/DefectVisibility.h
@@ -71,6 +74,12 @@ struct AnswerOptions {
     /// Chosen by the visibility ratio: the least combined contrast (RMS gradient in the regions
     /// over the mean brightness; the eye needs about 0.01), below which the ratio is noise.
     double minContrast = kMinDefectContrast;
+    /// With the defects objective's `both` measure (objective/BothMeasuresObjective.h): the name
+    /// of the candidate (the user's lamp) over which every candidate's merit is a gain, the
+    /// smaller of its JND's and its visibility ratio's over that candidate's, as the objective
+    /// raises (so a light is chosen over the lamp only when it shows the defects more by both).
+    /// Empty, or without JND: answerMerit's figure.
+    std::string gainOver;
 };
 
 struct ScoredCandidate {

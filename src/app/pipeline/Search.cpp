@@ -7,11 +7,14 @@
 #include "app/pipeline/InitialState.h"
 #include "core/Error.h"
 #include "core/Stopwatch.h"
+#include "objective/BothMeasuresObjective.h"
 #include "objective/CoarseLight.h"
 #include "objective/DefectObjective.h"
 #include "objective/JndObjective.h"
 #include "objective/TransportLoss.h"
 #include "objective/UnbiasedObjective.h"
+#include "scene/EnvMapPresets.h"
+#include "scene/EnvMapToE.h"
 
 namespace sl {
 
@@ -32,12 +35,22 @@ ObjectiveOnT objectiveOnT(ObjectiveKind kind, const TransportMatrix& t, const Se
         case ObjectiveKind::Defects: {
             DefectObjectiveOptions d;
             d.whiteMean = whiteFurnaceMean(t, in.mask, in.shard);
+            JndObjectiveOptions j;
+            j.view = oo.viewing.pixelsPerDegree > 0 ? oo.viewing : defaultViewing();
+            j.band = d;
             if (oo.defectMeasure == DefectMeasure::Jnd) {
-                JndObjectiveOptions j;
-                j.view = oo.viewing.pixelsPerDegree > 0 ? oo.viewing : defaultViewing();
-                j.band = d;
                 r.halves = std::make_unique<JndObjective>(t.width, t.height, in.mask, in.defects,
                                                           in.reference, oo, j);
+            } else if (oo.defectMeasure == DefectMeasure::Both) {
+                auto both = std::make_unique<BothMeasuresObjective>(
+                    t.width, t.height, in.mask, in.defects, in.reference, oo, j);
+                // The user's lamp; without one, the studio preset (as optimize's comparison).
+                const std::vector<double> anchor =
+                    oo.anchorLight.empty()
+                        ? envMapToE(studioEnvMap(t.envWidth, t.envHeight), in.rgb ? 3 : 1)
+                        : oo.anchorLight;
+                both->setAnchors(measureAnchors(t, *both, anchor, in.rgb, in.shard));
+                r.halves = std::move(both);
             } else {
                 r.halves = std::make_unique<DefectObjective>(t.width, t.height, in.mask, in.defects,
                                                              in.reference, oo, d);

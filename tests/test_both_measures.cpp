@@ -1,0 +1,134 @@
+// The defects objective on both measures (objective/BothMeasuresObjective.h): its exact gradient
+// against forward-mode autodiff, its value against the two measures' (a soft maximum of their
+// losses less the anchors: between the larger less τ·log 2 and the larger), the anchor light's
+// gain of exactly 1, and `optimize --defects-measure both` end to end.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "AutodiffCheck.h"
+#include "TestUtil.h"
+#include "core/Error.h"
+#include "core/Rng.h"
+#include "objective/BothMeasuresObjective.h"
+#include "objective/TransportLoss.h"
+#include "scene/Scene.h"
+#include "transport/TransportSink.h"
+
+using namespace sl;
+
+namespace {
+
+TransportMatrix bumpyHalves(int spp) {
+    SceneDesc d;
+    d.heightmap.pitch = 0.05;
+    d.camera.origin = {0, 2, 2};
+    d.camera.width = d.camera.height = 20;
+    d.render.maxDepth = 3;
+    const Scene scene(d, 32, 32, test::bumpyHeightMap(32));
+    RenderOptions o;
+    o.spp = spp;
+    o.maxDepth = 3;
+    o.sampleSets = 2;
+    return precomputeTransport(scene, o, 1).matrix;
+}
+
+/// Two labelled stripes of columns: [4, 7) label 1, [12, 14) label 2.
+std::vector<uint8_t> twoStripes(const TransportMatrix& t) {
+    std::vector<uint8_t> m(t.rows(), 0);
+    for (int y = 0; y < t.height; ++y)
+        for (int x = 0; x < t.width; ++x)
+            m[static_cast<size_t>(y) * t.width + x] = x >= 4 && x < 7     ? 1
+                                                      : x >= 12 && x < 14 ? 2
+                                                                          : 0;
+    return m;
+}
+
+JndObjectiveOptions options(const TransportMatrix& t) {
+    JndObjectiveOptions o;
+    o.view.pixelsPerDegree = 38.8;
+    o.view.whiteLuminance = 200;
+    o.band.whiteMean = whiteFurnaceMean(t, t.objectMask);
+    return o;
+}
+
+/// A light brighter towards one side of the grid (a lamp-like anchor).
+std::vector<double> sideLight(const TransportMatrix& t) {
+    std::vector<double> e(t.cols());
+    for (size_t k = 0; k < e.size(); ++k)
+        e[k] = 0.1 + 0.9 * static_cast<double>(k % t.envWidth) / t.envWidth;
+    return e;
+}
+
+}  // namespace
+
+TEST(BothMeasuresObjective, ExactGradientMatchesAutodiff) {
+    const TransportMatrix t = bumpyHalves(8);
+    ObjectiveOptions oo;
+    oo.lambda = 3;
+    BothMeasuresObjective obj(t.width, t.height, t.objectMask, twoStripes(t), {}, oo, options(t));
+    obj.setAnchors(measureAnchors(t, obj, sideLight(t), false));
+    Pcg32 rng(17, 5);
+    // A mid light, a dark one (the floors) and a bright one (the band's upper edge).
+    test::expectMatchesAutodiff(t, obj, rng, {0.5, 0.02, 3.0}, 1e-11, 1e-8);
+}
+
+// The loss is the soft maximum of the two measures' losses less their anchors: at most the
+// larger, at least the larger less τ·log 2; its visibility term at the anchor light is 0 (a gain
+// of exactly 1 on both measures), and its gradient weighs the measure that gains less.
+TEST(BothMeasuresObjective, IsTheSoftMaximumOfTheTwoGainsOverTheLamp) {
+    const TransportMatrix t = bumpyHalves(8);
+    ObjectiveOptions oo;
+    oo.lambda = 3;
+    BothMeasuresObjective obj(t.width, t.height, t.objectMask, twoStripes(t), {}, oo, options(t));
+    const std::vector<double> lamp = sideLight(t);
+    const MeasureAnchors a = measureAnchors(t, obj, lamp, false);
+    obj.setAnchors(a);
+    const TransportLoss both(t, obj, false), jnd(t, obj.jnd(), false), ratio(t, obj.ratio(), false);
+    const LossParts atLamp = both.evaluate(lamp, {});
+    EXPECT_NEAR(atLamp.lGrad, 0.0, 1e-12);
+    EXPECT_NEAR(atLamp.G, 1.0, 1e-12);
+    Pcg32 rng(3, 8);
+    for (int trial = 0; trial < 4; ++trial) {
+        std::vector<double> e(t.cols());
+        for (double& v : e) v = 0.1 + rng.nextDouble();
+        const double aj = jnd.evaluate(e, {}).total - a.jnd,
+                     ar = ratio.evaluate(e, {}).total - a.ratio;
+        const double top = std::max(aj, ar), total = both.evaluate(e, {}).total;
+        EXPECT_LE(total, top + 1e-12);
+        EXPECT_GE(total, top - kLabelSoftMin * std::log(2.0) - 1e-12);
+        // The gradient is the two gradients weighted towards the larger loss.
+        std::vector<double> g(t.cols()), gj(t.cols()), gr(t.cols());
+        both.evaluate(e, g);
+        jnd.evaluate(e, gj);
+        ratio.evaluate(e, gr);
+        const double w = 1 / (1 + std::exp((ar - aj) / kLabelSoftMin));
+        for (size_t k = 0; k < g.size(); ++k)
+            EXPECT_NEAR(g[k], w * gj[k] + (1 - w) * gr[k],
+                        1e-9 * (std::abs(gj[k]) + std::abs(gr[k]) + 1e-12));
+    }
+    EXPECT_THROW(measureAnchors(t, obj, std::vector<double>{}, false), InputError);
+}
+
+TEST(BothMeasuresObjective, OptimizeRunsItOverTheLampAndRecordsTheMeasure) {
+    test::TempDir dir("both-cli");
+    const std::string part = (dir.path() / "part.exr").string(),
+                      scene = (dir.path() / "scene.json").string(),
+                      truth = (dir.path() / "part-truth.png").string();
+    ASSERT_EQ(
+        test::runCli("gen-surface -o " + part + " --width 160 --height 160 --scratches 3 --scene " +
+                     scene + " --image-size 40 --spp 8 --max-depth 3")
+            .exitCode,
+        0);
+    const auto out = dir.path() / "out";
+    const auto r =
+        test::runCli("optimize " + scene + " --truth " + truth +
+                     " --defects-measure both --heldout none --iterations 100 -o " + out.string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const auto summary = nlohmann::json::parse(test::readFile(out / "summary.json"));
+    EXPECT_EQ(summary.value("defects_measure", ""), "both");
+    EXPECT_TRUE(summary.value("improved", false)) << r.output;
+}
