@@ -750,8 +750,9 @@ TEST(OptimizeAnswers, DefectsBelowTheTrainingNoiseRaiseTheSpp) {
     const json& a = s["answer"];
     ASSERT_TRUE(a.is_object());
     EXPECT_GE(a["candidates"].size(), 4u);
-    // The scene has the default viewing model: the answer is chosen in JND, the ratio beside.
-    EXPECT_EQ(a["merit"], "JND");
+    // The scene has the default viewing model and the default measure (both): the answer is
+    // chosen on the smaller of its JND's and its visibility ratio's gains over the lamp.
+    EXPECT_EQ(a["merit"], "gain over studio preset");
     EXPECT_TRUE(a["candidates"][0]["visibility"].is_number()) << a.dump(2);
     bool found = false;
     for (const json& c : a["candidates"]) found |= c["name"] == a["light"];

@@ -28,10 +28,11 @@ struct ObjectiveOptions {
     RegTarget reg = RegTarget::EnvMap;  // where the L2 regulariser acts
     bool smoothAbs = false;             // |x| ≈ sqrt(x² + ε²) − ε, for quasi-Newton methods
     double smoothEps = 1e-4;            // ε of the smooth |x|, in luminance units
-    /// What the defects objective makes large (objective/ObjectiveKind.h DefectMeasure): JND,
-    /// the judge's first figure, by default (raced against the ratio: docs/RESULTS.md "The
-    /// defects objective on JND").
-    DefectMeasure defectMeasure = DefectMeasure::Jnd;
+    /// What the defects objective makes large (objective/ObjectiveKind.h DefectMeasure): by
+    /// default the worse of the JND's and the visibility ratio's gains over the user's lamp
+    /// (raced against JND alone on held-out parts: docs/RESULTS.md "The defects light above the
+    /// lamp by both measures").
+    DefectMeasure defectMeasure = DefectMeasure::Both;
     /// How the image is seen, for the jnd measure (pixelsPerDegree 0: the caller's default,
     /// e.g. the scene's viewing block).
     ViewingModel viewing{};
