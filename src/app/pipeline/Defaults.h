@@ -37,6 +37,7 @@ struct OptimizeDefaults {
     int paperMinSpp = 512;
     ObjectiveKind objective = ObjectiveKind::Unbiased;
     ObjectiveKind objectiveWithDefects = ObjectiveKind::Defects;
+    double lambda = 30.0;  // the regulariser's λ (the paper's); optimize's one λ, the viewer's
 };
 OptimizeDefaults optimizeDefaults();
 
