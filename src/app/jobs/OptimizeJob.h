@@ -9,7 +9,7 @@
 //                the held-out score (own objective and the paper's eq. 2)
 //   summary.json optimizer, lambda, iterations, initial/final loss and parts, timings, T's facts,
 //                held-out scores, visibility metrics (final and initial)
-//   report.html  one self-contained page for the inspector (app/report/Report.h
+//   report.html  one self-contained page for the inspector (app/report/OptimizeReport.h
 //                renderOptimizeReportHtml): (1) a headline in words, how much better E* shows
 //                the defects than the user's lamp and the paper's light, with the judge's
 //                numbers; (2) full-size renders under the lamp and E* with an A/B slider, the

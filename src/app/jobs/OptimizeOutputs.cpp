@@ -18,6 +18,7 @@
 #include "app/pipeline/Search.h"
 #include "app/pipeline/Truth.h"
 #include "app/report/OptimizeFigures.h"
+#include "app/report/OptimizeReport.h"
 #include "app/report/PartSummary.h"
 #include "app/report/Preview.h"
 #include "app/report/Report.h"
@@ -333,8 +334,8 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     }
     if (run.judged) s["judge"] = toJson(*run.judged);
     {
-        // The report's headline (app/report/Report.h optimizeHeadline): E* against the user's lamp
-        // and the paper's light, on T and (with the held-out estimate) by the judge.
+        // The report's headline (app/report/OptimizeReport.h optimizeHeadline): E* against the
+        // user's lamp and the paper's light, on T and (with the held-out estimate) by the judge.
         json cmp;
         cmp["objective"] = objectiveKindName(in.kind);
         cmp["regions"] = in.regionSource;
