@@ -1,4 +1,4 @@
-#include "app/viewer/Viewer.h"
+#include "app/viewer/ViewerSession.h"
 
 #include <unistd.h>
 
