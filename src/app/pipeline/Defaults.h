@@ -1,8 +1,8 @@
 // The decisions every command that optimizes a light makes the same way, written once here:
 // which objective runs when none is named, how an optimizer's row of optimize/Methods.h resolves
 // into what runs, and how an input (.tm or scene) becomes T. `optimize` (app/jobs/OptimizeJob.h),
-// `lamps` (app/jobs/LampsJob.h) and the viewer (app/viewer/ViewerSession.h) call these; `bench race`
-// races the defaults and the CLI prints them in its help.
+// `lamps` (app/jobs/LampsJob.h) and the viewer (app/viewer/ViewerSession.h) call these; `bench
+// race` races the defaults and the CLI prints them in its help.
 #pragma once
 
 #include <filesystem>
