@@ -95,7 +95,7 @@ Problem quadratic(std::vector<double> m) {
 
 // E = 0: the image is black, G = 0 (eq. 2 would be infinite: it is clamped at its floor, with
 // a zero gradient) and the unbiased loss is finite; every optimizer returns finite values, and
-// `optimize` refuses such a start with a message (app/jobs/OptimizeJob.cpp).
+// `optimize` refuses such a start with a message (app/jobs/OptimizeStages.cpp prepareRuns).
 TEST(HardCases, AllBlackStart) {
     auto scene = sceneOf(test::bumpyHeightMap(32), 32);
     const TransportMatrix t = precomputeTransport(*scene, opts(8, 2), 1).matrix;

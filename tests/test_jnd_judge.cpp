@@ -8,6 +8,7 @@
 
 #include "TestUtil.h"
 #include "app/pipeline/Judge.h"
+#include "app/report/OptimizeReport.h"
 #include "app/report/Report.h"
 #include "core/Error.h"
 #include "io/SceneFile.h"

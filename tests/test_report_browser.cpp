@@ -14,6 +14,7 @@
 #include <string>
 
 #include "TestUtil.h"
+#include "app/report/OptimizeReport.h"
 #include "app/report/Report.h"
 #include "core/Text.h"
 

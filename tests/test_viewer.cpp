@@ -1,12 +1,12 @@
-// The live relighting viewer (app/viewer/Viewer.h, app/viewer/ViewerServer.h): the session's
-// relight is T·E, its judge numbers are the Judge's, every request is validated; the server
-// survives malformed requests and connections closed mid-transfer; and the page, driven in headless
-// Chromium, paints a texel and shows the image and judge numbers that `relight` and `judge` give
-// for the saved light (screenshot at build/test-artifacts/viewer-screenshot.png); lamps set through
-// the API are exactly their rasterization (scene/Lamp.h), and dragging one on the page's hemisphere
-// gives the E, image and judge numbers that the rasterizer, `relight` and `judge` give; the
-// optimizer from the current light lowers optimize's loss and reports its progress; saving
-// writes only inside the output directory.
+// The live relighting viewer (app/viewer/ViewerSession.h, ViewerApi.h, ViewerServer.h): the
+// session's relight is T·E, its judge numbers are the Judge's, every request is validated; the
+// server survives malformed requests and connections closed mid-transfer; and the page, driven in
+// headless Chromium, paints a texel and shows the image and judge numbers that `relight` and
+// `judge` give for the saved light (screenshot at build/test-artifacts/viewer-screenshot.png);
+// lamps set through the API are exactly their rasterization (scene/Lamp.h), and dragging one on the
+// page's hemisphere gives the E, image and judge numbers that the rasterizer, `relight` and `judge`
+// give; the optimizer from the current light lowers optimize's loss and reports its progress;
+// saving writes only inside the output directory.
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <httplib.h>
@@ -37,7 +37,7 @@
 #include "app/pipeline/LossMask.h"
 #include "app/pipeline/Search.h"
 #include "app/pipeline/Transport.h"
-#include "app/viewer/Viewer.h"
+#include "app/viewer/ViewerApi.h"
 #include "app/viewer/ViewerServer.h"
 #include "core/Error.h"
 #include "io/EnvMapIO.h"

@@ -11,6 +11,8 @@
 #include "app/jobs/OptimizeJob.h"
 #include "app/pipeline/Cache.h"
 #include "app/pipeline/Transport.h"
+#include "app/report/OptimizeReport.h"
+#include "app/report/Preview.h"
 #include "app/report/Report.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"

@@ -1,8 +1,8 @@
 // scratchlight view (part.tm | SCENE.json | OUTDIR) [--port 8080] [--host H] [--open] [-o DIR]
 //                   [--lamps lamps.json]
 // scratchlight bench view [SCENE.json] [--size 512,2048] [--spp 1] [--repeats 20] [-o CSV]
-// The live relighting viewer (app/viewer/Viewer.h, app/viewer/ViewerServer.h) and its latency benchmark
-// (app/bench/ViewerBench.h).
+// The live relighting viewer (app/viewer/ViewerSession.h, ViewerApi.h, ViewerServer.h) and its
+// latency benchmark (app/bench/ViewerBench.h).
 #include <signal.h>
 
 #include <cstdio>
@@ -10,7 +10,7 @@
 #include <memory>
 
 #include "app/bench/ViewerBench.h"
-#include "app/viewer/Viewer.h"
+#include "app/viewer/ViewerApi.h"
 #include "app/viewer/ViewerServer.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"

@@ -1,6 +1,6 @@
 // The OUTDIR contract: what `optimize -o OUTDIR` writes that others read, written once. The
-// writer (app/jobs/OptimizeJob.cpp, the figures app/report/OptimizeFigures.cpp) names its files
-// by these constants, and its readers read through them: the viewer (app/viewer/Viewer.cpp:
+// writer (app/jobs/OptimizeOutputs.cpp, the figures app/report/OptimizeFigures.cpp) names its files
+// by these constants, and its readers read through them: the viewer (app/viewer/ViewerSession.cpp:
 // the objective that made the output, T, the lights), the report (app/report/Report.cpp: a run's
 // pictures, loss and metrics; OptimizeReport.cpp: optimize's page), both reading summary.json
 // through its typed reader (io/OptimizeSummary.h), judge (an OUTDIR as a light: its envmap.exr) and

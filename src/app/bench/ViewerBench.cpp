@@ -8,7 +8,7 @@
 
 #include "app/host/Plot.h"
 #include "app/pipeline/Transport.h"
-#include "app/viewer/Viewer.h"
+#include "app/viewer/ViewerApi.h"
 #include "app/viewer/ViewerServer.h"
 #include "core/Error.h"
 #include "core/Interrupt.h"

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "app/host/Version.h"
+#include "app/report/OptimizeReport.h"
 #include "app/report/PartSummary.h"
 #include "app/report/Preview.h"
 #include "app/report/Report.h"
@@ -168,8 +169,8 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
         if (!o.defects.empty())
             regions = defectRegionsInImage(*scene, o.defects, jo.truth, o.reference);
         // The regions in the image once (truth labels, or the defect region), then the judge
-        // in rounds (app/pipeline/Judge.h judgeInRounds): the estimate's spp grows until every score's
-        // standard error is small, unless --spp is given.
+        // in rounds (app/pipeline/Judge.h judgeInRounds): the estimate's spp grows until every
+        // score's standard error is small, unless --spp is given.
         std::vector<uint8_t> labels, reference;
         std::vector<RegionLabel> legend;
         if (regions) {

@@ -9,7 +9,6 @@
 #include <sstream>
 
 #include "app/host/Version.h"
-#include "app/jobs/OptimizeJob.h"
 #include "app/pipeline/Defaults.h"
 #include "app/pipeline/InitialState.h"
 #include "app/pipeline/JudgeEstimate.h"

@@ -1,8 +1,8 @@
 // The decisions every command that optimizes a light makes the same way, written once here:
 // which objective runs when none is named, how an optimizer's row of optimize/Methods.h resolves
 // into what runs, and how an input (.tm or scene) becomes T. `optimize` (app/jobs/OptimizeJob.h),
-// `lamps` (app/jobs/LampsJob.h) and the viewer (app/viewer/Viewer.h) call these; `bench race`
-// races the defaults and the CLI prints them in its help.
+// `lamps` (app/jobs/LampsJob.h) and the viewer (app/viewer/ViewerSession.h) call these; `bench
+// race` races the defaults and the CLI prints them in its help.
 #pragma once
 
 #include <filesystem>
@@ -37,6 +37,7 @@ struct OptimizeDefaults {
     int paperMinSpp = 512;
     ObjectiveKind objective = ObjectiveKind::Unbiased;
     ObjectiveKind objectiveWithDefects = ObjectiveKind::Defects;
+    double lambda = 30.0;  // the regulariser's λ (the paper's); optimize's one λ, the viewer's
 };
 OptimizeDefaults optimizeDefaults();
 

@@ -1,5 +1,7 @@
-// optimize's own page (renderOptimizeReportHtml, app/report/Report.h): the headline in words,
-// the renders with an A/B slider, the env map, the loss and the three lights' metrics.
+// optimize's own page (app/report/OptimizeReport.h): the headline in words, the renders with an
+// A/B slider, the env map, the loss and the three lights' metrics.
+#include "app/report/OptimizeReport.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

@@ -3,7 +3,19 @@
 #include <algorithm>
 #include <cstddef>
 
+#include "io/ImageIO.h"
+
 namespace sl {
+
+void writeRender(const std::filesystem::path& exr, const std::vector<double>& image, int width,
+                 int height, int channels) {
+    Image img(width, height, channels);
+    for (size_t i = 0; i < image.size(); ++i) img.data[i] = static_cast<float>(image[i]);
+    writeExr(exr, img);
+    auto png = exr;
+    png.replace_extension(".png");
+    writePng(png, img);
+}
 
 double exposureScale(const std::vector<double>& y, const std::vector<uint8_t>& part) {
     std::vector<double> in;

@@ -1,13 +1,19 @@
-// Previews a person looks at: a render exposed for a PNG, and the same with labelled regions
-// outlined in one colour per label (the judge's report, optimize's regions.png).
+// Previews a person looks at: a render written as data with its PNG preview, a render exposed
+// for a PNG, and the same with labelled regions outlined in one colour per label (the judge's
+// report, optimize's regions.png).
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <vector>
 
 #include "core/Image.h"
 
 namespace sl {
+
+/// Writes `image` (width×height, 1 or 3 channels, double) as EXR + PNG preview.
+void writeRender(const std::filesystem::path& exr, const std::vector<double>& image, int width,
+                 int height, int channels);
 
 /// The exposure of a preview: the 99th percentile of the part's pixels (all pixels when `part`
 /// is empty) maps to 0.8; 1 when that is not positive.

@@ -1,9 +1,10 @@
-// The viewer's API (app/viewer/Viewer.h handleViewerRequest): the router from a request to the
+// The viewer's API (app/viewer/ViewerApi.h handleViewerRequest): the router from a request to the
 // session's answer, the page, and the API's lamp JSON.
+#include "app/viewer/ViewerApi.h"
+
 #include <cmath>
 #include <numbers>
 
-#include "app/viewer/Viewer.h"
 #include "core/Error.h"
 #include "core/Text.h"
 #include "io/InputFile.h"

@@ -14,7 +14,7 @@
 #include <string_view>
 
 #include "app/viewer/ConnectionLoop.h"
-#include "app/viewer/Viewer.h"
+#include "app/viewer/ViewerApi.h"
 #include "core/Error.h"
 #include "core/Interrupt.h"
 

@@ -1,12 +1,12 @@
 // The viewer's HTTP server (cpp-httplib, plain HTTP): every request goes to
-// handleViewerRequest (app/viewer/Viewer.h); this file only moves bytes. Bound to 127.0.0.1 unless
-// a host is given (the command line then warns). The port is bound exclusively (no SO_REUSEPORT: a
-// second viewer on the same port is refused). httplib accepts and parses; the connections
-// themselves are ours (app/viewer/ConnectionLoop.h): one thread reads every socket and a worker
-// gets a connection only with a whole request buffered, so idle, slow or non-reading clients hold
-// no worker, and pipelined requests are answered in order. Request bodies over kViewerMaxBody are
-// refused before they are read; a malformed request or a connection closed mid-transfer ends that
-// connection only.
+// handleViewerRequest (app/viewer/ViewerApi.h); this file only moves bytes. Bound to 127.0.0.1
+// unless a host is given (the command line then warns). The port is bound exclusively (no
+// SO_REUSEPORT: a second viewer on the same port is refused). httplib accepts and parses; the
+// connections themselves are ours (app/viewer/ConnectionLoop.h): one thread reads every socket and
+// a worker gets a connection only with a whole request buffered, so idle, slow or non-reading
+// clients hold no worker, and pipelined requests are answered in order. Request bodies over
+// kViewerMaxBody are refused before they are read; a malformed request or a connection closed
+// mid-transfer ends that connection only.
 #pragma once
 
 #include <memory>

@@ -1,13 +1,15 @@
-// The live relighting viewer's library half (README "view"): a ViewerSession holds T, the
-// judge (when there is an estimate), two lights A and B, and answers the page's requests as
-// plain functions (handleViewerRequest: a request in, a response out), so everything but the
-// sockets is tested without a server (app/viewer/ViewerServer.h serves it over HTTP).
+// The live relighting viewer's session (README "view"): a ViewerSession holds T, the judge
+// (when there is an estimate), two lights A and B and the optimizer from the current light, as
+// plain functions the API calls (app/viewer/ViewerApi.h handleViewerRequest: a request in, a
+// response out), so everything but the sockets is tested without a server
+// (app/viewer/ViewerServer.h serves it over HTTP).
 //
 // Inputs (ViewerOptions::input):
 //   part.tm     T as stored; the judge scores on T's own halves when it has two (else none)
 //   SCENE.json  T traced at the scene's spp (or `spp`) as two halves (optimize's objectives
 //               need them; T·E is their mean), cached by fingerprint, and the judge's
-//               own estimate (app/pipeline/Judge.h, `judgeSpp`), exactly as `judge SCENE.json` scores
+//               own estimate (app/pipeline/Judge.h, `judgeSpp`), exactly as `judge SCENE.json`
+//               scores
 //   OUTDIR      an optimize output directory: its summary.json's transport file, its E*
 //               (envmap.exr, the preset "optimized"; the paper's light, "paper"), its truth
 //               (when recorded) or else its defect regions' layer (view-regions.png), and the
@@ -20,40 +22,8 @@
 // A truth label mask (height-map space) gives the judge per-region visibility and the page its
 // defect overlay (the regions' outlines, app/report/Preview.h colours).
 //
-// The API (JSON unless said; every request validated, errors 400 {"error": "..."}):
-//   GET  /                 the page (src/app/viewer/ViewerPage.html, embedded at build time)
-//   GET  /api/info         image and env-map size, presets, judge and overlay present, the
-//                          auto exposure of A, the texel that lights the most of the image,
-//                          "lamps" (how many lamps.json holds), "lamp_kinds"
-//   GET  /api/light?slot=a E of a slot:  {"slot": "a", "E": [...]}
-//   POST /api/light        {"slot": "a"|"b", "E": [...]} or {"slot": ..., "preset": NAME}:
-//                          sets the light, answers with its judge numbers (as GET /api/judge)
-//   GET  /api/judge?slot=a {"slot", "judge": toJson(JudgeScore) or null, "auto_exposure"}
-//                          (POST /api/light answers the same without "auto_exposure")
-//   GET  /api/image.png?slot=a&exposure=X   T·E's luminance, ×X, sRGB-encoded 8-bit gray PNG
-//   GET  /api/overlay.png  the defect regions' outlines as RGBA (404 without regions)
-//   GET  /api/lamps?slot=a {"slot", "lamps": [lamp...], "distance_mm"}: the lamps the slot's
-//                          light is made of (empty when it is painted or a preset without lamps)
-//   POST /api/lamps        {"slot", "lamps": [lamp...]}: the light becomes the lamps rasterized
-//                          into the basis (scene/Lamp.h LampRasterizer, default quadrature);
-//                          answers as POST /api/light. A lamp: {"kind": disk|bar|ring,
-//                          "azimuth_deg", "elevation_deg" in [-90, 90], "size_deg" (Lamp::size:
-//                          disk radius, bar half-length, ring half-height; (0, 90]),
-//                          "width_deg" (bar half-width, (0, 90]), "roll_deg", "radiance" in
-//                          [0, 1e6]}; at most kViewerMaxLamps.
-//   POST /api/optimize     {"slot", "iterations"?: N}: starts optimize's search (app/pipeline/Search.h,
-//                          optimize's default method and objective, below) on T from the slot's
-//                          current light, in a background thread, one at a time (409 while one
-//                          runs); {"stop": true} stops it at its next iteration (the best
-//                          iterate so far is kept, as optimize does on Ctrl-C)
-//   GET  /api/optimize     {"state": idle|running|done|stopped|failed, "slot", "iteration",
-//                          "budget", "loss", "initial_loss", "objective", "method", "seconds",
-//                          "run" (counts runs), "history" [[iteration, loss]...], "error"}; when
-//                          a run ends its E* becomes the slot's light (its lamps are dropped)
-//   POST /api/save         {"slot": "a", "name": "NAME.exr"}: writes E as OUTDIR/NAME.exr and
-//                          T·E as OUTDIR/NAME-render.exr; {"slot", "name": "NAME.json"}: the
-//                          slot's lamps as lamps.json (io/LampsFile.h). Atomic (io/AtomicFile.h);
-//                          NAME: letters, digits, - _ . and nothing else (no paths).
+// The page's API, its router and the page: app/viewer/ViewerApi.h.
+//
 // CONVENTION: the server never writes outside ViewerOptions::outDir.
 //
 // The optimizer from the current light: on an optimize OUTDIR, the objective that made the
@@ -90,10 +60,6 @@
 
 namespace sl {
 
-/// Request limits: bodies, paths and query values longer than these are refused (400/413).
-inline constexpr size_t kViewerMaxBody = 1 << 20;
-inline constexpr size_t kViewerMaxPath = 256;
-inline constexpr size_t kViewerMaxQueryValue = 64;
 /// The largest texel value a light may hold.
 inline constexpr double kViewerMaxTexel = 1e6;
 /// The most lamps a light may have.
@@ -120,26 +86,14 @@ struct ViewerOptions {
 /// The objective that made an optimize output, as the viewer reads it back.
 struct ViewerObjective {
     ObjectiveKind kind = ObjectiveKind::Unbiased;
-    ObjectiveOptions options;                 // λ, smooth_abs (summary.json)
-    std::vector<uint8_t> mask;                // the loss mask (mask.png; empty: the part)
-    std::vector<uint8_t> defects, reference;  // the defects objective's regions (app/pipeline/Truth.h)
+    ObjectiveOptions options;   // λ, smooth_abs (summary.json)
+    std::vector<uint8_t> mask;  // the loss mask (mask.png; empty: the part)
+    std::vector<uint8_t> defects,
+        reference;  // the defects objective's regions (app/pipeline/Truth.h)
 };
 /// Reads it from an optimize OUTDIR (summary.json "objective", "lambda", "smooth_abs", mask.png,
 /// the region files) for a T of width×height; InputError naming the file when one is unfit.
 ViewerObjective readViewerObjective(const std::filesystem::path& outDir, int width, int height);
-
-struct ViewerRequest {
-    std::string method;  // "GET" or "POST"
-    std::string path;    // "/api/image.png"
-    std::map<std::string, std::string> query;
-    std::string body;
-};
-
-struct ViewerResponse {
-    int status = 200;
-    std::string contentType = "application/json";
-    std::string body;
-};
 
 /// What GET /api/optimize reports.
 struct ViewerOptimizeStatus {
@@ -252,24 +206,9 @@ class ViewerSession {
     void runOptimize(int slot, std::vector<double> start, int iterations);
 };
 
-/// The slot a query or body names: "a" (or missing) → 0, "b" → 1; InputError otherwise.
-int viewerSlot(const std::string& text);
-
 /// Checks a file name for POST /api/save: 1..64 characters of letters, digits, '-', '_', '.',
 /// not starting with '.', no "..", ending in `extension` (".exr" or ".json"), no path
 /// separators (InputError naming the fix).
 void checkViewerFileName(const std::string& name, const std::string& extension = ".exr");
-
-/// A lamp of the API (degrees, see above) and back; fromJson validates (InputError naming
-/// `where` and the field).
-nlohmann::ordered_json viewerLampJson(const Lamp& lamp);
-Lamp viewerLampFromJson(const nlohmann::ordered_json& j, const std::string& where);
-
-/// Answers one request (locks the session's mutex). Never throws: bad input is 400 with
-/// {"error": message}, an unknown path 404, anything else 500.
-ViewerResponse handleViewerRequest(ViewerSession& session, const ViewerRequest& request);
-
-/// The page (embedded at build time from src/app/viewer/ViewerPage.html).
-const std::string& viewerPageHtml();
 
 }  // namespace sl

@@ -1,4 +1,4 @@
-#include "app/viewer/Viewer.h"
+#include "app/viewer/ViewerSession.h"
 
 #include <unistd.h>
 
@@ -8,7 +8,6 @@
 #include <numbers>
 #include <sstream>
 
-#include "app/jobs/OptimizeJob.h"
 #include "app/pipeline/Defaults.h"
 #include "app/pipeline/JudgeEstimate.h"
 #include "app/pipeline/LossMask.h"
@@ -523,14 +522,13 @@ void ViewerSession::runOptimize(int slot, std::vector<double> start, int iterati
     try {
         const TransportMatrix& t = transport();
         const Stopwatch clock;
-        // optimize's defaults: objective, method and budget (app/pipeline/Defaults.h), λ and loss
-        // mask (app/jobs/OptimizeJob.h).
-        const OptimizeJobOptions job;
+        // optimize's defaults: objective, method, budget and λ (app/pipeline/Defaults.h), and
+        // its default loss mask (the part: app/pipeline/LossMask.h) and objective options.
         SearchInputs si;
         si.set = {&t};
-        si.mask = lossMask(job.mask, t, nullptr, job.scratch).pixels;
-        si.objective = job.objective;
-        si.objective.lambda = job.lambdas.front();
+        si.mask = lossMask(LossMaskSpec{}, t, nullptr, ScratchMapOptions{}).pixels;
+        si.objective = ObjectiveOptions{};
+        si.objective.lambda = optimizeDefaults().lambda;
         const bool labelled =
             std::any_of(labels_.begin(), labels_.end(), [](uint8_t v) { return v != 0; });
         ObjectiveKind kind = defaultObjective(labelled, t.planes);
