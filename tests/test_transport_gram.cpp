@@ -13,6 +13,7 @@
 
 #include "TestUtil.h"
 #include "app/pipeline/Cache.h"
+#include "app/pipeline/Search.h"
 #include "core/Rng.h"
 #include "io/GramFile.h"
 #include "objective/TransportLoss.h"
@@ -356,4 +357,36 @@ TEST(TransportGram, ACachedGramIsStoredOnceAndReadByTheNextLossBitForBit) {
     EXPECT_FALSE(cachedGram(dir.path(), "", third));
     EXPECT_EQ(clearCache(dir.path()).grams, 1u);
     EXPECT_EQ(cacheContents(dir.path()).grams, 0u);
+}
+
+TEST(TransportGram, ASearchStoresTheGramAndTheNextSearchReadsItForTheSameLight) {
+    // app/pipeline/Search.h: a search given the cache folder and T's fingerprint builds the
+    // Gram before its first evaluation and stores it; the next search reads it and finds the
+    // same E* bit for bit; a search without the cache reads the products for its first
+    // evaluations (Auto) and finds it to rounding.
+    auto s = smallScene(19);
+    const TransportMatrix t = halves(*s, 1);
+    test::TempDir dir("gramsearch");
+    SearchInputs in;
+    in.set = {&t};
+    in.mask = t.objectMask;
+    in.objective.lambda = 3;
+    SearchOptions so;
+    so.objective = ObjectiveKind::Unbiased;
+    so.optimizer.method = OptimizerMethod::Lbfgs;
+    so.optimizer.iterations = 300;
+    const SearchResult plain = search(in, so);
+    EXPECT_EQ(cacheContents(dir.path()).grams, 0u);
+    in.gramCache = dir.path();
+    in.fingerprint = "00112233445566778899aabbccddeeff";
+    const SearchResult cold = search(in, so);
+    EXPECT_EQ(cacheContents(dir.path()).grams, 1u);
+    const SearchResult warm = search(in, so);
+    EXPECT_EQ(cacheContents(dir.path()).grams, 1u);
+    ASSERT_EQ(cold.e.size(), warm.e.size());
+    EXPECT_EQ(0, std::memcmp(cold.e.data(), warm.e.data(), cold.e.size() * sizeof(double)));
+    EXPECT_EQ(cold.optimizer.evaluations, warm.optimizer.evaluations);
+    EXPECT_GT(cold.optimizer.evaluations, kAutoSlicesAfter);
+    EXPECT_NEAR(cold.training.total, plain.training.total, 1e-9 * std::abs(plain.training.total));
+    EXPECT_LE(maxRelDiff(cold.e, plain.e), 1e-4);
 }
