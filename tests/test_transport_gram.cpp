@@ -8,9 +8,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 
 #include "TestUtil.h"
+#include "app/pipeline/Cache.h"
+#include "app/pipeline/Search.h"
 #include "core/Rng.h"
+#include "io/GramFile.h"
 #include "objective/TransportLoss.h"
 #include "objective/UnbiasedObjective.h"
 #include "render/Render.h"
@@ -257,4 +262,131 @@ TEST(TransportGram, LossesOnTheSameTAndMaskShareOneGram) {
     EXPECT_EQ(lb.gram().pairForm(E, {}), own.pairForm(E, {}));
     EXPECT_TRUE(std::equal(lb.gram().pairMatrix().begin(), lb.gram().pairMatrix().end(),
                            own.pairMatrix().begin(), own.pairMatrix().end()));
+}
+
+TEST(TransportGram, AGramFileReadsBackBitForBitUnderItsKeyOnly) {
+    // io/GramFile.h: the stored matrices are the built ones, bit for bit; another key, another
+    // texel count, a damaged or cut file read as nothing.
+    auto s = smallScene(17);
+    const TransportMatrix t = halves(*s, 1);
+    const TransportGram built(t, holedMask(t), true);
+    test::TempDir dir("gramfile");
+    const std::filesystem::path file = dir.path() / "g.gram";
+    const std::string key(32, 'a'), other(32, 'b');
+    writeGramFile(file, key, built);
+    EXPECT_EQ(peekGramFile(file), key);
+    const auto read = readGramFile(file, key, t.cols());
+    ASSERT_TRUE(read.has_value());
+    EXPECT_TRUE(std::equal(read->seen().begin(), read->seen().end(), built.seen().begin(),
+                           built.seen().end()));
+    ASSERT_EQ(read->pairMatrix().size(), built.pairMatrix().size());
+    EXPECT_EQ(0, std::memcmp(read->pairMatrix().data(), built.pairMatrix().data(),
+                             built.pairMatrix().size_bytes()));
+    EXPECT_EQ(0, std::memcmp(read->productMatrix().data(), built.productMatrix().data(),
+                             built.productMatrix().size_bytes()));
+    const std::vector<double> E = randomVec(t.cols(), 8);
+    EXPECT_EQ(read->pairForm(E, {}), built.pairForm(E, {}));
+    EXPECT_EQ(read->productForm(E, {}), built.productForm(E, {}));
+    EXPECT_FALSE(readGramFile(file, other, t.cols()));
+    EXPECT_FALSE(readGramFile(file, key, t.cols() + 1));
+    EXPECT_FALSE(readGramFile(dir.path() / "none.gram", key, t.cols()));
+    // One flipped byte in P, then the file cut short.
+    std::string bytes;
+    {
+        std::ifstream in(file, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    auto rewrite = [&](const std::string& b) {
+        std::ofstream out(file, std::ios::binary | std::ios::trunc);
+        out.write(b.data(), static_cast<std::streamsize>(b.size()));
+    };
+    std::string damaged = bytes;
+    damaged[bytes.size() / 2] ^= 0x10;
+    rewrite(damaged);
+    EXPECT_FALSE(readGramFile(file, key, t.cols()));
+    rewrite(bytes.substr(0, bytes.size() - 9));
+    EXPECT_FALSE(readGramFile(file, key, t.cols()));
+    rewrite("not a gram file at all, just text of some length");
+    EXPECT_EQ(peekGramFile(file), "");
+}
+
+TEST(TransportGram, ACachedGramIsStoredOnceAndReadByTheNextLossBitForBit) {
+    // app/pipeline/Cache.h cachedGram: the first loss builds and stores T's Gram, a loss of a
+    // later run (none alive in between) reads it; both evaluate to the same bits; the cache
+    // lists, trims and clears the file with the matrices.
+    auto s = smallScene(17);
+    const TransportMatrix t = halves(*s, 1);
+    UnbiasedObjective obj(t.width, t.height, t.objectMask, ObjectiveOptions{});
+    test::TempDir dir("gramcache");
+    const std::string fp = "0123456789abcdef0123456789abcdef";
+    const std::vector<double> e = randomVec(t.cols(), 6);
+    std::vector<double> g0(e.size()), g1(e.size());
+    double l0 = 0, l1 = 0;
+    {
+        TransportLoss first(t, obj, false);
+        first.setLayout(TransportLayout::Gram);
+        ASSERT_TRUE(first.gramPays());
+        const auto held = cachedGram(dir.path(), fp, first);
+        ASSERT_TRUE(held);
+        EXPECT_EQ(held.get(), &first.gram());
+        l0 = first.evaluate(e, g0).total;
+    }
+    const CacheContents listed = cacheContents(dir.path());
+    EXPECT_EQ(listed.grams, 1u);
+    EXPECT_NE(describeCache(listed).find("1 Gram matrix"), std::string::npos);
+    {
+        TransportLoss second(t, obj, false);
+        second.setLayout(TransportLayout::Gram);
+        EXPECT_FALSE(second.gramIfBuilt());
+        const auto held = cachedGram(dir.path(), fp, second);
+        ASSERT_TRUE(held);
+        EXPECT_EQ(held.get(), &second.gram());
+        EXPECT_FALSE(second.adoptGram(held));  // it has one already
+        l1 = second.evaluate(e, g1).total;
+    }
+    EXPECT_EQ(l0, l1);
+    EXPECT_EQ(0, std::memcmp(g0.data(), g1.data(), g0.size() * sizeof(double)));
+    // Another fingerprint or pair mask is another key.
+    UnbiasedObjective holed(t.width, t.height, holedMask(t), ObjectiveOptions{});
+    const TransportLoss third(t, holed, false);
+    EXPECT_NE(third.gramKey(fp), TransportLoss(t, obj, false).gramKey(fp));
+    EXPECT_NE(TransportLoss(t, obj, false).gramKey(fp),
+              TransportLoss(t, obj, false).gramKey(std::string(32, 'f')));
+    // No folder or no fingerprint: nothing kept.
+    EXPECT_FALSE(cachedGram({}, fp, third));
+    EXPECT_FALSE(cachedGram(dir.path(), "", third));
+    EXPECT_EQ(clearCache(dir.path()).grams, 1u);
+    EXPECT_EQ(cacheContents(dir.path()).grams, 0u);
+}
+
+TEST(TransportGram, ASearchStoresTheGramAndTheNextSearchReadsItForTheSameLight) {
+    // app/pipeline/Search.h: a search given the cache folder and T's fingerprint builds the
+    // Gram before its first evaluation and stores it; the next search reads it and finds the
+    // same E* bit for bit; a search without the cache reads the products for its first
+    // evaluations (Auto) and finds it to rounding.
+    auto s = smallScene(19);
+    const TransportMatrix t = halves(*s, 1);
+    test::TempDir dir("gramsearch");
+    SearchInputs in;
+    in.set = {&t};
+    in.mask = t.objectMask;
+    in.objective.lambda = 3;
+    SearchOptions so;
+    so.objective = ObjectiveKind::Unbiased;
+    so.optimizer.method = OptimizerMethod::Lbfgs;
+    so.optimizer.iterations = 300;
+    const SearchResult plain = search(in, so);
+    EXPECT_EQ(cacheContents(dir.path()).grams, 0u);
+    in.gramCache = dir.path();
+    in.fingerprint = "00112233445566778899aabbccddeeff";
+    const SearchResult cold = search(in, so);
+    EXPECT_EQ(cacheContents(dir.path()).grams, 1u);
+    const SearchResult warm = search(in, so);
+    EXPECT_EQ(cacheContents(dir.path()).grams, 1u);
+    ASSERT_EQ(cold.e.size(), warm.e.size());
+    EXPECT_EQ(0, std::memcmp(cold.e.data(), warm.e.data(), cold.e.size() * sizeof(double)));
+    EXPECT_EQ(cold.optimizer.evaluations, warm.optimizer.evaluations);
+    EXPECT_GT(cold.optimizer.evaluations, kAutoSlicesAfter);
+    EXPECT_NEAR(cold.training.total, plain.training.total, 1e-9 * std::abs(plain.training.total));
+    EXPECT_LE(maxRelDiff(cold.e, plain.e), 1e-4);
 }

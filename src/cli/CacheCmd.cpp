@@ -31,6 +31,9 @@ int runCache(const CacheArgs& a) {
         if (removed.lights > 0)
             lights = " and " + std::to_string(removed.lights) + " derived light" +
                      (removed.lights == 1 ? "" : "s");
+        if (removed.grams > 0)
+            lights += " and " + std::to_string(removed.grams) + " Gram matri" +
+                      (removed.grams == 1 ? "x" : "ces");
         std::printf("removed %zu transport matri%s%s (%.1f MB) from %s\n", removed.files,
                     removed.files == 1 ? "x" : "ces", lights.c_str(),
                     static_cast<double>(removed.bytes) / 1e6, dir.string().c_str());

@@ -191,8 +191,12 @@ class MemoryStream : public Imf::OStream {
     size_t pos_ = 0;
 };
 
-/// PNG files: zlib's default level (OpenImageIO's, which wrote them before).
+/// 16-bit PNG files (data: height maps): zlib's default level (OpenImageIO's, which wrote them
+/// before).
 constexpr int kPngFileLevel = 6;
+/// 8-bit previews and masks: zlib's fastest level. The same pixels; level 6 spent ~5 % of the CPU
+/// of a run on a cached T in deflate (issue 32, sixth pass).
+constexpr int kPngPreviewLevel = 1;
 
 void writePngFile(const fs::path& file, const std::string& encoded) {
     writeBytesAtomically(file, encoded.data(), encoded.size());
@@ -304,7 +308,7 @@ void writePng(const fs::path& file, const Image& img, float exposure) {
         px[k] = static_cast<uint8_t>(std::lround(e * 255.0f));
     }
     writePngFile(file, encodePng(px.data(), img.width, img.height, img.channels, 8, PngColour::Srgb,
-                                 kPngFileLevel));
+                                 kPngPreviewLevel));
 }
 
 void writePng16(const fs::path& file, const Image& img) {
@@ -331,7 +335,7 @@ void writeMaskPng(const fs::path& file, const std::vector<uint8_t>& mask, int w,
                                             std::to_string(mask.size()) + " bytes, " +
                                             std::to_string(w) + "x" + std::to_string(h) +
                                             " needs " + std::to_string(static_cast<size_t>(w) * h));
-    writePngFile(file, encodePng(mask.data(), w, h, 1, 8, PngColour::Linear, kPngFileLevel));
+    writePngFile(file, encodePng(mask.data(), w, h, 1, 8, PngColour::Linear, kPngPreviewLevel));
 }
 
 }  // namespace sl

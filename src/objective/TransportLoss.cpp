@@ -5,11 +5,14 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <mutex>
+#include <sstream>
 #include <stdexcept>
 
 #include "core/Error.h"
+#include "core/Hash.h"
 
 namespace sl {
 
@@ -35,6 +38,7 @@ struct TransportLoss::SlicesCache {
 struct TransportLoss::GramCache {
     std::once_flag once, decided;
     std::shared_ptr<const TransportGram> gram;
+    std::atomic<bool> ready{false};  // gram is set (read without the once flag)
     bool pays = false;
 };
 
@@ -53,18 +57,37 @@ struct GramKey {
 std::mutex gramRegistryMutex;
 std::vector<std::pair<GramKey, std::weak_ptr<const TransportGram>>> gramRegistry;
 
+/// The registry's Gram for (t, mask, products): a live one, else `adopt` when given (matrices
+/// built before), else one built now.
 std::shared_ptr<const TransportGram> sharedGram(const TransportMatrix& t,
-                                                std::span<const uint8_t> mask, bool products) {
+                                                std::span<const uint8_t> mask, bool products,
+                                                std::shared_ptr<const TransportGram> adopt = {}) {
     GramKey key{&t, t.nnz(), std::vector<uint8_t>(mask.begin(), mask.end()), products};
     const std::lock_guard lock(gramRegistryMutex);
     std::erase_if(gramRegistry, [](const auto& e) { return e.second.expired(); });
     for (const auto& [k, g] : gramRegistry)
         if (k == key)
             if (auto shared = g.lock()) return shared;
-    auto g = std::make_shared<const TransportGram>(t, mask, products, t.threads);
+    auto g = adopt ? std::move(adopt)
+                   : std::make_shared<const TransportGram>(t, mask, products, t.threads);
     gramRegistry.emplace_back(std::move(key), g);
     return g;
 }
+
+/// The registry's live Gram for (t, mask, products), or null.
+std::shared_ptr<const TransportGram> liveGram(const TransportMatrix& t,
+                                              std::span<const uint8_t> mask, bool products) {
+    const GramKey key{&t, t.nnz(), std::vector<uint8_t>(mask.begin(), mask.end()), products};
+    const std::lock_guard lock(gramRegistryMutex);
+    for (const auto& [k, g] : gramRegistry)
+        if (k == key)
+            if (auto shared = g.lock()) return shared;
+    return nullptr;
+}
+
+/// The revision of TransportGram's build (its sums' order): a stored Gram of another revision
+/// is not read (gramKey).
+constexpr int kGramRevision = 1;
 
 }  // namespace
 
@@ -170,15 +193,55 @@ bool TransportLoss::gramPays() const {
 const TransportGram& TransportLoss::gram() const {
     if (!gramEligible())
         throw std::logic_error("TransportLoss::gram: the loss is not quadratic in T's halves");
-    std::call_once(gram_->once,
-                   [&] { gram_->gram = sharedGram(t_, unb_->pairMask(), unb_->usesProducts()); });
+    std::call_once(gram_->once, [&] {
+        gram_->gram = sharedGram(t_, unb_->pairMask(), unb_->usesProducts());
+        gram_->ready = true;
+    });
     return *gram_->gram;
+}
+
+std::string TransportLoss::gramKey(const std::string& fingerprint) const {
+    if (!gramEligible())
+        throw std::logic_error("TransportLoss::gramKey: the loss is not quadratic in T's halves");
+    const std::span<const uint8_t> mask = unb_->pairMask();
+    std::ostringstream what;
+    what << "gram " << kGramRevision << "; T " << fingerprint << "; " << t_.rows() << "x"
+         << t_.cols() << ", nnz " << t_.nnz() << ", channels " << t_.channels << "; products "
+         << unb_->usesProducts() << "; pairs " << toHex(hash64(mask.data(), mask.size()));
+    const std::string w = what.str();
+    return toHex(hash64(w.data(), w.size(), 1)) + toHex(hash64(w.data(), w.size(), 2));
+}
+
+bool TransportLoss::adoptGram(std::shared_ptr<const TransportGram> g) const {
+    if (!g || !gramEligible() || g->cols() != t_.cols() ||
+        (unb_->usesProducts() && !g->hasProducts()))
+        return false;
+    bool adopted = false;
+    std::call_once(gram_->once, [&] {
+        gram_->gram = sharedGram(t_, unb_->pairMask(), unb_->usesProducts(), std::move(g));
+        gram_->ready = true;
+        adopted = true;
+    });
+    return adopted;
+}
+
+bool TransportLoss::shareHeldGram() const {
+    if (!gramEligible() || gram_->ready) return gram_->ready;
+    auto held = liveGram(t_, unb_->pairMask(), unb_->usesProducts());
+    return held && adoptGram(std::move(held));
+}
+
+std::shared_ptr<const TransportGram> TransportLoss::gramIfBuilt() const {
+    return gram_->ready ? gram_->gram : nullptr;
 }
 
 const TransportGram* TransportLoss::evaluationGram() const {
     if (!gramEligible()) return nullptr;
     if (layout_ == TransportLayout::Gram) return &gram();
-    if (layout_ == TransportLayout::Auto && evaluations_ >= kAutoSlicesAfter && gramPays())
+    // Auto: once the evaluations so far would have paid for the build, or at once when this
+    // loss has its Gram already (built for it or adopted: nothing left to pay).
+    if (layout_ == TransportLayout::Auto && (gram_->ready || evaluations_ >= kAutoSlicesAfter) &&
+        gramPays())
         return &gram();
     return nullptr;
 }

@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "core/Communicator.h"
@@ -68,6 +69,21 @@ class TransportLoss {
     /// shared with every other loss on the same T and pair mask alive in the process (a lamps
     /// run's E* search and its fit build them once).
     const TransportGram& gram() const;
+    /// The identity of gram() for a store of it (io/GramFile.h): T's `fingerprint` (its
+    /// provenance's: every input of T), T's shape, this loss's pair mask and whether it needs
+    /// Q, and the build's revision, as 32 hex digits. Needs gramEligible().
+    std::string gramKey(const std::string& fingerprint) const;
+    /// Installs matrices built before on this loss's T and pair mask (a stored copy of gram(),
+    /// bit for bit), shared as gram() is: this loss and every other on the same T and mask
+    /// read them instead of building their own while one holds them. False (nothing installed)
+    /// when this loss has its Gram already, is not eligible, or they do not fit (another
+    /// texel count; Q missing where the objective needs it).
+    bool adoptGram(std::shared_ptr<const TransportGram> gram) const;
+    /// Whether this loss has its Gram matrices now: its own, or adopted from another loss on
+    /// the same T and pair mask that holds them (then gram() costs nothing).
+    bool shareHeldGram() const;
+    /// The Gram matrices this loss built or adopted (null when none yet).
+    std::shared_ptr<const TransportGram> gramIfBuilt() const;
 
     /// The same loss for an E that is zero outside the texels `active` (a gray E), through
     /// `columns` (a TransportColumns of this loss's matrix): the products read only the active
@@ -123,7 +139,8 @@ class TransportLoss {
     std::shared_ptr<GramCache> gram_;
     mutable std::vector<double> pe_, qe_;  // P·E, Q·E of a Gram evaluation
     /// The Gram matrices an evaluation reads, or nullptr for the products (for Auto: from the
-    /// kAutoSlicesAfter-th evaluation on, counted by productSlices()).
+    /// kAutoSlicesAfter-th evaluation on, counted by productSlices(), or from the first when
+    /// this loss has them already).
     const TransportGram* evaluationGram() const;
     LossParts evaluateGram(const TransportGram& g, std::span<const double> E,
                            std::span<const uint16_t> active, bool onActive,

@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "core/Color.h"
 #include "transport/BlockParallel.h"
@@ -147,6 +148,19 @@ TransportGram::TransportGram(const TransportMatrix& t, std::span<const uint8_t> 
     };
     symmetrise(p_);
     if (products) symmetrise(q_);
+}
+
+TransportGram::TransportGram(size_t cols, std::vector<uint16_t> seen, std::vector<double> p,
+                             std::vector<double> q)
+    : n_(cols), m_(seen.size()), seen_(std::move(seen)), p_(std::move(p)), q_(std::move(q)) {
+    if (p_.size() != m_ * m_ || (!q_.empty() && q_.size() != m_ * m_))
+        throw std::invalid_argument("TransportGram: the matrices do not match the seen texels");
+    index_.assign(n_, -1);
+    for (size_t k = 0; k < m_; ++k) {
+        if (seen_[k] >= n_ || (k > 0 && seen_[k] <= seen_[k - 1]))
+            throw std::invalid_argument("TransportGram: seen texels not ascending within cols");
+        index_[seen_[k]] = static_cast<int32_t>(k);
+    }
 }
 
 double TransportGram::form(const std::vector<double>& m, std::span<const double> E,

@@ -39,6 +39,11 @@ class TransportGram {
     /// part in pairs; products: also build Q (R's matrix). threads: 0 = all.
     TransportGram(const TransportMatrix& t, std::span<const uint8_t> pairMask, bool products,
                   int threads = 0);
+    /// The matrices as built before (a stored copy, io/GramFile.h): cols texels, the seen ones
+    /// (ascending, each < cols), P and Q (seen.size() squared each, row-major; q empty: no Q).
+    /// std::invalid_argument when the parts do not fit together.
+    TransportGram(size_t cols, std::vector<uint16_t> seen, std::vector<double> p,
+                  std::vector<double> q);
 
     /// Multiply-adds a build of P (and Q when products) costs on t: what a caller weighs against
     /// the evaluations it saves.

@@ -42,7 +42,9 @@ namespace sl {
 /// 7.0 GB on CSR; the copy would take it past 8 GB). Gram: a loss quadratic in T's halves
 /// (objective/HalfImageObjective.h) is evaluated through T's Gram matrices
 /// (transport/TransportGram.h), any other as Auto; Auto does the same from its
-/// kAutoSlicesAfter-th evaluation on when the build pays (TransportLoss::gramPays).
+/// kAutoSlicesAfter-th evaluation on when the build pays (TransportLoss::gramPays), and from
+/// the first when the loss has its Gram already (built, or read from the cache:
+/// TransportLoss::adoptGram).
 enum class TransportLayout { Csr, Slices, Auto, Gram };
 inline constexpr int kAutoSlicesAfter = 16;
 inline constexpr size_t kAutoSlicesMaxBytes = size_t{1} << 30;

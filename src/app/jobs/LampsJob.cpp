@@ -141,11 +141,16 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
             in.defects = std::move(regions.defects);
             in.reference = std::move(regions.reference);
         }
+        in.gramCache = cacheDir;  // E*'s search reads the Gram the fit holds (below)
+        in.fingerprint = job.transport.file.provenance.fingerprint;
         job.objective = kind;
         const ObjectiveOnT objective = objectiveOnT(kind, t, in, o.objective);
-        // T's Gram matrices, built once for E*'s search and the fit: a loss on the same T and
-        // mask shares them while one holds them (objective/TransportLoss.h gram()).
-        if (objective.loss->gramPays()) objective.loss->gram();
+        // T's Gram matrices, built once for E*'s search and the fit (or read from the cache,
+        // app/pipeline/Cache.h cachedGram): a loss on the same T and mask shares them while one
+        // holds them (objective/TransportLoss.h gram()).
+        if (!cachedGram(cacheDir, job.transport.file.provenance.fingerprint, *objective.loss) &&
+            objective.loss->gramPays())
+            objective.loss->gram();
 
         // E*.
         if (o.from.empty()) {

@@ -477,6 +477,8 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
     si.defects = in.defects;
     si.reference = in.reference;
     si.shard = in.shard;
+    si.gramCache = p.cacheDir;  // T's Gram matrices kept beside T
+    si.fingerprint = job.transport.file.provenance.fingerprint;
     const ObjectiveOnT own = objectiveOnT(in.kind, t, si, oo);
     const TransportLoss& loss = *own.loss;
     std::unique_ptr<HeldOutScorer> scorer;

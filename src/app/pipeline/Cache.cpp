@@ -13,7 +13,9 @@
 #include <vector>
 
 #include "io/AtomicFile.h"
+#include "io/GramFile.h"
 #include "io/TransportFile.h"
+#include "objective/TransportLoss.h"
 
 namespace sl {
 
@@ -68,13 +70,29 @@ bool isLightFile(const fs::path& p) {
     return in.read(got.data(), static_cast<std::streamsize>(got.size())) && got == head;
 }
 
+constexpr std::string_view kGramPrefix = "gram-", kGramExt = ".gram";
+
+/// gram-<key>.gram whose header holds that key (io/GramFile.h peekGramFile).
+bool isGramFile(const fs::path& p) {
+    const std::string name = p.filename().string();
+    if (name.size() != kGramPrefix.size() + 32 + kGramExt.size() ||
+        name.rfind(kGramPrefix, 0) != 0 || !name.ends_with(kGramExt))
+        return false;
+    const std::string key = name.substr(kGramPrefix.size(), 32);
+    return hexDigits(key) && peekGramFile(p) == key;
+}
+
+fs::path gramPath(const fs::path& dir, const std::string& key) {
+    return dir / (std::string(kGramPrefix) + key + std::string(kGramExt));
+}
+
 /// A file this cache wrote, by its name and its content, never by the name alone:
 /// transport-<fingerprint>.tm whose header holds that fingerprint (the cache names each matrix
 /// by it), or the temporary of one while written (io/AtomicFile.h:
 /// .transport-<fingerprint>.tmp-<pid>-<n>.tm) that is empty or starts as a .tm file does; or a
-/// derived light, light-<key>.json holding that key.
+/// derived light, light-<key>.json holding that key; or a Gram file, gram-<key>.gram holding it.
 bool isCacheFile(const fs::path& p) {
-    if (isLightFile(p)) return true;
+    if (isLightFile(p) || isGramFile(p)) return true;
     const std::string name = p.filename().string();
     constexpr std::string_view kPrefix = "transport-", kExt = ".tm";
     if (name.size() > kPrefix.size() + kExt.size() && name.rfind(kPrefix, 0) == 0 &&
@@ -145,7 +163,8 @@ CacheContents cacheFiles(const fs::path& dir, Count&& count) {
         if (!e.is_regular_file(ec) || !isCacheFile(e.path())) continue;
         const uintmax_t size = e.file_size(ec);
         if (!count(e.path())) continue;
-        ++(e.path().extension() == ".tm" ? c.files : c.lights);
+        const fs::path ext = e.path().extension();
+        ++(ext == ".tm" ? c.files : ext == kGramExt ? c.grams : c.lights);
         c.bytes += size;
     }
     return c;
@@ -177,7 +196,7 @@ CacheContents trimCache(const fs::path& dir, uintmax_t maxBytes) {
         const uintmax_t size = fs::file_size(p, ec);
         if (ec) return false;
         total += size;
-        if (p.extension() == ".tm" || isLightFile(p))
+        if (p.extension() == ".tm" || p.extension() == kGramExt || isLightFile(p))
             entries.push_back({p, fs::last_write_time(p, ec), size});
         return true;
     });
@@ -190,7 +209,8 @@ CacheContents trimCache(const fs::path& dir, uintmax_t maxBytes) {
         std::error_code ec;
         if (!fs::remove(e.path, ec)) continue;
         total -= e.bytes;
-        ++(e.path.extension() == ".tm" ? removed.files : removed.lights);
+        const fs::path ext = e.path.extension();
+        ++(ext == ".tm" ? removed.files : ext == kGramExt ? removed.grams : removed.lights);
         removed.bytes += e.bytes;
     }
     return removed;
@@ -221,6 +241,29 @@ void writeCachedLight(const fs::path& dir, const std::string& key, const std::st
     }
 }
 
+std::shared_ptr<const TransportGram> cachedGram(const fs::path& dir, const std::string& fingerprint,
+                                                const TransportLoss& loss) {
+    if (dir.empty() || fingerprint.empty() || !loss.gramPays()) return nullptr;
+    if (loss.shareHeldGram()) return loss.gramIfBuilt();  // held by another loss on this T
+    const std::string key = loss.gramKey(fingerprint);
+    const fs::path file = gramPath(dir, key);
+    if (auto stored = readGramFile(file, key, loss.matrix().cols())) {
+        touchCacheFile(file);
+        loss.adoptGram(std::make_shared<const TransportGram>(std::move(*stored)));
+        spdlog::debug("T's Gram matrices from cache {}", file.string());
+        return loss.gramIfBuilt();
+    }
+    const TransportGram& built = loss.gram();
+    try {
+        std::error_code ec;
+        fs::create_directories(dir, ec);
+        writeGramFile(file, key, built);
+    } catch (const std::exception& e) {
+        spdlog::warn("cache {}: T's Gram matrices were not stored: {}", dir.string(), e.what());
+    }
+    return loss.gramIfBuilt();
+}
+
 void touchCacheFile(const fs::path& file) {
     std::error_code ec;
     fs::last_write_time(file, fs::file_time_type::clock::now(), ec);
@@ -233,6 +276,8 @@ std::string describeCache(const CacheContents& c) {
     if (c.lights > 0)
         lights = ", " + std::to_string(c.lights) + " derived light" + (c.lights == 1 ? "" : "s");
     std::snprintf(buf, sizeof buf, ": %zu transport matri%s", c.files, c.files == 1 ? "x" : "ces");
+    if (c.grams > 0)
+        lights += ", " + std::to_string(c.grams) + " Gram matri" + (c.grams == 1 ? "x" : "ces");
     std::string out = c.dir.string() + buf + lights;
     std::snprintf(buf, sizeof buf, ", %.1f MB", static_cast<double>(c.bytes) / 1e6);
     return out + buf;

@@ -1,6 +1,6 @@
 // The transport-matrix cache: where optimize and judge keep the matrices they trace from a
-// scene (transport-<fingerprint>.tm, app/pipeline/Transport.h), so a second run with the same scene,
-// camera, material, height map and sampling reads T instead of tracing it. A matrix's
+// scene (transport-<fingerprint>.tm, app/pipeline/Transport.h), so a second run with the same
+// scene, camera, material, height map and sampling reads T instead of tracing it. A matrix's
 // fingerprint covers every input that changes it, so a stale entry is never used; an entry
 // that fails to read is traced again.
 //
@@ -17,18 +17,25 @@
 // kDefaultCacheMaxBytes) when a command asks for it, least recently used matrix first (a
 // matrix's modification time is its last use: a cache hit refreshes it, touchCacheFile).
 // Beside the matrices it keeps lights derived from them (light-<key>.json: the paper's light
-// optimize computes on its T, and its specular start), so a run on the same T does not compute them again; they go with
-// the matrices (listed, trimmed and cleared alike) and are a few kB each.
+// optimize computes on its T, and its specular start), so a run on the same T does not compute them
+// again; they go with the matrices (listed, trimmed and cleared alike) and are a few kB each.
+// Beside them, T's Gram matrices (gram-<key>.gram, io/GramFile.h: the noise-unbiased objective's
+// quadratic forms, transport/TransportGram.h), so a run on a cached T does not build them again: a
+// few MB each (670² doubles on the bundled part at 256²), trimmed and cleared with the matrices.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
 namespace sl {
+
+class TransportGram;
+class TransportLoss;
 
 /// The cache's default size cap: a few 512², 1024-spp matrices of several parts.
 inline constexpr uintmax_t kDefaultCacheMaxBytes = 4'000'000'000;
@@ -47,6 +54,7 @@ struct CacheContents {
     std::filesystem::path dir;
     size_t files = 0;   // transport matrices
     size_t lights = 0;  // lights derived from them (light-<key>.json)
+    size_t grams = 0;   // their Gram matrices (gram-<key>.gram)
     uintmax_t bytes = 0;
 };
 
@@ -74,11 +82,23 @@ std::optional<std::vector<double>> readCachedLight(const std::filesystem::path& 
 void writeCachedLight(const std::filesystem::path& dir, const std::string& key,
                       const std::string& what, std::span<const double> values);
 
+/// T's Gram matrices for `loss` (TransportLoss::gram) kept in `dir` by T's `fingerprint`
+/// (TransportLoss::gramKey): those another loss on the same T holds (TransportLoss::
+/// shareHeldGram), else read from dir/gram-<key>.gram and installed in the loss
+/// (TransportLoss::adoptGram) when stored there, else built now and stored. Returns them, to be
+/// held while the losses on this T run (every loss on the same T and pair mask shares them);
+/// null, doing nothing, when the loss does not use them (not eligible, or their build does not
+/// pay: TransportLoss::gramPays) or dir or fingerprint is empty. A failed write is logged, not
+/// thrown: the cache only saves time.
+std::shared_ptr<const TransportGram> cachedGram(const std::filesystem::path& dir,
+                                                const std::string& fingerprint,
+                                                const TransportLoss& loss);
+
 /// Marks a cache file as used now (its modification time), for trimCache's order.
 void touchCacheFile(const std::filesystem::path& file);
 
-/// "DIR: 3 transport matrices, 118 MB" (", 1 derived light" after the matrices when there are
-/// any; or "no cache").
+/// "DIR: 3 transport matrices, 118 MB" (", 1 derived light" and ", 1 Gram matrix" after the
+/// matrices when there are any; or "no cache").
 std::string describeCache(const CacheContents& contents);
 
 }  // namespace sl

@@ -4,6 +4,7 @@
 #include <memory>
 #include <optional>
 
+#include "app/pipeline/Cache.h"
 #include "app/pipeline/InitialState.h"
 #include "core/Error.h"
 #include "core/Stopwatch.h"
@@ -110,6 +111,10 @@ SearchResult search(const SearchInputs& in, const SearchOptions& o) {
 
     // The final stage's losses judge the starts; earlier stages are built per run.
     StageLosses finalStage(in, o.objective, in.objective, count);
+    // set[0]'s Gram matrices from the cache when kept there; held for the whole search, so
+    // every stage's loss on set[0] reads the same ones.
+    const std::shared_ptr<const TransportGram> gram =
+        cachedGram(in.gramCache, in.fingerprint, *finalStage.parts.front().loss);
     std::vector<double> stages = o.continuation;
     stages.push_back(1.0);
 

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <span>
@@ -68,6 +69,12 @@ struct SearchInputs {
     /// Over MPI ranks: the rows of every T in `set` this rank holds (TransportLoss::distribute);
     /// default: one process, the whole T here. Every rank runs the same search in step.
     RowShard shard;
+    /// Where set[0]'s Gram matrices are kept between runs, and set[0]'s fingerprint (its
+    /// provenance's): a search whose objective reads them (TransportLoss::gramPays) reads them
+    /// from there, or builds them before its first evaluation and stores them
+    /// (app/pipeline/Cache.h cachedGram). Either empty: built by the loss as it goes, not kept.
+    std::filesystem::path gramCache;
+    std::string fingerprint;
 };
 
 struct SearchResult {
