@@ -321,6 +321,10 @@ struct DefectMap {
     // residual in sigmaLevel)
     size_t selfsimOffsets = 0, selfsimDetections = 0, selfsimRegions = 0, selfsimDropped = 0;
     double selfsimThreshold = 0;
+    // selfsim only: the texture's own tail (step 7: the threshold on a region's peak score, 0
+    // off), the regions grown and those dropped below it
+    double selfsimTextureThreshold = 0;
+    size_t selfsimCandidates = 0, selfsimDroppedTexture = 0;
     double seconds = 0;
 
     size_t markedCount() const;
