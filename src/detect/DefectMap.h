@@ -19,8 +19,8 @@
 //          detect/LayMap.h (the median along the texture's lay, thresholds against the
 //          residual's robust σ and the texture's RMS, no regions along the border);
 //   selfsim what the texture does not repeat: detect/SelfSimMap.h (each sample's copies at
-//          the texture's own offsets, their median its background, an a-contrario test on the
-//          residual at several scales);
+//          the texture's own offsets, their median its background, a-contrario tests on the
+//          residual at several scales and against the tail of the map's own regions);
 //   paper  the paper's scratch map, detect/ScratchMap.h computeScratchMap with
 //          DefectMapOptions::paper (patches whose detrended range is large).
 //
