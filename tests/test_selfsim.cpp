@@ -7,6 +7,7 @@
 // the method table has the row and detectDefects runs it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -105,7 +106,8 @@ TEST(SelfSimMap, PureTextureFalseDetectionsAverageAtMostTheNfa) {
     // residual is close to Gaussian noise, so the expected number of detections (regions holding
     // a sample with NFA <= nfa; regions of one sample count) is at most nfa
     SelfSimMapOptions o;
-    o.textureRms = 0;  // the test alone
+    o.textureRms = 0;  // the test alone (the texture's own tail, step 7, off too)
+    o.textureNfa = 0;
     o.minRegion = 1;
     constexpr int kRuns = 6;
     size_t regions = 0;
@@ -135,6 +137,76 @@ TEST(SelfSimMap, AutoOnAMeasuredTextureIsTheSelfSimMap) {
     EXPECT_EQ(machined.method, DefectMethod::Auto);
     EXPECT_FALSE(machined.measuredTexture);
     EXPECT_NE(machined.map, m.map);
+}
+
+// Step 7's threshold on peaks that are exactly exponential above z0 (their quantiles,
+// z0 + β·ln(N/(N − i − ½))): the tail above any quantile is the same exponential (memoryless),
+// its median excess is β·ln 2, so the threshold is where N·P(peak ≥ z) = nfa:
+// z0 + β·ln(N/nfa), whatever the quantile the tail is measured from (within 0.05: the
+// median of a finite sample).
+TEST(SelfSimMap, TextureTailThresholdIsWhereTheExponentialTailExpectsNfaRegions) {
+    constexpr size_t kN = 4000;
+    const double z0 = 2.5, beta = 1.7;
+    std::vector<float> peaks;
+    for (size_t i = 0; i < kN; ++i)
+        peaks.push_back(static_cast<float>(
+            z0 + beta * std::log(static_cast<double>(kN) / (static_cast<double>(kN - i) - 0.5))));
+    std::mt19937 rng(4);
+    std::shuffle(peaks.begin(), peaks.end(), rng);  // the order of the regions does not matter
+    for (double q : {0.5, 0.75, 0.9})
+        for (double nfa : {1.0, 0.1})
+            EXPECT_NEAR(textureTailThreshold(peaks, q, nfa), z0 + beta * std::log(kN / nfa), 0.05)
+                << "quantile " << q << ", nfa " << nfa;
+    EXPECT_EQ(textureTailThreshold(peaks, 0.75, 0.0), 0.0);  // off
+    peaks.resize(kTextureTailMinRegions - 1);
+    EXPECT_EQ(textureTailThreshold(peaks, 0.75, 1.0), 0.0);  // too few regions for a tail
+}
+
+// The texture's own marks are dropped, the defect is kept: striations strewn with 400
+// particles whose heights are exponential (a measured texture's heavy tail: many small, a few
+// as high as 1.5 × the striations), and one pit three times deeper than the striations. The
+// Gaussian test (step 5) and the texture's RMS (step 6) keep the highest particles; the
+// texture's own tail of the regions' peaks (step 7) drops them and keeps the pit: at most
+// the one texture region its NFA of 1 expects is left (here one particle of 400 is).
+TEST(SelfSimMap, TheTexturesOwnTailDropsItsParticlesAndKeepsThePit) {
+    std::vector<float> h = striations(11);
+    std::mt19937 rng(12);
+    std::uniform_real_distribution<double> ux(48, kW - 48), uy(48, kH - 48);
+    std::exponential_distribution<double> amplitude(1.0 / 0.2);
+    std::vector<uint8_t> particles(h.size(), 0), pitTruth(h.size(), 0);
+    for (int k = 0; k < 400; ++k) {
+        const double cx = ux(rng), cy = uy(rng), a = amplitude(rng);
+        for (int y = static_cast<int>(cy) - 4; y <= static_cast<int>(cy) + 4; ++y)
+            for (int x = static_cast<int>(cx) - 4; x <= static_cast<int>(cx) + 4; ++x) {
+                const double d2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
+                const size_t i = static_cast<size_t>(y) * kW + x;
+                h[i] += static_cast<float>(a * std::exp(-d2 / (2 * 1.2 * 1.2)));
+                if (d2 <= 2.5 * 2.5) particles[i] = 1;
+            }
+    }
+    pit(h, pitTruth, 128, 112, 6, 3.0);
+    for (size_t i = 0; i < h.size(); ++i)
+        if (pitTruth[i]) particles[i] = 0;
+    SelfSimMapOptions off;
+    off.textureNfa = 0;
+    const SelfSimMapOptions on;
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
+                     b = detectSelfSimDefects(h, kW, kH, on);
+    EXPECT_EQ(a.textureThreshold, 0.0);
+    EXPECT_GT(b.textureThreshold, b.threshold) << "the texture's tail above the Gaussian's";
+    EXPECT_GE(b.candidates, kTextureTailMinRegions);
+    const Counts pa = count(a.map, pitTruth, on.border), pb = count(b.map, pitTruth, on.border);
+    EXPECT_GE(pa.hits, pa.truth * 8 / 10) << "the pit, without step 7";
+    EXPECT_GE(pb.hits, pb.truth * 8 / 10) << "the pit, with step 7";
+    const size_t marksOff = count(a.map, particles, on.border).hits,
+                 marksOn = count(b.map, particles, on.border).hits;
+    // without step 7 the highest particles are marked; with it the pit and at most the one
+    // texture region its NFA of 1 expects
+    EXPECT_GE(a.regions, 10u) << marksOff << " samples of particles marked";
+    EXPECT_LE(b.regions, 2u) << marksOn << " samples of particles marked, " << b.droppedTexture
+                             << " regions dropped at " << b.textureThreshold << " robust sigmas";
+    EXPECT_LT(marksOn * 10, marksOff);
+    EXPECT_GT(b.droppedTexture, 0u);
 }
 
 TEST(SelfSimMap, GaussianTailInverseIsExact) {
@@ -181,6 +253,12 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o = {};
     o.tailQuantile = 1.0;
     expectNamed(o, "selfsim-tail-quantile");
+    o = {};
+    o.textureNfa = -1;
+    expectNamed(o, "selfsim-texture-nfa");
+    o = {};
+    o.textureQuantile = 1.0;
+    expectNamed(o, "selfsim-texture-quantile");
 
     EXPECT_EQ(parseDefectMethod("selfsim"), DefectMethod::SelfSim);
     EXPECT_STREQ(defectMethodName(DefectMethod::SelfSim), "selfsim");

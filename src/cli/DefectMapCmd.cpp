@@ -55,9 +55,11 @@ int runDefectMap(const DefectMapJobOptions& o) {
         std::printf(
             "  %zu texture offsets; residual sigma %.4g (height units), detection at %.3f "
             "robust sigmas (NFA); %zu samples detected, %zu regions kept, %zu at the border "
-            "dropped\n",
+            "dropped; the texture's own tail at %.3f robust sigmas (of %zu regions grown), "
+            "%zu regions below it dropped\n",
             m.selfsimOffsets, m.sigmaLevel, m.selfsimThreshold, m.selfsimDetections,
-            m.selfsimRegions, m.selfsimDropped);
+            m.selfsimRegions, m.selfsimDropped, m.selfsimTextureThreshold, m.selfsimCandidates,
+            m.selfsimDroppedTexture);
     if (s.score) {
         const DefectScore& sc = *s.score;
         std::printf("%-18s %5s %10s %10s %10s %9s %7s %7s\n", "kind", "value", "truth", "hits",
@@ -355,6 +357,13 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     c->add_option("--selfsim-drop-border-regions", q.dropBorderRegions,
                   "selfsim: drop regions that reach the border's inner line (true/false)")
+        ->capture_default_str();
+    c->add_option("--selfsim-texture-nfa", q.textureNfa,
+                  "selfsim: expected texture regions above the texture's own tail of region "
+                  "peaks (0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-texture-quantile", q.textureQuantile,
+                  "selfsim: ... the tail starting at this quantile of the regions' peaks")
         ->capture_default_str();
     c->add_option("--kernel", m.paper.kernel, "paper: moving-average window, samples")
         ->capture_default_str();

@@ -19,8 +19,8 @@
 //          detect/LayMap.h (the median along the texture's lay, thresholds against the
 //          residual's robust σ and the texture's RMS, no regions along the border);
 //   selfsim what the texture does not repeat: detect/SelfSimMap.h (each sample's copies at
-//          the texture's own offsets, their median its background, an a-contrario test on the
-//          residual at several scales);
+//          the texture's own offsets, their median its background, a-contrario tests on the
+//          residual at several scales and against the tail of the map's own regions);
 //   paper  the paper's scratch map, detect/ScratchMap.h computeScratchMap with
 //          DefectMapOptions::paper (patches whose detrended range is large).
 //
@@ -321,6 +321,10 @@ struct DefectMap {
     // residual in sigmaLevel)
     size_t selfsimOffsets = 0, selfsimDetections = 0, selfsimRegions = 0, selfsimDropped = 0;
     double selfsimThreshold = 0;
+    // selfsim only: the texture's own tail (step 7: the threshold on a region's peak score, 0
+    // off), the regions grown and those dropped below it
+    double selfsimTextureThreshold = 0;
+    size_t selfsimCandidates = 0, selfsimDroppedTexture = 0;
     double seconds = 0;
 
     size_t markedCount() const;

@@ -194,6 +194,9 @@ void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int he
     r.selfsimRegions = m.regions;
     r.selfsimDropped = m.droppedBorder;
     r.selfsimThreshold = m.threshold;
+    r.selfsimTextureThreshold = m.textureThreshold;
+    r.selfsimCandidates = m.candidates;
+    r.selfsimDroppedTexture = m.droppedTexture;
     r.markedScore = r.markedCount();
 }
 

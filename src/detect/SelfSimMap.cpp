@@ -76,6 +76,22 @@ std::vector<float> gaussianBlur(const std::vector<float>& img, int W, int H, dou
 
 }  // namespace
 
+double textureTailThreshold(std::span<const float> peaks, double quantile, double nfa) {
+    // too few responses to measure a tail on: no threshold from the texture
+    if (peaks.size() < kTextureTailMinRegions || !(nfa > 0.0)) return 0.0;
+    std::vector<float> v(peaks.begin(), peaks.end());
+    std::sort(v.begin(), v.end());
+    const size_t k =
+        std::min(v.size() - 1, static_cast<size_t>(quantile * static_cast<double>(v.size())));
+    const double u = v[k];
+    std::vector<float> excess;
+    for (size_t j = k; j < v.size(); ++j)
+        if (v[j] > u) excess.push_back(static_cast<float>(v[j] - u));
+    const double beta = excess.empty() ? 0.0 : medianOf(excess) / std::log(2.0);
+    const double tail = static_cast<double>(v.size()) * (1.0 - quantile);
+    return u + beta * std::max(0.0, std::log(tail / nfa));
+}
+
 double gaussianTailInverse(double p) {
     // Φ̄(z) = erfc(z/√2)/2 decreases in z: bisection on [0, 40]
     double lo = 0.0, hi = 40.0;
@@ -124,6 +140,12 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
                          "The default is 0 (off)");
     if (!(o.textureRms >= 0.0))
         throw inputError(option("selfsim-texture-rms"), "must be >= 0", "The default is 1");
+    if (!(o.textureNfa >= 0.0))
+        throw inputError(option("selfsim-texture-nfa"), "must be >= 0",
+                         "The default is 1 (0: off)");
+    if (!(o.textureQuantile >= 0.0 && o.textureQuantile < 1.0))
+        throw inputError(option("selfsim-texture-quantile"), "must be in [0, 1)",
+                         "The default is 0.75");
     if (!(o.growSigma > 0.0))
         throw inputError(option("selfsim-grow-sigma"), "must be > 0", "The default is 2.5");
     if (o.growScale < 0 || o.growScale >= o.scales)
@@ -370,26 +392,33 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     }
 
     // ---- step 6: regions -----------------------------------------------------------------
+    // 6a: every region the growth makes (the detector's responses all over the map) with its
+    // peak score; 6b: the texture's own tail of those peaks; 6c: the regions kept
     const float thr = static_cast<float>(out.threshold);
     const float grow = static_cast<float>(std::min(o.growSigma, out.threshold));
+    struct Region {
+        size_t begin, end;  // its samples in `members`
+        float peak;         // its largest zDetect
+        bool atBorder;
+    };
+    std::vector<Region> regions;
+    std::vector<size_t> members, stack;
     std::vector<uint8_t> seen(n, 0);
-    std::vector<size_t> stack, region;
     for (int y = b; y < H - b; ++y)
         for (int x = b; x < W - b; ++x) {
             const size_t i0 = static_cast<size_t>(y) * W + x;
             if (zDetect[i0] >= thr) ++out.detections;
             if (seen[i0] || !(zGrow[i0] >= grow)) continue;
             stack.assign(1, i0);
-            region.clear();
             seen[i0] = 1;
-            bool detected = false, atBorder = false;
+            Region reg{members.size(), 0, 0.0f, false};
             while (!stack.empty()) {
                 const size_t i = stack.back();
                 stack.pop_back();
-                region.push_back(i);
+                members.push_back(i);
                 const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
-                detected = detected || zDetect[i] >= thr;
-                if (px == b || py == b || px == W - b - 1 || py == H - b - 1) atBorder = true;
+                reg.peak = std::max(reg.peak, zDetect[i]);
+                if (px == b || py == b || px == W - b - 1 || py == H - b - 1) reg.atBorder = true;
                 for (int qy = py - 1; qy <= py + 1; ++qy)
                     for (int qx = px - 1; qx <= px + 1; ++qx) {
                         if (!inside(qx, qy)) continue;
@@ -399,22 +428,38 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                         stack.push_back(q);
                     }
             }
-            if (!detected || static_cast<int>(region.size()) < o.minRegion) continue;
-            if (o.textureRms > 0.0) {
-                float peak = 0.0f;
-                for (size_t i : region) peak = std::max(peak, std::abs(out.residual[i]));
-                if (peak < o.textureRms * out.textureRms) {
-                    ++out.droppedShallow;
-                    continue;
-                }
-            }
-            if (o.dropBorderRegions && b > 0 && atBorder) {
-                ++out.droppedBorder;
+            reg.end = members.size();
+            regions.push_back(reg);
+        }
+    out.candidates = regions.size();
+    if (o.textureNfa > 0.0) {
+        std::vector<float> peaks;
+        peaks.reserve(regions.size());
+        for (const Region& reg : regions) peaks.push_back(reg.peak);
+        out.textureThreshold = textureTailThreshold(peaks, o.textureQuantile, o.textureNfa);
+    }
+    for (const Region& reg : regions) {
+        if (!(reg.peak >= thr) || static_cast<int>(reg.end - reg.begin) < o.minRegion) continue;
+        if (o.textureRms > 0.0) {
+            float peak = 0.0f;
+            for (size_t k = reg.begin; k < reg.end; ++k)
+                peak = std::max(peak, std::abs(out.residual[members[k]]));
+            if (peak < o.textureRms * out.textureRms) {
+                ++out.droppedShallow;
                 continue;
             }
-            ++out.regions;
-            for (size_t i : region) out.map[i] = 255;
         }
+        if (reg.peak < out.textureThreshold) {
+            ++out.droppedTexture;
+            continue;
+        }
+        if (o.dropBorderRegions && b > 0 && reg.atBorder) {
+            ++out.droppedBorder;
+            continue;
+        }
+        ++out.regions;
+        for (size_t k = reg.begin; k < reg.end; ++k) out.map[members[k]] = 255;
+    }
     return out;
 }
 
