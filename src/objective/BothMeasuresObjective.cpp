@@ -65,7 +65,7 @@ MeasureAnchors measureAnchors(const TransportMatrix& t, const BothMeasuresObject
                          "'both' needs the user's lamp as the light its gains are over (" +
                              std::to_string(anchor.size()) + " values given, " +
                              std::to_string(t.cols()) + " texels)",
-                         "give the lamp with --compare, or use --defects-measure jnd");
+                         "give the lamp (" + option("compare") + "), or measure 'jnd' alone");
     MeasureAnchors a;
     TransportLoss jnd(t, objective.jnd(), rgb), ratio(t, objective.ratio(), rgb);
     jnd.distribute(shard);
