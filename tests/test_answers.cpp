@@ -796,6 +796,17 @@ TEST(OptimizeAnswers, AGivenSppIsKeptAndItsGapWarnedAbout) {
             warned |= w.get<std::string>().find("training noise") != std::string::npos;
         EXPECT_TRUE(warned) << s["warnings"].dump();
     }
+    // The defects objective (both measures) chose its answer on its gains over the lamp; the
+    // whole-image objective on the same part and truth chooses on the JND.
+    EXPECT_EQ(s["answer"]["merit"], "gain over studio preset");
+    const auto whole = dir.path() / "whole";
+    const test::RunResult u =
+        test::runCli("optimize " + (dir.path() / "scene.json").string() + " --truth " +
+                     (dir.path() / "part-truth.png").string() +
+                     " --objective unbiased --spp 4 --heldout none --no-figures --cache " +
+                     (dir.path() / "cache").string() + " -o " + whole.string() + " 2>&1");
+    ASSERT_EQ(u.exitCode, 0) << u.output;
+    EXPECT_EQ(readJson(whole / "summary.json")["answer"]["merit"], "JND");
 }
 
 // A black box (SPSA through our renderer) minimizes eq. 2 through the renderer: the summary's

@@ -666,7 +666,9 @@ void checkAnswer(const Plan& p, const Inputs& in, const OptimizeJobSummary& job,
         {"uniform-0.5", CandidateKind::Reference, std::vector<double>(in.lampE.size(), 0.5)});
     candidates.push_back({"paper's light", CandidateKind::Reference, in.paperE});
     AnswerOptions ao;
-    if (jo.objective.defectMeasure == DefectMeasure::Both) ao.gainOver = in.lampName;
+    // The defects objective on both measures chooses on its own figure; the others on the JND.
+    if (in.kind == ObjectiveKind::Defects && jo.objective.defectMeasure == DefectMeasure::Both)
+        ao.gainOver = in.lampName;
     AnswerChoice choice = chooseAnswer(validation, std::move(candidates), ao);
     choice.validationSpp = job.validation->file.provenance.spp;
     const ScoredCandidate& a = choice.answer();
