@@ -391,12 +391,12 @@ void prepareComparisons(const Plan& p, Inputs& in, const OptimizeJobSummary& job
     const TransportMatrix& t = job.transport.file.matrix;
     if (!in.sceneParts) {
         // The user's lamp: it does not depend on T (only on the env map's size).
-        const EnvMap lamp = o.compare.empty() ? studioEnvMap(t.envWidth, t.envHeight)
-                                              : lightFromSpec(o.compare, t.envWidth, t.envHeight,
-                                                              o.rgb ? 3 : 0, option("compare"));
         in.lampName = o.compare.empty() ? std::string("studio preset")
                                         : std::filesystem::path(o.compare).filename().string();
-        in.lampE = envMapToE(lamp, o.rgb ? 3 : 1);  // as the judge reads a light
+        in.lampE = o.compare.empty() ? defaultLampE(t.envWidth, t.envHeight, o.rgb)
+                                     : envMapToE(lightFromSpec(o.compare, t.envWidth, t.envHeight,
+                                                               o.rgb ? 3 : 0, option("compare")),
+                                                 o.rgb ? 3 : 1);  // as the judge reads a light
         if (!o.truth.empty()) in.truthLabels = projectTruth(*in.scene, o.truth);
         in.sceneParts = true;
     }

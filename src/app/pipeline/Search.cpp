@@ -19,6 +19,10 @@
 
 namespace sl {
 
+std::vector<double> defaultLampE(int envWidth, int envHeight, bool rgb) {
+    return envMapToE(studioEnvMap(envWidth, envHeight), rgb ? 3 : 1);
+}
+
 ObjectiveOnT objectiveOnT(ObjectiveKind kind, const TransportMatrix& t, const SearchInputs& in,
                           const ObjectiveOptions& oo) {
     ObjectiveOnT r;
@@ -47,9 +51,8 @@ ObjectiveOnT objectiveOnT(ObjectiveKind kind, const TransportMatrix& t, const Se
                     t.width, t.height, in.mask, in.defects, in.reference, oo, j);
                 // The user's lamp; without one, the studio preset (as optimize's comparison).
                 const std::vector<double> anchor =
-                    oo.anchorLight.empty()
-                        ? envMapToE(studioEnvMap(t.envWidth, t.envHeight), in.rgb ? 3 : 1)
-                        : oo.anchorLight;
+                    oo.anchorLight.empty() ? defaultLampE(t.envWidth, t.envHeight, in.rgb)
+                                           : oo.anchorLight;
                 both->setAnchors(measureAnchors(t, *both, anchor, in.rgb, in.shard));
                 r.halves = std::move(both);
             } else {

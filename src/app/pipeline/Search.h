@@ -89,6 +89,11 @@ struct SearchResult {
 
 SearchResult search(const SearchInputs& inputs, const SearchOptions& options);
 
+/// The user's lamp when none is given (optimize's comparison, the `both` measure's anchor): the
+/// studio preset on the env-map grid envWidth × envHeight, as E (with `rgb`, three values per
+/// texel) as the judge reads a light.
+std::vector<double> defaultLampE(int envWidth, int envHeight, bool rgb);
+
 /// One objective of `kind` on one estimate of T and its loss through T (the objective must
 /// outlive the loss: both are owned here). inputs: the mask, rgb and the defects' regions.
 struct ObjectiveOnT {
