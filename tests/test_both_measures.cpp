@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "AutodiffCheck.h"
+#include "DefectMeasureParts.h"
 #include "TestUtil.h"
 #include "core/Error.h"
 #include "core/Rng.h"
@@ -22,39 +23,6 @@ using namespace sl;
 
 namespace {
 
-TransportMatrix bumpyHalves(int spp) {
-    SceneDesc d;
-    d.heightmap.pitch = 0.05;
-    d.camera.origin = {0, 2, 2};
-    d.camera.width = d.camera.height = 20;
-    d.render.maxDepth = 3;
-    const Scene scene(d, 32, 32, test::bumpyHeightMap(32));
-    RenderOptions o;
-    o.spp = spp;
-    o.maxDepth = 3;
-    o.sampleSets = 2;
-    return precomputeTransport(scene, o, 1).matrix;
-}
-
-/// Two labelled stripes of columns: [4, 7) label 1, [12, 14) label 2.
-std::vector<uint8_t> twoStripes(const TransportMatrix& t) {
-    std::vector<uint8_t> m(t.rows(), 0);
-    for (int y = 0; y < t.height; ++y)
-        for (int x = 0; x < t.width; ++x)
-            m[static_cast<size_t>(y) * t.width + x] = x >= 4 && x < 7     ? 1
-                                                      : x >= 12 && x < 14 ? 2
-                                                                          : 0;
-    return m;
-}
-
-JndObjectiveOptions options(const TransportMatrix& t) {
-    JndObjectiveOptions o;
-    o.view.pixelsPerDegree = 38.8;
-    o.view.whiteLuminance = 200;
-    o.band.whiteMean = whiteFurnaceMean(t, t.objectMask);
-    return o;
-}
-
 /// A light brighter towards one side of the grid (a lamp-like anchor).
 std::vector<double> sideLight(const TransportMatrix& t) {
     std::vector<double> e(t.cols());
@@ -66,10 +34,11 @@ std::vector<double> sideLight(const TransportMatrix& t) {
 }  // namespace
 
 TEST(BothMeasuresObjective, ExactGradientMatchesAutodiff) {
-    const TransportMatrix t = bumpyHalves(8);
+    const TransportMatrix t = test::bumpyHalves(8);
     ObjectiveOptions oo;
     oo.lambda = 3;
-    BothMeasuresObjective obj(t.width, t.height, t.objectMask, twoStripes(t), {}, oo, options(t));
+    BothMeasuresObjective obj(t.width, t.height, t.objectMask, test::twoStripes(t), {}, oo,
+                              test::jndOptions(t));
     obj.setAnchors(measureAnchors(t, obj, sideLight(t), false));
     Pcg32 rng(17, 5);
     // A mid light, a dark one (the floors) and a bright one (the band's upper edge).
@@ -80,10 +49,11 @@ TEST(BothMeasuresObjective, ExactGradientMatchesAutodiff) {
 // larger, at least the larger less τ·log 2; its visibility term at the anchor light is 0 (a gain
 // of exactly 1 on both measures), and its gradient weighs the measure that gains less.
 TEST(BothMeasuresObjective, IsTheSoftMaximumOfTheTwoGainsOverTheLamp) {
-    const TransportMatrix t = bumpyHalves(8);
+    const TransportMatrix t = test::bumpyHalves(8);
     ObjectiveOptions oo;
     oo.lambda = 3;
-    BothMeasuresObjective obj(t.width, t.height, t.objectMask, twoStripes(t), {}, oo, options(t));
+    BothMeasuresObjective obj(t.width, t.height, t.objectMask, test::twoStripes(t), {}, oo,
+                              test::jndOptions(t));
     const std::vector<double> lamp = sideLight(t);
     const MeasureAnchors a = measureAnchors(t, obj, lamp, false);
     obj.setAnchors(a);

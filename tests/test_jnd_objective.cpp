@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "AutodiffCheck.h"
+#include "DefectMeasureParts.h"
 #include "TestUtil.h"
 #include "core/Error.h"
 #include "core/Rng.h"
@@ -25,49 +26,12 @@
 
 using namespace sl;
 
-namespace {
-
-/// A 20×20 view of a bumpy 32×32 part, T in two independent halves.
-TransportMatrix bumpyHalves(int spp) {
-    SceneDesc d;
-    d.heightmap.pitch = 0.05;
-    d.camera.origin = {0, 2, 2};
-    d.camera.width = d.camera.height = 20;
-    d.render.maxDepth = 3;
-    const Scene scene(d, 32, 32, test::bumpyHeightMap(32));
-    RenderOptions o;
-    o.spp = spp;
-    o.maxDepth = 3;
-    o.sampleSets = 2;
-    return precomputeTransport(scene, o, 1).matrix;
-}
-
-/// Two labelled stripes of columns: [4, 7) label 1, [12, 14) label 2.
-std::vector<uint8_t> twoStripes(const TransportMatrix& t) {
-    std::vector<uint8_t> m(t.rows(), 0);
-    for (int y = 0; y < t.height; ++y)
-        for (int x = 0; x < t.width; ++x)
-            m[static_cast<size_t>(y) * t.width + x] = x >= 4 && x < 7     ? 1
-                                                      : x >= 12 && x < 14 ? 2
-                                                                          : 0;
-    return m;
-}
-
-JndObjectiveOptions options(const TransportMatrix& t) {
-    JndObjectiveOptions o;
-    o.view.pixelsPerDegree = 38.8;
-    o.view.whiteLuminance = 200;
-    o.band.whiteMean = whiteFurnaceMean(t, t.objectMask);
-    return o;
-}
-
-}  // namespace
-
 TEST(JndObjective, ExactGradientMatchesAutodiff) {
-    const TransportMatrix t = bumpyHalves(8);
+    const TransportMatrix t = test::bumpyHalves(8);
     ObjectiveOptions oo;
     oo.lambda = 3;
-    const JndObjective obj(t.width, t.height, t.objectMask, twoStripes(t), {}, oo, options(t));
+    const JndObjective obj(t.width, t.height, t.objectMask, test::twoStripes(t), {}, oo,
+                           test::jndOptions(t));
     ASSERT_EQ(obj.labels().size(), 2u);
     Pcg32 rng(11, 3);
     // A mid light, a dark one (the dark floor and the luminance clamp) and a bright one (the
@@ -147,9 +111,9 @@ TEST(JndObjective, ABrighterPartIsSeenBetter) {
 }
 
 TEST(JndObjective, RegionsWithoutPixelsAreClearErrors) {
-    const TransportMatrix t = bumpyHalves(2);
+    const TransportMatrix t = test::bumpyHalves(2);
     const std::vector<uint8_t> none(t.rows(), 0), all(t.rows(), 1);
-    const JndObjectiveOptions o = options(t);
+    const JndObjectiveOptions o = test::jndOptions(t);
     EXPECT_THROW(JndObjective(t.width, t.height, t.objectMask, none, {}, {}, o), InputError);
     EXPECT_THROW(JndObjective(t.width, t.height, t.objectMask, all, {}, {}, o), InputError);
 }
