@@ -525,6 +525,9 @@ TEST(Answer, TheGainOverTheLampNeedsBothMeasures) {
     ASSERT_TRUE(disagree && agree) << "the test part's lights cannot tell the rules apart";
     AnswerOptions o;
     o.gainOver = "lamp";
+    // The test part shows its scratch below 1 JND under every light; the gains here are over the
+    // lamp's own JND (no floor: the next test has the default floor of 1 JND).
+    o.gainFloorJnd = 0;
     {
         const auto [a, b] = *disagree;
         const std::vector<AnswerCandidate> candidates = {
@@ -852,4 +855,42 @@ TEST(OptimizeAnswers, TheBlackBoxSummaryReportsTheLossItMinimized) {
     EXPECT_NE(refused.exitCode, 0);
     EXPECT_NE(refused.output.find("eq. 2 through the renderer"), std::string::npos)
         << refused.output;
+}
+
+// Under a lamp that shows the defects less than just noticeably (the test part shows its scratch
+// below 1 JND under every light; the lamp is the best of a few lights dimmed), the JND's gain is
+// counted from 1 JND (kGainFloorJnd), as the both measure's anchor is: a finite merit, not a gain
+// over nothing, and the answer line says so.
+TEST(Answer, AGainOverALampThatShowsNothingCountsFromOneJnd) {
+    const auto part = ScratchedPartJudge::make();
+    const Judge& jnd = *part->jndJudge;
+    // The light that shows the scratch best of a few, and that light dimmed below half of it.
+    std::vector<double> bright;
+    double best = -1;
+    for (uint64_t k = 1; k <= 8; ++k) {
+        std::vector<double> e = randomLight(1250, 60 + k);
+        const double j = answerMerit(jnd.score(e), true).value;
+        if (j > best) best = j, bright = std::move(e);
+    }
+    std::vector<double> dim = bright;
+    double lampJnd = answerMerit(jnd.score(dim), true).value;
+    for (int k = 0; k < 40 && !(lampJnd < 0.5 * best); ++k) {
+        for (double& v : dim) v *= 0.25;
+        lampJnd = answerMerit(jnd.score(dim), true).value;
+    }
+    ASSERT_LT(lampJnd, 0.5 * best) << "no dimming hides the test part's defects";
+    const AnswerMerit lit = answerMerit(jnd.score(bright), true);
+    const double lampVisibility = answerMerit(jnd.score(dim), true).visibility;
+    ASSERT_LT(best, kGainFloorJnd);
+    AnswerOptions o;
+    o.gainOver = "lamp";
+    const AnswerChoice c = chooseAnswer(
+        jnd,
+        {{"optimized", CandidateKind::Optimized, bright}, {"lamp", CandidateKind::Reference, dim}},
+        o);
+    EXPECT_NEAR(c.scored[0].merit.value,
+                std::min(lit.value / kGainFloorJnd, lit.visibility / lampVisibility), 1e-9);
+    EXPECT_NEAR(c.scored[1].merit.value, std::min(lampJnd / kGainFloorJnd, 1.0), 1e-12);
+    EXPECT_TRUE(std::isfinite(c.scored[0].merit.value));
+    EXPECT_NE(c.reason.find("counted from there"), std::string::npos) << c.reason;
 }

@@ -83,6 +83,31 @@ TEST(BothMeasuresObjective, IsTheSoftMaximumOfTheTwoGainsOverTheLamp) {
     EXPECT_THROW(measureAnchors(t, obj, std::vector<double>{}, false), InputError);
 }
 
+// Under a lamp that shows the defects less than 1 JND (the side light dimmed), the JND anchor is
+// the visibility term of 1 JND (lGrad = −2·log 1 = 0), so a light's JND gain is counted from the
+// threshold of seeing; the ratio's anchor is still the lamp's own (the ratio does not depend on
+// the light's scale, the JND does).
+TEST(BothMeasuresObjective, TheJndAnchorIsAtLeastOneJnd) {
+    const TransportMatrix t = test::bumpyHalves(8);
+    ObjectiveOptions oo;
+    BothMeasuresObjective obj(t.width, t.height, t.objectMask, test::twoStripes(t), {}, oo,
+                              test::jndOptions(t));
+    const TransportLoss jnd(t, obj.jnd(), false), ratio(t, obj.ratio(), false);
+    std::vector<double> lamp = sideLight(t);
+    for (int k = 0; k < 40 && jnd.evaluate(lamp, {}).G >= 0.5 * kGainFloorJnd; ++k)
+        for (double& v : lamp) v *= 0.25;
+    ASSERT_LT(jnd.evaluate(lamp, {}).G, 0.5 * kGainFloorJnd) << "no dimming hides the stripes";
+    const MeasureAnchors a = measureAnchors(t, obj, lamp, false);
+    EXPECT_EQ(a.jnd, -2.0 * std::log(kGainFloorJnd));
+    EXPECT_EQ(a.ratio, ratio.evaluate(lamp, {}).lGrad);
+    // Where the lamp shows them at more than 1 JND its own term is the anchor.
+    const std::vector<double> lit = sideLight(t);
+    const LossParts litJnd = jnd.evaluate(lit, {});
+    if (litJnd.G > kGainFloorJnd) {
+        EXPECT_EQ(measureAnchors(t, obj, lit, false).jnd, litJnd.lGrad);
+    }
+}
+
 TEST(BothMeasuresObjective, OptimizeRunsItOverTheLampAndRecordsTheMeasure) {
     test::TempDir dir("both-cli");
     const std::string part = (dir.path() / "part.exr").string(),

@@ -70,7 +70,8 @@ MeasureAnchors measureAnchors(const TransportMatrix& t, const BothMeasuresObject
     TransportLoss jnd(t, objective.jnd(), rgb), ratio(t, objective.ratio(), rgb);
     jnd.distribute(shard);
     ratio.distribute(shard);
-    a.jnd = jnd.evaluate(anchor, {}).lGrad;
+    // lGrad = −2·log J (objective/JndObjective.h), so J ≥ kGainFloorJnd is lGrad ≤ its value.
+    a.jnd = std::min(jnd.evaluate(anchor, {}).lGrad, -2.0 * std::log(kGainFloorJnd));
     a.ratio = ratio.evaluate(anchor, {}).lGrad;
     return a;
 }

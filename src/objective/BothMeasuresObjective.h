@@ -14,6 +14,12 @@
 //   a_r   = Loss_ratio − c_r = −2·log(ratio / ratio_lamp) + penalties + λ·mean(E²)
 //   Loss  = softmax_τ(a_j, a_r) = τ·log((exp(a_j/τ) + exp(a_r/τ)) / 2),  τ = kLabelSoftMin
 //
+// The JND anchor is the lamp's JND or 1 JND, whichever is larger (kGainFloorJnd): under a lamp
+// that shows the defects less than just noticeably, a gain over the lamp's JND is a gain over
+// nothing (its JND can be 0, its φ on the floor's tangent, and every light's JND gain unbounded),
+// so the JND gain is counted from the threshold of seeing; the softmax then weighs both measures
+// where the lamp shows nothing, instead of the ratio alone.
+//
 // between max(a_j, a_r) − τ·log 2 and max(a_j, a_r): the optimizer works on the measure whose gain
 // over the lamp is the smaller (weights w_i = exp(a_i/τ)/Σ, summing to 1, so the shared exposure
 // terms and the regulariser keep their weight). Loss < 0 where both gains are above 1 (up to the
@@ -36,6 +42,10 @@
 #include "transport/TransportMatrix.h"
 
 namespace sl {
+
+/// The least JND a gain over the lamp is counted from (BothMeasuresObjective's JND anchor, the
+/// answer's gain merit, pipeline/Answer.h): the threshold of seeing.
+inline constexpr double kGainFloorJnd = 1.0;
 
 /// The two measures' visibility terms (LossParts::lGrad) of the anchor light (the user's lamp) on
 /// the estimate the objective is evaluated on.
@@ -83,7 +93,8 @@ class BothMeasuresObjective final : public HalfImageObjective {
 };
 
 /// The anchors of `objective` on T's halves: the two measures' visibility terms of the light
-/// `anchor` (E, as T's columns; with `rgb`, three values per texel). Throws InputError (option
+/// `anchor` (E, as T's columns; with `rgb`, three values per texel), the JND's taken at
+/// kGainFloorJnd where the light shows the defects less. Throws InputError (option
 /// 'defects-measure') when `anchor` is empty or has the wrong size.
 MeasureAnchors measureAnchors(const TransportMatrix& t, const BothMeasuresObjective& objective,
                               std::span<const double> anchor, bool rgb, const RowShard& shard = {});

@@ -79,15 +79,23 @@ AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> 
         c.scored.push_back(std::move(s));
     }
     c.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    bool jndFloored = false;  // the lamp shows the defects less than kGainFloorJnd
     if (!options.gainOver.empty()) {
         const auto anchor = std::find_if(
             c.scored.begin(), c.scored.end(),
             [&](const ScoredCandidate& s) { return s.candidate.name == options.gainOver; });
         if (anchor != c.scored.end() && anchor->merit.what == "JND") {
-            const double j0 = anchor->merit.value, v0 = anchor->merit.visibility;
+            // The JND gain counted from the threshold of seeing, as the objective's anchor
+            // (objective/BothMeasuresObjective.h); a lamp whose ratio cannot be formed leaves
+            // the JND's gain alone.
+            jndFloored = !(anchor->merit.value >= options.gainFloorJnd);
+            const double j0 = jndFloored ? options.gainFloorJnd : anchor->merit.value;
+            const double v0 = anchor->merit.visibility;
+            const bool ratioGain = std::isfinite(v0) && v0 > 0;
             for (ScoredCandidate& s : c.scored) {
                 s.merit.jnd = s.merit.value;
-                s.merit.value = std::min(s.merit.jnd / j0, s.merit.visibility / v0);
+                s.merit.value = ratioGain ? std::min(s.merit.jnd / j0, s.merit.visibility / v0)
+                                          : s.merit.jnd / j0;
                 s.merit.what = "gain over " + options.gainOver;
             }
         }
@@ -141,7 +149,11 @@ AnswerChoice chooseAnswer(const Judge& validation, std::vector<AnswerCandidate> 
     if (gain)
         on += "; JND of the least visible kind " + formatNumber(a.merit.jnd, 4) + " vs " +
               formatNumber(o.merit.jnd, 4) + "; visibility ratio " +
-              formatNumber(a.merit.visibility, 4) + " vs " + formatNumber(o.merit.visibility, 4);
+              formatNumber(a.merit.visibility, 4) + " vs " + formatNumber(o.merit.visibility, 4) +
+              (jndFloored ? "; " + options.gainOver + " shows the defects less than " +
+                                formatNumber(options.gainFloorJnd, 2) +
+                                " JND, so the JND's gain is counted from there"
+                          : std::string());
     if (jnd)
         on += "; all kinds pooled " + formatNumber(a.merit.pooled, 4) + " vs " +
               formatNumber(o.merit.pooled, 4) + "; visibility ratio " +

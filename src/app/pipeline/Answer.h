@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "app/pipeline/Judge.h"
+#include "objective/BothMeasuresObjective.h"
 #include "objective/DefectObjective.h"
 
 namespace sl {
@@ -80,6 +81,9 @@ struct AnswerOptions {
     /// raises (so a light is chosen over the lamp only when it shows the defects more by both).
     /// Empty, or without JND: answerMerit's figure.
     std::string gainOver;
+    /// The least JND the gains are counted from (objective/BothMeasuresObjective.h's anchor):
+    /// under a lamp that shows the defects less, a gain over it is a gain over this.
+    double gainFloorJnd = kGainFloorJnd;
 };
 
 struct ScoredCandidate {
