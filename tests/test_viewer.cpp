@@ -831,6 +831,47 @@ TEST(ViewerOutdir, JudgeViewerReportAndTerminalAgreeOnTheObjectivesNumbers) {
     EXPECT_NEAR(st.initialLoss, final, 1e-4 * std::abs(final) + 1e-6);
 }
 
+// The viewer's optimizer on a `both` output runs the objective that made it, gains over the lamp
+// the output was compared with (compare-lamp-envmap.exr), not the studio preset: from E* its
+// starting loss is the run's final training loss.
+TEST(ViewerOutdir, TheBothMeasuresOptimizerGainsOverTheOutputsLamp) {
+    test::TempDir dir("both-view");
+    const std::string part = (dir / "part.exr").string(), scene = (dir / "scene.json").string(),
+                      truth = (dir / "part-truth.png").string(), cache = (dir / "cache").string();
+    ASSERT_EQ(
+        test::runCli("gen-surface -o " + part + " --width 160 --height 160 --scratches 3 --scene " +
+                     scene + " --image-size 40 --spp 8 --max-depth 3")
+            .exitCode,
+        0);
+    const auto out = dir / "out";
+    const auto r = test::runCli("optimize " + scene + " --truth " + truth +
+                                " --spp 16 --heldout none --iterations 30 --compare const:0.3" +
+                                " --cache " + cache + " -o " + out.string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const auto summary = json::parse(test::readFile(out / "summary.json"));
+    ASSERT_EQ(summary.value("defects_measure", ""), "both");
+    ViewerOptions o;
+    o.input = out;
+    o.cache.dir = cache;
+    o.outDir = dir / "view";
+    ViewerSession v(o);
+    ASSERT_TRUE(v.outputObjective());
+    const auto& t = v.transport();
+    const std::vector<double>& anchor = v.outputObjective()->options.anchorLight;
+    ASSERT_EQ(anchor.size(), t.cols());
+    for (double e : anchor) EXPECT_NEAR(e, 0.3, 1e-7);
+    const fs::path star = fs::exists(out / "envmap-optimized.exr") ? out / "envmap-optimized.exr"
+                                                                   : out / "envmap.exr";
+    const EnvMap e = loadEnvMap(star, t.envWidth, t.envHeight, 1);
+    v.setLight(0, std::vector<double>(e.texels.begin(), e.texels.end()));
+    v.startOptimize(0, 1);
+    v.waitOptimize();
+    const ViewerOptimizeStatus st = v.optimizeStatus();
+    ASSERT_NE(st.state, "failed") << st.error;
+    const double final = summary.at("final_loss").get<double>();
+    EXPECT_NEAR(st.initialLoss, final, 1e-4 * std::abs(final) + 1e-6);
+}
+
 TEST(ViewerBench, PrintsItsTableAndWritesCsv) {
     test::TempDir dir("viewer-bench");
     const fs::path csv = dir / "bench-view.csv";

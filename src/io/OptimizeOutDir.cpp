@@ -19,6 +19,7 @@ constexpr OutDirFile kFiles[] = {
     {kRenderOptimizedPng, Written::ReferenceWon, ""},
     {kCompareLamp, Written::Always, ""},
     {kCompareLampPng, Written::Always, ""},
+    {kLampEnvMap, Written::Always, "view"},
     {kComparePaper, Written::Always, ""},
     {kComparePaperPng, Written::Always, ""},
     {kPaperEnvMap, Written::Always, "view"},

@@ -31,6 +31,7 @@ inline constexpr const char* kRegionsDefects = "regions-defects.png";
 inline constexpr const char* kRegionsReference = "regions-reference.png";
 inline constexpr const char* kCompareLamp = "compare-lamp.exr";
 inline constexpr const char* kCompareLampPng = "compare-lamp.png";
+inline constexpr const char* kLampEnvMap = "compare-lamp-envmap.exr";  // the lamp as T's E
 inline constexpr const char* kComparePaper = "compare-paper.exr";
 inline constexpr const char* kComparePaperPng = "compare-paper.png";
 inline constexpr const char* kPaperEnvMap = "compare-paper-envmap.exr";

@@ -342,6 +342,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
         json lamp = {{"name", in.lampName},
                      {"spec", o.compare.empty() ? std::string("studio") : o.compare},
                      {"render", outdir::kCompareLampPng},
+                     {"envmap", outdir::kLampEnvMap},
                      {"training", partsJson(r.lampTraining)}};
         json paper = {{"name", "paper's light"},
                       {"method",
@@ -494,6 +495,7 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
     // (each render exposed on its own, the regions' outlines as a transparent layer).
     writeRender(dir / outdir::kCompareLamp, imageLamp, t.width, t.height, ch);
     writeRender(dir / outdir::kComparePaper, imagePaper, t.width, t.height, ch);
+    writeEnvMap(dir / outdir::kLampEnvMap, toEnvMap(in.lampE, t, o.rgb));
     writeEnvMap(dir / outdir::kPaperEnvMap, toEnvMap(in.paperE, t, o.rgb));
     Image lampView = writeExposedPng(dir / outdir::kViewLamp, imageLamp, t);
     Image optimizedView = writeExposedPng(dir / outdir::kViewOptimized, imageOptimized, t);

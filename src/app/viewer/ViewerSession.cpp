@@ -183,13 +183,18 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
         const auto& t = t_->file.matrix;
         for (const auto& [name, file] :
              {std::pair<std::string, std::string>{"optimized", outdir::kEnvMap},
-              {"paper", outdir::kPaperEnvMap}})
+              {"paper", outdir::kPaperEnvMap},
+              {"lamp", outdir::kLampEnvMap}})
             if (fs::exists(in / file))
                 extraPresets_[name] =
                     envMapToE(loadEnvMap(in / file, t.envWidth, t.envHeight, 1), 1);
         // The objective (and regions) that made the output: the optimizer's, and the judge's
         // regions when there is no truth (as optimize's judge scored them).
         made_ = readViewerObjective(in, t.width, t.height);
+        // The both measure's gains are over the lamp the output was compared with (an output
+        // written before the lamp's env map was: the studio preset, objectiveOnT's fallback).
+        if (made_->options.defectMeasure == DefectMeasure::Both && extraPresets_.count("lamp"))
+            made_->options.anchorLight = extraPresets_.at("lamp");
         if (truth.empty() && made_->kind == ObjectiveKind::Defects) {
             labels_.assign(made_->defects.size(), 0);
             for (size_t q = 0; q < labels_.size(); ++q) labels_[q] = made_->defects[q] ? 255 : 0;
