@@ -1,7 +1,7 @@
 // scratchlight gradcheck SCENE.json [--methods exact,autodiff,fd,spsa] [-o REPORT.json] ...
 // scratchlight bench gradients [SCENE.json] [-o DIR] ...
 // Gradients by every method against autodiff (app/bench/GradCheck.h): the check, and its
-// benchmark, which share the set-up's options.
+// benchmark (a row of cli/BenchCmd.cpp's table), which share the set-up's options.
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
@@ -114,87 +114,75 @@ int runBenchGradientsCmd(BenchArgs a) {
 }  // namespace
 
 void registerGradCheck(CLI::App& app, std::function<int()>& run) {
-    {
-        auto a = std::make_shared<GradCheckArgs>();
-        CLI::App* c = app.add_subcommand(
-            "gradcheck",
-            "Gradients of the loss by every method against autodiff (ceres::Jet): seconds per "
-            "gradient, relative L2 error, cosine similarity");
-        c->add_option("scene", a->scene, "Scene file (JSON)")->required();
-        addSetupOptions(c, a->o.setup, a->setup);
-        c->add_option("--methods", a->o.methods,
-                      "Methods: exact, exact+precompute, autodiff, autodiff-T, fd, fd-forward, "
-                      "fd-fresh, spsa")
-            ->delimiter(',')
-            ->check(CLI::IsMember(gradCheckMethods()))
-            ->capture_default_str();
-        c->add_option("--fd-step", a->o.fd.h, "Finite-difference step h (E units)")
-            ->check(inRange(1e-12, 0.49))
-            ->capture_default_str();
-        c->add_option("--spsa-c", a->o.spsa.c, "SPSA perturbation size c")
-            ->check(positiveNumber())
-            ->capture_default_str();
-        c->add_option("--spsa-q", a->o.spsa.q, "SPSA estimates averaged per gradient")
-            ->check(inRange(1, 1 << 20))
-            ->capture_default_str();
-        c->add_option("--repeats", a->o.repeats, "Repeats (medians of time and error)")
-            ->check(inRange(1, 1000))
-            ->capture_default_str();
-        c->add_option("-o,--output", a->out, "Also write the report to this JSON file");
-        c->callback([a, &run] { run = [a] { return runGradCheckCmd(*a); }; });
-    }
-    {
-        CLI::App* bench = nullptr;
-        try {
-            bench = app.get_subcommand("bench");
-        } catch (const CLI::OptionNotFound&) {
-            bench = app.add_subcommand("bench", "Benchmarks (print a table, write CSV)");
-            bench->require_subcommand(1);
-        }
-        auto a = std::make_shared<BenchArgs>();
-        BenchGradientsOptions& o = a->o;
-        CLI::App* c = bench->add_subcommand(
-            "gradients",
-            "Seconds against gradient error for exact, autodiff, FD and SPSA, and loss against "
-            "wall-clock seconds for whole optimizations (CSV + plots)");
-        c->add_option("scene", a->scene, "Scene file (default: the bundled scenes/default)");
-        addSetupOptions(c, o.setup, a->setup);
-        c->add_option("--fd-step", o.fdSteps, "Central-FD steps h (common random numbers)")
-            ->delimiter(',')
-            ->capture_default_str();
-        c->add_option("--fd-fresh-step", o.fdFreshSteps, "Central-FD steps h with fresh seeds")
-            ->delimiter(',')
-            ->capture_default_str();
-        c->add_option("--spsa-q", o.spsaQ, "SPSA averaging counts q")
-            ->delimiter(',')
-            ->capture_default_str();
-        c->add_option("--spsa-c", o.spsaC, "SPSA perturbation sizes c of the q sweep")
-            ->delimiter(',')
-            ->capture_default_str();
-        c->add_option("--spsa-opt-c", o.spsa.c, "SPSA c of the whole optimizations")
-            ->check(positiveNumber())
-            ->capture_default_str();
-        c->add_option("--repeats", o.repeats, "Repeats per measurement (medians)")
-            ->check(inRange(1, 1000))
-            ->capture_default_str();
-        c->add_option("--iterations", o.iterations, "Adam iterations (exact, autodiff, fd-adam)")
-            ->check(inRange(1, 1000000))
-            ->capture_default_str();
-        c->add_option("--spsa-iterations", o.spsaIterations, "SPSA iterations")
-            ->check(inRange(1, 100000000))
-            ->capture_default_str();
-        c->add_option("--budget", o.budgetSeconds, "Wall-clock budget per optimization (s)")
-            ->check(positiveNumber())
-            ->capture_default_str();
-        c->add_flag("--no-optimize", a->noOptimize, "Skip the whole optimizations");
-        c->add_option("-o,--output", a->out, "Output directory")->capture_default_str();
-        c->add_option("--plot-script", a->script,
-                      "The plotting script: a path, or a name found beside the executable "
-                      "(../scripts, ../share/scratchlight/scripts)")
-            ->capture_default_str();
-        c->add_flag("--no-plot", a->noPlot, "Do not run the plotting script");
-        c->callback([a, &run] { run = [a] { return runBenchGradientsCmd(*a); }; });
-    }
+    auto a = std::make_shared<GradCheckArgs>();
+    CLI::App* c = app.add_subcommand(
+        "gradcheck",
+        "Gradients of the loss by every method against autodiff (ceres::Jet): seconds per "
+        "gradient, relative L2 error, cosine similarity");
+    c->add_option("scene", a->scene, "Scene file (JSON)")->required();
+    addSetupOptions(c, a->o.setup, a->setup);
+    c->add_option("--methods", a->o.methods,
+                  "Methods: exact, exact+precompute, autodiff, autodiff-T, fd, fd-forward, "
+                  "fd-fresh, spsa")
+        ->delimiter(',')
+        ->check(CLI::IsMember(gradCheckMethods()))
+        ->capture_default_str();
+    c->add_option("--fd-step", a->o.fd.h, "Finite-difference step h (E units)")
+        ->check(inRange(1e-12, 0.49))
+        ->capture_default_str();
+    c->add_option("--spsa-c", a->o.spsa.c, "SPSA perturbation size c")
+        ->check(positiveNumber())
+        ->capture_default_str();
+    c->add_option("--spsa-q", a->o.spsa.q, "SPSA estimates averaged per gradient")
+        ->check(inRange(1, 1 << 20))
+        ->capture_default_str();
+    c->add_option("--repeats", a->o.repeats, "Repeats (medians of time and error)")
+        ->check(inRange(1, 1000))
+        ->capture_default_str();
+    c->add_option("-o,--output", a->out, "Also write the report to this JSON file");
+    c->callback([a, &run] { run = [a] { return runGradCheckCmd(*a); }; });
+}
+
+void addGradientsBench(CLI::App* c, std::function<int()>& run) {
+    auto a = std::make_shared<BenchArgs>();
+    BenchGradientsOptions& o = a->o;
+    c->add_option("scene", a->scene, "Scene file (default: the bundled scenes/default)");
+    addSetupOptions(c, o.setup, a->setup);
+    c->add_option("--fd-step", o.fdSteps, "Central-FD steps h (common random numbers)")
+        ->delimiter(',')
+        ->capture_default_str();
+    c->add_option("--fd-fresh-step", o.fdFreshSteps, "Central-FD steps h with fresh seeds")
+        ->delimiter(',')
+        ->capture_default_str();
+    c->add_option("--spsa-q", o.spsaQ, "SPSA averaging counts q")
+        ->delimiter(',')
+        ->capture_default_str();
+    c->add_option("--spsa-c", o.spsaC, "SPSA perturbation sizes c of the q sweep")
+        ->delimiter(',')
+        ->capture_default_str();
+    c->add_option("--spsa-opt-c", o.spsa.c, "SPSA c of the whole optimizations")
+        ->check(positiveNumber())
+        ->capture_default_str();
+    c->add_option("--repeats", o.repeats, "Repeats per measurement (medians)")
+        ->check(inRange(1, 1000))
+        ->capture_default_str();
+    c->add_option("--iterations", o.iterations, "Adam iterations (exact, autodiff, fd-adam)")
+        ->check(inRange(1, 1000000))
+        ->capture_default_str();
+    c->add_option("--spsa-iterations", o.spsaIterations, "SPSA iterations")
+        ->check(inRange(1, 100000000))
+        ->capture_default_str();
+    c->add_option("--budget", o.budgetSeconds, "Wall-clock budget per optimization (s)")
+        ->check(positiveNumber())
+        ->capture_default_str();
+    c->add_flag("--no-optimize", a->noOptimize, "Skip the whole optimizations");
+    c->add_option("-o,--output", a->out, "Output directory")->capture_default_str();
+    c->add_option("--plot-script", a->script,
+                  "The plotting script: a path, or a name found beside the executable "
+                  "(../scripts, ../share/scratchlight/scripts)")
+        ->capture_default_str();
+    c->add_flag("--no-plot", a->noPlot, "Do not run the plotting script");
+    c->callback([a, &run] { run = [a] { return runBenchGradientsCmd(*a); }; });
 }
 
 }  // namespace sl::cli

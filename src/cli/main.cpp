@@ -163,7 +163,6 @@ int main(int argc, char** argv) {
     registerOptimize(app, run);
     registerJudge(app, run);
     registerBench(app, run);
-    registerRace(app, run);
     registerGradCheck(app, run);
     registerExportMitsuba(app, run);
     registerScratchMap(app, run);
