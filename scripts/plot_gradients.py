@@ -75,7 +75,7 @@ def speed_vs_error(rows, out):
     ax.set_yscale("log")
     ax.set_xlabel("relative L2 error of the gradient vs autodiff")
     ax.set_ylabel("seconds per gradient (median)")
-    ax.set_title("Speed against error of the loss gradient (1250 texels)")
+    ax.set_title("Speed against error of the loss gradient (every texel of E)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8, loc="best")
     fig.tight_layout()

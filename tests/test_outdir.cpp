@@ -27,6 +27,22 @@ std::set<std::string> contractFiles() {
     return names;
 }
 
+/// `full` with each of `pointers` given an array (which fits no typed key): refused by the typed
+/// summary, naming the pointer.
+void expectEachRefusedByName(const nlohmann::json& full, const std::vector<std::string>& pointers) {
+    for (const std::string& p : pointers) {
+        nlohmann::json bad = full;
+        bad[nlohmann::json::json_pointer(p)] = nlohmann::json::array({1});
+        try {
+            outdir::optimizeSummaryFromJson(bad, "summary.json");
+            ADD_FAILURE() << p << " with an array was accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("summary.json " + p), std::string::npos)
+                << e.what();
+        }
+    }
+}
+
 TEST(OutDir, OptimizeWritesEveryFileAndKeyTheContractLists) {
     test::TempDir dir("outdir");
     ASSERT_EQ(test::writeSmallLabelledPart(dir.path()), 0);
@@ -43,7 +59,9 @@ TEST(OutDir, OptimizeWritesEveryFileAndKeyTheContractLists) {
         }
     const auto s = nlohmann::json::parse(test::readFile(dir / "out" / outdir::kSummary));
     for (const outdir::SummaryKey& k : outdir::optimizeSummaryKeys())
-        EXPECT_TRUE(s.contains(nlohmann::json::json_pointer(k.pointer))) << k.pointer;
+        if (!k.referenceWon) {
+            EXPECT_TRUE(s.contains(nlohmann::json::json_pointer(k.pointer))) << k.pointer;
+        }
 }
 
 // The typed summary (io/OptimizeSummary.h): each key it types is one the contract lists, is
@@ -100,17 +118,7 @@ TEST(OutDir, TheTypedSummaryReadsListedKeysAndRefusesAWrongTypeByName) {
     EXPECT_FALSE(empty.judgeSpp.has_value());
 
     // Every typed key with a value of another type (an array fits none of them).
-    for (const std::string& p : typed) {
-        nlohmann::json bad = full;
-        bad[nlohmann::json::json_pointer(p)] = nlohmann::json::array({1});
-        try {
-            outdir::optimizeSummaryFromJson(bad, "summary.json");
-            ADD_FAILURE() << p << " with an array was accepted";
-        } catch (const InputError& e) {
-            EXPECT_NE(std::string(e.what()).find("summary.json " + p), std::string::npos)
-                << e.what();
-        }
-    }
+    expectEachRefusedByName(full, typed);
     EXPECT_THROW(outdir::optimizeSummaryFromJson(nlohmann::json::array(), "summary.json"),
                  InputError);
     test::TempDir dir("outdir-summary");
@@ -120,6 +128,118 @@ TEST(OutDir, TheTypedSummaryReadsListedKeysAndRefusesAWrongTypeByName) {
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find(outdir::kSummary), std::string::npos) << e.what();
     }
+}
+
+// The comparison typed (io/OptimizeSummary.h Comparison): each light's name, training loss and
+// judge score, the answer when a reference won, every key it reads listed by the contract, and
+// a key of another type refused by name.
+TEST(OutDir, TheTypedComparisonReadsEachLightAndRefusesAWrongTypeByName) {
+    std::set<std::string> listed;
+    for (const outdir::SummaryKey& k : outdir::optimizeSummaryKeys()) listed.insert(k.pointer);
+    const std::vector<std::string> typed = {"/compare/objective",
+                                            "/compare/regions",
+                                            "/compare/viewing/text",
+                                            "/compare/lamp/name",
+                                            "/compare/lamp/training/loss",
+                                            "/compare/paper/training/loss",
+                                            "/compare/optimized/training/loss",
+                                            "/compare/optimized/judge/unbiased",
+                                            "/compare/optimized/judge/eq2",
+                                            "/compare/optimized/judge/brightness",
+                                            "/compare/optimized/judge/mean_E",
+                                            "/compare/optimized/judge/sparsity",
+                                            "/compare/optimized/judge/visibility",
+                                            "/compare/optimized/judge/se/least_visible_jnd",
+                                            "/compare/answer/name",
+                                            "/compare/answer/merit",
+                                            "/compare/answer/merit_answer",
+                                            "/compare/answer/merit_optimized",
+                                            "/compare/answer/optimized_why",
+                                            "/compare/answer/judge"};
+    for (const std::string& p : typed) EXPECT_TRUE(listed.count(p)) << p << " is not listed";
+
+    auto judge = [](double u, double jnd) {
+        return nlohmann::json{
+            {"unbiased", u},
+            {"eq2", 2 * u},
+            {"brightness", 0.5},
+            {"mean_E", 0.25},
+            {"sparsity", nullptr},  // not finite when written
+            {"visibility",
+             {{{"name", "scratch"}, {"pixels", 120}, {"visibility", 3.0}, {"jnd", jnd}},
+              {{"name", "dent"}, {"pixels", 40}, {"visibility", 1.5}, {"contrast", 0.1}}}},
+            {"se", {{"least_visible_jnd", 0.05}}}};
+    };
+    const nlohmann::json full = {
+        {"compare",
+         {{"objective", "defects"},
+          {"regions", "truth part-truth.png"},
+          {"viewing", {{"text", "38.8 px/deg"}}},
+          {"judge_spp", 512},
+          {"lamp",
+           {{"name", "studio preset"}, {"training", {{"loss", 4.0}}}, {"judge", judge(8, 1)}}},
+          {"paper", {{"name", "paper's light"}, {"training", {{"loss", 3.0}}}}},
+          {"optimized", {{"training", {{"loss", 1.0}}}, {"judge", judge(2, 3)}}},
+          {"answer",
+           {{"name", "studio preset"},
+            {"merit", "JND"},
+            {"merit_answer", 2.5},
+            {"merit_optimized", 2.0},
+            {"optimized_why", ""},
+            {"judge", judge(8, 1)}}}}}};
+    const outdir::OptimizeSummary s = outdir::optimizeSummaryFromJson(full, "summary.json");
+    ASSERT_TRUE(s.comparison.has_value());
+    const outdir::Comparison& c = *s.comparison;
+    EXPECT_EQ(c.objective, "defects");
+    ASSERT_TRUE(c.regions.has_value());
+    EXPECT_EQ(*c.regions, "truth part-truth.png");
+    EXPECT_EQ(c.viewing, "38.8 px/deg");
+    EXPECT_EQ(c.lamp.name, "studio preset");
+    EXPECT_EQ(c.lamp.trainingLoss, 4.0);
+    EXPECT_EQ(c.paper.trainingLoss, 3.0);
+    EXPECT_FALSE(c.paper.judge.has_value());
+    EXPECT_TRUE(c.optimized.name.empty());
+    ASSERT_TRUE(c.optimized.judge.has_value());
+    const outdir::JudgedLight& o = *c.optimized.judge;
+    EXPECT_EQ(o.unbiased, 2.0);
+    EXPECT_EQ(o.eq2, 4.0);
+    EXPECT_EQ(o.brightness, 0.5);
+    EXPECT_EQ(o.meanE, 0.25);
+    EXPECT_TRUE(std::isnan(o.sparsity));
+    EXPECT_EQ(o.leastVisibleJndSe, 0.05);
+    ASSERT_TRUE(o.regions.has_value());
+    ASSERT_EQ(o.regions->size(), 2u);
+    EXPECT_EQ((*o.regions)[0].name, "scratch");
+    EXPECT_EQ((*o.regions)[0].pixels, 120);
+    EXPECT_EQ((*o.regions)[0].jnd, 3.0);
+    EXPECT_TRUE(std::isnan((*o.regions)[0].contrast));
+    EXPECT_TRUE(std::isnan((*o.regions)[1].jnd));
+    EXPECT_EQ((*o.regions)[1].contrast, 0.1);
+    ASSERT_TRUE(c.answer.has_value());
+    EXPECT_EQ(c.answer->name, "studio preset");
+    EXPECT_EQ(c.answer->merit, "JND");
+    EXPECT_EQ(c.answer->meritAnswer, 2.5);
+    EXPECT_EQ(c.answer->meritOptimized, 2.0);
+    EXPECT_TRUE(c.answer->optimizedWhy.empty());
+    ASSERT_TRUE(c.answer->judge.has_value());
+    EXPECT_EQ(c.answer->judge->unbiased, 8.0);
+
+    // Without a comparison there is none; a comparison without a judge has no judge scores.
+    EXPECT_FALSE(outdir::optimizeSummaryFromJson(nlohmann::json::object(), "summary.json")
+                     .comparison.has_value());
+    const outdir::OptimizeSummary bare = outdir::optimizeSummaryFromJson(
+        {{"compare", {{"lamp", {{"name", "lamp"}}}}}}, "summary.json");
+    ASSERT_TRUE(bare.comparison.has_value());
+    EXPECT_FALSE(bare.comparison->regions.has_value());
+    EXPECT_FALSE(bare.comparison->optimized.judge.has_value());
+    EXPECT_FALSE(bare.comparison->answer.has_value());
+    EXPECT_TRUE(std::isnan(bare.comparison->optimized.trainingLoss));
+
+    // A typed key, or a region's figure, of another type: refused by its pointer.
+    std::vector<std::string> wrong = typed;
+    wrong.push_back("/compare/lamp/judge/visibility/1/jnd");
+    wrong.push_back("/compare/answer/judge/visibility/0/name");
+    expectEachRefusedByName(full, wrong);
 }
 
 TEST(OutDir, ThePlotScriptsOpenOnlyFilesTheContractLists) {

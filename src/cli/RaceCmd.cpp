@@ -160,23 +160,18 @@ void addRaceRunOptions(CLI::App* c, RaceOptions& o, std::string& out) {
 
 }  // namespace
 
-void registerRace(CLI::App& app, std::function<int()>& run) {
-    CLI::App* bench = app.get_subcommand("bench");
+void addRaceBench(CLI::App* c, std::function<int()>& run) {
     auto a = std::make_shared<RaceArgs>();
-    CLI::App* c = bench->add_subcommand(
-        "race", "Race optimizer configurations on generated parts, scored by the judge");
     addRaceRunOptions(c, a->o, a->out);
     c->add_option("--configs", a->configs, "Configurations (default: all; paper-loop always)")
         ->delimiter(',');
     c->callback([a, &run] { run = [a] { return runRaceCmd(*a); }; });
+}
 
+void addSettingsBench(CLI::App* st, std::function<int()>& run) {
     auto sa = std::make_shared<SettingsArgs>();
     sa->o.parts = {"ballend-chatter"};
     sa->o.seeds = 2;
-    CLI::App* st = bench->add_subcommand(
-        "settings",
-        "Speed against error: the judge's score of E* against seconds for spp x sampling x "
-        "max_depth");
     addRaceRunOptions(st, sa->o, sa->out);
     st->add_option("--spp", sa->spps, "Samples per pixel of T")
         ->delimiter(',')

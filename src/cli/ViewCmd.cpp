@@ -108,11 +108,10 @@ void registerView(CLI::App& app, std::function<int()>& run) {
                   "Output directory: the only place the viewer writes (saved lights and lamps)")
         ->capture_default_str();
     c->callback([a, &run] { run = [a] { return runView(*a); }; });
+}
 
-    CLI::App* bench = app.get_subcommand("bench");
+void addViewBench(CLI::App* v, std::function<int()>& run) {
     auto b = std::make_shared<ViewerBenchOptions>();
-    CLI::App* v = bench->add_subcommand(
-        "view", "The viewer's latency: relight + PNG encode + transfer under an HTTP client");
     v->add_option("scene", b->scene, "Scene file (default: the bundled scenes/default)");
     v->add_option("--size", b->sizes, "Image sizes (square), e.g. --size 512,2048")
         ->delimiter(',')

@@ -18,8 +18,6 @@
 #include "app/host/Version.h"
 #include "cli/Commands.h"
 #include "cli/Common.h"
-#include "cli/GradientCmds.h"
-#include "cli/PaperCmds.h"
 #include "core/Error.h"
 #include "core/Interrupt.h"
 #include "core/Text.h"
@@ -160,12 +158,16 @@ int main(int argc, char** argv) {
     registerRender(app, run);
     registerGenSurface(app, run);
     registerInsertDefects(app, run);
-    registerTransport(app, run);
+    registerPrecompute(app, run);
+    registerRelight(app, run);
+    registerOptimize(app, run);
     registerJudge(app, run);
     registerBench(app, run);
-    registerRace(app, run);
-    registerGradients(app, run);
-    registerPaper(app, run);
+    registerGradCheck(app, run);
+    registerExportMitsuba(app, run);
+    registerScratchMap(app, run);
+    registerReport(app, run);
+    registerEnvMapPreset(app, run);
     registerDefectMap(app, run);
     registerCache(app, run);
     registerLamps(app, run);

@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "io/HeightmapIO.h"
+#include "io/HeightmapData.h"
 
 namespace sl {
 

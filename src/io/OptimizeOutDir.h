@@ -73,6 +73,7 @@ struct SummaryKey {
     const char* pointer;
     bool always;  // written by every run (else: with the judge's estimate, or a given truth)
     const char* readers;
+    bool referenceWon = false;  // written only when a reference is the answer (ReferenceWon)
 };
 std::span<const SummaryKey> optimizeSummaryKeys();
 

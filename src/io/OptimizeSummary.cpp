@@ -1,5 +1,8 @@
 #include "io/OptimizeSummary.h"
 
+#include <cmath>
+#include <limits>
+
 #include "core/Error.h"
 #include "io/InputFile.h"
 #include "io/OptimizeOutDir.h"
@@ -20,10 +23,12 @@ constexpr Kind kNumber{[](const json& v) { return v.is_number(); }, "a number"};
 constexpr Kind kBool{[](const json& v) { return v.is_boolean(); }, "true or false"};
 constexpr Kind kInteger{[](const json& v) { return v.is_number_integer(); }, "an integer"};
 constexpr Kind kObject{[](const json& v) { return v.is_object(); }, "an object"};
+constexpr Kind kArray{[](const json& v) { return v.is_array(); }, "an array"};
 
 /// The value at `pointer`, or nullptr when absent or null; InputError naming `where` and the
 /// pointer when it is not of `kind`.
-const json* take(const json& d, const char* pointer, const std::string& where, const Kind& kind) {
+const json* take(const json& d, const std::string& pointer, const std::string& where,
+                 const Kind& kind) {
     const json::json_pointer p(pointer);
     if (!d.contains(p) || d.at(p).is_null()) return nullptr;
     const json& v = d.at(p);
@@ -32,6 +37,81 @@ const json* take(const json& d, const char* pointer, const std::string& where, c
                          std::string("must be ") + kind.name + ", got " + jsonExcerpt(v, 40),
                          "write the output again with a current optimize");
     return &v;
+}
+
+/// The number at `pointer` (NaN when absent or null).
+double numberAt(const json& d, const std::string& pointer, const std::string& where) {
+    const json* v = take(d, pointer, where, kNumber);
+    return v ? v->get<double>() : std::numeric_limits<double>::quiet_NaN();
+}
+
+/// The string at `pointer` ("" when absent or null).
+std::string stringAt(const json& d, const std::string& pointer, const std::string& where) {
+    const json* v = take(d, pointer, where, kString);
+    return v ? v->get<std::string>() : std::string();
+}
+
+/// A judge score at `at` (app/pipeline/Judge.h toJson), or none when absent.
+std::optional<JudgedLight> judgedAt(const json& d, const std::string& at,
+                                    const std::string& where) {
+    if (!take(d, at, where, kObject)) return std::nullopt;
+    JudgedLight j;
+    j.unbiased = numberAt(d, at + "/unbiased", where);
+    j.eq2 = numberAt(d, at + "/eq2", where);
+    j.brightness = numberAt(d, at + "/brightness", where);
+    j.meanE = numberAt(d, at + "/mean_E", where);
+    j.sparsity = numberAt(d, at + "/sparsity", where);
+    if (const json* regions = take(d, at + "/visibility", where, kArray)) {
+        j.regions.emplace();
+        for (size_t k = 0; k < regions->size(); ++k) {
+            const std::string r = at + "/visibility/" + std::to_string(k);
+            take(d, r, where, kObject);
+            JudgedRegion g;
+            g.name = stringAt(d, r + "/name", where);
+            const double pixels = numberAt(d, r + "/pixels", where);
+            g.pixels = std::isfinite(pixels) ? pixels : 0.0;
+            g.visibility = numberAt(d, r + "/visibility", where);
+            g.jnd = numberAt(d, r + "/jnd", where);
+            g.contrast = numberAt(d, r + "/contrast", where);
+            j.regions->push_back(std::move(g));
+        }
+    }
+    if (take(d, at + "/se", where, kObject))
+        j.leastVisibleJndSe = numberAt(d, at + "/se/least_visible_jnd", where);
+    return j;
+}
+
+ComparedLight lightAt(const json& d, const std::string& at, const std::string& where) {
+    ComparedLight l;
+    if (!take(d, at, where, kObject)) return l;
+    l.name = stringAt(d, at + "/name", where);
+    if (take(d, at + "/training", where, kObject))
+        l.trainingLoss = numberAt(d, at + "/training/loss", where);
+    l.judge = judgedAt(d, at + "/judge", where);
+    return l;
+}
+
+Comparison comparisonOf(const json& d, const std::string& where) {
+    Comparison c;
+    c.objective = stringAt(d, "/compare/objective", where);
+    if (const json* v = take(d, "/compare/regions", where, kString))
+        c.regions = v->get<std::string>();
+    if (take(d, "/compare/viewing", where, kObject))
+        c.viewing = stringAt(d, "/compare/viewing/text", where);
+    c.lamp = lightAt(d, "/compare/lamp", where);
+    c.paper = lightAt(d, "/compare/paper", where);
+    c.optimized = lightAt(d, "/compare/optimized", where);
+    if (take(d, "/compare/answer", where, kObject)) {
+        ComparedAnswer a;
+        a.name = stringAt(d, "/compare/answer/name", where);
+        a.merit = stringAt(d, "/compare/answer/merit", where);
+        a.optimizedWhy = stringAt(d, "/compare/answer/optimized_why", where);
+        a.meritAnswer = numberAt(d, "/compare/answer/merit_answer", where);
+        a.meritOptimized = numberAt(d, "/compare/answer/merit_optimized", where);
+        a.judge = judgedAt(d, "/compare/answer/judge", where);
+        c.answer = std::move(a);
+    }
+    return c;
 }
 
 }  // namespace
@@ -56,7 +136,10 @@ OptimizeSummary optimizeSummaryFromJson(json document, const std::string& where)
     if (const json* v = take(d, "/final_loss", where, kNumber)) s.finalLoss = *v;
     if (const json* v = take(d, "/metrics", where, kObject)) s.metrics = *v;
     if (const json* v = take(d, "/metrics_initial", where, kObject)) s.metricsInitial = *v;
-    if (const json* v = take(d, "/compare", where, kObject)) s.compare = *v;
+    if (const json* v = take(d, "/compare", where, kObject)) {
+        s.compare = *v;
+        s.comparison = comparisonOf(d, where);
+    }
     if (const json* v = take(d, "/compare/judge_spp", where, kInteger)) s.judgeSpp = v->get<int>();
     s.document = std::move(document);
     return s;

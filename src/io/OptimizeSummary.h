@@ -1,6 +1,8 @@
 // summary.json of an optimize OUTDIR as its readers take it (io/OptimizeOutDir.h lists its keys):
 // the viewer and the report read the file through readOptimizeSummary, each listed key typed
-// once here instead of by JSON pointers at each reader.
+// once here instead of by JSON pointers at each reader; the comparison of the three lights
+// (/compare: the user's lamp, the paper's light, the optimized one, and the judge's scores of
+// each) as the report's headline and table read it.
 #pragma once
 
 #include <filesystem>
@@ -8,12 +10,64 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace sl::outdir {
 
+/// One defect region of a judge score (/visibility/k of app/pipeline/Judge.h toJson).
+struct JudgedRegion {
+    std::string name;                                              // name
+    double pixels = 0;                                             // pixels (absent: 0)
+    double visibility = std::numeric_limits<double>::quiet_NaN();  // visibility
+    double jnd = std::numeric_limits<double>::quiet_NaN();         // jnd
+    double contrast = std::numeric_limits<double>::quiet_NaN();    // contrast
+};
+
+/// A light's judge score as summary.json records it (app/pipeline/Judge.h toJson); a number
+/// that was not finite (written as null) or is absent is NaN.
+struct JudgedLight {
+    double unbiased = std::numeric_limits<double>::quiet_NaN();    // unbiased: U
+    double eq2 = std::numeric_limits<double>::quiet_NaN();         // eq2
+    double brightness = std::numeric_limits<double>::quiet_NaN();  // brightness
+    double meanE = std::numeric_limits<double>::quiet_NaN();       // mean_E
+    double sparsity = std::numeric_limits<double>::quiet_NaN();    // sparsity
+    /// visibility: the defect regions; absent (a score without them) is not the same as empty.
+    std::optional<std::vector<JudgedRegion>> regions;
+    /// se/least_visible_jnd: the least visible kind's JND's standard error (NaN: not estimated).
+    double leastVisibleJndSe = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// One light of /compare: lamp (the user's), paper (the paper's method on T), optimized.
+struct ComparedLight {
+    std::string name;                                                // name ("" when absent)
+    double trainingLoss = std::numeric_limits<double>::quiet_NaN();  // training/loss
+    std::optional<JudgedLight> judge;  // judge: with the judge's estimate
+};
+
+/// /compare/answer: a reference (or a finer light) that beat E* on the validation estimate and
+/// is the answer (envmap.exr), with what it was chosen on.
+struct ComparedAnswer {
+    std::string name;          // name ("" when absent)
+    std::string merit;         // merit: what the lights were compared by ("" when absent)
+    std::string optimizedWhy;  // optimized_why: the check E* failed ("" when it passed)
+    double meritAnswer = std::numeric_limits<double>::quiet_NaN();     // merit_answer
+    double meritOptimized = std::numeric_limits<double>::quiet_NaN();  // merit_optimized
+    std::optional<JudgedLight> judge;                                  // judge
+};
+
+/// /compare typed: the three lights side by side, on T and (with the judge's estimate) by the
+/// judge; written by app/jobs/OptimizeOutputs.cpp, read by the report
+/// (app/report/OptimizeReport.cpp).
+struct Comparison {
+    std::string objective;               // objective: the objective the training losses are of
+    std::optional<std::string> regions;  // regions: where the defect regions came from
+    std::string viewing;  // viewing/text: the judge's viewing model in words ("" when absent)
+    ComparedLight lamp, paper, optimized;
+    std::optional<ComparedAnswer> answer;
+};
+
 /// The keys of optimizeSummaryKeys() that a C++ reader uses, typed; an absent key keeps its
-/// default. `document` is the whole file, for what a page shows as written (the judge's
-/// scores under /compare, the run's settings).
+/// default. `document` is the whole file, for what a page shows as written (the run's settings).
 struct OptimizeSummary {
     std::string objective;                                     // /objective ("" when absent)
     double lambda = std::numeric_limits<double>::quiet_NaN();  // /lambda
@@ -22,14 +76,15 @@ struct OptimizeSummary {
     std::string defectsMeasure;                                // /defects_measure ("" when absent)
     std::string optimizer;                                     // /optimizer ("" when absent)
     std::string transportFile;                                 // /transport/file ("" when absent)
-    std::string truth;              // /truth: the truth label file ("" when absent)
-    nlohmann::json initialLoss;     // /initial_loss: a number or null (absent: null)
-    nlohmann::json finalLoss;       // /final_loss
-    nlohmann::json metrics;         // /metrics: an object (absent: null)
-    nlohmann::json metricsInitial;  // /metrics_initial
-    nlohmann::json compare;         // /compare: an object (absent: null)
-    std::optional<int> judgeSpp;    // /compare/judge_spp
-    nlohmann::json document;        // the whole summary.json
+    std::string truth;                     // /truth: the truth label file ("" when absent)
+    nlohmann::json initialLoss;            // /initial_loss: a number or null (absent: null)
+    nlohmann::json finalLoss;              // /final_loss
+    nlohmann::json metrics;                // /metrics: an object (absent: null)
+    nlohmann::json metricsInitial;         // /metrics_initial
+    nlohmann::json compare;                // /compare: an object as written (absent: null)
+    std::optional<Comparison> comparison;  // /compare typed (absent: none)
+    std::optional<int> judgeSpp;           // /compare/judge_spp
+    nlohmann::json document;               // the whole summary.json
 };
 
 /// A parsed summary.json typed; InputError naming `where` and the key when a listed key has

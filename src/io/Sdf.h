@@ -5,7 +5,7 @@
 
 #include <filesystem>
 
-#include "io/HeightmapIO.h"
+#include "io/HeightmapData.h"
 
 namespace sl {
 

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <vector>
 
-#include "io/HeightmapIO.h"
+#include "io/HeightmapData.h"
 
 namespace sl {
 

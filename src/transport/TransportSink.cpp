@@ -6,6 +6,7 @@
 
 #include "core/Color.h"
 #include "core/Error.h"
+#include "scene/EnvMapBasis.h"
 #include "scene/Scene.h"
 
 namespace sl {
@@ -30,7 +31,9 @@ TransportSink::TransportSink(const EnvMapBasis& basis, int width, int height, in
                              " = " + std::to_string(basis.texelCount()) +
                              " texels, more than a transport matrix's limit of " +
                              std::to_string(kMaxTransportTexels),
-                         "use a smaller env-map grid (default 50x25)");
+                         "use a smaller env-map grid (default " +
+                             std::to_string(kDefaultEnvMapGrid.width) + "x" +
+                             std::to_string(kDefaultEnvMapGrid.height) + ")");
 }
 
 void TransportSink::consume(const PixelPaths& px) {

@@ -27,59 +27,63 @@ double num(const json& j, const char* key) {
     return j[key].get<double>();
 }
 
-/// A judge score's regions from its JSON: pixels, visibility and JND (NaN where absent).
-std::vector<RegionVisibility> regionsOf(const json& judge) {
+/// A light's judge score as summary.json records it (io/OptimizeSummary.h), none when the run
+/// had no judge's estimate.
+using Judged = std::optional<outdir::JudgedLight>;
+
+/// A judge score's regions: pixels, visibility and JND (NaN where absent).
+std::vector<RegionVisibility> regionsOf(const std::vector<outdir::JudgedRegion>& judged) {
     std::vector<RegionVisibility> regions;
-    for (const json& r : judge["visibility"]) {
+    for (const outdir::JudgedRegion& r : judged) {
         RegionVisibility v;
-        v.visibility = num(r, "visibility");
-        v.jnd = num(r, "jnd");
-        const double p = num(r, "pixels");
-        v.pixels = std::isfinite(p) && p > 0 ? static_cast<size_t>(p) : 0;
+        v.visibility = r.visibility;
+        v.jnd = r.jnd;
+        v.pixels = std::isfinite(r.pixels) && r.pixels > 0 ? static_cast<size_t>(r.pixels) : 0;
         regions.push_back(v);
     }
     return regions;
 }
 
 /// All defect regions as one (objective/DefectVisibility.h combinedVisibility) from a judge
-/// score's JSON.
-double combinedVisibility(const json& judge) {
-    if (!judge.is_object() || !judge.contains("visibility")) return std::nan("");
-    return sl::combinedVisibility(regionsOf(judge));
+/// score; NaN without regions.
+double combinedVisibility(const Judged& judge) {
+    if (!judge || !judge->regions) return std::nan("");
+    return sl::combinedVisibility(regionsOf(*judge->regions));
 }
 
 /// The regions' JND pooled (objective/DefectVisibility.h combinedJnd); NaN without JND.
-double combinedJnd(const json& judge) {
-    if (!judge.is_object() || !judge.contains("visibility")) return std::nan("");
-    return sl::combinedJnd(regionsOf(judge));
+double combinedJnd(const Judged& judge) {
+    if (!judge || !judge->regions) return std::nan("");
+    return sl::combinedJnd(regionsOf(*judge->regions));
 }
 
 /// The defects' JND as the answer is chosen on it: the least visible kind's
 /// (objective/DefectVisibility.h leastVisibleJnd); NaN without JND.
-double leastVisibleJnd(const json& judge) {
-    if (!judge.is_object() || !judge.contains("visibility")) return std::nan("");
-    return sl::leastVisibleJnd(regionsOf(judge));
+double leastVisibleJnd(const Judged& judge) {
+    if (!judge || !judge->regions) return std::nan("");
+    return sl::leastVisibleJnd(regionsOf(*judge->regions));
 }
 
-/// " ± 0.12": the standard error of the least visible kind's JND in a judge score's JSON
+/// " ± 0.12": the standard error of the least visible kind's JND in a judge score
 /// (app/pipeline/Judge.h toJson, se.least_visible_jnd); empty when it was not estimated.
-std::string leastVisibleJndError(const json& judge) {
-    if (!judge.is_object() || !judge.contains("se") || !judge["se"].is_object()) return "";
-    const json& se = judge["se"];
-    if (!se.contains("least_visible_jnd") || !se["least_visible_jnd"].is_number()) return "";
-    const double e = se["least_visible_jnd"].get<double>();
-    if (!std::isfinite(e)) return "";
+std::string leastVisibleJndError(const Judged& judge) {
+    if (!judge || !std::isfinite(judge->leastVisibleJndSe)) return "";
     char buf[64];
-    std::snprintf(buf, sizeof buf, " ± %.2g", e);
+    std::snprintf(buf, sizeof buf, " ± %.2g", judge->leastVisibleJndSe);
     return buf;
 }
 
 /// How many defect kinds the judge scored (regions with pixels).
-size_t defectKinds(const json& judge) {
+size_t defectKinds(const Judged& judge) {
     size_t n = 0;
-    if (judge.is_object() && judge.contains("visibility"))
-        for (const json& r : judge["visibility"]) n += num(r, "pixels") > 0;
+    if (judge && judge->regions)
+        for (const outdir::JudgedRegion& r : *judge->regions) n += r.pixels > 0;
     return n;
+}
+
+/// A judge score's number, NaN without the judge's estimate.
+double judged(const Judged& judge, double outdir::JudgedLight::*figure) {
+    return judge ? (*judge).*figure : std::nan("");
 }
 
 std::string fmt(double v, int digits = 3) {
@@ -91,24 +95,22 @@ std::string fmt(double v, int digits = 3) {
 
 /// With two or more labelled regions, the one that shows least under the answer, first: "The
 /// least visible label is dent: 1.2 (your lamp 3.4)." (empty with fewer regions).
-std::string worstLabelSentence(const json& answer, const json& lamp) {
-    if (!answer.is_object() || !answer.contains("visibility") || answer["visibility"].size() < 2)
-        return "";
+std::string worstLabelSentence(const Judged& answer, const Judged& lamp) {
+    if (!answer || !answer->regions || answer->regions->size() < 2) return "";
     // In JND where the judge has it (the answer is chosen on it), else the visibility ratio.
     const bool jnd = std::isfinite(leastVisibleJnd(answer));
-    const char* key = jnd ? "jnd" : "visibility";
-    const json* worst = nullptr;
-    for (const json& r : answer["visibility"])
-        if (std::isfinite(num(r, key)) && num(r, "pixels") > 0 &&
-            (!worst || num(r, key) < num(*worst, key)))
-            worst = &r;
+    double outdir::JudgedRegion::*key =
+        jnd ? &outdir::JudgedRegion::jnd : &outdir::JudgedRegion::visibility;
+    const outdir::JudgedRegion* worst = nullptr;
+    for (const outdir::JudgedRegion& r : *answer->regions)
+        if (std::isfinite(r.*key) && r.pixels > 0 && (!worst || r.*key < (*worst).*key)) worst = &r;
     if (!worst) return "";
-    const std::string name = worst->value("name", std::string("?"));
+    const std::string name = worst->name.empty() ? std::string("?") : worst->name;
     double atLamp = std::nan("");
-    if (lamp.is_object() && lamp.contains("visibility"))
-        for (const json& r : lamp["visibility"])
-            if (r.value("name", std::string()) == name) atLamp = num(r, key);
-    return " The least visible label is " + name + ": " + fmt(num(*worst, key), 3) +
+    if (lamp && lamp->regions)
+        for (const outdir::JudgedRegion& r : *lamp->regions)
+            if (r.name == name) atLamp = r.*key;
+    return " The least visible label is " + name + ": " + fmt((*worst).*key, 3) +
            (jnd ? " JND" : "") + " (your lamp " + fmt(atLamp, 3) + ").";
 }
 
@@ -193,8 +195,8 @@ std::string jndPhrase(double j, const std::string& se = {}) {
 /// the optimized light the defects are 8.9 JND above threshold, 3.1 under your lamp (...) and
 /// 2.0 under the paper's light, as a person sees the image (38.8 px/deg, white 200 cd/m²). "
 /// Empty when the judge has no JND.
-std::string jndSentence(const json& opt, const json& lamp, const json& paper,
-                        const std::string& underLamp, const json& viewing) {
+std::string jndSentence(const Judged& opt, const Judged& lamp, const Judged& paper,
+                        const std::string& underLamp, const std::string& viewing) {
     const double jo = leastVisibleJnd(opt), jl = leastVisibleJnd(lamp), jp = leastVisibleJnd(paper);
     if (!std::isfinite(jo) || !std::isfinite(jl)) return "";
     const std::string what =
@@ -205,16 +207,19 @@ std::string jndSentence(const json& opt, const json& lamp, const json& paper,
     if (std::isfinite(jp))
         out += " and " + fmt(jp, 3) + leastVisibleJndError(paper) + " under the paper's light";
     out += ", as a person sees the image";
-    if (viewing.contains("text") && viewing["text"].is_string())
-        out += " (" + viewing["text"].get<std::string>() + ")";
+    if (!viewing.empty()) out += " (" + viewing + ")";
     out += ". ";
     return out;
 }
 
-std::string lampUnder(const json& cmp) {
-    const json lamp = cmp.value("lamp", json::object());
+/// The user's lamp's name in the comparison (the studio preset when it names none).
+std::string lampNameOf(const outdir::Comparison& c) {
+    return c.lamp.name.empty() ? std::string("studio preset") : c.lamp.name;
+}
+
+std::string lampUnder(const outdir::Comparison& c) {
     std::string out = "under your lamp (";
-    out += lamp.value("name", std::string("studio preset"));
+    out += lampNameOf(c);
     out += ")";
     return out;
 }
@@ -361,23 +366,27 @@ std::string lampNotChosen(const json& s, double jndOptimized, double jndLamp,
     return "";
 }
 
-std::string optimizeHeadline(const json& s) {
-    if (!s.contains("compare") || !s["compare"].is_object())
+namespace {
+
+/// The headline from the summary typed (optimizeHeadline).
+std::string headlineOf(const outdir::OptimizeSummary& summary) {
+    if (!summary.comparison)
         return "This output directory has no comparison with a lamp (it predates it).";
-    const json& cmp = s["compare"];
-    const json lamp = cmp.value("lamp", json::object()), paper = cmp.value("paper", json::object()),
-               opt = cmp.value("optimized", json::object());
+    const json& s = summary.document;
+    const outdir::Comparison& cmp = *summary.comparison;
+    const outdir::ComparedLight &lamp = cmp.lamp, &paper = cmp.paper, &opt = cmp.optimized;
     const std::string underLamp = lampUnder(cmp), underPaper = "under the paper's light";
+    const std::string spp = fmt(summary.judgeSpp ? *summary.judgeSpp : std::nan(""), 6);
+    const std::string objective = cmp.objective.empty() ? "objective" : cmp.objective;
     std::string out;
     // A reference that beat E* on the validation estimate is the answer (app/pipeline/Answer.h):
     // said first, then the judge's figures of the answer beside E*'s.
-    if (cmp.contains("answer") && cmp["answer"].is_object()) {
-        const json& ans = cmp["answer"];
-        const std::string name = ans.value("name", std::string("a reference light"));
-        const std::string why = ans.value("optimized_why", std::string());
-        const std::string figures = ans.value("merit", std::string("figure")) + " " +
-                                    fmt(num(ans, "merit_answer"), 3) + " vs " +
-                                    fmt(num(ans, "merit_optimized"), 3);
+    if (cmp.answer) {
+        const outdir::ComparedAnswer& ans = *cmp.answer;
+        const std::string name = ans.name.empty() ? "a reference light" : ans.name;
+        const std::string& why = ans.optimizedWhy;
+        const std::string figures = (ans.merit.empty() ? "figure" : ans.merit) + " " +
+                                    fmt(ans.meritAnswer, 3) + " vs " + fmt(ans.meritOptimized, 3);
         out = "The answer is " + name + ", not the optimized light: " +
               (why.empty() ? "on an independent validation estimate it showed the defects "
                              "better (" +
@@ -386,39 +395,35 @@ std::string optimizeHeadline(const json& s) {
                              "pass the checks (" +
                                  why + "; " + figures + ")") +
               "; the optimized light is kept beside it (envmap-optimized.exr).";
-        if (ans.contains("judge") && opt.contains("judge")) {
-            const std::string spp = fmt(num(cmp, "judge_spp"), 6);
-            const double va = combinedVisibility(ans["judge"]),
-                         vo = combinedVisibility(opt["judge"]);
-            const double ja = leastVisibleJnd(ans["judge"]), jo = leastVisibleJnd(opt["judge"]);
+        if (ans.judge && opt.judge) {
+            const double va = combinedVisibility(ans.judge), vo = combinedVisibility(opt.judge);
+            const double ja = leastVisibleJnd(ans.judge), jo = leastVisibleJnd(opt.judge);
             if (std::isfinite(ja) && std::isfinite(jo) && std::isfinite(va) && std::isfinite(vo))
                 out += std::string(" Judge: ") +
-                       (defectKinds(ans["judge"]) > 1 ? "the least visible defect kind is "
-                                                      : "the defects are ") +
+                       (defectKinds(ans.judge) > 1 ? "the least visible defect kind is "
+                                                   : "the defects are ") +
                        jndPhrase(ja) + " under " + name + ", " + fmt(jo, 3) +
                        " JND under the optimized light (visibility ratio " + fmt(va, 3) + " vs " +
                        fmt(vo, 3) + "), on an independent " + spp + "-spp estimate." +
-                       worstLabelSentence(ans["judge"], lamp.value("judge", json::object()));
+                       worstLabelSentence(ans.judge, lamp.judge);
             else if (std::isfinite(va) && std::isfinite(vo))
                 out += " Judge: defect visibility " + fmt(va, 3) + " (" + name + ") vs " +
                        fmt(vo, 3) + " (optimized), on an independent " + spp + "-spp estimate." +
-                       worstLabelSentence(ans["judge"], lamp.value("judge", json::object()));
+                       worstLabelSentence(ans.judge, lamp.judge);
             else
-                out += " Judge: U " + fmt(num(ans["judge"], "unbiased"), 3) + " (" + name +
-                       ") vs " + fmt(num(opt["judge"], "unbiased"), 3) +
+                out += " Judge: U " + fmt(ans.judge->unbiased, 3) + " (" + name + ") vs " +
+                       fmt(opt.judge->unbiased, 3) +
                        " (optimized; lower is better), on an independent " + spp + "-spp estimate.";
         }
         return out;
     }
-    if (opt.contains("judge")) {
-        const std::string spp = fmt(num(cmp, "judge_spp"), 6);
-        const double vo = combinedVisibility(opt["judge"]), vl = combinedVisibility(lamp["judge"]),
-                     vp = combinedVisibility(paper["judge"]);
+    if (opt.judge) {
+        const double vo = combinedVisibility(opt.judge), vl = combinedVisibility(lamp.judge),
+                     vp = combinedVisibility(paper.judge);
         if (std::isfinite(vo) && std::isfinite(vl) && std::isfinite(vp)) {
-            out = jndSentence(opt["judge"], lamp["judge"], paper["judge"], underLamp,
-                              cmp.value("viewing", json::object()));
-            out += lampNotChosen(s, leastVisibleJnd(opt["judge"]), leastVisibleJnd(lamp["judge"]),
-                                 lamp.value("name", std::string()));
+            out = jndSentence(opt.judge, lamp.judge, paper.judge, underLamp, cmp.viewing);
+            out += lampNotChosen(s, leastVisibleJnd(opt.judge), leastVisibleJnd(lamp.judge),
+                                 lamp.name);
             if (out.empty()) {  // no JND: the visibility ratio is the visibility
                 out = "Under the optimized light the defects are " + moreVisible(vo, vl, underLamp);
                 out += " and " + moreVisible(vo, vp, "under the paper's light");
@@ -435,11 +440,12 @@ std::string optimizeHeadline(const json& s) {
                        " (your lamp) vs " + fmt(vp, 3);
             }
             out += " (paper's light), on an independent " + spp + "-spp estimate.";
-            out += worstLabelSentence(opt["judge"], lamp["judge"]);
+            out += worstLabelSentence(opt.judge, lamp.judge);
             return out;
         }
-        const double uo = num(opt["judge"], "unbiased"), ul = num(lamp["judge"], "unbiased"),
-                     up = num(paper["judge"], "unbiased");
+        const double uo = opt.judge->unbiased,
+                     ul = judged(lamp.judge, &outdir::JudgedLight::unbiased),
+                     up = judged(paper.judge, &outdir::JudgedLight::unbiased);
         out =
             "No defect region is known, so the judge's loss U (image gradient over the part, "
             "noise-unbiased; lower is better) stands for visibility: under the optimized "
@@ -450,15 +456,18 @@ std::string optimizeHeadline(const json& s) {
                ", on an independent " + spp + "-spp estimate).";
         return out;
     }
-    const json& to = opt.value("training", json::object());
-    const double lo = num(to, "loss"), ll = num(lamp.value("training", json::object()), "loss"),
-                 lp = num(paper.value("training", json::object()), "loss");
-    out = "Training figures only (no judge's estimate was asked for): the " +
-          cmp.value("objective", std::string("objective")) +
+    const double lo = opt.trainingLoss, ll = lamp.trainingLoss, lp = paper.trainingLoss;
+    out = "Training figures only (no judge's estimate was asked for): the " + objective +
           " loss (lower is better) under the optimized light is " + lowerLoss(lo, ll, underLamp);
     out += " and " + lowerLoss(lo, lp, underPaper);
     out += " (" + fmt(lo, 3) + " vs " + fmt(ll, 3) + " vs " + fmt(lp, 3) + ").";
     return out;
+}
+
+}  // namespace
+
+std::string optimizeHeadline(const json& s) {
+    return headlineOf(outdir::optimizeSummaryFromJson(s, "summary.json"));
 }
 
 std::string heightmapSentence(const json& hm) {
@@ -489,22 +498,21 @@ std::string heightmapSentence(const json& hm) {
 }
 
 std::string optimizeHeadlineOf(const std::filesystem::path& outDir) {
-    return optimizeHeadline(outdir::readOptimizeSummary(outDir).document);
+    return headlineOf(outdir::readOptimizeSummary(outDir));
 }
 
 std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
                                      const std::string& figureProblem) {
     const outdir::OptimizeSummary summary = outdir::readOptimizeSummary(dir);
     const json& s = summary.document;
-    const json cmp = summary.compare.is_object() ? summary.compare : json::object();
-    const json lamp = cmp.value("lamp", json::object()), paper = cmp.value("paper", json::object()),
-               opt = cmp.value("optimized", json::object());
-    const std::string lampName = lamp.value("name", std::string("studio preset"));
-    const std::string headline = optimizeHeadline(s);
+    const outdir::Comparison cmp = summary.comparison.value_or(outdir::Comparison{});
+    const outdir::ComparedLight &lamp = cmp.lamp, &paper = cmp.paper, &opt = cmp.optimized;
+    const std::string lampName = lampNameOf(cmp);
+    const std::string objective = cmp.objective.empty() ? "objective" : cmp.objective;
+    const std::string headline = headlineOf(summary);
     // Worse than the lamp: in JND when the judge has it (the visibility; a ratio below the
     // lamp's only says the texture shows more too), else by the ratio or U.
-    const double jndOpt = opt.contains("judge") ? leastVisibleJnd(opt["judge"]) : std::nan(""),
-                 jndLamp = lamp.contains("judge") ? leastVisibleJnd(lamp["judge"]) : std::nan("");
+    const double jndOpt = leastVisibleJnd(opt.judge), jndLamp = leastVisibleJnd(lamp.judge);
     const bool referenceWon = s.contains("answer") && s["answer"].is_object() &&
                               s["answer"].value("kind", std::string()) == "reference";
     const bool worse = std::isfinite(jndOpt) && std::isfinite(jndLamp)
@@ -546,8 +554,7 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
           << "the paper's method run "
           << "on our T (eq. 2, λ 30, Adam lr 0.02 × 100 from E₀ = 0.5), not the paper's own "
           << "result.";
-        if (cmp.contains("regions") && !cmp["regions"].get<std::string>().empty())
-            f << " Defect regions: " << cmp["regions"].get<std::string>() << ".";
+        if (cmp.regions && !cmp.regions->empty()) f << " Defect regions: " << *cmp.regions << ".";
         h << "<p class=\"found\">" << escapeXml(f.str()) << "</p>\n";
     }
     if (s.contains("heightmap") && s["heightmap"].is_object())
@@ -597,7 +604,7 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
          "percentile at 0.8), as a camera would. Drag the slider to move between your lamp ("
       << escapeXml(lampName) << ") on the left and the optimized light on the right.";
     if (regions)
-        h << " Outlines: " << escapeXml(cmp.value("regions", std::string("defect regions")))
+        h << " Outlines: " << escapeXml(cmp.regions.value_or("defect regions"))
           << " (red 255, orange 224, magenta 192, yellow 160, cyan 144, blue 128).";
     h << "</p>\n";
     if (std::filesystem::exists(dir / outdir::kViewPaper))
@@ -623,8 +630,9 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
     h << "<section id=\"metrics\"><h2>The numbers</h2>\n";
     h << "<table class=\"compare\"><thead><tr><th></th><th>your lamp (" << escapeXml(lampName)
       << ")</th><th>paper's light</th><th>optimized</th></tr></thead><tbody>\n";
-    if (opt.contains("judge")) {
-        const json &jl = lamp["judge"], &jp = paper["judge"], &jo = opt["judge"];
+    if (opt.judge) {
+        const Judged &jl = lamp.judge, &jp = paper.judge, &jo = opt.judge;
+        using L = outdir::JudgedLight;
         // JND first (as a person sees it: README "Visibility in JND"), the ratio beside it.
         if (std::isfinite(leastVisibleJnd(jo))) {
             h << compareRow("judge: JND of the least visible defect kind", leastVisibleJnd(jl),
@@ -635,43 +643,43 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
         }
         h << compareRow("judge: defect visibility (all regions)", combinedVisibility(jl),
                         combinedVisibility(jp), combinedVisibility(jo), 0);
-        if (jo.contains("visibility"))
-            for (size_t k = 0; k < jo["visibility"].size(); ++k) {
-                const std::string name = jo["visibility"][k].value("name", std::string("?"));
-                auto at = [&](const json& j, const char* key) {
-                    return j.contains("visibility") && k < j["visibility"].size()
-                               ? num(j["visibility"][k], key)
-                               : std::nan("");
+        if (jo->regions)
+            for (size_t k = 0; k < jo->regions->size(); ++k) {
+                const std::string& named = (*jo->regions)[k].name;
+                const std::string name = named.empty() ? std::string("?") : named;
+                auto at = [&](const Judged& j, double outdir::JudgedRegion::*figure) {
+                    return j && j->regions && k < j->regions->size() ? (*j->regions)[k].*figure
+                                                                     : std::nan("");
                 };
-                if (std::isfinite(at(jo, "jnd")))
-                    h << compareRow("judge: JND of " + name, at(jl, "jnd"), at(jp, "jnd"),
-                                    at(jo, "jnd"), 0);
-                h << compareRow("judge: visibility of " + name, at(jl, "visibility"),
-                                at(jp, "visibility"), at(jo, "visibility"), 0);
-                h << compareRow("judge: contrast of " + name, at(jl, "contrast"),
-                                at(jp, "contrast"), at(jo, "contrast"), 0);
+                using R = outdir::JudgedRegion;
+                if (std::isfinite(at(jo, &R::jnd)))
+                    h << compareRow("judge: JND of " + name, at(jl, &R::jnd), at(jp, &R::jnd),
+                                    at(jo, &R::jnd), 0);
+                h << compareRow("judge: visibility of " + name, at(jl, &R::visibility),
+                                at(jp, &R::visibility), at(jo, &R::visibility), 0);
+                h << compareRow("judge: contrast of " + name, at(jl, &R::contrast),
+                                at(jp, &R::contrast), at(jo, &R::contrast), 0);
             }
-        h << compareRow("judge: U (lower is better)", num(jl, "unbiased"), num(jp, "unbiased"),
-                        num(jo, "unbiased"), 1);
-        h << compareRow("judge: eq. 2 (lower is better)", num(jl, "eq2"), num(jp, "eq2"),
-                        num(jo, "eq2"), 1);
-        h << compareRow("brightness (white sky = 1)", num(jl, "brightness"), num(jp, "brightness"),
-                        num(jo, "brightness"), -1);
-        h << compareRow("mean E", num(jl, "mean_E"), num(jp, "mean_E"), num(jo, "mean_E"), -1);
-        h << compareRow("share of dark texels", num(jl, "sparsity"), num(jp, "sparsity"),
-                        num(jo, "sparsity"), -1);
+        h << compareRow("judge: U (lower is better)", judged(jl, &L::unbiased),
+                        judged(jp, &L::unbiased), judged(jo, &L::unbiased), 1);
+        h << compareRow("judge: eq. 2 (lower is better)", judged(jl, &L::eq2), judged(jp, &L::eq2),
+                        judged(jo, &L::eq2), 1);
+        h << compareRow("brightness (white sky = 1)", judged(jl, &L::brightness),
+                        judged(jp, &L::brightness), judged(jo, &L::brightness), -1);
+        h << compareRow("mean E", judged(jl, &L::meanE), judged(jp, &L::meanE),
+                        judged(jo, &L::meanE), -1);
+        h << compareRow("share of dark texels", judged(jl, &L::sparsity), judged(jp, &L::sparsity),
+                        judged(jo, &L::sparsity), -1);
     }
-    auto training = [](const json& j) { return num(j.value("training", json::object()), "loss"); };
-    h << compareRow(
-        "training loss (" + cmp.value("objective", std::string("objective")) + ", lower is better)",
-        training(lamp), training(paper), training(opt), 1);
+    h << compareRow("training loss (" + objective + ", lower is better)", lamp.trainingLoss,
+                    paper.trainingLoss, opt.trainingLoss, 1);
     // The held-out figures of the run: the objective it optimized on the independent estimate,
     // and U there (scored for the returned light only).
     if (s.contains("heldout_loss") && s["heldout_loss"].is_number()) {
         const double nan = std::nan("");
-        h << compareRow("held out: the " + cmp.value("objective", std::string("objective")) +
-                            " loss on the independent estimate (lower is better)",
-                        nan, nan, num(s, "heldout_loss"), -1);
+        h << compareRow(
+            "held out: the " + objective + " loss on the independent estimate (lower is better)",
+            nan, nan, num(s, "heldout_loss"), -1);
         if (s.contains("heldout_U"))
             h << compareRow("held out: U on the independent estimate (lower is better)", nan, nan,
                             num(s, "heldout_U"), -1);

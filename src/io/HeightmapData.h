@@ -1,0 +1,39 @@
+// A height map as a reader returns it (HeightmapData) and the size limits of the measured
+// formats' headers: what loadHeightmap (io/HeightmapIO.h, which documents every format) and each
+// format's reader (io/X3p.h, io/Sdf.h, io/GwyddionReader.h) share, so that none of them includes
+// the dispatcher that includes it.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace sl {
+
+struct HeightmapData {
+    int width = 0, height = 0;
+    std::vector<float> heights;   // row-major, row 0 first (width * height values)
+    std::string format;           // e.g. "exr float32", "png uint16", "npy float64"
+    std::optional<double> pitch;  // measured maps: the sample spacing (mm); unset otherwise
+    /// The file's Y spacing (mm) when it differs from its X spacing; after loadHeightmap the map
+    /// is square at `pitch` and this is unset (resampling says what was done).
+    std::optional<double> pitchY;
+    size_t invalidFilled = 0;  // measured maps: invalid points filled (io/HeightmapIO.h)
+    /// Per sample, 1 where the height was invented (an invalid point filled, or interpolated
+    /// from one); empty when every height is measured. Levelling fits the others only.
+    std::vector<uint8_t> invalid;
+    std::string resampling;             // "" or how non-square pixels were made square
+    std::vector<std::string> warnings;  // what an imperfect file made the reader assume
+    /// A measured map (X3P, SDF, an instrument format): carries its pitch and heights in mm.
+    bool measured() const { return pitch.has_value(); }
+};
+
+namespace detail {
+/// Largest side and sample count an X3P or SDF header may claim (a larger claim is refused).
+inline constexpr long long kMaxMetrologySide = 1000000;
+inline constexpr long long kMaxMetrologySamples = 400000000;
+}  // namespace detail
+
+}  // namespace sl
