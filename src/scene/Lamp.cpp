@@ -51,7 +51,7 @@ void gaussLegendre(int n, std::vector<double>& x, std::vector<double>& w) {
     }
 }
 
-constexpr double kTail = 5.8;  // S is cut to 0 / 1 beyond ±kTail (erfc(5.8)/2 < 1e-16)
+constexpr double kTail = 5.8;  // S is cut to 0 / 1 beyond ±kTail (erfc(5.8)/2 = 1.2e-16)
 
 /// S(t) = ½(1 + erf t) and S'(t) = exp(−t²)/√π on [−kTail, kTail] by Taylor polynomials about
 /// the nearest node of a grid of spacing δ = 1/64 (lamp_detail::tabulatedStep): S^(k) at each
@@ -98,7 +98,7 @@ const StepTable& stepTable() {
     return table;
 }
 
-/// S(t) with its tails cut where they are below 1e-16 (no erf there).
+/// S(t) with its tails cut where they are below 1.2e-16 (no erf there).
 double stepFast(double t) {
     if (t < -kTail) return 0.0;
     if (t > kTail) return 1.0;

@@ -120,7 +120,7 @@ inline double smoothStep(double t) {
 }
 
 /// S(t) and S'(t) as the rasterizer evaluates them (the hot loop of a lamp fit): 0 / 1 and 0
-/// beyond |t| > 5.8 (erfc(5.8)/2 < 1e-16), inside it degree-6 (S) and degree-5 (S') Taylor
+/// beyond |t| > 5.8 (erfc(5.8)/2 = 1.2e-16), inside it degree-6 (S) and degree-5 (S') Taylor
 /// polynomials about the nearest node of a grid of spacing δ = 1/64 whose coefficients are
 /// S's derivatives there (S^(k+1) = (−1)^k H_k(t) S'(t)), computed once with std::erfc and
 /// std::exp. The Taylor remainder, |u| ≤ δ/2 and max|S^(7)| = max|H_6 e^(−t²)|/√π = 120/√π:
@@ -163,7 +163,7 @@ T step(const T& t) {
     using std::erf;
     return 0.5 * (erf(t) + 1.0);
 }
-/// The same on Dual numbers, constant where the tails are below 1e-16 (no erf, no exp).
+/// The same on Dual numbers, constant where the tails are below 1.2e-16 (no erf, no exp).
 template <int N>
 Dual<N> step(const Dual<N>& t) {
     if (t.v < -5.8) return Dual<N>(0.0);
