@@ -298,6 +298,29 @@ TEST(LampRaster, HandWrittenDerivativesEqualTheDualReference) {
     }
 }
 
+TEST(LampRaster, TabulatedStepIsErfAndItsSlopeWithinItsBound) {
+    // lamp_detail::tabulatedStep against std::erf and std::exp on a grid 1/4096 apart (64 points
+    // between two of its nodes, its nodes and midpoints included) over [-6, 6]: within the
+    // Taylor remainder it states (3e-17 and 3e-14) plus rounding; 0 / 1 and 0 beyond ±5.8.
+    double worstS = 0, worstDs = 0;
+    for (int k = -6 * 4096; k <= 6 * 4096; ++k) {
+        const double t = k / 4096.0;
+        double s, ds;
+        lamp_detail::tabulatedStep(t, s, ds);
+        if (std::abs(t) > 5.8) {
+            ASSERT_EQ(s, t < 0 ? 0.0 : 1.0) << t;
+            ASSERT_EQ(ds, 0.0) << t;
+            continue;
+        }
+        worstS = std::max(worstS, std::abs(s - 0.5 * std::erfc(-t)));
+        worstDs = std::max(worstDs, std::abs(ds - std::exp(-t * t) / std::sqrt(kPi)));
+    }
+    EXPECT_LT(worstS, 5e-16);
+    EXPECT_LT(worstDs, 5e-14);
+    // Cut at ±5.8 as the Dual step is: what is cut is below 1.2e-16.
+    EXPECT_LT(0.5 * std::erfc(5.8), 1.2e-16);
+}
+
 TEST(LampRaster, KindsParseFromTheirTable) {
     for (const auto& row : lampKindTable()) EXPECT_EQ(parseLampKind(row.name), row.value);
     EXPECT_THROW(parseLampKind("dome"), InputError);

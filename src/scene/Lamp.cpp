@@ -1,6 +1,7 @@
 #include "scene/Lamp.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <utility>
@@ -50,10 +51,60 @@ void gaussLegendre(int n, std::vector<double>& x, std::vector<double>& w) {
     }
 }
 
-/// S(t) with its tails cut where they are below 1e-16 (no erf there).
-constexpr double kTail = 5.8;
+constexpr double kTail = 5.8;  // S is cut to 0 / 1 beyond ±kTail (erfc(5.8)/2 = 1.2e-16)
+
+/// S(t) = ½(1 + erf t) and S'(t) = exp(−t²)/√π on [−kTail, kTail] by Taylor polynomials about
+/// the nearest node of a grid of spacing δ = 1/64 (lamp_detail::tabulatedStep): S^(k) at each
+/// node, k = 0..6, are S, then S^(k) = (−1)^(k−1) H_(k−1)(t) S'(t) (H the physicists' Hermite
+/// polynomials), computed once with std::erfc and std::exp.
+struct StepTable {
+    static constexpr int kPerUnit = 64;
+    static constexpr int kNodes = static_cast<int>(2 * kTail * kPerUnit) + 2;
+    std::vector<std::array<double, 7>> c;  // S^(k)(t_n) / k!
+
+    StepTable() : c(static_cast<size_t>(kNodes)) {
+        constexpr double kInvSqrtPi = 0.5641895835477562869;
+        for (int n = 0; n < kNodes; ++n) {
+            const double t = -kTail + static_cast<double>(n) / kPerUnit;
+            const double g = kInvSqrtPi * std::exp(-t * t);
+            double hm = 1, h = 2 * t;  // H_0, H_1
+            std::array<double, 7>& a = c[static_cast<size_t>(n)];
+            a[0] = t < 0 ? 0.5 * std::erfc(-t) : 1 - 0.5 * std::erfc(t);
+            a[1] = g;
+            double factorial = 1, sign = -1;
+            for (int k = 2; k <= 6; ++k) {
+                factorial *= k;
+                a[static_cast<size_t>(k)] = sign * h * g / factorial;  // H_(k−1) S' / k!
+                const double next = 2 * t * h - 2 * (k - 1) * hm;      // H_k
+                hm = h;
+                h = next;
+                sign = -sign;
+            }
+        }
+    }
+    void eval(double t, double& s, double& ds) const {
+        const double x = (t + kTail) * kPerUnit;
+        const auto n = static_cast<size_t>(x + 0.5);
+        const double u = t - (-kTail + static_cast<double>(n) / kPerUnit);
+        const double* a = c[n].data();
+        s = a[0] + u * (a[1] + u * (a[2] + u * (a[3] + u * (a[4] + u * (a[5] + u * a[6])))));
+        ds =
+            a[1] + u * (2 * a[2] + u * (3 * a[3] + u * (4 * a[4] + u * (5 * a[5] + u * 6 * a[6]))));
+    }
+};
+
+const StepTable& stepTable() {
+    static const StepTable table;
+    return table;
+}
+
+/// S(t) with its tails cut where they are below 1.2e-16 (no erf there).
 double stepFast(double t) {
-    return t < -kTail ? 0.0 : (t > kTail ? 1.0 : lamp_detail::smoothStep(t));
+    if (t < -kTail) return 0.0;
+    if (t > kTail) return 1.0;
+    double s, ds;
+    stepTable().eval(t, s, ds);
+    return s;
 }
 
 /// The lamp's membership as membership<double>, with early outs far from the edges (the hot
@@ -105,6 +156,9 @@ struct NodeDerivatives {
     LampKind kind;
     double h, a, b, lo, hi, cosA, sinA, hSinA, cotA, sinYLimit;
     lamp_detail::Frame<double> f;
+    // Reciprocals (a multiply where a division stalled the loop), and a bar's reach along its
+    // axis as the tangent of |x| beyond which both its x factors are 0 (−1: no such limit).
+    double invH, invHSinA, tanXLimit;
     // ∂c, ∂e1, ∂e2 by (φ, ε, ρ) (vectors), from frame<Dual<3>>.
     double dc[3][3], de1[3][3], de2[3][3];
 
@@ -120,7 +174,10 @@ struct NodeDerivatives {
           hSinA(edge * std::sin(l.size)),
           cotA(std::cos(l.size) / std::sin(l.size)),
           sinYLimit(l.width + kTail * edge < kPi / 2 ? std::sin(l.width + kTail * edge) : 2.0),
-          f(lamp_detail::frame<double>(l.azimuth, l.elevation, l.roll)) {
+          f(lamp_detail::frame<double>(l.azimuth, l.elevation, l.roll)),
+          invH(1 / edge),
+          invHSinA(1 / (edge * std::sin(l.size))),
+          tanXLimit(l.size + kTail * edge < kPi / 2 ? std::tan(l.size + kTail * edge) : -1.0) {
         using D3 = Dual<3>;
         const auto fd = lamp_detail::frame<D3>(
             D3::variable(l.azimuth, 0), D3::variable(l.elevation, 1), D3::variable(l.roll, 2));
@@ -136,7 +193,6 @@ struct NodeDerivatives {
     }
     /// S and S' at t (0 beyond the tails, as stepFast).
     static void stepAndSlope(double t, double& s, double& ds) {
-        constexpr double kInvSqrtPi = 0.5641895835477562869;
         if (t < -kTail) {
             s = 0;
             ds = 0;
@@ -144,63 +200,66 @@ struct NodeDerivatives {
             s = 1;
             ds = 0;
         } else {
-            s = lamp_detail::smoothStep(t);
-            ds = kInvSqrtPi * std::exp(-t * t);
+            stepTable().eval(t, s, ds);
         }
     }
     /// m and, into g, ∂m/∂(φ, ε, a, b, ρ) (zero where m is exactly 0 or 1).
     double operator()(const Vec3d& d, double elevation, double g[5]) const {
         switch (kind) {
             case LampKind::Disk: {
-                const double t = (dot3(f.c, d) - cosA) / hSinA;
+                const double t = (dot3(f.c, d) - cosA) * invHSinA;
                 double s, ds;
                 stepAndSlope(t, s, ds);
-                g[0] = ds * dot3(dc[0], d) / hSinA;
-                g[1] = ds * dot3(dc[1], d) / hSinA;
-                g[2] = ds * (1 / h - t * cotA);
+                const double k = ds * invHSinA;
+                g[0] = k * dot3(dc[0], d);
+                g[1] = k * dot3(dc[1], d);
+                g[2] = ds * (invH - t * cotA);
                 g[3] = 0;
-                g[4] = ds * dot3(dc[2], d) / hSinA;
+                g[4] = k * dot3(dc[2], d);
                 return s;
             }
             case LampKind::Bar: {
                 const double r = dot3(f.e2, d);
                 for (int k = 0; k < 5; ++k) g[k] = 0;
                 if (std::abs(r) >= sinYLimit) return 0.0;  // across the bar, beyond its edge
+                // Along the axis beyond a + kTail·h (|x| past atan of tanXLimit, or behind the
+                // centre's hemisphere) both x factors and their slopes are 0: no atan2.
+                const double p = dot3(f.e1, d), q = dot3(f.c, d);
+                if (tanXLimit > 0 && (q <= 0 || std::abs(p) > q * tanXLimit)) return 0.0;
                 const double y = std::asin(r);
                 double sb1, db1, sb2, db2;
-                stepAndSlope((b - y) / h, sb1, db1);
-                stepAndSlope((b + y) / h, sb2, db2);
+                stepAndSlope((b - y) * invH, sb1, db1);
+                stepAndSlope((b + y) * invH, sb2, db2);
                 const double sb = sb1 * sb2;
                 if (sb == 0) return 0.0;
-                const double p = dot3(f.e1, d), q = dot3(f.c, d);
                 const double x = std::atan2(p, q);
                 double sa1, da1, sa2, da2;
-                stepAndSlope((a - x) / h, sa1, da1);
-                stepAndSlope((a + x) / h, sa2, da2);
+                stepAndSlope((a - x) * invH, sa1, da1);
+                stepAndSlope((a + x) * invH, sa2, da2);
                 const double sa = sa1 * sa2;
-                const double mx = (-da1 * sa2 + sa1 * da2) * sb / h;
-                const double my = sa * (-db1 * sb2 + sb1 * db2) / h;
-                const double pq = p * p + q * q, ry = 1 / std::sqrt(1 - r * r);
+                const double mx = (-da1 * sa2 + sa1 * da2) * sb * invH;
+                const double my = sa * (-db1 * sb2 + sb1 * db2) * invH;
+                const double invPq = 1 / (p * p + q * q), ry = 1 / std::sqrt(1 - r * r);
                 double dm[3];
                 for (int k = 0; k < 3; ++k) {
-                    const double dx = (q * dot3(de1[k], d) - p * dot3(dc[k], d)) / pq;
+                    const double dx = (q * dot3(de1[k], d) - p * dot3(dc[k], d)) * invPq;
                     const double dy = dot3(de2[k], d) * ry;
                     dm[k] = mx * dx + my * dy;
                 }
                 g[0] = dm[0];
                 g[1] = dm[1];
-                g[2] = (da1 * sa2 + sa1 * da2) * sb / h;
-                g[3] = sa * (db1 * sb2 + sb1 * db2) / h;
+                g[2] = (da1 * sa2 + sa1 * da2) * sb * invH;
+                g[3] = sa * (db1 * sb2 + sb1 * db2) * invH;
                 g[4] = dm[2];
                 return sa * sb;
             }
             case LampKind::Ring: {
                 double s1, d1, s2, d2;
-                stepAndSlope((elevation - lo) / h, s1, d1);
-                stepAndSlope((elevation - hi) / h, s2, d2);
+                stepAndSlope((elevation - lo) * invH, s1, d1);
+                stepAndSlope((elevation - hi) * invH, s2, d2);
                 g[0] = 0;
-                g[1] = (-d1 + d2) / h;
-                g[2] = (d1 + d2) / h;
+                g[1] = (-d1 + d2) * invH;
+                g[2] = (d1 + d2) * invH;
                 g[3] = 0;
                 g[4] = 0;
                 return s1 - s2;
@@ -216,6 +275,17 @@ double angleBetween(const Vec3d& a, const Vec3d& b) {
 }
 
 }  // namespace
+
+namespace lamp_detail {
+void tabulatedStep(double t, double& s, double& ds) {
+    if (t < -kTail || t > kTail) {
+        s = t < 0 ? 0.0 : 1.0;
+        ds = 0;
+        return;
+    }
+    stepTable().eval(t, s, ds);
+}
+}  // namespace lamp_detail
 
 std::span<const LampKindRow> lampKindTable() {
     return kLampKinds;

@@ -43,9 +43,11 @@
 // exp(−t²)/√π times the frame's derivatives, reusing the value's erf): equal to the Dual ones
 // to 1e-12 on random lamps. That cut the fit's rasterization by only ~10 % per evaluation
 // (perf, `lamps part.tm --count 3` on the bundled part at 256²: 2.3 → 2.0 ms of CPU an
-// evaluation): most of it is libm's erf, exp, atan2 and asin at the nodes of the edges' soft
-// band (±5.8 h), which both paths evaluate. Which cells a lamp can touch is one dot product
-// per cell against cos(reach + the cell's radius).
+// evaluation): most of it was libm's erf, exp, atan2 and asin at the nodes of the edges' soft
+// band (±5.8 h), which both paths evaluate. So S and S' are tabulated (lamp_detail::
+// tabulatedStep: Taylor polynomials on a grid, within 3e-14 of erf and exp); the Dual
+// reference keeps std::erf. Which cells a lamp can touch is one dot product per cell against
+// cos(reach + the cell's radius).
 #pragma once
 
 #include <algorithm>
@@ -117,6 +119,16 @@ inline double smoothStep(double t) {
     return 0.5 * (1.0 + std::erf(t));
 }
 
+/// S(t) and S'(t) as the rasterizer evaluates them (the hot loop of a lamp fit): 0 / 1 and 0
+/// beyond |t| > 5.8 (erfc(5.8)/2 = 1.2e-16), inside it degree-6 (S) and degree-5 (S') Taylor
+/// polynomials about the nearest node of a grid of spacing δ = 1/64 whose coefficients are
+/// S's derivatives there (S^(k+1) = (−1)^k H_k(t) S'(t)), computed once with std::erfc and
+/// std::exp. The Taylor remainder, |u| ≤ δ/2 and max|S^(7)| = max|H_6 e^(−t²)|/√π = 120/√π:
+/// |S − Ŝ| ≤ 67.7·(1/128)^7/7! < 3e-17 and |S' − Ŝ'| ≤ 67.7·(1/128)^6/6! < 3e-14, plus
+/// rounding (tests/test_lamps.cpp checks both against std::erf and std::exp on a dense grid).
+/// It costs a few multiply-adds where erf and exp cost ~10× that.
+void tabulatedStep(double t, double& s, double& ds);
+
 /// The lamp's frame from its angles: centre c, along-axis e1, across e2 (see above).
 template <class T>
 struct Frame {
@@ -151,7 +163,7 @@ T step(const T& t) {
     using std::erf;
     return 0.5 * (erf(t) + 1.0);
 }
-/// The same on Dual numbers, constant where the tails are below 1e-16 (no erf, no exp).
+/// The same on Dual numbers, constant where the tails are below 1.2e-16 (no erf, no exp).
 template <int N>
 Dual<N> step(const Dual<N>& t) {
     if (t.v < -5.8) return Dual<N>(0.0);
