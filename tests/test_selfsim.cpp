@@ -209,6 +209,80 @@ TEST(SelfSimMap, TheTexturesOwnTailDropsItsParticlesAndKeepsThePit) {
     EXPECT_GT(b.droppedTexture, 0u);
 }
 
+// Step 8 keeps a weak defect's flanks and revives no texture mark. (1) Striations with a
+// shallow groove, 6 samples wide and 6 noise σ deep, labelled where it is at least a tenth of
+// its depth: its outer labelled samples stand below the growth at 2.5 σ. With step 8 more of it
+// is marked, and every sample step 8 adds lies next to a region kept without it, below the
+// region's sign (the groove's), under growSigma; nothing is removed and no region added.
+// (2) The particles of TheTexturesOwnTailDropsItsParticlesAndKeepsThePit, which step 7 drops,
+// and a pit three times deeper than the striations: a tenth of the pit's peak score is above
+// growSigma, so step 8 adds nothing there, and the particles stay dropped: the same map.
+TEST(SelfSimMap, TheFlanksOfAWeakDefectAreMarkedAndNoDroppedRegionIsRevived) {
+    std::vector<float> h = striations(21);
+    std::vector<uint8_t> truth(h.size(), 0);
+    groove(h, truth, 70, 150, 190, 135, 6, 0.3);
+    SelfSimMapOptions off;
+    off.extendSteps = 0;
+    const SelfSimMapOptions on;
+    ASSERT_EQ(on.extendSteps, 1);
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
+                     b = detectSelfSimDefects(h, kW, kH, on);
+    EXPECT_EQ(a.extended, 0u);
+    EXPECT_EQ(b.regions, a.regions) << "step 8 adds no region";
+    const Counts ga = count(a.map, truth, on.border), gb = count(b.map, truth, on.border);
+    EXPECT_GE(ga.hits, ga.truth / 2) << "the groove is kept";
+    EXPECT_GE(gb.hits, ga.hits + 10) << "its flanks: " << ga.hits << " of " << ga.truth
+                                     << " without step 8, " << gb.hits << " with";
+    size_t added = 0, addedOnTruth = 0;
+    for (int y = 1; y + 1 < kH; ++y)
+        for (int x = 1; x + 1 < kW; ++x) {
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            if (a.map[i]) {
+                EXPECT_TRUE(b.map[i]) << "step 8 removes nothing";
+                continue;
+            }
+            if (!b.map[i]) continue;
+            ++added;
+            addedOnTruth += truth[i] ? 1 : 0;
+            EXPECT_LT(b.residual[i], 0.0f) << "the groove's sign at " << x << "," << y;
+            // below the growth (its score is |r − the residual's median|/σ; that median is a
+            // small share of σ here)
+            EXPECT_LT(std::abs(b.residual[i]), (on.growSigma + 0.5) * b.sigma)
+                << "below the growth";
+            bool nextToKept = false;
+            for (int qy = y - 1; qy <= y + 1; ++qy)
+                for (int qx = x - 1; qx <= x + 1; ++qx)
+                    nextToKept = nextToKept || a.map[static_cast<size_t>(qy) * kW + qx];
+            EXPECT_TRUE(nextToKept) << "a sample away from every kept region at " << x << "," << y;
+        }
+    EXPECT_EQ(added, b.extended);
+    EXPECT_GE(addedOnTruth * 10, added * 8) << "what step 8 adds is mostly the groove's";
+
+    // (2) the particles stay dropped, the deep pit is kept as it was
+    std::vector<float> p = striations(11);
+    std::mt19937 rng(12);
+    std::uniform_real_distribution<double> ux(48, kW - 48), uy(48, kH - 48);
+    std::exponential_distribution<double> amplitude(1.0 / 0.2);
+    for (int k = 0; k < 400; ++k) {
+        const double cx = ux(rng), cy = uy(rng), amp = amplitude(rng);
+        for (int y = static_cast<int>(cy) - 4; y <= static_cast<int>(cy) + 4; ++y)
+            for (int x = static_cast<int>(cx) - 4; x <= static_cast<int>(cx) + 4; ++x) {
+                const double d2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
+                p[static_cast<size_t>(y) * kW + x] +=
+                    static_cast<float>(amp * std::exp(-d2 / (2 * 1.2 * 1.2)));
+            }
+    }
+    std::vector<uint8_t> pitTruth(p.size(), 0);
+    pit(p, pitTruth, 128, 112, 6, 3.0);
+    const SelfSimMap c = detectSelfSimDefects(p, kW, kH, off),
+                     d = detectSelfSimDefects(p, kW, kH, on);
+    EXPECT_GT(d.droppedTexture, 0u) << "step 7 dropped particles";
+    const Counts pd = count(d.map, pitTruth, on.border);
+    EXPECT_GE(pd.hits, pd.truth * 8 / 10) << "the pit";
+    EXPECT_EQ(d.extended, 0u);
+    EXPECT_EQ(d.map, c.map);
+}
+
 TEST(SelfSimMap, GaussianTailInverseIsExact) {
     EXPECT_NEAR(gaussianTailInverse(0.5), 0.0, 1e-9);
     EXPECT_NEAR(gaussianTailInverse(0.05), 1.6448536269514722, 1e-9);
@@ -259,6 +333,15 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o = {};
     o.textureQuantile = 1.0;
     expectNamed(o, "selfsim-texture-quantile");
+    o = {};
+    o.extendSteps = -1;
+    expectNamed(o, "selfsim-extend-steps");
+    o = {};
+    o.extendSigma = 0;
+    expectNamed(o, "selfsim-extend-sigma");
+    o = {};
+    o.extendShare = 1.0;
+    expectNamed(o, "selfsim-extend-share");
 
     EXPECT_EQ(parseDefectMethod("selfsim"), DefectMethod::SelfSim);
     EXPECT_STREQ(defectMethodName(DefectMethod::SelfSim), "selfsim");

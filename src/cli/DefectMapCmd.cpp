@@ -365,6 +365,16 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--selfsim-texture-quantile", q.textureQuantile,
                   "selfsim: ... the tail starting at this quantile of the regions' peaks")
         ->capture_default_str();
+    c->add_option("--selfsim-extend-steps", q.extendSteps,
+                  "selfsim: a kept region grows this many samples further into its flanks (0: "
+                  "off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-extend-share", q.extendShare,
+                  "selfsim: ... into samples of its sign scoring at least this share of its peak")
+        ->capture_default_str();
+    c->add_option("--selfsim-extend-sigma", q.extendSigma,
+                  "selfsim: ... and at least this many robust sigmas")
+        ->capture_default_str();
     c->add_option("--kernel", m.paper.kernel, "paper: moving-average window, samples")
         ->capture_default_str();
     c->add_option("--patch", m.paper.patch, "paper: patch side, samples")->capture_default_str();

@@ -151,6 +151,13 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (o.growScale < 0 || o.growScale >= o.scales)
         throw inputError(option("selfsim-grow-scale"), "must be in 0..scales-1",
                          "The default is 0");
+    if (o.extendSteps < 0)
+        throw inputError(option("selfsim-extend-steps"), "must be >= 0",
+                         "The default is 1 (0: off)");
+    if (!(o.extendSigma > 0.0))
+        throw inputError(option("selfsim-extend-sigma"), "must be > 0", "The default is 1");
+    if (!(o.extendShare >= 0.0 && o.extendShare < 1.0))
+        throw inputError(option("selfsim-extend-share"), "must be in [0, 1)", "The default is 0.1");
     if (o.border < 0)
         throw inputError(option("selfsim-border"), "must be >= 0", "The default is 40");
     if (o.minRegion < 1)
@@ -438,6 +445,9 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
         for (const Region& reg : regions) peaks.push_back(reg.peak);
         out.textureThreshold = textureTailThreshold(peaks, o.textureQuantile, o.textureNfa);
     }
+    stack.clear();
+    std::vector<int8_t> regionSign(o.extendSteps > 0 ? n : 0, 0);
+    std::vector<float> regionLevel(regionSign.size(), 0.0f);
     for (const Region& reg : regions) {
         if (!(reg.peak >= thr) || static_cast<int>(reg.end - reg.begin) < o.minRegion) continue;
         if (o.textureRms > 0.0) {
@@ -458,7 +468,49 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             continue;
         }
         ++out.regions;
-        for (size_t k = reg.begin; k < reg.end; ++k) out.map[members[k]] = 255;
+        // step 8's sign: that of the region's largest |r| (a groove's or a dent's below the
+        // texture, a burr's or a particle's above)
+        size_t top = members[reg.begin];
+        for (size_t k = reg.begin; k < reg.end; ++k)
+            if (std::abs(out.residual[members[k]]) > std::abs(out.residual[top])) top = members[k];
+        const int8_t sign = out.residual[top] < 0.0f ? -1 : 1;
+        // ... and its level: extendShare of its peak score, at least extendSigma
+        const float level = std::max(static_cast<float>(o.extendSigma),
+                                     static_cast<float>(o.extendShare) * reg.peak);
+        for (size_t k = reg.begin; k < reg.end; ++k) {
+            out.map[members[k]] = 255;
+            if (regionSign.empty()) continue;
+            regionSign[members[k]] = sign;
+            regionLevel[members[k]] = level;
+            stack.push_back(members[k]);  // step 8's first frontier
+        }
+    }
+    // ---- step 8: the kept regions' flanks --------------------------------------------------
+    // a kept region grows `extendSteps` samples further, layer by layer, into samples whose
+    // residual has the region's sign and a score of at least its level (below growSigma): a
+    // defect's flanks and tapered ends, where its offset is a small share of its depth; only
+    // from regions steps 6-7 kept and only into samples below growSigma (those above it are
+    // another region, judged on its own: a texture region or one at the border is never
+    // revived), at most extendSteps samples from them
+    std::vector<size_t> next;
+    for (int step = 0; step < o.extendSteps && !stack.empty(); ++step) {
+        next.clear();
+        for (const size_t i : stack) {
+            const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
+            for (int qy = py - 1; qy <= py + 1; ++qy)
+                for (int qx = px - 1; qx <= px + 1; ++qx) {
+                    if (!inside(qx, qy)) continue;
+                    const size_t q = static_cast<size_t>(qy) * W + qx;
+                    if (out.map[q] || !(zGrow[q] >= regionLevel[i]) || zGrow[q] >= grow) continue;
+                    if ((out.residual[q] < 0.0f ? -1 : 1) != regionSign[i]) continue;
+                    out.map[q] = 255;
+                    regionSign[q] = regionSign[i];
+                    regionLevel[q] = regionLevel[i];
+                    ++out.extended;
+                    next.push_back(q);
+                }
+        }
+        stack.swap(next);
     }
     return out;
 }
