@@ -229,6 +229,38 @@ TEST(JudgeRounds, NextSppFollowsTheSquareOfTheErrorRatio) {
     EXPECT_EQ(w.score, "x: U");
 }
 
+// A reference (optimize's lamp and paper's light) is read only against the answer: its score's
+// SE may be up to a tenth of its gap to the answer's (at most 20 % of itself), the answer's is
+// held to 1 % (worstError; exact on scores whose SEs are given).
+TEST(JudgeRounds, AReferenceIsHeldToItsGapToTheAnswer) {
+    auto scored = [](const std::string& name, double u, double se) {
+        JudgeScore s;
+        s.name = name;
+        s.unbiased.total = u;
+        s.se = JudgeScore::Errors{};
+        s.se->unbiased = se;
+        return s;
+    };
+    const JudgeScore answer = scored("answer", 5.0, 0.04);  // 0.8 %
+    const JudgeScore paper = scored("paper", 12.0, 0.6);    // 5 %, 7 from the answer
+    const JudgeScore far = scored("answer", 400.0, 1.0);
+    EXPECT_NEAR(worstError(answer).excess, 0.8, 1e-12);
+    EXPECT_NEAR(worstError(paper).excess, 5.0, 1e-12);  // alone: 5 % against 1 %
+    WorstError w = worstError(paper, kJudgeMaxError, &answer);
+    EXPECT_NEAR(w.excess, 0.6 / 0.7, 1e-12);  // a tenth of the gap: 0.7
+    EXPECT_TRUE(w.byGap);
+    EXPECT_NEAR(w.relative, 0.05, 1e-12);
+    EXPECT_EQ(w.score, "paper: U");
+    // Near the answer (gap 0.5): a tenth of the gap (0.05) is below 1 % of itself (0.055).
+    w = worstError(scored("near", 5.5, 0.275), kJudgeMaxError, &answer);
+    EXPECT_NEAR(w.excess, 5.0, 1e-12);
+    EXPECT_FALSE(w.byGap);
+    // The cap: a tenth of a gap of 300 is 30, but at most 20 % of itself (20).
+    w = worstError(scored("far", 100.0, 30.0), kJudgeMaxError, &far);
+    EXPECT_NEAR(w.excess, 30.0 / 20.0, 1e-12);
+    EXPECT_EQ(nextJudgeSpp(64, w.excess, 1024, 1.0), 256);  // 64 · 2.25 = 144 -> 256
+}
+
 // judge.json records the estimate's spp, the rounds that chose it, and every score's SE.
 // The JND figures (perception/JndVisibility.h) have standard errors by the same bootstrap: over
 // 16 judge seeds at 256 spp, the region's JND moves by what one estimate's SE says (±45 %, as

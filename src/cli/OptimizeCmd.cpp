@@ -95,6 +95,23 @@ int runOptimize(OptimizeArgs a) {
                 pm(r.judged->unbiased.total, r.judged->se, &JudgeScore::Errors::unbiased).c_str(),
                 jndPart.c_str(), r.judged->meanE, 100.0 * r.judged->sparsity,
                 r.start.empty() ? "" : (", best start " + r.start).c_str());
+            // The lights it is compared with, each score with its standard error (their rounds:
+            // app/pipeline/Judge.h JudgeStopRule).
+            std::string refs;
+            for (const std::optional<JudgeScore>* x :
+                 {&r.judgedLamp, &r.judgedPaper, &r.judgedOptimized}) {
+                if (!*x) continue;
+                const JudgeScore& j = **x;
+                const double jj = leastVisibleJnd(j.visibility);
+                refs += (refs.empty() ? "" : "; ") + j.name + " U " +
+                        formatNumber(j.unbiased.total, 4) +
+                        pm(j.unbiased.total, j.se, &JudgeScore::Errors::unbiased) +
+                        (std::isfinite(jj) ? ", JND " + formatNumber(jj, 3) +
+                                                 pm(jj, j.se, &JudgeScore::Errors::leastVisibleJnd)
+                                           : std::string());
+            }
+            if (!refs.empty())
+                std::printf("judge (lambda %g), compared with: %s\n", r.lambda, refs.c_str());
         }
     // The report's first sentence (app/report/Report.h), here too.
     for (const OptimizeRun& r : s.runs) {

@@ -709,8 +709,11 @@ void judgeRun(const Plan& p, const Inputs& in, OptimizeJobSummary& job, LambdaRe
         std::vector<std::pair<std::string, std::vector<double>>> lights = {
             {run.dir.filename().string(), r.e}, {"lamp", in.lampE}, {"paper", in.paperE}};
         if (!r.optimizedE.empty()) lights.emplace_back("optimized", r.optimizedE);
+        // The answer first; the others are read only against it (JudgeStopRule::againstFirst).
+        JudgeStopRule rule;
+        rule.againstFirst = true;
         run.judgeRounds = judgeInRounds(judgeAt, lights, first,
-                                        rounds ? std::max(first, kJudgeDefaultSpp) : first);
+                                        rounds ? std::max(first, kJudgeDefaultSpp) : first, rule);
         spdlog::info("lambda {}: judge estimate {}", run.lambda, run.judgeRounds.describe());
         const std::vector<JudgeScore>& s = run.judgeRounds.scores;
         run.judged = s[0];
@@ -743,6 +746,8 @@ void judgeRun(const Plan& p, const Inputs& in, OptimizeJobSummary& job, LambdaRe
                                 ", not the optimized light: " + run.answer->reason);
     if (run.noise.rounds.size() && !run.noise.met)
         run.warnings.push_back("training noise: " + run.noise.reason);
+    if (!run.judgeRounds.rounds.empty() && !run.judgeRounds.met)
+        run.warnings.push_back("judge: " + run.judgeRounds.describe());
     for (const std::string& w : run.warnings) spdlog::warn("lambda {}: {}", run.lambda, w);
 }
 

@@ -216,34 +216,67 @@ JudgeScore Judge::scoreWithErrors(std::span<const double> E, const std::string& 
     return s;
 }
 
-WorstError worstRelativeError(const JudgeScore& s) {
+namespace {
+
+/// The region of `answer` with the same label as `name` (null if none).
+const RegionVisibility* regionNamed(const JudgeScore& answer, const std::string& name) {
+    for (const RegionVisibility& r : answer.visibility)
+        if (r.label.name == name) return &r;
+    return nullptr;
+}
+
+}  // namespace
+
+WorstError worstError(const JudgeScore& s, double target, const JudgeScore* answer, double gapShare,
+                      double referenceCap) {
     WorstError w;
     if (!s.se) return w;
-    auto consider = [&](double value, double se, double floor, const std::string& what) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    auto consider = [&](double value, double se, double floor, const std::string& what,
+                        double answerValue) {
         if (!std::isfinite(value)) return;
+        const double scale = std::max(std::abs(value), floor);
         // An SE that cannot be formed while the score can: as bad as it gets.
-        const double rel = std::isfinite(se) ? se / std::max(std::abs(value), floor)
-                                             : std::numeric_limits<double>::infinity();
-        if (rel > w.relative || w.score.empty()) {
+        const double rel = std::isfinite(se) ? se / scale : std::numeric_limits<double>::infinity();
+        double allowed = target * scale;
+        bool byGap = false;
+        if (answer && std::isfinite(answerValue)) {
+            const double gap =
+                std::min(gapShare * std::abs(value - answerValue), referenceCap * scale);
+            if (gap > allowed) allowed = gap, byGap = true;
+        }
+        const double excess = rel * scale / allowed;
+        if (excess > w.excess || w.score.empty()) {
             w.relative = rel;
+            w.excess = excess;
+            w.byGap = byGap;
             w.score = s.name.empty() ? what : s.name + ": " + what;
         }
     };
-    consider(s.eq2.total, s.se->eq2, 1e-3, "eq2");
-    consider(s.unbiased.total, s.se->unbiased, 1e-3, "U");
-    consider(s.brightness, s.se->brightness, 0.05, "brightness");
+    auto of = [&](double JudgeScore::*f) { return answer ? (*answer).*f : nan; };
+    consider(s.eq2.total, s.se->eq2, 1e-3, "eq2", answer ? answer->eq2.total : nan);
+    consider(s.unbiased.total, s.se->unbiased, 1e-3, "U", answer ? answer->unbiased.total : nan);
+    consider(s.brightness, s.se->brightness, 0.05, "brightness", of(&JudgeScore::brightness));
     consider(combinedVisibility(s.visibility), s.se->combinedVisibility, 0.1,
-             "visibility (all regions)");
+             "visibility (all regions)", answer ? combinedVisibility(answer->visibility) : nan);
     for (size_t k = 0; k < s.visibility.size() && k < s.se->visibility.size(); ++k) {
         const RegionVisibility& r = s.visibility[k];
-        consider(r.visibility, s.se->visibility[k], 0.1, "visibility " + r.label.name);
-        consider(r.contrast, s.se->contrast[k], 0.01, "contrast " + r.label.name);
+        const RegionVisibility* a = answer ? regionNamed(*answer, r.label.name) : nullptr;
+        consider(r.visibility, s.se->visibility[k], 0.1, "visibility " + r.label.name,
+                 a ? a->visibility : nan);
+        consider(r.contrast, s.se->contrast[k], 0.01, "contrast " + r.label.name,
+                 a ? a->contrast : nan);
     }
     size_t least = 0;
     const double j = leastVisibleJnd(s.visibility, &least);
     if (std::isfinite(j))
-        consider(j, s.se->leastVisibleJnd, 1.0, "JND " + s.visibility[least].label.name);
+        consider(j, s.se->leastVisibleJnd, 1.0, "JND " + s.visibility[least].label.name,
+                 answer ? leastVisibleJnd(answer->visibility) : nan);
     return w;
+}
+
+WorstError worstRelativeError(const JudgeScore& s) {
+    return worstError(s);
 }
 
 int nextJudgeSpp(int spp, double worstRelative, int cap, double target) {
@@ -260,39 +293,91 @@ int nextJudgeSpp(int spp, double worstRelative, int cap, double target) {
 std::string JudgedRounds::describe(double target) const {
     if (rounds.empty()) return "not judged";
     const JudgeRound& r = rounds.back();
-    const std::string worst = "worst " + formatNumber(100.0 * r.worst.relative, 2) + " %" +
-                              (r.worst.score.empty() ? std::string() : ", " + r.worst.score);
+    const std::string pct = formatNumber(100.0 * target, 2) + " %";
+    const std::string share = formatNumber(100.0 * gapShare, 2) + " %";
+    auto worstOf = [&](const WorstError& w, bool within) {
+        return (within ? "closest to its limit " : "worst ") + formatNumber(100.0 * w.relative, 2) +
+               " %" + (w.score.empty() ? std::string() : ", " + w.score) +
+               (w.byGap ? " (held to " + share + " of its gap to the answer's)" : std::string());
+    };
     std::string spps;
     for (const JudgeRound& x : rounds) spps += (spps.empty() ? "" : " -> ") + std::to_string(x.spp);
-    return std::to_string(r.spp) + " spp: " +
-           (met ? "every score's standard error <= " + formatNumber(100.0 * target, 2) + " % (" +
-                      worst + ")"
-                : "standard error above " + formatNumber(100.0 * target, 2) + " % at the most " +
-                      std::to_string(r.spp) + " spp (" + worst + ")") +
-           (rounds.size() > 1 ? "; rounds " + spps + " spp" : std::string());
+    const std::string tail = rounds.size() > 1 ? "; rounds " + spps + " spp" : std::string();
+    if (!againstFirst)
+        return std::to_string(r.spp) + " spp: " +
+               (met ? "every score's standard error <= " + pct + " (" + worstOf(r.worst, true) + ")"
+                    : "standard error above " + pct + " at the most " + std::to_string(r.spp) +
+                          " spp (" + worstOf(r.worst, false) + ")") +
+               tail;
+    const bool answerMet = !(r.answer.excess > 1.0), refMet = !(r.references.excess > 1.0);
+    std::string out = std::to_string(r.spp) + " spp: the answer's scores' standard errors " +
+                      (answerMet ? "<= " + pct + " (" + worstOf(r.answer, true) + ")"
+                                 : "above " + pct + " at the most " + std::to_string(r.spp) +
+                                       " spp (" + worstOf(r.answer, false) + ")");
+    out += refMet ? "; the references' <= " + pct + " or " + share +
+                        " of their gap to the answer's (" + worstOf(r.references, true) + ")"
+                  : "; a reference's comparison with the answer is not decided at " +
+                        std::to_string(r.spp) + " spp (its SE above " + pct + " and " + share +
+                        " of its gap to the answer's; " + worstOf(r.references, false) +
+                        "; references are traced to at most " + std::to_string(referenceMaxSpp) +
+                        " spp)";
+    return out + tail;
 }
 
 JudgedRounds judgeInRounds(const std::function<const Judge&(int spp)>& judgeAt,
                            const std::vector<std::pair<std::string, std::vector<double>>>& lights,
                            int spp, int cap, double target) {
+    JudgeStopRule rule;
+    rule.target = target;
+    return judgeInRounds(judgeAt, lights, spp, cap, rule);
+}
+
+JudgedRounds judgeInRounds(const std::function<const Judge&(int spp)>& judgeAt,
+                           const std::vector<std::pair<std::string, std::vector<double>>>& lights,
+                           int spp, int cap, const JudgeStopRule& rule) {
     JudgedRounds out;
+    out.againstFirst = rule.againstFirst && lights.size() > 1;
+    out.gapShare = rule.gapShare;
+    out.referenceMaxSpp = out.againstFirst ? std::min(cap, rule.referenceMaxSpp) : cap;
+    auto worse = [](WorstError& into, const WorstError& w) {
+        if (w.excess > into.excess || into.score.empty()) into = w;
+    };
     for (;;) {
         const Judge& judge = judgeAt(spp);
         out.scores.clear();
         JudgeRound round;
         round.spp = spp;
-        for (const auto& [name, e] : lights) {
-            out.scores.push_back(judge.scoreWithErrors(e, name));
-            const WorstError w = worstRelativeError(out.scores.back());
-            if (w.relative > round.worst.relative || round.worst.score.empty()) round.worst = w;
+        for (const auto& [name, e] : lights) out.scores.push_back(judge.scoreWithErrors(e, name));
+        for (size_t k = 0; k < out.scores.size(); ++k) {
+            const bool reference = out.againstFirst && k > 0;
+            const WorstError w =
+                worstError(out.scores[k], rule.target, reference ? &out.scores[0] : nullptr,
+                           rule.gapShare, rule.referenceCap);
+            worse(round.worst, w);
+            worse(reference ? round.references : round.answer, w);
         }
         out.rounds.push_back(round);
-        out.met = !(round.worst.relative > target);
-        const int next = nextJudgeSpp(spp, round.worst.relative, cap, target);
+        out.met = !(round.worst.excess > 1.0);
+        // The SE falls as 1/sqrt(spp): the excess is the factor to bring below 1; the
+        // references' only up to their own cap.
+        const int next =
+            out.againstFirst
+                ? std::max(nextJudgeSpp(spp, round.answer.excess, cap, 1.0),
+                           nextJudgeSpp(spp, round.references.excess, out.referenceMaxSpp, 1.0))
+                : nextJudgeSpp(spp, round.worst.excess, cap, 1.0);
         if (next == 0) return out;
-        spdlog::info("judge: {} spp: standard error {} % ({}) > {} %: tracing again at {} spp", spp,
-                     formatNumber(100.0 * round.worst.relative, 2), round.worst.score,
-                     formatNumber(100.0 * target, 2), next);
+        const WorstError& why =
+            out.againstFirst && nextJudgeSpp(spp, round.answer.excess, cap, 1.0) == next
+                ? round.answer
+                : (out.againstFirst ? round.references : round.worst);
+        spdlog::info(
+            "judge: {} spp: standard error {} % ({}{}) > what the rule allows: tracing "
+            "again at {} spp",
+            spp, formatNumber(100.0 * why.relative, 2), why.score,
+            why.byGap ? ", held to " + formatNumber(100.0 * rule.gapShare, 2) +
+                            " % of its gap to the answer's"
+                      : std::string(),
+            next);
         spp = next;
     }
 }
@@ -375,7 +460,11 @@ nlohmann::ordered_json roundsJson(const JudgedRounds& rounds) {
                      {"worst_relative_se", std::isfinite(r.worst.relative)
                                                ? nlohmann::ordered_json(r.worst.relative)
                                                : nlohmann::ordered_json(nullptr)},
-                     {"worst_score", r.worst.score}});
+                     {"worst_score", r.worst.score},
+                     {"worst_over_allowed", std::isfinite(r.worst.excess)
+                                                ? nlohmann::ordered_json(r.worst.excess)
+                                                : nlohmann::ordered_json(nullptr)},
+                     {"worst_is_reference_gap", r.worst.byGap}});
     return a;
 }
 

@@ -117,8 +117,35 @@ struct JudgeScore {
 struct WorstError {
     double relative = 0;
     std::string score;  // e.g. "lamp: visibility scratch"
+    /// The SE over what the stopping rule allows it (worstError): <= 1 is met. worstRelativeError
+    /// leaves it at relative / kJudgeMaxError.
+    double excess = 0;
+    /// The allowance was the gap to the answer's score, not the score's own target (a reference).
+    bool byGap = false;
 };
 WorstError worstRelativeError(const JudgeScore& score);
+
+/// A reference light (optimize's lamp, paper's light, E* beside a reference answer) is read
+/// only against the answer: "31 % lower than under your lamp", "2.3× the lamp's JND". Its
+/// score's standard error is enough when it is within kJudgeMaxError of the score (as the
+/// answer's) or within kJudgeGapShare of its gap to the answer's same score (the comparison is
+/// then decided, 10 standard errors apart, and its size known to a tenth), but never above
+/// kJudgeReferenceMaxError of the score (the cap: a reference printed to ±20 % is not read).
+/// A reference's comparison that is not decided at kJudgeReferenceMaxSpp (the pilot's double)
+/// does not trace further by itself (the answer's own scores still may, to kJudgeDefaultSpp):
+/// on a near-flat part the paper's light's U kept a 5.4 % SE at 1024 spp, 2 SE from the
+/// answer's, and 60 % of the judge's seconds went to it. The run then says so (describe).
+inline constexpr double kJudgeGapShare = 0.1;
+inline constexpr double kJudgeReferenceMaxError = 0.2;
+inline constexpr int kJudgeReferenceMaxSpp = 128;
+
+/// The stopping rule's worst score of `score`: each score's SE over what it is allowed,
+/// target·max(|value|, floor) (worstRelativeError's floors), and for a reference (`answer`
+/// given: the light it is compared with) max(that, gapShare·|value − answer's value|), at most
+/// referenceCap·max(|value|, floor). The worst by excess; its relative SE beside it.
+WorstError worstError(const JudgeScore& score, double target = kJudgeMaxError,
+                      const JudgeScore* answer = nullptr, double gapShare = kJudgeGapShare,
+                      double referenceCap = kJudgeReferenceMaxError);
 
 /// The spp of the judge's next round: the standard error falls as 1/sqrt(spp), so
 /// spp·(worst/target)², to a power of two, at least twice spp and at most cap; 0 when the
@@ -197,16 +224,35 @@ class Judge {
 /// round (so the same seed gives the same numbers); with a fixed spp, spp == cap: one round.
 struct JudgeRound {
     int spp = 0;
-    WorstError worst;
+    WorstError worst;  // over every light (by excess)
+    /// With references (JudgeStopRule::againstFirst): the answer's worst and the references'.
+    WorstError answer, references;
 };
 struct JudgedRounds {
     std::vector<JudgeScore> scores;  // in the lights' order, of the last round
     std::vector<JudgeRound> rounds;
-    bool met = false;  // every error within target
+    bool met = false;           // every error within what the rule allows
+    bool againstFirst = false;  // the rule's references (JudgeStopRule::againstFirst)
+    double gapShare = kJudgeGapShare;
+    int referenceMaxSpp = 0;
     int spp() const { return rounds.empty() ? 0 : rounds.back().spp; }
-    /// "128 spp: SE <= 1 % (worst 0.62 %, lamp: U)" or "... at the cap 1024 spp: worst ..."
+    /// "128 spp: SE <= 1 % (worst 0.62 %, lamp: U)" or "... at the cap 1024 spp: worst ...";
+    /// with references, what they were held to.
     std::string describe(double target = kJudgeMaxError) const;
 };
+/// With againstFirst (optimize: its answer first, then the lights it is compared with) the
+/// others are references (worstError's rule with the first light's scores); else every light's
+/// every score is held to target.
+struct JudgeStopRule {
+    double target = kJudgeMaxError;
+    bool againstFirst = false;
+    double gapShare = kJudgeGapShare;
+    double referenceCap = kJudgeReferenceMaxError;
+    int referenceMaxSpp = kJudgeReferenceMaxSpp;  // the references' rounds stop here
+};
+JudgedRounds judgeInRounds(const std::function<const Judge&(int spp)>& judgeAt,
+                           const std::vector<std::pair<std::string, std::vector<double>>>& lights,
+                           int spp, int cap, const JudgeStopRule& rule);
 JudgedRounds judgeInRounds(const std::function<const Judge&(int spp)>& judgeAt,
                            const std::vector<std::pair<std::string, std::vector<double>>>& lights,
                            int spp, int cap, double target = kJudgeMaxError);
