@@ -736,6 +736,24 @@ TEST(ViewerOutdir, OpensAnOptimizeOutputDirectoryWithItsLightRegionsAndJudge) {
 // --defects` and the viewer give the same numbers: the held-out figure is the defects loss on
 // the independent estimate (U beside it), the judge's visibility is of the same region, and the
 // viewer's optimizer runs the defects objective on the same regions from the same loss.
+namespace {
+
+/// The viewer's optimizer run for `iterations` from an optimize output's E* (envmap-optimized.exr
+/// when a reference is the answer): its status once done.
+ViewerOptimizeStatus optimizeFromTheOutputsLight(ViewerSession& v, const fs::path& out,
+                                                 int iterations) {
+    const auto& t = v.transport();
+    const fs::path star = fs::exists(out / "envmap-optimized.exr") ? out / "envmap-optimized.exr"
+                                                                   : out / "envmap.exr";
+    const EnvMap e = loadEnvMap(star, t.envWidth, t.envHeight, 1);
+    v.setLight(0, std::vector<double>(e.texels.begin(), e.texels.end()));
+    v.startOptimize(0, iterations);
+    v.waitOptimize();
+    return v.optimizeStatus();
+}
+
+}  // namespace
+
 TEST(ViewerOutdir, JudgeViewerReportAndTerminalAgreeOnTheObjectivesNumbers) {
     test::TempDir dir("one-objective");
     const std::string part = (dir / "part.exr").string(), scene = (dir / "scene.json").string(),
@@ -817,14 +835,7 @@ TEST(ViewerOutdir, JudgeViewerReportAndTerminalAgreeOnTheObjectivesNumbers) {
                 1e-5 * std::abs(judged.value("unbiased", 1.0)));
     // From E* (envmap-optimized.exr when a reference is the answer), the optimizer's starting
     // loss is the run's final training loss.
-    const auto& t = v.transport();
-    const fs::path star = fs::exists(out / "envmap-optimized.exr") ? out / "envmap-optimized.exr"
-                                                                   : out / "envmap.exr";
-    const EnvMap e = loadEnvMap(star, t.envWidth, t.envHeight, 1);
-    v.setLight(0, std::vector<double>(e.texels.begin(), e.texels.end()));
-    v.startOptimize(0, 2);
-    v.waitOptimize();
-    const ViewerOptimizeStatus st = v.optimizeStatus();
+    const ViewerOptimizeStatus st = optimizeFromTheOutputsLight(v, out, 2);
     ASSERT_NE(st.state, "failed") << st.error;
     EXPECT_EQ(st.objective, "defects");
     const double final = s.at("final_loss").get<double>();
@@ -860,13 +871,7 @@ TEST(ViewerOutdir, TheBothMeasuresOptimizerGainsOverTheOutputsLamp) {
     const std::vector<double>& anchor = v.outputObjective()->options.anchorLight;
     ASSERT_EQ(anchor.size(), t.cols());
     for (double e : anchor) EXPECT_NEAR(e, 0.3, 1e-7);
-    const fs::path star = fs::exists(out / "envmap-optimized.exr") ? out / "envmap-optimized.exr"
-                                                                   : out / "envmap.exr";
-    const EnvMap e = loadEnvMap(star, t.envWidth, t.envHeight, 1);
-    v.setLight(0, std::vector<double>(e.texels.begin(), e.texels.end()));
-    v.startOptimize(0, 1);
-    v.waitOptimize();
-    const ViewerOptimizeStatus st = v.optimizeStatus();
+    const ViewerOptimizeStatus st = optimizeFromTheOutputsLight(v, out, 1);
     ASSERT_NE(st.state, "failed") << st.error;
     const double final = summary.at("final_loss").get<double>();
     EXPECT_NEAR(st.initialLoss, final, 1e-4 * std::abs(final) + 1e-6);
