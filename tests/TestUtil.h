@@ -175,4 +175,14 @@ inline int writeSmallLabelledPart(const std::filesystem::path& dir) {
         .exitCode;
 }
 
+/// The CLI tests' defects part in `dir`: a 160×160 map with three labelled scratches (part.exr,
+/// part-truth.png) and a scene seeing it at 40×40, 8 spp, depth 3 (scene.json). Returns
+/// gen-surface's exit code.
+inline int writeScratchedPart(const std::filesystem::path& dir) {
+    return runCli("gen-surface -o " + (dir / "part.exr").string() +
+                  " --width 160 --height 160 --scratches 3 --scene " +
+                  (dir / "scene.json").string() + " --image-size 40 --spp 8 --max-depth 3")
+        .exitCode;
+}
+
 }  // namespace sl::test

@@ -110,14 +110,9 @@ TEST(BothMeasuresObjective, TheJndAnchorIsAtLeastOneJnd) {
 
 TEST(BothMeasuresObjective, OptimizeRunsItOverTheLampAndRecordsTheMeasure) {
     test::TempDir dir("both-cli");
-    const std::string part = (dir.path() / "part.exr").string(),
-                      scene = (dir.path() / "scene.json").string(),
+    const std::string scene = (dir.path() / "scene.json").string(),
                       truth = (dir.path() / "part-truth.png").string();
-    ASSERT_EQ(
-        test::runCli("gen-surface -o " + part + " --width 160 --height 160 --scratches 3 --scene " +
-                     scene + " --image-size 40 --spp 8 --max-depth 3")
-            .exitCode,
-        0);
+    ASSERT_EQ(test::writeScratchedPart(dir.path()), 0);
     const auto out = dir.path() / "out";
     const auto r =
         test::runCli("optimize " + scene + " --truth " + truth +

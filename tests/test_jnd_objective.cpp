@@ -122,14 +122,9 @@ TEST(JndObjective, RegionsWithoutPixelsAreClearErrors) {
 // summary.json; it lowers its own loss; a measure outside the table is a usage error naming both.
 TEST(JndObjective, OptimizeRunsItAndRecordsTheMeasure) {
     test::TempDir dir("jnd-cli");
-    const std::string part = (dir.path() / "part.exr").string(),
-                      scene = (dir.path() / "scene.json").string(),
+    const std::string scene = (dir.path() / "scene.json").string(),
                       truth = (dir.path() / "part-truth.png").string();
-    ASSERT_EQ(
-        test::runCli("gen-surface -o " + part + " --width 160 --height 160 --scratches 3 --scene " +
-                     scene + " --image-size 40 --spp 8 --max-depth 3")
-            .exitCode,
-        0);
+    ASSERT_EQ(test::writeScratchedPart(dir.path()), 0);
     const auto out = dir.path() / "out";
     auto r =
         test::runCli("optimize " + scene + " --truth " + truth +

@@ -847,13 +847,9 @@ TEST(ViewerOutdir, JudgeViewerReportAndTerminalAgreeOnTheObjectivesNumbers) {
 // starting loss is the run's final training loss.
 TEST(ViewerOutdir, TheBothMeasuresOptimizerGainsOverTheOutputsLamp) {
     test::TempDir dir("both-view");
-    const std::string part = (dir / "part.exr").string(), scene = (dir / "scene.json").string(),
+    const std::string scene = (dir / "scene.json").string(),
                       truth = (dir / "part-truth.png").string(), cache = (dir / "cache").string();
-    ASSERT_EQ(
-        test::runCli("gen-surface -o " + part + " --width 160 --height 160 --scratches 3 --scene " +
-                     scene + " --image-size 40 --spp 8 --max-depth 3")
-            .exitCode,
-        0);
+    ASSERT_EQ(test::writeScratchedPart(dir.path()), 0);
     const auto out = dir / "out";
     const auto r = test::runCli("optimize " + scene + " --truth " + truth +
                                 " --spp 16 --heldout none --iterations 30 --compare const:0.3" +
