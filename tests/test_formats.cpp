@@ -296,6 +296,45 @@ TEST(FormatsX3p, Float32Float64Int32Values) {
     }
 }
 
+// Float heights with CZ/Increment ≠ 1: applied when the result is a plausible relief (as
+// Gwyddion does); read as stored, in metres, with a warning, when applying it would leave a
+// relief below any instrument's resolution (x3ptools' older writer: metres beside 1e-06).
+TEST(FormatsX3p, AFloatIncrementThatWouldEraseTheReliefIsIgnoredWithAWarning) {
+    test::TempDir dir("x3p");
+    X3pSpec s;
+    s.zType = "D";
+    s.sizeX = 3;
+    s.sizeY = 2;
+    s.values = {2.1e-7, 8.3e-7, 5e-7, 3e-7, 6e-7, 4e-7};  // metres, 0.62 µm peak to valley
+    s.zIncrement = "1e-06";
+    writeX3p(dir / "m.x3p", s);
+    const HeightmapData d = loadHeightmap(dir / "m.x3p", {});
+    std::vector<double> mm;
+    for (double v : s.values) mm.push_back(v * 1e3);
+    expectHeights(d, 3, 2, mm, 1e-9);
+    ASSERT_EQ(d.warnings.size(), 1u);
+    EXPECT_NE(d.warnings[0].find("Record1/Axes/CZ/Increment is 1e-06"), std::string::npos)
+        << d.warnings[0];
+    EXPECT_NE(d.warnings[0].find("height_scale"), std::string::npos) << d.warnings[0];
+
+    // The same increment on floats in micrometres gives a plausible relief: applied, silently.
+    X3pSpec u = s;
+    for (double& v : u.values) v *= 1e6;  // 0.21 .. 0.83 (µm)
+    writeX3p(dir / "u.x3p", u);
+    const HeightmapData du = loadHeightmap(dir / "u.x3p", {});
+    expectHeights(du, 3, 2, mm, 1e-9);
+    EXPECT_TRUE(du.warnings.empty());
+
+    // A float map whose relief is below a nanometre as stored is not second-guessed.
+    X3pSpec f = s;
+    for (double& v : f.values) v *= 1e-3;
+    writeX3p(dir / "f.x3p", f);
+    const HeightmapData df = loadHeightmap(dir / "f.x3p", {});
+    for (size_t k = 0; k < df.heights.size(); ++k)
+        EXPECT_NEAR(df.heights[k], f.values[k] * 1e-6 * 1e3, 1e-15);
+    EXPECT_TRUE(df.warnings.empty());
+}
+
 TEST(FormatsX3p, HeightScaleMultipliesAndUpperCaseExtensionLoads) {
     test::TempDir dir("x3p");
     X3pSpec s;

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <zip.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -471,12 +472,18 @@ TEST(RealSurfaces, LogoX3pInAFolder) {
     checkRealFile(kRealFiles[4]);
 }
 
-TEST(RealSurfaces, LogoWarnsOnlyAboutItsEditedMainXml) {
+TEST(RealSurfaces, LogoWarnsAboutItsEditedMainXmlAndItsZIncrement) {
     const fs::path file = sharedDir() / "logo-in-folder.x3p";
     if (!fs::exists(file)) GTEST_SKIP() << file << " is absent (../shared/real-surfaces)";
     const HeightmapData d = loadHeightmap(file, {});
-    ASSERT_EQ(d.warnings.size(), 1u);
+    ASSERT_EQ(d.warnings.size(), 2u);
     EXPECT_NE(d.warnings[0].find("main.xml does not match"), std::string::npos) << d.warnings[0];
+    // Its float64 heights are metres beside CZ/Increment 1e-06 (x3ptools' older writer): read as
+    // stored, the logo's 8-bit relief of about 0.6 µm, not 1e-13 m.
+    EXPECT_NE(d.warnings[1].find("CZ/Increment is 1e-06"), std::string::npos) << d.warnings[1];
+    const auto [lo, hi] = std::minmax_element(d.heights.begin(), d.heights.end());
+    EXPECT_GT(*hi - *lo, 0.4e-3);  // mm
+    EXPECT_LT(*hi - *lo, 1.0e-3);
     EXPECT_TRUE(
         loadHeightmap(sharedDir() / "sensofar-bullet-land-in-folder.x3p", {}).warnings.empty());
 }

@@ -2,6 +2,7 @@
 
 #include <zip.h>
 
+#include <algorithm>
 #include <bit>
 #include <charconv>
 #include <cmath>
@@ -13,6 +14,7 @@
 #include <memory>
 #include <new>
 #include <pugixml.hpp>
+#include <sstream>
 #include <string>
 #include <system_error>
 #include <utility>
@@ -38,6 +40,16 @@ const char* const kFixDamaged = "The X3P file is damaged; export it again";
 /// believed (deflate packs at most 1032; stored members have ratio 1).
 constexpr uint64_t kMaxInflateRatio = 1100;
 constexpr uint64_t kMaxXmlBytes = uint64_t(64) << 20;
+
+// Float heights (F, D) and CZ/Increment. ISO 5436-2 scales integer codes by the increment; for
+// float data the readers disagree: Gwyddion applies it, x3ptools (which writes most float X3P
+// files: the CSAFE bullet-land and logo samples) reads the floats as metres and ignores it, and
+// its older writer left Increment 1e-06 beside heights already in metres. When the increment
+// would shrink a relief that is plausible in metres (kMinRawReliefM..kMaxRawReliefM) below any
+// instrument's vertical resolution (kMinReliefM), the floats are read as stored, with a warning.
+constexpr double kMinReliefM = 1e-10;    // 0.1 nm peak to valley: below it, no measured part
+constexpr double kMinRawReliefM = 1e-9;  // 1 nm
+constexpr double kMaxRawReliefM = 1e-2;  // 10 mm
 
 struct ZipCloser {
     void operator()(zip_t* z) const { zip_discard(z); }
@@ -336,9 +348,33 @@ class X3pReader {
             const unsigned char* p = raw.data();
             float* out = d.heights.data();
             const size_t count = d.heights.size();
+            double scale = zInc_;
+            if ((code_ == 'F' || code_ == 'D') && zInc_ != 1.0) {
+                double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+                for (size_t k = 0; k < count; ++k) {
+                    const double v = decode(raw.data() + k * bytes_);
+                    if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
+                }
+                const double rawRelief = hi - lo;
+                if (rawRelief >= kMinRawReliefM && rawRelief <= kMaxRawReliefM &&
+                    rawRelief * std::abs(zInc_) < kMinReliefM) {
+                    scale = 1.0;
+                    std::ostringstream w;
+                    w << "Record1/Axes/CZ/Increment is " << zInc_ << " for " << d.format
+                      << " heights: applied, it would make the relief "
+                      << rawRelief * std::abs(zInc_)
+                      << " m peak to valley, below any instrument's resolution; the heights are "
+                         "read as stored, in metres (a relief of "
+                      << rawRelief
+                      << " m), as x3ptools reads float X3P files. If the file's "
+                         "heights are in another unit, scale them with the scene's "
+                         "heightmap.height_scale";
+                    d.warnings.push_back(w.str());
+                }
+            }
             for (size_t k = 0; k < count; ++k, p += bytes_) {
                 const double v = decode(p);
-                out[k] = std::isnan(v) ? nan : static_cast<float>((v * zInc_ + zOff_) * mm);
+                out[k] = std::isnan(v) ? nan : static_cast<float>((v * scale + zOff_) * mm);
             }
             if (!valid.empty())
                 for (size_t k = 0; k < count; ++k)
