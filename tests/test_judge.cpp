@@ -330,18 +330,21 @@ TEST(Search, MultistartKeepsTheLowestTrainingLoss) {
     }
 }
 
-// The JND measure's stall stop is optimize's default only there: the defects objective on the
-// JND measure, when the optimizer has no stall stop of its own; the ratio measure and the
-// other objectives run to their budget.
-TEST(Search, TheStallStopIsTheJndMeasuresOnly) {
-    ObjectiveOptions jnd, ratio;
+// The stall stop is optimize's default only where the loss is in −2·log units of a gain: the
+// defects objective on the JND measure or on both measures, when the optimizer has no stall stop
+// of its own; the ratio measure and the other objectives run to their budget.
+TEST(Search, TheStallStopIsTheJndAndBothMeasuresOnly) {
+    ObjectiveOptions jnd, ratio, both;
     jnd.defectMeasure = DefectMeasure::Jnd;
     ratio.defectMeasure = DefectMeasure::Ratio;
+    both.defectMeasure = DefectMeasure::Both;
     const OptimizerOptions none;
-    const OptimizerOptions s = withJndStall(none, ObjectiveKind::Defects, jnd);
-    EXPECT_EQ(s.stallEvaluations, kJndStallEvaluations);
-    EXPECT_EQ(s.stallTolerance, kJndStallTolerance);
-    EXPECT_EQ(s.iterations, none.iterations);
+    for (const ObjectiveOptions& o : {jnd, both}) {
+        const OptimizerOptions s = withJndStall(none, ObjectiveKind::Defects, o);
+        EXPECT_EQ(s.stallEvaluations, kJndStallEvaluations);
+        EXPECT_EQ(s.stallTolerance, kJndStallTolerance);
+        EXPECT_EQ(s.iterations, none.iterations);
+    }
     EXPECT_EQ(withJndStall(none, ObjectiveKind::Defects, ratio).stallEvaluations, 0);
     EXPECT_EQ(withJndStall(none, ObjectiveKind::Unbiased, jnd).stallEvaluations, 0);
     EXPECT_EQ(withJndStall(none, ObjectiveKind::Paper, jnd).stallEvaluations, 0);

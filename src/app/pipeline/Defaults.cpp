@@ -31,8 +31,9 @@ OptimizerOptions resolveOptimizer(OptimizerOptions requested) {
 
 OptimizerOptions withJndStall(OptimizerOptions opt, ObjectiveKind kind,
                               const ObjectiveOptions& objective) {
-    if (kind == ObjectiveKind::Defects && objective.defectMeasure == DefectMeasure::Jnd &&
-        opt.stallEvaluations == 0) {
+    const bool jndUnits = objective.defectMeasure == DefectMeasure::Jnd ||
+                          objective.defectMeasure == DefectMeasure::Both;
+    if (kind == ObjectiveKind::Defects && jndUnits && opt.stallEvaluations == 0) {
         opt.stallEvaluations = kJndStallEvaluations;
         opt.stallTolerance = kJndStallTolerance;
     }

@@ -64,8 +64,10 @@ OptimizerOptions resolveOptimizer(OptimizerOptions requested);
 /// kJndStallEvaluations evaluations (optimize/Optimizer.h stallEvaluations).
 inline constexpr int kJndStallEvaluations = 200;
 inline constexpr double kJndStallTolerance = 0.01;
-/// `opt` with the stall stop above when `kind` is the defects objective on the JND measure and
-/// opt has no stall stop of its own; otherwise `opt` as it is.
+/// `opt` with the stall stop above when `kind` is the defects objective on the JND measure or on
+/// both measures (objective/BothMeasuresObjective.h: a soft maximum of −2·log gains, the same
+/// units, so 0.01 is again 0.5 % of the smaller gain) and opt has no stall stop of its own;
+/// otherwise `opt` as it is.
 OptimizerOptions withJndStall(OptimizerOptions opt, ObjectiveKind kind,
                               const ObjectiveOptions& objective);
 
