@@ -12,6 +12,7 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <stdexcept>
 
 #include "SyntheticDefects.h"
@@ -640,4 +641,179 @@ TEST(JudgeRounds, TheMeanOfTwoEstimatesIsTheirEntriesMean) {
     TransportMatrix other = a.file.matrix;
     other.planes = 1;
     EXPECT_THROW(meanOfEstimates(a.file.matrix, other), std::invalid_argument);
+}
+
+namespace {
+
+double gauss(Pcg32& rng) {
+    const double u1 = std::max(rng.nextDouble(), 1e-300), u2 = rng.nextDouble();
+    return std::sqrt(-2 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
+}
+
+/// A synthetic estimate of known noise (the judge's rounds without a tracer): a 16×16 image
+/// fully in the part, three texels, texel c's column a checkerboard μ_c = 1 ± A_c, and at
+/// spp n each half's entry μ + (σ_c·sqrt(2/n))·z with z standard normal (a half is the mean of
+/// n/2 samples of standard deviation σ_c), fresh for every spp (seeded by it). The light e_c
+/// (texel c alone) has half images μ_c + noise, so with λ 0 its U = sqrt(S/G_u) with G_u =
+/// Y_aᵀ·M·Y_b (M: the grid's Laplacian) of known variance 2s²·|Mμ|² + s⁴·tr(M²) (s: a half's
+/// standard deviation), and by the delta method SE(U) = U·SE(G_u)/(2·G). On a checkerboard
+/// eq. 2 (S/Σ|ΔȲ|, no difference near 0 at these s) has the same first-order relative SE,
+/// s·sqrt(Σ deg²/2)/(2A·pairs), and the brightness a far smaller one.
+struct KnownNoise {
+    static constexpr int kSide = 16;
+    std::vector<double> amplitude, sigma;  // per texel
+    std::vector<std::unique_ptr<TransportSource>> kept;
+    std::unique_ptr<Judge> judge;
+    JudgeOptions options;
+
+    KnownNoise() { options.objective.lambda = 0; }
+    static std::vector<double> mu(double a) {
+        std::vector<double> m(size_t(kSide) * kSide);
+        for (int y = 0; y < kSide; ++y)
+            for (int x = 0; x < kSide; ++x) m[size_t(y) * kSide + x] = (x + y) % 2 ? 1 - a : 1 + a;
+        return m;
+    }
+    /// Σ_pairs (Δμ)², |Mμ|², tr(M²) on the grid (right and down neighbours).
+    struct Forms {
+        double g = 0, mmu2 = 0, trace = 0;
+    };
+    static Forms forms(const std::vector<double>& m) {
+        Forms f;
+        for (int y = 0; y < kSide; ++y)
+            for (int x = 0; x < kSide; ++x) {
+                const size_t p = size_t(y) * kSide + x;
+                double lap = 0;
+                int deg = 0;
+                auto nb = [&](int qx, int qy) {
+                    if (qx < 0 || qy < 0 || qx >= kSide || qy >= kSide) return;
+                    lap += m[p] - m[size_t(qy) * kSide + qx];
+                    ++deg;
+                };
+                nb(x + 1, y), nb(x - 1, y), nb(x, y + 1), nb(x, y - 1);
+                f.mmu2 += lap * lap;
+                f.trace += double(deg) * deg + deg;
+                if (x + 1 < kSide) f.g += std::pow(m[p + 1] - m[p], 2);
+                if (y + 1 < kSide) f.g += std::pow(m[p + kSide] - m[p], 2);
+            }
+        return f;
+    }
+    /// U's relative standard error of light e_c at spp (the formula above).
+    double relativeError(size_t c, int spp) const {
+        const Forms f = forms(mu(amplitude[c]));
+        const double s = sigma[c] * std::sqrt(2.0 / spp);
+        return 0.5 * std::sqrt(2 * s * s * f.mmu2 + std::pow(s, 4) * f.trace) / f.g;
+    }
+    /// The per-sample σ that gives U of e_c a relative SE of r at spp (the quadratic in s²).
+    void setError(size_t c, double r, int spp) {
+        const Forms f = forms(mu(amplitude[c]));
+        const double rhs = std::pow(2 * r * f.g, 2);
+        const double s2 =
+            (-2 * f.mmu2 + std::sqrt(4 * f.mmu2 * f.mmu2 + 4 * f.trace * rhs)) / (2 * f.trace);
+        sigma[c] = std::sqrt(s2) / std::sqrt(2.0 / spp);
+    }
+    std::vector<double> light(size_t c) const {
+        std::vector<double> e(amplitude.size(), 0.0);
+        e[c] = 1;
+        return e;
+    }
+    const Judge& at(int spp) {
+        Pcg32 rng(0x5eed + uint64_t(spp), 7);
+        auto src = std::make_unique<TransportSource>();
+        TransportMatrix& t = src->file.matrix;
+        t.width = t.height = kSide;
+        t.envWidth = static_cast<int>(amplitude.size());
+        t.envHeight = 1;
+        t.planes = 2;
+        t.storage = TransportStorage::Dense;
+        t.objectMask.assign(t.rows(), 1);
+        t.values.resize(t.rows() * t.cols() * 2);
+        for (size_t c = 0; c < t.cols(); ++c) {
+            const std::vector<double> m = mu(amplitude[c]);
+            const double s = sigma[c] * std::sqrt(2.0 / spp);
+            for (size_t p = 0; p < t.rows(); ++p)
+                for (int h = 0; h < 2; ++h)
+                    t.values[(p * t.cols() + c) * 2 + h] =
+                        static_cast<float>(m[p] + s * gauss(rng));
+        }
+        src->file.provenance.spp = spp;
+        judge.reset();
+        kept.push_back(std::move(src));
+        judge = std::make_unique<Judge>(*kept.back(), options);
+        return *judge;
+    }
+};
+
+}  // namespace
+
+// The rounds on an estimate whose variance is known (KnownNoise), optimize's rule (the answer
+// first, the others references): U's SE is known at every spp, so where the rounds stop is too.
+// - It stops early: the answer's U has a 0.5 % SE at the 64-spp pilot, the lamp's 3 %, but the
+//   lamp's U is 3× the answer's, so a tenth of the gap (6.7 % of it) decides it: one round.
+//   Every score held to 1 % (the rule before references) must trace to 1024 for the lamp
+//   (64·3² = 576, the next power of two), where its SE is 0.75 %.
+// - It must go further: the answer's U has a 2.4 % SE at 64 spp, so 64·2.4² = 369 -> 512 spp in
+//   one step (256 would leave 1.2 %: that round is skipped), where it is 0.85 %: met.
+// - A reference 3.4 % from the answer with a 3 % SE: a tenth of the gap is below 1 % of itself,
+//   so 1 % it is, and the rounds go to the references' most (128 spp: 2.1 %) and no further; the
+//   comparison is said not decided.
+// Each round's SE of the deciding score is the known one within ±20 % (U's by the delta method,
+// eq. 2's by the bootstrap, from one estimate's halves).
+TEST(JudgeRounds, RoundsOnAnEstimateOfKnownNoiseStopWhereItsVarianceSays) {
+    KnownNoise k;
+    k.amplitude = {0.3, 0.1, 0.29};  // answer, lamp (U 3× the answer's), a near reference
+    k.sigma.assign(3, 0);
+    k.setError(0, 0.005, 64);
+    k.setError(1, 0.03, 64);
+    k.setError(2, 0.03, 64);
+    EXPECT_NEAR(k.relativeError(1, 1024), 0.0075, 0.0005);  // ~1/sqrt(16) of 3 %
+    auto judgeAt = [&](int spp) -> const Judge& { return k.at(spp); };
+    JudgeStopRule rule;
+    rule.againstFirst = true;
+    auto seOf = [](const JudgedRounds& r, size_t light) {
+        return r.scores[light].se->unbiased / r.scores[light].unbiased.total;
+    };
+
+    // Stops early: one round.
+    const JudgedRounds early =
+        judgeInRounds(judgeAt, {{"answer", k.light(0)}, {"lamp", k.light(1)}}, 64, 1024, rule);
+    ASSERT_EQ(early.scores.size(), 2u);
+    EXPECT_NEAR(early.scores[1].unbiased.total / early.scores[0].unbiased.total, 3.0, 0.1);
+    EXPECT_TRUE(early.met) << early.describe();
+    EXPECT_EQ(early.spp(), 64) << early.describe();
+    EXPECT_NEAR(seOf(early, 0) / k.relativeError(0, 64), 1.0, 0.2);
+    EXPECT_NEAR(seOf(early, 1) / k.relativeError(1, 64), 1.0, 0.2);
+    EXPECT_TRUE(early.rounds[0].references.byGap);
+    EXPECT_EQ(early.rounds[0].references.score.rfind("lamp: ", 0), 0u);
+    // The same lights, every score held to 1 %: to the cap, met there.
+    const JudgedRounds all =
+        judgeInRounds(judgeAt, {{"answer", k.light(0)}, {"lamp", k.light(1)}}, 64, 1024);
+    ASSERT_EQ(all.rounds.size(), 2u) << all.describe();
+    EXPECT_EQ(all.spp(), 1024);
+    EXPECT_EQ(all.rounds[0].worst.score.rfind("lamp: ", 0), 0u);
+    EXPECT_TRUE(all.met) << all.describe();
+    EXPECT_NEAR(seOf(all, 1) / k.relativeError(1, 1024), 1.0, 0.2);
+
+    // Must go further: 64 -> 512.
+    k.setError(0, 0.024, 64);
+    EXPECT_GT(k.relativeError(0, 256), 0.01);
+    EXPECT_LT(k.relativeError(0, 512), 0.0085);
+    const JudgedRounds further =
+        judgeInRounds(judgeAt, {{"answer", k.light(0)}, {"lamp", k.light(1)}}, 64, 1024, rule);
+    ASSERT_EQ(further.rounds.size(), 2u) << further.describe();
+    EXPECT_EQ(further.rounds[0].spp, 64);
+    EXPECT_EQ(further.rounds[0].answer.score.rfind("answer: ", 0), 0u);  // U or eq. 2
+    EXPECT_NEAR(further.rounds[0].answer.relative / k.relativeError(0, 64), 1.0, 0.2);
+    EXPECT_EQ(further.spp(), 512);
+    EXPECT_TRUE(further.met) << further.describe();
+    EXPECT_NEAR(seOf(further, 0) / k.relativeError(0, 512), 1.0, 0.2);
+
+    // A near reference: to the references' most, not decided, said.
+    k.setError(0, 0.005, 64);
+    const JudgedRounds near =
+        judgeInRounds(judgeAt, {{"answer", k.light(0)}, {"paper", k.light(2)}}, 64, 1024, rule);
+    EXPECT_EQ(near.spp(), kJudgeReferenceMaxSpp) << near.describe();
+    EXPECT_FALSE(near.met);
+    EXPECT_FALSE(near.rounds.back().references.byGap);
+    EXPECT_NEAR(seOf(near, 1) / k.relativeError(2, kJudgeReferenceMaxSpp), 1.0, 0.2);
+    EXPECT_NE(near.describe().find("not decided"), std::string::npos) << near.describe();
 }

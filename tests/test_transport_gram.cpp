@@ -10,6 +10,8 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <set>
+#include <utility>
 
 #include "TestUtil.h"
 #include "app/pipeline/Cache.h"
@@ -172,7 +174,61 @@ TEST(TransportGram, BuildWorkCountsTheBuildsMultiplyAdds) {
         squares += k * k;
     }
     EXPECT_EQ(TransportGram::buildWork(t, none, true), squares);
-    EXPECT_GT(TransportGram::buildWork(t, t.objectMask, false), 0.0);
+    // With pairs: Σ_p k_p·|L_p|, L_p row p of Lap·T_b (the texels of p and of its masked
+    // neighbours, each once), over the masked pixels with a masked neighbour; below the
+    // neighbours' rows added one by one (Σ_p k_p·(k_p + Σ_q k_q)).
+    for (const std::vector<uint8_t>& mask : {t.objectMask, holedMask(t)}) {
+        double merged = 0, oneByOne = 0;
+        const size_t w = static_cast<size_t>(t.width);
+        for (size_t p = 0; p < t.rows(); ++p) {
+            const double kp = static_cast<double>(t.rowPtr[p + 1] - t.rowPtr[p]);
+            if (!mask[p] || kp == 0) continue;
+            std::set<uint16_t> texels;
+            double around = 0;
+            int deg = 0;
+            const size_t x = p % w, y = p / w;
+            for (auto [ok, q] :
+                 {std::pair{x + 1 < w, p + 1}, std::pair{y + 1 < size_t(t.height), p + w},
+                  std::pair{x > 0, p - 1}, std::pair{y > 0, p - w}}) {
+                if (!ok || !mask[q]) continue;
+                ++deg;
+                around += static_cast<double>(t.rowPtr[q + 1] - t.rowPtr[q]);
+                texels.insert(t.colIdx.begin() + long(t.rowPtr[q]),
+                              t.colIdx.begin() + long(t.rowPtr[q + 1]));
+            }
+            if (deg == 0) continue;
+            texels.insert(t.colIdx.begin() + long(t.rowPtr[p]),
+                          t.colIdx.begin() + long(t.rowPtr[p + 1]));
+            merged += kp * static_cast<double>(texels.size());
+            oneByOne += kp * (kp + around);
+        }
+        EXPECT_EQ(TransportGram::buildWork(t, mask, false), merged);
+        EXPECT_EQ(TransportGram::buildWork(t, mask, true), merged + squares);
+        EXPECT_LT(merged, oneByOne);
+        std::printf("[ measured ] build work %.4g, neighbours' rows one by one %.4g (%.2fx)\n",
+                    merged, oneByOne, oneByOne / merged);
+    }
+}
+
+// Where the build does not pay at once (gramPays), Auto builds it once the evaluations through
+// the products have cost what it will: buildWork <= kGramWorkPerEvaluation·nnz·evaluations,
+// exactly from the first evaluation count that reaches it.
+TEST(TransportGram, TheBuildIsRepaidAfterTheEvaluationsItCosts) {
+    auto s = smallScene(15);
+    const TransportMatrix t = halves(*s, 1);
+    UnbiasedObjective obj(t.width, t.height, t.objectMask, ObjectiveOptions{});
+    const TransportLoss loss(t, obj, false);
+    const double work = TransportGram::buildWork(t, obj.pairMask(), obj.usesProducts());
+    const double each = TransportLoss::kGramWorkPerEvaluation * static_cast<double>(t.nnz());
+    const int k = static_cast<int>(std::ceil(work / each));
+    ASSERT_GT(k, 1);
+    EXPECT_FALSE(loss.gramRepaid(k - 1));
+    EXPECT_TRUE(loss.gramRepaid(k));
+    EXPECT_TRUE(loss.gramRepaid(10 * k));
+    EXPECT_FALSE(loss.gramRepaid(0));
+    // The paper's objective: never.
+    ImageObjective paper(t.width, t.height, t.objectMask, ObjectiveOptions{});
+    EXPECT_FALSE(TransportLoss(t, paper, false).gramRepaid(1 << 30));
 }
 
 TEST(TransportGram, LossThroughTheGramEqualsTheLossThroughTheProducts) {

@@ -40,6 +40,8 @@ struct TransportLoss::GramCache {
     std::shared_ptr<const TransportGram> gram;
     std::atomic<bool> ready{false};  // gram is set (read without the once flag)
     bool pays = false;
+    bool fits = false;  // the matrices within kGramMaxBytes
+    double work = 0;    // TransportGram::buildWork
 };
 
 namespace {
@@ -86,8 +88,8 @@ std::shared_ptr<const TransportGram> liveGram(const TransportMatrix& t,
 }
 
 /// The revision of TransportGram's build (its sums' order): a stored Gram of another revision
-/// is not read (gramKey).
-constexpr int kGramRevision = 1;
+/// is not read (gramKey). 2: Lap·T_b's rows merged before they are added (TransportGram.h).
+constexpr int kGramRevision = 2;
 
 }  // namespace
 
@@ -179,15 +181,27 @@ bool TransportLoss::gramEligible() const {
 
 bool TransportLoss::gramPays() const {
     if (!gramEligible()) return false;
+    decideGram();
+    return gram_->pays;
+}
+
+void TransportLoss::decideGram() const {
     std::call_once(gram_->decided, [&] {
         const double n = static_cast<double>(t_.cols());
         const double matrices = unb_->usesProducts() ? 2 : 1;
-        gram_->pays = matrices * n * n * static_cast<double>(sizeof(double)) <=
-                          static_cast<double>(kGramMaxBytes) &&
-                      TransportGram::buildWork(t_, unb_->pairMask(), unb_->usesProducts()) <=
-                          kGramWorkPerNonZero * static_cast<double>(t_.nnz());
+        gram_->fits = matrices * n * n * static_cast<double>(sizeof(double)) <=
+                      static_cast<double>(kGramMaxBytes);
+        gram_->work = TransportGram::buildWork(t_, unb_->pairMask(), unb_->usesProducts());
+        gram_->pays =
+            gram_->fits && gram_->work <= kGramWorkPerNonZero * static_cast<double>(t_.nnz());
     });
-    return gram_->pays;
+}
+
+bool TransportLoss::gramRepaid(int evaluations) const {
+    if (!gramEligible()) return false;
+    decideGram();
+    return gram_->fits && gram_->work <= kGramWorkPerEvaluation * static_cast<double>(t_.nnz()) *
+                                             static_cast<double>(evaluations);
 }
 
 const TransportGram& TransportLoss::gram() const {
@@ -238,12 +252,14 @@ std::shared_ptr<const TransportGram> TransportLoss::gramIfBuilt() const {
 const TransportGram* TransportLoss::evaluationGram() const {
     if (!gramEligible()) return nullptr;
     if (layout_ == TransportLayout::Gram) return &gram();
-    // Auto: once the evaluations so far would have paid for the build, or at once when this
-    // loss has its Gram already (built for it or adopted: nothing left to pay).
-    if (layout_ == TransportLayout::Auto && (gram_->ready || evaluations_ >= kAutoSlicesAfter) &&
-        gramPays())
-        return &gram();
-    return nullptr;
+    // Auto: at once when this loss has its Gram already (built for it or adopted: nothing left
+    // to pay); from the kAutoSlicesAfter-th evaluation when the build pays (gramPays); else once
+    // the evaluations so far have cost what the build will (gramRepaid).
+    if (layout_ != TransportLayout::Auto) return nullptr;
+    const bool due =
+        (gram_->ready || evaluations_ >= kAutoSlicesAfter) && (gramPays() || gram_->ready);
+    if (!due && !(evaluations_ >= kAutoSlicesAfter && gramRepaid(evaluations_))) return nullptr;
+    return &gram();
 }
 
 LossParts TransportLoss::evaluateGram(const TransportGram& g, std::span<const double> E,

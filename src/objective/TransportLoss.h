@@ -64,6 +64,16 @@ class TransportLoss {
     /// evaluations repay; its answer equals the products' to rounding.
     bool gramPays() const;
     static constexpr double kGramWorkPerNonZero = 256;
+    /// Whether `evaluations` through the products have cost what the Gram's build will (when
+    /// eligible and within kGramMaxBytes): buildWork <= kGramWorkPerEvaluation per non-zero of
+    /// T per evaluation. Auto builds it then where gramPays() is false: a search that runs
+    /// long (L-BFGS's 886 evaluations on a steep 512² part) pays at most twice what the best
+    /// choice in hindsight would have.
+    bool gramRepaid(int evaluations) const;
+    /// One evaluation through the slices, in the build's multiply-adds per non-zero of T: at
+    /// 2048², 156 ms of CPU over 31.6 M non-zeros against 13.2 s for a build of 3.33·10⁹
+    /// (docs/BENCHMARKS.md, issue 32's 2048² ratios).
+    static constexpr double kGramWorkPerEvaluation = 1.25;
     static constexpr size_t kGramMaxBytes = size_t{256} << 20;
     /// The Gram matrices of T for this loss's objective (built on first use; gramEligible()),
     /// shared with every other loss on the same T and pair mask alive in the process (a lamps
@@ -142,6 +152,7 @@ class TransportLoss {
     /// kAutoSlicesAfter-th evaluation on, counted by productSlices(), or from the first when
     /// this loss has them already).
     const TransportGram* evaluationGram() const;
+    void decideGram() const;  // gram_'s fits, work and pays, once
     LossParts evaluateGram(const TransportGram& g, std::span<const double> E,
                            std::span<const uint16_t> active, bool onActive,
                            std::span<double> grad) const;

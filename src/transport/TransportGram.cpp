@@ -55,19 +55,30 @@ double TransportGram::buildWork(const TransportMatrix& t, std::span<const uint8_
     check(t, pairMask);
     const size_t w = static_cast<size_t>(t.width), h = static_cast<size_t>(t.height);
     auto k = [&](size_t p) { return static_cast<double>(t.rowPtr[p + 1] - t.rowPtr[p]); };
+    // The texels of row p of Lap·T_b: those of p and of its masked neighbours, each once.
+    std::vector<size_t> stamp(t.cols(), 0);
+    size_t now = 0;
     double work = 0;
     for (size_t p = 0; p < t.rows(); ++p) {
         const double kp = k(p);
         if (kp == 0) continue;
         if (products) work += kp * kp;
         if (!pairMask[p]) continue;
-        double around = 0;
+        ++now;
+        size_t merged = 0;
         int deg = 0;
+        auto visit = [&](size_t q) {
+            for (uint64_t e = t.rowPtr[q]; e < t.rowPtr[q + 1]; ++e)
+                if (stamp[t.colIdx[e]] != now) stamp[t.colIdx[e]] = now, ++merged;
+        };
         forNeighbours(pairMask.data(), w, h, p, [&](size_t q) {
-            around += k(q);
+            visit(q);
             ++deg;
         });
-        if (deg > 0) work += kp * (around + kp);
+        if (deg > 0) {
+            visit(p);
+            work += kp * static_cast<double>(merged);
+        }
     }
     return work;
 }
@@ -112,9 +123,45 @@ TransportGram::TransportGram(const TransportMatrix& t, std::span<const uint8_t> 
         for (uint64_t k = t.rowPtr[q]; k < t.rowPtr[q + 1]; ++k)
             acc[index_[t.colIdx[k]]] += s * lum(k, 1);
     };
+    // Row p of Lap·T_b, deg(p)·T_b[p] − Σ_{q ~ p} T_b[q], merged once per pixel (its texels
+    // each once, at their places in seen_): a row of P then takes one multiply-add per texel of
+    // it, where adding the neighbours' rows one by one took one per entry of each.
+    std::vector<uint64_t> lapPtr(rows + 1, 0);
+    std::vector<uint32_t> lapCol;
+    std::vector<double> lapVal;
+    {
+        std::vector<double> acc(m_, 0.0);
+        std::vector<uint32_t> touched;
+        std::vector<uint8_t> on(m_, 0);
+        auto gather = [&](size_t q, double s) {
+            for (uint64_t k = t.rowPtr[q]; k < t.rowPtr[q + 1]; ++k) {
+                const auto j = static_cast<uint32_t>(index_[t.colIdx[k]]);
+                if (!on[j]) on[j] = 1, touched.push_back(j);
+                acc[j] += s * lum(k, 1);
+            }
+        };
+        const uint8_t* mask = pairMask.data();
+        for (size_t p = 0; p < rows; ++p) {
+            lapPtr[p + 1] = lapPtr[p];
+            if (!mask[p] || t.rowPtr[p + 1] == t.rowPtr[p]) continue;
+            int deg = 0;
+            forNeighbours(mask, w, h, p, [&](size_t q) {
+                gather(q, -1.0);
+                ++deg;
+            });
+            if (deg > 0) gather(p, deg);
+            for (uint32_t j : touched) {
+                lapCol.push_back(j);
+                lapVal.push_back(acc[j]);
+                acc[j] = 0;
+                on[j] = 0;
+            }
+            touched.clear();
+            lapPtr[p + 1] = lapCol.size();
+        }
+    }
     p_.assign(m_ * m_, 0.0);
     if (products) q_.assign(m_ * m_, 0.0);
-    const uint8_t* mask = pairMask.data();
     forBlocks(m_, 8, threads, [&](size_t i0, size_t i1) {
         for (size_t i = i0; i < i1; ++i) {
             double* pr = p_.data() + i * m_;
@@ -124,14 +171,8 @@ TransportGram::TransportGram(const TransportMatrix& t, std::span<const uint8_t> 
                 const size_t p = rowOf[u];
                 const double ai = a[u];
                 if (qr) addRow(qr, p, ai);
-                if (!mask[p]) continue;
-                // Row p of Lap·T_b: deg(p)·T_b[p] − Σ_{q ~ p} T_b[q].
-                int deg = 0;
-                forNeighbours(mask, w, h, p, [&](size_t q) {
-                    addRow(pr, q, -ai);
-                    ++deg;
-                });
-                if (deg > 0) addRow(pr, p, deg * ai);
+                for (uint64_t k = lapPtr[p]; k < lapPtr[p + 1]; ++k)
+                    pr[lapCol[k]] += ai * lapVal[k];
             }
         }
     });

@@ -11,10 +11,12 @@
 // Once built, an evaluation costs one symmetric product with an at most cols()² matrix (the
 // seen texels', below: 670² = 3.6 MB on the bundled part at 256²) whatever the image size and
 // spp, against two sparse products over all of T's non-zeros and a pass over the image. Building
-// costs about Σ_p k_p·Σ_{q ∈ N[p]} k_q multiply-adds (k: a row's entries; buildWork()), each
-// into one row of P that stays in the core's L1 cache: on the bundled part at 256², 16 spp,
-// 55 M, the CPU time of ~50 sparse evaluations (`bench transport`). It equals the products'
-// loss to rounding (another order of the same sums).
+// costs about Σ_p k_p·|L_p| multiply-adds (k: a row's entries; L_p: row p of Lap·T_b, merged
+// once, the texels of p and its neighbours each once; buildWork()), each into one row of P
+// that stays in the core's L1 cache (adding the neighbours' rows one by one, Σ_p k_p·Σ_{q ∈
+// N[p]} k_q, costs more where neighbouring pixels see the same texels: 1.22–1.26× on the
+// tests' small part, tests/test_transport_gram.cpp). It equals the products' loss to rounding
+// (another order of the same sums).
 //
 // For a gray E (luminance of each entry, as TransportColumns). Only the texels some pixel sees
 // (T's non-empty columns) have rows and columns in P and Q: the others' are zero (at 256² the
