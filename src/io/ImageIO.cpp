@@ -259,14 +259,13 @@ void writeExr(const fs::path& file, const Image& img) {
     for (size_t k = 0; k < img.data.size(); ++k)
         if (!std::isfinite(img.data[k])) throwBadValue(file, img, k, img.data[k]);
     // Written with OpenEXR itself: OpenImageIO 2.4 stamps every EXR with the time of writing
-    // (capDate), so equal images made different files. The header is OpenImageIO's otherwise
-    // (ZIP, increasing Y, float32 channels) but for the level: zlib's fastest, 1, not 4 (the
-    // same pixels; docs/BENCHMARKS.md "Issue 32, eighth pass" has its cost and sizes).
+    // (capDate), so equal images made different files. The header is OpenImageIO's otherwise:
+    // ZIP at level 4, increasing Y, float32 channels.
     std::vector<char> encoded;
     try {
         Imf::Header header(img.width, img.height);
         header.compression() = Imf::ZIP_COMPRESSION;
-        header.zipCompressionLevel() = 1;
+        header.zipCompressionLevel() = 4;
         const std::vector<std::string> names = channelNames(img.channels);
         Imf::FrameBuffer frame;
         const size_t xStride = sizeof(float) * static_cast<size_t>(img.channels);
