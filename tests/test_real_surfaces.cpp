@@ -357,6 +357,39 @@ TEST(FormatsGwyddion, ReadsGwyddionsOwnFileByContent) {
     EXPECT_THROW(loadHeightmap(dir / "junk.xyz123", {}), InputError);
 }
 
+TEST(FormatsGwyddion, TheCommandLoadsGwyddionOnlyForAFileThatNeedsIt) {
+    // Gwyddion is a module loaded on first use (io/GwyddionModule.h): a render of a .gwy part
+    // through the command loads it (and Gwyddion's libraries) from beside the executable; a
+    // render of an EXR part does not (the dynamic loader lists what it loads: LD_DEBUG=files).
+    if (!SL_HAVE_GWYDDION) GTEST_SKIP() << "built with -DSCRATCHLIGHT_GWYDDION=OFF";
+    test::TempDir dir("gwycli");
+    const int w = 24, h = 24;
+    std::vector<float> mm(static_cast<size_t>(w * h));
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i)
+            mm[static_cast<size_t>(j * w + i)] = 0.002f * std::sin(0.5f * static_cast<float>(i));
+    writeGwy(dir / "part.gwy", w, h, mm, 0.01);
+    test::writeText(dir / "scene.json", R"({"heightmap": {"path": "part.gwy"}})");
+    auto render = [&](const std::string& scene, const std::string& out) {
+        return test::runShell("LD_DEBUG=files " + std::string(SL_CLI_PATH) + " render " + scene +
+                              " --size 16 --spp 1 -o " + (dir / out).string() + " 2>&1");
+    };
+    const test::RunResult gwy = render((dir / "scene.json").string(), "gwy.exr");
+    ASSERT_EQ(gwy.exitCode, 0) << gwy.output.substr(
+        gwy.output.size() > 4000 ? gwy.output.size() - 4000 : 0);
+    EXPECT_NE(gwy.output.find("libscratchlight-gwyddion"), std::string::npos);
+    EXPECT_NE(gwy.output.find("libgwyddion2"), std::string::npos);
+    EXPECT_NE(gwy.output.find("gwyddion gwyfile"), std::string::npos);  // the part line
+    EXPECT_TRUE(fs::exists(dir / "gwy.exr"));
+    const test::RunResult exr =
+        render(std::string(SL_SOURCE_DIR) + "/scenes/default/scene.json", "exr.exr");
+    ASSERT_EQ(exr.exitCode, 0);
+    EXPECT_NE(exr.output.find("libtbb"), std::string::npos);  // LD_DEBUG does list libraries
+    EXPECT_EQ(exr.output.find("libscratchlight-gwyddion"), std::string::npos);
+    EXPECT_EQ(exr.output.find("libgwy"), std::string::npos);
+    EXPECT_EQ(exr.output.find("libgtk"), std::string::npos);
+}
+
 // --- the shared real surfaces -------------------------------------------------------------------
 
 fs::path sharedDir() {

@@ -1,13 +1,13 @@
 // GwyddionReader: height maps read through Gwyddion's file modules (Gwyddion 2.x, Debian
-// `gwyddion` and `libgwyddion20-dev`; GPL-2+, see README "Licence"). The one file of
-// scratchlight that includes Gwyddion's headers; built with the CMake option SCRATCHLIGHT_GWYDDION
-// (default ON). Without it gwyddionBuilt() is false, gwyddionDetect() finds nothing and
-// readGwyddion()/writeGwy() throw an InputError that names the option.
+// `gwyddion` and `libgwyddion20-dev`; GPL-2+, see README "Licence"), built with the CMake option
+// SCRATCHLIGHT_GWYDDION (default ON). Without it gwyddionBuilt() is false, gwyddionDetect() finds
+// nothing and readGwyddion()/writeGwy() throw an InputError that names the option.
 //
-// Gwyddion is initialised once, on the first file that needs it (thread-safe), headless as its
-// own gwyddion-thumbnailer does: the widget types, the gradient resources, then only the file
-// modules (`<libdir>/gwyddion/modules/file`; the other module kinds need a display). Gwyddion is
-// not thread-safe: every call into it holds one lock.
+// Gwyddion is not linked into the program: its calls live in a module loaded the first time a
+// file needs it (io/GwyddionModule.h, libscratchlight-gwyddion.so beside the executable), which
+// initialises Gwyddion once, headless as its own gwyddion-thumbnailer does: the widget types, the
+// gradient resources, then only the file modules (`<libdir>/gwyddion/modules/file`; the other
+// module kinds need a display). Gwyddion is not thread-safe: every call into it holds one lock.
 //
 // What is read (loadHeightmap dispatches here for a file whose content none of our own readers
 // claims, io/HeightmapIO.h): the lowest-numbered channel (/N/data) whose lateral and height units

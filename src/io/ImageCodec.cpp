@@ -1,41 +1,15 @@
 #include "io/ImageCodec.h"
 
-#include <dlfcn.h>
-
 #include <atomic>
-#include <filesystem>
 #include <mutex>
 #include <string>
-#include <system_error>
-#include <vector>
 
 #include "core/Error.h"
+#include "io/SharedModule.h"
 
 namespace sl::detail {
 
-namespace fs = std::filesystem;
-
 namespace {
-
-#ifndef SL_IMAGE_CODEC_LINKED
-constexpr const char* kModuleName = "libscratchlight-oiio.so";
-
-/// Where the module may be: beside the executable (the build tree), the installed
-/// <prefix>/lib/scratchlight, then the build tree this was compiled in.
-std::vector<fs::path> moduleCandidates() {
-    std::vector<fs::path> out;
-    std::error_code ec;
-    const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-    if (!ec && exe.has_parent_path()) {
-        out.push_back(exe.parent_path() / kModuleName);
-        out.push_back(exe.parent_path().parent_path() / "lib" / "scratchlight" / kModuleName);
-    }
-#ifdef SL_IMAGE_CODEC_BUILD_DIR
-    out.push_back(fs::path(SL_IMAGE_CODEC_BUILD_DIR) / kModuleName);
-#endif
-    return out;
-}
-#endif
 
 struct Loaded {
     std::once_flag once;
@@ -53,31 +27,12 @@ void load(Loaded& s) {
 #ifdef SL_IMAGE_CODEC_LINKED  // linked into this program (the fuzz targets)
     s.codec = sl_image_codec_v1();
 #else
-    std::string tried;
-    for (const fs::path& p : moduleCandidates()) {
-        std::error_code ec;
-        if (!fs::is_regular_file(p, ec)) {
-            tried += (tried.empty() ? "" : ", ") + p.string();
-            continue;
-        }
-        void* h = dlopen(p.c_str(), RTLD_NOW | RTLD_LOCAL);
-        if (!h) {
-            const char* e = dlerror();
-            s.problem = "cannot load " + p.string() + " (" + (e ? e : "no reason given") + ")";
-            return;
-        }
-        using Entry = const ImageCodec* (*)();
-        auto entry = reinterpret_cast<Entry>(dlsym(h, "sl_image_codec_v1"));
-        if (!entry) {
-            s.problem = p.string() + " is not scratchlight's OpenImageIO module";
-            return;
-        }
+    using Entry = const ImageCodec* (*)();
+    if (auto entry = reinterpret_cast<Entry>(openModuleEntry(
+            "libscratchlight-oiio.so", "sl_image_codec_v1", /*global=*/false, &s.problem)))
         s.codec = entry();
-        break;
-    }
-    if (!s.codec && s.problem.empty())
-        s.problem = std::string("the OpenImageIO module ") + kModuleName +
-                    " was not found (looked for " + tried + ")";
+    else
+        s.problem = "its module could not be opened: " + s.problem;
 #endif
     if (s.codec && s.codec->version != kImageCodecVersion) {
         s.problem = "the OpenImageIO module is of another version of scratchlight";

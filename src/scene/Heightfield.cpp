@@ -34,7 +34,11 @@ bool memoryMonitor(void* ptr, ssize_t bytes, bool /*post*/) {
 }  // namespace
 
 Heightfield::Heightfield(int width, int height, double pitch, std::span<const float> heights)
-    : width_(width), height_(height), pitch_(pitch), memory_(new std::atomic<int64_t>[2]) {
+    : width_(width),
+      height_(height),
+      pitch_(pitch),
+      heights_(heights),
+      memory_(new std::atomic<int64_t>[2]) {
     if (width < 2 || height < 2)
         throw inputError(
             "heightmap",
@@ -57,31 +61,33 @@ Heightfield::Heightfield(int width, int height, double pitch, std::span<const fl
     memory_[0] = 0;
     memory_[1] = 0;
 
+    stats_.vertexBytes = static_cast<size_t>(width) * height * 3 * sizeof(float);
+    auto [mn, mx] = std::minmax_element(heights.begin(), heights.end());
+    minH_ = *mn;
+    maxH_ = *mx;
+}
+
+void Heightfield::build() const {
     const Stopwatch clock;
+    const int width = width_, height = height_;
+    // The vertices (x, y, z per sample) are filled here, with the BVH, not on construction: a
+    // run that traces no ray never writes them (12 MB at 1024²).
     const size_t nv = static_cast<size_t>(width) * height;
     vertices_.resize(3 * nv + 1);  // Embree reads a vertex with a 16-byte load
-    stats_.vertexBytes = nv * 3 * sizeof(float);
+    const double pitch = pitch_;
     const double cx = 0.5 * (width - 1), cz = 0.5 * (height - 1);
     float* verts = vertices_.data();
+    const float* heights = heights_.data();
     tbb::parallel_for(0, height, [&](int j) {
         float z = static_cast<float>((j - cz) * pitch);
         float* row = verts + static_cast<size_t>(j) * width * 3;
-        const float* h = heights.data() + static_cast<size_t>(j) * width;
+        const float* h = heights + static_cast<size_t>(j) * width;
         for (int i = 0; i < width; ++i) {
             row[3 * i + 0] = static_cast<float>((i - cx) * pitch);
             row[3 * i + 1] = h[i];
             row[3 * i + 2] = z;
         }
     });
-    auto [mn, mx] = std::minmax_element(heights.begin(), heights.end());
-    minH_ = *mn;
-    maxH_ = *mx;
-    fillSeconds_ = clock.seconds();
-}
-
-void Heightfield::build() const {
-    const Stopwatch clock;
-    const int width = width_, height = height_;
     device_ = rtcNewDevice(nullptr);
     if (!device_) throw std::runtime_error("Embree: could not create a device");
     rtcSetDeviceMemoryMonitorFunction(device_, memoryMonitor, memory_.get());
@@ -92,7 +98,6 @@ void Heightfield::build() const {
     // of the bundled scene had a camera sample that passed through the part).
     rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
     RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_GRID);
-    const size_t nv = static_cast<size_t>(width) * height;
     rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, vertices_.data(),
                                0, 3 * sizeof(float), nv);
 
@@ -121,7 +126,7 @@ void Heightfield::build() const {
     rtcReleaseGeometry(geom);
     rtcCommitScene(scene_);
     if (rtcGetDeviceError(device_) != RTC_ERROR_NONE) embreeFail(device_, "building the BVH");
-    stats_.buildSeconds = fillSeconds_ + clock.seconds();
+    stats_.buildSeconds = clock.seconds();
     // The vertex buffer is ours, shared with Embree: counted as Embree's, as when it made it.
     stats_.embreeBytes =
         stats_.vertexBytes + static_cast<size_t>(std::max<int64_t>(0, memory_[0].load()));

@@ -79,10 +79,12 @@ inline RTCRayHit makeRayHit(const Ray& ray, float tnear) {
 /// The BVH is built on the first query (intersect, occluded, rtcScene or stats), not on
 /// construction: a run that reads its transport matrix from the cache never traces a ray, and
 /// building Embree's BVH of a 1024² map took ~0.1-0.2 s of it on 2 cores. The vertices are
-/// filled on construction (the grid's vertex buffer is ours, shared with Embree).
+/// filled with the BVH too (the grid's vertex buffer is ours, shared with Embree), from the
+/// heights the Heightfield was made from: they must outlive it (Scene owns both).
 class Heightfield {
   public:
-    /// heights: W×H, row-major, row 0 first, in scene units. Throws InputError if too small.
+    /// heights: W×H, row-major, row 0 first, in scene units, kept (not copied) until the BVH is
+    /// built. Throws InputError if too small.
     Heightfield(int width, int height, double pitch, std::span<const float> heights);
     ~Heightfield();
     Heightfield(const Heightfield&) = delete;
@@ -121,8 +123,8 @@ class Heightfield {
     int width_, height_;
     double pitch_;
     float minH_ = 0, maxH_ = 0;
-    std::vector<float> vertices_;  // x, y, z per sample, then one float of padding (Embree's)
-    double fillSeconds_ = 0;
+    std::span<const float> heights_;       // the caller's, read by build()
+    mutable std::vector<float> vertices_;  // x, y, z per sample, then one float of padding
     mutable std::once_flag once_;
     mutable std::atomic<bool> built_{false};
     mutable RTCDevice device_ = nullptr;
