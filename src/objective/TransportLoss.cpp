@@ -256,10 +256,9 @@ const TransportGram* TransportLoss::evaluationGram() const {
     // to pay); from the kAutoSlicesAfter-th evaluation when the build pays (gramPays); else once
     // the evaluations so far have cost what the build will (gramRepaid).
     if (layout_ != TransportLayout::Auto) return nullptr;
-    const bool due =
-        (gram_->ready || evaluations_ >= kAutoSlicesAfter) && (gramPays() || gram_->ready);
-    if (!due && !(evaluations_ >= kAutoSlicesAfter && gramRepaid(evaluations_))) return nullptr;
-    return &gram();
+    if (gram_->ready) return &gram();
+    if (evaluations_ < kAutoSlicesAfter) return nullptr;
+    return gramPays() || gramRepaid(evaluations_) ? &gram() : nullptr;
 }
 
 LossParts TransportLoss::evaluateGram(const TransportGram& g, std::span<const double> E,
