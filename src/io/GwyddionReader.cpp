@@ -25,18 +25,11 @@ const detail::GwyddionModule& gwyddion(const std::string& what) {
     static const detail::GwyddionModule* module = nullptr;
     static std::string problem;
     std::call_once(once, [] {
-        using Entry = const detail::GwyddionModule* (*)();
-        // RTLD_GLOBAL: Gwyddion's file modules, which it opens itself, use its libraries'
-        // symbols without linking them.
-        if (auto entry = reinterpret_cast<Entry>(detail::openModuleEntry(
-                "libscratchlight-gwyddion.so", "sl_gwyddion_module_v1", /*global=*/true, &problem)))
-            module = entry();
-        else
-            problem = "its module could not be opened: " + problem;
-        if (module && module->version != detail::kGwyddionModuleVersion) {
-            problem = "the Gwyddion module is of another version of scratchlight";
-            module = nullptr;
-        }
+        // global: Gwyddion's file modules, which it opens itself, use its libraries' symbols
+        // without linking them.
+        module = detail::openModule<detail::GwyddionModule>(
+            "libscratchlight-gwyddion.so", "sl_gwyddion_module_v1", /*global=*/true,
+            detail::kGwyddionModuleVersion, "Gwyddion", &problem);
     });
     if (!module)
         throw inputError(what, "needs Gwyddion to be read, and " + problem,

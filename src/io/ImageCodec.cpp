@@ -27,17 +27,10 @@ void load(Loaded& s) {
 #ifdef SL_IMAGE_CODEC_LINKED  // linked into this program (the fuzz targets)
     s.codec = sl_image_codec_v1();
 #else
-    using Entry = const ImageCodec* (*)();
-    if (auto entry = reinterpret_cast<Entry>(openModuleEntry(
-            "libscratchlight-oiio.so", "sl_image_codec_v1", /*global=*/false, &s.problem)))
-        s.codec = entry();
-    else
-        s.problem = "its module could not be opened: " + s.problem;
+    s.codec =
+        openModule<ImageCodec>("libscratchlight-oiio.so", "sl_image_codec_v1",
+                               /*global=*/false, kImageCodecVersion, "OpenImageIO", &s.problem);
 #endif
-    if (s.codec && s.codec->version != kImageCodecVersion) {
-        s.problem = "the OpenImageIO module is of another version of scratchlight";
-        s.codec = nullptr;
-    }
     s.loaded = s.codec != nullptr;
 }
 

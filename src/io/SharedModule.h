@@ -17,4 +17,23 @@ namespace sl::detail {
 void* openModuleEntry(const std::string& fileName, const char* entry, bool global,
                       std::string* problem);
 
+/// The module `fileName` whose entry `entry` returns its table `const M*` (a struct with an
+/// `int version`): openModuleEntry, then the table, which must be of `version` (both sides are
+/// built together); null with *problem saying why ("its module could not be opened: …", or "the
+/// <what> module is of another version of scratchlight").
+template <typename M>
+const M* openModule(const std::string& fileName, const char* entry, bool global, int version,
+                    const std::string& what, std::string* problem) {
+    using Entry = const M* (*)();
+    const auto open = reinterpret_cast<Entry>(openModuleEntry(fileName, entry, global, problem));
+    if (!open) {
+        *problem = "its module could not be opened: " + *problem;
+        return nullptr;
+    }
+    const M* module = open();
+    if (module && module->version == version) return module;
+    *problem = "the " + what + " module is of another version of scratchlight";
+    return nullptr;
+}
+
 }  // namespace sl::detail
