@@ -146,9 +146,7 @@ TEST(TrainingNoise, TheDescriptionNamesTheGridOfEachRound) {
     std::string d = describeTrainingNoise(s);
     EXPECT_NE(d.find("512 spp, 25x13 nodes: train/validation gap 4 % ± 2 %"), std::string::npos)
         << d;
-    EXPECT_NE(d.find("-> 512 spp on 25x13 nodes (within 5 % plus what V's noise explains)"),
-              std::string::npos)
-        << d;
+    EXPECT_NE(d.find("-> 512 spp on 25x13 nodes (within 5 %)"), std::string::npos) << d;
     // V traced at more spp than T is named; a gap V cannot resolve at its most spp is said so.
     s.rounds.push_back(round(512, LightGrid{25, 13}, 1.2, 0.2, 0.3, 1024));
     s.met = false;
@@ -159,14 +157,24 @@ TEST(TrainingNoise, TheDescriptionNamesTheGridOfEachRound) {
         << d;
     EXPECT_NE(d.find("V at 1024 spp cannot resolve 5 %"), std::string::npos) << d;
     EXPECT_EQ(d.find("no light is trusted"), std::string::npos) << d;
+    // A gap above the tolerance by less than V's noise, at the rule's limits, says ABOVE.
+    s.rounds.back() = round(512, LightGrid{9, 4}, 1.07, 0.07, 0.02, 1024);
+    s.rounds.back().verdict = GapVerdict::Above;
+    d = describeTrainingNoise(s);
+    EXPECT_NE(d.find("-> 512 spp on 9x4 nodes: ABOVE 5 % by less than V at 1024 spp's noise"),
+              std::string::npos)
+        << d;
 }
 
 // Step 3's verdict: over-fit only beyond kGapSigmas standard errors above the tolerance;
-// otherwise V's noise when its SE is above the tolerance (or unknown); else within.
+// otherwise V's noise when its SE is above the tolerance (or unknown); else above when the gap
+// is above the tolerance; else within.
 TEST(TrainingNoise, TheVerdictWeighsTheGapAgainstItsError) {
     EXPECT_EQ(kGapSigmas, 2.0);
     EXPECT_EQ(gapVerdict(0.03, 0.01, 0.05, false), GapVerdict::Within);
-    EXPECT_EQ(gapVerdict(0.08, 0.02, 0.05, false), GapVerdict::Within);   // 0.08 − 0.04 ≤ 0.05
+    EXPECT_EQ(gapVerdict(0.05, 0.05, 0.05, false), GapVerdict::Within);  // both at the tolerance
+    EXPECT_EQ(gapVerdict(0.08, 0.02, 0.05, false), GapVerdict::Above);   // 0.08 − 0.04 ≤ 0.05
+    EXPECT_EQ(gapVerdict(0.0501, 0.0001, 0.05, true), GapVerdict::Above);
     EXPECT_EQ(gapVerdict(0.10, 0.02, 0.05, false), GapVerdict::OverFit);  // 0.10 − 0.04 > 0.05
     EXPECT_EQ(gapVerdict(0.50, 0.30, 0.05, false), GapVerdict::ValidationNoise);   // −0.10
     EXPECT_EQ(gapVerdict(0.30, 0.10, 0.05, false), GapVerdict::OverFit);           // 0.10 > 0.05
@@ -191,6 +199,62 @@ TEST(TrainingNoise, TheVerdictWeighsTheGapAgainstItsError) {
     EXPECT_TRUE(validationSppFree(ObjectiveKind::Defects));
     EXPECT_TRUE(validationSppFree(ObjectiveKind::Unbiased));
     EXPECT_FALSE(validationSppFree(ObjectiveKind::Paper));  // eq. 2 is biased by the noise
+}
+
+// Step 4's decisions, one per verdict: within keeps; V's noise raises V (T for eq. 2); above
+// raises V while its SE could hide twice the tolerance, else T like over-fit, then a coarser
+// light; at the limits the light is kept, unresolved when V's noise could explain the gap.
+TEST(TrainingNoise, EachVerdictLeadsToItsRemedy) {
+    TrainingNoiseOptions o;  // 5 %, T to 512 spp, V to 1024
+    auto round = [](int spp, int vSpp, double gap, double se, LightGrid grid = {}) {
+        TrainingNoiseRound r;
+        r.spp = spp;
+        r.validationSpp = vSpp;
+        r.gap = gap;
+        r.gapError = se;
+        r.grid = grid;
+        return r;
+    };
+    auto decide = [&](const TrainingNoiseRound& r, ObjectiveKind kind = ObjectiveKind::Defects) {
+        return decideAfterRound(r, kind, o, 50, 25);
+    };
+    GapDecision d = decide(round(64, 16, 0.04, 0.01));
+    EXPECT_EQ(d.verdict, GapVerdict::Within);
+    EXPECT_EQ(d.describe(), "kept");
+    EXPECT_FALSE(d.unresolved);
+    // Above, V's SE 4 % > 2.5 %: V to SE ≤ 2.5 %: 16·(0.04/0.025)² = 41 -> 64.
+    d = decide(round(64, 16, 0.08, 0.04));
+    EXPECT_EQ(d.verdict, GapVerdict::Above);
+    EXPECT_EQ(d.describe(), "V at 64 spp");
+    // Above with V's SE ≤ 2.5 %: T's spp as for over-fit, 64·0.08/0.025 = 205 -> 256.
+    d = decide(round(64, 64, 0.08, 0.02));
+    EXPECT_EQ(d.verdict, GapVerdict::Above);
+    EXPECT_EQ(d.describe(), "T at 256 spp");
+    // The same where V is at its most spp already.
+    EXPECT_EQ(decide(round(64, 1024, 0.08, 0.04)).describe(), "T at 256 spp");
+    // Over-fit: T first; at T's most spp a coarser light; at the coarsest, kept as over-fit.
+    EXPECT_EQ(decide(round(64, 16, 0.3, 0.02)).verdict, GapVerdict::OverFit);
+    EXPECT_EQ(decide(round(64, 16, 0.3, 0.02)).describe(), "T at 512 spp");  // at most 8×
+    EXPECT_EQ(decide(round(512, 128, 0.3, 0.02)).describe(), "a coarser light, 35x18 nodes");
+    d = decide(round(512, 128, 0.3, 0.02, LightGrid{9, 4}));
+    EXPECT_EQ(d.describe(), "kept: over-fit at the limits");
+    EXPECT_FALSE(d.unresolved);
+    // Above at the same limits: the light is kept, the gap not resolved.
+    d = decide(round(512, 128, 0.07, 0.02, LightGrid{9, 4}));
+    EXPECT_EQ(d.verdict, GapVerdict::Above);
+    EXPECT_EQ(d.describe(), "kept: not resolved at this cost");
+    EXPECT_TRUE(d.unresolved);
+    // V's noise: V rises; at V's most, kept unresolved; eq. 2 raises T's spp instead (its V
+    // keeps T's spp).
+    EXPECT_EQ(decide(round(64, 16, 0.2, 0.1)).describe(), "V at 64 spp");  // 16·(0.1/0.05)² = 64
+    EXPECT_TRUE(decide(round(64, 1024, 0.2, 0.1)).unresolved);
+    EXPECT_EQ(decide(round(64, 64, 0.2, 0.1), ObjectiveKind::Paper).describe(), "T at 256 spp");
+    // A given spp: nothing is traced again; over-fit still coarsens the light, above does not.
+    o.adapt = false;
+    EXPECT_EQ(decide(round(16, 16, 0.3, 0.02)).describe(), "a coarser light, 35x18 nodes");
+    d = decide(round(16, 16, 0.07, 0.02));
+    EXPECT_EQ(d.verdict, GapVerdict::Above);
+    EXPECT_EQ(d.describe(), "kept: not resolved at this cost");
 }
 
 // V's first round (step 1): a quarter of T's spp, even, at least 16, at most T's.

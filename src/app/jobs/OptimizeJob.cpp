@@ -153,39 +153,15 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                     dynamic_cast<const UnbiasedObjective*>(onV.halves.get()));
                 nr.secondsGapError = gapClock.seconds();
                 // Step 4: V's noise: more V (T's spp for eq. 2, whose V must keep T's spp);
-                // over-fit: more T, then a coarser light (step 5).
-                const bool freeV = validationSppFree(in.kind);
-                const bool vAtMost =
-                    freeV ? !p.noise.adapt || nr.validationSpp >= p.noise.maxValidationSpp
-                          : !p.noise.adapt || nr.spp >= p.noise.maxSpp;
-                nr.verdict = gapVerdict(nr.gap, nr.gapError, p.noise.maxGap, vAtMost);
+                // over-fit or above the tolerance: more T, then a coarser light (step 5).
+                const GapDecision next =
+                    decideAfterRound(nr, in.kind, p.noise, job.transport.file.matrix.envWidth,
+                                     job.transport.file.matrix.envHeight);
+                nr.verdict = next.verdict;
                 nr.seconds = round.seconds() - notInRound;
                 noise.met = nr.verdict == GapVerdict::Within;
-                const bool vNoise = nr.verdict == GapVerdict::ValidationNoise;
-                const int nextV =
-                    vNoise && freeV && p.noise.adapt
-                        ? nextValidationSpp(nr.validationSpp, nr.gapError, p.noise).value_or(0)
-                        : 0;
-                const int next = !p.noise.adapt || noise.met || (vNoise && freeV) ? 0
-                                 : vNoise
-                                     ? nextJudgeSpp(nr.spp,
-                                                    std::isnan(nr.gapError)
-                                                        ? std::numeric_limits<double>::infinity()
-                                                        : nr.gapError,
-                                                    p.noise.maxSpp, p.noise.maxGap)
-                                     : nextTrainingSpp(nr.spp, nr.gap, p.noise).value_or(0);
-                const std::optional<LightGrid> coarser =
-                    nr.verdict == GapVerdict::OverFit && next == 0 && p.noise.adaptGrid
-                        ? nextLightGrid(nr.grid, job.transport.file.matrix.envWidth,
-                                        job.transport.file.matrix.envHeight)
-                        : std::nullopt;
-                noise.unresolved = vNoise && nextV == 0 && next == 0;
-                nr.decision = nextV > 0   ? "V at " + std::to_string(nextV) + " spp"
-                              : next > 0  ? "T at " + std::to_string(next) + " spp"
-                              : coarser   ? "a coarser light, " + coarser->name()
-                              : noise.met ? std::string("kept")
-                              : vNoise    ? std::string("kept: not resolved at this cost")
-                                          : std::string("kept: over-fit at the limits");
+                noise.unresolved = next.unresolved;
+                nr.decision = next.describe();
                 noise.rounds.push_back(nr);
                 spdlog::info(
                     "training noise: {} spp, {}, V {} spp, E*'s {} {} on T and {} on the "
@@ -195,9 +171,9 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                     formatNumber(nr.training, 4), formatNumber(nr.validation, 4),
                     formatNumber(100.0 * nr.gap, 3), formatNumber(100.0 * nr.gapError, 3),
                     gapVerdictName(nr.verdict), nr.decision);
-                if (nextV > 0) {
+                if (next.nextValidation > 0) {
                     // The same T and E*, scored again on V at more spp: this round goes on.
-                    p.validationSpp = nextV;
+                    p.validationSpp = next.nextValidation;
                     noise.rounds.back().seconds = 0;  // counted in the round that goes on
                     const Stopwatch validationClock;
                     loadValidation(p, in, job);
@@ -207,19 +183,19 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                             .loss->evaluate(r.e, {});
                     continue;
                 }
-                if (next == 0 && !coarser) break;
+                if (next.nextTraining == 0 && !next.coarser) break;
                 noise.secondsAdded += nr.seconds;
                 round.restart();
                 notInRound = 0;
                 std::vector<std::pair<std::string, std::vector<double>>> finer;
-                if (next > 0) {
-                    load(next);
+                if (next.nextTraining > 0) {
+                    load(next.nextTraining);
                 } else {
                     finer = std::move(r.finer);
                     finer.emplace_back("optimized on " + nr.grid.name() + " (gap " +
                                            formatNumber(100.0 * nr.gap, 3) + " %)",
                                        r.optimizedE.empty() ? r.e : r.optimizedE);
-                    p.o.lightGrid = *coarser;
+                    p.o.lightGrid = *next.coarser;
                 }
                 searchClock.restart();
                 r = optimizeLambda(p, in, job, lambda);

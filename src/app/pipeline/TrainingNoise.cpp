@@ -80,6 +80,8 @@ const char* gapVerdictName(GapVerdict v) {
             return "over-fit";
         case GapVerdict::ValidationNoise:
             return "validation noise";
+        case GapVerdict::Above:
+            return "above";
     }
     return "within";
 }
@@ -88,6 +90,7 @@ GapVerdict gapVerdict(double gap, double se, double maxGap, bool validationAtMos
     if (std::isnan(se)) return validationAtMost ? GapVerdict::OverFit : GapVerdict::ValidationNoise;
     if (gap - kGapSigmas * se > maxGap) return GapVerdict::OverFit;
     if (se > maxGap) return GapVerdict::ValidationNoise;
+    if (gap > maxGap) return GapVerdict::Above;
     return GapVerdict::Within;
 }
 
@@ -119,6 +122,61 @@ std::optional<int> nextValidationSpp(int spp, double se, const TrainingNoiseOpti
                      o.maxValidationSpp, o.maxGap);
     if (next <= spp) return std::nullopt;
     return next;
+}
+
+GapDecision decideAfterRound(const TrainingNoiseRound& r, ObjectiveKind kind,
+                             const TrainingNoiseOptions& o, int envWidth, int envHeight) {
+    GapDecision d;
+    // V's spp may rise alone where its figure does not depend on it; eq. 2's V keeps T's.
+    const bool freeV = validationSppFree(kind);
+    const bool vAtMost =
+        freeV ? !o.adapt || r.validationSpp >= o.maxValidationSpp : !o.adapt || r.spp >= o.maxSpp;
+    d.verdict = gapVerdict(r.gap, r.gapError, o.maxGap, vAtMost);
+    const double se = std::isnan(r.gapError) ? std::numeric_limits<double>::infinity() : r.gapError;
+    switch (d.verdict) {
+        case GapVerdict::Within:
+            return d;
+        case GapVerdict::ValidationNoise:
+            if (o.adapt && freeV) {
+                d.nextValidation = nextValidationSpp(r.validationSpp, r.gapError, o).value_or(0);
+            } else if (o.adapt) {  // eq. 2's V keeps T's spp: both rise to V's target
+                const int next = nextJudgeSpp(r.spp, se, o.maxSpp, o.maxGap);
+                d.nextTraining = next > r.spp ? next : 0;
+            }
+            d.unresolved = d.nextValidation == 0 && d.nextTraining == 0;
+            return d;
+        case GapVerdict::Above:
+            // A given spp keeps its light here (it is only warned about).
+            if (!o.adapt) {
+                d.unresolved = true;
+                return d;
+            }
+            if (freeV && se > kAboveErrorShare * o.maxGap) {
+                const int next = nextJudgeSpp(r.validationSpp, se, o.maxValidationSpp,
+                                              kAboveErrorShare * o.maxGap);
+                if (next > r.validationSpp) {
+                    d.nextValidation = next;
+                    return d;
+                }
+            }
+            break;
+        case GapVerdict::OverFit:
+            break;
+    }
+    // Over-fit, or above with V resolved: more T, then a coarser light (step 5).
+    if (o.adapt) d.nextTraining = nextTrainingSpp(r.spp, r.gap, o).value_or(0);
+    if (d.nextTraining == 0 && o.adaptGrid) d.coarser = nextLightGrid(r.grid, envWidth, envHeight);
+    d.unresolved = d.verdict == GapVerdict::Above && d.nextTraining == 0 && !d.coarser;
+    return d;
+}
+
+std::string GapDecision::describe() const {
+    if (nextValidation > 0) return "V at " + std::to_string(nextValidation) + " spp";
+    if (nextTraining > 0) return "T at " + std::to_string(nextTraining) + " spp";
+    if (coarser) return "a coarser light, " + coarser->name();
+    if (verdict == GapVerdict::Within) return "kept";
+    if (unresolved) return "kept: not resolved at this cost";
+    return "kept: over-fit at the limits";
 }
 
 std::optional<int> nextTrainingSpp(int spp, double gap, const TrainingNoiseOptions& o) {
@@ -155,13 +213,16 @@ std::string describeTrainingNoise(const TrainingNoiseSummary& s) {
     }
     const std::string on = s.grid().perTexel() ? std::string() : " on " + s.grid().name();
     const std::string tol = pct(s.maxGap);
-    const std::string noise = "within " + tol + " plus what V's noise explains";
+    const std::string noise = "within " + tol;
+    const std::string vAt =
+        "V at " + std::to_string(std::max(s.rounds.back().validationSpp, s.spp())) + " spp";
     const std::string unresolved =
-        ": within what V's noise explains, but V at " +
-        std::to_string(std::max(s.rounds.back().validationSpp, s.spp())) + " spp cannot resolve " +
-        tol +
-        ", so the gap is not resolved at this cost (the light is "
-        "kept, V's noise not chased)";
+        s.rounds.back().verdict == GapVerdict::Above
+            ? ": ABOVE " + tol + " by less than " + vAt +
+                  "'s noise explains, so the gap is not resolved at this cost (the light is kept)"
+            : ": within what V's noise explains, but " + vAt + " cannot resolve " + tol +
+                  ", so the gap is not resolved at this cost (the light is "
+                  "kept, V's noise not chased)";
     if (!s.adapted)
         out += s.met          ? " (the given spp" + on + "; " + noise + ")"
                : s.unresolved ? " (the given spp" + on + ")" + unresolved

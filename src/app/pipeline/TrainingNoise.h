@@ -29,7 +29,10 @@
 //        validation noise  otherwise, while SE > maxGap: V cannot tell a gap of maxGap from 0
 //                          (or V's figure of E* is on the objective's floor: its gradient in
 //                          the defects below V's noise; at V's most spp that is over-fit);
-//        within            otherwise: the gap is within maxGap plus what V's noise explains.
+//        above             otherwise, while gap > maxGap: above the tolerance by less than
+//                          V's noise explains (the target is a gap ≤ maxGap, not a gap V's
+//                          noise cannot tell from it);
+//        within            otherwise: gap ≤ maxGap, measured to SE ≤ maxGap.
 //   4. within: n (and the grid) is kept. Validation noise: V, not T, gets more samples — V's
 //      spp rises (nextValidationSpp: SE falls as 1/sqrt(spp), so spp·(SE/maxGap)², a power of
 //      two, at least 2×, at most maxValidationSpp, the judge's most) and E* is scored again on
@@ -38,6 +41,11 @@
 //      light); with a given spp V keeps T's (the gap is only measured). The paper
 //      objective's eq. 2 is biased by noise (Σ|ΔY| grows with it), so its V keeps T's spp and
 //      T's spp rises instead.
+//      Above: V first while its noise could hide a gap of twice the tolerance (SE > maxGap/2:
+//      V's spp rises until SE ≤ maxGap/2, kAboveErrorShare), else as over-fit: a gap measured
+//      above the tolerance is closed by the same remedy (more T, then a coarser light); at the
+//      limits the light is kept and the run says its gap is above the tolerance by less than
+//      V's noise explains.
 //      Over-fit: the part of the gap the noise makes falls as 1/spp (the optimizer's gain on noise
 //      is proportional to the noise's variance), so the next n is the smallest power of two ≥ 2n
 //      with gap·n/n' ≤ maxGap/2 (half the tolerance, so one more trace usually settles it), at most
@@ -152,12 +160,13 @@ inline constexpr int kValidationPilotSpp = 16;
 int validationPilotSpp(int trainingSpp);
 
 /// The verdict on a round's gap weighed against its standard error (header, step 3).
-enum class GapVerdict { Within, OverFit, ValidationNoise };
-/// "within", "over-fit", "validation noise".
+enum class GapVerdict { Within, OverFit, ValidationNoise, Above };
+/// "within", "over-fit", "validation noise", "above".
 const char* gapVerdictName(GapVerdict verdict);
 /// Over-fit when gap − kGapSigmas·se > maxGap; else validation noise when se > maxGap; else
-/// within. An unknown SE (NaN: V's figure of E* is on the objective's floor, or the bootstrap
-/// could not form it in half its replicates) is validation noise while V can take more samples
+/// above when gap > maxGap; else within. An unknown SE (NaN: V's figure of E* is on the objective's
+/// floor, or the bootstrap could not form it in half its replicates) is validation noise while V
+/// can take more samples
 /// (`validationAtMost` false) and over-fit once it cannot: V's most samples do not see what T
 /// shows.
 GapVerdict gapVerdict(double gap, double se, double maxGap, bool validationAtMost);
@@ -232,6 +241,28 @@ bool validationSppFree(ObjectiveKind kind);
 /// V's next spp after a round whose gap's standard error is `se` with V at `spp` (step 4):
 /// nextJudgeSpp's rule with target maxGap and cap maxValidationSpp; nullopt at the cap.
 std::optional<int> nextValidationSpp(int spp, double se, const TrainingNoiseOptions& options);
+
+/// The share of maxGap V's standard error must come down to before a gap above the tolerance
+/// is closed with T's spp (step 4, "above"): at SE ≤ maxGap/2 V's noise cannot hide a gap of
+/// twice the tolerance.
+inline constexpr double kAboveErrorShare = 0.5;
+
+/// What the rule does after a round (step 4): V at nextValidation spp (the same T and E*),
+/// else T at nextTraining spp, else the light on `coarser`, else the light is kept.
+struct GapDecision {
+    int nextValidation = 0;
+    int nextTraining = 0;
+    std::optional<LightGrid> coarser;
+    /// The light is kept within what V's noise explains at V's most spp (validation noise or
+    /// above at the limits): the gap is not resolved at this cost.
+    bool unresolved = false;
+    std::string describe() const;  // "V at 1024 spp", "T at 128 spp", "a coarser light, …", "kept…"
+    GapVerdict verdict = GapVerdict::Within;
+};
+/// The verdict on `round` (its spp, grid, V's spp, gap and SE; its own verdict is not read) and
+/// what follows it, for objective `kind` on an envWidth × envHeight env map.
+GapDecision decideAfterRound(const TrainingNoiseRound& round, ObjectiveKind kind,
+                             const TrainingNoiseOptions& options, int envWidth, int envHeight);
 
 /// The next spp after a round at `spp` with `gap` (header, step 4); nullopt when spp is already
 /// at options.maxSpp.
