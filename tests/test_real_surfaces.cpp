@@ -357,6 +357,26 @@ TEST(FormatsGwyddion, ReadsGwyddionsOwnFileByContent) {
     EXPECT_THROW(loadHeightmap(dir / "junk.xyz123", {}), InputError);
 }
 
+// A file no reader claims is refused naming the file and the readers there are; a build without
+// Gwyddion names the option that adds the instrument formats (README, "Gwyddion's licence").
+TEST(Formats, AFileNoReaderClaimsIsRefusedNamingTheReaders) {
+    test::TempDir dir("noreader");
+    test::writeText(dir / "part.opd", "not what an instrument writes\n");
+    try {
+        loadHeightmap(dir / "part.opd", {});
+        FAIL() << "read";
+    } catch (const InputError& e) {
+        const std::string m = e.what();
+        EXPECT_NE(m.find("part.opd"), std::string::npos) << m;
+        EXPECT_NE(m.find("no reader claims this file"), std::string::npos) << m;
+        EXPECT_NE(m.find("X3P or SDF"), std::string::npos) << m;
+        if (SL_HAVE_GWYDDION)
+            EXPECT_NE(m.find("none of Gwyddion's file modules reads it"), std::string::npos) << m;
+        else
+            EXPECT_NE(m.find("-DSCRATCHLIGHT_GWYDDION=ON"), std::string::npos) << m;
+    }
+}
+
 TEST(FormatsGwyddion, TheCommandLoadsGwyddionOnlyForAFileThatNeedsIt) {
     // Gwyddion is a module loaded on first use (io/GwyddionModule.h): a render of a .gwy part
     // through the command loads it (and Gwyddion's libraries) from beside the executable; a

@@ -490,9 +490,26 @@ HeightmapData loadHeightmap(const fs::path& file, const HeightmapOptions& opt,
     if (ext == ".sdf") return finishMetrology(where, readSdf(file), opt);
     const bool image = ext == ".exr" || ext == ".tif" || ext == ".tiff" || ext == ".png" ||
                        ext == ".jpg" || ext == ".jpeg" || ext == ".hdr";
-    if (!image && !gwyddionDetect(file).empty())
-        return finishMetrology(where, readGwyddion(file), opt);
-    return loadWithOiio(file, opt);
+    if (image) return loadWithOiio(file, opt);
+    if (!gwyddionDetect(file).empty()) return finishMetrology(where, readGwyddion(file), opt);
+    try {
+        return loadWithOiio(file, opt);  // an image format named otherwise
+    } catch (const InputError&) {
+        // No reader claims it: say which readers there are, and whether Gwyddion's are among them.
+        if (gwyddionBuilt())
+            throw inputError(where,
+                             "no reader claims this file: it is not an image (EXR, TIFF, PNG), "
+                             ".npy, X3P or SDF, and none of Gwyddion's file modules reads it",
+                             "Check that the file is whole, or export it from the instrument's "
+                             "software as X3P or SDF");
+        throw inputError(where,
+                         "no reader claims this file: it is not an image (EXR, TIFF, PNG), .npy, "
+                         "X3P or SDF, and this scratchlight was built without Gwyddion "
+                         "(SCRATCHLIGHT_GWYDDION=OFF), whose file modules read instrument "
+                         "formats (.opd, .plu, .sur, .dat, ...)",
+                         "Build scratchlight with -DSCRATCHLIGHT_GWYDDION=ON, or export the file "
+                         "from the instrument's software as X3P or SDF");
+    }
 }
 
 }  // namespace sl
