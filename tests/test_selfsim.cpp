@@ -283,6 +283,50 @@ TEST(SelfSimMap, TheFlanksOfAWeakDefectAreMarkedAndNoDroppedRegionIsRevived) {
     EXPECT_EQ(d.map, c.map);
 }
 
+// Step 8a keeps a deep defect and drops the texture the growth joined to it. Striations with a
+// groove 60 noise σ deep (labelled where it is at least a tenth of its depth) and, beside it, a
+// shallow depression of the texture (a dark particle, ~4 σ: below the detection alone), close
+// enough that the growth at 2.5 σ joins the two into one region, which the groove keeps. Without
+// step 8a the depression and the groove's halo (down to a twentieth of its depth) are marked with
+// it; with it a tenth of the depression at most and half the marks outside the label, the
+// groove's label is marked as before, and nothing is marked that was not marked without it.
+TEST(SelfSimMap, ADeepDefectIsKeptAndTheTextureJoinedToItDropped) {
+    std::vector<float> h = striations(31);
+    std::vector<uint8_t> truth(h.size(), 0), particle(h.size(), 0);
+    groove(h, truth, 70, 112, 190, 112, 8, 3.0);
+    const double cx = 130, cy = 118;  // 6 samples off the groove's line, 2 beyond its edge
+    for (int y = 100; y < 136; ++y)
+        for (int x = 112; x < 148; ++x) {
+            const double d2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            h[i] -= static_cast<float>(0.2 * std::exp(-d2 / (2 * 3.0 * 3.0)));
+            if (d2 <= 4.0 * 4.0 && !truth[i]) particle[i] = 1;
+        }
+    SelfSimMapOptions off;
+    off.trimShare = 0;
+    const SelfSimMapOptions on;
+    ASSERT_GT(on.trimShare, 0.0);
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
+                     b = detectSelfSimDefects(h, kW, kH, on);
+    EXPECT_EQ(a.trimmed, 0u);
+    EXPECT_GT(b.trimmed, 0u);
+    EXPECT_EQ(b.regions, a.regions) << "step 8a drops no region";
+    const Counts ga = count(a.map, truth, on.border), gb = count(b.map, truth, on.border);
+    EXPECT_GE(ga.hits, ga.truth * 9 / 10) << "the groove, without step 8a";
+    EXPECT_GE(gb.hits, ga.hits * 97 / 100) << "the groove, with it: " << gb.hits << " of "
+                                           << ga.truth << " (" << ga.hits << " without)";
+    const Counts pa = count(a.map, particle, on.border), pb = count(b.map, particle, on.border);
+    EXPECT_GE(pa.hits, 10u) << "the depression joined to the groove, without step 8a";
+    EXPECT_LE(pb.hits * 10, pa.hits)
+        << "the depression, with step 8a: " << pb.hits << " of " << pa.hits << " samples";
+    EXPECT_LT((gb.marked - gb.hits) * 2, ga.marked - ga.hits)
+        << "marks outside the label: " << ga.marked - ga.hits << " without step 8a, "
+        << gb.marked - gb.hits << " with";
+    size_t onlyWith = 0;
+    for (size_t i = 0; i < h.size(); ++i) onlyWith += b.map[i] && !a.map[i] ? 1 : 0;
+    EXPECT_EQ(onlyWith, 0u) << "samples marked only with step 8a";
+}
+
 TEST(SelfSimMap, GaussianTailInverseIsExact) {
     EXPECT_NEAR(gaussianTailInverse(0.5), 0.0, 1e-9);
     EXPECT_NEAR(gaussianTailInverse(0.05), 1.6448536269514722, 1e-9);
@@ -342,6 +386,9 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o = {};
     o.extendShare = 1.0;
     expectNamed(o, "selfsim-extend-share");
+    o = {};
+    o.trimShare = 1.0;
+    expectNamed(o, "selfsim-trim-share");
 
     EXPECT_EQ(parseDefectMethod("selfsim"), DefectMethod::SelfSim);
     EXPECT_STREQ(defectMethodName(DefectMethod::SelfSim), "selfsim");

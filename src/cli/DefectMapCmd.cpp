@@ -365,6 +365,10 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--selfsim-texture-quantile", q.textureQuantile,
                   "selfsim: ... the tail starting at this quantile of the regions' peaks")
         ->capture_default_str();
+    c->add_option("--selfsim-trim-share", q.trimShare,
+                  "selfsim: a kept region keeps its samples scoring at least this share of its "
+                  "largest score (0: off)")
+        ->capture_default_str();
     c->add_option("--selfsim-extend-steps", q.extendSteps,
                   "selfsim: a kept region grows this many samples further into its flanks (0: "
                   "off)")

@@ -158,6 +158,9 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
         throw inputError(option("selfsim-extend-sigma"), "must be > 0", "The default is 1");
     if (!(o.extendShare >= 0.0 && o.extendShare < 1.0))
         throw inputError(option("selfsim-extend-share"), "must be in [0, 1)", "The default is 0.1");
+    if (!(o.trimShare >= 0.0 && o.trimShare < 1.0))
+        throw inputError(option("selfsim-trim-share"), "must be in [0, 1)",
+                         "The default is 0.08 (0: off)");
     if (o.border < 0)
         throw inputError(option("selfsim-border"), "must be >= 0", "The default is 40");
     if (o.minRegion < 1)
@@ -477,7 +480,17 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
         // ... and its level: extendShare of its peak score, at least extendSigma
         const float level = std::max(static_cast<float>(o.extendSigma),
                                      static_cast<float>(o.extendShare) * reg.peak);
+        // step 8a: the region's extent is where it scores at least trimShare of its largest
+        // score at the growth's scales (and growSigma): a deep defect's 2.5-sigma halo, and
+        // texture that the growth joined to it at a small share of its depth, are left out
+        float top0 = 0.0f;
+        for (size_t k = reg.begin; k < reg.end; ++k) top0 = std::max(top0, zGrow[members[k]]);
+        const float cut = static_cast<float>(o.trimShare) * top0;
         for (size_t k = reg.begin; k < reg.end; ++k) {
+            if (zGrow[members[k]] < cut) {
+                ++out.trimmed;
+                continue;
+            }
             out.map[members[k]] = 255;
             if (regionSign.empty()) continue;
             regionSign[members[k]] = sign;
