@@ -15,6 +15,7 @@
 
 #include "TestUtil.h"
 #include "app/pipeline/Cache.h"
+#include "app/pipeline/HeldOut.h"
 #include "app/pipeline/Search.h"
 #include "core/Rng.h"
 #include "io/GramFile.h"
@@ -148,6 +149,68 @@ TEST(TransportGram, FormsOnActiveTexelsEqualTheWholeFormsOfAnEnvMapZeroElsewhere
         EXPECT_NEAR(qa[c], qe[c], 1e-13 * std::abs(R));
     }
     EXPECT_EQ(pa[0], -1.0);  // only the active texels are written
+}
+
+TEST(TransportGram, TheBuildIsEachEntrysSumOverThePixelsInOrderBitForBit) {
+    // P = sym(T_aᵀ·Lap·T_b) and Q = sym(T_aᵀ·T_b), every entry summed over the pixels in
+    // ascending order (Lap's row p: its neighbours' rows with −1, then its own with deg(p)),
+    // written out densely here: the build (in blocks of rows, on any number of threads) gives
+    // exactly these numbers, so Gram files stored by an earlier build of the same order stay
+    // valid under their revision.
+    auto s = smallScene(19);
+    const TransportMatrix t = halves(*s, 1);
+    const std::vector<uint8_t> mask = holedMask(t);
+    const size_t w = static_cast<size_t>(t.width), h = static_cast<size_t>(t.height);
+    const size_t n = t.cols(), st = static_cast<size_t>(t.stride());
+    auto val = [&](uint64_t k, int plane) { return double(t.values[k * st + size_t(plane)]); };
+    for (int threads : {1, 3}) {
+        const TransportGram g(t, mask, true, threads);
+        const size_t m = g.seen().size();
+        std::vector<int> index(n, -1);
+        for (size_t k = 0; k < m; ++k) index[g.seen()[k]] = static_cast<int>(k);
+        std::vector<double> P(m * m, 0.0), Q(m * m, 0.0), lap(m), b(m);
+        for (size_t p = 0; p < t.rows(); ++p) {
+            std::fill(lap.begin(), lap.end(), 0.0);
+            std::fill(b.begin(), b.end(), 0.0);
+            for (uint64_t k = t.rowPtr[p]; k < t.rowPtr[p + 1]; ++k)
+                b[size_t(index[t.colIdx[k]])] = val(k, 1);
+            bool hasLap = false;
+            if (mask[p]) {
+                int deg = 0;
+                auto gather = [&](size_t q, double f) {
+                    for (uint64_t k = t.rowPtr[q]; k < t.rowPtr[q + 1]; ++k)
+                        lap[size_t(index[t.colIdx[k]])] += f * val(k, 1);
+                };
+                const size_t x = p % w, y = p / w;
+                if (x + 1 < w && mask[p + 1]) gather(p + 1, -1.0), ++deg;
+                if (y + 1 < h && mask[p + w]) gather(p + w, -1.0), ++deg;
+                if (x > 0 && mask[p - 1]) gather(p - 1, -1.0), ++deg;
+                if (y > 0 && mask[p - w]) gather(p - w, -1.0), ++deg;
+                if (deg > 0) gather(p, deg), hasLap = true;
+            }
+            for (uint64_t k = t.rowPtr[p]; k < t.rowPtr[p + 1]; ++k) {
+                const size_t i = size_t(index[t.colIdx[k]]);
+                const double ai = val(k, 0);
+                for (uint64_t l = t.rowPtr[p]; l < t.rowPtr[p + 1]; ++l) {
+                    const size_t j = size_t(index[t.colIdx[l]]);
+                    Q[i * m + j] += ai * b[j];
+                }
+                if (!hasLap) continue;
+                for (size_t j = 0; j < m; ++j)
+                    if (lap[j] != 0.0) P[i * m + j] += ai * lap[j];
+            }
+        }
+        for (std::vector<double>* M : {&P, &Q})
+            for (size_t i = 0; i < m; ++i)
+                for (size_t j = i + 1; j < m; ++j) {
+                    const double v = 0.5 * ((*M)[i * m + j] + (*M)[j * m + i]);
+                    (*M)[i * m + j] = (*M)[j * m + i] = v;
+                }
+        size_t differ = 0;
+        for (size_t e = 0; e < m * m; ++e)
+            differ += (g.pairMatrix()[e] != P[e]) + (g.productMatrix()[e] != Q[e]);
+        EXPECT_EQ(differ, 0u) << "threads " << threads << ", " << m << " seen texels";
+    }
 }
 
 TEST(TransportGram, RefusesWhatItCannotRepresent) {
@@ -297,6 +360,28 @@ TEST(TransportGram, AutoSwitchesToTheGramWhenItPays) {
     const TransportLoss p(t, paper, false);
     EXPECT_FALSE(p.gramEligible());
     EXPECT_THROW(p.gram(), std::logic_error);
+}
+
+TEST(TransportGram, TheHeldOutScorerReadsTsArraysAndBuildsNoGram) {
+    // optimize's held-out curve asks the scorer for one value every heldOutEvery iterations;
+    // Auto would build the held-out T's Gram at its 17th (a 512² part: seconds of CPU for the
+    // few scores after it). Its scores stay those of T's own arrays, bit for bit, however many.
+    auto s = smallScene(21);
+    const TransportMatrix t = halves(*s, 1);
+    UnbiasedObjective obj(t.width, t.height, t.objectMask, ObjectiveOptions{});
+    const TransportLoss aut(t, obj, false);
+    ASSERT_TRUE(aut.gramPays());  // Auto would build it
+    TransportLoss csr(t, obj, false);
+    csr.setLayout(TransportLayout::Csr);
+    const HeldOutScorer scorer(t, t.objectMask, ObjectiveOptions{}, ObjectiveKind::Unbiased, false);
+    EXPECT_EQ(scorer.unbiasedLoss().layout(), TransportLayout::Csr);
+    for (int i = 0; i < kAutoSlicesAfter + 4; ++i) {
+        const std::vector<double> e = randomVec(csr.dimension(), 11 + static_cast<uint64_t>(i));
+        const HeldOutScore h = scorer.score(e);
+        EXPECT_EQ(h.unbiased.total, csr.evaluate(e, {}).total) << i;
+        EXPECT_EQ(h.own.total, h.unbiased.total) << i;
+    }
+    EXPECT_EQ(scorer.unbiasedLoss().gramIfBuilt(), nullptr);
 }
 
 TEST(TransportGram, LossesOnTheSameTAndMaskShareOneGram) {

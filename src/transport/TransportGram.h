@@ -12,16 +12,17 @@
 // seen texels', below: 670² = 3.6 MB on the bundled part at 256²) whatever the image size and
 // spp, against two sparse products over all of T's non-zeros and a pass over the image. Building
 // costs about Σ_p k_p·|L_p| multiply-adds (k: a row's entries; L_p: row p of Lap·T_b, merged
-// once, the texels of p and its neighbours each once; buildWork()), each into one row of P
-// that stays in the core's L1 cache (adding the neighbours' rows one by one, Σ_p k_p·Σ_{q ∈
-// N[p]} k_q, costs more where neighbouring pixels see the same texels: 1.22–1.26× on the
+// once, the texels of p and its neighbours each once; buildWork()), each into one of a
+// block of P's rows that stays in the core's cache (adding the neighbours' rows one by one, Σ_p
+// k_p·Σ_{q ∈ N[p]} k_q, costs more where neighbouring pixels see the same texels: 1.22–1.26× on the
 // tests' small part, tests/test_transport_gram.cpp). It equals the products' loss to rounding
 // (another order of the same sums).
 //
 // For a gray E (luminance of each entry, as TransportColumns). Only the texels some pixel sees
 // (T's non-empty columns) have rows and columns in P and Q: the others' are zero (at 256² the
-// bundled part sees about half the sky). P's row i is summed by one thread over column i of
-// T_a in row order, and P, Q are formed whole before they are used; a form of at most
+// bundled part sees about half the sky). P's rows are summed in blocks, a block by one thread
+// over the pixels in order (each entry the same sum in the same order whatever the threads),
+// and P, Q are formed whole before they are used; a form of at most
 // kSerialEntries entries runs on the calling thread (waking other threads for a product of a
 // few MB costs more than it saves on a shared machine): results do not depend on the number of
 // threads. A dense T is not supported (its caller keeps the sparse products).

@@ -1,8 +1,8 @@
 // Held-out scoring (docs/DESIGN.md "Noise is the trap"): every optimization is also scored on
-// an independent estimate — for `optimize`, the judge's (app/pipeline/Judge.h: its own seed, 1024 spp by
-// default, two sample sets), so that both the paper's eq. 2 and the noise-unbiased objective
-// can be evaluated on it. The held-out objectives use the training mask intersected with the
-// held-out T's object mask (the judge's own scores use the part mask). The held-out figure of a
+// an independent estimate — for `optimize`, the judge's (app/pipeline/Judge.h: its own seed, its
+// first round's spp, two sample sets), so that both the paper's eq. 2 and the noise-unbiased
+// objective can be evaluated on it. The held-out objectives use the training mask intersected with
+// the held-out T's object mask (the judge's own scores use the part mask). The held-out figure of a
 // run is the objective it optimized (`own`: eq. 2, U, or the defects loss on the same regions),
 // so the training and held-out curves are one quantity; U and eq. 2 are kept beside it.
 #pragma once
@@ -53,13 +53,17 @@ struct HeldOutScore {
 class HeldOutScorer {
   public:
     /// heldOut must have two planes. kind: the optimized objective; defects and reference: its
-    /// regions (image space, the defects objective's; app/pipeline/Search.h SearchInputs). rgb: E has 3
-    /// values per texel.
+    /// regions (image space, the defects objective's; app/pipeline/Search.h SearchInputs). rgb: E
+    /// has 3 values per texel.
     HeldOutScorer(const TransportMatrix& heldOut, const std::vector<uint8_t>& trainingMask,
                   const ObjectiveOptions& options, ObjectiveKind kind, bool rgb,
                   std::vector<uint8_t> defects = {}, std::vector<uint8_t> reference = {});
     ~HeldOutScorer();
+    /// The scores of E on heldOut, through its own arrays (TransportLayout::Csr: no slices,
+    /// no Gram built for a few evaluations).
     HeldOutScore score(std::span<const double> E) const;
+    /// The loss U is scored through (for tests: its layout, and that no Gram was built).
+    const TransportLoss& unbiasedLoss() const;
 
   private:
     ObjectiveKind kind_;
