@@ -44,6 +44,7 @@
 #include "objective/Metrics.h"
 #include "objective/TransportLoss.h"
 #include "objective/UnbiasedObjective.h"
+#include "optimize/PaperSetup.h"
 #include "optimize/SpecularInit.h"
 #include "render/Footprint.h"
 #include "render/Render.h"
@@ -347,9 +348,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
                      {"envmap", outdir::kLampEnvMap},
                      {"training", partsJson(r.lampTraining)}};
         json paper = {{"name", "paper's light"},
-                      {"method",
-                       "the paper's method run on this T: eq. 2, lambda 30 on mean(E^2), Adam lr "
-                       "0.02 x 100 from E0 = 0.5"},
+                      {"method", "the paper's method run on this T: " + paperSetupText()},
                       {"render", outdir::kComparePaperPng},
                       {"envmap", outdir::kPaperEnvMap},
                       {"training", partsJson(r.paperTraining)}};

@@ -14,6 +14,7 @@
 #include "io/OptimizeOutDir.h"
 #include "io/OptimizeSummary.h"
 #include "objective/DefectVisibility.h"
+#include "optimize/PaperSetup.h"
 
 namespace sl {
 
@@ -532,10 +533,11 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
         }
         f << "It was found with " << (summary.optimizer.empty() ? "?" : summary.optimizer)
           << " on the " << (summary.objective.empty() ? "?" : summary.objective) << " objective, λ "
-          << fmt(summary.lambda, 4) << ". The paper's light is "
-          << "the paper's method run "
-          << "on our T (eq. 2, λ 30, Adam lr 0.02 × 100 from E₀ = 0.5), not the paper's own "
-          << "result.";
+          << fmt(summary.lambda, 4)
+          << ". The paper's light is the paper's method run on our T (eq. 2, λ "
+          << kPaperSetup.lambda << ", Adam lr " << kPaperSetup.learningRate << " × "
+          << kPaperSetup.steps << " from E₀ = " << kPaperSetup.start
+          << "), not the paper's own result.";
         if (cmp.regions && !cmp.regions->empty()) f << " Defect regions: " << *cmp.regions << ".";
         h << "<p class=\"found\">" << escapeXml(f.str()) << "</p>\n";
     }
