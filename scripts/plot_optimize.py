@@ -2,8 +2,9 @@
 """Figures of one `scratchlight optimize` output directory (the report's figures).
 
 usage: scripts/plot_optimize.py OUTDIR [--title TEXT] [--print]
-Reads OUTDIR/{summary.json, loss.csv, plot-data.json, view-*.png (or initial.png, render.png)}
-and writes, each atomically:
+Reads OUTDIR/{summary.json, loss.csv, plot-data.json, view-*.png (or initial.png, render.png)},
+summary.json by the keys src/io/OptimizeOutDir.h lists (scripts/outdir_contract.py), and
+writes, each atomically:
   OUTDIR/plot-envmap.png  the optimized env map as a lat-long plot (azimuth 0-360 deg on x,
                           elevation -90..90 deg on y, horizon, camera and mirror direction, the
                           brightest directions labelled) and a polar plot of the upper hemisphere
@@ -36,6 +37,7 @@ except ImportError as e:  # the caller reports "figure not made: ..."
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from atomic_save import savefig  # noqa: E402  scripts/atomic_save.py, beside this script
+from outdir_contract import at, read_summary  # noqa: E402  scripts/outdir_contract.py
 
 METADATA = {"Software": None}  # no version string: the same bytes from every matplotlib run
 
@@ -170,8 +172,8 @@ def draw_loss(ax, it, loss, hit, held, s):
         ax.set_ylabel("loss (lower is better; linear: some values ≤ 0)")
     ax.xaxis.set_major_locator(ticker.MaxNLocator(nbins=6, integer=True))
     ax.set_xlabel("iteration")
-    ax.set_title(f"{s.get('optimizer', '?')} on {s.get('objective', '?')}, "
-                 f"λ = {s.get('lambda', float('nan')):g}")
+    ax.set_title(f"{at(s, '/optimizer', '?')} on {at(s, '/objective', '?')}, "
+                 f"λ = {at(s, '/lambda', float('nan')):g}")
     ax.grid(alpha=0.3, which="major")
     ax.legend(fontsize=8, loc="upper right")
 
@@ -195,13 +197,14 @@ def main():
     if missing:
         sys.exit(f"plot_optimize: {a.outdir} lacks {', '.join(missing)}: "
                  "is it the output directory of `scratchlight optimize`?")
-    with open(os.path.join(a.outdir, "summary.json")) as f:
-        s = json.load(f)
+    s = read_summary(a.outdir)
     data = None
     if os.path.exists(os.path.join(a.outdir, "plot-data.json")):
         with open(os.path.join(a.outdir, "plot-data.json")) as f:
             data = json.load(f)
-    dirs = s.get("envmap_directions", {})
+    dirs = {"camera": at(s, "/envmap_directions/camera"),
+            "mirror": at(s, "/envmap_directions/mirror"),
+            "brightest": at(s, "/envmap_directions/brightest", [])}
     it, loss, hit, held = read_loss(os.path.join(a.outdir, "loss.csv"))
     wrote = []
 
@@ -225,7 +228,7 @@ def main():
     save(fig, out, dpi=90)
     wrote.append(out)
 
-    lamp = s.get("compare", {}).get("lamp", {}).get("name", "")
+    lamp = at(s, "/compare/lamp/name", "")
     fig = plt.figure(figsize=(17, 4.6))
     gs = fig.add_gridspec(1, 4, width_ratios=[1, 1, 1.7, 1.3])
     for k, (names, title) in enumerate([

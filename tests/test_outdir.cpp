@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
@@ -240,6 +241,155 @@ TEST(OutDir, TheTypedComparisonReadsEachLightAndRefusesAWrongTypeByName) {
     wrong.push_back("/compare/lamp/judge/visibility/1/jnd");
     wrong.push_back("/compare/answer/judge/visibility/0/name");
     expectEachRefusedByName(full, wrong);
+}
+
+// The rest of what the report reads typed (io/OptimizeSummary.h): the self-check, the env map's
+// marked directions, the warnings, the part, T's image size and the held-out figures; each key
+// listed by the contract, absent ones at their defaults, another type refused by name.
+TEST(OutDir, TheTypedSummaryReadsTheAnswerDirectionsAndHeldOutFigures) {
+    std::set<std::string> listed;
+    for (const outdir::SummaryKey& k : outdir::optimizeSummaryKeys()) listed.insert(k.pointer);
+    const std::vector<std::string> typed = {"/answer",
+                                            "/answer/light",
+                                            "/answer/kind",
+                                            "/answer/merit",
+                                            "/answer/candidates",
+                                            "/answer/candidates/0/name",
+                                            "/answer/candidates/0/kind",
+                                            "/answer/candidates/0/merit",
+                                            "/answer/candidates/0/eligible",
+                                            "/answer/candidates/0/why",
+                                            "/envmap_directions",
+                                            "/envmap_directions/camera",
+                                            "/envmap_directions/mirror",
+                                            "/envmap_directions/brightest",
+                                            "/warnings",
+                                            "/heightmap",
+                                            "/transport/image",
+                                            "/heldout_loss",
+                                            "/heldout_U"};
+    for (const std::string& p : typed) EXPECT_TRUE(listed.count(p)) << p << " is not listed";
+
+    const nlohmann::json full = {
+        {"answer",
+         {{"light", "studio preset"},
+          {"kind", "reference"},
+          {"merit", "JND"},
+          {"candidates",
+           {{{"name", "optimized"}, {"kind", "optimized"}, {"merit", 2.0}, {"why", ""}},
+            {{"name", "studio preset"},
+             {"kind", "reference"},
+             {"merit", nullptr},
+             {"eligible", false},
+             {"why", "too dark"}}}}}},
+        {"envmap_directions",
+         {{"camera", {{"azimuth_deg", 180.0}, {"elevation_deg", 45.0}}},
+          {"brightest",
+           {{{"azimuth_deg", 10.0}, {"elevation_deg", 20.0}},
+            {{"azimuth_deg", 30.0}, {"elevation_deg", -5.0}}}}}},
+        {"warnings", {"no improvement", "dark"}},
+        {"heightmap", {{"file", "part.exr"}, {"format", "exr"}}},
+        {"transport", {{"image", {96, 64}}}},
+        {"heldout_loss", 1.25},
+        {"heldout_U", nullptr}};
+    const outdir::OptimizeSummary s = outdir::optimizeSummaryFromJson(full, "summary.json");
+    ASSERT_TRUE(s.answer.has_value());
+    EXPECT_EQ(s.answer->light, "studio preset");
+    EXPECT_EQ(s.answer->kind, "reference");
+    EXPECT_EQ(s.answer->merit, "JND");
+    ASSERT_EQ(s.answer->candidates.size(), 2u);
+    EXPECT_EQ(s.answer->candidates[0].name, "optimized");
+    EXPECT_EQ(s.answer->candidates[0].merit, 2.0);
+    EXPECT_TRUE(s.answer->candidates[0].eligible);  // absent: eligible
+    EXPECT_TRUE(std::isnan(s.answer->candidates[1].merit));
+    EXPECT_FALSE(s.answer->candidates[1].eligible);
+    EXPECT_EQ(s.answer->candidates[1].why, "too dark");
+    ASSERT_TRUE(s.envmapDirections.has_value());
+    ASSERT_TRUE(s.envmapDirections->camera.has_value());
+    EXPECT_EQ(s.envmapDirections->camera->azimuthDeg, 180.0);
+    EXPECT_EQ(s.envmapDirections->camera->elevationDeg, 45.0);
+    EXPECT_FALSE(s.envmapDirections->mirror.has_value());
+    ASSERT_EQ(s.envmapDirections->brightest.size(), 2u);
+    EXPECT_EQ(s.envmapDirections->brightest[1].elevationDeg, -5.0);
+    EXPECT_EQ(s.warnings, (std::vector<std::string>{"no improvement", "dark"}));
+    EXPECT_EQ(s.heightmap["format"], "exr");
+    ASSERT_TRUE(s.image.has_value());
+    EXPECT_EQ((*s.image)[0], 96);
+    EXPECT_EQ((*s.image)[1], 64);
+    EXPECT_EQ(s.heldoutLoss, 1.25);
+    EXPECT_TRUE(std::isnan(s.heldoutU));
+
+    const outdir::OptimizeSummary empty =
+        outdir::optimizeSummaryFromJson(nlohmann::json::object(), "summary.json");
+    EXPECT_FALSE(empty.answer.has_value());
+    EXPECT_FALSE(empty.envmapDirections.has_value());
+    EXPECT_TRUE(empty.warnings.empty());
+    EXPECT_TRUE(empty.heightmap.is_null());
+    EXPECT_FALSE(empty.image.has_value());
+    EXPECT_TRUE(std::isnan(empty.heldoutLoss));
+
+    // Another type, by its pointer: the typed keys (an array of [1] fits none but the arrays,
+    // whose elements are then refused), a candidate's field, a direction's, a warning.
+    std::vector<std::string> wrong = {"/answer",
+                                      "/answer/light",
+                                      "/answer/kind",
+                                      "/answer/merit",
+                                      "/answer/candidates/0",
+                                      "/answer/candidates/1/merit",
+                                      "/answer/candidates/1/eligible",
+                                      "/answer/candidates/0/why",
+                                      "/envmap_directions",
+                                      "/envmap_directions/camera",
+                                      "/envmap_directions/brightest/0/azimuth_deg",
+                                      "/heightmap",
+                                      "/heldout_loss",
+                                      "/heldout_U"};
+    expectEachRefusedByName(full, wrong);
+    nlohmann::json badWarning = full;
+    badWarning["warnings"][1] = 3;
+    EXPECT_THROW(outdir::optimizeSummaryFromJson(badWarning, "summary.json"), InputError);
+    nlohmann::json badImage = full;
+    badImage["transport"]["image"] = {96};
+    try {
+        outdir::optimizeSummaryFromJson(badImage, "summary.json");
+        ADD_FAILURE() << "an image of one number was accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("summary.json /transport/image"), std::string::npos)
+            << e.what();
+    }
+}
+
+// The plot scripts read summary.json through scripts/outdir_contract.py, by JSON pointers: each
+// pointer a script names is one the contract lists, with the script among its readers.
+TEST(OutDir, ThePlotScriptsReadOnlyListedSummaryKeys) {
+    std::map<std::string, std::string> readers;
+    for (const outdir::SummaryKey& k : outdir::optimizeSummaryKeys())
+        readers[k.pointer] = k.readers;
+    const std::regex pointer(R"re(["'](/[a-z_%/0-9A-Z]+)["'])re");
+    for (const char* script : {"scripts/plot_optimize.py", "scripts/plot_before_after.py"}) {
+        const std::string text = test::readFile(fs::path(SL_SOURCE_DIR) / script);
+        ASSERT_FALSE(text.empty()) << script;
+        EXPECT_NE(text.find("from outdir_contract import"), std::string::npos) << script;
+        int seen = 0;
+        for (std::sregex_iterator m(text.begin(), text.end(), pointer), e; m != e; ++m) {
+            const std::string p = (*m)[1];
+            std::vector<std::string> pointers;
+            if (const size_t at = p.find("%s"); at != std::string::npos) {
+                for (const char* key : {"lamp", "paper", "optimized"})
+                    pointers.push_back(std::string(p).replace(at, 2, key));
+            } else {
+                pointers.push_back(p);
+            }
+            for (const std::string& q : pointers) {
+                const auto it = readers.find(q);
+                ASSERT_NE(it, readers.end()) << script << " reads " << q << ", which is not listed";
+                EXPECT_NE(it->second.find(fs::path(script).filename().string()), std::string::npos)
+                    << q << " does not name " << script << " among its readers";
+            }
+            ++seen;
+        }
+        EXPECT_GT(seen, 0) << script;
+    }
 }
 
 TEST(OutDir, ThePlotScriptsOpenOnlyFilesTheContractLists) {

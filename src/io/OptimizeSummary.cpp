@@ -114,6 +114,48 @@ Comparison comparisonOf(const json& d, const std::string& where) {
     return c;
 }
 
+AnswerCheck answerOf(const json& d, const std::string& where) {
+    AnswerCheck a;
+    a.light = stringAt(d, "/answer/light", where);
+    a.kind = stringAt(d, "/answer/kind", where);
+    a.merit = stringAt(d, "/answer/merit", where);
+    if (const json* candidates = take(d, "/answer/candidates", where, kArray))
+        for (size_t k = 0; k < candidates->size(); ++k) {
+            const std::string c = "/answer/candidates/" + std::to_string(k);
+            take(d, c, where, kObject);
+            AnswerCandidate candidate;
+            candidate.name = stringAt(d, c + "/name", where);
+            candidate.kind = stringAt(d, c + "/kind", where);
+            candidate.merit = numberAt(d, c + "/merit", where);
+            if (const json* v = take(d, c + "/eligible", where, kBool))
+                candidate.eligible = v->get<bool>();
+            candidate.why = stringAt(d, c + "/why", where);
+            a.candidates.push_back(std::move(candidate));
+        }
+    return a;
+}
+
+EnvDirection directionAt(const json& d, const std::string& at, const std::string& where) {
+    EnvDirection e;
+    e.azimuthDeg = numberAt(d, at + "/azimuth_deg", where);
+    e.elevationDeg = numberAt(d, at + "/elevation_deg", where);
+    return e;
+}
+
+EnvDirections directionsOf(const json& d, const std::string& where) {
+    const std::string at = "/envmap_directions";
+    EnvDirections e;
+    if (take(d, at + "/camera", where, kObject)) e.camera = directionAt(d, at + "/camera", where);
+    if (take(d, at + "/mirror", where, kObject)) e.mirror = directionAt(d, at + "/mirror", where);
+    if (const json* brightest = take(d, at + "/brightest", where, kArray))
+        for (size_t k = 0; k < brightest->size(); ++k) {
+            const std::string b = at + "/brightest/" + std::to_string(k);
+            take(d, b, where, kObject);
+            e.brightest.push_back(directionAt(d, b, where));
+        }
+    return e;
+}
+
 }  // namespace
 
 OptimizeSummary optimizeSummaryFromJson(json document, const std::string& where) {
@@ -141,6 +183,21 @@ OptimizeSummary optimizeSummaryFromJson(json document, const std::string& where)
         s.comparison = comparisonOf(d, where);
     }
     if (const json* v = take(d, "/compare/judge_spp", where, kInteger)) s.judgeSpp = v->get<int>();
+    if (take(d, "/answer", where, kObject)) s.answer = answerOf(d, where);
+    if (take(d, "/envmap_directions", where, kObject)) s.envmapDirections = directionsOf(d, where);
+    if (const json* w = take(d, "/warnings", where, kArray))
+        for (size_t k = 0; k < w->size(); ++k)
+            s.warnings.push_back(stringAt(d, "/warnings/" + std::to_string(k), where));
+    if (const json* v = take(d, "/heightmap", where, kObject)) s.heightmap = *v;
+    if (const json* v = take(d, "/transport/image", where, kArray)) {
+        if (v->size() != 2 || !(*v)[0].is_number_integer() || !(*v)[1].is_number_integer())
+            throw inputError(where + " /transport/image",
+                             "must be two integers, got " + jsonExcerpt(*v, 40),
+                             "write the output again with a current optimize");
+        s.image = std::array<int, 2>{(*v)[0].get<int>(), (*v)[1].get<int>()};
+    }
+    s.heldoutLoss = numberAt(d, "/heldout_loss", where);
+    s.heldoutU = numberAt(d, "/heldout_U", where);
     s.document = std::move(document);
     return s;
 }

@@ -1,10 +1,13 @@
 // summary.json of an optimize OUTDIR as its readers take it (io/OptimizeOutDir.h lists its keys):
-// the viewer and the report read the file through readOptimizeSummary, each listed key typed
-// once here instead of by JSON pointers at each reader; the comparison of the three lights
-// (/compare: the user's lamp, the paper's light, the optimized one, and the judge's scores of
-// each) as the report's headline and table read it.
+// the viewer, the report and its figures read the file through readOptimizeSummary (or a
+// summary in memory through optimizeSummaryFromJson), each listed key typed once here instead of
+// by JSON pointers at each reader; the comparison of the three lights (/compare: the user's
+// lamp, the paper's light, the optimized one, and the judge's scores of each) as the report's
+// headline and table read it, the self-check (/answer), the env map's marked directions, the
+// held-out figures, the warnings and the part.
 #pragma once
 
+#include <array>
 #include <filesystem>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -66,6 +69,37 @@ struct Comparison {
     std::optional<ComparedAnswer> answer;
 };
 
+/// One candidate of the self-check (/answer/candidates/k, app/pipeline/Answer.h answerJson).
+struct AnswerCandidate {
+    std::string name;                                         // name ("" when absent)
+    std::string kind;                                         // kind: optimized, reference, ...
+    double merit = std::numeric_limits<double>::quiet_NaN();  // merit (null or absent: NaN)
+    bool eligible = true;                                     // eligible (absent: true)
+    std::string why;  // why: the check it failed ("" when it passed)
+};
+
+/// /answer: the self-check on the validation estimate (app/pipeline/Answer.h answerJson): the
+/// light returned, what the candidates were compared by, and each candidate.
+struct AnswerCheck {
+    std::string light;  // light: the candidate returned ("" when absent)
+    std::string kind;   // kind: the returned candidate's kind ("reference": a reference won)
+    std::string merit;  // merit: what the candidates were compared by ("" when absent)
+    std::vector<AnswerCandidate> candidates;  // candidates
+};
+
+/// A direction of /envmap_directions in degrees (scene/EnvMapBasis.h; NaN when absent).
+struct EnvDirection {
+    double azimuthDeg = std::numeric_limits<double>::quiet_NaN();    // azimuth_deg
+    double elevationDeg = std::numeric_limits<double>::quiet_NaN();  // elevation_deg
+};
+
+/// /envmap_directions: the directions the report and its figures mark on the env map.
+struct EnvDirections {
+    std::optional<EnvDirection> camera;   // camera: toward the camera (with a scene)
+    std::optional<EnvDirection> mirror;   // mirror: what a flat part reflects into the camera
+    std::vector<EnvDirection> brightest;  // brightest: the light's brightest directions
+};
+
 /// The keys of optimizeSummaryKeys() that a C++ reader uses, typed; an absent key keeps its
 /// default. `document` is the whole file, for what a page shows as written (the run's settings).
 struct OptimizeSummary {
@@ -84,7 +118,14 @@ struct OptimizeSummary {
     nlohmann::json compare;                // /compare: an object as written (absent: null)
     std::optional<Comparison> comparison;  // /compare typed (absent: none)
     std::optional<int> judgeSpp;           // /compare/judge_spp
-    nlohmann::json document;               // the whole summary.json
+    std::optional<AnswerCheck> answer;     // /answer: the self-check (absent: none)
+    std::optional<EnvDirections> envmapDirections;  // /envmap_directions (absent: none)
+    std::vector<std::string> warnings;              // /warnings
+    nlohmann::json heightmap;  // /heightmap: the part as read, an object as written (absent: null)
+    std::optional<std::array<int, 2>> image;  // /transport/image: T's image width and height
+    double heldoutLoss = std::numeric_limits<double>::quiet_NaN();  // /heldout_loss (null: NaN)
+    double heldoutU = std::numeric_limits<double>::quiet_NaN();     // /heldout_U
+    nlohmann::json document;                                        // the whole summary.json
 };
 
 /// A parsed summary.json typed; InputError naming `where` and the key when a listed key has

@@ -1,6 +1,7 @@
 #include "optimize/Methods.h"
 
 #include "core/Registry.h"
+#include "optimize/PaperSetup.h"
 
 namespace sl {
 
@@ -13,7 +14,7 @@ constexpr BudgetUnit kSteps = BudgetUnit::Steps, kEvals = BudgetUnit::Evaluation
 // clang-format off
 constexpr OptimizerMethodRow kMethods[] = {
     {M::Adam, "adam", "Adam as Mitsuba 3 runs it (the paper: lr 0.02, 100 steps)",
-     G::Exact, "one step (one gradient evaluation)", kSteps, 100, M::Adam, 1},
+     G::Exact, "one step (one gradient evaluation)", kSteps, kPaperSetup.steps, M::Adam, 1},
     {M::Lbfgs, "lbfgs", "NLopt's L-BFGS with the [0, 1] box as bounds",
      G::Exact, "one evaluation (NLopt's maxeval)", kEvals, 2000, M::Lbfgs, 1},
     {M::Mma, "mma", "NLopt's method of moving asymptotes",
@@ -31,7 +32,8 @@ constexpr OptimizerMethodRow kMethods[] = {
      G::Renderer, "one step (2q renders)", kSteps, 100, M::Spsa, 1},
     {M::PaperLoop, "paper-loop",
      "the paper's loop on T: eq. 2, Adam from 0.5, a fresh estimate of T every step",
-     G::Exact, "one Adam step on the next estimate of T", kSteps, 100, M::Adam, 8},
+     G::Exact, "one Adam step on the next estimate of T", kSteps, kPaperSetup.steps, M::Adam,
+     kPaperLoopEstimates},
     {M::Tnewton, "tnewton", "NLopt's preconditioned truncated Newton with restarts",
      G::Exact, "one evaluation (NLopt's maxeval)", kEvals, 2000, M::Tnewton, 1},
 };

@@ -27,6 +27,7 @@
 #include "io/AtomicFile.h"
 #include "io/SceneFile.h"
 #include "objective/DefectVisibility.h"
+#include "optimize/PaperSetup.h"
 #include "scene/EnvMapPresets.h"
 #include "scene/Scene.h"
 #include "synth/DefectInsert.h"
@@ -205,9 +206,13 @@ std::vector<RaceConfig> defaultRaceConfigs() {
     using K = ObjectiveKind;
     using M = OptimizerMethod;
     std::vector<RaceConfig> c;
+    // The paper's set-up (optimize/PaperSetup.h) at 16 spp an estimate: its loop over
+    // kPaperLoopEstimates estimates, and its Adam on one (the paper's light's set-up).
     const OptimizerMethodRow& loop = methodRow(M::PaperLoop);
-    c.push_back(config(loop.name, K::Paper, loop.runs, loop.defaultBudget, 16, loop.defaultPlanes));
-    c.push_back(config("paper-adam", K::Paper, M::Adam, 100, 16));
+    c.push_back(config(loop.name, kPaperSetup.objective, loop.runs, loop.defaultBudget, 16,
+                       loop.defaultPlanes, {kPaperSetup.startSpec}));
+    c.push_back(config("paper-adam", kPaperSetup.objective, M::Adam, kPaperSetup.steps, 16, 1,
+                       {kPaperSetup.startSpec}));
     c.push_back(config("paper-lbfgs-16", K::Paper, M::Lbfgs, 2000, 16));
     c.push_back(config("unbiased-adam-planes8", K::Unbiased, M::Adam, 300, 16, 8));
     c.push_back(config("unbiased-lbfgs-16", K::Unbiased, M::Lbfgs, 2000, 16));

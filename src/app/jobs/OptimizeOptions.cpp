@@ -1,6 +1,7 @@
 #include "app/jobs/OptimizeOptions.h"
 
 #include "app/pipeline/InitialState.h"
+#include "optimize/PaperSetup.h"
 
 namespace sl {
 
@@ -8,8 +9,8 @@ namespace {
 
 constexpr OptimizePresetRow kPresets[] = {
     {OptimizePreset::Paper, "paper",
-     "the paper's experiment exactly (eq. 2, lambda 30, E0 = 0.5, Adam lr 0.02 x 100, a fresh "
-     "sample set of the scene's spp every iteration: 100 estimates of T)"},
+     "the paper's experiment exactly (eq. 2, lambda 30 on mean(E^2), Adam lr 0.02 x 100 from E0 "
+     "= 0.5; a fresh estimate of T at the scene's spp every step: 100 estimates)"},
 };
 
 }  // namespace
@@ -20,16 +21,16 @@ std::span<const OptimizePresetRow> optimizePresetTable() {
 
 void applyOptimizePreset(OptimizePreset preset, OptimizeJobOptions& o) {
     switch (preset) {
-        case OptimizePreset::Paper:
+        case OptimizePreset::Paper:  // optimize/PaperSetup.h: one fresh estimate per step
             o.optimizer.method = OptimizerMethod::PaperLoop;
-            o.optimizer.iterations = 100;
-            o.optimizer.learningRate = 0.02;
-            o.lambdas = {30.0};
-            o.objective.reg = RegTarget::EnvMap;
-            o.starts = {parseInitialState("const:0.5")};
-            o.objectiveKind = ObjectiveKind::Paper;
+            o.optimizer.iterations = kPaperSetup.steps;
+            o.optimizer.learningRate = kPaperSetup.learningRate;
+            o.lambdas = {kPaperSetup.lambda};
+            o.objective.reg = kPaperSetup.reg;
+            o.starts = {parseInitialState(kPaperSetup.startSpec)};
+            o.objectiveKind = kPaperSetup.objective;
             o.continuation.clear();
-            o.planes = 100;
+            o.planes = kPaperExperimentEstimates;
             break;
     }
 }

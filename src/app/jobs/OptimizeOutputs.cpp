@@ -9,6 +9,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <stdexcept>
 #include <utility>
 
 #include "app/host/Version.h"
@@ -35,6 +36,7 @@
 #include "io/ImageIO.h"
 #include "io/MaskIO.h"
 #include "io/OptimizeOutDir.h"
+#include "io/OptimizeSummary.h"
 #include "io/SceneFile.h"
 #include "io/StagedDirectory.h"
 #include "io/TransportFile.h"
@@ -42,6 +44,7 @@
 #include "objective/Metrics.h"
 #include "objective/TransportLoss.h"
 #include "objective/UnbiasedObjective.h"
+#include "optimize/PaperSetup.h"
 #include "optimize/SpecularInit.h"
 #include "render/Footprint.h"
 #include "render/Render.h"
@@ -345,9 +348,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
                      {"envmap", outdir::kLampEnvMap},
                      {"training", partsJson(r.lampTraining)}};
         json paper = {{"name", "paper's light"},
-                      {"method",
-                       "the paper's method run on this T: eq. 2, lambda 30 on mean(E^2), Adam lr "
-                       "0.02 x 100 from E0 = 0.5"},
+                      {"method", "the paper's method run on this T: " + paperSetupText()},
                       {"render", outdir::kComparePaperPng},
                       {"envmap", outdir::kPaperEnvMap},
                       {"training", partsJson(r.paperTraining)}};
@@ -399,8 +400,9 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
 }
 
 /// What the figures show, from plot-data.json's and summary.json's content (as
-/// scripts/plot_optimize.py reads them from the files) and the loss curve.
-OptimizeFiguresInput figuresInput(const json& plotData, const json& summary,
+/// scripts/plot_optimize.py reads them from the files; the summary through its typed reader,
+/// io/OptimizeSummary.h) and the loss curve.
+OptimizeFiguresInput figuresInput(const json& plotData, const json& summaryJson,
                                   const LossCurve& curve) {
     OptimizeFiguresInput f;
     f.envmap.width = plotData.at("width").get<int>();
@@ -408,24 +410,25 @@ OptimizeFiguresInput figuresInput(const json& plotData, const json& summary,
     f.envmap.azimuthDeg = plotData.at("azimuth_deg").get<std::vector<double>>();
     f.envmap.elevationDeg = plotData.at("elevation_deg").get<std::vector<double>>();
     f.envmap.luminance = plotData.at("lights").at("optimized").get<std::vector<double>>();
-    const json& dirs = summary.at("envmap_directions");
-    auto direction = [](const json& d) {
-        return PlotDirection{d.at("azimuth_deg").get<double>(),
-                             d.at("elevation_deg").get<double>()};
+    const outdir::OptimizeSummary summary = outdir::optimizeSummaryFromJson(
+        nlohmann::json::parse(summaryJson.dump()), outdir::kSummary);
+    if (!summary.envmapDirections || !summary.comparison)
+        throw std::runtime_error("summary.json has no envmap_directions or no compare");
+    const outdir::EnvDirections& dirs = *summary.envmapDirections;
+    auto direction = [](const outdir::EnvDirection& d) {
+        return PlotDirection{d.azimuthDeg, d.elevationDeg};
     };
-    if (dirs.contains("camera")) f.directions.camera = direction(dirs["camera"]);
-    if (dirs.contains("mirror")) f.directions.mirror = direction(dirs["mirror"]);
-    for (const json& d : dirs.at("brightest")) f.directions.brightest.push_back(direction(d));
+    if (dirs.camera) f.directions.camera = direction(*dirs.camera);
+    if (dirs.mirror) f.directions.mirror = direction(*dirs.mirror);
+    for (const outdir::EnvDirection& d : dirs.brightest)
+        f.directions.brightest.push_back(direction(d));
     f.loss = curve;
     std::ostringstream lambda;
-    lambda << summary.at("lambda").get<double>();
-    f.lossTitle = summary.at("optimizer").get<std::string>() + " on " +
-                  summary.at("objective").get<std::string>() + ", λ = " + lambda.str();
-    f.title = "scratchlight optimize: loss " +
-              formatNumber(summary.at("initial_loss").get<double>(), 4) + " → " +
-              formatNumber(summary.at("final_loss").get<double>(), 4);
-    f.lampTitle =
-        "your lamp (" + summary.at("compare").at("lamp").at("name").get<std::string>() + ")";
+    lambda << summary.lambda;
+    f.lossTitle = summary.optimizer + " on " + summary.objective + ", λ = " + lambda.str();
+    f.title = "scratchlight optimize: loss " + formatNumber(summary.initialLoss.get<double>(), 4) +
+              " → " + formatNumber(summary.finalLoss.get<double>(), 4);
+    f.lampTitle = "your lamp (" + summary.comparison->lamp.name + ")";
     return f;
 }
 

@@ -41,6 +41,7 @@
 #include "objective/Metrics.h"
 #include "objective/TransportLoss.h"
 #include "objective/UnbiasedObjective.h"
+#include "optimize/PaperSetup.h"
 #include "optimize/SpecularInit.h"
 #include "render/Footprint.h"
 #include "render/Render.h"
@@ -65,10 +66,10 @@ Plan plan(const OptimizeJobOptions& options) {
     p.requested = o.optimizer.method;
     const OptimizerMethodRow& row = methodRow(p.requested);
     if (p.requested == OptimizerMethod::PaperLoop) {
-        // The paper's loop on T: eq. 2, Adam, a fresh sample set (estimate of T) every step,
-        // from the paper's E0.
-        o.objectiveKind = ObjectiveKind::Paper;
-        if (o.starts.empty()) o.starts = {parseInitialState("const:0.5")};
+        // The paper's loop on T (optimize/PaperSetup.h): eq. 2, Adam, a fresh sample set
+        // (estimate of T) every step, from the paper's E0.
+        o.objectiveKind = kPaperSetup.objective;
+        if (o.starts.empty()) o.starts = {parseInitialState(kPaperSetup.startSpec)};
     }
     if (p.requested != OptimizerMethod::PaperLoop && row.gradient == GradientSource::Renderer) {
         // A black box minimizes eq. 2 through the renderer (optimize/BlackBox.h RenderLoss): the

@@ -14,6 +14,7 @@
 #include "io/OptimizeOutDir.h"
 #include "io/OptimizeSummary.h"
 #include "objective/DefectVisibility.h"
+#include "optimize/PaperSetup.h"
 
 namespace sl {
 
@@ -21,11 +22,6 @@ using nlohmann::json;
 using report::table;
 
 namespace {
-
-double num(const json& j, const char* key) {
-    if (!j.is_object() || !j.contains(key) || !j[key].is_number()) return std::nan("");
-    return j[key].get<double>();
-}
 
 /// A light's judge score as summary.json records it (io/OptimizeSummary.h), none when the run
 /// had no judge's estimate.
@@ -114,9 +110,9 @@ std::string worstLabelSentence(const Judged& answer, const Judged& lamp) {
            (jnd ? " JND" : "") + " (your lamp " + fmt(atLamp, 3) + ").";
 }
 
-std::string degrees(const json& d, const char* key) {
+std::string degrees(double deg) {
     char buf[32];
-    std::snprintf(buf, sizeof buf, "%.0f°", num(d, key));
+    std::snprintf(buf, sizeof buf, "%.0f°", deg);
     return buf;
 }
 
@@ -336,43 +332,33 @@ std::string compareRow(const std::string& name, double lamp, double paper, doubl
     return h.str();
 }
 
-}  // namespace
-
 /// When the judge sees the defects more under the lamp than under the returned optimized light
 /// (JND), why the self-check did not return the lamp (app/pipeline/Answer.h): it failed a check on
 /// the validation estimate, or it showed less there. Empty otherwise.
-std::string lampNotChosen(const json& s, double jndOptimized, double jndLamp,
-                          const std::string& lampName) {
-    if (!(jndLamp > jndOptimized) || !s.contains("answer") || !s["answer"].is_object() ||
-        !s["answer"].contains("candidates"))
-        return "";
-    for (const json& c : s["answer"]["candidates"]) {
-        if (c.value("name", std::string()) != lampName ||
-            c.value("kind", std::string()) != "reference")
-            continue;
-        if (!c.value("eligible", true))
+std::string lampNotChosen(const std::optional<outdir::AnswerCheck>& answer, double jndOptimized,
+                          double jndLamp, const std::string& lampName) {
+    if (!(jndLamp > jndOptimized) || !answer) return "";
+    for (const outdir::AnswerCandidate& c : answer->candidates) {
+        if (c.name != lampName || c.kind != "reference") continue;
+        if (!c.eligible)
             return "Your lamp was not the answer: on the validation estimate it did not pass the "
                    "checks (" +
-                   c.value("why", std::string()) + "). ";
-        const std::string merit = s["answer"].value("merit", std::string("figure"));
+                   c.why + "). ";
+        const std::string merit = answer->merit.empty() ? "figure" : answer->merit;
         double mo = std::nan("");
-        for (const json& o : s["answer"]["candidates"])
-            if (o.value("name", std::string()) == s["answer"].value("light", std::string()))
-                mo = num(o, "merit");
+        for (const outdir::AnswerCandidate& o : answer->candidates)
+            if (o.name == answer->light) mo = o.merit;
         return "Your lamp was not the answer: on the validation estimate, where the answer is "
                "chosen, it showed them less (" +
-               merit + " " + fmt(num(c, "merit"), 3) + " vs " + fmt(mo, 3) + "). ";
+               merit + " " + fmt(c.merit, 3) + " vs " + fmt(mo, 3) + "). ";
     }
     return "";
 }
-
-namespace {
 
 /// The headline from the summary typed (optimizeHeadline).
 std::string headlineOf(const outdir::OptimizeSummary& summary) {
     if (!summary.comparison)
         return "This output directory has no comparison with a lamp (it predates it).";
-    const json& s = summary.document;
     const outdir::Comparison& cmp = *summary.comparison;
     const outdir::ComparedLight &lamp = cmp.lamp, &paper = cmp.paper, &opt = cmp.optimized;
     const std::string underLamp = lampUnder(cmp), underPaper = "under the paper's light";
@@ -422,8 +408,8 @@ std::string headlineOf(const outdir::OptimizeSummary& summary) {
                      vp = combinedVisibility(paper.judge);
         if (std::isfinite(vo) && std::isfinite(vl) && std::isfinite(vp)) {
             out = jndSentence(opt.judge, lamp.judge, paper.judge, underLamp, cmp.viewing);
-            out += lampNotChosen(s, leastVisibleJnd(opt.judge), leastVisibleJnd(lamp.judge),
-                                 lamp.name);
+            out += lampNotChosen(summary.answer, leastVisibleJnd(opt.judge),
+                                 leastVisibleJnd(lamp.judge), lamp.name);
             if (out.empty()) {  // no JND: the visibility ratio is the visibility
                 out = "Under the optimized light the defects are " + moreVisible(vo, vl, underLamp);
                 out += " and " + moreVisible(vo, vp, "under the paper's light");
@@ -504,7 +490,6 @@ std::string optimizeHeadlineOf(const std::filesystem::path& outDir) {
 std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
                                      const std::string& figureProblem) {
     const outdir::OptimizeSummary summary = outdir::readOptimizeSummary(dir);
-    const json& s = summary.document;
     const outdir::Comparison cmp = summary.comparison.value_or(outdir::Comparison{});
     const outdir::ComparedLight &lamp = cmp.lamp, &paper = cmp.paper, &opt = cmp.optimized;
     const std::string lampName = lampNameOf(cmp);
@@ -513,16 +498,14 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
     // Worse than the lamp: in JND when the judge has it (the visibility; a ratio below the
     // lamp's only says the texture shows more too), else by the ratio or U.
     const double jndOpt = leastVisibleJnd(opt.judge), jndLamp = leastVisibleJnd(lamp.judge);
-    const bool referenceWon = s.contains("answer") && s["answer"].is_object() &&
-                              s["answer"].value("kind", std::string()) == "reference";
+    const bool referenceWon = summary.answer && summary.answer->kind == "reference";
     const bool worse = std::isfinite(jndOpt) && std::isfinite(jndLamp)
                            ? !referenceWon && jndOpt < jndLamp
                            : headline.find("LESS visible") != std::string::npos ||
                                  headline.find("HIGHER") != std::string::npos;
     std::ostringstream h;
     std::string title = "scratchlight optimize: the light that shows the defects";
-    if (s.contains("lambda") && s["lambda"].is_number())
-        title += " (λ " + fmt(num(s, "lambda"), 4) + ")";
+    if (std::isfinite(summary.lambda)) title += " (λ " + fmt(summary.lambda, 4) + ")";
     h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>"
       << escapeXml(title) << "</title>\n<style>" << kOptimizeStyle << "</style></head><body>\n";
 
@@ -532,36 +515,36 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
       << "</p>\n";
     {
         std::ostringstream f;
-        const json dirs = s.value("envmap_directions", json::object());
-        const json bright = dirs.value("brightest", json::array());
+        const outdir::EnvDirections dirs =
+            summary.envmapDirections.value_or(outdir::EnvDirections{});
+        const std::vector<outdir::EnvDirection>& bright = dirs.brightest;
         if (!bright.empty()) {
-            f << "The optimized light comes mainly from azimuth "
-              << degrees(bright[0], "azimuth_deg") << ", elevation "
-              << degrees(bright[0], "elevation_deg");
+            f << "The optimized light comes mainly from azimuth " << degrees(bright[0].azimuthDeg)
+              << ", elevation " << degrees(bright[0].elevationDeg);
             for (size_t k = 1; k < bright.size(); ++k)
                 f << (k + 1 == bright.size() ? " and " : "; ") << "azimuth "
-                  << degrees(bright[k], "azimuth_deg") << ", elevation "
-                  << degrees(bright[k], "elevation_deg");
+                  << degrees(bright[k].azimuthDeg) << ", elevation "
+                  << degrees(bright[k].elevationDeg);
             f << " (brightest directions of the env map";
-            if (dirs.contains("camera"))
-                f << "; the camera is at azimuth " << degrees(dirs["camera"], "azimuth_deg")
-                  << ", elevation " << degrees(dirs["camera"], "elevation_deg");
+            if (dirs.camera)
+                f << "; the camera is at azimuth " << degrees(dirs.camera->azimuthDeg)
+                  << ", elevation " << degrees(dirs.camera->elevationDeg);
             f << "). ";
         }
-        f << "It was found with " << s.value("optimizer", std::string("?")) << " on the "
-          << s.value("objective", std::string("?")) << " objective, λ " << fmt(num(s, "lambda"), 4)
-          << ". The paper's light is "
-          << "the paper's method run "
-          << "on our T (eq. 2, λ 30, Adam lr 0.02 × 100 from E₀ = 0.5), not the paper's own "
-          << "result.";
+        f << "It was found with " << (summary.optimizer.empty() ? "?" : summary.optimizer)
+          << " on the " << (summary.objective.empty() ? "?" : summary.objective) << " objective, λ "
+          << fmt(summary.lambda, 4)
+          << ". The paper's light is the paper's method run on our T (eq. 2, λ "
+          << kPaperSetup.lambda << ", Adam lr " << kPaperSetup.learningRate << " × "
+          << kPaperSetup.steps << " from E₀ = " << kPaperSetup.start
+          << "), not the paper's own result.";
         if (cmp.regions && !cmp.regions->empty()) f << " Defect regions: " << *cmp.regions << ".";
         h << "<p class=\"found\">" << escapeXml(f.str()) << "</p>\n";
     }
-    if (s.contains("heightmap") && s["heightmap"].is_object())
-        h << "<p class=\"part\">" << escapeXml(heightmapSentence(s["heightmap"])) << "</p>\n";
-    if (s.contains("warnings"))
-        for (const json& w : s["warnings"])
-            h << "<p class=\"warn\">" << escapeXml(w.get<std::string>()) << "</p>\n";
+    if (summary.heightmap.is_object())
+        h << "<p class=\"part\">" << escapeXml(heightmapSentence(summary.heightmap)) << "</p>\n";
+    for (const std::string& w : summary.warnings)
+        h << "<p class=\"warn\">" << escapeXml(w) << "</p>\n";
     h << "</section>\n";
 
     // 2. The renders: A/B slider, the regions' outline, 1:1 crops.
@@ -576,10 +559,7 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
             h << " &nbsp; <label><input type=\"checkbox\" id=\"show-regions\" checked> outline "
                  "the defect regions</label>";
         // Full size (1:1); a render narrower than 400 pixels is shown enlarged by a whole factor.
-        int width = 0;
-        if (s.contains("transport") && s["transport"].contains("image") &&
-            s["transport"]["image"].is_array() && !s["transport"]["image"].empty())
-            width = s["transport"]["image"][0].get<int>();
+        const int width = summary.image ? (*summary.image)[0] : 0;
         std::string size;
         if (width > 0 && width < 400)
             size = " style=\"width:" + std::to_string(400 / width * width) + "px\"";
@@ -675,14 +655,13 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
                     paper.trainingLoss, opt.trainingLoss, 1);
     // The held-out figures of the run: the objective it optimized on the independent estimate,
     // and U there (scored for the returned light only).
-    if (s.contains("heldout_loss") && s["heldout_loss"].is_number()) {
+    if (std::isfinite(summary.heldoutLoss)) {  // written with U beside it (io/OptimizeOutDir.h)
         const double nan = std::nan("");
         h << compareRow(
             "held out: the " + objective + " loss on the independent estimate (lower is better)",
-            nan, nan, num(s, "heldout_loss"), -1);
-        if (s.contains("heldout_U"))
-            h << compareRow("held out: U on the independent estimate (lower is better)", nan, nan,
-                            num(s, "heldout_U"), -1);
+            nan, nan, summary.heldoutLoss, -1);
+        h << compareRow("held out: U on the independent estimate (lower is better)", nan, nan,
+                        summary.heldoutU, -1);
     }
     h << "</tbody></table>\n<p class=\"caption\">JND: how many times its threshold a person "
          "sees the region on the screen (1: at the threshold, 0: nothing to see; the viewing "

@@ -267,8 +267,9 @@ ReportRun reportRunFromOutDir(const std::filesystem::path& dir, const std::strin
         if (!it->is_object() && !it->is_array()) r.settings[it.key()] = *it;
     r.metrics = json::object();
     const bool fin = state == RunState::Final;
-    if (s.contains("initial_loss")) r.metrics["loss_initial"] = s["initial_loss"];
-    if (fin && s.contains("final_loss")) r.metrics["loss_final"] = s["final_loss"];
+    // every optimize writes both (a loss that was not finite as null)
+    r.metrics["loss_initial"] = summary.initialLoss;
+    if (fin) r.metrics["loss_final"] = summary.finalLoss;
     const json& m = fin ? summary.metrics : summary.metricsInitial;
     if (m.is_object())
         for (auto it = m.begin(); it != m.end(); ++it) r.metrics[it.key()] = *it;
