@@ -68,7 +68,12 @@ std::optional<PartOfTransport> keepPartOfTransport(const std::filesystem::path& 
     if (!p || transportSceneInputs(scene) != p->sceneInputs ||
         scene.desc.canonicalJson != p->desc.canonicalJson)
         return std::nullopt;
-    const ViewingModel v = viewingFor(scene);
+    ViewingModel v;
+    try {
+        v = viewingFor(scene);
+    } catch (const std::exception&) {  // said where the viewing model is used, as before
+        return std::nullopt;
+    }
     const std::string mapFile = scene.desc.heightmap.path.filename().string();
     nlohmann::json warnings = nlohmann::json::array();
     for (const std::string& w : scene.load.warnings) warnings.push_back(mapFile + ": " + w);
