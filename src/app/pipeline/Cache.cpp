@@ -100,10 +100,11 @@ fs::path gramPath(const fs::path& dir, const std::string& key) {
     return dir / (std::string(kGramPrefix) + key + std::string(kGramExt));
 }
 
-/// Counts a cache file in `c` by its kind.
+/// Counts a cache file in `c` by its kind (by its name: it may be removed already).
 void countFile(CacheContents& c, const fs::path& p) {
     const fs::path ext = p.extension();
-    ++(ext == ".tm" ? c.files : ext == kGramExt ? c.grams : isPartFile(p) ? c.parts : c.lights);
+    const bool part = p.filename().string().rfind(kPartPrefix, 0) == 0;
+    ++(ext == ".tm" ? c.files : ext == kGramExt ? c.grams : part ? c.parts : c.lights);
 }
 
 /// A file this cache wrote, by its name and its content, never by the name alone:
