@@ -34,6 +34,9 @@ int runCache(const CacheArgs& a) {
         if (removed.grams > 0)
             lights += " and " + std::to_string(removed.grams) + " Gram matri" +
                       (removed.grams == 1 ? "x" : "ces");
+        if (removed.parts > 0)
+            lights += " and " + std::to_string(removed.parts) + " part record" +
+                      (removed.parts == 1 ? "" : "s");
         std::printf("removed %zu transport matri%s%s (%.1f MB) from %s\n", removed.files,
                     removed.files == 1 ? "x" : "ces", lights.c_str(),
                     static_cast<double>(removed.bytes) / 1e6, dir.string().c_str());

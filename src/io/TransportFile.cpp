@@ -64,16 +64,10 @@ std::string fingerprintOf(const json& in) {
 
 }  // namespace
 
-TransportProvenance transportProvenance(const Scene& scene, const RenderOptions& opt,
-                                        int channels) {
+json transportSceneInputs(const Scene& scene) {
     const CameraDesc& c = scene.camera.desc();
     const ConductorParams& m = scene.bsdf.params();
     json in;
-    in["format"] = "scratchlight transport v1";
-    in["tracer_revision"] = kTracerRevision;
-    in["convention"] = kTransportConvention;
-    in["channels"] = channels;
-    in["planes"] = opt.sampleSets;  // 2: two independent sample sets, the halves T_a, T_b
     in["camera"] = {
         {"type", c.type == CameraDesc::Type::Perspective ? "perspective" : "orthographic"},
         {"origin", vec(c.origin)},
@@ -98,6 +92,53 @@ TransportProvenance transportProvenance(const Scene& scene, const RenderOptions&
         {"pixel_pitch", scene.desc.heightmap.pitch},
         {"content_hash", toHex(hash64(scene.heights.data(), scene.heights.size() * sizeof(float)))},
         {"file", scene.desc.heightmap.path.filename().string()}};
+    if (!scene.desc.file.empty())
+        in["scene_file"] = std::filesystem::absolute(scene.desc.file).lexically_normal().string();
+    // The fields they change are recorded above; these let sceneOfTransport load the same scene.
+    if (!scene.desc.overrides.empty()) in["scene_overrides"] = scene.desc.overrides;
+    return in;
+}
+
+json sceneInputsOfTransport(const TransportProvenance& provenance) {
+    json in = json::parse(provenance.inputs);
+    // What transportProvenance adds to the scene's share (the trace's options).
+    for (const char* key : {"format", "tracer_revision", "convention", "channels", "planes",
+                            "render", "rows", "pixels"})
+        in.erase(key);
+    return in;
+}
+
+CameraDesc cameraOfTransport(const TransportProvenance& provenance) {
+    const json c = json::parse(provenance.inputs).at("camera");
+    auto v = [](const json& a) {
+        return Vec3d{a.at(0).get<double>(), a.at(1).get<double>(), a.at(2).get<double>()};
+    };
+    CameraDesc d;
+    d.type = c.at("type").get<std::string>() == "perspective" ? CameraDesc::Type::Perspective
+                                                              : CameraDesc::Type::Orthographic;
+    d.origin = v(c.at("origin"));
+    d.target = v(c.at("target"));
+    d.up = v(c.at("up"));
+    d.fovDeg = c.at("fov").get<double>();
+    d.widthMm = c.at("width_mm").get<double>();
+    d.width = c.at("width").get<int>();
+    d.height = c.at("height").get<int>();
+    return d;
+}
+
+TransportProvenance transportProvenance(const Scene& scene, const RenderOptions& opt,
+                                        int channels) {
+    return transportProvenance(transportSceneInputs(scene), opt, channels);
+}
+
+TransportProvenance transportProvenance(const json& sceneInputs, const RenderOptions& opt,
+                                        int channels) {
+    json in = sceneInputs;
+    in["format"] = "scratchlight transport v1";
+    in["tracer_revision"] = kTracerRevision;
+    in["convention"] = kTransportConvention;
+    in["channels"] = channels;
+    in["planes"] = opt.sampleSets;  // 2: two independent sample sets, the halves T_a, T_b
     in["render"] = {{"spp", opt.spp},
                     {"max_depth", opt.maxDepth},
                     {"seed", opt.seed},
@@ -115,7 +156,9 @@ TransportProvenance transportProvenance(const Scene& scene, const RenderOptions&
             {"hash", toHex(hash64(f.data(), f.size()))}};
     }
     if (opt.rowBegin != 0 || opt.rowEnd != 0)  // a shard (absent for the whole image)
-        in["rows"] = {opt.rowBegin, opt.rowEnd > 0 ? opt.rowEnd : c.height};
+        in["rows"] = {opt.rowBegin, opt.rowEnd > 0
+                                        ? opt.rowEnd
+                                        : sceneInputs.at("camera").at("height").get<int>()};
     if (!opt.pixels.empty()) {  // only some pixels traced (a region; absent for all)
         std::vector<uint8_t> flags(opt.pixels.size());  // 0/1 whatever non-zero value is set
         std::transform(opt.pixels.begin(), opt.pixels.end(), flags.begin(),
@@ -123,10 +166,6 @@ TransportProvenance transportProvenance(const Scene& scene, const RenderOptions&
         const auto traced = static_cast<size_t>(std::count(flags.begin(), flags.end(), 1));
         in["pixels"] = {{"traced", traced}, {"hash", toHex(hash64(flags.data(), flags.size()))}};
     }
-    if (!scene.desc.file.empty())
-        in["scene_file"] = std::filesystem::absolute(scene.desc.file).lexically_normal().string();
-    // The fields they change are recorded above; these let sceneOfTransport load the same scene.
-    if (!scene.desc.overrides.empty()) in["scene_overrides"] = scene.desc.overrides;
     TransportProvenance p;
     p.inputs = in.dump();
     p.fingerprint = fingerprintOf(in);

@@ -24,10 +24,12 @@
 #include <cstdint>
 #include <filesystem>
 #include <istream>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
 
 #include "render/PathTracer.h"
+#include "scene/Camera.h"
 #include "transport/TransportMatrix.h"
 
 namespace sl {
@@ -50,6 +52,18 @@ struct TransportProvenance {
 /// height-map pitch and content, spp, seed, max_depth, channels, convention.
 TransportProvenance transportProvenance(const Scene& scene, const RenderOptions& options,
                                         int channels);
+/// The same from the scene's share of the inputs (transportSceneInputs), which every T of a
+/// scene records alike: the fingerprint of another estimate of the same part (another spp or
+/// seed) without its height map, e.g. from a .tm's recorded inputs (sceneInputsOfTransport).
+TransportProvenance transportProvenance(const nlohmann::json& sceneInputs,
+                                        const RenderOptions& options, int channels);
+/// The scene's share of T's inputs: the resolved camera, the material, the env-map grid, the
+/// height map's grid, pitch, content hash and file name, the scene file and its overrides.
+nlohmann::json transportSceneInputs(const Scene& scene);
+/// The same, as a T recorded them (its provenance's inputs without what its trace set).
+nlohmann::json sceneInputsOfTransport(const TransportProvenance& provenance);
+/// The camera a T was traced through (its recorded "camera" input).
+CameraDesc cameraOfTransport(const TransportProvenance& provenance);
 
 /// Writes T atomically (a temporary renamed into place). `result`: the file is the command's
 /// result (precompute's), so its rename is the command's commit (core/Interrupt.h enterCommit:

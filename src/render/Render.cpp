@@ -14,11 +14,15 @@ RenderResult render(const Scene& scene, const EnvMap& env, const RenderOptions& 
 }
 
 RenderOptions renderOptionsFor(const Scene& scene) {
+    return renderOptionsFor(scene.desc.render);
+}
+
+RenderOptions renderOptionsFor(const RenderDesc& render) {
     RenderOptions o;
-    o.spp = scene.desc.render.spp;
-    o.maxDepth = scene.desc.render.maxDepth;
-    o.seed = scene.desc.render.seed;
-    o.sampling = scene.desc.render.sampling;
+    o.spp = render.spp;
+    o.maxDepth = render.maxDepth;
+    o.seed = render.seed;
+    o.sampling = render.sampling;
     return o;
 }
 

@@ -4,6 +4,7 @@
 #include "core/Image.h"
 #include "render/PathTracer.h"
 #include "scene/EnvMap.h"
+#include "scene/RenderDesc.h"
 
 namespace sl {
 
@@ -18,5 +19,6 @@ RenderResult render(const Scene& scene, const EnvMap& env, const RenderOptions& 
 
 /// RenderOptions from the scene's `render` section.
 RenderOptions renderOptionsFor(const Scene& scene);
+RenderOptions renderOptionsFor(const RenderDesc& render);
 
 }  // namespace sl

@@ -79,7 +79,8 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
             in = Inputs{};
             in.ranks = p.ranks;
             in.scene = std::move(kept.scene);  // loaded once
-            if (kept.sceneParts) {             // what does not depend on T: computed once
+            in.part = std::move(kept.part);
+            if (kept.sceneParts) {  // what does not depend on T: computed once
                 in.defects = std::move(kept.defects);
                 in.reference = std::move(kept.reference);
                 in.truth = std::move(kept.truth);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <future>
 #include <iomanip>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -120,14 +121,12 @@ std::vector<double> luminanceOf(const std::vector<double>& image, size_t pixels)
 }
 
 /// A render exposed on its own as a camera would (app/report/Preview.h exposureScale on the part),
-/// written as a PNG; returned for the figures.
-Image writeExposedPng(const std::filesystem::path& png, const std::vector<double>& image,
-                      const TransportMatrix& t) {
+/// for its PNG and the figures.
+Image exposedImage(const std::vector<double>& image, const TransportMatrix& t) {
     const int ch = image.size() == t.rows() ? 1 : 3;
     const double scale = exposureScale(luminanceOf(image, t.rows()), t.objectMask);
     Image img(t.width, t.height, ch);
     for (size_t i = 0; i < image.size(); ++i) img.data[i] = static_cast<float>(image[i] * scale);
-    writePng(png, img);
     return img;
 }
 
@@ -154,8 +153,8 @@ std::vector<double> envLuminance(const std::vector<double>& e, bool rgb) {
 json envDirectionsJson(const Inputs& in, const TransportMatrix& t, const std::vector<double>& e,
                        bool rgb) {
     json j;
-    if (in.scene) {
-        const CameraDesc& c = in.scene->camera.desc();
+    if (in.scene || in.part) {
+        const CameraDesc& c = in.scene ? in.scene->camera.desc() : in.part->camera;
         const Vec3d toCamera = normalize(c.origin - c.target);
         j["camera"] = directionJson(toCamera);
         j["mirror"] = directionJson(Vec3d{-toCamera.x, toCamera.y, -toCamera.z});
@@ -229,7 +228,10 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     for (const InitialState& s : o.starts) starts.push_back(s.spec);
     json s;
     s["scratchlight"] = runProvenance(o.commandLine);
-    if (in.scene) s["part"] = partSummaryJson(*in.scene);
+    if (in.scene)
+        s["part"] = partSummaryJson(*in.scene);
+    else if (in.part && in.part->recorded())
+        s["part"] = in.part->part;
     s["optimizer"] = run.optimizer.method;
     s["planes"] = o.planes;
     if (p.ranks)  // each rank held one shard; "transport" describes rank 0's
@@ -293,7 +295,10 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     } else {
         s["heldout_loss"] = nullptr;
     }
-    if (in.scene) s["heightmap"] = heightmapLoadJson(*in.scene);  // reader and levelling
+    if (in.scene)
+        s["heightmap"] = heightmapLoadJson(*in.scene);  // reader and levelling
+    else if (in.part && in.part->recorded())
+        s["heightmap"] = in.part->heightmap;
     s["transport"] = transportJson(job.transport);
     if (job.validation) {
         json v = {{"transport", transportJson(*job.validation)}};
@@ -451,6 +456,29 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
     if (!p.writes()) return {};
     const std::filesystem::path dir = p.staged(run.dir);
     std::filesystem::create_directories(dir);
+    // What the figures are drawn from, first: they are drawn on another core while the files
+    // below are written (app/report/OptimizeFigures.h; a third of the outputs' time at 256²).
+    const json plotData = plotDataJson(in, t, r.e, o.rgb);
+    const VisibilityMetrics metricsFinal = metricsFor(t, imageFinal, mask, r.e, o.rgb, in.truth);
+    const json summary = runSummaryJson(p, in, job, r, metricsFinal);
+    const Image lampView = exposedImage(imageLamp, t);
+    const Image optimizedView = exposedImage(imageOptimized, t);
+    std::optional<ProgressTask> figuresTask;
+    std::future<std::string> figures;  // what went wrong ("" when drawn); waited for when it goes
+    if (o.figures) {
+        figuresTask.emplace("figures");
+        figures = std::async(std::launch::async, [&] {
+            try {
+                OptimizeFiguresInput fig = figuresInput(plotData, summary, r.curve);
+                fig.lampView = lampView;
+                fig.optimizedView = optimizedView;
+                writeOptimizeFigures(dir, fig);
+                return std::string();
+            } catch (const std::exception& e) {
+                return std::string(e.what());
+            }
+        });
+    }
     writeEnvMap(dir / outdir::kEnvMap, toEnvMap(r.e, t, o.rgb));
     writePng(dir / outdir::kEnvMapPng, envMapPreview(toEnvMap(r.e, t, o.rgb), 16));
     const int ch = t.channels == 3 ? 3 : 1;
@@ -500,9 +528,9 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
     writeRender(dir / outdir::kComparePaper, imagePaper, t.width, t.height, ch);
     writeEnvMap(dir / outdir::kLampEnvMap, toEnvMap(in.lampE, t, o.rgb));
     writeEnvMap(dir / outdir::kPaperEnvMap, toEnvMap(in.paperE, t, o.rgb));
-    Image lampView = writeExposedPng(dir / outdir::kViewLamp, imageLamp, t);
-    Image optimizedView = writeExposedPng(dir / outdir::kViewOptimized, imageOptimized, t);
-    writeExposedPng(dir / outdir::kViewPaper, imagePaper, t);
+    writePng(dir / outdir::kViewLamp, lampView);
+    writePng(dir / outdir::kViewOptimized, optimizedView);
+    writePng(dir / outdir::kViewPaper, exposedImage(imagePaper, t));
     if (!in.regionLabels.empty()) {
         const Image outlined = outlinedRender(std::vector<double>(t.rows(), 0.0), t.width, t.height,
                                               {}, in.regionLabels);
@@ -515,27 +543,15 @@ ReportRun writeRunOutputs(const Plan& p, const Inputs& in, const OptimizeJobSumm
         }
         writePng(dir / outdir::kViewRegions, layer);
     }
-    const json plotData = plotDataJson(in, t, r.e, o.rgb);
     writeTextAtomically(dir / outdir::kPlotData, plotData.dump() + "\n");
-    const VisibilityMetrics metricsFinal = metricsFor(t, imageFinal, mask, r.e, o.rgb, in.truth);
-    const json summary = runSummaryJson(p, in, job, r, metricsFinal);
     writeTextAtomically(dir / outdir::kSummary, summary.dump(2) + "\n");
     // The figures, drawn in-process (app/report/OptimizeFigures.h); when they fail the report says
     // why.
-    std::string figureProblem;
-    if (!o.figures) {
-        figureProblem = "figures not asked for";
-    } else {
-        const ProgressTask task("figures");
-        try {
-            OptimizeFiguresInput fig = figuresInput(plotData, summary, r.curve);
-            fig.lampView = std::move(lampView);
-            fig.optimizedView = std::move(optimizedView);
-            writeOptimizeFigures(dir, fig);
-        } catch (const std::exception& e) {
-            figureProblem = e.what();
-            spdlog::warn("figures not made: {}", figureProblem);
-        }
+    std::string figureProblem = "figures not asked for";
+    if (figures.valid()) {
+        figureProblem = figures.get();
+        figuresTask.reset();
+        if (!figureProblem.empty()) spdlog::warn("figures not made: {}", figureProblem);
     }
     writeTextAtomically(dir / outdir::kReport, renderOptimizeReportHtml(dir, figureProblem));
     std::ostringstream title;

@@ -15,6 +15,7 @@
 #include "app/pipeline/Cache.h"
 #include "app/pipeline/InitialState.h"
 #include "app/pipeline/JudgeEstimate.h"
+#include "app/pipeline/PartOfTransport.h"
 #include "app/pipeline/Search.h"
 #include "app/pipeline/Truth.h"
 #include "app/report/OptimizeFigures.h"
@@ -126,6 +127,16 @@ std::vector<uint8_t> chooseDefectSppScale(const Scene& scene, const std::vector<
     return defectSppScale(defects, factor);
 }
 
+/// A .tm's scene, loaded now (from T's provenance) for `purpose`; what it says of the part is
+/// kept beside T for the next run (app/pipeline/PartOfTransport.h).
+void sceneOfTm(const Plan& p, Inputs& in, const OptimizeJobSummary& job,
+               const std::string& purpose) {
+    in.scene = sceneOfTransport(job.transport.file, purpose);
+    if (auto kept = keepPartOfTransport(in.shard.distributed() ? "" : p.cacheDir,
+                                        job.transport.file, *in.scene, partSummaryJson(*in.scene)))
+        in.part = std::move(kept);
+}
+
 }  // namespace
 
 /// Stage 1: the scene and the training estimates of T (traced or cached, or the .tm); `spp`:
@@ -199,19 +210,31 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp) {
                          "has no half-sample matrices; " + option("objective") + " " +
                              objectiveKindName(in.kind) + " needs them",
                          "precompute it with " + option("halves") + ", or pass the scene file");
-    // What needs the scene itself: for a .tm, read from T's provenance.
-    bool specularStart = false;
-    for (const InitialState& s : o.starts) specularStart |= s.kind == InitialKind::Specular;
-    const bool needScene = p.blackBox || o.mask.kind == LossMaskKind::Scratch || specularStart ||
-                           in.kind == ObjectiveKind::Defects || !o.truth.empty() ||
-                           o.heldOut.mode == HeldOutMode::Judge;
-    if (!in.scene && needScene) {
+    // What needs the scene itself: for a .tm, read from T's provenance. A specular start only
+    // when it is not cached; V is read from the cache by T's recorded inputs when it is there
+    // (loadValidation), and with the part's record in the cache (app/pipeline/PartOfTransport.h)
+    // the height map is then not read at all.
+    if (!in.scene) {
+        bool specularStart = false, specularTraced = false;
+        for (const InitialState& s : o.starts) {
+            specularStart |= s.kind == InitialKind::Specular;
+            specularTraced |= initialEnvMapNeedsScene(s, t.envWidth, t.envHeight, o.rgb,
+                                                      job.transport.file.provenance.maxDepth,
+                                                      in.shard.distributed() ? "" : p.cacheDir,
+                                                      job.transport.file.provenance.fingerprint);
+        }
+        const bool needHeights = p.blackBox || o.mask.kind == LossMaskKind::Scratch ||
+                                 specularTraced || in.kind == ObjectiveKind::Defects ||
+                                 !o.truth.empty() || o.heldOut.mode == HeldOutMode::Judge;
+        if (!needHeights && specularStart && !in.part)
+            in.part = partOfTransport(job.transport.file, p.cacheDir);
         const std::string purpose =
             o.heldOut.mode == HeldOutMode::Judge
                 ? "the held-out estimate (or " + option("heldout") + " none)"
                 : option("mask") + " scratch / " + option("init") + " specular / " +
                       option("truth");
-        in.scene = sceneOfTransport(job.transport.file, purpose);
+        if (needHeights || (specularStart && !(in.part && in.part->recorded())))
+            sceneOfTm(p, in, job, purpose);
     }
     in.set = {&t};
     for (const TransportSource& x : job.extraPlanes) in.set.push_back(&x.file.matrix);
@@ -254,10 +277,10 @@ void loadHeldOut(const Plan& p, const Inputs& in, OptimizeJobSummary& job) {
 
 /// Stage 2b: the validation estimate (app/pipeline/TrainingNoise.h): the training trace again with
 /// its own seed, two sample sets; for a .tm, T's recorded spp and path length on its scene.
-void loadValidation(const Plan& p, const Inputs& in, OptimizeJobSummary& job) {
+void loadValidation(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     job.validation.reset();
     if (!p.validate) return;
-    if (!in.scene) {
+    if (!in.scene && !in.part) {
         spdlog::info(
             "no validation estimate: the transport matrix records no scene to trace it from, so "
             "E* is neither checked for over-fitting nor against the references");
@@ -278,8 +301,18 @@ void loadValidation(const Plan& p, const Inputs& in, OptimizeJobSummary& job) {
     // figure does not depend on its spp and the rule adapts; more once its rounds asked for it.
     const int tSpp = job.transport.file.provenance.spp;
     const int first = p.noise.adapt && validationSppFree(in.kind) ? validationPilotSpp(tSpp) : tSpp;
-    job.validation =
-        validationEstimate(*in.scene, v, seed, p.cacheDir, std::max(first, p.validationSpp));
+    const int spp = std::max(first, p.validationSpp);
+    if (!in.scene) {  // a .tm's part: V from the cache by T's recorded inputs, else traced
+        PrecomputeOptions c = v;  // as validationEstimate sets them
+        if (spp > 0) c.spp = spp;
+        c.seed = seed + kValidationSeedOffset;
+        c.sampleSets = 2;
+        job.validation = cachedTransport(in.part->sceneInputs, in.part->sceneRender(), c,
+                                         in.shard.distributed() ? "" : p.cacheDir);
+        if (job.validation) return;
+        sceneOfTm(p, in, job, "the validation estimate");
+    }
+    job.validation = validationEstimate(*in.scene, v, seed, p.cacheDir, spp);
 }
 
 /// The objective in use through the validation estimate (its figure of E* and the gap's SE).
@@ -444,7 +477,8 @@ std::vector<std::string> resultWarnings(const OptimizeRun& run, const std::vecto
 /// How a person sees the images (the judge's JND): the scene's viewing model, the default one
 /// when only T is at hand.
 ViewingModel viewingOf(const Inputs& in) {
-    return in.scene ? viewingFor(*in.scene) : defaultViewing();
+    if (in.scene) return viewingFor(*in.scene);
+    return in.part && in.part->viewing ? *in.part->viewing : defaultViewing();
 }
 
 /// The objective's options at λ; the jnd measure sees the image as the judge does (viewingOf).

@@ -14,6 +14,7 @@
 
 #include "app/jobs/OptimizePlan.h"
 #include "app/pipeline/LossMask.h"
+#include "app/pipeline/PartOfTransport.h"
 #include "app/pipeline/Search.h"
 #include "app/pipeline/Transport.h"
 #include "app/pipeline/Truth.h"
@@ -45,6 +46,9 @@ struct Inputs {
     const Communicator* ranks = nullptr;  // Plan::ranks
     RowShard shard;                       // the rows of T this rank holds (over MPI ranks)
     std::unique_ptr<Scene> scene;         // loaded once; from T's provenance for a .tm when needed
+    /// A .tm's part without its height map (app/pipeline/PartOfTransport.h): set, with the scene
+    /// unloaded, when what the run needs of it is cached; kept beside T once the scene is loaded.
+    std::optional<PartOfTransport> part;
     ObjectiveKind kind = ObjectiveKind::Unbiased;
     bool onHalves() const { return registryRow(objectiveKindTable(), kind).planes == 2; }
     std::vector<uint8_t> defects, reference;  // the defects objective's regions (image)
@@ -84,7 +88,7 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp);
 void loadHeldOut(const Plan& p, const Inputs& in, OptimizeJobSummary& job);
 /// Stage 2b: the validation estimate (app/pipeline/TrainingNoise.h): the training trace again with
 /// its own seed, two sample sets; for a .tm, T's recorded spp and path length on its scene.
-void loadValidation(const Plan& p, const Inputs& in, OptimizeJobSummary& job);
+void loadValidation(const Plan& p, Inputs& in, OptimizeJobSummary& job);
 /// The objective in use through the validation estimate (its figure of E* and the gap's SE).
 ObjectiveOnT validationObjective(const Inputs& in, const OptimizeJobSummary& job,
                                  const ObjectiveOptions& oo, bool rgb);

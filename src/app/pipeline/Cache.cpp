@@ -54,20 +54,34 @@ std::optional<std::vector<double>> readLightFile(const fs::path& p, const std::s
     return v;
 }
 
-/// light-<key>.json holding that key: its first bytes are writeCachedLight's {"key":"<key>"
-/// (nlohmann writes the keys in order). Only the start is read: listing and trimming the cache
-/// parsed every light's values three times a run, ~0.06 s with fifty lights.
-bool isLightFile(const fs::path& p) {
+/// <prefix><key>.json holding that key (light-: a light, part-: a part's record): its first bytes
+/// are writeCachedLight's (writePartRecord's) {"key":"<key>" (nlohmann writes the keys in order).
+/// Only the start is read: listing and trimming the cache parsed every light's values three times a
+/// run, ~0.06 s with fifty lights.
+bool isKeyedJsonFile(const fs::path& p, std::string_view prefix) {
     const std::string name = p.filename().string();
-    if (name.size() != kLightPrefix.size() + 32 + kLightExt.size() ||
-        name.rfind(kLightPrefix, 0) != 0 || !name.ends_with(kLightExt))
+    if (name.size() != prefix.size() + 32 + kLightExt.size() || name.rfind(prefix, 0) != 0 ||
+        !name.ends_with(kLightExt))
         return false;
-    const std::string key = name.substr(kLightPrefix.size(), 32);
+    const std::string key = name.substr(prefix.size(), 32);
     if (!hexDigits(key)) return false;
     const std::string head = "{\"key\":\"" + key + "\",";
     std::string got(head.size(), '\0');
     std::ifstream in(p, std::ios::binary);
     return in.read(got.data(), static_cast<std::streamsize>(got.size())) && got == head;
+}
+
+bool isLightFile(const fs::path& p) {
+    return isKeyedJsonFile(p, kLightPrefix);
+}
+
+/// A part's record (writePartRecord): part-<key>.json holding that key, as a light's file does.
+constexpr std::string_view kPartPrefix = "part-";
+bool isPartFile(const fs::path& p) {
+    return isKeyedJsonFile(p, kPartPrefix);
+}
+fs::path partPath(const fs::path& dir, const std::string& key) {
+    return dir / (std::string(kPartPrefix) + key + std::string(kLightExt));
 }
 
 constexpr std::string_view kGramPrefix = "gram-", kGramExt = ".gram";
@@ -86,13 +100,20 @@ fs::path gramPath(const fs::path& dir, const std::string& key) {
     return dir / (std::string(kGramPrefix) + key + std::string(kGramExt));
 }
 
+/// Counts a cache file in `c` by its kind (by its name: it may be removed already).
+void countFile(CacheContents& c, const fs::path& p) {
+    const fs::path ext = p.extension();
+    const bool part = p.filename().string().rfind(kPartPrefix, 0) == 0;
+    ++(ext == ".tm" ? c.files : ext == kGramExt ? c.grams : part ? c.parts : c.lights);
+}
+
 /// A file this cache wrote, by its name and its content, never by the name alone:
 /// transport-<fingerprint>.tm whose header holds that fingerprint (the cache names each matrix
 /// by it), or the temporary of one while written (io/AtomicFile.h:
 /// .transport-<fingerprint>.tmp-<pid>-<n>.tm) that is empty or starts as a .tm file does; or a
 /// derived light, light-<key>.json holding that key; or a Gram file, gram-<key>.gram holding it.
 bool isCacheFile(const fs::path& p) {
-    if (isLightFile(p) || isGramFile(p)) return true;
+    if (isLightFile(p) || isGramFile(p) || isPartFile(p)) return true;
     const std::string name = p.filename().string();
     constexpr std::string_view kPrefix = "transport-", kExt = ".tm";
     if (name.size() > kPrefix.size() + kExt.size() && name.rfind(kPrefix, 0) == 0 &&
@@ -163,8 +184,7 @@ CacheContents cacheFiles(const fs::path& dir, Count&& count) {
         if (!e.is_regular_file(ec) || !isCacheFile(e.path())) continue;
         const uintmax_t size = e.file_size(ec);
         if (!count(e.path())) continue;
-        const fs::path ext = e.path().extension();
-        ++(ext == ".tm" ? c.files : ext == kGramExt ? c.grams : c.lights);
+        countFile(c, e.path());
         c.bytes += size;
     }
     return c;
@@ -196,7 +216,7 @@ CacheContents trimCache(const fs::path& dir, uintmax_t maxBytes) {
         const uintmax_t size = fs::file_size(p, ec);
         if (ec) return false;
         total += size;
-        if (p.extension() == ".tm" || p.extension() == kGramExt || isLightFile(p))
+        if (p.extension() == ".tm" || p.extension() == kGramExt || isLightFile(p) || isPartFile(p))
             entries.push_back({p, fs::last_write_time(p, ec), size});
         return true;
     });
@@ -209,8 +229,7 @@ CacheContents trimCache(const fs::path& dir, uintmax_t maxBytes) {
         std::error_code ec;
         if (!fs::remove(e.path, ec)) continue;
         total -= e.bytes;
-        const fs::path ext = e.path.extension();
-        ++(ext == ".tm" ? removed.files : ext == kGramExt ? removed.grams : removed.lights);
+        countFile(removed, e.path);
         removed.bytes += e.bytes;
     }
     return removed;
@@ -236,6 +255,34 @@ void writeCachedLight(const fs::path& dir, const std::string& key, const std::st
         // nlohmann writes doubles so that they read back bit for bit.
         writeTextAtomically(dir / (std::string(kLightPrefix) + key + std::string(kLightExt)),
                             j.dump() + "\n");
+    } catch (const std::exception& e) {
+        spdlog::warn("cache {}: the {} was not stored: {}", dir.string(), what, e.what());
+    }
+}
+
+std::optional<nlohmann::json> readPartRecord(const fs::path& dir, const std::string& key) {
+    if (dir.empty()) return std::nullopt;
+    const fs::path file = partPath(dir, key);
+    std::error_code ec;
+    if (!fs::is_regular_file(file, ec) || fs::file_size(file, ec) > (16u << 20))
+        return std::nullopt;
+    std::ifstream in(file);
+    nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    if (j.is_discarded() || !j.is_object() || j.value("key", std::string()) != key ||
+        !j.contains("record") || !j["record"].is_object())
+        return std::nullopt;
+    touchCacheFile(file);
+    return std::move(j["record"]);
+}
+
+void writePartRecord(const fs::path& dir, const std::string& key, const std::string& what,
+                     const nlohmann::json& record) {
+    if (dir.empty()) return;
+    const nlohmann::json j = {{"key", key}, {"what", what}, {"record", record}};
+    try {
+        std::error_code ec;
+        fs::create_directories(dir, ec);
+        writeTextAtomically(partPath(dir, key), j.dump() + "\n");
     } catch (const std::exception& e) {
         spdlog::warn("cache {}: the {} was not stored: {}", dir.string(), what, e.what());
     }
@@ -278,6 +325,8 @@ std::string describeCache(const CacheContents& c) {
     std::snprintf(buf, sizeof buf, ": %zu transport matri%s", c.files, c.files == 1 ? "x" : "ces");
     if (c.grams > 0)
         lights += ", " + std::to_string(c.grams) + " Gram matri" + (c.grams == 1 ? "x" : "ces");
+    if (c.parts > 0)
+        lights += ", " + std::to_string(c.parts) + " part record" + (c.parts == 1 ? "" : "s");
     std::string out = c.dir.string() + buf + lights;
     std::snprintf(buf, sizeof buf, ", %.1f MB", static_cast<double>(c.bytes) / 1e6);
     return out + buf;

@@ -22,11 +22,14 @@
 // Beside them, T's Gram matrices (gram-<key>.gram, io/GramFile.h: the noise-unbiased objective's
 // quadratic forms, transport/TransportGram.h), so a run on a cached T does not build them again: a
 // few MB each (670² doubles on the bundled part at 256²), trimmed and cleared with the matrices.
+// Beside them, a part's record (part-<key>.json, app/pipeline/PartOfTransport.h): what a run on a
+// .tm needs of its scene besides its estimates, so that it does not load the height map.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <span>
 #include <string>
@@ -55,6 +58,7 @@ struct CacheContents {
     size_t files = 0;   // transport matrices
     size_t lights = 0;  // lights derived from them (light-<key>.json)
     size_t grams = 0;   // their Gram matrices (gram-<key>.gram)
+    size_t parts = 0;   // their parts' records (part-<key>.json)
     uintmax_t bytes = 0;
 };
 
@@ -82,6 +86,14 @@ std::optional<std::vector<double>> readCachedLight(const std::filesystem::path& 
 void writeCachedLight(const std::filesystem::path& dir, const std::string& key,
                       const std::string& what, std::span<const double> values);
 
+/// A part's record kept beside T (app/pipeline/PartOfTransport.h): dir/part-<key>.json, `key` 32
+/// hex digits, its record as written; nullopt when dir is empty or the file is missing, damaged
+/// or holds another key. A hit marks the file used (touchCacheFile).
+std::optional<nlohmann::json> readPartRecord(const std::filesystem::path& dir,
+                                             const std::string& key);
+/// Stores a part's record as dir/part-<key>.json (atomically), as writeCachedLight stores a light.
+void writePartRecord(const std::filesystem::path& dir, const std::string& key,
+                     const std::string& what, const nlohmann::json& record);
 /// T's Gram matrices for `loss` (TransportLoss::gram) kept in `dir` by T's `fingerprint`
 /// (TransportLoss::gramKey): those another loss on the same T holds (TransportLoss::
 /// shareHeldGram), else read from dir/gram-<key>.gram and installed in the loss

@@ -124,21 +124,39 @@ std::vector<double> initialEnvMap(const InitialState& start, int width, int heig
     return specularInitialEnvMap(*scene, maxDepth, rgb);
 }
 
+namespace {
+
+/// The specular start's key in the cache beside T.
+std::string specularKey(bool rgb, int maxDepth, const std::string& fingerprint) {
+    const std::string what = "specular start 1; T " + fingerprint + "; rgb " + std::to_string(rgb) +
+                             "; max_depth " + std::to_string(maxDepth);
+    return toHex(hash64(what.data(), what.size(), 1)) + toHex(hash64(what.data(), what.size(), 2));
+}
+
+}  // namespace
+
 std::vector<double> initialEnvMap(const InitialState& start, int width, int height, bool rgb,
                                   const Scene* scene, int maxDepth,
                                   const std::filesystem::path& cacheDir,
                                   const std::string& fingerprint) {
     if (start.kind != InitialKind::Specular || cacheDir.empty() || fingerprint.empty())
         return initialEnvMap(start, width, height, rgb, scene, maxDepth);
-    const std::string what = "specular start 1; T " + fingerprint + "; rgb " + std::to_string(rgb) +
-                             "; max_depth " + std::to_string(maxDepth);
-    const std::string key =
-        toHex(hash64(what.data(), what.size(), 1)) + toHex(hash64(what.data(), what.size(), 2));
+    const std::string key = specularKey(rgb, maxDepth, fingerprint);
     const size_t n = static_cast<size_t>(width) * static_cast<size_t>(height) * (rgb ? 3 : 1);
     if (auto cached = readCachedLight(cacheDir, key); cached && cached->size() == n) return *cached;
     std::vector<double> e = initialEnvMap(start, width, height, rgb, scene, maxDepth);
     if (e.size() == n) writeCachedLight(cacheDir, key, "specular start on T " + fingerprint, e);
     return e;
+}
+
+bool initialEnvMapNeedsScene(const InitialState& start, int width, int height, bool rgb,
+                             int maxDepth, const std::filesystem::path& cacheDir,
+                             const std::string& fingerprint) {
+    if (start.kind != InitialKind::Specular) return false;
+    if (cacheDir.empty() || fingerprint.empty()) return true;
+    const auto cached = readCachedLight(cacheDir, specularKey(rgb, maxDepth, fingerprint));
+    return !cached || cached->size() !=
+                          static_cast<size_t>(width) * static_cast<size_t>(height) * (rgb ? 3 : 1);
 }
 
 std::vector<double> initialEnvMap(const InitialState& start, int width, int height, bool rgb) {

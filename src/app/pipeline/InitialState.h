@@ -68,6 +68,11 @@ std::vector<double> initialEnvMap(const InitialState& start, int width, int heig
                                   const std::filesystem::path& cacheDir,
                                   const std::string& fingerprint);
 
+/// Whether the E0 above needs `scene`: a `specular` start that the cache does not hold.
+bool initialEnvMapNeedsScene(const InitialState& start, int width, int height, bool rgb,
+                             int maxDepth, const std::filesystem::path& cacheDir,
+                             const std::string& fingerprint);
+
 /// E0 from an env map as `envmap:FILE` takes a loaded file: a one-channel map is E itself, a
 /// colour map becomes gray by CIE L*/100 (or stays RGB with rgb); clamped to [0, 1].
 std::vector<double> initialEnvMapFrom(const EnvMap& map, bool rgb);

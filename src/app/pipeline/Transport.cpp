@@ -215,10 +215,15 @@ std::optional<SppChoice> resolveSpp(const Scene& scene, PrecomputeOptions& o,
 }
 
 RenderOptions traceOptions(const Scene& scene, const PrecomputeOptions& o) {
+    return traceOptions(renderOptionsFor(scene), scene.camera.height(), o);
+}
+
+RenderOptions traceOptions(const RenderOptions& sceneRender, int imageHeight,
+                           const PrecomputeOptions& o) {
     if (o.autoSpp) throw std::logic_error("traceOptions: resolve spp auto first (resolveSpp)");
     if (o.autoMaxDepth)
         throw std::logic_error("traceOptions: resolve max_depth auto first (resolveMaxDepth)");
-    RenderOptions r = renderOptionsFor(scene);
+    RenderOptions r = sceneRender;
     if (o.spp) r.spp = *o.spp;
     if (o.maxDepth) r.maxDepth = *o.maxDepth;
     if (o.sampling) r.sampling = *o.sampling;
@@ -229,7 +234,7 @@ RenderOptions traceOptions(const Scene& scene, const PrecomputeOptions& o) {
     }
     r.sppScale = o.sppScale;  // its size is the tracer's to check
     if (o.rowBegin != 0 || o.rowEnd != 0) {
-        const int H = scene.camera.height();
+        const int H = imageHeight;
         if (o.rowBegin < 0 || o.rowEnd > H || o.rowBegin >= o.rowEnd)
             throw inputError(option("rows"),
                              std::to_string(o.rowBegin) + ":" + std::to_string(o.rowEnd) +
@@ -243,6 +248,31 @@ RenderOptions traceOptions(const Scene& scene, const PrecomputeOptions& o) {
     r.sampleSets = o.sampleSets;
     return r;
 }
+
+namespace {
+
+/// The cache's T of these inputs, when it is there and reads (a damaged one is warned about).
+std::optional<TransportSource> readCachedTransport(const TransportProvenance& prov,
+                                                   const std::filesystem::path& cacheDir,
+                                                   const Stopwatch& clock) {
+    const auto cached = cacheDir / ("transport-" + prov.fingerprint + ".tm");
+    if (!std::filesystem::exists(cached)) return std::nullopt;
+    try {
+        TransportSource s;
+        s.file = readTransportFile(cached, prov.fingerprint);
+        s.path = cached;
+        s.cacheHit = true;
+        touchCacheFile(cached);  // its last use, for the cache's size cap (app/pipeline/Cache.h)
+        s.secondsTotal = clock.seconds();
+        spdlog::info("transport matrix from cache {}", cached.string());
+        return s;
+    } catch (const InputError& e) {
+        spdlog::warn("ignoring cached transport matrix: {}", e.what());
+    }
+    return std::nullopt;
+}
+
+}  // namespace
 
 TransportSource precomputeToFile(const std::filesystem::path& file,
                                  const PrecomputeOptions& options, const std::filesystem::path& out,
@@ -266,23 +296,21 @@ TransportSource transportForScene(const Scene& scene, const PrecomputeOptions& o
     const RenderOptions ro = traceOptions(scene, options);
     const TransportProvenance prov = transportProvenance(scene, ro, options.rgb ? 3 : 1);
     if (cacheDir.empty()) return trace(scene, ro, prov, options.rgb, options.label, {}, clock);
-    const auto cached = cacheDir / ("transport-" + prov.fingerprint + ".tm");
-    if (std::filesystem::exists(cached)) {
-        try {
-            TransportSource s;
-            s.file = readTransportFile(cached, prov.fingerprint);
-            s.path = cached;
-            s.cacheHit = true;
-            touchCacheFile(
-                cached);  // its last use, for the cache's size cap (app/pipeline/Cache.h)
-            s.secondsTotal = clock.seconds();
-            spdlog::info("transport matrix from cache {}", cached.string());
-            return s;
-        } catch (const InputError& e) {
-            spdlog::warn("ignoring cached transport matrix: {}", e.what());
-        }
-    }
-    return trace(scene, ro, prov, options.rgb, options.label, cached, clock);
+    if (auto s = readCachedTransport(prov, cacheDir, clock)) return std::move(*s);
+    return trace(scene, ro, prov, options.rgb, options.label,
+                 cacheDir / ("transport-" + prov.fingerprint + ".tm"), clock);
+}
+
+std::optional<TransportSource> cachedTransport(const nlohmann::json& sceneInputs,
+                                               const RenderOptions& sceneRender,
+                                               const PrecomputeOptions& options,
+                                               const std::filesystem::path& cacheDir) {
+    const Stopwatch clock;
+    if (cacheDir.empty()) return std::nullopt;
+    const int height = sceneInputs.at("camera").at("height").get<int>();
+    const RenderOptions ro = traceOptions(sceneRender, height, options);
+    return readCachedTransport(transportProvenance(sceneInputs, ro, options.rgb ? 3 : 1), cacheDir,
+                               clock);
 }
 
 TransportMatrix meanOfEstimates(const TransportMatrix& a0, const TransportMatrix& b0) {

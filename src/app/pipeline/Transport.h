@@ -89,6 +89,18 @@ std::optional<SppChoice> resolveSpp(const Scene& scene, PrecomputeOptions& optio
 /// The RenderOptions a precompute of `scene` uses: the scene's `render` section with the
 /// options' overrides.
 RenderOptions traceOptions(const Scene& scene, const PrecomputeOptions& options);
+/// The same from the scene's render section (render/Render.h renderOptionsFor) and image height.
+RenderOptions traceOptions(const RenderOptions& sceneRender, int imageHeight,
+                           const PrecomputeOptions& options);
+
+/// What transportForScene reads from `cacheDir` for these options, found without the scene: from
+/// the scene's share of T's inputs (io/TransportFile.h transportSceneInputs, or a .tm's
+/// sceneInputsOfTransport) and its render section. nullopt when it is not cached (or cacheDir is
+/// empty): then transportForScene traces it from the scene.
+std::optional<TransportSource> cachedTransport(const nlohmann::json& sceneInputs,
+                                               const RenderOptions& sceneRender,
+                                               const PrecomputeOptions& options,
+                                               const std::filesystem::path& cacheDir);
 
 /// Traces `scene` into T and writes it to `out` (atomic). Returns what was built.
 TransportSource precomputeToFile(const std::filesystem::path& scene,
