@@ -49,4 +49,10 @@ inline std::string toHex(uint64_t v) {
     return s;
 }
 
+/// A 128-bit key of `text` as 32 hex digits (two 64-bit hashes, seeds 1 and 2): the names of
+/// the cache's files (transport fingerprints, lights, Grams, parts' records) and of renders.
+inline std::string hexKey128(std::string_view text) {
+    return toHex(hash64(text.data(), text.size(), 1)) + toHex(hash64(text.data(), text.size(), 2));
+}
+
 }  // namespace sl

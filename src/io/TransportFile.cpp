@@ -59,7 +59,7 @@ std::string fingerprintOf(const json& in) {
     keyed.erase("scene_file");
     keyed.erase("scene_overrides");
     const std::string text = keyed.dump();
-    return toHex(hash64(text.data(), text.size(), 1)) + toHex(hash64(text.data(), text.size(), 2));
+    return hexKey128(text);
 }
 
 }  // namespace

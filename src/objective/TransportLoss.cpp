@@ -223,7 +223,7 @@ std::string TransportLoss::gramKey(const std::string& fingerprint) const {
          << t_.cols() << ", nnz " << t_.nnz() << ", channels " << t_.channels << "; products "
          << unb_->usesProducts() << "; pairs " << toHex(hash64(mask.data(), mask.size()));
     const std::string w = what.str();
-    return toHex(hash64(w.data(), w.size(), 1)) + toHex(hash64(w.data(), w.size(), 2));
+    return hexKey128(w);
 }
 
 bool TransportLoss::adoptGram(std::shared_ptr<const TransportGram> g) const {

@@ -369,8 +369,7 @@ BasisTransportResult basisTransport(const Scene& scene, const ExternalRenderer& 
         in["renderer"] = renderer.key();
         prov.inputs = in.dump();
         const std::string text = prov.fingerprint + "|" + renderer.key();
-        prov.fingerprint =
-            toHex(hash64(text.data(), text.size(), 1)) + toHex(hash64(text.data(), text.size(), 2));
+        prov.fingerprint = hexKey128(text);
     }
     const int ew = scene.basis.width(), eh = scene.basis.height();
     const size_t cols = static_cast<size_t>(ew) * eh;

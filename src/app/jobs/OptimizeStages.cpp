@@ -389,7 +389,7 @@ std::vector<double> paperLight(const Plan& p, const Inputs& in, const TransportM
              << "; iterations " << paper.optimizer.iterations << "; start "
              << paper.starts.front().spec << "; reg " << static_cast<int>(paper.objective.reg);
         const std::string w = what.str();
-        key = toHex(hash64(w.data(), w.size(), 1)) + toHex(hash64(w.data(), w.size(), 2));
+        key = hexKey128(w);
         if (auto cached = readCachedLight(p.cacheDir, key);
             cached && cached->size() == t.cols() * (p.o.rgb ? 3 : 1)) {
             spdlog::info("the paper's light on T from cache");

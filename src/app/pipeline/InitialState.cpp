@@ -130,7 +130,7 @@ namespace {
 std::string specularKey(bool rgb, int maxDepth, const std::string& fingerprint) {
     const std::string what = "specular start 1; T " + fingerprint + "; rgb " + std::to_string(rgb) +
                              "; max_depth " + std::to_string(maxDepth);
-    return toHex(hash64(what.data(), what.size(), 1)) + toHex(hash64(what.data(), what.size(), 2));
+    return hexKey128(what);
 }
 
 }  // namespace

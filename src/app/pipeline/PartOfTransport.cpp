@@ -17,7 +17,7 @@ namespace {
 std::string recordKey(const nlohmann::json& sceneInputs, const SceneDesc& desc) {
     const std::string what = "part 1; T's scene " + sceneInputs.dump() + "; scene file " +
                              desc.file.string() + "; as parsed " + desc.canonicalJson;
-    return toHex(hash64(what.data(), what.size(), 1)) + toHex(hash64(what.data(), what.size(), 2));
+    return hexKey128(what);
 }
 
 }  // namespace
