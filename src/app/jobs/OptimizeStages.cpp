@@ -303,11 +303,8 @@ void loadValidation(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     const int first = p.noise.adapt && validationSppFree(in.kind) ? validationPilotSpp(tSpp) : tSpp;
     const int spp = std::max(first, p.validationSpp);
     if (!in.scene) {  // a .tm's part: V from the cache by T's recorded inputs, else traced
-        PrecomputeOptions c = v;  // as validationEstimate sets them
-        if (spp > 0) c.spp = spp;
-        c.seed = seed + kValidationSeedOffset;
-        c.sampleSets = 2;
-        job.validation = cachedTransport(in.part->sceneInputs, in.part->sceneRender(), c,
+        job.validation = cachedTransport(in.part->sceneInputs, in.part->sceneRender(),
+                                         validationOptions(v, seed, spp),
                                          in.shard.distributed() ? "" : p.cacheDir);
         if (job.validation) return;
         sceneOfTm(p, in, job, "the validation estimate");

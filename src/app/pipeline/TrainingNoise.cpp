@@ -8,15 +8,20 @@
 
 namespace sl {
 
-TransportSource validationEstimate(const Scene& scene, const PrecomputeOptions& training,
-                                   uint64_t trainingSeed, const std::filesystem::path& cacheDir,
-                                   int spp) {
+PrecomputeOptions validationOptions(const PrecomputeOptions& training, uint64_t trainingSeed,
+                                    int spp) {
     PrecomputeOptions o = training;
     if (spp > 0) o.spp = spp;
     o.seed = trainingSeed + kValidationSeedOffset;
     o.sampleSets = 2;
     o.label = "validation estimate";
-    return transportForScene(scene, o, cacheDir);
+    return o;
+}
+
+TransportSource validationEstimate(const Scene& scene, const PrecomputeOptions& training,
+                                   uint64_t trainingSeed, const std::filesystem::path& cacheDir,
+                                   int spp) {
+    return transportForScene(scene, validationOptions(training, trainingSeed, spp), cacheDir);
 }
 
 int validationPilotSpp(int trainingSpp) {

@@ -151,6 +151,11 @@ struct TrainingNoiseOptions {
 TransportSource validationEstimate(const Scene& scene, const PrecomputeOptions& training,
                                    uint64_t trainingSeed, const std::filesystem::path& cacheDir,
                                    int spp = 0);
+/// The options validationEstimate traces V with (its spp, seed and sample sets set from the
+/// training trace's), for finding V in the cache without the scene (app/pipeline/Transport.h
+/// cachedTransport).
+PrecomputeOptions validationOptions(const PrecomputeOptions& training, uint64_t trainingSeed,
+                                    int spp = 0);
 
 /// V's least first round (header, step 1): at 16 spp V's figure of E* has a standard error of
 /// ~0.2 % on a 512² part without defects (the gap's tolerance is 5 %).
