@@ -91,7 +91,7 @@ TEST(Defaults, ThePaperSetupIsOneAndEachUseDerivesFromIt) {
     EXPECT_EQ(o.starts[0].value, p.start);
     ASSERT_TRUE(o.objectiveKind.has_value());
     EXPECT_EQ(*o.objectiveKind, p.objective);
-    EXPECT_EQ(o.planes, kPaperExperimentEstimates);
+    EXPECT_EQ(o.estimates, kPaperExperimentEstimates);
     EXPECT_EQ(kPaperExperimentEstimates, p.steps);
     EXPECT_NE(std::string(registryRow(optimizePresetTable(), OptimizePreset::Paper).help)
                   .find(paperSetupText()),
@@ -100,14 +100,14 @@ TEST(Defaults, ThePaperSetupIsOneAndEachUseDerivesFromIt) {
     const OptimizerMethodRow& loop = methodRow(OptimizerMethod::PaperLoop);
     EXPECT_EQ(loop.defaultBudget, p.steps);
     EXPECT_EQ(loop.runs, OptimizerMethod::Adam);
-    EXPECT_EQ(loop.defaultPlanes, kPaperLoopEstimates);
+    EXPECT_EQ(loop.defaultEstimates, kPaperLoopEstimates);
     EXPECT_EQ(methodRow(OptimizerMethod::Adam).defaultBudget, p.steps);
     EXPECT_EQ(OptimizerOptions{}.learningRate, p.learningRate);
     // The race's baseline is paper-loop on the paper's objective from its start.
     const RaceConfig base = defaultRaceConfigs().front();
     EXPECT_EQ(base.name, loop.name);
     EXPECT_EQ(base.search.objective, p.objective);
-    EXPECT_EQ(base.search.planes, kPaperLoopEstimates);
+    EXPECT_EQ(base.search.estimates, kPaperLoopEstimates);
     ASSERT_EQ(base.search.starts.size(), 1u);
     EXPECT_EQ(base.search.starts[0].spec, p.startSpec);
     // The objective's default λ and optimize's are the paper's.

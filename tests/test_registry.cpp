@@ -73,7 +73,7 @@ TEST(Registry, OptimizerMethodsSayWhoRunsThemAndTheirBudget) {
     for (const OptimizerMethodRow& r : optimizerMethodTable()) {
         SCOPED_TRACE(r.name);
         EXPECT_GT(r.defaultBudget, 0);
-        EXPECT_GE(r.defaultPlanes, 1);
+        EXPECT_GE(r.defaultEstimates, 1);
         // The method that does the work is one minimize() or minimizeBlackBox() runs itself.
         const OptimizerMethodRow& runs = methodRow(r.runs);
         EXPECT_EQ(runs.runs, runs.value);
@@ -166,7 +166,7 @@ TEST(OptimizeJob, ResolvesItsDefaultsFromTheRegistries) {
         runOptimizeJob(loop);
         ADD_FAILURE() << "paper-loop ran on a .tm";
     } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find(option("planes")), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find(option("estimates")), std::string::npos) << e.what();
     }
     OptimizeJobOptions box = o;
     box.optimizer.method = OptimizerMethod::Spsa;

@@ -236,11 +236,12 @@ void registerOptimize(CLI::App& app, std::function<int()>& run) {
     c->add_option("--lr,--learning-rate", j.optimizer.learningRate, "Adam learning rate")
         ->check(positiveNumber())
         ->capture_default_str();
-    c->add_option("--planes", j.planes,
+    c->add_option("--estimates,--planes", j.estimates,
                   "Independent estimates of T (seeds seed+k) cycled by the optimizer, one "
                   "per step (stochastic, as the paper's loop; default: the method's, 1, "
                   "paper-loop " +
-                      std::to_string(methodRow(OptimizerMethod::PaperLoop).defaultPlanes) + ")")
+                      std::to_string(methodRow(OptimizerMethod::PaperLoop).defaultEstimates) +
+                      "; --planes, its old name, is still accepted)")
         ->check(inRange(1, 1000));
     c->add_option_function<std::vector<std::string>>(
          "--starts",

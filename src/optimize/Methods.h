@@ -46,7 +46,7 @@ struct OptimizerMethodRow {
     BudgetUnit budget;      // ... counted in the summary's iterations or evaluations
     int defaultBudget;      // iterations when none is given
     OptimizerMethod runs;   // the method that does the work (paper-loop: adam)
-    int defaultPlanes;      // independent estimates of T cycled per step when none is given
+    int defaultEstimates;   // independent estimates of T cycled per step when none is given
 };
 
 std::span<const OptimizerMethodRow> optimizerMethodTable();

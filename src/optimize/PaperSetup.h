@@ -5,7 +5,7 @@
 //     applyOptimizePreset): a fresh estimate of T at the scene's spp every step, so
 //     kPaperExperimentEstimates (= the steps) estimates;
 //   - the `paper-loop` optimizer (optimize/Methods.cpp, the race's baseline in app/bench/Race.cpp):
-//     the same loop cycled over kPaperLoopEstimates estimates (`--planes` changes it; the race
+//     the same loop cycled over kPaperLoopEstimates estimates (`--estimates` changes it; the race
 //     traces each at 16 spp);
 //   - the paper's light, optimize's comparison (app/jobs/OptimizeStages.cpp paperLight, through the
 //     preset): the same steps on one estimate, the training T itself, kept in the cache by T's

@@ -41,7 +41,7 @@ constexpr int kRaceImageSize = 256;  // the parts' scene files' image (the defau
 constexpr int kRaceMaxDepth = 3;     // the path length every part is traced at
 
 RaceConfig config(const std::string& name, ObjectiveKind objective, OptimizerMethod method,
-                  int iterations, int spp, int planes = 1,
+                  int iterations, int spp, int estimates = 1,
                   const std::vector<std::string>& starts = {"const:0.5"},
                   std::vector<double> continuation = {}) {
     RaceConfig c;
@@ -50,7 +50,7 @@ RaceConfig config(const std::string& name, ObjectiveKind objective, OptimizerMet
     c.search.objective = objective;
     c.search.optimizer.method = method;
     c.search.optimizer.iterations = iterations;
-    c.search.planes = planes;
+    c.search.estimates = estimates;
     c.search.starts.clear();
     for (const std::string& spec : starts) c.search.starts.push_back(parseInitialState(spec));
     c.search.continuation = std::move(continuation);
@@ -210,7 +210,7 @@ std::vector<RaceConfig> defaultRaceConfigs() {
     // kPaperLoopEstimates estimates, and its Adam on one (the paper's light's set-up).
     const OptimizerMethodRow& loop = methodRow(M::PaperLoop);
     c.push_back(config(loop.name, kPaperSetup.objective, loop.runs, loop.defaultBudget, 16,
-                       loop.defaultPlanes, {kPaperSetup.startSpec}));
+                       loop.defaultEstimates, {kPaperSetup.startSpec}));
     c.push_back(config("paper-adam", kPaperSetup.objective, M::Adam, kPaperSetup.steps, 16, 1,
                        {kPaperSetup.startSpec}));
     c.push_back(config("paper-lbfgs-16", K::Paper, M::Lbfgs, 2000, 16));
@@ -508,7 +508,7 @@ RaceSummary raceOnWorlds(const RaceOptions& o) {
                 p.threads = o.threads;
                 const Stopwatch precompute;
                 const std::vector<TransportSource> set =
-                    transportSetForScene(*scene, p, c.search.planes, {});
+                    transportSetForScene(*scene, p, c.search.estimates, {});
                 r.secondsPrecompute = precompute.seconds();
                 SearchInputs in;
                 for (const auto& s : set) in.set.push_back(&s.file.matrix);

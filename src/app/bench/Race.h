@@ -1,5 +1,5 @@
 // `scratchlight bench race`: the measured race that chooses optimize's defaults. Every
-// configuration (objective × method × spp × planes × starts × continuation) runs on generated
+// configuration (objective × method × spp × estimates × starts × continuation) runs on generated
 // parts × training seeds; every result is scored by the judge (app/pipeline/Judge.h) on the part's
 // independent 1024-spp estimate; seconds are precompute (traced fresh, not cached) + search,
 // measured one after another in the same run. Ratios are to the paper-loop configuration on

@@ -90,7 +90,7 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
                 in.sceneParts = true;
             }
             in.sppScale = std::move(kept.sppScale);  // chosen with the regions, on the first load
-            job.extraPlanes.clear();
+            job.extraEstimates.clear();
             const Stopwatch traceClock;
             loadTraining(p, in, job, spp);
             secondsTrace += traceClock.seconds();

@@ -30,7 +30,7 @@ void applyOptimizePreset(OptimizePreset preset, OptimizeJobOptions& o) {
             o.starts = {parseInitialState(kPaperSetup.startSpec)};
             o.objectiveKind = kPaperSetup.objective;
             o.continuation.clear();
-            o.planes = kPaperExperimentEstimates;
+            o.estimates = kPaperExperimentEstimates;
             break;
     }
 }

@@ -91,9 +91,9 @@ struct OptimizeJobOptions {
     /// renders from T are then dark outside the mask (the judge still traces the whole part).
     bool traceMaskOnly = false;
     CacheLocation cache;  // where traced matrices are kept (app/pipeline/Cache.h)
-    // The search (app/pipeline/Search.h). planes: independent estimates of T cycled per step (0:
+    // The search (app/pipeline/Search.h). estimates: independent estimates of T cycled per step (0:
     // the method's default); continuation: λ factors before λ.
-    int planes = 0;
+    int estimates = 0;
     std::vector<double> continuation;
     /// The grid the light is searched on (objective/CoarseLight.h). Unset: the noise rule's
     /// (app/pipeline/TrainingNoise.h: one value per texel, coarser while the gap stays large at the
@@ -167,8 +167,8 @@ struct OptimizeRun {
 
 struct OptimizeJobSummary {
     TransportSource transport;
-    std::vector<TransportSource> extraPlanes;  // estimates 1..planes−1 of T
-    std::optional<TransportSource> heldOut;    // the judge's estimate
+    std::vector<TransportSource> extraEstimates;  // estimates 1..estimates−1 of T
+    std::optional<TransportSource> heldOut;       // the judge's estimate
     std::optional<TransportSource>
         validation;  // the validation estimate (app/pipeline/TrainingNoise.h)
     size_t maskPixels = 0;

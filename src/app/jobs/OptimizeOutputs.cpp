@@ -233,7 +233,7 @@ json runSummaryJson(const Plan& p, const Inputs& in, const OptimizeJobSummary& j
     else if (in.part && in.part->recorded())
         s["part"] = in.part->part;
     s["optimizer"] = run.optimizer.method;
-    s["planes"] = o.planes;
+    s["estimates"] = o.estimates;
     if (p.ranks)  // each rank held one shard; "transport" describes rank 0's
         s["mpi"] = {{"ranks", p.ranks->size()},
                     {"seconds_collectives_optimize", run.secondsCollectives}};

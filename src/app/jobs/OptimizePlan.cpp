@@ -58,7 +58,7 @@ Plan plan(const OptimizeJobOptions& options) {
         if (!(l >= 0) || !std::isfinite(l))
             throw inputError(option("lambda"), "must be >= 0",
                              "give e.g. 30, or 10,30,100 for a sweep");
-    if (options.planes < 0) throw inputError(option("planes"), "must be >= 1");
+    if (options.estimates < 0) throw inputError(option("estimates"), "must be >= 1");
     if (options.heldOutEvery < 1) throw inputError(option("heldout-every"), "must be >= 1");
     Plan p;
     p.o = options;
@@ -87,7 +87,7 @@ Plan plan(const OptimizeJobOptions& options) {
             o.starts.push_back(parseInitialState(spec));
     p.requestedOptimizer = o.optimizer;
     o.optimizer = resolveOptimizer(o.optimizer);  // the method that runs; iterations 0: its budget
-    if (o.planes == 0) o.planes = row.defaultPlanes;
+    if (o.estimates == 0) o.estimates = row.defaultEstimates;
     p.blackBox = row.gradient == GradientSource::Renderer;
     p.tmInput = isTransportFile(o.input);
     if (p.tmInput && !o.sceneOverrides.empty())
@@ -109,10 +109,10 @@ Plan plan(const OptimizeJobOptions& options) {
         throw inputError(option("optimizer") + " " + row.name,
                          "renders the scene for every gradient, so it needs the scene file",
                          "pass SCENE.json instead of the .tm");
-    if (p.tmInput && o.planes > 1)
-        throw inputError(option("planes") + " " + std::to_string(o.planes),
+    if (p.tmInput && o.estimates > 1)
+        throw inputError(option("estimates") + " " + std::to_string(o.estimates),
                          "needs independent estimates of T traced from the scene",
-                         "pass SCENE.json instead of the .tm, or " + option("planes") + " 1");
+                         "pass SCENE.json instead of the .tm, or " + option("estimates") + " 1");
     p.cacheDir = cacheDirectory(o.cache);
     // Noise-aware training: spp auto (the default) adapts; a given spp is measured and kept.
     p.noise.maxGap = o.precompute.sppTolerance;
@@ -126,10 +126,10 @@ Plan plan(const OptimizeJobOptions& options) {
     const bool distributed = o.ranks && o.ranks->distributed();
     p.validate =
         !distributed && p.requested != OptimizerMethod::PaperLoop && (o.selfCheck || !p.blackBox);
-    if (p.blackBox || o.planes > 1 || !p.validate) p.noise.adapt = false;
+    if (p.blackBox || o.estimates > 1 || !p.validate) p.noise.adapt = false;
     // A given T (.tm, .shards) keeps its per-texel light as the spp it was traced at, so one
     // process and MPI ranks (which cannot validate) return the same light from it.
-    p.noise.adaptGrid = !o.lightGrid && !p.blackBox && o.planes == 1 && p.validate && !p.tmInput;
+    p.noise.adaptGrid = !o.lightGrid && !p.blackBox && o.estimates == 1 && p.validate && !p.tmInput;
     p.superSampleDefects = !p.blackBox && !distributed;
     if (o.ranks && o.ranks->distributed()) {
         p.ranks = o.ranks;

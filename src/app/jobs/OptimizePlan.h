@@ -13,7 +13,7 @@
 
 namespace sl::optimizejob {
 
-/// Stage 0: the options with every default filled in (budget, starts, planes) and checked; a
+/// Stage 0: the options with every default filled in (budget, starts, estimates) and checked; a
 /// method that stands for a set-up (paper-loop) expanded into it.
 struct Plan {
     OptimizeJobOptions o;

@@ -192,13 +192,13 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp) {
         }
         if (in.sppScale) pre.sppScale = *in.sppScale;
         std::vector<TransportSource> set =
-            transportSetForScene(*in.scene, pre, o.planes, p.cacheDir);
+            transportSetForScene(*in.scene, pre, o.estimates, p.cacheDir);
         job.transport = std::move(set.front());
         job.transport.autoDepth = depth;
         if (!pre.spp) pre.spp = job.transport.file.provenance.spp;
         in.trained = pre;
         in.trainingSeed = job.transport.file.provenance.seed;
-        for (size_t k = 1; k < set.size(); ++k) job.extraPlanes.push_back(std::move(set[k]));
+        for (size_t k = 1; k < set.size(); ++k) job.extraEstimates.push_back(std::move(set[k]));
     }
     const TransportMatrix& t = job.transport.file.matrix;
     if (o.rgb && t.channels != 3)
@@ -237,7 +237,7 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp) {
             sceneOfTm(p, in, job, purpose);
     }
     in.set = {&t};
-    for (const TransportSource& x : job.extraPlanes) in.set.push_back(&x.file.matrix);
+    for (const TransportSource& x : job.extraEstimates) in.set.push_back(&x.file.matrix);
 }
 
 /// Stage 2: the independent estimate every result is scored on.
@@ -270,7 +270,7 @@ void loadHeldOut(const Plan& p, const Inputs& in, OptimizeJobSummary& job) {
             break;
     }
     const uint64_t hs = job.heldOut->file.provenance.seed, ts = job.transport.file.provenance.seed;
-    if (hs >= ts && hs < ts + static_cast<uint64_t>(o.planes))
+    if (hs >= ts && hs < ts + static_cast<uint64_t>(o.estimates))
         throw inputError(option("seed"), "the training seed range overlaps the judge's seed",
                          "use another " + option("seed"));
 }
@@ -405,7 +405,7 @@ std::vector<double> paperLight(const Plan& p, const Inputs& in, const TransportM
     so.optimizer = paper.optimizer;
     so.optimizer.method = OptimizerMethod::Adam;
     so.optimizer.callback = nullptr;
-    so.planes = 1;
+    so.estimates = 1;
     so.starts = paper.starts;
     std::vector<double> e = search(si, so).e;
     if (!key.empty()) writeCachedLight(p.cacheDir, key, "paper's light on T " + fingerprint, e);
@@ -548,7 +548,7 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
     double lastHeld = std::nan("");
 
     auto callback = [&](const IterationRecord& r, std::span<const double> x) {
-        // Every row: the optimizer's own loss (with planes, on the estimate of that step; with
+        // Every row: the optimizer's own loss (with estimates, on the estimate of that step; with
         // continuation, at that stage's λ). Every heldOutEvery rows also the parts on T at λ
         // and the held-out scores.
         const bool full = r.iteration % o.heldOutEvery == 0;
@@ -630,7 +630,7 @@ LambdaResult optimizeLambda(const Plan& p, const Inputs& in, const OptimizeJobSu
         so.objective = in.kind;
         so.optimizer = resolveOptimizer(p.requestedOptimizer, in.kind, oo);
         so.optimizer.callback = nullptr;
-        so.planes = o.planes;
+        so.estimates = o.estimates;
         so.starts = o.starts;
         so.continuation = o.continuation;
         so.lightGrid = o.lightGrid.value_or(LightGrid{});

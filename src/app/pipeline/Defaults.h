@@ -43,8 +43,8 @@ OptimizeDefaults optimizeDefaults();
 
 /// The objective when none is named: eq. 2 (paper) on a T without halves; otherwise the
 /// defaults' defects objective when the defects are named (a truth, a defect region, the
-/// viewer's labels), their unbiased one when not. `planes`: the estimates in a given T (a .tm);
-/// unset: T is still to be traced from a scene, with the halves the objective asks for.
+/// viewer's labels), their unbiased one when not. `planes`: the halves (sample sets) of a given T
+/// (a .tm); unset: T is still to be traced from a scene, with the halves the objective asks for.
 ObjectiveKind defaultObjective(bool defectsNamed, std::optional<int> planes = std::nullopt);
 
 /// The optimizer options optimize starts from: the defaults' method, iterations 0 (= the

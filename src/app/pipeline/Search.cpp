@@ -95,9 +95,9 @@ struct StageLosses {
 }  // namespace
 
 SearchResult search(const SearchInputs& in, const SearchOptions& o) {
-    if (o.planes < 1) throw inputError(option("planes"), "must be >= 1", "use 1 for one T");
-    if (in.set.size() < static_cast<size_t>(o.planes))
-        throw std::invalid_argument("search: fewer estimates of T than planes");
+    if (o.estimates < 1) throw inputError(option("estimates"), "must be >= 1", "use 1 for one T");
+    if (in.set.size() < static_cast<size_t>(o.estimates))
+        throw std::invalid_argument("search: fewer estimates of T than asked for");
     if (o.starts.empty())
         throw inputError(option("starts"), "no start given", "use e.g. const:0.5");
     for (double f : o.continuation)
@@ -105,7 +105,7 @@ SearchResult search(const SearchInputs& in, const SearchOptions& o) {
             throw inputError(option("continuation"), "λ factors must be > 0", "use e.g. 4,2");
     const Stopwatch clock;
     const TransportMatrix& t = *in.set.front();
-    const auto count = static_cast<size_t>(o.planes);
+    const auto count = static_cast<size_t>(o.estimates);
     std::optional<CoarseLight> grid;
     if (!o.lightGrid.perTexel() &&
         (o.lightGrid.width != t.envWidth || o.lightGrid.height != t.envHeight))

@@ -2,7 +2,7 @@
 // independent estimates of T, from which starts, through which λ continuation. `optimize`
 // runs one search per λ; `bench race` runs many and the judge scores them.
 //
-//   planes        K ≥ 1 independent estimates of T (app/pipeline/Transport.h
+//   estimates     K ≥ 1 independent estimates of T (app/pipeline/Transport.h
 //                 transportSetForScene). With K > 1 every gradient evaluation uses the next
 //                 estimate (objective/TransportLoss.h CyclingLoss): a fresh sample set per
 //                 step, as the paper's loop.
@@ -40,7 +40,7 @@ struct Scene;
 struct SearchOptions {
     ObjectiveKind objective = ObjectiveKind::Paper;
     OptimizerOptions optimizer;  // method, budget, Adam's step (callback: see SearchInputs)
-    int planes = 1;
+    int estimates = 1;
     std::vector<InitialState> starts{InitialState{}};  // default: const:0.5
     std::vector<double> continuation;
     /// The grid the light is searched on (objective/CoarseLight.h); default: one value per
@@ -49,7 +49,7 @@ struct SearchOptions {
 };
 
 struct SearchInputs {
-    /// The estimates of T (at least options.planes; set[0] is the main T). The unbiased
+    /// The estimates of T (at least options.estimates; set[0] is the main T). The unbiased
     /// objective needs two planes in each.
     std::vector<const TransportMatrix*> set;
     std::vector<uint8_t> mask;   // the loss mask (image space, nonzero inside)

@@ -106,7 +106,7 @@ int defectSppFactor(size_t defectPixels, size_t partPixels);
 std::vector<uint8_t> defectSppScale(const std::vector<uint8_t>& defects, int factor);
 
 /// The validation estimate's seed: the training seed plus this ("valid"). It is not in any
-/// training seed range a user can reach with --planes (< 2^20) and not the judge's seed.
+/// training seed range a user can reach with --estimates (< 2^20) and not the judge's seed.
 inline constexpr uint64_t kValidationSeedOffset = 0x76616C6964ULL << 20;
 
 /// The most one round multiplies the training spp by. 8: with the defect pixels supersampled

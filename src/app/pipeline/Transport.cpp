@@ -51,7 +51,7 @@ TransportSource trace(const Scene& scene, const RenderOptions& ro, const Transpo
 std::vector<TransportSource> transportSetForScene(const Scene& scene,
                                                   const PrecomputeOptions& options, int count,
                                                   const std::filesystem::path& cacheDir) {
-    if (count < 1) throw inputError("planes", "must be >= 1, got " + std::to_string(count));
+    if (count < 1) throw inputError("estimates", "must be >= 1, got " + std::to_string(count));
     const uint64_t base = options.seed ? *options.seed : scene.desc.render.seed;
     std::vector<TransportSource> set;
     for (int k = 0; k < count; ++k) {

@@ -114,7 +114,7 @@ TransportSource transportForScene(const Scene& scene, const PrecomputeOptions& o
 
 /// `count` independent estimates of T: the same trace with seeds seed + k, k = 0..count−1
 /// (seed: options.seed or the scene's render.seed), each cached like transportForScene. The
-/// sample-set planes the stochastic optimizers cycle through (estimate 0 is the usual T).
+/// estimates the stochastic optimizers cycle through (estimate 0 is the usual T).
 std::vector<TransportSource> transportSetForScene(const Scene& scene,
                                                   const PrecomputeOptions& options, int count,
                                                   const std::filesystem::path& cacheDir);

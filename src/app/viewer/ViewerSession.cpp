@@ -557,7 +557,7 @@ void ViewerSession::runOptimize(int slot, std::vector<double> start, int iterati
         requested.iterations = iterations;  // 0: the method's default budget
         const OptimizerMethodRow& row = methodRow(requested.method);
         so.optimizer = resolveOptimizer(requested, kind, si.objective);  // the stall stop too
-        so.planes = 1;
+        so.estimates = 1;
         InitialState s0;
         s0.kind = InitialKind::EnvMapFile;
         s0.spec = "the viewer's light";

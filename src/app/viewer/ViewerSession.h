@@ -33,7 +33,7 @@
 // defect labels (a truth) and T has halves, the noise-unbiased one with halves, eq. 2 without;
 // λ and the loss mask "object" as optimize's defaults). Always optimize's default method at its
 // default budget, one start: the slot's light clamped into the optimizer's box [0, 1], one
-// estimate of T (the session's T; `planes` 1). On an OUTDIR of the defects objective without a
+// estimate of T (the session's T; `estimates` 1). On an OUTDIR of the defects objective without a
 // truth the judge scores the same regions as optimize's judge did (one region, "defects", and
 // its reference), at the output's λ.
 #pragma once
