@@ -257,6 +257,51 @@ TEST(TrainingNoise, EachVerdictLeadsToItsRemedy) {
     EXPECT_EQ(d.describe(), "kept: not resolved at this cost");
 }
 
+// The rule's caps are a budget of samples: an image with k times fewer pixels than 256² takes up
+// to k times the spp (a power of two, at most 4×), a larger one keeps the caps; a given --max-spp
+// is kept, V's cap still scales; and the scaled caps lead the remedies on.
+TEST(TrainingNoise, TheSppCapsAreABudgetOfSamples) {
+    EXPECT_EQ(sppCapForImage(512, 256 * 256), 512);
+    EXPECT_EQ(sppCapForImage(512, 512 * 512), 512);
+    EXPECT_EQ(sppCapForImage(512, 200 * 200), 512);  // 1.6× fewer pixels: no power of two
+    EXPECT_EQ(sppCapForImage(512, 181 * 181), 1024);
+    EXPECT_EQ(sppCapForImage(512, 128 * 128), 2048);
+    EXPECT_EQ(sppCapForImage(1024, 128 * 128), 4096);
+    EXPECT_EQ(sppCapForImage(512, 64 * 64), 2048);  // at most kMaxSppCapScale
+    for (size_t pixels : {size_t{48 * 48}, size_t{128 * 128}, size_t{300 * 300}}) {
+        const int cap = sppCapForImage(512, pixels);
+        // The samples of a trace at the cap never exceed a 256² trace at 512 spp.
+        EXPECT_LE(static_cast<double>(cap) * static_cast<double>(pixels),
+                  512.0 * static_cast<double>(std::max(pixels, kSppCapPixels)));
+    }
+    const TrainingNoiseOptions base;
+    const TrainingNoiseOptions small = base.forImage(128 * 128, false);
+    EXPECT_EQ(small.maxSpp, 4 * base.maxSpp);
+    EXPECT_EQ(small.maxValidationSpp, 4 * base.maxValidationSpp);
+    EXPECT_EQ(small.maxGap, base.maxGap);
+    TrainingNoiseOptions given = base;
+    given.maxSpp = 64;
+    EXPECT_EQ(given.forImage(128 * 128, true).maxSpp, 64);
+    EXPECT_EQ(given.forImage(128 * 128, true).maxValidationSpp, 4 * base.maxValidationSpp);
+    EXPECT_EQ(base.forImage(256 * 256, false).maxSpp, base.maxSpp);
+    // Over-fit at 512 spp on a 128² image: more T, not yet a coarser light; V's noise at 1024
+    // spp: more V, not yet "not resolved".
+    TrainingNoiseRound r;
+    r.spp = 512;
+    r.validationSpp = 1024;
+    r.gap = 0.3;
+    r.gapError = 0.02;
+    EXPECT_EQ(decideAfterRound(r, ObjectiveKind::Defects, small, 50, 25).describe(),
+              "T at 2048 spp");
+    EXPECT_EQ(decideAfterRound(r, ObjectiveKind::Defects, base, 50, 25).describe(),
+              "a coarser light, 35x18 nodes");
+    r.gap = 0.2;
+    r.gapError = 0.1;
+    EXPECT_EQ(decideAfterRound(r, ObjectiveKind::Defects, small, 50, 25).describe(),
+              "V at 4096 spp");
+    EXPECT_TRUE(decideAfterRound(r, ObjectiveKind::Defects, base, 50, 25).unresolved);
+}
+
 // V's first round (step 1): a quarter of T's spp, even, at least 16, at most T's.
 TEST(TrainingNoise, TheValidationEstimateStartsAtAQuarterOfTsSpp) {
     EXPECT_EQ(validationPilotSpp(64), 16);

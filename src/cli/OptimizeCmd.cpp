@@ -9,6 +9,7 @@
 #include "app/host/ExternalRenderer.h"
 #include "app/jobs/OptimizeJob.h"
 #include "app/pipeline/Cache.h"
+#include "app/pipeline/TrainingNoise.h"
 #include "app/pipeline/Transport.h"
 #include "app/report/OptimizeReport.h"
 #include "app/report/Preview.h"
@@ -260,9 +261,14 @@ void registerOptimize(CLI::App& app, std::function<int()>& run) {
     addChoice(c, "--preset", a->preset, optimizePresetTable(),
               "Settings fixed together (they override the options they fix)");
     addTraceOptions(c, j.precompute, j.sceneOverrides, true);
-    c->add_option("--max-spp", j.noiseMaxSpp, "--spp auto: the most training spp it traces")
-        ->check(inRange(1, 1 << 20))
-        ->capture_default_str();
+    c->add_option(
+         "--max-spp", j.noiseMaxSpp,
+         "--spp auto: the most training spp it traces (default: " +
+             std::to_string(TrainingNoiseOptions{}.maxSpp) +
+             " at 256x256 pixels and above; a smaller image up to " +
+             std::to_string(kMaxSppCapScale) + "x that, for the same samples: 128x128 takes " +
+             std::to_string(sppCapForImage(TrainingNoiseOptions{}.maxSpp, 128 * 128)) + ")")
+        ->check(inRange(1, 1 << 20));
     c->add_option_function<std::string>(
          "--light-grid", [&j](const std::string& v) { j.lightGrid = parseLightGrid(v); },
          "Search the light on a grid of WxH nodes interpolated onto the env map, or "

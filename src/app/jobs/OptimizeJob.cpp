@@ -107,6 +107,11 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
         Stopwatch round;
         double notInRound = 0;  // the judge's estimate is not part of a training round
         load(0);
+        // The rule's spp caps are a budget of samples (app/pipeline/TrainingNoise.h
+        // sppCapForImage): a small image may trace more spp for what a 256² trace costs.
+        p.noise = p.noise.forImage(static_cast<size_t>(job.transport.file.matrix.width) *
+                                       static_cast<size_t>(job.transport.file.matrix.height),
+                                   p.o.noiseMaxSpp > 0);
         {
             const Stopwatch judgeClock;
             loadHeldOut(p, in, job);

@@ -78,7 +78,9 @@ struct OptimizeJobOptions {
     /// unset, or precompute.autoSpp) the training spp is raised until E*'s train/validation gap is
     /// within precompute.sppTolerance; with a given spp the gap is measured and warned about. Off
     /// for the paper's loop (the paper's experiment), black-box optimizers and MPI ranks.
-    int noiseMaxSpp = TrainingNoiseOptions{}.maxSpp;
+    /// The most training spp the rule traces; 0: TrainingNoiseOptions' maxSpp scaled to the image
+    /// (app/pipeline/TrainingNoise.h sppCapForImage: 512 at 256² and above, 2048 at 128²).
+    int noiseMaxSpp = 0;
     /// The defects objective's defect pixels take this many times the training spp (and the
     /// validation estimate's); 0: the rule of app/pipeline/TrainingNoise.h (defectSppFactor), 1:
     /// off.

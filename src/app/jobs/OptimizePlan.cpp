@@ -116,7 +116,7 @@ Plan plan(const OptimizeJobOptions& options) {
     p.cacheDir = cacheDirectory(o.cache);
     // Noise-aware training: spp auto (the default) adapts; a given spp is measured and kept.
     p.noise.maxGap = o.precompute.sppTolerance;
-    p.noise.maxSpp = o.noiseMaxSpp;
+    if (o.noiseMaxSpp) p.noise.maxSpp = o.noiseMaxSpp;  // else scaled to the image when loaded
     if (!(p.noise.maxGap > 0 && p.noise.maxGap < 1))
         throw inputError(option("tolerance"), "is " + formatNumber(p.noise.maxGap, 3),
                          "use a relative train/validation gap in (0, 1), e.g. 0.05");

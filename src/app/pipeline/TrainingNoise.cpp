@@ -24,6 +24,19 @@ TransportSource validationEstimate(const Scene& scene, const PrecomputeOptions& 
     return transportForScene(scene, validationOptions(training, trainingSeed, spp), cacheDir);
 }
 
+int sppCapForImage(int spp, size_t pixels) {
+    int scale = 1;
+    while (scale < kMaxSppCapScale && pixels > 0 && pixels * 2 * scale <= kSppCapPixels) scale *= 2;
+    return spp * scale;
+}
+
+TrainingNoiseOptions TrainingNoiseOptions::forImage(size_t pixels, bool keepMaxSpp) const {
+    TrainingNoiseOptions o = *this;
+    if (!keepMaxSpp) o.maxSpp = sppCapForImage(maxSpp, pixels);
+    o.maxValidationSpp = sppCapForImage(maxValidationSpp, pixels);
+    return o;
+}
+
 int validationPilotSpp(int trainingSpp) {
     const int quarter = (trainingSpp / 4) & ~1;
     return std::min(trainingSpp, std::max(kValidationPilotSpp, quarter));

@@ -127,6 +127,21 @@ std::optional<LightGrid> nextLightGrid(const LightGrid& grid, int envWidth, int 
 /// (header, step 3).
 inline constexpr double kGapSigmas = 2.0;
 
+/// The image pixels at which the rule's spp caps (TrainingNoiseOptions::maxSpp and
+/// maxValidationSpp) hold as written: 256². The caps are a budget of samples, not of samples per
+/// pixel: an image with fewer pixels may trace proportionally more spp for what a 256² trace
+/// costs (a 128² part 4×), since there the over-fit the rule measures and V's noise are the
+/// same per pixel while a trace is a quarter of the cost (on rough 128² parts the defects'
+/// figure on V at 1024 spp kept a standard error of 3–31 %, so the gap could not be resolved). A
+/// larger image keeps the caps in spp.
+inline constexpr size_t kSppCapPixels = 256 * 256;
+/// The most the caps are scaled by (a 128² image's factor): below 128² an image is a preview,
+/// and its traces at 16× the spp would take longer than the 256² run they stand in for.
+inline constexpr int kMaxSppCapScale = 4;
+/// `spp` scaled to an image of `pixels` pixels by the rule above: spp times the largest power of
+/// two ≤ kSppCapPixels / pixels, at least 1, at most kMaxSppCapScale.
+int sppCapForImage(int spp, size_t pixels);
+
 struct TrainingNoiseOptions {
     /// Measure the gap and raise spp until it is within maxGap (false: keep the given spp and
     /// only warn).
@@ -141,6 +156,9 @@ struct TrainingNoiseOptions {
     /// The most spp V is traced at when its own noise hides the gap (step 4): the judge's most,
     /// so V never needs more samples than an estimate the judge itself trusts.
     int maxValidationSpp = kJudgeDefaultSpp;
+    /// These options with both caps scaled to an image of `pixels` pixels (sppCapForImage);
+    /// `keepMaxSpp`: a maxSpp the user gave is kept as given.
+    TrainingNoiseOptions forImage(size_t pixels, bool keepMaxSpp) const;
 };
 
 /// The validation estimate V for a training trace of `scene` made with `training` (its spp,
