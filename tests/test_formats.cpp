@@ -317,6 +317,19 @@ TEST(FormatsX3p, AFloatIncrementThatWouldEraseTheReliefIsIgnoredWithAWarning) {
         << d.warnings[0];
     EXPECT_NE(d.warnings[0].find("height_scale"), std::string::npos) << d.warnings[0];
 
+    // A point the valid-points mask drops holds an instrument's marker (1e3): the relief is the
+    // valid points', so the file is read as stored all the same.
+    X3pSpec masked = s;
+    masked.values[4] = 1e3;
+    masked.valid = {true, true, true, true, false, true};
+    writeX3p(dir / "v.x3p", masked);
+    const HeightmapData dv = loadHeightmap(dir / "v.x3p", {});
+    ASSERT_EQ(dv.heights.size(), 6u);
+    EXPECT_NEAR(dv.heights[1], s.values[1] * 1e3, 1e-9);
+    ASSERT_FALSE(dv.warnings.empty());
+    EXPECT_NE(dv.warnings[0].find("Record1/Axes/CZ/Increment is 1e-06"), std::string::npos)
+        << dv.warnings[0];
+
     // The same increment on floats in micrometres gives a plausible relief: applied, silently.
     X3pSpec u = s;
     for (double& v : u.values) v *= 1e6;  // 0.21 .. 0.83 (µm)

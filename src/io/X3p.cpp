@@ -351,7 +351,10 @@ class X3pReader {
             double scale = zInc_;
             if ((code_ == 'F' || code_ == 'D') && zInc_ != 1.0) {
                 double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+                // Over the valid points only: a point the valid-points mask drops may hold
+                // any finite value (an instrument's marker), which is not the relief.
                 for (size_t k = 0; k < count; ++k) {
+                    if (!valid.empty() && !((valid[k / 8] >> (k % 8)) & 1)) continue;
                     const double v = decode(raw.data() + k * bytes_);
                     if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
                 }

@@ -111,7 +111,8 @@ void countFile(CacheContents& c, const fs::path& p) {
 /// transport-<fingerprint>.tm whose header holds that fingerprint (the cache names each matrix
 /// by it), or the temporary of one while written (io/AtomicFile.h:
 /// .transport-<fingerprint>.tmp-<pid>-<n>.tm) that is empty or starts as a .tm file does; or a
-/// derived light, light-<key>.json holding that key; or a Gram file, gram-<key>.gram holding it.
+/// derived light, light-<key>.json holding that key; a part's record, part-<key>.json holding
+/// it (app/pipeline/PartOfTransport.h); or a Gram file, gram-<key>.gram holding it.
 bool isCacheFile(const fs::path& p) {
     if (isLightFile(p) || isGramFile(p) || isPartFile(p)) return true;
     const std::string name = p.filename().string();
