@@ -411,9 +411,34 @@ LampRasterizer::Reach LampRasterizer::reach(const Lamp& lamp) const {
         case LampKind::Disk:
             r.angle = lamp.size + margin;
             break;
-        case LampKind::Bar:
+        case LampKind::Bar: {
             r.angle = std::abs(lamp.size) + std::abs(lamp.width) + margin;
+            if (!options_.cullBarCells) break;
+            // A node is exactly 0 when |y| >= yMax (the early out on |d·e2| >= sin yMax), or
+            // when |x| > xMax (x's factors and slopes are 0 beyond a + kTail·h); y = asin(d·e2)
+            // is the signed angle to the great circle across e2, and asin(d·n±) that to the
+            // meridian at x = ±xMax (d·n± = ±cos y sin(x ∓ xMax), n+ = −sin xMax c + cos xMax
+            // e1, n− = −sin xMax c − cos xMax e1): both move by at most the angle moved, so a
+            // cell whose centre is more than its radius beyond either holds no non-zero node.
+            const auto f = lamp_detail::frame<double>(lamp.azimuth, lamp.elevation, lamp.roll);
+            const Vec3d c{f.c[0], f.c[1], f.c[2]}, e1{f.e1[0], f.e1[1], f.e1[2]};
+            r.e2 = {f.e2[0], f.e2[1], f.e2[2]};
+            const double yMax = lamp.width + kTail * options_.edge;
+            if (yMax > 0 && yMax < kPi / 2) {
+                r.acrossCut = true;
+                r.yMax = yMax;
+                r.sinY = std::sin(yMax);
+                r.cosY = std::cos(yMax);
+            }
+            const double xMax = lamp.size + kTail * options_.edge;
+            if (lamp.size > 0 && xMax < kPi / 2) {
+                r.alongCut = true;
+                const double sx = std::sin(xMax), cx = std::cos(xMax);
+                r.nPlus = c * (-sx) + e1 * cx;
+                r.nMinus = c * (-sx) - e1 * cx;
+            }
             break;
+        }
         case LampKind::Ring:
             r.lo = lamp.elevation - lamp.size - margin;
             r.hi = lamp.elevation + lamp.size + margin;
@@ -431,8 +456,21 @@ bool LampRasterizer::cellMayTouch(const Lamp& lamp, const Vec3d& centre, const R
     // The angle between the lamp's and the cell's centres is at most reach + the cell's
     // radius: cos(angle) >= cos(reach + radius), unless that sum passes π (every cell).
     if (reach.angle + cellRadius_[c] >= kPi) return true;
-    return dot(centre, cellCentre_[c]) >=
-           reach.cosAngle * cellCosRadius_[c] - reach.sinAngle * cellSinRadius_[c];
+    if (dot(centre, cellCentre_[c]) <
+        reach.cosAngle * cellCosRadius_[c] - reach.sinAngle * cellSinRadius_[c])
+        return false;
+    // A bar's cell beyond a cut great circle by more than its radius R (and a margin far above
+    // rounding): sin(yMax + R) < |centre·e2|, or sin R < centre·n±.
+    constexpr double kMargin = 1e-9;
+    const Vec3d& cc = cellCentre_[c];
+    const double cosR = cellCosRadius_[c], sinR = cellSinRadius_[c];
+    if (reach.acrossCut && reach.yMax + cellRadius_[c] < kPi / 2 &&
+        std::abs(dot(cc, reach.e2)) > reach.sinY * cosR + reach.cosY * sinR + kMargin)
+        return false;
+    if (reach.alongCut &&
+        (dot(cc, reach.nPlus) > sinR + kMargin || dot(cc, reach.nMinus) > sinR + kMargin))
+        return false;
+    return true;
 }
 
 void LampRasterizer::coverage(const Lamp& lamp, std::vector<double>& c, std::vector<double>* dc,
