@@ -161,6 +161,8 @@ struct NodeDerivatives {
     double invH, invHSinA, tanXLimit;
     // ∂c, ∂e1, ∂e2 by (φ, ε, ρ) (vectors), from frame<Dual<3>>.
     double dc[3][3], de1[3][3], de2[3][3];
+    // The step's table, held (no static guard checked at every node).
+    const StepTable& table = stepTable();
 
     NodeDerivatives(const Lamp& l, double edge)
         : kind(l.kind),
@@ -192,7 +194,7 @@ struct NodeDerivatives {
         return v[0] * d.x + v[1] * d.y + v[2] * d.z;
     }
     /// S and S' at t (0 beyond the tails, as stepFast).
-    static void stepAndSlope(double t, double& s, double& ds) {
+    void stepAndSlope(double t, double& s, double& ds) const {
         if (t < -kTail) {
             s = 0;
             ds = 0;
@@ -200,7 +202,7 @@ struct NodeDerivatives {
             s = 1;
             ds = 0;
         } else {
-            stepTable().eval(t, s, ds);
+            table.eval(t, s, ds);
         }
     }
     /// m and, into g, ∂m/∂(φ, ε, a, b, ρ) (zero where m is exactly 0 or 1).
@@ -269,10 +271,6 @@ struct NodeDerivatives {
         return 0.0;
     }
 };
-
-double angleBetween(const Vec3d& a, const Vec3d& b) {
-    return std::acos(std::clamp(dot(a, b), -1.0, 1.0));
-}
 
 }  // namespace
 
@@ -372,11 +370,13 @@ LampRasterizer::LampRasterizer(const EnvMapBasis& basis, LampRasterOptions optio
             const size_t cell = static_cast<size_t>(j) * W + i;
             const Vec3d centre = EnvMapBasis::uvToDirection((i + 1.0) / W, (j + 0.5) / (H - 1));
             cellCentre_[cell] = centre;
-            double radius = 0;
+            // The cell's radius: the largest angle from its centre to a corner, an edge's middle
+            // or a node, as the acos of the smallest cosine (one acos a cell, not one a node).
+            double minCos = 1;
             for (double fy : {0.0, 1.0})
                 for (double fx : {0.0, 0.5, 1.0})
-                    radius = std::max(
-                        radius, angleBetween(centre, EnvMapBasis::uvToDirection(
+                    minCos =
+                        std::min(minCos, dot(centre, EnvMapBasis::uvToDirection(
                                                          (i + 0.5 + fx) / W, (j + fy) / (H - 1))));
             cellElHi_[cell] = kPi / 2 - kPi * j / (H - 1);
             cellElLo_[cell] = kPi / 2 - kPi * (j + 1) / (H - 1);
@@ -388,7 +388,7 @@ LampRasterizer::LampRasterizer(const EnvMapBasis& basis, LampRasterOptions optio
                 const double fx = gx_[static_cast<size_t>(s)], fy = gy_[static_cast<size_t>(s)];
                 const double v = (j + fy) / (H - 1);
                 const Vec3d d = EnvMapBasis::uvToDirection((i + 0.5 + fx) / W, v);
-                radius = std::max(radius, angleBetween(centre, d));
+                minCos = std::min(minCos, dot(centre, d));
                 const double dw = std::sin(kPi * v) * cellArea * wxy[static_cast<size_t>(s)];
                 dir_[cell * n_ + s] = d;
                 elev_[cell * n_ + s] = std::asin(std::clamp(d.y, -1.0, 1.0));
@@ -398,6 +398,7 @@ LampRasterizer::LampRasterizer(const EnvMapBasis& basis, LampRasterOptions optio
                 omega_[t10] += (1 - fx) * fy * dw;
                 omega_[t11] += fx * fy * dw;
             }
+            const double radius = std::acos(std::clamp(minCos, -1.0, 1.0));
             cellRadius_[cell] = radius;
             cellCosRadius_[cell] = std::cos(radius);
             cellSinRadius_[cell] = std::sin(radius);
