@@ -161,6 +161,8 @@ struct NodeDerivatives {
     double invH, invHSinA, tanXLimit;
     // ∂c, ∂e1, ∂e2 by (φ, ε, ρ) (vectors), from frame<Dual<3>>.
     double dc[3][3], de1[3][3], de2[3][3];
+    // The step's table, held (no static guard checked at every node).
+    const StepTable& table = stepTable();
 
     NodeDerivatives(const Lamp& l, double edge)
         : kind(l.kind),
@@ -192,7 +194,7 @@ struct NodeDerivatives {
         return v[0] * d.x + v[1] * d.y + v[2] * d.z;
     }
     /// S and S' at t (0 beyond the tails, as stepFast).
-    static void stepAndSlope(double t, double& s, double& ds) {
+    void stepAndSlope(double t, double& s, double& ds) const {
         if (t < -kTail) {
             s = 0;
             ds = 0;
@@ -200,7 +202,7 @@ struct NodeDerivatives {
             s = 1;
             ds = 0;
         } else {
-            stepTable().eval(t, s, ds);
+            table.eval(t, s, ds);
         }
     }
     /// m and, into g, ∂m/∂(φ, ε, a, b, ρ) (zero where m is exactly 0 or 1).
@@ -269,10 +271,6 @@ struct NodeDerivatives {
         return 0.0;
     }
 };
-
-double angleBetween(const Vec3d& a, const Vec3d& b) {
-    return std::acos(std::clamp(dot(a, b), -1.0, 1.0));
-}
 
 }  // namespace
 
@@ -372,11 +370,13 @@ LampRasterizer::LampRasterizer(const EnvMapBasis& basis, LampRasterOptions optio
             const size_t cell = static_cast<size_t>(j) * W + i;
             const Vec3d centre = EnvMapBasis::uvToDirection((i + 1.0) / W, (j + 0.5) / (H - 1));
             cellCentre_[cell] = centre;
-            double radius = 0;
+            // The cell's radius: the largest angle from its centre to a corner, an edge's middle
+            // or a node, as the acos of the smallest cosine (one acos a cell, not one a node).
+            double minCos = 1;
             for (double fy : {0.0, 1.0})
                 for (double fx : {0.0, 0.5, 1.0})
-                    radius = std::max(
-                        radius, angleBetween(centre, EnvMapBasis::uvToDirection(
+                    minCos =
+                        std::min(minCos, dot(centre, EnvMapBasis::uvToDirection(
                                                          (i + 0.5 + fx) / W, (j + fy) / (H - 1))));
             cellElHi_[cell] = kPi / 2 - kPi * j / (H - 1);
             cellElLo_[cell] = kPi / 2 - kPi * (j + 1) / (H - 1);
@@ -388,7 +388,7 @@ LampRasterizer::LampRasterizer(const EnvMapBasis& basis, LampRasterOptions optio
                 const double fx = gx_[static_cast<size_t>(s)], fy = gy_[static_cast<size_t>(s)];
                 const double v = (j + fy) / (H - 1);
                 const Vec3d d = EnvMapBasis::uvToDirection((i + 0.5 + fx) / W, v);
-                radius = std::max(radius, angleBetween(centre, d));
+                minCos = std::min(minCos, dot(centre, d));
                 const double dw = std::sin(kPi * v) * cellArea * wxy[static_cast<size_t>(s)];
                 dir_[cell * n_ + s] = d;
                 elev_[cell * n_ + s] = std::asin(std::clamp(d.y, -1.0, 1.0));
@@ -398,6 +398,7 @@ LampRasterizer::LampRasterizer(const EnvMapBasis& basis, LampRasterOptions optio
                 omega_[t10] += (1 - fx) * fy * dw;
                 omega_[t11] += fx * fy * dw;
             }
+            const double radius = std::acos(std::clamp(minCos, -1.0, 1.0));
             cellRadius_[cell] = radius;
             cellCosRadius_[cell] = std::cos(radius);
             cellSinRadius_[cell] = std::sin(radius);
@@ -411,9 +412,34 @@ LampRasterizer::Reach LampRasterizer::reach(const Lamp& lamp) const {
         case LampKind::Disk:
             r.angle = lamp.size + margin;
             break;
-        case LampKind::Bar:
+        case LampKind::Bar: {
             r.angle = std::abs(lamp.size) + std::abs(lamp.width) + margin;
+            if (!options_.cullBarCells) break;
+            // A node is exactly 0 when |y| >= yMax (the early out on |d·e2| >= sin yMax), or
+            // when |x| > xMax (x's factors and slopes are 0 beyond a + kTail·h); y = asin(d·e2)
+            // is the signed angle to the great circle across e2, and asin(d·n±) that to the
+            // meridian at x = ±xMax (d·n± = ±cos y sin(x ∓ xMax), n+ = −sin xMax c + cos xMax
+            // e1, n− = −sin xMax c − cos xMax e1): both move by at most the angle moved, so a
+            // cell whose centre is more than its radius beyond either holds no non-zero node.
+            const auto f = lamp_detail::frame<double>(lamp.azimuth, lamp.elevation, lamp.roll);
+            const Vec3d c{f.c[0], f.c[1], f.c[2]}, e1{f.e1[0], f.e1[1], f.e1[2]};
+            r.e2 = {f.e2[0], f.e2[1], f.e2[2]};
+            const double yMax = lamp.width + kTail * options_.edge;
+            if (yMax > 0 && yMax < kPi / 2) {
+                r.acrossCut = true;
+                r.yMax = yMax;
+                r.sinY = std::sin(yMax);
+                r.cosY = std::cos(yMax);
+            }
+            const double xMax = lamp.size + kTail * options_.edge;
+            if (lamp.size > 0 && xMax < kPi / 2) {
+                r.alongCut = true;
+                const double sx = std::sin(xMax), cx = std::cos(xMax);
+                r.nPlus = c * (-sx) + e1 * cx;
+                r.nMinus = c * (-sx) - e1 * cx;
+            }
             break;
+        }
         case LampKind::Ring:
             r.lo = lamp.elevation - lamp.size - margin;
             r.hi = lamp.elevation + lamp.size + margin;
@@ -431,8 +457,21 @@ bool LampRasterizer::cellMayTouch(const Lamp& lamp, const Vec3d& centre, const R
     // The angle between the lamp's and the cell's centres is at most reach + the cell's
     // radius: cos(angle) >= cos(reach + radius), unless that sum passes π (every cell).
     if (reach.angle + cellRadius_[c] >= kPi) return true;
-    return dot(centre, cellCentre_[c]) >=
-           reach.cosAngle * cellCosRadius_[c] - reach.sinAngle * cellSinRadius_[c];
+    if (dot(centre, cellCentre_[c]) <
+        reach.cosAngle * cellCosRadius_[c] - reach.sinAngle * cellSinRadius_[c])
+        return false;
+    // A bar's cell beyond a cut great circle by more than its radius R (and a margin far above
+    // rounding): sin(yMax + R) < |centre·e2|, or sin R < centre·n±.
+    constexpr double kMargin = 1e-9;
+    const Vec3d& cc = cellCentre_[c];
+    const double cosR = cellCosRadius_[c], sinR = cellSinRadius_[c];
+    if (reach.acrossCut && reach.yMax + cellRadius_[c] < kPi / 2 &&
+        std::abs(dot(cc, reach.e2)) > reach.sinY * cosR + reach.cosY * sinR + kMargin)
+        return false;
+    if (reach.alongCut &&
+        (dot(cc, reach.nPlus) > sinR + kMargin || dot(cc, reach.nMinus) > sinR + kMargin))
+        return false;
+    return true;
 }
 
 void LampRasterizer::coverage(const Lamp& lamp, std::vector<double>& c, std::vector<double>* dc,

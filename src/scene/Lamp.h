@@ -200,6 +200,10 @@ T membership(LampKind kind, const Frame<T>& f, const T& el, const T& a, const T&
 struct LampRasterOptions {
     int subsamples = 16;                         // N: Gauss–Legendre nodes per cell and axis
     double edge = 1.5 * 3.14159265358979 / 180;  // h, radians
+    /// Skip a bar's cells that lie wholly beyond its cut tails across or along its axis (every
+    /// node there is exactly 0, so the result is the same bit for bit; off only for the test
+    /// that shows it).
+    bool cullBarCells = true;
 };
 
 /// Rasterizes lamps into E on one basis (the quadrature is built once).
@@ -248,9 +252,14 @@ class LampRasterizer {
     void coverage(const Lamp& lamp, std::vector<double>& c, std::vector<double>* dc,
                   bool byDual = false) const;
     /// How far from its centre a lamp can touch a cell (a disk or bar: an angle, with its
-    /// cosine and sine; a ring: an elevation band).
+    /// cosine and sine; a ring: an elevation band). A bar also: the great circles its nodes
+    /// cannot cross (its axis' e2 at y = ±yMax, and the meridians about e2 at x = ±xMax, by
+    /// their normals), yMax and xMax where its factors' tails are cut (b, a + 5.8 h).
     struct Reach {
         double angle = 0, cosAngle = 1, sinAngle = 0, lo = 0, hi = 0;
+        bool acrossCut = false, alongCut = false;
+        Vec3d e2, nPlus, nMinus;
+        double yMax = 0, sinY = 0, cosY = 1;
     };
     Reach reach(const Lamp& lamp) const;
     void jacobianOf(const Lamp& lamp, std::span<double> J, std::span<double> E, bool byDual) const;
