@@ -34,7 +34,7 @@ TransportSource judgeEstimate(const Scene& scene, const JudgeOptions& o) {
     p.sampleSets = 2;
     p.threads = o.threads;
     p.label = "judge estimate";
-    return transportInDoublings(scene, p, kJudgePilotSpp, o.cacheDir);
+    return transportInDoublings(scene, p, kJudgeDoublingBase, o.cacheDir);
 }
 
 ViewingModel viewingFor(const Scene& scene) {
@@ -211,6 +211,16 @@ JudgeScore Judge::scoreWithErrors(std::span<const double> E, const std::string& 
         e.visibility.push_back(se[kHead + k]);
         e.contrast.push_back(se[kHead + regions + k]);
         e.jnd.push_back(se[kHead + 2 * regions + k]);
+    }
+    // Below kJudgeBootstrapFullSpp the bootstrap under-states eq. 2's SE (Judge.h): inflated,
+    // and the regions' (not measured there); U's delta-method SE and the brightness's kept.
+    if (s.spp > 0 && s.spp < kJudgeBootstrapFullSpp) {
+        const double f = kJudgeLowSppInflation;
+        e.eq2 *= f;
+        e.combinedVisibility *= f;
+        e.leastVisibleJnd *= f;
+        for (std::vector<double>* v : {&e.visibility, &e.contrast, &e.jnd})
+            for (double& x : *v) x *= f;
     }
     s.se = std::move(e);
     return s;

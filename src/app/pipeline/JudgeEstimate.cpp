@@ -27,7 +27,7 @@ TransportSource judgeEstimateFor(const TransportFile& training, const Scene& sce
     o.rgb = training.matrix.channels == 3;
     o.sampleSets = 2;
     o.label = "judge estimate (held out)";
-    TransportSource s = transportInDoublings(scene, o, kJudgePilotSpp, cacheDir);
+    TransportSource s = transportInDoublings(scene, o, kJudgeDoublingBase, cacheDir);
     // Same scene, camera, material and height map: only the sampling may differ, and the
     // renderer (a T from another renderer's basis renders, app/host/ExternalRenderer.h, is judged
     // on our tracer's estimate: the cross-renderer check).
