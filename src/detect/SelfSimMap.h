@@ -125,19 +125,23 @@ struct SelfSimMapOptions {
                                 // levelled heights' outside the border; >= 0, 0: off)
     int border = 40;            // samples at the map's edges never marked (>= 0)
     int minRegion = 12;         // smallest region kept, samples (>= 1)
-    bool dropBorderRegions = true;  // regions reaching the border's inner line are dropped
-    double textureNfa = 1.0;        // step 7: expected texture regions above the texture's own
-                                    // tail (>= 0; 0: off)
-    double textureQuantile = 0.75;  // ... whose tail starts at this quantile of the regions'
-                                    // peaks (in [0, 1))
-    double trimShare = 0.08;        // step 8a: a kept region keeps its samples scoring at
-                                    // least this share of its largest score at the growth's
-                                    // scales (in [0, 1); 0: off)
-    int extendSteps = 1;            // step 8b: a kept region grows this many samples further
-                                    // (>= 0; 0: off) into samples of its sign with |r_s|/σ_s
-                                    // below growSigma (s <= growScale) and at least ...
-    double extendShare = 0.1;       // ... this share of the region's peak score (in [0, 1)) ...
-    double extendSigma = 1.0;       // ... and at least this (> 0)
+    bool dropBorderRegions = true;     // regions reaching the border's inner line are dropped
+    double textureNfa = 1.0;           // step 7: expected texture regions above the texture's own
+                                       // tail (>= 0; 0: off)
+    double textureQuantile = 0.75;     // ... whose tail starts at this quantile of the regions'
+                                       // peaks (in [0, 1))
+    double trimShare = 0.08;           // step 8a: a kept region keeps its samples scoring at
+                                       // least this share of its largest score at the growth's
+                                       // scales (in [0, 1); 0: off)
+    double particleElongation = 3.0;   // step 8c: a kept region more compact than this (the
+                                       // root of its extent's eigenvalue ratio; 0: off) ...
+    double particleRaisedShare = 0.8;  // ... with at least this share of its Σ|r| above the
+                                       // texture (in (0, 1]) is a particle: dropped
+    int extendSteps = 1;               // step 8b: a kept region grows this many samples further
+                                       // (>= 0; 0: off) into samples of its sign with |r_s|/σ_s
+                                       // below growSigma (s <= growScale) and at least ...
+    double extendShare = 0.1;          // ... this share of the region's peak score (in [0, 1)) ...
+    double extendSigma = 1.0;          // ... and at least this (> 0)
 };
 
 // Step 7 needs at least this many regions to measure the texture's tail on.
@@ -155,6 +159,7 @@ struct SelfSimMap {
     size_t droppedShallow = 0;          // regions dropped below the texture's RMS
     size_t droppedTexture = 0;          // regions dropped below the texture's own tail (step 7)
     size_t candidates = 0;              // regions grown (step 7's N)
+    size_t droppedParticles = 0;        // kept regions step 8c dropped as particles
     size_t trimmed = 0;                 // samples of kept regions step 8a left out
     size_t extended = 0;                // samples step 8b added to the kept regions
     double textureThreshold = 0;        // step 7's threshold on a region's peak score (0: off)
