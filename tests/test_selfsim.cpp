@@ -189,7 +189,9 @@ TEST(SelfSimMap, TheTexturesOwnTailDropsItsParticlesAndKeepsThePit) {
         if (pitTruth[i]) particles[i] = 0;
     SelfSimMapOptions off;
     off.textureNfa = 0;
-    const SelfSimMapOptions on;
+    off.particleElongation = 0;  // step 8c would drop these raised blobs too: step 7 alone
+    SelfSimMapOptions on;
+    on.particleElongation = 0;
     const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
                      b = detectSelfSimDefects(h, kW, kH, on);
     EXPECT_EQ(a.textureThreshold, 0.0);
@@ -327,6 +329,40 @@ TEST(SelfSimMap, ADeepDefectIsKeptAndTheTextureJoinedToItDropped) {
     EXPECT_EQ(onlyWith, 0u) << "samples marked only with step 8a";
 }
 
+// Step 8c drops a particle and keeps the defects: striations with a pit (3 × the striations
+// deep, below the texture), a burr (a raised ridge 5 samples wide and 50 long, 3 × the
+// striations high) and a particle (a raised dome of the pit's size and height: compact, above
+// the texture). Without step 8c all three are marked; with it the pit and the burr as before
+// and the particle not, one region fewer, and nothing marked that was not marked without it.
+TEST(SelfSimMap, ARaisedCompactParticleIsDroppedThePitAndTheBurrKept) {
+    std::vector<float> h = striations(41);
+    std::vector<uint8_t> pitTruth(h.size(), 0), burrTruth(h.size(), 0), particle(h.size(), 0);
+    pit(h, pitTruth, 80, 80, 6, 3.0);
+    groove(h, burrTruth, 70, 150, 118, 140, 5, -3.0);  // depth < 0: raised
+    pit(h, particle, 175, 95, 6, -3.0);                // a dome
+    SelfSimMapOptions off;
+    off.particleElongation = 0;
+    const SelfSimMapOptions on;
+    ASSERT_GT(on.particleElongation, 0.0);
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
+                     b = detectSelfSimDefects(h, kW, kH, on);
+    const Counts pa = count(a.map, pitTruth, on.border), pb = count(b.map, pitTruth, on.border);
+    const Counts ba = count(a.map, burrTruth, on.border), bb = count(b.map, burrTruth, on.border);
+    const Counts qa = count(a.map, particle, on.border), qb = count(b.map, particle, on.border);
+    EXPECT_GE(pa.hits, pa.truth * 8 / 10) << "the pit, without step 8c";
+    EXPECT_GE(ba.hits, ba.truth * 8 / 10) << "the burr, without step 8c";
+    EXPECT_GE(qa.hits, qa.truth * 8 / 10) << "the particle, without step 8c";
+    EXPECT_EQ(pb.hits, pa.hits) << "the pit, with step 8c";
+    EXPECT_EQ(bb.hits, ba.hits) << "the burr, with step 8c";
+    EXPECT_EQ(qb.hits, 0u) << "the particle, with step 8c: " << qb.hits << " of " << qb.truth;
+    EXPECT_EQ(a.droppedParticles, 0u);
+    EXPECT_GE(b.droppedParticles, 1u);
+    EXPECT_EQ(b.regions + b.droppedParticles, a.regions);
+    size_t onlyWith = 0;
+    for (size_t i = 0; i < h.size(); ++i) onlyWith += b.map[i] && !a.map[i] ? 1 : 0;
+    EXPECT_EQ(onlyWith, 0u) << "samples marked only with step 8c";
+}
+
 TEST(SelfSimMap, GaussianTailInverseIsExact) {
     EXPECT_NEAR(gaussianTailInverse(0.5), 0.0, 1e-9);
     EXPECT_NEAR(gaussianTailInverse(0.05), 1.6448536269514722, 1e-9);
@@ -389,6 +425,12 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o = {};
     o.trimShare = 1.0;
     expectNamed(o, "selfsim-trim-share");
+    o = {};
+    o.particleElongation = -1.0;
+    expectNamed(o, "selfsim-particle-elongation");
+    o = {};
+    o.particleRaisedShare = 0.0;
+    expectNamed(o, "selfsim-particle-raised-share");
 
     EXPECT_EQ(parseDefectMethod("selfsim"), DefectMethod::SelfSim);
     EXPECT_STREQ(defectMethodName(DefectMethod::SelfSim), "selfsim");

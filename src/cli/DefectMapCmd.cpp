@@ -369,6 +369,13 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
                   "selfsim: a kept region keeps its samples scoring at least this share of its "
                   "largest score (0: off)")
         ->capture_default_str();
+    c->add_option("--selfsim-particle-elongation", q.particleElongation,
+                  "selfsim: a kept region more compact than this elongation and raised is a "
+                  "particle, dropped (0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-particle-raised-share", q.particleRaisedShare,
+                  "selfsim: ... raised: at least this share of its residual above the texture")
+        ->capture_default_str();
     c->add_option("--selfsim-extend-steps", q.extendSteps,
                   "selfsim: a kept region grows this many samples further into its flanks (0: "
                   "off)")

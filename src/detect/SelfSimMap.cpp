@@ -74,6 +74,36 @@ std::vector<float> gaussianBlur(const std::vector<float>& img, int W, int H, dou
     return out;
 }
 
+// Step 8c: a region is a particle when it stands above the texture (at least `raisedShare` of
+// its Σ|r| is positive) and is compact: the square root of its coordinates' covariance
+// eigenvalues' ratio (each sample a unit square: + 1/12 on both) below `elongation`.
+bool isParticle(const std::vector<size_t>& samples, const std::vector<float>& r, int W,
+                double elongation, double raisedShare) {
+    if (samples.empty()) return false;
+    double up = 0.0, all = 0.0, sx = 0.0, sz = 0.0;
+    for (const size_t i : samples) {
+        up += std::max(0.0f, r[i]);
+        all += std::abs(r[i]);
+        sx += static_cast<double>(i % W);
+        sz += static_cast<double>(i / W);
+    }
+    if (!(all > 0.0) || up < raisedShare * all) return false;
+    const double m = static_cast<double>(samples.size()), mx = sx / m, mz = sz / m;
+    double cxx = 0.0, czz = 0.0, cxz = 0.0;
+    for (const size_t i : samples) {
+        const double dx = static_cast<double>(i % W) - mx, dz = static_cast<double>(i / W) - mz;
+        cxx += dx * dx;
+        czz += dz * dz;
+        cxz += dx * dz;
+    }
+    cxx = cxx / m + 1.0 / 12.0;
+    czz = czz / m + 1.0 / 12.0;
+    cxz /= m;
+    const double half = 0.5 * (cxx + czz),
+                 root = std::sqrt(0.25 * (cxx - czz) * (cxx - czz) + cxz * cxz);
+    return std::sqrt((half + root) / (half - root)) < elongation;
+}
+
 }  // namespace
 
 double textureTailThreshold(std::span<const float> peaks, double quantile, double nfa) {
@@ -161,6 +191,12 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.trimShare >= 0.0 && o.trimShare < 1.0))
         throw inputError(option("selfsim-trim-share"), "must be in [0, 1)",
                          "The default is 0.08 (0: off)");
+    if (!(o.particleElongation >= 0.0))
+        throw inputError(option("selfsim-particle-elongation"), "must be >= 0",
+                         "The default is 3 (0: off)");
+    if (!(o.particleRaisedShare > 0.0 && o.particleRaisedShare <= 1.0))
+        throw inputError(option("selfsim-particle-raised-share"), "must be in (0, 1]",
+                         "The default is 0.8");
     if (o.border < 0)
         throw inputError(option("selfsim-border"), "must be >= 0", "The default is 40");
     if (o.minRegion < 1)
@@ -451,6 +487,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     stack.clear();
     std::vector<int8_t> regionSign(o.extendSteps > 0 ? n : 0, 0);
     std::vector<float> regionLevel(regionSign.size(), 0.0f);
+    std::vector<size_t> kept;
     for (const Region& reg : regions) {
         if (!(reg.peak >= thr) || static_cast<int>(reg.end - reg.begin) < o.minRegion) continue;
         if (o.textureRms > 0.0) {
@@ -486,16 +523,25 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
         float top0 = 0.0f;
         for (size_t k = reg.begin; k < reg.end; ++k) top0 = std::max(top0, zGrow[members[k]]);
         const float cut = static_cast<float>(o.trimShare) * top0;
+        kept.clear();
         for (size_t k = reg.begin; k < reg.end; ++k) {
-            if (zGrow[members[k]] < cut) {
-                ++out.trimmed;
-                continue;
-            }
-            out.map[members[k]] = 255;
+            if (zGrow[members[k]] < cut) continue;
+            kept.push_back(members[k]);
+        }
+        // step 8c: a particle (raised, compact) is the texture's, not a defect
+        if (o.particleElongation > 0.0 &&
+            isParticle(kept, out.residual, W, o.particleElongation, o.particleRaisedShare)) {
+            --out.regions;
+            ++out.droppedParticles;
+            continue;
+        }
+        out.trimmed += (reg.end - reg.begin) - kept.size();
+        for (const size_t i : kept) {
+            out.map[i] = 255;
             if (regionSign.empty()) continue;
-            regionSign[members[k]] = sign;
-            regionLevel[members[k]] = level;
-            stack.push_back(members[k]);  // step 8's first frontier
+            regionSign[i] = sign;
+            regionLevel[i] = level;
+            stack.push_back(i);  // step 8's first frontier
         }
     }
     // ---- step 8: the kept regions' flanks --------------------------------------------------
