@@ -251,8 +251,9 @@ void registerOptimize(CLI::App& app, std::function<int()>& run) {
              for (const std::string& spec : specs)
                  j.starts.push_back(parseInitialState(spec, "--starts"));
          },
-         "Multistart: optimize from each and keep the lowest training loss (" + initialSpecForms() +
-             ")")
+         "Multistart: optimize from each; E* is the lowest training loss, and the self-check "
+         "chooses among every start's light on the validation estimate (" +
+             initialSpecForms() + ")")
         ->delimiter(',')
         ->excludes(init);
     c->add_option("--continuation", j.continuation,
