@@ -127,13 +127,19 @@ std::vector<uint8_t> chooseDefectSppScale(const Scene& scene, const std::vector<
     return defectSppScale(defects, factor);
 }
 
+/// The cache a stage reads and writes what it derives from T in (the specular start, the part's
+/// record, V found by T's inputs): none on an MPI rank's shard of T.
+std::filesystem::path derivedCacheDir(const Plan& p, const Inputs& in) {
+    return in.shard.distributed() ? std::filesystem::path() : p.cacheDir;
+}
+
 /// A .tm's scene, loaded now (from T's provenance) for `purpose`; what it says of the part is
 /// kept beside T for the next run (app/pipeline/PartOfTransport.h).
 void sceneOfTm(const Plan& p, Inputs& in, const OptimizeJobSummary& job,
                const std::string& purpose) {
     in.scene = sceneOfTransport(job.transport.file, purpose);
-    if (auto kept = keepPartOfTransport(in.shard.distributed() ? "" : p.cacheDir,
-                                        job.transport.file, *in.scene, partSummaryJson(*in.scene)))
+    if (auto kept = keepPartOfTransport(derivedCacheDir(p, in), job.transport.file, *in.scene,
+                                        partSummaryJson(*in.scene)))
         in.part = std::move(kept);
 }
 
@@ -218,10 +224,9 @@ void loadTraining(const Plan& p, Inputs& in, OptimizeJobSummary& job, int spp) {
         bool specularStart = false, specularTraced = false;
         for (const InitialState& s : o.starts) {
             specularStart |= s.kind == InitialKind::Specular;
-            specularTraced |= initialEnvMapNeedsScene(s, t.envWidth, t.envHeight, o.rgb,
-                                                      job.transport.file.provenance.maxDepth,
-                                                      in.shard.distributed() ? "" : p.cacheDir,
-                                                      job.transport.file.provenance.fingerprint);
+            specularTraced |= initialEnvMapNeedsScene(
+                s, t.envWidth, t.envHeight, o.rgb, job.transport.file.provenance.maxDepth,
+                derivedCacheDir(p, in), job.transport.file.provenance.fingerprint);
         }
         const bool needHeights = p.blackBox || o.mask.kind == LossMaskKind::Scratch ||
                                  specularTraced || in.kind == ObjectiveKind::Defects ||
@@ -304,8 +309,7 @@ void loadValidation(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     const int spp = std::max(first, p.validationSpp);
     if (!in.scene) {  // a .tm's part: V from the cache by T's recorded inputs, else traced
         job.validation = cachedTransport(in.part->sceneInputs, in.part->sceneRender(),
-                                         validationOptions(v, seed, spp),
-                                         in.shard.distributed() ? "" : p.cacheDir);
+                                         validationOptions(v, seed, spp), derivedCacheDir(p, in));
         if (job.validation) return;
         sceneOfTm(p, in, job, "the validation estimate");
     }
@@ -339,7 +343,7 @@ void prepareRuns(const Plan& p, Inputs& in, OptimizeJobSummary& job) {
     const int maxDepth = job.transport.file.provenance.maxDepth;
     for (const InitialState& s : o.starts)
         in.startValues.push_back(initialEnvMap(s, t.envWidth, t.envHeight, o.rgb, in.scene.get(),
-                                               maxDepth, in.shard.distributed() ? "" : p.cacheDir,
+                                               maxDepth, derivedCacheDir(p, in),
                                                job.transport.file.provenance.fingerprint));
     // A start whose image has no contrast on the part (E = 0: all black) is a plateau of every
     // objective (G = 0, gradient 0): no optimizer can leave it.

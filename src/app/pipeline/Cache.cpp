@@ -75,6 +75,9 @@ bool isLightFile(const fs::path& p) {
     return isKeyedJsonFile(p, kLightPrefix);
 }
 
+/// A transport matrix: transport-<fingerprint>.tm (transportCachePath).
+constexpr std::string_view kTransportPrefix = "transport-", kTransportExt = ".tm";
+
 /// A part's record (writePartRecord): part-<key>.json holding that key, as a light's file does.
 constexpr std::string_view kPartPrefix = "part-";
 bool isPartFile(const fs::path& p) {
@@ -104,7 +107,7 @@ fs::path gramPath(const fs::path& dir, const std::string& key) {
 void countFile(CacheContents& c, const fs::path& p) {
     const fs::path ext = p.extension();
     const bool part = p.filename().string().rfind(kPartPrefix, 0) == 0;
-    ++(ext == ".tm" ? c.files : ext == kGramExt ? c.grams : part ? c.parts : c.lights);
+    ++(ext == kTransportExt ? c.files : ext == kGramExt ? c.grams : part ? c.parts : c.lights);
 }
 
 /// A file this cache wrote, by its name and its content, never by the name alone:
@@ -116,18 +119,17 @@ void countFile(CacheContents& c, const fs::path& p) {
 bool isCacheFile(const fs::path& p) {
     if (isLightFile(p) || isGramFile(p) || isPartFile(p)) return true;
     const std::string name = p.filename().string();
-    constexpr std::string_view kPrefix = "transport-", kExt = ".tm";
-    if (name.size() > kPrefix.size() + kExt.size() && name.rfind(kPrefix, 0) == 0 &&
-        name.ends_with(kExt)) {
-        const std::string fp =
-            name.substr(kPrefix.size(), name.size() - kPrefix.size() - kExt.size());
+    if (name.size() > kTransportPrefix.size() + kTransportExt.size() &&
+        name.rfind(kTransportPrefix, 0) == 0 && name.ends_with(kTransportExt)) {
+        const std::string fp = name.substr(
+            kTransportPrefix.size(), name.size() - kTransportPrefix.size() - kTransportExt.size());
         if (fp.size() != 32 || !hexDigits(fp)) return false;
         std::string inFile;
         return peekTransportFile(p, &inFile) == 2 && inFile == fp;
     }
     // .transport-<fp>.tmp-<pid>-<n>.tm
-    if (name.rfind(".transport-", 0) != 0 || !name.ends_with(kExt)) return false;
-    const std::string rest = name.substr(11, name.size() - 11 - kExt.size());
+    if (name.rfind(".transport-", 0) != 0 || !name.ends_with(kTransportExt)) return false;
+    const std::string rest = name.substr(11, name.size() - 11 - kTransportExt.size());
     const size_t tmp = rest.find(".tmp-");
     if (tmp != 32 || !hexDigits(rest.substr(0, 32))) return false;
     const std::string ids = rest.substr(tmp + 5);
@@ -157,6 +159,10 @@ fs::path locate(const CacheLocation& location) {
 }
 
 }  // namespace
+
+fs::path transportCachePath(const fs::path& dir, const std::string& fingerprint) {
+    return dir / (std::string(kTransportPrefix) + fingerprint + std::string(kTransportExt));
+}
 
 fs::path cacheDirectory(const CacheLocation& location) {
     const fs::path dir = locate(location);
@@ -217,7 +223,8 @@ CacheContents trimCache(const fs::path& dir, uintmax_t maxBytes) {
         const uintmax_t size = fs::file_size(p, ec);
         if (ec) return false;
         total += size;
-        if (p.extension() == ".tm" || p.extension() == kGramExt || isLightFile(p) || isPartFile(p))
+        if (p.extension() == kTransportExt || p.extension() == kGramExt || isLightFile(p) ||
+            isPartFile(p))
             entries.push_back({p, fs::last_write_time(p, ec), size});
         return true;
     });

@@ -106,6 +106,11 @@ std::shared_ptr<const TransportGram> cachedGram(const std::filesystem::path& dir
                                                 const std::string& fingerprint,
                                                 const TransportLoss& loss);
 
+/// Where the cache in `dir` keeps the transport matrix of `fingerprint`:
+/// transport-<fingerprint>.tm (the name isCacheFile checks against the file's header).
+std::filesystem::path transportCachePath(const std::filesystem::path& dir,
+                                         const std::string& fingerprint);
+
 /// Marks a cache file as used now (its modification time), for trimCache's order.
 void touchCacheFile(const std::filesystem::path& file);
 

@@ -255,7 +255,7 @@ namespace {
 std::optional<TransportSource> readCachedTransport(const TransportProvenance& prov,
                                                    const std::filesystem::path& cacheDir,
                                                    const Stopwatch& clock) {
-    const auto cached = cacheDir / ("transport-" + prov.fingerprint + ".tm");
+    const auto cached = transportCachePath(cacheDir, prov.fingerprint);
     if (!std::filesystem::exists(cached)) return std::nullopt;
     try {
         TransportSource s;
@@ -298,7 +298,7 @@ TransportSource transportForScene(const Scene& scene, const PrecomputeOptions& o
     if (cacheDir.empty()) return trace(scene, ro, prov, options.rgb, options.label, {}, clock);
     if (auto s = readCachedTransport(prov, cacheDir, clock)) return std::move(*s);
     return trace(scene, ro, prov, options.rgb, options.label,
-                 cacheDir / ("transport-" + prov.fingerprint + ".tm"), clock);
+                 transportCachePath(cacheDir, prov.fingerprint), clock);
 }
 
 std::optional<TransportSource> cachedTransport(const nlohmann::json& sceneInputs,
@@ -397,22 +397,10 @@ TransportSource transportInDoublings(const Scene& scene, const PrecomputeOptions
     if (doublings(spp, base) == 0) return transportForScene(scene, options, cacheDir);
     const Stopwatch clock;
     const TransportProvenance prov = doubledProvenance(scene, options, base);
-    const auto cached = cacheDir.empty() ? std::filesystem::path()
-                                         : cacheDir / ("transport-" + prov.fingerprint + ".tm");
-    if (!cached.empty() && std::filesystem::exists(cached)) {
-        try {
-            TransportSource s;
-            s.file = readTransportFile(cached, prov.fingerprint);
-            s.path = cached;
-            s.cacheHit = true;
-            touchCacheFile(cached);
-            s.secondsTotal = clock.seconds();
-            spdlog::info("transport matrix from cache {}", cached.string());
-            return s;
-        } catch (const InputError& e) {
-            spdlog::warn("ignoring cached transport matrix: {}", e.what());
-        }
-    }
+    const auto cached =
+        cacheDir.empty() ? std::filesystem::path() : transportCachePath(cacheDir, prov.fingerprint);
+    if (!cached.empty())
+        if (auto s = readCachedTransport(prov, cacheDir, clock)) return std::move(*s);
     PrecomputeOptions half = options, chunk = options;
     half.spp = chunk.spp = spp / 2;
     chunk.seed = doublingSeed(options.seed.value_or(scene.desc.render.seed), spp / 2);
