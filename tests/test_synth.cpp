@@ -21,6 +21,7 @@
 #include "io/ImageIO.h"
 #include "io/MaskIO.h"
 #include "synth/SurfaceGenerator.h"
+#include "synth/SurfaceGeneratorDetail.h"
 
 namespace {
 
@@ -764,7 +765,7 @@ TEST(Synth, TurnedGroovesMatchTheNoseRadiusFormula) {
 }
 
 TEST(Synth, NewProcessesAreDeterministicAndThreadIndependent) {
-    for (sl::TestPart part : {sl::TestPart::FlatEnd, sl::TestPart::Turned}) {
+    for (sl::TestPart part : {sl::TestPart::FlatEnd, sl::TestPart::Turned, sl::TestPart::Ground}) {
         SurfaceSpec s = sl::testPartSpec(part);
         s.width = 300;
         s.height = 200;
@@ -796,7 +797,85 @@ TEST(Synth, ProcessDefaultsOfTheOldProcessesAreTheOldSpec) {
         EXPECT_EQ(errorOf(d), "") << r.name;
         EXPECT_EQ(&sl::parseRegistryName(sl::processTable(), r.name, "test"), &r);
     }
-    EXPECT_EQ(seen, (std::vector<int>{0, 1, 2, 3}));
+    EXPECT_EQ(seen, (std::vector<int>{0, 1, 2, 3, 4}));
+}
+
+namespace {
+/// A ground surface with nothing but its grit tracks: no roughness, chatter, defects or pocket.
+SurfaceSpec bareGround(int w, int h) {
+    SurfaceSpec s = sl::processDefaults(SurfaceSpec::Process::Ground);
+    s.width = w;
+    s.height = h;
+    s.roughnessRms = 0;
+    s.chatterAmplitude = 0;
+    s.scratchCount = s.gougeCount = s.dentCount = 0;
+    s.pocketEdge = false;
+    return s;
+}
+}  // namespace
+
+// Ground: every sample is exactly the MIN of the wheel's envelope (0) and every grit track, the
+// whole list searched (the generator searches only the bins beside the sample's).
+TEST(Synth, GroundIsTheMinOfTheWheelAndEveryGritTrack) {
+    for (double angle : {0.0, 37.0}) {
+        SurfaceSpec s = bareGround(96, 64);
+        s.rasterAngleDeg = angle;
+        const GeneratedSurface g = sl::generateSurface(s);
+        const sl::surfacegen::Frame fr(s);
+        const sl::surfacegen::ToolMarks tm = sl::surfacegen::toolMarks(s, fr);
+        ASSERT_GT(tm.grits.size(), 100u);
+        size_t cut = 0;
+        for (int j = 0; j < s.height; ++j)
+            for (int i = 0; i < s.width; ++i) {
+                const double x = (i - fr.cx) * s.pitch, z = (j - fr.cz) * s.pitch;
+                const double t = x * tm.cosA + z * tm.sinA, p = -x * tm.sinA + z * tm.cosA;
+                double best = 0;
+                for (const sl::surfacegen::GritTrack& k : tm.grits) {
+                    const double q = p - k.p;
+                    if (t <= k.t0 || t >= k.t1 || q * q >= tm.R2) continue;
+                    const double tau = (t - k.t0) / (k.t1 - k.t0);
+                    const double w = sl::surfacegen::smoothstep01(std::min(tau, 1.0 - tau) /
+                                                                  sl::surfacegen::kGritTaper);
+                    best = std::min(best, sl::surfacegen::sphereRise(tm.R, q * q) - k.depth * w);
+                }
+                const float h = g.heights[static_cast<size_t>(j) * s.width + i];
+                ASSERT_EQ(h, static_cast<float>(best)) << angle << " " << i << "," << j;
+                cut += h < 0;
+            }
+        // Some of the surface is cut and some is the wheel's plateau.
+        EXPECT_GT(cut, g.heights.size() / 4);
+        EXPECT_LT(cut, g.heights.size());
+        const double deepest = sl::surfacegen::kGritDepthCut * s.gritDepth;
+        for (float h : g.heights) ASSERT_GE(h, -deepest - 1e-9);
+    }
+}
+
+// The grits' tracks lie along the lay: the height changes far more across the lay than along
+// it, and turning the lay by 90° turns that with it; denser tracks leave less plateau.
+TEST(Synth, GroundStreaksLieAlongTheLay) {
+    auto meanSteps = [](const GeneratedSurface& g) {
+        double dx = 0, dz = 0;
+        for (int j = 0; j + 1 < g.height; ++j)
+            for (int i = 0; i + 1 < g.width; ++i) {
+                const size_t k = static_cast<size_t>(j) * g.width + i;
+                dx += std::abs(g.heights[k + 1] - g.heights[k]);
+                dz += std::abs(g.heights[k + g.width] - g.heights[k]);
+            }
+        return std::pair{dx, dz};
+    };
+    SurfaceSpec s = bareGround(128, 128);
+    const auto [alongX, acrossZ] = meanSteps(sl::generateSurface(s));
+    EXPECT_LT(alongX, 0.25 * acrossZ);
+    s.rasterAngleDeg = 90;
+    const auto [acrossX, alongZ] = meanSteps(sl::generateSurface(s));
+    EXPECT_LT(alongZ, 0.25 * acrossX);
+    auto plateau = [](const GeneratedSurface& g) {
+        return std::count(g.heights.begin(), g.heights.end(), 0.0f);
+    };
+    SurfaceSpec dense = bareGround(128, 128);
+    dense.stepover = 0.5 * s.stepover;
+    EXPECT_LT(plateau(sl::generateSurface(dense)),
+              plateau(sl::generateSurface(bareGround(128, 128))));
 }
 
 TEST(Synth, DentIsLabelledWhereItLowersTheSurface) {
@@ -1117,6 +1196,17 @@ TEST(Synth, ValidationNamesTheNewFields) {
     s.feedPerTooth = 0.1;
     s.turnCentreX = std::nan("");
     expectField(s, "turnCentreX");
+    s = sl::processDefaults(SurfaceSpec::Process::Ground);
+    s.width = s.height = 16;
+    EXPECT_EQ(errorOf(s), "");
+    s.gritDepth = 0;
+    expectField(s, "gritDepth");
+    s.gritDepth = 0.001;
+    s.gritLength = -1;
+    expectField(s, "gritLength");
+    s = base;  // another process: a negative grit length is still a mistake
+    s.gritLength = -1;
+    expectField(s, "gritLength");
     s = base;
     s.chatterBands = 2;
     s.chatterBandWidth = 0;

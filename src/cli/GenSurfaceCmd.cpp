@@ -99,8 +99,13 @@ void registerGenSurface(CLI::App& app, std::function<int()>& run) {
     addSpec(c, g, "--height", &SurfaceSpec::height, "Rows")->check(inRange(2, 32767));
     addSpec(c, g, "--pitch", &SurfaceSpec::pitch, "Sample spacing in mm");
     addSpec(c, g, "--tool-radius", &SurfaceSpec::toolRadius,
-            "Tool radius in mm (ball, face-mill cutter or flat end mill)");
-    addSpec(c, g, "--stepover", &SurfaceSpec::stepover, "Path or pass spacing in mm");
+            "Tool radius in mm (ball, face-mill cutter or flat end mill; ground: grit tip)");
+    addSpec(c, g, "--stepover", &SurfaceSpec::stepover,
+            "Path or pass spacing in mm (ground: mean spacing of the grit tracks)");
+    addSpec(c, g, "--grit-depth", &SurfaceSpec::gritDepth,
+            "Ground: the grits' mean depth of cut in mm");
+    addSpec(c, g, "--grit-length", &SurfaceSpec::gritLength,
+            "Ground: the grit tracks' mean length along the lay in mm");
     addSpec(c, g, "--feed,--feed-per-tooth", &SurfaceSpec::feedPerTooth,
             "Feed per tooth in mm (per revolution for turned; flatend: 0 = no feed marks)");
     addSpec(c, g, "--nose-radius,--insert-nose-radius", &SurfaceSpec::insertNoseRadius,

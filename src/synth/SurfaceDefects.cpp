@@ -139,7 +139,7 @@ std::vector<Gouge> placeGouges(const SurfaceSpec& spec, const Frame& fr, const T
     const double pitch = fr.pitch, extX = fr.extX, extZ = fr.extZ;
     const bool ball = fr.ball;
     std::vector<Gouge> gouges;
-    const double gougeRadius = ball ? spec.toolRadius
+    const double gougeRadius = ball || fr.process == SurfaceSpec::Process::Ground ? spec.toolRadius
                                : fr.process == SurfaceSpec::Process::FlatEndPocket
                                    ? spec.toolCornerRadius
                                    : spec.insertNoseRadius;

@@ -124,6 +124,14 @@ void validate(const SurfaceSpec& s) {
                     formatNumber(s.feedPerTooth) + " mm",
                 "Reduce feedPerTooth or stepover");
     }
+    if (s.process == SurfaceSpec::Process::Ground) {
+        requireFinite(s.gritDepth, "gritDepth");
+        require(s.gritDepth > 0, "gritDepth", "must be > 0 mm, got " + formatNumber(s.gritDepth),
+                "The grits' mean depth of cut in mm, e.g. 0.0008");
+        requireFinite(s.gritLength, "gritLength");
+        require(s.gritLength > 0, "gritLength", "must be > 0 mm, got " + formatNumber(s.gritLength),
+                "The grit tracks' mean length along the lay in mm, e.g. 1");
+    }
     if (s.process == SurfaceSpec::Process::Turned) {
         requireInsert("turning inserts: 0.2-1.6 mm", "per revolution for turning",
                       "0.05-0.2 mm per revolution");
@@ -142,7 +150,8 @@ void validate(const SurfaceSpec& s) {
           std::pair{s.roughnessCorrelation, "roughnessCorrelation"},
           std::pair{s.scratchDepth, "scratchDepth"}, std::pair{s.scratchWidth, "scratchWidth"},
           std::pair{s.gougeDepth, "gougeDepth"}, std::pair{s.gougeLength, "gougeLength"},
-          std::pair{s.dentDepth, "dentDepth"}, std::pair{s.dentRadius, "dentRadius"}}) {
+          std::pair{s.dentDepth, "dentDepth"}, std::pair{s.dentRadius, "dentRadius"},
+          std::pair{s.gritDepth, "gritDepth"}, std::pair{s.gritLength, "gritLength"}}) {
         requireFinite(v, field);
         require(v >= 0, field, "must be >= 0 mm, got " + formatNumber(v),
                 "A length is never negative (this run may not use it: leave it out)");
@@ -466,6 +475,9 @@ void compose(const SurfaceSpec& spec, const Frame& fr, const ToolMarks& tm, cons
                     case SurfaceSpec::Process::Turned:
                         h = tm.turned(rad, theta, amp, active);
                         break;
+                    case SurfaceSpec::Process::Ground:
+                        h = tm.ground(t, p, sw, amp);
+                        break;
                 }
                 row[static_cast<size_t>(i)] = h;
             }
@@ -586,6 +598,13 @@ std::string describe(const SurfaceSpec& spec, const Frame& fr, const ToolMarks& 
         } else {
             marks += ", no feed marks";
         }
+    } else if (fr.process == SurfaceSpec::Process::Ground) {
+        std::snprintf(buf, sizeof buf,
+                      "surface grinding along %.4g deg: grit tips r=%.4g mm, %zu tracks %.4g mm "
+                      "apart across the lay, %.4g mm long, %.4g um deep on average",
+                      spec.rasterAngleDeg, R, tm.grits.size(), s, spec.gritLength,
+                      1e3 * spec.gritDepth);
+        marks = buf;
     } else {
         std::snprintf(buf, sizeof buf,
                       "face turning about (%.4g, %.4g) mm, nose r=%.4g mm, feed %.4g mm/rev: "
@@ -674,6 +693,10 @@ GeneratedSurface generateSurface(const SurfaceSpec& spec) {
         case SurfaceSpec::Process::Turned:
             out.scallop = scallopHeight(spec.feedPerTooth, spec.insertNoseRadius);
             out.feedMark = out.scallop;
+            break;
+        case SurfaceSpec::Process::Ground:
+            out.scallop = spec.gritDepth;  // the grits' mean depth: no scallop between tracks
+            out.feedMark = 0.0;
             break;
     }
     // Ctrl-C (core/Interrupt.h): stop between the stages and between the rows' blocks; nothing

@@ -44,8 +44,20 @@
 //       scallopHeight(f, r_n) = r_n − √(r_n² − (f/2)²) ≈ f²/(8·r_n) stand between grooves f
 //       apart: concentric rings near the centre, nearly straight parallel grooves far from it
 //       (put the centre off the map for a section of straight grooves).
+//     - Ground: surface grinding along angle a (the lay). Each abrasive grit that cuts leaves a
+//       track: a groove of its tip radius r_g (toolRadius), h = r_g − √(r_g² − q²) − δ_k·w(τ)
+//       at across-lay distance q from its centre line p_k, over a length L_k along the lay (τ in
+//       [0, 1] along it; w = smoothstep(min(τ, 1 − τ)/0.15): a grit enters and leaves the cut).
+//       The surface is the MIN of the wheel's envelope y = 0 and every track (material is gone
+//       wherever a grit went). Tracks are drawn from the seed: centre lines p_k and mid-points
+//       uniform, on average one track across the lay per `stepover` at any point along it
+//       (1/(stepover·gritLength) tracks per mm²); lengths uniform in [0.5, 1.5]·gritLength;
+//       depths δ_k = gritDepth·e_k, e_k exponential of mean 1 (the grits' protrusion), cut at
+//       4: the ground finish's fine streaks along the lay, plateaus at y = 0 where no grit cut.
 //     - Chatter: the tool's depth oscillates along the path, A·sin(2π·t/λ + φ_k), random phase
-//       φ_k per path (Turned: along the spiral, t = π·ρ_n²/f, the path length to radius ρ_n).
+//       φ_k per path (Turned: along the spiral, t = π·ρ_n²/f, the path length to radius ρ_n;
+//       Ground: the wheel's, one phase for the whole lay, so the marks are straight lines across
+//       it).
 //     - Chatter bands (chatterBands > 0): strips |c − c_b| < chatterBandWidth/2 across the
 //       paths, c the across-path coordinate (p for milling, the radius r about the turning
 //       centre for Turned, so bands are rings there), where the chatter amplitude is
@@ -56,7 +68,7 @@
 //  2. Gouges (defects): the tool digs in by up to `gougeDepth` along a short segment of a path
 //     (depth D·sin(π·τ), τ ∈ [0,1] along the segment); the surface becomes the MIN of itself
 //     and the swept sphere (radius R for ball-end, r_n for face mill and turned, r_c for the flat
-//     end mill).
+//     end mill; for ground, a rogue grit of tip radius r_g dug in along the lay).
 //  3. Roughness: Gaussian noise on a lattice of spacing `roughnessCorrelation` (clamped to at
 //     least the pitch), interpolated by a cubic B-spline and renormalised so its RMS is
 //     `roughnessRms` at every point. Being defined in mm, it is the same surface at any pitch.
@@ -178,10 +190,14 @@ struct SurfaceSpec {
         BallEndRaster,
         FaceMillFeed,
         FlatEndPocket,
-        Turned
+        Turned,
+        Ground
     } process = Process::BallEndRaster;
-    double toolRadius = 3.0;  // mm: ball radius R (ball-end), cutter radius (face mill, flat end)
-    double stepover = 0.4;    // mm: path (ball-end) or pass (face mill) spacing, < 2·toolRadius
+    // mm: ball radius R (ball-end), cutter radius (face mill, flat end), grit tip radius (ground)
+    double toolRadius = 3.0;
+    // mm: path (ball-end) or pass (face mill) spacing, < 2·toolRadius; ground: the mean spacing
+    // of the grit tracks across the lay
+    double stepover = 0.4;
     double pathOffset = 0.0;  // mm: across-path position p of path k = 0
     // mm: feed per tooth (face-mill crescents, ball and flat-end feed marks; flat end: 0 = no
     // feed marks), or per revolution (Turned)
@@ -190,6 +206,8 @@ struct SurfaceSpec {
     double insertNoseRadius = 0.8;  // mm: face-mill or turning insert nose radius r_n
     double toolCornerRadius = 0.2;  // mm: flat end mill corner radius r_c (< toolRadius)
     double turnCentreX = 0.0, turnCentreZ = 0.0;  // mm: Turned, the spiral's centre
+    double gritDepth = 0.0008;                    // mm: Ground, the grits' mean depth of cut
+    double gritLength = 1.0;      // mm: Ground, the grit tracks' mean length along the lay
     double rasterAngleDeg = 0.0;  // direction of the tool paths in the x-z plane, from +x to +z
     double chatterAmplitude = 0.0005;  // mm, periodic waviness along the path (chatter)
     double chatterWavelength = 0.4;    // mm
@@ -259,7 +277,7 @@ std::span<const ProcessRow> processTable();
 SurfaceSpec processDefaults(SurfaceSpec::Process process);
 
 /// The labelled test parts (gen-surface --part): one per process, every defect kind present.
-enum class TestPart { BallEnd, FaceMill, FlatEnd, Turned };
+enum class TestPart { BallEnd, FaceMill, FlatEnd, Turned, Ground };
 struct TestPartRow {
     TestPart value;
     const char* name;

@@ -32,6 +32,7 @@ constexpr uint64_t kBurrStream = 0x6275727273303031ULL;
 constexpr uint64_t kTurnStream = 0x7475726e73303031ULL;
 constexpr uint64_t kNoiseStream = 0x6e6f697365303031ULL;
 constexpr uint64_t kSpikeStream = 0x7370696b65303031ULL;
+constexpr uint64_t kGritStream = 0x6772697473303031ULL;
 
 /// Throws the input error of a SurfaceSpec field (its option name) unless `ok`.
 void require(bool ok, const std::string& field, const std::string& problem, const std::string& fix);
@@ -79,6 +80,16 @@ struct Frame {
 // ---------------------------------------------------------------------------------------------
 // Tool marks.
 
+/// One grit's track (Ground): its centre line across the lay, its extent along it, its depth.
+struct GritTrack {
+    double p = 0, t0 = 0, t1 = 0, depth = 0;
+};
+
+/// The taper of a grit's depth along its track, τ ∈ [0, 1] (see SurfaceGenerator.h).
+constexpr double kGritTaper = 0.15;
+/// The deepest grit, in units of gritDepth (the exponential's cut).
+constexpr double kGritDepthCut = 4.0;
+
 struct ToolMarks {
     SurfaceSpec::Process process = SurfaceSpec::Process::BallEndRaster;
     double R = 0, R2 = 0;   // ball radius (ball-end) or cutter radius (face mill, flat end)
@@ -92,6 +103,11 @@ struct ToolMarks {
     double xc = 0, zc = 0, turnPhase = 0, turnChatterPhase = 0;  // turned
     int64_t kMin = 0, kMax = 0;                                  // path table range
     std::vector<double> chatCos, chatSin, toothPhase;
+    // Ground: the grit tracks sorted into bins of `gritBin` mm across the lay from `gritLo`
+    // (bin b holds grits[gritStart[b] .. gritStart[b + 1]); a track reaches less than a bin).
+    std::vector<GritTrack> grits;
+    std::vector<uint32_t> gritStart;
+    double gritLo = 0, gritBin = 1;
 
     size_t idx(int64_t k) const { return static_cast<size_t>(std::clamp(k, kMin, kMax) - kMin); }
 
@@ -171,6 +187,29 @@ struct ToolMarks {
             best = std::min(best, h + amp * (sw * chatCos[n] + cw * chatSin[n]));
         }
         return std::isfinite(best) ? best : rc;  // unreachable after validation
+    }
+
+    // Ground: the MIN of the wheel's envelope (0) and the grit tracks that reach the point,
+    // with the wheel's chatter (one phase: sw = sin(ω·t)).
+    double ground(double t, double p, double sw, double amp) const {
+        double best = 0.0;
+        const auto bins = static_cast<int64_t>(gritStart.size()) - 1;
+        const auto b = static_cast<int64_t>(std::floor((p - gritLo) / gritBin));
+        for (int64_t c = std::max<int64_t>(b - 1, 0); c <= std::min(b + 1, bins - 1); ++c) {
+            for (uint32_t n = gritStart[static_cast<size_t>(c)];
+                 n < gritStart[static_cast<size_t>(c) + 1]; ++n) {
+                const GritTrack& g = grits[n];
+                if (t <= g.t0 || t >= g.t1) continue;
+                const double q = p - g.p;
+                if (q * q >= R2) continue;
+                const double rise = sphereRise(R, q * q);
+                if (rise >= g.depth) continue;
+                const double tau = (t - g.t0) / (g.t1 - g.t0);
+                const double w = smoothstep01(std::min(tau, 1.0 - tau) / kGritTaper);
+                best = std::min(best, rise - g.depth * w);
+            }
+        }
+        return best + amp * sw;
     }
 
     // Turned: the nose profile about the spiral's nearest turns; r = distance to the centre,

@@ -42,6 +42,44 @@ double pocketHalfWidth(double depth, double r) {
     return r * std::sqrt(std::max(0.0, 1.0 - c * c));
 }
 
+/// Ground: draws the grit tracks that can reach the map (see SurfaceGenerator.h) and sorts them
+/// into bins across the lay, each at least as wide as a track's reach.
+void groundTracks(const SurfaceSpec& spec, const Frame& fr, ToolMarks& tm) {
+    const double hx = 0.5 * fr.extX, hz = 0.5 * fr.extZ;
+    const double deepest = std::min(kGritDepthCut * spec.gritDepth, tm.R);
+    // A grit δ deep cuts where its tip has risen less than δ: |q| < √(δ·(2R − δ)).
+    const double reach = std::sqrt(deepest * (2 * tm.R - deepest));
+    const double halfP = std::abs(tm.sinA) * hx + std::abs(tm.cosA) * hz + reach;
+    const double halfT = std::abs(tm.cosA) * hx + std::abs(tm.sinA) * hz + 0.75 * spec.gritLength;
+    const double count = (2 * halfP) * (2 * halfT) / (spec.stepover * spec.gritLength);
+    require(count < 5.0e7, "stepover",
+            "gives " + formatNumber(count) + " grit tracks over the map, too many",
+            "Use a larger stepover or gritLength for a ground surface this large");
+    Pcg32 rng(mix64(spec.seed ^ kGritStream), kGritStream);
+    const auto n = static_cast<size_t>(std::llround(count));
+    std::vector<GritTrack> drawn(n);
+    for (GritTrack& g : drawn) {
+        g.p = -halfP + 2 * halfP * rng.nextDouble();
+        const double mid = -halfT + 2 * halfT * rng.nextDouble();
+        const double half = 0.5 * spec.gritLength * (0.5 + rng.nextDouble());
+        g.t0 = mid - half;
+        g.t1 = mid + half;
+        g.depth = spec.gritDepth * std::min(-std::log(1.0 - rng.nextDouble()), kGritDepthCut);
+    }
+    tm.gritLo = -halfP;
+    tm.gritBin = std::max(reach, 1e-9);
+    const auto bins = static_cast<size_t>(std::ceil(2 * halfP / tm.gritBin)) + 1;
+    auto binOf = [&](const GritTrack& g) {
+        return std::min(static_cast<size_t>((g.p - tm.gritLo) / tm.gritBin), bins - 1);
+    };
+    tm.gritStart.assign(bins + 1, 0);
+    for (const GritTrack& g : drawn) ++tm.gritStart[binOf(g) + 1];
+    for (size_t b = 0; b < bins; ++b) tm.gritStart[b + 1] += tm.gritStart[b];
+    tm.grits.resize(n);
+    std::vector<uint32_t> next(tm.gritStart.begin(), tm.gritStart.end() - 1);
+    for (const GritTrack& g : drawn) tm.grits[next[binOf(g)]++] = g;
+}
+
 }  // namespace
 
 /// Stage 1: the tool paths that can shape the map, with their chatter and tooth phases.
@@ -81,6 +119,10 @@ ToolMarks toolMarks(const SurfaceSpec& spec, const Frame& fr) {
         tm.chatCos.assign(1, 1.0);
         tm.chatSin.assign(1, 0.0);
         tm.toothPhase.assign(1, 0.0);
+        return tm;
+    }
+    if (spec.process == SurfaceSpec::Process::Ground) {
+        groundTracks(spec, fr, tm);
         return tm;
     }
     {
@@ -186,6 +228,8 @@ constexpr ProcessRow kProcesses[] = {
      "flat end mill pocket floor: step-over ridges of the corner radius, floor feed marks"},
     {SurfaceSpec::Process::Turned, "turned",
      "face turning: a spiral groove of the nose radius about a centre"},
+    {SurfaceSpec::Process::Ground, "ground",
+     "surface grinding: the grits' fine tracks along the lay, plateaus between them"},
 };
 
 constexpr TestPartRow kTestParts[] = {
@@ -194,6 +238,7 @@ constexpr TestPartRow kTestParts[] = {
      "face mill (R 4 mm, passes 3 mm apart) with every defect kind"},
     {TestPart::FlatEnd, "flatend", "flat end mill pocket floor with every defect kind"},
     {TestPart::Turned, "turned", "face-turned section with every defect kind"},
+    {TestPart::Ground, "ground", "ground surface with every defect kind"},
 };
 
 }  // namespace
@@ -219,6 +264,16 @@ SurfaceSpec processDefaults(SurfaceSpec::Process process) {
             s.insertNoseRadius = 0.8;
             s.feedPerTooth = 0.1;
             break;
+        case SurfaceSpec::Process::Ground:
+            // A coarse finish: grit tips of 40 µm radius, tracks 15 µm apart, 0.8 µm deep on
+            // average; the wheel's chatter 0.3 µm (Sq 0.78 µm with the default roughness).
+            s.toolRadius = 0.04;
+            s.stepover = 0.015;
+            s.gritDepth = 0.0008;
+            s.gritLength = 1.0;
+            s.chatterAmplitude = 0.0003;
+            s.chatterWavelength = 0.8;
+            break;
     }
     return s;
 }
@@ -241,6 +296,9 @@ SurfaceSpec testPartSpec(TestPart part) {
             break;
         case TestPart::Turned:
             process = SurfaceSpec::Process::Turned;
+            break;
+        case TestPart::Ground:
+            process = SurfaceSpec::Process::Ground;
             break;
     }
     SurfaceSpec s = processDefaults(process);
