@@ -127,9 +127,14 @@ bool isCacheFile(const fs::path& p) {
         std::string inFile;
         return peekTransportFile(p, &inFile) == 2 && inFile == fp;
     }
-    // .transport-<fp>.tmp-<pid>-<n>.tm
-    if (name.rfind(".transport-", 0) != 0 || !name.ends_with(kTransportExt)) return false;
-    const std::string rest = name.substr(11, name.size() - 11 - kTransportExt.size());
+    // .transport-<fp>.tmp-<pid>-<n>.tm (io/AtomicFile.h's temporary beside transport-<fp>.tm)
+    std::string tmpPrefix(1, '.');
+    tmpPrefix.append(kTransportPrefix);
+    if (name.size() < tmpPrefix.size() + kTransportExt.size() || name.rfind(tmpPrefix, 0) != 0 ||
+        !name.ends_with(kTransportExt))
+        return false;
+    const std::string rest =
+        name.substr(tmpPrefix.size(), name.size() - tmpPrefix.size() - kTransportExt.size());
     const size_t tmp = rest.find(".tmp-");
     if (tmp != 32 || !hexDigits(rest.substr(0, 32))) return false;
     const std::string ids = rest.substr(tmp + 5);
