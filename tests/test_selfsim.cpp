@@ -363,6 +363,67 @@ TEST(SelfSimMap, ARaisedCompactParticleIsDroppedThePitAndTheBurrKept) {
     EXPECT_EQ(onlyWith, 0u) << "samples marked only with step 8c";
 }
 
+// Step 8d keeps a defect that the growth joined to a region reaching the border, and not the
+// texture's rugged marks there: striations crossed from border to border by a raised ridge (3 ×
+// the striations high: a region at the border, never marked), a pit (3 × deep, a paraboloid)
+// touching the ridge's lower flank, and a rugged hollow touching its upper flank (a shallow
+// depression holding narrow cones of 0.6-3 × the striations' depth: one piece below the
+// texture whose score is a cluster of spikes, as a measured land's rough end is). Without step
+// 8d nothing of the three is marked (one region, at the border); with it the pit is marked as a
+// region of its own would be and the hollow is not; with the fill test off (a tiny share) the
+// hollow is marked too: the shape test is what drops it.
+TEST(SelfSimMap, ABorderRegionsDefectPieceIsKeptItsRuggedTexturePieceDropped) {
+    std::vector<float> h = striations(51);
+    std::vector<uint8_t> pitTruth(h.size(), 0), ridge(h.size(), 0), hollow(h.size(), 0);
+    groove(h, ridge, 0, 112, kW - 1, 112, 10, -3.0);  // raised, across the whole map
+    pit(h, pitTruth, 90, 122, 7, 3.0);                // its rim on the ridge's flank
+    std::vector<uint8_t> scratch(h.size(), 0);
+    pit(h, hollow, 170, 99, 11, 0.6);  // the hollow's base, its rim on the ridge's other flank
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> off(-7.0, 7.0), depth(0.6, 3.0);
+    for (int k = 0; k < 12; ++k) pit(h, scratch, 170 + off(rng), 97 + off(rng), 1.6, depth(rng));
+    // the ridge's own samples (where the pit and the hollow are not painted over its flanks) and
+    // the pit's off the ridge
+    for (size_t i = 0; i < h.size(); ++i) {
+        const bool pitHere = pitTruth[i] != 0, hollowHere = hollow[i] || scratch[i];
+        pitTruth[i] = pitHere && !ridge[i];
+        ridge[i] = ridge[i] && !pitHere && !hollowHere;
+        hollow[i] = hollowHere;
+    }
+
+    SelfSimMapOptions off8d;
+    off8d.borderPieceFill = 0;
+    const SelfSimMapOptions on;
+    ASSERT_GT(on.borderPieceFill, 0.0);
+    SelfSimMapOptions anyShape;
+    anyShape.borderPieceFill = 1e-6;
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off8d),
+                     b = detectSelfSimDefects(h, kW, kH, on),
+                     c = detectSelfSimDefects(h, kW, kH, anyShape);
+    const Counts pa = count(a.map, pitTruth, on.border), pb = count(b.map, pitTruth, on.border),
+                 pc = count(c.map, pitTruth, on.border);
+    const Counts ha = count(a.map, hollow, on.border), hb = count(b.map, hollow, on.border),
+                 hc = count(c.map, hollow, on.border);
+    const Counts ra = count(a.map, ridge, on.border), rb = count(b.map, ridge, on.border);
+    EXPECT_GE(a.droppedBorder, 1u);
+    EXPECT_EQ(a.borderPieces, 0u);
+    EXPECT_EQ(pa.hits, 0u) << "the pit, without step 8d (joined to the ridge at the border)";
+    EXPECT_EQ(ha.hits, 0u) << "the hollow, without step 8d";
+    EXPECT_EQ(ra.hits, 0u) << "the ridge, without step 8d";
+    EXPECT_GE(pb.hits, pb.truth * 8 / 10)
+        << "the pit, with step 8d: " << pb.hits << " of " << pb.truth;
+    EXPECT_EQ(hb.hits, 0u) << "the rugged hollow, with step 8d: " << hb.hits << " of " << hb.truth;
+    EXPECT_EQ(rb.hits, 0u) << "the ridge, with step 8d: it reaches the border";
+    EXPECT_GE(b.borderPieces, 1u);
+    EXPECT_GE(hc.hits, hc.truth / 2)
+        << "the hollow with any shape kept: " << hc.hits << " of " << hc.truth;
+    EXPECT_GE(pc.hits, pb.hits);
+    EXPECT_GT(c.borderPieces, b.borderPieces);
+    size_t lost = 0;
+    for (size_t i = 0; i < h.size(); ++i) lost += a.map[i] && !b.map[i] ? 1 : 0;
+    EXPECT_EQ(lost, 0u) << "samples marked without step 8d and not with it";
+}
+
 TEST(SelfSimMap, GaussianTailInverseIsExact) {
     EXPECT_NEAR(gaussianTailInverse(0.5), 0.0, 1e-9);
     EXPECT_NEAR(gaussianTailInverse(0.05), 1.6448536269514722, 1e-9);
@@ -431,6 +492,12 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o = {};
     o.particleRaisedShare = 0.0;
     expectNamed(o, "selfsim-particle-raised-share");
+    o = {};
+    o.borderPieceFill = 1.0;
+    expectNamed(o, "selfsim-border-piece-fill");
+    o = {};
+    o.borderPieceMin = 0;
+    expectNamed(o, "selfsim-border-piece-min");
 
     EXPECT_EQ(parseDefectMethod("selfsim"), DefectMethod::SelfSim);
     EXPECT_STREQ(defectMethodName(DefectMethod::SelfSim), "selfsim");

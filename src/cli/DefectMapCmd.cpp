@@ -55,11 +55,11 @@ int runDefectMap(const DefectMapJobOptions& o) {
         std::printf(
             "  %zu texture offsets; residual sigma %.4g (height units), detection at %.3f "
             "robust sigmas (NFA); %zu samples detected, %zu regions kept, %zu at the border "
-            "dropped; the texture's own tail at %.3f robust sigmas (of %zu regions grown), "
-            "%zu regions below it dropped\n",
+            "dropped (%zu of their pieces kept); the texture's own tail at %.3f robust sigmas "
+            "(of %zu regions grown), %zu regions below it dropped\n",
             m.selfsimOffsets, m.sigmaLevel, m.selfsimThreshold, m.selfsimDetections,
-            m.selfsimRegions, m.selfsimDropped, m.selfsimTextureThreshold, m.selfsimCandidates,
-            m.selfsimDroppedTexture);
+            m.selfsimRegions, m.selfsimDropped, m.selfsimBorderPieces, m.selfsimTextureThreshold,
+            m.selfsimCandidates, m.selfsimDroppedTexture);
     if (s.score) {
         const DefectScore& sc = *s.score;
         std::printf("%-18s %5s %10s %10s %10s %9s %7s %7s\n", "kind", "value", "truth", "hits",
@@ -375,6 +375,13 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     c->add_option("--selfsim-particle-raised-share", q.particleRaisedShare,
                   "selfsim: ... raised: at least this share of its residual above the texture")
+        ->capture_default_str();
+    c->add_option("--selfsim-border-piece-fill", q.borderPieceFill,
+                  "selfsim: a region at the border is split by sign; a piece off the border is "
+                  "kept when its mean score is at least this share of its largest (0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-border-piece-min", q.borderPieceMin,
+                  "selfsim: ... and it keeps at least this many samples")
         ->capture_default_str();
     c->add_option("--selfsim-extend-steps", q.extendSteps,
                   "selfsim: a kept region grows this many samples further into its flanks (0: "

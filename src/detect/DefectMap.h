@@ -325,6 +325,7 @@ struct DefectMap {
     // off), the regions grown and those dropped below it
     double selfsimTextureThreshold = 0;
     size_t selfsimCandidates = 0, selfsimDroppedTexture = 0;
+    size_t selfsimBorderPieces = 0;  // selfsim only: pieces of border regions kept (step 8d)
     double seconds = 0;
 
     size_t markedCount() const;

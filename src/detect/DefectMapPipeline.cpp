@@ -197,6 +197,7 @@ void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int he
     r.selfsimTextureThreshold = m.textureThreshold;
     r.selfsimCandidates = m.candidates;
     r.selfsimDroppedTexture = m.droppedTexture;
+    r.selfsimBorderPieces = m.borderPieces;
     r.markedScore = r.markedCount();
 }
 

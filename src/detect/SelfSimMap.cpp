@@ -197,6 +197,11 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.particleRaisedShare > 0.0 && o.particleRaisedShare <= 1.0))
         throw inputError(option("selfsim-particle-raised-share"), "must be in (0, 1]",
                          "The default is 0.8");
+    if (!(o.borderPieceFill >= 0.0 && o.borderPieceFill < 1.0))
+        throw inputError(option("selfsim-border-piece-fill"), "must be in [0, 1)",
+                         "The default is 0.45 (0: off)");
+    if (o.borderPieceMin < 1)
+        throw inputError(option("selfsim-border-piece-min"), "must be >= 1", "The default is 40");
     if (o.border < 0)
         throw inputError(option("selfsim-border"), "must be >= 0", "The default is 40");
     if (o.minRegion < 1)
@@ -488,6 +493,92 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     std::vector<int8_t> regionSign(o.extendSteps > 0 ? n : 0, 0);
     std::vector<float> regionLevel(regionSign.size(), 0.0f);
     std::vector<size_t> kept;
+    // steps 8a and 8c on a region's (or a border piece's) samples, then the map and step 8b's
+    // first frontier; a border piece (step 8d) also has to be shaped as a defect: at least
+    // borderPieceMin samples after the trim, and its mean score at least borderPieceFill of its
+    // largest. False when nothing is marked.
+    auto keepRegion = [&](std::span<const size_t> samples, float peak, bool piece) {
+        // step 8b's sign: that of the region's largest |r| (a groove's or a dent's below the
+        // texture, a burr's or a particle's above) ...
+        size_t top = samples.front();
+        for (const size_t i : samples)
+            if (std::abs(out.residual[i]) > std::abs(out.residual[top])) top = i;
+        const int8_t sign = out.residual[top] < 0.0f ? -1 : 1;
+        // ... and its level: extendShare of its peak score, at least extendSigma
+        const float level =
+            std::max(static_cast<float>(o.extendSigma), static_cast<float>(o.extendShare) * peak);
+        // step 8a: the region's extent is where it scores at least trimShare of its largest
+        // score at the growth's scales (and growSigma): a deep defect's 2.5-sigma halo, and
+        // texture that the growth joined to it at a small share of its depth, are left out
+        float top0 = 0.0f;
+        for (const size_t i : samples) top0 = std::max(top0, zGrow[i]);
+        const float cut = static_cast<float>(o.trimShare) * top0;
+        kept.clear();
+        for (const size_t i : samples)
+            if (zGrow[i] >= cut) kept.push_back(i);
+        // step 8c: a particle (raised, compact) is the texture's, not a defect
+        if (o.particleElongation > 0.0 &&
+            isParticle(kept, out.residual, W, o.particleElongation, o.particleRaisedShare)) {
+            ++out.droppedParticles;
+            return false;
+        }
+        if (piece) {
+            if (static_cast<int>(kept.size()) < o.borderPieceMin) return false;
+            double sum = 0.0;
+            float most = 0.0f;
+            for (const size_t i : kept) {
+                sum += zGrow[i];
+                most = std::max(most, zGrow[i]);
+            }
+            if (!(sum >= o.borderPieceFill * most * static_cast<double>(kept.size()))) return false;
+        }
+        out.trimmed += samples.size() - kept.size();
+        for (const size_t i : kept) {
+            out.map[i] = 255;
+            if (regionSign.empty()) continue;
+            regionSign[i] = sign;
+            regionLevel[i] = level;
+            stack.push_back(i);  // step 8b's first frontier
+        }
+        return true;
+    };
+    // step 8d: a region reaching the border, split into the pieces that lie below the texture
+    // (8-connected samples of the region whose residual is negative: material removed, as by a
+    // groove, a pit or a dent); the pieces that do not reach the border are judged as regions
+    // (steps 6-7), then by their shape (keepRegion)
+    std::vector<uint8_t> pieceSeen(o.borderPieceFill > 0.0 ? n : 0, 0);
+    std::vector<size_t> piece;
+    auto keepBorderPieces = [&](const Region& reg) {
+        for (size_t k = reg.begin; k < reg.end; ++k) {
+            const size_t i0 = members[k];
+            if (pieceSeen[i0] || !(out.residual[i0] < 0.0f)) continue;
+            piece.assign(1, i0);
+            pieceSeen[i0] = 1;
+            bool atBorder = false;
+            float peak = 0.0f, deepest = 0.0f;
+            for (size_t j = 0; j < piece.size(); ++j) {
+                const size_t i = piece[j];
+                const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
+                peak = std::max(peak, zDetect[i]);
+                deepest = std::max(deepest, std::abs(out.residual[i]));
+                if (px == b || py == b || px == W - b - 1 || py == H - b - 1) atBorder = true;
+                for (int qy = py - 1; qy <= py + 1; ++qy)
+                    for (int qx = px - 1; qx <= px + 1; ++qx) {
+                        if (!inside(qx, qy)) continue;
+                        const size_t q = static_cast<size_t>(qy) * W + qx;
+                        if (pieceSeen[q] || !(zGrow[q] >= grow) || !(out.residual[q] < 0.0f))
+                            continue;
+                        pieceSeen[q] = 1;
+                        piece.push_back(q);
+                    }
+            }
+            if (atBorder || static_cast<int>(piece.size()) < o.minRegion || !(peak >= thr) ||
+                peak < out.textureThreshold ||
+                (o.textureRms > 0.0 && deepest < o.textureRms * out.textureRms))
+                continue;
+            if (keepRegion(piece, peak, true)) ++out.borderPieces;
+        }
+    };
     for (const Region& reg : regions) {
         if (!(reg.peak >= thr) || static_cast<int>(reg.end - reg.begin) < o.minRegion) continue;
         if (o.textureRms > 0.0) {
@@ -505,44 +596,11 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
         }
         if (o.dropBorderRegions && b > 0 && reg.atBorder) {
             ++out.droppedBorder;
+            if (!pieceSeen.empty()) keepBorderPieces(reg);
             continue;
         }
-        ++out.regions;
-        // step 8's sign: that of the region's largest |r| (a groove's or a dent's below the
-        // texture, a burr's or a particle's above)
-        size_t top = members[reg.begin];
-        for (size_t k = reg.begin; k < reg.end; ++k)
-            if (std::abs(out.residual[members[k]]) > std::abs(out.residual[top])) top = members[k];
-        const int8_t sign = out.residual[top] < 0.0f ? -1 : 1;
-        // ... and its level: extendShare of its peak score, at least extendSigma
-        const float level = std::max(static_cast<float>(o.extendSigma),
-                                     static_cast<float>(o.extendShare) * reg.peak);
-        // step 8a: the region's extent is where it scores at least trimShare of its largest
-        // score at the growth's scales (and growSigma): a deep defect's 2.5-sigma halo, and
-        // texture that the growth joined to it at a small share of its depth, are left out
-        float top0 = 0.0f;
-        for (size_t k = reg.begin; k < reg.end; ++k) top0 = std::max(top0, zGrow[members[k]]);
-        const float cut = static_cast<float>(o.trimShare) * top0;
-        kept.clear();
-        for (size_t k = reg.begin; k < reg.end; ++k) {
-            if (zGrow[members[k]] < cut) continue;
-            kept.push_back(members[k]);
-        }
-        // step 8c: a particle (raised, compact) is the texture's, not a defect
-        if (o.particleElongation > 0.0 &&
-            isParticle(kept, out.residual, W, o.particleElongation, o.particleRaisedShare)) {
-            --out.regions;
-            ++out.droppedParticles;
-            continue;
-        }
-        out.trimmed += (reg.end - reg.begin) - kept.size();
-        for (const size_t i : kept) {
-            out.map[i] = 255;
-            if (regionSign.empty()) continue;
-            regionSign[i] = sign;
-            regionLevel[i] = level;
-            stack.push_back(i);  // step 8's first frontier
-        }
+        const std::span<const size_t> samples(members.data() + reg.begin, reg.end - reg.begin);
+        if (keepRegion(samples, reg.peak, false)) ++out.regions;
     }
     // ---- step 8: the kept regions' flanks --------------------------------------------------
     // a kept region grows `extendSteps` samples further, layer by layer, into samples whose
