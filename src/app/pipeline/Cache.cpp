@@ -303,16 +303,23 @@ void writePartRecord(const fs::path& dir, const std::string& key, const std::str
 
 std::shared_ptr<const TransportGram> cachedGram(const fs::path& dir, const std::string& fingerprint,
                                                 const TransportLoss& loss) {
-    if (dir.empty() || fingerprint.empty() || !loss.gramPays()) return nullptr;
-    if (loss.shareHeldGram()) return loss.gramIfBuilt();  // held by another loss on this T
+    if (dir.empty() || fingerprint.empty() || !loss.gramEligible()) return nullptr;
     const std::string key = loss.gramKey(fingerprint);
     const fs::path file = gramPath(dir, key);
-    if (auto stored = readGramFile(file, key, loss.matrix().cols())) {
+    // A stored file answers gramPays without its pass over T (TransportGram::buildWork, ~3 % of a
+    // re-optimization's CPU): only a loss whose build paid stores one, and the key holds all that
+    // decides it (T, its shape, the products and the pairs).
+    std::error_code statError;
+    const bool stored = fs::is_regular_file(file, statError);
+    if (!stored && !loss.gramPays()) return nullptr;
+    if (loss.shareHeldGram()) return loss.gramIfBuilt();  // held by another loss on this T
+    if (auto read = stored ? readGramFile(file, key, loss.matrix().cols()) : std::nullopt) {
         touchCacheFile(file);
-        loss.adoptGram(std::make_shared<const TransportGram>(std::move(*stored)));
+        loss.adoptGram(std::make_shared<const TransportGram>(std::move(*read)));
         spdlog::debug("T's Gram matrices from cache {}", file.string());
         return loss.gramIfBuilt();
     }
+    if (!loss.gramPays()) return nullptr;
     const TransportGram& built = loss.gram();
     try {
         std::error_code ec;

@@ -100,8 +100,9 @@ void writePartRecord(const std::filesystem::path& dir, const std::string& key,
 /// (TransportLoss::adoptGram) when stored there, else built now and stored. Returns them, to be
 /// held while the losses on this T run (every loss on the same T and pair mask shares them);
 /// null, doing nothing, when the loss does not use them (not eligible, or their build does not
-/// pay: TransportLoss::gramPays) or dir or fingerprint is empty. A failed write is logged, not
-/// thrown: the cache only saves time.
+/// pay: TransportLoss::gramPays, asked only when no file is stored under the key: a stored file
+/// was written by a paying build of the same key) or dir or fingerprint is empty. A failed write
+/// is logged, not thrown: the cache only saves time.
 std::shared_ptr<const TransportGram> cachedGram(const std::filesystem::path& dir,
                                                 const std::string& fingerprint,
                                                 const TransportLoss& loss);
