@@ -129,6 +129,40 @@ TEST(TransportGram, FormsEqualTheHalfImagesSums) {
     }
 }
 
+TEST(TransportGram, AFormsProductIsEachRowsDotInItsFourSumsBitForBit) {
+    // The header's order: a row's dot with E over the seen texels in four sums (position mod 4)
+    // added as (s0 + s2) + (s1 + s3); G the same dot of E with P·E. Sizes around the products'
+    // blocks of four rows, and one above kSerialEntries (rows over threads), on 1 and 2 threads.
+    auto dot = [](const double* a, const double* b, size_t n) {
+        double s[4] = {0, 0, 0, 0};
+        for (size_t k = 0; k < n; ++k) s[k % 4] += a[k] * b[k];
+        return (s[0] + s[2]) + (s[1] + s[3]);
+    };
+    for (const size_t m : {size_t{1}, size_t{3}, size_t{4}, size_t{5}, size_t{7}, size_t{9},
+                           size_t{66}, size_t{2051}}) {
+        const size_t n = m + 3;  // three texels no pixel sees
+        std::vector<uint16_t> seen;
+        for (size_t k = 0; k < m; ++k) seen.push_back(static_cast<uint16_t>(k + (k > m / 2) * 3));
+        std::vector<double> p = randomVec(m * m, 10 + m);
+        for (double& x : p) x -= 0.5;
+        const TransportGram g(n, seen, p, {});
+        std::vector<double> e = randomVec(n, 20 + m), x(m), ref(m);
+        for (size_t k = 0; k < m; ++k) x[k] = e[seen[k]];
+        for (size_t k = 0; k < m; ++k) ref[k] = dot(p.data() + k * m, x.data(), m);
+        const double G = dot(x.data(), ref.data(), m);
+        for (const int threads : {1, 2}) {
+            std::vector<double> pe(n, -1.0);
+            EXPECT_EQ(g.pairForm(e, pe, threads), G) << m << " texels, " << threads;
+            for (size_t k = 0; k < m; ++k) EXPECT_EQ(pe[seen[k]], ref[k]) << m << ", row " << k;
+            for (size_t c = 0; c < n; ++c) {
+                if (std::find(seen.begin(), seen.end(), c) == seen.end()) {
+                    EXPECT_EQ(pe[c], 0.0) << "texel " << c;
+                }
+            }
+        }
+    }
+}
+
 TEST(TransportGram, FormsOnActiveTexelsEqualTheWholeFormsOfAnEnvMapZeroElsewhere) {
     auto s = smallScene(19);
     const TransportMatrix t = halves(*s, 1);

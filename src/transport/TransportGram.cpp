@@ -4,6 +4,10 @@
 #include <string>
 #include <utility>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "core/Color.h"
 #include "transport/BlockParallel.h"
 
@@ -23,6 +27,38 @@ inline double dot(const double* a, const double* b, size_t n) {
         for (int l = 0; l < 4; ++l) s[l] += a[k + l] * b[k + l];
     for (int l = 0; k < n; ++k, ++l) s[l] += a[k] * b[k];
     return (s[0] + s[2]) + (s[1] + s[3]);
+}
+
+/// out[r] = dot(a + r·stride, b, n) for r = 0..3, each the same bits as dot's: its four sums
+/// in the same order, only with four rows in flight at once, so that each b[k] is loaded once
+/// for the four and the sums' chains overlap (the form's product is bound by those chains).
+inline void dot4(const double* a, size_t stride, const double* b, size_t n, double* out) {
+#if defined(__SSE2__) && !defined(__FMA__)
+    // Lanes: s[r][0] holds sums 0 and 1 of row r, s[r][1] sums 2 and 3. Each step rounds the
+    // product and then the sum, as dot's does where the target has no fused multiply-add (with
+    // one, the compiler may fuse dot's: then dot4 is dot itself, below).
+    __m128d s[4][2];
+    for (auto& row : s) row[0] = row[1] = _mm_setzero_pd();
+    size_t k = 0;
+    for (; k + 4 <= n; k += 4) {
+        const __m128d x0 = _mm_loadu_pd(b + k), x1 = _mm_loadu_pd(b + k + 2);
+        for (size_t r = 0; r < 4; ++r) {
+            const double* ar = a + r * stride + k;
+            s[r][0] = _mm_add_pd(s[r][0], _mm_mul_pd(_mm_loadu_pd(ar), x0));
+            s[r][1] = _mm_add_pd(s[r][1], _mm_mul_pd(_mm_loadu_pd(ar + 2), x1));
+        }
+    }
+    for (size_t r = 0; r < 4; ++r) {
+        double t[4];
+        _mm_storeu_pd(t, s[r][0]);
+        _mm_storeu_pd(t + 2, s[r][1]);
+        const double* ar = a + r * stride;
+        for (size_t j = k, l = 0; j < n; ++j, ++l) t[l] += ar[j] * b[j];
+        out[r] = (t[0] + t[2]) + (t[1] + t[3]);
+    }
+#else
+    for (size_t r = 0; r < 4; ++r) out[r] = dot(a + r * stride, b, n);
+#endif
 }
 
 /// The masked right/down/left/up neighbours of pixel p (itself masked): f(q) for each.
@@ -216,7 +252,9 @@ double TransportGram::form(const std::vector<double>& m, std::span<const double>
     const double* x = e.data();
     double* out = v.data();  // the calling thread's vectors: workers use them through pointers
     auto rows = [&](size_t i0, size_t i1) {
-        for (size_t i = i0; i < i1; ++i) out[i] = dot(m.data() + i * m_, x, m_);
+        size_t i = i0;
+        for (; i + 4 <= i1; i += 4) dot4(m.data() + i * m_, m_, x, m_, out + i);
+        for (; i < i1; ++i) out[i] = dot(m.data() + i * m_, x, m_);
     };
     if (m_ * m_ <= kSerialEntries)
         rows(0, m_);

@@ -64,7 +64,9 @@ class TransportGram {
     std::span<const double> productMatrix() const { return q_; }
 
     /// G = Eᵀ·P·E; PE (size cols(), when non-empty) receives P·E. Likewise R with Q (needs
-    /// hasProducts()). E: cols() values.
+    /// hasProducts()). E: cols() values. Each entry of P·E is its row's dot with E over the
+    /// seen texels in four sums (the position mod 4) added as (s0 + s2) + (s1 + s3), and G the
+    /// same dot of E with P·E: the same bits on any number of threads.
     double pairForm(std::span<const double> E, std::span<double> PE, int threads = 0) const;
     double productForm(std::span<const double> E, std::span<double> QE, int threads = 0) const;
     /// The same for an E that is zero outside `active` (ascending or not, no repeats): only
