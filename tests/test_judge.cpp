@@ -95,6 +95,38 @@ TEST(Judge, FlatMirrorUnderAKnownEnvMap) {
     EXPECT_TRUE(s.unbiased.clamped || s.unbiased.G < 1e-6 * s.unbiased.S);
 }
 
+// The white furnace's images are rendered once per judge and reused by every light it scores:
+// a judge that scored other lights first gives a light the same bits as a fresh one, and the
+// brightness is the light's lit sum over the white one's on the part, in pixel order.
+TEST(Judge, EveryLightIsScoredOnTheSameWhiteFurnaceAsByAFreshJudge) {
+    auto scene = wavyScene(24);
+    JudgeOptions o;
+    o.spp = 8;
+    Judge used(*scene, o);
+    const std::vector<double> e1 = randomVec(1250, 31), e2 = randomVec(1250, 32);
+    (void)used.score(e2);
+    (void)used.scoreWithErrors(e2, {}, 16);
+    const JudgeScore a = used.score(e1), ae = used.scoreWithErrors(e1, {}, 16);
+    Judge fresh(*scene, o);
+    const JudgeScore b = fresh.score(e1);
+    Judge freshErrors(*scene, o);
+    const JudgeScore be = freshErrors.scoreWithErrors(e1, {}, 16);
+    EXPECT_EQ(a.brightness, b.brightness);
+    EXPECT_EQ(a.unbiased.total, b.unbiased.total);
+    EXPECT_EQ(a.eq2.total, b.eq2.total);
+    ASSERT_TRUE(ae.se && be.se);
+    EXPECT_EQ(ae.se->brightness, be.se->brightness);
+    EXPECT_EQ(ae.se->eq2, be.se->eq2);
+    EXPECT_EQ(ae.se->unbiased, be.se->unbiased);
+    const std::vector<double> y = fresh.meanImage(e1),
+                              w = fresh.meanImage(std::vector<double>(1250, 1.0));
+    double lit = 0, white = 0;
+    for (size_t p = 0; p < y.size(); ++p)
+        if (fresh.partMask()[p]) lit += y[p], white += w[p];
+    ASSERT_GT(white, 0.0);
+    EXPECT_EQ(b.brightness, lit / white);
+}
+
 // Two judges with different seeds agree on U within 2 % at 1024 spp.
 TEST(Judge, AgreesWithItselfAcrossSeeds) {
     auto scene = wavyScene(48);

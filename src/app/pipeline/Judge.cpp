@@ -102,18 +102,36 @@ std::vector<double> Judge::meanImage(std::span<const double> E) const {
     return y;
 }
 
+const Judge::White& Judge::whiteImages(size_t size, bool halves) const {
+    const TransportMatrix& t = estimate_->file.matrix;
+    const std::lock_guard<std::mutex> lock(whiteMutex_);
+    auto it =
+        std::find_if(white_.begin(), white_.end(), [&](const White& w) { return w.size == size; });
+    if (it == white_.end()) it = white_.insert(white_.end(), White{size, {}, {}, {}});
+    std::vector<double> one;
+    if (it->mean.empty() || (halves && it->a.empty())) one.assign(size, 1.0);
+    if (it->mean.empty()) {
+        it->mean.resize(t.rows());
+        t.applyLuminance(one, it->mean);
+    }
+    if (halves && it->a.empty()) {
+        it->a.resize(t.rows());
+        it->b.resize(t.rows());
+        t.applyLuminanceHalves(one, it->a, it->b);
+    }
+    return *it;
+}
+
 JudgeScore Judge::score(std::span<const double> E, const std::string& name) const {
     const TransportMatrix& t = estimate_->file.matrix;
     const bool rgb = E.size() == 3 * t.cols();
     if (E.size() != t.cols() && !rgb)
         throw std::invalid_argument("Judge::score: E does not fit the judge's env-map grid");
     // One pass for the mean image (eq. 2) and one for both halves (U and the visibility).
-    std::vector<double> y(t.rows()), ya(t.rows()), yb(t.rows()), w(t.rows());
+    std::vector<double> y(t.rows()), ya(t.rows()), yb(t.rows());
     t.applyLuminance(E, y);
     t.applyLuminanceHalves(E, ya, yb);
-    const std::vector<double> one(E.size(), 1.0);
-    t.applyLuminance(one, w);
-    JudgeScore s = scoreImages(E, ya, yb, y, {}, {}, w);
+    JudgeScore s = scoreImages(E, ya, yb, y, {}, {}, whiteImages(E.size(), false).mean);
     s.name = name;
     return s;
 }
@@ -167,8 +185,9 @@ JudgeScore Judge::scoreWithErrors(std::span<const double> E, const std::string& 
     // perturbs them with the same signs (core/WildBootstrap.h).
     std::vector<HalfImages> images(2, HalfImages{std::vector<double>(n), std::vector<double>(n)});
     t.applyLuminanceHalves(E, images[0].a, images[0].b);
-    const std::vector<double> one(E.size(), 1.0);
-    t.applyLuminanceHalves(one, images[1].a, images[1].b);
+    const White& white = whiteImages(E.size(), true);
+    images[1].a = white.a;
+    images[1].b = white.b;
     const size_t regions = s.visibility.size();
     // The JND figures have errors only where they were formed (a viewing model and regions).
     const bool jnd = std::any_of(s.visibility.begin(), s.visibility.end(),

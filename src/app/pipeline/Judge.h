@@ -23,10 +23,12 @@
 #pragma once
 
 #include <cstdint>
+#include <deque>
 #include <filesystem>
 #include <functional>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <span>
@@ -221,8 +223,18 @@ class Judge {
     std::vector<uint8_t> reference_;
     std::unique_ptr<ImageObjective> eq2_;          // eq. 2 on the part mask, built once
     std::unique_ptr<UnbiasedObjective> unbiased_;  // U on the part mask, built once
+    // The white furnace's mean image and halves (E all 1 of the scored light's size): the same
+    // for every light scored, so rendered once per judge and size (whiteImages).
+    struct White {
+        size_t size = 0;
+        std::vector<double> mean, a, b;
+    };
+    mutable std::mutex whiteMutex_;
+    mutable std::deque<White> white_;  // a deque: a White handed out stays where it is
 
     void buildObjectives();
+    /// The white furnace's images for an E of `size` values (rendered on first use).
+    const White& whiteImages(size_t size, bool halves) const;
     /// The scores from the light's half images and the white furnace's (means: (a + b)/2
     /// unless given); `bank`: the JND's band filters on the part, built once (null: per call).
     JudgeScore scoreImages(std::span<const double> E, std::span<const double> ya,
