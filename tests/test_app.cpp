@@ -189,10 +189,30 @@ TEST(RenderBench, RendererAndBareEmbreeTraceTheSameCameraRays) {
         EXPECT_GE(row.bare.rays, 8u * 8u * 2u) << row.map;
         EXPECT_GT(row.heightfield.vertexBytes, 0u) << row.map;
         EXPECT_GT(row.ratio(), 0) << row.map;
+        // The footprint's rays: at least its camera rays, at most every pixel's rays.
+        EXPECT_LE(row.rendererFootprint.rays, row.renderer.rays) << row.map;
+        EXPECT_LE(row.bareFootprint.rays, row.bare.rays) << row.map;
+        EXPECT_GT(row.bareFootprint.rays, 0u) << row.map;
+        EXPECT_GT(row.footprintRatio(), 0) << row.map;
+    }
+    {
+        // Both loops trace the footprint's camera rays: with maxDepth 1 they count the same.
+        SceneDesc d = readSceneFile(s.scene);
+        d.camera.width = d.camera.height = 8;
+        d.render.maxDepth = 1;
+        auto scene = loadScene(d);
+        uint64_t footprint = 0;
+        for (const PixelSpan& sp : partFootprint(*scene)) footprint += uint64_t(sp.end - sp.begin);
+        RenderOptions opt = renderOptionsFor(*scene);
+        opt.spp = 2;
+        opt.cullBackground = true;
+        EXPECT_EQ(benchRenderer(*scene, opt).rays, 2 * footprint);
+        EXPECT_EQ(benchBareEmbree(*scene, opt).rays, 2 * footprint);
     }
     const auto csv = lines(r.csv());
     ASSERT_EQ(csv.size(), 3u);
     EXPECT_EQ(csv[0].rfind("height_map,", 0), 0u);
+    EXPECT_NE(csv[0].find(",footprint_ratio"), std::string::npos);
     EXPECT_EQ(csv[2].rfind("16x16,", 0), 0u);
 
     o.repeats = 0;

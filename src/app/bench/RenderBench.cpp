@@ -18,23 +18,29 @@ namespace {
 
 RenderBenchRow measure(const Scene& scene, const std::string& name, double genSeconds,
                        const RenderBenchOptions& o) {
-    RenderOptions opt = renderOptionsFor(scene);
-    opt.spp = o.spp;
-    opt.threads = o.threads;
-    opt.cullBackground = false;  // the bare Embree loop traces every camera ray: the same rays
+    RenderOptions all = renderOptionsFor(scene);
+    all.spp = o.spp;
+    all.threads = o.threads;
+    all.cullBackground = false;  // every pixel's camera rays, in both loops: the same rays
+    RenderOptions part = all;
+    part.cullBackground = true;  // the footprint's pixels, in both loops
     RenderBenchRow r;
     r.map = name;
     r.genSeconds = genSeconds;
     r.heightfield = scene.surface->stats();
-    // Interleaved, so that both see the same machine state.
-    std::vector<ThroughputRow> ren, bare;
+    // Interleaved, so that all four see the same machine state.
+    std::vector<ThroughputRow> ren, bare, renPart, barePart;
     for (int i = 0; i < o.repeats; ++i) {
         throwIfInterrupted();
-        ren.push_back(benchRenderer(scene, opt));
-        bare.push_back(benchBareEmbree(scene, opt));
+        ren.push_back(benchRenderer(scene, all));
+        bare.push_back(benchBareEmbree(scene, all));
+        renPart.push_back(benchRenderer(scene, part));
+        barePart.push_back(benchBareEmbree(scene, part));
     }
     r.renderer = medianThroughput(ren);
     r.bare = medianThroughput(bare);
+    r.rendererFootprint = medianThroughput(renPart);
+    r.bareFootprint = medianThroughput(barePart);
     return r;
 }
 
@@ -49,9 +55,21 @@ ThroughputRow medianThroughput(const std::vector<ThroughputRow>& rows) {
     return m;
 }
 
-double RenderBenchRow::ratio() const {
+namespace {
+
+double throughputRatio(const ThroughputRow& renderer, const ThroughputRow& bare) {
     const double b = bare.raysPerSecond();
     return b > 0 ? renderer.raysPerSecond() / b : 0;
+}
+
+}  // namespace
+
+double RenderBenchRow::ratio() const {
+    return throughputRatio(renderer, bare);
+}
+
+double RenderBenchRow::footprintRatio() const {
+    return throughputRatio(rendererFootprint, bareFootprint);
 }
 
 RenderBenchResult runRenderBench(const RenderBenchOptions& o) {
@@ -97,14 +115,19 @@ std::string RenderBenchResult::csv() const {
     std::ostringstream os;
     os << "height_map,generate_s,build_s,vertex_bytes,embree_bytes,embree_peak_bytes,"
           "image,spp,renderer_rays,renderer_s,renderer_rays_per_s,bare_rays,bare_s,"
-          "bare_rays_per_s,ratio\n";
+          "bare_rays_per_s,ratio,footprint_renderer_rays,footprint_renderer_s,"
+          "footprint_renderer_rays_per_s,footprint_bare_rays,footprint_bare_s,"
+          "footprint_bare_rays_per_s,footprint_ratio\n";
     for (const RenderBenchRow& r : rows)
         os << r.map << ',' << r.genSeconds << ',' << r.heightfield.buildSeconds << ','
            << r.heightfield.vertexBytes << ',' << r.heightfield.embreeBytes << ','
            << r.heightfield.embreePeakBytes << ',' << options.resolution << ',' << options.spp
            << ',' << r.renderer.rays << ',' << r.renderer.seconds << ','
            << r.renderer.raysPerSecond() << ',' << r.bare.rays << ',' << r.bare.seconds << ','
-           << r.bare.raysPerSecond() << ',' << r.ratio() << '\n';
+           << r.bare.raysPerSecond() << ',' << r.ratio() << ',' << r.rendererFootprint.rays << ','
+           << r.rendererFootprint.seconds << ',' << r.rendererFootprint.raysPerSecond() << ','
+           << r.bareFootprint.rays << ',' << r.bareFootprint.seconds << ','
+           << r.bareFootprint.raysPerSecond() << ',' << r.footprintRatio() << '\n';
     return os.str();
 }
 

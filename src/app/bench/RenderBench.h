@@ -1,6 +1,7 @@
 // `scratchlight bench render`: renderer rays/s next to bare Embree closest-hit rays/s on the same
-// height field in the same run (render/Benchmark.h), and the height field's build time and
-// memory, for an optional scene file and synthetic height maps of several sizes.
+// height field in the same run (render/Benchmark.h), on every pixel and on the part's footprint
+// only, and the height field's build time and memory, for an optional scene file and synthetic
+// height maps of several sizes.
 #pragma once
 
 #include <filesystem>
@@ -27,8 +28,13 @@ struct RenderBenchRow {
     std::string map;        // scene file name or "NxN"
     double genSeconds = 0;  // generating the synthetic map (0 for a scene file)
     HeightfieldStats heightfield;
-    ThroughputRow renderer, bare;  // median over the repeats
-    double ratio() const;          // renderer rays/s over bare rays/s
+    ThroughputRow renderer, bare;  // every pixel's rays; median over the repeats
+    // The same on the part's footprint only (render/Footprint.h: the pixels the tracer, the
+    // precompute and the renderer trace by default); a background pixel's ray misses the part
+    // at once, cheap for both loops, which lifts the every-pixel ratio.
+    ThroughputRow rendererFootprint, bareFootprint;
+    double ratio() const;           // renderer rays/s over bare rays/s, every pixel
+    double footprintRatio() const;  // the same on the footprint's pixels
 };
 
 struct RenderBenchResult {
