@@ -17,6 +17,7 @@
 #include "app/pipeline/Cache.h"
 #include "app/pipeline/HeldOut.h"
 #include "app/pipeline/Search.h"
+#include "core/Color.h"
 #include "core/Rng.h"
 #include "io/GramFile.h"
 #include "objective/TransportLoss.h"
@@ -188,63 +189,73 @@ TEST(TransportGram, FormsOnActiveTexelsEqualTheWholeFormsOfAnEnvMapZeroElsewhere
 TEST(TransportGram, TheBuildIsEachEntrysSumOverThePixelsInOrderBitForBit) {
     // P = sym(T_aᵀ·Lap·T_b) and Q = sym(T_aᵀ·T_b), every entry summed over the pixels in
     // ascending order (Lap's row p: its neighbours' rows with −1, then its own with deg(p)),
-    // written out densely here: the build (in blocks of rows, on any number of threads) gives
-    // exactly these numbers, so Gram files stored by an earlier build of the same order stay
-    // valid under their revision.
-    auto s = smallScene(19);
-    const TransportMatrix t = halves(*s, 1);
-    const std::vector<uint8_t> mask = holedMask(t);
-    const size_t w = static_cast<size_t>(t.width), h = static_cast<size_t>(t.height);
-    const size_t n = t.cols(), st = static_cast<size_t>(t.stride());
-    auto val = [&](uint64_t k, int plane) { return double(t.values[k * st + size_t(plane)]); };
-    for (int threads : {1, 3}) {
-        const TransportGram g(t, mask, true, threads);
-        const size_t m = g.seen().size();
-        std::vector<int> index(n, -1);
-        for (size_t k = 0; k < m; ++k) index[g.seen()[k]] = static_cast<int>(k);
-        std::vector<double> P(m * m, 0.0), Q(m * m, 0.0), lap(m), b(m);
-        for (size_t p = 0; p < t.rows(); ++p) {
-            std::fill(lap.begin(), lap.end(), 0.0);
-            std::fill(b.begin(), b.end(), 0.0);
-            for (uint64_t k = t.rowPtr[p]; k < t.rowPtr[p + 1]; ++k)
-                b[size_t(index[t.colIdx[k]])] = val(k, 1);
-            bool hasLap = false;
-            if (mask[p]) {
-                int deg = 0;
-                auto gather = [&](size_t q, double f) {
-                    for (uint64_t k = t.rowPtr[q]; k < t.rowPtr[q + 1]; ++k)
-                        lap[size_t(index[t.colIdx[k]])] += f * val(k, 1);
-                };
-                const size_t x = p % w, y = p / w;
-                if (x + 1 < w && mask[p + 1]) gather(p + 1, -1.0), ++deg;
-                if (y + 1 < h && mask[p + w]) gather(p + w, -1.0), ++deg;
-                if (x > 0 && mask[p - 1]) gather(p - 1, -1.0), ++deg;
-                if (y > 0 && mask[p - w]) gather(p - w, -1.0), ++deg;
-                if (deg > 0) gather(p, deg), hasLap = true;
-            }
-            for (uint64_t k = t.rowPtr[p]; k < t.rowPtr[p + 1]; ++k) {
-                const size_t i = size_t(index[t.colIdx[k]]);
-                const double ai = val(k, 0);
-                for (uint64_t l = t.rowPtr[p]; l < t.rowPtr[p + 1]; ++l) {
-                    const size_t j = size_t(index[t.colIdx[l]]);
-                    Q[i * m + j] += ai * b[j];
+    // written out densely here: the build (in blocks of rows, a pixel's entries in a block
+    // several rows at a time, the rows of Lap·T_b over chunks of pixels, on any number of
+    // threads) gives exactly these numbers, so Gram files stored by an earlier build of the
+    // same order stay valid under their revision. 40² pixels: more than one chunk of them.
+    auto s = smallScene(40);
+    for (int channels : {1, 3})
+        for (int threads : {1, 3}) {
+            const TransportMatrix t = halves(*s, channels);
+            const std::vector<uint8_t> mask = holedMask(t);
+            const size_t w = static_cast<size_t>(t.width), h = static_cast<size_t>(t.height);
+            const size_t n = t.cols(), st = static_cast<size_t>(t.stride());
+            // An entry's luminance in a plane, as core/Color.h weighs the channels.
+            auto val = [&](uint64_t k, int plane) {
+                const float* v = t.values.data() + k * st + size_t(plane * channels);
+                if (channels == 1) return double(v[0]);
+                return luminance(1.0, 0.0, 0.0) * v[0] + luminance(0.0, 1.0, 0.0) * v[1] +
+                       luminance(0.0, 0.0, 1.0) * v[2];
+            };
+            const TransportGram g(t, mask, true, threads);
+            const size_t m = g.seen().size();
+            std::vector<int> index(n, -1);
+            for (size_t k = 0; k < m; ++k) index[g.seen()[k]] = static_cast<int>(k);
+            std::vector<double> P(m * m, 0.0), Q(m * m, 0.0), lap(m), b(m);
+            for (size_t p = 0; p < t.rows(); ++p) {
+                std::fill(lap.begin(), lap.end(), 0.0);
+                std::fill(b.begin(), b.end(), 0.0);
+                for (uint64_t k = t.rowPtr[p]; k < t.rowPtr[p + 1]; ++k)
+                    b[size_t(index[t.colIdx[k]])] = val(k, 1);
+                bool hasLap = false;
+                if (mask[p]) {
+                    int deg = 0;
+                    auto gather = [&](size_t q, double f) {
+                        for (uint64_t k = t.rowPtr[q]; k < t.rowPtr[q + 1]; ++k)
+                            lap[size_t(index[t.colIdx[k]])] += f * val(k, 1);
+                    };
+                    const size_t x = p % w, y = p / w;
+                    if (x + 1 < w && mask[p + 1]) gather(p + 1, -1.0), ++deg;
+                    if (y + 1 < h && mask[p + w]) gather(p + w, -1.0), ++deg;
+                    if (x > 0 && mask[p - 1]) gather(p - 1, -1.0), ++deg;
+                    if (y > 0 && mask[p - w]) gather(p - w, -1.0), ++deg;
+                    if (deg > 0) gather(p, deg), hasLap = true;
                 }
-                if (!hasLap) continue;
-                for (size_t j = 0; j < m; ++j)
-                    if (lap[j] != 0.0) P[i * m + j] += ai * lap[j];
+                for (uint64_t k = t.rowPtr[p]; k < t.rowPtr[p + 1]; ++k) {
+                    const size_t i = size_t(index[t.colIdx[k]]);
+                    const double ai = val(k, 0);
+                    for (uint64_t l = t.rowPtr[p]; l < t.rowPtr[p + 1]; ++l) {
+                        const size_t j = size_t(index[t.colIdx[l]]);
+                        Q[i * m + j] += ai * b[j];
+                    }
+                    if (!hasLap) continue;
+                    for (size_t j = 0; j < m; ++j)
+                        if (lap[j] != 0.0) P[i * m + j] += ai * lap[j];
+                }
             }
+            for (std::vector<double>* M : {&P, &Q})
+                for (size_t i = 0; i < m; ++i)
+                    for (size_t j = i + 1; j < m; ++j) {
+                        const double v = 0.5 * ((*M)[i * m + j] + (*M)[j * m + i]);
+                        (*M)[i * m + j] = (*M)[j * m + i] = v;
+                    }
+            size_t differ = 0;
+            for (size_t e = 0; e < m * m; ++e)
+                differ += (g.pairMatrix()[e] != P[e]) + (g.productMatrix()[e] != Q[e]);
+            EXPECT_EQ(differ, 0u) << channels << " channels, threads " << threads << ", " << m
+                                  << " seen texels";
+            EXPECT_GT(m, 64u);  // more than two blocks of rows
         }
-        for (std::vector<double>* M : {&P, &Q})
-            for (size_t i = 0; i < m; ++i)
-                for (size_t j = i + 1; j < m; ++j) {
-                    const double v = 0.5 * ((*M)[i * m + j] + (*M)[j * m + i]);
-                    (*M)[i * m + j] = (*M)[j * m + i] = v;
-                }
-        size_t differ = 0;
-        for (size_t e = 0; e < m * m; ++e)
-            differ += (g.pairMatrix()[e] != P[e]) + (g.productMatrix()[e] != Q[e]);
-        EXPECT_EQ(differ, 0u) << "threads " << threads << ", " << m << " seen texels";
-    }
 }
 
 TEST(TransportGram, RefusesWhatItCannotRepresent) {

@@ -1,5 +1,6 @@
 #include "transport/TransportGram.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -70,6 +71,11 @@ inline void forNeighbours(const uint8_t* mask, size_t w, size_t h, size_t p, F&&
     if (x > 0 && mask[p - 1]) f(p - 1);
     if (y > 0 && mask[p - w]) f(p - w);
 }
+
+// P's rows a thread sums at once (32 rows of the periodic lines' 1060 seen texels: 271 KB, in
+// a core's L2), and the pixels a thread takes at once for the rows of Lap·T_b.
+constexpr size_t kRowsPerBlock = 32;
+constexpr size_t kPixelsPerChunk = 1024;
 
 void check(const TransportMatrix& t, std::span<const uint8_t> pairMask) {
     if (t.storage != TransportStorage::Sparse)
@@ -142,48 +148,66 @@ TransportGram::TransportGram(const TransportMatrix& t, std::span<const uint8_t> 
             seen_.push_back(static_cast<uint16_t>(c));
         }
     m_ = seen_.size();
-    // acc += s · lum(T_b row q).
-    auto addRow = [&](double* acc, size_t q, double s) {
-        for (uint64_t k = t.rowPtr[q]; k < t.rowPtr[q + 1]; ++k)
-            acc[index_[t.colIdx[k]]] += s * lum(k, 1);
-    };
+    // Each entry's place in seen_ (T's columns are texels, < 65536: colIdx is 16-bit).
+    const uint64_t nnz = t.rowPtr[rows];
+    std::vector<uint16_t> at(nnz);
+    forBlocks(rows, kPixelsPerChunk, threads, [&](size_t p0, size_t p1) {
+        for (uint64_t k = t.rowPtr[p0]; k < t.rowPtr[p1]; ++k)
+            at[k] = static_cast<uint16_t>(index_[t.colIdx[k]]);
+    });
     // Row p of Lap·T_b, deg(p)·T_b[p] − Σ_{q ~ p} T_b[q], merged once per pixel (its texels
     // each once, at their places in seen_): a row of P then takes one multiply-add per texel of
-    // it, where adding the neighbours' rows one by one took one per entry of each.
+    // it, where adding the neighbours' rows one by one took one per entry of each. Built over
+    // chunks of pixels on every thread, each row on its own (the same values whatever the
+    // threads): its texels counted first, so the rows are written once where they stay.
+    const uint8_t* mask = pairMask.data();
+    // f(q, s) for the rows that make row p of Lap·T_b (none where p has no pair or no entry).
+    auto lapParts = [&](size_t p, auto&& f) {
+        if (!mask[p] || t.rowPtr[p + 1] == t.rowPtr[p]) return;
+        int deg = 0;
+        forNeighbours(mask, w, h, p, [&](size_t q) {
+            f(q, -1.0);
+            ++deg;
+        });
+        if (deg > 0) f(p, static_cast<double>(deg));
+    };
+    const size_t chunks = (rows + kPixelsPerChunk - 1) / kPixelsPerChunk;
     std::vector<uint64_t> lapPtr(rows + 1, 0);
-    std::vector<uint32_t> lapCol;
-    std::vector<double> lapVal;
-    {
-        std::vector<double> acc(m_, 0.0);
-        std::vector<uint32_t> touched;
-        std::vector<uint8_t> on(m_, 0);
-        auto gather = [&](size_t q, double s) {
-            for (uint64_t k = t.rowPtr[q]; k < t.rowPtr[q + 1]; ++k) {
-                const auto j = static_cast<uint32_t>(index_[t.colIdx[k]]);
-                if (!on[j]) on[j] = 1, touched.push_back(j);
-                acc[j] += s * lum(k, 1);
-            }
-        };
-        const uint8_t* mask = pairMask.data();
-        for (size_t p = 0; p < rows; ++p) {
-            lapPtr[p + 1] = lapPtr[p];
-            if (!mask[p] || t.rowPtr[p + 1] == t.rowPtr[p]) continue;
-            int deg = 0;
-            forNeighbours(mask, w, h, p, [&](size_t q) {
-                gather(q, -1.0);
-                ++deg;
+    forBlocks(chunks, 1, threads, [&](size_t c0, size_t c1) {
+        std::vector<uint32_t> stamp(m_, 0);
+        uint32_t now = 0;
+        for (size_t p = c0 * kPixelsPerChunk; p < std::min(rows, c1 * kPixelsPerChunk); ++p) {
+            ++now;
+            uint64_t merged = 0;
+            lapParts(p, [&](size_t q, double) {
+                for (uint64_t k = t.rowPtr[q]; k < t.rowPtr[q + 1]; ++k)
+                    if (stamp[at[k]] != now) stamp[at[k]] = now, ++merged;
             });
-            if (deg > 0) gather(p, deg);
-            for (uint32_t j : touched) {
-                lapCol.push_back(j);
-                lapVal.push_back(acc[j]);
-                acc[j] = 0;
-                on[j] = 0;
-            }
-            touched.clear();
-            lapPtr[p + 1] = lapCol.size();
+            lapPtr[p + 1] = merged;
         }
-    }
+    });
+    for (size_t p = 0; p < rows; ++p) lapPtr[p + 1] += lapPtr[p];
+    std::vector<uint16_t> lapCol(lapPtr[rows]);
+    std::vector<double> lapVal(lapPtr[rows]);
+    forBlocks(chunks, 1, threads, [&](size_t c0, size_t c1) {
+        std::vector<double> acc(m_, 0.0);
+        std::vector<uint8_t> on(m_, 0);
+        for (size_t p = c0 * kPixelsPerChunk; p < std::min(rows, c1 * kPixelsPerChunk); ++p) {
+            uint64_t end = lapPtr[p];
+            lapParts(p, [&](size_t q, double s) {
+                for (uint64_t k = t.rowPtr[q]; k < t.rowPtr[q + 1]; ++k) {
+                    const uint16_t j = at[k];
+                    if (!on[j]) on[j] = 1, lapCol[end++] = j;
+                    acc[j] += s * lum(k, 1);
+                }
+            });
+            for (uint64_t l = lapPtr[p]; l < end; ++l) {
+                lapVal[l] = acc[lapCol[l]];
+                acc[lapCol[l]] = 0;
+                on[lapCol[l]] = 0;
+            }
+        }
+    });
     p_.assign(m_ * m_, 0.0);
     if (products) q_.assign(m_ * m_, 0.0);
     // P's rows in blocks of kRowsPerBlock, each block by one thread in pixel order: pixel p adds
@@ -191,25 +215,80 @@ TransportGram::TransportGram(const TransportMatrix& t, std::span<const uint8_t> 
     // per block while they are in cache (a block's rows of P and Q stay in L2), where summing
     // row i over column i of T_a read every pixel's Lap row once per texel it sees, from
     // memory (~12 bytes per multiply-add: the periodic lines' 1.5·10⁹ took 4.9 s of CPU).
+    // A block reads only its own entries of T_a (bucketed by block, pixels ascending), and a
+    // pixel's entries in the block share each read of its rows (up to four rows of P at once).
     // Every P[i][j] is the same sum in the same order (pixels ascending), so the matrices are
     // the column order's bit for bit.
-    constexpr size_t kRowsPerBlock = 32;
     const size_t blocks = (m_ + kRowsPerBlock - 1) / kRowsPerBlock;
+    std::vector<uint64_t> blockPtr(blocks + 1, 0);
+    for (uint64_t k = 0; k < nnz; ++k) ++blockPtr[at[k] / kRowsPerBlock + 1];
+    for (size_t b = 0; b < blocks; ++b) blockPtr[b + 1] += blockPtr[b];
+    std::vector<uint32_t> entryPixel(nnz);
+    std::vector<uint16_t> entryInRow(nnz);  // its place in the pixel's row (< cols() <= 65536)
+    {
+        std::vector<uint64_t> next(blockPtr.begin(), blockPtr.end() - 1);
+        for (size_t p = 0; p < rows; ++p)
+            for (uint64_t k = t.rowPtr[p]; k < t.rowPtr[p + 1]; ++k) {
+                const uint64_t e = next[at[k] / kRowsPerBlock]++;
+                entryPixel[e] = static_cast<uint32_t>(p);
+                entryInRow[e] = static_cast<uint16_t>(k - t.rowPtr[p]);
+            }
+    }
+    // row[r][cols[l]] += a[r]·vals[l] for R rows at once, l over one row of Lap·T_b or T_b.
+    auto addRows = [](double* const* row, const double* a, int R, const uint16_t* cols,
+                      const double* vals, size_t len) {
+        if (R == 4) {
+            for (size_t l = 0; l < len; ++l) {
+                const double v = vals[l];
+                const size_t c = cols[l];
+                row[0][c] += a[0] * v;
+                row[1][c] += a[1] * v;
+                row[2][c] += a[2] * v;
+                row[3][c] += a[3] * v;
+            }
+        } else if (R == 2) {
+            for (size_t l = 0; l < len; ++l) {
+                const double v = vals[l];
+                const size_t c = cols[l];
+                row[0][c] += a[0] * v;
+                row[1][c] += a[1] * v;
+            }
+        } else {
+            for (size_t l = 0; l < len; ++l) row[0][cols[l]] += a[0] * vals[l];
+        }
+    };
     forBlocks(blocks, 1, threads, [&](size_t b0, size_t b1) {
+        std::vector<double> rowB;  // T_b's row of a pixel, for Q
         for (size_t b = b0; b < b1; ++b) {
-            const auto i0 = static_cast<int32_t>(b * kRowsPerBlock);
-            const auto i1 = static_cast<int32_t>(std::min(m_, (b + 1) * kRowsPerBlock));
-            for (size_t p = 0; p < rows; ++p)
-                for (uint64_t k = t.rowPtr[p]; k < t.rowPtr[p + 1]; ++k) {
-                    const int32_t i = index_[t.colIdx[k]];
-                    if (i < i0 || i >= i1) continue;
-                    const double ai = lum(k, 0);
-                    const auto iu = static_cast<size_t>(i);
-                    if (products) addRow(q_.data() + iu * m_, p, ai);
-                    double* pr = p_.data() + iu * m_;
-                    for (uint64_t l = lapPtr[p]; l < lapPtr[p + 1]; ++l)
-                        pr[lapCol[l]] += ai * lapVal[l];
+            const uint64_t e1 = blockPtr[b + 1];
+            for (uint64_t e = blockPtr[b]; e < e1;) {
+                const uint32_t p = entryPixel[e];
+                uint64_t g = e + 1;
+                while (g < e1 && entryPixel[g] == p) ++g;
+                const uint16_t* lc = lapCol.data() + lapPtr[p];
+                const double* lv = lapVal.data() + lapPtr[p];
+                const size_t nl = lapPtr[p + 1] - lapPtr[p];
+                const uint64_t k0 = t.rowPtr[p], kb = t.rowPtr[p + 1] - k0;
+                if (products) {
+                    rowB.resize(kb);
+                    for (uint64_t k = 0; k < kb; ++k) rowB[k] = lum(k0 + k, 1);
                 }
+                while (e < g) {
+                    const int R = g - e >= 4 ? 4 : g - e >= 2 ? 2 : 1;
+                    double* pr[4];
+                    double* qr[4];
+                    double a[4];
+                    for (int r = 0; r < R; ++r) {
+                        const uint64_t k = k0 + entryInRow[e + static_cast<uint64_t>(r)];
+                        a[r] = lum(k, 0);
+                        pr[r] = p_.data() + size_t{at[k]} * m_;
+                        qr[r] = products ? q_.data() + size_t{at[k]} * m_ : nullptr;
+                    }
+                    if (products) addRows(qr, a, R, at.data() + k0, rowB.data(), kb);
+                    addRows(pr, a, R, lc, lv, nl);
+                    e += static_cast<uint64_t>(R);
+                }
+            }
         }
     });
     // sym(M) in place: the pairs (i, j), (j, i) get their mean, so P is exactly symmetric.

@@ -20,8 +20,9 @@
 //
 // For a gray E (luminance of each entry, as TransportColumns). Only the texels some pixel sees
 // (T's non-empty columns) have rows and columns in P and Q: the others' are zero (at 256² the
-// bundled part sees about half the sky). P's rows are summed in blocks, a block by one thread
-// over the pixels in order (each entry the same sum in the same order whatever the threads),
+// bundled part sees about half the sky). The rows of Lap·T_b are merged over chunks of pixels
+// on every thread; P's rows are summed in blocks, a block by one thread over its own entries of
+// T_a, pixels in order (each entry the same sum in the same order whatever the threads),
 // and P, Q are formed whole before they are used; a form of at most
 // kSerialEntries entries runs on the calling thread (waking other threads for a product of a
 // few MB costs more than it saves on a shared machine): results do not depend on the number of
