@@ -202,6 +202,12 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
                          "The default is 0.45 (0: off)");
     if (o.borderPieceMin < 1)
         throw inputError(option("selfsim-border-piece-min"), "must be >= 1", "The default is 40");
+    if (o.borderPieceRim < 0)
+        throw inputError(option("selfsim-border-piece-rim"), "must be >= 0",
+                         "The default is 2 (0: off)");
+    if (!(o.borderPieceSigma >= 0.0 && o.borderPieceSigma < 1.0))
+        throw inputError(option("selfsim-border-piece-sigma"), "must be in [0, 1)",
+                         "The default is 0.01 (0: every map)");
     if (o.border < 0)
         throw inputError(option("selfsim-border"), "must be >= 0", "The default is 40");
     if (o.minRegion < 1)
@@ -579,10 +585,16 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     // (8-connected samples of the region whose residual is negative: material removed, as by a
     // groove, a pit or a dent); the pieces that do not reach the border are judged as regions
     // (steps 6-7), then by their shape (keepRegion)
-    std::vector<uint8_t> pieceSeen(o.borderPieceFill > 0.0 ? n : 0, 0);
+    // ... on a texture only: where the map's own repeats explain it to within
+    // borderPieceSigma of its RMS (a relief on a flat background, as a logo, not a texture),
+    // a step of the relief leaves a band below it as smooth as a defect
+    const bool splitBorder =
+        o.borderPieceFill > 0.0 && !(out.sigma < o.borderPieceSigma * out.textureRms);
+    std::vector<uint8_t> pieceSeen(splitBorder ? n : 0, 0), inRegion(pieceSeen.size(), 0);
     std::vector<size_t> piece;
     const auto below = [&](size_t q) { return grows(q) && out.residual[q] < 0.0f; };
     auto keepBorderPieces = [&](const Region& reg) {
+        for (size_t k = reg.begin; k < reg.end; ++k) inRegion[members[k]] = 1;
         for (size_t k = reg.begin; k < reg.end; ++k) {
             const size_t i0 = members[k];
             if (pieceSeen[i0] || !(out.residual[i0] < 0.0f)) continue;
@@ -590,8 +602,25 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             const bool atBorder = floodRegion(i0, pieceSeen, piece, below);
             const float peak = peakOf(piece);
             if (atBorder || gate(piece, peak) != Gate::Pass) continue;
-            if (keepRegion(piece, peak, true)) ++out.borderPieces;
+            if (!keepRegion(piece, peak, true)) continue;
+            ++out.borderPieces;
+            // its pile-up: the region's samples above the texture within borderPieceRim
+            // samples (Chebyshev) of what the piece kept
+            const int reach = o.borderPieceRim;
+            for (const size_t i : kept) {
+                const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
+                for (int qy = std::max(0, py - reach); qy <= std::min(H - 1, py + reach); ++qy)
+                    for (int qx = std::max(0, px - reach); qx <= std::min(W - 1, px + reach);
+                         ++qx) {
+                        const size_t q = static_cast<size_t>(qy) * W + qx;
+                        if (inRegion[q] && !out.map[q] && out.residual[q] >= 0.0f) {
+                            out.map[q] = 255;
+                            ++out.borderRim;
+                        }
+                    }
+            }
         }
+        for (size_t k = reg.begin; k < reg.end; ++k) inRegion[members[k]] = 0;
     };
     for (const Region& reg : regions) {
         const std::span<const size_t> samples(members.data() + reg.begin, reg.end - reg.begin);
