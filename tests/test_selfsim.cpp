@@ -393,9 +393,10 @@ TEST(SelfSimMap, ABorderRegionsDefectPieceIsKeptItsRuggedTexturePieceDropped) {
 
     SelfSimMapOptions off8d;
     off8d.borderPieceFill = 0;
-    const SelfSimMapOptions on;
+    SelfSimMapOptions on;  // the pieces alone: their pile-up (borderPieceRim) is tested below
+    on.borderPieceRim = 0;
     ASSERT_GT(on.borderPieceFill, 0.0);
-    SelfSimMapOptions anyShape;
+    SelfSimMapOptions anyShape = on;
     anyShape.borderPieceFill = 1e-6;
     const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off8d),
                      b = detectSelfSimDefects(h, kW, kH, on),
@@ -422,6 +423,92 @@ TEST(SelfSimMap, ABorderRegionsDefectPieceIsKeptItsRuggedTexturePieceDropped) {
     size_t lost = 0;
     for (size_t i = 0; i < h.size(); ++i) lost += a.map[i] && !b.map[i] ? 1 : 0;
     EXPECT_EQ(lost, 0u) << "samples marked without step 8d and not with it";
+}
+
+// A pit with a pile-up rim (model A's shape, synth/DefectInsert.h: a ring of width ρ/2 outside
+// the crater, profile h_r·(1 − u²)²) whose rim touches a raised ridge that runs from border to
+// border: the crater is kept as a border piece (step 8d); with borderPieceRim its rim, raised and
+// within 2 samples of the crater, is marked too; the ridge, more than 2 samples from the crater,
+// is not marked either way.
+TEST(SelfSimMap, ABorderPiecesPileUpIsMarkedTheRaisedTextureBesideItIsNot) {
+    std::vector<float> h = striations(53);
+    std::vector<uint8_t> ridge(h.size(), 0), crater(h.size(), 0), rim(h.size(), 0);
+    groove(h, ridge, 0, 112, kW - 1, 112, 10, -3.0);  // raised, across the whole map, to y 117
+    const double cx = 120, rho = 7, d = 3, w = rho / 2, cy = 117 + rho + w;
+    pit(h, crater, cx, cy, rho, d);
+    // the rim holds half the crater's volume: 2π (ρ + w/2) w h_r 8/15 = 0.5 π ρ² d / 2
+    const double hr = 0.5 * rho * rho * d / 2 / (2 * (rho + w / 2) * w * 8 / 15);
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            const double u = (std::hypot(x - cx, y - cy) - rho - w / 2) / (w / 2);
+            if (std::abs(u) >= 1) continue;
+            const double v = hr * (1 - u * u) * (1 - u * u);
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            h[i] += static_cast<float>(v);
+            rim[i] = v >= 0.1 * d && !crater[i] ? 1 : 0;  // labelled as the insertion labels
+        }
+    for (size_t i = 0; i < h.size(); ++i) ridge[i] = ridge[i] && !crater[i] && !rim[i];
+
+    SelfSimMapOptions noRim;
+    noRim.borderPieceRim = 0;
+    const SelfSimMapOptions on;
+    ASSERT_EQ(on.borderPieceRim, 2);
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, noRim),
+                     b = detectSelfSimDefects(h, kW, kH, on);
+    const Counts ca = count(a.map, crater, on.border), cb = count(b.map, crater, on.border);
+    const Counts ra = count(a.map, rim, on.border), rb = count(b.map, rim, on.border);
+    const Counts ga = count(a.map, ridge, on.border), gb = count(b.map, ridge, on.border);
+    EXPECT_GE(a.borderPieces, 1u);
+    EXPECT_GE(ca.hits, ca.truth * 8 / 10) << "the crater: " << ca.hits << " of " << ca.truth;
+    EXPECT_EQ(cb.hits, ca.hits) << "the crater, with its rim";
+    EXPECT_EQ(ra.hits, 0u) << "the rim without borderPieceRim (a raised piece is never kept)";
+    EXPECT_GE(rb.hits, rb.truth / 2) << "the rim with it: " << rb.hits << " of " << rb.truth;
+    EXPECT_EQ(b.borderRim, rb.marked - ra.marked);
+    EXPECT_EQ(ga.hits, 0u) << "the ridge, without the rim rule";
+    EXPECT_EQ(gb.hits, 0u) << "the ridge, with it: more than 2 samples from the crater";
+    size_t added = 0, outside = 0;
+    for (size_t i = 0; i < h.size(); ++i) {
+        if (!b.map[i] || a.map[i]) continue;
+        ++added;
+        outside += rim[i] ? 0 : 1;
+    }
+    EXPECT_EQ(added, b.borderRim);
+    EXPECT_LE(outside, added / 4) << "added samples outside the rim's label";
+}
+
+// Step 8d runs on a texture, not on a map that its own repeats explain almost exactly (a relief
+// on a flat background, as the logo: its residual's σ_0 is 1/250-1/440 of its RMS, the measured
+// textures' 1/7-1/56, and a step of the relief leaves a band below it as smooth as a defect).
+// The ridge-and-pit scene of the border pieces' test, whose σ_0 is ~8 % of its RMS: with the
+// default share the pit is kept, as with no share at all; with a share above the scene's own,
+// the scene counts as a relief and the map is the one without step 8d.
+TEST(SelfSimMap, BorderPiecesAreSplitOnATextureNotOnAMapItsRepeatsExplain) {
+    std::vector<float> h = striations(51);
+    std::vector<uint8_t> pitTruth(h.size(), 0), ridge(h.size(), 0);
+    groove(h, ridge, 0, 112, kW - 1, 112, 10, -3.0);
+    pit(h, pitTruth, 90, 122, 7, 3.0);
+    for (size_t i = 0; i < h.size(); ++i) pitTruth[i] = pitTruth[i] && !ridge[i];
+    SelfSimMapOptions off8d;
+    off8d.borderPieceFill = 0;
+    const SelfSimMapOptions on;
+    SelfSimMapOptions everyMap, relief;
+    everyMap.borderPieceSigma = 0;
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off8d),
+                     b = detectSelfSimDefects(h, kW, kH, on),
+                     c = detectSelfSimDefects(h, kW, kH, everyMap);
+    const double share = b.sigma / b.textureRms;
+    EXPECT_GT(share, 2 * on.borderPieceSigma) << "a texture";
+    EXPECT_LT(share, 0.5);
+    relief.borderPieceSigma = 0.5;  // the scene's share below it: a relief
+    const SelfSimMap d = detectSelfSimDefects(h, kW, kH, relief);
+    const Counts pa = count(a.map, pitTruth, on.border), pb = count(b.map, pitTruth, on.border);
+    EXPECT_EQ(pa.hits, 0u) << "the pit without step 8d";
+    EXPECT_GE(b.borderPieces, 1u);
+    EXPECT_GE(pb.hits, pb.truth * 8 / 10)
+        << "the pit on a texture: " << pb.hits << " of " << pb.truth;
+    EXPECT_EQ(b.map, c.map) << "on a texture the share changes nothing";
+    EXPECT_EQ(d.borderPieces, 0u);
+    EXPECT_EQ(d.map, a.map) << "a relief: no piece split off, the map without step 8d";
 }
 
 TEST(SelfSimMap, GaussianTailInverseIsExact) {
@@ -468,6 +555,12 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o = {};
     o.tailQuantile = 1.0;
     expectNamed(o, "selfsim-tail-quantile");
+    o = {};
+    o.borderPieceRim = -1;
+    expectNamed(o, "selfsim-border-piece-rim");
+    o = {};
+    o.borderPieceSigma = 1.0;
+    expectNamed(o, "selfsim-border-piece-sigma");
     o = {};
     o.textureNfa = -1;
     expectNamed(o, "selfsim-texture-nfa");

@@ -383,6 +383,14 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--selfsim-border-piece-min", q.borderPieceMin,
                   "selfsim: ... and it keeps at least this many samples")
         ->capture_default_str();
+    c->add_option("--selfsim-border-piece-rim", q.borderPieceRim,
+                  "selfsim: ... a kept piece takes its region's raised samples within this many "
+                  "samples of it, its pile-up (0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-border-piece-sigma", q.borderPieceSigma,
+                  "selfsim: ... pieces only on a map whose residual sigma is at least this share "
+                  "of its RMS (a texture, not a relief; 0: every map)")
+        ->capture_default_str();
     c->add_option("--selfsim-extend-steps", q.extendSteps,
                   "selfsim: a kept region grows this many samples further into its flanks (0: "
                   "off)")

@@ -202,6 +202,12 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
                          "The default is 0.45 (0: off)");
     if (o.borderPieceMin < 1)
         throw inputError(option("selfsim-border-piece-min"), "must be >= 1", "The default is 40");
+    if (o.borderPieceRim < 0)
+        throw inputError(option("selfsim-border-piece-rim"), "must be >= 0",
+                         "The default is 2 (0: off)");
+    if (!(o.borderPieceSigma >= 0.0 && o.borderPieceSigma < 1.0))
+        throw inputError(option("selfsim-border-piece-sigma"), "must be in [0, 1)",
+                         "The default is 0.01 (0: every map)");
     if (o.border < 0)
         throw inputError(option("selfsim-border"), "must be >= 0", "The default is 40");
     if (o.minRegion < 1)
@@ -447,39 +453,58 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     // peak score; 6b: the texture's own tail of those peaks; 6c: the regions kept
     const float thr = static_cast<float>(out.threshold);
     const float grow = static_cast<float>(std::min(o.growSigma, out.threshold));
+    // f(q) for each of the 8 neighbours q of sample i that lie inside the border (and i itself)
+    auto forEachNeighbour = [&](size_t i, auto&& f) {
+        const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
+        for (int qy = py - 1; qy <= py + 1; ++qy)
+            for (int qx = px - 1; qx <= px + 1; ++qx)
+                if (inside(qx, qy)) f(static_cast<size_t>(qy) * W + qx);
+    };
+    // The 8-connected region from sample i0 over the samples inside the border that `accept`
+    // admits and `seen` does not hold yet: appended to `samples` in the order reached (the
+    // vector is the flood's queue), each marked in `seen`. True when it reaches the border's
+    // inner line.
+    auto floodRegion = [&](size_t i0, std::vector<uint8_t>& seen, std::vector<size_t>& samples,
+                           auto&& accept) {
+        const size_t begin = samples.size();
+        samples.push_back(i0);
+        seen[i0] = 1;
+        bool atBorder = false;
+        for (size_t j = begin; j < samples.size(); ++j) {
+            const size_t i = samples[j];
+            const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
+            if (px == b || py == b || px == W - b - 1 || py == H - b - 1) atBorder = true;
+            forEachNeighbour(i, [&](size_t q) {
+                if (seen[q] || !accept(q)) return;
+                seen[q] = 1;
+                samples.push_back(q);
+            });
+        }
+        return atBorder;
+    };
+    auto peakOf = [&](std::span<const size_t> samples) {
+        float peak = 0.0f;
+        for (const size_t i : samples) peak = std::max(peak, zDetect[i]);
+        return peak;
+    };
     struct Region {
         size_t begin, end;  // its samples in `members`
         float peak;         // its largest zDetect
         bool atBorder;
     };
     std::vector<Region> regions;
-    std::vector<size_t> members, stack;
+    std::vector<size_t> members;
     std::vector<uint8_t> seen(n, 0);
+    const auto grows = [&](size_t q) { return zGrow[q] >= grow; };
     for (int y = b; y < H - b; ++y)
         for (int x = b; x < W - b; ++x) {
             const size_t i0 = static_cast<size_t>(y) * W + x;
             if (zDetect[i0] >= thr) ++out.detections;
-            if (seen[i0] || !(zGrow[i0] >= grow)) continue;
-            stack.assign(1, i0);
-            seen[i0] = 1;
+            if (seen[i0] || !grows(i0)) continue;
             Region reg{members.size(), 0, 0.0f, false};
-            while (!stack.empty()) {
-                const size_t i = stack.back();
-                stack.pop_back();
-                members.push_back(i);
-                const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
-                reg.peak = std::max(reg.peak, zDetect[i]);
-                if (px == b || py == b || px == W - b - 1 || py == H - b - 1) reg.atBorder = true;
-                for (int qy = py - 1; qy <= py + 1; ++qy)
-                    for (int qx = px - 1; qx <= px + 1; ++qx) {
-                        if (!inside(qx, qy)) continue;
-                        const size_t q = static_cast<size_t>(qy) * W + qx;
-                        if (seen[q] || !(zGrow[q] >= grow)) continue;
-                        seen[q] = 1;
-                        stack.push_back(q);
-                    }
-            }
+            reg.atBorder = floodRegion(i0, seen, members, grows);
             reg.end = members.size();
+            reg.peak = peakOf({members.data() + reg.begin, reg.end - reg.begin});
             regions.push_back(reg);
         }
     out.candidates = regions.size();
@@ -489,7 +514,21 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
         for (const Region& reg : regions) peaks.push_back(reg.peak);
         out.textureThreshold = textureTailThreshold(peaks, o.textureQuantile, o.textureNfa);
     }
-    stack.clear();
+    // steps 6-7's gates on a region (or a border piece) with its peak score: a detection and
+    // minRegion samples, its largest |r| at least textureRms × the texture's RMS, its peak
+    // above the texture's own tail
+    enum class Gate { Small, Shallow, Texture, Pass };
+    auto gate = [&](std::span<const size_t> samples, float peak) {
+        if (!(peak >= thr) || static_cast<int>(samples.size()) < o.minRegion) return Gate::Small;
+        if (o.textureRms > 0.0) {
+            float deepest = 0.0f;
+            for (const size_t i : samples) deepest = std::max(deepest, std::abs(out.residual[i]));
+            if (deepest < o.textureRms * out.textureRms) return Gate::Shallow;
+        }
+        if (peak < out.textureThreshold) return Gate::Texture;
+        return Gate::Pass;
+    };
+    std::vector<size_t> stack;
     std::vector<int8_t> regionSign(o.extendSteps > 0 ? n : 0, 0);
     std::vector<float> regionLevel(regionSign.size(), 0.0f);
     std::vector<size_t> kept;
@@ -546,51 +585,52 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     // (8-connected samples of the region whose residual is negative: material removed, as by a
     // groove, a pit or a dent); the pieces that do not reach the border are judged as regions
     // (steps 6-7), then by their shape (keepRegion)
-    std::vector<uint8_t> pieceSeen(o.borderPieceFill > 0.0 ? n : 0, 0);
+    // ... on a texture only: where the map's own repeats explain it to within
+    // borderPieceSigma of its RMS (a relief on a flat background, as a logo, not a texture),
+    // a step of the relief leaves a band below it as smooth as a defect
+    const bool splitBorder =
+        o.borderPieceFill > 0.0 && !(out.sigma < o.borderPieceSigma * out.textureRms);
+    std::vector<uint8_t> pieceSeen(splitBorder ? n : 0, 0), inRegion(pieceSeen.size(), 0);
     std::vector<size_t> piece;
+    const auto below = [&](size_t q) { return grows(q) && out.residual[q] < 0.0f; };
     auto keepBorderPieces = [&](const Region& reg) {
+        for (size_t k = reg.begin; k < reg.end; ++k) inRegion[members[k]] = 1;
         for (size_t k = reg.begin; k < reg.end; ++k) {
             const size_t i0 = members[k];
             if (pieceSeen[i0] || !(out.residual[i0] < 0.0f)) continue;
-            piece.assign(1, i0);
-            pieceSeen[i0] = 1;
-            bool atBorder = false;
-            float peak = 0.0f, deepest = 0.0f;
-            for (size_t j = 0; j < piece.size(); ++j) {
-                const size_t i = piece[j];
+            piece.clear();
+            const bool atBorder = floodRegion(i0, pieceSeen, piece, below);
+            const float peak = peakOf(piece);
+            if (atBorder || gate(piece, peak) != Gate::Pass) continue;
+            if (!keepRegion(piece, peak, true)) continue;
+            ++out.borderPieces;
+            // its pile-up: the region's samples above the texture within borderPieceRim
+            // samples (Chebyshev) of what the piece kept
+            const int reach = o.borderPieceRim;
+            for (const size_t i : kept) {
                 const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
-                peak = std::max(peak, zDetect[i]);
-                deepest = std::max(deepest, std::abs(out.residual[i]));
-                if (px == b || py == b || px == W - b - 1 || py == H - b - 1) atBorder = true;
-                for (int qy = py - 1; qy <= py + 1; ++qy)
-                    for (int qx = px - 1; qx <= px + 1; ++qx) {
-                        if (!inside(qx, qy)) continue;
+                for (int qy = std::max(0, py - reach); qy <= std::min(H - 1, py + reach); ++qy)
+                    for (int qx = std::max(0, px - reach); qx <= std::min(W - 1, px + reach);
+                         ++qx) {
                         const size_t q = static_cast<size_t>(qy) * W + qx;
-                        if (pieceSeen[q] || !(zGrow[q] >= grow) || !(out.residual[q] < 0.0f))
-                            continue;
-                        pieceSeen[q] = 1;
-                        piece.push_back(q);
+                        if (inRegion[q] && !out.map[q] && out.residual[q] >= 0.0f) {
+                            out.map[q] = 255;
+                            ++out.borderRim;
+                        }
                     }
             }
-            if (atBorder || static_cast<int>(piece.size()) < o.minRegion || !(peak >= thr) ||
-                peak < out.textureThreshold ||
-                (o.textureRms > 0.0 && deepest < o.textureRms * out.textureRms))
-                continue;
-            if (keepRegion(piece, peak, true)) ++out.borderPieces;
         }
+        for (size_t k = reg.begin; k < reg.end; ++k) inRegion[members[k]] = 0;
     };
     for (const Region& reg : regions) {
-        if (!(reg.peak >= thr) || static_cast<int>(reg.end - reg.begin) < o.minRegion) continue;
-        if (o.textureRms > 0.0) {
-            float peak = 0.0f;
-            for (size_t k = reg.begin; k < reg.end; ++k)
-                peak = std::max(peak, std::abs(out.residual[members[k]]));
-            if (peak < o.textureRms * out.textureRms) {
-                ++out.droppedShallow;
-                continue;
-            }
+        const std::span<const size_t> samples(members.data() + reg.begin, reg.end - reg.begin);
+        const Gate verdict = gate(samples, reg.peak);
+        if (verdict == Gate::Small) continue;
+        if (verdict == Gate::Shallow) {
+            ++out.droppedShallow;
+            continue;
         }
-        if (reg.peak < out.textureThreshold) {
+        if (verdict == Gate::Texture) {
             ++out.droppedTexture;
             continue;
         }
@@ -599,7 +639,6 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             if (!pieceSeen.empty()) keepBorderPieces(reg);
             continue;
         }
-        const std::span<const size_t> samples(members.data() + reg.begin, reg.end - reg.begin);
         if (keepRegion(samples, reg.peak, false)) ++out.regions;
     }
     // ---- step 8: the kept regions' flanks --------------------------------------------------
@@ -612,21 +651,16 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     std::vector<size_t> next;
     for (int step = 0; step < o.extendSteps && !stack.empty(); ++step) {
         next.clear();
-        for (const size_t i : stack) {
-            const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
-            for (int qy = py - 1; qy <= py + 1; ++qy)
-                for (int qx = px - 1; qx <= px + 1; ++qx) {
-                    if (!inside(qx, qy)) continue;
-                    const size_t q = static_cast<size_t>(qy) * W + qx;
-                    if (out.map[q] || !(zGrow[q] >= regionLevel[i]) || zGrow[q] >= grow) continue;
-                    if ((out.residual[q] < 0.0f ? -1 : 1) != regionSign[i]) continue;
-                    out.map[q] = 255;
-                    regionSign[q] = regionSign[i];
-                    regionLevel[q] = regionLevel[i];
-                    ++out.extended;
-                    next.push_back(q);
-                }
-        }
+        for (const size_t i : stack)
+            forEachNeighbour(i, [&](size_t q) {
+                if (out.map[q] || !(zGrow[q] >= regionLevel[i]) || zGrow[q] >= grow) return;
+                if ((out.residual[q] < 0.0f ? -1 : 1) != regionSign[i]) return;
+                out.map[q] = 255;
+                regionSign[q] = regionSign[i];
+                regionLevel[q] = regionLevel[i];
+                ++out.extended;
+                next.push_back(q);
+            });
         stack.swap(next);
     }
     return out;
