@@ -112,6 +112,55 @@ TEST(DefectInsert, LabelsEveryDefectOfTheModelAndLeavesTheFaintOnesOut) {
     }
 }
 
+TEST(DefectInsert, CrackIsOptInAndCutsTheGeneratorsCrack) {
+    // Not among model B's default kinds (what --kinds left out inserts is unchanged).
+    const std::vector<InsertKind> b = modelKinds(DefectModel::B);
+    EXPECT_EQ(b,
+              (std::vector<InsertKind>{InsertKind::Gouge, InsertKind::PitChain, InsertKind::Dent}));
+    EXPECT_EQ(parseInsertKind("crack", "--kinds"), InsertKind::Crack);
+    EXPECT_EQ(insertKindRow(InsertKind::Crack).label, kTruthCrack);
+    const int W = 400, H = 300;
+    std::vector<float> flat(W * H, 0.0f);
+    InsertSpec s;
+    s.model = DefectModel::B;
+    s.kinds = {InsertKind::Crack};
+    s.count = 3;
+    s.faint = 0;
+    s.depth = 0.002;
+    s.seed = 5;
+    const InsertResult r = insertDefects(flat, W, H, s);
+    ASSERT_EQ(r.defects.size(), 3u);
+    // On a flat map the heights are the cracks' offsets: never raised (no rim), at most
+    // 1.3 × depth deep, and labelled exactly where lowered by >= 10 % of the crack's depth.
+    for (float h : r.heights) ASSERT_LE(h, 0.0f);
+    for (const InsertedDefect& d : r.defects) {
+        EXPECT_EQ(d.kind, InsertKind::Crack);
+        EXPECT_GE(d.size, 2.0);
+        EXPECT_LE(d.size, 4.0);
+        EXPECT_GT(d.samples, 20u);
+        for (int z = d.z0; z <= d.z1; ++z)
+            for (int x = d.x0; x <= d.x1; ++x) {
+                const size_t i = static_cast<size_t>(z) * W + x;
+                EXPECT_GE(r.heights[i], -d.depth * (1 + 1e-6));
+                if (r.truth[i] != 0) {
+                    EXPECT_EQ(r.truth[i], kTruthCrack);
+                    EXPECT_LE(r.heights[i], -0.1 * d.depth * (1 - 1e-6));
+                } else {
+                    EXPECT_GT(r.heights[i], -0.1 * d.depth * (1 + 1e-6));
+                }
+            }
+    }
+    // Every labelled sample is counted by its crack.
+    size_t labelled = 0;
+    for (uint8_t v : r.truth) labelled += v != 0;
+    size_t counted = 0;
+    for (const InsertedDefect& d : r.defects) counted += d.samples;
+    EXPECT_EQ(labelled, counted);
+    // Not the model's kind: refused by name.
+    s.model = DefectModel::A;
+    EXPECT_THROW(insertDefects(flat, W, H, s), InputError);
+}
+
 TEST(DefectInsert, BadInputIsNamed) {
     std::vector<float> h(200 * 200, 0.0f);
     InsertSpec s;
@@ -127,7 +176,7 @@ TEST(DefectInsert, BadInputIsNamed) {
     EXPECT_THROW(insertDefects(h, 200, 200, s), InputError);
     s.depth = 0.001;
     EXPECT_THROW(insertDefects(h, 100, 100, s), InputError);  // smaller than the margins
-    EXPECT_THROW(parseInsertKind("crack", "kinds"), InputError);
+    EXPECT_THROW(parseInsertKind("spall", "kinds"), InputError);
     EXPECT_EQ(parseInsertKind("pit-chain", "kinds"), InsertKind::PitChain);
 }
 

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "TestUtil.h"
+#include "app/jobs/InfoJob.h"
 #include "core/Error.h"
 #include "core/Md5.h"
 #include "io/HeightmapIO.h"
@@ -719,4 +720,84 @@ TEST(FormatsScene, PitchComesFromTheFileUnlessTheSceneGivesOne) {
     writeSdfBinary(dir / "part.sdf", sd);
     test::writeText(dir / "sdf.json", R"({"heightmap": {"path": "part.sdf"}, )" + cam + "}");
     EXPECT_NEAR(loadScene(dir / "sdf.json")->surface->pitch(), 0.002, 1e-15);
+}
+
+TEST(FormatsInfo, InfoSaysWhatTheReadersFound) {
+    // `info` (app/jobs/InfoJob.h) says what every command reads: the summary, without the CLI.
+    test::TempDir dir("info");
+    // A measured X3P: a tilted plane with one invalid point. Its pitch is the file's, the
+    // default levelling (auto) removes the plane, so the heights after it are flat: Sq 0.
+    X3pSpec s;
+    s.sizeX = 8;
+    s.sizeY = 6;
+    for (int j = 0; j < 6; ++j)
+        for (int i = 0; i < 8; ++i) s.values.push_back(1e-6 * (3.0 + 2.0 * i - 1.5 * j));
+    s.values[13] = kNaN;
+    writeX3p(dir / "plane.x3p", s);
+    InfoJobSummary x = runInfoJob({dir / "plane.x3p", {}});
+    EXPECT_EQ(x.reader, loadHeightmap(dir / "plane.x3p", {}).format);
+    EXPECT_TRUE(x.measured);
+    EXPECT_EQ(x.width, 8);
+    EXPECT_EQ(x.height, 6);
+    ASSERT_TRUE(x.pitch.has_value());
+    EXPECT_NEAR(*x.pitch, 0.005, 1e-15);
+    EXPECT_EQ(x.pitchFrom, "file");
+    EXPECT_EQ(x.resampling, "");
+    EXPECT_EQ(x.invalidFilled, 1u);
+    EXPECT_EQ(x.levelling.applied.mode, LevellingDesc::Mode::Plane);
+    EXPECT_TRUE(x.levelling.automatic);
+    EXPECT_GT(x.levelling.rmsBefore, 1e-3);
+    EXPECT_LT(x.sq, 1e-9);
+    EXPECT_LT(x.maxHeight - x.minHeight, 1e-8);
+    EXPECT_TRUE(x.heightsInMm);
+    EXPECT_TRUE(x.part.is_null());
+    nlohmann::ordered_json j = infoJson(x);
+    EXPECT_EQ(j["size_px"], nlohmann::ordered_json({8, 6}));
+    EXPECT_NEAR(j["size_mm"][0].get<double>(), 7 * 0.005, 1e-15);
+    EXPECT_EQ(j["resampled"], false);
+    EXPECT_EQ(j["levelling"]["mode"], "plane");
+    EXPECT_TRUE(j["scene"].is_null());
+
+    // Non-square pixels are resampled, and info says so.
+    s.incY = 1e-5;
+    writeX3p(dir / "rect.x3p", s);
+    const InfoJobSummary r = runInfoJob({dir / "rect.x3p", {}});
+    EXPECT_NE(r.resampling, "");
+    EXPECT_EQ(infoJson(r)["resampled"], true);
+
+    // A bare .npy carries no pitch and is not levelled (auto: heights as designed): its Sq is
+    // the RMS of its values about their mean.
+    std::vector<float> v(48);
+    for (size_t k = 0; k < v.size(); ++k) v[k] = static_cast<float>(k % 5);
+    test::writeNpyF32(dir / "part.npy", 6, 8, v);
+    const InfoJobSummary n = runInfoJob({dir / "part.npy", {}});
+    EXPECT_FALSE(n.pitch.has_value());
+    EXPECT_EQ(n.pitchFrom, "none");
+    EXPECT_FALSE(n.measured);
+    EXPECT_FALSE(n.heightsInMm);
+    EXPECT_EQ(n.levelling.applied.mode, LevellingDesc::Mode::None);
+    double mean = 0, ss = 0;
+    for (float h : v) mean += h / 48.0;
+    for (float h : v) ss += (h - mean) * (h - mean);
+    EXPECT_NEAR(n.sq, std::sqrt(ss / 48.0), 1e-12);
+    EXPECT_EQ(n.minHeight, 0.0);
+    EXPECT_EQ(n.maxHeight, 4.0);
+    EXPECT_TRUE(infoJson(n)["pixel_pitch_mm"].is_null());
+
+    // Its scene gives the pitch, and the scene's material and camera are reported; an override
+    // applies as it does for every command.
+    test::writeText(dir / "npy.json",
+                    R"({"heightmap": {"path": "part.npy", "pixel_pitch": 0.02},
+                        "camera": {"width": 16, "height": 12}})");
+    const InfoJobSummary c = runInfoJob({dir / "npy.json", {"material.alpha=0.2"}});
+    EXPECT_EQ(c.scene, (dir / "npy.json").string());
+    EXPECT_EQ(c.file, (dir / "part.npy").string());
+    ASSERT_TRUE(c.pitch.has_value());
+    EXPECT_EQ(*c.pitch, 0.02);
+    EXPECT_EQ(c.pitchFrom, "scene");
+    EXPECT_TRUE(c.heightsInMm);
+    j = infoJson(c);
+    EXPECT_EQ(j["camera"]["width"], 16);
+    EXPECT_NEAR(j["material"]["alpha"][0].get<double>(), 0.2, 1e-6);
+    EXPECT_NEAR(j["size_mm"][1].get<double>(), 5 * 0.02, 1e-15);
 }

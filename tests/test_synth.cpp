@@ -910,6 +910,122 @@ TEST(Synth, DentIsLabelledWhereItLowersTheSurface) {
                   sl::kTruthDent);
 }
 
+TEST(Synth, CrackIsANarrowMeanderingBranchingFissureWithNoRim) {
+    // A crack (SurfaceGenerator.h crackPaths) on a rough, chattering ball-end surface: the
+    // change it makes is its V (depth·e at the trunk's middle, width·e/2 either side of its
+    // path, nothing beyond: no rim), and its label is exactly where it lowers the surface by
+    // >= 10 % of its depth.
+    SurfaceSpec s = cleanBallEnd();
+    s.roughnessRms = 0.0002;
+    s.chatterAmplitude = 0.0005;
+    s.crackCount = 2;
+    s.crackLength = 0.8;
+    s.crackWidth = 0.03;
+    s.crackDepth = 0.006;
+    s.crackBranches = 2;
+    GeneratedSurface g = sl::generateSurface(s);
+    SurfaceSpec s0 = s;
+    s0.crackCount = 0;
+    GeneratedSurface g0 = sl::generateSurface(s0);
+    ASSERT_EQ(g.cracks.size(), 2u);
+    EXPECT_NE(g.description.find("2 crack(s)"), std::string::npos) << g.description;
+    std::vector<std::vector<sl::CrackPath>> pieces;
+    for (const sl::CrackSpec& c : g.cracks) {
+        EXPECT_GE(c.depth, 0.5 * s.crackDepth);
+        EXPECT_LE(c.depth, s.crackDepth);
+        EXPECT_GE(c.width, 0.5 * s.crackWidth);
+        EXPECT_LE(c.width, s.crackWidth);
+        pieces.push_back(sl::crackPaths(c));
+        const std::vector<sl::CrackPath>& p = pieces.back();
+        // Branching: the trunk and its branches, each starting on a trunk vertex, shallower.
+        ASSERT_EQ(p.size(), 3u);
+        const sl::CrackPath& trunk = p[0];
+        ASSERT_EQ(trunk.x.size(), 17u);
+        for (size_t b = 1; b < p.size(); ++b) {
+            EXPECT_TRUE(p[b].branch);
+            bool onTrunk = false;
+            for (size_t k = 0; k < trunk.x.size(); ++k)
+                onTrunk = onTrunk || (p[b].x[0] == trunk.x[k] && p[b].z[0] == trunk.z[k]);
+            EXPECT_TRUE(onTrunk);
+            EXPECT_LE(p[b].depth, 0.6 * c.depth);
+        }
+        // Meandering: the trunk is `length` long along its path, its chord shorter, its chord's
+        // midpoint at the centre, and its vertices off the chord.
+        double arc = 0, off = 0;
+        const double cx = trunk.x.back() - trunk.x[0], cz = trunk.z.back() - trunk.z[0];
+        const double chord = std::hypot(cx, cz);
+        for (size_t k = 0; k + 1 < trunk.x.size(); ++k) {
+            arc += std::hypot(trunk.x[k + 1] - trunk.x[k], trunk.z[k + 1] - trunk.z[k]);
+            off = std::max(
+                off,
+                std::abs((trunk.x[k] - trunk.x[0]) * cz - (trunk.z[k] - trunk.z[0]) * cx) / chord);
+        }
+        EXPECT_NEAR(arc, c.length, 1e-12);
+        EXPECT_LT(chord, 0.999 * c.length);
+        EXPECT_GT(off, 0.01 * c.length);
+        EXPECT_NEAR(0.5 * (trunk.x[0] + trunk.x.back()), c.x, 1e-12);
+        EXPECT_NEAR(0.5 * (trunk.z[0] + trunk.z.back()), c.z, 1e-12);
+        // Depth: the trunk's middle vertex (arc L/2, e = 1) is `depth` deep; nowhere deeper.
+        EXPECT_NEAR(sl::crackOffset(p, trunk.x[8], trunk.z[8]), -c.depth, 1e-12 * c.depth);
+        // Width: across the middle of trunk piece 7 (arc 7.5/16 of L, e = √(1 − (1/16)²)) the
+        // V is width·e wide: half its depth at a quarter of that from the path, 0 beyond half.
+        const double e = std::sqrt(1.0 - 1.0 / 256.0);
+        const double mx = 0.5 * (trunk.x[7] + trunk.x[8]), mz = 0.5 * (trunk.z[7] + trunk.z[8]);
+        const double dx = trunk.x[8] - trunk.x[7], dz = trunk.z[8] - trunk.z[7];
+        const double nx = -dz / std::hypot(dx, dz), nz = dx / std::hypot(dx, dz);
+        const double half = 0.5 * c.width * e;
+        for (double side : {-1.0, 1.0}) {
+            EXPECT_NEAR(sl::crackPathOffset(trunk, mx + side * 0.5 * half * nx,
+                                            mz + side * 0.5 * half * nz),
+                        -0.5 * c.depth * e, 1e-12 * c.depth);
+            EXPECT_LT(sl::crackPathOffset(trunk, mx + side * 0.999 * half * nx,
+                                          mz + side * 0.999 * half * nz),
+                      0.0);
+            EXPECT_EQ(sl::crackPathOffset(trunk, mx + side * 1.001 * half * nx,
+                                          mz + side * 1.001 * half * nz),
+                      0.0);
+        }
+    }
+    // The map: the change is the cracks' offsets (to float rounding), never a rise (no rim,
+    // bit for bit), and the label is exactly where a crack lowers by >= 10 % of its depth.
+    size_t labelled = 0, changed = 0;
+    for (int j = 0; j < g.height; ++j)
+        for (int i = 0; i < g.width; ++i) {
+            const size_t k = static_cast<size_t>(j) * g.width + i;
+            const double x = (i - 0.5 * (g.width - 1)) * g.pitch;
+            const double z = (j - 0.5 * (g.height - 1)) * g.pitch;
+            double expected = 0;
+            bool deep = false;
+            for (size_t c = 0; c < pieces.size(); ++c) {
+                const double o = sl::crackOffset(pieces[c], x, z);
+                EXPECT_GE(o, -g.cracks[c].depth);
+                expected += o;
+                deep = deep || o <= -0.1 * g.cracks[c].depth;
+            }
+            ASSERT_LE(g.heights[k], g0.heights[k]) << i << "," << j;
+            EXPECT_NEAR(g.heights[k] - g0.heights[k], expected, 1e-8) << i << "," << j;
+            EXPECT_EQ(g.truth[k], deep ? sl::kTruthCrack : 0) << i << "," << j;
+            labelled += g.truth[k] != 0;
+            changed += g.heights[k] != g0.heights[k];
+        }
+    // Narrow: the labelled samples are a thin line, fewer than the trunks' and branches' length
+    // times their widest opening in samples.
+    EXPECT_GT(labelled, 100u);
+    EXPECT_LT(static_cast<double>(labelled),
+              2 * (1 + 2 * 0.5) * s.crackLength * s.crackWidth / (g.pitch * g.pitch));
+    EXPECT_GE(changed, labelled);
+    // Validation names the fields.
+    SurfaceSpec bad = s;
+    bad.crackWidth = 0;
+    EXPECT_NE(errorOf(bad).find(optionOf("crackWidth")), std::string::npos);
+    bad = s;
+    bad.crackLength = -1;
+    EXPECT_NE(errorOf(bad).find(optionOf("crackLength")), std::string::npos);
+    bad = s;
+    bad.crackBranches = -1;
+    EXPECT_NE(errorOf(bad).find(optionOf("crackBranches")), std::string::npos);
+}
+
 TEST(Synth, PocketBurrIsLabelledWhereItRaisesTheEdge) {
     SurfaceSpec s = cleanBallEnd();
     s.pocketEdge = true;
@@ -1144,9 +1260,9 @@ TEST(Synth, LegendNamesEveryLabelPresent) {
     }
     EXPECT_TRUE(std::is_sorted(values.rbegin(), values.rend()));
     EXPECT_EQ(std::adjacent_find(values.begin(), values.end()), values.end());
-    EXPECT_EQ(names,
-              (std::vector<std::string>{"defect", "scratch", "gouge", "pit", "pit-chain", "dent",
-                                        "tool-change-step", "burr", "chatter-band", "chatter"}));
+    EXPECT_EQ(names, (std::vector<std::string>{"defect", "scratch", "gouge", "pit", "pit-chain",
+                                               "crack", "dent", "tool-change-step", "burr",
+                                               "chatter-band", "chatter"}));
     // As always: "defect" even when absent, "chatter" only when present.
     std::vector<uint8_t> empty(16, 0);
     auto legend = sl::truthLegend(empty);

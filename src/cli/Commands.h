@@ -25,6 +25,7 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run);
 void registerCache(CLI::App& app, std::function<int()>& run);
 void registerLamps(CLI::App& app, std::function<int()>& run);
 void registerView(CLI::App& app, std::function<int()>& run);
+void registerInfo(CLI::App& app, std::function<int()>& run);
 
 /// One `bench X`: its name, its help line, and what adds its options to the subcommand and, when
 /// chosen, sets `run`.

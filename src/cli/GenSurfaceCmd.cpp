@@ -142,6 +142,13 @@ void registerGenSurface(CLI::App& app, std::function<int()>& run) {
             "Number of random dents (label 224)");
     addSpec(c, g, "--dent-depth", &SurfaceSpec::dentDepth, "Deepest dent in mm");
     addSpec(c, g, "--dent-radius", &SurfaceSpec::dentRadius, "Dent indenter radius in mm");
+    addSpec(c, g, "--cracks,--crack-count", &SurfaceSpec::crackCount,
+            "Number of random cracks: meandering, branching fissures with no rim (label 232)");
+    addSpec(c, g, "--crack-length", &SurfaceSpec::crackLength,
+            "Longest crack's trunk in mm, along its path");
+    addSpec(c, g, "--crack-width", &SurfaceSpec::crackWidth, "Widest crack opening in mm");
+    addSpec(c, g, "--crack-depth", &SurfaceSpec::crackDepth, "Deepest crack in mm");
+    addSpec(c, g, "--crack-branches", &SurfaceSpec::crackBranches, "Branches of each crack");
     addSpec(c, g, "--burr,--pocket-burr-height", &SurfaceSpec::pocketBurrHeight,
             "Burr height on the pocket edge in mm (0: none; label 160)");
     addSpec(c, g, "--tool-change-step", &SurfaceSpec::toolChangeStep,

@@ -22,7 +22,8 @@ struct ModelRow {
 };
 constexpr ModelRow kModels[] = {
     {DefectModel::A, "A", "scratches with pile-up rims, pits with a rim, burrs (tuned on)"},
-    {DefectModel::B, "B", "asymmetric gouges, chains of small pits, dents with no rim"},
+    {DefectModel::B, "B",
+     "asymmetric gouges, chains of small pits, dents with no rim (cracks when named)"},
 };
 
 int runInsert(const InsertDefectsJobOptions& o) {
@@ -76,7 +77,7 @@ void registerInsertDefects(CLI::App& app, std::function<int()>& run) {
             while (std::getline(ss, k, ','))
                 if (!k.empty()) a->spec.kinds.push_back(parseInsertKind(k, "--kinds"));
         },
-        "Comma-separated kinds of the model (default: its three): " +
+        "Comma-separated kinds of the model (default: its three; crack only when named): " +
             registryNames(insertKindTable()));
     c->add_option("--seed", a->spec.seed, "Random seed of the placement and shapes")
         ->capture_default_str();

@@ -172,6 +172,7 @@ int main(int argc, char** argv) {
     registerCache(app, run);
     registerLamps(app, run);
     registerView(app, run);
+    registerInfo(app, run);
 
     if (argc > 1 && argv[1][0] != '-' && reportUnknownCommand(app, argv[1])) return kUsageError;
     try {

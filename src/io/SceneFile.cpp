@@ -569,9 +569,9 @@ HeightSource loadHeightSource(const std::filesystem::path& file,
     o.defaultIntegerRange = std::array<double, 2>{0.0, 1.0};
     s.map = loadHeightmap(file, o);
     // A bare map is levelled by the default (auto: plane for a measured map, else none).
-    const HeightmapLoad load =
-        levelMap(s.map, LevellingDesc{}, s.map.pitch.value_or(1.0), file.string());
-    reportLoad(file, load, s.map.width, s.map.height, s.map.pitch.value_or(1.0));
+    s.load = levelMap(s.map, LevellingDesc{}, s.map.pitch.value_or(1.0), file.string());
+    s.load.measured = s.map.measured();
+    reportLoad(file, s.load, s.map.width, s.map.height, s.map.pitch.value_or(1.0));
     // What was read, as loadScene says it for a scene (describePart).
     const HeightmapData& m = s.map;
     std::string line = "part " + file.filename().string() + " (" + m.format +

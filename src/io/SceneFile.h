@@ -52,6 +52,7 @@ std::string describePart(const Scene& scene);
 struct HeightSource {
     std::unique_ptr<Scene> scene;  // null for a bare height map
     HeightmapData map;             // the bare height map's data (empty for a scene)
+    HeightmapLoad load;            // the bare map's reading and levelling (a scene: scene->load)
     const std::vector<float>& heights() const { return scene ? scene->heights : map.heights; }
     int width() const { return scene ? scene->mapWidth : map.width; }
     int height() const { return scene ? scene->mapHeight : map.height; }

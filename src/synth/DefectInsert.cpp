@@ -28,6 +28,8 @@ constexpr InsertKindRow kKinds[] = {
     {InsertKind::PitChain, "pit-chain", DefectModel::B, kTruthPitChain,
      "model B: 4-8 small pits along a line, no rims"},
     {InsertKind::Dent, "dent", DefectModel::B, kTruthDent, "model B: a spherical dent with no rim"},
+    {InsertKind::Crack, "crack", DefectModel::B, kTruthCrack,
+     "model B, only when named: a narrow meandering, branching fissure with no rim", false},
 };
 
 double bump(double u) {  // (1 − u²)² on [−1, 1], 0 outside; ∫ = 16/15
@@ -120,7 +122,7 @@ InsertKind parseInsertKind(std::string_view name, const std::string& where) {
 std::vector<InsertKind> modelKinds(DefectModel model) {
     std::vector<InsertKind> k;
     for (const InsertKindRow& r : kKinds)
-        if (r.model == model) k.push_back(r.value);
+        if (r.model == model && r.byDefault) k.push_back(r.value);
     return k;
 }
 
@@ -407,6 +409,28 @@ InsertResult insertDefects(std::span<const float> heights, int W, int H, const I
                         },
                         0.1 * d);
                     def.size = r;
+                    break;
+                }
+                case InsertKind::Crack: {
+                    CrackSpec c;
+                    c.x = cx;
+                    c.z = cz;
+                    c.angleDeg = th * 180.0 / kPi;
+                    c.length = U(0.15, 0.3) * S;
+                    c.width = U(2, 4) * sc;
+                    c.depth = d;
+                    c.branches = 1 + static_cast<int>(rng.nextU32() % 3);
+                    c.seed = (static_cast<uint64_t>(rng.nextU32()) << 32) | rng.nextU32();
+                    const std::vector<CrackPath> paths = crackPaths(c);
+                    std::vector<double> px, pz;
+                    for (const CrackPath& p : paths) {
+                        px.insert(px.end(), p.x.begin(), p.x.end());
+                        pz.insert(pz.end(), p.z.begin(), p.z.end());
+                    }
+                    st = makeStamp(
+                        polylineBox(px, pz, 0.5 * c.width + 2), W, H,
+                        [&](int x, int z) { return crackOffset(paths, x, z); }, 0.1 * d);
+                    def.size = c.width;
                     break;
                 }
             }

@@ -35,6 +35,10 @@
 //     d × 0.7–1, no rim) along a straight line, 2.5–4 radii apart.
 //   - dent (224): a spherical cap pressed in, lateral radius 10–25 samples × sizeScale, depth d,
 //     no rim: d − (R − √(R² − ρ²)), R = (ρ_d² + d²)/(2d).
+//   - crack (232, opt-in: `--kinds crack`, not among the model's default three): the
+//     generator's crack (SurfaceGenerator.h crackPaths: a zig-zag trunk with branches, a V
+//     opening as an ellipse along the trunk, no rim), its trunk 0.15–0.3 × the shorter side
+//     long, its widest opening 2–4 samples × sizeScale, depth d, 1–3 branches.
 // Depth d of each defect = depthBase × U(0.7, 1.3) (burr height likewise). `faint` defects per
 // kind are added at faintDepth (below what any light shows: the eval's choice is a few % of the
 // texture's Sq) and are NOT labelled (truth 0); they are listed with `labelled` false so a
@@ -55,7 +59,7 @@
 namespace sl {
 
 enum class DefectModel { A, B };
-enum class InsertKind { Scratch, Pit, Burr, Gouge, PitChain, Dent };
+enum class InsertKind { Scratch, Pit, Burr, Gouge, PitChain, Dent, Crack };
 
 struct InsertKindRow {
     InsertKind value;
@@ -63,17 +67,18 @@ struct InsertKindRow {
     DefectModel model;
     uint8_t label;
     const char* help;
+    bool byDefault = true;  // among the model's kinds when none are named (modelKinds)
 };
 std::span<const InsertKindRow> insertKindTable();
 const InsertKindRow& insertKindRow(InsertKind kind);
 /// The kind named `name` (a row of insertKindTable); InputError naming `where` otherwise.
 InsertKind parseInsertKind(std::string_view name, const std::string& where);
-/// The model's three kinds, in table order.
+/// The model's three default kinds (byDefault), in table order: what --kinds left out means.
 std::vector<InsertKind> modelKinds(DefectModel model);
 
 struct InsertSpec {
     DefectModel model = DefectModel::A;
-    std::vector<InsertKind> kinds;  // empty: the model's three kinds; each must be the model's
+    std::vector<InsertKind> kinds;  // empty: the model's three (modelKinds); each the model's
     int count = 3;                  // labelled defects per kind (>= 0)
     int faint = 1;                  // unlabelled faint defects per kind (>= 0)
     double depth = 0.002;           // depthBase, height units (> 0)
@@ -90,8 +95,8 @@ struct InsertedDefect {
     double depth = 0;                    // height units (burr: its height)
     double x = 0, z = 0;                 // centre (column, row), samples
     int x0 = 0, z0 = 0, x1 = 0, z1 = 0;  // bounding box (inclusive), samples
-    double size = 0;                     // width (scratch, gouge, burr), radius (pit, dent, chain)
-    size_t samples = 0;                  // samples labelled (0 when not labelled)
+    double size = 0;     // width (scratch, gouge, burr; crack: widest), radius (pit, dent, chain)
+    size_t samples = 0;  // samples labelled (0 when not labelled)
 };
 
 struct InsertResult {

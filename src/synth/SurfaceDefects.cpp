@@ -1,6 +1,7 @@
 // Synthetic NC-machined surfaces, the defects: scratches, gouges, dents, chatter bands, the
-// pocket-edge burr and measurement spikes (stages 3, 4, 4b-4d, 6b), and the truth labels'
-// table. See SurfaceGenerator.h for the model and conventions.
+// pocket-edge burr, cracks and measurement spikes (stages 3, 4, 4b-4e, 6b), and the truth
+// labels' table. See SurfaceGenerator.h for the model and conventions. The crack's shape
+// (crackPaths, crackOffset) is public: insert-defects (synth/DefectInsert.h) cuts the same one.
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -297,6 +298,59 @@ Burr placeBurr(const SurfaceSpec& spec, const Frame& fr, const GeneratedSurface&
     return b;
 }
 
+/// Stage 4e: the cracks, drawn from the seed (centres uniform over the inner 60% of the map, off
+/// the pocket edge; see SurfaceSpec).
+std::vector<Crack> placeCracks(const SurfaceSpec& spec, const Frame& fr, GeneratedSurface& out) {
+    std::vector<Crack> cracks;
+    if (spec.crackCount <= 0) return cracks;
+    Pcg32 rng(mix64(spec.seed ^ kCrackStream), kCrackStream);
+    const double keepOut = std::isfinite(out.pocketEdgeX)
+                               ? out.pocketEdgeHalfWidth + 0.5 * spec.crackLength + 0.1
+                               : -1.0;
+    for (int n = 0; n < spec.crackCount; ++n) {
+        CrackSpec c;
+        for (int attempt = 0; attempt < 64; ++attempt) {
+            c.x = (rng.nextDouble() - 0.5) * 0.6 * fr.extX;
+            c.z = (rng.nextDouble() - 0.5) * 0.6 * fr.extZ;
+            if (!(std::abs(c.x - out.pocketEdgeX) < keepOut)) break;
+        }
+        c.angleDeg = 180.0 * rng.nextDouble();
+        c.length = spec.crackLength * (0.75 + 0.25 * rng.nextDouble());
+        c.width = spec.crackWidth * (0.5 + 0.5 * rng.nextDouble());
+        c.depth = spec.crackDepth * (0.5 + 0.5 * rng.nextDouble());
+        c.branches = spec.crackBranches;
+        c.seed = (static_cast<uint64_t>(rng.nextU32()) << 32) | rng.nextU32();
+        out.cracks.push_back(c);
+    }
+    for (const CrackSpec& c : out.cracks) {
+        Crack k;
+        k.spec = c;
+        k.paths = crackPaths(c);
+        double x0 = kInf, x1 = -kInf, z0 = kInf, z1 = -kInf;
+        for (const CrackPath& p : k.paths) {
+            const auto [xa, xb] = std::minmax_element(p.x.begin(), p.x.end());
+            const auto [za, zb] = std::minmax_element(p.z.begin(), p.z.end());
+            x0 = std::min(x0, *xa);
+            x1 = std::max(x1, *xb);
+            z0 = std::min(z0, *za);
+            z1 = std::max(z1, *zb);
+        }
+        const double reach = 0.5 * c.width + fr.pitch;
+        auto lo = [&](double v, double cc, int n) {
+            return static_cast<int>(std::clamp(std::floor(v / fr.pitch + cc), 0.0, n - 1.0));
+        };
+        auto hi = [&](double v, double cc, int n) {
+            return static_cast<int>(std::clamp(std::ceil(v / fr.pitch + cc), -1.0, n - 1.0));
+        };
+        k.i0 = lo(x0 - reach, fr.cx, fr.W);
+        k.i1 = hi(x1 + reach, fr.cx, fr.W);
+        k.j0 = lo(z0 - reach, fr.cz, fr.H);
+        k.j1 = hi(z1 + reach, fr.cz, fr.H);
+        cracks.push_back(std::move(k));
+    }
+    return cracks;
+}
+
 /// Stage 6b: measurement spikes at random samples (after everything).
 void addSpikes(const SurfaceSpec& spec, GeneratedSurface& out) {
     if (spec.spikeCount <= 0) return;
@@ -317,6 +371,90 @@ void addSpikes(const SurfaceSpec& spec, GeneratedSurface& out) {
 
 namespace sl {
 
+using surfacegen::kPi;
+
+std::vector<CrackPath> crackPaths(const CrackSpec& c) {
+    using surfacegen::kCrackShapeStream;
+    Pcg32 rng(mix64(c.seed ^ kCrackShapeStream), kCrackShapeStream);
+    auto U = [&rng](double a, double b) { return a + (b - a) * rng.nextDouble(); };
+    constexpr double kDeg = kPi / 180.0;
+    constexpr int kTrunkPieces = 16, kBranchPieces = 8;
+    // A zig-zag from (x, z) along `heading`: each piece deflected by a grain, pulled back toward
+    // the mean direction.
+    auto walk = [&](double x, double z, double heading, double length, int pieces, CrackPath& p) {
+        p.x = {x};
+        p.z = {z};
+        const double step = length / pieces;
+        double phi = U(-30, 30) * kDeg;
+        for (int k = 0; k < pieces; ++k) {
+            if (k > 0) phi = 0.5 * phi + U(-30, 30) * kDeg;
+            x += step * std::cos(heading + phi);
+            z += step * std::sin(heading + phi);
+            p.x.push_back(x);
+            p.z.push_back(z);
+        }
+    };
+    std::vector<CrackPath> paths(1);
+    CrackPath& trunk = paths[0];
+    trunk.width = c.width;
+    trunk.depth = c.depth;
+    walk(0.0, 0.0, c.angleDeg * kDeg, c.length, kTrunkPieces, trunk);
+    const double mx = 0.5 * (trunk.x.front() + trunk.x.back());
+    const double mz = 0.5 * (trunk.z.front() + trunk.z.back());
+    for (size_t k = 0; k < trunk.x.size(); ++k) {
+        trunk.x[k] += c.x - mx;
+        trunk.z[k] += c.z - mz;
+    }
+    for (int b = 0; b < c.branches; ++b) {
+        const auto k = static_cast<size_t>(3 + rng.nextU32() % 11);  // vertex 3..13
+        const double heading =
+            std::atan2(paths[0].z[k + 1] - paths[0].z[k], paths[0].x[k + 1] - paths[0].x[k]) +
+            (rng.nextDouble() < 0.5 ? -1.0 : 1.0) * U(25, 50) * kDeg;
+        const double length = U(0.25, 0.5) * c.length;
+        // The trunk's opening at vertex k (arc k·L/16): the ellipse's √(1 − (2t/L − 1)²).
+        const double u = 2.0 * static_cast<double>(k) / kTrunkPieces - 1.0;
+        const double e = std::sqrt(1.0 - u * u);
+        CrackPath br;
+        br.branch = true;
+        br.width = 0.6 * e * c.width;
+        br.depth = 0.6 * e * c.depth;
+        walk(paths[0].x[k], paths[0].z[k], heading, length, kBranchPieces, br);
+        paths.push_back(std::move(br));
+    }
+    return paths;
+}
+
+double crackPathOffset(const CrackPath& p, double x, double z) {
+    // The nearest point of the polyline: its distance s and its arc position t.
+    double best = surfacegen::kInf, arc = 0, acc = 0;
+    for (size_t k = 0; k + 1 < p.x.size(); ++k) {
+        const double dx = p.x[k + 1] - p.x[k], dz = p.z[k + 1] - p.z[k];
+        const double len2 = dx * dx + dz * dz, len = std::sqrt(len2);
+        double t = len2 > 0 ? ((x - p.x[k]) * dx + (z - p.z[k]) * dz) / len2 : 0.0;
+        t = std::clamp(t, 0.0, 1.0);
+        const double qx = p.x[k] + t * dx - x, qz = p.z[k] + t * dz - z;
+        const double d2 = qx * qx + qz * qz;
+        if (d2 < best) {
+            best = d2;
+            arc = acc + t * len;
+        }
+        acc += len;
+    }
+    if (!(acc > 0)) return 0.0;
+    const double u = arc / acc;
+    const double e = p.branch ? std::sqrt(std::max(0.0, 1.0 - u))
+                              : std::sqrt(std::max(0.0, 1.0 - (2 * u - 1) * (2 * u - 1)));
+    const double half = 0.5 * p.width * e, s = std::sqrt(best);
+    if (!(s < half)) return 0.0;
+    return -p.depth * e * (1.0 - s / half);
+}
+
+double crackOffset(const std::vector<CrackPath>& paths, double x, double z) {
+    double v = 0.0;
+    for (const CrackPath& p : paths) v = std::min(v, crackPathOffset(p, x, z));
+    return v;
+}
+
 namespace {
 
 constexpr TruthKind kTruthKinds[] = {
@@ -325,6 +463,7 @@ constexpr TruthKind kTruthKinds[] = {
     {kTruthGouge, "gouge", "inserted gouges (insert-defects, model B)"},
     {kTruthPit, "pit", "inserted pits (insert-defects, model A)"},
     {kTruthPitChain, "pit-chain", "inserted chains of pits (insert-defects, model B)"},
+    {kTruthCrack, "crack", "cracks: narrow meandering, branching fissures with no rim"},
     {kTruthDent, "dent", "spherical dents"},
     {kTruthToolChange, "tool-change-step", "the ramp of a tool-change step"},
     {kTruthBurr, "burr", "the pocket-edge burr and labelled scratch lips"},

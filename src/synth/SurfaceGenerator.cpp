@@ -284,6 +284,24 @@ void validate(const SurfaceSpec& s) {
                 "must be in [0, radius] mm, got " + formatNumber(d.depth),
                 "Dent depths are in mm, positive into the part");
     }
+    require(s.crackCount >= 0 && s.crackCount <= 100000, "crackCount",
+            "must be in [0, 100000], got " + std::to_string(s.crackCount), "Use 0 for no cracks");
+    if (s.crackCount > 0) {
+        requireFinite(s.crackLength, "crackLength");
+        require(s.crackLength > 0, "crackLength",
+                "must be > 0 mm, got " + formatNumber(s.crackLength),
+                "The crack's length along its path in mm, e.g. 1.5");
+        requireFinite(s.crackWidth, "crackWidth");
+        require(s.crackWidth > 0, "crackWidth", "must be > 0 mm, got " + formatNumber(s.crackWidth),
+                "The crack's widest opening in mm, e.g. 0.025");
+        requireFinite(s.crackDepth, "crackDepth");
+        require(s.crackDepth >= 0, "crackDepth",
+                "must be >= 0 mm, got " + formatNumber(s.crackDepth),
+                "The crack's deepest point in mm, e.g. 0.006");
+        require(s.crackBranches >= 0 && s.crackBranches <= 100, "crackBranches",
+                "must be in [0, 100], got " + std::to_string(s.crackBranches),
+                "Use 0 for a crack without branches");
+    }
     requireFinite(s.pocketBurrHeight, "pocketBurrHeight");
     require(s.pocketBurrHeight >= 0, "pocketBurrHeight",
             "must be >= 0 mm, got " + formatNumber(s.pocketBurrHeight), "Use 0 for no burr");
@@ -403,6 +421,7 @@ struct Features {
     std::vector<Scratch> scratches;
     std::vector<Gouge> gouges;
     std::vector<Dent> dents;
+    std::vector<Crack> cracks;
     std::vector<double> bands;
     Burr burr;
 };
@@ -511,6 +530,14 @@ void compose(const SurfaceSpec& spec, const Frame& fr, const ToolMarks& tm, cons
                     bool hit = false;
                     row[static_cast<size_t>(i)] += dentOffset(d, (i - cx) * pitch, z, hit);
                     if (hit) mark(i, kTruthDent);
+                }
+            }
+            for (const Crack& k : ft.cracks) {
+                if (j < k.j0 || j > k.j1) continue;
+                for (int i = k.i0; i <= k.i1; ++i) {
+                    const double off = crackOffset(k.paths, (i - cx) * pitch, z);
+                    row[static_cast<size_t>(i)] += off;
+                    if (k.spec.depth > 0 && off <= -0.1 * k.spec.depth) mark(i, kTruthCrack);
                 }
             }
             if (burrOn) {
@@ -637,6 +664,12 @@ std::string describe(const SurfaceSpec& spec, const Frame& fr, const ToolMarks& 
         std::snprintf(buf, sizeof buf, "; %zu dent(s)", out.dents.size());
         extras += buf;
     }
+    if (!out.cracks.empty()) {
+        std::snprintf(
+            buf, sizeof buf, "; %zu crack(s) up to %.3g um deep, %.4g mm long, %d branch(es)",
+            out.cracks.size(), 1e3 * spec.crackDepth, spec.crackLength, spec.crackBranches);
+        extras += buf;
+    }
     if (spec.pocketBurrHeight > 0) {
         std::snprintf(buf, sizeof buf, "; burr %.3g um on the pocket edge",
                       1e3 * spec.pocketBurrHeight);
@@ -707,6 +740,7 @@ GeneratedSurface generateSurface(const SurfaceSpec& spec) {
     ft.scratches = placeScratches(spec, fr, out);
     ft.gouges = placeGouges(spec, fr, tm, out);
     ft.dents = placeDents(spec, fr, out);
+    ft.cracks = placeCracks(spec, fr, out);
     ft.bands = placeChatterBands(spec, fr, tm);
     out.chatterBands = ft.bands;
     ft.burr = placeBurr(spec, fr, out);

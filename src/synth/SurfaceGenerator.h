@@ -88,6 +88,9 @@
 //     a line along the tool paths, a circle about the turning centre), the surface is
 //     toolChangeStep lower (negative: higher), where a tool with another length offset took
 //     over; the step is a smoothstep ramp over max(toolChangeWidth, 2·pitch). Added.
+//  4e. Cracks (defects, opt-in: crackCount): a narrow fissure, meandering and branching, with
+//     no raised rim (the material parted; nothing was pushed aside): crackPaths() below has the
+//     model and its sources. Added to the surface.
 //  6. Measurement noise (opt-in, not a defect, not labelled): what an optical profilometer
 //     adds to the part's true surface: white Gaussian noise of RMS noiseRms on every sample (its
 //     vertical noise floor) and spikeCount single-sample spikes of ±[0.5, 1]·spikeHeight at
@@ -106,6 +109,7 @@
 // ≥ 10% of its depth; kTruthChatter (128) on the other samples of a confined chatter region
 // (chatterStartFraction > 0). Everything else, including the pocket edge, is 0. The kinds added
 // for the test parts, each labelled where its own change is ≥ 10% of its size:
+//   kTruthCrack (232, "crack"): cells a crack lowered by ≥ 10% of its depth;
 //   kTruthDent (224, "dent"): cells a dent lowered by ≥ 10% of its depth;
 //   kTruthToolChange (192, "tool-change-step"): the ramp of the step where it has moved the
 //     surface by ≥ 10% of the step (the plateau beyond is shifted too, but not labelled: the
@@ -113,10 +117,10 @@
 //   kTruthBurr (160, "burr"): cells the pocket-edge burr raised by ≥ 10% of its local height,
 //     and with labelScratchLips the scratches' lips where they are ≥ 10% of the lip height;
 //   kTruthChatterBand (144, "chatter-band"): every sample of a chatter band.
-// Where labels overlap the HIGHER value wins: cut defects over dents over the step over burrs
-// over chatter bands over the chatter region. Every value is ≥ 128, so a reader that binarises
-// the mask at half scale (optimize --truth's metrics: inside = value/255 > 0.5) counts every
-// label as a defect; the judge reads each value as its own region.
+// Where labels overlap the HIGHER value wins: cut defects over cracks over dents over the step
+// over burrs over chatter bands over the chatter region. Every value is ≥ 128, so a reader that
+// binarises the mask at half scale (optimize --truth's metrics: inside = value/255 > 0.5) counts
+// every label as a defect; the judge reads each value as its own region.
 #pragma once
 
 #include <cstdint>
@@ -133,6 +137,7 @@ inline constexpr uint8_t kTruthScratch = 250;      // inserted scratch (synth/De
 inline constexpr uint8_t kTruthGouge = 248;        // inserted asymmetric gouge (model B)
 inline constexpr uint8_t kTruthPit = 240;          // inserted pit with a rim (model A)
 inline constexpr uint8_t kTruthPitChain = 236;     // inserted chain of small pits (model B)
+inline constexpr uint8_t kTruthCrack = 232;        // crack (generated or inserted, model B)
 inline constexpr uint8_t kTruthDent = 224;         // spherical dent
 inline constexpr uint8_t kTruthToolChange = 192;   // tool-change step (its ramp)
 inline constexpr uint8_t kTruthBurr = 160;         // pocket-edge burr, labelled scratch lips
@@ -176,6 +181,57 @@ struct DentSpec {
     double depth = 0.005;  // mm
     double radius = 0.5;   // mm, indenter radius
 };
+
+/// One crack: its trunk's centre, direction and length along its path, its widest opening and
+/// deepest point, its branches, and the seed of its meander (crackPaths draws the shape from
+/// it). Lengths in the map's units: mm in the generator, samples in insert-defects.
+struct CrackSpec {
+    double x = 0, z = 0;   // centre of the trunk's chord
+    double angleDeg = 0;   // the trunk's mean direction, from +x toward +z
+    double length = 1.5;   // the trunk's length along its path
+    double width = 0.025;  // the opening at the surface where widest (the trunk's middle)
+    double depth = 0.006;  // the depth where deepest (the trunk's middle)
+    int branches = 2;      // branches off the trunk
+    uint64_t seed = 1;     // the meander's and the branches' draws
+};
+
+/// One piece of a crack: a polyline (the trunk, or a branch starting on the trunk) with the
+/// opening and depth of its own profile (crackPaths).
+struct CrackPath {
+    std::vector<double> x, z;  // vertices
+    double width = 0, depth = 0;
+    bool branch = false;
+};
+
+/// A crack's pieces, trunk first. The model and its sources:
+///  - a recession with no raised portion: ISO 8785:1998 (surface imperfections) tells the
+///    hollows without a raised edge (4.1.10, the dent) from those with one (4.3.1, the crater)
+///    and names crazing (4.4.5) "a network of cracks on a surface"; a crack is a parting of the
+///    material, nothing is pushed aside, so it has no rim;
+///  - its path: "a clean (crystalline) fracture passing through or across the grain
+///    boundaries" (the crack of ISO 6157 and ASTM A788), so it is deflected at every grain: a
+///    zig-zag that keeps its mean direction, and it branches;
+///  - its opening: linear-elastic fracture mechanics (Westergaard 1939, Irwin 1957): a crack
+///    of half-length a under uniform tension opens as √(a² − x²), and near a tip as the square
+///    root of the distance to it.
+///  - the trunk: 16 straight pieces of length/16; piece k heads angle + φ_k, φ_0 = U(−30°, 30°),
+///    φ_k = φ_(k−1)/2 + U(−30°, 30°) (a grain's deflection, pulled back toward the mean so the
+///    crack keeps its direction); the polyline is centred on (x, z) by its chord's midpoint;
+///  - its opening along its arc t ∈ [0, L]: e(t) = √(1 − (2t/L − 1)²) (the ellipse: 1 in the
+///    middle, 0 at both tips); width·e(t) wide and depth·e(t) deep;
+///  - `branches` branches, each from a trunk vertex k ∈ [3, 13] (uniform), heading the trunk's
+///    piece k direction ± U(25°, 50°), length U(0.25, 0.5)·L in 8 pieces of the same meander; its
+///    opening √(1 − t/L_b) (a tip's root) times 0.6 × the trunk's opening e at its vertex
+///    (width and depth alike);
+///  - the cross-section, s the distance to the piece's polyline and t the arc position of the
+///    nearest point: a V, −D(t)·(1 − 2s/W(t)) for s < W(t)/2, and 0 beyond (no rim); where
+///    pieces meet, the deeper one (the MIN).
+/// Deterministic from the spec (its seed).
+std::vector<CrackPath> crackPaths(const CrackSpec& spec);
+
+/// One piece's offset (≤ 0) at (x, z), and the crack's: the MIN over its pieces.
+double crackPathOffset(const CrackPath& path, double x, double z);
+double crackOffset(const std::vector<CrackPath>& paths, double x, double z);
 
 /// One measurement spike: sample (i, j) offset by `height` mm.
 struct Spike {
@@ -247,6 +303,14 @@ struct SurfaceSpec {
     double dentDepth = 0.005;     // mm
     double dentRadius = 0.5;      // mm, indenter radius
     std::vector<DentSpec> dents;  // explicit dents (override the random ones)
+    // Random cracks (0: none): centres uniform over the inner 60% of the map, kept clear of the
+    // pocket edge, any direction, depth and width uniform in [0.5, 1]·crackDepth/crackWidth,
+    // length in [0.75, 1]·crackLength, crackBranches branches each (crackPaths).
+    int crackCount = 0;
+    double crackLength = 1.5;   // mm, along the trunk's path
+    double crackWidth = 0.025;  // mm, the widest opening
+    double crackDepth = 0.006;  // mm, the deepest point
+    int crackBranches = 2;
     bool pocketEdge = true;
     double pocketDepth = 0.3;          // mm
     double pocketWallFraction = 0.25;  // fraction of the map (in +x) that is pocket floor
@@ -303,6 +367,7 @@ struct GeneratedSurface {
     std::vector<ScratchSpec> scratches;  // the scratches actually cut (explicit or random)
     std::vector<GougeSpec> gouges;       // the gouges actually cut
     std::vector<DentSpec> dents;         // the dents actually pressed
+    std::vector<CrackSpec> cracks;       // the cracks actually opened
     std::vector<double> chatterBands;    // band centres, across-path coordinate c (mm)
     std::vector<Spike> spikes;           // measurement spikes added
     // Predicted feed-mark height (the face mill's `scallop`; ball-end f²-scallop with feed marks;

@@ -1,8 +1,8 @@
 // The surface generator's stages shared by its three files (private to src/synth/):
 // SurfaceProcesses.cpp (the tool marks of each machining process, the pocket step, the
 // process and test-part tables), SurfaceDefects.cpp (scratches, gouges, dents, chatter bands,
-// the burr, spikes and the truth labels' table) and SurfaceGenerator.cpp (validation, roughness,
-// composition and the description). The model and conventions: SurfaceGenerator.h.
+// the burr, cracks, spikes and the truth labels' table) and SurfaceGenerator.cpp (validation,
+// roughness, composition and the description). The model and conventions: SurfaceGenerator.h.
 #pragma once
 
 #include <algorithm>
@@ -33,6 +33,8 @@ constexpr uint64_t kTurnStream = 0x7475726e73303031ULL;
 constexpr uint64_t kNoiseStream = 0x6e6f697365303031ULL;
 constexpr uint64_t kSpikeStream = 0x7370696b65303031ULL;
 constexpr uint64_t kGritStream = 0x6772697473303031ULL;
+constexpr uint64_t kCrackStream = 0x637261636b303031ULL;       // the cracks' placement
+constexpr uint64_t kCrackShapeStream = 0x637261636b736831ULL;  // one crack's shape (crackPaths)
 
 /// Throws the input error of a SurfaceSpec field (its option name) unless `ok`.
 void require(bool ok, const std::string& field, const std::string& problem, const std::string& fix);
@@ -268,6 +270,13 @@ struct Dent {
 /// Dent height offset (≤ 0) at (x, z); sets `hit` where it lowers by ≥ 10% of the depth.
 double dentOffset(const Dent& d, double x, double z, bool& hit);
 
+/// A crack placed on the map: its spec, its pieces (crackPaths) and its sample bounding box.
+struct Crack {
+    CrackSpec spec;
+    std::vector<CrackPath> paths;
+    int i0 = 0, i1 = -1, j0 = 0, j1 = -1;
+};
+
 /// The pocket-edge burr: its profile across the edge per column and its height along it per
 /// row (both 0 without a burr).
 struct Burr {
@@ -275,7 +284,7 @@ struct Burr {
 };
 
 // ---------------------------------------------------------------------------------------------
-// The stages (SurfaceProcesses.cpp: 1, 2; SurfaceDefects.cpp: 3, 4, 4b, 4c, 4d, 6b).
+// The stages (SurfaceProcesses.cpp: 1, 2; SurfaceDefects.cpp: 3, 4, 4b, 4c, 4d, 4e, 6b).
 
 /// Stage 1: the tool paths that can shape the map, with their chatter and tooth phases.
 ToolMarks toolMarks(const SurfaceSpec& spec, const Frame& fr);
@@ -295,6 +304,10 @@ std::vector<Gouge> placeGouges(const SurfaceSpec& spec, const Frame& fr, const T
 /// Stage 4b: the dents, given or drawn from the seed (uniform over the inner 80% of the map,
 /// off the pocket edge).
 std::vector<Dent> placeDents(const SurfaceSpec& spec, const Frame& fr, GeneratedSurface& out);
+
+/// Stage 4e: the cracks, drawn from the seed (centres uniform over the inner 60% of the map, off
+/// the pocket edge; see SurfaceSpec).
+std::vector<Crack> placeCracks(const SurfaceSpec& spec, const Frame& fr, GeneratedSurface& out);
 
 /// Stage 4c: the chatter bands' centres (across-path coordinate), uniform over the map's range.
 std::vector<double> placeChatterBands(const SurfaceSpec& spec, const Frame& fr,

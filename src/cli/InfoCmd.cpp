@@ -1,0 +1,72 @@
+// scratchlight info (HEIGHTMAP | SCENE.json) [-D key=value ...] [--json]
+// Prints what the readers found in a height map or a scene's: the work is app/jobs/InfoJob.h.
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "app/jobs/InfoJob.h"
+#include "cli/Commands.h"
+#include "cli/Common.h"
+#include "core/Text.h"
+
+namespace sl::cli {
+
+namespace {
+
+struct InfoArgs {
+    InfoJobOptions job;
+    bool json = false;
+};
+
+int runInfo(const InfoArgs& a) {
+    const InfoJobSummary s = runInfoJob(a.job);
+    if (a.json) {
+        std::printf("%s\n", infoJson(s).dump(2).c_str());
+        return kOk;
+    }
+    const std::string unit = s.heightsInMm ? " mm" : " (as stored)";
+    std::printf("file        %s\n", s.file.c_str());
+    if (!s.scene.empty()) std::printf("scene       %s\n", s.scene.c_str());
+    std::printf("reader      %s%s\n", s.reader.c_str(), s.measured ? " (a measurement)" : "");
+    std::printf("size        %d x %d samples", s.width, s.height);
+    if (s.pitch)
+        std::printf(", %s x %s mm", formatNumber((s.width - 1) * *s.pitch, 4).c_str(),
+                    formatNumber((s.height - 1) * *s.pitch, 4).c_str());
+    std::printf("\n");
+    if (s.pitch)
+        std::printf("pitch       %s mm (the %s's)\n", formatNumber(*s.pitch).c_str(),
+                    s.pitchFrom.c_str());
+    else
+        std::printf("pitch       none in the file (a scene must give heightmap.pixel_pitch)\n");
+    std::printf("resampled   %s\n", s.resampling.empty() ? "no" : s.resampling.c_str());
+    std::printf("invalid     %zu points filled\n", s.invalidFilled);
+    std::printf("levelling   %s\n", s.levelling.text().c_str());
+    std::printf("heights     %s .. %s%s, Sq %s%s (after levelling)\n",
+                formatNumber(s.minHeight, 4).c_str(), formatNumber(s.maxHeight, 4).c_str(),
+                unit.c_str(), formatNumber(s.sq, 4).c_str(), unit.c_str());
+    for (const std::string& w : s.warnings) std::printf("warning     %s\n", w.c_str());
+    if (!s.part.is_null()) {
+        std::printf("material    %s\n", s.part.at("material").dump().c_str());
+        std::printf("camera      %s\n", s.part.at("camera").dump().c_str());
+    }
+    return kOk;
+}
+
+}  // namespace
+
+void registerInfo(CLI::App& app, std::function<int()>& run) {
+    auto a = std::make_shared<InfoArgs>();
+    CLI::App* c = app.add_subcommand(
+        "info",
+        "Print what the readers found in a height map or a scene's: reader, pitch, resampling, "
+        "size, heights and Sq after levelling, invalid points, the levelling in force");
+    c->add_option_function<std::string>(
+         "input", [a](const std::string& v) { a->job.input = v; },
+         "Height map (X3P, SDF, an instrument's file, EXR, ...) or scene file (JSON)")
+        ->required();
+    addSceneOverrides(c, a->job.sceneOverrides, false);
+    c->add_flag("--json", a->json, "Print the summary as JSON");
+    c->callback([a, &run] { run = [a] { return runInfo(*a); }; });
+}
+
+}  // namespace sl::cli
