@@ -230,6 +230,28 @@ TEST(DefectMap, GrooveOnPeriodicTextureIsFound) {
     EXPECT_GE(s.overall.precision, 0.7);
 }
 
+// Step 7b's quantile per tile: the groove above covers about 2 % of the map, so it is in the
+// whole map's 0.99 quantile and a tail threshold from that quantile (seedTailTiles = 1) keeps
+// only part of it; taken per tile of an 8 × 8 grid and the median of those, the quantile is the
+// texture's (the groove is in a few tiles) and the groove is found as without step 7b.
+TEST(DefectMap, TheTexturesTailIsTakenPerTile) {
+    std::vector<float> h = texture(kN);
+    const std::vector<uint8_t> truth = cutGroove(h, kN, 50, 60, 150, 130, 4.0, 0.4);
+    const std::vector<RegionLabel> legend{{255, "defect"}};
+    DefectMapOptions whole;
+    whole.seedTail = 1.5;
+    whole.seedTailTiles = 1;
+    DefectMapOptions tiles = whole;
+    tiles.seedTailTiles = 8;
+    const DefectScore w = scoreDefectMap(detectDefects(h, kN, kN, whole).map, truth, legend);
+    const DefectScore t = scoreDefectMap(detectDefects(h, kN, kN, tiles).map, truth, legend);
+    std::printf("groove recall: tail of the whole map %.3f, per tile %.3f\n", w.overall.recall,
+                t.overall.recall);
+    EXPECT_LT(w.overall.recall, 0.7);
+    EXPECT_GE(t.overall.recall, 0.8);
+    EXPECT_GE(t.overall.precision, 0.7);
+}
+
 // A one-sample-wide diagonal groove, 0.4 deep, on a plane with white noise of RMS 0.02 (no
 // texture: what the notch takes of a groove on a texture's harmonics is another matter): a
 // least-squares quadratic fit over the edge window is pulled toward it and leaves both

@@ -278,6 +278,8 @@ struct DefectMapOptions {
     // border, when that is higher, and their grow thresholds by the same factor (0: off)
     double seedTail = 0.0;           // (>= 0; 1.5 the value tried on real textures)
     double seedTailQuantile = 0.99;  // (in (0, 1))
+    int seedTailTiles = 8;  // ... that quantile per tile of an n × n grid, q their median (>= 1;
+                            // 1: the whole map's)
     double growTail = 0.0;           // with seedTail: the grow thresholds are max(their σ value,
                             // growTail × the same quantile), not scaled with the seed (>= 0)
     // the height map is a measurement (an instrument's file, or its scene says
