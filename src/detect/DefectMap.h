@@ -154,7 +154,9 @@
 //     high a defect must stand to seed; how far it grows is a lower share of the same tail. On a
 //     Gaussian residual q_0.99 = 2.6 σ and 1.5·q = 3.9 < 5.5: nothing changes; what the map is
 //     for (an inserted defect covers ~1 % of the map) stays above it, being far deeper than
-//     the texture's tail.
+//     the texture's tail. The quantile is taken per tile (seedTailTiles × seedTailTiles) and
+//     q is the median of those: a defect is in few tiles, a texture's tail in all. Step 8's
+//     threshold on E is raised the same way (to seedTail × E's tail, per tile).
 //  8. Texture-change regions (chatter bands): E = the separable running median of |A| over
 //     `energyWindow` samples (on |A| pooled 2×2 with half the window, read back at the sample's
 //     cell): a robust local amplitude of what the texture model left. Samples with
