@@ -179,6 +179,10 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--seed-tail-quantile", m.seedTailQuantile,
                   "auto: the quantile of the score that --seed-tail scales")
         ->capture_default_str();
+    c->add_option("--seed-tail-tiles", m.seedTailTiles,
+                  "auto: that quantile taken per tile of an NxN grid, their median used "
+                  "(a defect is in few tiles; 1: the whole map's quantile)")
+        ->capture_default_str();
     c->add_option("--grow-tail", m.growTail,
                   "auto: with --seed-tail, grow thresholds at least this x the same score "
                   "quantile, not scaled with the seed (0: scaled)")

@@ -154,7 +154,9 @@
 //     high a defect must stand to seed; how far it grows is a lower share of the same tail. On a
 //     Gaussian residual q_0.99 = 2.6 σ and 1.5·q = 3.9 < 5.5: nothing changes; what the map is
 //     for (an inserted defect covers ~1 % of the map) stays above it, being far deeper than
-//     the texture's tail.
+//     the texture's tail. The quantile is taken per tile (seedTailTiles × seedTailTiles) and
+//     q is the median of those: a defect is in few tiles, a texture's tail in all. Step 8's
+//     threshold on E is raised the same way (to seedTail × E's tail, per tile).
 //  8. Texture-change regions (chatter bands): E = the separable running median of |A| over
 //     `energyWindow` samples (on |A| pooled 2×2 with half the window, read back at the sample's
 //     cell): a robust local amplitude of what the texture model left. Samples with
@@ -278,6 +280,8 @@ struct DefectMapOptions {
     // border, when that is higher, and their grow thresholds by the same factor (0: off)
     double seedTail = 0.0;           // (>= 0; 1.5 the value tried on real textures)
     double seedTailQuantile = 0.99;  // (in (0, 1))
+    int seedTailTiles = 8;  // ... that quantile per tile of an n × n grid, q their median (>= 1;
+                            // 1: the whole map's)
     double growTail = 0.0;           // with seedTail: the grow thresholds are max(their σ value,
                             // growTail × the same quantile), not scaled with the seed (>= 0)
     // the height map is a measurement (an instrument's file, or its scene says

@@ -82,6 +82,10 @@ void checkOptions(const DefectMapOptions& o) {
         throw inputError(option("grow-tail"),
                          "must be >= 0 (got " + std::to_string(o.growTail) + ")",
                          "0 scales the grow thresholds with the seed's");
+    if (o.seedTailTiles < 1 || o.seedTailTiles > 64)
+        throw inputError(option("seed-tail-tiles"),
+                         "must be in [1, 64] (got " + std::to_string(o.seedTailTiles) + ")",
+                         "1 takes the quantile over the whole map");
     if (!(o.seedTailQuantile > 0.0 && o.seedTailQuantile < 1.0))
         throw inputError(option("seed-tail-quantile"),
                          "must be in (0, 1) (got " + std::to_string(o.seedTailQuantile) + ")");

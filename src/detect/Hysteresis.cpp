@@ -18,19 +18,38 @@ size_t hysteresis(const std::vector<float>& score, int W, int H, double seed, do
     return marked;
 }
 
+double tailQuantile(const std::vector<float>& score, int W, int H, const DefectMapOptions& o) {
+    const int x0 = o.border, x1 = W - o.border, y0 = o.border, y1 = H - o.border;
+    if (x1 <= x0 || y1 <= y0) return 0.0;
+    const int n = std::max(1, std::min({o.seedTailTiles, x1 - x0, y1 - y0}));
+    std::vector<double> tileQ;
+    tileQ.reserve(static_cast<size_t>(n) * n);
+    std::vector<float> v;
+    for (int ty = 0; ty < n; ++ty)
+        for (int tx = 0; tx < n; ++tx) {
+            const int ya = y0 + (y1 - y0) * ty / n, yb = y0 + (y1 - y0) * (ty + 1) / n;
+            const int xa = x0 + (x1 - x0) * tx / n, xb = x0 + (x1 - x0) * (tx + 1) / n;
+            v.clear();
+            for (int y = ya; y < yb; ++y)
+                for (int x = xa; x < xb; ++x) v.push_back(score[static_cast<size_t>(y) * W + x]);
+            if (v.empty()) continue;
+            const size_t k =
+                std::min(v.size() - 1,
+                         static_cast<size_t>(o.seedTailQuantile * static_cast<double>(v.size())));
+            std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+            tileQ.push_back(static_cast<double>(v[k]));
+        }
+    if (tileQ.empty()) return 0.0;
+    // the median over tiles (the lower middle one of an even count)
+    const size_t m = (tileQ.size() - 1) / 2;
+    std::nth_element(tileQ.begin(), tileQ.begin() + static_cast<std::ptrdiff_t>(m), tileQ.end());
+    return tileQ[m];
+}
+
 Thresholds tailThresholds(const std::vector<float>& score, int W, int H, const DefectMapOptions& o,
                           double seed, double grow) {
     if (!(o.seedTail > 0.0)) return {seed, grow};
-    std::vector<float> v;
-    v.reserve(score.size());
-    for (int y = o.border; y < H - o.border; ++y)
-        for (int x = o.border; x < W - o.border; ++x)
-            v.push_back(score[static_cast<size_t>(y) * W + x]);
-    if (v.empty()) return {seed, grow};
-    const size_t k = std::min(
-        v.size() - 1, static_cast<size_t>(o.seedTailQuantile * static_cast<double>(v.size())));
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-    const double q = static_cast<double>(v[k]);
+    const double q = tailQuantile(score, W, H, o);
     const double s = std::max(seed, o.seedTail * q);
     const double g = o.growTail > 0.0 ? std::max(grow, o.growTail * q) : grow * s / seed;
     return {s, std::min(g, s)};

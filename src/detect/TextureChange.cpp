@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "detect/Hysteresis.h"
 #include "detect/ImageFilters.h"
 
 namespace sl::defectmap {
@@ -26,6 +27,14 @@ size_t markTextureChange(std::vector<float>& v, int W, int H, const DefectMapOpt
     const double medE = std::max(medianAbs(E2), floorSigma);
     if (!(medE > 0.0)) return 0;
     double base = ratio * medE;  // the threshold on E
+    if (o.seedTail > 0.0) {
+        // step 7b on E: a texture whose own local amplitude varies much (clusters of a heavy-
+        // tailed texture's deepest marks) raises the threshold to seedTail × E's tail, taken
+        // per tile (tailQuantile) on the pooled map, its border halved as the map is
+        DefectMapOptions pooledOptions = o;
+        pooledOptions.border = (o.border + 1) / 2;
+        base = std::max(base, o.seedTail * tailQuantile(E2, W2, H2, pooledOptions));
+    }
     auto energy = [&](int x, int y) { return E2[static_cast<size_t>(y / 2) * W2 + x / 2]; };
     const bool grow = o.energyGrowBorder && o.border > 0;
     std::vector<uint8_t> own(n, 0);  // this test's marks

@@ -12,8 +12,9 @@ namespace sl::defectmap {
 
 /// Step 8 on v (W×H; consumed: replaced by |v| and then emptied): E = the separable running
 /// median of |v| (energyWindow, on the 2×2-pooled values), marked (255 in `map`) where
-/// E >= ratio × max(median E, floorSigma) outside the border and, with energyGrowBorder, grown
-/// outward into it layer by layer. lineExcess: the threshold in the border is raised by the
+/// E >= ratio × max(median E, floorSigma) outside the border (with seedTail > 0, and
+/// E >= seedTail × E's tail per tile, tailQuantile on the pooled map) and, with energyGrowBorder,
+/// grown outward into it layer by layer. lineExcess: the threshold in the border is raised by the
 /// excess of the median of E along the sample's pooled row (top and bottom border) or column
 /// (left and right) over median(E). Returns the samples it marked that were not marked before.
 size_t markTextureChange(std::vector<float>& v, int W, int H, const DefectMapOptions& o,
