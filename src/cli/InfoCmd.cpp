@@ -1,4 +1,4 @@
-// scratchlight info (HEIGHTMAP | SCENE.json) [-D key=value ...] [--json]
+// scratchlight info (HEIGHTMAP | SCENE.json) [-D key=value ...] [-o INFO.json]
 // Prints what the readers found in a height map or a scene's: the work is app/jobs/InfoJob.h.
 #include <cstdio>
 #include <memory>
@@ -8,6 +8,7 @@
 #include "cli/Commands.h"
 #include "cli/Common.h"
 #include "core/Text.h"
+#include "io/AtomicFile.h"
 
 namespace sl::cli {
 
@@ -15,15 +16,12 @@ namespace {
 
 struct InfoArgs {
     InfoJobOptions job;
-    bool json = false;
+    std::string output;  // the summary as JSON, written too (empty: printed only)
 };
 
 int runInfo(const InfoArgs& a) {
     const InfoJobSummary s = runInfoJob(a.job);
-    if (a.json) {
-        std::printf("%s\n", infoJson(s).dump(2).c_str());
-        return kOk;
-    }
+    if (!a.output.empty()) writeTextAtomically(a.output, infoJson(s).dump(2) + "\n");
     const std::string unit = s.heightsInMm ? " mm" : " (as stored)";
     std::printf("file        %s\n", s.file.c_str());
     if (!s.scene.empty()) std::printf("scene       %s\n", s.scene.c_str());
@@ -49,6 +47,7 @@ int runInfo(const InfoArgs& a) {
         std::printf("material    %s\n", s.part.at("material").dump().c_str());
         std::printf("camera      %s\n", s.part.at("camera").dump().c_str());
     }
+    if (!a.output.empty()) std::printf("wrote       %s\n", a.output.c_str());
     return kOk;
 }
 
@@ -65,7 +64,7 @@ void registerInfo(CLI::App& app, std::function<int()>& run) {
          "Height map (X3P, SDF, an instrument's file, EXR, ...) or scene file (JSON)")
         ->required();
     addSceneOverrides(c, a->job.sceneOverrides, false);
-    c->add_flag("--json", a->json, "Print the summary as JSON");
+    c->add_option("-o,--output", a->output, "Also write the summary as JSON to this file");
     c->callback([a, &run] { run = [a] { return runInfo(*a); }; });
 }
 
