@@ -394,12 +394,15 @@ TEST(DefectMap, StepModelFillsTheRingAcrossTheWall) {
 // in the texture's whole amplitude the scallops dwarf the band (as the ball-end part's
 // scallops do its chatter bands); in the sector of the texture varying along x the band stands
 // 6× above the feed marks. Only the sector split (textureSectors 2) marks it.
-TEST(DefectMap, ChatterBandAlongThePathIsFoundInItsOwnSector) {
-    constexpr int n = 128, y0 = 48, y1 = 80;
+// A 128² map of ridges across y with a 12-sample texture along x, 6× stronger in rows 48–79 (a
+// chatter band along the path, labelled 144 in truth), and white noise.
+constexpr int kBandN = 128;
+static void chatterBandMap(std::vector<float>& h, std::vector<uint8_t>& truth) {
+    constexpr int n = kBandN, y0 = 48, y1 = 80;
     std::mt19937 rng(5);
     std::normal_distribution<double> nd(0.0, 0.01);
-    std::vector<float> h(static_cast<size_t>(n) * n);
-    std::vector<uint8_t> truth(h.size(), 0);
+    h.assign(static_cast<size_t>(n) * n, 0.0f);
+    truth.assign(h.size(), 0);
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x) {
             const bool band = y >= y0 && y < y1;
@@ -408,6 +411,13 @@ TEST(DefectMap, ChatterBandAlongThePathIsFoundInItsOwnSector) {
             h[k] = static_cast<float>(1.0 - std::abs(std::sin(M_PI * y / 16.0)) + along + nd(rng));
             truth[k] = band ? 144 : 0;
         }
+}
+
+TEST(DefectMap, ChatterBandAlongThePathIsFoundInItsOwnSector) {
+    constexpr int n = kBandN;
+    std::vector<float> h;
+    std::vector<uint8_t> truth;
+    chatterBandMap(h, truth);
     const std::vector<RegionLabel> legend{{144, "chatter-band"}};
     DefectMapOptions o;
     o.border = 8;
@@ -449,19 +459,10 @@ TEST(DefectMap, TextureChangeStandsAboveTheTexturesOwnTail) {
     EXPECT_GT(a.markedEnergy, 1000u);
     EXPECT_LT(b.markedEnergy, a.markedEnergy * 7 / 10);
     // the band of the test above, with the tail
-    constexpr int n = 128, y0 = 48, y1 = 80;
-    std::mt19937 rng(5);
-    std::normal_distribution<double> nd(0.0, 0.01);
-    std::vector<float> h(static_cast<size_t>(n) * n);
-    std::vector<uint8_t> truth(h.size(), 0);
-    for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x) {
-            const bool band = y >= y0 && y < y1;
-            const double along = (band ? 0.3 : 0.05) * std::sin(2 * M_PI * x / 12.0);
-            const size_t k = static_cast<size_t>(y) * n + x;
-            h[k] = static_cast<float>(1.0 - std::abs(std::sin(M_PI * y / 16.0)) + along + nd(rng));
-            truth[k] = band ? 144 : 0;
-        }
+    constexpr int n = kBandN;
+    std::vector<float> h;
+    std::vector<uint8_t> truth;
+    chatterBandMap(h, truth);
     const std::vector<RegionLabel> legend{{144, "chatter-band"}};
     on.border = 8;
     const DefectScore band = scoreDefectMap(detectDefects(h, n, n, on).map, truth, legend);
