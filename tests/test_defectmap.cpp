@@ -185,14 +185,20 @@ TEST(DefectMap, TextureTailRaisesTheThresholdsOnAHeavyTailedTexture) {
 // it costs recall where a defect covers more than ~1 % of the map) they are not marked, and a
 // scratch across the lay, deeper than the tracks, still is. (Step 8, the texture change, is
 // left out on both sides: on a ground surface it marks clusters of deep tracks, 1-7 % of a clean
-// map, and 7b does not touch it; docs/RESULTS.md "On a process never tuned on".)
-TEST(DefectMap, GroundGritTracksAreTheTexturesOwnTail) {
+// map; 7b's tail on step 8 is the test TextureChangeStandsAboveTheTexturesOwnTail below.)
+// A size² ground surface, seed 3, with no chatter, scratch, gouge, dent or pocket edge.
+static SurfaceSpec cleanGroundSpec(int size) {
     SurfaceSpec s = processDefaults(SurfaceSpec::Process::Ground);
-    s.width = s.height = 320;
+    s.width = s.height = size;
     s.seed = 3;
     s.chatterAmplitude = 0;
     s.scratchCount = s.gougeCount = s.dentCount = 0;
     s.pocketEdge = false;
+    return s;
+}
+
+TEST(DefectMap, GroundGritTracksAreTheTexturesOwnTail) {
+    SurfaceSpec s = cleanGroundSpec(320);
     const GeneratedSurface clean = generateSurface(s);
     DefectMapOptions off;
     off.energyWindow = 0;
@@ -439,12 +445,7 @@ TEST(DefectMap, ChatterBandAlongThePathIsFoundInItsOwnSector) {
 // samples (seed 3; on 1024² parts, seeds 1-10, 1.2 % -> 0.2 % with step 7b on S in both). A
 // chatter band (the case above: a quarter of the map, in a minority of the tiles) stays found.
 TEST(DefectMap, TextureChangeStandsAboveTheTexturesOwnTail) {
-    SurfaceSpec s = processDefaults(SurfaceSpec::Process::Ground);
-    s.width = s.height = 512;
-    s.seed = 3;
-    s.chatterAmplitude = 0;
-    s.scratchCount = s.gougeCount = s.dentCount = 0;
-    s.pocketEdge = false;
+    SurfaceSpec s = cleanGroundSpec(512);
     const GeneratedSurface clean = generateSurface(s);
     DefectMapOptions off;
     off.seedTail = 0;
