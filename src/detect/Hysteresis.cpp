@@ -18,8 +18,9 @@ size_t hysteresis(const std::vector<float>& score, int W, int H, double seed, do
     return marked;
 }
 
-double tailQuantile(const std::vector<float>& score, int W, int H, const DefectMapOptions& o) {
-    const int x0 = o.border, x1 = W - o.border, y0 = o.border, y1 = H - o.border;
+double tailQuantile(const std::vector<float>& score, int W, int H, int border,
+                    const DefectMapOptions& o) {
+    const int x0 = border, x1 = W - border, y0 = border, y1 = H - border;
     if (x1 <= x0 || y1 <= y0) return 0.0;
     const int n = std::max(1, std::min({o.seedTailTiles, x1 - x0, y1 - y0}));
     std::vector<double> tileQ;
@@ -49,7 +50,7 @@ double tailQuantile(const std::vector<float>& score, int W, int H, const DefectM
 Thresholds tailThresholds(const std::vector<float>& score, int W, int H, const DefectMapOptions& o,
                           double seed, double grow) {
     if (!(o.seedTail > 0.0)) return {seed, grow};
-    const double q = tailQuantile(score, W, H, o);
+    const double q = tailQuantile(score, W, H, o.border, o);
     const double s = std::max(seed, o.seedTail * q);
     const double g = o.growTail > 0.0 ? std::max(grow, o.growTail * q) : grow * s / seed;
     return {s, std::min(g, s)};

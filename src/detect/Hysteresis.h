@@ -49,12 +49,13 @@ void forEachRegion(int W, int H, int reach, Seed seed, Grow grow, Region region)
 size_t hysteresis(const std::vector<float>& score, int W, int H, double seed, double grow,
                   int minRegion, std::vector<uint8_t>& map);
 
-/// Step 7b's q: the samples outside the border cut into seedTailTiles × seedTailTiles tiles, the
-/// seedTailQuantile quantile of `score` in each, and the median of those (the lower middle one of
-/// an even count). A texture's tail is everywhere, so every tile has it; a defect, even one that
-/// covers more than 1 − seedTailQuantile of the map, is in few tiles and moves the median
-/// little. seedTailTiles = 1 is the quantile over the whole map.
-double tailQuantile(const std::vector<float>& score, int W, int H, const DefectMapOptions& o);
+/// Step 7b's q: the samples outside `border` (samples at each edge) cut into seedTailTiles ×
+/// seedTailTiles tiles, the seedTailQuantile quantile of `score` in each, and the median of those
+/// (the lower middle one of an even count). A texture's tail is everywhere, so every tile has it; a
+/// defect, even one that covers more than 1 − seedTailQuantile of the map, is in few tiles and
+/// moves the median little. seedTailTiles = 1 is the quantile over the whole map.
+double tailQuantile(const std::vector<float>& score, int W, int H, int border,
+                    const DefectMapOptions& o);
 
 /// Step 7b: the seed and grow thresholds from the texture's own tail. q = tailQuantile; the seed
 /// is max(seed, seedTail·q), the grow threshold max(grow, growTail·q) with growTail > 0, else

@@ -31,9 +31,7 @@ size_t markTextureChange(std::vector<float>& v, int W, int H, const DefectMapOpt
         // step 7b on E: a texture whose own local amplitude varies much (clusters of a heavy-
         // tailed texture's deepest marks) raises the threshold to seedTail × E's tail, taken
         // per tile (tailQuantile) on the pooled map, its border halved as the map is
-        DefectMapOptions pooledOptions = o;
-        pooledOptions.border = (o.border + 1) / 2;
-        base = std::max(base, o.seedTail * tailQuantile(E2, W2, H2, pooledOptions));
+        base = std::max(base, o.seedTail * tailQuantile(E2, W2, H2, (o.border + 1) / 2, o));
     }
     auto energy = [&](int x, int y) { return E2[static_cast<size_t>(y / 2) * W2 + x / 2]; };
     const bool grow = o.energyGrowBorder && o.border > 0;
