@@ -280,7 +280,8 @@ void registerOptimize(CLI::App& app, std::function<int()>& run) {
     c->add_option("--defect-spp-scale", j.defectSppScale,
                   "--objective defects: the defect pixels take N times the training spp "
                   "(their few pixel pairs are the noisiest part of the objective); 0: the "
-                  "rule (up to 32, within half the part's samples), 1: off")
+                  "rule (up to 32 per label, the smallest labels first, within half the part's "
+                  "samples), 1: off")
         ->check(inRange(0, kMaxSppScale))
         ->capture_default_str();
     c->add_flag_function(

@@ -82,8 +82,8 @@ struct OptimizeJobOptions {
     /// (app/pipeline/TrainingNoise.h sppCapForImage: 512 at 256² and above, 2048 at 128²).
     int noiseMaxSpp = 0;
     /// The defects objective's defect pixels take this many times the training spp (and the
-    /// validation estimate's); 0: the rule of app/pipeline/TrainingNoise.h (defectSppFactor), 1:
-    /// off.
+    /// validation estimate's); 0: the rule of app/pipeline/TrainingNoise.h (defectSppFactors, per
+    /// label), 1: off.
     int defectSppScale = 0;
     /// The self-checked answer (app/pipeline/Answer.h): the light returned is the best of E*, every
     /// start's result and the references on the validation estimate. False: E* is returned.

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -103,28 +104,48 @@ void defectRegionsOnce(const OptimizeJobOptions& o, Inputs& in) {
     in.reference = std::move(regions.reference);
 }
 
-/// The defect pixels' sample multipliers of the training trace: `given` (> 0), else the rule's
-/// factor for the defect pixels on the part's footprint; printed when above 1.
+/// The defect pixels' sample multipliers of the training trace: `given` (> 0) on every defect
+/// pixel, else the rule's factor per label (app/pipeline/TrainingNoise.h defectSppFactors) for the
+/// defect pixels on the part's footprint; printed when above 1.
 std::vector<uint8_t> chooseDefectSppScale(const Scene& scene, const std::vector<uint8_t>& defects,
                                           int given) {
-    size_t part = 0, marked = 0;
+    size_t part = 0;
+    std::array<size_t, 256> labelPixels{};
     const std::vector<PixelSpan> spans = partFootprint(scene);
     const auto W = static_cast<size_t>(scene.camera.width());
     for (size_t y = 0; y < spans.size(); ++y)
         for (int x = spans[y].begin; x < spans[y].end; ++x) {
             ++part;
-            marked += defects[y * W + static_cast<size_t>(x)] != 0;
+            ++labelPixels[defects[y * W + static_cast<size_t>(x)]];
         }
-    const int factor = given > 0 ? given : defectSppFactor(marked, part);
-    if (factor > 1)
+    std::array<int, 256> factors;
+    if (given > 0)
+        factors.fill(given);
+    else
+        factors = defectSppFactors(labelPixels, part);
+    size_t marked = 0;
+    double extra = 0;
+    std::string perLabel;
+    for (size_t v = 1; v < 256; ++v) {
+        if (labelPixels[v] == 0) continue;
+        marked += labelPixels[v];
+        extra += static_cast<double>(labelPixels[v]) * (factors[v] - 1);
+        perLabel +=
+            fmt::format("{}{} px {}x", perLabel.empty() ? "" : ", ", labelPixels[v], factors[v]);
+    }
+    const std::string share =
+        formatNumber(100.0 * extra / static_cast<double>(std::max<size_t>(part, 1)), 2);
+    if (extra > 0 && given > 0)
         spdlog::info(
-            "defect pixels: {} of the part's {} take {}x the training spp (their few pairs are "
-            "the objective's noisiest sum; +{} % samples)",
-            marked, part, factor,
-            formatNumber(100.0 * static_cast<double>(marked) * (factor - 1) /
-                             static_cast<double>(std::max<size_t>(part, 1)),
-                         2));
-    return defectSppScale(defects, factor);
+            "defect pixels: {} of the part's {} take {}x the training spp (given; +{} % "
+            "samples)",
+            marked, part, given, share);
+    else if (extra > 0)
+        spdlog::info(
+            "defect pixels: {} of the part's {} take more of the training spp, by label from the "
+            "smallest ({}; their few pairs are the objective's noisiest sums; +{} % samples)",
+            marked, part, perLabel, share);
+    return defectSppScale(defects, factors);
 }
 
 /// The cache a stage reads and writes what it derives from T in (the specular start, the part's

@@ -42,12 +42,47 @@ int validationPilotSpp(int trainingSpp) {
     return std::min(trainingSpp, std::max(kValidationPilotSpp, quarter));
 }
 
-int defectSppFactor(size_t defectPixels, size_t partPixels) {
+namespace {
+/// The largest power of two ≤ kDefectSppScale whose extra samples on `pixels` fit in `budget`
+/// pixels' worth.
+int factorWithin(size_t pixels, double budget) {
     int f = kDefectSppScale;
-    while (f > 1 && static_cast<double>(defectPixels) * (f - 1) >
-                        kDefectSppBudget * static_cast<double>(partPixels))
-        f /= 2;
-    return defectPixels == 0 ? 1 : f;
+    while (f > 1 && static_cast<double>(pixels) * (f - 1) > budget) f /= 2;
+    return pixels == 0 ? 1 : f;
+}
+}  // namespace
+
+int defectSppFactor(size_t defectPixels, size_t partPixels) {
+    return factorWithin(defectPixels, kDefectSppBudget * static_cast<double>(partPixels));
+}
+
+std::array<int, 256> defectSppFactors(const std::array<size_t, 256>& labelPixels,
+                                      size_t partPixels) {
+    std::array<int, 256> factors;
+    factors.fill(1);
+    std::vector<int> labels;
+    for (int v = 1; v < 256; ++v)
+        if (labelPixels[static_cast<size_t>(v)] > 0) labels.push_back(v);
+    std::stable_sort(labels.begin(), labels.end(), [&](int a, int b) {
+        return labelPixels[static_cast<size_t>(a)] < labelPixels[static_cast<size_t>(b)];
+    });
+    double budget = kDefectSppBudget * static_cast<double>(partPixels);
+    for (const int v : labels) {
+        const size_t n = labelPixels[static_cast<size_t>(v)];
+        const int f = factorWithin(n, budget);
+        factors[static_cast<size_t>(v)] = f;
+        budget -= static_cast<double>(n) * (f - 1);
+    }
+    return factors;
+}
+
+std::vector<uint8_t> defectSppScale(const std::vector<uint8_t>& defects,
+                                    const std::array<int, 256>& factors) {
+    if (std::all_of(factors.begin() + 1, factors.end(), [](int f) { return f <= 1; })) return {};
+    std::vector<uint8_t> s(defects.size(), 1);
+    for (size_t p = 0; p < s.size(); ++p)
+        if (defects[p]) s[p] = static_cast<uint8_t>(std::max(1, factors[defects[p]]));
+    return s;
 }
 
 std::vector<uint8_t> defectSppScale(const std::vector<uint8_t>& defects, int factor) {

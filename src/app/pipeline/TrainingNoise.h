@@ -71,6 +71,7 @@
 // references.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -101,9 +102,23 @@ inline constexpr double kDefectSppBudget = 0.5;
 /// The multiplier of the defect pixels by the rule above (1 when none is affordable):
 /// `defectPixels` of the `partPixels` the camera sees of the part.
 int defectSppFactor(size_t defectPixels, size_t partPixels);
+
+/// The multipliers by label (index: the label's value; 1 for 0 and for absent labels), the rule
+/// above per label: the objective's soft-min over labels follows the label that shows least, and
+/// its noise is that label's g(D_k), a mean over its own pairs; a truth's smallest labels (a burr,
+/// a dent: tens of pixels) are the noisiest, while a chatter band of thousands of pixels would
+/// spend the whole budget at 2x on one factor for all. So the budget goes to the labels in order
+/// of size, smallest first, each taking the largest power of two ≤ kDefectSppScale whose extra
+/// samples fit in what the smaller ones left. One label: defectSppFactor's factor exactly.
+/// labelPixels[v]: the pixels of label v the camera sees of the part (labelPixels[0] unused).
+std::array<int, 256> defectSppFactors(const std::array<size_t, 256>& labelPixels,
+                                      size_t partPixels);
 /// The per-pixel multipliers: `factor` on the nonzero pixels of `defects`, 1 elsewhere; empty
 /// when factor is 1 (the plain trace).
 std::vector<uint8_t> defectSppScale(const std::vector<uint8_t>& defects, int factor);
+/// The same with a factor per label (defectSppFactors); empty when every factor is 1.
+std::vector<uint8_t> defectSppScale(const std::vector<uint8_t>& defects,
+                                    const std::array<int, 256>& factors);
 
 /// The validation estimate's seed: the training seed plus this ("valid"). It is not in any
 /// training seed range a user can reach with --estimates (< 2^20) and not the judge's seed.
