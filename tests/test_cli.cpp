@@ -210,6 +210,22 @@ TEST_F(CliTest, BenchScratchmapPrintsATableAndWritesCsv) {
     EXPECT_EQ(runCli("bench scratchmap --sizes 0").exitCode, 2);
 }
 
+TEST_F(CliTest, BenchLoadPrintsATableAndWritesCsv) {
+    // the bundled part, once: a row naming its reader, the CSV's header and its line
+    const std::string part = std::string(SL_SOURCE_DIR) + "/scenes/default/part.exr";
+    const std::string csv = (dir / "load.csv").string();
+    auto r = runCli("bench load \"" + part + "\" --repeats 1 -o \"" + csv + "\"");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("part.exr"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("exr float32"), std::string::npos) << r.output;
+    std::ifstream in(csv);
+    int lines = 0;
+    for (std::string l; std::getline(in, l);) ++lines;
+    EXPECT_EQ(lines, 2);
+    EXPECT_EQ(runCli("bench load").exitCode, 2);                           // no file
+    EXPECT_EQ(runCli("bench load " + part + " --repeats 0").exitCode, 2);  // a usage error
+}
+
 // Issue 35: an output never replaces an input of the same run. `render scene.json -o part.exr`
 // overwrote the scene's own height map (exit 0); the PNG preview beside the output may not
 // replace it either.

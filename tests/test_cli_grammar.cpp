@@ -2,7 +2,8 @@
 // commands and each command's --help for its flags, and checks one name per concept (-o for
 // every output, --width/--height/--size and --spp/--seed/--max-depth on every command that
 // renders, -D on every command that reads a scene, no retired synonyms); then that -D,
-// --size and --envmap SPEC do what they say, from any directory.
+// --size and --envmap SPEC do what they say, from any directory; and that every `bench X` is
+// listed where the benchmarks are listed (README, DESIGN).
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -156,6 +157,35 @@ TEST(CliGrammar, EveryCommandFollowsOneGrammar) {
         if (readsScene.count(c)) {
             EXPECT_TRUE(g.flags.count("-D")) << help.output;
         }
+    }
+}
+
+// Every `bench X` is listed where the benchmarks are listed: the README's command table (its
+// `scratchlight bench (...)` row) and DESIGN's "Tests and benchmarks" (`scratchlight bench ...`).
+TEST(CliGrammar, EveryBenchIsListedInTheReadmeAndDesign) {
+    const auto bench = runCli("bench --help");
+    ASSERT_EQ(bench.exitCode, 0) << bench.output;
+    const std::vector<std::string> benches = subcommandsIn(bench.output);
+    ASSERT_GE(benches.size(), 16u) << bench.output;
+    // The names of a `bench A | B | ...` list: the words between the bars, from `bench` to the
+    // first character that is neither a name, a space nor a bar.
+    auto listAfter = [](const std::string& text, const std::string& start, size_t from = 0) {
+        std::set<std::string> names;
+        const size_t at = from == std::string::npos ? from : text.find(start, from);
+        if (at == std::string::npos) return names;
+        static const std::regex item(R"(^\s*(?:\\)?\|?\s*([a-z][a-z0-9-]*))");
+        std::string rest = text.substr(at + start.size());
+        for (std::smatch m; std::regex_search(rest, m, item); rest = m.suffix()) names.insert(m[1]);
+        return names;
+    };
+    const std::string readme = test::readFile(SL_SOURCE_DIR "/README.md");
+    const std::string design = test::readFile(SL_SOURCE_DIR "/docs/DESIGN.md");
+    const std::set<std::string> inReadme = listAfter(readme, "| `scratchlight bench (");
+    const std::set<std::string> inDesign =
+        listAfter(design, "`scratchlight bench ", design.find("\n## Tests and benchmarks\n"));
+    for (const std::string& b : benches) {
+        EXPECT_TRUE(inReadme.count(b)) << "README's bench row does not list " << b;
+        EXPECT_TRUE(inDesign.count(b)) << "DESIGN's \"Tests and benchmarks\" does not list " << b;
     }
 }
 

@@ -1,5 +1,6 @@
 // Tests for the surface-metrology height-map readers (io/X3p.h, io/Sdf.h through
-// io/HeightmapIO.h loadHeightmap) and the scene's use of a file's own pixel pitch. The files are
+// io/HeightmapIO.h loadHeightmap) and the scene's use of a file's own pixel pitch; `info` and
+// `bench load`, which report on them. The files are
 // written here: X3P with libzip, SDF by hand (ASCII and binary).
 #include <gtest/gtest.h>
 #include <zip.h>
@@ -13,10 +14,12 @@
 #include <iterator>
 #include <limits>
 #include <map>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "TestUtil.h"
+#include "app/bench/LoadBench.h"
 #include "app/jobs/InfoJob.h"
 #include "core/Error.h"
 #include "core/Md5.h"
@@ -800,4 +803,81 @@ TEST(FormatsInfo, InfoSaysWhatTheReadersFound) {
     EXPECT_EQ(j["camera"]["width"], 16);
     EXPECT_NEAR(j["material"]["alpha"][0].get<double>(), 0.2, 1e-6);
     EXPECT_NEAR(j["size_mm"][1].get<double>(), 5 * 0.02, 1e-15);
+}
+
+TEST(FormatsBench, LoadBenchTimesEachFileAsTheCommandsLoadIt) {
+    // `bench load` (app/bench/LoadBench.h), run tiny without the CLI: a row per file in their
+    // order, each file read and levelled as every command reads a bare height map
+    // (loadHeightSource); no timing asserted, only what the rows say and how they are formed.
+    test::TempDir dir("load-bench");
+    X3pSpec s;  // measured, non-square pixels, one invalid point, a tilt for the plane to remove
+    s.sizeX = 8;
+    s.sizeY = 6;
+    s.incY = 1e-5;
+    for (int j = 0; j < 6; ++j)
+        for (int i = 0; i < 8; ++i) s.values.push_back(1e-6 * (3.0 + 2.0 * i - 1.5 * j + (i % 3)));
+    s.values[13] = kNaN;
+    writeX3p(dir / "tilt, rect.x3p", s);
+    SdfSpec b;
+    b.values = ramp(4, 3);
+    writeSdfBinary(dir / "b.sdf", b);
+    std::vector<float> v(48);
+    for (size_t k = 0; k < v.size(); ++k) v[k] = static_cast<float>(k % 7);
+    test::writeNpyF32(dir / "part.npy", 6, 8, v);
+
+    LoadBenchOptions o;
+    o.files = {dir / "tilt, rect.x3p", dir / "b.sdf", dir / "part.npy"};
+    o.repeats = 2;
+    const LoadBenchResult r = runLoadBench(o);
+    ASSERT_EQ(r.rows.size(), 3u);
+    for (size_t i = 0; i < 3; ++i) {
+        const LoadBenchRow& row = r.rows[i];
+        SCOPED_TRACE(row.file.string());
+        EXPECT_EQ(row.file, o.files[i]);
+        const HeightSource src = loadHeightSource(row.file);
+        EXPECT_EQ(row.reader, src.map.format);
+        EXPECT_EQ(row.width, src.width());
+        EXPECT_EQ(row.height, src.height());
+        EXPECT_EQ(row.invalidFilled, src.map.invalidFilled);
+        EXPECT_EQ(row.resampling, src.map.resampling);
+        EXPECT_EQ(row.bytes, fs::file_size(row.file));
+        // the levelling the commands apply, to the bit
+        EXPECT_EQ(row.levelling.applied.mode, src.load.levelling.applied.mode);
+        EXPECT_EQ(row.levelling.automatic, src.load.levelling.automatic);
+        EXPECT_EQ(row.levelling.rmsAfter, src.load.levelling.rmsAfter);
+        EXPECT_EQ(row.levelling.coefficients, src.load.levelling.coefficients);
+        for (double t : {row.firstSeconds, row.rawSeconds, row.readSeconds, row.readCpuSeconds,
+                         row.levelSeconds})
+            EXPECT_TRUE(std::isfinite(t) && t >= 0.0) << t;
+        EXPECT_EQ(row.readRatio(), row.readSeconds / row.rawSeconds);
+        EXPECT_EQ(row.readMBps(), static_cast<double>(row.bytes) / 1e6 / row.readSeconds);
+    }
+    EXPECT_NE(r.rows[0].resampling, "");
+    EXPECT_EQ(r.rows[0].invalidFilled, 1u);
+    EXPECT_EQ(r.rows[0].levelling.applied.mode, LevellingDesc::Mode::Plane);
+    EXPECT_EQ(r.rows[2].levelling.applied.mode, LevellingDesc::Mode::None);
+    // CSV: a header and a line per file; a path and a reader holding commas stay one field
+    const std::string csv = r.csv();
+    std::istringstream lines(csv);
+    std::vector<std::string> l;
+    for (std::string line; std::getline(lines, line);) l.push_back(line);
+    ASSERT_EQ(l.size(), 4u) << csv;
+    EXPECT_EQ(l[0].rfind("file,reader,bytes,", 0), 0u) << l[0];
+    EXPECT_EQ(l[1].rfind("\"" + o.files[0].string() + "\",\"" + r.rows[0].reader + "\",", 0), 0u)
+        << l[1];
+
+    // Bad input is named: no file, no repeat, a file no reader reads.
+    EXPECT_THROW(runLoadBench({}), InputError);
+    LoadBenchOptions zero = o;
+    zero.repeats = 0;
+    EXPECT_THROW(runLoadBench(zero), InputError);
+    test::writeText(dir / "notes.txt", "not a height map");
+    LoadBenchOptions bad;
+    bad.files = {dir / "notes.txt"};
+    try {
+        runLoadBench(bad);
+        ADD_FAILURE() << "notes.txt was read";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("notes.txt"), std::string::npos) << e.what();
+    }
 }

@@ -68,6 +68,54 @@ Counts count(const std::vector<uint8_t>& map, const std::vector<uint8_t>& truth,
     return c;
 }
 
+/// Samples `in` marks and `notIn` does not (what a step adds, or with the maps swapped, drops).
+size_t markedOnlyIn(const SelfSimMap& in, const SelfSimMap& notIn) {
+    size_t n = 0;
+    for (size_t i = 0; i < in.map.size(); ++i) n += in.map[i] && !notIn.map[i] ? 1 : 0;
+    return n;
+}
+
+/// Striations (seed 11) strewn with 400 particles whose heights are exponential (mean 0.2: many
+/// small, a few as high as 1.5 × the striations), Gaussian domes of σ 1.2 samples at random
+/// places 48 samples or more from the edges; `particles` (optional) marks each within 2.5
+/// samples of its centre.
+std::vector<float> particleField(std::vector<uint8_t>* particles = nullptr) {
+    std::vector<float> h = striations(11);
+    if (particles) particles->assign(h.size(), 0);
+    std::mt19937 rng(12);
+    std::uniform_real_distribution<double> ux(48, kW - 48), uy(48, kH - 48);
+    std::exponential_distribution<double> amplitude(1.0 / 0.2);
+    for (int k = 0; k < 400; ++k) {
+        const double cx = ux(rng), cy = uy(rng), a = amplitude(rng);
+        for (int y = static_cast<int>(cy) - 4; y <= static_cast<int>(cy) + 4; ++y)
+            for (int x = static_cast<int>(cx) - 4; x <= static_cast<int>(cx) + 4; ++x) {
+                const double d2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
+                const size_t i = static_cast<size_t>(y) * kW + x;
+                h[i] += static_cast<float>(a * std::exp(-d2 / (2 * 1.2 * 1.2)));
+                if (particles && d2 <= 2.5 * 2.5) (*particles)[i] = 1;
+            }
+    }
+    return h;
+}
+
+/// The border pieces' scene: striations (seed 51) crossed from border to border by a raised
+/// ridge (3 × the striations high, 10 samples wide, along y = 112: a region at the border) and
+/// a pit (3 × deep, ρ 7) whose rim lies on the ridge's lower flank. The masks are as painted
+/// (the pit's overlaps the ridge's).
+struct RidgeAndPit {
+    std::vector<float> h;
+    std::vector<uint8_t> ridge, pit;
+};
+RidgeAndPit ridgeAndPit() {
+    RidgeAndPit s;
+    s.h = striations(51);
+    s.ridge.assign(s.h.size(), 0);
+    s.pit.assign(s.h.size(), 0);
+    groove(s.h, s.ridge, 0, 112, kW - 1, 112, 10, -3.0);  // raised, across the whole map
+    pit(s.h, s.pit, 90, 122, 7, 3.0);                     // its rim on the ridge's flank
+    return s;
+}
+
 }  // namespace
 
 TEST(SelfSimMap, StriationsAreTheBackgroundThePitAndTheGrooveAreMarked) {
@@ -169,21 +217,9 @@ TEST(SelfSimMap, TextureTailThresholdIsWhereTheExponentialTailExpectsNfaRegions)
 // texture's own tail of the regions' peaks (step 7) drops them and keeps the pit: at most
 // the one texture region its NFA of 1 expects is left (here one particle of 400 is).
 TEST(SelfSimMap, TheTexturesOwnTailDropsItsParticlesAndKeepsThePit) {
-    std::vector<float> h = striations(11);
-    std::mt19937 rng(12);
-    std::uniform_real_distribution<double> ux(48, kW - 48), uy(48, kH - 48);
-    std::exponential_distribution<double> amplitude(1.0 / 0.2);
-    std::vector<uint8_t> particles(h.size(), 0), pitTruth(h.size(), 0);
-    for (int k = 0; k < 400; ++k) {
-        const double cx = ux(rng), cy = uy(rng), a = amplitude(rng);
-        for (int y = static_cast<int>(cy) - 4; y <= static_cast<int>(cy) + 4; ++y)
-            for (int x = static_cast<int>(cx) - 4; x <= static_cast<int>(cx) + 4; ++x) {
-                const double d2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
-                const size_t i = static_cast<size_t>(y) * kW + x;
-                h[i] += static_cast<float>(a * std::exp(-d2 / (2 * 1.2 * 1.2)));
-                if (d2 <= 2.5 * 2.5) particles[i] = 1;
-            }
-    }
+    std::vector<uint8_t> particles;
+    std::vector<float> h = particleField(&particles);
+    std::vector<uint8_t> pitTruth(h.size(), 0);
     pit(h, pitTruth, 128, 112, 6, 3.0);
     for (size_t i = 0; i < h.size(); ++i)
         if (pitTruth[i]) particles[i] = 0;
@@ -261,19 +297,7 @@ TEST(SelfSimMap, TheFlanksOfAWeakDefectAreMarkedAndNoDroppedRegionIsRevived) {
     EXPECT_GE(addedOnTruth * 10, added * 8) << "what step 8 adds is mostly the groove's";
 
     // (2) the particles stay dropped, the deep pit is kept as it was
-    std::vector<float> p = striations(11);
-    std::mt19937 rng(12);
-    std::uniform_real_distribution<double> ux(48, kW - 48), uy(48, kH - 48);
-    std::exponential_distribution<double> amplitude(1.0 / 0.2);
-    for (int k = 0; k < 400; ++k) {
-        const double cx = ux(rng), cy = uy(rng), amp = amplitude(rng);
-        for (int y = static_cast<int>(cy) - 4; y <= static_cast<int>(cy) + 4; ++y)
-            for (int x = static_cast<int>(cx) - 4; x <= static_cast<int>(cx) + 4; ++x) {
-                const double d2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
-                p[static_cast<size_t>(y) * kW + x] +=
-                    static_cast<float>(amp * std::exp(-d2 / (2 * 1.2 * 1.2)));
-            }
-    }
+    std::vector<float> p = particleField();
     std::vector<uint8_t> pitTruth(p.size(), 0);
     pit(p, pitTruth, 128, 112, 6, 3.0);
     const SelfSimMap c = detectSelfSimDefects(p, kW, kH, off),
@@ -324,9 +348,7 @@ TEST(SelfSimMap, ADeepDefectIsKeptAndTheTextureJoinedToItDropped) {
     EXPECT_LT((gb.marked - gb.hits) * 2, ga.marked - ga.hits)
         << "marks outside the label: " << ga.marked - ga.hits << " without step 8a, "
         << gb.marked - gb.hits << " with";
-    size_t onlyWith = 0;
-    for (size_t i = 0; i < h.size(); ++i) onlyWith += b.map[i] && !a.map[i] ? 1 : 0;
-    EXPECT_EQ(onlyWith, 0u) << "samples marked only with step 8a";
+    EXPECT_EQ(markedOnlyIn(b, a), 0u) << "samples marked only with step 8a";
 }
 
 // Step 8c drops a particle and keeps the defects: striations with a pit (3 × the striations
@@ -358,9 +380,7 @@ TEST(SelfSimMap, ARaisedCompactParticleIsDroppedThePitAndTheBurrKept) {
     EXPECT_EQ(a.droppedParticles, 0u);
     EXPECT_GE(b.droppedParticles, 1u);
     EXPECT_EQ(b.regions + b.droppedParticles, a.regions);
-    size_t onlyWith = 0;
-    for (size_t i = 0; i < h.size(); ++i) onlyWith += b.map[i] && !a.map[i] ? 1 : 0;
-    EXPECT_EQ(onlyWith, 0u) << "samples marked only with step 8c";
+    EXPECT_EQ(markedOnlyIn(b, a), 0u) << "samples marked only with step 8c";
 }
 
 // Step 8d keeps a defect that the growth joined to a region reaching the border, and not the
@@ -373,11 +393,8 @@ TEST(SelfSimMap, ARaisedCompactParticleIsDroppedThePitAndTheBurrKept) {
 // region of its own would be and the hollow is not; with the fill test off (a tiny share) the
 // hollow is marked too: the shape test is what drops it.
 TEST(SelfSimMap, ABorderRegionsDefectPieceIsKeptItsRuggedTexturePieceDropped) {
-    std::vector<float> h = striations(51);
-    std::vector<uint8_t> pitTruth(h.size(), 0), ridge(h.size(), 0), hollow(h.size(), 0);
-    groove(h, ridge, 0, 112, kW - 1, 112, 10, -3.0);  // raised, across the whole map
-    pit(h, pitTruth, 90, 122, 7, 3.0);                // its rim on the ridge's flank
-    std::vector<uint8_t> scratch(h.size(), 0);
+    auto [h, ridge, pitTruth] = ridgeAndPit();
+    std::vector<uint8_t> hollow(h.size(), 0), scratch(h.size(), 0);
     pit(h, hollow, 170, 99, 11, 0.6);  // the hollow's base, its rim on the ridge's other flank
     std::mt19937 rng(7);
     std::uniform_real_distribution<double> off(-7.0, 7.0), depth(0.6, 3.0);
@@ -420,9 +437,7 @@ TEST(SelfSimMap, ABorderRegionsDefectPieceIsKeptItsRuggedTexturePieceDropped) {
         << "the hollow with any shape kept: " << hc.hits << " of " << hc.truth;
     EXPECT_GE(pc.hits, pb.hits);
     EXPECT_GT(c.borderPieces, b.borderPieces);
-    size_t lost = 0;
-    for (size_t i = 0; i < h.size(); ++i) lost += a.map[i] && !b.map[i] ? 1 : 0;
-    EXPECT_EQ(lost, 0u) << "samples marked without step 8d and not with it";
+    EXPECT_EQ(markedOnlyIn(a, b), 0u) << "samples marked without step 8d and not with it";
 }
 
 // A pit with a pile-up rim (model A's shape, synth/DefectInsert.h: a ring of width ρ/2 outside
@@ -483,10 +498,7 @@ TEST(SelfSimMap, ABorderPiecesPileUpIsMarkedTheRaisedTextureBesideItIsNot) {
 // default share the pit is kept, as with no share at all; with a share above the scene's own,
 // the scene counts as a relief and the map is the one without step 8d.
 TEST(SelfSimMap, BorderPiecesAreSplitOnATextureNotOnAMapItsRepeatsExplain) {
-    std::vector<float> h = striations(51);
-    std::vector<uint8_t> pitTruth(h.size(), 0), ridge(h.size(), 0);
-    groove(h, ridge, 0, 112, kW - 1, 112, 10, -3.0);
-    pit(h, pitTruth, 90, 122, 7, 3.0);
+    auto [h, ridge, pitTruth] = ridgeAndPit();
     for (size_t i = 0; i < h.size(); ++i) pitTruth[i] = pitTruth[i] && !ridge[i];
     SelfSimMapOptions off8d;
     off8d.borderPieceFill = 0;

@@ -1,6 +1,6 @@
 // scratchlight bench X: every benchmark is a row of benchCommands() below, the one table of
-// `bench`'s subcommands. For render | transport | scratchmap | read | lamps | targets | jnd |
-// defectmap | noise | sampling | depth | regions this file parses the options, runs the benchmark
+// `bench`'s subcommands. For render | transport | scratchmap | read | load | lamps | targets | jnd
+// | defectmap | noise | sampling | depth | regions this file parses the options, runs the benchmark
 // in the library (app/bench/XBench.h), prints its table and writes its CSV; race and settings
 // (RaceCmd.cpp), gradients (GradCheckCmd.cpp) and view (ViewCmd.cpp) sit beside the command whose
 // options they share.
@@ -14,6 +14,7 @@
 #include "app/bench/DepthBench.h"
 #include "app/bench/JndBench.h"
 #include "app/bench/LampsBench.h"
+#include "app/bench/LoadBench.h"
 #include "app/bench/NoiseBench.h"
 #include "app/bench/ReadBench.h"
 #include "app/bench/RegionBench.h"
@@ -281,6 +282,39 @@ int runScratchMapBenchCmd(const ScratchMapBenchArgs& a) {
     return kOk;
 }
 
+struct LoadBenchArgs {
+    LoadBenchOptions o;
+    std::vector<std::string> files;
+    std::string csv = "bench-load.csv";
+};
+
+int runLoadBenchCmd(LoadBenchArgs a) {
+    for (const std::string& f : a.files) a.o.files.emplace_back(f);
+    const LoadBenchResult r = runLoadBench(a.o);
+    std::printf("%-36s %-22s %7s %8s | %8s %8s | %8s %8s %7s %8s | %8s %-8s | %8s\n", "file",
+                "reader", "MB", "Msamples", "raw ms", "MB/s", "read s", "MB/s", "x raw", "CPU s",
+                "level s", "", "first s");
+    for (const LoadBenchRow& row : r.rows) {
+        // the reader's name; its count of invalid points filled stays in the CSV
+        const std::string reader = row.reader.substr(0, row.reader.find(','));
+        std::printf(
+            "%-36s %-22s %7.2f %8.3f | %8.2f %8.0f | %8.3f %8.1f %6.0fx %8.3f | %8.3f %-8s | "
+            "%8.3f\n",
+            row.file.filename().string().c_str(), reader.c_str(), row.megabytes(),
+            row.samples() / 1e6, row.rawSeconds * 1e3, row.rawMBps(), row.readSeconds,
+            row.readMBps(), row.readRatio(), row.readCpuSeconds, row.levelSeconds,
+            levellingName(row.levelling.applied).c_str(), row.firstSeconds);
+    }
+    std::printf(
+        "(median of %d interleaved runs; raw = the file's bytes into memory, read = "
+        "loadHeightmap: decode, fill, resample; x raw = read / raw; level = the default "
+        "levelling; first = the first read, a reader module's loading included)\n",
+        a.o.repeats);
+    writeBenchCsv(a.csv, r.csv());
+    std::printf("wrote %s\n", a.csv.c_str());
+    return kOk;
+}
+
 struct ReadBenchArgs {
     ReadBenchOptions o;
     std::string csv = "bench-read.csv";
@@ -532,6 +566,16 @@ void addReadBench(CLI::App* c, std::function<int()>& run) {
     c->callback([rb, &run] { run = [rb] { return runReadBenchCmd(*rb); }; });
 }
 
+void addLoadBench(CLI::App* c, std::function<int()>& run) {
+    auto lb = std::make_shared<LoadBenchArgs>();
+    c->add_option("files", lb->files, "Height-map files (any format a command reads)")->required();
+    c->add_option("--repeats", lb->o.repeats, "Interleaved runs (median)")
+        ->check(inRange(1, 100))
+        ->capture_default_str();
+    c->add_option("-o,--output", lb->csv, "CSV output")->capture_default_str();
+    c->callback([lb, &run] { run = [lb] { return runLoadBenchCmd(*lb); }; });
+}
+
 void addLampsBench(CLI::App* c, std::function<int()>& run) {
     auto lb = std::make_shared<LampsBenchArgs>();
     c->add_option("--parts", lb->o.parts, "bundled and/or race parts")
@@ -719,6 +763,10 @@ const std::vector<BenchCommand>& benchCommands() {
          "Seconds to read an NxN height map from instrument files (X3P by our reader and by "
          "Gwyddion's, Gwyddion's .gwy) against the same heights from EXR",
          addReadBench},
+        {"load",
+         "Where loading your height-map files goes: each file's reader (decode, fill, resample) "
+         "and levelling, seconds and MB/s, against a raw read of the same bytes",
+         addLoadBench},
         {"lamps",
          "K lamps against E* on the judge's parts per objective (judge scores), and the fit's "
          "seconds with products over the lamps' texels vs over all of T",

@@ -75,6 +75,14 @@ void addDefectRegionOptions(CLI::App* c, RegionSpec& defects, RegionSpec& refere
               "part-truth.png:none");
 }
 
+void addHeightSourceInput(CLI::App* c, std::filesystem::path& input,
+                          std::vector<std::string>& overrides, const std::string& help) {
+    c->add_option_function<std::string>(
+         "input", [&input](const std::string& v) { input = v; }, help)
+        ->required();
+    addSceneOverrides(c, overrides, false);
+}
+
 void addSceneOverrides(CLI::App* c, std::vector<std::string>& overrides, bool image) {
     c->add_option_function<std::vector<std::string>>(
          "-D",

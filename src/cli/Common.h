@@ -64,8 +64,16 @@ EnvMap chooseEnvMap(const Scene& scene, const std::string& spec);
 /// (both) for the image, which are camera.width/height overrides.
 void addSceneOverrides(CLI::App* c, std::vector<std::string>& overrides, bool image);
 
-/// --defects and --reference of the defects objective (app/pipeline/Truth.h RegionSpec) for a command
-/// that optimizes a light (optimize, lamps). Defined after addParsed below.
+/// The input of a command that reads a height map (io/SceneFile.h loadHeightSource: info,
+/// defectmap, insert-defects, scratchmap): the required positional `input`, a height map in any
+/// format a reader reads or a scene file (JSON) whose height map it reads, and the scene
+/// overrides a scene file takes (addSceneOverrides without the image's: these commands render
+/// nothing). `help` says what the command reads of each.
+void addHeightSourceInput(CLI::App* c, std::filesystem::path& input,
+                          std::vector<std::string>& overrides, const std::string& help);
+
+/// --defects and --reference of the defects objective (app/pipeline/Truth.h RegionSpec) for a
+/// command that optimizes a light (optimize, lamps). Defined after addParsed below.
 void addDefectRegionOptions(CLI::App* c, RegionSpec& defects, RegionSpec& reference);
 
 /// --renderer, --renderer-cmd (implies --renderer command), --renderer-timeout.

@@ -87,12 +87,9 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
         "defectmap",
         "Defect map without labels: model the machining texture, mark what it cannot explain "
         "(height-map space; projected into the image with a scene)");
-    c->add_option_function<std::string>(
-         "input", [a](const std::string& v) { a->input = v; },
-         "Height map (EXR/TIFF/PNG/.npy) or a scene file (JSON: its height map, and its camera "
-         "for --image-output)")
-        ->required();
-    addSceneOverrides(c, a->sceneOverrides, false);
+    addHeightSourceInput(c, a->input, a->sceneOverrides,
+                         "Height map (EXR/TIFF/PNG/.npy) or a scene file (JSON: its height map, "
+                         "and its camera for --image-output)");
     addChoice(c, "--method", a->map.method, defectMethodTable(), "Method (default auto)");
     c->add_option_function<std::string>(
          "-o,--output", [a](const std::string& v) { a->output = v; },

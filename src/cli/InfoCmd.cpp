@@ -59,11 +59,9 @@ void registerInfo(CLI::App& app, std::function<int()>& run) {
         "info",
         "Print what the readers found in a height map or a scene's: reader, pitch, resampling, "
         "size, heights and Sq after levelling, invalid points, the levelling in force");
-    c->add_option_function<std::string>(
-         "input", [a](const std::string& v) { a->job.input = v; },
-         "Height map (X3P, SDF, an instrument's file, EXR, ...) or scene file (JSON)")
-        ->required();
-    addSceneOverrides(c, a->job.sceneOverrides, false);
+    addHeightSourceInput(
+        c, a->job.input, a->job.sceneOverrides,
+        "Height map (X3P, SDF, an instrument's file, EXR, ...) or scene file (JSON)");
     c->add_option("-o,--output", a->output, "Also write the summary as JSON to this file");
     c->callback([a, &run] { run = [a] { return runInfo(*a); }; });
 }

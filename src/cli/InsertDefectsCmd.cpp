@@ -56,11 +56,8 @@ void registerInsertDefects(CLI::App& app, std::function<int()>& run) {
         "insert-defects",
         "Insert defects of known shape into a height map (or a scene's) and write it with its "
         "truth labels, legend and a scene file, as gen-surface does");
-    c->add_option_function<std::string>(
-         "input", [a](const std::string& v) { a->input = v; },
-         "Height map (X3P, SDF, EXR, ...) or scene file (JSON)")
-        ->required();
-    addSceneOverrides(c, a->sceneOverrides, false);
+    addHeightSourceInput(c, a->input, a->sceneOverrides,
+                         "Height map (X3P, SDF, EXR, ...) or scene file (JSON)");
     c->add_option_function<std::string>(
          "-o,--output", [a](const std::string& v) { a->output = v; },
          "Height map to write (.exr, float32 mm); beside it <stem>-truth.png, <stem>-truth.json "

@@ -25,7 +25,8 @@ namespace sl::cli {
 namespace {
 
 struct ScratchArgs {
-    std::string input, out = "scratchmap.png", imageMask;
+    std::filesystem::path input;
+    std::string out = "scratchmap.png", imageMask;
     std::vector<std::string> overrides;
     ScratchMapOptions opt;
 };
@@ -86,11 +87,9 @@ void registerScratchMap(CLI::App& app, std::function<int()>& run) {
         "scratchmap",
         "Cutting-scratch map (paper 5.1): detrend by a moving average, scale to [0,1], mark "
         "patches whose max-min >= threshold");
-    c->add_option("input", a->input,
-                  "Height map (EXR/TIFF/PNG/.npy) or a scene file (JSON: its height map, and "
-                  "its camera for --image-output)")
-        ->required();
-    addSceneOverrides(c, a->overrides, false);
+    addHeightSourceInput(c, a->input, a->overrides,
+                         "Height map (EXR/TIFF/PNG/.npy) or a scene file (JSON: its height map, "
+                         "and its camera for --image-output)");
     c->add_option("--kernel", a->opt.kernel, "Moving-average window, samples")
         ->capture_default_str()
         ->check(inRange(1, 1 << 20));

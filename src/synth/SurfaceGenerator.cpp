@@ -58,6 +58,18 @@ void requireFinite(double v, const std::string& field) {
             "Set it to a finite value in mm (or degrees for angles)");
 }
 
+/// A length in mm: finite, then > 0 ("must be > 0 mm, got ..."), `fix` saying what it is.
+void requirePositiveMm(double v, const std::string& field, const std::string& fix) {
+    requireFinite(v, field);
+    require(v > 0, field, "must be > 0 mm, got " + formatNumber(v), fix);
+}
+
+/// A length in mm that may be 0 (how a spec says "none"): finite, then >= 0.
+void requireNonNegativeMm(double v, const std::string& field, const std::string& fix) {
+    requireFinite(v, field);
+    require(v >= 0, field, "must be >= 0 mm, got " + formatNumber(v), fix);
+}
+
 void validate(const SurfaceSpec& s) {
     require(s.width >= 2, "width", "must be at least 2 samples, got " + std::to_string(s.width),
             "Use a map of at least 2x2 samples");
@@ -67,25 +79,18 @@ void validate(const SurfaceSpec& s) {
             "width*height = " + formatNumber(static_cast<double>(s.width) * s.height) +
                 " samples is too large",
             "Keep width*height at or below 2e9");
-    requireFinite(s.pitch, "pitch");
-    require(s.pitch > 0, "pitch", "must be > 0 mm, got " + formatNumber(s.pitch),
-            "Set the sample spacing in mm, e.g. 0.01");
-    requireFinite(s.toolRadius, "toolRadius");
-    require(s.toolRadius > 0, "toolRadius", "must be > 0 mm, got " + formatNumber(s.toolRadius),
-            "Set the ball (or face-mill cutter) radius in mm");
-    requireFinite(s.stepover, "stepover");
-    require(s.stepover > 0, "stepover", "must be > 0 mm, got " + formatNumber(s.stepover),
-            "Set the spacing of the tool paths in mm");
+    requirePositiveMm(s.pitch, "pitch", "Set the sample spacing in mm, e.g. 0.01");
+    requirePositiveMm(s.toolRadius, "toolRadius",
+                      "Set the ball (or face-mill cutter) radius in mm");
+    requirePositiveMm(s.stepover, "stepover", "Set the spacing of the tool paths in mm");
     require(s.stepover < 2 * s.toolRadius, "stepover",
             "must be < 2*toolRadius = " + formatNumber(2 * s.toolRadius) + " mm, got " +
                 formatNumber(s.stepover),
             "Paths further apart than the tool's diameter leave uncut material");
     requireFinite(s.pathOffset, "pathOffset");
     requireFinite(s.rasterAngleDeg, "rasterAngleDeg");
-    requireFinite(s.feedPerTooth, "feedPerTooth");
-    require(s.feedPerTooth >= 0, "feedPerTooth",
-            "must be >= 0 mm, got " + formatNumber(s.feedPerTooth),
-            "Set the feed per tooth in mm (0 disables ball-end feed marks)");
+    requireNonNegativeMm(s.feedPerTooth, "feedPerTooth",
+                         "Set the feed per tooth in mm (0 disables ball-end feed marks)");
     if (s.process == SurfaceSpec::Process::BallEndRaster && s.ballFeedMarks) {
         double hs = 0.5 * s.stepover, hf = 0.5 * s.feedPerTooth;
         require(hs * hs + hf * hf < s.toolRadius * s.toolRadius, "feedPerTooth",
@@ -97,9 +102,7 @@ void validate(const SurfaceSpec& s) {
     // An insert of nose radius r cuts crescents only for a feed in (0, 2r) per tooth or turn.
     auto requireInsert = [&](const std::string& inserts, const std::string& feedIs,
                              const std::string& typicalFeeds) {
-        requireFinite(s.insertNoseRadius, "insertNoseRadius");
-        require(s.insertNoseRadius > 0, "insertNoseRadius",
-                "must be > 0 mm, got " + formatNumber(s.insertNoseRadius), "Typical " + inserts);
+        requirePositiveMm(s.insertNoseRadius, "insertNoseRadius", "Typical " + inserts);
         require(s.feedPerTooth > 0 && s.feedPerTooth < 2 * s.insertNoseRadius, "feedPerTooth",
                 "must be in (0, 2*insertNoseRadius = " + formatNumber(2 * s.insertNoseRadius) +
                     ") mm " + feedIs + ", got " + formatNumber(s.feedPerTooth),
@@ -125,12 +128,10 @@ void validate(const SurfaceSpec& s) {
                 "Reduce feedPerTooth or stepover");
     }
     if (s.process == SurfaceSpec::Process::Ground) {
-        requireFinite(s.gritDepth, "gritDepth");
-        require(s.gritDepth > 0, "gritDepth", "must be > 0 mm, got " + formatNumber(s.gritDepth),
-                "The grits' mean depth of cut in mm, e.g. 0.0008");
-        requireFinite(s.gritLength, "gritLength");
-        require(s.gritLength > 0, "gritLength", "must be > 0 mm, got " + formatNumber(s.gritLength),
-                "The grit tracks' mean length along the lay in mm, e.g. 1");
+        requirePositiveMm(s.gritDepth, "gritDepth",
+                          "The grits' mean depth of cut in mm, e.g. 0.0008");
+        requirePositiveMm(s.gritLength, "gritLength",
+                          "The grit tracks' mean length along the lay in mm, e.g. 1");
     }
     if (s.process == SurfaceSpec::Process::Turned) {
         requireInsert("turning inserts: 0.2-1.6 mm", "per revolution for turning",
@@ -152,13 +153,10 @@ void validate(const SurfaceSpec& s) {
           std::pair{s.gougeDepth, "gougeDepth"}, std::pair{s.gougeLength, "gougeLength"},
           std::pair{s.dentDepth, "dentDepth"}, std::pair{s.dentRadius, "dentRadius"},
           std::pair{s.gritDepth, "gritDepth"}, std::pair{s.gritLength, "gritLength"}}) {
-        requireFinite(v, field);
-        require(v >= 0, field, "must be >= 0 mm, got " + formatNumber(v),
-                "A length is never negative (this run may not use it: leave it out)");
+        requireNonNegativeMm(v, field,
+                             "A length is never negative (this run may not use it: leave it out)");
     }
-    requireFinite(s.chatterAmplitude, "chatterAmplitude");
-    require(s.chatterAmplitude >= 0, "chatterAmplitude",
-            "must be >= 0 mm, got " + formatNumber(s.chatterAmplitude), "Use 0 to disable chatter");
+    requireNonNegativeMm(s.chatterAmplitude, "chatterAmplitude", "Use 0 to disable chatter");
     requireFinite(s.chatterStartFraction, "chatterStartFraction");
     require(s.chatterStartFraction >= 0 && s.chatterStartFraction < 1, "chatterStartFraction",
             "must be in [0, 1), got " + formatNumber(s.chatterStartFraction),
@@ -167,14 +165,10 @@ void validate(const SurfaceSpec& s) {
             "must be in [0, 10000], got " + std::to_string(s.chatterBands),
             "Use 0 for no chatter bands");
     if (s.chatterBands > 0) {
-        requireFinite(s.chatterBandWidth, "chatterBandWidth");
-        require(s.chatterBandWidth > 0, "chatterBandWidth",
-                "must be > 0 mm, got " + formatNumber(s.chatterBandWidth),
-                "Set the width of a chatter band across the paths in mm, e.g. 0.8");
-        requireFinite(s.chatterBandAmplitude, "chatterBandAmplitude");
-        require(s.chatterBandAmplitude > 0, "chatterBandAmplitude",
-                "must be > 0 mm, got " + formatNumber(s.chatterBandAmplitude),
-                "Set the chatter amplitude inside the bands in mm, or chatterBands = 0");
+        requirePositiveMm(s.chatterBandWidth, "chatterBandWidth",
+                          "Set the width of a chatter band across the paths in mm, e.g. 0.8");
+        requirePositiveMm(s.chatterBandAmplitude, "chatterBandAmplitude",
+                          "Set the chatter amplitude inside the bands in mm, or chatterBands = 0");
     }
     if (s.chatterAmplitude > 0 || s.chatterBands > 0) {
         requireFinite(s.chatterWavelength, "chatterWavelength");
@@ -183,9 +177,7 @@ void validate(const SurfaceSpec& s) {
             "must be > 0 mm when chatterAmplitude > 0, got " + formatNumber(s.chatterWavelength),
             "Set the chatter wavelength in mm, or chatterAmplitude = 0");
     }
-    requireFinite(s.roughnessRms, "roughnessRms");
-    require(s.roughnessRms >= 0, "roughnessRms",
-            "must be >= 0 mm, got " + formatNumber(s.roughnessRms), "Use 0 to disable roughness");
+    requireNonNegativeMm(s.roughnessRms, "roughnessRms", "Use 0 to disable roughness");
     if (s.roughnessRms > 0) {
         requireFinite(s.roughnessCorrelation, "roughnessCorrelation");
         require(s.roughnessCorrelation > 0, "roughnessCorrelation",
@@ -213,14 +205,8 @@ void validate(const SurfaceSpec& s) {
                 "must be in [0, 100000], got " + std::to_string(s.scratchCount),
                 "Use 0 for no scratches");
         if (s.scratchCount > 0) {
-            requireFinite(s.scratchDepth, "scratchDepth");
-            require(s.scratchDepth >= 0, "scratchDepth",
-                    "must be >= 0 mm, got " + formatNumber(s.scratchDepth),
-                    "Scratch depths are in mm");
-            requireFinite(s.scratchWidth, "scratchWidth");
-            require(s.scratchWidth > 0, "scratchWidth",
-                    "must be > 0 mm, got " + formatNumber(s.scratchWidth),
-                    "Scratch widths are in mm");
+            requireNonNegativeMm(s.scratchDepth, "scratchDepth", "Scratch depths are in mm");
+            requirePositiveMm(s.scratchWidth, "scratchWidth", "Scratch widths are in mm");
         }
     }
     for (size_t n = 0; n < s.scratches.size(); ++n) {
@@ -241,13 +227,8 @@ void validate(const SurfaceSpec& s) {
                 "must be in [0, 100000], got " + std::to_string(s.gougeCount),
                 "Use 0 for no gouges");
         if (s.gougeCount > 0) {
-            requireFinite(s.gougeDepth, "gougeDepth");
-            require(s.gougeDepth >= 0, "gougeDepth",
-                    "must be >= 0 mm, got " + formatNumber(s.gougeDepth), "Gouge depths are in mm");
-            requireFinite(s.gougeLength, "gougeLength");
-            require(s.gougeLength > 0, "gougeLength",
-                    "must be > 0 mm, got " + formatNumber(s.gougeLength),
-                    "Gouge lengths are in mm");
+            requireNonNegativeMm(s.gougeDepth, "gougeDepth", "Gouge depths are in mm");
+            requirePositiveMm(s.gougeLength, "gougeLength", "Gouge lengths are in mm");
         }
     }
     for (size_t n = 0; n < s.gouges.size(); ++n) {
@@ -264,10 +245,7 @@ void validate(const SurfaceSpec& s) {
                 "must be in [0, 100000], got " + std::to_string(s.dentCount), "Use 0 for no dents");
         if (s.dentCount > 0) {
             requireFinite(s.dentDepth, "dentDepth");
-            requireFinite(s.dentRadius, "dentRadius");
-            require(s.dentRadius > 0, "dentRadius",
-                    "must be > 0 mm, got " + formatNumber(s.dentRadius),
-                    "The indenter's radius in mm, e.g. 0.5");
+            requirePositiveMm(s.dentRadius, "dentRadius", "The indenter's radius in mm, e.g. 0.5");
             require(s.dentDepth >= 0 && s.dentDepth <= s.dentRadius, "dentDepth",
                     "must be in [0, dentRadius = " + formatNumber(s.dentRadius) + "] mm, got " +
                         formatNumber(s.dentDepth),
@@ -287,64 +265,45 @@ void validate(const SurfaceSpec& s) {
     require(s.crackCount >= 0 && s.crackCount <= 100000, "crackCount",
             "must be in [0, 100000], got " + std::to_string(s.crackCount), "Use 0 for no cracks");
     if (s.crackCount > 0) {
-        requireFinite(s.crackLength, "crackLength");
-        require(s.crackLength > 0, "crackLength",
-                "must be > 0 mm, got " + formatNumber(s.crackLength),
-                "The crack's length along its path in mm, e.g. 1.5");
-        requireFinite(s.crackWidth, "crackWidth");
-        require(s.crackWidth > 0, "crackWidth", "must be > 0 mm, got " + formatNumber(s.crackWidth),
-                "The crack's widest opening in mm, e.g. 0.025");
-        requireFinite(s.crackDepth, "crackDepth");
-        require(s.crackDepth >= 0, "crackDepth",
-                "must be >= 0 mm, got " + formatNumber(s.crackDepth),
-                "The crack's deepest point in mm, e.g. 0.006");
+        requirePositiveMm(s.crackLength, "crackLength",
+                          "The crack's length along its path in mm, e.g. 1.5");
+        requirePositiveMm(s.crackWidth, "crackWidth",
+                          "The crack's widest opening in mm, e.g. 0.025");
+        requireNonNegativeMm(s.crackDepth, "crackDepth",
+                             "The crack's deepest point in mm, e.g. 0.006");
         require(s.crackBranches >= 0 && s.crackBranches <= 100, "crackBranches",
                 "must be in [0, 100], got " + std::to_string(s.crackBranches),
                 "Use 0 for a crack without branches");
     }
-    requireFinite(s.pocketBurrHeight, "pocketBurrHeight");
-    require(s.pocketBurrHeight >= 0, "pocketBurrHeight",
-            "must be >= 0 mm, got " + formatNumber(s.pocketBurrHeight), "Use 0 for no burr");
+    requireNonNegativeMm(s.pocketBurrHeight, "pocketBurrHeight", "Use 0 for no burr");
     if (s.pocketBurrHeight > 0) {
         require(s.pocketEdge && s.pocketDepth > 0, "pocketBurrHeight",
                 "a burr sits on the pocket edge, and there is none",
                 "Keep the pocket edge (pocketEdge = true, pocketDepth > 0) or set it to 0");
-        requireFinite(s.pocketBurrWidth, "pocketBurrWidth");
-        require(s.pocketBurrWidth > 0, "pocketBurrWidth",
-                "must be > 0 mm, got " + formatNumber(s.pocketBurrWidth),
-                "The burr's width across the edge in mm, e.g. 0.04");
+        requirePositiveMm(s.pocketBurrWidth, "pocketBurrWidth",
+                          "The burr's width across the edge in mm, e.g. 0.04");
     }
     requireFinite(s.toolChangeStep, "toolChangeStep");
     if (s.toolChangeStep != 0) {
         requireFinite(s.toolChangeAt, "toolChangeAt");
-        requireFinite(s.toolChangeWidth, "toolChangeWidth");
-        require(s.toolChangeWidth >= 0, "toolChangeWidth",
-                "must be >= 0 mm, got " + formatNumber(s.toolChangeWidth),
-                "The width of the step's ramp in mm (at least 2 samples are used)");
+        requireNonNegativeMm(s.toolChangeWidth, "toolChangeWidth",
+                             "The width of the step's ramp in mm (at least 2 samples are used)");
     }
-    requireFinite(s.noiseRms, "noiseRms");
-    require(s.noiseRms >= 0, "noiseRms", "must be >= 0 mm, got " + formatNumber(s.noiseRms),
-            "Use 0 for no measurement noise");
+    requireNonNegativeMm(s.noiseRms, "noiseRms", "Use 0 for no measurement noise");
     require(s.spikeCount >= 0 && s.spikeCount <= 1000000, "spikeCount",
             "must be in [0, 1000000], got " + std::to_string(s.spikeCount), "Use 0 for no spikes");
     if (s.spikeCount > 0) {
-        requireFinite(s.spikeHeight, "spikeHeight");
-        require(s.spikeHeight >= 0, "spikeHeight",
-                "must be >= 0 mm, got " + formatNumber(s.spikeHeight),
-                "It is the largest spike's height; each spike's sign is random");
+        requireNonNegativeMm(s.spikeHeight, "spikeHeight",
+                             "It is the largest spike's height; each spike's sign is random");
     }
     if (s.pocketEdge) {
-        requireFinite(s.pocketDepth, "pocketDepth");
-        require(s.pocketDepth >= 0, "pocketDepth",
-                "must be >= 0 mm, got " + formatNumber(s.pocketDepth),
-                "The pocket floor is pocketDepth below the top");
+        requireNonNegativeMm(s.pocketDepth, "pocketDepth",
+                             "The pocket floor is pocketDepth below the top");
         requireFinite(s.pocketWallFraction, "pocketWallFraction");
         require(s.pocketWallFraction > 0 && s.pocketWallFraction < 1, "pocketWallFraction",
                 "must be in (0, 1), got " + formatNumber(s.pocketWallFraction),
                 "It is the fraction of the map width (in +x) that is pocket floor");
-        requireFinite(s.cornerRadius, "cornerRadius");
-        require(s.cornerRadius >= 0, "cornerRadius",
-                "must be >= 0 mm, got " + formatNumber(s.cornerRadius), "Use 0 for a sharp step");
+        requireNonNegativeMm(s.cornerRadius, "cornerRadius", "Use 0 for a sharp step");
     }
 }
 
