@@ -379,6 +379,51 @@ TEST(TransportGram, LossThroughTheGramEqualsTheLossThroughTheProducts) {
     }
 }
 
+TEST(TransportGram, TheHessianProductIsTheGradientsDerivative) {
+    auto s = smallScene(21);
+    const TransportMatrix t = halves(*s, 1);
+    for (RegTarget reg : {RegTarget::EnvMap, RegTarget::Image}) {
+        ObjectiveOptions oo;
+        oo.reg = reg;
+        oo.lambda = 3;
+        UnbiasedObjective obj(t.width, t.height, t.objectMask, oo);
+        TransportLoss loss(t, obj, false);
+        ASSERT_TRUE(loss.offersHessian());
+        const Problem p = loss.problem();
+        ASSERT_TRUE(static_cast<bool>(p.hessianProduct));
+        const size_t n = loss.dimension();
+        std::vector<double> e = randomVec(n, 11), v = randomVec(n, 12);
+        for (double& x : e) x = 0.2 + 0.6 * x;
+        for (double& x : v) x -= 0.5;
+        // Central differences of the exact gradient along v: H·v to O(h²).
+        const double h = 1e-5;
+        std::vector<double> ep(e), em(e), gp(n), gm(n), fd(n);
+        for (size_t i = 0; i < n; ++i) {
+            ep[i] += h * v[i];
+            em[i] -= h * v[i];
+        }
+        p.evaluate(ep, gp);
+        p.evaluate(em, gm);
+        for (size_t i = 0; i < n; ++i) fd[i] = (gp[i] - gm[i]) / (2 * h);
+        std::vector<double> hvFresh(n), hvAfter(n), g(n);
+        p.hessianProduct(e, v, hvFresh);  // P·E computed for it
+        p.evaluate(e, g);
+        p.hessianProduct(e, v, hvAfter);  // P·E the evaluation's
+        double scale = 0, err = 0;
+        for (size_t i = 0; i < n; ++i) {
+            scale = std::max(scale, std::abs(fd[i]));
+            err = std::max(err, std::abs(hvFresh[i] - fd[i]));
+        }
+        EXPECT_LT(err, 1e-6 * scale) << "reg " << int(reg);
+        EXPECT_EQ(hvFresh, hvAfter);  // the same bits either way
+    }
+    // An objective that is not quadratic in the halves offers none.
+    ImageObjective paper(t.width, t.height, t.objectMask, ObjectiveOptions{});
+    TransportLoss image(t, paper, false);
+    EXPECT_FALSE(image.offersHessian());
+    EXPECT_FALSE(static_cast<bool>(image.problem().hessianProduct));
+}
+
 TEST(TransportGram, AutoSwitchesToTheGramWhenItPays) {
     auto s = smallScene(21);
     const TransportMatrix t = halves(*s, 1);

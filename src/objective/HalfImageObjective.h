@@ -38,6 +38,14 @@ class HalfImageObjective {
         (void)G, (void)R, (void)E, (void)dLdG, (void)dLdR, (void)dLdE;
         throw std::logic_error("HalfImageObjective::fromForms: the loss is not quadratic");
     }
+    /// fromForms' second derivatives, for Hessian products through the Gram: d²L/dG² at G into
+    /// d2LdG2 (L is linear in R: dLdR is its whole part), and the direct d²L/dE² as a multiple
+    /// of the identity into regCurvature (for `texels` values of E).
+    virtual void formCurvature(double G, size_t texels, double& d2LdG2,
+                               double& regCurvature) const {
+        (void)G, (void)texels, (void)d2LdG2, (void)regCurvature;
+        throw std::logic_error("HalfImageObjective::formCurvature: the loss is not quadratic");
+    }
 };
 
 }  // namespace sl

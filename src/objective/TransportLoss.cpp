@@ -267,7 +267,12 @@ LossParts TransportLoss::evaluateGram(const TransportGram& g, std::span<const do
     const bool want = !grad.empty(), products = unb_->usesProducts();
     pe_.resize(want ? dimension_ : 0);
     qe_.resize(want && products ? dimension_ : 0);
+    peAt_.clear();
     const double G = onActive ? g.pairFormOn(E, active, pe_) : g.pairForm(E, pe_, t_.threads);
+    if (want && !onActive) {  // P·E whole at E: a Hessian product at E reads it
+        peAt_.assign(E.begin(), E.end());
+        gAt_ = G;
+    }
     const double R = !products  ? 0.0
                      : onActive ? g.productFormOn(E, active, qe_)
                                 : g.productForm(E, qe_, t_.threads);
@@ -283,6 +288,40 @@ LossParts TransportLoss::evaluateGram(const TransportGram& g, std::span<const do
     else
         for (size_t i = 0; i < dimension_; ++i) add(i);
     return parts;
+}
+
+bool TransportLoss::offersHessian() const {
+    if (!gramEligible()) return false;
+    const double n = static_cast<double>(t_.cols()), matrices = unb_->usesProducts() ? 2 : 1;
+    return matrices * n * n * static_cast<double>(sizeof(double)) <=
+           static_cast<double>(kGramMaxBytes);
+}
+
+void TransportLoss::hessianProduct(std::span<const double> E, std::span<const double> v,
+                                   std::span<double> Hv) const {
+    if (E.size() != dimension_ || v.size() != dimension_ || Hv.size() != dimension_)
+        throw std::invalid_argument("TransportLoss::hessianProduct: E, v or Hv has the wrong size");
+    const TransportGram& g = gram();
+    const bool products = unb_->usesProducts();
+    if (peAt_.size() != dimension_ || !std::equal(E.begin(), E.end(), peAt_.begin())) {
+        pe_.resize(dimension_);
+        gAt_ = g.pairForm(E, pe_, t_.threads);
+        peAt_.assign(E.begin(), E.end());
+    }
+    double dLdG = 0, dLdR = 0, d2LdG2 = 0, regCurvature = 0;
+    unb_->fromForms(gAt_, 0.0, E, dLdG, dLdR, {});  // dLdR does not depend on R
+    unb_->formCurvature(gAt_, dimension_, d2LdG2, regCurvature);
+    hp_.resize(dimension_);
+    g.pairForm(v, hp_, t_.threads);
+    if (products) {
+        hq_.resize(dimension_);
+        g.productForm(v, hq_, t_.threads);
+    }
+    double pev = 0;  // (P·E)ᵀ·v
+    for (size_t i = 0; i < dimension_; ++i) pev += pe_[i] * v[i];
+    const double a = 2 * dLdG, b = 4 * d2LdG2 * pev, c = 2 * dLdR;
+    for (size_t i = 0; i < dimension_; ++i)
+        Hv[i] = a * hp_[i] + b * pe_[i] + regCurvature * v[i] + (products ? c * hq_[i] : 0.0);
 }
 
 const TransportSlices& TransportLoss::slices() const {
@@ -524,6 +563,9 @@ Problem TransportLoss::problem(LossParts* last, bool fused) const {
         if (last) *last = parts;
         return parts.total;
     };
+    if (offersHessian())
+        p.hessianProduct = [this](std::span<const double> x, std::span<const double> v,
+                                  std::span<double> hv) { hessianProduct(x, v, hv); };
     return p;
 }
 

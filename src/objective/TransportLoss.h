@@ -95,6 +95,19 @@ class TransportLoss {
     /// The Gram matrices this loss built or adopted (null when none yet).
     std::shared_ptr<const TransportGram> gramIfBuilt() const;
 
+    /// The Hessian of the loss at E times v into Hv (dimension() values each), exact, through
+    /// T's Gram matrices (gramEligible(); built on first use, as gram()). With the loss
+    /// L = ℓ(G) + dLdR·R + reg(E) (objective/HalfImageObjective.h fromForms, formCurvature),
+    ///   ∇²L·v = 2ℓ'(G)·P·v + 4ℓ''(G)·(P·E)·((P·E)ᵀ·v) + 2·dLdR·Q·v + reg''·v:
+    /// one product with P (and one with Q for the image's regulariser) a call. P·E and G are
+    /// the last evaluation's when it was a whole gradient evaluation at this E (an optimizer's
+    /// iterate), else one more product.
+    void hessianProduct(std::span<const double> E, std::span<const double> v,
+                        std::span<double> Hv) const;
+    /// Whether problem() offers hessianProduct: gramEligible() and the matrices within
+    /// kGramMaxBytes.
+    bool offersHessian() const;
+
     /// The same loss for an E that is zero outside the texels `active` (a gray E), through
     /// `columns` (a TransportColumns of this loss's matrix): the products read only the active
     /// columns. grad (when non-empty) is exact on the active texels; on the others it holds
@@ -148,6 +161,9 @@ class TransportLoss {
     struct GramCache;
     std::shared_ptr<GramCache> gram_;
     mutable std::vector<double> pe_, qe_;  // P·E, Q·E of a Gram evaluation
+    mutable std::vector<double> peAt_;     // the E at which pe_ and gAt_ hold P·E and G (or empty)
+    mutable double gAt_ = 0;
+    mutable std::vector<double> hp_, hq_;  // P·v, Q·v of a Hessian product
     /// The Gram matrices an evaluation reads, or nullptr for the products (for Auto: from the
     /// kAutoSlicesAfter-th evaluation on, counted by productSlices(), or from the first when
     /// this loss has them already).

@@ -131,4 +131,13 @@ LossParts UnbiasedObjective::fromForms(double G, double R, std::span<const doubl
     return r;
 }
 
+void UnbiasedObjective::formCurvature(double G, size_t texels, double& d2LdG2,
+                                      double& regCurvature) const {
+    const double S = maskSize();
+    d2LdG2 = G < base_.gFloor() ? 0.0 : 0.75 * std::sqrt(S) / (G * G * std::sqrt(G));
+    regCurvature = options().reg == RegTarget::EnvMap && texels > 0
+                       ? 2.0 * options().lambda / static_cast<double>(texels)
+                       : 0.0;
+}
+
 }  // namespace sl

@@ -51,6 +51,11 @@ class UnbiasedObjective final : public HalfImageObjective {
     bool usesProducts() const override { return options().reg == RegTarget::Image; }
     LossParts fromForms(double G, double R, std::span<const double> E, double& dLdG, double& dLdR,
                         std::span<double> dLdE) const override;
+    /// d²L/dG² = ¾·sqrt(S)·G^(−5/2) above the floor, 0 on the tangent below it; the
+    /// regulariser's curvature 2λ/texels for mean(E²), 0 for the image's (λ·R/(W·H) is linear
+    /// in R).
+    void formCurvature(double G, size_t texels, double& d2LdG2,
+                       double& regCurvature) const override;
 
     /// G_u alone (for tests and scoring).
     double energy(std::span<const double> Ya, std::span<const double> Yb) const;

@@ -36,6 +36,11 @@ constexpr OptimizerMethodRow kMethods[] = {
      kPaperLoopEstimates},
     {M::Tnewton, "tnewton", "NLopt's preconditioned truncated Newton with restarts",
      G::Exact, "one evaluation (NLopt's maxeval)", kEvals, 2000, M::Tnewton, 1},
+    {M::NewtonTr, "newton-tr",
+     "projected truncated Newton in a trust region on the problem's exact Hessian products "
+     "(the unbiased objective through T's Gram); NLopt's L-BFGS where it offers none",
+     G::Exact, "one accepted step (one or more evaluations and Hessian products)", kSteps, 500,
+     M::NewtonTr, 1},
 };
 // clang-format on
 

@@ -4,8 +4,10 @@
 // `minimizeBlackBox()` (BlackBox.h) the ones through the renderer; `paper-loop` is Adam on a
 // loss that cycles through independent estimates of T (the optimize job sets it up).
 //
-// Adding a method: one row here, its enum value, and its code where the compiler's -Wswitch
-// points (Optimizer.cpp's dispatch, and NloptOptimizer.cpp for an NLopt algorithm).
+// Adding a method (docs/DESIGN.md "Add an optimizer"): its enum value here, one row in
+// Methods.cpp's table, and its code where the compiler's -Wswitch points (Optimizer.cpp's
+// dispatch: a method of its own in its own file, declared in OptimizerDetail.h, as
+// NewtonOptimizer.cpp; NloptOptimizer.cpp's switch for an NLopt algorithm).
 #pragma once
 
 #include <span>
@@ -25,7 +27,8 @@ enum class OptimizerMethod {
     FdAdam,
     Spsa,
     PaperLoop,
-    Tnewton
+    Tnewton,
+    NewtonTr
 };
 
 /// Where a method's gradient comes from.

@@ -33,7 +33,15 @@
 //                Ceres iteration (an accepted line-search step, usually 1–3 evaluations);
 //                `iterations` = max_num_iterations.
 //
-// relativeFunctionTolerance (0 = off) is NLopt's ftol_rel and Ceres' function_tolerance.
+//   newton-tr    A projected truncated Newton method in a trust region on the problem's exact
+//                Hessian products (NewtonOptimizer.cpp, which describes it). One iteration =
+//                one accepted step; `iterations` = the most steps. A problem that offers no
+//                Hessian products (Problem::hessianProduct) runs NLopt's L-BFGS instead, with
+//                maxeval the larger of `iterations` and lbfgs' default budget, and says so in
+//                the summary's settings.
+//
+// relativeFunctionTolerance (0 = off) is NLopt's ftol_rel, Ceres' function_tolerance and
+// newton-tr's relative decrease of one step.
 // stallEvaluations/stallTolerance (0 = off) stop any method once the best loss has fallen by less
 // than the tolerance over that many evaluations (termination "stalled: ..."; not a failure).
 // The callback sees every recorded iteration, iteration 0 first; returning false stops the run
@@ -266,6 +274,12 @@ void minimizeAdam(detail::Run& run, std::vector<double>& x) {
     run.summary.termination = "iteration limit reached (" + std::to_string(o.iterations) + ")";
 }
 
+// The summary of L-BFGS run for newton-tr on a problem without Hessian products.
+void noteNoHessian(OptimizerSummary& s, const OptimizerOptions& asked) {
+    s.method = methodName(asked.method);
+    s.settings = "the problem offers no Hessian products: NLopt's L-BFGS ran (" + s.settings + ")";
+}
+
 std::string fixed(double v, int decimals) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
@@ -285,9 +299,18 @@ OptimizerSummary minimize(const Problem& problem, std::vector<double>& x,
     validate(problem, x, options);
     for (double& xi : x) xi = detail::clampTo(xi, problem.lower, problem.upper);
 
-    detail::Run run(problem, options);
+    // newton-tr on a problem without Hessian products: L-BFGS, said in the settings.
+    OptimizerOptions lbfgs;
+    const bool noHessian = options.method == OptimizerMethod::NewtonTr && !problem.hessianProduct;
+    if (noHessian) {
+        lbfgs = options;
+        lbfgs.method = OptimizerMethod::Lbfgs;
+        lbfgs.iterations =
+            std::max(options.iterations, methodRow(OptimizerMethod::Lbfgs).defaultBudget);
+    }
+    detail::Run run(problem, noHessian ? lbfgs : options);
     try {
-        switch (options.method) {
+        switch (run.options().method) {
             case OptimizerMethod::Adam:
                 minimizeAdam(run, x);
                 break;
@@ -301,6 +324,9 @@ OptimizerSummary minimize(const Problem& problem, std::vector<double>& x,
             case OptimizerMethod::Tnewton:
                 detail::minimizeNlopt(run, x);
                 break;
+            case OptimizerMethod::NewtonTr:
+                detail::minimizeNewtonTr(run, x);
+                break;
             case OptimizerMethod::FdAdam:
             case OptimizerMethod::Spsa:
             case OptimizerMethod::PaperLoop:
@@ -308,8 +334,10 @@ OptimizerSummary minimize(const Problem& problem, std::vector<double>& x,
         }
     } catch (const detail::NonFinite& stop) {
         run.finishAfterNonFinite(stop, x);
+        if (noHessian) noteNoHessian(run.summary, options);
         return run.summary;
     }
+    if (noHessian) noteNoHessian(run.summary, options);
     run.finish(x);
     if (run.stalled())
         run.summary.termination = "stalled: the loss fell less than " +
@@ -320,9 +348,10 @@ OptimizerSummary minimize(const Problem& problem, std::vector<double>& x,
 
 std::string OptimizerSummary::briefReport() const {
     return method + ": " + std::to_string(iterations) + " iterations, " +
-           std::to_string(evaluations) + " evaluations, loss " + sci(initialLoss) + " -> " +
-           sci(finalLoss) + ", " + fixed(seconds, 3) + " s, " + (failed ? "FAILED: " : "") +
-           termination;
+           std::to_string(evaluations) + " evaluations, " +
+           (hessianProducts > 0 ? std::to_string(hessianProducts) + " Hessian products, " : "") +
+           "loss " + sci(initialLoss) + " -> " + sci(finalLoss) + ", " + fixed(seconds, 3) +
+           " s, " + (failed ? "FAILED: " : "") + termination;
 }
 
 std::string OptimizerSummary::fullReport() const {
@@ -350,6 +379,7 @@ std::string OptimizerSummary::fullReport() const {
     s << "\n";
     line("Iterations", std::to_string(iterations));
     line("Evaluations", std::to_string(evaluations));
+    if (hessianProducts > 0) line("Hessian products", std::to_string(hessianProducts));
     line("Time (s)", fixed(seconds, 4));
     if (evaluations > 0) line("  per evaluation (ms)", fixed(1e3 * seconds / evaluations, 4));
     s << "\n";

@@ -50,6 +50,7 @@ struct OptimizerSummary {
     std::string method;  // the method's name (or the name of a set-up that ran it)
     int iterations = 0;
     int evaluations = 0;
+    int hessianProducts = 0;  // Problem::hessianProduct calls (newton-tr), each about an evaluation
     double initialLoss = 0, finalLoss = 0;
     double seconds = 0;
     std::string termination;  // why it stopped

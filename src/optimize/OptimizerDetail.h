@@ -99,7 +99,8 @@ inline double clampTo(double v, double lo, double hi) {
 // The methods. Each starts from x (clamped, validated; nothing recorded yet), records the
 // initial point and every iteration through run, leaves the returned point in x and sets
 // run.summary.termination / failed / settings. Run::finish() is called by minimize().
-void minimizeNlopt(Run& run, std::vector<double>& x);  // NloptOptimizer.cpp
-void minimizeCeres(Run& run, std::vector<double>& x);  // CeresOptimizer.cpp
+void minimizeNlopt(Run& run, std::vector<double>& x);     // NloptOptimizer.cpp
+void minimizeCeres(Run& run, std::vector<double>& x);     // CeresOptimizer.cpp
+void minimizeNewtonTr(Run& run, std::vector<double>& x);  // NewtonOptimizer.cpp
 
 }  // namespace sl::detail

@@ -216,11 +216,16 @@ std::vector<RaceConfig> defaultRaceConfigs() {
     c.push_back(config("paper-lbfgs-16", K::Paper, M::Lbfgs, 2000, 16));
     c.push_back(config("unbiased-adam-planes8", K::Unbiased, M::Adam, 300, 16, 8));
     c.push_back(config("unbiased-lbfgs-16", K::Unbiased, M::Lbfgs, 2000, 16));
+    c.push_back(config("unbiased-newton-tr-16", K::Unbiased, M::NewtonTr,
+                       methodRow(M::NewtonTr).defaultBudget, 16));  // as unbiased-lbfgs-16
     c.push_back(config("unbiased-lbfgs-32", K::Unbiased, M::Lbfgs, 2000, 32));
     // optimize's defaults (app/pipeline/Defaults.h optimizeDefaults), for each objective.
     const OptimizeDefaults d = optimizeDefaults();
     c.push_back(config("default-unbiased", K::Unbiased, d.method, methodRow(d.method).defaultBudget,
                        16, 1, d.starts));
+    // ... and newton-tr in the unbiased default's place (the starts and spp of default-unbiased).
+    c.push_back(config("default-unbiased-newton-tr", K::Unbiased, M::NewtonTr,
+                       methodRow(M::NewtonTr).defaultBudget, 16, 1, d.starts));
     c.push_back(config("default-paper", K::Paper, d.method, methodRow(d.method).defaultBudget,
                        d.paperMinSpp, 1, d.starts));
     // ... and with the defects named (the part's truth): the defects objective.
