@@ -180,6 +180,10 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
                   "auto: that quantile taken per tile of an NxN grid, their median used "
                   "(a defect is in few tiles; 1: the whole map's quantile)")
         ->capture_default_str();
+    c->add_option("--seed-tail-wide", m.seedTailWide,
+                  "auto: with --seed-tail, a texture change of at least this many tiles' "
+                  "samples is no texture's tail: left out of the tails and marked (0: off)")
+        ->capture_default_str();
     c->add_option("--grow-tail", m.growTail,
                   "auto: with --seed-tail, grow thresholds at least this x the same score "
                   "quantile, not scaled with the seed (0: scaled)")

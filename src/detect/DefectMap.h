@@ -143,8 +143,8 @@
 //     out of the noise; the two-sided test keeps out what is straight but not a groove: a
 //     raised line (the flat-end floor's step-over ridges, which the notch leaves in part) or a
 //     step (lower on one side only).
-// 7b. The texture's own tail (seedTail > 0; off by default until it is measured on the
-//     gen-surface parts' table): a measured texture is not a stationary Gaussian
+// 7b. The texture's own tail (seedTail > 0; 1.5 by default since 2026-11-28, with the wide
+//     changes below): a measured or ground texture is not a stationary Gaussian
 //     field: the tool marks, striae and particles the notch cannot model leave a residual whose
 //     tail is far heavier than a Gaussian's (on a bullet land, S ≥ 5.5 on a fifth of the map),
 //     so thresholds in robust σ mark the texture itself. Let q = the seedTailQuantile quantile
@@ -156,7 +156,14 @@
 //     for (an inserted defect covers ~1 % of the map) stays above it, being far deeper than
 //     the texture's tail. The quantile is taken per tile (seedTailTiles × seedTailTiles) and
 //     q is the median of those: a defect is in few tiles, a texture's tail in all. Step 8's
-//     threshold on E is raised the same way (to seedTail × E's tail, per tile).
+//     threshold on E is raised the same way (to seedTail × E's tail, per tile). A texture
+//     change is not in few tiles: a turned part's chatter ring, 27-42 % of the map on some
+//     seeds, lies in most tiles and was its own tail (its E and S the tiles' quantiles), so the
+//     tail lost it whole. So with seedTailWide > 0 the wide changes, step 8's regions at its own
+//     ratios (of any of its tests, on the pooled grid) that hold at least seedTailWide × a
+//     tile's samples, are left out of every tail (of S, V and E; a tile with fewer than half of
+//     its samples left is left out) and marked by step 8 at its own ratio; a clean ground
+//     texture's clusters of deep tracks are far smaller than a tile.
 //  8. Texture-change regions (chatter bands): E = the separable running median of |A| over
 //     `energyWindow` samples (on |A| pooled 2×2 with half the window, read back at the sample's
 //     cell): a robust local amplitude of what the texture model left. Samples with
@@ -189,7 +196,9 @@
 // K > 1, K more and a copy of the half spectrum while they are made; step 4a about 10 more
 // while the steps are found; step 4b one more copy (two while the repass runs); step 7a 2
 // more while it runs; with levelWiener one more (Δ) and a copy of the half spectrum while Δ is
-// made; step 8 a byte per sample while each test runs.
+// made; step 8 a quarter copy per test (its pooled E; 1 + K with textureSectors K > 1, made
+// before step 7 and kept to the end, one more full copy while the first is made) and a byte
+// per sample while each test marks.
 #pragma once
 
 #include <cstdint>
@@ -278,12 +287,15 @@ struct DefectMapOptions {
     // step 7b (the texture's own tail): the seed thresholds of steps 7 and 7a are raised to
     // seedTail × the seedTailQuantile-quantile of S (of V for 7a) over the samples outside the
     // border, when that is higher, and their grow thresholds by the same factor (0: off)
-    double seedTail = 0.0;           // (>= 0; 1.5 the value tried on real textures)
+    double seedTail = 1.5;           // (>= 0; 0: off)
     double seedTailQuantile = 0.99;  // (in (0, 1))
     int seedTailTiles = 8;  // ... that quantile per tile of an n × n grid, q their median (>= 1;
                             // 1: the whole map's)
-    double growTail = 0.0;           // with seedTail: the grow thresholds are max(their σ value,
+    double growTail = 0.0;  // with seedTail: the grow thresholds are max(their σ value,
                             // growTail × the same quantile), not scaled with the seed (>= 0)
+    double seedTailWide = 1.0;  // with seedTail: a texture change (step 8 at its own ratio) of at
+                                // least this many tail tiles' samples is no texture's tail: it is
+                                // left out of every tail and marked (>= 0; 0: off)
     // the height map is a measurement (an instrument's file, or its scene says
     // heightmap.measured): auto is then the selfsim method (see the method table above)
     bool measured = false;

@@ -86,6 +86,10 @@ void checkOptions(const DefectMapOptions& o) {
         throw inputError(option("seed-tail-tiles"),
                          "must be in [1, 64] (got " + std::to_string(o.seedTailTiles) + ")",
                          "1 takes the quantile over the whole map");
+    if (!(o.seedTailWide >= 0.0) || !std::isfinite(o.seedTailWide))
+        throw inputError(option("seed-tail-wide"),
+                         "must be >= 0 (got " + std::to_string(o.seedTailWide) + ")",
+                         "0 takes the tails over wide texture changes too");
     if (!(o.seedTailQuantile > 0.0 && o.seedTailQuantile < 1.0))
         throw inputError(option("seed-tail-quantile"),
                          "must be in (0, 1) (got " + std::to_string(o.seedTailQuantile) + ")");
@@ -336,9 +340,33 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
     R = {};
     macro = {};
     r.sigmaLevel = 1.4826 * medianAbs(A);
+    // step 8's local energies (of A without the Wiener term, and with textureEnergy of T or its
+    // sectors), now: their wide changes are left out of step 7b's tails (header, 7b)
+    std::vector<ChangeEnergy> changes;
+    if (o.energyWindow > 0) {
+        std::vector<float> a = A;
+        changes.push_back(changeEnergy(a, W, H, o, floorSigma, o.energyRatio, true));
+        if (o.textureEnergy) {
+            if (sectors.empty())
+                changes.push_back(
+                    changeEnergy(texture, W, H, o, floorSigma, o.textureEnergyRatio, false));
+            for (std::vector<float>& t : sectors) {
+                throwIfInterrupted();  // Ctrl-C between the energies (core/Interrupt.h)
+                changes.push_back(
+                    changeEnergy(t, W, H, o, floorSigma, o.textureEnergyRatio, false));
+            }
+        }
+        texture = {};
+        sectors = {};
+    }
+    std::vector<uint8_t> widePooled, wide;
+    wideChanges(changes, W, H, widePooled, wide);
+    const std::vector<uint8_t>* skip = wide.empty() ? nullptr : &wide;
+    throwIfInterrupted();  // Ctrl-C between the steps (core/Interrupt.h)
     // the level's Wiener estimate in the notched bins, for the score and the line valleys; σ_A
-    // above and step 8 below keep the background-magnitude residual
+    // above and step 8 (its energies above) keep the background-magnitude residual
     for (size_t k = 0; k < levelDelta.size(); ++k) A[k] += levelDelta[k];
+    levelDelta = {};
     r.sigmaEdge = 1.4826 * medianAbs(N);
     const double sa = std::max(r.sigmaLevel, floorSigma), sn = std::max(r.sigmaEdge, floorSigma);
     const double snz = o.edgeAxes ? std::max(1.4826 * medianAbs(Nz), floorSigma) : 1.0;
@@ -356,13 +384,13 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
                         S[static_cast<size_t>(y) * W + x] = 0.0f;
             });
         // step 7b: the texture's own tail raises the thresholds
-        const Thresholds t = tailThresholds(S, W, H, o, o.seedSigma, o.growSigma);
+        const Thresholds t = tailThresholds(S, W, H, o, o.seedSigma, o.growSigma, skip);
         const double seed = t.seed;
         r.seedUsed = seed;
         r.growUsed = t.grow;
         if (o.lineLength > 0) {
             // step 7a: the line-valley regions seed the hysteresis and are grown through
-            const std::vector<uint8_t> lines = lineValleyRegions(A, W, H, o, &r.lineSeedUsed);
+            const std::vector<uint8_t> lines = lineValleyRegions(A, W, H, o, &r.lineSeedUsed, skip);
             for (size_t k = 0; k < n; ++k)
                 if (lines[k]) S[k] = std::max(S[k], static_cast<float>(seed));
         }
@@ -377,19 +405,9 @@ DefectMap detectDefects(std::span<const float> heights, int width, int height,
     throwIfInterrupted();  // Ctrl-C between the steps (core/Interrupt.h)
     N = {};
     Nz = {};
-    if (o.energyWindow > 0) {
-        // step 8 on |A| and, with textureEnergy, on |T|
-        for (size_t k = 0; k < levelDelta.size(); ++k) A[k] -= levelDelta[k];
-        levelDelta = {};
-        auto mark = [&](std::vector<float>& v, double ratio, bool lineExcess) {
-            r.markedEnergy += markTextureChange(v, W, H, o, floorSigma, ratio, lineExcess, r.map);
-        };
-        mark(A, o.energyRatio, true);
-        if (o.textureEnergy) {
-            if (sectors.empty()) mark(texture, o.textureEnergyRatio, false);
-            for (std::vector<float>& t : sectors) mark(t, o.textureEnergyRatio, false);
-        }
-    }
+    wide = {};
+    for (const ChangeEnergy& e : changes)  // step 8 on |A| and, with textureEnergy, on |T|
+        r.markedEnergy += markTextureChange(e, widePooled, W, H, o, r.map);
     r.seconds = clock.seconds();
     return r;
 }

@@ -19,7 +19,7 @@ size_t hysteresis(const std::vector<float>& score, int W, int H, double seed, do
 }
 
 double tailQuantile(const std::vector<float>& score, int W, int H, int border,
-                    const DefectMapOptions& o) {
+                    const DefectMapOptions& o, const std::vector<uint8_t>* skip) {
     const int x0 = border, x1 = W - border, y0 = border, y1 = H - border;
     if (x1 <= x0 || y1 <= y0) return 0.0;
     const int n = std::max(1, std::min({o.seedTailTiles, x1 - x0, y1 - y0}));
@@ -32,8 +32,12 @@ double tailQuantile(const std::vector<float>& score, int W, int H, int border,
             const int xa = x0 + (x1 - x0) * tx / n, xb = x0 + (x1 - x0) * (tx + 1) / n;
             v.clear();
             for (int y = ya; y < yb; ++y)
-                for (int x = xa; x < xb; ++x) v.push_back(score[static_cast<size_t>(y) * W + x]);
-            if (v.empty()) continue;
+                for (int x = xa; x < xb; ++x) {
+                    const size_t k = static_cast<size_t>(y) * W + x;
+                    if (!skip || !(*skip)[k]) v.push_back(score[k]);
+                }
+            const size_t all = static_cast<size_t>(yb - ya) * static_cast<size_t>(xb - xa);
+            if (v.empty() || 2 * v.size() < all) continue;
             const size_t k =
                 std::min(v.size() - 1,
                          static_cast<size_t>(o.seedTailQuantile * static_cast<double>(v.size())));
@@ -48,9 +52,9 @@ double tailQuantile(const std::vector<float>& score, int W, int H, int border,
 }
 
 Thresholds tailThresholds(const std::vector<float>& score, int W, int H, const DefectMapOptions& o,
-                          double seed, double grow) {
+                          double seed, double grow, const std::vector<uint8_t>* skip) {
     if (!(o.seedTail > 0.0)) return {seed, grow};
-    const double q = tailQuantile(score, W, H, o.border, o);
+    const double q = tailQuantile(score, W, H, o.border, o, skip);
     const double s = std::max(seed, o.seedTail * q);
     const double g = o.growTail > 0.0 ? std::max(grow, o.growTail * q) : grow * s / seed;
     return {s, std::min(g, s)};

@@ -53,18 +53,20 @@ size_t hysteresis(const std::vector<float>& score, int W, int H, double seed, do
 /// seedTailTiles tiles, the seedTailQuantile quantile of `score` in each, and the median of those
 /// (the lower middle one of an even count). A texture's tail is everywhere, so every tile has it; a
 /// defect, even one that covers more than 1 − seedTailQuantile of the map, is in few tiles and
-/// moves the median little. seedTailTiles = 1 is the quantile over the whole map.
+/// moves the median little. seedTailTiles = 1 is the quantile over the whole map. With `skip`
+/// (W×H, nonzero: left out; step 8's wide texture changes), the skipped samples are left out of
+/// every tile and a tile with fewer than half of its samples left is left out; no tile left: 0.
 double tailQuantile(const std::vector<float>& score, int W, int H, int border,
-                    const DefectMapOptions& o);
+                    const DefectMapOptions& o, const std::vector<uint8_t>* skip = nullptr);
 
 /// Step 7b: the seed and grow thresholds from the texture's own tail. q = tailQuantile; the seed
 /// is max(seed, seedTail·q), the grow threshold max(grow, growTail·q) with growTail > 0, else
-/// grow scaled by the seed's factor; never above the seed.
+/// grow scaled by the seed's factor; never above the seed. `skip` as for tailQuantile.
 struct Thresholds {
     double seed, grow;
 };
 
 Thresholds tailThresholds(const std::vector<float>& score, int W, int H, const DefectMapOptions& o,
-                          double seed, double grow);
+                          double seed, double grow, const std::vector<uint8_t>* skip = nullptr);
 
 }  // namespace sl::defectmap

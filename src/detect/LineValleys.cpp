@@ -52,7 +52,8 @@ void segmentMeans(const std::vector<float>& A, int W, int H, double c, double s,
 }  // namespace
 
 std::vector<uint8_t> lineValleyRegions(const std::vector<float>& A, int W, int H,
-                                       const DefectMapOptions& o, double* seedUsed) {
+                                       const DefectMapOptions& o, double* seedUsed,
+                                       const std::vector<uint8_t>* skip) {
     constexpr double kPi = 3.14159265358979323846;
     const size_t n = A.size();
     const int m = o.lineLength / 2;
@@ -98,7 +99,7 @@ std::vector<uint8_t> lineValleyRegions(const std::vector<float>& A, int W, int H
         }
     });
     std::vector<uint8_t> regions(n, 0);
-    const Thresholds t = tailThresholds(V, W, H, o, o.lineSeedSigma, o.lineGrowSigma);
+    const Thresholds t = tailThresholds(V, W, H, o, o.lineSeedSigma, o.lineGrowSigma, skip);
     if (seedUsed) *seedUsed = t.seed;
     hysteresis(V, W, H, t.seed, t.grow, 1, regions);
     for (uint8_t& v : regions) v = v != 0;

@@ -15,8 +15,10 @@ namespace sl::defectmap {
 /// V_θ = min(L_θ(p + o·n) − L_θ(p), L_θ(p − o·n) − L_θ(p)) / σ_θ with n the normal,
 /// o = `lineOffset` (rounded to samples) and σ_θ = 1.4826 × the median of both differences'
 /// magnitudes. V = max over θ of V_θ, 0 within `border`. Returns 1 on the regions of
-/// V ≥ lineGrowSigma (8-connected) that reach V ≥ lineSeedSigma, 0 elsewhere.
+/// V ≥ lineGrowSigma (8-connected) that reach V ≥ lineSeedSigma (both raised by step 7b, its
+/// tail without the samples `skip` holds, when given), 0 elsewhere.
 std::vector<uint8_t> lineValleyRegions(const std::vector<float>& A, int W, int H,
-                                       const DefectMapOptions& o, double* seedUsed);
+                                       const DefectMapOptions& o, double* seedUsed,
+                                       const std::vector<uint8_t>* skip = nullptr);
 
 }  // namespace sl::defectmap
