@@ -43,10 +43,11 @@ void logInfo(const std::string& m) {
 }
 
 /// A benchmark's CSV, after its last safe point (core/Interrupt.h): a Ctrl-C before it writes
-/// nothing, one after it lets the file appear whole.
+/// nothing, one after it lets the file appear whole; then the table's last line names it.
 void writeBenchCsv(const std::string& path, const std::string& text) {
     enterCommit();
     writeTextAtomically(path, text);
+    std::printf("wrote %s\n", path.c_str());
 }
 
 struct RenderBenchArgs {
@@ -76,7 +77,6 @@ int runRenderBenchCmd(RenderBenchArgs a) {
         "pixel, then on the part's footprint only: the pixels a precompute traces)\n",
         a.o.resolution, a.o.resolution, a.o.spp, a.o.repeats);
     writeBenchCsv(a.csv, r.csv());
-    std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
 
@@ -162,7 +162,6 @@ int runTransportBenchCmd(TransportBenchArgs a) {
     std::printf("(medians: tracing of %d interleaved runs, products of %d runs)\n", a.o.repeats,
                 r.productRepeats);
     writeBenchCsv(a.csv, r.csv());
-    std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
 
@@ -186,7 +185,6 @@ int runTargetsBenchCmd(TargetsBenchArgs a) {
         a.o.scene.empty() ? "the bundled part" : a.o.scene.c_str(), a.o.size, a.o.size, a.o.spp,
         r.precomputeSeconds, a.o.repeats, formatNumber(a.o.lambda).c_str(), a.o.lampCount);
     writeBenchCsv(a.csv, r.csv());
-    std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
 
@@ -209,7 +207,6 @@ int runJndBenchCmd(const JndBenchArgs& a) {
         "label, of the answer and of the studio lamp)\n",
         a.o.evaluationSpp, a.o.optimizeSize);
     writeBenchCsv(a.csv, r.csv());
-    std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
 
@@ -235,7 +232,6 @@ int runLampsBenchCmd(LampsBenchArgs a) {
         "and E*; cpu: CPU seconds of all threads)\n",
         a.o.count, a.o.size, a.o.size);
     writeBenchCsv(a.csv, r.csv());
-    std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
 
@@ -258,7 +254,6 @@ int runDefectMapBenchCmd(const DefectMapBenchArgs& a) {
         "the same run)\n",
         a.o.repeats);
     writeBenchCsv(a.csv, r.csv());
-    std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
 
@@ -278,7 +273,6 @@ int runScratchMapBenchCmd(const ScratchMapBenchArgs& a) {
     std::printf("(kernel %d, patch %d, threshold %g; median of %d runs)\n", a.o.map.kernel,
                 a.o.map.patch, a.o.map.threshold, a.o.repeats);
     writeBenchCsv(a.csv, r.csv());
-    std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
 
@@ -311,7 +305,6 @@ int runLoadBenchCmd(LoadBenchArgs a) {
         "levelling; first = the first read, a reader module's loading included)\n",
         a.o.repeats);
     writeBenchCsv(a.csv, r.csv());
-    std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
 
@@ -333,7 +326,6 @@ int runReadBenchCmd(const ReadBenchArgs& a) {
                     r.gwyddionInitSeconds);
     std::printf(")\n");
     writeBenchCsv(a.csv, r.csv());
-    std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
 
@@ -436,7 +428,6 @@ int runSamplingBenchCmd(SamplingArgs a) {
         "RMSE, seconds and 1/(RMSE^2 s) to bsdf in the same run)\n",
         a.o.resolution, a.o.resolution, a.o.envmap.c_str());
     writeBenchCsv(a.csv, r.csv());
-    std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
 
@@ -460,7 +451,6 @@ int runDepthBenchCmd(DepthArgs a) {
         "max_depth)\n",
         a.o.resolution, a.o.resolution, a.o.spp);
     writeBenchCsv(a.csv, r.csv());
-    std::printf("wrote %s\n", a.csv.c_str());
     return kOk;
 }
 
@@ -490,7 +480,6 @@ int runRegionBenchCmd(RegionArgs a) {
         "'every pixel'; footprint's T is the baseline's bit for bit: %s)\n",
         r.width, r.height, a.o.spp, a.o.repeats, r.rows[1].sameAsBaseline ? "yes" : "NO");
     writeBenchCsv(a.csv, r.csv());
-    std::printf("wrote %s\n", a.csv.c_str());
     return r.rows[1].sameAsBaseline ? kOk : kRuntimeError;
 }
 

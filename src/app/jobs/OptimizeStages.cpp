@@ -125,13 +125,8 @@ std::vector<uint8_t> chooseDefectSppScale(const Scene& scene, const std::vector<
         factors = defectSppFactors(labelPixels, part);
     size_t marked = 0;
     double extra = 0;
-    std::vector<size_t> labels;  // the labels present, smallest first, as the rule takes them
-    for (size_t v = 1; v < 256; ++v)
-        if (labelPixels[v] > 0) labels.push_back(v);
-    std::stable_sort(labels.begin(), labels.end(),
-                     [&](size_t a, size_t b) { return labelPixels[a] < labelPixels[b]; });
     std::string perLabel;
-    for (const size_t v : labels) {
+    for (const size_t v : labelsBySize(labelPixels)) {  // as the rule takes them
         marked += labelPixels[v];
         extra += static_cast<double>(labelPixels[v]) * (factors[v] - 1);
         perLabel +=

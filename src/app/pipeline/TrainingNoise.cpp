@@ -60,20 +60,23 @@ std::array<int, 256> defectSppFactors(const std::array<size_t, 256>& labelPixels
                                       size_t partPixels) {
     std::array<int, 256> factors;
     factors.fill(1);
-    std::vector<int> labels;
-    for (int v = 1; v < 256; ++v)
-        if (labelPixels[static_cast<size_t>(v)] > 0) labels.push_back(v);
-    std::stable_sort(labels.begin(), labels.end(), [&](int a, int b) {
-        return labelPixels[static_cast<size_t>(a)] < labelPixels[static_cast<size_t>(b)];
-    });
     double budget = kDefectSppBudget * static_cast<double>(partPixels);
-    for (const int v : labels) {
-        const size_t n = labelPixels[static_cast<size_t>(v)];
+    for (const size_t v : labelsBySize(labelPixels)) {
+        const size_t n = labelPixels[v];
         const int f = factorWithin(n, budget);
-        factors[static_cast<size_t>(v)] = f;
+        factors[v] = f;
         budget -= static_cast<double>(n) * (f - 1);
     }
     return factors;
+}
+
+std::vector<size_t> labelsBySize(const std::array<size_t, 256>& labelPixels) {
+    std::vector<size_t> labels;
+    for (size_t v = 1; v < 256; ++v)
+        if (labelPixels[v] > 0) labels.push_back(v);
+    std::stable_sort(labels.begin(), labels.end(),
+                     [&](size_t a, size_t b) { return labelPixels[a] < labelPixels[b]; });
+    return labels;
 }
 
 std::vector<uint8_t> defectSppScale(const std::vector<uint8_t>& defects,
@@ -86,11 +89,9 @@ std::vector<uint8_t> defectSppScale(const std::vector<uint8_t>& defects,
 }
 
 std::vector<uint8_t> defectSppScale(const std::vector<uint8_t>& defects, int factor) {
-    if (factor <= 1) return {};
-    std::vector<uint8_t> s(defects.size(), 1);
-    for (size_t p = 0; p < s.size(); ++p)
-        if (defects[p]) s[p] = static_cast<uint8_t>(factor);
-    return s;
+    std::array<int, 256> factors;
+    factors.fill(factor);
+    return defectSppScale(defects, factors);
 }
 
 bool figureHigherIsBetter(ObjectiveKind kind) {

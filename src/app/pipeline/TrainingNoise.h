@@ -113,6 +113,9 @@ int defectSppFactor(size_t defectPixels, size_t partPixels);
 /// labelPixels[v]: the pixels of label v the camera sees of the part (labelPixels[0] unused).
 std::array<int, 256> defectSppFactors(const std::array<size_t, 256>& labelPixels,
                                       size_t partPixels);
+/// The labels with a pixel in labelPixels (values 1-255), smallest first (ties: by value): the
+/// order defectSppFactors spends its budget in.
+std::vector<size_t> labelsBySize(const std::array<size_t, 256>& labelPixels);
 /// The per-pixel multipliers: `factor` on the nonzero pixels of `defects`, 1 elsewhere; empty
 /// when factor is 1 (the plain trace).
 std::vector<uint8_t> defectSppScale(const std::vector<uint8_t>& defects, int factor);
