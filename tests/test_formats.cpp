@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 #include <zip.h>
 
+#include <algorithm>
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -14,6 +16,7 @@
 #include <iterator>
 #include <limits>
 #include <map>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -486,6 +489,49 @@ TEST(FormatsX3p, Md5ChecksumsAreVerified) {
     s.dataMd5 = "auto";
     writeX3p(dir / "ok.x3p", s);
     EXPECT_EQ(loadHeightmap(dir / "ok.x3p", {}).width, 4);
+    s.dataMd5 = "0123456789abcdef0123456789abcdef";
+    writeX3p(dir / "bad.x3p", s);
+    expectRefused(dir / "bad.x3p", {"bindata/data.bin", "MD5", "MD5ChecksumPointData"});
+}
+
+TEST(FormatsX3p, Md5InPiecesIsTheMd5OfTheWhole) {
+    // The digest must not depend on how the bytes arrive: split points inside and across
+    // 64-byte blocks, empty pieces, and a message whose padding spills into a second block.
+    std::mt19937 rng(7);
+    for (size_t n : {size_t(0), size_t(1), size_t(55), size_t(56), size_t(63), size_t(64),
+                     size_t(65), size_t(127), size_t(128), size_t(1000), size_t(100003)}) {
+        std::string bytes(n, '\0');
+        for (char& b : bytes) b = static_cast<char>(rng() & 0xff);
+        const std::string whole = md5Hex(bytes.data(), bytes.size());
+        for (int trial = 0; trial < 20; ++trial) {
+            Md5 m;
+            size_t at = 0;
+            while (at < n) {
+                const size_t piece = std::min<size_t>(n - at, rng() % 150);
+                m.update(bytes.data() + at, piece);
+                at += piece;
+            }
+            EXPECT_EQ(m.hex(), whole) << n << " bytes, trial " << trial;
+        }
+    }
+}
+
+TEST(FormatsX3p, AMemberOfManyReadPiecesIsVerifiedAsAWhole) {
+    // 1100 x 1100 float64 = 9.7 MB: the member is inflated in several pieces while a second
+    // thread hashes them; the heights, the digest and a wrong digest's refusal are as for one.
+    test::TempDir dir("x3p");
+    X3pSpec s;
+    s.sizeX = s.sizeY = 1100;
+    s.values.resize(size_t(1100) * 1100);
+    std::mt19937 rng(11);
+    std::normal_distribution<double> g(0.0, 1e-6);
+    for (double& v : s.values) v = g(rng);
+    s.dataMd5 = "auto";
+    writeX3p(dir / "big.x3p", s);
+    const HeightmapData d = loadHeightmap(dir / "big.x3p", {});
+    ASSERT_EQ(d.width, 1100);
+    for (size_t k : {size_t(0), size_t(4u << 17), s.values.size() - 1})
+        EXPECT_EQ(d.heights[k], static_cast<float>(s.values[k] * 1000.0)) << k;
     s.dataMd5 = "0123456789abcdef0123456789abcdef";
     writeX3p(dir / "bad.x3p", s);
     expectRefused(dir / "bad.x3p", {"bindata/data.bin", "MD5", "MD5ChecksumPointData"});

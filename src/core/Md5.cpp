@@ -1,5 +1,6 @@
 #include "core/Md5.h"
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <cstring>
@@ -80,30 +81,48 @@ void block(std::array<uint32_t, 4>& s, const unsigned char* p) {
 
 }  // namespace
 
-std::string md5Hex(const void* data, size_t bytes) {
-    std::array<uint32_t, 4> s = {0x67452301u, 0xefcdab89u, 0x98badcfeu, 0x10325476u};
+void Md5::update(const void* data, size_t bytes) {
     const auto* p = static_cast<const unsigned char*>(data);
-    size_t i = 0;
-    for (; i + 64 <= bytes; i += 64) block(s, p + i);
+    total_ += bytes;
+    if (pendingBytes_ > 0) {
+        const size_t take = std::min(bytes, 64 - pendingBytes_);
+        std::memcpy(pending_ + pendingBytes_, p, take);
+        pendingBytes_ += take, p += take, bytes -= take;
+        if (pendingBytes_ < 64) return;
+        block(state_, pending_);
+        pendingBytes_ = 0;
+    }
+    for (; bytes >= 64; p += 64, bytes -= 64) block(state_, p);
+    std::memcpy(pending_, p, bytes);
+    pendingBytes_ = bytes;
+}
+
+std::string Md5::hex() {
     // The tail, 0x80, zeros, and the length in bits (little-endian): one or two blocks.
     unsigned char tail[128] = {};
-    const size_t rest = bytes - i;
-    if (rest > 0) std::memcpy(tail, p + i, rest);
+    const size_t rest = pendingBytes_;
+    std::memcpy(tail, pending_, rest);
     tail[rest] = 0x80;
     const size_t len = rest < 56 ? 64 : 128;
-    const uint64_t bits = static_cast<uint64_t>(bytes) * 8;
+    const uint64_t bits = total_ * 8;
     for (size_t b = 0; b < 8; ++b) tail[len - 8 + b] = static_cast<unsigned char>(bits >> (8 * b));
-    block(s, tail);
-    if (len == 128) block(s, tail + 64);
-    static const char* const hex = "0123456789abcdef";
+    block(state_, tail);
+    if (len == 128) block(state_, tail + 64);
+    static const char* const hexDigits = "0123456789abcdef";
     std::string out;
-    for (uint32_t w : s)
+    for (uint32_t w : state_)
         for (int b = 0; b < 4; ++b) {
             const auto byte = static_cast<unsigned>((w >> (8 * b)) & 0xff);
-            out += hex[byte >> 4];
-            out += hex[byte & 15];
+            out += hexDigits[byte >> 4];
+            out += hexDigits[byte & 15];
         }
     return out;
+}
+
+std::string md5Hex(const void* data, size_t bytes) {
+    Md5 m;
+    m.update(data, bytes);
+    return m.hex();
 }
 
 }  // namespace sl
