@@ -132,17 +132,18 @@
 //     (e) The pile-up: a kept region (or border piece) that lies below the texture -- at least
 //     pileUpShare of its Σ|r| (after 8a) negative -- takes the samples above the texture
 //     within pileUpReach samples (Chebyshev) of it that score at least pileUpSigma at the
-//     growth's scales. A groove ploughed into a surface or a pit struck into it pushes the
-//     material it displaces up beside it, so its banks stand a little above the texture (a
-//     person marks them with the scratch); they are weaker than the groove, mostly below the
-//     growth's 2.5 σ, and step 8b grows a region into its own sign only. A raised region takes
-//     nothing here (a burr's or a particle's surroundings are not its pile-up). On the DEV
-//     insertion seeds 101-105 of scripts/eval-real (both models, the five measured files;
-//     replayed on the dumped residuals, then the binary: σ 1.0 / 1.5 / 2.0 / 2.5, share 0.5 /
-//     0.6 / 0.7, runs at target 21 / 20 / 18 / 17, 20 / 20 / 17): runs at target on the four
-//     textures 17 -> 20 (the periodic lines in model A, whose scratches' recall was short),
-//     median recall 0.825 -> 0.841 at precision 0.822 -> 0.779 (model B's defects have no
-//     pile-up: their precision falls by 0.01-0.06 for nothing); held out in docs/RESULTS.md.
+//     growth's scales (as each region is kept, before 8b's flanks). A groove ploughed into a
+//     surface or a pit struck into it pushes the material it displaces up beside it, so its banks
+//     stand a little above the texture (a person marks them with the scratch); they are weaker than
+//     the groove, mostly below the growth's 2.5 σ, and step 8b grows a region into its own sign
+//     only. A raised region takes nothing here (a burr's or a particle's surroundings are not its
+//     pile-up). On the DEV insertion seeds 101-105 of scripts/eval-real (both models, the five
+//     measured files; replayed on the dumped residuals first, then the binary with σ 1.0 / 1.5
+//     / 2.0 / 2.5 and share 0.5 / 0.6 / 0.7: runs at target 21 / 20 / 18 / 17 and 20 / 20 / 17):
+//     runs at target on the four textures 17 -> 20 (the periodic lines in model A, whose scratches'
+//     recall was short), median recall 0.825 -> 0.841 at precision 0.822 -> 0.779 (model B's
+//     defects have no pile-up: its median precision falls by 0.03-0.07 for nothing); held out in
+//     docs/RESULTS.md.
 // Every threshold is relative to σ_s, so the map is invariant to h → a·h + b (a ≠ 0) up to
 // rounding; a constant map marks nothing. Cost: offsets × (2·refine + 1)² box-filtered
 // difference passes over the map, parallel over tiles (TBB); memory 2 × offsets + 6 float copies.
