@@ -328,9 +328,11 @@ TEST(SelfSimMap, ADeepDefectIsKeptAndTheTextureJoinedToItDropped) {
             h[i] -= static_cast<float>(0.2 * std::exp(-d2 / (2 * 3.0 * 3.0)));
             if (d2 <= 4.0 * 4.0 && !truth[i]) particle[i] = 1;
         }
-    SelfSimMapOptions off;
+    SelfSimMapOptions off;  // step 8a alone: the pile-up (step 8e) is tested below
     off.trimShare = 0;
-    const SelfSimMapOptions on;
+    off.pileUpReach = 0;
+    SelfSimMapOptions on;
+    on.pileUpReach = 0;
     ASSERT_GT(on.trimShare, 0.0);
     const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
                      b = detectSelfSimDefects(h, kW, kH, on);
@@ -410,8 +412,10 @@ TEST(SelfSimMap, ABorderRegionsDefectPieceIsKeptItsRuggedTexturePieceDropped) {
 
     SelfSimMapOptions off8d;
     off8d.borderPieceFill = 0;
-    SelfSimMapOptions on;  // the pieces alone: their pile-up (borderPieceRim) is tested below
-    on.borderPieceRim = 0;
+    off8d.pileUpReach = 0;
+    SelfSimMapOptions on;   // the pieces alone: their pile-up (borderPieceRim, step 8e) is
+    on.borderPieceRim = 0;  // tested below
+    on.pileUpReach = 0;
     ASSERT_GT(on.borderPieceFill, 0.0);
     SelfSimMapOptions anyShape = on;
     anyShape.borderPieceFill = 1e-6;
@@ -464,9 +468,11 @@ TEST(SelfSimMap, ABorderPiecesPileUpIsMarkedTheRaisedTextureBesideItIsNot) {
         }
     for (size_t i = 0; i < h.size(); ++i) ridge[i] = ridge[i] && !crater[i] && !rim[i];
 
-    SelfSimMapOptions noRim;
+    SelfSimMapOptions noRim;  // the border pieces' rim alone: step 8e is tested below
     noRim.borderPieceRim = 0;
-    const SelfSimMapOptions on;
+    noRim.pileUpReach = 0;
+    SelfSimMapOptions on;
+    on.pileUpReach = 0;
     ASSERT_EQ(on.borderPieceRim, 2);
     const SelfSimMap a = detectSelfSimDefects(h, kW, kH, noRim),
                      b = detectSelfSimDefects(h, kW, kH, on);
@@ -489,6 +495,80 @@ TEST(SelfSimMap, ABorderPiecesPileUpIsMarkedTheRaisedTextureBesideItIsNot) {
     }
     EXPECT_EQ(added, b.borderRim);
     EXPECT_LE(outside, added / 4) << "added samples outside the rim's label";
+}
+
+// Step 8e: a kept region below the texture takes its pile-up. Striations with a groove (3 × the
+// striations deep, across the lay, off the border) whose banks, the rows just outside its
+// label, are raised by 1.8 × the residual's σ_0 (a scratch's pile-up, weaker than the growth's
+// 2.5 σ: most of it is no region of its own), and a burr (the same groove raised) whose banks
+// are lowered as much. Without step 8e the groove is marked and at most half of its banks'
+// samples; with it at least half and twice as many as without, every sample it adds is raised
+// and 9 in 10 lie within two samples of the groove's label; the burr's lowered banks are marked
+// as without (a raised region takes no pile-up), and nothing marked before is dropped.
+TEST(SelfSimMap, AGroovesPileUpIsMarkedTheBanksOfARaisedBurrAreNot) {
+    std::vector<float> h = striations(61);
+    const double sigma = detectSelfSimDefects(h, kW, kH).sigma;
+    ASSERT_GT(sigma, 0.0);
+    std::vector<uint8_t> grooveTruth(h.size(), 0), burrTruth(h.size(), 0);
+    groove(h, grooveTruth, 70, 80, 190, 80, 6, 3.0);
+    groove(h, burrTruth, 70, 150, 190, 150, 6, -3.0);  // depth < 0: raised
+    // the banks: the samples just above and below each label, in the columns it spans
+    std::vector<uint8_t> grooveBanks(h.size(), 0), burrBanks(h.size(), 0);
+    auto banks = [&](const std::vector<uint8_t>& label, std::vector<uint8_t>& bank, double dh) {
+        for (int y = 1; y < kH - 1; ++y)
+            for (int x = 0; x < kW; ++x) {
+                const size_t i = static_cast<size_t>(y) * kW + x;
+                if (label[i] || !(label[i - kW] || label[i + kW])) continue;
+                bank[i] = 1;
+                h[i] += static_cast<float>(dh);
+            }
+    };
+    banks(grooveTruth, grooveBanks, 1.8 * sigma);
+    banks(burrTruth, burrBanks, -1.8 * sigma);
+
+    SelfSimMapOptions off;
+    off.pileUpReach = 0;
+    const SelfSimMapOptions on;
+    ASSERT_EQ(on.pileUpReach, 1);
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
+                     b = detectSelfSimDefects(h, kW, kH, on);
+    const Counts ga = count(a.map, grooveTruth, on.border),
+                 gb = count(b.map, grooveTruth, on.border);
+    const Counts pa = count(a.map, grooveBanks, on.border),
+                 pb = count(b.map, grooveBanks, on.border);
+    const Counts ua = count(a.map, burrTruth, on.border), ub = count(b.map, burrTruth, on.border);
+    const Counts la = count(a.map, burrBanks, on.border), lb = count(b.map, burrBanks, on.border);
+    EXPECT_GE(ga.hits, ga.truth * 9 / 10) << "the groove, without step 8e";
+    EXPECT_GE(ua.hits, ua.truth * 9 / 10) << "the burr, without step 8e";
+    EXPECT_EQ(gb.hits, ga.hits) << "the groove, with step 8e";
+    EXPECT_EQ(ub.hits, ua.hits) << "the burr, with step 8e";
+    EXPECT_EQ(a.pileUp, 0u);
+    EXPECT_LE(pa.hits * 2, pa.truth)
+        << "the groove's banks without step 8e: " << pa.hits << " of " << pa.truth;
+    EXPECT_GE(pb.hits * 2, pb.truth) << "the groove's banks with step 8e: " << pb.hits << " of "
+                                     << pb.truth << " (" << pa.hits << " without)";
+    EXPECT_GE(pb.hits, 2 * pa.hits);
+    EXPECT_EQ(lb.hits, la.hits) << "the burr's lowered banks: a raised region takes no pile-up";
+    EXPECT_EQ(markedOnlyIn(a, b), 0u) << "samples marked without step 8e and not with it";
+    // what step 8e added: raised, and next to the groove's label or its banks (a bank's sample
+    // above the growth's 2.5 σ is in the groove's region, and step 8e reaches a sample beyond)
+    size_t added = 0, away = 0, lowered = 0;
+    for (int y = 2; y < kH - 2; ++y)
+        for (int x = 2; x < kW - 2; ++x) {
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            if (!b.map[i] || a.map[i]) continue;
+            ++added;
+            lowered += b.residual[i] > 0.0f ? 0 : 1;
+            bool near = false;
+            for (int qy = y - 2; qy <= y + 2; ++qy)
+                for (int qx = x - 2; qx <= x + 2; ++qx)
+                    near = near || grooveTruth[static_cast<size_t>(qy) * kW + qx];
+            away += near ? 0 : 1;
+        }
+    EXPECT_EQ(added, b.pileUp);
+    EXPECT_EQ(lowered, 0u) << "step 8e adds raised samples only";
+    EXPECT_LE(away * 10, added) << away << " of the " << added
+                                << " samples added lie away from the groove";
 }
 
 // Step 8d runs on a texture, not on a map that its own repeats explain almost exactly (a relief
@@ -573,6 +653,15 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o = {};
     o.borderPieceSigma = 1.0;
     expectNamed(o, "selfsim-border-piece-sigma");
+    o = {};
+    o.pileUpReach = -1;
+    expectNamed(o, "selfsim-pile-up-reach");
+    o = {};
+    o.pileUpSigma = 0;
+    expectNamed(o, "selfsim-pile-up-sigma");
+    o = {};
+    o.pileUpShare = 0;
+    expectNamed(o, "selfsim-pile-up-share");
     o = {};
     o.textureNfa = -1;
     expectNamed(o, "selfsim-texture-nfa");

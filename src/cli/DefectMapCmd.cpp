@@ -396,6 +396,16 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
                   "selfsim: ... pieces only on a map whose residual sigma is at least this share "
                   "of its RMS (a texture, not a relief; 0: every map)")
         ->capture_default_str();
+    c->add_option("--selfsim-pile-up-reach", q.pileUpReach,
+                  "selfsim: a kept region below the texture takes the samples above it within "
+                  "this many samples, its pile-up (0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-pile-up-sigma", q.pileUpSigma,
+                  "selfsim: ... those scoring at least this many robust sigmas")
+        ->capture_default_str();
+    c->add_option("--selfsim-pile-up-share", q.pileUpShare,
+                  "selfsim: ... when at least this share of its residual is below the texture")
+        ->capture_default_str();
     c->add_option("--selfsim-extend-steps", q.extendSteps,
                   "selfsim: a kept region grows this many samples further into its flanks (0: "
                   "off)")

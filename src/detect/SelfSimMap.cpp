@@ -208,6 +208,14 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.borderPieceSigma >= 0.0 && o.borderPieceSigma < 1.0))
         throw inputError(option("selfsim-border-piece-sigma"), "must be in [0, 1)",
                          "The default is 0.01 (0: every map)");
+    if (o.pileUpReach < 0)
+        throw inputError(option("selfsim-pile-up-reach"), "must be >= 0",
+                         "The default is 1 (0: off)");
+    if (!(o.pileUpSigma > 0.0))
+        throw inputError(option("selfsim-pile-up-sigma"), "must be > 0", "The default is 1.5");
+    if (!(o.pileUpShare > 0.0 && o.pileUpShare <= 1.0))
+        throw inputError(option("selfsim-pile-up-share"), "must be in (0, 1]",
+                         "The default is 0.6");
     if (o.border < 0)
         throw inputError(option("selfsim-border"), "must be >= 0", "The default is 40");
     if (o.minRegion < 1)
@@ -578,6 +586,31 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             regionSign[i] = sign;
             regionLevel[i] = level;
             stack.push_back(i);  // step 8b's first frontier
+        }
+        // step 8e: a region below the texture takes its pile-up, the samples above the texture
+        // within pileUpReach samples of it scoring at least pileUpSigma
+        if (o.pileUpReach > 0) {
+            double down = 0.0, all = 0.0;
+            for (const size_t i : kept) {
+                down += std::max(0.0f, -out.residual[i]);
+                all += std::abs(out.residual[i]);
+            }
+            if (all > 0.0 && down >= o.pileUpShare * all) {
+                const int reach = o.pileUpReach;
+                for (const size_t i : kept) {
+                    const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
+                    for (int qy = py - reach; qy <= py + reach; ++qy)
+                        for (int qx = px - reach; qx <= px + reach; ++qx) {
+                            if (!inside(qx, qy)) continue;
+                            const size_t q = static_cast<size_t>(qy) * W + qx;
+                            if (out.map[q] || !(out.residual[q] > 0.0f) ||
+                                !(zGrow[q] >= static_cast<float>(o.pileUpSigma)))
+                                continue;
+                            out.map[q] = 255;
+                            ++out.pileUp;
+                        }
+                }
+            }
         }
         return true;
     };
