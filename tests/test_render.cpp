@@ -11,6 +11,7 @@
 #include "io/HeightmapIO.h"
 #include "io/ImageIO.h"
 #include "io/SceneFile.h"
+#include "render/Footprint.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
 
@@ -205,6 +206,29 @@ TEST(Render, BackgroundIsZeroAndOutsideTheMask) {
             EXPECT_EQ(r.image.data[3 * p], 0.0f);
         }
     EXPECT_GT(background, 100);
+}
+
+TEST(Render, ProgressCountsTheFootprintsSamplesRowByRow) {
+    // Rows are traced in order; the progress is the share of the footprint's samples done, so
+    // rows that miss the part add nothing and the fraction grows with the work (the ETA holds).
+    SceneDesc d = baseDesc();
+    d.camera.type = CameraDesc::Type::Orthographic;
+    d.camera.widthMm = 6.0;  // wider than the 3.15 mm part: the first and last rows miss it
+    Scene s(d, 64, 64, flatHeights(64, 64));
+    const std::vector<PixelSpan> spans = partFootprint(s);
+    std::vector<double> expected;
+    double total = 0, done = 0;
+    for (const PixelSpan& sp : spans) total += sp.end - sp.begin;
+    for (const PixelSpan& sp : spans) expected.push_back((done += sp.end - sp.begin) / total);
+    ASSERT_EQ(spans.front().end - spans.front().begin, 0);  // a row outside the footprint
+    RenderOptions o = opts(4, 2, 1);                        // one thread: every row reported
+    std::vector<double> reported;
+    o.progress = [&](double f) { reported.push_back(f); };
+    render(s, EnvMap::constant(50, 25, 1.0f), o);
+    ASSERT_EQ(reported.size(), expected.size());
+    for (size_t k = 0; k < reported.size(); ++k) EXPECT_DOUBLE_EQ(reported[k], expected[k]) << k;
+    EXPECT_EQ(reported.front(), 0.0);
+    EXPECT_EQ(reported.back(), 1.0);
 }
 
 TEST(Render, BitIdenticalForAnyThreadCount) {

@@ -10,9 +10,9 @@
 #include <atomic>
 #include <cmath>
 #include <mutex>
-#include <numeric>
 #include <optional>
 #include <stdexcept>
+#include <tuple>
 
 #include "core/Interrupt.h"
 #include "core/Rng.h"
@@ -31,9 +31,9 @@ std::pair<int, int> strataFor(int spp) {
 }
 
 std::pair<double, double> sampleOffset(int s, int spp, int sampleSets, double u1, double u2) {
-    const int perSet = spp / sampleSets, k = s % perSet;
+    const int perSet = spp / sampleSets;
     const auto [nx, ny] = strataFor(perSet);
-    return {(k % nx + u1) / nx, (k / nx + u2) / ny};
+    return stratumOffset(s % perSet, nx, ny, u1, u2);
 }
 
 namespace {
@@ -69,13 +69,6 @@ inline float powerHeuristic(float pdfA, float pdfB) {
     return a + b > 0.0f ? a / (a + b) : 0.0f;
 }
 
-/// The row stride of trace()'s schedule: the integer nearest 0.618·H that is coprime to H.
-int rowStride(int H) {
-    int s = std::max(1, static_cast<int>(std::lround(0.6180339887 * H)));
-    while (std::gcd(s, H) != 1) ++s;
-    return s;
-}
-
 }  // namespace
 
 TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
@@ -100,7 +93,7 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
         throw std::invalid_argument("PathTracer: an spp multiplier is above kMaxSppScale");
     // A pixel's sampling constants, per multiplier (index: the multiplier).
     struct PixelSampling {
-        int spp = 0, perSet = 0, strataX = 1;
+        int spp = 0, perSet = 0, strataX = 1, strataY = 1;
         float invSpp = 0, strataXf = 1, strataYf = 1;
     };
     std::vector<PixelSampling> samplings(static_cast<size_t>(maxScale) + 1);
@@ -111,6 +104,7 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
         ps.invSpp = 1.0f / static_cast<float>(ps.spp);
         const auto [nx, ny] = strataFor(ps.perSet);
         ps.strataX = nx;
+        ps.strataY = ny;
         ps.strataXf = static_cast<float>(nx);
         ps.strataYf = static_cast<float>(ny);
     }
@@ -143,9 +137,11 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
         return sh;
     };
 
-    // Rows are traced in a stride order (row k is y = k·stride mod H, stride coprime to H, near
-    // 0.618·H), so every stretch of the schedule mixes rows that see the part with rows that
-    // do not: the rows done grow linearly in time and the progress' ETA holds. Each pixel's
+    // Rows are traced in order, each thread a run of neighbouring rows, so consecutive rays
+    // meet the same part of Embree's tree and the sink's rows are neighbours in memory (a
+    // stride order that mixed far rows cost ~4 % of the footprint's rays/s, docs/BENCHMARKS.md).
+    // The progress counts the rows' samples, not the rows: rows that miss the part cost
+    // nothing, so the fraction done grows linearly in time and the ETA holds. Each pixel's
     // samples depend only on (seed, pixel, sample), so the order changes no result.
     const int rowBegin = opt.rowBegin, rowEnd = opt.rowEnd > 0 ? opt.rowEnd : H;
     if (rowBegin < 0 || rowEnd > H || rowBegin >= rowEnd)
@@ -155,7 +151,22 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
     const std::vector<PixelSpan> spans =
         opt.cullBackground ? partFootprint(scene_) : std::vector<PixelSpan>(H, PixelSpan{0, W});
     const int traced = rowEnd - rowBegin;
-    const int stride = rowStride(traced);
+    std::vector<uint64_t> rowSamples(static_cast<size_t>(traced), 0);
+    uint64_t totalSamples = 0;
+    if (opt.progress) {
+        for (int y = rowBegin; y < rowEnd; ++y) {
+            const PixelSpan span = spans[static_cast<size_t>(y)];
+            uint64_t n = 0;
+            for (int x = span.begin; x < span.end; ++x) {
+                const size_t pixel = static_cast<size_t>(y) * W + x;
+                if (!opt.pixels.empty() && opt.pixels[pixel] == 0) continue;
+                n += opt.sppScale.empty() ? 1 : std::max<uint64_t>(1, opt.sppScale[pixel]);
+            }
+            rowSamples[static_cast<size_t>(y - rowBegin)] = n;
+            totalSamples += n;
+        }
+    }
+    std::atomic<uint64_t> samplesDone{0};
     auto body = [&](const tbb::blocked_range<int>& rows) {
         std::vector<EscapedPath> paths;
         paths.reserve(static_cast<size_t>(baseSpp));
@@ -164,7 +175,7 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
         std::vector<int> strata(stratified ? static_cast<size_t>(bounces) * baseSpp * maxScale : 0);
         Counters& c = counters.local();
         for (int k = rows.begin(); k < rows.end(); ++k) {
-            const int y = rowBegin + static_cast<int>((static_cast<int64_t>(k) * stride) % traced);
+            const int y = rowBegin + k;
             const PixelSpan span = spans[static_cast<size_t>(y)];
             for (int x = span.begin; x < span.end; ++x) {
                 // Ctrl-C: stop here, keep nothing. Per pixel, not per row: a row at the judge's
@@ -174,7 +185,8 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
                 if (!opt.pixels.empty() && opt.pixels[pixel] == 0) continue;
                 const PixelSampling& ps =
                     samplings[opt.sppScale.empty() ? 1 : std::max<size_t>(1, opt.sppScale[pixel])];
-                const int spp = ps.spp, perSet = ps.perSet, strataX = ps.strataX;
+                const int spp = ps.spp, perSet = ps.perSet, strataX = ps.strataX,
+                          strataY = ps.strataY;
                 const float invSpp = ps.invSpp, strataXf = ps.strataXf, strataYf = ps.strataYf;
                 paths.clear();
                 uint32_t hits = 0;
@@ -186,10 +198,10 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
                 for (int s = 0; s < spp; ++s) {
                     Pcg32 rng = sampleRng(opt.seed, pixel, static_cast<uint64_t>(s));
                     const double u1 = rng.nextDouble(), u2 = rng.nextDouble();
-                    auto [ox, oy] = sampleOffset(s, spp, opt.sampleSets, u1, u2);
                     const auto set = static_cast<uint32_t>(s / perSet);
                     const auto kInSet = static_cast<uint32_t>(s % perSet);
                     const auto& shift = shifts[set];
+                    double ox, oy;
                     if (stratified) {  // Sobol' point kInSet, shifted, jittered below 2^-32
                         ox = std::min(
                             (static_cast<double>(sobol(kInSet, 0) ^ shift[0]) + u1) * 0x1p-32,
@@ -197,6 +209,9 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
                         oy = std::min(
                             (static_cast<double>(sobol(kInSet, 1) ^ shift[1]) + u2) * 0x1p-32,
                             kBelowOneD);
+                    } else {
+                        std::tie(ox, oy) =
+                            stratumOffset(static_cast<int>(kInSet), strataX, strataY, u1, u2);
                     }
                     Ray ray = cam.generateRay(x + ox, y + oy);
                     Rgb throughput{1.0f};
@@ -270,11 +285,15 @@ TraceSummary PathTracer::trace(const RenderOptions& opt, PathSink& sink) const {
                 sum.objectMask[pixel] = hits == static_cast<uint32_t>(spp) ? 1 : 0;
                 sink.consume(PixelPaths{pixel, hits, paths});
             }
-            int done = ++rowsDone;
+            const int done = ++rowsDone;
+            const uint64_t samples = samplesDone += rowSamples[static_cast<size_t>(k)];
             if (opt.progress) {
                 std::unique_lock lock(progressMutex, std::try_to_lock);
                 if (lock.owns_lock() || done == traced)
-                    opt.progress(static_cast<double>(done) / traced);
+                    opt.progress(done == traced || totalSamples == 0
+                                     ? static_cast<double>(done) / traced
+                                     : static_cast<double>(samples) /
+                                           static_cast<double>(totalSamples));
             }
         }
     };

@@ -134,6 +134,12 @@ class PathTracer {
 /// Stratification of spp camera samples: nx × ny strata with nx the largest divisor <= sqrt(spp).
 std::pair<int, int> strataFor(int spp);
 
+/// Film offset in [0,1)² of the sample in stratum (k mod nx, k div nx) of nx × ny, jittered by
+/// two uniform numbers (u1, u2).
+inline std::pair<double, double> stratumOffset(int k, int nx, int ny, double u1, double u2) {
+    return {(k % nx + u1) / nx, (k / nx + u2) / ny};
+}
+
 /// Film offset in [0,1)² of sample s of a pixel: stratum (k mod nx, k div nx) of the sample's
 /// set (k = index within the set) jittered by two uniform numbers (u1, u2).
 std::pair<double, double> sampleOffset(int s, int spp, int sampleSets, double u1, double u2);
