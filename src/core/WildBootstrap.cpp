@@ -1,6 +1,7 @@
 #include "core/WildBootstrap.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <exception>
@@ -41,15 +42,28 @@ std::vector<double> wildBootstrapErrors(std::span<const HalfImages> images, uint
         for (size_t p = 0; p < n; ++p) d[k][p] = (images[k].a[p] - images[k].b[p]) * std::sqrt(0.5);
     const int count = std::max(replicates, 0);
     std::vector<std::vector<double>> byReplicate(static_cast<size_t>(count));  // [rep][score]
-    // Replicate `rep` into the worker's own images `r`, then its scores.
+    // Replicate `rep` into the worker's own images `r`, then its scores. A block of pixels at a
+    // time: its Rademacher weights drawn first, pixel by pixel, then each image's block perturbed
+    // in a pass the compiler vectorizes (the same values as perturbing pixel by pixel).
+    constexpr size_t kBlock = 1024;
     auto one = [&](int rep, std::vector<HalfImages>& r) {
         Pcg32 rng(mix64(seed ^ 0x5345ULL), static_cast<uint64_t>(rep));
-        for (size_t p = 0; p < n; ++p) {
-            const uint32_t bits = rng.nextU32();
-            const double sa = bits & 1u ? 1.0 : -1.0, sb = bits & 2u ? 1.0 : -1.0;
+        std::array<double, kBlock> wa{}, wb{};
+        for (size_t p0 = 0; p0 < n; p0 += kBlock) {
+            const size_t m = std::min(kBlock, n - p0);
+            for (size_t i = 0; i < m; ++i) {
+                const uint32_t bits = rng.nextU32();
+                wa[i] = bits & 1u ? 1.0 : -1.0;
+                wb[i] = bits & 2u ? 1.0 : -1.0;
+            }
             for (size_t k = 0; k < images.size(); ++k) {
-                r[k].a[p] = images[k].a[p] + sa * d[k][p];
-                r[k].b[p] = images[k].b[p] + sb * d[k][p];
+                const double* a = images[k].a.data() + p0;
+                const double* b = images[k].b.data() + p0;
+                const double* dk = d[k].data() + p0;
+                double* ra = r[k].a.data() + p0;
+                double* rb = r[k].b.data() + p0;
+                for (size_t i = 0; i < m; ++i) ra[i] = a[i] + wa[i] * dk[i];
+                for (size_t i = 0; i < m; ++i) rb[i] = b[i] + wb[i] * dk[i];
             }
         }
         byReplicate[static_cast<size_t>(rep)] = scores(r);
