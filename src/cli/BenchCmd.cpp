@@ -762,7 +762,8 @@ const std::vector<BenchCommand>& benchCommands() {
          addLampsBench},
         {"targets",
          "Issue 32's wall-clock targets, a row each with its ratio to the bound: re-optimizing a "
-         "cached T with another lambda (held-out none, and the judge's), lamps K = 3",
+         "cached T with another lambda (held-out none, and the judge's), the first answer from the "
+         "scene (nothing cached), lamps K = 3",
          addTargetsBench},
         {"jnd",
          "Seconds of one JND evaluation per image size (band filters direct vs Fourier, and the "
