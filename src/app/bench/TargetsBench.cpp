@@ -186,7 +186,7 @@ TargetsBenchResult runTargetsBench(const TargetsBenchOptions& o) {
         rowOf("re-optimize T at lambda " + l + ", no held-out", kReoptimizeTarget, none));
     result.rows.push_back(
         rowOf("re-optimize T at lambda " + l + ", judge's held-out", kReoptimizeTarget, judge));
-    result.rows.push_back(rowOf("optimize the scene at " + std::to_string(o.size) + "x" +
+    result.rows.push_back(rowOf("optimize SCENE at " + std::to_string(o.size) + "x" +
                                     std::to_string(o.size) + ", no held-out, uncached",
                                 kFirstAnswerTarget, first));
     result.rows.push_back(
