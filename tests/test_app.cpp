@@ -294,23 +294,27 @@ TEST(TransportBench, MeasuresTracingTAndTheIterationOnT) {
 }
 
 // bench targets: a row per issue-32 target, its bound, and the phases inside the job's wall time
-// (the optimizer's seconds and the lamps' E* and fits are parts of it, so the rest is >= 0).
+// (the optimizer's seconds, the scene row's trace and the lamps' E* and fits are parts of it, so
+// the rest is >= 0); the scene row traces T (its cache is emptied before each run), the others
+// read it.
 TEST(TargetsBench, ARowPerTargetWithItsBoundAndPhasesInsideTheWallTime) {
     test::TempDir dir("targets-bench");
     TargetsBenchOptions o;
     o.size = 16;
     o.spp = 2;
-    o.repeats = 1;
+    o.repeats = 2;
     o.lampCount = 1;
     o.workDir = dir.path();
     const TargetsBenchResult r = runTargetsBench(o);
-    ASSERT_EQ(r.rows.size(), 3u);
+    ASSERT_EQ(r.rows.size(), 4u);
     EXPECT_EQ(r.rows[0].target, "re-optimize T at lambda 10, no held-out");
     EXPECT_EQ(r.rows[1].target, "re-optimize T at lambda 10, judge's held-out");
-    EXPECT_EQ(r.rows[2].target, "lamps on T, K = 1");
+    EXPECT_EQ(r.rows[2].target, "optimize SCENE at 16x16, no held-out, uncached");
+    EXPECT_EQ(r.rows[3].target, "lamps on T, K = 1");
     EXPECT_EQ(r.rows[0].targetSeconds, 0.2);
     EXPECT_EQ(r.rows[1].targetSeconds, 0.2);
     EXPECT_EQ(r.rows[2].targetSeconds, 1.0);
+    EXPECT_EQ(r.rows[3].targetSeconds, 1.0);
     for (const TargetsBenchRow& row : r.rows) {
         SCOPED_TRACE(row.target);
         EXPECT_GT(row.evaluations, 0);
@@ -320,10 +324,15 @@ TEST(TargetsBench, ARowPerTargetWithItsBoundAndPhasesInsideTheWallTime) {
         EXPECT_GE(row.secondsMax, row.seconds);
         EXPECT_DOUBLE_EQ(row.ratio(), row.seconds / row.targetSeconds);
     }
-    EXPECT_GT(r.rows[2].secondsTarget, 0);  // lamps optimized E* first
+    EXPECT_EQ(r.rows[0].secondsTrace, 0);
+    EXPECT_EQ(r.rows[1].secondsTrace, 0);
+    EXPECT_GT(r.rows[2].secondsTrace, 0);  // the scene row traces T
+    EXPECT_EQ(r.rows[3].secondsTrace, 0);
+    EXPECT_GT(r.rows[3].secondsTarget, 0);  // lamps optimized E* first
     const std::string csv = r.csv();
-    EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4);
+    EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 5);
     EXPECT_TRUE(std::filesystem::exists(dir.path() / "optimize" / "report.html"));
+    EXPECT_TRUE(std::filesystem::exists(dir.path() / "optimize-scene" / "report.html"));
 }
 
 // bench jnd: one evaluation row per size whose two band-filter methods agree to rounding, and an

@@ -453,6 +453,47 @@ TEST(JudgeRounds, BootstrapErrorsAreTheSameOnAnyNumberOfThreads) {
                  std::runtime_error);
 }
 
+// Each replicate is the wild bootstrap's perturbation exactly (core/WildBootstrap.h): pixel p of
+// replicate r takes the signs of the p-th draw of Pcg32(mix64(seed ^ 0x5345), r), bit 0 for half
+// a and bit 1 for half b, the same for every image, and adds sign · (a − b)/√2; the perturbed
+// images equal, bit for bit, that rule applied pixel by pixel (on a size that is no multiple of
+// the blocks the bootstrap draws its signs in).
+TEST(JudgeRounds, BootstrapReplicatesAreTheRulesPerturbationBitForBit) {
+    const size_t n = 2500;
+    Pcg32 rng(9, 3);
+    std::vector<HalfImages> images(3, HalfImages{std::vector<double>(n), std::vector<double>(n)});
+    for (HalfImages& h : images)
+        for (size_t p = 0; p < n; ++p) {
+            h.a[p] = 0.3 + rng.nextDouble();
+            h.b[p] = 0.3 + rng.nextDouble();
+        }
+    std::vector<std::vector<HalfImages>> seen;
+    const int replicates = 5;
+    const uint64_t seed = 77;
+    wildBootstrapErrors(
+        images, seed, replicates,
+        [&](std::span<const HalfImages> r) {
+            seen.emplace_back(r.begin(), r.end());
+            return std::vector<double>{r[0].a[0]};
+        },
+        1);
+    ASSERT_EQ(seen.size(), static_cast<size_t>(replicates));
+    for (int rep = 0; rep < replicates; ++rep) {
+        Pcg32 signs(mix64(seed ^ 0x5345ULL), static_cast<uint64_t>(rep));
+        size_t differ = 0;
+        for (size_t p = 0; p < n; ++p) {
+            const uint32_t bits = signs.nextU32();
+            const double sa = bits & 1u ? 1.0 : -1.0, sb = bits & 2u ? 1.0 : -1.0;
+            for (size_t k = 0; k < images.size(); ++k) {
+                const double d = (images[k].a[p] - images[k].b[p]) * std::sqrt(0.5);
+                differ += seen[rep][k].a[p] != images[k].a[p] + sa * d;
+                differ += seen[rep][k].b[p] != images[k].b[p] + sb * d;
+            }
+        }
+        EXPECT_EQ(differ, 0u) << "replicate " << rep;
+    }
+}
+
 // The JND figures' errors on one bank of band filters for every replicate, on every core: the
 // same numbers as the serial bootstrap that built a bank per replicate (each region's JND and
 // its error, bit for bit, on 1 and 3 threads), and the same seed gives the same numbers.

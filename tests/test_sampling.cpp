@@ -110,6 +110,19 @@ const char* name(Sampling s) {
 
 }  // namespace
 
+// Four states in flight are the same stream: nextU32s gives the values of as many nextU32 calls,
+// for counts below, at and past a multiple of four, and leaves the stream where they would.
+TEST(Sampling, BulkDrawsAreTheStreamsDraws) {
+    for (size_t n : {0, 1, 3, 4, 5, 8, 1027}) {
+        Pcg32 one(12345, 678), bulk(12345, 678);
+        std::vector<uint32_t> expected(n), got(n);
+        for (uint32_t& x : expected) x = one.nextU32();
+        bulk.nextU32s(got.data(), n);
+        EXPECT_EQ(got, expected) << n << " draws";
+        EXPECT_EQ(bulk.nextU32(), one.nextU32()) << "after " << n << " draws";
+    }
+}
+
 TEST(EnvSampler, DensityIntegratesToOne) {
     const EnvMapBasis basis(50, 25);
     for (int guided = 0; guided < 2; ++guided) {

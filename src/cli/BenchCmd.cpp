@@ -177,13 +177,16 @@ int runTargetsBenchCmd(TargetsBenchArgs a) {
     std::printf(
         "(%s at %dx%d, %d spp with halves, T traced in %.1f s and cached with everything the "
         "first runs keep; each job in this process as the command runs it (no process start-up), "
-        "median and range of %d interleaved runs; ratio = median / bound; optimizer: its "
-        "seconds (lamps: the fits K = 1..K), evals: loss-and-gradient evaluations in them; rest: "
-        "loading, E* (lamps), comparison lights, self-check, renders, figures, report); the rows "
-        "are `optimize part.tm --lambda %s --heldout none`, the same with the default "
-        "--heldout, and `lamps part.tm --count %d`\n",
+        "median and range of %d interleaved runs; ratio = median / bound; trace: T and its "
+        "validation estimate traced (the scene row); optimizer: its seconds (lamps: the fits "
+        "K = 1..K), evals: loss-and-gradient evaluations in them; rest: loading, E* (lamps), "
+        "comparison lights, self-check, renders, figures, report); the rows are `optimize "
+        "part.tm --lambda %s --heldout none`, the same with the default --heldout, `optimize "
+        "SCENE --size %d --spp %d --lambda %s --heldout none` with an empty cache each run, and "
+        "`lamps part.tm --count %d`\n",
         a.o.scene.empty() ? "the bundled part" : a.o.scene.c_str(), a.o.size, a.o.size, a.o.spp,
-        r.precomputeSeconds, a.o.repeats, formatNumber(a.o.lambda).c_str(), a.o.lampCount);
+        r.precomputeSeconds, a.o.repeats, formatNumber(a.o.lambda).c_str(), a.o.size, a.o.spp,
+        formatNumber(a.o.lambda).c_str(), a.o.lampCount);
     writeBenchCsv(a.csv, r.csv());
     return kOk;
 }
@@ -762,7 +765,8 @@ const std::vector<BenchCommand>& benchCommands() {
          addLampsBench},
         {"targets",
          "Issue 32's wall-clock targets, a row each with its ratio to the bound: re-optimizing a "
-         "cached T with another lambda (held-out none, and the judge's), lamps K = 3",
+         "cached T with another lambda (held-out none, and the judge's), the first answer from the "
+         "scene (nothing cached), lamps K = 3",
          addTargetsBench},
         {"jnd",
          "Seconds of one JND evaluation per image size (band filters direct vs Fourier, and the "

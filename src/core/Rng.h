@@ -3,6 +3,7 @@
 // are bit-identical for any thread count.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 namespace sl {
@@ -21,10 +22,29 @@ class Pcg32 {
     }
     uint32_t nextU32() {
         uint64_t old = state_;
-        state_ = old * 6364136223846793005ULL + inc_;
-        auto xorshifted = static_cast<uint32_t>(((old >> 18u) ^ old) >> 27u);
-        auto rot = static_cast<uint32_t>(old >> 59u);
-        return (xorshifted >> rot) | (xorshifted << ((~rot + 1u) & 31u));
+        state_ = old * kMultiplier + inc_;
+        return output(old);
+    }
+    /// The next `n` draws into `out`: the same values as `n` calls of nextU32, four states in
+    /// flight (the stream jumped four steps at a time: s + 4 = a⁴·s + (a³ + a² + a + 1)·inc), so
+    /// the multiplications do not wait on each other.
+    void nextU32s(uint32_t* out, size_t n) {
+        constexpr uint64_t a = kMultiplier, a2 = a * a, a4 = a2 * a2;
+        const uint64_t c = inc_, c2 = a * c + c, c4 = a2 * c2 + c2;
+        uint64_t s0 = state_, s1 = s0 * a + c, s2 = s1 * a + c, s3 = s2 * a + c;
+        size_t i = 0;
+        for (; i + 4 <= n; i += 4) {
+            out[i] = output(s0);
+            out[i + 1] = output(s1);
+            out[i + 2] = output(s2);
+            out[i + 3] = output(s3);
+            s0 = s0 * a4 + c4;
+            s1 = s1 * a4 + c4;
+            s2 = s2 * a4 + c4;
+            s3 = s3 * a4 + c4;
+        }
+        state_ = s0;
+        for (; i < n; ++i) out[i] = nextU32();
     }
     /// Uniform float in [0, 1): 24 random mantissa bits, never returns 1.
     float nextFloat() { return static_cast<float>(nextU32() >> 8) * 0x1p-24f; }
@@ -34,6 +54,12 @@ class Pcg32 {
     }
 
   private:
+    static constexpr uint64_t kMultiplier = 6364136223846793005ULL;
+    static uint32_t output(uint64_t old) {
+        auto xorshifted = static_cast<uint32_t>(((old >> 18u) ^ old) >> 27u);
+        auto rot = static_cast<uint32_t>(old >> 59u);
+        return (xorshifted >> rot) | (xorshifted << ((~rot + 1u) & 31u));
+    }
     uint64_t state_ = 0, inc_ = 0;
 };
 

@@ -1,7 +1,9 @@
 #include "core/WildBootstrap.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <exception>
 #include <limits>
@@ -41,15 +43,33 @@ std::vector<double> wildBootstrapErrors(std::span<const HalfImages> images, uint
         for (size_t p = 0; p < n; ++p) d[k][p] = (images[k].a[p] - images[k].b[p]) * std::sqrt(0.5);
     const int count = std::max(replicates, 0);
     std::vector<std::vector<double>> byReplicate(static_cast<size_t>(count));  // [rep][score]
-    // Replicate `rep` into the worker's own images `r`, then its scores.
+    // Replicate `rep` into the worker's own images `r`, then its scores. A block of pixels at a
+    // time: its Rademacher weights drawn first, pixel by pixel, then each image's block perturbed
+    // in a pass the compiler vectorizes (the same values as perturbing pixel by pixel).
+    constexpr size_t kBlock = 1024;
+    constexpr uint64_t kOne = 0x3ff0000000000000ULL;  // 1.0
     auto one = [&](int rep, std::vector<HalfImages>& r) {
         Pcg32 rng(mix64(seed ^ 0x5345ULL), static_cast<uint64_t>(rep));
-        for (size_t p = 0; p < n; ++p) {
-            const uint32_t bits = rng.nextU32();
-            const double sa = bits & 1u ? 1.0 : -1.0, sb = bits & 2u ? 1.0 : -1.0;
+        std::array<double, kBlock> wa{}, wb{};
+        std::array<uint32_t, kBlock> draws{};
+        for (size_t p0 = 0; p0 < n; p0 += kBlock) {
+            const size_t m = std::min(kBlock, n - p0);
+            // ±1.0 from the bit without a branch (a branch on a random bit is mispredicted half
+            // the time): 1.0's bits with the sign bit set where the bit is clear.
+            rng.nextU32s(draws.data(), m);
+            for (size_t i = 0; i < m; ++i) {
+                const uint64_t bits = draws[i];
+                wa[i] = std::bit_cast<double>(kOne | (~bits & 1u) << 63);
+                wb[i] = std::bit_cast<double>(kOne | (~bits >> 1 & 1u) << 63);
+            }
             for (size_t k = 0; k < images.size(); ++k) {
-                r[k].a[p] = images[k].a[p] + sa * d[k][p];
-                r[k].b[p] = images[k].b[p] + sb * d[k][p];
+                const double* a = images[k].a.data() + p0;
+                const double* b = images[k].b.data() + p0;
+                const double* dk = d[k].data() + p0;
+                double* ra = r[k].a.data() + p0;
+                double* rb = r[k].b.data() + p0;
+                for (size_t i = 0; i < m; ++i) ra[i] = a[i] + wa[i] * dk[i];
+                for (size_t i = 0; i < m; ++i) rb[i] = b[i] + wb[i] * dk[i];
             }
         }
         byReplicate[static_cast<size_t>(rep)] = scores(r);

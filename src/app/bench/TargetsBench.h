@@ -4,13 +4,15 @@
 // paper's light, the specular start, the judge's estimate):
 //   - re-optimize: optimize on the cached T at another lambda L, no held-out (target 0.2 s),
 //   - the same with the default held-out estimate, the judge's (target 0.2 s),
+//   - the first answer from the scene: optimize the scene at N², S spp, no held-out, its cache
+//     folder emptied before each run so that T is traced (target 1 s),
 //   - lamps on T, K = 3 (target 1 s).
 // Each is run `repeats` times, interleaved, in this process (no process start-up: ~0.03 s),
 // as the command runs it (the job with the command's defaults, figures and report included).
 // A row: the median wall seconds and its ratio to the target, the median CPU seconds and the
-// load beside it, and where the time went: the
-// optimizer's (or the lamp fit's) seconds, its evaluations and ms per evaluation, and the rest
-// (loading, the comparison lights, the self-check, renders, figures, report).
+// load beside it, and where the time went: the trace's seconds (from the scene), the optimizer's
+// (or the lamp fit's) seconds, its evaluations and ms per evaluation, and the rest (loading, the
+// comparison lights, the self-check, renders, figures, report).
 #pragma once
 
 #include <filesystem>
@@ -39,6 +41,7 @@ struct TargetsBenchRow {
     double optimizerSeconds = 0;  // median: the optimizer (optimize) or the fits K = 1..K (lamps)
     double evaluations = 0;       // median: loss-and-gradient evaluations in it
     double secondsTarget = 0;     // lamps: optimizing E* first (median; 0 for optimize)
+    double secondsTrace = 0;      // from the scene: its estimates of T (load, trace, write)
     /// Median CPU seconds of the job (all threads, and the plot script it waits for): on a
     /// shared machine the wall time is mostly the scheduler's, the CPU time the work's.
     double cpuSeconds = 0;
@@ -46,7 +49,7 @@ struct TargetsBenchRow {
     double msPerEvaluation() const {
         return evaluations > 0 ? 1e3 * optimizerSeconds / evaluations : 0;
     }
-    double rest() const { return seconds - optimizerSeconds - secondsTarget; }
+    double rest() const { return seconds - optimizerSeconds - secondsTarget - secondsTrace; }
     double ratio() const { return targetSeconds > 0 ? seconds / targetSeconds : 0; }
 };
 
