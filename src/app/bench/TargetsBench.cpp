@@ -94,17 +94,11 @@ TargetsBenchResult runTargetsBench(const TargetsBenchOptions& o) {
     precomputeToFile(scene, po, tm, size);
     result.precomputeSeconds = pre.seconds();
 
-    auto optimize = [&](double lambda, bool heldOut) {
-        OptimizeJobOptions j;
-        j.input = tm;
-        j.outDir = work / "optimize";
-        j.lambdas = {lambda};
-        if (!heldOut) j.heldOut.mode = HeldOutMode::None;
-        j.cache.dir = cache;
-        j.commandLine = "bench targets";
+    // One optimize job as the command runs it, timed: its seconds, CPU and its searches'.
+    auto timedOptimize = [](const OptimizeJobOptions& j, OptimizeJobSummary& s) {
         const Stopwatch clock;
         const double cpu0 = cpuSecondsWithChildren();
-        const OptimizeJobSummary s = runOptimizeJob(j);
+        s = runOptimizeJob(j);
         Sample x;
         x.seconds = clock.seconds();
         x.cpu = cpuSecondsWithChildren() - cpu0;
@@ -113,6 +107,17 @@ TargetsBenchResult runTargetsBench(const TargetsBenchOptions& o) {
             x.evaluations += r.optimizer.evaluations;
         }
         return x;
+    };
+    auto optimize = [&](double lambda, bool heldOut) {
+        OptimizeJobOptions j;
+        j.input = tm;
+        j.outDir = work / "optimize";
+        j.lambdas = {lambda};
+        if (!heldOut) j.heldOut.mode = HeldOutMode::None;
+        j.cache.dir = cache;
+        j.commandLine = "bench targets";
+        OptimizeJobSummary s;
+        return timedOptimize(j, s);
     };
     // The first answer from the scene: optimize SCENE at N², S spp, no held-out, with a cache
     // folder made empty before each run, so T (and whatever else the run needs) is traced.
@@ -128,16 +133,8 @@ TargetsBenchResult runTargetsBench(const TargetsBenchOptions& o) {
         j.heldOut.mode = HeldOutMode::None;
         j.cache.dir = fresh;
         j.commandLine = "bench targets";
-        const Stopwatch clock;
-        const double cpu0 = cpuSecondsWithChildren();
-        const OptimizeJobSummary s = runOptimizeJob(j);
-        Sample x;
-        x.seconds = clock.seconds();
-        x.cpu = cpuSecondsWithChildren() - cpu0;
-        for (const OptimizeRun& r : s.runs) {
-            x.optimizer += r.optimizer.seconds;
-            x.evaluations += r.optimizer.evaluations;
-        }
+        OptimizeJobSummary s;
+        Sample x = timedOptimize(j, s);
         x.trace = s.transport.secondsTotal;
         for (const TransportSource& e : s.extraEstimates) x.trace += e.secondsTotal;
         if (s.validation) x.trace += s.validation->secondsTotal;
