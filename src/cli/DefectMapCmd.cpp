@@ -60,6 +60,9 @@ int runDefectMap(const DefectMapJobOptions& o) {
             m.selfsimOffsets, m.sigmaLevel, m.selfsimThreshold, m.selfsimDetections,
             m.selfsimRegions, m.selfsimDropped, m.selfsimBorderPieces, m.selfsimTextureThreshold,
             m.selfsimCandidates, m.selfsimDroppedTexture);
+    if (m.method == DefectMethod::SelfSim && m.selfsimReliefLevels > 0)
+        std::printf("  a relief: its %zu plateau levels taken out before the copies\n",
+                    m.selfsimReliefLevels);
     if (s.score) {
         const DefectScore& sc = *s.score;
         std::printf("%-18s %5s %10s %10s %10s %9s %7s %7s\n", "kind", "value", "truth", "hits",
@@ -395,6 +398,10 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--selfsim-border-piece-sigma", q.borderPieceSigma,
                   "selfsim: ... pieces only on a map whose residual sigma is at least this share "
                   "of its RMS (a texture, not a relief; 0: every map)")
+        ->capture_default_str();
+    c->add_option("--selfsim-relief", q.relief,
+                  "selfsim: on a relief (heights on a few flat levels: lettering, a stepped part) "
+                  "take each sample's plateau level out first (true/false)")
         ->capture_default_str();
     c->add_option("--selfsim-pile-up-reach", q.pileUpReach,
                   "selfsim: a kept region below the texture takes the samples above it within "

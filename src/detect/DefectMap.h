@@ -342,6 +342,7 @@ struct DefectMap {
     double selfsimTextureThreshold = 0;
     size_t selfsimCandidates = 0, selfsimDroppedTexture = 0;
     size_t selfsimBorderPieces = 0;  // selfsim only: pieces of border regions kept (step 8d)
+    size_t selfsimReliefLevels = 0;  // selfsim only: a relief's levels taken out (step 1b; 0: none)
     double seconds = 0;
 
     size_t markedCount() const;

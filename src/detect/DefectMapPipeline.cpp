@@ -206,6 +206,7 @@ void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int he
     r.selfsimCandidates = m.candidates;
     r.selfsimDroppedTexture = m.droppedTexture;
     r.selfsimBorderPieces = m.borderPieces;
+    r.selfsimReliefLevels = m.reliefLevels;
     r.markedScore = r.markedCount();
 }
 

@@ -11,6 +11,7 @@
 #include "core/Error.h"
 #include "core/Interrupt.h"
 #include "core/PolynomialFit.h"
+#include "detect/ReliefLevels.h"
 
 namespace sl {
 
@@ -232,8 +233,15 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     out.residual.assign(n, 0.0f);
     if (W < 2 || H < 2 || heights.size() != n) return out;
 
-    const std::vector<float> g = removeQuadratic(heights, W, H);
+    const std::vector<float> levelled = removeQuadratic(heights, W, H);
     throwIfInterrupted();
+    const int b = std::min(o.border, (std::min(W, H) - 1) / 2);
+    // step 1b: a relief's plateaus taken out (detect/ReliefLevels.h): g is then the plateaus'
+    // texture, what the copies compare and whose RMS a region is judged against (step 6)
+    ReliefLevels relief;
+    if (o.relief) relief = findReliefLevels(levelled, W, H, b);
+    const std::vector<float>& g = relief.relief ? relief.flattened : levelled;
+    if (relief.relief) out.reliefLevels = relief.levels.size();
 
     // ---- steps 2–3, tile by tile: the texture's offsets and each sample's copies ----------
     const int R = std::min(o.searchRadius, std::max(W, H) - 1);
@@ -273,7 +281,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             }
         }
         std::stable_sort(cands.begin(), cands.end(),
-                         [](const Cand& a, const Cand& b) { return a.score < b.score; });
+                         [](const Cand& p, const Cand& q) { return p.score < q.score; });
         std::vector<int>& kept = tileOffsets[static_cast<size_t>(tileIndex)];
         const int sep = 2 * o.refine + 1;
         std::vector<int> perSector(static_cast<size_t>(o.sectors), 0);
@@ -395,6 +403,9 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             out.residual[i] = g[i] - est;
         }
     });
+    if (relief.relief)  // a step's ramp is the relief's, never a defect's
+        for (size_t i = 0; i < n; ++i)
+            if (relief.ramp[i]) out.residual[i] = 0.0f;
     copies.clear();
     copies.shrink_to_fit();
     copySsd.clear();
@@ -402,7 +413,6 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     throwIfInterrupted();
 
     // ---- step 5: detection in noise at several scales -------------------------------------
-    const int b = std::min(o.border, (std::min(W, H) - 1) / 2);
     auto inside = [&](int x, int y) { return x >= b && y >= b && x < W - b && y < H - b; };
     size_t interior = 0;
     for (int y = 0; y < H; ++y)
@@ -411,10 +421,12 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     const double tests = static_cast<double>(interior) * o.scales;
     out.threshold = gaussianTailInverse(std::min(0.5, o.nfa / (2.0 * tests)));
     // σ floor: 1e-3 of the levelled heights' RMS (a flat background, as a logo's, leaves a
-    // residual of rounding whose MAD is 0; that alone is no anomaly)
+    // residual of rounding whose MAD is 0; that alone is no anomaly), on a relief at least its
+    // levels' half band (two samples of one plateau differ by up to a band's width)
     double rms = 0.0;
-    for (float v : g) rms += static_cast<double>(v) * v;
-    const double sigmaFloor = 1e-3 * std::sqrt(rms / static_cast<double>(n));
+    for (float v : levelled) rms += static_cast<double>(v) * v;
+    const double sigmaFloor = std::max(1e-3 * std::sqrt(rms / static_cast<double>(n)),
+                                       relief.relief ? relief.halfWidth : 0.0);
     {
         double sum = 0.0;
         for (int y = b; y < H - b; ++y)
@@ -516,7 +528,9 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             regions.push_back(reg);
         }
     out.candidates = regions.size();
-    if (o.textureNfa > 0.0) {
+    // (not on a relief: its plateaus, flat to within their band, leave no texture whose tail
+    // the regions would sample -- nearly all of them are the defects)
+    if (o.textureNfa > 0.0 && !relief.relief) {
         std::vector<float> peaks;
         peaks.reserve(regions.size());
         for (const Region& reg : regions) peaks.push_back(reg.peak);

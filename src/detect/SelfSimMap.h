@@ -9,6 +9,20 @@
 // Our variant (h the heights, W×H, row-major; each parameter a field of SelfSimMapOptions):
 //  1. Level: g = h − its least-squares quadratic surface (a part's tilt and curve would make
 //     every offset copy differ by a slope).
+//  1b. A relief's plateaus (detect/ReliefLevels.h; `relief`): on a map whose heights sit on a
+//     few flat levels joined by steps (lettering in relief, a stepped part), each sample's
+//     plateau level is subtracted first and a step's ramp is zeroed in the residual (after
+//     step 4): the letters do not repeat, and a stroke narrower than the patch finds only flat
+//     copies, so without this the whole letter is in the residual as deep as a defect. g below
+//     is then the flattened map: the copies compare it, and its RMS is the texture's RMS of
+//     step 6 (the plateaus' texture with the defects on it; the relief's own RMS would hide any
+//     defect shallower than the letters). On a relief σ_s is never below the first level's
+//     half band (two samples of one plateau differ by up to a band's width) and step 7 is off
+//     (the plateaus leave no texture whose tail the regions would sample: nearly all of them
+//     are the defects). On the DEV insertion seeds 101-105 of scripts/eval-real (both models)
+//     the x3ptools logo, the one relief among the five measured files, went from 0 to 10 of
+//     10 runs at target; the four textures are not reliefs and their maps are byte-identical;
+//     held out in docs/RESULTS.md.
 //  2. Offsets: the texture's own repeats, per tile of `tile` samples (the whole map with 0).
 //     For every offset d on a grid of refine + 1 samples with exclusion ≤ max(|dx|, |dz|) ≤
 //     searchRadius (the sample's own neighbourhood left out, as in the paper), D(d) = the
@@ -64,8 +78,8 @@
 //     On the DEV insertion seeds 101–105 of scripts/eval-real (both models, the five
 //     measured files) it came out at 11–19 σ on the four textures (step 5's: ~5 σ) and cut
 //     the periodic lines' own marks (median precision 0.64 → 0.78 at recall 0.80; target
-//     met on 5 of 10 runs, 1 before); nothing changed on the other three; on the logo (a
-//     relief, no texture) it is 375–3100 σ and marks nothing (docs/RESULTS.md).
+//     met on 5 of 10 runs, 1 before); nothing changed on the other three; on the logo read as
+//     a texture (step 1b off) it is 375–3100 σ and marks nothing; on a relief it is off (1b).
 //  8. The kept regions' extent. (a) A kept region keeps only its samples scoring at least
 //     trimShare × its largest score at the growth's scales (and growSigma): the label's own
 //     rule (below), with the region's largest |r|/σ_0 standing for its depth. The growth at
@@ -125,10 +139,12 @@
 //     seeds (the binary) the Sensofar land's model-A median recall 0.59 -> 0.64, runs at
 //     target on the four textures 16 -> 17, precision -0.00 to -0.04 on 12 runs.
 //     Step 8d runs only on a map whose residual σ_0 is at least borderPieceSigma of its
-//     texture's RMS: on a relief on a flat background (the logo, σ_0 1/250-1/440 of its RMS;
-//     the measured textures 1/7-1/56) the repeats explain it almost exactly, and the band a
-//     step of the relief leaves below it is as smooth as a defect (the logo's DEV run A 102:
-//     precision 0.68 -> 0.60 with step 8d, a letter's edge; back to 0.68 with the gate).
+//     texture's RMS: on a relief read as a texture (step 1b off; the logo, σ_0 1/250-1/440 of
+//     its RMS; the measured textures 1/7-1/56) the repeats explain it almost exactly, and the
+//     band a step of the relief leaves below it is as smooth as a defect (the logo's DEV run
+//     A 102: precision 0.68 -> 0.60 with step 8d, a letter's edge; back to 0.68 with the
+//     gate). With step 1b the relief is out of g and of its RMS, and on the logo no region
+//     reaches the border (DEV seeds 101-105): 8d has nothing to split there.
 //     (e) The pile-up: a kept region (or border piece) that lies below the texture -- at least
 //     pileUpShare of its Σ|r| (after 8a) negative -- takes the samples above the texture
 //     within pileUpReach samples (Chebyshev) of it that score at least pileUpSigma at the
@@ -208,6 +224,8 @@ struct SelfSimMapOptions {
     double pileUpSigma = 1.5;          // ... scoring at least this at the growth's scales ...
     double pileUpShare = 0.6;          // ... when at least this share of its Σ|r| is below the
                                        // texture (in (0, 1])
+    bool relief = true;                // step 1b: a relief's plateaus taken out first
+                                       // (detect/ReliefLevels.h; false: off)
     int extendSteps = 1;               // step 8b: a kept region grows this many samples further
                                        // (>= 0; 0: off) into samples of its sign with |r_s|/σ_s
                                        // below growSigma (s <= growScale) and at least ...
@@ -236,6 +254,7 @@ struct SelfSimMap {
     size_t pileUp = 0;                  // samples step 8e added (the kept regions' pile-up)
     size_t trimmed = 0;                 // samples of kept regions step 8a left out
     size_t extended = 0;                // samples step 8b added to the kept regions
+    size_t reliefLevels = 0;            // step 1b: the relief's levels (0: not a relief)
     double textureThreshold = 0;        // step 7's threshold on a region's peak score (0: off)
     double textureRms = 0;              // RMS of the levelled heights outside the border
 };
