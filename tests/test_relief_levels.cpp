@@ -106,6 +106,18 @@ TEST(ReliefLevels, TexturesAreNoRelief) {
     EXPECT_FALSE(findReliefLevels(flat, kW, kH, 40).relief);
 }
 
+TEST(ReliefLevels, ATextureOnACoarseHeightQuantumIsNoRelief) {
+    // white noise stored on 16 levels (a quantum of half its σ, as an 8-bit height map of a
+    // smooth part): its heights sit on exact levels, but in specks
+    std::mt19937 rng(5);
+    std::normal_distribution<double> nd(0.0, 1.0);
+    std::vector<float> h(static_cast<size_t>(kW) * kH);
+    for (float& v : h) v = static_cast<float>(std::round(std::clamp(nd(rng), -4.0, 3.5) * 2.0));
+    const ReliefLevels r = findReliefLevels(h, kW, kH, 40);
+    EXPECT_FALSE(r.relief);
+    EXPECT_LT(r.cover, 0.01) << "samples on a plateau";
+}
+
 TEST(ReliefLevels, ARampBetweenTwoLevelsIsTheRelief) {
     // two plateaus (0 and 1) split at x = 128 by a step, a ramp of one sample at 0.5 along
     // rows 100-119 (along the whole step, the ramp's samples would be a level of their own)

@@ -144,25 +144,15 @@ ReliefLevels findReliefLevels(std::span<const float> heights, int W, int H, int 
     }
     for (size_t k = 0; k < h.bands.size(); ++k) {
         out.levels.push_back(cnt[k] > 0 ? sum[k] / cnt[k] : 0.5 * (h.bands[k].lo + h.bands[k].hi));
-        out.cover += h.bands[k].share;
     }
     out.halfWidth = 0.5 * (h.bands.front().hi - h.bands.front().lo);
 
-    // step 3: the gate
-    out.relief =
-        h.bands.size() >= 2 && out.halfWidth <= o.maxHalfWidth * rms && out.cover >= o.minCover;
-    if (!out.relief) return out;
+    if (h.bands.size() < 2 || !(out.halfWidth <= o.maxHalfWidth * rms)) return out;
 
     // step 4: each sample's plateau (its band's level, or the nearest in-band sample's)
     std::vector<int> band(n), plateau(n, -1);
     std::deque<size_t> queue;
-    for (size_t i = 0; i < n; ++i) {
-        band[i] = h.bandOfValue(g[i]);
-        if (band[i] >= 0) {
-            plateau[i] = band[i];
-            queue.push_back(i);
-        }
-    }
+    for (size_t i = 0; i < n; ++i) band[i] = h.bandOfValue(g[i]);
     // a plateau is a 4-connected piece of one band of at least minPlateau samples: where a pit
     // or a groove on a letter passes through another level's height, the samples at that height
     // are a thin ring or line, not a plateau (they are the defect's)
@@ -187,12 +177,19 @@ ReliefLevels findReliefLevels(std::span<const float> heights, int W, int H, int 
             if (static_cast<int>(piece.size()) < o.minPlateau)
                 for (size_t i : piece) band[i] = -1;
         }
-        queue.clear();
         for (size_t i = 0; i < n; ++i) {
             plateau[i] = band[i];
             if (band[i] >= 0) queue.push_back(i);
         }
     }
+    // step 3: the gate, on the samples inside the border that lie on a plateau (a texture
+    // stored with a coarse height quantum has its heights on a few levels too, but in specks)
+    size_t onPlateau = 0;
+    for (int y = b; y < H - b; ++y)
+        for (int x = b; x < W - b; ++x) onPlateau += band[static_cast<size_t>(y) * W + x] >= 0;
+    out.cover = static_cast<double>(onPlateau) / static_cast<double>(v.size());
+    out.relief = out.cover >= o.minCover;
+    if (!out.relief) return out;
     while (!queue.empty()) {
         const size_t i = queue.front();
         queue.pop_front();

@@ -16,10 +16,12 @@
 //     first level's band, subtracted, then step 1 again (`refits` times): a relief's letters
 //     pull a fit through all samples off its background, which then spans many bins.
 //  3. The gate: a relief when there are at least two levels, the first level's band is at most
-//     maxHalfWidth × rms wide each side, and the bands hold at least minCover of the samples. A
-//     texture's heights spread over ~rms (its first band is 0.35–2 rms wide each side on the
-//     measured textures of scripts/eval-real); the x3ptools logo's are 0.005 rms, on 18 levels
-//     holding 0.99 of its samples.
+//     maxHalfWidth × rms wide each side, and at least minCover of the samples lie on plateaus
+//     (step 4's pieces of a band). A texture's heights spread over ~rms (its first band is
+//     0.35–2 rms wide each side on the measured textures of scripts/eval-real); the x3ptools
+//     logo's are 0.005 rms, on 18 levels holding 0.99 of its samples. A texture stored with a
+//     coarse height quantum (an 8-bit height map) has its heights on a few exact levels too,
+//     but in specks, not plateaus: noise quantized to 16 levels has under 1 % on a plateau.
 //  4. Each sample's plateau: its own level when its height is in a level's band (widened by half
 //     a bin each side) and it lies in a 4-connected piece of that band of at least minPlateau
 //     samples (a pit or a groove on a letter passing through another level's height leaves a
@@ -53,7 +55,8 @@ struct ReliefLevels {
     bool relief = false;           // the gate (step 3) passed
     std::vector<double> levels;    // the levels' heights (first: the most samples)
     double halfWidth = 0;          // the first band's half-width (height units)
-    double cover = 0;              // share of the samples inside the border in a band
+    double cover = 0;              // share of the samples inside the border on a plateau
+                                   // (measured once the bands pass the gate's first tests)
     std::vector<float> flattened;  // relief only: height − its plateau's level, ramps 0
     std::vector<uint8_t> ramp;     // relief only: 1 on a step's ramp
     double plateauSpread = 0;      // relief only: RMS of height − level over the in-band samples
