@@ -18,8 +18,10 @@
 //  3. The gate: a relief when there are at least two levels, the first level's band is at most
 //     maxHalfWidth × rms wide each side, and at least minCover of the samples lie on plateaus
 //     (step 4's pieces of a band). A texture's heights spread over ~rms (its first band is
-//     0.35–2 rms wide each side on the measured textures of scripts/eval-real); the x3ptools
-//     logo's are 0.005 rms, on 18 levels holding 0.99 of its samples. A texture stored with a
+//     0.35–2 rms wide each side on the measured textures of scripts/eval-real, 0.67–2.2 on
+//     gen-surface's parts); the x3ptools logo's are 0.005 rms, on 18 levels holding 0.99 of its
+//     samples; maxHalfWidth sits between them, and admits plateaus with some noise
+//     (tests/test_relief_levels.cpp). A texture stored with a
 //     coarse height quantum (an 8-bit height map) has its heights on a few exact levels too,
 //     but in specks, not plateaus: noise quantized to 16 levels has under 1 % on a plateau.
 //  4. Each sample's plateau: its own level when its height is in a level's band (widened by half
@@ -45,7 +47,7 @@ struct ReliefLevelsOptions {
     double bandTail = 0.05;        // a level's band: neighbouring bins above this share of its peak
     double minLevelShare = 0.002;  // a level holds at least this share of the samples
     int refits = 3;                // the first level's quadratic fitted again this many times
-    double maxHalfWidth = 0.05;    // a relief's first band at most this × RMS each side
+    double maxHalfWidth = 0.15;    // a relief's first band at most this × RMS each side
     double minCover = 0.9;         // ... and its levels' bands hold at least this share
     int minPlateau = 12;           // a plateau: a 4-connected piece of a band this large (samples)
     int rampReach = 1;             // a step's ramp: levels above and below within this (samples)
