@@ -119,20 +119,26 @@ TEST(ReliefLevels, ATextureOnACoarseHeightQuantumIsNoRelief) {
 }
 
 TEST(ReliefLevels, ARampBetweenTwoLevelsIsTheRelief) {
-    // two plateaus (0 and 1) split at x = 128 by a step, a ramp of one sample at 0.5 along
-    // rows 100-119 (along the whole step, the ramp's samples would be a level of their own)
+    // two plateaus (0 and 1) split at x = 128 by a step, with a ramp of one sample at 0.5 along
+    // rows 100-109 (a ramp: levels above and below beside it) and one at 0.25 along rows 140-189
+    // (50 samples, a level of its own on a plateau of 50: the relief's either way)
     std::vector<float> h(static_cast<size_t>(kW) * kH);
     for (int y = 0; y < kH; ++y)
-        for (int x = 0; x < kW; ++x)
-            h[static_cast<size_t>(y) * kW + x] =
-                x < 128 ? 0.0f : (x == 128 && y >= 100 && y < 120 ? 0.5f : 1.0f);
+        for (int x = 0; x < kW; ++x) {
+            float v = x < 128 ? 0.0f : 1.0f;
+            if (x == 128 && y >= 100 && y < 110) v = 0.5f;
+            if (x == 128 && y >= 140 && y < 190) v = 0.25f;
+            h[static_cast<size_t>(y) * kW + x] = v;
+        }
     const ReliefLevels r = findReliefLevels(h, kW, kH, 40);
     ASSERT_TRUE(r.relief);
-    for (int y = 100; y < 120; ++y) {
+    for (int y = 100; y < 110; ++y) {
         EXPECT_EQ(r.ramp[static_cast<size_t>(y) * kW + 128], 1) << "row " << y;
         EXPECT_EQ(r.ramp[static_cast<size_t>(y) * kW + 127], 0) << "row " << y;
-        EXPECT_EQ(r.flattened[static_cast<size_t>(y) * kW + 128], 0.0f) << "row " << y;
     }
+    for (int y = 40; y < kH - 40; ++y)
+        EXPECT_LE(std::abs(r.flattened[static_cast<size_t>(y) * kW + 128]), 2 * r.halfWidth)
+            << "row " << y;
 }
 
 // The scene of the test below, with `noise` (σ, white) added: an instrument's relief.
@@ -165,7 +171,7 @@ TEST(ReliefLevels, SelfSimMarksTheDefectsOnANoisyRelief) {
     const LetteringScene s = letteringWithDefects(0.01);
     const SelfSimMapOptions o;
     const SelfSimMap m = detectSelfSimDefects(s.h, kW, kH, o);
-    EXPECT_EQ(m.reliefLevels, 4u);
+    EXPECT_GE(m.reliefLevels, 4u);  // a relief (the noise may split a level in two)
     size_t truth = 0, hits = 0, marked = 0;
     for (int y = o.border; y < kH - o.border; ++y)
         for (int x = o.border; x < kW - o.border; ++x) {

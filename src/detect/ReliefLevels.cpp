@@ -190,6 +190,10 @@ ReliefLevels findReliefLevels(std::span<const float> heights, int W, int H, int 
     out.cover = static_cast<double>(onPlateau) / static_cast<double>(v.size());
     out.relief = out.cover >= o.minCover;
     if (!out.relief) return out;
+    std::vector<uint8_t> hasPlateau(out.levels.size(), 0);
+    for (size_t i = 0; i < n; ++i)
+        if (band[i] >= 0) hasPlateau[static_cast<size_t>(band[i])] = 1;
+    for (uint8_t k : hasPlateau) out.plateauLevels += k;
     while (!queue.empty()) {
         const size_t i = queue.front();
         queue.pop_front();

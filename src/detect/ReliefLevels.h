@@ -43,19 +43,21 @@
 namespace sl {
 
 struct ReliefLevelsOptions {
-    double binShare = 0.01;        // histogram bin, share of the RMS (> 0)
-    double bandTail = 0.05;        // a level's band: neighbouring bins above this share of its peak
-    double minLevelShare = 0.002;  // a level holds at least this share of the samples
-    int refits = 3;                // the first level's quadratic fitted again this many times
-    double maxHalfWidth = 0.15;    // a relief's first band at most this × RMS each side
-    double minCover = 0.9;         // ... and its levels' bands hold at least this share
-    int minPlateau = 12;           // a plateau: a 4-connected piece of a band this large (samples)
-    int rampReach = 1;             // a step's ramp: levels above and below within this (samples)
+    double binShare = 0.01;  // histogram bin, share of the RMS (> 0)
+    double bandTail = 0.05;  // a level's band: neighbouring bins above this share of its peak
+    double minLevelShare = 0.0005;  // a level holds at least this share of the samples
+    int refits = 3;                 // the first level's quadratic fitted again this many times
+    double maxHalfWidth = 0.15;     // a relief's first band at most this × RMS each side
+    double minCover = 0.9;          // ... and at least this share of the samples is on plateaus
+    int minPlateau = 12;            // a plateau: a 4-connected piece of a band this large (samples)
+    int rampReach = 1;              // a step's ramp: levels above and below within this (samples)
 };
 
 struct ReliefLevels {
     bool relief = false;           // the gate (step 3) passed
     std::vector<double> levels;    // the levels' heights (first: the most samples)
+    size_t plateauLevels = 0;      // relief only: levels with a plateau (the others' samples are
+                                   // a defect's passing through their height)
     double halfWidth = 0;          // the first band's half-width (height units)
     double cover = 0;              // share of the samples inside the border on a plateau
                                    // (measured once the bands pass the gate's first tests)

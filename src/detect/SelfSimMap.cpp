@@ -241,7 +241,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     ReliefLevels relief;
     if (o.relief) relief = findReliefLevels(levelled, W, H, b);
     const std::vector<float>& g = relief.relief ? relief.flattened : levelled;
-    if (relief.relief) out.reliefLevels = relief.levels.size();
+    if (relief.relief) out.reliefLevels = relief.plateauLevels;
 
     // ---- steps 2–3, tile by tile: the texture's offsets and each sample's copies ----------
     const int R = std::min(o.searchRadius, std::max(W, H) - 1);

@@ -254,7 +254,8 @@ struct SelfSimMap {
     size_t pileUp = 0;                  // samples step 8e added (the kept regions' pile-up)
     size_t trimmed = 0;                 // samples of kept regions step 8a left out
     size_t extended = 0;                // samples step 8b added to the kept regions
-    size_t reliefLevels = 0;            // step 1b: the relief's levels (0: not a relief)
+    size_t reliefLevels = 0;            // step 1b: the relief's levels with a plateau (0: not
+                                        // a relief)
     double textureThreshold = 0;        // step 7's threshold on a region's peak score (0: off)
     double textureRms = 0;              // RMS of the levelled heights outside the border
 };
