@@ -218,6 +218,12 @@ struct SelfSimMapOptions {
     double borderPieceSigma = 0.01;    // ... only on a map whose residual σ_0 is at least this
                                        // share of its texture's RMS (a texture, not a relief;
                                        // in [0, 1), 0: every map)
+    double borderLevelStep = 1.25;     // step 8f: a region at the border split again at levels
+                                       // growSigma × this^k of its score (0: off; else > 1) ...
+    double borderLevelFill = 0.6;      // ... a piece off the border kept when its mean score is
+                                       // at least this share of its largest (in [0, 1)) ...
+    double borderLevelShape = 0.35;    // ... and its mean excess over the level at least this
+                                       // share of its largest excess (in [0, 1))
     int pileUpReach = 1;               // step 8e: a kept region mostly below the texture takes
                                        // the samples above it within this many samples (>= 0,
                                        // 0: off) ...
@@ -250,6 +256,7 @@ struct SelfSimMap {
     size_t candidates = 0;              // regions grown (step 7's N)
     size_t droppedParticles = 0;        // kept regions step 8c dropped as particles
     size_t borderPieces = 0;            // pieces of border regions step 8d kept
+    size_t borderLevelPieces = 0;       // ... of which step 8f kept (at a level above growSigma)
     size_t borderRim = 0;               // ... and their pile-up's samples
     size_t pileUp = 0;                  // samples step 8e added (the kept regions' pile-up)
     size_t trimmed = 0;                 // samples of kept regions step 8a left out
