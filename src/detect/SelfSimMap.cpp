@@ -689,8 +689,8 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
         // tree): at each level L = growSigma × borderLevelStep^k below the region's largest
         // score, its samples below the texture scoring at least L and not marked yet, in
         // 8-connected pieces; a piece off the border is judged as step 8d's (the gates, the
-        // trim, borderPieceMin) with borderLevelFill for its fill, and a piece that is not kept
-        // is split again at the next level
+        // trim, borderPieceMin) with borderLevelFill for its fill and borderLevelShape for its
+        // excess over the level, and a piece that is not kept is split again at the next level
         if (o.borderLevelStep > 1.0) {
             float top = 0.0f;
             for (size_t k = reg.begin; k < reg.end; ++k) top = std::max(top, zGrow[members[k]]);
