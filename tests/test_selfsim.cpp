@@ -444,6 +444,61 @@ TEST(SelfSimMap, ABorderRegionsDefectPieceIsKeptItsRuggedTexturePieceDropped) {
     EXPECT_EQ(markedOnlyIn(a, b), 0u) << "samples marked without step 8d and not with it";
 }
 
+// Step 8f splits a region that reaches the border at rising levels of its own score. Striations
+// with two rough stretches, each from a border into the map (a shallow trough, 0.3 × the
+// striations deep and 24 samples wide, below the texture's RMS, strewn with narrow cones of
+// 0.6-3 × their depth, as a measured land's rough end is): at the end of one a pit (3 × deep, a
+// paraboloid), at the end of the other a rugged hollow (a shallow depression holding such cones).
+// At the growth's 2.5 σ each defect is one piece below the texture with its stretch, which
+// reaches the border, so step 8d keeps neither. Above the stretch's score the pit is a piece of
+// its own, off the border and shaped as one depression: with step 8f it is marked, the hollow is
+// not (its pieces are clusters of spikes), and with the shape tests off (tiny shares) the hollow
+// is marked too: they are what drops it. The stretches are never marked.
+TEST(SelfSimMap, ABorderRegionSplitAtRisingLevelsKeepsThePitNotTheRuggedHollow) {
+    std::vector<float> h = striations(71);
+    std::vector<uint8_t> rough(h.size(), 0), pitTruth(h.size(), 0), hollow(h.size(), 0);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> off(-7.0, 7.0), depth(0.6, 3.0), along(0.0, 100.0),
+        across(-8.0, 8.0);
+    for (int k = 0; k < 150; ++k) {
+        pit(h, rough, along(rng), 70 + across(rng), 2.0, depth(rng));
+        pit(h, rough, kW - 1 - along(rng) * 1.15, 150 + across(rng), 2.0, depth(rng));
+    }
+    pit(h, pitTruth, 109, 70, 8, 3.0);  // at the end of the first stretch
+    pit(h, hollow, 143, 150, 11, 0.6);  // the hollow's base, at the end of the second
+    for (int k = 0; k < 12; ++k) pit(h, hollow, 143 + off(rng), 150 + off(rng), 1.6, depth(rng));
+    for (size_t i = 0; i < h.size(); ++i) rough[i] = rough[i] && !pitTruth[i] && !hollow[i];
+
+    SelfSimMapOptions off8f;
+    off8f.borderLevelStep = 0.0;
+    SelfSimMapOptions on;
+    ASSERT_EQ(on.borderLevelStep, 1.25);
+    SelfSimMapOptions anyShape = on;
+    anyShape.borderLevelFill = 1e-6;
+    anyShape.borderLevelShape = 1e-6;
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off8f),
+                     b = detectSelfSimDefects(h, kW, kH, on),
+                     c = detectSelfSimDefects(h, kW, kH, anyShape);
+    const Counts pa = count(a.map, pitTruth, on.border), pb = count(b.map, pitTruth, on.border);
+    const Counts ha = count(a.map, hollow, on.border), hb = count(b.map, hollow, on.border),
+                 hc = count(c.map, hollow, on.border);
+    const Counts ta = count(a.map, rough, on.border), tb = count(b.map, rough, on.border),
+                 tc = count(c.map, rough, on.border);
+    EXPECT_GE(a.droppedBorder, 2u);
+    EXPECT_EQ(a.borderLevelPieces, 0u);
+    EXPECT_EQ(pa.hits, 0u) << "the pit, without step 8f (joined to its rough stretch at the border)";
+    EXPECT_EQ(ha.hits, 0u) << "the hollow, without step 8f";
+    EXPECT_GE(pb.hits, pb.truth / 2) << "the pit, with step 8f: " << pb.hits << " of " << pb.truth;
+    EXPECT_EQ(hb.hits, 0u) << "the rugged hollow, with step 8f: " << hb.hits << " of " << hb.truth;
+    EXPECT_GE(b.borderLevelPieces, 1u);
+    EXPECT_GE(hc.hits, hc.truth / 4)
+        << "the hollow with any shape kept: " << hc.hits << " of " << hc.truth;
+    EXPECT_GT(c.borderLevelPieces, b.borderLevelPieces);
+    EXPECT_EQ(ta.hits + tb.hits, 0u) << "the rough stretches: " << ta.hits << ", " << tb.hits;
+    EXPECT_GT(tc.hits, 0u) << "the rough stretches with any shape kept";
+    EXPECT_EQ(markedOnlyIn(a, b), 0u) << "samples marked without step 8f and not with it";
+}
+
 // A pit with a pile-up rim (model A's shape, synth/DefectInsert.h: a ring of width ρ/2 outside
 // the crater, profile h_r·(1 − u²)²) whose rim touches a raised ridge that runs from border to
 // border: the crater is kept as a border piece (step 8d); with borderPieceRim its rim, raised and
@@ -692,6 +747,15 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o = {};
     o.borderPieceMin = 0;
     expectNamed(o, "selfsim-border-piece-min");
+    o = {};
+    o.borderLevelStep = 1.0;
+    expectNamed(o, "selfsim-border-level-step");
+    o = {};
+    o.borderLevelFill = 1.0;
+    expectNamed(o, "selfsim-border-level-fill");
+    o = {};
+    o.borderLevelShape = -0.1;
+    expectNamed(o, "selfsim-border-level-shape");
 
     EXPECT_EQ(parseDefectMethod("selfsim"), DefectMethod::SelfSim);
     EXPECT_STREQ(defectMethodName(DefectMethod::SelfSim), "selfsim");

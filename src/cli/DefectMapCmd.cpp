@@ -399,6 +399,17 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
                   "selfsim: ... pieces only on a map whose residual sigma is at least this share "
                   "of its RMS (a texture, not a relief; 0: every map)")
         ->capture_default_str();
+    c->add_option("--selfsim-border-level-step", q.borderLevelStep,
+                  "selfsim: a region at the border is split again at levels of its score rising "
+                  "by this factor; a piece off the border is judged as the pieces above (0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-border-level-fill", q.borderLevelFill,
+                  "selfsim: ... and kept when its mean score is at least this share of its largest")
+        ->capture_default_str();
+    c->add_option("--selfsim-border-level-shape", q.borderLevelShape,
+                  "selfsim: ... and its mean excess over the level at least this share of its "
+                  "largest excess")
+        ->capture_default_str();
     c->add_option("--selfsim-relief", q.relief,
                   "selfsim: on a relief (heights on a few flat levels: lettering, a stepped part) "
                   "take each sample's plateau level out first (true/false)")

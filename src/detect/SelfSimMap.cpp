@@ -206,6 +206,15 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (o.borderPieceRim < 0)
         throw inputError(option("selfsim-border-piece-rim"), "must be >= 0",
                          "The default is 2 (0: off)");
+    if (!(o.borderLevelStep == 0.0 || o.borderLevelStep > 1.0))
+        throw inputError(option("selfsim-border-level-step"), "must be 0 (off) or > 1",
+                         "The default is 1.25");
+    if (!(o.borderLevelShape >= 0.0 && o.borderLevelShape < 1.0))
+        throw inputError(option("selfsim-border-level-shape"), "must be in [0, 1)",
+                         "The default is 0.35");
+    if (!(o.borderLevelFill >= 0.0 && o.borderLevelFill < 1.0))
+        throw inputError(option("selfsim-border-level-fill"), "must be in [0, 1)",
+                         "The default is 0.6");
     if (!(o.borderPieceSigma >= 0.0 && o.borderPieceSigma < 1.0))
         throw inputError(option("selfsim-border-piece-sigma"), "must be in [0, 1)",
                          "The default is 0.01 (0: every map)");
@@ -555,10 +564,11 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     std::vector<float> regionLevel(regionSign.size(), 0.0f);
     std::vector<size_t> kept;
     // steps 8a and 8c on a region's (or a border piece's) samples, then the map and step 8b's
-    // first frontier; a border piece (step 8d) also has to be shaped as a defect: at least
-    // borderPieceMin samples after the trim, and its mean score at least borderPieceFill of its
-    // largest. False when nothing is marked.
-    auto keepRegion = [&](std::span<const size_t> samples, float peak, bool piece) {
+    // first frontier; a border piece (steps 8d, 8f) also has to be shaped as a defect: at least
+    // borderPieceMin samples after the trim, and its mean score at least `fill` of its largest
+    // (borderPieceFill, borderLevelFill). False when nothing is marked.
+    auto keepRegion = [&](std::span<const size_t> samples, float peak, bool piece, double fill,
+                          double cutAt) {
         // step 8b's sign: that of the region's largest |r| (a groove's or a dent's below the
         // texture, a burr's or a particle's above) ...
         size_t top = samples.front();
@@ -591,7 +601,12 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                 sum += zGrow[i];
                 most = std::max(most, zGrow[i]);
             }
-            if (!(sum >= o.borderPieceFill * most * static_cast<double>(kept.size()))) return false;
+            if (!(sum >= fill * most * static_cast<double>(kept.size()))) return false;
+            // step 8f's piece cut at level `cutAt`: its mean excess over the level at least
+            // borderLevelShape of its largest (a depression's shape, whatever the level)
+            const double m = static_cast<double>(kept.size());
+            if (cutAt > 0.0 && !(sum - m * cutAt >= o.borderLevelShape * (most - cutAt) * m))
+                return false;
         }
         out.trimmed += samples.size() - kept.size();
         for (const size_t i : kept) {
@@ -640,6 +655,23 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     std::vector<uint8_t> pieceSeen(splitBorder ? n : 0, 0), inRegion(pieceSeen.size(), 0);
     std::vector<size_t> piece;
     const auto below = [&](size_t q) { return grows(q) && out.residual[q] < 0.0f; };
+    std::vector<uint8_t> levelSeen(splitBorder && o.borderLevelStep > 1.0 ? n : 0, 0);
+    // a kept piece's pile-up: the region's samples above the texture within borderPieceRim
+    // samples (Chebyshev) of what the piece kept
+    auto takeRim = [&] {
+        const int reach = o.borderPieceRim;
+        for (const size_t i : kept) {
+            const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
+            for (int qy = std::max(0, py - reach); qy <= std::min(H - 1, py + reach); ++qy)
+                for (int qx = std::max(0, px - reach); qx <= std::min(W - 1, px + reach); ++qx) {
+                    const size_t q = static_cast<size_t>(qy) * W + qx;
+                    if (inRegion[q] && !out.map[q] && out.residual[q] >= 0.0f) {
+                        out.map[q] = 255;
+                        ++out.borderRim;
+                    }
+                }
+        }
+    };
     auto keepBorderPieces = [&](const Region& reg) {
         for (size_t k = reg.begin; k < reg.end; ++k) inRegion[members[k]] = 1;
         for (size_t k = reg.begin; k < reg.end; ++k) {
@@ -649,22 +681,37 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             const bool atBorder = floodRegion(i0, pieceSeen, piece, below);
             const float peak = peakOf(piece);
             if (atBorder || gate(piece, peak) != Gate::Pass) continue;
-            if (!keepRegion(piece, peak, true)) continue;
+            if (!keepRegion(piece, peak, true, o.borderPieceFill, 0.0)) continue;
             ++out.borderPieces;
-            // its pile-up: the region's samples above the texture within borderPieceRim
-            // samples (Chebyshev) of what the piece kept
-            const int reach = o.borderPieceRim;
-            for (const size_t i : kept) {
-                const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
-                for (int qy = std::max(0, py - reach); qy <= std::min(H - 1, py + reach); ++qy)
-                    for (int qx = std::max(0, px - reach); qx <= std::min(W - 1, px + reach);
-                         ++qx) {
-                        const size_t q = static_cast<size_t>(qy) * W + qx;
-                        if (inRegion[q] && !out.map[q] && out.residual[q] >= 0.0f) {
-                            out.map[q] = 255;
-                            ++out.borderRim;
-                        }
-                    }
+            takeRim();
+        }
+        // step 8f: the region split again at rising levels of its own score (a component
+        // tree): at each level L = growSigma × borderLevelStep^k below the region's largest
+        // score, its samples below the texture scoring at least L and not marked yet, in
+        // 8-connected pieces; a piece off the border is judged as step 8d's (the gates, the
+        // trim, borderPieceMin) with borderLevelFill for its fill and borderLevelShape for its
+        // excess over the level, and a piece that is not kept is split again at the next level
+        if (o.borderLevelStep > 1.0) {
+            float top = 0.0f;
+            for (size_t k = reg.begin; k < reg.end; ++k) top = std::max(top, zGrow[members[k]]);
+            for (double level = grow * o.borderLevelStep; level < top; level *= o.borderLevelStep) {
+                for (size_t k = reg.begin; k < reg.end; ++k) levelSeen[members[k]] = 0;
+                const float cut = static_cast<float>(level);
+                const auto above = [&](size_t q) {
+                    return inRegion[q] && !out.map[q] && zGrow[q] >= cut && out.residual[q] < 0.0f;
+                };
+                for (size_t k = reg.begin; k < reg.end; ++k) {
+                    const size_t i0 = members[k];
+                    if (levelSeen[i0] || !above(i0)) continue;
+                    piece.clear();
+                    const bool atBorder = floodRegion(i0, levelSeen, piece, above);
+                    const float peak = peakOf(piece);
+                    if (atBorder || gate(piece, peak) != Gate::Pass) continue;
+                    if (!keepRegion(piece, peak, true, o.borderLevelFill, level)) continue;
+                    ++out.borderPieces;
+                    ++out.borderLevelPieces;
+                    takeRim();
+                }
             }
         }
         for (size_t k = reg.begin; k < reg.end; ++k) inRegion[members[k]] = 0;
@@ -686,7 +733,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             if (!pieceSeen.empty()) keepBorderPieces(reg);
             continue;
         }
-        if (keepRegion(samples, reg.peak, false)) ++out.regions;
+        if (keepRegion(samples, reg.peak, false, 0.0, 0.0)) ++out.regions;
     }
     // ---- step 8: the kept regions' flanks --------------------------------------------------
     // a kept region grows `extendSteps` samples further, layer by layer, into samples whose
