@@ -150,8 +150,7 @@ ReliefLevels findReliefLevels(std::span<const float> heights, int W, int H, int 
     if (h.bands.size() < 2 || !(out.halfWidth <= o.maxHalfWidth * rms)) return out;
 
     // step 4: each sample's plateau (its band's level, or the nearest in-band sample's)
-    std::vector<int> band(n), plateau(n, -1);
-    std::deque<size_t> queue;
+    std::vector<int> band(n);
     for (size_t i = 0; i < n; ++i) band[i] = h.bandOfValue(g[i]);
     // a plateau is a 4-connected piece of one band of at least minPlateau samples: where a pit
     // or a groove on a letter passes through another level's height, the samples at that height
@@ -177,10 +176,6 @@ ReliefLevels findReliefLevels(std::span<const float> heights, int W, int H, int 
             if (static_cast<int>(piece.size()) < o.minPlateau)
                 for (size_t i : piece) band[i] = -1;
         }
-        for (size_t i = 0; i < n; ++i) {
-            plateau[i] = band[i];
-            if (band[i] >= 0) queue.push_back(i);
-        }
     }
     // step 3: the gate, on the samples inside the border that lie on a plateau (a texture
     // stored with a coarse height quantum has its heights on a few levels too, but in specks)
@@ -194,6 +189,10 @@ ReliefLevels findReliefLevels(std::span<const float> heights, int W, int H, int 
     for (size_t i = 0; i < n; ++i)
         if (band[i] >= 0) hasPlateau[static_cast<size_t>(band[i])] = 1;
     for (uint8_t k : hasPlateau) out.plateauLevels += k;
+    std::vector<int> plateau = band;
+    std::deque<size_t> queue;
+    for (size_t i = 0; i < n; ++i)
+        if (band[i] >= 0) queue.push_back(i);
     while (!queue.empty()) {
         const size_t i = queue.front();
         queue.pop_front();
@@ -211,18 +210,11 @@ ReliefLevels findReliefLevels(std::span<const float> heights, int W, int H, int 
     out.flattened.assign(n, 0.0f);
     out.ramp.assign(n, 0);
     const int r = std::max(0, o.rampReach);
-    double spread = 0.0;
-    size_t spreadCount = 0;
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) {
             const size_t i = static_cast<size_t>(y) * W + x;
             if (band[i] >= 0) {
-                const double d = g[i] - out.levels[band[i]];
-                out.flattened[i] = static_cast<float>(d);
-                if (x >= b && y >= b && x < W - b && y < H - b) {
-                    spread += d * d;
-                    ++spreadCount;
-                }
+                out.flattened[i] = static_cast<float>(g[i] - out.levels[band[i]]);
                 continue;
             }
             bool above = false, below = false;
@@ -239,7 +231,6 @@ ReliefLevels findReliefLevels(std::span<const float> heights, int W, int H, int 
             }
             out.flattened[i] = static_cast<float>(g[i] - out.levels[plateau[i]]);
         }
-    out.plateauSpread = spreadCount ? std::sqrt(spread / static_cast<double>(spreadCount)) : 0.0;
     return out;
 }
 

@@ -63,7 +63,6 @@ struct ReliefLevels {
                                    // (measured once the bands pass the gate's first tests)
     std::vector<float> flattened;  // relief only: height − its plateau's level, ramps 0
     std::vector<uint8_t> ramp;     // relief only: 1 on a step's ramp
-    double plateauSpread = 0;      // relief only: RMS of height − level over the in-band samples
 };
 
 /// Steps 1–4 on the levelled heights g (W×H, finite) with `border` samples left out of the
