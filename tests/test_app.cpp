@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "TestUtil.h"
+#include "app/bench/DefectMapBench.h"
 #include "app/bench/GradCheck.h"
 #include "app/bench/JndBench.h"
 #include "app/bench/RenderBench.h"
@@ -24,6 +25,7 @@
 #include "render/Footprint.h"
 #include "render/Render.h"
 #include "scene/Scene.h"
+#include "synth/SurfaceGenerator.h"
 
 using namespace sl;
 
@@ -396,6 +398,38 @@ TEST(ScratchMapBench, MarksTheScratchAndWritesOneRowPerSize) {
     o.repeats = 1;
     o.sizes = {0};
     EXPECT_THROW(runScratchMapBench(o), InputError);
+}
+
+TEST(DefectMapBench, EachColumnIsTheMapItNamesOnTheSameHeights) {
+    // the columns are detectDefects on the ball-end part: as a simulator's map (the tool-path
+    // model), as a measured texture (the selfsim method) and the paper's scratch map
+    DefectMapBenchOptions o;
+    o.sizes = {96};
+    o.repeats = 1;
+    const DefectMapBenchResult r = runDefectMapBench(o);
+    ASSERT_EQ(r.rows.size(), 1u);
+    SurfaceSpec spec = testPartSpec(TestPart::BallEnd);
+    spec.width = spec.height = 96;
+    const GeneratedSurface part = generateSurface(spec);
+    DefectMapOptions m;
+    m.method = DefectMethod::Auto;
+    const DefectMap simulator = detectDefects(part.heights, 96, 96, m);
+    m.measured = true;
+    const DefectMap measured = detectDefects(part.heights, 96, 96, m);
+    EXPECT_FALSE(simulator.measuredTexture);
+    EXPECT_TRUE(measured.measuredTexture);
+    m = DefectMapOptions{};
+    m.method = DefectMethod::Paper;
+    const DefectMap paper = detectDefects(part.heights, 96, 96, m);
+    EXPECT_EQ(r.rows[0].markedAuto, simulator.markedFraction());
+    EXPECT_EQ(r.rows[0].markedMeasured, measured.markedFraction());
+    EXPECT_EQ(r.rows[0].markedPaper, paper.markedFraction());
+    EXPECT_GT(r.rows[0].secondsMeasured, 0.0);
+    EXPECT_EQ(lines(r.csv()).size(), 2u);
+    o.measured = false;
+    EXPECT_EQ(runDefectMapBench(o).rows[0].secondsMeasured, 0.0);
+    o.sizes = {1};
+    EXPECT_THROW(runDefectMapBench(o), InputError);
 }
 
 TEST(Report, LossCsvColumnsAreFoundByNameAndErrorsNameTheLine) {

@@ -56,10 +56,12 @@ int runDefectMap(const DefectMapJobOptions& o) {
             "  %zu texture offsets; residual sigma %.4g (height units), detection at %.3f "
             "robust sigmas (NFA); %zu samples detected, %zu regions kept, %zu at the border "
             "dropped (%zu of their pieces kept); the texture's own tail at %.3f robust sigmas "
-            "(of %zu regions grown), %zu regions below it dropped\n",
+            "(of %zu regions grown), %zu regions below it dropped; %zu regions shallower than "
+            "the texture's RMS %.4g (height units) dropped\n",
             m.selfsimOffsets, m.sigmaLevel, m.selfsimThreshold, m.selfsimDetections,
             m.selfsimRegions, m.selfsimDropped, m.selfsimBorderPieces, m.selfsimTextureThreshold,
-            m.selfsimCandidates, m.selfsimDroppedTexture);
+            m.selfsimCandidates, m.selfsimDroppedTexture, m.selfsimDroppedShallow,
+            m.selfsimTextureRms);
     if (m.method == DefectMethod::SelfSim && m.selfsimReliefLevels > 0)
         std::printf("  a relief: its %zu plateau levels taken out before the copies\n",
                     m.selfsimReliefLevels);

@@ -341,6 +341,9 @@ struct DefectMap {
     // off), the regions grown and those dropped below it
     double selfsimTextureThreshold = 0;
     size_t selfsimCandidates = 0, selfsimDroppedTexture = 0;
+    // selfsim only: regions whose deepest |r| is below the texture's RMS (step 6), and that RMS
+    size_t selfsimDroppedShallow = 0;
+    double selfsimTextureRms = 0;
     size_t selfsimBorderPieces = 0;  // selfsim only: pieces of border regions kept (step 8d)
     size_t selfsimReliefLevels = 0;  // selfsim only: a relief's levels taken out (step 1b; 0: none)
     double seconds = 0;

@@ -205,6 +205,8 @@ void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int he
     r.selfsimTextureThreshold = m.textureThreshold;
     r.selfsimCandidates = m.candidates;
     r.selfsimDroppedTexture = m.droppedTexture;
+    r.selfsimDroppedShallow = m.droppedShallow;
+    r.selfsimTextureRms = m.textureRms;
     r.selfsimBorderPieces = m.borderPieces;
     r.selfsimReliefLevels = m.reliefLevels;
     r.markedScore = r.markedCount();

@@ -18,6 +18,9 @@ DefectMapBenchResult runDefectMapBench(const DefectMapBenchOptions& o) {
     result.options = o;
     DefectMapOptions autoOptions = o.map;
     autoOptions.method = DefectMethod::Auto;
+    autoOptions.measured = false;
+    DefectMapOptions measuredOptions = autoOptions;
+    measuredOptions.measured = true;
     DefectMapOptions paperOptions = o.map;
     paperOptions.method = DefectMethod::Paper;
     ProgressTask task("bench defectmap", static_cast<double>(o.sizes.size()) * o.repeats);
@@ -27,28 +30,43 @@ DefectMapBenchResult runDefectMapBench(const DefectMapBenchOptions& o) {
         const GeneratedSurface part = generateSurface(spec);
         DefectMapBenchRow row;
         row.size = n;
-        std::vector<double> tAuto, tPaper;
+        std::vector<double> tAuto, tMeasured, tPaper;
+        const std::vector<uint8_t> negatives{kTruthChatter};
+        const auto score = [&](const DefectMap& m) {
+            return scoreDefectMap(m.map, part.truth, truthLegend(part.truth), negatives).overall;
+        };
         for (int r = 0; r < o.repeats; ++r) {
             throwIfInterrupted();
             const DefectMap a = detectDefects(part.heights, n, n, autoOptions);
+            tAuto.push_back(a.seconds);
+            row.markedAuto = a.markedFraction();
+            if (r == 0) {
+                const auto s = score(a);
+                row.precision = s.precision;
+                row.recall = s.recall;
+            }
+            if (o.measured) {
+                throwIfInterrupted();
+                const DefectMap m = detectDefects(part.heights, n, n, measuredOptions);
+                tMeasured.push_back(m.seconds);
+                row.markedMeasured = m.markedFraction();
+                if (r == 0) {
+                    const auto s = score(m);
+                    row.precisionMeasured = s.precision;
+                    row.recallMeasured = s.recall;
+                }
+            }
             throwIfInterrupted();
             const DefectMap p = detectDefects(part.heights, n, n, paperOptions);
-            tAuto.push_back(a.seconds);
             tPaper.push_back(p.seconds);
-            task.advance();
-            row.markedAuto = a.markedFraction();
             row.markedPaper = p.markedFraction();
-            if (r == 0) {
-                const std::vector<uint8_t> negatives{kTruthChatter};
-                const DefectScore s =
-                    scoreDefectMap(a.map, part.truth, truthLegend(part.truth), negatives);
-                row.precision = s.overall.precision;
-                row.recall = s.overall.recall;
-            }
+            task.advance();
         }
         row.secondsAuto = median(tAuto);
+        row.secondsMeasured = tMeasured.empty() ? 0.0 : median(tMeasured);
         row.secondsPaper = median(tPaper);
         row.ratio = row.secondsPaper > 0 ? row.secondsAuto / row.secondsPaper : 0.0;
+        row.ratioMeasured = row.secondsPaper > 0 ? row.secondsMeasured / row.secondsPaper : 0.0;
         result.rows.push_back(row);
     }
     return result;
@@ -56,12 +74,14 @@ DefectMapBenchResult runDefectMapBench(const DefectMapBenchOptions& o) {
 
 std::string DefectMapBenchResult::csv() const {
     std::ostringstream os;
-    os << "size,repeats,seconds_auto,seconds_paper,ratio,marked_auto,marked_paper,precision,"
-          "recall\n";
+    os << "size,repeats,seconds_auto,seconds_measured,seconds_paper,ratio,ratio_measured,"
+          "marked_auto,marked_measured,marked_paper,precision,recall,precision_measured,"
+          "recall_measured\n";
     for (const DefectMapBenchRow& r : rows)
-        os << r.size << ',' << options.repeats << ',' << r.secondsAuto << ',' << r.secondsPaper
-           << ',' << r.ratio << ',' << r.markedAuto << ',' << r.markedPaper << ',' << r.precision
-           << ',' << r.recall << '\n';
+        os << r.size << ',' << options.repeats << ',' << r.secondsAuto << ',' << r.secondsMeasured
+           << ',' << r.secondsPaper << ',' << r.ratio << ',' << r.ratioMeasured << ','
+           << r.markedAuto << ',' << r.markedMeasured << ',' << r.markedPaper << ',' << r.precision
+           << ',' << r.recall << ',' << r.precisionMeasured << ',' << r.recallMeasured << '\n';
     return os.str();
 }
 
