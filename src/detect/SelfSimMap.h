@@ -250,6 +250,11 @@ struct SelfSimMapOptions {
                                        // at least this share of its largest (in [0, 1)) ...
     double borderLevelShape = 0.35;    // ... and its mean excess over the level at least this
                                        // share of its largest excess (in [0, 1))
+    double grooveBankWidth = 1.0;      // step 8g: a mark below the texture as long as a line
+                                       // takes the samples above it scoring at least growSigma
+                                       // within this × its width of it (its banks; >= 0, 0: off)
+    double grooveLength = 5.0;         // ... a line: its samples at least this × its width²
+                                       // (>= 0)
     int pileUpReach = 1;               // step 8e: a kept region mostly below the texture takes
                                        // the samples above it within this many samples (>= 0,
                                        // 0: off) ...
@@ -285,6 +290,7 @@ struct SelfSimMap {
     size_t borderLevelPieces = 0;       // ... of which step 8f kept (at a level above growSigma)
     size_t borderRim = 0;               // ... and their pile-up's samples
     size_t pileUp = 0;                  // samples step 8e added (the kept regions' pile-up)
+    size_t grooveBanks = 0;             // samples step 8g added (the banks of marks below it)
     size_t trimmed = 0;                 // samples of kept regions step 8a left out
     size_t extended = 0;                // samples step 8b added to the kept regions
     size_t reliefLevels = 0;            // step 1b: the relief's levels with a plateau (0: not
