@@ -328,11 +328,13 @@ TEST(SelfSimMap, ADeepDefectIsKeptAndTheTextureJoinedToItDropped) {
             h[i] -= static_cast<float>(0.2 * std::exp(-d2 / (2 * 3.0 * 3.0)));
             if (d2 <= 4.0 * 4.0 && !truth[i]) particle[i] = 1;
         }
-    SelfSimMapOptions off;  // step 8a alone: the pile-up (step 8e) is tested below
+    SelfSimMapOptions off;  // step 8a alone: the pile-up and the banks (8e, 8g) are tested below
     off.trimShare = 0;
     off.pileUpReach = 0;
+    off.grooveBankWidth = 0.0;
     SelfSimMapOptions on;
     on.pileUpReach = 0;
+    on.grooveBankWidth = 0.0;
     ASSERT_GT(on.trimShare, 0.0);
     const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
                      b = detectSelfSimDefects(h, kW, kH, on);
@@ -486,7 +488,8 @@ TEST(SelfSimMap, ABorderRegionSplitAtRisingLevelsKeepsThePitNotTheRuggedHollow) 
                  tc = count(c.map, rough, on.border);
     EXPECT_GE(a.droppedBorder, 2u);
     EXPECT_EQ(a.borderLevelPieces, 0u);
-    EXPECT_EQ(pa.hits, 0u) << "the pit, without step 8f (joined to its rough stretch at the border)";
+    EXPECT_EQ(pa.hits, 0u)
+        << "the pit, without step 8f (joined to its rough stretch at the border)";
     EXPECT_EQ(ha.hits, 0u) << "the hollow, without step 8f";
     EXPECT_GE(pb.hits, pb.truth / 2) << "the pit, with step 8f: " << pb.hits << " of " << pb.truth;
     EXPECT_EQ(hb.hits, 0u) << "the rugged hollow, with step 8f: " << hb.hits << " of " << hb.truth;
@@ -581,9 +584,11 @@ TEST(SelfSimMap, AGroovesPileUpIsMarkedTheBanksOfARaisedBurrAreNot) {
     banks(grooveTruth, grooveBanks, 1.8 * sigma);
     banks(burrTruth, burrBanks, -1.8 * sigma);
 
-    SelfSimMapOptions off;
+    SelfSimMapOptions off;  // step 8e alone: step 8g (the banks, tested below) off in both
     off.pileUpReach = 0;
-    const SelfSimMapOptions on;
+    off.grooveBankWidth = 0.0;
+    SelfSimMapOptions on;
+    on.grooveBankWidth = 0.0;
     ASSERT_EQ(on.pileUpReach, 1);
     const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
                      b = detectSelfSimDefects(h, kW, kH, on);
@@ -718,6 +723,12 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o.pileUpShare = 0;
     expectNamed(o, "selfsim-pile-up-share");
     o = {};
+    o.grooveBankWidth = -1;
+    expectNamed(o, "selfsim-groove-bank-width");
+    o = {};
+    o.grooveLength = -0.5;
+    expectNamed(o, "selfsim-groove-length");
+    o = {};
     o.textureNfa = -1;
     expectNamed(o, "selfsim-texture-nfa");
     o = {};
@@ -768,4 +779,95 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     EXPECT_EQ(viaTable.map, detectSelfSimDefects(h, kW, kH, d.selfsim).map);
     EXPECT_EQ(viaTable.method, DefectMethod::SelfSim);
     EXPECT_GT(viaTable.selfsimRegions, 0u);
+}
+
+// Step 8g: a mark below the texture that is a line takes its banks. Striations with a groove
+// (3 × the striations deep, 6 samples wide, across the lay) whose banks, strips 3 samples wide
+// on each side of its label, stand 3.5 × the residual's σ_0 above the texture (a scratch's
+// pile-up, as wide as the groove: above the growth's 2.5 σ, below the texture's RMS, so not a
+// region of its own); a raised strip as high, 16 samples from the groove, parallel to it; and a
+// burr (the same groove raised) with such strips beside it. Without step 8g at most 3 in 5 of the
+// groove's banks are marked (those the groove's region holds, and step 8e's row); with it at
+// least 2 in 3 (a sixth of the banks score below 2.5 σ) and a tenth more, every sample it adds is
+// raised and lies within the groove's width of its mark; the far strip and the burr's strips are
+// marked neither way (too far; a raised mark takes no banks), nothing marked before is dropped, and
+// a pit (as wide as it is long: no line) takes none of its ring.
+TEST(SelfSimMap, AGroovesBanksAreMarkedTheRaisedTextureBeyondThemIsNot) {
+    std::vector<float> h = striations(67);
+    const double sigma = detectSelfSimDefects(h, kW, kH).sigma;
+    ASSERT_GT(sigma, 0.0);
+    std::vector<uint8_t> grooveTruth(h.size(), 0), burrTruth(h.size(), 0), pitTruth(h.size(), 0);
+    groove(h, grooveTruth, 60, 80, 196, 80, 6, 3.0);
+    groove(h, burrTruth, 60, 150, 196, 150, 6, -3.0);  // depth < 0: raised
+    pit(h, pitTruth, 128, 116, 6, 3.0);
+    const double bank = 3.5 * sigma;
+    std::vector<uint8_t> grooveBanks(h.size(), 0), farStrip(h.size(), 0), burrBanks(h.size(), 0),
+        pitBanks(h.size(), 0);
+    auto strip = [&](std::vector<uint8_t>& mask, int x0, int x1, int y0, int y1) {
+        for (int y = y0; y <= y1; ++y)
+            for (int x = x0; x <= x1; ++x) {
+                const size_t i = static_cast<size_t>(y) * kW + x;
+                mask[i] = 1;
+                h[i] += static_cast<float>(bank);
+            }
+    };
+    strip(grooveBanks, 60, 196, 75, 77);  // beside the label (rows 78-82)
+    strip(grooveBanks, 60, 196, 83, 85);
+    strip(farStrip, 60, 196, 96, 98);
+    strip(burrBanks, 60, 196, 145, 147);
+    strip(burrBanks, 60, 196, 153, 155);
+    for (int y = 105; y <= 127; ++y)  // the pit's ring: 6 to 9 samples from its centre
+        for (int x = 117; x <= 139; ++x) {
+            const double d = std::hypot(x - 128.0, y - 116.0);
+            if (d < 6.0 || d > 9.0) continue;
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            pitBanks[i] = 1;
+            h[i] += static_cast<float>(bank);
+        }
+
+    SelfSimMapOptions off;
+    off.grooveBankWidth = 0.0;
+    const SelfSimMapOptions on;
+    ASSERT_EQ(on.grooveBankWidth, 1.0);
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
+                     b = detectSelfSimDefects(h, kW, kH, on);
+    const Counts ga = count(a.map, grooveTruth, on.border),
+                 gb = count(b.map, grooveTruth, on.border);
+    const Counts ka = count(a.map, grooveBanks, on.border),
+                 kb = count(b.map, grooveBanks, on.border);
+    const Counts fa = count(a.map, farStrip, on.border), fb = count(b.map, farStrip, on.border);
+    const Counts ua = count(a.map, burrTruth, on.border), ub = count(b.map, burrTruth, on.border);
+    const Counts la = count(a.map, burrBanks, on.border), lb = count(b.map, burrBanks, on.border);
+    const Counts pa = count(a.map, pitTruth, on.border), pb = count(b.map, pitTruth, on.border);
+    const Counts ra = count(a.map, pitBanks, on.border), rb = count(b.map, pitBanks, on.border);
+    EXPECT_GE(ga.hits, ga.truth * 9 / 10) << "the groove";
+    EXPECT_GE(ua.hits, ua.truth * 9 / 10) << "the burr";
+    EXPECT_GE(pa.hits, pa.truth * 9 / 10) << "the pit";
+    EXPECT_EQ(gb.hits, ga.hits);
+    EXPECT_EQ(ub.hits, ua.hits);
+    EXPECT_EQ(pb.hits, pa.hits);
+    EXPECT_EQ(a.grooveBanks, 0u);
+    EXPECT_LE(ka.hits * 5, ka.truth * 3)
+        << "the groove's banks without step 8g: " << ka.hits << " of " << ka.truth;
+    EXPECT_GE(kb.hits * 3, kb.truth * 2)
+        << "the groove's banks with step 8g: " << kb.hits << " of " << kb.truth;
+    EXPECT_GE((kb.hits - ka.hits) * 10, kb.truth)
+        << "step 8g adds at least a tenth of the banks: " << ka.hits << " -> " << kb.hits;
+    EXPECT_EQ(fa.hits + fb.hits, 0u) << "the far strip: " << fa.hits << ", " << fb.hits;
+    EXPECT_EQ(lb.hits, la.hits) << "the burr's strips: a raised mark takes no banks";
+    EXPECT_EQ(rb.hits, ra.hits) << "the pit's ring: a pit is no line";
+    EXPECT_EQ(markedOnlyIn(a, b), 0u) << "samples marked without step 8g and not with it";
+    size_t added = 0, lowered = 0, away = 0;
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            if (!b.map[i] || a.map[i]) continue;
+            ++added;
+            lowered += b.residual[i] > 0.0f ? 0 : 1;
+            away += y >= 72 && y <= 88 ? 0 : 1;  // the groove's mark ± its width (8)
+        }
+    EXPECT_EQ(added, b.grooveBanks);
+    EXPECT_GT(added, 0u);
+    EXPECT_EQ(lowered, 0u) << "step 8g adds raised samples only";
+    EXPECT_EQ(away, 0u) << away << " of the " << added << " samples added lie away from the groove";
 }

@@ -416,6 +416,14 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
                   "selfsim: on a relief (heights on a few flat levels: lettering, a stepped part) "
                   "take each sample's plateau level out first (true/false)")
         ->capture_default_str();
+    c->add_option("--selfsim-groove-bank-width", q.grooveBankWidth,
+                  "selfsim: a mark below the texture as long as a line takes the samples above it "
+                  "scoring at least the growth's sigma within this times its width of it, its "
+                  "banks (0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-groove-length", q.grooveLength,
+                  "selfsim: ... a line: its samples at least this times its width squared")
+        ->capture_default_str();
     c->add_option("--selfsim-pile-up-reach", q.pileUpReach,
                   "selfsim: a kept region below the texture takes the samples above it within "
                   "this many samples, its pile-up (0: off)")

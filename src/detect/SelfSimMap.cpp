@@ -105,6 +105,152 @@ bool isParticle(const std::vector<size_t>& samples, const std::vector<float>& r,
     return std::sqrt((half + root) / (half - root)) < elongation;
 }
 
+// Felzenszwalb and Huttenlocher's exact squared distance transform of a sampled function, in one
+// dimension: d[q] = min_p (q − p)² + f[p] over the n samples (f +inf where nothing is)
+void squaredDistance1d(const std::vector<double>& f, std::vector<double>& d, int n,
+                       std::vector<int>& v, std::vector<double>& z) {
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    int k = -1;
+    for (int q = 0; q < n; ++q) {
+        if (!(f[q] < kInf)) continue;
+        while (k >= 0) {
+            const double s =
+                ((f[q] + double(q) * q) - (f[v[k]] + double(v[k]) * v[k])) / (2.0 * (q - v[k]));
+            if (s > z[k]) break;
+            --k;
+        }
+        ++k;
+        v[k] = q;
+        z[k] = k == 0 ? -kInf
+                      : ((f[q] + double(q) * q) - (f[v[k - 1]] + double(v[k - 1]) * v[k - 1])) /
+                            (2.0 * (q - v[k - 1]));
+        z[k + 1] = kInf;
+    }
+    for (int q = 0, j = 0; q < n; ++q) {
+        if (k < 0) {
+            d[q] = kInf;
+            continue;
+        }
+        while (z[j + 1] < q) ++j;
+        d[q] = (q - v[j]) * double(q - v[j]) + f[v[j]];
+    }
+}
+
+// The exact Euclidean distance of every sample of a w×h grid to the nearest sample where `at`
+// is set (squared; +inf when none is)
+std::vector<double> squaredDistanceTo(const std::vector<uint8_t>& at, int w, int h) {
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    std::vector<double> d(at.size()), f(std::max(w, h)), g(std::max(w, h));
+    std::vector<int> v(std::max(w, h));
+    std::vector<double> z(std::max(w, h) + 1);
+    for (size_t i = 0; i < at.size(); ++i) d[i] = at[i] ? 0.0 : kInf;
+    for (int x = 0; x < w; ++x) {
+        for (int y = 0; y < h; ++y) f[y] = d[static_cast<size_t>(y) * w + x];
+        squaredDistance1d(f, g, h, v, z);
+        for (int y = 0; y < h; ++y) d[static_cast<size_t>(y) * w + x] = g[y];
+    }
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) f[x] = d[static_cast<size_t>(y) * w + x];
+        squaredDistance1d(f, g, w, v, z);
+        for (int x = 0; x < w; ++x) d[static_cast<size_t>(y) * w + x] = g[x];
+    }
+    return d;
+}
+
+// Step 8g (SelfSimMap.h): each mark that lies below the texture (at least `share` of its Σ|r|
+// negative) and is a line (its samples at least `length` × its width²) takes the samples above the
+// texture scoring at least `grow` at the growth's scales, not marked, inside the border, that lie
+// within `widthShare` × its width (twice the largest distance of its samples from the samples
+// outside it) of it and are 8-connected to it through such samples: a groove's banks, as wide as
+// the groove. Returns the samples added.
+size_t takeGrooveBanks(std::vector<uint8_t>& map, const std::vector<float>& r,
+                       const std::vector<float>& zGrow, int W, int H, int border, double grow,
+                       double share, double widthShare, double length) {
+    const size_t n = map.size();
+    const std::vector<uint8_t> before = map;
+    std::vector<int> label(n, -1);
+    std::vector<size_t> queue;
+    size_t added = 0;
+    const auto inside = [&](int x, int y) {
+        return x >= border && y >= border && x < W - border && y < H - border;
+    };
+    const auto bank = [&](size_t q) {
+        return !before[q] && r[q] > 0.0f && zGrow[q] >= static_cast<float>(grow) &&
+               inside(static_cast<int>(q % W), static_cast<int>(q / W));
+    };
+    int components = 0;
+    for (size_t i0 = 0; i0 < n; ++i0) {
+        if (!before[i0] || label[i0] >= 0) continue;
+        const int id = components++;
+        queue.assign(1, i0);
+        label[i0] = id;
+        int x0 = W, y0 = H, x1 = -1, y1 = -1;
+        double below = 0.0, all = 0.0;
+        for (size_t k = 0; k < queue.size(); ++k) {
+            const size_t i = queue[k];
+            const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
+            x0 = std::min(x0, px), x1 = std::max(x1, px), y0 = std::min(y0, py),
+            y1 = std::max(y1, py);
+            all += std::abs(r[i]);
+            if (r[i] < 0.0f) below -= r[i];
+            for (int qy = std::max(0, py - 1); qy <= std::min(H - 1, py + 1); ++qy)
+                for (int qx = std::max(0, px - 1); qx <= std::min(W - 1, px + 1); ++qx) {
+                    const size_t q = static_cast<size_t>(qy) * W + qx;
+                    if (before[q] && label[q] < 0) {
+                        label[q] = id;
+                        queue.push_back(q);
+                    }
+                }
+        }
+        if (!(all > 0.0) || below < share * all) continue;
+        // its width: in a box one sample wider than it (the samples outside the map are outside it)
+        int bw = x1 - x0 + 3, bh = y1 - y0 + 3;
+        std::vector<uint8_t> outside(static_cast<size_t>(bw) * bh, 1);
+        for (const size_t i : queue)
+            outside[static_cast<size_t>(static_cast<int>(i / W) - y0 + 1) * bw +
+                    (static_cast<int>(i % W) - x0 + 1)] = 0;
+        const std::vector<double> depth = squaredDistanceTo(outside, bw, bh);
+        double deepest = 0.0;
+        for (size_t k = 0; k < depth.size(); ++k)
+            if (!outside[k]) deepest = std::max(deepest, depth[k]);
+        const double width = 2.0 * std::sqrt(deepest);
+        if (static_cast<double>(queue.size()) < length * width * width) continue;
+        const double reach = std::max(1.0, widthShare * width);
+        // the distance to it over a box grown by the reach, and the banks flooded from it
+        const int m = static_cast<int>(std::ceil(reach)) + 1;
+        const int bx0 = std::max(0, x0 - m), by0 = std::max(0, y0 - m);
+        bw = std::min(W - 1, x1 + m) - bx0 + 1;
+        bh = std::min(H - 1, y1 + m) - by0 + 1;
+        std::vector<uint8_t> mine(static_cast<size_t>(bw) * bh, 0);
+        for (const size_t i : queue)
+            mine[static_cast<size_t>(static_cast<int>(i / W) - by0) * bw +
+                 (static_cast<int>(i % W) - bx0)] = 1;
+        const std::vector<double> dist = squaredDistanceTo(mine, bw, bh);
+        const double reach2 = reach * reach;
+        std::vector<uint8_t> seen(mine);
+        std::vector<size_t> front;
+        for (size_t k = 0; k < mine.size(); ++k)
+            if (mine[k]) front.push_back(k);
+        for (size_t k = 0; k < front.size(); ++k) {
+            const int lx = static_cast<int>(front[k] % bw), ly = static_cast<int>(front[k] / bw);
+            for (int qy = std::max(0, ly - 1); qy <= std::min(bh - 1, ly + 1); ++qy)
+                for (int qx = std::max(0, lx - 1); qx <= std::min(bw - 1, lx + 1); ++qx) {
+                    const size_t lq = static_cast<size_t>(qy) * bw + qx;
+                    if (seen[lq] || dist[lq] > reach2) continue;
+                    const size_t q = static_cast<size_t>(qy + by0) * W + (qx + bx0);
+                    if (!bank(q)) continue;
+                    seen[lq] = 1;
+                    front.push_back(lq);
+                    if (!map[q]) {
+                        map[q] = 255;
+                        ++added;
+                    }
+                }
+        }
+    }
+    return added;
+}
+
 }  // namespace
 
 double textureTailThreshold(std::span<const float> peaks, double quantile, double nfa) {
@@ -168,7 +314,9 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.nfa > 0.0)) throw inputError(option("selfsim-nfa"), "must be > 0", "The default is 1");
     if (!(o.tailQuantile >= 0.0 && o.tailQuantile < 1.0))
         throw inputError(option("selfsim-tail-quantile"), "must be in [0, 1)",
-                         "The default is 0 (off)");
+                         "The default is 1 (0: off)");
+    if (!(o.grooveLength >= 0.0))
+        throw inputError(option("selfsim-groove-length"), "must be >= 0", "The default is 5");
     if (!(o.textureRms >= 0.0))
         throw inputError(option("selfsim-texture-rms"), "must be >= 0", "The default is 1");
     if (!(o.textureNfa >= 0.0))
@@ -218,6 +366,9 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.borderPieceSigma >= 0.0 && o.borderPieceSigma < 1.0))
         throw inputError(option("selfsim-border-piece-sigma"), "must be in [0, 1)",
                          "The default is 0.01 (0: every map)");
+    if (!(o.grooveBankWidth >= 0.0))
+        throw inputError(option("selfsim-groove-bank-width"), "must be >= 0",
+                         "The default is 0 (off)");
     if (o.pileUpReach < 0)
         throw inputError(option("selfsim-pile-up-reach"), "must be >= 0",
                          "The default is 1 (0: off)");
@@ -757,6 +908,10 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             });
         stack.swap(next);
     }
+    // step 8g: the banks of the marks below the texture, on the final marks
+    if (o.grooveBankWidth > 0.0)
+        out.grooveBanks = takeGrooveBanks(out.map, out.residual, zGrow, W, H, b, grow,
+                                          o.pileUpShare, o.grooveBankWidth, o.grooveLength);
     return out;
 }
 
