@@ -250,6 +250,11 @@ struct SelfSimMapOptions {
                                        // at least this share of its largest (in [0, 1)) ...
     double borderLevelShape = 0.35;    // ... and its mean excess over the level at least this
                                        // share of its largest excess (in [0, 1))
+    double borderBasin = 0.0;          // step 8g: a piece step 8f kept takes back its basin,
+                                       // flooded down to growSigma with levels falling by this
+                                       // factor (0: off; else > 1) ...
+    double borderBasinGrowth = 0.0;    // ... given up when it holds more than this × the piece's
+                                       // samples (>= 0; 0: no bound)
     int pileUpReach = 1;               // step 8e: a kept region mostly below the texture takes
                                        // the samples above it within this many samples (>= 0,
                                        // 0: off) ...
@@ -284,6 +289,7 @@ struct SelfSimMap {
     size_t borderPieces = 0;            // pieces of border regions step 8d kept
     size_t borderLevelPieces = 0;       // ... of which step 8f kept (at a level above growSigma)
     size_t borderRim = 0;               // ... and their pile-up's samples
+    size_t borderBasin = 0;             // samples step 8g added (8f's pieces' basins)
     size_t pileUp = 0;                  // samples step 8e added (the kept regions' pile-up)
     size_t trimmed = 0;                 // samples of kept regions step 8a left out
     size_t extended = 0;                // samples step 8b added to the kept regions
