@@ -186,6 +186,21 @@
 //     4 040 / 2 283, each the same two runs; step 1.5 or shape 0.4 gain neither; raised pieces
 //     kept too (the land's shoulders: 1 300-1 700 samples, fill 0.45-0.5) cost the Sensofar
 //     land's model B 0.22-0.32 of precision. Held out in docs/RESULTS.md.
+//     (g) A piece step 8f kept takes back its basin (off by default; borderBasin): the piece
+//     holds a defect's part above the level it was cut at; its lower flanks, down to
+//     growSigma, stay one piece with the stretch of texture the region grew into. From that
+//     level the level falls by borderBasin at a time; at each level the region's samples below
+//     the texture that score at least it and are not marked are flooded, layer by layer, from
+//     the piece and from the texture's markers (every other sample of the piece's level, and
+//     each sample a level newly holds that neither flood reaches: a new maximum of the
+//     texture); a sample both reach in one layer is the texture's. What floods to the piece is
+//     marked with it, then its pile-up (8e, borderPieceRim) and 8b's flanks; the basin is given
+//     up (the piece kept alone) when it holds more than borderBasinGrowth × the piece's
+//     samples. On the DEV insertion seeds 101-105 of scripts/eval-real (both models, the five
+//     files; 1.1 and 1.25, bounds 1 and 2): no run gained or lost at 1.1 (32 of 50), the
+//     Sensofar land's model-A recall +0.04 to +0.08 on four runs (A 104 0.750 -> 0.787, short
+//     of 0.8), precision -0.01 to -0.05 where it changed, the Wyko part's own pits +2 080
+//     false samples; a bound of 1 or 2 × the piece gained nothing either. Off: no run to gain.
 // Every threshold is relative to σ_s, so the map is invariant to h → a·h + b (a ≠ 0) up to
 // rounding; a constant map marks nothing. Cost: offsets × (2·refine + 1)² box-filtered
 // difference passes over the map, parallel over tiles (TBB); memory 2 × offsets + 6 float copies.
