@@ -502,6 +502,45 @@ TEST(SelfSimMap, ABorderRegionSplitAtRisingLevelsKeepsThePitNotTheRuggedHollow) 
     EXPECT_EQ(markedOnlyIn(a, b), 0u) << "samples marked without step 8f and not with it";
 }
 
+// Step 8h: a piece step 8f kept takes back its basin. Striations with a rough stretch from a
+// border into the map (a shallow trough strewn with narrow cones, as step 8f's test above) and
+// a wide pit (a paraboloid, 3 × the striations deep) at its end: step 8f keeps the pit's upper
+// part only, the level where it stands off its stretch; its lower flanks, below that level, are
+// one piece with the stretch. With step 8h the pit takes them back (at least a quarter more of
+// its label, everything step 8f marked still marked) and the stretch's samples stay unmarked
+// (its cones are the texture's markers: what floods to them first is theirs); a basin bound
+// below what the pit takes back (borderBasinGrowth) gives step 8f's map byte for byte.
+TEST(SelfSimMap, ABorderPieceTakesBackItsBasinNotItsRoughStretch) {
+    std::vector<float> h = striations(71);
+    std::vector<uint8_t> rough(h.size(), 0), pitTruth(h.size(), 0);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> depth(0.6, 3.0), along(0.0, 100.0), across(-8.0, 8.0);
+    for (int k = 0; k < 150; ++k) pit(h, rough, along(rng), 70 + across(rng), 2.0, depth(rng));
+    pit(h, pitTruth, 109, 70, 8, 3.0);  // at the end of the stretch
+    for (size_t i = 0; i < h.size(); ++i) rough[i] = rough[i] && !pitTruth[i];
+
+    SelfSimMapOptions on;
+    ASSERT_EQ(on.borderBasin, 1.1);  // the default
+    SelfSimMapOptions off8h = on;
+    off8h.borderBasin = 0.0;
+    SelfSimMapOptions bounded = on;
+    bounded.borderBasinGrowth = 0.01;
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off8h),
+                     b = detectSelfSimDefects(h, kW, kH, on),
+                     c = detectSelfSimDefects(h, kW, kH, bounded);
+    const Counts pa = count(a.map, pitTruth, on.border), pb = count(b.map, pitTruth, on.border);
+    const Counts ta = count(a.map, rough, on.border), tb = count(b.map, rough, on.border);
+    EXPECT_GE(a.borderLevelPieces, 1u);
+    EXPECT_EQ(a.borderBasin, 0u);
+    EXPECT_GE(pb.hits, pa.hits + pa.hits / 4) << "the pit with its basin: " << pb.hits << " of "
+                                              << pb.truth << " (" << pa.hits << " without)";
+    EXPECT_GT(b.borderBasin, 0u);
+    EXPECT_EQ(ta.hits + tb.hits, 0u) << "the rough stretch: " << ta.hits << ", " << tb.hits;
+    EXPECT_EQ(markedOnlyIn(a, b), 0u) << "samples marked without step 8h and not with it";
+    EXPECT_EQ(c.map, a.map) << "the basin bounded below what it takes: step 8f's map";
+    EXPECT_EQ(c.borderBasin, 0u);
+}
+
 // A pit with a pile-up rim (model A's shape, synth/DefectInsert.h: a ring of width ρ/2 outside
 // the crater, profile h_r·(1 − u²)²) whose rim touches a raised ridge that runs from border to
 // border: the crater is kept as a border piece (step 8d); with borderPieceRim its rim, raised and
@@ -713,6 +752,12 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o = {};
     o.borderPieceSigma = 1.0;
     expectNamed(o, "selfsim-border-piece-sigma");
+    o = {};
+    o.borderBasin = 1.0;
+    expectNamed(o, "selfsim-border-basin");
+    o = {};
+    o.borderBasinGrowth = -1.0;
+    expectNamed(o, "selfsim-border-basin-growth");
     o = {};
     o.pileUpReach = -1;
     expectNamed(o, "selfsim-pile-up-reach");

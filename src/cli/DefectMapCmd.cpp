@@ -412,6 +412,14 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
                   "selfsim: ... and its mean excess over the level at least this share of its "
                   "largest excess")
         ->capture_default_str();
+    c->add_option("--selfsim-border-basin", q.borderBasin,
+                  "selfsim: ... a piece kept at a level takes back its basin, flooded down to the "
+                  "growth's level with levels falling by this factor (0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-border-basin-growth", q.borderBasinGrowth,
+                  "selfsim: ... the basin given up when it holds more than this many times the "
+                  "piece's samples (0: no bound)")
+        ->capture_default_str();
     c->add_option("--selfsim-relief", q.relief,
                   "selfsim: on a relief (heights on a few flat levels: lettering, a stepped part) "
                   "take each sample's plateau level out first (true/false)")

@@ -363,6 +363,12 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.borderLevelFill >= 0.0 && o.borderLevelFill < 1.0))
         throw inputError(option("selfsim-border-level-fill"), "must be in [0, 1)",
                          "The default is 0.6");
+    if (!(o.borderBasin == 0.0 || o.borderBasin > 1.0))
+        throw inputError(option("selfsim-border-basin"), "must be 0 (off) or > 1",
+                         "The default is 0 (off)");
+    if (!(o.borderBasinGrowth >= 0.0))
+        throw inputError(option("selfsim-border-basin-growth"), "must be >= 0",
+                         "The default is 0 (no bound)");
     if (!(o.borderPieceSigma >= 0.0 && o.borderPieceSigma < 1.0))
         throw inputError(option("selfsim-border-piece-sigma"), "must be in [0, 1)",
                          "The default is 0.01 (0: every map)");
@@ -714,6 +720,31 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     std::vector<int8_t> regionSign(o.extendSteps > 0 ? n : 0, 0);
     std::vector<float> regionLevel(regionSign.size(), 0.0f);
     std::vector<size_t> kept;
+    // step 8e: a region below the texture takes its pile-up, the samples above the texture
+    // within pileUpReach samples of it scoring at least pileUpSigma
+    auto takePileUp = [&](std::span<const size_t> samples) {
+        if (o.pileUpReach <= 0) return;
+        double down = 0.0, all = 0.0;
+        for (const size_t i : samples) {
+            down += std::max(0.0f, -out.residual[i]);
+            all += std::abs(out.residual[i]);
+        }
+        if (!(all > 0.0 && down >= o.pileUpShare * all)) return;
+        const int reach = o.pileUpReach;
+        for (const size_t i : samples) {
+            const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
+            for (int qy = py - reach; qy <= py + reach; ++qy)
+                for (int qx = px - reach; qx <= px + reach; ++qx) {
+                    if (!inside(qx, qy)) continue;
+                    const size_t q = static_cast<size_t>(qy) * W + qx;
+                    if (out.map[q] || !(out.residual[q] > 0.0f) ||
+                        !(zGrow[q] >= static_cast<float>(o.pileUpSigma)))
+                        continue;
+                    out.map[q] = 255;
+                    ++out.pileUp;
+                }
+        }
+    };
     // steps 8a and 8c on a region's (or a border piece's) samples, then the map and step 8b's
     // first frontier; a border piece (steps 8d, 8f) also has to be shaped as a defect: at least
     // borderPieceMin samples after the trim, and its mean score at least `fill` of its largest
@@ -767,31 +798,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             regionLevel[i] = level;
             stack.push_back(i);  // step 8b's first frontier
         }
-        // step 8e: a region below the texture takes its pile-up, the samples above the texture
-        // within pileUpReach samples of it scoring at least pileUpSigma
-        if (o.pileUpReach > 0) {
-            double down = 0.0, all = 0.0;
-            for (const size_t i : kept) {
-                down += std::max(0.0f, -out.residual[i]);
-                all += std::abs(out.residual[i]);
-            }
-            if (all > 0.0 && down >= o.pileUpShare * all) {
-                const int reach = o.pileUpReach;
-                for (const size_t i : kept) {
-                    const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
-                    for (int qy = py - reach; qy <= py + reach; ++qy)
-                        for (int qx = px - reach; qx <= px + reach; ++qx) {
-                            if (!inside(qx, qy)) continue;
-                            const size_t q = static_cast<size_t>(qy) * W + qx;
-                            if (out.map[q] || !(out.residual[q] > 0.0f) ||
-                                !(zGrow[q] >= static_cast<float>(o.pileUpSigma)))
-                                continue;
-                            out.map[q] = 255;
-                            ++out.pileUp;
-                        }
-                }
-            }
-        }
+        takePileUp(kept);
         return true;
     };
     // step 8d: a region reaching the border, split into the pieces that lie below the texture
@@ -822,6 +829,78 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                     }
                 }
         }
+    };
+    // step 8h: a piece step 8f kept takes back its basin, the region's samples below the texture
+    // that flood to it before they flood to the texture, down to growSigma: from the level it
+    // was cut at, the level falls by borderBasin at a time; at each level the region's samples
+    // below the texture that score at least it (and are not marked) are taken, layer by layer,
+    // by the piece and by the texture's markers -- every other sample of the piece's level and
+    // each one a level newly holds that neither reaches (a new maximum of the texture); a sample
+    // both reach in the same layer is the texture's. The basin is given up (the piece kept
+    // alone) when it holds more than borderBasinGrowth × the piece's samples.
+    std::vector<uint8_t> basinOwner(
+        splitBorder && o.borderLevelStep > 1.0 && o.borderBasin > 1.0 ? n : 0, 0);
+    std::vector<size_t> basinPiece, basinTexture, basinNew;
+    auto takeBasin = [&](const Region& reg, double level) {
+        enum : uint8_t { kNone = 0, kPiece = 1, kTexture = 2 };
+        basinPiece.assign(piece.begin(), piece.end());
+        basinTexture.clear();
+        for (const size_t i : piece) basinOwner[i] = kPiece;
+        float lv = static_cast<float>(level);
+        const auto candidate = [&](size_t q) {
+            return inRegion[q] && !out.map[q] && out.residual[q] < 0.0f && zGrow[q] >= lv &&
+                   basinOwner[q] == kNone;
+        };
+        for (size_t k = reg.begin; k < reg.end; ++k)
+            if (candidate(members[k])) {
+                basinOwner[members[k]] = kTexture;
+                basinTexture.push_back(members[k]);
+            }
+        // each layer of the flood: the texture's claims first, so a tie is the texture's
+        auto floodLayer = [&](std::vector<size_t>& owned, size_t from, uint8_t owner) {
+            const size_t end = owned.size();
+            for (size_t j = from; j < end; ++j)
+                forEachNeighbour(owned[j], [&](size_t q) {
+                    if (!candidate(q)) return;
+                    basinOwner[q] = owner;
+                    owned.push_back(q);
+                });
+            return end;
+        };
+        while (lv > grow) {
+            lv = std::max(grow, static_cast<float>(lv / o.borderBasin));
+            size_t fromPiece = 0, fromTexture = 0;
+            for (;;) {
+                const size_t nPiece = basinPiece.size(), nTexture = basinTexture.size();
+                fromTexture = floodLayer(basinTexture, fromTexture, kTexture);
+                fromPiece = floodLayer(basinPiece, fromPiece, kPiece);
+                if (basinPiece.size() == nPiece && basinTexture.size() == nTexture) break;
+            }
+            for (size_t k = reg.begin; k < reg.end; ++k)
+                if (candidate(members[k])) {
+                    basinOwner[members[k]] = kTexture;
+                    basinTexture.push_back(members[k]);
+                }
+        }
+        basinNew.clear();
+        for (const size_t i : basinPiece)
+            if (!out.map[i]) basinNew.push_back(i);
+        for (const size_t i : basinPiece) basinOwner[i] = kNone;
+        for (const size_t i : basinTexture) basinOwner[i] = kNone;
+        if (o.borderBasinGrowth > 0.0 && static_cast<double>(basinNew.size()) >
+                                             o.borderBasinGrowth * static_cast<double>(kept.size()))
+            return;
+        const size_t from = kept.front();
+        for (const size_t i : basinNew) {
+            out.map[i] = 255;
+            kept.push_back(i);
+            if (regionSign.empty()) continue;
+            regionSign[i] = regionSign[from];
+            regionLevel[i] = regionLevel[from];
+            stack.push_back(i);  // step 8b's frontier
+        }
+        out.borderBasin += basinNew.size();
+        takePileUp(basinNew);
     };
     auto keepBorderPieces = [&](const Region& reg) {
         for (size_t k = reg.begin; k < reg.end; ++k) inRegion[members[k]] = 1;
@@ -861,6 +940,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                     if (!keepRegion(piece, peak, true, o.borderLevelFill, level)) continue;
                     ++out.borderPieces;
                     ++out.borderLevelPieces;
+                    if (!basinOwner.empty()) takeBasin(reg, level);
                     takeRim();
                 }
             }
