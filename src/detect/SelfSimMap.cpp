@@ -314,7 +314,7 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.nfa > 0.0)) throw inputError(option("selfsim-nfa"), "must be > 0", "The default is 1");
     if (!(o.tailQuantile >= 0.0 && o.tailQuantile < 1.0))
         throw inputError(option("selfsim-tail-quantile"), "must be in [0, 1)",
-                         "The default is 1 (0: off)");
+                         "The default is 0 (off)");
     if (!(o.grooveLength >= 0.0))
         throw inputError(option("selfsim-groove-length"), "must be >= 0", "The default is 5");
     if (!(o.textureRms >= 0.0))
@@ -365,7 +365,7 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
                          "The default is 0.6");
     if (!(o.borderBasin == 0.0 || o.borderBasin > 1.0))
         throw inputError(option("selfsim-border-basin"), "must be 0 (off) or > 1",
-                         "The default is 0 (off)");
+                         "The default is 1.1");
     if (!(o.borderBasinGrowth >= 0.0))
         throw inputError(option("selfsim-border-basin-growth"), "must be >= 0",
                          "The default is 0 (no bound)");
@@ -374,7 +374,7 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
                          "The default is 0.01 (0: every map)");
     if (!(o.grooveBankWidth >= 0.0))
         throw inputError(option("selfsim-groove-bank-width"), "must be >= 0",
-                         "The default is 0 (off)");
+                         "The default is 1 (0: off)");
     if (o.pileUpReach < 0)
         throw inputError(option("selfsim-pile-up-reach"), "must be >= 0",
                          "The default is 1 (0: off)");
