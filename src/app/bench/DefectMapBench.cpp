@@ -32,34 +32,29 @@ DefectMapBenchResult runDefectMapBench(const DefectMapBenchOptions& o) {
         row.size = n;
         std::vector<double> tAuto, tMeasured, tPaper;
         const std::vector<uint8_t> negatives{kTruthChatter};
-        const auto score = [&](const DefectMap& m) {
-            return scoreDefectMap(m.map, part.truth, truthLegend(part.truth), negatives).overall;
+        const auto legend = truthLegend(part.truth);
+        // one method's map: its seconds and marked share recorded, the map returned
+        const auto runMethod = [&](const DefectMapOptions& mo, std::vector<double>& seconds,
+                                   double& marked) {
+            throwIfInterrupted();
+            DefectMap m = detectDefects(part.heights, n, n, mo);
+            seconds.push_back(m.seconds);
+            marked = m.markedFraction();
+            return m;
+        };
+        const auto score = [&](const DefectMap& m, double& precision, double& recall) {
+            const DefectScoreRow s = scoreDefectMap(m.map, part.truth, legend, negatives).overall;
+            precision = s.precision;
+            recall = s.recall;
         };
         for (int r = 0; r < o.repeats; ++r) {
-            throwIfInterrupted();
-            const DefectMap a = detectDefects(part.heights, n, n, autoOptions);
-            tAuto.push_back(a.seconds);
-            row.markedAuto = a.markedFraction();
-            if (r == 0) {
-                const auto s = score(a);
-                row.precision = s.precision;
-                row.recall = s.recall;
-            }
+            const DefectMap a = runMethod(autoOptions, tAuto, row.markedAuto);
+            if (r == 0) score(a, row.precision, row.recall);
             if (o.measured) {
-                throwIfInterrupted();
-                const DefectMap m = detectDefects(part.heights, n, n, measuredOptions);
-                tMeasured.push_back(m.seconds);
-                row.markedMeasured = m.markedFraction();
-                if (r == 0) {
-                    const auto s = score(m);
-                    row.precisionMeasured = s.precision;
-                    row.recallMeasured = s.recall;
-                }
+                const DefectMap m = runMethod(measuredOptions, tMeasured, row.markedMeasured);
+                if (r == 0) score(m, row.precisionMeasured, row.recallMeasured);
             }
-            throwIfInterrupted();
-            const DefectMap p = detectDefects(part.heights, n, n, paperOptions);
-            tPaper.push_back(p.seconds);
-            row.markedPaper = p.markedFraction();
+            runMethod(paperOptions, tPaper, row.markedPaper);
             task.advance();
         }
         row.secondsAuto = median(tAuto);
