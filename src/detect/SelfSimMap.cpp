@@ -157,19 +157,17 @@ std::vector<double> squaredDistanceTo(const std::vector<uint8_t>& at, int w, int
     return d;
 }
 
-// Step 8g (SelfSimMap.h): each mark that lies below the texture (at least `share` of its Σ|r|
-// negative) and is a line (its samples at least `length` × its width²) takes the samples above the
-// texture scoring at least `grow` at the growth's scales, not marked, inside the border, that lie
-// within `widthShare` × its width (twice the largest distance of its samples from the samples
-// outside it) of it and are 8-connected to it through such samples: a groove's banks, as wide as
-// the groove. Returns the samples added.
-size_t takeGrooveBanks(std::vector<uint8_t>& map, const std::vector<float>& r,
+// Step 8g (SelfSimMap.h) on one mark (its 8-connected samples; `before` the marks as they stood
+// before this step): when it lies below the texture (at least `share` of its Σ|r| negative) and
+// is a line (its samples at least `length` × its width²), it takes the samples above the texture
+// scoring at least `grow` at the growth's scales, not marked, inside the border, that lie within
+// `widthShare` × its width (twice the largest distance of its samples from the samples outside
+// it) of it and are 8-connected to it through such samples: a groove's banks, as wide as the
+// groove. Returns the samples added to `map`.
+size_t takeGrooveBanks(std::span<const size_t> mark, const std::vector<uint8_t>& before,
+                       std::vector<uint8_t>& map, const std::vector<float>& r,
                        const std::vector<float>& zGrow, int W, int H, int border, double grow,
                        double share, double widthShare, double length) {
-    const size_t n = map.size();
-    const std::vector<uint8_t> before = map;
-    std::vector<int> label(n, -1);
-    std::vector<size_t> queue;
     size_t added = 0;
     const auto inside = [&](int x, int y) {
         return x >= border && y >= border && x < W - border && y < H - border;
@@ -178,75 +176,58 @@ size_t takeGrooveBanks(std::vector<uint8_t>& map, const std::vector<float>& r,
         return !before[q] && r[q] > 0.0f && zGrow[q] >= static_cast<float>(grow) &&
                inside(static_cast<int>(q % W), static_cast<int>(q / W));
     };
-    int components = 0;
-    for (size_t i0 = 0; i0 < n; ++i0) {
-        if (!before[i0] || label[i0] >= 0) continue;
-        const int id = components++;
-        queue.assign(1, i0);
-        label[i0] = id;
-        int x0 = W, y0 = H, x1 = -1, y1 = -1;
-        double below = 0.0, all = 0.0;
-        for (size_t k = 0; k < queue.size(); ++k) {
-            const size_t i = queue[k];
-            const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
-            x0 = std::min(x0, px), x1 = std::max(x1, px), y0 = std::min(y0, py),
-            y1 = std::max(y1, py);
-            all += std::abs(r[i]);
-            if (r[i] < 0.0f) below -= r[i];
-            for (int qy = std::max(0, py - 1); qy <= std::min(H - 1, py + 1); ++qy)
-                for (int qx = std::max(0, px - 1); qx <= std::min(W - 1, px + 1); ++qx) {
-                    const size_t q = static_cast<size_t>(qy) * W + qx;
-                    if (before[q] && label[q] < 0) {
-                        label[q] = id;
-                        queue.push_back(q);
-                    }
+    int x0 = W, y0 = H, x1 = -1, y1 = -1;
+    double below = 0.0, all = 0.0;
+    for (const size_t i : mark) {
+        const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
+        x0 = std::min(x0, px), x1 = std::max(x1, px), y0 = std::min(y0, py), y1 = std::max(y1, py);
+        all += std::abs(r[i]);
+        if (r[i] < 0.0f) below -= r[i];
+    }
+    if (!(all > 0.0) || below < share * all) return 0;
+    // its width: in a box one sample wider than it (the samples outside the map are outside it)
+    int bw = x1 - x0 + 3, bh = y1 - y0 + 3;
+    std::vector<uint8_t> outside(static_cast<size_t>(bw) * bh, 1);
+    for (const size_t i : mark)
+        outside[static_cast<size_t>(static_cast<int>(i / W) - y0 + 1) * bw +
+                (static_cast<int>(i % W) - x0 + 1)] = 0;
+    const std::vector<double> depth = squaredDistanceTo(outside, bw, bh);
+    double deepest = 0.0;
+    for (size_t k = 0; k < depth.size(); ++k)
+        if (!outside[k]) deepest = std::max(deepest, depth[k]);
+    const double width = 2.0 * std::sqrt(deepest);
+    if (static_cast<double>(mark.size()) < length * width * width) return 0;
+    const double reach = std::max(1.0, widthShare * width);
+    // the distance to it over a box grown by the reach, and the banks flooded from it
+    const int m = static_cast<int>(std::ceil(reach)) + 1;
+    const int bx0 = std::max(0, x0 - m), by0 = std::max(0, y0 - m);
+    bw = std::min(W - 1, x1 + m) - bx0 + 1;
+    bh = std::min(H - 1, y1 + m) - by0 + 1;
+    std::vector<uint8_t> mine(static_cast<size_t>(bw) * bh, 0);
+    for (const size_t i : mark)
+        mine[static_cast<size_t>(static_cast<int>(i / W) - by0) * bw +
+             (static_cast<int>(i % W) - bx0)] = 1;
+    const std::vector<double> dist = squaredDistanceTo(mine, bw, bh);
+    const double reach2 = reach * reach;
+    std::vector<uint8_t> seen(mine);
+    std::vector<size_t> front;
+    for (size_t k = 0; k < mine.size(); ++k)
+        if (mine[k]) front.push_back(k);
+    for (size_t k = 0; k < front.size(); ++k) {
+        const int lx = static_cast<int>(front[k] % bw), ly = static_cast<int>(front[k] / bw);
+        for (int qy = std::max(0, ly - 1); qy <= std::min(bh - 1, ly + 1); ++qy)
+            for (int qx = std::max(0, lx - 1); qx <= std::min(bw - 1, lx + 1); ++qx) {
+                const size_t lq = static_cast<size_t>(qy) * bw + qx;
+                if (seen[lq] || dist[lq] > reach2) continue;
+                const size_t q = static_cast<size_t>(qy + by0) * W + (qx + bx0);
+                if (!bank(q)) continue;
+                seen[lq] = 1;
+                front.push_back(lq);
+                if (!map[q]) {
+                    map[q] = 255;
+                    ++added;
                 }
-        }
-        if (!(all > 0.0) || below < share * all) continue;
-        // its width: in a box one sample wider than it (the samples outside the map are outside it)
-        int bw = x1 - x0 + 3, bh = y1 - y0 + 3;
-        std::vector<uint8_t> outside(static_cast<size_t>(bw) * bh, 1);
-        for (const size_t i : queue)
-            outside[static_cast<size_t>(static_cast<int>(i / W) - y0 + 1) * bw +
-                    (static_cast<int>(i % W) - x0 + 1)] = 0;
-        const std::vector<double> depth = squaredDistanceTo(outside, bw, bh);
-        double deepest = 0.0;
-        for (size_t k = 0; k < depth.size(); ++k)
-            if (!outside[k]) deepest = std::max(deepest, depth[k]);
-        const double width = 2.0 * std::sqrt(deepest);
-        if (static_cast<double>(queue.size()) < length * width * width) continue;
-        const double reach = std::max(1.0, widthShare * width);
-        // the distance to it over a box grown by the reach, and the banks flooded from it
-        const int m = static_cast<int>(std::ceil(reach)) + 1;
-        const int bx0 = std::max(0, x0 - m), by0 = std::max(0, y0 - m);
-        bw = std::min(W - 1, x1 + m) - bx0 + 1;
-        bh = std::min(H - 1, y1 + m) - by0 + 1;
-        std::vector<uint8_t> mine(static_cast<size_t>(bw) * bh, 0);
-        for (const size_t i : queue)
-            mine[static_cast<size_t>(static_cast<int>(i / W) - by0) * bw +
-                 (static_cast<int>(i % W) - bx0)] = 1;
-        const std::vector<double> dist = squaredDistanceTo(mine, bw, bh);
-        const double reach2 = reach * reach;
-        std::vector<uint8_t> seen(mine);
-        std::vector<size_t> front;
-        for (size_t k = 0; k < mine.size(); ++k)
-            if (mine[k]) front.push_back(k);
-        for (size_t k = 0; k < front.size(); ++k) {
-            const int lx = static_cast<int>(front[k] % bw), ly = static_cast<int>(front[k] / bw);
-            for (int qy = std::max(0, ly - 1); qy <= std::min(bh - 1, ly + 1); ++qy)
-                for (int qx = std::max(0, lx - 1); qx <= std::min(bw - 1, lx + 1); ++qx) {
-                    const size_t lq = static_cast<size_t>(qy) * bw + qx;
-                    if (seen[lq] || dist[lq] > reach2) continue;
-                    const size_t q = static_cast<size_t>(qy + by0) * W + (qx + bx0);
-                    if (!bank(q)) continue;
-                    seen[lq] = 1;
-                    front.push_back(lq);
-                    if (!map[q]) {
-                        map[q] = 255;
-                        ++added;
-                    }
-                }
-        }
+            }
     }
     return added;
 }
@@ -988,10 +969,21 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             });
         stack.swap(next);
     }
-    // step 8g: the banks of the marks below the texture, on the final marks
-    if (o.grooveBankWidth > 0.0)
-        out.grooveBanks = takeGrooveBanks(out.map, out.residual, zGrow, W, H, b, grow,
-                                          o.pileUpShare, o.grooveBankWidth, o.grooveLength);
+    // step 8g: the banks of the marks below the texture, on the final marks (each mark flooded
+    // over the marks as they stand before the step)
+    if (o.grooveBankWidth > 0.0) {
+        const std::vector<uint8_t> before = out.map;
+        std::vector<uint8_t> markSeen(n, 0);
+        std::vector<size_t> mark;
+        for (size_t i0 = 0; i0 < n; ++i0) {
+            if (!before[i0] || markSeen[i0]) continue;
+            mark.clear();
+            floodRegion(i0, markSeen, mark, [&](size_t q) { return before[q] != 0; });
+            out.grooveBanks +=
+                takeGrooveBanks(mark, before, out.map, out.residual, zGrow, W, H, b, grow,
+                                o.pileUpShare, o.grooveBankWidth, o.grooveLength);
+        }
+    }
     return out;
 }
 
