@@ -302,6 +302,14 @@ struct SelfSimMapOptions {
                                        // factor (0: off; else > 1) ...
     double borderBasinGrowth = 0.0;    // ... given up when it holds more than this × the piece's
                                        // samples (>= 0; 0: no bound)
+    double lineElongation = 8.0;       // step 8i: a piece of a region at the border (8d, 8f)
+                                       // at least this elongated (the root of its extent's
+                                       // eigenvalue ratio; 0: off, else >= 1) ...
+    double lineAngle = 45.0;           // ... is kept without 8d's / 8f's shape tests when its
+                                       // long axis crosses its tile's lay (the tile's best
+                                       // offset) by at least this many degrees (in [0, 90]) ...
+    double lineLayContrast = 1.5;      // ... or its tile has no lay: the best offset's D more
+                                       // than 1 / this of the best one ≥ 45° from it (>= 1)
     int pileUpReach = 1;               // step 8e: a kept region mostly below the texture takes
                                        // the samples above it within this many samples (>= 0,
                                        // 0: off) ...
@@ -337,6 +345,8 @@ struct SelfSimMap {
     size_t borderLevelPieces = 0;       // ... of which step 8f kept (at a level above growSigma)
     size_t borderRim = 0;               // ... and their pile-up's samples
     size_t borderBasin = 0;             // samples step 8h added (8f's pieces' basins)
+    size_t borderLines = 0;             // pieces of border regions step 8i kept as lines
+                                        // crossing the lay (8d's / 8f's shape tests failed)
     size_t pileUp = 0;                  // samples step 8e added (the kept regions' pile-up)
     size_t grooveBanks = 0;             // samples step 8g added (the banks of marks below it)
     size_t trimmed = 0;                 // samples of kept regions step 8a left out
