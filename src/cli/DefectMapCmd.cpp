@@ -62,6 +62,9 @@ int runDefectMap(const DefectMapJobOptions& o) {
             m.selfsimRegions, m.selfsimDropped, m.selfsimBorderPieces, m.selfsimTextureThreshold,
             m.selfsimCandidates, m.selfsimDroppedTexture, m.selfsimDroppedShallow,
             m.selfsimTextureRms);
+    if (m.method == DefectMethod::SelfSim && m.selfsimBorderLines > 0)
+        std::printf("  %zu of those pieces kept as lines across the texture's lay\n",
+                    m.selfsimBorderLines);
     if (m.method == DefectMethod::SelfSim && m.selfsimReliefLevels > 0)
         std::printf("  a relief: its %zu plateau levels taken out before the copies\n",
                     m.selfsimReliefLevels);
