@@ -759,6 +759,15 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o.borderBasinGrowth = -1.0;
     expectNamed(o, "selfsim-border-basin-growth");
     o = {};
+    o.lineElongation = 0.5;
+    expectNamed(o, "selfsim-line-elongation");
+    o = {};
+    o.lineAngle = 91;
+    expectNamed(o, "selfsim-line-angle");
+    o = {};
+    o.lineLayContrast = 0.9;
+    expectNamed(o, "selfsim-line-lay-contrast");
+    o = {};
     o.pileUpReach = -1;
     expectNamed(o, "selfsim-pile-up-reach");
     o = {};
@@ -915,4 +924,78 @@ TEST(SelfSimMap, AGroovesBanksAreMarkedTheRaisedTextureBeyondThemIsNot) {
     EXPECT_GT(added, 0u);
     EXPECT_EQ(lowered, 0u) << "step 8g adds raised samples only";
     EXPECT_EQ(away, 0u) << away << " of the " << added << " samples added lie away from the groove";
+}
+
+// Step 8i: a piece of a region at the border that is a line crossing the texture's lay is kept
+// whatever its depth profile. Striae along z that do not repeat across them (the sum of four
+// sines along x of incommensurate periods, amplitude 1, and white noise of σ 0.05: a tile
+// repeats along z only, its lay) crossed from border to border by a raised ridge (3 × high, 10
+// samples wide, along x); from its lower flank two grooves run off, each 1.5 × deep and 5
+// samples wide with a deep spot (a pit 6 × deep, ρ 3) in its middle: one across the striae
+// (about 7° from x), one along them (along z). At the growth's 2.5 σ each is one region with the
+// ridge, which reaches the border; the deep spot puts the groove's mean score far below its
+// largest (step 8d's fill) and at every level of step 8f it is no depression (its shape). With
+// step 8i the groove across the striae is marked (at least 6 in 10 of its samples, against at
+// most a third without it: step 8f keeps the deep spot alone); the one along them gains nothing (a
+// stria's direction), the ridge is not marked, and asking for a right angle (lineAngle 90) keeps no
+// line. The pile-up and the banks (steps 8e, 8g) are off: they would take the ridge's flank beside
+// a kept groove.
+TEST(SelfSimMap, ALineAcrossTheLayIsKeptAtTheBorderOneAlongItIsNot) {
+    std::vector<float> h(static_cast<size_t>(kW) * kH);
+    std::mt19937 rng(53);
+    std::normal_distribution<double> noise(0.0, 0.05);
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x)
+            h[static_cast<size_t>(y) * kW + x] = static_cast<float>(
+                0.4 * std::sin(2 * M_PI * x / 7.3) + 0.3 * std::sin(2 * M_PI * x / 11.9 + 1.0) +
+                0.2 * std::sin(2 * M_PI * x / 17.7 + 2.0) +
+                0.1 * std::sin(2 * M_PI * x / 29.1 + 3.0) + noise(rng));
+    std::vector<uint8_t> ridge(h.size(), 0), across(h.size(), 0), along(h.size(), 0);
+    groove(h, ridge, 0, 112, kW - 1, 112, 10, -3.0);
+    groove(h, across, 120, 116, 200, 126, 5, 1.5);
+    pit(h, across, 160, 121, 3, 6.0);
+    groove(h, along, 70, 116, 70, 176, 5, 1.5);
+    pit(h, along, 70, 146, 3, 6.0);
+    // the ridge beyond 5 samples of the grooves (where they cut its flank, the groove's tail is
+    // its basin)
+    const std::vector<uint8_t> ridgePainted = ridge;
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            bool nearGroove = false;
+            for (int qy = std::max(0, y - 5); qy <= std::min(kH - 1, y + 5); ++qy)
+                for (int qx = std::max(0, x - 5); qx <= std::min(kW - 1, x + 5); ++qx) {
+                    const size_t q = static_cast<size_t>(qy) * kW + qx;
+                    nearGroove = nearGroove || across[q] || along[q];
+                }
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            ridge[i] = ridgePainted[i] && !nearGroove;
+        }
+
+    SelfSimMapOptions off;
+    off.lineElongation = 0.0;
+    off.pileUpReach = 0;
+    off.grooveBankWidth = 0.0;
+    SelfSimMapOptions on = off;
+    on.lineElongation = SelfSimMapOptions{}.lineElongation;
+    ASSERT_GT(on.lineElongation, 0.0);
+    SelfSimMapOptions square = on;
+    square.lineAngle = 90.0;
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
+                     b = detectSelfSimDefects(h, kW, kH, on),
+                     c = detectSelfSimDefects(h, kW, kH, square);
+    const Counts xa = count(a.map, across, on.border), xb = count(b.map, across, on.border);
+    const Counts za = count(a.map, along, on.border), zb = count(b.map, along, on.border);
+    const Counts rb = count(b.map, ridge, on.border);
+    EXPECT_GE(a.droppedBorder, 1u);
+    EXPECT_EQ(a.borderLines, 0u);
+    EXPECT_LE(xa.hits, xa.truth / 3)
+        << "the groove across, without step 8i: " << xa.hits << " of " << xa.truth;
+    EXPECT_GE(xb.hits, xb.truth * 6 / 10)
+        << "the groove across, with step 8i: " << xb.hits << " of " << xb.truth;
+    EXPECT_GE(xb.hits, xa.hits + xa.truth / 4);
+    EXPECT_GE(b.borderLines, 1u);
+    EXPECT_EQ(zb.hits, za.hits) << "the groove along the striae";
+    EXPECT_EQ(rb.hits, 0u) << "the ridge";
+    EXPECT_EQ(c.borderLines, 0u) << "a right angle asked for";
+    EXPECT_EQ(c.map, a.map) << "a right angle asked for";
 }

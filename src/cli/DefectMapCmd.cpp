@@ -62,6 +62,9 @@ int runDefectMap(const DefectMapJobOptions& o) {
             m.selfsimRegions, m.selfsimDropped, m.selfsimBorderPieces, m.selfsimTextureThreshold,
             m.selfsimCandidates, m.selfsimDroppedTexture, m.selfsimDroppedShallow,
             m.selfsimTextureRms);
+    if (m.method == DefectMethod::SelfSim && m.selfsimBorderLines > 0)
+        std::printf("  %zu of those pieces kept as lines across the texture's lay\n",
+                    m.selfsimBorderLines);
     if (m.method == DefectMethod::SelfSim && m.selfsimReliefLevels > 0)
         std::printf("  a relief: its %zu plateau levels taken out before the copies\n",
                     m.selfsimReliefLevels);
@@ -419,6 +422,17 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--selfsim-border-basin-growth", q.borderBasinGrowth,
                   "selfsim: ... the basin given up when it holds more than this many times the "
                   "piece's samples (0: no bound)")
+        ->capture_default_str();
+    c->add_option("--selfsim-line-elongation", q.lineElongation,
+                  "selfsim: a piece of a region at the border at least this elongated ...")
+        ->capture_default_str();
+    c->add_option("--selfsim-line-angle", q.lineAngle,
+                  "selfsim: ... and crossing the texture's lay by at least this many degrees is "
+                  "kept as a groove, whatever its depth profile (0 elongation: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-line-lay-contrast", q.lineLayContrast,
+                  "selfsim: ... where its tile has a lay: its best offset's difference at most "
+                  "1 / this of the best one 45 degrees or more from it")
         ->capture_default_str();
     c->add_option("--selfsim-relief", q.relief,
                   "selfsim: on a relief (heights on a few flat levels: lettering, a stepped part) "

@@ -345,6 +345,7 @@ struct DefectMap {
     size_t selfsimDroppedShallow = 0;
     double selfsimTextureRms = 0;
     size_t selfsimBorderPieces = 0;  // selfsim only: pieces of border regions kept (step 8d)
+    size_t selfsimBorderLines = 0;   // selfsim only: ... of which kept as lines across the lay (8i)
     size_t selfsimReliefLevels = 0;  // selfsim only: a relief's levels taken out (step 1b; 0: none)
     double seconds = 0;
 

@@ -208,6 +208,7 @@ void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int he
     r.selfsimDroppedShallow = m.droppedShallow;
     r.selfsimTextureRms = m.textureRms;
     r.selfsimBorderPieces = m.borderPieces;
+    r.selfsimBorderLines = m.borderLines;
     r.selfsimReliefLevels = m.reliefLevels;
     r.markedScore = r.markedCount();
 }

@@ -75,20 +75,20 @@ std::vector<float> gaussianBlur(const std::vector<float>& img, int W, int H, dou
     return out;
 }
 
-// Step 8c: a region is a particle when it stands above the texture (at least `raisedShare` of
-// its Σ|r| is positive) and is compact: the square root of its coordinates' covariance
-// eigenvalues' ratio (each sample a unit square: + 1/12 on both) below `elongation`.
-bool isParticle(const std::vector<size_t>& samples, const std::vector<float>& r, int W,
-                double elongation, double raisedShare) {
-    if (samples.empty()) return false;
-    double up = 0.0, all = 0.0, sx = 0.0, sz = 0.0;
+// A set of samples' extent: the square root of its coordinates' covariance eigenvalues' ratio
+// (each sample a unit square: + 1/12 on both), and the direction of its long axis (radians
+// from the x axis, in [0, π))
+struct Extent {
+    double elongation = 1.0, axis = 0.0;
+};
+Extent extentOf(std::span<const size_t> samples, int W) {
+    Extent e;
+    if (samples.empty()) return e;
+    double sx = 0.0, sz = 0.0;
     for (const size_t i : samples) {
-        up += std::max(0.0f, r[i]);
-        all += std::abs(r[i]);
         sx += static_cast<double>(i % W);
         sz += static_cast<double>(i / W);
     }
-    if (!(all > 0.0) || up < raisedShare * all) return false;
     const double m = static_cast<double>(samples.size()), mx = sx / m, mz = sz / m;
     double cxx = 0.0, czz = 0.0, cxz = 0.0;
     for (const size_t i : samples) {
@@ -102,7 +102,36 @@ bool isParticle(const std::vector<size_t>& samples, const std::vector<float>& r,
     cxz /= m;
     const double half = 0.5 * (cxx + czz),
                  root = std::sqrt(0.25 * (cxx - czz) * (cxx - czz) + cxz * cxz);
-    return std::sqrt((half + root) / (half - root)) < elongation;
+    e.elongation = std::sqrt((half + root) / (half - root));
+    e.axis = 0.5 * std::atan2(2.0 * cxz, cxx - czz);
+    if (e.axis < 0.0) e.axis += kPi;
+    return e;
+}
+
+// Step 8c: a region is a particle when it stands above the texture (at least `raisedShare` of
+// its Σ|r| is positive) and is compact: its extent's elongation below `elongation`.
+bool isParticle(const std::vector<size_t>& samples, const std::vector<float>& r, int W,
+                double elongation, double raisedShare) {
+    if (samples.empty()) return false;
+    double up = 0.0, all = 0.0;
+    for (const size_t i : samples) {
+        up += std::max(0.0f, r[i]);
+        all += std::abs(r[i]);
+    }
+    if (!(all > 0.0) || up < raisedShare * all) return false;
+    return extentOf(samples, W).elongation < elongation;
+}
+
+// Step 8i: a piece is a line crossing the texture's lay when its extent is at least
+// `elongation` and its long axis lies at least `angle` degrees (mod 180°) from the lay's
+// direction `lay` (radians from the x axis, in [0, π)).
+bool crossesLay(std::span<const size_t> samples, int W, double lay, double elongation,
+                double angle) {
+    const Extent e = extentOf(samples, W);
+    if (!(e.elongation >= elongation)) return false;
+    double d = std::abs(e.axis - lay);
+    d = std::min(d, kPi - d);
+    return d * 180.0 / kPi >= angle;
 }
 
 // Felzenszwalb and Huttenlocher's exact squared distance transform of a sampled function, in one
@@ -347,6 +376,14 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.borderBasin == 0.0 || o.borderBasin > 1.0))
         throw inputError(option("selfsim-border-basin"), "must be 0 (off) or > 1",
                          "The default is 1.1");
+    if (!(o.lineElongation == 0.0 || o.lineElongation >= 1.0))
+        throw inputError(option("selfsim-line-elongation"), "must be 0 (off) or >= 1",
+                         "The default is 8");
+    if (!(o.lineAngle >= 0.0 && o.lineAngle <= 90.0))
+        throw inputError(option("selfsim-line-angle"), "must be in [0, 90] degrees",
+                         "The default is 45");
+    if (!(o.lineLayContrast >= 1.0))
+        throw inputError(option("selfsim-line-lay-contrast"), "must be >= 1", "The default is 1.5");
     if (!(o.borderBasinGrowth >= 0.0))
         throw inputError(option("selfsim-border-basin-growth"), "must be >= 0",
                          "The default is 0 (no bound)");
@@ -398,6 +435,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     constexpr float kInf = std::numeric_limits<float>::infinity();
     std::vector<float> copies(static_cast<size_t>(K) * n, kInf), copySsd(copies.size(), kInf);
     std::vector<std::vector<int>> tileOffsets(static_cast<size_t>(tilesX) * tilesZ);
+    std::vector<float> tileLayContrast(tileOffsets.size(), 1.0f);  // step 8i
     const int pr = o.patch / 2;
     tbb::parallel_for(0, tilesX * tilesZ, [&](int tileIndex) {
         const int tx0 = (tileIndex % tilesX) * T, tz0 = (tileIndex / tilesX) * T;
@@ -429,6 +467,22 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
         }
         std::stable_sort(cands.begin(), cands.end(),
                          [](const Cand& p, const Cand& q) { return p.score < q.score; });
+        // step 8i's lay: how much better the tile's best offset is than the best one at
+        // least 45° from it (mod 180°): a striated tile repeats along its striae only
+        if (!cands.empty()) {
+            const double best = std::atan2(static_cast<double>(cands.front().dz),
+                                           static_cast<double>(cands.front().dx));
+            for (const Cand& c : cands) {
+                double d = std::abs(
+                    std::atan2(static_cast<double>(c.dz), static_cast<double>(c.dx)) - best);
+                d = std::fmod(d, kPi);
+                if (std::min(d, kPi - d) < 0.25 * kPi) continue;
+                const float least = cands.front().score;
+                tileLayContrast[static_cast<size_t>(tileIndex)] =
+                    least > 0.0f ? c.score / least : (c.score > 0.0f ? kInf : 1.0f);
+                break;
+            }
+        }
         std::vector<int>& kept = tileOffsets[static_cast<size_t>(tileIndex)];
         const int sep = 2 * o.refine + 1;
         std::vector<int> perSector(static_cast<size_t>(o.sectors), 0);
@@ -726,6 +780,28 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                 }
         }
     };
+    // step 8i: a border piece that is a line crossing its tile's lay (a groove across the
+    // striae; one along them is a stria); where the tile has no lay, any line
+    auto crossingLine = [&](std::span<const size_t> samples) {
+        if (!(o.lineElongation > 0.0) || samples.empty()) return false;
+        double sx = 0.0, sz = 0.0;
+        for (const size_t i : samples) {
+            sx += static_cast<double>(i % W);
+            sz += static_cast<double>(i / W);
+        }
+        const double m = static_cast<double>(samples.size());
+        const size_t tile =
+            static_cast<size_t>(std::min(tilesZ - 1, static_cast<int>(sz / m) / T)) * tilesX +
+            static_cast<size_t>(std::min(tilesX - 1, static_cast<int>(sx / m) / T));
+        const std::vector<int>& d = tileOffsets[tile];
+        const bool striated = d.size() >= 2 && tileLayContrast[tile] >= o.lineLayContrast;
+        double lay = 0.0;
+        if (striated) {
+            lay = std::atan2(static_cast<double>(d[1]), static_cast<double>(d[0]));
+            if (lay < 0.0) lay += kPi;
+        }
+        return crossesLay(samples, W, lay, o.lineElongation, striated ? o.lineAngle : 0.0);
+    };
     // steps 8a and 8c on a region's (or a border piece's) samples, then the map and step 8b's
     // first frontier; a border piece (steps 8d, 8f) also has to be shaped as a defect: at least
     // borderPieceMin samples after the trim, and its mean score at least `fill` of its largest
@@ -764,12 +840,16 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                 sum += zGrow[i];
                 most = std::max(most, zGrow[i]);
             }
-            if (!(sum >= fill * most * static_cast<double>(kept.size()))) return false;
             // step 8f's piece cut at level `cutAt`: its mean excess over the level at least
             // borderLevelShape of its largest (a depression's shape, whatever the level)
             const double m = static_cast<double>(kept.size());
-            if (cutAt > 0.0 && !(sum - m * cutAt >= o.borderLevelShape * (most - cutAt) * m))
-                return false;
+            const bool shaped =
+                sum >= fill * most * m &&
+                !(cutAt > 0.0 && !(sum - m * cutAt >= o.borderLevelShape * (most - cutAt) * m));
+            if (!shaped) {
+                if (!crossingLine(kept)) return false;
+                ++out.borderLines;  // step 8i: a groove across the lay, whatever its profile
+            }
         }
         out.trimmed += samples.size() - kept.size();
         for (const size_t i : kept) {
