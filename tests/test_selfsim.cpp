@@ -358,18 +358,18 @@ TEST(SelfSimMap, ADeepDefectIsKeptAndTheTextureJoinedToItDropped) {
 // Step 8c drops a particle and keeps the defects: striations with a pit (3 × the striations
 // deep, below the texture), a burr (a raised ridge 5 samples wide and 50 long, 3 × the
 // striations high) and a particle (a raised dome of the pit's size and height: compact, above
-// the texture). Without step 8c all three are marked; with it the pit and the burr as before
-// and the particle not, one region fewer, and nothing marked that was not marked without it.
+// the texture). Without step 8c -- the default: a person marks particles -- all three are
+// marked; with it (elongation 3) the pit and the burr as before and the particle not, one
+// region fewer, and nothing marked that was not marked without it.
 TEST(SelfSimMap, ARaisedCompactParticleIsDroppedThePitAndTheBurrKept) {
     std::vector<float> h = striations(41);
     std::vector<uint8_t> pitTruth(h.size(), 0), burrTruth(h.size(), 0), particle(h.size(), 0);
     pit(h, pitTruth, 80, 80, 6, 3.0);
     groove(h, burrTruth, 70, 150, 118, 140, 5, -3.0);  // depth < 0: raised
     pit(h, particle, 175, 95, 6, -3.0);                // a dome
-    SelfSimMapOptions off;
-    off.particleElongation = 0;
-    const SelfSimMapOptions on;
-    ASSERT_GT(on.particleElongation, 0.0);
+    const SelfSimMapOptions off;                       // the default
+    SelfSimMapOptions on;
+    on.particleElongation = 3.0;
     const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
                      b = detectSelfSimDefects(h, kW, kH, on);
     const Counts pa = count(a.map, pitTruth, on.border), pb = count(b.map, pitTruth, on.border);

@@ -352,7 +352,7 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
                          "The default is 0.08 (0: off)");
     if (!(o.particleElongation >= 0.0))
         throw inputError(option("selfsim-particle-elongation"), "must be >= 0",
-                         "The default is 3 (0: off)");
+                         "The default is 0 (off; 3 drops particles)");
     if (!(o.particleRaisedShare > 0.0 && o.particleRaisedShare <= 1.0))
         throw inputError(option("selfsim-particle-raised-share"), "must be in (0, 1]",
                          "The default is 0.8");
