@@ -76,10 +76,10 @@ std::vector<float> gaussianBlur(const std::vector<float>& img, int W, int H, dou
 }
 
 // A set of samples' extent: the square root of its coordinates' covariance eigenvalues' ratio
-// (each sample a unit square: + 1/12 on both), and the direction of its long axis (radians
-// from the x axis, in [0, π))
+// (each sample a unit square: + 1/12 on both), the direction of its long axis (radians from the
+// x axis, in [0, π)) and its centroid
 struct Extent {
-    double elongation = 1.0, axis = 0.0;
+    double elongation = 1.0, axis = 0.0, cx = 0.0, cz = 0.0;
 };
 Extent extentOf(std::span<const size_t> samples, int W) {
     Extent e;
@@ -90,6 +90,8 @@ Extent extentOf(std::span<const size_t> samples, int W) {
         sz += static_cast<double>(i / W);
     }
     const double m = static_cast<double>(samples.size()), mx = sx / m, mz = sz / m;
+    e.cx = mx;
+    e.cz = mz;
     double cxx = 0.0, czz = 0.0, cxz = 0.0;
     for (const size_t i : samples) {
         const double dx = static_cast<double>(i % W) - mx, dz = static_cast<double>(i / W) - mz;
@@ -125,9 +127,7 @@ bool isParticle(const std::vector<size_t>& samples, const std::vector<float>& r,
 // Step 8i: a piece is a line crossing the texture's lay when its extent is at least
 // `elongation` and its long axis lies at least `angle` degrees (mod 180°) from the lay's
 // direction `lay` (radians from the x axis, in [0, π)).
-bool crossesLay(std::span<const size_t> samples, int W, double lay, double elongation,
-                double angle) {
-    const Extent e = extentOf(samples, W);
+bool crossesLay(const Extent& e, double lay, double elongation, double angle) {
     if (!(e.elongation >= elongation)) return false;
     double d = std::abs(e.axis - lay);
     d = std::min(d, kPi - d);
@@ -784,15 +784,10 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     // striae; one along them is a stria); where the tile has no lay, any line
     auto crossingLine = [&](std::span<const size_t> samples) {
         if (!(o.lineElongation > 0.0) || samples.empty()) return false;
-        double sx = 0.0, sz = 0.0;
-        for (const size_t i : samples) {
-            sx += static_cast<double>(i % W);
-            sz += static_cast<double>(i / W);
-        }
-        const double m = static_cast<double>(samples.size());
+        const Extent e = extentOf(samples, W);
         const size_t tile =
-            static_cast<size_t>(std::min(tilesZ - 1, static_cast<int>(sz / m) / T)) * tilesX +
-            static_cast<size_t>(std::min(tilesX - 1, static_cast<int>(sx / m) / T));
+            static_cast<size_t>(std::min(tilesZ - 1, static_cast<int>(e.cz) / T)) * tilesX +
+            static_cast<size_t>(std::min(tilesX - 1, static_cast<int>(e.cx) / T));
         const std::vector<int>& d = tileOffsets[tile];
         const bool striated = d.size() >= 2 && tileLayContrast[tile] >= o.lineLayContrast;
         double lay = 0.0;
@@ -800,7 +795,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             lay = std::atan2(static_cast<double>(d[1]), static_cast<double>(d[0]));
             if (lay < 0.0) lay += kPi;
         }
-        return crossesLay(samples, W, lay, o.lineElongation, striated ? o.lineAngle : 0.0);
+        return crossesLay(e, lay, o.lineElongation, striated ? o.lineAngle : 0.0);
     };
     // steps 8a and 8c on a region's (or a border piece's) samples, then the map and step 8b's
     // first frontier; a border piece (steps 8d, 8f) also has to be shaped as a defect: at least
