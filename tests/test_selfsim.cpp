@@ -768,6 +768,15 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o.lineLayContrast = 0.9;
     expectNamed(o, "selfsim-line-lay-contrast");
     o = {};
+    o.burrElongation = 0.5;
+    expectNamed(o, "selfsim-burr-elongation");
+    o = {};
+    o.hollowRowGap = -1.0;
+    expectNamed(o, "selfsim-hollow-row-gap");
+    o = {};
+    o.hollowRowMembers = 1;
+    expectNamed(o, "selfsim-hollow-row-members");
+    o = {};
     o.pileUpReach = -1;
     expectNamed(o, "selfsim-pile-up-reach");
     o = {};
@@ -998,4 +1007,117 @@ TEST(SelfSimMap, ALineAcrossTheLayIsKeptAtTheBorderOneAlongItIsNot) {
     EXPECT_EQ(rb.hits, 0u) << "the ridge";
     EXPECT_EQ(c.borderLines, 0u) << "a right angle asked for";
     EXPECT_EQ(c.map, a.map) << "a right angle asked for";
+}
+
+// Step 8j: a raised piece of a region at the border that is a line crossing the texture's lay
+// (a burr across the striae) is kept. The striae of step 8i's test (along z, no repeat across
+// them) crossed from border to border by a trench along x (3 × deep, 10 samples wide); from its
+// lower bank two burrs rise (2 × high, 5 samples wide), one 40° from x (50° from the lay), one
+// along z. At the growth's 2.5 σ each burr is one region with the trench, which reaches the
+// border, and steps 8d-8i keep only pieces below the texture. With step 8j the burr across the
+// striae is marked (at least 6 in 10 of its samples), the one along them gains nothing, every
+// sample added is raised and on the burr or beside it (8b's flanks), and asking for a right angle
+// (lineAngle 90) keeps no raised line.
+TEST(SelfSimMap, ARaisedLineAcrossTheLayIsKeptAtTheBorderOneAlongItIsNot) {
+    std::vector<float> h(static_cast<size_t>(kW) * kH);
+    std::mt19937 rng(59);
+    std::normal_distribution<double> noise(0.0, 0.05);
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x)
+            h[static_cast<size_t>(y) * kW + x] = static_cast<float>(
+                0.4 * std::sin(2 * M_PI * x / 7.3) + 0.3 * std::sin(2 * M_PI * x / 11.9 + 1.0) +
+                0.2 * std::sin(2 * M_PI * x / 17.7 + 2.0) +
+                0.1 * std::sin(2 * M_PI * x / 29.1 + 3.0) + noise(rng));
+    std::vector<uint8_t> trench(h.size(), 0), across(h.size(), 0), along(h.size(), 0);
+    groove(h, trench, 0, 112, kW - 1, 112, 10, 3.0);
+    groove(h, across, 120, 118, 180, 168, 5, -2.0);
+    groove(h, along, 60, 118, 60, 178, 5, -2.0);
+
+    SelfSimMapOptions off;
+    SelfSimMapOptions on = off;
+    on.burrElongation = 8.0;
+    SelfSimMapOptions square = on;
+    square.lineAngle = 90.0;
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
+                     b = detectSelfSimDefects(h, kW, kH, on),
+                     c = detectSelfSimDefects(h, kW, kH, square);
+    const Counts xa = count(a.map, across, on.border), xb = count(b.map, across, on.border);
+    const Counts za = count(a.map, along, on.border), zb = count(b.map, along, on.border);
+    EXPECT_GE(a.droppedBorder, 1u);
+    EXPECT_EQ(a.raisedLines, 0u);
+    EXPECT_LE(xa.hits, xa.truth / 3)
+        << "the burr across, without step 8j: " << xa.hits << " of " << xa.truth;
+    EXPECT_GE(xb.hits, xb.truth * 6 / 10)
+        << "the burr across, with step 8j: " << xb.hits << " of " << xb.truth;
+    EXPECT_GE(b.raisedLines, 1u);
+    EXPECT_EQ(zb.hits, za.hits) << "the burr along the striae";
+    EXPECT_EQ(markedOnlyIn(a, b), 0u) << "samples marked without step 8j and not with it";
+    size_t added = 0, lowered = 0, away = 0;
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            if (!b.map[i] || a.map[i]) continue;
+            ++added;
+            lowered += b.residual[i] > 0.0f ? 0 : 1;
+            bool near = false;
+            for (int qy = std::max(0, y - 2); qy <= std::min(kH - 1, y + 2); ++qy)
+                for (int qx = std::max(0, x - 2); qx <= std::min(kW - 1, x + 2); ++qx)
+                    near = near || across[static_cast<size_t>(qy) * kW + qx];
+            away += near ? 0 : 1;
+        }
+    EXPECT_GT(added, 0u);
+    EXPECT_EQ(lowered, 0u) << "step 8j adds raised samples only";
+    EXPECT_EQ(away, 0u) << away << " of the " << added << " samples added lie off the burr";
+    EXPECT_EQ(c.raisedLines, 0u) << "a right angle asked for";
+    EXPECT_EQ(c.map, a.map) << "a right angle asked for";
+}
+
+// Step 8k: a row of hollows, each dropped alone, is kept. Striations (seed 61, noise σ 0.02)
+// with three sets of pits, each 0.25 deep (about 8 σ of the residual, under the texture's RMS, so
+// step 6 drops each alone) and 3 samples in radius: a row of six, 8 samples apart, 30° from x;
+// six scattered 40 samples or more apart; four in a square 8 samples on a side. The row is
+// marked (at least 6 in 10 of its samples); the scattered pits and the square (not a line) are
+// not; with the step off nothing of them is.
+TEST(SelfSimMap, ARowOfHollowsIsKeptScatteredOrClusteredHollowsAreNot) {
+    std::vector<float> h = striations(61, 0.02);
+    std::vector<uint8_t> row(h.size(), 0), scattered(h.size(), 0), square(h.size(), 0);
+    constexpr double kDepth = 0.25, kRho = 3.0;
+    for (int k = 0; k < 6; ++k)
+        pit(h, row, 70 + 8 * k * std::cos(M_PI / 6), 70 + 8 * k * std::sin(M_PI / 6), kRho, kDepth);
+    const double spots[6][2] = {{60, 150}, {110, 170}, {160, 150},
+                                {200, 60}, {200, 110}, {150, 60}};
+    for (const auto& s : spots) pit(h, scattered, s[0], s[1], kRho, kDepth);
+    for (int k = 0; k < 4; ++k) pit(h, square, 180 + 8 * (k % 2), 170 + 8 * (k / 2), kRho, kDepth);
+
+    SelfSimMapOptions off;
+    off.hollowRowGap = 0.0;
+    SelfSimMapOptions on = off;
+    on.hollowRowGap = SelfSimMapOptions{}.hollowRowGap;
+    ASSERT_GT(on.hollowRowGap, 0.0);
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
+                     b = detectSelfSimDefects(h, kW, kH, on);
+    const Counts ra = count(a.map, row, on.border), rb = count(b.map, row, on.border);
+    const Counts sb = count(b.map, scattered, on.border), qb = count(b.map, square, on.border);
+    EXPECT_GE(a.droppedShallow, 6u);
+    EXPECT_EQ(ra.hits, 0u) << "the row, without step 8k";
+    EXPECT_GE(rb.hits, rb.truth * 6 / 10) << "the row: " << rb.hits << " of " << rb.truth;
+    EXPECT_EQ(b.hollowRows, 1u);
+    EXPECT_EQ(b.rowHollows, 6u);
+    EXPECT_EQ(sb.hits, 0u) << "the scattered pits";
+    EXPECT_EQ(qb.hits, 0u) << "the square of pits";
+    EXPECT_EQ(markedOnlyIn(a, b), 0u) << "samples marked without step 8k and not with it";
+    size_t added = 0, away = 0;
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            if (!b.map[i] || a.map[i]) continue;
+            ++added;
+            bool near = false;
+            for (int qy = std::max(0, y - 2); qy <= std::min(kH - 1, y + 2); ++qy)
+                for (int qx = std::max(0, x - 2); qx <= std::min(kW - 1, x + 2); ++qx)
+                    near = near || row[static_cast<size_t>(qy) * kW + qx];
+            away += near ? 0 : 1;
+        }
+    EXPECT_GT(added, 0u);
+    EXPECT_EQ(away, 0u) << away << " of the " << added << " samples added lie off the row";
 }

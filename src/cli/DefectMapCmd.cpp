@@ -434,6 +434,18 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
                   "selfsim: ... where its tile has a lay: its best offset's difference at most "
                   "1 / this of the best one 45 degrees or more from it")
         ->capture_default_str();
+    c->add_option("--selfsim-burr-elongation", q.burrElongation,
+                  "selfsim: a piece of a region at the border above the texture at least this "
+                  "elongated and crossing the texture's lay as the line angle asks is kept, a burr "
+                  "across the striae (0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-hollow-row-gap", q.hollowRowGap,
+                  "selfsim: compact regions below the texture whose centres are at most this many "
+                  "samples apart are linked; a row of them in a line is kept, a pit chain (0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-hollow-row-members", q.hollowRowMembers,
+                  "selfsim: ... a row: at least this many of them")
+        ->capture_default_str();
     c->add_option("--selfsim-relief", q.relief,
                   "selfsim: on a relief (heights on a few flat levels: lettering, a stepped part) "
                   "take each sample's plateau level out first (true/false)")

@@ -81,6 +81,17 @@ std::vector<float> gaussianBlur(const std::vector<float>& img, int W, int H, dou
 struct Extent {
     double elongation = 1.0, axis = 0.0, cx = 0.0, cz = 0.0;
 };
+// the elongation and the long axis from the coordinates' central second moments (each sample
+// or point a unit square: + 1/12 on both variances)
+void extentFromMoments(Extent& e, double cxx, double czz, double cxz) {
+    cxx += 1.0 / 12.0;
+    czz += 1.0 / 12.0;
+    const double half = 0.5 * (cxx + czz),
+                 root = std::sqrt(0.25 * (cxx - czz) * (cxx - czz) + cxz * cxz);
+    e.elongation = std::sqrt((half + root) / (half - root));
+    e.axis = 0.5 * std::atan2(2.0 * cxz, cxx - czz);
+    if (e.axis < 0.0) e.axis += kPi;
+}
 Extent extentOf(std::span<const size_t> samples, int W) {
     Extent e;
     if (samples.empty()) return e;
@@ -99,15 +110,43 @@ Extent extentOf(std::span<const size_t> samples, int W) {
         czz += dz * dz;
         cxz += dx * dz;
     }
-    cxx = cxx / m + 1.0 / 12.0;
-    czz = czz / m + 1.0 / 12.0;
-    cxz /= m;
-    const double half = 0.5 * (cxx + czz),
-                 root = std::sqrt(0.25 * (cxx - czz) * (cxx - czz) + cxz * cxz);
-    e.elongation = std::sqrt((half + root) / (half - root));
-    e.axis = 0.5 * std::atan2(2.0 * cxz, cxx - czz);
-    if (e.axis < 0.0) e.axis += kPi;
+    extentFromMoments(e, cxx / m, czz / m, cxz / m);
     return e;
+}
+
+// Step 8k's rows: points (the hollows' centroids, x and z) linked when at most `gap` apart
+// (Euclidean), in groups (single linkage); a group of at least `least` points whose extent
+// (extentFromMoments) is at least `elongation` is a row. Each row's points' indices.
+std::vector<std::vector<size_t>> rowsOf(std::span<const std::array<double, 2>> p, double gap,
+                                        int least, double elongation) {
+    std::vector<size_t> parent(p.size());
+    for (size_t i = 0; i < p.size(); ++i) parent[i] = i;
+    const auto root = [&](size_t i) {
+        while (parent[i] != i) i = parent[i] = parent[parent[i]];
+        return i;
+    };
+    for (size_t i = 0; i < p.size(); ++i)
+        for (size_t j = i + 1; j < p.size(); ++j)
+            if (std::hypot(p[i][0] - p[j][0], p[i][1] - p[j][1]) <= gap) parent[root(i)] = root(j);
+    std::vector<std::vector<size_t>> groups(p.size()), rows;
+    for (size_t i = 0; i < p.size(); ++i) groups[root(i)].push_back(i);
+    for (std::vector<size_t>& g : groups) {
+        if (static_cast<int>(g.size()) < least || g.empty()) continue;
+        double mx = 0.0, mz = 0.0;
+        for (const size_t i : g) mx += p[i][0], mz += p[i][1];
+        const double m = static_cast<double>(g.size());
+        mx /= m;
+        mz /= m;
+        double cxx = 0.0, czz = 0.0, cxz = 0.0;
+        for (const size_t i : g) {
+            const double dx = p[i][0] - mx, dz = p[i][1] - mz;
+            cxx += dx * dx, czz += dz * dz, cxz += dx * dz;
+        }
+        Extent e;
+        extentFromMoments(e, cxx / m, czz / m, cxz / m);
+        if (e.elongation >= elongation) rows.push_back(std::move(g));
+    }
+    return rows;
 }
 
 // Step 8c: a region is a particle when it stands above the texture (at least `raisedShare` of
@@ -382,6 +421,14 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.lineAngle >= 0.0 && o.lineAngle <= 90.0))
         throw inputError(option("selfsim-line-angle"), "must be in [0, 90] degrees",
                          "The default is 45");
+    if (!(o.burrElongation == 0.0 || o.burrElongation >= 1.0))
+        throw inputError(option("selfsim-burr-elongation"), "must be 0 (off) or >= 1",
+                         "The default is 0 (off)");
+    if (!(o.hollowRowGap >= 0.0))
+        throw inputError(option("selfsim-hollow-row-gap"), "must be >= 0",
+                         "The default is 16 samples (0: off)");
+    if (o.hollowRowMembers < 2)
+        throw inputError(option("selfsim-hollow-row-members"), "must be >= 2", "The default is 4");
     if (!(o.lineLayContrast >= 1.0))
         throw inputError(option("selfsim-line-lay-contrast"), "must be >= 1", "The default is 1.5");
     if (!(o.borderBasinGrowth >= 0.0))
@@ -782,8 +829,8 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     };
     // step 8i: a border piece that is a line crossing its tile's lay (a groove across the
     // striae; one along them is a stria); where the tile has no lay, any line
-    auto crossingLine = [&](std::span<const size_t> samples) {
-        if (!(o.lineElongation > 0.0) || samples.empty()) return false;
+    auto crossingLine = [&](std::span<const size_t> samples, double elongation) {
+        if (!(elongation > 0.0) || samples.empty()) return false;
         const Extent e = extentOf(samples, W);
         const size_t tile =
             static_cast<size_t>(std::min(tilesZ - 1, static_cast<int>(e.cz) / T)) * tilesX +
@@ -795,14 +842,14 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             lay = std::atan2(static_cast<double>(d[1]), static_cast<double>(d[0]));
             if (lay < 0.0) lay += kPi;
         }
-        return crossesLay(e, lay, o.lineElongation, striated ? o.lineAngle : 0.0);
+        return crossesLay(e, lay, elongation, striated ? o.lineAngle : 0.0);
     };
     // steps 8a and 8c on a region's (or a border piece's) samples, then the map and step 8b's
     // first frontier; a border piece (steps 8d, 8f) also has to be shaped as a defect: at least
     // borderPieceMin samples after the trim, and its mean score at least `fill` of its largest
     // (borderPieceFill, borderLevelFill). False when nothing is marked.
     auto keepRegion = [&](std::span<const size_t> samples, float peak, bool piece, double fill,
-                          double cutAt) {
+                          double cutAt, double line) {
         // step 8b's sign: that of the region's largest |r| (a groove's or a dent's below the
         // texture, a burr's or a particle's above) ...
         size_t top = samples.front();
@@ -842,7 +889,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                 sum >= fill * most * m &&
                 !(cutAt > 0.0 && !(sum - m * cutAt >= o.borderLevelShape * (most - cutAt) * m));
             if (!shaped) {
-                if (!crossingLine(kept)) return false;
+                if (!crossingLine(kept, line)) return false;
                 ++out.borderLines;  // step 8i: a groove across the lay, whatever its profile
             }
         }
@@ -958,6 +1005,39 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
         out.borderBasin += basinNew.size();
         takePileUp(basinNew);
     };
+    // step 8j: a burr across the lay. The region at the border split at the levels of step 8f
+    // (from growSigma, rising by borderLevelStep) into its pieces above the texture; a piece
+    // off the border that passes steps 6-7's gates, keeps borderPieceMin samples after the trim
+    // and is a line at least burrElongation long crossing its tile's lay (step 8i's test)
+    // is kept; a piece not kept is split again at the next level. Raised pieces are kept on no
+    // other shape: a land's shoulders are raised plateaus as smooth as a defect.
+    std::vector<uint8_t> raisedSeen(splitBorder && o.burrElongation > 0.0 ? n : 0, 0);
+    auto keepRaisedLines = [&](const Region& reg) {
+        float top = 0.0f;
+        for (size_t k = reg.begin; k < reg.end; ++k) top = std::max(top, zGrow[members[k]]);
+        for (double level = grow;
+             level<top; level = o.borderLevelStep> 1.0 ? level * o.borderLevelStep : top) {
+            for (size_t k = reg.begin; k < reg.end; ++k) raisedSeen[members[k]] = 0;
+            const float cut = static_cast<float>(level);
+            const auto raised = [&](size_t q) {
+                return inRegion[q] && !out.map[q] && zGrow[q] >= cut && out.residual[q] > 0.0f;
+            };
+            for (size_t k = reg.begin; k < reg.end; ++k) {
+                const size_t i0 = members[k];
+                if (raisedSeen[i0] || !raised(i0)) continue;
+                piece.clear();
+                const bool atBorder = floodRegion(i0, raisedSeen, piece, raised);
+                const float peak = peakOf(piece);
+                if (atBorder || gate(piece, peak) != Gate::Pass) continue;
+                // no fill passes (an infinite share): the line test alone decides
+                if (!keepRegion(piece, peak, true, std::numeric_limits<double>::infinity(), 0.0,
+                                o.burrElongation))
+                    continue;
+                --out.borderLines;  // counted by keepRegion as step 8i's; it is 8j's
+                ++out.raisedLines;
+            }
+        }
+    };
     auto keepBorderPieces = [&](const Region& reg) {
         for (size_t k = reg.begin; k < reg.end; ++k) inRegion[members[k]] = 1;
         for (size_t k = reg.begin; k < reg.end; ++k) {
@@ -967,7 +1047,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             const bool atBorder = floodRegion(i0, pieceSeen, piece, below);
             const float peak = peakOf(piece);
             if (atBorder || gate(piece, peak) != Gate::Pass) continue;
-            if (!keepRegion(piece, peak, true, o.borderPieceFill, 0.0)) continue;
+            if (!keepRegion(piece, peak, true, o.borderPieceFill, 0.0, o.lineElongation)) continue;
             ++out.borderPieces;
             takeRim();
         }
@@ -993,7 +1073,8 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                     const bool atBorder = floodRegion(i0, levelSeen, piece, above);
                     const float peak = peakOf(piece);
                     if (atBorder || gate(piece, peak) != Gate::Pass) continue;
-                    if (!keepRegion(piece, peak, true, o.borderLevelFill, level)) continue;
+                    if (!keepRegion(piece, peak, true, o.borderLevelFill, level, o.lineElongation))
+                        continue;
                     ++out.borderPieces;
                     ++out.borderLevelPieces;
                     if (!basinOwner.empty()) takeBasin(reg, level);
@@ -1001,8 +1082,10 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                 }
             }
         }
+        if (!raisedSeen.empty()) keepRaisedLines(reg);  // step 8j
         for (size_t k = reg.begin; k < reg.end; ++k) inRegion[members[k]] = 0;
     };
+    std::vector<uint8_t> regionKept(o.hollowRowGap > 0.0 ? regions.size() : 0, 0);  // step 8k
     for (const Region& reg : regions) {
         const std::span<const size_t> samples(members.data() + reg.begin, reg.end - reg.begin);
         const Gate verdict = gate(samples, reg.peak);
@@ -1020,7 +1103,47 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             if (!pieceSeen.empty()) keepBorderPieces(reg);
             continue;
         }
-        if (keepRegion(samples, reg.peak, false, 0.0, 0.0)) ++out.regions;
+        if (!keepRegion(samples, reg.peak, false, 0.0, 0.0, 0.0)) continue;
+        ++out.regions;
+        if (!regionKept.empty()) regionKept[static_cast<size_t>(&reg - regions.data())] = 1;
+    }
+    // step 8k: a row of hollows. The regions off the border that hold a detection and minRegion
+    // samples, lie below the texture (at least kHollowShare of their Σ|r| negative) and are
+    // compact (extent below kHollowCompact), their centroids linked when at most hollowRowGap
+    // apart; a group of at least hollowRowMembers that is a line (its centroids' extent at least
+    // kHollowRowElongation) is a row, and its regions that steps 6-7 dropped (under the
+    // texture's RMS or its tail) are kept: a pit chain, each pit too small alone, the row a line
+    if (o.hollowRowGap > 0.0) {
+        std::vector<size_t> hollow;
+        std::vector<std::array<double, 2>> at;
+        for (size_t k = 0; k < regions.size(); ++k) {
+            const Region& reg = regions[k];
+            const std::span<const size_t> samples(members.data() + reg.begin, reg.end - reg.begin);
+            if (reg.atBorder || gate(samples, reg.peak) == Gate::Small) continue;
+            double down = 0.0, all = 0.0;
+            for (const size_t i : samples) {
+                down += std::max(0.0f, -out.residual[i]);
+                all += std::abs(out.residual[i]);
+            }
+            if (!(all > 0.0 && down >= kHollowShare * all)) continue;
+            const Extent e = extentOf(samples, W);
+            if (!(e.elongation < kHollowCompact)) continue;
+            hollow.push_back(k);
+            at.push_back({e.cx, e.cz});
+        }
+        for (const std::vector<size_t>& row :
+             rowsOf(at, o.hollowRowGap, o.hollowRowMembers, kHollowRowElongation)) {
+            size_t taken = 0;
+            for (const size_t j : row) {
+                const Region& reg = regions[hollow[j]];
+                if (regionKept[hollow[j]]) continue;
+                const std::span<const size_t> samples(members.data() + reg.begin,
+                                                      reg.end - reg.begin);
+                if (keepRegion(samples, reg.peak, false, 0.0, 0.0, 0.0)) ++taken;
+            }
+            out.rowHollows += taken;
+            out.hollowRows += taken > 0 ? 1 : 0;
+        }
     }
     // ---- step 8: the kept regions' flanks --------------------------------------------------
     // a kept region grows `extendSteps` samples further, layer by layer, into samples whose

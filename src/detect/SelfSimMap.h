@@ -346,6 +346,15 @@ struct SelfSimMapOptions {
                                        // offset) by at least this many degrees (in [0, 90]) ...
     double lineLayContrast = 1.5;      // ... or its tile has no lay: the best offset's D more
                                        // than 1 / this of the best one ≥ 45° from it (>= 1)
+    double burrElongation = 0.0;       // step 8j: a piece of a region at the border above the
+                                       // texture, at a level of step 8f, at least this
+                                       // elongated and crossing its tile's lay (8i's test) is
+                                       // kept, a burr (0: off, the default; else >= 1)
+    double hollowRowGap = 16.0;        // step 8k: hollows (compact regions below the texture)
+                                       // whose centroids are at most this many samples apart
+                                       // are linked (>= 0; 0: off) ...
+    int hollowRowMembers = 4;          // ... and at least this many in a line are a row, kept
+                                       // (>= 2)
     int pileUpReach = 1;               // step 8e: a kept region mostly below the texture takes
                                        // the samples above it within this many samples (>= 0,
                                        // 0: off) ...
@@ -360,6 +369,12 @@ struct SelfSimMapOptions {
     double extendShare = 0.1;          // ... this share of the region's peak score (in [0, 1)) ...
     double extendSigma = 1.0;          // ... and at least this (> 0)
 };
+
+// Step 8k: a hollow lies below the texture (at least this share of its Σ|r| negative) ...
+inline constexpr double kHollowShare = 0.8;
+// ... and is compact (its extent below this); a row's centroids are a line (extent at least this)
+inline constexpr double kHollowCompact = 2.5;
+inline constexpr double kHollowRowElongation = 4.0;
 
 // Step 7 needs at least this many regions to measure the texture's tail on.
 inline constexpr size_t kTextureTailMinRegions = 32;
@@ -383,6 +398,10 @@ struct SelfSimMap {
     size_t borderBasin = 0;             // samples step 8h added (8f's pieces' basins)
     size_t borderLines = 0;             // pieces of border regions step 8i kept as lines
                                         // crossing the lay (8d's / 8f's shape tests failed)
+    size_t raisedLines = 0;             // raised pieces of border regions step 8j kept (burrs
+                                        // across the lay)
+    size_t hollowRows = 0;              // rows of hollows step 8k kept regions of ...
+    size_t rowHollows = 0;              // ... and those regions (dropped by steps 6-7 alone)
     size_t pileUp = 0;                  // samples step 8e added (the kept regions' pile-up)
     size_t grooveBanks = 0;             // samples step 8g added (the banks of marks below it)
     size_t trimmed = 0;                 // samples of kept regions step 8a left out
