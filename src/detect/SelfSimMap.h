@@ -263,6 +263,43 @@
 //     at precision 0.64; without the lay test (lineAngle 0) extent 8 gave 36 (A 103 gained, the
 //     NanoFocus land B 103 lost) and extent 10 35, the NanoFocus land's precision -0.05 to -0.22 on
 //     all ten of its runs. Held out in docs/RESULTS.md.
+//  8j. A burr across the lay (burrElongation; off by default): a region at the border that
+//     steps 6-7 would keep is split, after steps 8d-8i, at the levels of step 8f (growSigma ×
+//     borderLevelStep^k, k = 0, 1, ...) into its pieces above the texture (r > 0, not marked);
+//     a piece off the border that passes the gates of steps 6-7 and keeps borderPieceMin
+//     samples after the trim (8a) is kept when it is a line crossing its tile's lay (step 8i's
+//     test with burrElongation for the extent), and split again at the next level when not.
+//     A burr is a raised ridge standing across the striae; a land's shoulders are raised
+//     plateaus along them, so raised pieces are kept on no other shape. Measured on the DEV
+//     insertion seeds 101-105 of scripts/eval-real and the seen 4301-4303 (the Sensofar land's
+//     missed burrs followed to their regions on the binary's dumped residual): of its 24 model-A
+//     burrs, 6 were found below half, 5 of them in the region of the rough end and the right
+//     shoulder (13 000-16 000 samples), 75-100 % raised, their peaks 27-53 σ above the tail
+//     of 11.6-12.0 σ; at some level each but one (a compact blob at the region's peak) is a raised
+//     piece of extent 8-11, and of the land's other raised pieces two are as long (1-2 samples
+//     wide, under borderPieceMin). Replayed in numpy (extent 8, no lay test), then the binary at
+//     extent 8 on DEV (both models, the five files): no run gained or lost (45 of 50 on a person's
+//     marks), recall +0.01 on three maps (the Sensofar land A 102 and A 104, a burr each; the
+//     NanoFocus land A 102), every other map byte for byte. Off: it gains no run. Held out in
+//     docs/RESULTS.md.
+//  8k. A row of hollows (hollowRowGap, hollowRowMembers): the regions of step 6 off the
+//     border that hold a detection and minRegion samples, lie below the texture (at least
+//     kHollowShare of their Σ|r| negative) and are compact (extent below kHollowCompact) are
+//     linked when their centroids are at most hollowRowGap samples apart (single linkage); a
+//     group of at least hollowRowMembers whose centroids are a line (their extent at least
+//     kHollowRowElongation) is a row, and its regions that steps 6-7 dropped (under the
+//     texture's RMS or its tail) are kept, with their trim, pile-up and flanks (8a, 8e, 8b). A
+//     pit chain is a row of compact hollows, each too small and too shallow alone on a texture
+//     whose tail is high (the Sensofar land's model-B runs: 17-19 σ against pits of 13-21 σ,
+//     0.8-1.2 × the texture's RMS); the texture's own hollows are scattered or follow a stria
+//     (elongated, or joined into one region). On the DEV insertion seeds 101-105 of
+//     scripts/eval-real (both models, the five files; the missed pit chains followed to their
+//     regions, the rule replayed in numpy: gap 12-20, 3-4 members, line 3-8; then the binary):
+//     runs at target on a person's marks 45 -> 46 of 50 (the Sensofar land B 104, recall
+//     0.76 -> 0.80), none lost, none below precision 0.6 from above; replayed, the samples it
+//     adds over the 50 runs 230 true / 7 false on the Sensofar land, 21 / 31 on the periodic
+//     lines and none on the other three; 3 members: +86 true / +342 false (the NanoFocus land
+//     and the Wyko part). Held out in docs/RESULTS.md.
 // Every threshold is relative to σ_s, so the map is invariant to h → a·h + b (a ≠ 0) up to
 // rounding; a constant map marks nothing. Cost: offsets × (2·refine + 1)² box-filtered
 // difference passes over the map, parallel over tiles (TBB); memory 2 × offsets + 6 float copies.
