@@ -65,6 +65,12 @@ int runDefectMap(const DefectMapJobOptions& o) {
     if (m.method == DefectMethod::SelfSim && m.selfsimBorderLines > 0)
         std::printf("  %zu of those pieces kept as lines across the texture's lay\n",
                     m.selfsimBorderLines);
+    if (m.method == DefectMethod::SelfSim && m.selfsimRaisedLines > 0)
+        std::printf("  %zu raised pieces at the border kept as burrs across the texture's lay\n",
+                    m.selfsimRaisedLines);
+    if (m.method == DefectMethod::SelfSim && m.selfsimHollowRows > 0)
+        std::printf("  %zu rows of hollows: %zu hollows dropped alone kept with their row\n",
+                    m.selfsimHollowRows, m.selfsimRowHollows);
     if (m.method == DefectMethod::SelfSim && m.selfsimReliefLevels > 0)
         std::printf("  a relief: its %zu plateau levels taken out before the copies\n",
                     m.selfsimReliefLevels);

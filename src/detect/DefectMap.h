@@ -347,6 +347,9 @@ struct DefectMap {
     size_t selfsimBorderPieces = 0;  // selfsim only: pieces of border regions kept (step 8d)
     size_t selfsimBorderLines = 0;   // selfsim only: ... of which kept as lines across the lay (8i)
     size_t selfsimReliefLevels = 0;  // selfsim only: a relief's levels taken out (step 1b; 0: none)
+    size_t selfsimRaisedLines = 0;  // selfsim only: raised pieces kept as burrs across the lay (8j)
+    size_t selfsimHollowRows = 0;   // selfsim only: rows of hollows (step 8k) ...
+    size_t selfsimRowHollows = 0;   // ... and their hollows that steps 6-7 had dropped
     double seconds = 0;
 
     size_t markedCount() const;

@@ -210,6 +210,9 @@ void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int he
     r.selfsimBorderPieces = m.borderPieces;
     r.selfsimBorderLines = m.borderLines;
     r.selfsimReliefLevels = m.reliefLevels;
+    r.selfsimRaisedLines = m.raisedLines;
+    r.selfsimHollowRows = m.hollowRows;
+    r.selfsimRowHollows = m.rowHollows;
     r.markedScore = r.markedCount();
 }
 
