@@ -1015,8 +1015,8 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     auto keepRaisedLines = [&](const Region& reg) {
         float top = 0.0f;
         for (size_t k = reg.begin; k < reg.end; ++k) top = std::max(top, zGrow[members[k]]);
-        for (double level = grow;
-             level<top; level = o.borderLevelStep> 1.0 ? level * o.borderLevelStep : top) {
+        // the levels: growSigma, then growSigma × borderLevelStep^k below the region's top
+        for (double level = grow; level < top; level *= o.borderLevelStep) {
             for (size_t k = reg.begin; k < reg.end; ++k) raisedSeen[members[k]] = 0;
             const float cut = static_cast<float>(level);
             const auto raised = [&](size_t q) {
@@ -1036,6 +1036,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                 --out.borderLines;  // counted by keepRegion as step 8i's; it is 8j's
                 ++out.raisedLines;
             }
+            if (!(o.borderLevelStep > 1.0)) break;  // step 8f off: the growth's level alone
         }
     };
     auto keepBorderPieces = [&](const Region& reg) {
