@@ -279,9 +279,9 @@
 //     piece of extent 8-11, and of the land's other raised pieces two are as long (1-2 samples
 //     wide, under borderPieceMin). Replayed in numpy (extent 8, no lay test), then the binary at
 //     extent 8 on DEV (both models, the five files): no run gained or lost (45 of 50 on a person's
-//     marks), recall +0.01 on three maps (the Sensofar land A 102 and A 104, a burr each; the
-//     NanoFocus land A 102), every other map byte for byte. Off: it gains no run. Held out in
-//     docs/RESULTS.md.
+//     marks), recall +0.008 to +0.015 on three maps (the Sensofar land A 102 and A 104, a burr
+//     each; the NanoFocus land A 102), every other map byte for byte. Off: it gains no run. Held
+//     out in docs/RESULTS.md.
 //  8k. A row of hollows (hollowRowGap, hollowRowMembers): the regions of step 6 off the
 //     border that hold a detection and minRegion samples, lie below the texture (at least
 //     kHollowShare of their Σ|r| negative) and are compact (extent below kHollowCompact) are
