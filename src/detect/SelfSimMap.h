@@ -359,6 +359,9 @@ struct SelfSimMapOptions {
                                        // below growSigma (s <= growScale) and at least ...
     double extendShare = 0.1;          // ... this share of the region's peak score (in [0, 1)) ...
     double extendSigma = 1.0;          // ... and at least this (> 0)
+    double roughnessCutoff = 0.0;      // step 6: the RMS textureRms scales is the roughness's
+                                       // -- g less its Gaussian low-pass of this cutoff
+                                       // wavelength λc, samples (ISO 16610-61) -- not g's (0: off)
 };
 
 // Step 7 needs at least this many regions to measure the texture's tail on.
@@ -391,6 +394,8 @@ struct SelfSimMap {
                                         // a relief)
     double textureThreshold = 0;        // step 7's threshold on a region's peak score (0: off)
     double textureRms = 0;              // RMS of the levelled heights outside the border
+    double shallowRms = 0;              // the RMS step 6 judges a region's peak against
+                                        // (textureRms, or the roughness's with roughnessCutoff)
 };
 
 /// Throws InputError naming the option for a bad value.
