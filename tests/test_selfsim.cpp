@@ -1026,6 +1026,7 @@ TEST(SelfSimMap, TheRoughnessRmsJudgesAPitOnACurvedLandTheFormDoesNot) {
     pit(h, pitTruth, 128, 112, 6, 1.2);
     const std::vector<float> land = curved(h);
     SelfSimMapOptions off, on;
+    off.roughnessCutoff = 0;
     on.roughnessCutoff = 96;
     const SelfSimMap a = detectSelfSimDefects(land, kW, kH, off),
                      b = detectSelfSimDefects(land, kW, kH, on);

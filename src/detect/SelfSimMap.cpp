@@ -421,7 +421,7 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
                          "The default is 0.6");
     if (!(o.roughnessCutoff >= 0.0))
         throw inputError(option("selfsim-roughness-cutoff"), "must be >= 0 (samples)",
-                         "The default is 0 (off: the levelled heights' RMS)");
+                         "The default is 96 (0: off, the levelled heights' RMS)");
     if (o.border < 0)
         throw inputError(option("selfsim-border"), "must be >= 0", "The default is 40");
     if (o.minRegion < 1)

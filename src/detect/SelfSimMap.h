@@ -359,9 +359,10 @@ struct SelfSimMapOptions {
                                        // below growSigma (s <= growScale) and at least ...
     double extendShare = 0.1;          // ... this share of the region's peak score (in [0, 1)) ...
     double extendSigma = 1.0;          // ... and at least this (> 0)
-    double roughnessCutoff = 0.0;      // step 6: the RMS textureRms scales is the roughness's
+    double roughnessCutoff = 96.0;     // step 6: the RMS textureRms scales is the roughness's
                                        // -- g less its Gaussian low-pass of this cutoff
-                                       // wavelength λc, samples (ISO 16610-61) -- not g's (0: off)
+                                       // wavelength λc, samples (ISO 16610-61) -- not g's (0:
+                                       // off, the map before 2026-11-29)
 };
 
 // Step 7 needs at least this many regions to measure the texture's tail on.
