@@ -62,6 +62,19 @@
 //     1–3 samples outside the defect, a third of the marks on small pits (DEV insertion seeds
 //     101–102 of scripts/eval-real: median precision 0.57 → 0.70, recall 0.87 → 0.82 on the
 //     four measured textures with defects; docs/RESULTS.md).
+//     The texture's RMS there is its roughness's (roughnessCutoff, since 2026-11-29): the RMS
+//     of g less its Gaussian low-pass of cutoff wavelength λc = 96 samples (ISO 16610-61's
+//     filter, twice the search radius: only what is longer than the texture's own repeats is
+//     taken out), not g's. A land's curved form, which step 1's quadratic leaves, was most of
+//     g's RMS: on the NanoFocus land 12 µm of g's against 4.0 µm of the roughness's, so its
+//     crater and an elongated pit, 25-45 σ and above the texture's tail, were dropped as shallow
+//     (0.36-0.58 of g's RMS). The Wyko part's arcs' waviness likewise (1.8 -> 0.64 µm). On a
+//     relief (step 1b) the flattened plateaus have no form: the logo's RMS moves by 1 %. On the
+//     five measured files alone (the person's marks of scripts/real-surface-marks, a defect found
+//     when a quarter of it is marked) the certain defects found went 7 -> 11 of 31, every one
+//     that the RMS alone dropped; on the DEV insertion seeds 101-105 of scripts/eval-real no run
+//     at target gained or was lost (45 of 50 on a person's marks; plain 36 -> 31, the
+//     NanoFocus land's own defects now marked); λc 48 the same runs at lower precision.
 //  7. The texture's own tail (an a-contrario test against the map's own statistics, not
 //     the Gaussian's): a measured texture's residual is heavy-tailed (particles, wandering
 //     striae, rough ends), so its own marks stand 7–90 σ high where step 5's Gaussian test
