@@ -776,6 +776,8 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o = {};
     o.hollowRowMembers = 1;
     expectNamed(o, "selfsim-hollow-row-members");
+    o.roughnessCutoff = -1.0;
+    expectNamed(o, "selfsim-roughness-cutoff");
     o = {};
     o.pileUpReach = -1;
     expectNamed(o, "selfsim-pile-up-reach");
@@ -1120,4 +1122,60 @@ TEST(SelfSimMap, ARowOfHollowsIsKeptScatteredOrClusteredHollowsAreNot) {
         }
     EXPECT_GT(added, 0u);
     EXPECT_EQ(away, 0u) << away << " of the " << added << " samples added lie off the row";
+}
+
+// Step 6 with roughnessCutoff: the RMS a region must reach is the roughness's, not the form's. A
+// land's curved shoulders are form the quadratic of step 1 leaves in g (16 u^8 across x, u = -1..1:
+// 16 × the striations high at the edges); a pit 1.2 × the striations deep stands far above the
+// residual and above the striations' roughness, but below the RMS of g, which the form makes.
+// Without the cutoff step 6 drops the pit as shallow; with it (λc 96 samples) the pit is marked
+// and nothing farther than 10 samples from its centre. On the striations without the form the
+// roughness's RMS is the map's to within 5 % (the filter takes out nothing of a texture whose
+// period is well below λc), and a pit 0.2 deep, which stands out of the residual (marked with no
+// RMS gate), stays below the roughness: not marked.
+TEST(SelfSimMap, TheRoughnessRmsJudgesAPitOnACurvedLandTheFormDoesNot) {
+    auto curved = [](std::vector<float> h) {
+        for (int y = 0; y < kH; ++y)
+            for (int x = 0; x < kW; ++x) {
+                const double u = (x - kW / 2.0) / (kW / 2.0);
+                h[static_cast<size_t>(y) * kW + x] += static_cast<float>(16.0 * std::pow(u, 8));
+            }
+        return h;
+    };
+    std::vector<float> h = striations(61);
+    std::vector<uint8_t> pitTruth(h.size(), 0);
+    pit(h, pitTruth, 128, 112, 6, 1.2);
+    const std::vector<float> land = curved(h);
+    SelfSimMapOptions off, on;
+    off.roughnessCutoff = 0;
+    on.roughnessCutoff = 96;
+    const SelfSimMap a = detectSelfSimDefects(land, kW, kH, off),
+                     b = detectSelfSimDefects(land, kW, kH, on);
+    EXPECT_EQ(a.shallowRms, a.textureRms);
+    EXPECT_LT(b.shallowRms * 2.0, b.textureRms) << "the form is most of the map's RMS";
+    const Counts pa = count(a.map, pitTruth, on.border), pb = count(b.map, pitTruth, on.border);
+    EXPECT_LT(pa.hits * 10, pa.truth) << "dropped as shallower than the form's RMS";
+    EXPECT_GT(a.droppedShallow, 0u);
+    EXPECT_GE(pb.hits, pb.truth * 8 / 10) << "the pit, judged against the roughness";
+    size_t far = 0;
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x)
+            if (b.map[static_cast<size_t>(y) * kW + x] && std::hypot(x - 128.0, y - 112.0) > 10.0)
+                ++far;
+    EXPECT_EQ(far, 0u) << "the striations and the form are not marked";
+
+    // the striations alone (no form): the roughness's RMS is the map's, and a pit that stands
+    // out of the residual (marked with no RMS gate) but not out of the roughness is not marked
+    std::vector<float> flat = striations(62);
+    std::vector<uint8_t> shallowTruth(flat.size(), 0);
+    pit(flat, shallowTruth, 128, 112, 6, 0.2);
+    SelfSimMapOptions noGate = on;
+    noGate.textureRms = 0;
+    const SelfSimMap c = detectSelfSimDefects(flat, kW, kH, on),
+                     d = detectSelfSimDefects(flat, kW, kH, noGate);
+    EXPECT_NEAR(c.shallowRms, c.textureRms, 0.05 * c.textureRms);
+    const Counts sc = count(c.map, shallowTruth, on.border),
+                 sd = count(d.map, shallowTruth, on.border);
+    EXPECT_GE(sd.hits, sd.truth / 3) << "it stands out of the residual";
+    EXPECT_EQ(sc.hits, 0u) << "but not out of the roughness (RMS " << c.shallowRms << ")";
 }

@@ -365,6 +365,10 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--selfsim-texture-rms", q.textureRms,
                   "selfsim: a region's peak residual at least this x the texture's RMS (0: off)")
         ->capture_default_str();
+    c->add_option("--selfsim-roughness-cutoff", q.roughnessCutoff,
+                  "selfsim: ... that RMS the roughness's: the heights less their Gaussian "
+                  "low-pass of this cutoff wavelength, samples (0: off)")
+        ->capture_default_str();
     c->add_option("--selfsim-grow-sigma", q.growSigma,
                   "selfsim: regions grow into this many robust sigmas")
         ->capture_default_str();

@@ -206,7 +206,7 @@ void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int he
     r.selfsimCandidates = m.candidates;
     r.selfsimDroppedTexture = m.droppedTexture;
     r.selfsimDroppedShallow = m.droppedShallow;
-    r.selfsimTextureRms = m.textureRms;
+    r.selfsimTextureRms = m.shallowRms;
     r.selfsimBorderPieces = m.borderPieces;
     r.selfsimBorderLines = m.borderLines;
     r.selfsimReliefLevels = m.reliefLevels;

@@ -75,6 +75,24 @@ std::vector<float> gaussianBlur(const std::vector<float>& img, int W, int H, dou
     return out;
 }
 
+// Step 6 with roughnessCutoff: the RMS of a map's roughness outside the border -- the map less its
+// Gaussian low-pass of cutoff wavelength λc (ISO 16610-61's weighting function: σ = λc·√(ln 2 /
+// 2)/π), the form and waviness a roughness filter takes out
+double roughnessRmsOf(const std::vector<float>& g, int W, int H, int b, double cutoff) {
+    const std::vector<float> form =
+        gaussianBlur(g, W, H, cutoff * std::sqrt(std::log(2.0) / 2.0) / kPi);
+    double sum = 0.0;
+    size_t count = 0;
+    for (int y = b; y < H - b; ++y)
+        for (int x = b; x < W - b; ++x) {
+            const size_t i = static_cast<size_t>(y) * W + x;
+            const double v = static_cast<double>(g[i]) - form[i];
+            sum += v * v;
+            ++count;
+        }
+    return count > 0 ? std::sqrt(sum / static_cast<double>(count)) : 0.0;
+}
+
 // A set of samples' extent: the square root of its coordinates' covariance eigenvalues' ratio
 // (each sample a unit square: + 1/12 on both), the direction of its long axis (radians from the
 // x axis, in [0, π)) and its centroid
@@ -448,6 +466,9 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.pileUpShare > 0.0 && o.pileUpShare <= 1.0))
         throw inputError(option("selfsim-pile-up-share"), "must be in (0, 1]",
                          "The default is 0.6");
+    if (!(o.roughnessCutoff >= 0.0))
+        throw inputError(option("selfsim-roughness-cutoff"), "must be >= 0 (samples)",
+                         "The default is 96 (0: off, the levelled heights' RMS)");
     if (o.border < 0)
         throw inputError(option("selfsim-border"), "must be >= 0", "The default is 40");
     if (o.minRegion < 1)
@@ -684,6 +705,8 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             }
         out.textureRms = std::sqrt(sum / static_cast<double>(interior));
     }
+    out.shallowRms =
+        o.roughnessCutoff > 0.0 ? roughnessRmsOf(g, W, H, b, o.roughnessCutoff) : out.textureRms;
     std::vector<float> zDetect(n, 0.0f), zGrow(n, 0.0f);
     for (int s = 0; s < o.scales; ++s) {
         throwIfInterrupted();
@@ -793,7 +816,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
         if (o.textureRms > 0.0) {
             float deepest = 0.0f;
             for (const size_t i : samples) deepest = std::max(deepest, std::abs(out.residual[i]));
-            if (deepest < o.textureRms * out.textureRms) return Gate::Shallow;
+            if (deepest < o.textureRms * out.shallowRms) return Gate::Shallow;
         }
         if (peak < out.textureThreshold) return Gate::Texture;
         return Gate::Pass;
