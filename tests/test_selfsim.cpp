@@ -776,6 +776,7 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o = {};
     o.hollowRowMembers = 1;
     expectNamed(o, "selfsim-hollow-row-members");
+    o = {};
     o.roughnessCutoff = -1.0;
     expectNamed(o, "selfsim-roughness-cutoff");
     o = {};
