@@ -65,6 +65,11 @@ int runDefectMap(const DefectMapJobOptions& o) {
     if (m.method == DefectMethod::SelfSim && m.selfsimBorderLines > 0)
         std::printf("  %zu of those pieces kept as lines across the texture's lay\n",
                     m.selfsimBorderLines);
+    if (m.method == DefectMethod::SelfSim && m.selfsimLayLines > 0)
+        std::printf(
+            "  %zu marks along the texture's lay judged again without the copies on "
+            "them: %zu samples added\n",
+            m.selfsimLayLines, m.selfsimLayLineSamples);
     if (m.method == DefectMethod::SelfSim && m.selfsimReliefLevels > 0)
         std::printf("  a relief: its %zu plateau levels taken out before the copies\n",
                     m.selfsimReliefLevels);
@@ -433,6 +438,24 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--selfsim-line-lay-contrast", q.lineLayContrast,
                   "selfsim: ... where its tile has a lay: its best offset's difference at most "
                   "1 / this of the best one 45 degrees or more from it")
+        ->capture_default_str();
+    c->add_option("--selfsim-lay-line-elongation", q.layLineElongation,
+                  "selfsim: a mark at least this elongated along its tile's lay ... (0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-lay-line-angle", q.layLineAngle,
+                  "selfsim: ... its long axis within this many degrees of the lay ...")
+        ->capture_default_str();
+    c->add_option("--selfsim-lay-line-reach", q.layLineReach,
+                  "selfsim: ... takes the samples within this many samples of it, connected to "
+                  "it ...")
+        ->capture_default_str();
+    c->add_option("--selfsim-lay-line-sigma", q.layLineSigma,
+                  "selfsim: ... that score at least this on the residual whose copies come from "
+                  "the offsets ...")
+        ->capture_default_str();
+    c->add_option("--selfsim-lay-line-width", q.layLineWidth,
+                  "selfsim: ... crossing the lay by more than this many samples (no copy lands "
+                  "on the line)")
         ->capture_default_str();
     c->add_option("--selfsim-relief", q.relief,
                   "selfsim: on a relief (heights on a few flat levels: lettering, a stepped part) "

@@ -346,6 +346,17 @@ struct SelfSimMapOptions {
                                        // offset) by at least this many degrees (in [0, 90]) ...
     double lineLayContrast = 1.5;      // ... or its tile has no lay: the best offset's D more
                                        // than 1 / this of the best one ≥ 45° from it (>= 1)
+    double layLineElongation = 0.0;    // step 8j: a mark at least this elongated (the root of
+                                       // its extent's eigenvalue ratio; 0: off, the default;
+                                       // else >= 1) ...
+    double layLineAngle = 30.0;        // ... whose long axis lies within this many degrees of
+                                       // its tile's lay (in [0, 90]) takes the samples ...
+    int layLineReach = 4;              // ... within this many samples of it (Chebyshev; >= 1)
+                                       // connected to it ...
+    double layLineSigma = 2.0;         // ... scoring at least this (> 0) on the residual whose
+                                       // copies come only from the offsets ...
+    double layLineWidth = 3.0;         // ... crossing the tile's lay by more than this many
+                                       // samples (> 0; no copy lands on the line itself)
     int pileUpReach = 1;               // step 8e: a kept region mostly below the texture takes
                                        // the samples above it within this many samples (>= 0,
                                        // 0: off) ...
@@ -383,6 +394,8 @@ struct SelfSimMap {
     size_t borderBasin = 0;             // samples step 8h added (8f's pieces' basins)
     size_t borderLines = 0;             // pieces of border regions step 8i kept as lines
                                         // crossing the lay (8d's / 8f's shape tests failed)
+    size_t layLines = 0;                // marks step 8j judged as lines along the lay
+    size_t layLineSamples = 0;          // ... and the samples it added to them
     size_t pileUp = 0;                  // samples step 8e added (the kept regions' pile-up)
     size_t grooveBanks = 0;             // samples step 8g added (the banks of marks below it)
     size_t trimmed = 0;                 // samples of kept regions step 8a left out
