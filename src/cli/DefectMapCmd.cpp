@@ -445,6 +445,13 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--selfsim-lay-line-angle", q.layLineAngle,
                   "selfsim: ... its long axis within this many degrees of the lay ...")
         ->capture_default_str();
+    c->add_option("--selfsim-lay-line-stand-out", q.layLineStandOut,
+                  "selfsim: ... its median score on the residual below at least this ...")
+        ->capture_default_str();
+    c->add_option("--selfsim-lay-line-kept", q.layLineKept,
+                  "selfsim: ... its median |r| at most this times its median on that residual "
+                  "(0: no test) ...")
+        ->capture_default_str();
     c->add_option("--selfsim-lay-line-reach", q.layLineReach,
                   "selfsim: ... takes the samples within this many samples of it, connected to "
                   "it ...")

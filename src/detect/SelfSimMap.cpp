@@ -269,11 +269,12 @@ size_t takeGrooveBanks(std::span<const size_t> mark, const std::vector<uint8_t>&
 // the line itself; the scores are that residual over its own robust σ (its MAD about its
 // median over the samples inside the border that have at least 3 such copies): the texture's
 // residual under the same copies. 0 where a sample has fewer than 3 such copies; all 0 when no
-// sample inside the border has.
+// sample inside the border has. `sigmaOut` is set to that σ (left as it is when it is 0).
 std::vector<float> acrossLayScores(const std::vector<float>& g, const std::vector<float>& copies,
                                    const std::vector<float>& copySsd,
                                    const std::vector<std::vector<int>>& tileOffsets, int W, int H,
-                                   int T, int tilesX, int K, int border, double width) {
+                                   int T, int tilesX, int K, int border, double width,
+                                   double& sigmaOut) {
     const size_t n = static_cast<size_t>(W) * static_cast<size_t>(H);
     std::vector<float> r(n, 0.0f);
     std::vector<uint8_t> has(n, 0);
@@ -313,6 +314,7 @@ std::vector<float> acrossLayScores(const std::vector<float>& g, const std::vecto
     for (float& v : vals) v = static_cast<float>(std::abs(v - med));
     const double sigma = 1.4826 * medianOf(vals);
     if (!(sigma > 0.0)) return z;
+    sigmaOut = sigma;
     for (size_t i = 0; i < n; ++i)
         if (has[i]) z[i] = static_cast<float>(std::abs(r[i] - med) / sigma);
     return z;
@@ -321,13 +323,18 @@ std::vector<float> acrossLayScores(const std::vector<float>& g, const std::vecto
 // Step 8j (SelfSimMap.h) on the marks as they stand (`map`): each mark (8-connected) of at
 // least `minSize` samples that is a line along its tile's lay -- its extent at least
 // `elongation`, its long axis within `angle` degrees of the lay `layAt(cx, cz)` gives for its
-// centroid (negative: the tile has no lay) -- takes the samples inside the border, not marked,
+// centroid (negative: the tile has no lay) -- and whose median score on step 8j's residual
+// (`zAcross`, whose σ is `sigmaAcross`) is at least `standOut`, and (with `kept` > 0) whose
+// median |r| is at most `kept` × its median |r_x| (a line the copies along the lay explain in
+// part) takes the samples inside the border, not marked,
 // within `reach` samples (Chebyshev) of it, that score at least `sigma` on step 8j's residual
 // (`zAcross`) and are 8-connected to it through such samples. Returns (lines, samples added).
 template <class LayAt>
 std::pair<size_t, size_t> takeLayLines(std::vector<uint8_t>& map, const std::vector<float>& zAcross,
-                                       int W, int H, int border, int minSize, double elongation,
-                                       double angle, int reach, double sigma, LayAt&& layAt) {
+                                       double sigmaAcross, const std::vector<float>& r, int W,
+                                       int H, int border, int minSize, double elongation,
+                                       double angle, double standOut, double kept, int reach,
+                                       double sigma, LayAt&& layAt) {
     const size_t n = map.size();
     const std::vector<uint8_t> before = map;
     const auto inside = [&](int x, int y) {
@@ -336,6 +343,7 @@ std::pair<size_t, size_t> takeLayLines(std::vector<uint8_t>& map, const std::vec
     std::vector<uint8_t> seen(n, 0);
     std::vector<int> band(n, -1);  // the mark whose reach holds the sample
     std::vector<size_t> mark, front;
+    std::vector<float> scores;
     size_t lines = 0, added = 0;
     for (size_t i0 = 0; i0 < n; ++i0) {
         if (!before[i0] || seen[i0]) continue;
@@ -360,6 +368,18 @@ std::pair<size_t, size_t> takeLayLines(std::vector<uint8_t>& map, const std::vec
         double d = std::abs(e.axis - lay);
         d = std::min(d, kPi - d);
         if (d * 180.0 / kPi > angle) continue;
+        // ... that stands out of the texture once no copy lands on it: its median score
+        scores.clear();
+        for (const size_t i : mark) scores.push_back(zAcross[i]);
+        const double across = medianOf(scores);
+        if (across < standOut) continue;
+        // ... and that the residual of all its copies explains in part: it keeps at most `kept`
+        // of what the copies across the lay leave (a line explained by itself)
+        if (kept > 0.0) {
+            scores.clear();
+            for (const size_t i : mark) scores.push_back(std::abs(r[i]));
+            if (medianOf(scores) > kept * across * sigmaAcross) continue;
+        }
         ++lines;
         const int id = static_cast<int>(i0);
         for (const size_t i : mark) {
@@ -431,7 +451,7 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
                          "must be larger than the exclusion (" + std::to_string(o.exclusion) + ")",
                          "The default is 48 samples");
     if (o.refine < 0)
-        throw inputError(option("selfsim-refine"), "must be >= 0", "The default is 2");
+        throw inputError(option("selfsim-refine"), "must be >= 0", "The default is 0.5");
     if (o.sectors < 1)
         throw inputError(option("selfsim-sectors"), "must be >= 1", "The default is 8");
     if (o.perSector < 1)
@@ -532,6 +552,12 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.layLineAngle >= 0.0 && o.layLineAngle <= 90.0))
         throw inputError(option("selfsim-lay-line-angle"), "must be in [0, 90] degrees",
                          "The default is 30");
+    if (!(o.layLineStandOut >= 0.0))
+        throw inputError(option("selfsim-lay-line-stand-out"), "must be >= 0",
+                         "The default is 4 (0: no test)");
+    if (!(o.layLineKept >= 0.0))
+        throw inputError(option("selfsim-lay-line-kept"), "must be >= 0",
+                         "The default is 1 (0: no test)");
     if (o.layLineReach < 1)
         throw inputError(option("selfsim-lay-line-reach"), "must be >= 1", "The default is 4");
     if (!(o.layLineSigma > 0.0))
@@ -746,9 +772,10 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             if (relief.ramp[i]) out.residual[i] = 0.0f;
     // step 8j's residual, from the copies that cross the lay (not on a relief)
     std::vector<float> zAcross;
+    double sigmaAcross = 0.0;
     if (o.layLineElongation > 0.0 && !relief.relief)
-        zAcross =
-            acrossLayScores(g, copies, copySsd, tileOffsets, W, H, T, tilesX, K, b, o.layLineWidth);
+        zAcross = acrossLayScores(g, copies, copySsd, tileOffsets, W, H, T, tilesX, K, b,
+                                  o.layLineWidth, sigmaAcross);
     copies.clear();
     copies.shrink_to_fit();
     copySsd.clear();
@@ -1215,8 +1242,9 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             return lay;
         };
         const auto [lines, added] =
-            takeLayLines(out.map, zAcross, W, H, b, o.minRegion, o.layLineElongation,
-                         o.layLineAngle, o.layLineReach, o.layLineSigma, layAt);
+            takeLayLines(out.map, zAcross, sigmaAcross, out.residual, W, H, b, o.minRegion,
+                         o.layLineElongation, o.layLineAngle, o.layLineStandOut, o.layLineKept,
+                         o.layLineReach, o.layLineSigma, layAt);
         out.layLines = lines;
         out.layLineSamples = added;
     }

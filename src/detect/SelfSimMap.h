@@ -263,6 +263,27 @@
 //     at precision 0.64; without the lay test (lineAngle 0) extent 8 gave 36 (A 103 gained, the
 //     NanoFocus land B 103 lost) and extent 10 35, the NanoFocus land's precision -0.05 to -0.22 on
 //     all ten of its runs. Held out in docs/RESULTS.md.
+//  8j. A line along the lay, judged again across it (layLineElongation; OFF BY DEFAULT): a
+//     scratch that runs along the texture's lay (the Wyko part's arcs) is explained by itself:
+//     the offsets along the lay land on the same scratch further along, so part of its copies
+//     carry it and r keeps only a part of its profile (0.42-0.50 on the Wyko part's DEV runs
+//     A 101 and A 105); what the map misses of it is its width, the rims and flanks under the
+//     growth's 2.5 σ. A second residual r_x takes each sample's estimate from the copies at the
+//     offsets of its tile whose component across the tile's lay (its best offset, step 2)
+//     exceeds layLineWidth samples, so no copy of a line along the lay lands on the line; it is
+//     scored over its own robust σ_x (the texture's residual under the same copies: the arcs,
+//     which repeat across the lay at the feed, stay explained; 0 where fewer than 3 such copies).
+//     After step 8g, each mark (8-connected) of at least minRegion samples that is a line along
+//     its tile's lay -- its extent at least layLineElongation, its long axis within layLineAngle
+//     of the lay of the tile holding its centroid, a tile with a lay as step 8i's
+//     (lineLayContrast) -- and that stands out of r_x (its samples' median |r_x|/σ_x at least
+//     layLineStandOut: a scratch, not one of the texture's own arcs, which r_x explains) takes
+//     the samples within layLineReach samples of it (Chebyshev), inside the border and not
+//     marked, that score at least layLineSigma on r_x and are 8-connected to it through such
+//     samples: a person outlines a scratch with its rims. On the Wyko part's DEV runs (numpy
+//     replay of steps 1-4, equal to the binary's added samples): r_x keeps 0.93-0.94 of the
+//     scratches' profile (layLineWidth 3) at σ_x 1.56-1.63 × σ_0, so the rims gain little
+//     amplitude; the width taken is what gains recall. FIGURES
 // Every threshold is relative to σ_s, so the map is invariant to h → a·h + b (a ≠ 0) up to
 // rounding; a constant map marks nothing. Cost: offsets × (2·refine + 1)² box-filtered
 // difference passes over the map, parallel over tiles (TBB); memory 2 × offsets + 6 float copies.
@@ -350,10 +371,14 @@ struct SelfSimMapOptions {
                                        // its extent's eigenvalue ratio; 0: off, the default;
                                        // else >= 1) ...
     double layLineAngle = 30.0;        // ... whose long axis lies within this many degrees of
-                                       // its tile's lay (in [0, 90]) takes the samples ...
+                                       // its tile's lay (in [0, 90]) ...
+    double layLineStandOut = 4.0;      // ... and whose median score on the residual below is
+                                       // at least this (>= 0; 0: no test) ...
+    double layLineKept = 1.0;          // ... and whose median |r| is at most this × its median
+                                       // |r_x| (>= 0; 0: no test) takes the samples ...
     int layLineReach = 4;              // ... within this many samples of it (Chebyshev; >= 1)
                                        // connected to it ...
-    double layLineSigma = 2.0;         // ... scoring at least this (> 0) on the residual whose
+    double layLineSigma = 0.5;         // ... scoring at least this (> 0) on the residual whose
                                        // copies come only from the offsets ...
     double layLineWidth = 3.0;         // ... crossing the tile's lay by more than this many
                                        // samples (> 0; no copy lands on the line itself)
