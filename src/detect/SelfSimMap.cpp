@@ -326,9 +326,9 @@ std::vector<float> acrossLayScores(const std::vector<float>& g, const std::vecto
 // centroid (negative: the tile has no lay) -- and whose median score on step 8j's residual
 // (`zAcross`, whose σ is `sigmaAcross`) is at least `standOut`, and (with `kept` > 0) whose
 // median |r| is at most `kept` × its median |r_x| (a line the copies along the lay explain in
-// part) takes the samples inside the border, not marked,
-// within `reach` samples (Chebyshev) of it, that score at least `sigma` on step 8j's residual
-// (`zAcross`) and are 8-connected to it through such samples. Returns (lines, samples added).
+// part) takes the samples inside the border, not marked, within `reach` samples (Chebyshev) of
+// it, that score at least `sigma` on step 8j's residual and are 8-connected to it through such
+// samples. Returns (lines, samples added).
 template <class LayAt>
 std::pair<size_t, size_t> takeLayLines(std::vector<uint8_t>& map, const std::vector<float>& zAcross,
                                        double sigmaAcross, const std::vector<float>& r, int W,
@@ -341,7 +341,7 @@ std::pair<size_t, size_t> takeLayLines(std::vector<uint8_t>& map, const std::vec
         return x >= border && y >= border && x < W - border && y < H - border;
     };
     std::vector<uint8_t> seen(n, 0);
-    std::vector<int> band(n, -1);  // the mark whose reach holds the sample
+    std::vector<size_t> band(n, n);  // the mark (its first sample) whose reach holds the sample
     std::vector<size_t> mark, front;
     std::vector<float> scores;
     size_t lines = 0, added = 0;
@@ -381,7 +381,7 @@ std::pair<size_t, size_t> takeLayLines(std::vector<uint8_t>& map, const std::vec
             if (medianOf(scores) > kept * across * sigmaAcross) continue;
         }
         ++lines;
-        const int id = static_cast<int>(i0);
+        const size_t id = i0;
         for (const size_t i : mark) {
             const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
             for (int qy = std::max(0, py - reach); qy <= std::min(H - 1, py + reach); ++qy)
