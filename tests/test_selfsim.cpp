@@ -780,6 +780,24 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o.roughnessCutoff = -1.0;
     expectNamed(o, "selfsim-roughness-cutoff");
     o = {};
+    o.layLineElongation = 0.5;
+    expectNamed(o, "selfsim-lay-line-elongation");
+    o = {};
+    o.layLineAngle = 91.0;
+    expectNamed(o, "selfsim-lay-line-angle");
+    o = {};
+    o.layLineStandOut = -1.0;
+    expectNamed(o, "selfsim-lay-line-stand-out");
+    o = {};
+    o.layLineReach = 0;
+    expectNamed(o, "selfsim-lay-line-reach");
+    o = {};
+    o.layLineSigma = 0.0;
+    expectNamed(o, "selfsim-lay-line-sigma");
+    o = {};
+    o.layLineWidth = 0.0;
+    expectNamed(o, "selfsim-lay-line-width");
+    o = {};
     o.pileUpReach = -1;
     expectNamed(o, "selfsim-pile-up-reach");
     o = {};
@@ -1179,4 +1197,113 @@ TEST(SelfSimMap, TheRoughnessRmsJudgesAPitOnACurvedLandTheFormDoesNot) {
                  sd = count(d.map, shallowTruth, on.border);
     EXPECT_GE(sd.hits, sd.truth / 3) << "it stands out of the residual";
     EXPECT_EQ(sc.hits, 0u) << "but not out of the roughness (RMS " << c.shallowRms << ")";
+}
+
+// Step 8l: a mark along the texture's lay takes the samples beside it that stand out of the
+// residual whose copies all cross the lay. Striations along z that repeat exactly along z and
+// only roughly across it (a period-9 profile plus a random value per column, σ 0.07, and white
+// noise of σ 0.05: the copies across the lay differ more than those along it) with a groove
+// along them (x 100, 3 × deep, 6 samples wide) and the same groove across them (y 160, x
+// 130-200); beside each, 4 to 5 samples from its axis on both sides, raised strips (its banks,
+// 1.5 × the residual's σ high: under the growth's 2.5 σ and beyond the pile-up's reach, so
+// steps 6-8i leave most of them); far from both, a strip as high. Step 7 is off (the columns'
+// own regions make a tail above the grooves). With step 8l the banks of the groove along the
+// lay are marked (at least half of them, against at most a fifth without it); the banks of the
+// groove across the lay gain nothing (no line along the lay; the copies across the lay land on
+// it, so r keeps more of it than r_x), though a quarter of them are taken when any line is
+// asked for (angle 90, no test of what r keeps); the far strip gains nothing; nothing is added
+// more than layLineReach samples from the marks it starts from, nor away from the groove along
+// the lay; asking for a mark that stands out by 1000 σ adds nothing. Off (the default), nothing
+// is added.
+TEST(SelfSimMap, ALineAlongTheLayTakesItsBanksOneAcrossItDoesNot) {
+    std::vector<float> h(static_cast<size_t>(kW) * kH);
+    {
+        std::mt19937 rng(71);
+        std::normal_distribution<double> white(0.0, 0.05), column(0.0, 0.07);
+        std::vector<double> c(kW);
+        for (double& v : c) v = column(rng);
+        for (int y = 0; y < kH; ++y)
+            for (int x = 0; x < kW; ++x) {
+                const double s = std::sin(M_PI * x / 9.0);
+                h[static_cast<size_t>(y) * kW + x] =
+                    static_cast<float>(std::pow(std::abs(s), 3) + c[x] + white(rng));
+            }
+    }
+    const double sigma = detectSelfSimDefects(h, kW, kH).sigma;
+    ASSERT_GT(sigma, 0.0);
+    std::vector<uint8_t> alongTruth(h.size(), 0), acrossTruth(h.size(), 0);
+    groove(h, alongTruth, 100, 60, 100, 170, 6, 3.0);
+    groove(h, acrossTruth, 130, 160, 200, 160, 6, 3.0);
+    std::vector<uint8_t> alongBanks(h.size(), 0), acrossBanks(h.size(), 0), farStrip(h.size(), 0);
+    const double bank = 1.5 * sigma;
+    auto strip = [&](std::vector<uint8_t>& mask, int x0, int x1, int y0, int y1) {
+        for (int y = y0; y <= y1; ++y)
+            for (int x = x0; x <= x1; ++x) {
+                const size_t i = static_cast<size_t>(y) * kW + x;
+                mask[i] = 1;
+                h[i] += static_cast<float>(bank);
+            }
+    };
+    strip(alongBanks, 95, 96, 62, 168);  // the label is x 98-102
+    strip(alongBanks, 104, 105, 62, 168);
+    strip(acrossBanks, 132, 198, 155, 156);
+    strip(acrossBanks, 132, 198, 164, 165);
+    strip(farStrip, 150, 151, 60, 130);
+
+    EXPECT_EQ(SelfSimMapOptions{}.layLineElongation, 4.0) << "step 8l is on by default";
+    SelfSimMapOptions off;
+    off.textureNfa = 0.0;  // the columns' regions make a tail above the grooves
+    off.layLineElongation = 0.0;
+    SelfSimMapOptions on = off;
+    on.layLineElongation = 4.0;
+    SelfSimMapOptions strict = on;
+    strict.layLineStandOut = 1000.0;
+    SelfSimMapOptions anyLine = on;  // any direction, explained by itself or not
+    anyLine.layLineAngle = 90.0;
+    anyLine.layLineKept = 0.0;
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
+                     b = detectSelfSimDefects(h, kW, kH, on),
+                     c = detectSelfSimDefects(h, kW, kH, strict),
+                     d = detectSelfSimDefects(h, kW, kH, anyLine);
+    const Counts ga = count(a.map, alongTruth, on.border), gb = count(b.map, alongTruth, on.border);
+    const Counts xa = count(a.map, acrossTruth, on.border);
+    const Counts ka = count(a.map, alongBanks, on.border), kb = count(b.map, alongBanks, on.border);
+    const Counts ca = count(a.map, acrossBanks, on.border),
+                 cb = count(b.map, acrossBanks, on.border);
+    const Counts fa = count(a.map, farStrip, on.border), fb = count(b.map, farStrip, on.border);
+    EXPECT_GE(ga.hits, ga.truth / 2) << "the groove along the lay";
+    EXPECT_GE(xa.hits, xa.truth / 2) << "the groove across the lay";
+    EXPECT_EQ(a.layLines, 0u);
+    EXPECT_EQ(a.layLineSamples, 0u);
+    EXPECT_LE(ka.hits * 5, ka.truth)
+        << "the banks without step 8l: " << ka.hits << " of " << ka.truth;
+    EXPECT_GE(kb.hits * 2, kb.truth) << "the banks with step 8l: " << kb.hits << " of " << kb.truth;
+    EXPECT_GE(gb.hits, ga.hits);
+    EXPECT_GE(b.layLines, 1u);
+    EXPECT_EQ(cb.hits, ca.hits) << "the banks of the groove across the lay";
+    const Counts cd = count(d.map, acrossBanks, on.border);
+    EXPECT_GE(cd.hits * 4, cb.hits * 4 + cb.truth)
+        << "the banks of the groove across the lay, any line taken: " << cd.hits << " of "
+        << cd.truth;
+    EXPECT_EQ(fb.hits, fa.hits) << "the far strip";
+    EXPECT_EQ(markedOnlyIn(a, b), 0u) << "step 8l only adds";
+    // what step 8l adds lies within layLineReach samples of the marks it starts from, beside
+    // the groove along the lay (x 80-120)
+    size_t added = 0, away = 0;
+    const int reach = on.layLineReach;
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            if (!b.map[i] || a.map[i]) continue;
+            ++added;
+            bool near = false;
+            for (int qy = std::max(0, y - reach); qy <= std::min(kH - 1, y + reach); ++qy)
+                for (int qx = std::max(0, x - reach); qx <= std::min(kW - 1, x + reach); ++qx)
+                    near = near || a.map[static_cast<size_t>(qy) * kW + qx] != 0;
+            away += near && x >= 80 && x <= 120 ? 0 : 1;
+        }
+    EXPECT_EQ(added, b.layLineSamples);
+    EXPECT_EQ(away, 0u) << away << " of the " << added << " samples added lie away from the groove";
+    EXPECT_EQ(c.layLineSamples, 0u) << "a mark standing out by 1000 sigma asked for";
+    EXPECT_EQ(c.map, a.map);
 }

@@ -71,6 +71,11 @@ int runDefectMap(const DefectMapJobOptions& o) {
     if (m.method == DefectMethod::SelfSim && m.selfsimHollowRows > 0)
         std::printf("  %zu rows of hollows: %zu hollows dropped alone kept with their row\n",
                     m.selfsimHollowRows, m.selfsimRowHollows);
+    if (m.method == DefectMethod::SelfSim && m.selfsimLayLines > 0)
+        std::printf(
+            "  %zu marks along the texture's lay judged again without the copies on "
+            "them: %zu samples added\n",
+            m.selfsimLayLines, m.selfsimLayLineSamples);
     if (m.method == DefectMethod::SelfSim && m.selfsimReliefLevels > 0)
         std::printf("  a relief: its %zu plateau levels taken out before the copies\n",
                     m.selfsimReliefLevels);
@@ -455,6 +460,31 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     c->add_option("--selfsim-hollow-row-members", q.hollowRowMembers,
                   "selfsim: ... a row: at least this many of them")
+        ->capture_default_str();
+    c->add_option("--selfsim-lay-line-elongation", q.layLineElongation,
+                  "selfsim: a mark at least this elongated along its tile's lay ... (0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-lay-line-angle", q.layLineAngle,
+                  "selfsim: ... its long axis within this many degrees of the lay ...")
+        ->capture_default_str();
+    c->add_option("--selfsim-lay-line-stand-out", q.layLineStandOut,
+                  "selfsim: ... its median score on the residual below at least this ...")
+        ->capture_default_str();
+    c->add_option("--selfsim-lay-line-kept", q.layLineKept,
+                  "selfsim: ... its median |r| at most this times its median on that residual "
+                  "(0: no test) ...")
+        ->capture_default_str();
+    c->add_option("--selfsim-lay-line-reach", q.layLineReach,
+                  "selfsim: ... takes the samples within this many samples of it, connected to "
+                  "it ...")
+        ->capture_default_str();
+    c->add_option("--selfsim-lay-line-sigma", q.layLineSigma,
+                  "selfsim: ... that score at least this on the residual whose copies come from "
+                  "the offsets ...")
+        ->capture_default_str();
+    c->add_option("--selfsim-lay-line-width", q.layLineWidth,
+                  "selfsim: ... crossing the lay by more than this many samples (no copy lands "
+                  "on the line)")
         ->capture_default_str();
     c->add_option("--selfsim-relief", q.relief,
                   "selfsim: on a relief (heights on a few flat levels: lettering, a stepped part) "

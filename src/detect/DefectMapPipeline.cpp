@@ -209,6 +209,8 @@ void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int he
     r.selfsimTextureRms = m.shallowRms;
     r.selfsimBorderPieces = m.borderPieces;
     r.selfsimBorderLines = m.borderLines;
+    r.selfsimLayLines = m.layLines;
+    r.selfsimLayLineSamples = m.layLineSamples;
     r.selfsimReliefLevels = m.reliefLevels;
     r.selfsimRaisedLines = m.raisedLines;
     r.selfsimHollowRows = m.hollowRows;

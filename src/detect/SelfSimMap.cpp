@@ -7,6 +7,8 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/Error.h"
 #include "core/Interrupt.h"
@@ -318,6 +320,149 @@ size_t takeGrooveBanks(std::span<const size_t> mark, const std::vector<uint8_t>&
     return added;
 }
 
+// Step 8l's residual (SelfSimMap.h): each sample's estimate is the median of its copies at the
+// offsets of its tile whose component across the tile's lay (the direction of its best offset,
+// the tile's first) exceeds `width` samples, so that no copy of a line along the lay lands on
+// the line itself; the scores are that residual over its own robust σ (its MAD about its
+// median over the samples inside the border that have at least 3 such copies): the texture's
+// residual under the same copies. 0 where a sample has fewer than 3 such copies; all 0 when no
+// sample inside the border has. `sigmaOut` is set to that σ (left as it is when it is 0).
+std::vector<float> acrossLayScores(const std::vector<float>& g, const std::vector<float>& copies,
+                                   const std::vector<float>& copySsd,
+                                   const std::vector<std::vector<int>>& tileOffsets, int W, int H,
+                                   int T, int tilesX, int K, int border, double width,
+                                   double& sigmaOut) {
+    const size_t n = static_cast<size_t>(W) * static_cast<size_t>(H);
+    std::vector<float> r(n, 0.0f);
+    std::vector<uint8_t> has(n, 0);
+    tbb::parallel_for(0, H, [&](int y) {
+        std::vector<float> v;
+        for (int x = 0; x < W; ++x) {
+            const size_t i = static_cast<size_t>(y) * W + x;
+            const std::vector<int>& d =
+                tileOffsets[static_cast<size_t>(y / T) * tilesX + static_cast<size_t>(x / T)];
+            if (d.size() < 2) continue;
+            const double len = std::hypot(static_cast<double>(d[0]), static_cast<double>(d[1]));
+            if (!(len > 0.0)) continue;
+            const double ux = d[0] / len, uz = d[1] / len;
+            v.clear();
+            for (int k = 0; k < K && 2 * static_cast<size_t>(k) + 1 < d.size(); ++k) {
+                const double across = std::abs(d[2 * k] * uz - d[2 * k + 1] * ux);
+                const size_t j = static_cast<size_t>(k) * n + i;
+                if (across > width && std::isfinite(copySsd[j])) v.push_back(copies[j]);
+            }
+            if (v.size() < 3) continue;
+            std::sort(v.begin(), v.end());
+            const float est =
+                v.size() % 2 ? v[v.size() / 2] : 0.5f * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+            r[i] = g[i] - est;
+            has[i] = 1;
+        }
+    });
+    std::vector<float> vals;
+    for (int y = border; y < H - border; ++y)
+        for (int x = border; x < W - border; ++x) {
+            const size_t i = static_cast<size_t>(y) * W + x;
+            if (has[i]) vals.push_back(r[i]);
+        }
+    std::vector<float> z(n, 0.0f);
+    if (vals.empty()) return z;
+    const double med = medianOf(vals);
+    for (float& v : vals) v = static_cast<float>(std::abs(v - med));
+    const double sigma = 1.4826 * medianOf(vals);
+    if (!(sigma > 0.0)) return z;
+    sigmaOut = sigma;
+    for (size_t i = 0; i < n; ++i)
+        if (has[i]) z[i] = static_cast<float>(std::abs(r[i] - med) / sigma);
+    return z;
+}
+
+// Step 8l (SelfSimMap.h) on the marks as they stand (`map`): each mark (8-connected) of at
+// least `minSize` samples that is a line along its tile's lay -- its extent at least
+// `elongation`, its long axis within `angle` degrees of the lay `layAt(cx, cz)` gives for its
+// centroid (negative: the tile has no lay) -- and whose median score on step 8l's residual
+// (`zAcross`, whose σ is `sigmaAcross`) is at least `standOut`, and (with `kept` > 0) whose
+// median |r| is at most `kept` × its median |r_x| (a line the copies along the lay explain in
+// part) takes the samples inside the border, not marked, within `reach` samples (Chebyshev) of
+// it, that score at least `sigma` on step 8l's residual and are 8-connected to it through such
+// samples. Returns (lines, samples added).
+template <class LayAt>
+std::pair<size_t, size_t> takeLayLines(std::vector<uint8_t>& map, const std::vector<float>& zAcross,
+                                       double sigmaAcross, const std::vector<float>& r, int W,
+                                       int H, int border, int minSize, double elongation,
+                                       double angle, double standOut, double kept, int reach,
+                                       double sigma, LayAt&& layAt) {
+    const size_t n = map.size();
+    const std::vector<uint8_t> before = map;
+    const auto inside = [&](int x, int y) {
+        return x >= border && y >= border && x < W - border && y < H - border;
+    };
+    std::vector<uint8_t> seen(n, 0);
+    std::vector<size_t> band(n, n);  // the mark (its first sample) whose reach holds the sample
+    std::vector<size_t> mark, front;
+    std::vector<float> scores;
+    size_t lines = 0, added = 0;
+    for (size_t i0 = 0; i0 < n; ++i0) {
+        if (!before[i0] || seen[i0]) continue;
+        mark.assign(1, i0);
+        seen[i0] = 1;
+        for (size_t k = 0; k < mark.size(); ++k) {
+            const int px = static_cast<int>(mark[k] % W), py = static_cast<int>(mark[k] / W);
+            for (int qy = std::max(0, py - 1); qy <= std::min(H - 1, py + 1); ++qy)
+                for (int qx = std::max(0, px - 1); qx <= std::min(W - 1, px + 1); ++qx) {
+                    const size_t q = static_cast<size_t>(qy) * W + qx;
+                    if (before[q] && !seen[q]) {
+                        seen[q] = 1;
+                        mark.push_back(q);
+                    }
+                }
+        }
+        if (static_cast<int>(mark.size()) < minSize) continue;
+        const Extent e = extentOf(mark, W);
+        if (!(e.elongation >= elongation)) continue;
+        const double lay = layAt(e.cx, e.cz);
+        if (lay < 0.0) continue;
+        double d = std::abs(e.axis - lay);
+        d = std::min(d, kPi - d);
+        if (d * 180.0 / kPi > angle) continue;
+        // ... that stands out of the texture once no copy lands on it: its median score
+        scores.clear();
+        for (const size_t i : mark) scores.push_back(zAcross[i]);
+        const double across = medianOf(scores);
+        if (across < standOut) continue;
+        // ... and that the residual of all its copies explains in part: it keeps at most `kept`
+        // of what the copies across the lay leave (a line explained by itself)
+        if (kept > 0.0) {
+            scores.clear();
+            for (const size_t i : mark) scores.push_back(std::abs(r[i]));
+            if (medianOf(scores) > kept * across * sigmaAcross) continue;
+        }
+        ++lines;
+        const size_t id = i0;
+        for (const size_t i : mark) {
+            const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
+            for (int qy = std::max(0, py - reach); qy <= std::min(H - 1, py + reach); ++qy)
+                for (int qx = std::max(0, px - reach); qx <= std::min(W - 1, px + reach); ++qx)
+                    band[static_cast<size_t>(qy) * W + qx] = id;
+        }
+        front.assign(mark.begin(), mark.end());
+        for (size_t k = 0; k < front.size(); ++k) {
+            const int px = static_cast<int>(front[k] % W), py = static_cast<int>(front[k] / W);
+            for (int qy = py - 1; qy <= py + 1; ++qy)
+                for (int qx = px - 1; qx <= px + 1; ++qx) {
+                    if (!inside(qx, qy)) continue;
+                    const size_t q = static_cast<size_t>(qy) * W + qx;
+                    if (map[q] || band[q] != id || !(zAcross[q] >= static_cast<float>(sigma)))
+                        continue;
+                    map[q] = 255;
+                    ++added;
+                    front.push_back(q);
+                }
+        }
+    }
+    return {lines, added};
+}
+
 }  // namespace
 
 double textureTailThreshold(std::span<const float> peaks, double quantile, double nfa) {
@@ -363,7 +508,7 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
                          "must be larger than the exclusion (" + std::to_string(o.exclusion) + ")",
                          "The default is 48 samples");
     if (o.refine < 0)
-        throw inputError(option("selfsim-refine"), "must be >= 0", "The default is 2");
+        throw inputError(option("selfsim-refine"), "must be >= 0", "The default is 0.5");
     if (o.sectors < 1)
         throw inputError(option("selfsim-sectors"), "must be >= 1", "The default is 8");
     if (o.perSector < 1)
@@ -468,7 +613,25 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
                          "The default is 0.6");
     if (!(o.roughnessCutoff >= 0.0))
         throw inputError(option("selfsim-roughness-cutoff"), "must be >= 0 (samples)",
-                         "The default is 96 (0: off, the levelled heights' RMS)");
+                         "The default is 0 (off, the levelled heights' RMS; 96 measured)");
+    if (!(o.layLineElongation == 0.0 || o.layLineElongation >= 1.0))
+        throw inputError(option("selfsim-lay-line-elongation"), "must be 0 (off) or >= 1",
+                         "The default is 4 (0: off)");
+    if (!(o.layLineAngle >= 0.0 && o.layLineAngle <= 90.0))
+        throw inputError(option("selfsim-lay-line-angle"), "must be in [0, 90] degrees",
+                         "The default is 30");
+    if (!(o.layLineStandOut >= 0.0))
+        throw inputError(option("selfsim-lay-line-stand-out"), "must be >= 0",
+                         "The default is 4 (0: no test)");
+    if (!(o.layLineKept >= 0.0))
+        throw inputError(option("selfsim-lay-line-kept"), "must be >= 0",
+                         "The default is 1 (0: no test)");
+    if (o.layLineReach < 1)
+        throw inputError(option("selfsim-lay-line-reach"), "must be >= 1", "The default is 4");
+    if (!(o.layLineSigma > 0.0))
+        throw inputError(option("selfsim-lay-line-sigma"), "must be > 0", "The default is 2");
+    if (!(o.layLineWidth > 0.0))
+        throw inputError(option("selfsim-lay-line-width"), "must be > 0", "The default is 3");
     if (o.border < 0)
         throw inputError(option("selfsim-border"), "must be >= 0", "The default is 40");
     if (o.minRegion < 1)
@@ -675,6 +838,12 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     if (relief.relief)  // a step's ramp is the relief's, never a defect's
         for (size_t i = 0; i < n; ++i)
             if (relief.ramp[i]) out.residual[i] = 0.0f;
+    // step 8l's residual, from the copies that cross the lay (not on a relief)
+    std::vector<float> zAcross;
+    double sigmaAcross = 0.0;
+    if (o.layLineElongation > 0.0 && !relief.relief)
+        zAcross = acrossLayScores(g, copies, copySsd, tileOffsets, W, H, T, tilesX, K, b,
+                                  o.layLineWidth, sigmaAcross);
     copies.clear();
     copies.shrink_to_fit();
     copySsd.clear();
@@ -1205,6 +1374,26 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                 takeGrooveBanks(mark, before, out.map, out.residual, zGrow, W, H, b, grow,
                                 o.pileUpShare, o.grooveBankWidth, o.grooveLength);
         }
+    }
+    // step 8l: a line along the lay takes the samples beside it that stand out of the texture
+    // once no copy lands on the line itself
+    if (!zAcross.empty()) {
+        const auto layAt = [&](double cx, double cz) {
+            const size_t tile =
+                static_cast<size_t>(std::min(tilesZ - 1, static_cast<int>(cz) / T)) * tilesX +
+                static_cast<size_t>(std::min(tilesX - 1, static_cast<int>(cx) / T));
+            const std::vector<int>& d = tileOffsets[tile];
+            if (d.size() < 2 || !(tileLayContrast[tile] >= o.lineLayContrast)) return -1.0;
+            double lay = std::atan2(static_cast<double>(d[1]), static_cast<double>(d[0]));
+            if (lay < 0.0) lay += kPi;
+            return lay;
+        };
+        const auto [lines, added] =
+            takeLayLines(out.map, zAcross, sigmaAcross, out.residual, W, H, b, o.minRegion,
+                         o.layLineElongation, o.layLineAngle, o.layLineStandOut, o.layLineKept,
+                         o.layLineReach, o.layLineSigma, layAt);
+        out.layLines = lines;
+        out.layLineSamples = added;
     }
     return out;
 }

@@ -311,6 +311,40 @@
 //     adds over the 50 runs 230 true / 7 false on the Sensofar land, 21 / 31 on the periodic
 //     lines and none on the other three; 3 members: +86 true / +342 false (the NanoFocus land
 //     and the Wyko part). Held out in docs/RESULTS.md.
+//  8l. A line along the lay, judged again across it (layLineElongation, since 2026-11-29;
+//     `--selfsim-lay-line-elongation 0` is the map before it; it runs after step 8g): a scratch
+//     that runs along the texture's lay (the Wyko part's arcs) is explained by itself: the offsets
+//     along the lay land on the same scratch further along, so part of its copies carry it and r
+//     keeps only part of its profile (0.42-0.50 on the Wyko part's DEV runs A 101 and A 105); what
+//     the map misses of it is its width, the rims and flanks under the growth's 2.5 σ. A second
+//     residual r_x takes each sample's estimate from its copies at the offsets of its tile whose
+//     component across the tile's lay (the tile's best offset, step 2) exceeds layLineWidth
+//     samples, so no copy of a line along the lay lands on the line (0 where fewer than 3 such
+//     copies); it is scored over its own robust σ_x, the texture's residual under the same copies
+//     (the arcs, which repeat across the lay at the feed, stay explained). After step 8g, each mark
+//     (8-connected, at least minRegion samples) that is a line along its tile's lay -- extent
+//     at least layLineElongation, long axis within layLineAngle of the lay of the tile holding
+//     its centroid, a tile with a lay as in step 8i (lineLayContrast) -- that stands out of
+//     r_x (its median |r_x|/σ_x at least layLineStandOut: a scratch, not one of the texture's
+//     own arcs) and that r explains in part (its median |r| at most layLineKept × its median
+//     |r_x|) takes the samples within layLineReach samples of it (Chebyshev), inside the border
+//     and not marked, that score at least layLineSigma on r_x and are 8-connected to it through
+//     such samples: its width, as a person outlines a scratch with its rims. Measured (numpy
+//     replay of steps 1-4 on the DEV runs, equal to the binary's added samples, then the
+//     binary): r_x keeps 0.93-0.94 of the along-lay scratches' profile (layLineWidth 3), but
+//     σ_x is 1.4-2.1 × σ_0 (fewer copies, and poorer ones), so the rims gain little amplitude:
+//     14-29 % of the missed samples of those scratches reach 2.5 σ_x. What gains recall is the
+//     width taken at a low level: DEV 101-105 (both models, the five files) 45 -> 46 of 50 runs
+//     at target on a person's marks (the Wyko part A 105, recall 0.726 -> 0.813; A 101 0.649 ->
+//     0.776, short), none lost, none below 0.6 from above, but precision on a person's marks
+//     -0.02 to -0.10 on the 14 runs it changed (9 of them on the bullet lands and the periodic
+//     lines, whose scratches along their striae are widened too; without the layLineKept test
+//     -0.05 to -0.15 on three runs more); layLineSigma 1.0 gained none (A 105 0.796). Held
+//     out once (4401-4403, where main has the Wyko part 6 of 6): 27 -> 27 of 30, precision
+//     -0.02 to -0.12 on four runs. The lead fixed before a second held-out run that it goes on
+//     if it gains a run there and loses none: on 4701-4703 (with steps 8k and 8j of this
+//     merge) 23 -> 24 of 30 (the periodic lines A 4702), none lost; median precision on a
+//     person's marks -0.03 on the NanoFocus land, -0.09 on the periodic lines (docs/RESULTS.md).
 // Every threshold is relative to σ_s, so the map is invariant to h → a·h + b (a ≠ 0) up to
 // rounding; a constant map marks nothing. Cost: offsets × (2·refine + 1)² box-filtered
 // difference passes over the map, parallel over tiles (TBB); memory 2 × offsets + 6 float copies.
@@ -403,6 +437,21 @@ struct SelfSimMapOptions {
                                        // are linked (>= 0; 0: off) ...
     int hollowRowMembers = 4;          // ... and at least this many in a line are a row, kept
                                        // (>= 2)
+    double layLineElongation = 4.0;    // step 8l: a mark at least this elongated (the root of
+                                       // its extent's eigenvalue ratio; 0: off, the map before
+                                       // 2026-11-29; else >= 1) ...
+    double layLineAngle = 30.0;        // ... whose long axis lies within this many degrees of
+                                       // its tile's lay (in [0, 90]) ...
+    double layLineStandOut = 4.0;      // ... and whose median score on the residual below is
+                                       // at least this (>= 0; 0: no test) ...
+    double layLineKept = 1.0;          // ... and whose median |r| is at most this × its median
+                                       // |r_x| (>= 0; 0: no test) takes the samples ...
+    int layLineReach = 4;              // ... within this many samples of it (Chebyshev; >= 1)
+                                       // connected to it ...
+    double layLineSigma = 0.5;         // ... scoring at least this (> 0) on the residual whose
+                                       // copies come only from the offsets ...
+    double layLineWidth = 3.0;         // ... crossing the tile's lay by more than this many
+                                       // samples (> 0; no copy lands on the line itself)
     int pileUpReach = 1;               // step 8e: a kept region mostly below the texture takes
                                        // the samples above it within this many samples (>= 0,
                                        // 0: off) ...
@@ -454,6 +503,8 @@ struct SelfSimMap {
                                         // across the lay)
     size_t hollowRows = 0;              // rows of hollows step 8k kept regions of ...
     size_t rowHollows = 0;              // ... and those regions (dropped by steps 6-7 alone)
+    size_t layLines = 0;                // marks step 8l judged as lines along the lay
+    size_t layLineSamples = 0;          // ... and the samples it added to them
     size_t pileUp = 0;                  // samples step 8e added (the kept regions' pile-up)
     size_t grooveBanks = 0;             // samples step 8g added (the banks of marks below it)
     size_t trimmed = 0;                 // samples of kept regions step 8a left out
