@@ -42,6 +42,22 @@ std::vector<float> striations(uint32_t seed, double noise = 0.05) {
     return h;
 }
 
+// Striae along z with no repeat across them (four incommensurate sines along x, amplitudes
+// 0.4-0.1) and white noise of σ 0.05: a texture whose tiles have a lay (along z) and whose
+// copies across it do not match (steps 8i and 8j).
+std::vector<float> aperiodicStriae(uint32_t seed) {
+    std::vector<float> h(static_cast<size_t>(kW) * kH);
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> noise(0.0, 0.05);
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x)
+            h[static_cast<size_t>(y) * kW + x] = static_cast<float>(
+                0.4 * std::sin(2 * M_PI * x / 7.3) + 0.3 * std::sin(2 * M_PI * x / 11.9 + 1.0) +
+                0.2 * std::sin(2 * M_PI * x / 17.7 + 2.0) +
+                0.1 * std::sin(2 * M_PI * x / 29.1 + 3.0) + noise(rng));
+    return h;
+}
+
 void pit(std::vector<float>& h, std::vector<uint8_t>& t, double cx, double cy, double rho,
          double d) {
     test::paintPit(h, t, kW, cx, cy, rho, d);
@@ -971,15 +987,7 @@ TEST(SelfSimMap, AGroovesBanksAreMarkedTheRaisedTextureBeyondThemIsNot) {
 // line. The pile-up and the banks (steps 8e, 8g) are off: they would take the ridge's flank beside
 // a kept groove.
 TEST(SelfSimMap, ALineAcrossTheLayIsKeptAtTheBorderOneAlongItIsNot) {
-    std::vector<float> h(static_cast<size_t>(kW) * kH);
-    std::mt19937 rng(53);
-    std::normal_distribution<double> noise(0.0, 0.05);
-    for (int y = 0; y < kH; ++y)
-        for (int x = 0; x < kW; ++x)
-            h[static_cast<size_t>(y) * kW + x] = static_cast<float>(
-                0.4 * std::sin(2 * M_PI * x / 7.3) + 0.3 * std::sin(2 * M_PI * x / 11.9 + 1.0) +
-                0.2 * std::sin(2 * M_PI * x / 17.7 + 2.0) +
-                0.1 * std::sin(2 * M_PI * x / 29.1 + 3.0) + noise(rng));
+    std::vector<float> h = aperiodicStriae(53);
     std::vector<uint8_t> ridge(h.size(), 0), across(h.size(), 0), along(h.size(), 0);
     groove(h, ridge, 0, 112, kW - 1, 112, 10, -3.0);
     groove(h, across, 120, 116, 200, 126, 5, 1.5);
@@ -1040,15 +1048,7 @@ TEST(SelfSimMap, ALineAcrossTheLayIsKeptAtTheBorderOneAlongItIsNot) {
 // sample added is raised and on the burr or beside it (8b's flanks), and asking for a right angle
 // (lineAngle 90) keeps no raised line.
 TEST(SelfSimMap, ARaisedLineAcrossTheLayIsKeptAtTheBorderOneAlongItIsNot) {
-    std::vector<float> h(static_cast<size_t>(kW) * kH);
-    std::mt19937 rng(59);
-    std::normal_distribution<double> noise(0.0, 0.05);
-    for (int y = 0; y < kH; ++y)
-        for (int x = 0; x < kW; ++x)
-            h[static_cast<size_t>(y) * kW + x] = static_cast<float>(
-                0.4 * std::sin(2 * M_PI * x / 7.3) + 0.3 * std::sin(2 * M_PI * x / 11.9 + 1.0) +
-                0.2 * std::sin(2 * M_PI * x / 17.7 + 2.0) +
-                0.1 * std::sin(2 * M_PI * x / 29.1 + 3.0) + noise(rng));
+    std::vector<float> h = aperiodicStriae(59);
     std::vector<uint8_t> trench(h.size(), 0), across(h.size(), 0), along(h.size(), 0);
     groove(h, trench, 0, 112, kW - 1, 112, 10, 3.0);
     groove(h, across, 120, 118, 180, 168, 5, -2.0);
