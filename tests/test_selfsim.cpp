@@ -805,6 +805,9 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o.layLineStandOut = -1.0;
     expectNamed(o, "selfsim-lay-line-stand-out");
     o = {};
+    o.layLineStandOutMax = -1.0;
+    expectNamed(o, "selfsim-lay-line-stand-out-max");
+    o = {};
     o.layLineReach = 0;
     expectNamed(o, "selfsim-lay-line-reach");
     o = {};
@@ -1306,4 +1309,10 @@ TEST(SelfSimMap, ALineAlongTheLayTakesItsBanksOneAcrossItDoesNot) {
     EXPECT_EQ(away, 0u) << away << " of the " << added << " samples added lie away from the groove";
     EXPECT_EQ(c.layLineSamples, 0u) << "a mark standing out by 1000 sigma asked for";
     EXPECT_EQ(c.map, a.map);
+    // the cap on the stand-out: below the floor no line passes, far above it every line does
+    SelfSimMapOptions capped = on, loose = on;
+    capped.layLineStandOutMax = 1.0;
+    loose.layLineStandOutMax = 1e6;
+    EXPECT_EQ(detectSelfSimDefects(h, kW, kH, capped).map, a.map) << "a cap under the floor";
+    EXPECT_EQ(detectSelfSimDefects(h, kW, kH, loose).map, b.map) << "a cap far above it";
 }

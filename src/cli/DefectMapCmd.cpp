@@ -470,6 +470,9 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--selfsim-lay-line-stand-out", q.layLineStandOut,
                   "selfsim: ... its median score on the residual below at least this ...")
         ->capture_default_str();
+    c->add_option("--selfsim-lay-line-stand-out-max", q.layLineStandOutMax,
+                  "selfsim: ... and at most this (0: no cap) ...")
+        ->capture_default_str();
     c->add_option("--selfsim-lay-line-kept", q.layLineKept,
                   "selfsim: ... its median |r| at most this times its median on that residual "
                   "(0: no test) ...")

@@ -381,7 +381,8 @@ std::vector<float> acrossLayScores(const std::vector<float>& g, const std::vecto
 // least `minSize` samples that is a line along its tile's lay -- its extent at least
 // `elongation`, its long axis within `angle` degrees of the lay `layAt(cx, cz)` gives for its
 // centroid (negative: the tile has no lay) -- and whose median score on step 8l's residual
-// (`zAcross`, whose σ is `sigmaAcross`) is at least `standOut`, and (with `kept` > 0) whose
+// (`zAcross`, whose σ is `sigmaAcross`) is at least `standOut` (and, with `standOutMax` > 0, at
+// most that: a line standing that far out already has its width), and (with `kept` > 0) whose
 // median |r| is at most `kept` × its median |r_x| (a line the copies along the lay explain in
 // part) takes the samples inside the border, not marked, within `reach` samples (Chebyshev) of
 // it, that score at least `sigma` on step 8l's residual and are 8-connected to it through such
@@ -390,8 +391,8 @@ template <class LayAt>
 std::pair<size_t, size_t> takeLayLines(std::vector<uint8_t>& map, const std::vector<float>& zAcross,
                                        double sigmaAcross, const std::vector<float>& r, int W,
                                        int H, int border, int minSize, double elongation,
-                                       double angle, double standOut, double kept, int reach,
-                                       double sigma, LayAt&& layAt) {
+                                       double angle, double standOut, double standOutMax,
+                                       double kept, int reach, double sigma, LayAt&& layAt) {
     const size_t n = map.size();
     const std::vector<uint8_t> before = map;
     const auto inside = [&](int x, int y) {
@@ -430,6 +431,7 @@ std::pair<size_t, size_t> takeLayLines(std::vector<uint8_t>& map, const std::vec
         for (const size_t i : mark) scores.push_back(zAcross[i]);
         const double across = medianOf(scores);
         if (across < standOut) continue;
+        if (standOutMax > 0.0 && across > standOutMax) continue;
         // ... and that the residual of all its copies explains in part: it keeps at most `kept`
         // of what the copies across the lay leave (a line explained by itself)
         if (kept > 0.0) {
@@ -620,6 +622,9 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.layLineAngle >= 0.0 && o.layLineAngle <= 90.0))
         throw inputError(option("selfsim-lay-line-angle"), "must be in [0, 90] degrees",
                          "The default is 30");
+    if (!(o.layLineStandOutMax >= 0.0))
+        throw inputError(option("selfsim-lay-line-stand-out-max"), "must be >= 0",
+                         "The default is 0 (no cap)");
     if (!(o.layLineStandOut >= 0.0))
         throw inputError(option("selfsim-lay-line-stand-out"), "must be >= 0",
                          "The default is 4 (0: no test)");
@@ -1388,10 +1393,10 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             if (lay < 0.0) lay += kPi;
             return lay;
         };
-        const auto [lines, added] =
-            takeLayLines(out.map, zAcross, sigmaAcross, out.residual, W, H, b, o.minRegion,
-                         o.layLineElongation, o.layLineAngle, o.layLineStandOut, o.layLineKept,
-                         o.layLineReach, o.layLineSigma, layAt);
+        const auto [lines, added] = takeLayLines(
+            out.map, zAcross, sigmaAcross, out.residual, W, H, b, o.minRegion, o.layLineElongation,
+            o.layLineAngle, o.layLineStandOut, o.layLineStandOutMax, o.layLineKept, o.layLineReach,
+            o.layLineSigma, layAt);
         out.layLines = lines;
         out.layLineSamples = added;
     }

@@ -345,6 +345,11 @@
 //     if it gains a run there and loses none: on 4701-4703 (with steps 8k and 8j of this
 //     merge) 23 -> 24 of 30 (the periodic lines A 4702), none lost; median precision on a
 //     person's marks -0.03 on the NanoFocus land, -0.09 on the periodic lines (docs/RESULTS.md).
+//     layLineStandOutMax (0, no cap, by default) skips a line standing more than that far out
+//     of r_x, whose width the map has found already (helper real34p: the NanoFocus land's
+//     costly lines stand 10.8-29.8 σ_x, the Wyko part's 4.1-7.0). At 10, DEV 47 -> 47 of 50,
+//     the NanoFocus land's median precision on a person's marks 0.775 -> 0.819; held out on
+//     4901-4903 (fresh, the rule to turn it on fixed before) no map changed, so it stays off.
 // Every threshold is relative to σ_s, so the map is invariant to h → a·h + b (a ≠ 0) up to
 // rounding; a constant map marks nothing. Cost: offsets × (2·refine + 1)² box-filtered
 // difference passes over the map, parallel over tiles (TBB); memory 2 × offsets + 6 float copies.
@@ -444,6 +449,8 @@ struct SelfSimMapOptions {
                                        // its tile's lay (in [0, 90]) ...
     double layLineStandOut = 4.0;      // ... and whose median score on the residual below is
                                        // at least this (>= 0; 0: no test) ...
+    double layLineStandOutMax = 0.0;   // ... and at most this (0: no cap; a line standing that
+                                       // far out of the texture already has its width) ...
     double layLineKept = 1.0;          // ... and whose median |r| is at most this × its median
                                        // |r_x| (>= 0; 0: no test) takes the samples ...
     int layLineReach = 4;              // ... within this many samples of it (Chebyshev; >= 1)
