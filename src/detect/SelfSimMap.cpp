@@ -169,17 +169,24 @@ std::vector<std::vector<size_t>> rowsOf(std::span<const std::array<double, 2>> p
     return rows;
 }
 
+// Whether at least `share` of the samples' Σ|r| lies on the side `sign` of the texture (+1
+// above, -1 below); false when Σ|r| is 0 (steps 8c, 8e, 8k)
+bool mostlyOfSign(std::span<const size_t> samples, const std::vector<float>& r, float sign,
+                  double share) {
+    double side = 0.0, all = 0.0;
+    for (const size_t i : samples) {
+        side += std::max(0.0f, sign * r[i]);
+        all += std::abs(r[i]);
+    }
+    return all > 0.0 && side >= share * all;
+}
+
 // Step 8c: a region is a particle when it stands above the texture (at least `raisedShare` of
 // its Σ|r| is positive) and is compact: its extent's elongation below `elongation`.
 bool isParticle(const std::vector<size_t>& samples, const std::vector<float>& r, int W,
                 double elongation, double raisedShare) {
     if (samples.empty()) return false;
-    double up = 0.0, all = 0.0;
-    for (const size_t i : samples) {
-        up += std::max(0.0f, r[i]);
-        all += std::abs(r[i]);
-    }
-    if (!(all > 0.0) || up < raisedShare * all) return false;
+    if (!mostlyOfSign(samples, r, 1.0f, raisedShare)) return false;
     return extentOf(samples, W).elongation < elongation;
 }
 
@@ -1003,12 +1010,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     // within pileUpReach samples of it scoring at least pileUpSigma
     auto takePileUp = [&](std::span<const size_t> samples) {
         if (o.pileUpReach <= 0) return;
-        double down = 0.0, all = 0.0;
-        for (const size_t i : samples) {
-            down += std::max(0.0f, -out.residual[i]);
-            all += std::abs(out.residual[i]);
-        }
-        if (!(all > 0.0 && down >= o.pileUpShare * all)) return;
+        if (!mostlyOfSign(samples, out.residual, -1.0f, o.pileUpShare)) return;
         const int reach = o.pileUpReach;
         for (const size_t i : samples) {
             const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
@@ -1026,20 +1028,24 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     };
     // step 8i: a border piece that is a line crossing its tile's lay (a groove across the
     // striae; one along them is a stria); where the tile has no lay, any line
+    // the lay of the tile holding (cx, cz): its best offset's direction (radians from the x axis,
+    // in [0, π)) when the tile is striated (lineLayContrast), else -1 (steps 8i, 8l)
+    const auto tileLay = [&](double cx, double cz) {
+        const size_t tile =
+            static_cast<size_t>(std::min(tilesZ - 1, static_cast<int>(cz) / T)) * tilesX +
+            static_cast<size_t>(std::min(tilesX - 1, static_cast<int>(cx) / T));
+        const std::vector<int>& d = tileOffsets[tile];
+        if (d.size() < 2 || !(tileLayContrast[tile] >= o.lineLayContrast)) return -1.0;
+        double lay = std::atan2(static_cast<double>(d[1]), static_cast<double>(d[0]));
+        if (lay < 0.0) lay += kPi;
+        return lay;
+    };
     auto crossingLine = [&](std::span<const size_t> samples, double elongation) {
         if (!(elongation > 0.0) || samples.empty()) return false;
         const Extent e = extentOf(samples, W);
-        const size_t tile =
-            static_cast<size_t>(std::min(tilesZ - 1, static_cast<int>(e.cz) / T)) * tilesX +
-            static_cast<size_t>(std::min(tilesX - 1, static_cast<int>(e.cx) / T));
-        const std::vector<int>& d = tileOffsets[tile];
-        const bool striated = d.size() >= 2 && tileLayContrast[tile] >= o.lineLayContrast;
-        double lay = 0.0;
-        if (striated) {
-            lay = std::atan2(static_cast<double>(d[1]), static_cast<double>(d[0]));
-            if (lay < 0.0) lay += kPi;
-        }
-        return crossesLay(e, lay, elongation, striated ? o.lineAngle : 0.0);
+        const double lay = tileLay(e.cx, e.cz);
+        const bool striated = lay >= 0.0;
+        return crossesLay(e, striated ? lay : 0.0, elongation, striated ? o.lineAngle : 0.0);
     };
     // steps 8a and 8c on a region's (or a border piece's) samples, then the map and step 8b's
     // first frontier; a border piece (steps 8d, 8f) also has to be shaped as a defect: at least
@@ -1283,10 +1289,13 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
         if (!raisedSeen.empty()) keepRaisedLines(reg);  // step 8j
         for (size_t k = reg.begin; k < reg.end; ++k) inRegion[members[k]] = 0;
     };
-    std::vector<uint8_t> regionKept(o.hollowRowGap > 0.0 ? regions.size() : 0, 0);  // step 8k
+    // step 8k's record: each region's verdict and whether it was kept
+    std::vector<Gate> verdicts(o.hollowRowGap > 0.0 ? regions.size() : 0, Gate::Small);
+    std::vector<uint8_t> regionKept(verdicts.size(), 0);
     for (const Region& reg : regions) {
         const std::span<const size_t> samples(members.data() + reg.begin, reg.end - reg.begin);
         const Gate verdict = gate(samples, reg.peak);
+        if (!verdicts.empty()) verdicts[static_cast<size_t>(&reg - regions.data())] = verdict;
         if (verdict == Gate::Small) continue;
         if (verdict == Gate::Shallow) {
             ++out.droppedShallow;
@@ -1317,13 +1326,8 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
         for (size_t k = 0; k < regions.size(); ++k) {
             const Region& reg = regions[k];
             const std::span<const size_t> samples(members.data() + reg.begin, reg.end - reg.begin);
-            if (reg.atBorder || gate(samples, reg.peak) == Gate::Small) continue;
-            double down = 0.0, all = 0.0;
-            for (const size_t i : samples) {
-                down += std::max(0.0f, -out.residual[i]);
-                all += std::abs(out.residual[i]);
-            }
-            if (!(all > 0.0 && down >= kHollowShare * all)) continue;
+            if (reg.atBorder || verdicts[k] == Gate::Small) continue;
+            if (!mostlyOfSign(samples, out.residual, -1.0f, kHollowShare)) continue;
             const Extent e = extentOf(samples, W);
             if (!(e.elongation < kHollowCompact)) continue;
             hollow.push_back(k);
@@ -1383,20 +1387,10 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     // step 8l: a line along the lay takes the samples beside it that stand out of the texture
     // once no copy lands on the line itself
     if (!zAcross.empty()) {
-        const auto layAt = [&](double cx, double cz) {
-            const size_t tile =
-                static_cast<size_t>(std::min(tilesZ - 1, static_cast<int>(cz) / T)) * tilesX +
-                static_cast<size_t>(std::min(tilesX - 1, static_cast<int>(cx) / T));
-            const std::vector<int>& d = tileOffsets[tile];
-            if (d.size() < 2 || !(tileLayContrast[tile] >= o.lineLayContrast)) return -1.0;
-            double lay = std::atan2(static_cast<double>(d[1]), static_cast<double>(d[0]));
-            if (lay < 0.0) lay += kPi;
-            return lay;
-        };
         const auto [lines, added] = takeLayLines(
             out.map, zAcross, sigmaAcross, out.residual, W, H, b, o.minRegion, o.layLineElongation,
             o.layLineAngle, o.layLineStandOut, o.layLineStandOutMax, o.layLineKept, o.layLineReach,
-            o.layLineSigma, layAt);
+            o.layLineSigma, tileLay);
         out.layLines = lines;
         out.layLineSamples = added;
     }
