@@ -437,6 +437,9 @@ struct SelfSimMapOptions {
                                        // texture, at a level of step 8f, at least this
                                        // elongated and crossing its tile's lay (8i's test) is
                                        // kept, a burr (0: off, the default; else >= 1)
+    double burrBasin = 0.0;            // step 8n: a burr step 8j kept takes back its basin,
+                                       // flooded down to growSigma with levels falling by this
+                                       // factor (0: off; else > 1)
     double hollowRowGap = 16.0;        // step 8k: hollows (compact regions below the texture)
                                        // whose centroids are at most this many samples apart
                                        // are linked (>= 0; 0: off) ...
@@ -508,6 +511,7 @@ struct SelfSimMap {
                                         // crossing the lay (8d's / 8f's shape tests failed)
     size_t raisedLines = 0;             // raised pieces of border regions step 8j kept (burrs
                                         // across the lay)
+    size_t burrBasin = 0;               // samples step 8n added (8j's burrs' basins)
     size_t hollowRows = 0;              // rows of hollows step 8k kept regions of ...
     size_t rowHollows = 0;              // ... and those regions (dropped by steps 6-7 alone)
     size_t layLines = 0;                // marks step 8l judged as lines along the lay
