@@ -787,6 +787,9 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o.burrElongation = 0.5;
     expectNamed(o, "selfsim-burr-elongation");
     o = {};
+    o.burrBasin = 1.0;
+    expectNamed(o, "selfsim-burr-basin");
+    o = {};
     o.hollowRowGap = -1.0;
     expectNamed(o, "selfsim-hollow-row-gap");
     o = {};
@@ -1094,6 +1097,57 @@ TEST(SelfSimMap, ARaisedLineAcrossTheLayIsKeptAtTheBorderOneAlongItIsNot) {
     EXPECT_EQ(away, 0u) << away << " of the " << added << " samples added lie off the burr";
     EXPECT_EQ(c.raisedLines, 0u) << "a right angle asked for";
     EXPECT_EQ(c.map, a.map) << "a right angle asked for";
+}
+
+// Step 8n: a burr step 8j kept takes back its basin. The scene of step 8j's test (a raised line
+// across the striae joined to a trench that runs from border to border): 8j keeps the burr's
+// top, cut at a level above the trench; with 8n its flanks above the texture down to the
+// growth's level are marked too, every sample added raised and on the burr (within 2 samples);
+// the burr along the striae and the trench are marked neither way; with 8j off 8n marks nothing.
+TEST(SelfSimMap, ABurrAcrossTheLayTakesBackItsBasinTheTextureBesideItDoesNot) {
+    std::vector<float> h = aperiodicStriae(59);
+    std::vector<uint8_t> trench(h.size(), 0), across(h.size(), 0), along(h.size(), 0);
+    groove(h, trench, 0, 112, kW - 1, 112, 10, 3.0);
+    groove(h, across, 120, 118, 180, 168, 5, -2.0);
+    groove(h, along, 60, 118, 60, 178, 5, -2.0);
+
+    SelfSimMapOptions j;
+    ASSERT_EQ(j.burrBasin, 0.0);  // the default: off
+    j.burrElongation = 8.0;
+    SelfSimMapOptions n = j;
+    n.burrBasin = 1.1;
+    SelfSimMapOptions alone;
+    alone.burrBasin = 1.1;
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, j), b = detectSelfSimDefects(h, kW, kH, n),
+                     c = detectSelfSimDefects(h, kW, kH, alone),
+                     off = detectSelfSimDefects(h, kW, kH);
+    const Counts xa = count(a.map, across, j.border), xb = count(b.map, across, j.border);
+    const Counts za = count(a.map, along, j.border), zb = count(b.map, along, j.border);
+    ASSERT_GE(a.raisedLines, 1u);
+    EXPECT_EQ(a.burrBasin, 0u);
+    EXPECT_GT(b.burrBasin, 0u);
+    EXPECT_GT(xb.hits, xa.hits) << "the burr across with its basin: " << xb.hits << " of "
+                                << xb.truth << " (" << xa.hits << " without)";
+    EXPECT_EQ(zb.hits, za.hits) << "the burr along the striae";
+    EXPECT_EQ(markedOnlyIn(a, b), 0u) << "samples marked without step 8n and not with it";
+    size_t added = 0, lowered = 0, away = 0;
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            if (!b.map[i] || a.map[i]) continue;
+            ++added;
+            lowered += b.residual[i] > 0.0f ? 0 : 1;
+            bool near = false;
+            for (int qy = std::max(0, y - 2); qy <= std::min(kH - 1, y + 2); ++qy)
+                for (int qx = std::max(0, x - 2); qx <= std::min(kW - 1, x + 2); ++qx)
+                    near = near || across[static_cast<size_t>(qy) * kW + qx];
+            away += near ? 0 : 1;
+        }
+    EXPECT_GT(added, 0u);
+    EXPECT_EQ(lowered, 0u) << "step 8n adds raised samples only";
+    EXPECT_EQ(away, 0u) << away << " of the " << added << " samples added lie off the burr";
+    EXPECT_EQ(c.map, off.map) << "step 8j off: no burr, no basin";
+    EXPECT_EQ(c.burrBasin, 0u);
 }
 
 // Step 8k: a row of hollows, each dropped alone, is kept. Striations (seed 61, noise σ 0.02)

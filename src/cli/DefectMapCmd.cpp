@@ -68,6 +68,8 @@ int runDefectMap(const DefectMapJobOptions& o) {
     if (m.method == DefectMethod::SelfSim && m.selfsimRaisedLines > 0)
         std::printf("  %zu raised pieces at the border kept as burrs across the texture's lay\n",
                     m.selfsimRaisedLines);
+    if (m.method == DefectMethod::SelfSim && m.selfsimBurrBasin > 0)
+        std::printf("  %zu samples of those burrs' basins taken back\n", m.selfsimBurrBasin);
     if (m.method == DefectMethod::SelfSim && m.selfsimHollowRows > 0)
         std::printf("  %zu rows of hollows: %zu hollows dropped alone kept with their row\n",
                     m.selfsimHollowRows, m.selfsimRowHollows);
@@ -453,6 +455,10 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
                   "selfsim: a piece of a region at the border above the texture at least this "
                   "elongated and crossing the texture's lay as the line angle asks is kept, a burr "
                   "across the striae (0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-burr-basin", q.burrBasin,
+                  "selfsim: ... a burr kept takes back its basin above the texture, flooded down "
+                  "to the growth's level with levels falling by this factor (0: off)")
         ->capture_default_str();
     c->add_option("--selfsim-hollow-row-gap", q.hollowRowGap,
                   "selfsim: compact regions below the texture whose centres are at most this many "

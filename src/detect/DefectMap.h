@@ -350,6 +350,7 @@ struct DefectMap {
     size_t selfsimLayLineSamples = 0;  // ... and the samples it added to them
     size_t selfsimReliefLevels = 0;  // selfsim only: a relief's levels taken out (step 1b; 0: none)
     size_t selfsimRaisedLines = 0;  // selfsim only: raised pieces kept as burrs across the lay (8j)
+    size_t selfsimBurrBasin = 0;    // ... and the samples of their basins step 8n took back
     size_t selfsimHollowRows = 0;   // selfsim only: rows of hollows (step 8k) ...
     size_t selfsimRowHollows = 0;   // ... and their hollows that steps 6-7 had dropped
     double seconds = 0;

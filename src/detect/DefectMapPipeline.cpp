@@ -213,6 +213,7 @@ void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int he
     r.selfsimLayLineSamples = m.layLineSamples;
     r.selfsimReliefLevels = m.reliefLevels;
     r.selfsimRaisedLines = m.raisedLines;
+    r.selfsimBurrBasin = m.burrBasin;
     r.selfsimHollowRows = m.hollowRows;
     r.selfsimRowHollows = m.rowHollows;
     r.markedScore = r.markedCount();

@@ -596,6 +596,9 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.burrElongation == 0.0 || o.burrElongation >= 1.0))
         throw inputError(option("selfsim-burr-elongation"), "must be 0 (off) or >= 1",
                          "The default is 0 (off)");
+    if (!(o.burrBasin == 0.0 || o.burrBasin > 1.0))
+        throw inputError(option("selfsim-burr-basin"), "must be 0 (off) or > 1",
+                         "The default is 0 (off); 1.1 measured");
     if (!(o.hollowRowGap >= 0.0))
         throw inputError(option("selfsim-hollow-row-gap"), "must be >= 0",
                          "The default is 16 samples (0: off)");
@@ -1144,17 +1147,20 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     // each one a level newly holds that neither reaches (a new maximum of the texture); a sample
     // both reach in the same layer is the texture's. The basin is given up (the piece kept
     // alone) when it holds more than borderBasinGrowth × the piece's samples.
+    // Step 8n floods a burr's basin the same way, above the texture (side +1; 8h's is -1).
     std::vector<uint8_t> basinOwner(
-        splitBorder && o.borderLevelStep > 1.0 && o.borderBasin > 1.0 ? n : 0, 0);
+        splitBorder && o.borderLevelStep > 1.0 && (o.borderBasin > 1.0 || o.burrBasin > 1.0) ? n
+                                                                                             : 0,
+        0);
     std::vector<size_t> basinPiece, basinTexture, basinNew;
-    auto takeBasin = [&](const Region& reg, double level) {
+    auto takeBasin = [&](const Region& reg, double level, double fall, float side) {
         enum : uint8_t { kNone = 0, kPiece = 1, kTexture = 2 };
         basinPiece.assign(piece.begin(), piece.end());
         basinTexture.clear();
         for (const size_t i : piece) basinOwner[i] = kPiece;
         float lv = static_cast<float>(level);
         const auto candidate = [&](size_t q) {
-            return inRegion[q] && !out.map[q] && out.residual[q] < 0.0f && zGrow[q] >= lv &&
+            return inRegion[q] && !out.map[q] && side * out.residual[q] > 0.0f && zGrow[q] >= lv &&
                    basinOwner[q] == kNone;
         };
         for (size_t k = reg.begin; k < reg.end; ++k)
@@ -1174,7 +1180,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             return end;
         };
         while (lv > grow) {
-            lv = std::max(grow, static_cast<float>(lv / o.borderBasin));
+            lv = std::max(grow, static_cast<float>(lv / fall));
             size_t fromPiece = 0, fromTexture = 0;
             for (;;) {
                 const size_t nPiece = basinPiece.size(), nTexture = basinTexture.size();
@@ -1205,7 +1211,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             regionLevel[i] = regionLevel[from];
             stack.push_back(i);  // step 8b's frontier
         }
-        out.borderBasin += basinNew.size();
+        (side < 0.0f ? out.borderBasin : out.burrBasin) += basinNew.size();
         takePileUp(basinNew);
     };
     // step 8j: a burr across the lay. The region at the border split at the levels of step 8f
@@ -1238,6 +1244,10 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                     continue;
                 --out.borderLines;  // counted by keepRegion as step 8i's; it is 8j's
                 ++out.raisedLines;
+                // step 8n: the burr takes back its basin, its flanks above the texture down to
+                // growSigma that flood to it before they flood to the texture's raised patches
+                if (o.burrBasin > 1.0 && !basinOwner.empty())
+                    takeBasin(reg, level, o.burrBasin, 1.0f);
             }
             if (!(o.borderLevelStep > 1.0)) break;  // step 8f off: the growth's level alone
         }
@@ -1281,7 +1291,8 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                         continue;
                     ++out.borderPieces;
                     ++out.borderLevelPieces;
-                    if (!basinOwner.empty()) takeBasin(reg, level);
+                    if (o.borderBasin > 1.0 && !basinOwner.empty())
+                        takeBasin(reg, level, o.borderBasin, -1.0f);
                     takeRim();
                 }
             }
