@@ -459,6 +459,14 @@ struct SelfSimMapOptions {
                                        // copies come only from the offsets ...
     double layLineWidth = 3.0;         // ... crossing the tile's lay by more than this many
                                        // samples (> 0; no copy lands on the line itself)
+    double grooveRimSigma = 0.0;       // step 8o: a groove's rims (8g's line below the texture,
+                                       // its marks before 8g) taken from this score (0: off,
+                                       // the default; else > 0) ...
+    double grooveRimLength = 15.0;     // ... a line at least this × its width² in samples
+                                       // (>= 0) ...
+    double grooveRimWidth = 1.0;       // ... within this × its width of it (> 0) ...
+    double grooveRimShare = 0.6;       // ... when at least this share of the Σ|r| there is above
+                                       // the texture (in [0, 1); 0: no test)
     int pileUpReach = 1;               // step 8e: a kept region mostly below the texture takes
                                        // the samples above it within this many samples (>= 0,
                                        // 0: off) ...
@@ -514,6 +522,7 @@ struct SelfSimMap {
     size_t layLineSamples = 0;          // ... and the samples it added to them
     size_t pileUp = 0;                  // samples step 8e added (the kept regions' pile-up)
     size_t grooveBanks = 0;             // samples step 8g added (the banks of marks below it)
+    size_t grooveRims = 0;              // samples step 8o added (a groove's rims, lower)
     size_t trimmed = 0;                 // samples of kept regions step 8a left out
     size_t extended = 0;                // samples step 8b added to the kept regions
     size_t reliefLevels = 0;            // step 1b: the relief's levels with a plateau (0: not
