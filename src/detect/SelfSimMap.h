@@ -350,6 +350,23 @@
 //     costly lines stand 10.8-29.8 σ_x, the Wyko part's 4.1-7.0). At 10, DEV 47 -> 47 of 50,
 //     the NanoFocus land's median precision on a person's marks 0.775 -> 0.819; held out on
 //     4901-4903 (fresh, the rule to turn it on fixed before) no map changed, so it stays off.
+//  8o. A groove's raised rims (grooveRimSigma; off by default, after step 8l): each mark as it
+//     stood before step 8g that lies below the texture (pileUpShare of its Σ|r| negative) and is
+//     a long line -- its samples at least grooveRimLength × its width² (8g's width), a line some
+//     15 widths long -- and beside which the ground stands mostly above the texture -- at least
+//     grooveRimShare of the Σ|r| of the samples within grooveRimWidth × its width of it (not
+//     marked, inside the border) positive -- takes the samples above the texture there that score
+//     at least grooveRimSigma at the growth's scales and are 8-connected to it through such
+//     samples (step 8g's flood at a lower score). A scratch ploughs its material up into rims a
+//     person outlines with it; on the Wyko part they are 57-59 % of every scratch's label, 0.6-1.3
+//     Sq high (A 4701's a median of 1.3 σ_0): under 8g's 2.5 σ and 8e's one sample. Beside a groove
+//     in the texture's noise the share is near a half (ground of either sign), so the share tells a
+//     rimmed groove from a bare one; the line test keeps the texture's own wide marks (at most 13
+//     widths long on the Wyko part's maps) out. Replayed in numpy on the dumped scores of seven
+//     seen model-A runs of the Wyko part (4701-4703, 4802, 4803, 4902, 4903; 1 σ, 1 width): the
+//     recall up 0.01-0.06 on five (A 4702 0.713 -> 0.774, A 4803 0.823 -> 0.850), 1810 true and
+//     1593 false samples added; on its DEV runs nothing (no mark passes). Off: it gains no DEV run
+//     (docs/RESULTS.md, "A groove's raised rims: step 8o").
 // Every threshold is relative to σ_s, so the map is invariant to h → a·h + b (a ≠ 0) up to
 // rounding; a constant map marks nothing. Cost: offsets × (2·refine + 1)² box-filtered
 // difference passes over the map, parallel over tiles (TBB); memory 2 × offsets + 6 float copies.
