@@ -835,6 +835,18 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o.grooveLength = -0.5;
     expectNamed(o, "selfsim-groove-length");
     o = {};
+    o.grooveRimSigma = -1.0;
+    expectNamed(o, "selfsim-groove-rim-sigma");
+    o = {};
+    o.grooveRimLength = -1.0;
+    expectNamed(o, "selfsim-groove-rim-length");
+    o = {};
+    o.grooveRimWidth = 0.0;
+    expectNamed(o, "selfsim-groove-rim-width");
+    o = {};
+    o.grooveRimShare = 1.0;
+    expectNamed(o, "selfsim-groove-rim-share");
+    o = {};
     o.textureNfa = -1;
     expectNamed(o, "selfsim-texture-nfa");
     o = {};
@@ -976,6 +988,77 @@ TEST(SelfSimMap, AGroovesBanksAreMarkedTheRaisedTextureBeyondThemIsNot) {
     EXPECT_GT(added, 0u);
     EXPECT_EQ(lowered, 0u) << "step 8g adds raised samples only";
     EXPECT_EQ(away, 0u) << away << " of the " << added << " samples added lie away from the groove";
+}
+
+// Step 8o: a long groove whose ground beside it stands mostly above the texture takes its raised
+// rims from a score of 1. Striations with three grooves across the lay (3 × the striations deep,
+// 6 samples wide): a long one (165 samples) with rims, strips 3 samples wide on each side of its
+// label 1.8 × the residual's σ_0 high (a scratch's pile-up, below the growth's 2.5 σ and step 8g's
+// banks); a long one without rims; a short one (20 samples: no line of 15 widths) with such rims.
+// Off (the default) step 8o adds nothing; on (1 σ), at least two in three of the long groove's
+// rims are marked, a fifth of them more than without it, every sample it adds is raised and lies
+// within the groove's width of its mark, the groove without rims and the short groove take
+// nothing from it, a raised strip as high beyond the reach is not marked, and nothing is dropped.
+TEST(SelfSimMap, AGroovesRaisedRimsAreMarkedAGrooveWithoutRimsTakesNothing) {
+    std::vector<float> h = striations(71);
+    const double sigma = detectSelfSimDefects(h, kW, kH).sigma;
+    ASSERT_GT(sigma, 0.0);
+    std::vector<uint8_t> longTruth(h.size(), 0), bareTruth(h.size(), 0), shortTruth(h.size(), 0);
+    groove(h, longTruth, 45, 70, 210, 70, 6, 3.0);
+    groove(h, bareTruth, 45, 120, 210, 120, 6, 3.0);
+    groove(h, shortTruth, 110, 165, 130, 165, 6, 3.0);
+    const double rim = 1.8 * sigma;
+    std::vector<uint8_t> longRims(h.size(), 0), shortRims(h.size(), 0), farStrip(h.size(), 0);
+    auto strip = [&](std::vector<uint8_t>& mask, int x0, int x1, int y0, int y1) {
+        for (int y = y0; y <= y1; ++y)
+            for (int x = x0; x <= x1; ++x) {
+                const size_t i = static_cast<size_t>(y) * kW + x;
+                mask[i] = 1;
+                h[i] += static_cast<float>(rim);
+            }
+    };
+    strip(longRims, 45, 210, 65, 67);  // beside the label (rows 68-72)
+    strip(longRims, 45, 210, 73, 75);
+    strip(farStrip, 45, 210, 92, 94);
+    strip(shortRims, 110, 130, 160, 162);
+    strip(shortRims, 110, 130, 168, 170);
+
+    const SelfSimMapOptions off;
+    ASSERT_EQ(off.grooveRimSigma, 0.0);
+    SelfSimMapOptions on;
+    on.grooveRimSigma = 1.0;
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
+                     b = detectSelfSimDefects(h, kW, kH, on);
+    const Counts la = count(a.map, longTruth, on.border), ra = count(a.map, longRims, on.border),
+                 rb = count(b.map, longRims, on.border);
+    const Counts ba = count(a.map, bareTruth, on.border), sa = count(a.map, shortTruth, on.border);
+    const Counts sra = count(a.map, shortRims, on.border), srb = count(b.map, shortRims, on.border);
+    const Counts fa = count(a.map, farStrip, on.border), fb = count(b.map, farStrip, on.border);
+    EXPECT_GE(la.hits, la.truth * 9 / 10) << "the long groove";
+    EXPECT_GE(ba.hits, ba.truth * 9 / 10) << "the groove without rims";
+    EXPECT_GE(sa.hits, sa.truth * 9 / 10) << "the short groove";
+    EXPECT_EQ(a.grooveRims, 0u);
+    EXPECT_GE(rb.hits * 3, rb.truth * 2)
+        << "the long groove's rims with step 8o: " << rb.hits << " of " << rb.truth;
+    EXPECT_GE((rb.hits - ra.hits) * 5, rb.truth)
+        << "step 8o adds at least a fifth of the rims: " << ra.hits << " -> " << rb.hits;
+    EXPECT_EQ(srb.hits, sra.hits) << "the short groove's rims: no line";
+    EXPECT_EQ(fb.hits, fa.hits) << "the far strip";
+    EXPECT_EQ(markedOnlyIn(a, b), 0u) << "samples marked without step 8o and not with it";
+    size_t added = 0, lowered = 0, away = 0;
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            if (!b.map[i] || a.map[i]) continue;
+            ++added;
+            lowered += b.residual[i] > 0.0f ? 0 : 1;
+            away += y >= 58 && y <= 82 ? 0 : 1;  // the long groove's mark ± its width
+        }
+    EXPECT_EQ(added, b.grooveRims);
+    EXPECT_GT(added, 0u);
+    EXPECT_EQ(lowered, 0u) << "step 8o adds raised samples only";
+    EXPECT_EQ(away, 0u) << away << " of the " << added
+                        << " samples added lie away from the long groove";
 }
 
 // Step 8i: a piece of a region at the border that is a line crossing the texture's lay is kept

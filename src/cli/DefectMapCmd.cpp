@@ -507,6 +507,20 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--selfsim-groove-length", q.grooveLength,
                   "selfsim: ... a line: its samples at least this times its width squared")
         ->capture_default_str();
+    c->add_option("--selfsim-groove-rim-sigma", q.grooveRimSigma,
+                  "selfsim: a groove's raised rims (a mark below the texture as long as a line) "
+                  "taken from this many robust sigmas (0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-groove-rim-length", q.grooveRimLength,
+                  "selfsim: ... a line: its samples at least this times its width squared ...")
+        ->capture_default_str();
+    c->add_option("--selfsim-groove-rim-width", q.grooveRimWidth,
+                  "selfsim: ... within this times its width of it ...")
+        ->capture_default_str();
+    c->add_option("--selfsim-groove-rim-share", q.grooveRimShare,
+                  "selfsim: ... when at least this share of the residual there is above the "
+                  "texture (0: no test)")
+        ->capture_default_str();
     c->add_option("--selfsim-pile-up-reach", q.pileUpReach,
                   "selfsim: a kept region below the texture takes the samples above it within "
                   "this many samples, its pile-up (0: off)")

@@ -258,11 +258,14 @@ std::vector<double> squaredDistanceTo(const std::vector<uint8_t>& at, int w, int
 // scoring at least `grow` at the growth's scales, not marked, inside the border, that lie within
 // `widthShare` × its width (twice the largest distance of its samples from the samples outside
 // it) of it and are 8-connected to it through such samples: a groove's banks, as wide as the
-// groove. Returns the samples added to `map`.
+// groove. Step 8o (SelfSimMap.h) calls it with a lower `grow` and `raisedShare` > 0: then the
+// mark takes anything only when at least that share of the Σ|r| of the samples within that
+// reach of it (not marked, inside the border) lies above the texture (raised rims along it).
+// Returns the samples added to `map`.
 size_t takeGrooveBanks(std::span<const size_t> mark, const std::vector<uint8_t>& before,
                        std::vector<uint8_t>& map, const std::vector<float>& r,
                        const std::vector<float>& zGrow, int W, int H, int border, double grow,
-                       double share, double widthShare, double length) {
+                       double share, double widthShare, double length, double raisedShare = 0.0) {
     size_t added = 0;
     const auto inside = [&](int x, int y) {
         return x >= border && y >= border && x < W - border && y < H - border;
@@ -304,6 +307,18 @@ size_t takeGrooveBanks(std::span<const size_t> mark, const std::vector<uint8_t>&
              (static_cast<int>(i % W) - bx0)] = 1;
     const std::vector<double> dist = squaredDistanceTo(mine, bw, bh);
     const double reach2 = reach * reach;
+    if (raisedShare > 0.0) {
+        double raised = 0.0, around = 0.0;
+        for (size_t k = 0; k < mine.size(); ++k) {
+            if (mine[k] || dist[k] > reach2) continue;
+            const int qx = static_cast<int>(k % bw) + bx0, qy = static_cast<int>(k / bw) + by0;
+            const size_t q = static_cast<size_t>(qy) * W + qx;
+            if (before[q] || !inside(qx, qy)) continue;
+            around += std::abs(r[q]);
+            raised += std::max(0.0f, r[q]);
+        }
+        if (!(around > 0.0) || raised < raisedShare * around) return 0;
+    }
     std::vector<uint8_t> seen(mine);
     std::vector<size_t> front;
     for (size_t k = 0; k < mine.size(); ++k)
@@ -615,6 +630,16 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.grooveBankWidth >= 0.0))
         throw inputError(option("selfsim-groove-bank-width"), "must be >= 0",
                          "The default is 1 (0: off)");
+    if (!(o.grooveRimSigma >= 0.0))
+        throw inputError(option("selfsim-groove-rim-sigma"), "must be >= 0",
+                         "The default is 0 (off)");
+    if (!(o.grooveRimLength >= 0.0))
+        throw inputError(option("selfsim-groove-rim-length"), "must be >= 0", "The default is 15");
+    if (!(o.grooveRimWidth > 0.0))
+        throw inputError(option("selfsim-groove-rim-width"), "must be > 0", "The default is 1");
+    if (!(o.grooveRimShare >= 0.0 && o.grooveRimShare < 1.0))
+        throw inputError(option("selfsim-groove-rim-share"), "must be in [0, 1)",
+                         "The default is 0.6 (0: no test)");
     if (o.pileUpReach < 0)
         throw inputError(option("selfsim-pile-up-reach"), "must be >= 0",
                          "The default is 1 (0: off)");
@@ -1382,6 +1407,8 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     }
     // step 8g: the banks of the marks below the texture, on the final marks (each mark flooded
     // over the marks as they stand before the step)
+    const std::vector<uint8_t> beforeBanks =
+        o.grooveRimSigma > 0.0 ? out.map : std::vector<uint8_t>();
     if (o.grooveBankWidth > 0.0) {
         const std::vector<uint8_t> before = out.map;
         std::vector<uint8_t> markSeen(n, 0);
@@ -1404,6 +1431,20 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             o.layLineSigma, tileLay);
         out.layLines = lines;
         out.layLineSamples = added;
+    }
+    // step 8o: a groove's raised rims, taken at a lower score when they stand along it (the
+    // marks as they stood before step 8g)
+    if (o.grooveRimSigma > 0.0) {
+        std::vector<uint8_t> markSeen(n, 0);
+        std::vector<size_t> mark;
+        for (size_t i0 = 0; i0 < n; ++i0) {
+            if (!beforeBanks[i0] || markSeen[i0]) continue;
+            mark.clear();
+            floodRegion(i0, markSeen, mark, [&](size_t q) { return beforeBanks[q] != 0; });
+            out.grooveRims += takeGrooveBanks(mark, beforeBanks, out.map, out.residual, zGrow, W, H,
+                                              b, o.grooveRimSigma, o.pileUpShare, o.grooveRimWidth,
+                                              o.grooveRimLength, o.grooveRimShare);
+        }
     }
     return out;
 }
