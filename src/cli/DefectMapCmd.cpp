@@ -71,6 +71,9 @@ int runDefectMap(const DefectMapJobOptions& o) {
     if (m.method == DefectMethod::SelfSim && m.selfsimHollowRows > 0)
         std::printf("  %zu rows of hollows: %zu hollows dropped alone kept with their row\n",
                     m.selfsimHollowRows, m.selfsimRowHollows);
+    if (m.method == DefectMethod::SelfSim && m.selfsimHollowChains > 0)
+        std::printf("  %zu chains of hollows on a rough stretch: %zu hollows kept\n",
+                    m.selfsimHollowChains, m.selfsimChainHollows);
     if (m.method == DefectMethod::SelfSim && m.selfsimLayLines > 0)
         std::printf(
             "  %zu marks along the texture's lay judged again without the copies on "
@@ -460,6 +463,11 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     c->add_option("--selfsim-hollow-row-members", q.hollowRowMembers,
                   "selfsim: ... a row: at least this many of them")
+        ->capture_default_str();
+    c->add_option("--selfsim-hollow-chain-tolerance", q.chainTolerance,
+                  "selfsim: hollows of the regions at the border (and off it) evenly spaced on a "
+                  "line, each within this share of the step of where it falls, are a chain, kept "
+                  "(0: off)")
         ->capture_default_str();
     c->add_option("--selfsim-lay-line-elongation", q.layLineElongation,
                   "selfsim: a mark at least this elongated along its tile's lay ... (0: off)")

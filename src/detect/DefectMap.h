@@ -352,6 +352,8 @@ struct DefectMap {
     size_t selfsimRaisedLines = 0;  // selfsim only: raised pieces kept as burrs across the lay (8j)
     size_t selfsimHollowRows = 0;   // selfsim only: rows of hollows (step 8k) ...
     size_t selfsimRowHollows = 0;   // ... and their hollows that steps 6-7 had dropped
+    size_t selfsimHollowChains = 0;  // step 8p: chains of hollows on a rough stretch kept ...
+    size_t selfsimChainHollows = 0;  // ... and their hollows
     double seconds = 0;
 
     size_t markedCount() const;

@@ -215,6 +215,8 @@ void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int he
     r.selfsimRaisedLines = m.raisedLines;
     r.selfsimHollowRows = m.hollowRows;
     r.selfsimRowHollows = m.rowHollows;
+    r.selfsimHollowChains = m.hollowChains;
+    r.selfsimChainHollows = m.chainHollows;
     r.markedScore = r.markedCount();
 }
 

@@ -442,6 +442,10 @@ struct SelfSimMapOptions {
                                        // are linked (>= 0; 0: off) ...
     int hollowRowMembers = 4;          // ... and at least this many in a line are a row, kept
                                        // (>= 2)
+    double chainTolerance = 0.0;       // step 8p: hollows of the regions at the border at step
+                                       // 8f's levels (and 8k's) evenly spaced on a line, each
+                                       // within this × the step of where it falls, are a chain,
+                                       // kept (0: off; else in (0, 0.5])
     double layLineElongation = 4.0;    // step 8l: a mark at least this elongated (the root of
                                        // its extent's eigenvalue ratio; 0: off, the map before
                                        // 2026-11-29; else >= 1) ...
@@ -510,6 +514,8 @@ struct SelfSimMap {
                                         // across the lay)
     size_t hollowRows = 0;              // rows of hollows step 8k kept regions of ...
     size_t rowHollows = 0;              // ... and those regions (dropped by steps 6-7 alone)
+    size_t hollowChains = 0;            // chains of hollows step 8p kept pieces of ...
+    size_t chainHollows = 0;            // ... and those pieces (and regions)
     size_t layLines = 0;                // marks step 8l judged as lines along the lay
     size_t layLineSamples = 0;          // ... and the samples it added to them
     size_t pileUp = 0;                  // samples step 8e added (the kept regions' pile-up)
