@@ -217,6 +217,8 @@ void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int he
     r.selfsimRowHollows = m.rowHollows;
     r.selfsimHollowChains = m.hollowChains;
     r.selfsimChainHollows = m.chainHollows;
+    r.selfsimFarBanks = m.farBanks;
+    r.selfsimFarBankSamples = m.farBankSamples;
     r.markedScore = r.markedCount();
 }
 

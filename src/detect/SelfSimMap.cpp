@@ -649,6 +649,9 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.chainTolerance >= 0.0 && o.chainTolerance <= 0.5))
         throw inputError(option("selfsim-hollow-chain-tolerance"), "must be in [0, 0.5]",
                          "Use 0 (off) or a share of the chain's step, as 0.2");
+    if (!(o.farBankReach >= 0.0))
+        throw inputError(option("selfsim-far-bank-reach"), "must be >= 0",
+                         "Use 0 (off) or a distance in samples, as 10");
     if (!(o.lineLayContrast >= 1.0))
         throw inputError(option("selfsim-line-lay-contrast"), "must be >= 1", "The default is 1.5");
     if (!(o.borderBasinGrowth >= 0.0))
@@ -1523,6 +1526,68 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             o.layLineSigma, tileLay);
         out.layLines = lines;
         out.layLineSamples = added;
+    }
+    // step 8q: a groove's far banks. Each mark below the texture (pileUpShare of its Σ|r|) that
+    // is a line (at least kFarBankGrooveMin samples, extent at least kFarBankElongation) takes
+    // the regions of step 6 not marked that stand above the texture (at least kFarBankRaised of
+    // their samples), are lines as well and run beside it: their long axis within
+    // kFarBankAngle of its own, their centroid within farBankReach samples of its axis and
+    // between its ends along it
+    if (o.farBankReach > 0.0) {
+        struct Groove {
+            double cx, cz, ux, uz, from, to;  // centroid, axis, extent along it
+        };
+        std::vector<Groove> grooves;
+        std::vector<uint8_t> markSeen(n, 0);
+        std::vector<size_t> mark;
+        for (size_t i0 = 0; i0 < n; ++i0) {
+            if (!out.map[i0] || markSeen[i0]) continue;
+            mark.clear();
+            floodRegion(i0, markSeen, mark, [&](size_t q) { return out.map[q] != 0; });
+            if (mark.size() < kFarBankGrooveMin ||
+                !mostlyOfSign(mark, out.residual, -1.0f, o.pileUpShare))
+                continue;
+            const Extent e = extentOf(mark, W);
+            if (!(e.elongation >= kFarBankElongation)) continue;
+            Groove gr{e.cx, e.cz, std::cos(e.axis), std::sin(e.axis), 0.0, 0.0};
+            gr.from = std::numeric_limits<double>::infinity();
+            gr.to = -gr.from;
+            for (const size_t i : mark) {
+                const double s = (static_cast<double>(i % W) - gr.cx) * gr.ux +
+                                 (static_cast<double>(i / W) - gr.cz) * gr.uz;
+                gr.from = std::min(gr.from, s);
+                gr.to = std::max(gr.to, s);
+            }
+            grooves.push_back(gr);
+        }
+        const double cosAngle = std::cos(kFarBankAngle * kPi / 180.0);
+        for (size_t k = 0; k < regions.size() && !grooves.empty(); ++k) {
+            const Region& reg = regions[k];
+            const std::span<const size_t> samples(members.data() + reg.begin, reg.end - reg.begin);
+            if (static_cast<int>(samples.size()) < o.minRegion) continue;
+            if (std::any_of(samples.begin(), samples.end(),
+                            [&](size_t i) { return out.map[i] != 0; }))
+                continue;
+            const auto raised = std::count_if(samples.begin(), samples.end(),
+                                              [&](size_t i) { return out.residual[i] > 0.0f; });
+            if (static_cast<double>(raised) < kFarBankRaised * static_cast<double>(samples.size()))
+                continue;
+            const Extent e = extentOf(samples, W);
+            if (!(e.elongation >= kFarBankElongation)) continue;
+            const double ux = std::cos(e.axis), uz = std::sin(e.axis);
+            for (const Groove& gr : grooves) {
+                if (std::abs(ux * gr.ux + uz * gr.uz) < cosAngle) continue;
+                const double dx = e.cx - gr.cx, dz = e.cz - gr.cz;
+                const double along = dx * gr.ux + dz * gr.uz;
+                if (std::abs(dz * gr.ux - dx * gr.uz) > o.farBankReach || along < gr.from ||
+                    along > gr.to)
+                    continue;
+                for (const size_t i : samples) out.map[i] = 255;
+                out.farBankSamples += samples.size();
+                ++out.farBanks;
+                break;
+            }
+        }
     }
     return out;
 }

@@ -446,6 +446,9 @@ struct SelfSimMapOptions {
                                        // 8f's levels (and 8k's) evenly spaced on a line, each
                                        // within this × the step of where it falls, are a chain,
                                        // kept (0: off; else in (0, 0.5])
+    double farBankReach = 0.0;         // step 8q: a raised line beside a groove, parallel
+                                       // to it, its centre within this many samples of the
+                                       // groove's axis, is the groove's bank (0: off)
     double layLineElongation = 4.0;    // step 8l: a mark at least this elongated (the root of
                                        // its extent's eigenvalue ratio; 0: off, the map before
                                        // 2026-11-29; else >= 1) ...
@@ -487,6 +490,13 @@ inline constexpr double kHollowShare = 0.8;
 // ... and is compact (its extent below this); a row's centroids are a line (extent at least this)
 inline constexpr double kHollowCompact = 2.5;
 inline constexpr double kHollowRowElongation = 4.0;
+// Step 8q: a groove has at least this many samples; it and its banks are lines (extent at least
+// this); a bank stands above the texture (at least this share of its samples) and runs within
+// this many degrees of the groove's axis
+inline constexpr size_t kFarBankGrooveMin = 40;
+inline constexpr double kFarBankElongation = 4.0;
+inline constexpr double kFarBankRaised = 0.9;
+inline constexpr double kFarBankAngle = 15.0;
 
 // Step 7 needs at least this many regions to measure the texture's tail on.
 inline constexpr size_t kTextureTailMinRegions = 32;
@@ -516,6 +526,8 @@ struct SelfSimMap {
     size_t rowHollows = 0;              // ... and those regions (dropped by steps 6-7 alone)
     size_t hollowChains = 0;            // chains of hollows step 8p kept pieces of ...
     size_t chainHollows = 0;            // ... and those pieces (and regions)
+    size_t farBanks = 0;                // regions step 8q kept as grooves' banks ...
+    size_t farBankSamples = 0;          // ... and their samples
     size_t layLines = 0;                // marks step 8l judged as lines along the lay
     size_t layLineSamples = 0;          // ... and the samples it added to them
     size_t pileUp = 0;                  // samples step 8e added (the kept regions' pile-up)
