@@ -796,6 +796,9 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o.chainTolerance = 0.6;
     expectNamed(o, "selfsim-hollow-chain-tolerance");
     o = {};
+    o.chainLayAngle = 91.0;
+    expectNamed(o, "selfsim-hollow-chain-lay-angle");
+    o = {};
     o.farBankReach = -1.0;
     expectNamed(o, "selfsim-far-bank-reach");
     o = {};

@@ -472,6 +472,10 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
                   "line, each within this share of the step of where it falls, are a chain, kept "
                   "(0: off)")
         ->capture_default_str();
+    c->add_option("--selfsim-hollow-chain-lay-angle", q.chainLayAngle,
+                  "selfsim: ... unless the chain runs within this many degrees of its tile's lay "
+                  "(0: no test)")
+        ->capture_default_str();
     c->add_option("--selfsim-far-bank-reach", q.farBankReach,
                   "selfsim: a raised line beside a groove and parallel to it, its centre within "
                   "this many samples of the groove's axis, is kept as the groove's bank (0: off)")

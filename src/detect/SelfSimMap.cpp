@@ -649,6 +649,9 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.chainTolerance >= 0.0 && o.chainTolerance <= 0.5))
         throw inputError(option("selfsim-hollow-chain-tolerance"), "must be in [0, 0.5]",
                          "Use 0 (off) or a share of the chain's step, as 0.2");
+    if (!(o.chainLayAngle >= 0.0 && o.chainLayAngle <= 90.0))
+        throw inputError(option("selfsim-hollow-chain-lay-angle"), "must be in [0, 90]",
+                         "Use 0 (no test) or an angle in degrees, as 30");
     if (!(o.farBankReach >= 0.0))
         throw inputError(option("selfsim-far-bank-reach"), "must be >= 0",
                          "Use 0 (off) or a distance in samples, as 10");
@@ -1458,6 +1461,17 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             }
             for (const std::vector<size_t>& chain :
                  chainsOf(at, o.hollowRowGap, o.hollowRowMembers, o.chainTolerance)) {
+                if (o.chainLayAngle > 0.0) {
+                    // a chain along its tile's lay is a stria's own hollows
+                    const auto& p0 = at[chain.front()];
+                    const auto& p1 = at[chain.back()];
+                    const double lay = tileLay(0.5 * (p0[0] + p1[0]), 0.5 * (p0[1] + p1[1]));
+                    double dir = std::atan2(p1[1] - p0[1], p1[0] - p0[0]);
+                    if (dir < 0.0) dir += kPi;
+                    double off = std::abs(dir - lay);
+                    off = std::min(off, kPi - off);
+                    if (lay >= 0.0 && off < o.chainLayAngle * kPi / 180.0) continue;
+                }
                 size_t taken = 0;
                 for (const size_t j : chain) {
                     std::span<const size_t> p;

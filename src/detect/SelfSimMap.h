@@ -446,6 +446,8 @@ struct SelfSimMapOptions {
                                        // 8f's levels (and 8k's) evenly spaced on a line, each
                                        // within this × the step of where it falls, are a chain,
                                        // kept (0: off; else in (0, 0.5])
+    double chainLayAngle = 0.0;        // ... unless it runs within this many degrees of its
+                                       // tile's lay (8i's lay; 0: no test; in [0, 90])
     double farBankReach = 0.0;         // step 8q: a raised line beside a groove, parallel
                                        // to it, its centre within this many samples of the
                                        // groove's axis, is the groove's bank (0: off)
