@@ -350,6 +350,43 @@
 //     costly lines stand 10.8-29.8 σ_x, the Wyko part's 4.1-7.0). At 10, DEV 47 -> 47 of 50,
 //     the NanoFocus land's median precision on a person's marks 0.775 -> 0.819; held out on
 //     4901-4903 (fresh, the rule to turn it on fixed before) no map changed, so it stays off.
+//  8p. A chain of hollows on a rough stretch (chainTolerance, chainLayAngle; off by default; helper
+//     real35s): after step 8k, the regions steps 6-7 keep that reach the border are cut at step
+//     8f's levels (growSigma × borderLevelStep^k); at each level their pieces below the texture,
+//     not marked, off the border, holding a detection and minRegion samples and compact (extent
+//     below kHollowCompact), with 8k's hollows off the border, are points (their centroids); a
+//     chain -- at least hollowRowMembers points evenly spaced on a straight line, each within
+//     chainTolerance × the step of where the chain's mean step puts it, steps at most
+//     hollowRowGap (chainsOf) -- is kept, each piece with its trim, pile-up and flanks (8a, 8e,
+//     8b); with chainLayAngle > 0 not when it runs within that many degrees of its tile's lay (8i's
+//     lay). A pit chain struck across a bullet land's rough end or shoulder is one region with it
+//     at 2.5 σ; above the stretch's own score each pit is a piece of its own, but of 12-25
+//     samples, under borderPieceMin, so steps 8d/8f keep none and 8k sees only regions off the
+//     border (the Sensofar land's model-B pit chains at recall 0.00-0.24 on the seen 4701-4903).
+//     The texture's own hollows line up too, but unevenly (spacing's coefficient of variation
+//     0.14-0.38, 0.7-3.1 samples off their line, on those runs), a chain's are even (0.00-0.03,
+//     0.0-0.3). Replayed on the seen runs (both textures, 36 runs): +307 true / 1 false samples,
+//     the Sensofar land B 4803 0.791 -> 0.805. On the DEV insertion seeds 101-105 (both models, the
+//     five files, the binary at 0.2): no run gained or lost (47 of 50 on a person's marks); the
+//     Sensofar land B 102 recall 0.89 -> 0.92; all ten NanoFocus land maps take one chain of the
+//     land's own notches under a step edge (along the lay), precision on a person's marks -0.01 to
+//     -0.04 (chainLayAngle 30 drops it, and with it B 102's gain and one seen chain 10° from the
+//     lay). Off: it gains no DEV run. Held out in docs/RESULTS.md.
+//  8q. A groove's far banks (farBankReach; off by default; helper real35s): after step 8l, each
+//     mark below the texture (pileUpShare of its Σ|r|) that is a line (at least
+//     kFarBankGrooveMin samples, extent at least kFarBankElongation) takes the regions of step 6
+//     not marked that stand above the texture (kFarBankRaised of their samples), are lines as
+//     well and run beside it: their long axis within kFarBankAngle of its own, their centroid
+//     within farBankReach samples of its axis and between its ends along it. A scratch ploughed
+//     into the Sensofar land piles its banks up 4-8 samples beside the groove, apart from it
+//     under the growth's 2.5 σ (step 8g floods only what touches it) and below the texture's
+//     RMS (5-9 σ: step 6 drops them), so the map keeps the groove's bottom alone (the seen A 4703:
+//     a scratch at recall 0.44, its banks two raised regions of 373 and 529 samples, extent 14-16,
+//     parallel to it). Replayed on the seen runs (both textures, 36 runs; reach 10): +1 418 true /
+//     82 false samples, the Sensofar land A 4703 0.745 -> 0.921, A 4701 0.726 -> 0.774. On the DEV
+//     insertion seeds 101-105 (the binary at 10): two maps changed (the periodic lines B 105, the
+//     Wyko part A 102: precision on a person's marks -0.01, recall unchanged), no run gained or
+//     lost. Off: it gains no DEV run. Held out in docs/RESULTS.md.
 // Every threshold is relative to σ_s, so the map is invariant to h → a·h + b (a ≠ 0) up to
 // rounding; a constant map marks nothing. Cost: offsets × (2·refine + 1)² box-filtered
 // difference passes over the map, parallel over tiles (TBB); memory 2 × offsets + 6 float copies.
