@@ -378,9 +378,9 @@
 //     not marked that stand above the texture (kFarBankRaised of their samples), are lines as
 //     well and run beside it: their long axis within kFarBankAngle of its own, their centroid
 //     within farBankReach samples of its axis and between its ends along it. A scratch ploughed
-//     into the Sensofar land piles its banks up 4-8 samples beside the groove, apart from it
+//     into the Sensofar land piles its banks up 7-9 samples from the groove's axis, apart from it
 //     under the growth's 2.5 σ (step 8g floods only what touches it) and below the texture's
-//     RMS (5-9 σ: step 6 drops them), so the map keeps the groove's bottom alone (the seen A 4703:
+//     RMS (7-9 σ: step 6 drops them), so the map keeps the groove's bottom alone (the seen A 4703:
 //     a scratch at recall 0.44, its banks two raised regions of 373 and 529 samples, extent 14-16,
 //     parallel to it). Replayed on the seen runs (both textures, 36 runs; reach 10): +1 418 true /
 //     82 false samples, the Sensofar land A 4703 0.745 -> 0.921, A 4701 0.726 -> 0.774. On the DEV
