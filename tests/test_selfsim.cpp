@@ -796,6 +796,15 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o.hollowRowMembers = 1;
     expectNamed(o, "selfsim-hollow-row-members");
     o = {};
+    o.chainTolerance = 0.6;
+    expectNamed(o, "selfsim-hollow-chain-tolerance");
+    o = {};
+    o.chainLayAngle = 91.0;
+    expectNamed(o, "selfsim-hollow-chain-lay-angle");
+    o = {};
+    o.farBankReach = -1.0;
+    expectNamed(o, "selfsim-far-bank-reach");
+    o = {};
     o.roughnessCutoff = -1.0;
     expectNamed(o, "selfsim-roughness-cutoff");
     o = {};
@@ -1281,6 +1290,101 @@ TEST(SelfSimMap, ARowOfHollowsIsKeptScatteredOrClusteredHollowsAreNot) {
         }
     EXPECT_GT(added, 0u);
     EXPECT_EQ(away, 0u) << away << " of the " << added << " samples added lie off the row";
+}
+
+// Step 8p: a chain of hollows on a rough stretch. Striations with two rough stretches from the
+// borders into the map (step 8f's test's: shallow troughs strewn with narrow cones). On the
+// first lies a chain of five pits (ρ 2.5, 6 × deep, twice the deepest cone), 9 samples apart on a
+// straight line; on the second five such pits on a line unevenly spaced (6, 14, 7 and 13 samples
+// apart). Each pit is one piece with its stretch at the growth's 2.5 σ and stands off it above
+// the stretch's score, but is smaller than borderPieceMin, so steps 8d and 8f keep none of them
+// (and step 8k sees only regions off the border). With step 8p the chain is marked (at least half
+// its samples, at least four of its pits kept), the uneven row is not, the stretches gain less than
+// half what the chain gains (the pits' flanks where they touch a cone), and nothing marked
+// without it is lost.
+TEST(SelfSimMap, AChainOfHollowsOnARoughStretchIsKeptAnUnevenRowIsNot) {
+    std::vector<float> h = striations(71);
+    std::vector<uint8_t> rough(h.size(), 0), chain(h.size(), 0), uneven(h.size(), 0);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> depth(0.6, 3.0), along(0.0, 100.0), across(-8.0, 8.0);
+    for (int k = 0; k < 150; ++k) {
+        pit(h, rough, along(rng), 70 + across(rng), 2.0, depth(rng));
+        pit(h, rough, kW - 1 - along(rng) * 1.15, 150 + across(rng), 2.0, depth(rng));
+    }
+    constexpr double kRho = 2.5, kDepth = 6.0;
+    for (int k = 0; k < 5; ++k) pit(h, chain, 50 + 9 * k, 68 + 1.5 * k, kRho, kDepth);
+    const double at[5] = {0, 6, 20, 27, 40};
+    for (const double s : at) pit(h, uneven, kW - 92 + s, 148 + 0.2 * s, kRho, kDepth);
+    for (size_t i = 0; i < h.size(); ++i) rough[i] = rough[i] && !chain[i] && !uneven[i];
+
+    SelfSimMapOptions off;
+    off.chainTolerance = 0.0;
+    SelfSimMapOptions on = off;
+    on.chainTolerance = 0.2;
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
+                     b = detectSelfSimDefects(h, kW, kH, on);
+    const Counts ca = count(a.map, chain, on.border), cb = count(b.map, chain, on.border);
+    const Counts ub = count(b.map, uneven, on.border), ua = count(a.map, uneven, on.border);
+    const Counts ta = count(a.map, rough, on.border), tb = count(b.map, rough, on.border);
+    EXPECT_GE(a.droppedBorder, 2u);
+    EXPECT_EQ(ca.hits, 0u) << "the chain, without step 8p";
+    EXPECT_GE(cb.hits, cb.truth / 2) << "the chain: " << cb.hits << " of " << cb.truth;
+    EXPECT_EQ(b.hollowChains, 1u);
+    EXPECT_GE(b.chainHollows, 4u);
+    EXPECT_EQ(ub.hits, ua.hits) << "the uneven row";
+    EXPECT_LT(2 * (tb.hits - ta.hits), cb.hits)
+        << "the rough stretches (the pits' flanks where they touch a cone): " << ta.hits << " -> "
+        << tb.hits;
+    EXPECT_EQ(markedOnlyIn(a, b), 0u) << "samples marked without step 8p and not with it";
+}
+
+// Step 8q: a groove's far banks. Striations with a groove (3 × the striations deep, 6 samples
+// wide, across the lay) whose banks, strips 3 samples wide, stand 6 × the residual's σ_0 above the
+// texture 5 samples off its label on each side (apart from it below the growth's 2.5 σ: regions
+// of their own, below the texture's RMS, so dropped; step 8g floods only what touches the
+// groove); a raised strip as high 17 samples from the groove's axis, parallel to it; and a burr
+// (the same groove raised) with such strips beside it. With step 8q (reach 10) the groove's banks
+// are marked (at least 3 in 4 of them, in two regions or more; none without it); the far strip and
+// the burr's strips are not, and nothing marked without it is lost.
+TEST(SelfSimMap, AGroovesFarBanksAreMarkedAFarStripAndABurrsStripsAreNot) {
+    std::vector<float> h = striations(67);
+    const double sigma = detectSelfSimDefects(h, kW, kH).sigma;
+    ASSERT_GT(sigma, 0.0);
+    std::vector<uint8_t> grooveTruth(h.size(), 0), burrTruth(h.size(), 0);
+    groove(h, grooveTruth, 60, 80, 196, 80, 6, 3.0);
+    groove(h, burrTruth, 60, 150, 196, 150, 6, -3.0);  // depth < 0: raised
+    std::vector<uint8_t> banks(h.size(), 0), farStrip(h.size(), 0), burrStrips(h.size(), 0);
+    auto strip = [&](std::vector<uint8_t>& mask, int y0) {
+        for (int y = y0; y < y0 + 3; ++y)
+            for (int x = 60; x <= 196; ++x) {
+                const size_t i = static_cast<size_t>(y) * kW + x;
+                mask[i] = 1;
+                h[i] += static_cast<float>(6.0 * sigma);
+            }
+    };
+    strip(banks, 70);  // the label is rows 78-82
+    strip(banks, 88);
+    strip(farStrip, 96);
+    strip(burrStrips, 142);
+    strip(burrStrips, 156);
+
+    SelfSimMapOptions off;
+    off.farBankReach = 0.0;
+    SelfSimMapOptions on = off;
+    on.farBankReach = 10.0;
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
+                     b = detectSelfSimDefects(h, kW, kH, on);
+    const Counts ga = count(a.map, grooveTruth, on.border), ka = count(a.map, banks, on.border),
+                 kb = count(b.map, banks, on.border);
+    const Counts fa = count(a.map, farStrip, on.border), fb = count(b.map, farStrip, on.border);
+    const Counts la = count(a.map, burrStrips, on.border), lb = count(b.map, burrStrips, on.border);
+    EXPECT_GE(ga.hits, ga.truth * 9 / 10) << "the groove";
+    EXPECT_EQ(ka.hits, 0u) << "the banks without step 8q";
+    EXPECT_GE(kb.hits * 4, kb.truth * 3) << "the banks: " << kb.hits << " of " << kb.truth;
+    EXPECT_GE(b.farBanks, 2u);
+    EXPECT_EQ(fb.hits, fa.hits) << "the far strip";
+    EXPECT_EQ(lb.hits, la.hits) << "the burr's strips";
+    EXPECT_EQ(markedOnlyIn(a, b), 0u) << "samples marked without step 8q and not with it";
 }
 
 // Step 6 with roughnessCutoff: the RMS a region must reach is the roughness's, not the form's. A

@@ -73,6 +73,12 @@ int runDefectMap(const DefectMapJobOptions& o) {
     if (m.method == DefectMethod::SelfSim && m.selfsimHollowRows > 0)
         std::printf("  %zu rows of hollows: %zu hollows dropped alone kept with their row\n",
                     m.selfsimHollowRows, m.selfsimRowHollows);
+    if (m.method == DefectMethod::SelfSim && m.selfsimHollowChains > 0)
+        std::printf("  %zu chains of hollows on a rough stretch: %zu hollows kept\n",
+                    m.selfsimHollowChains, m.selfsimChainHollows);
+    if (m.method == DefectMethod::SelfSim && m.selfsimFarBanks > 0)
+        std::printf("  %zu raised lines beside grooves kept as their banks: %zu samples\n",
+                    m.selfsimFarBanks, m.selfsimFarBankSamples);
     if (m.method == DefectMethod::SelfSim && m.selfsimLayLines > 0)
         std::printf(
             "  %zu marks along the texture's lay judged again without the copies on "
@@ -466,6 +472,19 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     c->add_option("--selfsim-hollow-row-members", q.hollowRowMembers,
                   "selfsim: ... a row: at least this many of them")
+        ->capture_default_str();
+    c->add_option("--selfsim-hollow-chain-tolerance", q.chainTolerance,
+                  "selfsim: hollows of the regions at the border (and off it) evenly spaced on a "
+                  "line, each within this share of the step of where it falls, are a chain, kept "
+                  "(0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-hollow-chain-lay-angle", q.chainLayAngle,
+                  "selfsim: ... unless the chain runs within this many degrees of its tile's lay "
+                  "(0: no test)")
+        ->capture_default_str();
+    c->add_option("--selfsim-far-bank-reach", q.farBankReach,
+                  "selfsim: a raised line beside a groove and parallel to it, its centre within "
+                  "this many samples of the groove's axis, is kept as the groove's bank (0: off)")
         ->capture_default_str();
     c->add_option("--selfsim-lay-line-elongation", q.layLineElongation,
                   "selfsim: a mark at least this elongated along its tile's lay ... (0: off)")

@@ -353,6 +353,10 @@ struct DefectMap {
     size_t selfsimBurrBasin = 0;    // ... and the samples of their basins step 8n took back
     size_t selfsimHollowRows = 0;   // selfsim only: rows of hollows (step 8k) ...
     size_t selfsimRowHollows = 0;   // ... and their hollows that steps 6-7 had dropped
+    size_t selfsimHollowChains = 0;    // step 8p: chains of hollows on a rough stretch kept ...
+    size_t selfsimChainHollows = 0;    // ... and their hollows
+    size_t selfsimFarBanks = 0;        // step 8q: grooves' banks kept ...
+    size_t selfsimFarBankSamples = 0;  // ... and their samples
     double seconds = 0;
 
     size_t markedCount() const;

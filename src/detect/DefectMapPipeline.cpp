@@ -216,6 +216,10 @@ void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int he
     r.selfsimBurrBasin = m.burrBasin;
     r.selfsimHollowRows = m.hollowRows;
     r.selfsimRowHollows = m.rowHollows;
+    r.selfsimHollowChains = m.hollowChains;
+    r.selfsimChainHollows = m.chainHollows;
+    r.selfsimFarBanks = m.farBanks;
+    r.selfsimFarBankSamples = m.farBankSamples;
     r.markedScore = r.markedCount();
 }
 

@@ -169,6 +169,51 @@ std::vector<std::vector<size_t>> rowsOf(std::span<const std::array<double, 2>> p
     return rows;
 }
 
+// Step 8p's chains: runs of at least `least` points (the hollows' centroids, x and z), evenly
+// spaced along a straight line: from each point i and each point j at most `gap` from it (and
+// at least 1), the chain steps on by its mean step so far, taking the point nearest where the
+// next step lands when it lies within `tolerance` × the step of it; a chain is kept when no
+// point lies where the step back from i lands (its first point is i). Each chain's points'
+// indices, in order (a chain and its reverse both).
+std::vector<std::vector<size_t>> chainsOf(std::span<const std::array<double, 2>> p, double gap,
+                                          int least, double tolerance) {
+    std::vector<std::vector<size_t>> chains;
+    // the point nearest (x, z), and its distance
+    const auto nearest = [&](double x, double z) {
+        size_t k = 0;
+        double best = std::numeric_limits<double>::infinity();
+        for (size_t m = 0; m < p.size(); ++m) {
+            const double d = std::hypot(p[m][0] - x, p[m][1] - z);
+            if (d < best) best = d, k = m;
+        }
+        return std::pair{k, best};
+    };
+    std::vector<size_t> chain;
+    for (size_t i = 0; i < p.size(); ++i)
+        for (size_t j = 0; j < p.size(); ++j) {
+            const double d = std::hypot(p[j][0] - p[i][0], p[j][1] - p[i][1]);
+            if (j == i || d > gap || d < 1.0) continue;
+            chain = {i, j};
+            double sx = p[j][0] - p[i][0], sz = p[j][1] - p[i][1];
+            for (;;) {
+                const auto [k, e] = nearest(p[chain.back()][0] + sx, p[chain.back()][1] + sz);
+                if (e > tolerance * std::hypot(sx, sz) ||
+                    std::find(chain.begin(), chain.end(), k) != chain.end())
+                    break;
+                chain.push_back(k);
+                const double steps = static_cast<double>(chain.size() - 1);
+                sx = (p[k][0] - p[i][0]) / steps;
+                sz = (p[k][1] - p[i][1]) / steps;
+            }
+            const auto [k, e] = nearest(p[i][0] - sx, p[i][1] - sz);
+            if (e <= tolerance * std::hypot(sx, sz) &&
+                std::find(chain.begin(), chain.end(), k) == chain.end())
+                continue;  // i is not the chain's first point
+            if (static_cast<int>(chain.size()) >= least) chains.push_back(chain);
+        }
+    return chains;
+}
+
 // Whether at least `share` of the samples' Σ|r| lies on the side `sign` of the texture (+1
 // above, -1 below); false when Σ|r| is 0 (steps 8c, 8e, 8k)
 bool mostlyOfSign(std::span<const size_t> samples, const std::vector<float>& r, float sign,
@@ -619,6 +664,15 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
                          "The default is 16 samples (0: off)");
     if (o.hollowRowMembers < 2)
         throw inputError(option("selfsim-hollow-row-members"), "must be >= 2", "The default is 4");
+    if (!(o.chainTolerance >= 0.0 && o.chainTolerance <= 0.5))
+        throw inputError(option("selfsim-hollow-chain-tolerance"), "must be in [0, 0.5]",
+                         "Use 0 (off) or a share of the chain's step, as 0.2");
+    if (!(o.chainLayAngle >= 0.0 && o.chainLayAngle <= 90.0))
+        throw inputError(option("selfsim-hollow-chain-lay-angle"), "must be in [0, 90]",
+                         "Use 0 (no test) or an angle in degrees, as 30");
+    if (!(o.farBankReach >= 0.0))
+        throw inputError(option("selfsim-far-bank-reach"), "must be >= 0",
+                         "Use 0 (off) or a distance in samples, as 10");
     if (!(o.lineLayContrast >= 1.0))
         throw inputError(option("selfsim-line-lay-contrast"), "must be >= 1", "The default is 1.5");
     if (!(o.borderBasinGrowth >= 0.0))
@@ -1383,6 +1437,99 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             out.hollowRows += taken > 0 ? 1 : 0;
         }
     }
+    // step 8p: a chain of hollows on a rough stretch. The regions steps 6-7 keep that reach the
+    // border (8d-8i judge their pieces, at least borderPieceMin samples each) are cut at step 8f's
+    // levels; at each level their pieces below the texture, not marked, off the border, holding a
+    // detection and minRegion samples and compact (8k's hollows), with 8k's hollows off the
+    // border, are points; a chain of at least hollowRowMembers of them evenly spaced on a line
+    // (chainsOf, chainTolerance; steps at most hollowRowGap) is kept, piece by piece
+    if (o.chainTolerance > 0.0 && o.hollowRowGap > 0.0 && o.dropBorderRegions && b > 0) {
+        std::vector<uint8_t> rough(n, 0), pieceAt(n, 0);
+        std::vector<size_t> roughSamples;
+        float top = 0.0f;
+        std::vector<size_t> offBorder;  // 8k's hollows: regions off the border
+        for (size_t k = 0; k < regions.size(); ++k) {
+            const Region& reg = regions[k];
+            const std::span<const size_t> samples(members.data() + reg.begin, reg.end - reg.begin);
+            if (reg.atBorder && verdicts[k] == Gate::Pass) {
+                for (const size_t i : samples) {
+                    if (!(out.residual[i] < 0.0f)) continue;
+                    rough[i] = 1;
+                    roughSamples.push_back(i);
+                    top = std::max(top, zGrow[i]);
+                }
+            } else if (!reg.atBorder && verdicts[k] != Gate::Small &&
+                       mostlyOfSign(samples, out.residual, -1.0f, kHollowShare) &&
+                       extentOf(samples, W).elongation < kHollowCompact) {
+                offBorder.push_back(k);
+            }
+        }
+        const double step = o.borderLevelStep > 1.0 ? o.borderLevelStep : 1.25;
+        std::vector<size_t> pool;
+        std::vector<std::pair<size_t, size_t>> pieces;  // [begin, end) in pool
+        std::vector<std::array<double, 2>> at;
+        for (double level = grow; !roughSamples.empty() && level <= top; level *= step) {
+            const auto lv = static_cast<float>(level);
+            pool.clear();
+            pieces.clear();
+            at.clear();
+            const auto inPiece = [&](size_t q) {
+                return rough[q] && !out.map[q] && zGrow[q] >= lv;
+            };
+            for (const size_t i0 : roughSamples) {
+                if (pieceAt[i0] || !inPiece(i0)) continue;
+                const size_t begin = pool.size();
+                const bool atBorder = floodRegion(i0, pieceAt, pool, inPiece);
+                const std::span<const size_t> p(pool.data() + begin, pool.size() - begin);
+                if (atBorder || static_cast<int>(p.size()) < o.minRegion || !(peakOf(p) >= thr))
+                    continue;
+                const Extent e = extentOf(p, W);
+                if (!(e.elongation < kHollowCompact)) continue;
+                pieces.emplace_back(begin, pool.size());
+                at.push_back({e.cx, e.cz});
+            }
+            for (const size_t i : pool) pieceAt[i] = 0;
+            if (pieces.empty()) continue;
+            for (const size_t k : offBorder) {
+                const Region& reg = regions[k];
+                const Extent e = extentOf({members.data() + reg.begin, reg.end - reg.begin}, W);
+                at.push_back({e.cx, e.cz});
+            }
+            for (const std::vector<size_t>& chain :
+                 chainsOf(at, o.hollowRowGap, o.hollowRowMembers, o.chainTolerance)) {
+                if (o.chainLayAngle > 0.0) {
+                    // a chain along its tile's lay is a stria's own hollows
+                    const auto& p0 = at[chain.front()];
+                    const auto& p1 = at[chain.back()];
+                    const double lay = tileLay(0.5 * (p0[0] + p1[0]), 0.5 * (p0[1] + p1[1]));
+                    double dir = std::atan2(p1[1] - p0[1], p1[0] - p0[0]);
+                    if (dir < 0.0) dir += kPi;
+                    double off = std::abs(dir - lay);
+                    off = std::min(off, kPi - off);
+                    if (lay >= 0.0 && off < o.chainLayAngle * kPi / 180.0) continue;
+                }
+                size_t taken = 0;
+                for (const size_t j : chain) {
+                    std::span<const size_t> p;
+                    float peak = 0.0f;
+                    if (j < pieces.size()) {
+                        p = {pool.data() + pieces[j].first, pieces[j].second - pieces[j].first};
+                        peak = peakOf(p);
+                    } else {
+                        const size_t k = offBorder[j - pieces.size()];
+                        p = {members.data() + regions[k].begin, regions[k].end - regions[k].begin};
+                        peak = regions[k].peak;
+                    }
+                    // kept before (by steps 6-8k, or with a chain at this level)
+                    if (std::any_of(p.begin(), p.end(), [&](size_t i) { return out.map[i] != 0; }))
+                        continue;
+                    if (keepRegion(p, peak, false, 0.0, 0.0, 0.0)) ++taken;
+                }
+                out.chainHollows += taken;
+                out.hollowChains += taken > 0 ? 1 : 0;
+            }
+        }
+    }
     // ---- step 8: the kept regions' flanks --------------------------------------------------
     // a kept region grows `extendSteps` samples further, layer by layer, into samples whose
     // residual has the region's sign and a score of at least its level (below growSigma): a
@@ -1444,6 +1591,68 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             out.grooveRims += takeGrooveBanks(mark, beforeBanks, out.map, out.residual, zGrow, W, H,
                                               b, o.grooveRimSigma, o.pileUpShare, o.grooveRimWidth,
                                               o.grooveRimLength, o.grooveRimShare);
+        }
+    }
+    // step 8q: a groove's far banks. Each mark below the texture (pileUpShare of its Σ|r|) that
+    // is a line (at least kFarBankGrooveMin samples, extent at least kFarBankElongation) takes
+    // the regions of step 6 not marked that stand above the texture (at least kFarBankRaised of
+    // their samples), are lines as well and run beside it: their long axis within
+    // kFarBankAngle of its own, their centroid within farBankReach samples of its axis and
+    // between its ends along it
+    if (o.farBankReach > 0.0) {
+        struct Groove {
+            double cx, cz, ux, uz, from, to;  // centroid, axis, extent along it
+        };
+        std::vector<Groove> grooves;
+        std::vector<uint8_t> markSeen(n, 0);
+        std::vector<size_t> mark;
+        for (size_t i0 = 0; i0 < n; ++i0) {
+            if (!out.map[i0] || markSeen[i0]) continue;
+            mark.clear();
+            floodRegion(i0, markSeen, mark, [&](size_t q) { return out.map[q] != 0; });
+            if (mark.size() < kFarBankGrooveMin ||
+                !mostlyOfSign(mark, out.residual, -1.0f, o.pileUpShare))
+                continue;
+            const Extent e = extentOf(mark, W);
+            if (!(e.elongation >= kFarBankElongation)) continue;
+            Groove gr{e.cx, e.cz, std::cos(e.axis), std::sin(e.axis), 0.0, 0.0};
+            gr.from = std::numeric_limits<double>::infinity();
+            gr.to = -gr.from;
+            for (const size_t i : mark) {
+                const double s = (static_cast<double>(i % W) - gr.cx) * gr.ux +
+                                 (static_cast<double>(i / W) - gr.cz) * gr.uz;
+                gr.from = std::min(gr.from, s);
+                gr.to = std::max(gr.to, s);
+            }
+            grooves.push_back(gr);
+        }
+        const double cosAngle = std::cos(kFarBankAngle * kPi / 180.0);
+        for (size_t k = 0; k < regions.size() && !grooves.empty(); ++k) {
+            const Region& reg = regions[k];
+            const std::span<const size_t> samples(members.data() + reg.begin, reg.end - reg.begin);
+            if (static_cast<int>(samples.size()) < o.minRegion) continue;
+            if (std::any_of(samples.begin(), samples.end(),
+                            [&](size_t i) { return out.map[i] != 0; }))
+                continue;
+            const auto raised = std::count_if(samples.begin(), samples.end(),
+                                              [&](size_t i) { return out.residual[i] > 0.0f; });
+            if (static_cast<double>(raised) < kFarBankRaised * static_cast<double>(samples.size()))
+                continue;
+            const Extent e = extentOf(samples, W);
+            if (!(e.elongation >= kFarBankElongation)) continue;
+            const double ux = std::cos(e.axis), uz = std::sin(e.axis);
+            for (const Groove& gr : grooves) {
+                if (std::abs(ux * gr.ux + uz * gr.uz) < cosAngle) continue;
+                const double dx = e.cx - gr.cx, dz = e.cz - gr.cz;
+                const double along = dx * gr.ux + dz * gr.uz;
+                if (std::abs(dz * gr.ux - dx * gr.uz) > o.farBankReach || along < gr.from ||
+                    along > gr.to)
+                    continue;
+                for (const size_t i : samples) out.map[i] = 255;
+                out.farBankSamples += samples.size();
+                ++out.farBanks;
+                break;
+            }
         }
     }
     return out;

@@ -389,6 +389,43 @@
 //     recall up 0.01-0.06 on five (A 4702 0.713 -> 0.774, A 4803 0.823 -> 0.850), 1810 true and
 //     1593 false samples added; on its DEV runs nothing (no mark passes). Off: it gains no DEV run
 //     (docs/RESULTS.md, "A groove's raised rims: step 8o").
+//  8p. A chain of hollows on a rough stretch (chainTolerance, chainLayAngle; off by default; helper
+//     real35s): after step 8k, the regions steps 6-7 keep that reach the border are cut at step
+//     8f's levels (growSigma × borderLevelStep^k); at each level their pieces below the texture,
+//     not marked, off the border, holding a detection and minRegion samples and compact (extent
+//     below kHollowCompact), with 8k's hollows off the border, are points (their centroids); a
+//     chain -- at least hollowRowMembers points evenly spaced on a straight line, each within
+//     chainTolerance × the step of where the chain's mean step puts it, steps at most
+//     hollowRowGap (chainsOf) -- is kept, each piece with its trim, pile-up and flanks (8a, 8e,
+//     8b); with chainLayAngle > 0 not when it runs within that many degrees of its tile's lay (8i's
+//     lay). A pit chain struck across a bullet land's rough end or shoulder is one region with it
+//     at 2.5 σ; above the stretch's own score each pit is a piece of its own, but of 12-25
+//     samples, under borderPieceMin, so steps 8d/8f keep none and 8k sees only regions off the
+//     border (the Sensofar land's model-B pit chains at recall 0.00-0.24 on the seen 4701-4903).
+//     The texture's own hollows line up too, but unevenly (spacing's coefficient of variation
+//     0.14-0.38, 0.7-3.1 samples off their line, on those runs), a chain's are even (0.00-0.03,
+//     0.0-0.3). Replayed on the seen runs (both textures, 36 runs): +307 true / 1 false samples,
+//     the Sensofar land B 4803 0.791 -> 0.805. On the DEV insertion seeds 101-105 (both models, the
+//     five files, the binary at 0.2): no run gained or lost (47 of 50 on a person's marks); the
+//     Sensofar land B 102 recall 0.89 -> 0.92; all ten NanoFocus land maps take one chain of the
+//     land's own notches under a step edge (along the lay), precision on a person's marks -0.01 to
+//     -0.04 (chainLayAngle 30 drops it, and with it B 102's gain and one seen chain 10° from the
+//     lay). Off: it gains no DEV run. Held out in docs/RESULTS.md.
+//  8q. A groove's far banks (farBankReach; off by default; helper real35s): after step 8l, each
+//     mark below the texture (pileUpShare of its Σ|r|) that is a line (at least
+//     kFarBankGrooveMin samples, extent at least kFarBankElongation) takes the regions of step 6
+//     not marked that stand above the texture (kFarBankRaised of their samples), are lines as
+//     well and run beside it: their long axis within kFarBankAngle of its own, their centroid
+//     within farBankReach samples of its axis and between its ends along it. A scratch ploughed
+//     into the Sensofar land piles its banks up 7-9 samples from the groove's axis, apart from it
+//     under the growth's 2.5 σ (step 8g floods only what touches it) and below the texture's
+//     RMS (7-9 σ: step 6 drops them), so the map keeps the groove's bottom alone (the seen A 4703:
+//     a scratch at recall 0.44, its banks two raised regions of 373 and 529 samples, extent 14-16,
+//     parallel to it). Replayed on the seen runs (both textures, 36 runs; reach 10): +1 418 true /
+//     82 false samples, the Sensofar land A 4703 0.745 -> 0.921, A 4701 0.726 -> 0.774. On the DEV
+//     insertion seeds 101-105 (the binary at 10): two maps changed (the periodic lines B 105, the
+//     Wyko part A 102: precision on a person's marks -0.01, recall unchanged), no run gained or
+//     lost. Off: it gains no DEV run. Held out in docs/RESULTS.md.
 // Every threshold is relative to σ_s, so the map is invariant to h → a·h + b (a ≠ 0) up to
 // rounding; a constant map marks nothing. Cost: offsets × (2·refine + 1)² box-filtered
 // difference passes over the map, parallel over tiles (TBB); memory 2 × offsets + 6 float copies.
@@ -484,6 +521,15 @@ struct SelfSimMapOptions {
                                        // are linked (>= 0; 0: off) ...
     int hollowRowMembers = 4;          // ... and at least this many in a line are a row, kept
                                        // (>= 2)
+    double chainTolerance = 0.0;       // step 8p: hollows of the regions at the border at step
+                                       // 8f's levels (and 8k's) evenly spaced on a line, each
+                                       // within this × the step of where it falls, are a chain,
+                                       // kept (0: off; else in (0, 0.5])
+    double chainLayAngle = 0.0;        // ... unless it runs within this many degrees of its
+                                       // tile's lay (8i's lay; 0: no test; in [0, 90])
+    double farBankReach = 0.0;         // step 8q: a raised line beside a groove, parallel
+                                       // to it, its centre within this many samples of the
+                                       // groove's axis, is the groove's bank (0: off)
     double layLineElongation = 4.0;    // step 8l: a mark at least this elongated (the root of
                                        // its extent's eigenvalue ratio; 0: off, the map before
                                        // 2026-11-29; else >= 1) ...
@@ -533,6 +579,13 @@ inline constexpr double kHollowShare = 0.8;
 // ... and is compact (its extent below this); a row's centroids are a line (extent at least this)
 inline constexpr double kHollowCompact = 2.5;
 inline constexpr double kHollowRowElongation = 4.0;
+// Step 8q: a groove has at least this many samples; it and its banks are lines (extent at least
+// this); a bank stands above the texture (at least this share of its samples) and runs within
+// this many degrees of the groove's axis
+inline constexpr size_t kFarBankGrooveMin = 40;
+inline constexpr double kFarBankElongation = 4.0;
+inline constexpr double kFarBankRaised = 0.9;
+inline constexpr double kFarBankAngle = 15.0;
 
 // Step 7 needs at least this many regions to measure the texture's tail on.
 inline constexpr size_t kTextureTailMinRegions = 32;
@@ -561,6 +614,10 @@ struct SelfSimMap {
     size_t burrBasin = 0;               // samples step 8n added (8j's burrs' basins)
     size_t hollowRows = 0;              // rows of hollows step 8k kept regions of ...
     size_t rowHollows = 0;              // ... and those regions (dropped by steps 6-7 alone)
+    size_t hollowChains = 0;            // chains of hollows step 8p kept pieces of ...
+    size_t chainHollows = 0;            // ... and those pieces (and regions)
+    size_t farBanks = 0;                // regions step 8q kept as grooves' banks ...
+    size_t farBankSamples = 0;          // ... and their samples
     size_t layLines = 0;                // marks step 8l judged as lines along the lay
     size_t layLineSamples = 0;          // ... and the samples it added to them
     size_t pileUp = 0;                  // samples step 8e added (the kept regions' pile-up)
