@@ -425,7 +425,8 @@
 //     82 false samples, the Sensofar land A 4703 0.745 -> 0.921, A 4701 0.726 -> 0.774. On the DEV
 //     insertion seeds 101-105 (the binary at 10): two maps changed (the periodic lines B 105, the
 //     Wyko part A 102: precision on a person's marks -0.01, recall unchanged), no run gained or
-//     lost. Off: it gains no DEV run. Held out in docs/RESULTS.md.
+//     lost. Off: it gains no DEV run; held out on 5201-5203 it gained two runs, but on fresh
+//     5301-5303 at the merge none (21 -> 21 of 30; docs/RESULTS.md).
 // Every threshold is relative to σ_s, so the map is invariant to h → a·h + b (a ≠ 0) up to
 // rounding; a constant map marks nothing. Cost: offsets × (2·refine + 1)² box-filtered
 // difference passes over the map, parallel over tiles (TBB); memory 2 × offsets + 6 float copies.
