@@ -91,6 +91,34 @@ size_t markedOnlyIn(const SelfSimMap& in, const SelfSimMap& notIn) {
     return n;
 }
 
+/// Whether `label` holds a sample within `reach` samples (a square) of (x, y).
+bool nearLabel(const std::vector<uint8_t>& label, int x, int y, int reach) {
+    for (int qy = std::max(0, y - reach); qy <= std::min(kH - 1, y + reach); ++qy)
+        for (int qx = std::max(0, x - reach); qx <= std::min(kW - 1, x + reach); ++qx)
+            if (label[static_cast<size_t>(qy) * kW + qx]) return true;
+    return false;
+}
+
+/// The samples a step added: those `with` marks and `without` does not; how many of them lie
+/// below the texture (residual <= 0, `with`'s), and how many are not where `onTarget(x, y)` says
+/// the step may add.
+struct Added {
+    size_t added = 0, lowered = 0, away = 0;
+};
+template <class OnTarget>
+Added addedSamples(const SelfSimMap& without, const SelfSimMap& with, OnTarget onTarget) {
+    Added n;
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            if (!with.map[i] || without.map[i]) continue;
+            ++n.added;
+            n.lowered += with.residual[i] > 0.0f ? 0 : 1;
+            n.away += onTarget(x, y) ? 0 : 1;
+        }
+    return n;
+}
+
 /// Striations (seed 11) strewn with 400 particles whose heights are exponential (mean 0.2: many
 /// small, a few as high as 1.5 × the striations), Gaussian domes of σ 1.2 samples at random
 /// places 48 samples or more from the edges; `particles` (optional) marks each within 2.5
@@ -667,19 +695,8 @@ TEST(SelfSimMap, AGroovesPileUpIsMarkedTheBanksOfARaisedBurrAreNot) {
     EXPECT_EQ(markedOnlyIn(a, b), 0u) << "samples marked without step 8e and not with it";
     // what step 8e added: raised, and next to the groove's label or its banks (a bank's sample
     // above the growth's 2.5 σ is in the groove's region, and step 8e reaches a sample beyond)
-    size_t added = 0, away = 0, lowered = 0;
-    for (int y = 2; y < kH - 2; ++y)
-        for (int x = 2; x < kW - 2; ++x) {
-            const size_t i = static_cast<size_t>(y) * kW + x;
-            if (!b.map[i] || a.map[i]) continue;
-            ++added;
-            lowered += b.residual[i] > 0.0f ? 0 : 1;
-            bool near = false;
-            for (int qy = y - 2; qy <= y + 2; ++qy)
-                for (int qx = x - 2; qx <= x + 2; ++qx)
-                    near = near || grooveTruth[static_cast<size_t>(qy) * kW + qx];
-            away += near ? 0 : 1;
-        }
+    const auto [added, lowered, away] =
+        addedSamples(a, b, [&](int x, int y) { return nearLabel(grooveTruth, x, y, 2); });
     EXPECT_EQ(added, b.pileUp);
     EXPECT_EQ(lowered, 0u) << "step 8e adds raised samples only";
     EXPECT_LE(away * 10, added) << away << " of the " << added
@@ -984,15 +1001,9 @@ TEST(SelfSimMap, AGroovesBanksAreMarkedTheRaisedTextureBeyondThemIsNot) {
     EXPECT_EQ(lb.hits, la.hits) << "the burr's strips: a raised mark takes no banks";
     EXPECT_EQ(rb.hits, ra.hits) << "the pit's ring: a pit is no line";
     EXPECT_EQ(markedOnlyIn(a, b), 0u) << "samples marked without step 8g and not with it";
-    size_t added = 0, lowered = 0, away = 0;
-    for (int y = 0; y < kH; ++y)
-        for (int x = 0; x < kW; ++x) {
-            const size_t i = static_cast<size_t>(y) * kW + x;
-            if (!b.map[i] || a.map[i]) continue;
-            ++added;
-            lowered += b.residual[i] > 0.0f ? 0 : 1;
-            away += y >= 72 && y <= 88 ? 0 : 1;  // the groove's mark ± its width (8)
-        }
+    // the groove's mark ± its width (8)
+    const auto [added, lowered, away] =
+        addedSamples(a, b, [](int, int y) { return y >= 72 && y <= 88; });
     EXPECT_EQ(added, b.grooveBanks);
     EXPECT_GT(added, 0u);
     EXPECT_EQ(lowered, 0u) << "step 8g adds raised samples only";
@@ -1054,15 +1065,9 @@ TEST(SelfSimMap, AGroovesRaisedRimsAreMarkedAGrooveWithoutRimsTakesNothing) {
     EXPECT_EQ(srb.hits, sra.hits) << "the short groove's rims: no line";
     EXPECT_EQ(fb.hits, fa.hits) << "the far strip";
     EXPECT_EQ(markedOnlyIn(a, b), 0u) << "samples marked without step 8o and not with it";
-    size_t added = 0, lowered = 0, away = 0;
-    for (int y = 0; y < kH; ++y)
-        for (int x = 0; x < kW; ++x) {
-            const size_t i = static_cast<size_t>(y) * kW + x;
-            if (!b.map[i] || a.map[i]) continue;
-            ++added;
-            lowered += b.residual[i] > 0.0f ? 0 : 1;
-            away += y >= 58 && y <= 82 ? 0 : 1;  // the long groove's mark ± its width
-        }
+    // the long groove's mark ± its width
+    const auto [added, lowered, away] =
+        addedSamples(a, b, [](int, int y) { return y >= 58 && y <= 82; });
     EXPECT_EQ(added, b.grooveRims);
     EXPECT_GT(added, 0u);
     EXPECT_EQ(lowered, 0u) << "step 8o adds raised samples only";
@@ -1136,6 +1141,24 @@ TEST(SelfSimMap, ALineAcrossTheLayIsKeptAtTheBorderOneAlongItIsNot) {
     EXPECT_EQ(c.map, a.map) << "a right angle asked for";
 }
 
+// Step 8j's and 8n's scene: aperiodic striae (along z) crossed from border to border by a
+// trench along x (3 × deep, 10 samples wide); from its lower bank two burrs rise (2 × high, 5
+// samples wide), one 40° from x (50° from the lay), one along z.
+struct BurrScene {
+    std::vector<float> h;
+    std::vector<uint8_t> trench, across, along;
+};
+BurrScene burrsFromATrench() {
+    BurrScene s{aperiodicStriae(59), {}, {}, {}};
+    s.trench.assign(s.h.size(), 0);
+    s.across.assign(s.h.size(), 0);
+    s.along.assign(s.h.size(), 0);
+    groove(s.h, s.trench, 0, 112, kW - 1, 112, 10, 3.0);
+    groove(s.h, s.across, 120, 118, 180, 168, 5, -2.0);
+    groove(s.h, s.along, 60, 118, 60, 178, 5, -2.0);
+    return s;
+}
+
 // Step 8j: a raised piece of a region at the border that is a line crossing the texture's lay
 // (a burr across the striae) is kept. The striae of step 8i's test (along z, no repeat across
 // them) crossed from border to border by a trench along x (3 × deep, 10 samples wide); from its
@@ -1146,11 +1169,9 @@ TEST(SelfSimMap, ALineAcrossTheLayIsKeptAtTheBorderOneAlongItIsNot) {
 // sample added is raised and on the burr or beside it (8b's flanks), and asking for a right angle
 // (lineAngle 90) keeps no raised line.
 TEST(SelfSimMap, ARaisedLineAcrossTheLayIsKeptAtTheBorderOneAlongItIsNot) {
-    std::vector<float> h = aperiodicStriae(59);
-    std::vector<uint8_t> trench(h.size(), 0), across(h.size(), 0), along(h.size(), 0);
-    groove(h, trench, 0, 112, kW - 1, 112, 10, 3.0);
-    groove(h, across, 120, 118, 180, 168, 5, -2.0);
-    groove(h, along, 60, 118, 60, 178, 5, -2.0);
+    const BurrScene scene = burrsFromATrench();
+    const std::vector<float>& h = scene.h;
+    const std::vector<uint8_t>&across = scene.across, &along = scene.along;
 
     SelfSimMapOptions off;
     SelfSimMapOptions on = off;
@@ -1171,19 +1192,8 @@ TEST(SelfSimMap, ARaisedLineAcrossTheLayIsKeptAtTheBorderOneAlongItIsNot) {
     EXPECT_GE(b.raisedLines, 1u);
     EXPECT_EQ(zb.hits, za.hits) << "the burr along the striae";
     EXPECT_EQ(markedOnlyIn(a, b), 0u) << "samples marked without step 8j and not with it";
-    size_t added = 0, lowered = 0, away = 0;
-    for (int y = 0; y < kH; ++y)
-        for (int x = 0; x < kW; ++x) {
-            const size_t i = static_cast<size_t>(y) * kW + x;
-            if (!b.map[i] || a.map[i]) continue;
-            ++added;
-            lowered += b.residual[i] > 0.0f ? 0 : 1;
-            bool near = false;
-            for (int qy = std::max(0, y - 2); qy <= std::min(kH - 1, y + 2); ++qy)
-                for (int qx = std::max(0, x - 2); qx <= std::min(kW - 1, x + 2); ++qx)
-                    near = near || across[static_cast<size_t>(qy) * kW + qx];
-            away += near ? 0 : 1;
-        }
+    const auto [added, lowered, away] =
+        addedSamples(a, b, [&](int x, int y) { return nearLabel(across, x, y, 2); });
     EXPECT_GT(added, 0u);
     EXPECT_EQ(lowered, 0u) << "step 8j adds raised samples only";
     EXPECT_EQ(away, 0u) << away << " of the " << added << " samples added lie off the burr";
@@ -1197,11 +1207,9 @@ TEST(SelfSimMap, ARaisedLineAcrossTheLayIsKeptAtTheBorderOneAlongItIsNot) {
 // growth's level are marked too, every sample added raised and on the burr (within 2 samples);
 // the burr along the striae and the trench are marked neither way; with 8j off 8n marks nothing.
 TEST(SelfSimMap, ABurrAcrossTheLayTakesBackItsBasinTheTextureBesideItDoesNot) {
-    std::vector<float> h = aperiodicStriae(59);
-    std::vector<uint8_t> trench(h.size(), 0), across(h.size(), 0), along(h.size(), 0);
-    groove(h, trench, 0, 112, kW - 1, 112, 10, 3.0);
-    groove(h, across, 120, 118, 180, 168, 5, -2.0);
-    groove(h, along, 60, 118, 60, 178, 5, -2.0);
+    const BurrScene scene = burrsFromATrench();
+    const std::vector<float>& h = scene.h;
+    const std::vector<uint8_t>&across = scene.across, &along = scene.along;
 
     SelfSimMapOptions j;
     ASSERT_EQ(j.burrBasin, 0.0);  // the default: off
@@ -1222,19 +1230,8 @@ TEST(SelfSimMap, ABurrAcrossTheLayTakesBackItsBasinTheTextureBesideItDoesNot) {
                                 << xb.truth << " (" << xa.hits << " without)";
     EXPECT_EQ(zb.hits, za.hits) << "the burr along the striae";
     EXPECT_EQ(markedOnlyIn(a, b), 0u) << "samples marked without step 8n and not with it";
-    size_t added = 0, lowered = 0, away = 0;
-    for (int y = 0; y < kH; ++y)
-        for (int x = 0; x < kW; ++x) {
-            const size_t i = static_cast<size_t>(y) * kW + x;
-            if (!b.map[i] || a.map[i]) continue;
-            ++added;
-            lowered += b.residual[i] > 0.0f ? 0 : 1;
-            bool near = false;
-            for (int qy = std::max(0, y - 2); qy <= std::min(kH - 1, y + 2); ++qy)
-                for (int qx = std::max(0, x - 2); qx <= std::min(kW - 1, x + 2); ++qx)
-                    near = near || across[static_cast<size_t>(qy) * kW + qx];
-            away += near ? 0 : 1;
-        }
+    const auto [added, lowered, away] =
+        addedSamples(a, b, [&](int x, int y) { return nearLabel(across, x, y, 2); });
     EXPECT_GT(added, 0u);
     EXPECT_EQ(lowered, 0u) << "step 8n adds raised samples only";
     EXPECT_EQ(away, 0u) << away << " of the " << added << " samples added lie off the burr";
@@ -1276,18 +1273,8 @@ TEST(SelfSimMap, ARowOfHollowsIsKeptScatteredOrClusteredHollowsAreNot) {
     EXPECT_EQ(sb.hits, 0u) << "the scattered pits";
     EXPECT_EQ(qb.hits, 0u) << "the square of pits";
     EXPECT_EQ(markedOnlyIn(a, b), 0u) << "samples marked without step 8k and not with it";
-    size_t added = 0, away = 0;
-    for (int y = 0; y < kH; ++y)
-        for (int x = 0; x < kW; ++x) {
-            const size_t i = static_cast<size_t>(y) * kW + x;
-            if (!b.map[i] || a.map[i]) continue;
-            ++added;
-            bool near = false;
-            for (int qy = std::max(0, y - 2); qy <= std::min(kH - 1, y + 2); ++qy)
-                for (int qx = std::max(0, x - 2); qx <= std::min(kW - 1, x + 2); ++qx)
-                    near = near || row[static_cast<size_t>(qy) * kW + qx];
-            away += near ? 0 : 1;
-        }
+    const Added d = addedSamples(a, b, [&](int x, int y) { return nearLabel(row, x, y, 2); });
+    const size_t added = d.added, away = d.away;
     EXPECT_GT(added, 0u);
     EXPECT_EQ(away, 0u) << away << " of the " << added << " samples added lie off the row";
 }
@@ -1533,19 +1520,10 @@ TEST(SelfSimMap, ALineAlongTheLayTakesItsBanksOneAcrossItDoesNot) {
     EXPECT_EQ(markedOnlyIn(a, b), 0u) << "step 8l only adds";
     // what step 8l adds lies within layLineReach samples of the marks it starts from, beside
     // the groove along the lay (x 80-120)
-    size_t added = 0, away = 0;
-    const int reach = on.layLineReach;
-    for (int y = 0; y < kH; ++y)
-        for (int x = 0; x < kW; ++x) {
-            const size_t i = static_cast<size_t>(y) * kW + x;
-            if (!b.map[i] || a.map[i]) continue;
-            ++added;
-            bool near = false;
-            for (int qy = std::max(0, y - reach); qy <= std::min(kH - 1, y + reach); ++qy)
-                for (int qx = std::max(0, x - reach); qx <= std::min(kW - 1, x + reach); ++qx)
-                    near = near || a.map[static_cast<size_t>(qy) * kW + qx] != 0;
-            away += near && x >= 80 && x <= 120 ? 0 : 1;
-        }
+    const Added beside = addedSamples(a, b, [&](int x, int y) {
+        return x >= 80 && x <= 120 && nearLabel(a.map, x, y, on.layLineReach);
+    });
+    const size_t added = beside.added, away = beside.away;
     EXPECT_EQ(added, b.layLineSamples);
     EXPECT_EQ(away, 0u) << away << " of the " << added << " samples added lie away from the groove";
     EXPECT_EQ(c.layLineSamples, 0u) << "a mark standing out by 1000 sigma asked for";
