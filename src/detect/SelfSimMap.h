@@ -459,6 +459,10 @@ struct SelfSimMapOptions {
                                        // copies come only from the offsets ...
     double layLineWidth = 3.0;         // ... crossing the tile's lay by more than this many
                                        // samples (> 0; no copy lands on the line itself)
+    double lineCopiesSigma = 0.0;      // step 8r: a line along its tile's lay takes the samples
+                                       // of its corridor scoring at least this on the residual
+                                       // of copies chosen for it across it (0: off, the default;
+                                       // else > 0)
     int pileUpReach = 1;               // step 8e: a kept region mostly below the texture takes
                                        // the samples above it within this many samples (>= 0,
                                        // 0: off) ...
@@ -483,6 +487,20 @@ inline constexpr double kHollowShare = 0.8;
 // ... and is compact (its extent below this); a row's centroids are a line (extent at least this)
 inline constexpr double kHollowCompact = 2.5;
 inline constexpr double kHollowRowElongation = 4.0;
+
+// Step 8r: a line is a mark at least this elongated (the root of its extent's eigenvalue ratio)
+// whose long axis lies within this many degrees of its tile's lay ...
+inline constexpr double kLineCopiesElongation = 4.0;
+inline constexpr double kLineCopiesAngle = 30.0;
+// ... its copies come from the offsets crossing it by more than twice its half-width (95 % of
+// its samples within it) + this margin, the corridor it grows in is its half-width + the margin
+// about its long axis, prolonged by this many samples beyond its ends ...
+inline constexpr double kLineCopiesMargin = 3.0;
+inline constexpr double kLineCopiesReach = 64.0;
+// ... the texture beside it that chooses the offsets and sets σ_L is a band this wide beyond
+// the corridor (off every mark by 2 samples), and this many offsets are kept
+inline constexpr double kLineCopiesBand = 24.0;
+inline constexpr int kLineCopiesOffsets = 8;
 
 // Step 7 needs at least this many regions to measure the texture's tail on.
 inline constexpr size_t kTextureTailMinRegions = 32;
@@ -512,6 +530,8 @@ struct SelfSimMap {
     size_t rowHollows = 0;              // ... and those regions (dropped by steps 6-7 alone)
     size_t layLines = 0;                // marks step 8l judged as lines along the lay
     size_t layLineSamples = 0;          // ... and the samples it added to them
+    size_t lineCopyLines = 0;           // lines along the lay step 8r judged on their own copies
+    size_t lineCopySamples = 0;         // ... and the samples it added to them
     size_t pileUp = 0;                  // samples step 8e added (the kept regions' pile-up)
     size_t grooveBanks = 0;             // samples step 8g added (the banks of marks below it)
     size_t trimmed = 0;                 // samples of kept regions step 8a left out
