@@ -350,6 +350,38 @@
 //     costly lines stand 10.8-29.8 σ_x, the Wyko part's 4.1-7.0). At 10, DEV 47 -> 47 of 50,
 //     the NanoFocus land's median precision on a person's marks 0.775 -> 0.819; held out on
 //     4901-4903 (fresh, the rule to turn it on fixed before) no map changed, so it stays off.
+//  8r. A line along the lay judged on copies chosen for it (lineCopiesSigma; off by default,
+//     since 2026-11-29; after step 8l, not on a relief). A scratch that runs along the arcs (the
+//     Wyko part's, 1-15° off the lay) is explained by itself: its tile keeps only offsets along
+//     the lay (step 2), so every copy of a sample on it is the scratch further along; and the
+//     tile keeps too few offsets across the lay for step 8l's r_x. Here the copies are chosen
+//     for the line, as a person compares it with the surface beside it: each mark (8-connected,
+//     at least minRegion samples) at least kLineCopiesElongation elongated, its long axis within
+//     kLineCopiesAngle of its tile's lay (a tile with a lay, as in step 8i), takes the offsets
+//     on step 2's grid within searchRadius that cross its long axis by more than twice its
+//     half-width (95 % of its samples within it) + kLineCopiesMargin (so no copy of a sample on
+//     it lands on it), the kLineCopiesOffsets of least median |g(x) − g(x + d)| over the band
+//     beside it (kLineCopiesBand samples beyond its corridor, off every mark by 2: the texture
+//     there), each refined per sample within ± refine to the least patch difference (step 3).
+//     r_L = g − the median of those copies, over σ_L, r_L's robust σ on that band. The samples
+//     of its corridor (its half-width + kLineCopiesMargin about its long axis, prolonged
+//     kLineCopiesReach samples beyond its ends), inside the border and not marked, whose r_L has
+//     the line's sign (its median r_L) and scores at least lineCopiesSigma, 8-connected to it
+//     through such samples, are marked. Measured (a numpy replay on main's maps of the Wyko
+//     part's DEV and seen runs, then the binary): r_L keeps 0.66-1.33 of the deep half of the
+//     scratches along the arcs (r kept 0.34-0.58), and 59-99 % of their missed deep samples in
+//     a corridor reach 4 σ_L (A 101 147 of 153, A 4702 184 of 188, A 5103 101 of 102; A 4802
+//     126 of 212); but the deep half is 12-26 % of what is missed, the rest the label's low
+//     banks (0-10 % reach 4 σ_L), and four of the eight scratches missed lie in no line's
+//     corridor (none of their marks passes as a line along the lay). On the DEV insertion seeds
+//     101-105 of scripts/eval-real (both models, the five files) at 4: 47 -> 48 of 50 at target
+//     on a person's marks (the Wyko part A 101, recall 0.776 -> 0.800, precision 0.692 ->
+//     0.667), none lost, none below 0.6 from above, but the NanoFocus land's median precision
+//     on a person's marks 0.775 -> 0.712 (-0.01 to -0.11 on 9 of its 10 runs: samples off the
+//     truth in the corridors of its lines along its striae), the Wyko part B 101 0.675 -> 0.620; on
+//     the seen 4701-4903 (the Wyko part, 18 runs) no run gained. σ_L at least the corridor's own
+//     (off the marks) cut the false samples but gained no run (A 101 0.788-0.797 at 2.5-4). Held
+//     out in docs/RESULTS.md.
 // Every threshold is relative to σ_s, so the map is invariant to h → a·h + b (a ≠ 0) up to
 // rounding; a constant map marks nothing. Cost: offsets × (2·refine + 1)² box-filtered
 // difference passes over the map, parallel over tiles (TBB); memory 2 × offsets + 6 float copies.
