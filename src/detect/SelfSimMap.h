@@ -381,7 +381,8 @@
 //     truth in the corridors of its lines along its striae), the Wyko part B 101 0.675 -> 0.620; on
 //     the seen 4701-4903 (the Wyko part, 18 runs) no run gained. σ_L at least the corridor's own
 //     (off the marks) cut the false samples but gained no run (A 101 0.788-0.797 at 2.5-4). Held
-//     out in docs/RESULTS.md.
+//     out once on 5501-5503: 26 -> 26 of 30, the NanoFocus land's median precision on a person's
+//     marks 0.786 -> 0.749; off (docs/RESULTS.md).
 // Every threshold is relative to σ_s, so the map is invariant to h → a·h + b (a ≠ 0) up to
 // rounding; a constant map marks nothing. Cost: offsets × (2·refine + 1)² box-filtered
 // difference passes over the map, parallel over tiles (TBB); memory 2 × offsets + 6 float copies.
