@@ -846,6 +846,9 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o.layLineWidth = 0.0;
     expectNamed(o, "selfsim-lay-line-width");
     o = {};
+    o.lineCopiesSigma = -1.0;
+    expectNamed(o, "selfsim-line-copies-sigma");
+    o = {};
     o.pileUpReach = -1;
     expectNamed(o, "selfsim-pile-up-reach");
     o = {};
@@ -1534,4 +1537,64 @@ TEST(SelfSimMap, ALineAlongTheLayTakesItsBanksOneAcrossItDoesNot) {
     loose.layLineStandOutMax = 1e6;
     EXPECT_EQ(detectSelfSimDefects(h, kW, kH, capped).map, a.map) << "a cap under the floor";
     EXPECT_EQ(detectSelfSimDefects(h, kW, kH, loose).map, b.map) << "a cap far above it";
+}
+
+// Step 8r: a line along the texture's lay judged on copies chosen for it. Striations along z (a
+// period-9 profile across x plus a random value per column, σ 0.2, and white noise of σ 0.05:
+// the striae repeat along z and poorly across, so every offset step 2 keeps lies along the lay)
+// with a long groove 8° off them (x 92-108 over y 52-172, 6 samples wide, 2 × the profile
+// deep): the copies of a sample on it are the groove itself further along, shifted by a sample
+// or two, so r keeps only its edges and ends. The copies chosen for the line (the offsets
+// crossing it, matched on the striae beside it) keep its whole depth: with step 8r at least 3/4
+// of the groove is marked, against less than 2/3 without, and everything added lies in its
+// corridor (x 84-116); a groove across the lay (y 100, x 140-200: no line along the lay) gains
+// nothing. Off (the default) nothing is added, and a threshold of 1000 σ_L adds nothing.
+TEST(SelfSimMap, ALineAlongTheLayJudgedOnItsOwnCopiesIsMarkedAlongItsLength) {
+    std::vector<float> h(static_cast<size_t>(kW) * kH);
+    {
+        std::mt19937 rng(71);
+        std::normal_distribution<double> white(0.0, 0.05), column(0.0, 0.2);
+        std::vector<double> c(kW);
+        for (double& v : c) v = column(rng);
+        for (int y = 0; y < kH; ++y)
+            for (int x = 0; x < kW; ++x) {
+                const double s = std::sin(M_PI * x / 9.0);
+                h[static_cast<size_t>(y) * kW + x] =
+                    static_cast<float>(std::pow(std::abs(s), 3) + c[x] + white(rng));
+            }
+    }
+    std::vector<uint8_t> alongTruth(h.size(), 0), acrossTruth(h.size(), 0);
+    groove(h, alongTruth, 92, 52, 108, 172, 6, 2.0);
+    groove(h, acrossTruth, 140, 100, 200, 100, 6, 2.0);
+    EXPECT_EQ(SelfSimMapOptions{}.lineCopiesSigma, 0.0) << "step 8r is off by default";
+    SelfSimMapOptions off;
+    off.textureNfa = 0.0;  // the columns' regions make a tail above the grooves
+    SelfSimMapOptions on = off, strict = off;
+    on.lineCopiesSigma = 4.0;
+    strict.lineCopiesSigma = 1000.0;
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
+                     b = detectSelfSimDefects(h, kW, kH, on),
+                     c = detectSelfSimDefects(h, kW, kH, strict);
+    const Counts ga = count(a.map, alongTruth, on.border), gb = count(b.map, alongTruth, on.border);
+    const Counts xa = count(a.map, acrossTruth, on.border),
+                 xb = count(b.map, acrossTruth, on.border);
+    EXPECT_EQ(a.lineCopyLines, 0u);
+    EXPECT_EQ(a.lineCopySamples, 0u);
+    EXPECT_LT(ga.hits * 3, ga.truth * 2) << "without step 8r: " << ga.hits << " of " << ga.truth;
+    EXPECT_GE(gb.hits * 4, gb.truth * 3) << "with step 8r: " << gb.hits << " of " << gb.truth;
+    EXPECT_GE(b.lineCopyLines, 1u);
+    EXPECT_EQ(xb.hits, xa.hits) << "the groove across the lay";
+    EXPECT_EQ(markedOnlyIn(a, b), 0u) << "step 8r only adds";
+    size_t added = 0, away = 0;
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            if (!b.map[i] || a.map[i]) continue;
+            ++added;
+            away += x >= 84 && x <= 116 ? 0 : 1;
+        }
+    EXPECT_EQ(added, b.lineCopySamples);
+    EXPECT_EQ(away, 0u) << away << " of the " << added << " samples added lie off the corridor";
+    EXPECT_EQ(c.lineCopySamples, 0u) << "1000 sigma_L asked for";
+    EXPECT_EQ(c.map, a.map);
 }

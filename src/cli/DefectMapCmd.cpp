@@ -84,6 +84,11 @@ int runDefectMap(const DefectMapJobOptions& o) {
             "  %zu marks along the texture's lay judged again without the copies on "
             "them: %zu samples added\n",
             m.selfsimLayLines, m.selfsimLayLineSamples);
+    if (m.method == DefectMethod::SelfSim && m.selfsimLineCopyLines > 0)
+        std::printf(
+            "  %zu lines along the lay judged on copies chosen for them: %zu samples "
+            "added\n",
+            m.selfsimLineCopyLines, m.selfsimLineCopySamples);
     if (m.method == DefectMethod::SelfSim && m.selfsimReliefLevels > 0)
         std::printf("  a relief: its %zu plateau levels taken out before the copies\n",
                     m.selfsimReliefLevels);
@@ -513,6 +518,10 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--selfsim-lay-line-width", q.layLineWidth,
                   "selfsim: ... crossing the lay by more than this many samples (no copy lands "
                   "on the line)")
+        ->capture_default_str();
+    c->add_option("--selfsim-line-copies-sigma", q.lineCopiesSigma,
+                  "selfsim: a line along the lay takes the samples of its corridor scoring at "
+                  "least this on the residual of copies chosen for it across it (0: off)")
         ->capture_default_str();
     c->add_option("--selfsim-relief", q.relief,
                   "selfsim: on a relief (heights on a few flat levels: lettering, a stepped part) "

@@ -347,7 +347,9 @@ struct DefectMap {
     size_t selfsimBorderPieces = 0;  // selfsim only: pieces of border regions kept (step 8d)
     size_t selfsimBorderLines = 0;   // selfsim only: ... of which kept as lines across the lay (8i)
     size_t selfsimLayLines = 0;      // selfsim only: marks step 8l judged as lines along the lay
-    size_t selfsimLayLineSamples = 0;  // ... and the samples it added to them
+    size_t selfsimLayLineSamples = 0;   // ... and the samples it added to them
+    size_t selfsimLineCopyLines = 0;    // lines along the lay step 8r judged on their own copies
+    size_t selfsimLineCopySamples = 0;  // ... and the samples it added to them
     size_t selfsimReliefLevels = 0;  // selfsim only: a relief's levels taken out (step 1b; 0: none)
     size_t selfsimRaisedLines = 0;  // selfsim only: raised pieces kept as burrs across the lay (8j)
     size_t selfsimBurrBasin = 0;    // ... and the samples of their basins step 8n took back

@@ -211,6 +211,8 @@ void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int he
     r.selfsimBorderLines = m.borderLines;
     r.selfsimLayLines = m.layLines;
     r.selfsimLayLineSamples = m.layLineSamples;
+    r.selfsimLineCopyLines = m.lineCopyLines;
+    r.selfsimLineCopySamples = m.lineCopySamples;
     r.selfsimReliefLevels = m.reliefLevels;
     r.selfsimRaisedLines = m.raisedLines;
     r.selfsimBurrBasin = m.burrBasin;

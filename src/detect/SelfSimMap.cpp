@@ -532,6 +532,224 @@ std::pair<size_t, size_t> takeLayLines(std::vector<uint8_t>& map, const std::vec
     return {lines, added};
 }
 
+// Step 8r (SelfSimMap.h) on the marks as they stand (`map`): each mark (8-connected) of at
+// least `minSize` samples that is a line along its tile's lay (extent at least
+// kLineCopiesElongation, its long axis within kLineCopiesAngle degrees of `layAt(cx, cz)`) gets
+// copies chosen for it: the offsets on a grid of refine + 1 samples within `radius` (Chebyshev)
+// that cross the line by more than twice its half-width + kLineCopiesMargin, the
+// kLineCopiesOffsets of least median |g(x) − g(x + d)| over the band beside it (the texture
+// there, off every mark), each refined per sample within ± refine to the least patch
+// difference. r_L = g − the median of those copies, over σ_L (its robust σ on the band); the
+// samples of the line's corridor (its half-width + kLineCopiesMargin about its long axis,
+// prolonged by kLineCopiesReach beyond its ends), inside the border and not marked, whose r_L
+// has the line's sign and scores at least `sigma` and that are 8-connected to it through such
+// samples are taken. Returns (lines judged, samples added).
+template <class LayAt>
+std::pair<size_t, size_t> takeLineCopies(std::vector<uint8_t>& map, const std::vector<float>& g,
+                                         int W, int H, int border, int minSize, int patch,
+                                         int refine, int radius, double sigma, LayAt&& layAt) {
+    const size_t n = map.size();
+    const std::vector<uint8_t> before = map;
+    // the samples within 2 of a mark: never the texture the band measures
+    std::vector<uint8_t> nearMark(n, 0);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            if (!before[static_cast<size_t>(y) * W + x]) continue;
+            for (int qy = std::max(0, y - 2); qy <= std::min(H - 1, y + 2); ++qy)
+                for (int qx = std::max(0, x - 2); qx <= std::min(W - 1, x + 2); ++qx)
+                    nearMark[static_cast<size_t>(qy) * W + qx] = 1;
+        }
+    const auto inside = [&](int x, int y) {
+        return x >= border && y >= border && x < W - border && y < H - border;
+    };
+    const int pr = patch / 2;
+    // the copy of sample (x, y) at offset (dx0, dz0) refined within ± refine: the value at the
+    // least patch difference (the patch clipped at the map's edges); NaN when the offset's
+    // end is outside the map
+    const auto copyAt = [&](int x, int y, int dx0, int dz0) {
+        if (x + dx0 < 0 || x + dx0 >= W || y + dz0 < 0 || y + dz0 >= H)
+            return std::numeric_limits<float>::quiet_NaN();
+        double best = std::numeric_limits<double>::infinity();
+        float value = std::numeric_limits<float>::quiet_NaN();
+        for (int ez = -refine; ez <= refine; ++ez)
+            for (int ex = -refine; ex <= refine; ++ex) {
+                const int dx = dx0 + ex, dz = dz0 + ez;
+                if (x + dx < 0 || x + dx >= W || y + dz < 0 || y + dz >= H) continue;
+                double ssd = 0.0;
+                for (int py = std::max({0, y - pr, -dz});
+                     py <= std::min({H - 1, y + pr, H - 1 - dz}); ++py)
+                    for (int px = std::max({0, x - pr, -dx});
+                         px <= std::min({W - 1, x + pr, W - 1 - dx}); ++px) {
+                        const double d = g[static_cast<size_t>(py) * W + px] -
+                                         g[static_cast<size_t>(py + dz) * W + px + dx];
+                        ssd += d * d;
+                    }
+                if (ssd < best) {
+                    best = ssd;
+                    value = g[static_cast<size_t>(y + dz) * W + x + dx];
+                }
+            }
+        return value;
+    };
+    std::vector<uint8_t> seen(n, 0), corridor(n, 0);
+    std::vector<size_t> mark, band, inCorridor, front;
+    std::vector<float> rL(n, 0.0f), v, diff;
+    std::vector<double> across;
+    size_t lines = 0, added = 0;
+    for (size_t i0 = 0; i0 < n; ++i0) {
+        if (!before[i0] || seen[i0]) continue;
+        mark.assign(1, i0);
+        seen[i0] = 1;
+        for (size_t k = 0; k < mark.size(); ++k) {
+            const int px = static_cast<int>(mark[k] % W), py = static_cast<int>(mark[k] / W);
+            for (int qy = std::max(0, py - 1); qy <= std::min(H - 1, py + 1); ++qy)
+                for (int qx = std::max(0, px - 1); qx <= std::min(W - 1, px + 1); ++qx) {
+                    const size_t q = static_cast<size_t>(qy) * W + qx;
+                    if (before[q] && !seen[q]) {
+                        seen[q] = 1;
+                        mark.push_back(q);
+                    }
+                }
+        }
+        if (static_cast<int>(mark.size()) < minSize) continue;
+        const Extent e = extentOf(mark, W);
+        if (!(e.elongation >= kLineCopiesElongation)) continue;
+        const double lay = layAt(e.cx, e.cz);
+        if (lay < 0.0) continue;
+        double turn = std::abs(e.axis - lay);
+        turn = std::min(turn, kPi - turn);
+        if (turn * 180.0 / kPi > kLineCopiesAngle) continue;
+        // the line's frame: along its long axis, across it (its normal)
+        const double lx = std::cos(e.axis), lz = std::sin(e.axis), nx = -lz, nz = lx;
+        double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+        across.clear();
+        for (const size_t i : mark) {
+            const double x = static_cast<double>(i % W) - e.cx,
+                         z = static_cast<double>(i / W) - e.cz;
+            lo = std::min(lo, x * lx + z * lz);
+            hi = std::max(hi, x * lx + z * lz);
+            across.push_back(std::abs(x * nx + z * nz));
+        }
+        const size_t q95 = static_cast<size_t>(0.95 * static_cast<double>(across.size() - 1));
+        std::nth_element(across.begin(), across.begin() + static_cast<std::ptrdiff_t>(q95),
+                         across.end());
+        const double half = across[q95] + kLineCopiesMargin;  // the corridor's half-width
+        const double cut = 2.0 * across[q95] + kLineCopiesMargin;
+        if (cut >= radius) continue;  // no offset crosses it within the search
+        lo -= kLineCopiesReach;
+        hi += kLineCopiesReach;
+        const double outer = half + kLineCopiesBand;
+        // the corridor and the band beside it, in the box holding both
+        const double ex = std::abs(lx) * std::max(-lo, hi) + std::abs(nx) * outer,
+                     ez = std::abs(lz) * std::max(-lo, hi) + std::abs(nz) * outer;
+        const int x0 = std::max(0, static_cast<int>(std::floor(e.cx - ex))),
+                  x1 = std::min(W - 1, static_cast<int>(std::ceil(e.cx + ex))),
+                  z0 = std::max(0, static_cast<int>(std::floor(e.cz - ez))),
+                  z1 = std::min(H - 1, static_cast<int>(std::ceil(e.cz + ez)));
+        band.clear();
+        inCorridor.clear();
+        for (int y = z0; y <= z1; ++y)
+            for (int x = x0; x <= x1; ++x) {
+                const double ax = x - e.cx, az = y - e.cz, along = ax * lx + az * lz,
+                             off = std::abs(ax * nx + az * nz);
+                if (along < lo || along > hi || off > outer) continue;
+                const size_t i = static_cast<size_t>(y) * W + x;
+                if (off <= half) {
+                    if (inside(x, y) && !before[i]) inCorridor.push_back(i);
+                } else if (!nearMark[i]) {
+                    band.push_back(i);
+                }
+            }
+        if (band.size() < 16 || inCorridor.empty()) continue;
+        // the band's samples the offsets are judged on (~1 k, every step-th) and its σ on (~4 k)
+        const size_t step = std::max<size_t>(1, band.size() / 1024);
+        struct Cand {
+            int dx, dz;
+            float score;
+        };
+        std::vector<Cand> cands;
+        const int grid = refine + 1;
+        for (int dz = -radius; dz <= radius; dz += grid)
+            for (int dx = -radius; dx <= radius; dx += grid) {
+                if (!(std::abs(dx * nx + dz * nz) > cut)) continue;
+                diff.clear();
+                for (size_t k = 0; k < band.size(); k += step) {
+                    const int x = static_cast<int>(band[k] % W), y = static_cast<int>(band[k] / W);
+                    if (x + dx < 0 || x + dx >= W || y + dz < 0 || y + dz >= H) continue;
+                    diff.push_back(
+                        std::abs(g[band[k]] - g[static_cast<size_t>(y + dz) * W + x + dx]));
+                }
+                if (diff.size() < 16) continue;
+                cands.push_back({dx, dz, static_cast<float>(medianOf(diff))});
+            }
+        std::stable_sort(cands.begin(), cands.end(),
+                         [](const Cand& p, const Cand& q) { return p.score < q.score; });
+        std::vector<std::array<int, 2>> kept;
+        for (const Cand& c : cands) {
+            if (static_cast<int>(kept.size()) >= kLineCopiesOffsets) break;
+            bool far = true;
+            for (const auto& k : kept)
+                far =
+                    far && std::max(std::abs(c.dx - k[0]), std::abs(c.dz - k[1])) > 2 * refine + 1;
+            if (far) kept.push_back({c.dx, c.dz});
+        }
+        if (kept.size() < 3) continue;
+        // r_L at a sample: g less the median of its copies (NaN with fewer than 3)
+        const auto residualAt = [&](size_t i) {
+            const int x = static_cast<int>(i % W), y = static_cast<int>(i / W);
+            v.clear();
+            for (const auto& k : kept) {
+                const float c = copyAt(x, y, k[0], k[1]);
+                if (std::isfinite(c)) v.push_back(c);
+            }
+            if (v.size() < 3) return std::numeric_limits<float>::quiet_NaN();
+            std::sort(v.begin(), v.end());
+            const float est =
+                v.size() % 2 ? v[v.size() / 2] : 0.5f * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+            return g[i] - est;
+        };
+        std::vector<float> bandR;
+        const size_t sigmaStep = std::max<size_t>(1, band.size() / 4096);
+        for (size_t k = 0; k < band.size(); k += sigmaStep) {
+            const float r = residualAt(band[k]);
+            if (std::isfinite(r)) bandR.push_back(r);
+        }
+        if (bandR.size() < 16) continue;
+        const double med = medianOf(bandR);
+        for (float& r : bandR) r = static_cast<float>(std::abs(r - med));
+        const double sigmaL = 1.4826 * medianOf(bandR);
+        if (!(sigmaL > 0.0)) continue;
+        // the line's sign: its median r_L
+        std::vector<float> onMark;
+        for (const size_t i : mark) {
+            const float r = residualAt(i);
+            if (std::isfinite(r)) onMark.push_back(r);
+        }
+        if (onMark.empty()) continue;
+        const double sign = medianOf(onMark) < 0.0 ? -1.0 : 1.0;
+        ++lines;
+        for (const size_t i : inCorridor) {
+            corridor[i] = 1;
+            const float r = residualAt(i);
+            rL[i] = std::isfinite(r) ? static_cast<float>(sign * (r - med) / sigmaL) : 0.0f;
+        }
+        front.assign(mark.begin(), mark.end());
+        for (size_t k = 0; k < front.size(); ++k) {
+            const int px = static_cast<int>(front[k] % W), py = static_cast<int>(front[k] / W);
+            for (int qy = std::max(0, py - 1); qy <= std::min(H - 1, py + 1); ++qy)
+                for (int qx = std::max(0, px - 1); qx <= std::min(W - 1, px + 1); ++qx) {
+                    const size_t q = static_cast<size_t>(qy) * W + qx;
+                    if (!corridor[q] || map[q] || !(rL[q] >= static_cast<float>(sigma))) continue;
+                    map[q] = 255;
+                    ++added;
+                    front.push_back(q);
+                }
+        }
+        for (const size_t i : inCorridor) corridor[i] = 0;
+    }
+    return {lines, added};
+}
+
 }  // namespace
 
 double textureTailThreshold(std::span<const float> peaks, double quantile, double nfa) {
@@ -726,6 +944,9 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
         throw inputError(option("selfsim-lay-line-sigma"), "must be > 0", "The default is 2");
     if (!(o.layLineWidth > 0.0))
         throw inputError(option("selfsim-lay-line-width"), "must be > 0", "The default is 3");
+    if (!(o.lineCopiesSigma >= 0.0))
+        throw inputError(option("selfsim-line-copies-sigma"), "must be >= 0",
+                         "The default is 0 (off; 4 measured)");
     if (o.border < 0)
         throw inputError(option("selfsim-border"), "must be >= 0", "The default is 40");
     if (o.minRegion < 1)
@@ -1654,6 +1875,13 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                 break;
             }
         }
+    }
+    // step 8r: a line along the lay judged on copies chosen for it, across it
+    if (o.lineCopiesSigma > 0.0 && !relief.relief) {
+        const auto [lines, added] = takeLineCopies(out.map, g, W, H, b, o.minRegion, o.patch,
+                                                   o.refine, R, o.lineCopiesSigma, tileLay);
+        out.lineCopyLines = lines;
+        out.lineCopySamples = added;
     }
     return out;
 }

@@ -427,6 +427,39 @@
 //     Wyko part A 102: precision on a person's marks -0.01, recall unchanged), no run gained or
 //     lost. Off: it gains no DEV run; held out on 5201-5203 it gained two runs, but on fresh
 //     5301-5303 at the merge none (21 -> 21 of 30; docs/RESULTS.md).
+//  8r. A line along the lay judged on copies chosen for it (lineCopiesSigma; off by default,
+//     since 2026-11-29; after step 8l, not on a relief). A scratch that runs along the arcs (the
+//     Wyko part's, 1-15° off the lay) is explained by itself: its tile keeps only offsets along
+//     the lay (step 2), so every copy of a sample on it is the scratch further along; and the
+//     tile keeps too few offsets across the lay for step 8l's r_x. Here the copies are chosen
+//     for the line, as a person compares it with the surface beside it: each mark (8-connected,
+//     at least minRegion samples) at least kLineCopiesElongation elongated, its long axis within
+//     kLineCopiesAngle of its tile's lay (a tile with a lay, as in step 8i), takes the offsets
+//     on step 2's grid within searchRadius that cross its long axis by more than twice its
+//     half-width (95 % of its samples within it) + kLineCopiesMargin (so no copy of a sample on
+//     it lands on it), the kLineCopiesOffsets of least median |g(x) − g(x + d)| over the band
+//     beside it (kLineCopiesBand samples beyond its corridor, off every mark by 2: the texture
+//     there), each refined per sample within ± refine to the least patch difference (step 3).
+//     r_L = g − the median of those copies, over σ_L, r_L's robust σ on that band. The samples
+//     of its corridor (its half-width + kLineCopiesMargin about its long axis, prolonged
+//     kLineCopiesReach samples beyond its ends), inside the border and not marked, whose r_L has
+//     the line's sign (its median r_L) and scores at least lineCopiesSigma, 8-connected to it
+//     through such samples, are marked. Measured (a numpy replay on main's maps of the Wyko
+//     part's DEV and seen runs, then the binary): r_L keeps 0.66-1.33 of the deep half of the
+//     scratches along the arcs (r kept 0.34-0.58), and 59-99 % of their missed deep samples in
+//     a corridor reach 4 σ_L (A 101 147 of 153, A 4702 184 of 188, A 5103 101 of 102; A 4802
+//     126 of 212); but the deep half is 12-26 % of what is missed, the rest the label's low
+//     banks (0-10 % reach 4 σ_L), and four of the eight scratches missed lie in no line's
+//     corridor (none of their marks passes as a line along the lay). On the DEV insertion seeds
+//     101-105 of scripts/eval-real (both models, the five files) at 4: 47 -> 48 of 50 at target
+//     on a person's marks (the Wyko part A 101, recall 0.776 -> 0.800, precision 0.692 ->
+//     0.667), none lost, none below 0.6 from above, but the NanoFocus land's median precision
+//     on a person's marks 0.775 -> 0.712 (-0.01 to -0.11 on 9 of its 10 runs: samples off the
+//     truth in the corridors of its lines along its striae), the Wyko part B 101 0.675 -> 0.620; on
+//     the seen 4701-4903 (the Wyko part, 18 runs) no run gained. σ_L at least the corridor's own
+//     (off the marks) cut the false samples but gained no run (A 101 0.788-0.797 at 2.5-4). Held
+//     out once on 5501-5503: 26 -> 26 of 30, the NanoFocus land's median precision on a person's
+//     marks 0.786 -> 0.749; off (docs/RESULTS.md).
 // Every threshold is relative to σ_s, so the map is invariant to h → a·h + b (a ≠ 0) up to
 // rounding; a constant map marks nothing. Cost: offsets × (2·refine + 1)² box-filtered
 // difference passes over the map, parallel over tiles (TBB); memory 2 × offsets + 6 float copies.
@@ -556,6 +589,10 @@ struct SelfSimMapOptions {
     double grooveRimWidth = 1.0;       // ... within this × its width of it (> 0) ...
     double grooveRimShare = 0.6;       // ... when at least this share of the Σ|r| there is above
                                        // the texture (in [0, 1); 0: no test)
+    double lineCopiesSigma = 0.0;      // step 8r: a line along its tile's lay takes the samples
+                                       // of its corridor scoring at least this on the residual
+                                       // of copies chosen for it across it (0: off, the default;
+                                       // else > 0)
     int pileUpReach = 1;               // step 8e: a kept region mostly below the texture takes
                                        // the samples above it within this many samples (>= 0,
                                        // 0: off) ...
@@ -587,6 +624,20 @@ inline constexpr size_t kFarBankGrooveMin = 40;
 inline constexpr double kFarBankElongation = 4.0;
 inline constexpr double kFarBankRaised = 0.9;
 inline constexpr double kFarBankAngle = 15.0;
+
+// Step 8r: a line is a mark at least this elongated (the root of its extent's eigenvalue ratio)
+// whose long axis lies within this many degrees of its tile's lay ...
+inline constexpr double kLineCopiesElongation = 4.0;
+inline constexpr double kLineCopiesAngle = 30.0;
+// ... its copies come from the offsets crossing it by more than twice its half-width (95 % of
+// its samples within it) + this margin, the corridor it grows in is its half-width + the margin
+// about its long axis, prolonged by this many samples beyond its ends ...
+inline constexpr double kLineCopiesMargin = 3.0;
+inline constexpr double kLineCopiesReach = 64.0;
+// ... the texture beside it that chooses the offsets and sets σ_L is a band this wide beyond
+// the corridor (off every mark by 2 samples), and this many offsets are kept
+inline constexpr double kLineCopiesBand = 24.0;
+inline constexpr int kLineCopiesOffsets = 8;
 
 // Step 7 needs at least this many regions to measure the texture's tail on.
 inline constexpr size_t kTextureTailMinRegions = 32;
@@ -621,6 +672,8 @@ struct SelfSimMap {
     size_t farBankSamples = 0;          // ... and their samples
     size_t layLines = 0;                // marks step 8l judged as lines along the lay
     size_t layLineSamples = 0;          // ... and the samples it added to them
+    size_t lineCopyLines = 0;           // lines along the lay step 8r judged on their own copies
+    size_t lineCopySamples = 0;         // ... and the samples it added to them
     size_t pileUp = 0;                  // samples step 8e added (the kept regions' pile-up)
     size_t grooveBanks = 0;             // samples step 8g added (the banks of marks below it)
     size_t grooveRims = 0;              // samples step 8o added (a groove's rims, lower)
