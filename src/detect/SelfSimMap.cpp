@@ -444,6 +444,33 @@ std::vector<float> acrossLayScores(const std::vector<float>& g, const std::vecto
     return z;
 }
 
+// The mark holding i0: the samples of `marks` 8-connected to it, in flood order, each set in
+// `seen` (steps 8l and 8r)
+void floodMark(const std::vector<uint8_t>& marks, size_t i0, std::vector<uint8_t>& seen,
+               std::vector<size_t>& mark, int W, int H) {
+    mark.assign(1, i0);
+    seen[i0] = 1;
+    for (size_t k = 0; k < mark.size(); ++k) {
+        const int px = static_cast<int>(mark[k] % W), py = static_cast<int>(mark[k] / W);
+        for (int qy = std::max(0, py - 1); qy <= std::min(H - 1, py + 1); ++qy)
+            for (int qx = std::max(0, px - 1); qx <= std::min(W - 1, px + 1); ++qx) {
+                const size_t q = static_cast<size_t>(qy) * W + qx;
+                if (marks[q] && !seen[q]) {
+                    seen[q] = 1;
+                    mark.push_back(q);
+                }
+            }
+    }
+}
+
+// The angle in degrees between a long axis and a lay, both in radians in [0, π): at most 90
+// (steps 8l and 8r)
+double degreesOffLay(double axis, double lay) {
+    double d = std::abs(axis - lay);
+    d = std::min(d, kPi - d);
+    return d * 180.0 / kPi;
+}
+
 // Step 8l (SelfSimMap.h) on the marks as they stand (`map`): each mark (8-connected) of at
 // least `minSize` samples that is a line along its tile's lay -- its extent at least
 // `elongation`, its long axis within `angle` degrees of the lay `layAt(cx, cz)` gives for its
@@ -472,27 +499,13 @@ std::pair<size_t, size_t> takeLayLines(std::vector<uint8_t>& map, const std::vec
     size_t lines = 0, added = 0;
     for (size_t i0 = 0; i0 < n; ++i0) {
         if (!before[i0] || seen[i0]) continue;
-        mark.assign(1, i0);
-        seen[i0] = 1;
-        for (size_t k = 0; k < mark.size(); ++k) {
-            const int px = static_cast<int>(mark[k] % W), py = static_cast<int>(mark[k] / W);
-            for (int qy = std::max(0, py - 1); qy <= std::min(H - 1, py + 1); ++qy)
-                for (int qx = std::max(0, px - 1); qx <= std::min(W - 1, px + 1); ++qx) {
-                    const size_t q = static_cast<size_t>(qy) * W + qx;
-                    if (before[q] && !seen[q]) {
-                        seen[q] = 1;
-                        mark.push_back(q);
-                    }
-                }
-        }
+        floodMark(before, i0, seen, mark, W, H);
         if (static_cast<int>(mark.size()) < minSize) continue;
         const Extent e = extentOf(mark, W);
         if (!(e.elongation >= elongation)) continue;
         const double lay = layAt(e.cx, e.cz);
         if (lay < 0.0) continue;
-        double d = std::abs(e.axis - lay);
-        d = std::min(d, kPi - d);
-        if (d * 180.0 / kPi > angle) continue;
+        if (degreesOffLay(e.axis, lay) > angle) continue;
         // ... that stands out of the texture once no copy lands on it: its median score
         scores.clear();
         for (const size_t i : mark) scores.push_back(zAcross[i]);
@@ -598,27 +611,13 @@ std::pair<size_t, size_t> takeLineCopies(std::vector<uint8_t>& map, const std::v
     size_t lines = 0, added = 0;
     for (size_t i0 = 0; i0 < n; ++i0) {
         if (!before[i0] || seen[i0]) continue;
-        mark.assign(1, i0);
-        seen[i0] = 1;
-        for (size_t k = 0; k < mark.size(); ++k) {
-            const int px = static_cast<int>(mark[k] % W), py = static_cast<int>(mark[k] / W);
-            for (int qy = std::max(0, py - 1); qy <= std::min(H - 1, py + 1); ++qy)
-                for (int qx = std::max(0, px - 1); qx <= std::min(W - 1, px + 1); ++qx) {
-                    const size_t q = static_cast<size_t>(qy) * W + qx;
-                    if (before[q] && !seen[q]) {
-                        seen[q] = 1;
-                        mark.push_back(q);
-                    }
-                }
-        }
+        floodMark(before, i0, seen, mark, W, H);
         if (static_cast<int>(mark.size()) < minSize) continue;
         const Extent e = extentOf(mark, W);
         if (!(e.elongation >= kLineCopiesElongation)) continue;
         const double lay = layAt(e.cx, e.cz);
         if (lay < 0.0) continue;
-        double turn = std::abs(e.axis - lay);
-        turn = std::min(turn, kPi - turn);
-        if (turn * 180.0 / kPi > kLineCopiesAngle) continue;
+        if (degreesOffLay(e.axis, lay) > kLineCopiesAngle) continue;
         // the line's frame: along its long axis, across it (its normal)
         const double lx = std::cos(e.axis), lz = std::sin(e.axis), nx = -lz, nz = lx;
         double lo = std::numeric_limits<double>::infinity(), hi = -lo;
