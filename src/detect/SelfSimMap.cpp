@@ -1352,9 +1352,10 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     // steps 8a and 8c on a region's (or a border piece's) samples, then the map and step 8b's
     // first frontier; a border piece (steps 8d, 8f) also has to be shaped as a defect: at least
     // borderPieceMin samples after the trim, and its mean score at least `fill` of its largest
-    // (borderPieceFill, borderLevelFill). False when nothing is marked.
+    // (borderPieceFill, borderLevelFill), or be a line crossing the lay (its extent at least
+    // `line`), counted in `lines`. False when nothing is marked.
     auto keepRegion = [&](std::span<const size_t> samples, float peak, bool piece, double fill,
-                          double cutAt, double line) {
+                          double cutAt, double line, size_t& lines) {
         // step 8b's sign: that of the region's largest |r| (a groove's or a dent's below the
         // texture, a burr's or a particle's above) ...
         size_t top = samples.front();
@@ -1395,7 +1396,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                 !(cutAt > 0.0 && !(sum - m * cutAt >= o.borderLevelShape * (most - cutAt) * m));
             if (!shaped) {
                 if (!crossingLine(kept, line)) return false;
-                ++out.borderLines;  // step 8i: a groove across the lay, whatever its profile
+                ++lines;  // step 8i (8j): a groove (a burr) across the lay, whatever its profile
             }
         }
         out.trimmed += samples.size() - kept.size();
@@ -1539,10 +1540,8 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                 if (atBorder || gate(piece, peak) != Gate::Pass) continue;
                 // no fill passes (an infinite share): the line test alone decides
                 if (!keepRegion(piece, peak, true, std::numeric_limits<double>::infinity(), 0.0,
-                                o.burrElongation))
+                                o.burrElongation, out.raisedLines))
                     continue;
-                --out.borderLines;  // counted by keepRegion as step 8i's; it is 8j's
-                ++out.raisedLines;
                 // step 8n: the burr takes back its basin, its flanks above the texture down to
                 // growSigma that flood to it before they flood to the texture's raised patches
                 if (o.burrBasin > 1.0 && !basinOwner.empty())
@@ -1560,7 +1559,9 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             const bool atBorder = floodRegion(i0, pieceSeen, piece, below);
             const float peak = peakOf(piece);
             if (atBorder || gate(piece, peak) != Gate::Pass) continue;
-            if (!keepRegion(piece, peak, true, o.borderPieceFill, 0.0, o.lineElongation)) continue;
+            if (!keepRegion(piece, peak, true, o.borderPieceFill, 0.0, o.lineElongation,
+                            out.borderLines))
+                continue;
             ++out.borderPieces;
             takeRim();
         }
@@ -1586,7 +1587,8 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                     const bool atBorder = floodRegion(i0, levelSeen, piece, above);
                     const float peak = peakOf(piece);
                     if (atBorder || gate(piece, peak) != Gate::Pass) continue;
-                    if (!keepRegion(piece, peak, true, o.borderLevelFill, level, o.lineElongation))
+                    if (!keepRegion(piece, peak, true, o.borderLevelFill, level, o.lineElongation,
+                                    out.borderLines))
                         continue;
                     ++out.borderPieces;
                     ++out.borderLevelPieces;
@@ -1620,7 +1622,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             if (!pieceSeen.empty()) keepBorderPieces(reg);
             continue;
         }
-        if (!keepRegion(samples, reg.peak, false, 0.0, 0.0, 0.0)) continue;
+        if (!keepRegion(samples, reg.peak, false, 0.0, 0.0, 0.0, out.borderLines)) continue;
         ++out.regions;
         if (!regionKept.empty()) regionKept[static_cast<size_t>(&reg - regions.data())] = 1;
     }
@@ -1651,7 +1653,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                 if (regionKept[hollow[j]]) continue;
                 const std::span<const size_t> samples(members.data() + reg.begin,
                                                       reg.end - reg.begin);
-                if (keepRegion(samples, reg.peak, false, 0.0, 0.0, 0.0)) ++taken;
+                if (keepRegion(samples, reg.peak, false, 0.0, 0.0, 0.0, out.borderLines)) ++taken;
             }
             out.rowHollows += taken;
             out.hollowRows += taken > 0 ? 1 : 0;
@@ -1743,7 +1745,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                     // kept before (by steps 6-8k, or with a chain at this level)
                     if (std::any_of(p.begin(), p.end(), [&](size_t i) { return out.map[i] != 0; }))
                         continue;
-                    if (keepRegion(p, peak, false, 0.0, 0.0, 0.0)) ++taken;
+                    if (keepRegion(p, peak, false, 0.0, 0.0, 0.0, out.borderLines)) ++taken;
                 }
                 out.chainHollows += taken;
                 out.hollowChains += taken > 0 ? 1 : 0;
