@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -471,6 +472,20 @@ double degreesOffLay(double axis, double lay) {
     return d * 180.0 / kPi;
 }
 
+// A mark's extent when it is a line along its tile's lay: at least `minSize` samples, its
+// extent at least `elongation`, its long axis within `angle` degrees of the lay `layAt(cx, cz)`
+// gives for its centroid (negative: the tile has no lay); none otherwise (steps 8l and 8r)
+template <class LayAt>
+std::optional<Extent> lineAlongLay(std::span<const size_t> mark, int W, int minSize,
+                                   double elongation, double angle, LayAt&& layAt) {
+    if (static_cast<int>(mark.size()) < minSize) return std::nullopt;
+    const Extent e = extentOf(mark, W);
+    if (!(e.elongation >= elongation)) return std::nullopt;
+    const double lay = layAt(e.cx, e.cz);
+    if (lay < 0.0 || degreesOffLay(e.axis, lay) > angle) return std::nullopt;
+    return e;
+}
+
 // Step 8l (SelfSimMap.h) on the marks as they stand (`map`): each mark (8-connected) of at
 // least `minSize` samples that is a line along its tile's lay -- its extent at least
 // `elongation`, its long axis within `angle` degrees of the lay `layAt(cx, cz)` gives for its
@@ -500,12 +515,7 @@ std::pair<size_t, size_t> takeLayLines(std::vector<uint8_t>& map, const std::vec
     for (size_t i0 = 0; i0 < n; ++i0) {
         if (!before[i0] || seen[i0]) continue;
         floodMark(before, i0, seen, mark, W, H);
-        if (static_cast<int>(mark.size()) < minSize) continue;
-        const Extent e = extentOf(mark, W);
-        if (!(e.elongation >= elongation)) continue;
-        const double lay = layAt(e.cx, e.cz);
-        if (lay < 0.0) continue;
-        if (degreesOffLay(e.axis, lay) > angle) continue;
+        if (!lineAlongLay(mark, W, minSize, elongation, angle, layAt)) continue;
         // ... that stands out of the texture once no copy lands on it: its median score
         scores.clear();
         for (const size_t i : mark) scores.push_back(zAcross[i]);
@@ -612,12 +622,10 @@ std::pair<size_t, size_t> takeLineCopies(std::vector<uint8_t>& map, const std::v
     for (size_t i0 = 0; i0 < n; ++i0) {
         if (!before[i0] || seen[i0]) continue;
         floodMark(before, i0, seen, mark, W, H);
-        if (static_cast<int>(mark.size()) < minSize) continue;
-        const Extent e = extentOf(mark, W);
-        if (!(e.elongation >= kLineCopiesElongation)) continue;
-        const double lay = layAt(e.cx, e.cz);
-        if (lay < 0.0) continue;
-        if (degreesOffLay(e.axis, lay) > kLineCopiesAngle) continue;
+        const std::optional<Extent> line =
+            lineAlongLay(mark, W, minSize, kLineCopiesElongation, kLineCopiesAngle, layAt);
+        if (!line) continue;
+        const Extent& e = *line;
         // the line's frame: along its long axis, across it (its normal)
         const double lx = std::cos(e.axis), lz = std::sin(e.axis), nx = -lz, nz = lx;
         double lo = std::numeric_limits<double>::infinity(), hi = -lo;
