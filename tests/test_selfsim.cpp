@@ -91,6 +91,18 @@ size_t markedOnlyIn(const SelfSimMap& in, const SelfSimMap& notIn) {
     return n;
 }
 
+/// Raises the box x0..x1 × y0..y1 (inclusive) of `h` by `height` and marks it in `mask` (the
+/// banks, rims and strips of steps 8g, 8o, 8q and 8l's tests).
+void raiseBox(std::vector<float>& h, std::vector<uint8_t>& mask, int x0, int x1, int y0, int y1,
+              double height) {
+    for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            mask[i] = 1;
+            h[i] += static_cast<float>(height);
+        }
+}
+
 /// Whether `label` holds a sample within `reach` samples (a square) of (x, y).
 bool nearLabel(const std::vector<uint8_t>& label, int x, int y, int reach) {
     for (int qy = std::max(0, y - reach); qy <= std::min(kH - 1, y + reach); ++qy)
@@ -951,12 +963,7 @@ TEST(SelfSimMap, AGroovesBanksAreMarkedTheRaisedTextureBeyondThemIsNot) {
     std::vector<uint8_t> grooveBanks(h.size(), 0), farStrip(h.size(), 0), burrBanks(h.size(), 0),
         pitBanks(h.size(), 0);
     auto strip = [&](std::vector<uint8_t>& mask, int x0, int x1, int y0, int y1) {
-        for (int y = y0; y <= y1; ++y)
-            for (int x = x0; x <= x1; ++x) {
-                const size_t i = static_cast<size_t>(y) * kW + x;
-                mask[i] = 1;
-                h[i] += static_cast<float>(bank);
-            }
+        raiseBox(h, mask, x0, x1, y0, y1, bank);
     };
     strip(grooveBanks, 60, 196, 75, 77);  // beside the label (rows 78-82)
     strip(grooveBanks, 60, 196, 83, 85);
@@ -1033,12 +1040,7 @@ TEST(SelfSimMap, AGroovesRaisedRimsAreMarkedAGrooveWithoutRimsTakesNothing) {
     const double rim = 1.8 * sigma;
     std::vector<uint8_t> longRims(h.size(), 0), shortRims(h.size(), 0), farStrip(h.size(), 0);
     auto strip = [&](std::vector<uint8_t>& mask, int x0, int x1, int y0, int y1) {
-        for (int y = y0; y <= y1; ++y)
-            for (int x = x0; x <= x1; ++x) {
-                const size_t i = static_cast<size_t>(y) * kW + x;
-                mask[i] = 1;
-                h[i] += static_cast<float>(rim);
-            }
+        raiseBox(h, mask, x0, x1, y0, y1, rim);
     };
     strip(longRims, 45, 210, 65, 67);  // beside the label (rows 68-72)
     strip(longRims, 45, 210, 73, 75);
@@ -1345,12 +1347,7 @@ TEST(SelfSimMap, AGroovesFarBanksAreMarkedAFarStripAndABurrsStripsAreNot) {
     groove(h, burrTruth, 60, 150, 196, 150, 6, -3.0);  // depth < 0: raised
     std::vector<uint8_t> banks(h.size(), 0), farStrip(h.size(), 0), burrStrips(h.size(), 0);
     auto strip = [&](std::vector<uint8_t>& mask, int y0) {
-        for (int y = y0; y < y0 + 3; ++y)
-            for (int x = 60; x <= 196; ++x) {
-                const size_t i = static_cast<size_t>(y) * kW + x;
-                mask[i] = 1;
-                h[i] += static_cast<float>(6.0 * sigma);
-            }
+        raiseBox(h, mask, 60, 196, y0, y0 + 2, 6.0 * sigma);
     };
     strip(banks, 70);  // the label is rows 78-82
     strip(banks, 88);
@@ -1471,12 +1468,7 @@ TEST(SelfSimMap, ALineAlongTheLayTakesItsBanksOneAcrossItDoesNot) {
     std::vector<uint8_t> alongBanks(h.size(), 0), acrossBanks(h.size(), 0), farStrip(h.size(), 0);
     const double bank = 1.5 * sigma;
     auto strip = [&](std::vector<uint8_t>& mask, int x0, int x1, int y0, int y1) {
-        for (int y = y0; y <= y1; ++y)
-            for (int x = x0; x <= x1; ++x) {
-                const size_t i = static_cast<size_t>(y) * kW + x;
-                mask[i] = 1;
-                h[i] += static_cast<float>(bank);
-            }
+        raiseBox(h, mask, x0, x1, y0, y1, bank);
     };
     strip(alongBanks, 95, 96, 62, 168);  // the label is x 98-102
     strip(alongBanks, 104, 105, 62, 168);
