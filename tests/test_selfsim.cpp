@@ -58,6 +58,24 @@ std::vector<float> aperiodicStriae(uint32_t seed) {
     return h;
 }
 
+/// Peaked striae along z, period 9 samples (|sin|³ ridges), each column offset by a normal
+/// draw of σ `columnSigma` (no repeat across them), plus white noise of σ 0.05 (seed 71; steps
+/// 8l's and 8r's tests).
+std::vector<float> peakedStriae(double columnSigma) {
+    std::vector<float> h(static_cast<size_t>(kW) * kH);
+    std::mt19937 rng(71);
+    std::normal_distribution<double> white(0.0, 0.05), column(0.0, columnSigma);
+    std::vector<double> c(kW);
+    for (double& v : c) v = column(rng);
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            const double s = std::sin(M_PI * x / 9.0);
+            h[static_cast<size_t>(y) * kW + x] =
+                static_cast<float>(std::pow(std::abs(s), 3) + c[x] + white(rng));
+        }
+    return h;
+}
+
 void pit(std::vector<float>& h, std::vector<uint8_t>& t, double cx, double cy, double rho,
          double d) {
     test::paintPit(h, t, kW, cx, cy, rho, d);
@@ -1447,19 +1465,7 @@ TEST(SelfSimMap, TheRoughnessRmsJudgesAPitOnACurvedLandTheFormDoesNot) {
 // the lay; asking for a mark that stands out by 1000 σ adds nothing. Off (the default), nothing
 // is added.
 TEST(SelfSimMap, ALineAlongTheLayTakesItsBanksOneAcrossItDoesNot) {
-    std::vector<float> h(static_cast<size_t>(kW) * kH);
-    {
-        std::mt19937 rng(71);
-        std::normal_distribution<double> white(0.0, 0.05), column(0.0, 0.07);
-        std::vector<double> c(kW);
-        for (double& v : c) v = column(rng);
-        for (int y = 0; y < kH; ++y)
-            for (int x = 0; x < kW; ++x) {
-                const double s = std::sin(M_PI * x / 9.0);
-                h[static_cast<size_t>(y) * kW + x] =
-                    static_cast<float>(std::pow(std::abs(s), 3) + c[x] + white(rng));
-            }
-    }
+    std::vector<float> h = peakedStriae(0.07);
     const double sigma = detectSelfSimDefects(h, kW, kH).sigma;
     ASSERT_GT(sigma, 0.0);
     std::vector<uint8_t> alongTruth(h.size(), 0), acrossTruth(h.size(), 0);
@@ -1542,19 +1548,7 @@ TEST(SelfSimMap, ALineAlongTheLayTakesItsBanksOneAcrossItDoesNot) {
 // corridor (x 84-116); a groove across the lay (y 100, x 140-200: no line along the lay) gains
 // nothing. Off (the default) nothing is added, and a threshold of 1000 σ_L adds nothing.
 TEST(SelfSimMap, ALineAlongTheLayJudgedOnItsOwnCopiesIsMarkedAlongItsLength) {
-    std::vector<float> h(static_cast<size_t>(kW) * kH);
-    {
-        std::mt19937 rng(71);
-        std::normal_distribution<double> white(0.0, 0.05), column(0.0, 0.2);
-        std::vector<double> c(kW);
-        for (double& v : c) v = column(rng);
-        for (int y = 0; y < kH; ++y)
-            for (int x = 0; x < kW; ++x) {
-                const double s = std::sin(M_PI * x / 9.0);
-                h[static_cast<size_t>(y) * kW + x] =
-                    static_cast<float>(std::pow(std::abs(s), 3) + c[x] + white(rng));
-            }
-    }
+    std::vector<float> h = peakedStriae(0.2);
     std::vector<uint8_t> alongTruth(h.size(), 0), acrossTruth(h.size(), 0);
     groove(h, alongTruth, 92, 52, 108, 172, 6, 2.0);
     groove(h, acrossTruth, 140, 100, 200, 100, 6, 2.0);
