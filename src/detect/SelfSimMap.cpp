@@ -1784,18 +1784,18 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     }
     // step 8g: the banks of the marks below the texture, on the final marks (each mark flooded
     // over the marks as they stand before the step)
+    // (step 8o floods the same marks later)
     const std::vector<uint8_t> beforeBanks =
-        o.grooveRimSigma > 0.0 ? out.map : std::vector<uint8_t>();
+        o.grooveBankWidth > 0.0 || o.grooveRimSigma > 0.0 ? out.map : std::vector<uint8_t>();
     if (o.grooveBankWidth > 0.0) {
-        const std::vector<uint8_t> before = out.map;
         std::vector<uint8_t> markSeen(n, 0);
         std::vector<size_t> mark;
         for (size_t i0 = 0; i0 < n; ++i0) {
-            if (!before[i0] || markSeen[i0]) continue;
+            if (!beforeBanks[i0] || markSeen[i0]) continue;
             mark.clear();
-            floodRegion(i0, markSeen, mark, [&](size_t q) { return before[q] != 0; });
+            floodRegion(i0, markSeen, mark, [&](size_t q) { return beforeBanks[q] != 0; });
             out.grooveBanks +=
-                takeGrooveBanks(mark, before, out.map, out.residual, zGrow, W, H, b, grow,
+                takeGrooveBanks(mark, beforeBanks, out.map, out.residual, zGrow, W, H, b, grow,
                                 o.pileUpShare, o.grooveBankWidth, o.grooveLength);
         }
     }
