@@ -879,6 +879,18 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o.lineCopiesSigma = -1.0;
     expectNamed(o, "selfsim-line-copies-sigma");
     o = {};
+    o.rimBandMean = -0.1;
+    expectNamed(o, "selfsim-rim-band-mean");
+    o = {};
+    o.rimBandShare = 1.5;
+    expectNamed(o, "selfsim-rim-band-share");
+    o = {};
+    o.rimBandReach = 0.0;
+    expectNamed(o, "selfsim-rim-band-reach");
+    o = {};
+    o.rimBandSegment = -1.0;
+    expectNamed(o, "selfsim-rim-band-segment");
+    o = {};
     o.pileUpReach = -1;
     expectNamed(o, "selfsim-pile-up-reach");
     o = {};
@@ -997,10 +1009,11 @@ TEST(SelfSimMap, AGroovesBanksAreMarkedTheRaisedTextureBeyondThemIsNot) {
             h[i] += static_cast<float>(bank);
         }
 
-    SelfSimMapOptions off;
-    off.grooveBankWidth = 0.0;
-    const SelfSimMapOptions on;
+    SelfSimMapOptions on;
     ASSERT_EQ(on.grooveBankWidth, 1.0);
+    on.rimBandMean = 0.0;  // step 8s judges the banks 8g leaves
+    SelfSimMapOptions off = on;
+    off.grooveBankWidth = 0.0;
     const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
                      b = detectSelfSimDefects(h, kW, kH, on);
     const Counts ga = count(a.map, grooveTruth, on.border),
@@ -1066,9 +1079,10 @@ TEST(SelfSimMap, AGroovesRaisedRimsAreMarkedAGrooveWithoutRimsTakesNothing) {
     strip(shortRims, 110, 130, 160, 162);
     strip(shortRims, 110, 130, 168, 170);
 
-    const SelfSimMapOptions off;
+    SelfSimMapOptions off;
     ASSERT_EQ(off.grooveRimSigma, 0.0);
-    SelfSimMapOptions on;
+    off.rimBandMean = 0.0;  // step 8s judges the rims 8o leaves
+    SelfSimMapOptions on = off;
     on.grooveRimSigma = 1.0;
     const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
                      b = detectSelfSimDefects(h, kW, kH, on);
@@ -1582,5 +1596,59 @@ TEST(SelfSimMap, ALineAlongTheLayJudgedOnItsOwnCopiesIsMarkedAlongItsLength) {
     EXPECT_EQ(added, b.lineCopySamples);
     EXPECT_EQ(away, 0u) << away << " of the " << added << " samples added lie off the corridor";
     EXPECT_EQ(c.lineCopySamples, 0u) << "1000 sigma_L asked for";
+    EXPECT_EQ(c.map, a.map);
+}
+
+// Step 8s: a groove's rims judged along it. Striations (seed 71) crossed by three grooves along
+// x, each 6 samples wide and 3 × deep: one with rims (a strip of 3 rows on each side raised by
+// 3 σ_0), one bare, and one with a strip of the same height 20 rows away (beyond any reach). With
+// step 8s the rims beside the first are marked (at least a third more of them), nothing is added
+// beside the bare groove or on the far strip, and what is added is above the texture and within the
+// first groove's band; asking for a mean of 1000 σ adds nothing. The copies along x (the
+// striations' period) follow the strips, so r keeps a quarter to a third of their height: a
+// segment's mean is 0.4-1 σ_0.
+TEST(SelfSimMap, AGroovesRimsJudgedAlongItAreMarkedABareGrooveTakesNothing) {
+    std::vector<float> h = striations(71);
+    const double sigma = detectSelfSimDefects(h, kW, kH).sigma;
+    ASSERT_GT(sigma, 0.0);
+    std::vector<uint8_t> rimmed(h.size(), 0), bare(h.size(), 0), far(h.size(), 0);
+    groove(h, rimmed, 45, 70, 210, 70, 6, 3.0);
+    groove(h, bare, 45, 120, 210, 120, 6, 3.0);
+    groove(h, far, 45, 160, 210, 160, 6, 3.0);
+    std::vector<uint8_t> rims(h.size(), 0), farStrip(h.size(), 0);
+    raiseBox(h, rims, 45, 210, 64, 66, 3.0 * sigma);
+    raiseBox(h, rims, 45, 210, 74, 76, 3.0 * sigma);
+    raiseBox(h, farStrip, 45, 210, 178, 180, 3.0 * sigma);
+
+    EXPECT_EQ(SelfSimMapOptions{}.rimBandMean, 0.6) << "step 8s is on by default";
+    SelfSimMapOptions off;
+    off.rimBandMean = 0.0;
+    const SelfSimMapOptions on;
+    SelfSimMapOptions strict;
+    strict.rimBandMean = 1000.0;
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
+                     b = detectSelfSimDefects(h, kW, kH, on),
+                     c = detectSelfSimDefects(h, kW, kH, strict);
+    const Counts ga = count(a.map, rimmed, on.border), ba = count(a.map, bare, on.border);
+    const Counts ra = count(a.map, rims, on.border), rb = count(b.map, rims, on.border);
+    const Counts fa = count(a.map, farStrip, on.border), fb = count(b.map, farStrip, on.border);
+    EXPECT_GE(ga.hits, ga.truth * 9 / 10) << "the rimmed groove";
+    EXPECT_GE(ba.hits, ba.truth * 9 / 10) << "the bare groove";
+    EXPECT_EQ(a.rimBands, 0u);
+    EXPECT_EQ(a.rimBandSamples, 0u);
+    EXPECT_GE((rb.hits - ra.hits) * 3, rb.truth)
+        << "step 8s adds at least a third of the rims: " << ra.hits << " -> " << rb.hits << " of "
+        << rb.truth;
+    EXPECT_GE(b.rimBands, 1u);
+    EXPECT_EQ(fb.hits, fa.hits) << "the strip 20 rows from its groove";
+    EXPECT_EQ(markedOnlyIn(a, b), 0u) << "step 8s only adds";
+    // the rimmed groove's core ± 0.9 × its width (6 samples) and a sample of rounding
+    const auto [added, lowered, away] =
+        addedSamples(a, b, [](int, int y) { return y >= 60 && y <= 80; });
+    EXPECT_EQ(added, b.rimBandSamples);
+    EXPECT_EQ(lowered, 0u) << "step 8s adds raised samples only";
+    EXPECT_EQ(away, 0u) << away << " of the " << added
+                        << " samples added lie away from the rimmed groove";
+    EXPECT_EQ(c.rimBandSamples, 0u) << "1000 sigma asked for";
     EXPECT_EQ(c.map, a.map);
 }

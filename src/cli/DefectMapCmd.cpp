@@ -89,6 +89,9 @@ int runDefectMap(const DefectMapJobOptions& o) {
             "  %zu lines along the lay judged on copies chosen for them: %zu samples "
             "added\n",
             m.selfsimLineCopyLines, m.selfsimLineCopySamples);
+    if (m.method == DefectMethod::SelfSim && m.selfsimRimBands > 0)
+        std::printf("  %zu segments of grooves' rims judged along them: %zu samples added\n",
+                    m.selfsimRimBands, m.selfsimRimBandSamples);
     if (m.method == DefectMethod::SelfSim && m.selfsimReliefLevels > 0)
         std::printf("  a relief: its %zu plateau levels taken out before the copies\n",
                     m.selfsimReliefLevels);
@@ -522,6 +525,20 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--selfsim-line-copies-sigma", q.lineCopiesSigma,
                   "selfsim: a line along the lay takes the samples of its corridor scoring at "
                   "least this on the residual of copies chosen for it across it (0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-rim-band-mean", q.rimBandMean,
+                  "selfsim: a groove's rims judged along it: a segment of the band beside it "
+                  "whose mean robust-sigma score is at least this takes its samples above the "
+                  "texture (0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-rim-band-share", q.rimBandShare,
+                  "selfsim: ... and at least this share of whose samples lie above the texture")
+        ->capture_default_str();
+    c->add_option("--selfsim-rim-band-reach", q.rimBandReach,
+                  "selfsim: ... the band reaching this times the groove's core width from it")
+        ->capture_default_str();
+    c->add_option("--selfsim-rim-band-segment", q.rimBandSegment,
+                  "selfsim: ... a segment this times the mark's width long")
         ->capture_default_str();
     c->add_option("--selfsim-relief", q.relief,
                   "selfsim: on a relief (heights on a few flat levels: lettering, a stepped part) "

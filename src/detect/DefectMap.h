@@ -350,6 +350,8 @@ struct DefectMap {
     size_t selfsimLayLineSamples = 0;   // ... and the samples it added to them
     size_t selfsimLineCopyLines = 0;    // lines along the lay step 8r judged on their own copies
     size_t selfsimLineCopySamples = 0;  // ... and the samples it added to them
+    size_t selfsimRimBands = 0;         // segments of grooves' bands step 8s took (rims) ...
+    size_t selfsimRimBandSamples = 0;   // ... and the samples they added
     size_t selfsimReliefLevels = 0;  // selfsim only: a relief's levels taken out (step 1b; 0: none)
     size_t selfsimRaisedLines = 0;  // selfsim only: raised pieces kept as burrs across the lay (8j)
     size_t selfsimBurrBasin = 0;    // ... and the samples of their basins step 8n took back

@@ -8,6 +8,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -757,6 +758,135 @@ std::pair<size_t, size_t> takeLineCopies(std::vector<uint8_t>& map, const std::v
     return {lines, added};
 }
 
+// Step 8s (SelfSimMap.h) on the marks as they stand (`before`; samples added to `map`): each mark
+// (8-connected) of at least kRimBandMarkMin samples that lies below the texture (at least
+// kRimBandGrooveShare of its Σ|r| negative) and is a line (its samples at least kRimBandLength ×
+// its width², the width twice the largest distance of a sample of it from the samples outside
+// it) has a band beside it: the samples not marked, inside the border, whose nearest sample of
+// a mark below the texture (r < 0; its core) is one of this mark's, at most `reach` × its core's
+// width away (twice the 95th percentile of its core's distances from the samples outside the
+// core; at least kRimBandReachMin). The band is cut into segments along the mark: the cell of
+// `segment` × its width (at least kRimBandCellMin samples) that holds that nearest core sample.
+// A segment of at least kRimBandSegmentMin samples whose mean r/σ_0 is at least `mean` and whose
+// share of samples above the texture is at least `share` gives its samples above the texture
+// (r > 0) to `map`. Returns (segments taken, samples added).
+std::pair<size_t, size_t> takeRimBands(const std::vector<uint8_t>& before,
+                                       std::vector<uint8_t>& map, const std::vector<float>& r,
+                                       double sigma, int W, int H, int border, double mean,
+                                       double share, double reach, double segment) {
+    const size_t n = before.size();
+    if (!(sigma > 0.0)) return {0, 0};
+    std::vector<uint8_t> unmarked(n), notCore(n);
+    for (size_t i = 0; i < n; ++i) {
+        unmarked[i] = before[i] ? 0 : 1;
+        notCore[i] = before[i] && r[i] < 0.0f ? 0 : 1;
+    }
+    const std::vector<double> inner = squaredDistanceTo(unmarked, W, H);
+    const std::vector<double> innerCore = squaredDistanceTo(notCore, W, H);
+    struct Groove {
+        double reach2 = -1.0;  // < 0: not a groove
+        int cell = 0;
+    };
+    std::vector<Groove> grooves;
+    std::vector<int> markOf(n, -1);
+    std::vector<uint8_t> seen(n, 0);
+    std::vector<size_t> mark;
+    std::vector<double> coreDepth;
+    double reachMax = 0.0;
+    for (size_t i0 = 0; i0 < n; ++i0) {
+        if (!before[i0] || seen[i0]) continue;
+        floodMark(before, i0, seen, mark, W, H);
+        const int id = static_cast<int>(grooves.size());
+        grooves.emplace_back();
+        double below = 0.0, all = 0.0, deepest = 0.0;
+        coreDepth.clear();
+        for (const size_t i : mark) {
+            markOf[i] = id;
+            all += std::abs(r[i]);
+            deepest = std::max(deepest, inner[i]);
+            if (r[i] < 0.0f) {
+                below -= r[i];
+                coreDepth.push_back(std::sqrt(innerCore[i]));
+            }
+        }
+        const double width = 2.0 * std::sqrt(deepest);
+        if (mark.size() < kRimBandMarkMin || !(all > 0.0) || below < kRimBandGrooveShare * all ||
+            static_cast<double>(mark.size()) < kRimBandLength * width * width || coreDepth.empty())
+            continue;
+        // the 95th percentile of the core's depths, interpolated between order statistics
+        std::sort(coreDepth.begin(), coreDepth.end());
+        const double at = 0.95 * static_cast<double>(coreDepth.size() - 1);
+        const size_t lo = static_cast<size_t>(at);
+        const size_t hi = std::min(lo + 1, coreDepth.size() - 1);
+        const double coreWidth = 2.0 * (coreDepth[lo] + (at - static_cast<double>(lo)) *
+                                                            (coreDepth[hi] - coreDepth[lo]));
+        const double rc = std::max(kRimBandReachMin, reach * coreWidth);
+        grooves[id].reach2 = rc * rc;
+        grooves[id].cell = std::max(kRimBandCellMin, static_cast<int>(segment * width));
+        reachMax = std::max(reachMax, rc);
+    }
+    if (!(reachMax > 0.0)) return {0, 0};
+    // each unmarked sample's nearest core sample within the largest reach
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    std::vector<double> best(n, kInf);
+    std::vector<size_t> from(n, 0);
+    const int R = static_cast<int>(std::ceil(reachMax));
+    const double R2 = reachMax * reachMax;
+    for (size_t p = 0; p < n; ++p) {
+        if (notCore[p]) continue;
+        const int px = static_cast<int>(p % W), py = static_cast<int>(p / W);
+        for (int qy = std::max(0, py - R); qy <= std::min(H - 1, py + R); ++qy)
+            for (int qx = std::max(0, px - R); qx <= std::min(W - 1, px + R); ++qx) {
+                const size_t q = static_cast<size_t>(qy) * W + qx;
+                if (before[q]) continue;
+                const double d2 = double(qx - px) * (qx - px) + double(qy - py) * (qy - py);
+                if (d2 > R2 || !(d2 < best[q])) continue;
+                best[q] = d2;
+                from[q] = p;
+            }
+    }
+    // the band's samples, their segment (mark, cell of the nearest core sample) and its tally
+    struct Tally {
+        size_t count = 0, raised = 0;
+        double sum = 0.0;
+    };
+    std::unordered_map<uint64_t, Tally> tallies;
+    std::vector<uint64_t> segmentOf(n, 0);
+    std::vector<size_t> band;
+    for (size_t q = 0; q < n; ++q) {
+        if (!(best[q] < kInf)) continue;
+        const int qx = static_cast<int>(q % W), qy = static_cast<int>(q / W);
+        if (qx < border || qy < border || qx >= W - border || qy >= H - border) continue;
+        const size_t p = from[q];
+        const Groove& gr = grooves[static_cast<size_t>(markOf[p])];
+        if (gr.reach2 < 0.0 || best[q] > gr.reach2) continue;
+        const uint64_t key = (static_cast<uint64_t>(markOf[p]) << 40) |
+                             (static_cast<uint64_t>(static_cast<int>(p / W) / gr.cell) << 20) |
+                             static_cast<uint64_t>(static_cast<int>(p % W) / gr.cell);
+        Tally& t = tallies[key];
+        ++t.count;
+        t.sum += r[q] / sigma;
+        if (r[q] > 0.0f) ++t.raised;
+        segmentOf[q] = key;
+        band.push_back(q);
+    }
+    const auto passes = [&](const Tally& t) {
+        return t.count >= kRimBandSegmentMin && t.sum >= mean * static_cast<double>(t.count) &&
+               static_cast<double>(t.raised) >= share * static_cast<double>(t.count);
+    };
+    size_t segments = 0, added = 0;
+    for (const auto& [key, t] : tallies)
+        if (passes(t)) ++segments;
+    for (const size_t q : band) {
+        if (r[q] <= 0.0f || !passes(tallies[segmentOf[q]])) continue;
+        if (!map[q]) {
+            map[q] = 255;
+            ++added;
+        }
+    }
+    return {segments, added};
+}
+
 }  // namespace
 
 double textureTailThreshold(std::span<const float> peaks, double quantile, double nfa) {
@@ -954,6 +1084,16 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.lineCopiesSigma >= 0.0))
         throw inputError(option("selfsim-line-copies-sigma"), "must be >= 0",
                          "The default is 0 (off; 4 measured)");
+    if (!(o.rimBandMean >= 0.0))
+        throw inputError(option("selfsim-rim-band-mean"), "must be >= 0",
+                         "The default is 0.6 (0: off)");
+    if (!(o.rimBandShare >= 0.0 && o.rimBandShare <= 1.0))
+        throw inputError(option("selfsim-rim-band-share"), "must be in [0, 1]",
+                         "The default is 0.65");
+    if (!(o.rimBandReach > 0.0))
+        throw inputError(option("selfsim-rim-band-reach"), "must be > 0", "The default is 0.9");
+    if (!(o.rimBandSegment > 0.0))
+        throw inputError(option("selfsim-rim-band-segment"), "must be > 0", "The default is 2");
     if (o.border < 0)
         throw inputError(option("selfsim-border"), "must be >= 0", "The default is 40");
     if (o.minRegion < 1)
@@ -1891,6 +2031,15 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                                                    o.refine, R, o.lineCopiesSigma, tileLay);
         out.lineCopyLines = lines;
         out.lineCopySamples = added;
+    }
+    // step 8s: a groove's rims judged along it, a segment of the band beside it at a time
+    if (o.rimBandMean > 0.0 && !relief.relief) {
+        const std::vector<uint8_t> before = out.map;
+        const auto [segments, added] =
+            takeRimBands(before, out.map, out.residual, out.sigma, W, H, b, o.rimBandMean,
+                         o.rimBandShare, o.rimBandReach, o.rimBandSegment);
+        out.rimBands = segments;
+        out.rimBandSamples = added;
     }
     return out;
 }
