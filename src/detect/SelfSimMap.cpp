@@ -775,7 +775,8 @@ std::pair<size_t, size_t> takeRimBands(const std::vector<uint8_t>& before,
                                        double sigma, int W, int H, int border, double mean,
                                        double share, double reach, double segment) {
     const size_t n = before.size();
-    if (!(sigma > 0.0)) return {0, 0};
+    // (the nearest core sample is held as 32 bits: a map of 2^32 samples takes no rims)
+    if (!(sigma > 0.0) || n > std::numeric_limits<uint32_t>::max()) return {0, 0};
     std::vector<uint8_t> unmarked(n), notCore(n);
     for (size_t i = 0; i < n; ++i) {
         unmarked[i] = before[i] ? 0 : 1;
@@ -827,9 +828,9 @@ std::pair<size_t, size_t> takeRimBands(const std::vector<uint8_t>& before,
     }
     if (!(reachMax > 0.0)) return {0, 0};
     // each unmarked sample's nearest core sample within the largest reach
-    constexpr double kInf = std::numeric_limits<double>::infinity();
-    std::vector<double> best(n, kInf);
-    std::vector<size_t> from(n, 0);
+    constexpr float kInf = std::numeric_limits<float>::infinity();
+    std::vector<float> best(n, kInf);
+    std::vector<uint32_t> from(n, 0);
     const int R = static_cast<int>(std::ceil(reachMax));
     const double R2 = reachMax * reachMax;
     for (size_t p = 0; p < n; ++p) {
@@ -839,10 +840,10 @@ std::pair<size_t, size_t> takeRimBands(const std::vector<uint8_t>& before,
             for (int qx = std::max(0, px - R); qx <= std::min(W - 1, px + R); ++qx) {
                 const size_t q = static_cast<size_t>(qy) * W + qx;
                 if (before[q]) continue;
-                const double d2 = double(qx - px) * (qx - px) + double(qy - py) * (qy - py);
-                if (d2 > R2 || !(d2 < best[q])) continue;
-                best[q] = d2;
-                from[q] = p;
+                const int d2 = (qx - px) * (qx - px) + (qy - py) * (qy - py);
+                if (d2 > R2 || !(static_cast<float>(d2) < best[q])) continue;
+                best[q] = static_cast<float>(d2);
+                from[q] = static_cast<uint32_t>(p);
             }
     }
     // the band's samples, their segment (mark, cell of the nearest core sample) and its tally
@@ -851,15 +852,14 @@ std::pair<size_t, size_t> takeRimBands(const std::vector<uint8_t>& before,
         double sum = 0.0;
     };
     std::unordered_map<uint64_t, Tally> tallies;
-    std::vector<uint64_t> segmentOf(n, 0);
-    std::vector<size_t> band;
+    std::vector<std::pair<size_t, uint64_t>> band;  // a sample and its segment
     for (size_t q = 0; q < n; ++q) {
         if (!(best[q] < kInf)) continue;
         const int qx = static_cast<int>(q % W), qy = static_cast<int>(q / W);
         if (qx < border || qy < border || qx >= W - border || qy >= H - border) continue;
         const size_t p = from[q];
         const Groove& gr = grooves[static_cast<size_t>(markOf[p])];
-        if (gr.reach2 < 0.0 || best[q] > gr.reach2) continue;
+        if (gr.reach2 < 0.0 || static_cast<double>(best[q]) > gr.reach2) continue;
         const uint64_t key = (static_cast<uint64_t>(markOf[p]) << 40) |
                              (static_cast<uint64_t>(static_cast<int>(p / W) / gr.cell) << 20) |
                              static_cast<uint64_t>(static_cast<int>(p % W) / gr.cell);
@@ -867,8 +867,7 @@ std::pair<size_t, size_t> takeRimBands(const std::vector<uint8_t>& before,
         ++t.count;
         t.sum += r[q] / sigma;
         if (r[q] > 0.0f) ++t.raised;
-        segmentOf[q] = key;
-        band.push_back(q);
+        band.emplace_back(q, key);
     }
     const auto passes = [&](const Tally& t) {
         return t.count >= kRimBandSegmentMin && t.sum >= mean * static_cast<double>(t.count) &&
@@ -877,8 +876,8 @@ std::pair<size_t, size_t> takeRimBands(const std::vector<uint8_t>& before,
     size_t segments = 0, added = 0;
     for (const auto& [key, t] : tallies)
         if (passes(t)) ++segments;
-    for (const size_t q : band) {
-        if (r[q] <= 0.0f || !passes(tallies[segmentOf[q]])) continue;
+    for (const auto& [q, key] : band) {
+        if (r[q] <= 0.0f || !passes(tallies[key])) continue;
         if (!map[q]) {
             map[q] = 255;
             ++added;
