@@ -879,6 +879,15 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o.lineCopiesSigma = -1.0;
     expectNamed(o, "selfsim-line-copies-sigma");
     o = {};
+    o.valleyLineSigma = -1.0;
+    expectNamed(o, "selfsim-valley-line-sigma");
+    o = {};
+    o.valleyLineGrow = 20.0;
+    expectNamed(o, "selfsim-valley-line-grow");
+    o = {};
+    o.valleyLineGate = 2.0;
+    expectNamed(o, "selfsim-valley-line-gate");
+    o = {};
     o.rimBandMean = -0.1;
     expectNamed(o, "selfsim-rim-band-mean");
     o = {};
@@ -1651,4 +1660,87 @@ TEST(SelfSimMap, AGroovesRimsJudgedAlongItAreMarkedABareGrooveTakesNothing) {
                         << " samples added lie away from the rimmed groove";
     EXPECT_EQ(c.rimBandSamples, 0u) << "1000 sigma asked for";
     EXPECT_EQ(c.map, a.map);
+}
+
+// Step 8t's response is a valley's depth below its sides: on flat ground a V groove along x (a
+// grid direction), 6 samples wide (inside the ± kValleyOffset the sides are read at), d deep,
+// gives d on its axis away from its ends, a ridge -d there is never above 0 and flat ground 0.
+TEST(SelfSimMap, TheValleyResponseIsAStraightValleysDepthBelowItsSides) {
+    const int w = 96, h = 64;
+    std::vector<float> g(static_cast<size_t>(w) * h, 0.0f);
+    const double d = 0.75;
+    for (int y = 0; y < h; ++y)
+        for (int x = 8; x < 88; ++x) {
+            const double s = std::abs(y - 20.0);
+            if (s < 3.0) g[static_cast<size_t>(y) * w + x] -= static_cast<float>(d * (1 - s / 3));
+            const double t = std::abs(y - 44.0);
+            if (t < 3.0) g[static_cast<size_t>(y) * w + x] += static_cast<float>(d * (1 - t / 3));
+        }
+    const std::vector<float> v = valleyResponse(g, w, h);
+    for (int x = 30; x <= 66; ++x) {
+        EXPECT_NEAR(v[static_cast<size_t>(20) * w + x], d, 1e-6) << "the groove's axis at x " << x;
+        EXPECT_LE(v[static_cast<size_t>(44) * w + x], 1e-6) << "the ridge's axis at x " << x;
+        EXPECT_NEAR(v[static_cast<size_t>(32) * w + x], 0.0, 1e-6) << "between them at x " << x;
+    }
+}
+
+// Step 8t on given marks: white noise (σ 0.05, seed 5) with two valleys along x, 5 samples wide
+// and 0.3 deep (about 27 σ of the texture's valley response): one continues a mark (a box over
+// its first stretch, standing for a groove the map found), the other lies 40 rows away from any
+// mark. The first is taken, the second not (no mark within reach), and nothing else; on
+// striations, whose own valleys are everywhere, the default gate keeps the step from taking
+// anything.
+TEST(SelfSimMap, AValleyBesideAMarkIsTakenOneAloneOrOnAValleyedTextureIsNot) {
+    std::mt19937 rng(5);
+    std::normal_distribution<double> noise(0.0, 0.05);
+    std::vector<float> g(static_cast<size_t>(kW) * kH);
+    for (float& v : g) v = static_cast<float>(noise(rng));
+    std::vector<uint8_t> continued(g.size(), 0), alone(g.size(), 0), map(g.size(), 0);
+    for (int y = 0; y < kH; ++y)
+        for (int x = 60; x < 200; ++x) {
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            const double s = std::abs(y - 80.0), t = std::abs(y - 150.0);
+            if (s <= 2.0) {
+                g[i] -= static_cast<float>(0.3 * (1 - s / 3));
+                if (x < 110)
+                    map[i] = 255;  // the stretch the map found
+                else
+                    continued[i] = 1;
+            }
+            if (t <= 2.0) {
+                g[i] -= static_cast<float>(0.3 * (1 - t / 3));
+                alone[i] = 1;
+            }
+        }
+    const SelfSimMapOptions o;
+    EXPECT_EQ(o.valleyLineSigma, 15.0) << "step 8t is on by default";
+    // the two valleys are 4 % of this small map's texture: the gate at 5 % (the default's
+    // 0.3 % is for a map of 10^5 samples and more; the striations below test it)
+    std::vector<uint8_t> m = map;
+    const auto [taken, added] = takeValleyLines(m, g, kW, kH, o.border, o.minRegion,
+                                                o.valleyLineSigma, o.valleyLineGrow, 0.05);
+    const Counts c = count(m, continued, o.border), a = count(m, alone, o.border);
+    EXPECT_GE(taken, 1u);  // the continuation (and the response past the valleys' start)
+    EXPECT_GE(c.hits * 10, c.truth * 9) << c.hits << " of the continued valley's " << c.truth;
+    EXPECT_EQ(a.hits, 0u) << "the valley with no mark beside it";
+    size_t away = 0, n = 0;
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            if (!m[i] || map[i]) continue;
+            ++n;
+            away += std::abs(y - 80) <= 4 ? 0 : 1;
+        }
+    EXPECT_EQ(n, added);
+    EXPECT_EQ(away, 0u) << away << " of the " << added << " samples added lie off the valley";
+
+    std::vector<float> s = striations(3);
+    std::vector<uint8_t> sm(s.size(), 0);
+    for (int y = 78; y <= 82; ++y)
+        for (int x = 60; x < 110; ++x) sm[static_cast<size_t>(y) * kW + x] = 255;
+    const std::vector<uint8_t> before = sm;
+    const auto [t2, a2] = takeValleyLines(sm, s, kW, kH, o.border, o.minRegion, o.valleyLineSigma,
+                                          o.valleyLineGrow, o.valleyLineGate);
+    EXPECT_EQ(a2, 0u) << "the striations' own valleys close the gate";
+    EXPECT_EQ(sm, before);
 }

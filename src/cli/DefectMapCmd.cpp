@@ -89,6 +89,9 @@ int runDefectMap(const DefectMapJobOptions& o) {
             "  %zu lines along the lay judged on copies chosen for them: %zu samples "
             "added\n",
             m.selfsimLineCopyLines, m.selfsimLineCopySamples);
+    if (m.method == DefectMethod::SelfSim && m.selfsimValleyLines > 0)
+        std::printf("  %zu valleys of the heights beside marks: %zu samples added\n",
+                    m.selfsimValleyLines, m.selfsimValleyLineSamples);
     if (m.method == DefectMethod::SelfSim && m.selfsimRimBands > 0)
         std::printf("  %zu segments of grooves' rims judged along them: %zu samples added\n",
                     m.selfsimRimBands, m.selfsimRimBandSamples);
@@ -525,6 +528,16 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option("--selfsim-line-copies-sigma", q.lineCopiesSigma,
                   "selfsim: a line along the lay takes the samples of its corridor scoring at "
                   "least this on the residual of copies chosen for it across it (0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-valley-line-sigma", q.valleyLineSigma,
+                  "selfsim: a valley of the heights beside a mark, its seed this many robust "
+                  "sigmas of the texture's valley response (0: off)")
+        ->capture_default_str();
+    c->add_option("--selfsim-valley-line-grow", q.valleyLineGrow,
+                  "selfsim: ... grown down to this many")
+        ->capture_default_str();
+    c->add_option("--selfsim-valley-line-gate", q.valleyLineGate,
+                  "selfsim: ... when at most this share of the texture reaches the seed's score")
         ->capture_default_str();
     c->add_option("--selfsim-rim-band-mean", q.rimBandMean,
                   "selfsim: a groove's rims judged along it: a segment of the band beside it "

@@ -213,6 +213,8 @@ void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int he
     r.selfsimLayLineSamples = m.layLineSamples;
     r.selfsimLineCopyLines = m.lineCopyLines;
     r.selfsimLineCopySamples = m.lineCopySamples;
+    r.selfsimValleyLines = m.valleyLines;
+    r.selfsimValleyLineSamples = m.valleyLineSamples;
     r.selfsimRimBands = m.rimBands;
     r.selfsimRimBandSamples = m.rimBandSamples;
     r.selfsimReliefLevels = m.reliefLevels;

@@ -888,6 +888,129 @@ std::pair<size_t, size_t> takeRimBands(const std::vector<uint8_t>& before,
 
 }  // namespace
 
+// Step 8t's response (SelfSimMap.h): at each sample, the largest over kValleyOrientations
+// directions θ of the mean, over the kValleyLength samples of the line along θ through it (the
+// grid samples a line of that length at θ passes), of (g(x + kValleyOffset·n) + g(x −
+// kValleyOffset·n))/2 − g(x), n the normal of θ, g read bilinearly and clamped at the map's
+// edges: how deep a straight valley lies below the ground on both sides of it.
+std::vector<float> valleyResponse(const std::vector<float>& g, int W, int H) {
+    const size_t n = g.size();
+    const auto at = [&](double x, double y) {
+        x = std::clamp(x, 0.0, static_cast<double>(W - 1));
+        y = std::clamp(y, 0.0, static_cast<double>(H - 1));
+        const int x0 = std::min(static_cast<int>(x), W - 2 < 0 ? 0 : W - 2),
+                  y0 = std::min(static_cast<int>(y), H - 2 < 0 ? 0 : H - 2);
+        const int x1 = std::min(x0 + 1, W - 1), y1 = std::min(y0 + 1, H - 1);
+        const double fx = x - x0, fy = y - y0;
+        const auto v = [&](int px, int py) {
+            return static_cast<double>(g[static_cast<size_t>(py) * W + px]);
+        };
+        return (1 - fy) * ((1 - fx) * v(x0, y0) + fx * v(x1, y0)) +
+               fy * ((1 - fx) * v(x0, y1) + fx * v(x1, y1));
+    };
+    std::vector<float> best(n, -std::numeric_limits<float>::infinity()), d(n);
+    const int c = kValleyLength / 2;
+    for (int k = 0; k < kValleyOrientations; ++k) {
+        const double th = kPi * k / kValleyOrientations;
+        const double nx = -std::sin(th), nz = std::cos(th), s = kValleyOffset;
+        tbb::parallel_for(0, H, [&](int y) {
+            for (int x = 0; x < W; ++x)
+                d[static_cast<size_t>(y) * W + x] = static_cast<float>(
+                    0.5 * (at(x + s * nx, y + s * nz) + at(x - s * nx, y - s * nz)) -
+                    g[static_cast<size_t>(y) * W + x]);
+        });
+        // the line's samples: the grid samples at 4 × its length points along it
+        std::vector<std::array<int, 2>> line;
+        for (int i = 0; i < 4 * kValleyLength; ++i) {
+            const double t = -c + 2.0 * c * i / (4 * kValleyLength - 1);
+            const std::array<int, 2> o{static_cast<int>(std::lround(t * std::cos(th))),
+                                       static_cast<int>(std::lround(t * std::sin(th)))};
+            if (std::find(line.begin(), line.end(), o) == line.end()) line.push_back(o);
+        }
+        tbb::parallel_for(0, H, [&](int y) {
+            for (int x = 0; x < W; ++x) {
+                double sum = 0.0;
+                for (const auto& o : line)
+                    sum += d[static_cast<size_t>(std::clamp(y + o[1], 0, H - 1)) * W +
+                             std::clamp(x + o[0], 0, W - 1)];
+                const size_t i = static_cast<size_t>(y) * W + x;
+                best[i] =
+                    std::max(best[i], static_cast<float>(sum / static_cast<double>(line.size())));
+            }
+        });
+    }
+    return best;
+}
+
+// Step 8t (SelfSimMap.h) on the marks as they stand (`map`): the valley response of g in robust
+// σ of the texture (the samples inside the border farther than kValleyTextureMargin from every
+// mark); when at most `gate` of the texture reaches `seed`, each 8-connected component of the
+// unmarked samples inside the border scoring at least `grow` that holds a sample scoring at least
+// `seed`, has at least `minSize` samples and lies within kValleyReach samples (|dx| + |dy|) of a
+// mark is marked. Returns (components taken, samples added).
+std::pair<size_t, size_t> takeValleyLines(std::vector<uint8_t>& map, const std::vector<float>& g,
+                                          int W, int H, int border, int minSize, double seed,
+                                          double grow, double gate) {
+    const size_t n = map.size();
+    const std::vector<uint8_t> before = map;
+    const std::vector<float> v = valleyResponse(g, W, H);
+    const std::vector<double> toMark = squaredDistanceTo(before, W, H);
+    const auto inside = [&](size_t i) {
+        const int x = static_cast<int>(i % W), y = static_cast<int>(i / W);
+        return x >= border && y >= border && x < W - border && y < H - border;
+    };
+    std::vector<float> texture;
+    for (size_t i = 0; i < n; ++i)
+        if (inside(i) && toMark[i] > kValleyTextureMargin * kValleyTextureMargin)
+            texture.push_back(v[i]);
+    if (texture.size() < 64) return {0, 0};
+    std::vector<float> work = texture;
+    const double med = medianOf(work);
+    for (float& t : work) t = static_cast<float>(std::abs(t - med));
+    const double sigma = 1.4826 * medianOf(work);
+    if (!(sigma > 0.0)) return {0, 0};
+    const auto score = [&](size_t i) { return (v[i] - med) / sigma; };
+    size_t high = 0;
+    for (const float t : texture) high += (t - med) / sigma >= seed ? 1 : 0;
+    if (static_cast<double>(high) > gate * static_cast<double>(texture.size())) return {0, 0};
+    std::vector<uint8_t> seen(n, 0);
+    std::vector<size_t> comp;
+    size_t taken = 0, added = 0;
+    for (size_t i0 = 0; i0 < n; ++i0) {
+        if (seen[i0] || before[i0] || !inside(i0) || !(score(i0) >= grow)) continue;
+        comp.assign(1, i0);
+        seen[i0] = 1;
+        bool seeded = false, near = false;
+        for (size_t k = 0; k < comp.size(); ++k) {
+            const size_t i = comp[k];
+            seeded = seeded || score(i) >= seed;
+            const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
+            for (int dy = -kValleyReach; dy <= kValleyReach && !near; ++dy)
+                for (int dx = -kValleyReach + std::abs(dy); dx <= kValleyReach - std::abs(dy);
+                     ++dx) {
+                    const int qx = px + dx, qy = py + dy;
+                    if (qx >= 0 && qy >= 0 && qx < W && qy < H &&
+                        before[static_cast<size_t>(qy) * W + qx]) {
+                        near = true;
+                        break;
+                    }
+                }
+            for (int qy = std::max(0, py - 1); qy <= std::min(H - 1, py + 1); ++qy)
+                for (int qx = std::max(0, px - 1); qx <= std::min(W - 1, px + 1); ++qx) {
+                    const size_t q = static_cast<size_t>(qy) * W + qx;
+                    if (seen[q] || before[q] || !inside(q) || !(score(q) >= grow)) continue;
+                    seen[q] = 1;
+                    comp.push_back(q);
+                }
+        }
+        if (!seeded || !near || comp.size() < static_cast<size_t>(minSize)) continue;
+        ++taken;
+        for (const size_t i : comp) map[i] = 255;
+        added += comp.size();
+    }
+    return {taken, added};
+}
+
 double textureTailThreshold(std::span<const float> peaks, double quantile, double nfa) {
     // too few responses to measure a tail on: no threshold from the texture
     if (peaks.size() < kTextureTailMinRegions || !(nfa > 0.0)) return 0.0;
@@ -1093,6 +1216,16 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
         throw inputError(option("selfsim-rim-band-reach"), "must be > 0", "The default is 0.9");
     if (!(o.rimBandSegment > 0.0))
         throw inputError(option("selfsim-rim-band-segment"), "must be > 0", "The default is 2");
+    if (!(o.valleyLineSigma >= 0.0))
+        throw inputError(option("selfsim-valley-line-sigma"), "must be >= 0",
+                         "The default is 15 (0: off)");
+    if (!(o.valleyLineGrow > 0.0 && o.valleyLineGrow <= o.valleyLineSigma) &&
+        o.valleyLineSigma > 0.0)
+        throw inputError(option("selfsim-valley-line-grow"),
+                         "must be > 0 and at most --selfsim-valley-line-sigma", "The default is 8");
+    if (!(o.valleyLineGate >= 0.0 && o.valleyLineGate <= 1.0))
+        throw inputError(option("selfsim-valley-line-gate"), "must be in [0, 1]",
+                         "The default is 0.003");
     if (o.border < 0)
         throw inputError(option("selfsim-border"), "must be >= 0", "The default is 40");
     if (o.minRegion < 1)
@@ -2030,6 +2163,14 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                                                    o.refine, R, o.lineCopiesSigma, tileLay);
         out.lineCopyLines = lines;
         out.lineCopySamples = added;
+    }
+    // step 8t: a line the heights show as a valley beside a mark (before 8s takes its rims)
+    if (o.valleyLineSigma > 0.0 && !relief.relief) {
+        const auto [lines, added] =
+            takeValleyLines(out.map, g, W, H, b, o.minRegion, o.valleyLineSigma, o.valleyLineGrow,
+                            o.valleyLineGate);
+        out.valleyLines = lines;
+        out.valleyLineSamples = added;
     }
     // step 8s: a groove's rims judged along it, a segment of the band beside it at a time
     if (o.rimBandMean > 0.0 && !relief.relief) {
