@@ -1222,7 +1222,8 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.valleyLineGrow > 0.0 && o.valleyLineGrow <= o.valleyLineSigma) &&
         o.valleyLineSigma > 0.0)
         throw inputError(option("selfsim-valley-line-grow"),
-                         "must be > 0 and at most --selfsim-valley-line-sigma", "The default is 8");
+                         "must be > 0 and at most " + option("selfsim-valley-line-sigma"),
+                         "The default is 8");
     if (!(o.valleyLineGate >= 0.0 && o.valleyLineGate <= 1.0))
         throw inputError(option("selfsim-valley-line-gate"), "must be in [0, 1]",
                          "The default is 0.003");
