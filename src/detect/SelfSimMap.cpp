@@ -34,6 +34,19 @@ double medianOf(std::vector<float>& v) {
     return v[m];
 }
 
+// The median of `v` and its robust σ, 1.4826 × the median absolute deviation from it (steps 5,
+// 8l, 8r and 8t); `v` is left holding the absolute deviations |v − median|.
+struct RobustScale {
+    double median = 0.0, sigma = 0.0;
+};
+RobustScale robustScaleOf(std::vector<float>& v) {
+    RobustScale s;
+    s.median = medianOf(v);
+    for (float& t : v) t = static_cast<float>(std::abs(t - s.median));
+    s.sigma = 1.4826 * medianOf(v);
+    return s;
+}
+
 // Step 1: g = h − the least-squares quadratic surface (coordinates scaled to [−1, 1]).
 std::vector<float> removeQuadratic(std::span<const float> h, int W, int H) {
     // core/PolynomialFit.h; on a map one or two samples wide the terms it cannot tell apart
@@ -436,9 +449,7 @@ std::vector<float> acrossLayScores(const std::vector<float>& g, const std::vecto
         }
     std::vector<float> z(n, 0.0f);
     if (vals.empty()) return z;
-    const double med = medianOf(vals);
-    for (float& v : vals) v = static_cast<float>(std::abs(v - med));
-    const double sigma = 1.4826 * medianOf(vals);
+    const auto [med, sigma] = robustScaleOf(vals);
     if (!(sigma > 0.0)) return z;
     sigmaOut = sigma;
     for (size_t i = 0; i < n; ++i)
@@ -723,9 +734,7 @@ std::pair<size_t, size_t> takeLineCopies(std::vector<uint8_t>& map, const std::v
             if (std::isfinite(r)) bandR.push_back(r);
         }
         if (bandR.size() < 16) continue;
-        const double med = medianOf(bandR);
-        for (float& r : bandR) r = static_cast<float>(std::abs(r - med));
-        const double sigmaL = 1.4826 * medianOf(bandR);
+        const auto [med, sigmaL] = robustScaleOf(bandR);
         if (!(sigmaL > 0.0)) continue;
         // the line's sign: its median r_L
         std::vector<float> onMark;
@@ -965,9 +974,7 @@ std::pair<size_t, size_t> takeValleyLines(std::vector<uint8_t>& map, const std::
             texture.push_back(v[i]);
     if (texture.size() < 64) return {0, 0};
     std::vector<float> work = texture;
-    const double med = medianOf(work);
-    for (float& t : work) t = static_cast<float>(std::abs(t - med));
-    const double sigma = 1.4826 * medianOf(work);
+    const auto [med, sigma] = robustScaleOf(work);
     if (!(sigma > 0.0)) return {0, 0};
     const auto score = [&](size_t i) { return (v[i] - med) / sigma; };
     size_t high = 0;
@@ -1480,9 +1487,9 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
         vals.reserve(interior);
         for (int y = b; y < H - b; ++y)
             for (int x = b; x < W - b; ++x) vals.push_back(rs[static_cast<size_t>(y) * W + x]);
-        const double med = medianOf(vals);
-        for (float& v : vals) v = static_cast<float>(std::abs(v - med));
-        double sigma = 1.4826 * medianOf(vals);
+        const RobustScale scale = robustScaleOf(vals);
+        const double med = scale.median;
+        double sigma = scale.sigma;
         if (o.tailQuantile > 0.0) {
             // the Gaussian whose tailQuantile-quantile of |r_s| is the residual's: a texture's
             // heavy tail (particles, wandering striae) raises σ_s where the MAD does not see it
