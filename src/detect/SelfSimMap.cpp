@@ -458,7 +458,7 @@ std::vector<float> acrossLayScores(const std::vector<float>& g, const std::vecto
 }
 
 // The mark holding i0: the samples of `marks` 8-connected to it, in flood order, each set in
-// `seen` (steps 8l and 8r)
+// `seen` (steps 8l, 8r, 8s and 8t)
 void floodMark(const std::vector<uint8_t>& marks, size_t i0, std::vector<uint8_t>& seen,
                std::vector<size_t>& mark, int W, int H) {
     mark.assign(1, i0);
@@ -955,7 +955,7 @@ std::vector<float> valleyResponse(const std::vector<float>& g, int W, int H) {
 // σ of the texture (the samples inside the border farther than kValleyTextureMargin from every
 // mark); when at most `gate` of the texture reaches `seed`, each 8-connected component of the
 // unmarked samples inside the border scoring at least `grow` that holds a sample scoring at least
-// `seed`, has at least `minSize` samples and lies within kValleyReach samples (|dx| + |dy|) of a
+// `seed`, has at least `minSize` samples and lies within kValleyReach samples (Euclidean) of a
 // mark is marked. Returns (components taken, samples added).
 std::pair<size_t, size_t> takeValleyLines(std::vector<uint8_t>& map, const std::vector<float>& g,
                                           int W, int H, int border, int minSize, double seed,
@@ -980,37 +980,20 @@ std::pair<size_t, size_t> takeValleyLines(std::vector<uint8_t>& map, const std::
     size_t high = 0;
     for (const float t : texture) high += (t - med) / sigma >= seed ? 1 : 0;
     if (static_cast<double>(high) > gate * static_cast<double>(texture.size())) return {0, 0};
+    // the samples a valley may take, flooded a component at a time
+    std::vector<uint8_t> low(n, 0);
+    for (size_t i = 0; i < n; ++i) low[i] = !before[i] && inside(i) && score(i) >= grow ? 1 : 0;
+    const double reach2 = static_cast<double>(kValleyReach) * kValleyReach;
     std::vector<uint8_t> seen(n, 0);
     std::vector<size_t> comp;
     size_t taken = 0, added = 0;
     for (size_t i0 = 0; i0 < n; ++i0) {
-        if (seen[i0] || before[i0] || !inside(i0) || !(score(i0) >= grow)) continue;
-        comp.assign(1, i0);
-        seen[i0] = 1;
-        bool seeded = false, near = false;
-        for (size_t k = 0; k < comp.size(); ++k) {
-            const size_t i = comp[k];
-            seeded = seeded || score(i) >= seed;
-            const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
-            for (int dy = -kValleyReach; dy <= kValleyReach && !near; ++dy)
-                for (int dx = -kValleyReach + std::abs(dy); dx <= kValleyReach - std::abs(dy);
-                     ++dx) {
-                    const int qx = px + dx, qy = py + dy;
-                    if (qx >= 0 && qy >= 0 && qx < W && qy < H &&
-                        before[static_cast<size_t>(qy) * W + qx]) {
-                        near = true;
-                        break;
-                    }
-                }
-            for (int qy = std::max(0, py - 1); qy <= std::min(H - 1, py + 1); ++qy)
-                for (int qx = std::max(0, px - 1); qx <= std::min(W - 1, px + 1); ++qx) {
-                    const size_t q = static_cast<size_t>(qy) * W + qx;
-                    if (seen[q] || before[q] || !inside(q) || !(score(q) >= grow)) continue;
-                    seen[q] = 1;
-                    comp.push_back(q);
-                }
-        }
-        if (!seeded || !near || comp.size() < static_cast<size_t>(minSize)) continue;
+        if (!low[i0] || seen[i0]) continue;
+        floodMark(low, i0, seen, comp, W, H);
+        if (comp.size() < static_cast<size_t>(minSize) ||
+            std::none_of(comp.begin(), comp.end(), [&](size_t i) { return score(i) >= seed; }) ||
+            std::none_of(comp.begin(), comp.end(), [&](size_t i) { return toMark[i] <= reach2; }))
+            continue;
         ++taken;
         for (const size_t i : comp) map[i] = 255;
         added += comp.size();

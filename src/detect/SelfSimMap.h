@@ -716,7 +716,7 @@ inline constexpr int kLineCopiesOffsets = 8;
 inline constexpr size_t kRimBandMarkMin = 20;
 // Step 8t: the valley response compares a sample with the ground this many samples to each side
 // of a line this long, at this many directions; the texture is the samples farther than this
-// from every mark; a valley is taken within this many samples (|dx| + |dy|) of a mark
+// from every mark; a valley is taken within this many samples (Euclidean) of a mark
 inline constexpr double kValleyOffset = 5.0;
 inline constexpr int kValleyLength = 21;
 inline constexpr int kValleyOrientations = 16;
@@ -797,7 +797,7 @@ std::vector<float> valleyResponse(const std::vector<float>& g, int width, int he
 /// response in robust σ of the texture (the samples inside `border` farther than
 /// kValleyTextureMargin from every mark); when at most `gate` of the texture reaches `seed`, each
 /// 8-connected component of unmarked samples inside the border scoring at least `grow` that
-/// holds a sample at `seed`, has `minSize` samples and lies within kValleyReach (|dx| + |dy|) of
+/// holds a sample at `seed`, has `minSize` samples and lies within kValleyReach (Euclidean) of
 /// a mark is marked. Returns (components taken, samples added).
 std::pair<size_t, size_t> takeValleyLines(std::vector<uint8_t>& map, const std::vector<float>& g,
                                           int width, int height, int border, int minSize,
