@@ -312,6 +312,27 @@ std::vector<double> squaredDistanceTo(const std::vector<uint8_t>& at, int w, int
     return d;
 }
 
+// A mark's width (steps 8g, 8o and 8s): twice the largest distance (Euclidean, exact) of a
+// sample of it from the samples outside it, in a box one sample wider than it (the samples
+// outside the map are outside it)
+double markWidth(std::span<const size_t> mark, int W) {
+    int x0 = std::numeric_limits<int>::max(), y0 = x0, x1 = -1, y1 = -1;
+    for (const size_t i : mark) {
+        const int px = static_cast<int>(i % W), py = static_cast<int>(i / W);
+        x0 = std::min(x0, px), x1 = std::max(x1, px), y0 = std::min(y0, py), y1 = std::max(y1, py);
+    }
+    const int bw = x1 - x0 + 3, bh = y1 - y0 + 3;
+    std::vector<uint8_t> outside(static_cast<size_t>(bw) * bh, 1);
+    for (const size_t i : mark)
+        outside[static_cast<size_t>(static_cast<int>(i / W) - y0 + 1) * bw +
+                (static_cast<int>(i % W) - x0 + 1)] = 0;
+    const std::vector<double> depth = squaredDistanceTo(outside, bw, bh);
+    double deepest = 0.0;
+    for (size_t k = 0; k < depth.size(); ++k)
+        if (!outside[k]) deepest = std::max(deepest, depth[k]);
+    return 2.0 * std::sqrt(deepest);
+}
+
 // Step 8g (SelfSimMap.h) on one mark (its 8-connected samples; `before` the marks as they stood
 // before this step): when it lies below the texture (at least `share` of its Σ|r| negative) and
 // is a line (its samples at least `length` × its width²), it takes the samples above the texture
@@ -343,24 +364,14 @@ size_t takeGrooveBanks(std::span<const size_t> mark, const std::vector<uint8_t>&
         if (r[i] < 0.0f) below -= r[i];
     }
     if (!(all > 0.0) || below < share * all) return 0;
-    // its width: in a box one sample wider than it (the samples outside the map are outside it)
-    int bw = x1 - x0 + 3, bh = y1 - y0 + 3;
-    std::vector<uint8_t> outside(static_cast<size_t>(bw) * bh, 1);
-    for (const size_t i : mark)
-        outside[static_cast<size_t>(static_cast<int>(i / W) - y0 + 1) * bw +
-                (static_cast<int>(i % W) - x0 + 1)] = 0;
-    const std::vector<double> depth = squaredDistanceTo(outside, bw, bh);
-    double deepest = 0.0;
-    for (size_t k = 0; k < depth.size(); ++k)
-        if (!outside[k]) deepest = std::max(deepest, depth[k]);
-    const double width = 2.0 * std::sqrt(deepest);
+    const double width = markWidth(mark, W);
     if (static_cast<double>(mark.size()) < length * width * width) return 0;
     const double reach = std::max(1.0, widthShare * width);
     // the distance to it over a box grown by the reach, and the banks flooded from it
     const int m = static_cast<int>(std::ceil(reach)) + 1;
     const int bx0 = std::max(0, x0 - m), by0 = std::max(0, y0 - m);
-    bw = std::min(W - 1, x1 + m) - bx0 + 1;
-    bh = std::min(H - 1, y1 + m) - by0 + 1;
+    const int bw = std::min(W - 1, x1 + m) - bx0 + 1;
+    const int bh = std::min(H - 1, y1 + m) - by0 + 1;
     std::vector<uint8_t> mine(static_cast<size_t>(bw) * bh, 0);
     for (const size_t i : mark)
         mine[static_cast<size_t>(static_cast<int>(i / W) - by0) * bw +
@@ -767,31 +778,26 @@ std::pair<size_t, size_t> takeLineCopies(std::vector<uint8_t>& map, const std::v
     return {lines, added};
 }
 
-// Step 8s (SelfSimMap.h) on the marks as they stand (`before`; samples added to `map`): each mark
+// Step 8s (SelfSimMap.h) on the marks as they stand (`map`; samples added to it): each mark
 // (8-connected) of at least kRimBandMarkMin samples that lies below the texture (at least
 // kRimBandGrooveShare of its Σ|r| negative) and is a line (its samples at least kRimBandLength ×
-// its width², the width twice the largest distance of a sample of it from the samples outside
-// it) has a band beside it: the samples not marked, inside the border, whose nearest sample of
-// a mark below the texture (r < 0; its core) is one of this mark's, at most `reach` × its core's
-// width away (twice the 95th percentile of its core's distances from the samples outside the
+// its markWidth²) has a band beside it: the samples not marked, inside the border, whose nearest
+// sample of a mark below the texture (r < 0; its core) is one of this mark's, at most `reach` × its
+// core's width away (twice the 95th percentile of its core's distances from the samples outside the
 // core; at least kRimBandReachMin). The band is cut into segments along the mark: the cell of
 // `segment` × its width (at least kRimBandCellMin samples) that holds that nearest core sample.
 // A segment of at least kRimBandSegmentMin samples whose mean r/σ_0 is at least `mean` and whose
 // share of samples above the texture is at least `share` gives its samples above the texture
 // (r > 0) to `map`. Returns (segments taken, samples added).
-std::pair<size_t, size_t> takeRimBands(const std::vector<uint8_t>& before,
-                                       std::vector<uint8_t>& map, const std::vector<float>& r,
+std::pair<size_t, size_t> takeRimBands(std::vector<uint8_t>& map, const std::vector<float>& r,
                                        double sigma, int W, int H, int border, double mean,
                                        double share, double reach, double segment) {
-    const size_t n = before.size();
+    const size_t n = map.size();
+    const std::vector<uint8_t> before = map;
     // (the nearest core sample is held as 32 bits: a map of 2^32 samples takes no rims)
     if (!(sigma > 0.0) || n > std::numeric_limits<uint32_t>::max()) return {0, 0};
-    std::vector<uint8_t> unmarked(n), notCore(n);
-    for (size_t i = 0; i < n; ++i) {
-        unmarked[i] = before[i] ? 0 : 1;
-        notCore[i] = before[i] && r[i] < 0.0f ? 0 : 1;
-    }
-    const std::vector<double> inner = squaredDistanceTo(unmarked, W, H);
+    std::vector<uint8_t> notCore(n);
+    for (size_t i = 0; i < n; ++i) notCore[i] = before[i] && r[i] < 0.0f ? 0 : 1;
     const std::vector<double> innerCore = squaredDistanceTo(notCore, W, H);
     struct Groove {
         double reach2 = -1.0;  // < 0: not a groove
@@ -808,18 +814,17 @@ std::pair<size_t, size_t> takeRimBands(const std::vector<uint8_t>& before,
         floodMark(before, i0, seen, mark, W, H);
         const int id = static_cast<int>(grooves.size());
         grooves.emplace_back();
-        double below = 0.0, all = 0.0, deepest = 0.0;
+        double below = 0.0, all = 0.0;
         coreDepth.clear();
         for (const size_t i : mark) {
             markOf[i] = id;
             all += std::abs(r[i]);
-            deepest = std::max(deepest, inner[i]);
             if (r[i] < 0.0f) {
                 below -= r[i];
                 coreDepth.push_back(std::sqrt(innerCore[i]));
             }
         }
-        const double width = 2.0 * std::sqrt(deepest);
+        const double width = markWidth(mark, W);
         if (mark.size() < kRimBandMarkMin || !(all > 0.0) || below < kRimBandGrooveShare * all ||
             static_cast<double>(mark.size()) < kRimBandLength * width * width || coreDepth.empty())
             continue;
@@ -2165,10 +2170,9 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     }
     // step 8s: a groove's rims judged along it, a segment of the band beside it at a time
     if (o.rimBandMean > 0.0 && !relief.relief) {
-        const std::vector<uint8_t> before = out.map;
         const auto [segments, added] =
-            takeRimBands(before, out.map, out.residual, out.sigma, W, H, b, o.rimBandMean,
-                         o.rimBandShare, o.rimBandReach, o.rimBandSegment);
+            takeRimBands(out.map, out.residual, out.sigma, W, H, b, o.rimBandMean, o.rimBandShare,
+                         o.rimBandReach, o.rimBandSegment);
         out.rimBands = segments;
         out.rimBandSamples = added;
     }
