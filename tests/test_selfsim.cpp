@@ -103,6 +103,15 @@ Counts count(const std::vector<uint8_t>& map, const std::vector<uint8_t>& truth,
 }
 
 /// Samples `in` marks and `notIn` does not (what a step adds, or with the maps swapped, drops).
+// The options of the map before step 8u, which takes a ring of samples about every mark (tested
+// on its own, AMarksEdgeThatKeepsItsSignIsTakenTheTextureBesideItIsNot): a step's test compares
+// the maps with and without that step alone.
+SelfSimMapOptions before8u() {
+    SelfSimMapOptions o;
+    o.edgeRingSigma = 0.0;
+    return o;
+}
+
 size_t markedOnlyIn(const SelfSimMap& in, const SelfSimMap& notIn) {
     size_t n = 0;
     for (size_t i = 0; i < in.map.size(); ++i) n += in.map[i] && !notIn.map[i] ? 1 : 0;
@@ -333,9 +342,9 @@ TEST(SelfSimMap, TheFlanksOfAWeakDefectAreMarkedAndNoDroppedRegionIsRevived) {
     std::vector<float> h = striations(21);
     std::vector<uint8_t> truth(h.size(), 0);
     groove(h, truth, 70, 150, 190, 135, 6, 0.3);
-    SelfSimMapOptions off;
+    SelfSimMapOptions off = before8u();
     off.extendSteps = 0;
-    const SelfSimMapOptions on;
+    const SelfSimMapOptions on = before8u();
     ASSERT_EQ(on.extendSteps, 1);
     const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
                      b = detectSelfSimDefects(h, kW, kH, on);
@@ -402,11 +411,12 @@ TEST(SelfSimMap, ADeepDefectIsKeptAndTheTextureJoinedToItDropped) {
             h[i] -= static_cast<float>(0.2 * std::exp(-d2 / (2 * 3.0 * 3.0)));
             if (d2 <= 4.0 * 4.0 && !truth[i]) particle[i] = 1;
         }
-    SelfSimMapOptions off;  // step 8a alone: the pile-up and the banks (8e, 8g) are tested below
+    SelfSimMapOptions off =
+        before8u();  // step 8a alone: the pile-up and the banks (8e, 8g) are tested below
     off.trimShare = 0;
     off.pileUpReach = 0;
     off.grooveBankWidth = 0.0;
-    SelfSimMapOptions on;
+    SelfSimMapOptions on = before8u();
     on.pileUpReach = 0;
     on.grooveBankWidth = 0.0;
     ASSERT_GT(on.trimShare, 0.0);
@@ -486,10 +496,11 @@ TEST(SelfSimMap, ABorderRegionsDefectPieceIsKeptItsRuggedTexturePieceDropped) {
         hollow[i] = hollowHere;
     }
 
-    SelfSimMapOptions off8d;
+    SelfSimMapOptions off8d = before8u();
     off8d.borderPieceFill = 0;
     off8d.pileUpReach = 0;
-    SelfSimMapOptions on;   // the pieces alone: their pile-up (borderPieceRim, step 8e) is
+    SelfSimMapOptions on =
+        before8u();         // the pieces alone: their pile-up (borderPieceRim, step 8e) is
     on.borderPieceRim = 0;  // tested below
     on.pileUpReach = 0;
     ASSERT_GT(on.borderPieceFill, 0.0);
@@ -545,9 +556,9 @@ TEST(SelfSimMap, ABorderRegionSplitAtRisingLevelsKeepsThePitNotTheRuggedHollow) 
     for (int k = 0; k < 12; ++k) pit(h, hollow, 143 + off(rng), 150 + off(rng), 1.6, depth(rng));
     for (size_t i = 0; i < h.size(); ++i) rough[i] = rough[i] && !pitTruth[i] && !hollow[i];
 
-    SelfSimMapOptions off8f;
+    SelfSimMapOptions off8f = before8u();
     off8f.borderLevelStep = 0.0;
-    SelfSimMapOptions on;
+    SelfSimMapOptions on = before8u();
     ASSERT_EQ(on.borderLevelStep, 1.25);
     SelfSimMapOptions anyShape = on;
     anyShape.borderLevelFill = 1e-6;
@@ -593,7 +604,7 @@ TEST(SelfSimMap, ABorderPieceTakesBackItsBasinNotItsRoughStretch) {
     pit(h, pitTruth, 109, 70, 8, 3.0);  // at the end of the stretch
     for (size_t i = 0; i < h.size(); ++i) rough[i] = rough[i] && !pitTruth[i];
 
-    SelfSimMapOptions on;
+    SelfSimMapOptions on = before8u();
     ASSERT_EQ(on.borderBasin, 1.1);  // the default
     SelfSimMapOptions off8h = on;
     off8h.borderBasin = 0.0;
@@ -639,10 +650,10 @@ TEST(SelfSimMap, ABorderPiecesPileUpIsMarkedTheRaisedTextureBesideItIsNot) {
         }
     for (size_t i = 0; i < h.size(); ++i) ridge[i] = ridge[i] && !crater[i] && !rim[i];
 
-    SelfSimMapOptions noRim;  // the border pieces' rim alone: step 8e is tested below
+    SelfSimMapOptions noRim = before8u();  // the border pieces' rim alone: step 8e is tested below
     noRim.borderPieceRim = 0;
     noRim.pileUpReach = 0;
-    SelfSimMapOptions on;
+    SelfSimMapOptions on = before8u();
     on.pileUpReach = 0;
     ASSERT_EQ(on.borderPieceRim, 2);
     const SelfSimMap a = detectSelfSimDefects(h, kW, kH, noRim),
@@ -1018,7 +1029,7 @@ TEST(SelfSimMap, AGroovesBanksAreMarkedTheRaisedTextureBeyondThemIsNot) {
             h[i] += static_cast<float>(bank);
         }
 
-    SelfSimMapOptions on;
+    SelfSimMapOptions on = before8u();
     ASSERT_EQ(on.grooveBankWidth, 1.0);
     on.rimBandMean = 0.0;  // step 8s judges the banks 8g leaves
     SelfSimMapOptions off = on;
@@ -1088,7 +1099,7 @@ TEST(SelfSimMap, AGroovesRaisedRimsAreMarkedAGrooveWithoutRimsTakesNothing) {
     strip(shortRims, 110, 130, 160, 162);
     strip(shortRims, 110, 130, 168, 170);
 
-    SelfSimMapOptions off;
+    SelfSimMapOptions off = before8u();
     ASSERT_EQ(off.grooveRimSigma, 0.0);
     off.rimBandMean = 0.0;  // step 8s judges the rims 8o leaves
     SelfSimMapOptions on = off;
@@ -1158,7 +1169,7 @@ TEST(SelfSimMap, ALineAcrossTheLayIsKeptAtTheBorderOneAlongItIsNot) {
             ridge[i] = ridgePainted[i] && !nearGroove;
         }
 
-    SelfSimMapOptions off;
+    SelfSimMapOptions off = before8u();
     off.lineElongation = 0.0;
     off.pileUpReach = 0;
     off.grooveBankWidth = 0.0;
@@ -1257,12 +1268,12 @@ TEST(SelfSimMap, ABurrAcrossTheLayTakesBackItsBasinTheTextureBesideItDoesNot) {
     const std::vector<float>& h = scene.h;
     const std::vector<uint8_t>&across = scene.across, &along = scene.along;
 
-    SelfSimMapOptions j;
+    SelfSimMapOptions j = before8u();
     ASSERT_EQ(j.burrBasin, 0.0);  // the default: off
     j.burrElongation = 8.0;
     SelfSimMapOptions n = j;
     n.burrBasin = 1.1;
-    SelfSimMapOptions alone;
+    SelfSimMapOptions alone = before8u();
     alone.burrBasin = 1.1;
     const SelfSimMap a = detectSelfSimDefects(h, kW, kH, j), b = detectSelfSimDefects(h, kW, kH, n),
                      c = detectSelfSimDefects(h, kW, kH, alone),
@@ -1350,7 +1361,7 @@ TEST(SelfSimMap, AChainOfHollowsOnARoughStretchIsKeptAnUnevenRowIsNot) {
     for (const double s : at) pit(h, uneven, kW - 92 + s, 148 + 0.2 * s, kRho, kDepth);
     for (size_t i = 0; i < h.size(); ++i) rough[i] = rough[i] && !chain[i] && !uneven[i];
 
-    SelfSimMapOptions off;
+    SelfSimMapOptions off = before8u();
     off.chainTolerance = 0.0;
     SelfSimMapOptions on = off;
     on.chainTolerance = 0.2;
@@ -1396,7 +1407,7 @@ TEST(SelfSimMap, AGroovesFarBanksAreMarkedAFarStripAndABurrsStripsAreNot) {
     strip(burrStrips, 142);
     strip(burrStrips, 156);
 
-    SelfSimMapOptions off;
+    SelfSimMapOptions off = before8u();
     off.farBankReach = 0.0;
     SelfSimMapOptions on = off;
     on.farBankReach = 10.0;
@@ -1506,7 +1517,7 @@ TEST(SelfSimMap, ALineAlongTheLayTakesItsBanksOneAcrossItDoesNot) {
     strip(farStrip, 150, 151, 60, 130);
 
     EXPECT_EQ(SelfSimMapOptions{}.layLineElongation, 4.0) << "step 8l is on by default";
-    SelfSimMapOptions off;
+    SelfSimMapOptions off = before8u();
     off.textureNfa = 0.0;  // the columns' regions make a tail above the grooves
     off.layLineElongation = 0.0;
     SelfSimMapOptions on = off;
@@ -1576,7 +1587,7 @@ TEST(SelfSimMap, ALineAlongTheLayJudgedOnItsOwnCopiesIsMarkedAlongItsLength) {
     groove(h, alongTruth, 92, 52, 108, 172, 6, 2.0);
     groove(h, acrossTruth, 140, 100, 200, 100, 6, 2.0);
     EXPECT_EQ(SelfSimMapOptions{}.lineCopiesSigma, 0.0) << "step 8r is off by default";
-    SelfSimMapOptions off;
+    SelfSimMapOptions off = before8u();
     off.textureNfa = 0.0;  // the columns' regions make a tail above the grooves
     SelfSimMapOptions on = off, strict = off;
     on.lineCopiesSigma = 4.0;
@@ -1630,10 +1641,10 @@ TEST(SelfSimMap, AGroovesRimsJudgedAlongItAreMarkedABareGrooveTakesNothing) {
     raiseBox(h, farStrip, 45, 210, 178, 180, 3.0 * sigma);
 
     EXPECT_EQ(SelfSimMapOptions{}.rimBandMean, 0.6) << "step 8s is on by default";
-    SelfSimMapOptions off;
+    SelfSimMapOptions off = before8u();
     off.rimBandMean = 0.0;
-    const SelfSimMapOptions on;
-    SelfSimMapOptions strict;
+    const SelfSimMapOptions on = before8u();
+    SelfSimMapOptions strict = before8u();
     strict.rimBandMean = 1000.0;
     const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
                      b = detectSelfSimDefects(h, kW, kH, on),
@@ -1743,4 +1754,65 @@ TEST(SelfSimMap, AValleyBesideAMarkIsTakenOneAloneOrOnAValleyedTextureIsNot) {
                                           o.valleyLineGrow, o.valleyLineGate);
     EXPECT_EQ(a2, 0u) << "the striations' own valleys close the gate";
     EXPECT_EQ(sm, before);
+}
+
+// Step 8u on given marks and residual (σ_0 1): a mark over x 32-63, y 40-45 (r -6) whose edge
+// below it (y 46) keeps its sign (r -1.5, a defect's fringe the copies took most of) and whose
+// edge above it (y 39) is the texture (r +1.5 but every third sample -1.5: either sign, 2-3 of 8
+// with the mark's). Its ends (x 31 and 64: 6 ring samples in a cell each) are too few to judge.
+// The 8 × 8 cells of the fringe are all hits and are taken whole; the texture's cells and the
+// ends take nothing; a second mark's fringe inside the border is never taken; a score of 1000
+// adds nothing and a share of 1 still takes the fringe.
+TEST(SelfSimMap, AMarksEdgeThatKeepsItsSignIsTakenTheTextureBesideItIsNot) {
+    const int border = 8;
+    std::vector<float> r(static_cast<size_t>(kW) * kH, 0.0f);
+    std::vector<uint8_t> map(r.size(), 0), fringe(r.size(), 0);
+    const auto at = [](int x, int y) { return static_cast<size_t>(y) * kW + x; };
+    for (int x = 32; x <= 63; ++x) {
+        for (int y = 40; y <= 45; ++y) {
+            map[at(x, y)] = 255;
+            r[at(x, y)] = -6.0f;
+        }
+        r[at(x, 46)] = -1.5f;
+        fringe[at(x, 46)] = 1;
+        r[at(x, 39)] = x % 3 == 0 ? -1.5f : 1.5f;
+        r[at(x, 31)] = r[at(x, 32)] = -1.5f;  // beside nothing marked: not on the ring
+    }
+    for (int y = 40; y <= 45; ++y) r[at(31, y)] = r[at(64, y)] = -1.5f;
+    // a mark against the border, its fringe inside it
+    for (int x = 96; x <= 127; ++x) {
+        map[at(x, border)] = 255;
+        r[at(x, border)] = -6.0f;
+        r[at(x, border - 1)] = -1.5f;
+    }
+    const SelfSimMapOptions o;
+    EXPECT_EQ(o.edgeRingSigma, 1.0) << "step 8u is on by default";
+    std::vector<uint8_t> m = map;
+    const auto [cells, added] =
+        takeEdgeRing(m, r, 1.0, kW, kH, border, o.edgeRingSigma, o.edgeRingShare, o.edgeRingCell);
+    EXPECT_EQ(cells, 4u) << "the fringe's four cells (x 32-63)";
+    EXPECT_EQ(added, 32u);
+    std::vector<uint8_t> expected = map;
+    for (size_t i = 0; i < m.size(); ++i)
+        if (fringe[i]) expected[i] = 255;
+    EXPECT_EQ(m, expected) << "the mark and its fringe, nothing else";
+    std::vector<uint8_t> strict = map, whole = map;
+    EXPECT_EQ(takeEdgeRing(strict, r, 1.0, kW, kH, border, 1000.0, o.edgeRingShare, o.edgeRingCell)
+                  .second,
+              0u)
+        << "1000 sigma asked for";
+    EXPECT_EQ(strict, map);
+    EXPECT_EQ(
+        takeEdgeRing(whole, r, 1.0, kW, kH, border, o.edgeRingSigma, 1.0, o.edgeRingCell).second,
+        32u)
+        << "every sample of the fringe's cells is a hit";
+    // the sign is the mark's: the same fringe raised (+1.5) beside a mark below the texture
+    std::vector<float> flipped = r;
+    for (int x = 32; x <= 63; ++x) flipped[at(x, 46)] = 1.5f;
+    std::vector<uint8_t> f = map;
+    EXPECT_EQ(takeEdgeRing(f, flipped, 1.0, kW, kH, border, o.edgeRingSigma, o.edgeRingShare,
+                           o.edgeRingCell)
+                  .second,
+              0u)
+        << "a raised edge beside a mark below the texture";
 }

@@ -95,6 +95,11 @@ int runDefectMap(const DefectMapJobOptions& o) {
     if (m.method == DefectMethod::SelfSim && m.selfsimRimBands > 0)
         std::printf("  %zu segments of grooves' rims judged along them: %zu samples added\n",
                     m.selfsimRimBands, m.selfsimRimBandSamples);
+    if (m.method == DefectMethod::SelfSim && m.selfsimEdgeRingCells > 0)
+        std::printf(
+            "  %zu cells of the marks' edge taken where it keeps their sign: %zu samples "
+            "added\n",
+            m.selfsimEdgeRingCells, m.selfsimEdgeRingSamples);
     if (m.method == DefectMethod::SelfSim && m.selfsimReliefLevels > 0)
         std::printf("  a relief: its %zu plateau levels taken out before the copies\n",
                     m.selfsimReliefLevels);
@@ -552,6 +557,16 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     c->add_option("--selfsim-rim-band-segment", q.rimBandSegment,
                   "selfsim: ... a segment this times the mark's width long")
+        ->capture_default_str();
+    c->add_option("--selfsim-edge-ring-sigma", q.edgeRingSigma,
+                  "selfsim: the marks' edge a cell at a time: a sample beside a mark scoring at "
+                  "least this many robust sigmas with the mark's sign (0: off) ...")
+        ->capture_default_str();
+    c->add_option("--selfsim-edge-ring-share", q.edgeRingShare,
+                  "selfsim: ... is marked when at least this share of its cell's edge samples are")
+        ->capture_default_str();
+    c->add_option("--selfsim-edge-ring-cell", q.edgeRingCell,
+                  "selfsim: ... the cells this many samples square")
         ->capture_default_str();
     c->add_option("--selfsim-relief", q.relief,
                   "selfsim: on a relief (heights on a few flat levels: lettering, a stepped part) "

@@ -1006,6 +1006,56 @@ std::pair<size_t, size_t> takeValleyLines(std::vector<uint8_t>& map, const std::
     return {taken, added};
 }
 
+// Step 8u (SelfSimMap.h): the ring about the marks as they stand, a cell of the grid at a time.
+std::pair<size_t, size_t> takeEdgeRing(std::vector<uint8_t>& map, const std::vector<float>& r,
+                                       double sigma, int W, int H, int border, double score,
+                                       double share, int cell) {
+    if (!(sigma > 0.0) || cell < 1) return {0, 0};
+    const std::vector<uint8_t> before = map;
+    const int cx = (W + cell - 1) / cell, cy = (H + cell - 1) / cell;
+    std::vector<size_t> ring(static_cast<size_t>(cx) * cy, 0), hits(ring.size(), 0);
+    std::vector<size_t> hit;  // the ring's hits, in order
+    const auto cellOf = [&](int x, int y) { return static_cast<size_t>(y / cell) * cx + x / cell; };
+    for (int y = border; y < H - border; ++y)
+        for (int x = border; x < W - border; ++x) {
+            const size_t i = static_cast<size_t>(y) * W + x;
+            if (before[i]) continue;
+            // the sum of its marked 4-neighbours' r (none: not on the ring)
+            double around = 0.0;
+            bool onRing = false;
+            const auto add = [&](size_t q) {
+                if (!before[q]) return;
+                onRing = true;
+                around += r[q];
+            };
+            if (x > 0) add(i - 1);
+            if (x + 1 < W) add(i + 1);
+            if (y > 0) add(i - W);
+            if (y + 1 < H) add(i + W);
+            if (!onRing) continue;
+            const size_t c = cellOf(x, y);
+            ++ring[c];
+            const double z = r[i] / sigma;
+            if (std::abs(z) >= score && ((z > 0.0 && around > 0.0) || (z < 0.0 && around < 0.0))) {
+                ++hits[c];
+                hit.push_back(i);
+            }
+        }
+    const auto passes = [&](size_t c) {
+        return ring[c] >= kEdgeRingCellMin &&
+               static_cast<double>(hits[c]) >= share * static_cast<double>(ring[c]);
+    };
+    size_t cells = 0, added = 0;
+    for (size_t c = 0; c < ring.size(); ++c)
+        if (passes(c)) ++cells;
+    for (const size_t i : hit) {
+        if (!passes(cellOf(static_cast<int>(i % W), static_cast<int>(i / W)))) continue;
+        map[i] = 255;
+        ++added;
+    }
+    return {cells, added};
+}
+
 double textureTailThreshold(std::span<const float> peaks, double quantile, double nfa) {
     // too few responses to measure a tail on: no threshold from the texture
     if (peaks.size() < kTextureTailMinRegions || !(nfa > 0.0)) return 0.0;
@@ -1211,6 +1261,14 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
         throw inputError(option("selfsim-rim-band-reach"), "must be > 0", "The default is 0.9");
     if (!(o.rimBandSegment > 0.0))
         throw inputError(option("selfsim-rim-band-segment"), "must be > 0", "The default is 2");
+    if (!(o.edgeRingSigma >= 0.0))
+        throw inputError(option("selfsim-edge-ring-sigma"), "must be >= 0",
+                         "The default is 1 (0: off)");
+    if (!(o.edgeRingShare > 0.0 && o.edgeRingShare <= 1.0))
+        throw inputError(option("selfsim-edge-ring-share"), "must be in (0, 1]",
+                         "The default is 0.5");
+    if (o.edgeRingCell < 1)
+        throw inputError(option("selfsim-edge-ring-cell"), "must be >= 1", "The default is 8");
     if (!(o.valleyLineSigma >= 0.0))
         throw inputError(option("selfsim-valley-line-sigma"), "must be >= 0",
                          "The default is 15 (0: off)");
@@ -2175,6 +2233,13 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                          o.rimBandReach, o.rimBandSegment);
         out.rimBands = segments;
         out.rimBandSamples = added;
+    }
+    // step 8u: the marks' ring, a cell at a time, where it keeps their sign
+    if (o.edgeRingSigma > 0.0 && !relief.relief) {
+        const auto [cells, added] = takeEdgeRing(out.map, out.residual, out.sigma, W, H, b,
+                                                 o.edgeRingSigma, o.edgeRingShare, o.edgeRingCell);
+        out.edgeRingCells = cells;
+        out.edgeRingSamples = added;
     }
     return out;
 }
