@@ -911,6 +911,15 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o.rimBandSegment = -1.0;
     expectNamed(o, "selfsim-rim-band-segment");
     o = {};
+    o.edgeRingSigma = -1.0;
+    expectNamed(o, "selfsim-edge-ring-sigma");
+    o = {};
+    o.edgeRingShare = 0.0;
+    expectNamed(o, "selfsim-edge-ring-share");
+    o = {};
+    o.edgeRingCell = 0;
+    expectNamed(o, "selfsim-edge-ring-cell");
+    o = {};
     o.pileUpReach = -1;
     expectNamed(o, "selfsim-pile-up-reach");
     o = {};
