@@ -216,9 +216,9 @@ void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int he
     r.selfsimValleyLines = m.valleyLines;
     r.selfsimValleyLineSamples = m.valleyLineSamples;
     r.selfsimRimBands = m.rimBands;
+    r.selfsimRimBandSamples = m.rimBandSamples;
     r.selfsimEdgeRingCells = m.edgeRingCells;
     r.selfsimEdgeRingSamples = m.edgeRingSamples;
-    r.selfsimRimBandSamples = m.rimBandSamples;
     r.selfsimReliefLevels = m.reliefLevels;
     r.selfsimRaisedLines = m.raisedLines;
     r.selfsimBurrBasin = m.burrBasin;
