@@ -920,6 +920,15 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o.edgeRingCell = 0;
     expectNamed(o, "selfsim-edge-ring-cell");
     o = {};
+    o.valleyRimMean = -1.0;
+    expectNamed(o, "selfsim-valley-rim-mean");
+    o = {};
+    o.valleyRimShare = 1.5;
+    expectNamed(o, "selfsim-valley-rim-share");
+    o = {};
+    o.valleyRimReach = 0.0;
+    expectNamed(o, "selfsim-valley-rim-reach");
+    o = {};
     o.pileUpReach = -1;
     expectNamed(o, "selfsim-pile-up-reach");
     o = {};
@@ -1824,4 +1833,73 @@ TEST(SelfSimMap, AMarksEdgeThatKeepsItsSignIsTakenTheTextureBesideItIsNot) {
                   .second,
               0u)
         << "a raised edge beside a mark below the texture";
+}
+
+// Step 8v on given marks and heights: white noise (σ 0.05, seed 9) with two valleys along x
+// (x 60-199, 5 samples wide, 0.3 deep, each marked: lines the map holds), one with a rim on each
+// side (rows 3-6 from its axis raised by 0.1, 2 σ of the noise: a scratch's pile-up), one bare.
+// Its band (its width, 6 samples) stands 1-2 σ above its ground and is taken: at least 3/4 of
+// the rims' samples, nothing beside the bare valley, nothing away from the rimmed one; a mean of
+// 1000 σ takes nothing, and with the gate shut (scores.open false) nothing is taken. Off by
+// default.
+TEST(SelfSimMap, ARimTheHeightsShowBesideAValleyLineIsTakenABareValleyTakesNothing) {
+    std::mt19937 rng(9);
+    std::normal_distribution<double> noise(0.0, 0.05);
+    std::vector<float> g(static_cast<size_t>(kW) * kH);
+    for (float& v : g) v = static_cast<float>(noise(rng));
+    std::vector<uint8_t> map(g.size(), 0), rims(g.size(), 0);
+    for (int y = 0; y < kH; ++y)
+        for (int x = 60; x < 200; ++x) {
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            for (const int axis : {80, 150}) {
+                const double s = std::abs(y - static_cast<double>(axis));
+                if (s <= 2.0) {
+                    g[i] -= static_cast<float>(0.3 * (1 - s / 3));
+                    map[i] = 255;
+                }
+                if (axis == 80 && s >= 3.0 && s <= 6.0) {
+                    g[i] += 0.1f;
+                    rims[i] = 1;
+                }
+            }
+        }
+    const SelfSimMapOptions o;
+    EXPECT_EQ(o.valleyRimMean, 0.0) << "step 8v is off by default";
+    const ValleyScores scores =
+        scoreValleys(map, g, kW, kH, o.border, o.valleyLineSigma, /*gate=*/0.05);
+    ASSERT_TRUE(scores.open);
+    std::vector<uint8_t> m = map;
+    const auto [segments, added] = takeValleyRims(m, g, scores, kW, kH, o.border, o.valleyLineSigma,
+                                                  o.valleyLineGrow, 0.5, 0.7, 1.0);
+    const Counts c = count(m, rims, o.border);
+    EXPECT_GE(segments, 1u);
+    EXPECT_GE(c.hits * 4, c.truth * 3) << c.hits << " of the rims' " << c.truth;
+    size_t n = 0, beside = 0, away = 0;
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            if (!m[i] || map[i]) continue;
+            ++n;
+            if (std::abs(y - 150) <= 10) ++beside;
+            if (std::abs(y - 80) > 8) ++away;
+        }
+    EXPECT_EQ(n, added);
+    EXPECT_EQ(beside, 0u) << "beside the bare valley";
+    EXPECT_EQ(away, 0u) << away << " of the " << added << " samples added lie off the band";
+
+    std::vector<uint8_t> strict = map;
+    EXPECT_EQ(takeValleyRims(strict, g, scores, kW, kH, o.border, o.valleyLineSigma,
+                             o.valleyLineGrow, 1000.0, 0.7, 1.0)
+                  .second,
+              0u);
+    EXPECT_EQ(strict, map);
+    ValleyScores shut = scores;
+    shut.open = false;
+    std::vector<uint8_t> closed = map;
+    EXPECT_EQ(takeValleyRims(closed, g, shut, kW, kH, o.border, o.valleyLineSigma, o.valleyLineGrow,
+                             0.5, 0.7, 1.0)
+                  .second,
+              0u)
+        << "the gate shut";
+    EXPECT_EQ(closed, map);
 }

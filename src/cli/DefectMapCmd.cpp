@@ -100,6 +100,11 @@ int runDefectMap(const DefectMapJobOptions& o) {
             "  %zu cells of the marks' edge taken where it keeps their sign: %zu samples "
             "added\n",
             m.selfsimEdgeRingCells, m.selfsimEdgeRingSamples);
+    if (m.method == DefectMethod::SelfSim && m.selfsimValleyRims > 0)
+        std::printf(
+            "  %zu segments of rims the heights show beside valley lines: %zu samples "
+            "added\n",
+            m.selfsimValleyRims, m.selfsimValleyRimSamples);
     if (m.method == DefectMethod::SelfSim && m.selfsimReliefLevels > 0)
         std::printf("  a relief: its %zu plateau levels taken out before the copies\n",
                     m.selfsimReliefLevels);
@@ -567,6 +572,16 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     c->add_option("--selfsim-edge-ring-cell", q.edgeRingCell,
                   "selfsim: ... the cells this many samples square")
+        ->capture_default_str();
+    c->add_option("--selfsim-valley-rim-mean", q.valleyRimMean,
+                  "selfsim: beside a valley line (step 8t's), a segment of the band whose heights "
+                  "stand this many robust sigmas of its ground above the ground (0: off) ...")
+        ->capture_default_str();
+    c->add_option("--selfsim-valley-rim-share", q.valleyRimShare,
+                  "selfsim: ... at least this share of them above it, gives them to the map")
+        ->capture_default_str();
+    c->add_option("--selfsim-valley-rim-reach", q.valleyRimReach,
+                  "selfsim: ... the band this times the line's width wide")
         ->capture_default_str();
     c->add_option("--selfsim-relief", q.relief,
                   "selfsim: on a relief (heights on a few flat levels: lettering, a stepped part) "

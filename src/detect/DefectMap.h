@@ -356,6 +356,8 @@ struct DefectMap {
     size_t selfsimRimBandSamples = 0;     // ... and the samples they added
     size_t selfsimEdgeRingCells = 0;      // cells of the marks' ring step 8u took ...
     size_t selfsimEdgeRingSamples = 0;    // ... and their samples
+    size_t selfsimValleyRims = 0;         // segments beside valley lines step 8v took (rims) ...
+    size_t selfsimValleyRimSamples = 0;   // ... and their samples
     size_t selfsimReliefLevels = 0;  // selfsim only: a relief's levels taken out (step 1b; 0: none)
     size_t selfsimRaisedLines = 0;  // selfsim only: raised pieces kept as burrs across the lay (8j)
     size_t selfsimBurrBasin = 0;    // ... and the samples of their basins step 8n took back

@@ -219,6 +219,8 @@ void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int he
     r.selfsimRimBandSamples = m.rimBandSamples;
     r.selfsimEdgeRingCells = m.edgeRingCells;
     r.selfsimEdgeRingSamples = m.edgeRingSamples;
+    r.selfsimValleyRims = m.valleyRims;
+    r.selfsimValleyRimSamples = m.valleyRimSamples;
     r.selfsimReliefLevels = m.reliefLevels;
     r.selfsimRaisedLines = m.raisedLines;
     r.selfsimBurrBasin = m.burrBasin;

@@ -956,38 +956,54 @@ std::vector<float> valleyResponse(const std::vector<float>& g, int W, int H) {
     return best;
 }
 
-// Step 8t (SelfSimMap.h) on the marks as they stand (`map`): the valley response of g in robust
-// σ of the texture (the samples inside the border farther than kValleyTextureMargin from every
-// mark); when at most `gate` of the texture reaches `seed`, each 8-connected component of the
-// unmarked samples inside the border scoring at least `grow` that holds a sample scoring at least
-// `seed`, has at least `minSize` samples and lies within kValleyReach samples (Euclidean) of a
-// mark is marked. Returns (components taken, samples added).
-std::pair<size_t, size_t> takeValleyLines(std::vector<uint8_t>& map, const std::vector<float>& g,
+// Steps 8t and 8v (SelfSimMap.h): the valley response of g in robust σ of the texture, the
+// samples inside the border farther than kValleyTextureMargin from every mark of `map`; the gate
+// is open when at most `gate` of the texture reaches `seed`.
+ValleyScores scoreValleys(const std::vector<uint8_t>& map, const std::vector<float>& g, int W,
+                          int H, int border, double seed, double gate) {
+    const size_t n = map.size();
+    ValleyScores out;
+    const std::vector<float> v = valleyResponse(g, W, H);
+    const std::vector<double> toMark = squaredDistanceTo(map, W, H);
+    std::vector<float> texture;
+    for (size_t i = 0; i < n; ++i) {
+        const int x = static_cast<int>(i % W), y = static_cast<int>(i / W);
+        if (x >= border && y >= border && x < W - border && y < H - border &&
+            toMark[i] > kValleyTextureMargin * kValleyTextureMargin)
+            texture.push_back(v[i]);
+    }
+    if (texture.size() < 64) return out;
+    std::vector<float> work = texture;
+    const auto [med, sigma] = robustScaleOf(work);
+    if (!(sigma > 0.0)) return out;
+    size_t high = 0;
+    for (const float t : texture) high += (t - med) / sigma >= seed ? 1 : 0;
+    out.open = static_cast<double>(high) <= gate * static_cast<double>(texture.size());
+    out.z.resize(n);
+    for (size_t i = 0; i < n; ++i) out.z[i] = static_cast<float>((v[i] - med) / sigma);
+    return out;
+}
+
+// Step 8t (SelfSimMap.h) on the marks as they stand (`map`) and the valley scores of g: when the
+// gate is open, each 8-connected component of the unmarked samples inside the border scoring at
+// least `grow` that holds a sample scoring at least `seed`, has at least `minSize` samples and
+// lies within kValleyReach samples (Euclidean) of a mark is marked. Returns (components taken,
+// samples added).
+std::pair<size_t, size_t> takeValleyLines(std::vector<uint8_t>& map, const ValleyScores& scores,
                                           int W, int H, int border, int minSize, double seed,
-                                          double grow, double gate) {
+                                          double grow) {
+    if (!scores.open || scores.z.size() != map.size()) return {0, 0};
     const size_t n = map.size();
     const std::vector<uint8_t> before = map;
-    const std::vector<float> v = valleyResponse(g, W, H);
+    const std::vector<float>& z = scores.z;
     const std::vector<double> toMark = squaredDistanceTo(before, W, H);
     const auto inside = [&](size_t i) {
         const int x = static_cast<int>(i % W), y = static_cast<int>(i / W);
         return x >= border && y >= border && x < W - border && y < H - border;
     };
-    std::vector<float> texture;
-    for (size_t i = 0; i < n; ++i)
-        if (inside(i) && toMark[i] > kValleyTextureMargin * kValleyTextureMargin)
-            texture.push_back(v[i]);
-    if (texture.size() < 64) return {0, 0};
-    std::vector<float> work = texture;
-    const auto [med, sigma] = robustScaleOf(work);
-    if (!(sigma > 0.0)) return {0, 0};
-    const auto score = [&](size_t i) { return (v[i] - med) / sigma; };
-    size_t high = 0;
-    for (const float t : texture) high += (t - med) / sigma >= seed ? 1 : 0;
-    if (static_cast<double>(high) > gate * static_cast<double>(texture.size())) return {0, 0};
     // the samples a valley may take, flooded a component at a time
     std::vector<uint8_t> low(n, 0);
-    for (size_t i = 0; i < n; ++i) low[i] = !before[i] && inside(i) && score(i) >= grow ? 1 : 0;
+    for (size_t i = 0; i < n; ++i) low[i] = !before[i] && inside(i) && z[i] >= grow ? 1 : 0;
     const double reach2 = static_cast<double>(kValleyReach) * kValleyReach;
     std::vector<uint8_t> seen(n, 0);
     std::vector<size_t> comp;
@@ -996,12 +1012,146 @@ std::pair<size_t, size_t> takeValleyLines(std::vector<uint8_t>& map, const std::
         if (!low[i0] || seen[i0]) continue;
         floodMark(low, i0, seen, comp, W, H);
         if (comp.size() < static_cast<size_t>(minSize) ||
-            std::none_of(comp.begin(), comp.end(), [&](size_t i) { return score(i) >= seed; }) ||
+            std::none_of(comp.begin(), comp.end(), [&](size_t i) { return z[i] >= seed; }) ||
             std::none_of(comp.begin(), comp.end(), [&](size_t i) { return toMark[i] <= reach2; }))
             continue;
         ++taken;
         for (const size_t i : comp) map[i] = 255;
         added += comp.size();
+    }
+    return {taken, added};
+}
+
+std::pair<size_t, size_t> takeValleyLines(std::vector<uint8_t>& map, const std::vector<float>& g,
+                                          int W, int H, int border, int minSize, double seed,
+                                          double grow, double gate) {
+    return takeValleyLines(map, scoreValleys(map, g, W, H, border, seed, gate), W, H, border,
+                           minSize, seed, grow);
+}
+
+// Step 8v (SelfSimMap.h) on the marks as they stand (`map`; samples added to it), the heights g
+// and step 8t's valley scores: the valley lines (the marked samples of the components of samples
+// inside the border scoring at least `grow` that hold one at `seed`), each 8-connected line of at
+// least kValleyRimLineMin samples with a band: the samples inside the border whose nearest
+// sample of the lines is one of its own, at most `reach` × its width away, and beyond it the
+// ground, kValleyRimGround samples further. Band and ground are cut into segments by the
+// kValleyRimCell cell of that nearest sample and the side (the signs of the offset from it); a
+// segment of at least kValleyRimSegmentMin band and ground samples whose heights stand above its
+// ground's median by a mean of at least `mean` × the ground's robust σ, at least `share` of them
+// above it, gives its unmarked samples above that median to the map. Returns (segments taken,
+// samples added).
+std::pair<size_t, size_t> takeValleyRims(std::vector<uint8_t>& map, const std::vector<float>& g,
+                                         const ValleyScores& scores, int W, int H, int border,
+                                         double seed, double grow, double mean, double share,
+                                         double reach) {
+    if (!scores.open || scores.z.size() != map.size() ||
+        map.size() > std::numeric_limits<uint32_t>::max())
+        return {0, 0};
+    const size_t n = map.size();
+    const std::vector<uint8_t> before = map;
+    const std::vector<float>& z = scores.z;
+    const auto inside = [&](size_t i) {
+        const int x = static_cast<int>(i % W), y = static_cast<int>(i / W);
+        return x >= border && y >= border && x < W - border && y < H - border;
+    };
+    // the valley lines: the marked samples of the seeded components
+    std::vector<uint8_t> low(n, 0), line(n, 0), seen(n, 0);
+    for (size_t i = 0; i < n; ++i) low[i] = inside(i) && z[i] >= grow ? 1 : 0;
+    std::vector<size_t> comp;
+    for (size_t i0 = 0; i0 < n; ++i0) {
+        if (!low[i0] || seen[i0]) continue;
+        floodMark(low, i0, seen, comp, W, H);
+        if (std::none_of(comp.begin(), comp.end(), [&](size_t i) { return z[i] >= seed; }))
+            continue;
+        for (const size_t i : comp)
+            if (before[i]) line[i] = 1;
+    }
+    // each line's reach (its width, 8g's), and every sample's nearest line sample within the
+    // largest reach and the ground beyond it
+    std::fill(seen.begin(), seen.end(), 0);
+    std::vector<int> lineOf(n, -1);
+    std::vector<double> reachOf;
+    double reachMax = 0.0;
+    for (size_t i0 = 0; i0 < n; ++i0) {
+        if (!line[i0] || seen[i0]) continue;
+        floodMark(line, i0, seen, comp, W, H);
+        const int id = static_cast<int>(reachOf.size());
+        for (const size_t i : comp) lineOf[i] = id;
+        const double rc =
+            comp.size() < kValleyRimLineMin ? -1.0 : reach * std::max(2.0, markWidth(comp, W));
+        reachOf.push_back(rc);
+        reachMax = std::max(reachMax, rc);
+    }
+    if (!(reachMax > 0.0)) return {0, 0};
+    constexpr float kInf = std::numeric_limits<float>::infinity();
+    std::vector<float> best(n, kInf);
+    std::vector<uint32_t> from(n, 0);
+    const double R = reachMax + kValleyRimGround;
+    const int Ri = static_cast<int>(std::ceil(R));
+    for (size_t p = 0; p < n; ++p) {
+        if (!line[p]) continue;
+        const int px = static_cast<int>(p % W), py = static_cast<int>(p / W);
+        for (int qy = std::max(0, py - Ri); qy <= std::min(H - 1, py + Ri); ++qy)
+            for (int qx = std::max(0, px - Ri); qx <= std::min(W - 1, px + Ri); ++qx) {
+                const size_t q = static_cast<size_t>(qy) * W + qx;
+                const int d2 = (qx - px) * (qx - px) + (qy - py) * (qy - py);
+                if (static_cast<double>(d2) > R * R || !(static_cast<float>(d2) < best[q]))
+                    continue;
+                best[q] = static_cast<float>(d2);
+                from[q] = static_cast<uint32_t>(p);
+            }
+    }
+    // band and ground samples by segment: (line, cell of the nearest line sample, side)
+    struct Segment {
+        std::vector<float> band, ground;
+        std::vector<size_t> bandAt;
+    };
+    std::unordered_map<uint64_t, Segment> segments;
+    for (size_t q = 0; q < n; ++q) {
+        if (line[q] || !(best[q] < kInf) || !inside(q)) continue;
+        const size_t p = from[q];
+        const double rc = reachOf[static_cast<size_t>(lineOf[p])];
+        if (rc < 0.0) continue;
+        const double d = std::sqrt(static_cast<double>(best[q]));
+        const bool inBand = d <= rc;
+        if (!inBand && d > rc + kValleyRimGround) continue;
+        const int px = static_cast<int>(p % W), py = static_cast<int>(p / W);
+        const int qx = static_cast<int>(q % W), qy = static_cast<int>(q / W);
+        const uint64_t side = static_cast<uint64_t>((qy > py) - (qy < py) + 1) * 3 +
+                              static_cast<uint64_t>((qx > px) - (qx < px) + 1);
+        const uint64_t key = (static_cast<uint64_t>(lineOf[p]) << 36) |
+                             (static_cast<uint64_t>(py / kValleyRimCell) << 20) |
+                             (static_cast<uint64_t>(px / kValleyRimCell) << 4) | side;
+        Segment& s = segments[key];
+        if (inBand) {
+            s.band.push_back(g[q]);
+            s.bandAt.push_back(q);
+        } else {
+            s.ground.push_back(g[q]);
+        }
+    }
+    size_t taken = 0, added = 0;
+    for (auto& [key, s] : segments) {
+        if (s.band.size() < kValleyRimSegmentMin || s.ground.size() < kValleyRimSegmentMin)
+            continue;
+        std::vector<float> work = s.ground;
+        const auto [groundMedian, groundSigma] = robustScaleOf(work);
+        if (!(groundSigma > 0.0)) continue;
+        double sum = 0.0;
+        size_t above = 0;
+        for (const float h : s.band) {
+            sum += h - groundMedian;
+            above += h > groundMedian ? 1 : 0;
+        }
+        const double count = static_cast<double>(s.band.size());
+        if (sum < mean * groundSigma * count || static_cast<double>(above) < share * count)
+            continue;
+        ++taken;
+        for (const size_t q : s.bandAt)
+            if (!before[q] && g[q] > groundMedian && !map[q]) {
+                map[q] = 255;
+                ++added;
+            }
     }
     return {taken, added};
 }
@@ -1261,6 +1411,14 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
         throw inputError(option("selfsim-rim-band-reach"), "must be > 0", "The default is 0.9");
     if (!(o.rimBandSegment > 0.0))
         throw inputError(option("selfsim-rim-band-segment"), "must be > 0", "The default is 2");
+    if (!(o.valleyRimMean >= 0.0))
+        throw inputError(option("selfsim-valley-rim-mean"), "must be >= 0",
+                         "The default is 0 (off; 0.5 measured)");
+    if (!(o.valleyRimShare >= 0.0 && o.valleyRimShare <= 1.0))
+        throw inputError(option("selfsim-valley-rim-share"), "must be in [0, 1]",
+                         "The default is 0.7");
+    if (!(o.valleyRimReach > 0.0))
+        throw inputError(option("selfsim-valley-rim-reach"), "must be > 0", "The default is 1");
     if (!(o.edgeRingSigma >= 0.0))
         throw inputError(option("selfsim-edge-ring-sigma"), "must be >= 0",
                          "The default is 1 (0: off)");
@@ -2219,10 +2377,11 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
         out.lineCopySamples = added;
     }
     // step 8t: a line the heights show as a valley beside a mark (before 8s takes its rims)
+    ValleyScores valleys;
     if (o.valleyLineSigma > 0.0 && !relief.relief) {
-        const auto [lines, added] =
-            takeValleyLines(out.map, g, W, H, b, o.minRegion, o.valleyLineSigma, o.valleyLineGrow,
-                            o.valleyLineGate);
+        valleys = scoreValleys(out.map, g, W, H, b, o.valleyLineSigma, o.valleyLineGate);
+        const auto [lines, added] = takeValleyLines(out.map, valleys, W, H, b, o.minRegion,
+                                                    o.valleyLineSigma, o.valleyLineGrow);
         out.valleyLines = lines;
         out.valleyLineSamples = added;
     }
@@ -2240,6 +2399,14 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                                                  o.edgeRingSigma, o.edgeRingShare, o.edgeRingCell);
         out.edgeRingCells = cells;
         out.edgeRingSamples = added;
+    }
+    // step 8v: the rims the heights show beside a valley line (step 8t's scores and gate)
+    if (o.valleyRimMean > 0.0 && o.valleyLineSigma > 0.0 && !relief.relief) {
+        const auto [segments, added] =
+            takeValleyRims(out.map, g, valleys, W, H, b, o.valleyLineSigma, o.valleyLineGrow,
+                           o.valleyRimMean, o.valleyRimShare, o.valleyRimReach);
+        out.valleyRims = segments;
+        out.valleyRimSamples = added;
     }
     return out;
 }

@@ -543,6 +543,30 @@
 //     Held out once on fresh 6101-6103 and 6201-6203 (60 runs; the rule to turn it on fixed
 //     before): 47 -> 50 of 60, none lost (docs/RESULTS.md, "The marks' edge, a cell at a time:
 //     step 8u"). `--selfsim-edge-ring-sigma 0` is the map before it.
+//  8v. The rims the heights show beside a valley line (valleyRimMean; off by default, since
+//     2026-11-29; after step 8u, with step 8t's scores and gate, not on a relief). Where a
+//     scratch runs along the Wyko part's arcs step 8t finds its groove in the heights, but r keeps
+//     nothing of its rims there, so step 8s (which judges them in r) leaves them: on the Wyko
+//     part's model-A runs the scratches along the arcs were found at 0.53-0.68 with both rims
+//     missed over most of their length. In the heights the rims stand above the ground beyond
+//     them. Each valley line (the marked samples of the components inside the border at
+//     valleyLineGrow or more that hold one at valleyLineSigma) of kValleyRimLineMin samples has a
+//     band, the samples whose nearest line sample is one of its own within valleyRimReach × its
+//     width (8g's), and a ground kValleyRimGround samples beyond the band; both are cut into
+//     segments by the kValleyRimCell cell of that nearest sample and the side (the signs of the
+//     offset). A segment of kValleyRimSegmentMin band and ground samples or more whose heights
+//     stand above the ground's median by a mean of valleyRimMean × the ground's robust σ, with
+//     valleyRimShare of them above it, gives its unmarked samples above that median to the map.
+//     Replayed in numpy on the Wyko part's seen runs 4701-5503 (48 runs, main's maps with 8u):
+//     41 -> 44 at target on a person's marks, none lost, model A's recall +0.02 to +0.13 (A 5103
+//     0.641 -> 0.771) at 0.00-0.02 of precision, model B unchanged (0-37 true samples a run);
+//     mean 0.3-1.0, share 0.6-0.8, cells of 12, ground 6: 44; reach 0.75 43, 1.5 42 with three
+//     lost. The binary (0.5) on DEV 101-105 (both models, the five files): 49 -> 49 of 50, 20 maps
+//     changed (the Wyko part and the periodic lines, whose gate is open too), model A's recall
+//     +0.02 to +0.07 on the Wyko part, +0.01 to +0.04 on the periodic lines, precision -0.00 to
+//     -0.04. Held out once on fresh 6301-6303 and 6401-6403 (the rule fixed before: on if a net
+//     gain): 59 -> 59 of 60, the Wyko part's model-A recall +0.02 to +0.06, so it stays off
+//     (docs/RESULTS.md, "The rims the heights show beside a valley line: step 8v").
 // Every threshold is relative to σ_s, so the map is invariant to h → a·h + b (a ≠ 0) up to
 // rounding; a constant map marks nothing. Cost: offsets × (2·refine + 1)² box-filtered
 // difference passes over the map, parallel over tiles (TBB); memory 2 × offsets + 6 float copies.
@@ -697,6 +721,13 @@ struct SelfSimMapOptions {
     double edgeRingShare = 0.5;        // ... is marked when at least this share of its cell's
                                        // ring samples are (in (0, 1]) ...
     int edgeRingCell = 8;              // ... the cells this many samples square (>= 1)
+    double valleyRimMean = 0.0;        // step 8v: beside step 8t's valley lines, a segment of
+                                       // the band whose heights stand this many robust σ of
+                                       // its ground above the ground's median (0: off, the
+                                       // default; 0.5 measured; with step 8t on) ...
+    double valleyRimShare = 0.7;       // ... at least this share of them above it (in [0, 1])
+                                       // ...
+    double valleyRimReach = 1.0;       // ... the band this × the line's width wide (> 0)
     int pileUpReach = 1;               // step 8e: a kept region mostly below the texture takes
                                        // the samples above it within this many samples (>= 0,
                                        // 0: off) ...
@@ -763,6 +794,13 @@ inline constexpr double kValleyTextureMargin = 6.0;
 inline constexpr int kValleyReach = 2;
 // Step 8u: a cell of the ring is judged on at least this many of its samples
 inline constexpr size_t kEdgeRingCellMin = 8;
+// Step 8v: a valley line of at least this many samples has a band; its ground lies this many
+// samples beyond the band; a segment is the band's and ground's samples whose nearest line sample
+// lies in one cell of this many samples square, on one side, judged on at least this many of each
+inline constexpr size_t kValleyRimLineMin = 20;
+inline constexpr double kValleyRimGround = 4.0;
+inline constexpr int kValleyRimCell = 8;
+inline constexpr size_t kValleyRimSegmentMin = 6;
 
 // Step 7 needs at least this many regions to measure the texture's tail on.
 inline constexpr size_t kTextureTailMinRegions = 32;
@@ -805,6 +843,8 @@ struct SelfSimMap {
     size_t rimBandSamples = 0;          // ... and the samples they added
     size_t edgeRingCells = 0;           // cells of the marks' ring step 8u took ...
     size_t edgeRingSamples = 0;         // ... and the samples they added
+    size_t valleyRims = 0;              // segments beside valley lines step 8v took ...
+    size_t valleyRimSamples = 0;        // ... and the samples they added
     size_t pileUp = 0;                  // samples step 8e added (the kept regions' pile-up)
     size_t grooveBanks = 0;             // samples step 8g added (the banks of marks below it)
     size_t grooveRims = 0;              // samples step 8o added (a groove's rims, lower)
@@ -831,6 +871,16 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
 /// at the edges) less the heights: a straight valley's depth below its sides.
 std::vector<float> valleyResponse(const std::vector<float>& g, int width, int height);
 
+/// Steps 8t and 8v: the valley response of the levelled heights in robust σ of the texture (the
+/// samples inside the border farther than kValleyTextureMargin from every mark), and whether the
+/// gate is open (at most `gate` of the texture reaching `seed`); z empty when there is no texture.
+struct ValleyScores {
+    std::vector<float> z;
+    bool open = false;
+};
+ValleyScores scoreValleys(const std::vector<uint8_t>& map, const std::vector<float>& g, int width,
+                          int height, int border, double seed, double gate);
+
 /// Step 8t on the marks as they stand (`map`, 255 marked; samples added to it): the valley
 /// response in robust σ of the texture (the samples inside `border` farther than
 /// kValleyTextureMargin from every mark); when at most `gate` of the texture reaches `seed`, each
@@ -840,6 +890,24 @@ std::vector<float> valleyResponse(const std::vector<float>& g, int width, int he
 std::pair<size_t, size_t> takeValleyLines(std::vector<uint8_t>& map, const std::vector<float>& g,
                                           int width, int height, int border, int minSize,
                                           double seed, double grow, double gate);
+/// ... the same on valley scores already computed (scoreValleys).
+std::pair<size_t, size_t> takeValleyLines(std::vector<uint8_t>& map, const ValleyScores& scores,
+                                          int width, int height, int border, int minSize,
+                                          double seed, double grow);
+
+/// Step 8v on the marks as they stand (`map`; samples added to it), the levelled heights g and
+/// step 8t's valley scores (nothing when its gate is shut): the valley lines (the marked samples
+/// of the components inside `border` scoring at least `grow` that hold one at `seed`) of at least
+/// kValleyRimLineMin samples each have a band, the samples whose nearest line sample is one of
+/// theirs within `reach` × the line's width (8g's), and its ground kValleyRimGround samples
+/// beyond. Cut into segments by the kValleyRimCell cell of that nearest sample and the side, a
+/// segment whose band stands above its ground's median by a mean of at least `mean` × the
+/// ground's robust σ, at least `share` of its samples above it, gives its unmarked samples above
+/// that median to the map. Returns (segments taken, samples added).
+std::pair<size_t, size_t> takeValleyRims(std::vector<uint8_t>& map, const std::vector<float>& g,
+                                         const ValleyScores& scores, int width, int height,
+                                         int border, double seed, double grow, double mean,
+                                         double share, double reach);
 
 /// Step 8u on the marks as they stand (`map`, 255 marked; samples added to it) and the residual
 /// r over its robust σ_0 (`sigma`): the ring, the samples inside `border` not marked with a
