@@ -79,32 +79,30 @@ int runDefectMap(const DefectMapJobOptions& o) {
     if (m.method == DefectMethod::SelfSim && m.selfsimFarBanks > 0)
         std::printf("  %zu raised lines beside grooves kept as their banks: %zu samples\n",
                     m.selfsimFarBanks, m.selfsimFarBankSamples);
-    if (m.method == DefectMethod::SelfSim && m.selfsimLayLines > 0)
-        std::printf(
-            "  %zu marks along the texture's lay judged again without the copies on "
-            "them: %zu samples added\n",
-            m.selfsimLayLines, m.selfsimLayLineSamples);
-    if (m.method == DefectMethod::SelfSim && m.selfsimLineCopyLines > 0)
-        std::printf(
-            "  %zu lines along the lay judged on copies chosen for them: %zu samples "
-            "added\n",
-            m.selfsimLineCopyLines, m.selfsimLineCopySamples);
-    if (m.method == DefectMethod::SelfSim && m.selfsimValleyLines > 0)
-        std::printf("  %zu valleys of the heights beside marks: %zu samples added\n",
-                    m.selfsimValleyLines, m.selfsimValleyLineSamples);
-    if (m.method == DefectMethod::SelfSim && m.selfsimRimBands > 0)
-        std::printf("  %zu segments of grooves' rims judged along them: %zu samples added\n",
-                    m.selfsimRimBands, m.selfsimRimBandSamples);
-    if (m.method == DefectMethod::SelfSim && m.selfsimEdgeRingCells > 0)
-        std::printf(
-            "  %zu cells of the marks' edge taken where it keeps their sign: %zu samples "
-            "added\n",
-            m.selfsimEdgeRingCells, m.selfsimEdgeRingSamples);
-    if (m.method == DefectMethod::SelfSim && m.selfsimValleyRims > 0)
-        std::printf(
-            "  %zu segments of rims the heights show beside valley lines: %zu samples "
-            "added\n",
-            m.selfsimValleyRims, m.selfsimValleyRimSamples);
+    if (m.method == DefectMethod::SelfSim) {
+        // the steps that add samples to marks (8l, 8r, 8t, 8s, 8u, 8v), in the order they run
+        struct Added {
+            size_t count, samples;
+            const char* what;
+        };
+        const Added added[] = {
+            {m.selfsimLayLines, m.selfsimLayLineSamples,
+             "marks along the texture's lay judged again without the copies on them"},
+            {m.selfsimLineCopyLines, m.selfsimLineCopySamples,
+             "lines along the lay judged on copies chosen for them"},
+            {m.selfsimValleyLines, m.selfsimValleyLineSamples,
+             "valleys of the heights beside marks"},
+            {m.selfsimRimBands, m.selfsimRimBandSamples,
+             "segments of grooves' rims judged along them"},
+            {m.selfsimEdgeRingCells, m.selfsimEdgeRingSamples,
+             "cells of the marks' edge taken where it keeps their sign"},
+            {m.selfsimValleyRims, m.selfsimValleyRimSamples,
+             "segments of rims the heights show beside valley lines"},
+        };
+        for (const Added& a : added)
+            if (a.count > 0)
+                std::printf("  %zu %s: %zu samples added\n", a.count, a.what, a.samples);
+    }
     if (m.method == DefectMethod::SelfSim && m.selfsimReliefLevels > 0)
         std::printf("  a relief: its %zu plateau levels taken out before the copies\n",
                     m.selfsimReliefLevels);
