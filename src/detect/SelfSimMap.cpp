@@ -778,6 +778,34 @@ std::pair<size_t, size_t> takeLineCopies(std::vector<uint8_t>& map, const std::v
     return {lines, added};
 }
 
+// Every sample's nearest sample of `source` within `reach` samples (Euclidean; of two as near, the
+// one first in the map's order), by a scan of the box about each source sample (steps 8s and 8v;
+// a map of fewer than 2^32 samples): its squared distance (infinite beyond the reach) and index.
+struct NearestWithin {
+    std::vector<float> d2;
+    std::vector<uint32_t> from;
+};
+NearestWithin nearestWithin(const std::vector<uint8_t>& source, int W, int H, double reach) {
+    const size_t n = source.size();
+    NearestWithin out{std::vector<float>(n, std::numeric_limits<float>::infinity()),
+                      std::vector<uint32_t>(n, 0)};
+    const int R = static_cast<int>(std::ceil(reach));
+    const double R2 = reach * reach;
+    for (size_t p = 0; p < n; ++p) {
+        if (!source[p]) continue;
+        const int px = static_cast<int>(p % W), py = static_cast<int>(p / W);
+        for (int qy = std::max(0, py - R); qy <= std::min(H - 1, py + R); ++qy)
+            for (int qx = std::max(0, px - R); qx <= std::min(W - 1, px + R); ++qx) {
+                const size_t q = static_cast<size_t>(qy) * W + qx;
+                const int d2 = (qx - px) * (qx - px) + (qy - py) * (qy - py);
+                if (d2 > R2 || !(static_cast<float>(d2) < out.d2[q])) continue;
+                out.d2[q] = static_cast<float>(d2);
+                out.from[q] = static_cast<uint32_t>(p);
+            }
+    }
+    return out;
+}
+
 // Step 8s (SelfSimMap.h) on the marks as they stand (`map`; samples added to it): each mark
 // (8-connected) of at least kRimBandMarkMin samples that lies below the texture (at least
 // kRimBandGrooveShare of its Σ|r| negative) and is a line (its samples at least kRimBandLength ×
@@ -841,25 +869,10 @@ std::pair<size_t, size_t> takeRimBands(std::vector<uint8_t>& map, const std::vec
         reachMax = std::max(reachMax, rc);
     }
     if (!(reachMax > 0.0)) return {0, 0};
-    // each unmarked sample's nearest core sample within the largest reach
-    constexpr float kInf = std::numeric_limits<float>::infinity();
-    std::vector<float> best(n, kInf);
-    std::vector<uint32_t> from(n, 0);
-    const int R = static_cast<int>(std::ceil(reachMax));
-    const double R2 = reachMax * reachMax;
-    for (size_t p = 0; p < n; ++p) {
-        if (notCore[p]) continue;
-        const int px = static_cast<int>(p % W), py = static_cast<int>(p / W);
-        for (int qy = std::max(0, py - R); qy <= std::min(H - 1, py + R); ++qy)
-            for (int qx = std::max(0, px - R); qx <= std::min(W - 1, px + R); ++qx) {
-                const size_t q = static_cast<size_t>(qy) * W + qx;
-                if (before[q]) continue;
-                const int d2 = (qx - px) * (qx - px) + (qy - py) * (qy - py);
-                if (d2 > R2 || !(static_cast<float>(d2) < best[q])) continue;
-                best[q] = static_cast<float>(d2);
-                from[q] = static_cast<uint32_t>(p);
-            }
-    }
+    // each sample's nearest core sample within the largest reach
+    std::vector<uint8_t> core(n);
+    for (size_t i = 0; i < n; ++i) core[i] = notCore[i] ? 0 : 1;
+    const auto [best, from] = nearestWithin(core, W, H, reachMax);
     // the band's samples, their segment (mark, cell of the nearest core sample) and its tally
     struct Tally {
         size_t count = 0, raised = 0;
@@ -868,7 +881,7 @@ std::pair<size_t, size_t> takeRimBands(std::vector<uint8_t>& map, const std::vec
     std::unordered_map<uint64_t, Tally> tallies;
     std::vector<std::pair<size_t, uint64_t>> band;  // a sample and its segment
     for (size_t q = 0; q < n; ++q) {
-        if (!(best[q] < kInf)) continue;
+        if (before[q] || !std::isfinite(best[q])) continue;
         const int qx = static_cast<int>(q % W), qy = static_cast<int>(q / W);
         if (qx < border || qy < border || qx >= W - border || qy >= H - border) continue;
         const size_t p = from[q];
@@ -1083,24 +1096,7 @@ std::pair<size_t, size_t> takeValleyRims(std::vector<uint8_t>& map, const std::v
         reachMax = std::max(reachMax, rc);
     }
     if (!(reachMax > 0.0)) return {0, 0};
-    constexpr float kInf = std::numeric_limits<float>::infinity();
-    std::vector<float> best(n, kInf);
-    std::vector<uint32_t> from(n, 0);
-    const double R = reachMax + kValleyRimGround;
-    const int Ri = static_cast<int>(std::ceil(R));
-    for (size_t p = 0; p < n; ++p) {
-        if (!line[p]) continue;
-        const int px = static_cast<int>(p % W), py = static_cast<int>(p / W);
-        for (int qy = std::max(0, py - Ri); qy <= std::min(H - 1, py + Ri); ++qy)
-            for (int qx = std::max(0, px - Ri); qx <= std::min(W - 1, px + Ri); ++qx) {
-                const size_t q = static_cast<size_t>(qy) * W + qx;
-                const int d2 = (qx - px) * (qx - px) + (qy - py) * (qy - py);
-                if (static_cast<double>(d2) > R * R || !(static_cast<float>(d2) < best[q]))
-                    continue;
-                best[q] = static_cast<float>(d2);
-                from[q] = static_cast<uint32_t>(p);
-            }
-    }
+    const auto [best, from] = nearestWithin(line, W, H, reachMax + kValleyRimGround);
     // band and ground samples by segment: (line, cell of the nearest line sample, side)
     struct Segment {
         std::vector<float> band, ground;
@@ -1108,7 +1104,7 @@ std::pair<size_t, size_t> takeValleyRims(std::vector<uint8_t>& map, const std::v
     };
     std::unordered_map<uint64_t, Segment> segments;
     for (size_t q = 0; q < n; ++q) {
-        if (line[q] || !(best[q] < kInf) || !inside(q)) continue;
+        if (line[q] || !std::isfinite(best[q]) || !inside(q)) continue;
         const size_t p = from[q];
         const double rc = reachOf[static_cast<size_t>(lineOf[p])];
         if (rc < 0.0) continue;
@@ -1134,8 +1130,7 @@ std::pair<size_t, size_t> takeValleyRims(std::vector<uint8_t>& map, const std::v
     for (auto& [key, s] : segments) {
         if (s.band.size() < kValleyRimSegmentMin || s.ground.size() < kValleyRimSegmentMin)
             continue;
-        std::vector<float> work = s.ground;
-        const auto [groundMedian, groundSigma] = robustScaleOf(work);
+        const auto [groundMedian, groundSigma] = robustScaleOf(s.ground);  // (s.ground spent)
         if (!(groundSigma > 0.0)) continue;
         double sum = 0.0;
         size_t above = 0;
