@@ -3,6 +3,10 @@
 //                        [tuning ...]
 // Parses the options and prints the result; the work is app/jobs/DefectMapJob.h and
 // detect/DefectMap.h.
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 
@@ -14,12 +18,51 @@ namespace sl::cli {
 
 namespace {
 
+// The border the method that ran never marks, and the option that sets it (none for paper).
+struct BorderInForce {
+    int samples = 0;
+    const char* flag = nullptr;
+};
+
+BorderInForce borderInForce(const DefectMapOptions& o, const DefectMap& m) {
+    if (m.measuredTexture || m.method == DefectMethod::SelfSim)
+        return {o.selfsim.border, "--selfsim-border"};
+    if (m.method == DefectMethod::Lay) return {o.lay.border, "--lay-border"};
+    if (m.method == DefectMethod::Auto) return {o.border, "--border"};
+    return {};
+}
+
+// a border taking at least this share of the map is warned about
+constexpr double kBorderShareWarn = 0.5;
+
+// the border b that leaves half of a width×height map inside it: (w − 2b)(h − 2b) = w·h/2
+int halfMapBorder(int width, int height) {
+    const double s = static_cast<double>(width) + height, p = static_cast<double>(width) * height;
+    return static_cast<int>(std::floor((s - std::sqrt(s * s - 2.0 * p)) / 4.0));
+}
+
+// A map so small that its border (never marked) takes most of it: say so, and how to mend it.
+void warnSmallMap(const DefectMapOptions& o, const DefectMap& m, int width, int height) {
+    const BorderInForce b = borderInForce(o, m);
+    if (!b.flag || b.samples <= 0) return;
+    const double inner = std::max(0, width - 2 * b.samples) * std::max(0, height - 2 * b.samples);
+    const double share = 1.0 - inner / (static_cast<double>(width) * height);
+    if (share < kBorderShareWarn) return;
+    spdlog::warn(
+        "the border of {} samples at the map's edges, never marked, is {:.0f}% of this {}x{} "
+        "map: a defect within {} samples of an edge is not marked. For a map this small give a "
+        "smaller {} (about {} keeps half of the map; the default was measured on maps of 256 "
+        "to 1588 samples a side)",
+        b.samples, 100.0 * share, width, height, b.samples, b.flag, halfMapBorder(width, height));
+}
+
 int runDefectMap(const DefectMapJobOptions& o) {
     const DefectMapJobSummary s = runDefectMapJob(o);
     const DefectMap& m = s.map;
     std::printf("defect map (%s) of %dx%d samples: %zu marked (%.2f%% of the map), %.3f s\n",
                 defectMethodName(m.method), s.width, s.height, m.markedCount(),
                 100.0 * m.markedFraction(), m.seconds);
+    warnSmallMap(o.map, m, s.width, s.height);
     if (m.measuredTexture)
         std::printf(
             "  auto on a measured texture (an instrument's height map, or the scene's "
