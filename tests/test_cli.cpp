@@ -405,7 +405,7 @@ TEST_F(CliTest, RenderChecksItsOutputsAndSaysWhenItIsBlack) {
 }
 
 // Issue 30: on a map so small that the border (never marked) is most of it, defectmap says so,
-// names the option of the method that ran and the border that leaves half of the map:
+// names the option of the method that ran and the border that would leave half of the map:
 // (w - 2b)(h - 2b) >= w h / 2 at b = 7 for 60 x 50 (46 x 36 = 1656 >= 1500), not at 8.
 TEST_F(CliTest, DefectMapWarnsWhenItsBorderIsMostOfTheMap) {
     std::string sdf =
@@ -419,15 +419,14 @@ TEST_F(CliTest, DefectMapWarnsWhenItsBorderIsMostOfTheMap) {
     auto r = runCli("defectmap " + f.string() + " -o " + (dir / "m.png").string());
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("the border of 40 samples"), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find("give a smaller --selfsim-border (about 7 keeps half"),
-              std::string::npos)
+    EXPECT_NE(r.output.find("--selfsim-border sets the border (7 keeps half"), std::string::npos)
         << r.output;
     r = runCli("defectmap " + f.string() + " --selfsim-border 7 -o " + (dir / "m.png").string());
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_EQ(r.output.find("the border of"), std::string::npos) << r.output;
     r = runCli("defectmap " + f.string() + " --method lay -o " + (dir / "m.png").string());
     ASSERT_EQ(r.exitCode, 0) << r.output;
-    EXPECT_NE(r.output.find("give a smaller --lay-border"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("--lay-border sets the border"), std::string::npos) << r.output;
 }
 
 // Issue 35 (second pass): defectmap wrote its map, then found a directory where the score CSV

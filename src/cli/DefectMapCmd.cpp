@@ -41,7 +41,10 @@ int halfMapBorder(int width, int height) {
     return static_cast<int>(std::floor((s - std::sqrt(s * s - 2.0 * p)) / 4.0));
 }
 
-// A map so small that its border (never marked) takes most of it: say so, and how to mend it.
+// A map so small that its border (never marked) takes most of it: say so, and which option sets
+// the border (a smaller one was measured on one small map, the Sensofar land at 2x2 means, 459 x
+// 128: 27 and 20 found no more than 40; docs/RESULTS.md, "The map on the five textures turned
+// and resampled").
 void warnSmallMap(const DefectMapOptions& o, const DefectMap& m, int width, int height) {
     const BorderInForce b = borderInForce(o, m);
     if (!b.flag || b.samples <= 0) return;
@@ -50,9 +53,9 @@ void warnSmallMap(const DefectMapOptions& o, const DefectMap& m, int width, int 
     if (share < kBorderShareWarn) return;
     spdlog::warn(
         "the border of {} samples at the map's edges, never marked, is {:.0f}% of this {}x{} "
-        "map: a defect within {} samples of an edge is not marked. For a map this small give a "
-        "smaller {} (about {} keeps half of the map; the default was measured on maps of 256 "
-        "to 1588 samples a side)",
+        "map: a defect within {} samples of an edge is not marked. {} sets the border ({} keeps "
+        "half of the map), but a smaller border is not known to find more: the maps were tuned "
+        "at the default on maps of 256 samples a side or more",
         b.samples, 100.0 * share, width, height, b.samples, b.flag, halfMapBorder(width, height));
 }
 
