@@ -27,6 +27,15 @@ inline int clampi(int v, int lo, int hi) {
     return v < lo ? lo : (v > hi ? hi : v);
 }
 
+// Whether sample (x, y) of a W×H map lies inside its border of `border` samples (the samples the
+// map never marks), and the same for the sample at index i (row-major).
+inline bool insideBorder(int x, int y, int W, int H, int border) {
+    return x >= border && y >= border && x < W - border && y < H - border;
+}
+inline bool insideBorder(size_t i, int W, int H, int border) {
+    return insideBorder(static_cast<int>(i % W), static_cast<int>(i / W), W, H, border);
+}
+
 double medianOf(std::vector<float>& v) {
     if (v.empty()) return 0.0;
     const size_t m = v.size() / 2;
@@ -348,9 +357,7 @@ size_t takeGrooveBanks(std::span<const size_t> mark, const std::vector<uint8_t>&
                        const std::vector<float>& zGrow, int W, int H, int border, double grow,
                        double share, double widthShare, double length, double raisedShare = 0.0) {
     size_t added = 0;
-    const auto inside = [&](int x, int y) {
-        return x >= border && y >= border && x < W - border && y < H - border;
-    };
+    const auto inside = [&](int x, int y) { return insideBorder(x, y, W, H, border); };
     const auto bank = [&](size_t q) {
         return !before[q] && r[q] > 0.0f && zGrow[q] >= static_cast<float>(grow) &&
                inside(static_cast<int>(q % W), static_cast<int>(q / W));
@@ -527,9 +534,7 @@ std::pair<size_t, size_t> takeLayLines(std::vector<uint8_t>& map, const std::vec
                                        double kept, int reach, double sigma, LayAt&& layAt) {
     const size_t n = map.size();
     const std::vector<uint8_t> before = map;
-    const auto inside = [&](int x, int y) {
-        return x >= border && y >= border && x < W - border && y < H - border;
-    };
+    const auto inside = [&](int x, int y) { return insideBorder(x, y, W, H, border); };
     std::vector<uint8_t> seen(n, 0);
     std::vector<size_t> band(n, n);  // the mark (its first sample) whose reach holds the sample
     std::vector<size_t> mark, front;
@@ -605,9 +610,7 @@ std::pair<size_t, size_t> takeLineCopies(std::vector<uint8_t>& map, const std::v
                 for (int qx = std::max(0, x - 2); qx <= std::min(W - 1, x + 2); ++qx)
                     nearMark[static_cast<size_t>(qy) * W + qx] = 1;
         }
-    const auto inside = [&](int x, int y) {
-        return x >= border && y >= border && x < W - border && y < H - border;
-    };
+    const auto inside = [&](int x, int y) { return insideBorder(x, y, W, H, border); };
     const int pr = patch / 2;
     // the copy of sample (x, y) at offset (dx0, dz0) refined within ± refine: the value at the
     // least patch difference (the patch clipped at the map's edges); NaN when the offset's
@@ -881,9 +884,7 @@ std::pair<size_t, size_t> takeRimBands(std::vector<uint8_t>& map, const std::vec
     std::unordered_map<uint64_t, Tally> tallies;
     std::vector<std::pair<size_t, uint64_t>> band;  // a sample and its segment
     for (size_t q = 0; q < n; ++q) {
-        if (before[q] || !std::isfinite(best[q])) continue;
-        const int qx = static_cast<int>(q % W), qy = static_cast<int>(q / W);
-        if (qx < border || qy < border || qx >= W - border || qy >= H - border) continue;
+        if (before[q] || !std::isfinite(best[q]) || !insideBorder(q, W, H, border)) continue;
         const size_t p = from[q];
         const Groove& gr = grooves[static_cast<size_t>(markOf[p])];
         if (gr.reach2 < 0.0 || static_cast<double>(best[q]) > gr.reach2) continue;
@@ -979,12 +980,10 @@ ValleyScores scoreValleys(const std::vector<uint8_t>& map, const std::vector<flo
     const std::vector<float> v = valleyResponse(g, W, H);
     const std::vector<double> toMark = squaredDistanceTo(map, W, H);
     std::vector<float> texture;
-    for (size_t i = 0; i < n; ++i) {
-        const int x = static_cast<int>(i % W), y = static_cast<int>(i / W);
-        if (x >= border && y >= border && x < W - border && y < H - border &&
+    for (size_t i = 0; i < n; ++i)
+        if (insideBorder(i, W, H, border) &&
             toMark[i] > kValleyTextureMargin * kValleyTextureMargin)
             texture.push_back(v[i]);
-    }
     if (texture.size() < 64) return out;
     std::vector<float> work = texture;
     const auto [med, sigma] = robustScaleOf(work);
@@ -1010,10 +1009,7 @@ std::pair<size_t, size_t> takeValleyLines(std::vector<uint8_t>& map, const Valle
     const std::vector<uint8_t> before = map;
     const std::vector<float>& z = scores.z;
     const std::vector<double> toMark = squaredDistanceTo(before, W, H);
-    const auto inside = [&](size_t i) {
-        const int x = static_cast<int>(i % W), y = static_cast<int>(i / W);
-        return x >= border && y >= border && x < W - border && y < H - border;
-    };
+    const auto inside = [&](size_t i) { return insideBorder(i, W, H, border); };
     // the samples a valley may take, flooded a component at a time
     std::vector<uint8_t> low(n, 0);
     for (size_t i = 0; i < n; ++i) low[i] = !before[i] && inside(i) && z[i] >= grow ? 1 : 0;
@@ -1063,10 +1059,7 @@ std::pair<size_t, size_t> takeValleyRims(std::vector<uint8_t>& map, const std::v
     const size_t n = map.size();
     const std::vector<uint8_t> before = map;
     const std::vector<float>& z = scores.z;
-    const auto inside = [&](size_t i) {
-        const int x = static_cast<int>(i % W), y = static_cast<int>(i / W);
-        return x >= border && y >= border && x < W - border && y < H - border;
-    };
+    const auto inside = [&](size_t i) { return insideBorder(i, W, H, border); };
     // the valley lines: the marked samples of the seeded components
     std::vector<uint8_t> low(n, 0), line(n, 0), seen(n, 0);
     for (size_t i = 0; i < n; ++i) low[i] = inside(i) && z[i] >= grow ? 1 : 0;
@@ -1652,7 +1645,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     throwIfInterrupted();
 
     // ---- step 5: detection in noise at several scales -------------------------------------
-    auto inside = [&](int x, int y) { return x >= b && y >= b && x < W - b && y < H - b; };
+    auto inside = [&](int x, int y) { return insideBorder(x, y, W, H, b); };
     size_t interior = 0;
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) interior += inside(x, y) ? 1 : 0;
