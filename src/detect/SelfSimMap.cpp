@@ -1057,7 +1057,6 @@ std::pair<size_t, size_t> takeValleyRims(std::vector<uint8_t>& map, const std::v
         map.size() > std::numeric_limits<uint32_t>::max())
         return {0, 0};
     const size_t n = map.size();
-    const std::vector<uint8_t> before = map;
     const std::vector<float>& z = scores.z;
     const auto inside = [&](size_t i) { return insideBorder(i, W, H, border); };
     // the valley lines: the marked samples of the seeded components
@@ -1070,7 +1069,7 @@ std::pair<size_t, size_t> takeValleyRims(std::vector<uint8_t>& map, const std::v
         if (std::none_of(comp.begin(), comp.end(), [&](size_t i) { return z[i] >= seed; }))
             continue;
         for (const size_t i : comp)
-            if (before[i]) line[i] = 1;
+            if (map[i]) line[i] = 1;
     }
     // each line's reach (its width, 8g's), and every sample's nearest line sample within the
     // largest reach and the ground beyond it
@@ -1136,7 +1135,7 @@ std::pair<size_t, size_t> takeValleyRims(std::vector<uint8_t>& map, const std::v
             continue;
         ++taken;
         for (const size_t q : s.bandAt)
-            if (!before[q] && g[q] > groundMedian && !map[q]) {
+            if (!map[q] && g[q] > groundMedian) {  // each band sample is in one segment
                 map[q] = 255;
                 ++added;
             }
