@@ -1148,20 +1148,19 @@ std::pair<size_t, size_t> takeEdgeRing(std::vector<uint8_t>& map, const std::vec
                                        double sigma, int W, int H, int border, double score,
                                        double share, int cell) {
     if (!(sigma > 0.0) || cell < 1) return {0, 0};
-    const std::vector<uint8_t> before = map;
     const int cx = (W + cell - 1) / cell, cy = (H + cell - 1) / cell;
     std::vector<size_t> ring(static_cast<size_t>(cx) * cy, 0), hits(ring.size(), 0);
-    std::vector<size_t> hit;  // the ring's hits, in order
+    std::vector<size_t> hit;  // the ring's hits, in order (the map changes only after the scan)
     const auto cellOf = [&](int x, int y) { return static_cast<size_t>(y / cell) * cx + x / cell; };
     for (int y = border; y < H - border; ++y)
         for (int x = border; x < W - border; ++x) {
             const size_t i = static_cast<size_t>(y) * W + x;
-            if (before[i]) continue;
+            if (map[i]) continue;
             // the sum of its marked 4-neighbours' r (none: not on the ring)
             double around = 0.0;
             bool onRing = false;
             const auto add = [&](size_t q) {
-                if (!before[q]) return;
+                if (!map[q]) return;
                 onRing = true;
                 around += r[q];
             };
