@@ -429,6 +429,43 @@ TEST_F(CliTest, DefectMapWarnsWhenItsBorderIsMostOfTheMap) {
     EXPECT_NE(r.output.find("--lay-border sets the border"), std::string::npos) << r.output;
 }
 
+// defectmap writes where the map could not judge beside the map (or at --unjudged-output) when
+// the method in force records it: on a measured file (an SDF), not on gen-surface's part.
+TEST_F(CliTest, DefectMapWritesWhereItCouldNotJudgeOnAMeasuredFile) {
+    std::string sdf =
+        "aBCR-1.0\nManufacID = test\nNumPoints = 120\nNumProfiles = 100\nXscale = 1e-6\n"
+        "Yscale = 1e-6\nZscale = 1e-6\nDataType = 7\n*\n";
+    for (int y = 0; y < 100; ++y)
+        for (int x = 0; x < 120; ++x) sdf += std::to_string((x * 7 + y * 13) % 11 - 5) + " ";
+    sdf += "\n*\n";
+    const std::filesystem::path f = dir / "part.sdf";
+    test::writeText(f, sdf);
+    auto r =
+        runCli("defectmap " + f.string() + " --selfsim-border 10 -o " + (dir / "m.png").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("not judged:"), std::string::npos) << r.output;
+    EXPECT_TRUE(std::filesystem::exists(dir / "m-unjudged.png")) << r.output;
+    const Image u = readImage(dir / "m-unjudged.png");
+    ASSERT_EQ(u.width, 120);
+    ASSERT_EQ(u.height, 100);
+    EXPECT_NEAR(u.at(0, 0), 128.0f / 255.0f, 1e-6f) << "the border";
+    EXPECT_NEAR(u.at(60, 50), 0.0f, 1e-6f) << "judged: the texture repeats there";
+    r = runCli("defectmap " + f.string() + " --selfsim-border 10 -o " + (dir / "n.png").string() +
+               " --unjudged-output " + (dir / "where.png").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_TRUE(std::filesystem::exists(dir / "where.png"));
+    EXPECT_FALSE(std::filesystem::exists(dir / "n-unjudged.png"));
+    r = runCli("defectmap " + f.string() + " --unjudged-output " + (dir / "where.txt").string());
+    EXPECT_NE(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("--unjudged-output"), std::string::npos) << r.output;
+    const std::string g = (dir / "g.exr").string();
+    ASSERT_EQ(runCli("gen-surface -o " + g + " --width 64 --height 64").exitCode, 0);
+    r = runCli("defectmap " + g + " -o " + (dir / "g-map.png").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_EQ(r.output.find("not judged:"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "g-map-unjudged.png"));
+}
+
 // Issue 35 (second pass): defectmap wrote its map, then found a directory where the score CSV
 // goes and failed with the map left behind; `defectmap -o` replaced its own truth and
 // `--score-output` its height map, `scratchmap -o` a PNG height map it read (exit 0). Their

@@ -270,6 +270,75 @@ TEST(SelfSimMap, AutoOnAMeasuredTextureIsTheSelfSimMap) {
     EXPECT_NE(machined.map, m.map);
 }
 
+// What the map could not judge (SelfSimMap::unjudged, DefectMap::unjudged). A raised ridge
+// across the whole map stands out of the striations but reaches the border's line: it is never
+// marked, and its samples are the unjudged ones (none marked, none in the border); the pit on
+// its flank is marked and judged. On striations with a pit and a groove off the border nothing
+// is unjudged. DefectMap's copy adds the border (kUnjudgedBorder, exactly the samples outside
+// it); auto on a machined part records none.
+TEST(SelfSimMap, WhatReachesTheBorderUnmarkedIsUnjudgedTheRestIsJudged) {
+    auto [h, ridge, pitTruth] = ridgeAndPit();
+    for (size_t i = 0; i < h.size(); ++i) ridge[i] = ridge[i] && !pitTruth[i];
+    const SelfSimMapOptions o;
+    const SelfSimMap m = detectSelfSimDefects(h, kW, kH, o);
+    ASSERT_EQ(m.unjudged.size(), h.size());
+    EXPECT_EQ(m.border, o.border);
+    EXPECT_GE(m.unjudgedRegions, 1u);
+    size_t both = 0, outside = 0, onRidge = 0, ridgeInside = 0;
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            const bool inside =
+                x >= o.border && y >= o.border && x < kW - o.border && y < kH - o.border;
+            both += m.unjudged[i] && m.map[i];
+            outside += m.unjudged[i] && !inside;
+            ridgeInside += ridge[i] && inside;
+            onRidge += ridge[i] && inside && m.unjudged[i];
+        }
+    EXPECT_EQ(both, 0u) << "a sample both marked and unjudged";
+    EXPECT_EQ(outside, 0u) << "an unjudged sample in the border (DefectMap's value for it)";
+    EXPECT_GE(onRidge, ridgeInside * 8 / 10) << onRidge << " of the ridge's " << ridgeInside;
+    const Counts p = count(m.map, pitTruth, o.border), u = count(m.unjudged, pitTruth, o.border);
+    EXPECT_GE(p.hits, p.truth / 2) << "the pit";
+    EXPECT_LE(u.hits, p.truth / 10) << "the pit's samples unjudged";
+
+    std::vector<float> clear = striations(3);
+    std::vector<uint8_t> t(clear.size(), 0);
+    pit(clear, t, 95, 80, 6, 1.0);
+    groove(clear, t, 70, 150, 190, 135, 4, 0.8);
+    const SelfSimMap judged = detectSelfSimDefects(clear, kW, kH, o);
+    EXPECT_EQ(judged.unjudgedRegions, 0u);
+    EXPECT_EQ(std::count(judged.unjudged.begin(), judged.unjudged.end(), 0), kW * kH);
+
+    DefectMapOptions measured;
+    measured.measured = true;
+    EXPECT_EQ(methodInForce(measured), DefectMethod::SelfSim);
+    const DefectMap d = detectDefects(h, kW, kH, measured);
+    ASSERT_EQ(d.unjudged.size(), h.size());
+    EXPECT_EQ(d.unjudgedRegions, m.unjudgedRegions);
+    EXPECT_EQ(d.unjudgedCount(),
+              static_cast<size_t>(std::count(m.unjudged.begin(), m.unjudged.end(), 255)));
+    size_t border = 0, wrong = 0;
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            const bool inside =
+                x >= o.border && y >= o.border && x < kW - o.border && y < kH - o.border;
+            border += !inside;
+            const uint8_t want = !inside         ? kUnjudgedBorder
+                                 : m.unjudged[i] ? kUnjudgedRegion
+                                                 : kJudged;
+            wrong += d.unjudged[i] != want;
+        }
+    EXPECT_EQ(wrong, 0u);
+    EXPECT_EQ(
+        static_cast<size_t>(std::count(d.unjudged.begin(), d.unjudged.end(), kUnjudgedBorder)),
+        border);
+    DefectMapOptions machined;
+    EXPECT_EQ(methodInForce(machined), DefectMethod::Auto);
+    EXPECT_TRUE(detectDefects(h, kW, kH, machined).unjudged.empty());
+}
+
 // Step 7's threshold on peaks that are exactly exponential above z0 (their quantiles,
 // z0 + β·ln(N/(N − i − ½))): the tail above any quantile is the same exponential (memoryless),
 // its median excess is β·ln 2, so the threshold is where N·P(peak ≥ z) = nfa:

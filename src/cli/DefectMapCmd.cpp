@@ -1,5 +1,6 @@
 // scratchlight defectmap (HEIGHTMAP | SCENE.json) [--method auto|lay|selfsim|paper] [-o map.png]
 //                        [--image-output MASK.png] [--truth TRUTH.png] [--score-output FILE]
+//                        [--unjudged-output FILE.png]
 //                        [tuning ...]
 // Parses the options and prints the result; the work is app/jobs/DefectMapJob.h and
 // detect/DefectMap.h.
@@ -149,6 +150,18 @@ int runDefectMap(const DefectMapJobOptions& o) {
             if (a.count > 0)
                 std::printf("  %zu %s: %zu samples added\n", a.count, a.what, a.samples);
     }
+    if (!m.unjudged.empty() && m.unjudgedRegions == 0)
+        std::printf(
+            "  judged everywhere inside the border: no region that stands out of the texture "
+            "reaches the border's line; the border itself is never marked\n");
+    else if (!m.unjudged.empty())
+        std::printf(
+            "  not judged: %zu regions that stand out of the texture reach the border's line "
+            "(they go on beyond what the map shows), %zu samples (%.2f%% of the map) left "
+            "unmarked for a person to look at; the border itself is never marked\n",
+            m.unjudgedRegions, m.unjudgedCount(),
+            100.0 * static_cast<double>(m.unjudgedCount()) /
+                static_cast<double>(m.unjudged.size()));
     if (m.method == DefectMethod::SelfSim && m.selfsimReliefLevels > 0)
         std::printf("  a relief: its %zu plateau levels taken out before the copies\n",
                     m.selfsimReliefLevels);
@@ -197,6 +210,11 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
     c->add_option_function<std::string>(
         "--score-output", [a](const std::string& v) { a->csv = v; },
         "CSV of the score (default: <output stem>-score.csv beside the map)");
+    c->add_option_function<std::string>(
+        "--unjudged-output", [a](const std::string& v) { a->unjudgedOutput = v; },
+        "Where the map could not judge, 8-bit PNG (255: a region that stands out of the texture "
+        "but reaches the border, left unmarked; 128: the border; written by selfsim and by auto "
+        "on a measured texture; default: <output stem>-unjudged.png beside the map)");
     std::string negatives;  // the default as numbers (uint8_t would print as a character)
     for (uint8_t v : a->negatives) negatives += (negatives.empty() ? "" : ",") + std::to_string(v);
     c->add_option("--negatives", a->negatives,

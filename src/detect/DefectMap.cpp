@@ -49,6 +49,17 @@ double DefectMap::markedFraction() const {
     return map.empty() ? 0.0 : static_cast<double>(markedCount()) / static_cast<double>(map.size());
 }
 
+size_t DefectMap::unjudgedCount() const {
+    size_t n = 0;
+    for (uint8_t v : unjudged) n += v == kUnjudgedRegion;
+    return n;
+}
+
+DefectMethod methodInForce(const DefectMapOptions& options) {
+    return options.method == DefectMethod::Auto && options.measured ? DefectMethod::SelfSim
+                                                                    : options.method;
+}
+
 DefectScore scoreDefectMap(std::span<const uint8_t> map, std::span<const uint8_t> labels,
                            std::span<const RegionLabel> legend,
                            std::span<const uint8_t> negatives) {

@@ -305,9 +305,25 @@ struct DefectMapOptions {
     ScratchMapOptions paper;    // the `paper` method's options
 };
 
+// The values of DefectMap::unjudged: where the map could not judge the part (a person looks
+// there), and where it judged it (marked or not).
+inline constexpr uint8_t kUnjudgedRegion = 255;  // a region at the border the map left unmarked
+inline constexpr uint8_t kUnjudgedBorder = 128;  // the border the method never marks
+inline constexpr uint8_t kJudged = 0;
+
+/// The method that maps a part with these options: SelfSim for auto on a measured texture.
+DefectMethod methodInForce(const DefectMapOptions& options);
+
 struct DefectMap {
     int width = 0, height = 0;  // of the height map
     std::vector<uint8_t> map;   // width*height, row-major: 255 marked, 0 not
+    // selfsim only (and auto on a measured texture; empty for the other methods): width*height,
+    // kUnjudgedRegion on the samples of the regions that stand out of the texture (steps 6-7's
+    // gates) but reach the border's inner line, left unmarked (SelfSimMap::unjudged: such a
+    // region continues beyond what the map shows, so it is neither a mark nor cleared),
+    // kUnjudgedBorder on the border the method never marks, kJudged elsewhere
+    std::vector<uint8_t> unjudged;
+    size_t unjudgedRegions = 0;  // regions with samples of kUnjudgedRegion
     DefectMethod method = DefectMethod::Auto;
     // auto only: σ_A and σ_N (with edgeAxes σ_Nx; height units), the bins notched, samples
     // marked by the level/edge score and by the texture-change step, padded FFT size
@@ -371,6 +387,7 @@ struct DefectMap {
 
     size_t markedCount() const;
     double markedFraction() const;  // marked samples / all samples
+    size_t unjudgedCount() const;   // samples of kUnjudgedRegion (0 when unjudged is empty)
 };
 
 /// The defect map of a width×height height map (row-major, row 0 first). Throws InputError

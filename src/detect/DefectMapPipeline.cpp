@@ -196,6 +196,15 @@ void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int he
     SelfSimMap m = detectSelfSimDefects(heights, width, height, o);
     r.method = DefectMethod::SelfSim;
     r.map = std::move(m.map);
+    r.unjudged = std::move(m.unjudged);
+    r.unjudgedRegions = m.unjudgedRegions;
+    if (!r.unjudged.empty()) {
+        const int b = m.border;
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x)
+                if (x < b || y < b || x >= width - b || y >= height - b)
+                    r.unjudged[static_cast<size_t>(y) * width + x] = kUnjudgedBorder;
+    }
     r.sigmaLevel = m.sigma;
     r.selfsimOffsets = m.offsetX.size();
     r.selfsimDetections = m.detections;

@@ -1437,12 +1437,14 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     const size_t n = static_cast<size_t>(W) * static_cast<size_t>(H);
     SelfSimMap out;
     out.map.assign(n, 0);
+    out.unjudged.assign(n, 0);
     out.residual.assign(n, 0.0f);
     if (W < 2 || H < 2 || heights.size() != n) return out;
 
     const std::vector<float> levelled = removeQuadratic(heights, W, H);
     throwIfInterrupted();
     const int b = std::min(o.border, (std::min(W, H) - 1) / 2);
+    out.border = b;
     // step 1b: a relief's plateaus taken out (detect/ReliefLevels.h): g is then the plateaus'
     // texture, what the copies compare and whose RMS a region is judged against (step 6)
     ReliefLevels relief;
@@ -2082,6 +2084,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     // step 8k's record: each region's verdict and whether it was kept
     std::vector<Gate> verdicts(o.hollowRowGap > 0.0 ? regions.size() : 0, Gate::Small);
     std::vector<uint8_t> regionKept(verdicts.size(), 0);
+    std::vector<size_t> borderRegions;  // the regions that pass the gates and reach the border
     for (const Region& reg : regions) {
         const std::span<const size_t> samples(members.data() + reg.begin, reg.end - reg.begin);
         const Gate verdict = gate(samples, reg.peak);
@@ -2097,6 +2100,7 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
         }
         if (o.dropBorderRegions && b > 0 && reg.atBorder) {
             ++out.droppedBorder;
+            borderRegions.push_back(static_cast<size_t>(&reg - regions.data()));
             if (!pieceSeen.empty()) keepBorderPieces(reg);
             continue;
         }
@@ -2393,6 +2397,16 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                            o.valleyRimMean, o.valleyRimShare, o.valleyRimReach);
         out.valleyRims = segments;
         out.valleyRimSamples = added;
+    }
+    // what the map could not judge: the samples of the regions at the border that no step marked
+    for (const size_t k : borderRegions) {
+        bool any = false;
+        for (size_t j = regions[k].begin; j < regions[k].end; ++j)
+            if (!out.map[members[j]]) {
+                out.unjudged[members[j]] = 255;
+                any = true;
+            }
+        out.unjudgedRegions += any ? 1 : 0;
     }
     return out;
 }

@@ -807,7 +807,15 @@ inline constexpr size_t kValleyRimSegmentMin = 6;
 inline constexpr size_t kTextureTailMinRegions = 32;
 
 struct SelfSimMap {
-    std::vector<uint8_t> map;           // width*height: 255 marked, 0 not
+    std::vector<uint8_t> map;  // width*height: 255 marked, 0 not
+    // width*height: 255 where the map could not judge (step 6 with dropBorderRegions): the
+    // samples of the regions that pass steps 6-7's gates but reach the border's inner line,
+    // which the map (steps 8d-8v included) did not mark; 0 elsewhere (the border itself
+    // included: a caller knows it from `border`). Such a region continues beyond what the map
+    // shows, so it is neither marked nor cleared: a person looks there.
+    std::vector<uint8_t> unjudged;
+    size_t unjudgedRegions = 0;         // regions with samples in `unjudged`
+    int border = 0;                     // the border applied: o.border, at most (min(W, H) - 1) / 2
     std::vector<float> residual;        // r of step 4 (height units), width*height
     std::vector<int> offsetX, offsetZ;  // the offsets kept, tile after tile (x = column, z = row)
     double sigma = 0;                   // σ_0 of r (height units)

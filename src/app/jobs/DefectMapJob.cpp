@@ -55,10 +55,16 @@ DefectMapJobSummary runDefectMapJob(const DefectMapJobOptions& o) {
     refuseOutputOverInput(o.output, option("output"), inputs);
     refuseOutputOverInput(o.imageOutput, option("image-output"), inputs);
     refuseOutputOverInput(csv, option("score-output"), inputs);
+    const std::filesystem::path unjudged =
+        !o.unjudgedOutput.empty()
+            ? o.unjudgedOutput
+            : o.output.parent_path() / (o.output.stem().string() + "-unjudged.png");
+    checkPng(unjudged, option("unjudged-output"));
+    refuseOutputOverInput(unjudged, option("unjudged-output"), inputs);
     // Every output staged before the work (a directory in the way is refused now, not after
     // it), renamed into place together at the end: none appears unless all do.
     AtomicOutput mapOut(o.output);
-    std::optional<AtomicOutput> imageOut, csvOut;
+    std::optional<AtomicOutput> imageOut, csvOut, unjudgedOut;
     if (!o.imageOutput.empty()) imageOut.emplace(o.imageOutput);
     if (!csv.empty()) csvOut.emplace(csv);
     const HeightSource src = loadHeightSource(o.input, o.sceneOverrides);
@@ -74,6 +80,7 @@ DefectMapJobSummary runDefectMapJob(const DefectMapJobOptions& o) {
                                 std::to_string(s.height) + ")");
         DefectMapOptions mo = o.map;
         mo.measured = src.measured();
+        if (methodInForce(mo) == DefectMethod::SelfSim) unjudgedOut.emplace(unjudged);
         s.map = detectDefects(h, s.width, s.height, mo);
     }
     if (truth) s.score = scoreDefectMap(s.map.map, truth->labels, truth->legend, o.negatives);
@@ -90,9 +97,10 @@ DefectMapJobSummary runDefectMapJob(const DefectMapJobOptions& o) {
     writeMaskPng(mapOut.tempPath(), s.map.map, s.width, s.height);
     if (imageOut) writeMaskPng(imageOut->tempPath(), image, s.imageWidth, s.imageHeight);
     if (csvOut) writeTextAtomically(csvOut->tempPath(), defectScoreCsv(*s.score));
+    if (unjudgedOut) writeMaskPng(unjudgedOut->tempPath(), s.map.unjudged, s.width, s.height);
     enterCommit();  // Ctrl-C before the files appear: none does; after: all (core/Interrupt.h)
-    for (AtomicOutput* out :
-         {&mapOut, imageOut ? &*imageOut : nullptr, csvOut ? &*csvOut : nullptr})
+    for (AtomicOutput* out : {&mapOut, imageOut ? &*imageOut : nullptr, csvOut ? &*csvOut : nullptr,
+                              unjudgedOut ? &*unjudgedOut : nullptr})
         if (out) {
             out->commit();
             s.written.push_back(out->finalPath());

@@ -25,6 +25,10 @@ struct DefectMapJobOptions {
     std::filesystem::path imageOutput;  // projected mask (PNG); needs a scene; empty: none
     std::filesystem::path truth;        // truth label PNG in height-map space; empty: no score
     std::filesystem::path csv;          // the score's CSV; empty: <output stem>-score.csv
+    // where the map could not judge (DefectMap::unjudged, 255 / 128 / 0 PNG in height-map
+    // space), written when the method in force records it (selfsim, and auto on a measured
+    // texture); empty: <output stem>-unjudged.png
+    std::filesystem::path unjudgedOutput;
     // Truth values counted as defect-free when scoring (a mark there is a false positive):
     // the confined chatter region (128), a texture change the map is not meant to mark.
     std::vector<uint8_t> negatives{128};
