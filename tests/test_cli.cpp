@@ -407,15 +407,22 @@ TEST_F(CliTest, RenderChecksItsOutputsAndSaysWhenItIsBlack) {
 // Issue 30: on a map so small that the border (never marked) is most of it, defectmap says so,
 // names the option of the method that ran and the border that would leave half of the map:
 // (w - 2b)(h - 2b) >= w h / 2 at b = 7 for 60 x 50 (46 x 36 = 1656 >= 1500), not at 8.
-TEST_F(CliTest, DefectMapWarnsWhenItsBorderIsMostOfTheMap) {
-    std::string sdf =
-        "aBCR-1.0\nManufacID = test\nNumPoints = 60\nNumProfiles = 50\nXscale = 1e-6\n"
-        "Yscale = 1e-6\nZscale = 1e-6\nDataType = 7\n*\n";
-    for (int y = 0; y < 50; ++y)
-        for (int x = 0; x < 60; ++x) sdf += std::to_string((x * 7 + y * 13) % 11 - 5) + " ";
+// An ASCII SDF of w x h samples at 1 um (a measured file: auto is the selfsim method), heights in
+// um from height(x, y).
+template <class Height>
+void writeAsciiSdf(const std::filesystem::path& f, int w, int h, Height height) {
+    std::string sdf = "aBCR-1.0\nManufacID = test\nNumPoints = " + std::to_string(w) +
+                      "\nNumProfiles = " + std::to_string(h) +
+                      "\nXscale = 1e-6\nYscale = 1e-6\nZscale = 1e-6\nDataType = 7\n*\n";
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) sdf += std::to_string(height(x, y)) + " ";
     sdf += "\n*\n";
-    const std::filesystem::path f = dir / "small.sdf";
     test::writeText(f, sdf);
+}
+
+TEST_F(CliTest, DefectMapWarnsWhenItsBorderIsMostOfTheMap) {
+    const std::filesystem::path f = dir / "small.sdf";
+    writeAsciiSdf(f, 60, 50, [](int x, int y) { return (x * 7 + y * 13) % 11 - 5; });
     auto r = runCli("defectmap " + f.string() + " -o " + (dir / "m.png").string());
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("the border of 40 samples"), std::string::npos) << r.output;
@@ -430,26 +437,36 @@ TEST_F(CliTest, DefectMapWarnsWhenItsBorderIsMostOfTheMap) {
 }
 
 // defectmap writes where the map could not judge beside the map (or at --unjudged-output) when
-// the method in force records it: on a measured file (an SDF), not on gen-surface's part.
+// the method in force records it: on a measured file (an SDF), not on gen-surface's part. A
+// periodic texture with a crater (40 um deep, radius 20) whose centre lies 4 samples inside the
+// border of 10: the crater reaches the border, so it is unjudged, not marked; the texture far
+// from it repeats and is judged; the border is 128. Without the crater the map judges everything
+// inside the border.
 TEST_F(CliTest, DefectMapWritesWhereItCouldNotJudgeOnAMeasuredFile) {
-    std::string sdf =
-        "aBCR-1.0\nManufacID = test\nNumPoints = 120\nNumProfiles = 100\nXscale = 1e-6\n"
-        "Yscale = 1e-6\nZscale = 1e-6\nDataType = 7\n*\n";
-    for (int y = 0; y < 100; ++y)
-        for (int x = 0; x < 120; ++x) sdf += std::to_string((x * 7 + y * 13) % 11 - 5) + " ";
-    sdf += "\n*\n";
-    const std::filesystem::path f = dir / "part.sdf";
-    test::writeText(f, sdf);
+    const auto texture = [](int x, int y) { return (x * 7 + y * 13) % 11 - 5; };
+    const std::filesystem::path f = dir / "part.sdf", plain = dir / "plain.sdf";
+    writeAsciiSdf(f, 120, 100, [&](int x, int y) {
+        const int r2 = (x - 14) * (x - 14) + (y - 50) * (y - 50);
+        return texture(x, y) - (r2 < 400 ? (40 * (400 - r2)) / 400 : 0);
+    });
+    writeAsciiSdf(plain, 120, 100, texture);
     auto r =
         runCli("defectmap " + f.string() + " --selfsim-border 10 -o " + (dir / "m.png").string());
     ASSERT_EQ(r.exitCode, 0) << r.output;
-    EXPECT_NE(r.output.find("not judged:"), std::string::npos) << r.output;
-    EXPECT_TRUE(std::filesystem::exists(dir / "m-unjudged.png")) << r.output;
+    EXPECT_NE(r.output.find("not judged: 1 regions"), std::string::npos) << r.output;
     const Image u = readImage(dir / "m-unjudged.png");
     ASSERT_EQ(u.width, 120);
     ASSERT_EQ(u.height, 100);
     EXPECT_NEAR(u.at(0, 0), 128.0f / 255.0f, 1e-6f) << "the border";
-    EXPECT_NEAR(u.at(60, 50), 0.0f, 1e-6f) << "judged: the texture repeats there";
+    EXPECT_NEAR(u.at(20, 50), 1.0f, 1e-6f) << "the crater";
+    EXPECT_NEAR(u.at(60, 20), 0.0f, 1e-6f) << "judged: the texture repeats there";
+    const Image m = readImage(dir / "m.png");
+    EXPECT_NEAR(m.at(20, 50), 0.0f, 1e-6f) << "the crater is not marked";
+    r = runCli("defectmap " + plain.string() + " --selfsim-border 10 -o " +
+               (dir / "p.png").string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("judged everywhere inside the border"), std::string::npos) << r.output;
+    EXPECT_TRUE(std::filesystem::exists(dir / "p-unjudged.png"));
     r = runCli("defectmap " + f.string() + " --selfsim-border 10 -o " + (dir / "n.png").string() +
                " --unjudged-output " + (dir / "where.png").string());
     ASSERT_EQ(r.exitCode, 0) << r.output;
