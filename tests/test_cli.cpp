@@ -460,6 +460,10 @@ TEST_F(CliTest, DefectMapWritesWhereItCouldNotJudgeOnAMeasuredFile) {
     EXPECT_NEAR(u.at(0, 0), 128.0f / 255.0f, 1e-6f) << "the border";
     EXPECT_NEAR(u.at(20, 50), 1.0f, 1e-6f) << "the crater";
     EXPECT_NEAR(u.at(60, 20), 0.0f, 1e-6f) << "judged: the texture repeats there";
+    const Image preview = readImage(dir / "m-preview.png");  // a picture of both
+    EXPECT_EQ(preview.width, 120);
+    EXPECT_EQ(preview.height, 100);
+    EXPECT_EQ(preview.channels, 3);
     const Image m = readImage(dir / "m.png");
     EXPECT_NEAR(m.at(20, 50), 0.0f, 1e-6f) << "the crater is not marked";
     r = runCli("defectmap " + plain.string() + " --selfsim-border 10 -o " +

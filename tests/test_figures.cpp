@@ -1,6 +1,6 @@
-// optimize's figures drawn in-process (app/report/OptimizeFigures.h on app/host/Canvas.h): each is a valid
-// PNG of the expected size with a picture in it, the same input gives the same bytes, bad input
-// is refused with a reason and writes nothing, and optimize writes them (or, with
+// optimize's figures drawn in-process (app/report/OptimizeFigures.h on app/host/Canvas.h): each is
+// a valid PNG of the expected size with a picture in it, the same input gives the same bytes, bad
+// input is refused with a reason and writes nothing, and optimize writes them (or, with
 // --no-figures, says in the report that they were not asked for).
 #include <gtest/gtest.h>
 
@@ -13,6 +13,8 @@
 #include "TestUtil.h"
 #include "app/host/Canvas.h"
 #include "app/report/OptimizeFigures.h"
+#include "app/report/Preview.h"
+#include "detect/DefectMap.h"
 #include "io/ImageIO.h"
 
 namespace fs = std::filesystem;
@@ -252,4 +254,48 @@ TEST(Figures, OptimizeWritesThemAndTheReportShowsThem) {
         EXPECT_FALSE(fs::exists(dir / "b" / name)) << name;
     EXPECT_NE(test::readFile(dir / "b" / "report.html").find("figures not asked for"),
               std::string::npos);
+}
+
+// defectmap's preview: the hill shade is lit from the top left, so a plane rising to the right
+// (facing left) is brighter than a flat map's 1/sqrt(3) and one rising to the left darker; the
+// slopes are in units of their own spread, so heights scaled by a power of two shade the same,
+// bit for bit. The preview outlines a mark red and an unjudged region blue and halves the
+// border's brightness.
+TEST(DefectMapPreview, LitFromTheTopLeftWhateverTheHeightsScaleMarksRedUnjudgedBlue) {
+    const int w = 24, h = 20;
+    std::vector<float> flat(static_cast<size_t>(w) * h, 3.0f), right(flat), left(flat), rough(flat);
+    for (int z = 0; z < h; ++z)
+        for (int x = 0; x < w; ++x) {
+            const size_t i = static_cast<size_t>(z) * w + x;
+            right[i] = 0.01f * static_cast<float>(x);
+            left[i] = -0.01f * static_cast<float>(x);
+            rough[i] = static_cast<float>(((x * 7 + z * 13) % 11) - 5) * 0.125f;
+        }
+    const std::vector<double> f = hillShade(flat, w, h), r = hillShade(right, w, h),
+                              l = hillShade(left, w, h);
+    for (const double v : f) EXPECT_DOUBLE_EQ(v, 1.0 / std::sqrt(3.0));
+    const size_t mid = static_cast<size_t>(h / 2) * w + w / 2;
+    EXPECT_GT(r[mid], f[mid] + 0.1);
+    EXPECT_LT(l[mid], f[mid] - 0.1);
+    std::vector<float> scaled(rough);
+    for (float& v : scaled) v *= 32.0f;
+    EXPECT_EQ(hillShade(rough, w, h), hillShade(scaled, w, h));
+
+    std::vector<uint8_t> map(flat.size(), 0), unjudged(flat.size(), kJudged);
+    for (int z = 8; z < 12; ++z)
+        for (int x = 4; x < 8; ++x) map[static_cast<size_t>(z) * w + x] = 255;
+    for (int z = 8; z < 12; ++z)
+        for (int x = 14; x < 18; ++x) unjudged[static_cast<size_t>(z) * w + x] = kUnjudgedRegion;
+    for (int x = 0; x < w; ++x) unjudged[x] = kUnjudgedBorder;  // the top row: the border
+    const Image plain = defectMapPreview(flat, w, h, map, {});
+    const Image p = defectMapPreview(flat, w, h, map, unjudged);
+    const OutlineColour& red = outlineOf(255);
+    const OutlineColour& blue = outlineOf(128);
+    EXPECT_EQ(p.at(4, 8, 0), red.r);
+    EXPECT_EQ(p.at(4, 8, 1), red.g);
+    EXPECT_EQ(p.at(14, 8, 2), blue.b);
+    EXPECT_EQ(p.at(14, 8, 0), blue.r);
+    EXPECT_EQ(plain.at(14, 8, 0), plain.at(20, 15, 0)) << "no unjudged: plain shade there";
+    EXPECT_FLOAT_EQ(p.at(10, 0, 0), 0.5f * plain.at(10, 0, 0)) << "the border dimmed";
+    EXPECT_EQ(p.at(20, 15, 0), plain.at(20, 15, 0)) << "judged, unmarked: the shade";
 }

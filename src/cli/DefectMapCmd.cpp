@@ -1,6 +1,6 @@
 // scratchlight defectmap (HEIGHTMAP | SCENE.json) [--method auto|lay|selfsim|paper] [-o map.png]
 //                        [--image-output MASK.png] [--truth TRUTH.png] [--score-output FILE]
-//                        [--unjudged-output FILE.png]
+//                        [--unjudged-output FILE.png] [--preview-output FILE.png]
 //                        [tuning ...]
 // Parses the options and prints the result; the work is app/jobs/DefectMapJob.h and
 // detect/DefectMap.h.
@@ -215,6 +215,10 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
         "Where the map could not judge, 8-bit PNG (255: a region that stands out of the texture "
         "but reaches the border, left unmarked; 128: the border; written by selfsim and by auto "
         "on a measured texture; default: <output stem>-unjudged.png beside the map)");
+    c->add_option_function<std::string>(
+        "--preview-output", [a](const std::string& v) { a->previewOutput = v; },
+        "A picture of the map: the hill-shaded heights, the marks outlined red, where it could "
+        "not judge blue, the border dimmed (default: <output stem>-preview.png beside the map)");
     std::string negatives;  // the default as numbers (uint8_t would print as a character)
     for (uint8_t v : a->negatives) negatives += (negatives.empty() ? "" : ",") + std::to_string(v);
     c->add_option("--negatives", a->negatives,

@@ -3,6 +3,7 @@
 #include <optional>
 #include <sstream>
 
+#include "app/report/Preview.h"
 #include "core/Error.h"
 #include "core/Interrupt.h"
 #include "core/Progress.h"
@@ -61,9 +62,15 @@ DefectMapJobSummary runDefectMapJob(const DefectMapJobOptions& o) {
             : o.output.parent_path() / (o.output.stem().string() + "-unjudged.png");
     checkPng(unjudged, option("unjudged-output"));
     refuseOutputOverInput(unjudged, option("unjudged-output"), inputs);
+    const std::filesystem::path preview =
+        !o.previewOutput.empty()
+            ? o.previewOutput
+            : o.output.parent_path() / (o.output.stem().string() + "-preview.png");
+    checkPng(preview, option("preview-output"));
+    refuseOutputOverInput(preview, option("preview-output"), inputs);
     // Every output staged before the work (a directory in the way is refused now, not after
     // it), renamed into place together at the end: none appears unless all do.
-    AtomicOutput mapOut(o.output);
+    AtomicOutput mapOut(o.output), previewOut(preview);
     std::optional<AtomicOutput> imageOut, csvOut, unjudgedOut;
     if (!o.imageOutput.empty()) imageOut.emplace(o.imageOutput);
     if (!csv.empty()) csvOut.emplace(csv);
@@ -98,9 +105,11 @@ DefectMapJobSummary runDefectMapJob(const DefectMapJobOptions& o) {
     if (imageOut) writeMaskPng(imageOut->tempPath(), image, s.imageWidth, s.imageHeight);
     if (csvOut) writeTextAtomically(csvOut->tempPath(), defectScoreCsv(*s.score));
     if (unjudgedOut) writeMaskPng(unjudgedOut->tempPath(), s.map.unjudged, s.width, s.height);
+    writePng(previewOut.tempPath(),
+             defectMapPreview(h, s.width, s.height, s.map.map, s.map.unjudged));
     enterCommit();  // Ctrl-C before the files appear: none does; after: all (core/Interrupt.h)
-    for (AtomicOutput* out : {&mapOut, imageOut ? &*imageOut : nullptr, csvOut ? &*csvOut : nullptr,
-                              unjudgedOut ? &*unjudgedOut : nullptr})
+    for (AtomicOutput* out : {&mapOut, &previewOut, imageOut ? &*imageOut : nullptr,
+                              csvOut ? &*csvOut : nullptr, unjudgedOut ? &*unjudgedOut : nullptr})
         if (out) {
             out->commit();
             s.written.push_back(out->finalPath());

@@ -29,6 +29,9 @@ struct DefectMapJobOptions {
     // space), written when the method in force records it (selfsim, and auto on a measured
     // texture); empty: <output stem>-unjudged.png
     std::filesystem::path unjudgedOutput;
+    // a picture of the map (app/report/Preview.h defectMapPreview: the hill-shaded heights, the
+    // marks outlined red, where it could not judge blue); empty: <output stem>-preview.png
+    std::filesystem::path previewOutput;
     // Truth values counted as defect-free when scoring (a mark there is a false positive):
     // the confined chatter region (128), a texture change the map is not meant to mark.
     std::vector<uint8_t> negatives{128};

@@ -1,8 +1,10 @@
 #include "app/report/Preview.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 
+#include "detect/DefectMap.h"
 #include "io/ImageIO.h"
 
 namespace sl {
@@ -68,6 +70,59 @@ Image outlinedRender(const std::vector<double>& y, int w, int h, const std::vect
             }
             for (int c = 0; c < 3; ++c) img.at(i, j, c) = rgb[c];
         }
+    return img;
+}
+
+std::vector<double> hillShade(std::span<const float> heights, int w, int h) {
+    const size_t n = static_cast<size_t>(w) * static_cast<size_t>(h);
+    std::vector<double> gx(n, 0.0), gz(n, 0.0);
+    auto at = [&](int x, int z) {
+        return static_cast<double>(
+            heights[static_cast<size_t>(std::clamp(z, 0, h - 1)) * w + std::clamp(x, 0, w - 1)]);
+    };
+    std::vector<double> mags;
+    mags.reserve(2 * n);
+    for (int z = 0; z < h; ++z)
+        for (int x = 0; x < w; ++x) {
+            const size_t i = static_cast<size_t>(z) * w + x;
+            gx[i] = 0.5 * (at(x + 1, z) - at(x - 1, z));
+            gz[i] = 0.5 * (at(x, z + 1) - at(x, z - 1));
+            mags.push_back(std::abs(gx[i]));
+            mags.push_back(std::abs(gz[i]));
+        }
+    double spread = 0.0;
+    if (!mags.empty()) {
+        double mean = 0.0;
+        for (const double m : mags) mean += m;
+        mean /= static_cast<double>(mags.size());
+        auto mid = mags.begin() + static_cast<std::ptrdiff_t>(mags.size() / 2);
+        std::nth_element(mags.begin(), mid, mags.end());
+        spread = *mid > 0.0 ? 1.4826 * *mid : mean;
+    }
+    // the light from the top left (−x, −z) at 45° elevation; a typical slope tilts the normal
+    // by about 27° (half a spread per sample)
+    const double l = 1.0 / std::sqrt(3.0), k = spread > 0.0 ? 0.5 / spread : 0.0;
+    std::vector<double> y(n);
+    for (size_t i = 0; i < n; ++i) {
+        const double nx = -k * gx[i], nz = -k * gz[i];
+        const double dot = (-nx - nz + 1.0) * l / std::sqrt(nx * nx + nz * nz + 1.0);
+        y[i] = std::clamp(dot, 0.0, 1.0);
+    }
+    return y;
+}
+
+Image defectMapPreview(std::span<const float> heights, int w, int h,
+                       const std::vector<uint8_t>& map, const std::vector<uint8_t>& unjudged) {
+    constexpr uint8_t kMarkColour = 255, kUnjudgedColour = 128;  // red, blue (kOutlines)
+    std::vector<uint8_t> labels(map.size(), 0);
+    for (size_t i = 0; i < labels.size(); ++i)
+        labels[i] = map[i]                                                ? kMarkColour
+                    : !unjudged.empty() && unjudged[i] == kUnjudgedRegion ? kUnjudgedColour
+                                                                          : 0;
+    Image img = outlinedRender(hillShade(heights, w, h), w, h, {}, labels);
+    for (size_t i = 0; i < unjudged.size(); ++i)
+        if (unjudged[i] == kUnjudgedBorder && !labels[i])
+            for (int c = 0; c < 3; ++c) img.data[i * 3 + static_cast<size_t>(c)] *= 0.5f;
     return img;
 }
 

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <span>
 #include <vector>
 
 #include "core/Image.h"
@@ -34,5 +35,18 @@ const OutlineColour& outlineOf(uint8_t value);
 /// none) drawn in the region's colour.
 Image outlinedRender(const std::vector<double>& y, int w, int h, const std::vector<uint8_t>& part,
                      const std::vector<uint8_t>& labels);
+
+/// A height map as a person looks at it: hill-shaded, lit from the top left (row 0 at the top)
+/// at 45° elevation, the slopes measured in units of their robust spread (1.4826 × the median
+/// |central difference|, the mean |difference| when that is 0), so that a texture of any
+/// height shows; w×h luminance in [0, 1]; a flat map is uniform.
+std::vector<double> hillShade(std::span<const float> heights, int w, int h);
+
+/// A defect map's preview (defectmap's <stem>-preview.png): the hill-shaded heights, the marks
+/// (map != 0) outlined red, the regions the map could not judge (unjudged == kUnjudgedRegion,
+/// detect/DefectMap.h) outlined blue (outlineOf(128)) and the border it never marks (unjudged
+/// == kUnjudgedBorder) at half brightness; `unjudged` empty: none.
+Image defectMapPreview(std::span<const float> heights, int w, int h,
+                       const std::vector<uint8_t>& map, const std::vector<uint8_t>& unjudged);
 
 }  // namespace sl
