@@ -196,6 +196,8 @@ void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int he
     SelfSimMap m = detectSelfSimDefects(heights, width, height, o);
     r.method = DefectMethod::SelfSim;
     r.map = std::move(m.map);
+    static_assert(kUnjudgedRegion == 255,
+                  "SelfSimMap::unjudged holds 255 where it could not judge");
     r.unjudged = std::move(m.unjudged);
     r.unjudgedRegions = m.unjudgedRegions;
     if (!r.unjudged.empty()) {
