@@ -24,6 +24,10 @@
 //     (tests/test_relief_levels.cpp). A texture stored with a
 //     coarse height quantum (an 8-bit height map) has its heights on a few exact levels too,
 //     but in specks, not plateaus: noise quantized to 16 levels has under 1 % on a plateau.
+//     minCover is half: the logo alone has 0.99 of its samples on plateaus, but with
+//     eval-real's model A defects on it 0.90-0.93 (40 runs, 2026-11-29), and at the gate's
+//     first value, 0.9, one of them (A 7103: 0.898) was read as a texture and its letters
+//     marked (precision 0.31, recall 0.34); a relief damaged over up to half of it is still one.
 //  4. Each sample's plateau: its own level when its height is in a level's band (widened by half
 //     a bin each side) and it lies in a 4-connected piece of that band of at least minPlateau
 //     samples (a pit or a groove on a letter passing through another level's height leaves a
@@ -48,7 +52,7 @@ struct ReliefLevelsOptions {
     double minLevelShare = 0.0005;  // a level holds at least this share of the samples
     int refits = 3;                 // the first level's quadratic fitted again this many times
     double maxHalfWidth = 0.15;     // a relief's first band at most this × RMS each side
-    double minCover = 0.9;          // ... and at least this share of the samples is on plateaus
+    double minCover = 0.5;          // ... and at least this share of the samples is on plateaus
     int minPlateau = 12;            // a plateau: a 4-connected piece of a band this large (samples)
     int rampReach = 1;              // a step's ramp: levels above and below within this (samples)
 };
