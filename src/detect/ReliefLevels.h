@@ -25,9 +25,10 @@
 //     coarse height quantum (an 8-bit height map) has its heights on a few exact levels too,
 //     but in specks, not plateaus: noise quantized to 16 levels has under 1 % on a plateau.
 //     minCover is half: the logo alone has 0.99 of its samples on plateaus, but with
-//     eval-real's model A defects on it 0.90-0.93 (40 runs, 2026-11-29), and at the gate's
-//     first value, 0.9, one of them (A 7103: 0.898) was read as a texture and its letters
-//     marked (precision 0.31, recall 0.34); a relief damaged over up to half of it is still one.
+//     eval-real's defects on it 0.898-0.936 (model A) and 0.943-0.958 (model B; 34 runs,
+//     2026-11-29), and at the gate's first value, 0.9, one of them (A 7103: 0.898) was read as
+//     a texture and its letters marked (precision 0.31, recall 0.34); a relief damaged over up
+//     to half of it is still one.
 //  4. Each sample's plateau: its own level when its height is in a level's band (widened by half
 //     a bin each side) and it lies in a 4-connected piece of that band of at least minPlateau
 //     samples (a pit or a groove on a letter passing through another level's height leaves a
