@@ -2,6 +2,8 @@
 
 #include <optional>
 #include <sstream>
+#include <string>
+#include <utility>
 
 #include "app/report/Preview.h"
 #include "core/Error.h"
@@ -24,6 +26,12 @@ void checkPng(const std::filesystem::path& file, const std::string& what) {
     if (file.extension() != ".png")
         throw inputError(what + " '" + file.string() + "'", "must end in .png",
                          "The map is an 8-bit PNG (255 marked, 0 not)");
+}
+
+// A second output beside the map: `given`, else <output stem><suffix> in the map's folder.
+std::filesystem::path besideMap(const std::filesystem::path& output,
+                                const std::filesystem::path& given, const std::string& suffix) {
+    return !given.empty() ? given : output.parent_path() / (output.stem().string() + suffix);
 }
 
 }  // namespace
@@ -50,24 +58,17 @@ DefectMapJobSummary runDefectMapJob(const DefectMapJobOptions& o) {
         inputs.push_back(std::filesystem::path(o.truth).replace_extension(".json"));  // legend
     }
     const std::filesystem::path csv =
-        o.truth.empty()  ? std::filesystem::path()
-        : !o.csv.empty() ? o.csv
-                         : o.output.parent_path() / (o.output.stem().string() + "-score.csv");
+        o.truth.empty() ? std::filesystem::path() : besideMap(o.output, o.csv, "-score.csv");
     refuseOutputOverInput(o.output, option("output"), inputs);
     refuseOutputOverInput(o.imageOutput, option("image-output"), inputs);
     refuseOutputOverInput(csv, option("score-output"), inputs);
-    const std::filesystem::path unjudged =
-        !o.unjudgedOutput.empty()
-            ? o.unjudgedOutput
-            : o.output.parent_path() / (o.output.stem().string() + "-unjudged.png");
-    checkPng(unjudged, option("unjudged-output"));
-    refuseOutputOverInput(unjudged, option("unjudged-output"), inputs);
-    const std::filesystem::path preview =
-        !o.previewOutput.empty()
-            ? o.previewOutput
-            : o.output.parent_path() / (o.output.stem().string() + "-preview.png");
-    checkPng(preview, option("preview-output"));
-    refuseOutputOverInput(preview, option("preview-output"), inputs);
+    const std::filesystem::path unjudged = besideMap(o.output, o.unjudgedOutput, "-unjudged.png"),
+                                preview = besideMap(o.output, o.previewOutput, "-preview.png");
+    for (const auto& [file, name] :
+         {std::pair{unjudged, "unjudged-output"}, std::pair{preview, "preview-output"}}) {
+        checkPng(file, option(name));
+        refuseOutputOverInput(file, option(name), inputs);
+    }
     // Every output staged before the work (a directory in the way is refused now, not after
     // it), renamed into place together at the end: none appears unless all do.
     AtomicOutput mapOut(o.output), previewOut(preview);
