@@ -75,21 +75,29 @@ Image outlinedRender(const std::vector<double>& y, int w, int h, const std::vect
 
 std::vector<double> hillShade(std::span<const float> heights, int w, int h) {
     const size_t n = static_cast<size_t>(w) * static_cast<size_t>(h);
-    std::vector<double> gx(n, 0.0), gz(n, 0.0);
     auto at = [&](int x, int z) {
         return static_cast<double>(
             heights[static_cast<size_t>(std::clamp(z, 0, h - 1)) * w + std::clamp(x, 0, w - 1)]);
     };
+    // the central differences at sample i (x = column, z = row)
+    auto slopes = [&](size_t i, double& gx, double& gz) {
+        const int x = static_cast<int>(i % static_cast<size_t>(w)),
+                  z = static_cast<int>(i / static_cast<size_t>(w));
+        gx = 0.5 * (at(x + 1, z) - at(x - 1, z));
+        gz = 0.5 * (at(x, z + 1) - at(x, z - 1));
+    };
+    // their spread over every sample, or every stride-th on a map of more than kSpreadSamples
+    // (the median of a million is as good, and a 5000² map's would need 400 MB)
+    constexpr size_t kSpreadSamples = 1'000'000;
+    const size_t stride = std::max<size_t>(1, n / kSpreadSamples);
     std::vector<double> mags;
-    mags.reserve(2 * n);
-    for (int z = 0; z < h; ++z)
-        for (int x = 0; x < w; ++x) {
-            const size_t i = static_cast<size_t>(z) * w + x;
-            gx[i] = 0.5 * (at(x + 1, z) - at(x - 1, z));
-            gz[i] = 0.5 * (at(x, z + 1) - at(x, z - 1));
-            mags.push_back(std::abs(gx[i]));
-            mags.push_back(std::abs(gz[i]));
-        }
+    mags.reserve(2 * (n / stride + 1));
+    for (size_t i = 0; i < n; i += stride) {
+        double gx = 0.0, gz = 0.0;
+        slopes(i, gx, gz);
+        mags.push_back(std::abs(gx));
+        mags.push_back(std::abs(gz));
+    }
     double spread = 0.0;
     if (!mags.empty()) {
         double mean = 0.0;
@@ -104,7 +112,9 @@ std::vector<double> hillShade(std::span<const float> heights, int w, int h) {
     const double l = 1.0 / std::sqrt(3.0), k = spread > 0.0 ? 0.5 / spread : 0.0;
     std::vector<double> y(n);
     for (size_t i = 0; i < n; ++i) {
-        const double nx = -k * gx[i], nz = -k * gz[i];
+        double gx = 0.0, gz = 0.0;
+        slopes(i, gx, gz);
+        const double nx = -k * gx, nz = -k * gz;
         const double dot = (-nx - nz + 1.0) * l / std::sqrt(nx * nx + nz * nz + 1.0);
         y[i] = std::clamp(dot, 0.0, 1.0);
     }

@@ -38,8 +38,9 @@ Image outlinedRender(const std::vector<double>& y, int w, int h, const std::vect
 
 /// A height map as a person looks at it: hill-shaded, lit from the top left (row 0 at the top)
 /// at 45° elevation, the slopes measured in units of their robust spread (1.4826 × the median
-/// |central difference|, the mean |difference| when that is 0), so that a texture of any
-/// height shows; w×h luminance in [0, 1]; a flat map is uniform.
+/// |central difference|, the mean |difference| when that is 0; over every sample, or a regular
+/// subset of a million on a larger map), so that a texture of any height shows; w×h luminance
+/// in [0, 1]; a flat map is uniform.
 std::vector<double> hillShade(std::span<const float> heights, int w, int h);
 
 /// A defect map's preview (defectmap's <stem>-preview.png): the hill-shaded heights, the marks
