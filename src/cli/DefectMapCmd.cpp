@@ -150,18 +150,19 @@ int runDefectMap(const DefectMapJobOptions& o) {
             if (a.count > 0)
                 std::printf("  %zu %s: %zu samples added\n", a.count, a.what, a.samples);
     }
-    if (!m.unjudged.empty() && m.unjudgedRegions == 0)
+    if (!m.unjudged.empty() && m.unjudgedRegions == 0) {
         std::printf(
             "  judged everywhere inside the border: no region that stands out of the texture "
             "reaches the border's line; the border itself is never marked\n");
-    else if (!m.unjudged.empty())
+    } else if (!m.unjudged.empty()) {
+        const size_t unjudged = m.unjudgedCount();
         std::printf(
             "  not judged: %zu regions that stand out of the texture reach the border's line "
             "(they go on beyond what the map shows), %zu samples (%.2f%% of the map) left "
             "unmarked for a person to look at; the border itself is never marked\n",
-            m.unjudgedRegions, m.unjudgedCount(),
-            100.0 * static_cast<double>(m.unjudgedCount()) /
-                static_cast<double>(m.unjudged.size()));
+            m.unjudgedRegions, unjudged,
+            100.0 * static_cast<double>(unjudged) / static_cast<double>(m.unjudged.size()));
+    }
     if (m.method == DefectMethod::SelfSim && m.selfsimReliefLevels > 0)
         std::printf("  a relief: its %zu plateau levels taken out before the copies\n",
                     m.selfsimReliefLevels);
