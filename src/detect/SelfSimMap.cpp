@@ -15,6 +15,7 @@
 #include "core/Error.h"
 #include "core/Interrupt.h"
 #include "core/PolynomialFit.h"
+#include "detect/Extent.h"
 #include "detect/ReliefLevels.h"
 
 namespace sl {
@@ -117,45 +118,6 @@ double roughnessRmsOf(const std::vector<float>& g, int W, int H, int b, double c
             ++count;
         }
     return count > 0 ? std::sqrt(sum / static_cast<double>(count)) : 0.0;
-}
-
-// A set of samples' extent: the square root of its coordinates' covariance eigenvalues' ratio
-// (each sample a unit square: + 1/12 on both), the direction of its long axis (radians from the
-// x axis, in [0, π)) and its centroid
-struct Extent {
-    double elongation = 1.0, axis = 0.0, cx = 0.0, cz = 0.0;
-};
-// the elongation and the long axis from the coordinates' central second moments (each sample
-// or point a unit square: + 1/12 on both variances)
-void extentFromMoments(Extent& e, double cxx, double czz, double cxz) {
-    cxx += 1.0 / 12.0;
-    czz += 1.0 / 12.0;
-    const double half = 0.5 * (cxx + czz),
-                 root = std::sqrt(0.25 * (cxx - czz) * (cxx - czz) + cxz * cxz);
-    e.elongation = std::sqrt((half + root) / (half - root));
-    e.axis = 0.5 * std::atan2(2.0 * cxz, cxx - czz);
-    if (e.axis < 0.0) e.axis += kPi;
-}
-Extent extentOf(std::span<const size_t> samples, int W) {
-    Extent e;
-    if (samples.empty()) return e;
-    double sx = 0.0, sz = 0.0;
-    for (const size_t i : samples) {
-        sx += static_cast<double>(i % W);
-        sz += static_cast<double>(i / W);
-    }
-    const double m = static_cast<double>(samples.size()), mx = sx / m, mz = sz / m;
-    e.cx = mx;
-    e.cz = mz;
-    double cxx = 0.0, czz = 0.0, cxz = 0.0;
-    for (const size_t i : samples) {
-        const double dx = static_cast<double>(i % W) - mx, dz = static_cast<double>(i / W) - mz;
-        cxx += dx * dx;
-        czz += dz * dz;
-        cxz += dx * dz;
-    }
-    extentFromMoments(e, cxx / m, czz / m, cxz / m);
-    return e;
 }
 
 // Step 8k's rows: points (the hollows' centroids, x and z) linked when at most `gap` apart
