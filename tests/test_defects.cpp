@@ -18,6 +18,7 @@
 #include "app/pipeline/Truth.h"
 #include "core/Error.h"
 #include "core/Rng.h"
+#include "detect/MarkShapes.h"
 #include "io/ImageIO.h"
 #include "io/MaskIO.h"
 #include "objective/Autodiff.h"
@@ -415,6 +416,19 @@ TEST(DefectObjective, OptimizeRunsItOnAGeneratedPart) {
     std::stringstream ss2;
     ss2 << in2.rdbuf();
     EXPECT_NE(ss2.str().find("\"defects\": \"auto\""), std::string::npos) << ss2.str();
+    // auto's regions are the map's marks labelled by shape (detect/MarkShapes.h): the
+    // scratches are lines, and nothing else is written
+    {
+        const Image labels = readImage(dir.path() / "out2" / "regions-defects.png");
+        size_t lines = 0, other = 0;
+        for (size_t q = 0; q < labels.pixelCount(); ++q) {
+            const long v = std::lround(labels.data[q * labels.channels] * 255.0f);
+            lines += v == kMarkLine;
+            other += v != 0 && v != kMarkLine && v != kMarkSpot;
+        }
+        EXPECT_GT(lines, 0u);
+        EXPECT_EQ(other, 0u);
+    }
     // A label the truth does not have: an error naming the file, exit 1.
     r = test::runCli("optimize " + scene + " --objective defects --heldout none --defects " +
                      truth + ":nosuchkind -o " + (dir.path() / "out3").string());

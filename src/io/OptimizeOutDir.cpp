@@ -50,6 +50,7 @@ constexpr SummaryKey kKeys[] = {
     {"/smooth_abs", true, "view"},
     {"/reg", true, "view"},
     {"/defects_measure", false, "view"},
+    {"/defects", false, "view"},  // the defects objective's region as written (auto: by shape)
     {"/optimizer", true, "report, scripts/plot_optimize.py"},
     {"/transport/file", true, "view"},
     {"/truth", false, "view"},

@@ -168,6 +168,7 @@ OptimizeSummary optimizeSummaryFromJson(json document, const std::string& where)
     if (const json* v = take(d, "/reg", where, kString)) s.reg = v->get<std::string>();
     if (const json* v = take(d, "/defects_measure", where, kString))
         s.defectsMeasure = v->get<std::string>();
+    if (const json* v = take(d, "/defects", where, kString)) s.defects = v->get<std::string>();
     if (const json* v = take(d, "/optimizer", where, kString)) s.optimizer = v->get<std::string>();
     take(d, "/transport", where, kObject);
     if (const json* v = take(d, "/transport/file", where, kString))

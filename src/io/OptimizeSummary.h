@@ -108,8 +108,9 @@ struct OptimizeSummary {
     bool smoothAbs = false;                                    // /smooth_abs
     std::string reg = "envmap";                                // /reg: envmap or image
     std::string defectsMeasure;                                // /defects_measure ("" when absent)
-    std::string optimizer;                                     // /optimizer ("" when absent)
-    std::string transportFile;                                 // /transport/file ("" when absent)
+    std::string defects;    // /defects: the defects objective's region as written ("" when absent)
+    std::string optimizer;  // /optimizer ("" when absent)
+    std::string transportFile;             // /transport/file ("" when absent)
     std::string truth;                     // /truth: the truth label file ("" when absent)
     nlohmann::json initialLoss;            // /initial_loss: a number or null (absent: null)
     nlohmann::json finalLoss;              // /final_loss

@@ -174,9 +174,10 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
         std::vector<uint8_t> labels, reference;
         std::vector<RegionLabel> legend;
         if (regions) {
-            labels.resize(regions->defects.size());
-            for (size_t q = 0; q < labels.size(); ++q) labels[q] = regions->defects[q] ? 255 : 0;
-            legend = {{255, "defects"}};
+            JudgedDefectLabels judged = judgedDefectLabels(
+                regions->defects, defectRegionSpec(o.defects, jo.truth).automatic);
+            labels = std::move(judged.labels);
+            legend = std::move(judged.legend);
             reference = regions->reference;
         } else if (!jo.truth.empty()) {
             LabelMask m = projectTruth(*scene, jo.truth, jo.threads);

@@ -194,8 +194,10 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         std::vector<uint8_t> labels;
         std::vector<RegionLabel> legend;
         if (kind == ObjectiveKind::Defects) {
-            for (uint8_t v : in.defects) labels.push_back(v ? 255 : 0);
-            legend = {RegionLabel{255, "defects"}};
+            JudgedDefectLabels judged =
+                judgedDefectLabels(in.defects, defectRegionSpec(o.defects, o.truth).automatic);
+            labels = std::move(judged.labels);
+            legend = std::move(judged.legend);
         } else if (!o.truth.empty() && scene) {
             LabelMask truth = projectTruth(*scene, o.truth);
             labels = std::move(truth.labels);

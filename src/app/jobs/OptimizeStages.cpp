@@ -460,9 +460,9 @@ void prepareComparisons(const Plan& p, Inputs& in, const OptimizeJobSummary& job
         in.regionLegend = in.truthLabels.legend;
         in.regionSource = "truth " + o.truth.filename().string();
     } else if (!in.defects.empty()) {
-        in.regionLabels.assign(in.defects.size(), 0);
-        for (size_t q = 0; q < in.defects.size(); ++q) in.regionLabels[q] = in.defects[q] ? 255 : 0;
-        in.regionLegend = {RegionLabel{255, "defects"}};
+        JudgedDefectLabels judged = judgedDefectLabels(in.defects, defectRegion(o).automatic);
+        in.regionLabels = std::move(judged.labels);
+        in.regionLegend = std::move(judged.legend);
         in.regionReference = in.reference;  // as judge --defects --reference scores it
         in.regionSource = "defect region " + defectRegion(o).text();
     } else if (o.mask.kind != LossMaskKind::Object) {

@@ -9,6 +9,7 @@
 #include "core/Image.h"
 #include "core/Text.h"
 #include "detect/DefectMap.h"
+#include "detect/MarkShapes.h"
 #include "io/ImageIO.h"
 #include "objective/ImageSpace.h"
 #include "scene/Scene.h"
@@ -53,7 +54,7 @@ std::vector<std::string> splitList(std::string_view s) {
 }  // namespace
 
 std::string RegionSpec::text() const {
-    if (automatic) return "auto";
+    if (automatic) return std::string(kAutoRegion);
     std::string t = file.string();
     for (size_t k = 0; k < labels.size(); ++k) {
         t += k ? "," : ":";
@@ -64,7 +65,7 @@ std::string RegionSpec::text() const {
 
 RegionSpec parseRegionSpec(std::string_view text, std::string_view optionName) {
     RegionSpec r;
-    if (text == "auto") {
+    if (text == kAutoRegion) {
         r.automatic = true;
         return r;
     }
@@ -144,8 +145,16 @@ DefectRegions defectRegionsInImage(const Scene& scene, const RegionSpec& defectS
     DefectRegions r;
     const RegionSpec defects = defectRegionSpec(defectSpec, truth);
     // The truth itself: every label, with its value.
-    r.defects = defectSpec.empty() && !truth.empty() ? projectTruth(scene, truth).labels
-                                                     : projectRegion(scene, defects);
+    if (defectSpec.empty() && !truth.empty())
+        r.defects = projectTruth(scene, truth).labels;
+    else if (defects.automatic)  // each mark labelled by its shape, as the judge scores it
+        r.defects = projectLabelsToImage(
+            tracePrimaryHits(scene),
+            labelMarksByShape(regionInHeightMap(defects, scene.mapWidth, scene.mapHeight,
+                                                scene.heights, scene.load.measured),
+                              scene.mapWidth, scene.mapHeight));
+    else
+        r.defects = projectRegion(scene, defects);
     if (defects.automatic &&
         std::none_of(r.defects.begin(), r.defects.end(), [](uint8_t v) { return v != 0; }))
         throw inputError(
@@ -160,6 +169,21 @@ DefectRegions defectRegionsInImage(const Scene& scene, const RegionSpec& defectS
             r.reference[q] = !marked[q] && !r.defects[q] ? 255 : 0;
     } else if (!reference.empty()) {
         r.reference = projectRegion(scene, reference);
+    }
+    return r;
+}
+
+JudgedDefectLabels judgedDefectLabels(std::span<const uint8_t> defects, bool byShape) {
+    JudgedDefectLabels r;
+    r.labels.assign(defects.begin(), defects.end());
+    if (byShape) {
+        bool present[256] = {};
+        for (const uint8_t v : r.labels) present[v] = true;
+        for (const RegionLabel& l : markShapeLegend())
+            if (present[l.value]) r.legend.push_back(l);
+    } else {
+        for (uint8_t& v : r.labels) v = v ? 255 : 0;
+        r.legend = {RegionLabel{255, "defects"}};
     }
     return r;
 }

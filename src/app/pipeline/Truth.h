@@ -10,6 +10,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/RegionLabel.h"
 #include "io/MaskIO.h"
 #include "io/OptimizeOutDir.h"
 
@@ -23,6 +24,9 @@ std::vector<uint8_t> projectMaskFile(const Scene& scene, const std::filesystem::
 
 /// readLabelMask projected into the image: the labels keep their values, the legend its names.
 LabelMask projectTruth(const Scene& scene, const std::filesystem::path& truth, int threads = 0);
+
+/// How a region names the defect map of the scene's own height map (RegionSpec::automatic).
+inline constexpr std::string_view kAutoRegion = "auto";
 
 /// A region drawn in height-map space, given as "FILE" (a mask: nonzero inside) or
 /// "auto" (the defect map of the scene's own height map, found without labels:
@@ -66,11 +70,22 @@ struct DefectRegions {
     std::vector<uint8_t> defects;
     std::vector<uint8_t> reference;  // empty: the objective's default (the part off the defects)
 };
-/// defects: defectRegionSpec(defects, truth) projected; reference: empty when not given, auto:
+/// defects: defectRegionSpec(defects, truth) projected (auto: each mark labelled by its shape,
+/// detect/MarkShapes.h labelMarksByShape, so the objective asks each kind to show); reference:
+/// empty when not given, auto:
 /// the part the defect map leaves unmarked and outside the defects, else the region given.
 /// Throws InputError when an automatic defect region marks nothing the camera sees.
 DefectRegions defectRegionsInImage(const Scene& scene, const RegionSpec& defects,
                                    const std::filesystem::path& truth, const RegionSpec& reference);
+
+/// A defect region's labels as the judge scores them and the reports outline and name them.
+struct JudgedDefectLabels {
+    std::vector<uint8_t> labels;      // 0 outside the region
+    std::vector<RegionLabel> legend;  // the labels present
+};
+/// `byShape` (the region is the defect map's own, `auto`): the marks' shapes as labelled
+/// (detect/MarkShapes.h: lines, spots), else one region "defects" (255) over every nonzero value.
+JudgedDefectLabels judgedDefectLabels(std::span<const uint8_t> defects, bool byShape);
 
 /// The defects objective's regions as an optimize output keeps them, in image space:
 /// regions-defects.png (the label values, 8-bit, tagged linear) and (when not the default)

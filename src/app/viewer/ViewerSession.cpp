@@ -93,6 +93,7 @@ ViewerObjective readViewerObjective(const fs::path& dir, int width, int height) 
                              "run optimize again to write it");
         o.defects = std::move(regions->defects);
         o.reference = std::move(regions->reference);
+        o.defectsByShape = s.defects == kAutoRegion;
     }
     return o;
 }
@@ -196,9 +197,9 @@ ViewerSession::ViewerSession(const ViewerOptions& options) : options_(options) {
         if (made_->options.defectMeasure == DefectMeasure::Both && extraPresets_.count("lamp"))
             made_->options.anchorLight = extraPresets_.at("lamp");
         if (truth.empty() && made_->kind == ObjectiveKind::Defects) {
-            labels_.assign(made_->defects.size(), 0);
-            for (size_t q = 0; q < labels_.size(); ++q) labels_[q] = made_->defects[q] ? 255 : 0;
-            legend_ = {RegionLabel{255, "defects"}};
+            JudgedDefectLabels judged = judgedDefectLabels(made_->defects, made_->defectsByShape);
+            labels_ = std::move(judged.labels);
+            legend_ = std::move(judged.legend);
             reference_ = made_->reference;
         }
         // The regions optimize outlined (a transparent layer), when there are no labels here.

@@ -89,7 +89,8 @@ struct ViewerObjective {
     ObjectiveOptions options;   // λ, smooth_abs (summary.json)
     std::vector<uint8_t> mask;  // the loss mask (mask.png; empty: the part)
     std::vector<uint8_t> defects,
-        reference;  // the defects objective's regions (app/pipeline/Truth.h)
+        reference;                // the defects objective's regions (app/pipeline/Truth.h)
+    bool defectsByShape = false;  // the region is the defect map's own (auto): labelled by shape
 };
 /// Reads it from an optimize OUTDIR (summary.json "objective", "lambda", "smooth_abs", mask.png,
 /// the region files) for a T of width×height; InputError naming the file when one is unfit.
