@@ -498,6 +498,9 @@ TEST(JudgeCommand, ScoresTheDefectRegionAsOptimizeDoes) {
     const auto summary = nlohmann::json::parse(test::readFile(opt / "summary.json"));
     ASSERT_EQ(summary.value("defects", ""), "auto") << summary.dump(1);
     const auto& optimized = summary.at("judge").at("visibility");
+    // The report's caption names each region's outline colour (app/report/Preview.h outlineOf).
+    EXPECT_NE(test::readFile(opt / "report.html").find("Outlines: defect region auto (lines red"),
+              std::string::npos);
 
     const auto out = dir.path() / "judged";
     r = test::runCli("judge " + scene + " " + opt.string() +

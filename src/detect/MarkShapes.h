@@ -26,8 +26,9 @@
 namespace sl {
 
 inline constexpr double kLineElongation = 3.0;
-inline constexpr uint8_t kMarkLine = 200;  // the label of a line-shaped mark
-inline constexpr uint8_t kMarkSpot = 100;  // the label of any other mark
+// The labels' values, as outlines show them (app/report/Preview.h outlineOf): red, yellow.
+inline constexpr uint8_t kMarkLine = 255;  // the label of a line-shaped mark
+inline constexpr uint8_t kMarkSpot = 160;  // the label of any other mark
 
 /// The labels' names, as a legend (kMarkLine "lines", kMarkSpot "spots").
 std::vector<RegionLabel> markShapeLegend();

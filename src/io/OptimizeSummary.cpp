@@ -68,6 +68,8 @@ std::optional<JudgedLight> judgedAt(const json& d, const std::string& at,
             take(d, r, where, kObject);
             JudgedRegion g;
             g.name = stringAt(d, r + "/name", where);
+            const double value = numberAt(d, r + "/value", where);
+            g.value = std::isfinite(value) ? static_cast<int>(value) : 0;
             const double pixels = numberAt(d, r + "/pixels", where);
             g.pixels = std::isfinite(pixels) ? pixels : 0.0;
             g.visibility = numberAt(d, r + "/visibility", where);

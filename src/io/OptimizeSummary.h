@@ -20,6 +20,7 @@ namespace sl::outdir {
 /// One defect region of a judge score (/visibility/k of app/pipeline/Judge.h toJson).
 struct JudgedRegion {
     std::string name;                                              // name
+    int value = 0;                                                 // value: its label (absent: 0)
     double pixels = 0;                                             // pixels (absent: 0)
     double visibility = std::numeric_limits<double>::quiet_NaN();  // visibility
     double jnd = std::numeric_limits<double>::quiet_NaN();         // jnd

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <sstream>
 
+#include "app/report/Preview.h"
 #include "app/report/Report.h"
 #include "app/report/ReportDetail.h"
 #include "core/Error.h"
@@ -450,6 +451,20 @@ std::string headlineOf(const outdir::OptimizeSummary& summary) {
     return out;
 }
 
+/// The outlines' colours: each judged region's name and colour (outlineOf its label), else
+/// (no judge) the colour of each value.
+std::string outlineLegend(const outdir::Comparison& cmp) {
+    std::string out;
+    const auto& judged = cmp.optimized.judge;
+    if (judged && judged->regions)
+        for (const outdir::JudgedRegion& r : *judged->regions) {
+            if (r.pixels <= 0 || r.value < 1 || r.value > 255) continue;
+            out += (out.empty() ? "" : ", ") + r.name + " " +
+                   outlineOf(static_cast<uint8_t>(r.value)).name;
+        }
+    return out.empty() ? "red 255, orange 224, magenta 192, yellow 160, cyan 144, blue 128" : out;
+}
+
 }  // namespace
 
 std::string optimizeHeadline(const json& s) {
@@ -584,8 +599,8 @@ std::string renderOptimizeReportHtml(const std::filesystem::path& dir,
          "percentile at 0.8), as a camera would. Drag the slider to move between your lamp ("
       << escapeXml(lampName) << ") on the left and the optimized light on the right.";
     if (regions)
-        h << " Outlines: " << escapeXml(cmp.regions.value_or("defect regions"))
-          << " (red 255, orange 224, magenta 192, yellow 160, cyan 144, blue 128).";
+        h << " Outlines: " << escapeXml(cmp.regions.value_or("defect regions")) << " ("
+          << escapeXml(outlineLegend(cmp)) << ").";
     h << "</p>\n";
     if (std::filesystem::exists(dir / outdir::kViewPaper))
         h << "<div class=\"stills\"><figure><img alt=\"the paper's light\" src=\""
