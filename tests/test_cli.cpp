@@ -487,6 +487,34 @@ TEST_F(CliTest, DefectMapWritesWhereItCouldNotJudgeOnAMeasuredFile) {
     EXPECT_FALSE(std::filesystem::exists(dir / "g-map-unjudged.png"));
 }
 
+// optimize without labels on a measured file (the defect map's regions, auto): what the map
+// could not judge is named in the warnings, the summary and the report, so a person looks there.
+TEST_F(CliTest, OptimizeWithoutLabelsWarnsWhereTheMapCouldNotJudge) {
+    const std::filesystem::path f = dir / "part.sdf";
+    writeAsciiSdf(f, 256, 224, [](int x, int y) {
+        const int crater = (x - 30) * (x - 30) + (y - 112) * (y - 112);  // reaches the border
+        const int pit = (x - 150) * (x - 150) + (y - 100) * (y - 100);
+        return (x * 7 + y * 13) % 11 - 5 - (crater < 900 ? (40 * (900 - crater)) / 900 : 0) -
+               (pit < 36 ? (40 * (36 - pit)) / 36 : 0);
+    });
+    {
+        std::ofstream scene(dir / "part.json");
+        scene << R"({"heightmap": {"path": "part.sdf"}})";
+    }
+    const auto out = dir / "opt";
+    const auto r =
+        runCli("optimize " + (dir / "part.json").string() +
+               " --defects auto --size 32 --iterations 20 --heldout-spp 16 -o " + out.string());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("the defect map could not judge 1 region that stands out"),
+              std::string::npos)
+        << r.output;
+    EXPECT_NE(test::readFile(out / "summary.json").find("the defect map could not judge 1 region"),
+              std::string::npos);
+    EXPECT_NE(test::readFile(out / "report.html").find("the defect map could not judge 1 region"),
+              std::string::npos);
+}
+
 // Issue 35 (second pass): defectmap wrote its map, then found a directory where the score CSV
 // goes and failed with the map left behind; `defectmap -o` replaced its own truth and
 // `--score-output` its height map, `scratchmap -o` a PNG height map it read (exit 0). Their

@@ -13,9 +13,13 @@
 #include <vector>
 
 #include "SyntheticDefects.h"
+#include "TestUtil.h"
+#include "app/pipeline/Truth.h"
 #include "core/Error.h"
 #include "detect/DefectMap.h"
+#include "detect/MarkShapes.h"
 #include "detect/SelfSimMap.h"
+#include "scene/Scene.h"
 
 using namespace sl;
 
@@ -200,6 +204,32 @@ RidgeAndPit ridgeAndPit() {
 }
 
 }  // namespace
+
+// optimize's defect region auto (app/pipeline/Truth.h defectRegionsInImage) on a measured
+// part: the map's marks by shape, and what the map could not judge, counted as the map does, so
+// optimize can warn that the light was not asked to show it.
+TEST(SelfSimMap, TheObjectivesAutoRegionCountsWhatTheMapCouldNotJudge) {
+    auto [h, ridge, pitTruth] = ridgeAndPit();
+    for (float& v : h) v *= 0.01f;  // heights in mm on the bumpy part's 0.05 mm samples
+    Scene scene(test::bumpyPartDesc(64, 56), kW, kH, h);
+    scene.load.measured = true;
+    const DefectRegions r = defectRegionsInImage(scene, parseRegionSpec("auto", "defects"), {}, {});
+    DefectMapOptions measured;
+    measured.measured = true;
+    const DefectMap d = detectDefects(h, kW, kH, measured);
+    ASSERT_GE(d.unjudgedRegions, 1u);
+    EXPECT_EQ(r.unjudgedRegions, d.unjudgedRegions);
+    EXPECT_DOUBLE_EQ(r.unjudgedShare,
+                     static_cast<double>(d.unjudgedCount()) / static_cast<double>(h.size()));
+    size_t marked = 0, other = 0;
+    for (const uint8_t v : r.defects) {
+        marked += v != 0;
+        other += v != 0 && v != kMarkLine && v != kMarkSpot;
+    }
+    EXPECT_GT(marked, 0u) << "the pit, seen by the camera";
+    EXPECT_EQ(other, 0u);
+    EXPECT_TRUE(r.reference.empty()) << "the objective's default reference";
+}
 
 TEST(SelfSimMap, StriationsAreTheBackgroundThePitAndTheGrooveAreMarked) {
     std::vector<float> h = striations(3);

@@ -83,6 +83,8 @@ OptimizeJobSummary runOptimizeJob(const OptimizeJobOptions& options) {
             if (kept.sceneParts) {  // what does not depend on T: computed once
                 in.defects = std::move(kept.defects);
                 in.reference = std::move(kept.reference);
+                in.unjudgedRegions = kept.unjudgedRegions;
+                in.unjudgedShare = kept.unjudgedShare;
                 in.truth = std::move(kept.truth);
                 in.truthLabels = std::move(kept.truthLabels);
                 in.lampName = std::move(kept.lampName);

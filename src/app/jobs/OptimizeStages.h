@@ -52,6 +52,8 @@ struct Inputs {
     ObjectiveKind kind = ObjectiveKind::Unbiased;
     bool onHalves() const { return registryRow(objectiveKindTable(), kind).planes == 2; }
     std::vector<uint8_t> defects, reference;  // the defects objective's regions (image)
+    size_t unjudgedRegions = 0;  // auto: the regions the defect map could not judge (Truth.h)
+    double unjudgedShare = 0;    // and their share of the height map
     /// The training trace's per-pixel sample multipliers (app/pipeline/TrainingNoise.h
     /// defectSppScale; empty: none), chosen on the first load from the scene and the regions, kept
     /// after.

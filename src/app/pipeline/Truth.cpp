@@ -147,13 +147,17 @@ DefectRegions defectRegionsInImage(const Scene& scene, const RegionSpec& defectS
     // The truth itself: every label, with its value.
     if (defectSpec.empty() && !truth.empty())
         r.defects = projectTruth(scene, truth).labels;
-    else if (defects.automatic)  // each mark labelled by its shape, as the judge scores it
-        r.defects = projectLabelsToImage(
-            tracePrimaryHits(scene),
-            labelMarksByShape(regionInHeightMap(defects, scene.mapWidth, scene.mapHeight,
-                                                scene.heights, scene.load.measured),
-                              scene.mapWidth, scene.mapHeight));
-    else
+    else if (defects.automatic) {  // each mark labelled by its shape, as the judge scores it
+        DefectMapOptions o;
+        o.measured = scene.load.measured;
+        const DefectMap m = detectDefects(scene.heights, scene.mapWidth, scene.mapHeight, o);
+        r.defects = projectLabelsToImage(tracePrimaryHits(scene),
+                                         labelMarksByShape(m.map, scene.mapWidth, scene.mapHeight));
+        r.unjudgedRegions = m.unjudgedRegions;
+        if (!m.unjudged.empty())
+            r.unjudgedShare =
+                static_cast<double>(m.unjudgedCount()) / static_cast<double>(m.unjudged.size());
+    } else
         r.defects = projectRegion(scene, defects);
     if (defects.automatic &&
         std::none_of(r.defects.begin(), r.defects.end(), [](uint8_t v) { return v != 0; }))

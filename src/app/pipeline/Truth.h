@@ -69,6 +69,11 @@ RegionSpec defectRegionSpec(const RegionSpec& defects, const std::filesystem::pa
 struct DefectRegions {
     std::vector<uint8_t> defects;
     std::vector<uint8_t> reference;  // empty: the objective's default (the part off the defects)
+    // auto only: the regions the defect map could not judge (DefectMap::unjudgedRegions: they
+    // stand out of the texture but reach its border, left unmarked, so they are in the
+    // reference) and their share of the height map's samples
+    size_t unjudgedRegions = 0;
+    double unjudgedShare = 0;
 };
 /// defects: defectRegionSpec(defects, truth) projected (auto: each mark labelled by its shape,
 /// detect/MarkShapes.h labelMarksByShape, so the objective asks each kind to show); reference:
