@@ -164,7 +164,8 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
             throw inputError(option("reference"), "is the reference of a defect region",
                              "give " + option("defects") + " too (e.g. auto)");
         // With a defect region: its regions in the image first (a bad mask fails before the
-        // trace), then one region "defects" as optimize's held-out judge scores it.
+        // trace), then its labels as optimize's held-out judge scores them (app/pipeline/Truth.h
+        // judgedDefectLabels: auto's lines and spots, else one region "defects").
         std::optional<DefectRegions> regions;
         if (!o.defects.empty())
             regions = defectRegionsInImage(*scene, o.defects, jo.truth, o.reference);

@@ -51,6 +51,14 @@ std::vector<std::string> splitList(std::string_view s) {
     return out;
 }
 
+/// The defect map a region "auto" is: the default method and options, on a measured map the
+/// method for measured textures (detect/DefectMap.h).
+DefectMap autoDefectMap(std::span<const float> heights, int width, int height, bool measured) {
+    DefectMapOptions o;
+    o.measured = measured;
+    return detectDefects(heights, width, height, o);
+}
+
 }  // namespace
 
 std::string RegionSpec::text() const {
@@ -91,9 +99,7 @@ std::vector<uint8_t> regionInHeightMap(const RegionSpec& region, int mapWidth, i
     if (region.automatic) {
         if (heights.size() != static_cast<size_t>(mapWidth) * static_cast<size_t>(mapHeight))
             throw std::invalid_argument("regionInHeightMap: auto needs the height map");
-        DefectMapOptions o;
-        o.measured = measured;
-        return detectDefects(heights, mapWidth, mapHeight, o).map;
+        return autoDefectMap(heights, mapWidth, mapHeight, measured).map;
     }
     if (region.labels.empty()) return loadHeightMapMask(region.file, mapWidth, mapHeight);
     const LabelMask m = readLabelMask(region.file, mapWidth, mapHeight);
@@ -148,9 +154,8 @@ DefectRegions defectRegionsInImage(const Scene& scene, const RegionSpec& defectS
     if (defectSpec.empty() && !truth.empty())
         r.defects = projectTruth(scene, truth).labels;
     else if (defects.automatic) {  // each mark labelled by its shape, as the judge scores it
-        DefectMapOptions o;
-        o.measured = scene.load.measured;
-        const DefectMap m = detectDefects(scene.heights, scene.mapWidth, scene.mapHeight, o);
+        const DefectMap m =
+            autoDefectMap(scene.heights, scene.mapWidth, scene.mapHeight, scene.load.measured);
         r.defects = projectLabelsToImage(tracePrimaryHits(scene),
                                          labelMarksByShape(m.map, scene.mapWidth, scene.mapHeight));
         r.unjudgedRegions = m.unjudgedRegions;
