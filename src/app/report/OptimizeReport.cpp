@@ -462,7 +462,10 @@ std::string outlineLegend(const outdir::Comparison& cmp) {
             out += (out.empty() ? "" : ", ") + r.name + " " +
                    outlineOf(static_cast<uint8_t>(r.value)).name;
         }
-    return out.empty() ? "red 255, orange 224, magenta 192, yellow 160, cyan 144, blue 128" : out;
+    if (out.empty())
+        for (const OutlineColour& c : outlineColours())
+            out += (out.empty() ? "" : ", ") + std::string(c.name) + " " + std::to_string(c.value);
+    return out;
 }
 
 }  // namespace

@@ -39,6 +39,10 @@ constexpr OutlineColour kOutlines[] = {
 
 }  // namespace
 
+std::span<const OutlineColour> outlineColours() {
+    return kOutlines;
+}
+
 const OutlineColour& outlineOf(uint8_t v) {
     static constexpr OutlineColour white{0, 1.0f, 1.0f, 1.0f, "white"};
     for (const OutlineColour& c : kOutlines)

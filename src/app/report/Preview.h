@@ -29,6 +29,8 @@ struct OutlineColour {
     const char* name;
 };
 const OutlineColour& outlineOf(uint8_t value);
+/// Every value with a colour of its own, in that order (red 255 first).
+std::span<const OutlineColour> outlineColours();
 
 /// A w×h luminance render as an RGB preview (exposureScale), gray, with the boundary pixels of
 /// every labelled region (a pixel of the region with a 4-neighbour outside it; `labels` empty:
