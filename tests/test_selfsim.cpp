@@ -229,6 +229,15 @@ TEST(SelfSimMap, TheObjectivesAutoRegionCountsWhatTheMapCouldNotJudge) {
     EXPECT_GT(marked, 0u) << "the pit, seen by the camera";
     EXPECT_EQ(other, 0u);
     EXPECT_TRUE(r.reference.empty()) << "the objective's default reference";
+    // --reference auto beside --defects auto: the part off the marks, the same map
+    const DefectRegions both = defectRegionsInImage(scene, parseRegionSpec("auto", "defects"), {},
+                                                    parseRegionSpec("auto", "reference"));
+    EXPECT_EQ(both.defects, r.defects);
+    ASSERT_EQ(both.reference.size(), r.defects.size());
+    size_t wrong = 0;
+    for (size_t q = 0; q < r.defects.size(); ++q)
+        wrong += both.reference[q] != (r.defects[q] ? 0 : 255);
+    EXPECT_EQ(wrong, 0u);
 }
 
 TEST(SelfSimMap, StriationsAreTheBackgroundThePitAndTheGrooveAreMarked) {

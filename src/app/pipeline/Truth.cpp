@@ -171,8 +171,10 @@ DefectRegions defectRegionsInImage(const Scene& scene, const RegionSpec& defectS
             "the defect map of the height map marks nothing the camera sees",
             "give a defect mask with " + option("defects") + " or a truth with " + option("truth"));
     if (reference.automatic) {
-        // The part the defect map finds clean and that is not a defect region pixel.
-        const std::vector<uint8_t> marked = projectRegion(scene, reference);
+        // The part the defect map finds clean and that is not a defect region pixel (with the
+        // defects auto too, the map is theirs: not made and traced again).
+        const std::vector<uint8_t> marked =
+            defects.automatic ? r.defects : projectRegion(scene, reference);
         r.reference.assign(marked.size(), 0);
         for (size_t q = 0; q < marked.size(); ++q)
             r.reference[q] = !marked[q] && !r.defects[q] ? 255 : 0;
