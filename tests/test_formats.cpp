@@ -701,6 +701,145 @@ TEST(FormatsSdf, UnsupportedAndDamagedFilesAreRefusedNamingFileAndField) {
 
 // --- scenes -------------------------------------------------------------------------------------
 
+TEST(FormatsX3p, InfinitePointsAreInvalidAndPitchesAHairApartAreNotInterpolated) {
+    // Alicona's X3P export marks an unmeasured point +Inf and writes pitches that differ in the
+    // fifth digit (2.279984 x 2.279795 µm): the points are filled as NaN ones are, and the map
+    // keeps its samples (interpolating onto a 0.008 % finer pitch would only blur it).
+    test::TempDir dir("x3p");
+    X3pSpec s;
+    s.zType = "F";
+    s.incX = 2.279984e-6;
+    s.incY = 2.279795e-6;
+    s.values = ramp(4, 3);
+    for (double& v : s.values) v *= 1e-6;
+    s.values[5] = std::numeric_limits<double>::infinity();   // row 1, column 1
+    s.values[6] = -std::numeric_limits<double>::infinity();  // row 1, column 2
+    writeX3p(dir / "alicona.x3p", s);
+    const HeightmapData d = loadHeightmap(dir / "alicona.x3p", {});
+    EXPECT_EQ(d.invalidFilled, 2u);
+    EXPECT_EQ(d.width, 4);
+    EXPECT_EQ(d.height, 3);
+    EXPECT_NEAR(*d.pitch, 2.279795e-3, 1e-12);  // the finer pitch
+    EXPECT_NE(d.resampling.find("read as square"), std::string::npos) << d.resampling;
+    EXPECT_NE(d.resampling.find("differ by 0.0083 %, within the 0.1 %"), std::string::npos)
+        << d.resampling;
+    // Every measured sample is the file's, unmoved.
+    for (size_t k = 0; k < 12; ++k) {
+        if (k == 5 || k == 6) continue;
+        EXPECT_FLOAT_EQ(d.heights[k], static_cast<float>(static_cast<float>(s.values[k]) * 1e3));
+    }
+    // Side by side, each is the mean of its valid neighbours (not of the other).
+    EXPECT_NEAR(d.heights[5], (1 + 10 + 21) / 3.0 * 1e-3, 1e-7);
+    EXPECT_NEAR(d.heights[6], (2 + 13 + 22) / 3.0 * 1e-3, 1e-7);
+
+    // Pitches further apart than a calibration (0.1 %) are interpolated: 2 % onto 4.9 µm.
+    X3pSpec near;
+    near.incY = 4.9e-6;  // finer along y: columns are interpolated, rows kept
+    near.sizeX = 60;
+    near.values = ramp(60, 3);
+    writeX3p(dir / "near.x3p", near);
+    const HeightmapData dn = loadHeightmap(dir / "near.x3p", {});
+    EXPECT_EQ(dn.width, 61);  // ⌊59·5/4.9⌋ + 1
+    EXPECT_NE(dn.resampling.find("onto the finer pitch"), std::string::npos) << dn.resampling;
+}
+
+/// A TrueMap v2.0 file (io/HeightmapIO.h): `cut` bytes short, or with `extra` bytes after it.
+void writeTrueMap(const fs::path& p, uint32_t w, uint32_t h, float lx, float ly,
+                  const std::vector<float>& z, size_t cut = 0) {
+    std::string out = "Binary TrueMap Data File v2.0\r\n";
+    out.push_back('\0');
+    out += std::string("Created by a test") + std::string(7, ' ');
+    const auto put = [&](auto v) {
+        char b[sizeof v];
+        std::memcpy(b, &v, sizeof v);  // the tests run on little-endian hosts
+        out.append(b, sizeof v);
+    };
+    put(w);
+    put(h);
+    for (float v : {lx, ly, 0.0f, 0.0f}) put(v);
+    for (float v : z) put(v);
+    out.resize(out.size() - cut);
+    test::writeText(p, out);
+}
+
+TEST(FormatsTrueMap, ValuesPitchInvalidPointsAndDamagedFiles) {
+    test::TempDir dir("tmd");
+    std::vector<float> z;
+    for (double v : ramp(4, 3)) z.push_back(static_cast<float>(v * 1e-3));  // mm
+    z[5] = std::numeric_limits<float>::quiet_NaN();  // neighbours 1, 10, 12, 21 (µm)
+    writeTrueMap(dir / "a.tmd", 4, 3, 0.02f, 0.015f, z);
+    // Read by its content, whatever its name.
+    fs::copy_file(dir / "a.tmd", dir / "a.dat");
+    for (const char* name : {"a.tmd", "a.dat"}) {
+        SCOPED_TRACE(name);
+        const HeightmapData d = loadHeightmap(dir / name, {});
+        EXPECT_EQ(d.format.rfind("truemap v2.0 float32", 0), 0u) << d.format;
+        EXPECT_EQ(d.width, 4);
+        EXPECT_EQ(d.height, 3);
+        EXPECT_NEAR(*d.pitch, 0.005, 1e-9);  // 0.02 mm over 4 samples; 0.015 over 3
+        EXPECT_TRUE(d.resampling.empty()) << d.resampling;
+        EXPECT_EQ(d.invalidFilled, 1u);
+        EXPECT_FLOAT_EQ(d.heights[11], 0.023f);  // row 2, column 3
+        EXPECT_NEAR(d.heights[5], (1 + 10 + 12 + 21) / 4.0 * 1e-3, 1e-7);
+    }
+    writeTrueMap(dir / "short.tmd", 4, 3, 0.02f, 0.015f, z, 4);
+    expectRefused(dir / "short.tmd", {"124 bytes", "4 x 3", "128"});
+    writeTrueMap(dir / "flat.tmd", 4, 3, 0.0f, 0.015f, z);
+    expectRefused(dir / "flat.tmd", {"lengths X and Y"});
+    writeTrueMap(dir / "huge.tmd", 4, 2000000, 0.02f, 0.015f, z);
+    expectRefused(dir / "huge.tmd", {"4 x 2000000"});
+    test::writeText(dir / "v1.tmd", "Binary TrueMap Data File v1.0 and then some bytes\n");
+    expectRefused(dir / "v1.tmd", {"not a TrueMap v2.0 file"});
+}
+
+/// A NanoFocus NMS file (io/HeightmapIO.h): codes, z range in µm, spacing in nm.
+void writeNms(const fs::path& p, uint32_t nx, uint32_t ny, double zmin, double zmax, double dx,
+              double dy, const std::vector<uint16_t>& codes, bool intensities, size_t cut = 0) {
+    std::string out(3468, '\0');
+    const auto at = [&](size_t o, auto v) { std::memcpy(out.data() + o, &v, sizeof v); };
+    std::memcpy(out.data() + 32, "OM_MS_2.0", 9);
+    at(16, zmin);
+    at(24, zmax);
+    at(1368, nx);
+    at(1372, ny);
+    at(1376, dx);
+    at(1384, dy);
+    for (uint16_t c : codes) out.append(reinterpret_cast<const char*>(&c), 2);
+    if (intensities) out.append(codes.size(), '\x7f');
+    out.resize(out.size() - cut);
+    test::writeText(p, out);
+}
+
+TEST(FormatsNms, CodesSpanTheHeaderRangePitchAndDamagedFiles) {
+    test::TempDir dir("nms");
+    std::vector<uint16_t> codes(12);
+    for (size_t k = 0; k < 12; ++k) codes[k] = static_cast<uint16_t>(k * 5957);
+    codes[11] = 65535;
+    writeNms(dir / "a.nms", 4, 3, 2.0, 8.0, 312.5, 312.5, codes, true);
+    writeNms(dir / "b.bin", 4, 3, 2.0, 8.0, 312.5, 400.0, codes, false);  // no intensities
+    const HeightmapData a = loadHeightmap(dir / "a.nms", {});
+    EXPECT_EQ(a.format, "nanofocus nms uint16");
+    EXPECT_EQ(a.width, 4);
+    EXPECT_EQ(a.height, 3);
+    EXPECT_NEAR(*a.pitch, 312.5e-6, 1e-15);  // nm -> mm
+    for (size_t k = 0; k < 12; ++k)  // code 0 is z min, 65535 z max (µm -> mm)
+        EXPECT_NEAR(a.heights[k], (2.0 + 6.0 * codes[k] / 65535.0) * 1e-3, 1e-9) << k;
+    EXPECT_NEAR(a.heights[11], 8e-3, 1e-9);
+    const HeightmapData b = loadHeightmap(dir / "b.bin", {});  // by content, resampled along y
+    EXPECT_EQ(b.width, 4);
+    EXPECT_EQ(b.height, 3);  // ⌊2·400/312.5⌋ + 1
+    EXPECT_NE(b.resampling.find("onto the finer pitch"), std::string::npos) << b.resampling;
+
+    writeNms(dir / "short.nms", 4, 3, 2.0, 8.0, 312.5, 312.5, codes, true, 1);
+    expectRefused(dir / "short.nms", {"3503 bytes", "3492", "3504"});
+    writeNms(dir / "range.nms", 4, 3, 8.0, 2.0, 312.5, 312.5, codes, true);
+    expectRefused(dir / "range.nms", {"height range", "byte 16"});
+    writeNms(dir / "pitch.nms", 4, 3, 2.0, 8.0, 0.0, 312.5, codes, true);
+    expectRefused(dir / "pitch.nms", {"spacing", "byte 1376"});
+    test::writeText(dir / "other.nms", std::string(40, 'x'));
+    expectRefused(dir / "other.nms", {"not a NanoFocus NMS file"});
+}
+
 TEST(FormatsScene, PitchComesFromTheFileUnlessTheSceneGivesOne) {
     test::TempDir dir("scene");
     X3pSpec s;

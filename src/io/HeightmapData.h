@@ -34,6 +34,9 @@ namespace detail {
 /// Largest side and sample count an X3P or SDF header may claim (a larger claim is refused).
 inline constexpr long long kMaxMetrologySide = 1000000;
 inline constexpr long long kMaxMetrologySamples = 400000000;
+/// X and Y pitches at most this far apart (relative) are read as square, not interpolated: an
+/// instrument's pitch calibration is known to about 0.1 % (io/HeightmapIO.h).
+inline constexpr double kSquarePitchTolerance = 1e-3;
 }  // namespace detail
 
 }  // namespace sl

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <new>
 #include <system_error>
 
@@ -14,8 +15,10 @@
 #include "io/GwyddionReader.h"
 #include "io/ImageFile.h"
 #include "io/ImageIO.h"
+#include "io/NanoFocusNms.h"
 #include "io/Npy.h"
 #include "io/Sdf.h"
+#include "io/TrueMap.h"
 #include "io/X3p.h"
 
 namespace sl {
@@ -228,6 +231,19 @@ void resampleSquare(const std::string& where, HeightmapData& d) {
         return;
     }
     const double ratio = (alongY ? py : px) / p;
+    if (ratio - 1.0 <= detail::kSquarePitchTolerance) {
+        // Pitches a hair apart (an instrument's calibration, e.g. 19.57 x 19.58 nm): within
+        // what a calibration knows, so interpolating would only blur the map; its samples are
+        // kept and called square at the finer pitch.
+        d.resampling = std::to_string(w) + "x" + std::to_string(h) + " samples of " +
+                       micrometres(px) + " x " + micrometres(py) + " um read as square at " +
+                       micrometres(p) + " um (the pitches differ by " +
+                       formatNumber(100.0 * (ratio - 1.0), 2) + " %, within the " +
+                       formatNumber(100.0 * detail::kSquarePitchTolerance) +
+                       " % read as square: no interpolation)";
+        d.pitch = p;
+        return;
+    }
     // Real instruments differ by a few times at most (a line scanner's profiles perhaps 100);
     // a 124-byte file with a 1e7 ratio made 1.6 GB of interpolated points (scripts/fuzz).
     if (!(ratio <= 1000))
@@ -284,8 +300,14 @@ HeightmapData finishMetrology(const std::string& where, HeightmapData d,
                               const HeightmapOptions& opt) {
     checkSize(where, d.width, d.height);
     const Mapping m = mappingFor(where, opt, false, d.format);
+    // NaN, and +-Inf as some instruments mark an unmeasured point (Alicona's X3P export):
+    // both are invalid points, filled below.
     size_t invalid = 0;
-    for (float v : d.heights) invalid += std::isnan(v) ? 1 : 0;
+    for (float& v : d.heights)
+        if (!std::isfinite(v)) {
+            v = std::numeric_limits<float>::quiet_NaN();
+            ++invalid;
+        }
     const size_t n = d.heights.size();
     if (invalid == n)
         throw inputError(where, "every point of the height map is invalid (" + d.format + ")",
@@ -293,7 +315,7 @@ HeightmapData finishMetrology(const std::string& where, HeightmapData d,
     if (invalid > n / 2)
         throw inputError(where,
                          std::to_string(invalid) + " of " + std::to_string(n) +
-                             " points are invalid (NaN or masked), more than half; the height "
+                             " points are invalid (NaN, infinite or masked), more than half; the height "
                              "map would be mostly invented",
                          "Crop the measurement to its valid region and export it again");
     d.invalidFilled = fillInvalid(d);
@@ -425,22 +447,24 @@ HeightmapData loadWithOiio(const fs::path& file, const HeightmapOptions& opt) {
 }
 
 /// What a file's first bytes say it is.
-enum class Content { Npy, Zip, Sdf, Image, Unknown };
+enum class Content { Npy, Zip, Sdf, TrueMap, Nms, Image, Unknown };
 
 Content sniff(const fs::path& file) {
-    unsigned char b[8] = {};
+    unsigned char b[kNmsNameOffset + kNmsNameLength] = {};
     size_t got = 0;
     if (FILE* f = std::fopen(file.c_str(), "rb")) {
         got = std::fread(b, 1, sizeof b, f);
         std::fclose(f);
     }
-    const auto starts = [&](const char* magic, size_t len) {
-        return got >= len && std::memcmp(b, magic, len) == 0;
+    const auto starts = [&](const char* magic, size_t len, size_t at = 0) {
+        return got >= at + len && std::memcmp(b + at, magic, len) == 0;
     };
     if (starts("\x93NUMPY", 6)) return Content::Npy;
     if (starts("PK\x03\x04", 4)) return Content::Zip;
     if (starts("aBCR-", 5) || starts("bBCR-", 5) || starts("aISO-", 5) || starts("bISO-", 5))
         return Content::Sdf;
+    if (starts(kTrueMapMagic, kTrueMapMagicLength)) return Content::TrueMap;
+    if (starts(kNmsName, kNmsNameLength, kNmsNameOffset)) return Content::Nms;
     if (starts("\x76\x2f\x31\x01", 4) || starts("\x89PNG", 4) || starts("II*\0", 4) ||
         starts("MM\0*", 4) || starts("\xff\xd8\xff", 3))
         return Content::Image;
@@ -468,6 +492,10 @@ HeightmapData loadHeightmap(const fs::path& file, const HeightmapOptions& opt,
             return loadNpy(file, opt);
         case Content::Sdf:
             return finishMetrology(where, readSdf(file), opt);
+        case Content::TrueMap:
+            return finishMetrology(where, readTrueMap(file), opt);
+        case Content::Nms:
+            return finishMetrology(where, readNanoFocusNms(file), opt);
         case Content::Image:
             return loadWithOiio(file, opt);
         case Content::Zip:
@@ -488,6 +516,8 @@ HeightmapData loadHeightmap(const fs::path& file, const HeightmapOptions& opt,
     if (ext == ".npy") return loadNpy(file, opt);
     if (ext == ".x3p") return finishMetrology(where, readX3p(file), opt);
     if (ext == ".sdf") return finishMetrology(where, readSdf(file), opt);
+    if (ext == ".tmd") return finishMetrology(where, readTrueMap(file), opt);
+    if (ext == ".nms") return finishMetrology(where, readNanoFocusNms(file), opt);
     const bool image = ext == ".exr" || ext == ".tif" || ext == ".tiff" || ext == ".png" ||
                        ext == ".jpg" || ext == ".jpeg" || ext == ".hdr";
     if (image) return loadWithOiio(file, opt);
@@ -499,12 +529,13 @@ HeightmapData loadHeightmap(const fs::path& file, const HeightmapOptions& opt,
         if (gwyddionBuilt())
             throw inputError(where,
                              "no reader claims this file: it is not an image (EXR, TIFF, PNG), "
-                             ".npy, X3P or SDF, and none of Gwyddion's file modules reads it",
+                             ".npy, X3P, SDF, TrueMap .tmd or NanoFocus .nms, and none of "
+                             "Gwyddion's file modules reads it",
                              "Check that the file is whole, or export it from the instrument's "
                              "software as X3P or SDF");
         throw inputError(where,
                          "no reader claims this file: it is not an image (EXR, TIFF, PNG), .npy, "
-                         "X3P or SDF, and this scratchlight was built without Gwyddion "
+                         "X3P, SDF, TrueMap .tmd or NanoFocus .nms, and this scratchlight was built without Gwyddion "
                          "(SCRATCHLIGHT_GWYDDION=OFF), whose file modules read instrument "
                          "formats (.opd, .plu, .sur, .dat, ...)",
                          "Build scratchlight with -DSCRATCHLIGHT_GWYDDION=ON, or export the file "

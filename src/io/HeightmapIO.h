@@ -23,7 +23,8 @@
 //         I (int16), L (int32), F (float32) or D (float64), z = value · CZ/Increment (default 1)
 //         + CZ/Offset (default 0); Record3/MatrixDimension SizeX × SizeY with SizeZ 1; binary
 //         little-endian data (Record3/DataLink/PointDataLink, usually bindata/data.bin) X
-//         fastest, then Y. Invalid points: NaN (float types) and the optional valid-points
+//         fastest, then Y. Invalid points: NaN or ±Inf (float types; Alicona's export writes
+//         +Inf) and the optional valid-points
 //         mask (Record3/DataLink/ValidPointsLink, 1 bit per point, LSB first, 0 = invalid).
 //         MD5 checksums are verified when given (Record3/DataLink/MD5ChecksumPointData and
 //         MD5ChecksumValidPoints; main.xml against the Record4/ChecksumFile member when that
@@ -50,6 +51,20 @@
 //         in ASCII) and Gwyddion's sentinels 65535 (uint16), 4294967295 (uint32), −32768
 //         (int16), −2147483648 (int32). Compression ≠ 0 is refused; CheckType is ignored (the
 //         checksum is not verified).
+//       - TrueMap (.tmd, "Binary TrueMap Data File v2.0", io/TrueMap.h): an 80-byte
+//         little-endian header — 32 bytes of name (the magic, "\r\n\0"), 24 of comment, uint32
+//         width and height, float32 length X and Y (mm, the whole side) and offset X and Y —
+//         then width·height float32 heights in mm, X fastest. Pitch = length / samples per
+//         axis. NaN is an invalid point. Other versions, a size that does not match the
+//         header, non-positive lengths are refused. (Gwyddion 2.62 has no TrueMap module.)
+//       - NanoFocus µsurf (.nms, "OM_MS_" at byte 32, io/NanoFocusNms.h): a 3468-byte
+//         little-endian header of which we read float64 z min and max (µm) at byte 16, uint32
+//         points X and Y at 1368, float64 spacing X and Y (nm) at 1376; then X·Y uint16 codes,
+//         X fastest, and optionally as many uint8 intensities (ignored). z = z min + code /
+//         65535 · (z max − z min). No code is known to mark an invalid point (every code is
+//         read as a height). The layout is reverse-engineered (surfalize reads it so; Gwyddion
+//         2.62's modules do not read these files: its Quesant module claims them and fails).
+//         A size other than header + 2 or 3 bytes per point is refused.
 //       - instrument formats (Wyko OPD, Sensofar PLU, Digital Surf SUR, Zygo DAT, NanoFocus,
 //         Gwyddion's .gwy and whatever else Gwyddion's file modules read): through Gwyddion
 //         (io/GwyddionReader.h; the build option SCRATCHLIGHT_GWYDDION), heights and spacing in
@@ -60,12 +75,16 @@
 //     k·p from the first. HeightmapData::resampling says so; a new sample is invalid when a
 //     source sample it weights is. Pitches more than 1000-fold apart are refused (a damaged
 //     header: a 124-byte file would become gigabytes); one row or column is not resampled.
+//     Pitches a hair apart (at most 0.1 %, an instrument's calibration: Alicona's 2.27998 x
+//     2.27979 µm) are not interpolated, which would only blur the map: its samples are kept at
+//     p, and `resampling` says "read as square" with the pitches' difference in per cent.
+//     Any non-finite height of a measured map (NaN, ±Inf) is an invalid point.
 //     Invalid points are filled, deterministically, layer by layer from the valid region: each
 //     pass gives every invalid point that has a valid 4-neighbour the mean of those neighbours,
 //     all at once, then counts them valid. HeightmapData::invalidFilled counts them (and the
 //     format string says so). Refused: no valid point, or more than half the points invalid.
 // Which reader: by content (the first bytes: .npy's magic, a zip = X3P, SDF's version line,
-// EXR/PNG/TIFF/JPEG magic), then by extension for what the content does not say (a damaged
+// TrueMap's name, NMS's name at byte 32, EXR/PNG/TIFF/JPEG magic), then by extension for what the content does not say (a damaged
 // file keeps its format's error), then Gwyddion's file modules (by content and name), then
 // OpenImageIO. X3P and SDF use our own readers, also when Gwyddion is built: they read the X3P
 // files whose members sit in a folder (Gwyddion refuses them) and are faster (README

@@ -269,9 +269,10 @@ inline std::string assembleX3p(std::string xml, const std::string& data,
     return {std::istreambuf_iterator<char>(in), {}};
 }
 
-/// The surface-metrology readers (io/X3p.h, io/Sdf.h through io/HeightmapIO.h loadHeightmap).
-/// Input: one selector byte, then the payload. Bits 0-1: 0 = the payload is an .sdf file (ASCII
-/// or binary); 1 = the payload is an .x3p file (a zip: most mutations stop at its CRCs);
+/// The surface-metrology readers (io/X3p.h, io/Sdf.h, io/TrueMap.h, io/NanoFocusNms.h through
+/// io/HeightmapIO.h loadHeightmap). Input: one selector byte, then the payload. Bits 0-1: 0 = the
+/// payload is a file named .sdf (ASCII or binary SDF, or a TrueMap or NMS file, which the content
+/// picks); 1 = the payload is an .x3p file (a zip: most mutations stop at its CRCs);
 /// 2, 3 = the payload is a little-endian uint16 n, n bytes of main.xml and the point data, put
 /// into an X3P archive by assembleX3p, so that mutations reach the XML's fields and the data's
 /// checks behind the zip's CRCs and the MD5 digest. Bit 2: height_scale 2. An accepted map must

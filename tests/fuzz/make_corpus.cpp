@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -298,6 +299,27 @@ void metrology() {
     b += std::string("\x00\x03\x00", 3);  // no compression, float32, no check
     for (float v : {1.0f, 2.0f, 3.0f, 4.0f, 5.5f, -6.0f}) putLE(b, v);
     put("metrology", "binary-f32.sdf", b + "*\nOperator = fuzz\n");
+    // TrueMap and NanoFocus NMS, recognised by their content under the .sdf name (selector 0).
+    std::string t(1, '\x00');
+    t += std::string("Binary TrueMap Data File v2.0\r\n\0", 32) +
+         std::string("fuzz                 \r\n\0", 24);
+    putLE(t, uint32_t{3});
+    putLE(t, uint32_t{2});
+    for (float v : {0.015f, 0.01f, 0.0f, 0.0f}) putLE(t, v);
+    for (float v : {0.001f, 0.002f, 0.003f, 0.004f, 0.0055f, -0.006f}) putLE(t, v);
+    put("metrology", "truemap.tmd.bin", t);
+    std::string m(1 + 3468, '\x00');
+    const auto at = [&](size_t o, auto v) { std::memcpy(m.data() + 1 + o, &v, sizeof v); };
+    std::memcpy(m.data() + 1 + 32, "OM_MS_2.0", 9);
+    at(16, 2.0);
+    at(24, 8.0);
+    at(1368, uint32_t{3});
+    at(1372, uint32_t{2});
+    at(1376, 312.5);
+    at(1384, 312.5);
+    for (uint16_t v : {0, 100, 2000, 30000, 65000, 65535}) putLE(m, v);
+    m += std::string(6, '\x7f');
+    put("metrology", "nanofocus.nms.bin", m);
 }
 
 }  // namespace
