@@ -6,7 +6,6 @@
 #include <zip.h>
 
 #include <algorithm>
-#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -822,7 +821,7 @@ TEST(FormatsNms, CodesSpanTheHeaderRangePitchAndDamagedFiles) {
     EXPECT_EQ(a.width, 4);
     EXPECT_EQ(a.height, 3);
     EXPECT_NEAR(*a.pitch, 312.5e-6, 1e-15);  // nm -> mm
-    for (size_t k = 0; k < 12; ++k)  // code 0 is z min, 65535 z max (µm -> mm)
+    for (size_t k = 0; k < 12; ++k)          // code 0 is z min, 65535 z max (µm -> mm)
         EXPECT_NEAR(a.heights[k], (2.0 + 6.0 * codes[k] / 65535.0) * 1e-3, 1e-9) << k;
     EXPECT_NEAR(a.heights[11], 8e-3, 1e-9);
     const HeightmapData b = loadHeightmap(dir / "b.bin", {});  // by content, resampled along y

@@ -2011,3 +2011,27 @@ TEST(SelfSimMap, ARimTheHeightsShowBesideAValleyLineIsTakenABareValleyTakesNothi
         << "the gate shut";
     EXPECT_EQ(closed, map);
 }
+
+TEST(SelfSimMap, AnEmptyMapSaysWhyWhenRegionsStoodOut) {
+    DefectMap m;
+    m.method = DefectMethod::SelfSim;
+    m.map.assign(16, 0);
+    m.selfsimThreshold = 4.998;
+    m.selfsimTextureThreshold = 35.16;
+    m.selfsimTextureRms = 0.00343;
+    EXPECT_EQ(m.whyNothingMarked(), "");  // nothing stood out: nothing to explain
+    m.selfsimDroppedTexture = 100;
+    m.selfsimDroppedShallow = 2;
+    const std::string why = m.whyNothingMarked();
+    EXPECT_NE(why.find("102 regions stood out"), std::string::npos) << why;
+    EXPECT_NE(why.find("100 no higher than the texture's own tail (35.2 robust sigmas)"),
+              std::string::npos)
+        << why;
+    EXPECT_NE(why.find("2 shallower than its RMS (0.00343"), std::string::npos) << why;
+    EXPECT_EQ(why.find("--"), std::string::npos) << why;  // the library names no option
+    m.map[3] = 255;                                       // something marked: nothing to explain
+    EXPECT_EQ(m.whyNothingMarked(), "");
+    m.map[3] = 0;
+    m.method = DefectMethod::Paper;  // only the self-similarity map has these gates
+    EXPECT_EQ(m.whyNothingMarked(), "");
+}

@@ -163,6 +163,11 @@ int runDefectMap(const DefectMapJobOptions& o) {
             m.unjudgedRegions, unjudged,
             100.0 * static_cast<double>(unjudged) / static_cast<double>(m.unjudged.size()));
     }
+    if (const std::string why = m.whyNothingMarked(); !why.empty())
+        spdlog::warn(
+            "nothing marked: {}. If you see defects, outline them in a mask and give it "
+            "to optimize with --defects MASK (or labels with --truth)",
+            why);
     if (m.method == DefectMethod::SelfSim && m.selfsimReliefLevels > 0)
         std::printf("  a relief: its %zu plateau levels taken out before the copies\n",
                     m.selfsimReliefLevels);

@@ -5,6 +5,7 @@
 
 #include "core/Error.h"
 #include "core/Registry.h"
+#include "core/Text.h"
 
 namespace sl {
 
@@ -53,6 +54,35 @@ size_t DefectMap::unjudgedCount() const {
     size_t n = 0;
     for (uint8_t v : unjudged) n += v == kUnjudgedRegion;
     return n;
+}
+
+std::string DefectMap::whyNothingMarked() const {
+    const size_t dropped = selfsimDroppedTexture + selfsimDroppedShallow;
+    if (method != DefectMethod::SelfSim || dropped == 0 || markedCount() > 0) return {};
+    std::string why;
+    why.append(std::to_string(dropped))
+        .append(dropped == 1 ? " region" : " regions")
+        .append(" stood out of the residual's noise (above ")
+        .append(formatNumber(selfsimThreshold, 3))
+        .append(" robust sigmas) but none above what the texture's own features reach:");
+    if (selfsimDroppedTexture > 0)
+        why.append(" ")
+            .append(std::to_string(selfsimDroppedTexture))
+            .append(" no higher than the texture's own tail (")
+            .append(formatNumber(selfsimTextureThreshold, 3))
+            .append(" robust sigmas)");
+    if (selfsimDroppedTexture > 0 && selfsimDroppedShallow > 0) why.append(",");
+    if (selfsimDroppedShallow > 0)
+        why.append(" ")
+            .append(std::to_string(selfsimDroppedShallow))
+            .append(" shallower than its RMS (")
+            .append(formatNumber(selfsimTextureRms, 4))
+            .append(" height units)");
+    why.append(
+        ". A defect that stands no higher than the texture's own features is not told from "
+        "them: on textures the map was not tuned on (a rubber, a coin's relief, a moulded "
+        "pattern) it marked nothing where a person sees inserted scratches");
+    return why;
 }
 
 DefectMethod methodInForce(const DefectMapOptions& options) {

@@ -388,6 +388,10 @@ struct DefectMap {
     size_t markedCount() const;
     double markedFraction() const;  // marked samples / all samples
     size_t unjudgedCount() const;   // samples of kUnjudgedRegion (0 when unjudged is empty)
+    /// Why the self-similarity map marked nothing although regions stood out of its residual's
+    /// noise (step 7's texture tail or step 6's RMS dropped them all): a sentence for the user,
+    /// "" when something is marked or nothing stood out. Names no option.
+    std::string whyNothingMarked() const;
 };
 
 /// The defect map of a width×height height map (row-major, row 0 first). Throws InputError

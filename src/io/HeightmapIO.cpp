@@ -313,11 +313,12 @@ HeightmapData finishMetrology(const std::string& where, HeightmapData d,
         throw inputError(where, "every point of the height map is invalid (" + d.format + ")",
                          "Export a measurement that has valid points");
     if (invalid > n / 2)
-        throw inputError(where,
-                         std::to_string(invalid) + " of " + std::to_string(n) +
-                             " points are invalid (NaN, infinite or masked), more than half; the height "
-                             "map would be mostly invented",
-                         "Crop the measurement to its valid region and export it again");
+        throw inputError(
+            where,
+            std::to_string(invalid) + " of " + std::to_string(n) +
+                " points are invalid (NaN, infinite or masked), more than half; the height "
+                "map would be mostly invented",
+            "Crop the measurement to its valid region and export it again");
     d.invalidFilled = fillInvalid(d);
     if (d.invalidFilled > 0)
         d.format += ", " + std::to_string(d.invalidFilled) + " invalid points filled";
@@ -535,7 +536,8 @@ HeightmapData loadHeightmap(const fs::path& file, const HeightmapOptions& opt,
                              "software as X3P or SDF");
         throw inputError(where,
                          "no reader claims this file: it is not an image (EXR, TIFF, PNG), .npy, "
-                         "X3P, SDF, TrueMap .tmd or NanoFocus .nms, and this scratchlight was built without Gwyddion "
+                         "X3P, SDF, TrueMap .tmd or NanoFocus .nms, and this scratchlight was "
+                         "built without Gwyddion "
                          "(SCRATCHLIGHT_GWYDDION=OFF), whose file modules read instrument "
                          "formats (.opd, .plu, .sur, .dat, ...)",
                          "Build scratchlight with -DSCRATCHLIGHT_GWYDDION=ON, or export the file "

@@ -151,11 +151,13 @@ DefectRegions defectRegionsInImage(const Scene& scene, const RegionSpec& defectS
     DefectRegions r;
     const RegionSpec defects = defectRegionSpec(defectSpec, truth);
     // The truth itself: every label, with its value.
+    std::string whyNothingMarked;
     if (defectSpec.empty() && !truth.empty())
         r.defects = projectTruth(scene, truth).labels;
     else if (defects.automatic) {  // each mark labelled by its shape, as the judge scores it
         const DefectMap m =
             autoDefectMap(scene.heights, scene.mapWidth, scene.mapHeight, scene.load.measured);
+        whyNothingMarked = m.whyNothingMarked();
         r.defects = projectLabelsToImage(tracePrimaryHits(scene),
                                          labelMarksByShape(m.map, scene.mapWidth, scene.mapHeight));
         r.unjudgedRegions = m.unjudgedRegions;
@@ -168,7 +170,8 @@ DefectRegions defectRegionsInImage(const Scene& scene, const RegionSpec& defectS
         std::none_of(r.defects.begin(), r.defects.end(), [](uint8_t v) { return v != 0; }))
         throw inputError(
             option("defects") + " auto",
-            "the defect map of the height map marks nothing the camera sees",
+            "the defect map of the height map marks nothing the camera sees" +
+                (whyNothingMarked.empty() ? "" : " (" + whyNothingMarked + ")"),
             "give a defect mask with " + option("defects") + " or a truth with " + option("truth"));
     if (reference.automatic) {
         // The part the defect map finds clean and that is not a defect region pixel (with the
