@@ -22,11 +22,14 @@
 
 #include "TestUtil.h"
 #include "app/bench/LoadBench.h"
+#include "app/bench/ReadBench.h"
 #include "app/jobs/InfoJob.h"
 #include "core/Error.h"
 #include "core/Md5.h"
 #include "io/HeightmapIO.h"
+#include "io/NanoFocusNms.h"
 #include "io/SceneFile.h"
+#include "io/TrueMap.h"
 #include "io/X3p.h"
 #include "scene/Heightfield.h"
 #include "scene/Scene.h"
@@ -839,6 +842,27 @@ TEST(FormatsNms, CodesSpanTheHeaderRangePitchAndDamagedFiles) {
     expectRefused(dir / "other.nms", {"not a NanoFocus NMS file"});
 }
 
+TEST(FormatsTrueMap, WritersRoundTripThroughTheReaders) {
+    // TrueMap: float32 heights back bit for bit; NMS: within half a code of the range.
+    test::TempDir dir("tmd");
+    std::vector<float> h;
+    for (double v : ramp(5, 4)) h.push_back(static_cast<float>(0.001 * v - 0.003));
+    writeTrueMap(dir / "w.tmd", 5, 4, h, 0.004);
+    const HeightmapData t = loadHeightmap(dir / "w.tmd", {});
+    EXPECT_EQ(t.width, 5);
+    EXPECT_EQ(t.height, 4);
+    EXPECT_NEAR(*t.pitch, 0.004, 1e-9);
+    EXPECT_EQ(t.heights, h);
+    writeNanoFocusNms(dir / "w.nms", 5, 4, h, 0.004);
+    const HeightmapData m = loadHeightmap(dir / "w.nms", {});
+    EXPECT_EQ(m.format, "nanofocus nms uint16");
+    EXPECT_NEAR(*m.pitch, 0.004, 1e-12);
+    const double halfCode = 0.5 * 0.034 / 65535.0;  // h spans -0.003 .. 0.031 mm
+    for (size_t k = 0; k < h.size(); ++k) EXPECT_NEAR(m.heights[k], h[k], halfCode + 1e-9) << k;
+    EXPECT_FLOAT_EQ(m.heights[0], h[0]);  // the ends are codes 0 and 65535 exactly
+    EXPECT_FLOAT_EQ(m.heights[19], h[19]);
+}
+
 TEST(FormatsScene, PitchComesFromTheFileUnlessTheSceneGivesOne) {
     test::TempDir dir("scene");
     X3pSpec s;
@@ -987,6 +1011,28 @@ TEST(FormatsInfo, InfoSaysWhatTheReadersFound) {
     EXPECT_EQ(j["camera"]["width"], 16);
     EXPECT_NEAR(j["material"]["alpha"][0].get<double>(), 0.2, 1e-6);
     EXPECT_NEAR(j["size_mm"][1].get<double>(), 5 * 0.02, 1e-15);
+}
+
+TEST(FormatsBench, ReadBenchReadsTheSameHeightsFromEveryFormat) {
+    ReadBenchOptions o;
+    o.size = 40;  // 1600 samples: the NaN every 9973rd is the first only
+    o.repeats = 1;
+    const ReadBenchResult r = runReadBench(o);
+    ASSERT_GE(r.rows.size(), 4u);
+    EXPECT_EQ(r.rows.front().format, "exr float32");
+    std::map<std::string, const ReadBenchRow*> by;
+    for (const ReadBenchRow& row : r.rows) {
+        EXPECT_EQ(row.width, 40) << row.format;
+        EXPECT_EQ(row.height, 40) << row.format;
+        EXPECT_GT(row.ratioToExr, 0.0) << row.format;
+        by[row.reader] = &row;
+    }
+    ASSERT_TRUE(by.count("ours (io/TrueMap.cpp)") && by.count("ours (io/NanoFocusNms.cpp)"));
+    // the float formats carry the instrument's invalid point; NMS has no code for one
+    EXPECT_EQ(by["ours (io/X3p.cpp)"]->invalidFilled, 1u);
+    EXPECT_EQ(by["ours (io/TrueMap.cpp)"]->invalidFilled, 1u);
+    EXPECT_EQ(by["ours (io/NanoFocusNms.cpp)"]->invalidFilled, 0u);
+    EXPECT_NE(r.csv().find("tmd float32,ours (io/TrueMap.cpp),40,40,"), std::string::npos);
 }
 
 TEST(FormatsBench, LoadBenchTimesEachFileAsTheCommandsLoadIt) {

@@ -1,13 +1,16 @@
 #include "io/NanoFocusNms.h"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <string>
+#include <vector>
 
 #include "core/Error.h"
 #include "core/Text.h"
+#include "io/AtomicFile.h"
 #include "io/InputFile.h"
 
 namespace sl {
@@ -85,6 +88,31 @@ HeightmapData readNanoFocusNms(const std::filesystem::path& file) {
     for (size_t k = 0; k < n; ++k, p += 2)
         d.heights[k] = static_cast<float>(zmin * 1e-3 + step * static_cast<double>(le(p, 2)));
     return d;
+}
+
+void writeNanoFocusNms(const std::filesystem::path& file, int width, int height,
+                       const std::vector<float>& heightsMm, double pitchMm) {
+    const size_t n = heightsMm.size();
+    std::string out(kData + 3 * n, '\0');
+    const auto put = [&](size_t at, uint64_t u, int bytes) {
+        for (int b = 0; b < bytes; ++b) out[at + b] = static_cast<char>((u >> (8 * b)) & 0xff);
+    };
+    std::memcpy(out.data() + kNmsNameOffset, "OM_MS_2.0", 9);
+    const auto [lo, hi] = std::minmax_element(heightsMm.begin(), heightsMm.end());
+    const double zmin = n ? *lo * 1e3 : 0.0, zmax = n ? *hi * 1e3 : 0.0;  // µm
+    put(kZRange, std::bit_cast<uint64_t>(zmin), 8);
+    put(kZRange + 8, std::bit_cast<uint64_t>(zmax), 8);
+    put(kPoints, static_cast<uint32_t>(width), 4);
+    put(kPoints + 4, static_cast<uint32_t>(height), 4);
+    put(kSpacing, std::bit_cast<uint64_t>(pitchMm * 1e6), 8);  // nm
+    put(kSpacing + 8, std::bit_cast<uint64_t>(pitchMm * 1e6), 8);
+    const double codes = zmax > zmin ? 65535.0 / (zmax - zmin) : 0.0;
+    for (size_t k = 0; k < n; ++k) {
+        const double c = std::round((heightsMm[k] * 1e3 - zmin) * codes);
+        put(kData + 2 * k, static_cast<uint64_t>(std::clamp(c, 0.0, 65535.0)), 2);
+    }
+    std::fill(out.begin() + static_cast<std::ptrdiff_t>(kData + 2 * n), out.end(), '\x80');
+    writeBytesAtomically(file, out.data(), out.size());
 }
 
 }  // namespace sl

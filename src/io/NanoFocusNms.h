@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <vector>
 
 #include "io/HeightmapData.h"
 
@@ -20,5 +21,12 @@ inline constexpr size_t kNmsNameLength = sizeof(kNmsName) - 1;
 /// differs), `format` "nanofocus nms uint16". Throws InputError naming the file and the offending
 /// field.
 HeightmapData readNanoFocusNms(const std::filesystem::path& file);
+
+/// Writes a W×H height map (mm, row 0 first) as an NMS file: the heights' range in µm, each
+/// quantised to one of 65536 codes over it, the spacing in nm, and a flat intensity image (what
+/// readNanoFocusNms reads back to within a code; `bench read`). Written atomically; throws
+/// InputError naming the file.
+void writeNanoFocusNms(const std::filesystem::path& file, int width, int height,
+                       const std::vector<float>& heightsMm, double pitchMm);
 
 }  // namespace sl

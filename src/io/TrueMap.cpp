@@ -9,6 +9,7 @@
 
 #include "core/Error.h"
 #include "core/Text.h"
+#include "io/AtomicFile.h"
 #include "io/InputFile.h"
 
 namespace sl {
@@ -74,6 +75,27 @@ HeightmapData readTrueMap(const std::filesystem::path& file) {
     const char* p = bytes.data() + kHeaderBytes;
     for (size_t k = 0; k < n; ++k, p += 4) d.heights[k] = f32(p);  // mm; NaN is invalid
     return d;
+}
+
+void writeTrueMap(const std::filesystem::path& file, int width, int height,
+                  const std::vector<float>& heightsMm, double pitchMm) {
+    std::string out(kHeaderBytes, '\0');
+    std::memcpy(out.data(), kTrueMapMagic, kTrueMapMagicLength);
+    std::memcpy(out.data() + kTrueMapMagicLength, "\r\n", 2);
+    const char comment[] = "scratchlight";
+    std::memcpy(out.data() + kNameBytes, comment, sizeof comment - 1);
+    const auto put = [&](size_t at, auto v) {
+        const auto u = std::bit_cast<uint32_t>(v);
+        for (int b = 0; b < 4; ++b) out[at + b] = static_cast<char>((u >> (8 * b)) & 0xff);
+    };
+    const size_t h = kNameBytes + kCommentBytes;
+    put(h, static_cast<uint32_t>(width));
+    put(h + 4, static_cast<uint32_t>(height));
+    put(h + 8, static_cast<float>(width * pitchMm));
+    put(h + 12, static_cast<float>(height * pitchMm));
+    out.resize(kHeaderBytes + 4 * heightsMm.size());
+    for (size_t k = 0; k < heightsMm.size(); ++k) put(kHeaderBytes + 4 * k, heightsMm[k]);
+    writeBytesAtomically(file, out.data(), out.size());
 }
 
 }  // namespace sl

@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <vector>
 
 #include "io/HeightmapData.h"
 
@@ -19,5 +20,11 @@ inline constexpr size_t kTrueMapMagicLength = sizeof(kTrueMapMagic) - 1;
 /// `pitchY` when the Y spacing differs), `format` "truemap v2.0 float32". Throws InputError
 /// naming the file and the offending field.
 HeightmapData readTrueMap(const std::filesystem::path& file);
+
+/// Writes a W×H height map (mm, row 0 first) as a TrueMap v2.0 file with lengths W·pitch and
+/// H·pitch (what readTrueMap reads back; `bench read`). Written atomically; throws InputError
+/// naming the file.
+void writeTrueMap(const std::filesystem::path& file, int width, int height,
+                  const std::vector<float>& heightsMm, double pitchMm);
 
 }  // namespace sl

@@ -15,6 +15,8 @@
 #include "io/GwyddionReader.h"
 #include "io/HeightmapIO.h"
 #include "io/ImageIO.h"
+#include "io/NanoFocusNms.h"
+#include "io/TrueMap.h"
 #include "io/X3p.h"
 
 namespace sl {
@@ -56,7 +58,8 @@ ReadBenchResult runReadBench(const ReadBenchOptions& o) {
                 0.001f * std::sin(0.157f * static_cast<float>(x)) + 2e-6f * static_cast<float>(y);
     TempFolder dir;
     const fs::path exr = dir.path / "heights.exr", x3p = dir.path / "heights.x3p",
-                   gwy = dir.path / "heights.gwy";
+                   gwy = dir.path / "heights.gwy", tmd = dir.path / "heights.tmd",
+                   nms = dir.path / "heights.nms";
     {
         ProgressTask task("bench read: writing the files");
         Image img(n, n, 1);
@@ -68,6 +71,10 @@ ReadBenchResult runReadBench(const ReadBenchOptions& o) {
         for (size_t k = 0; k < withNan.size(); k += 9973)
             withNan[k] = std::numeric_limits<float>::quiet_NaN();
         writeX3p(x3p, n, n, withNan, pitch);
+        throwIfInterrupted();
+        writeTrueMap(tmd, n, n, withNan, pitch);
+        throwIfInterrupted();
+        writeNanoFocusNms(nms, n, n, h, pitch);  // (no invalid-point code in this format)
         throwIfInterrupted();
         if (gwyddionBuilt()) {
             const Stopwatch init;
@@ -83,7 +90,9 @@ ReadBenchResult runReadBench(const ReadBenchOptions& o) {
     };
     std::vector<Case> cases = {
         {"exr float32", "OpenEXR (io/ExrReader.cpp)", exr, HeightmapReader::Auto},
-        {"x3p float64", "ours (io/X3p.cpp)", x3p, HeightmapReader::Auto}};
+        {"x3p float64", "ours (io/X3p.cpp)", x3p, HeightmapReader::Auto},
+        {"tmd float32", "ours (io/TrueMap.cpp)", tmd, HeightmapReader::Auto},
+        {"nms uint16", "ours (io/NanoFocusNms.cpp)", nms, HeightmapReader::Auto}};
     if (gwyddionBuilt()) {
         cases.push_back({"x3p float64", "Gwyddion (opengps)", x3p, HeightmapReader::Gwyddion});
         cases.push_back({"gwy float64", "Gwyddion (gwyfile)", gwy, HeightmapReader::Auto});
