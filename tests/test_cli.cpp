@@ -561,3 +561,30 @@ TEST_F(CliTest, MapCommandsWriteAllOrNothingAndNeverOverTheirInputs) {
         EXPECT_FALSE(std::filesystem::exists(dir / "s.png")) << over;
     }
 }
+
+TEST_F(CliTest, AHeightMapWhereASceneIsAskedForIsTheDefaultSceneAroundIt) {
+    // An instrument file (an SDF: pitch in the file) given to render as it is, -D still applies.
+    std::string sdf =
+        "aBCR-1.0\nManufacID = test\nCreateDate = 010120241200\n"
+        "ModDate = 010120241200\nNumPoints = 8\nNumProfiles = 6\nXscale = 5e-06\n"
+        "Yscale = 5e-06\nZscale = 1e-06\nZresolution = -1\nCompression = 0\n"
+        "DataType = 5\nCheckType = 0\n*\n";
+    for (int k = 0; k < 48; ++k) sdf += std::to_string(k % 5) + (k % 8 == 7 ? "\n" : " ");
+    test::writeText(dir / "part.sdf", sdf);
+    auto r = runCli("render " + (dir / "part.sdf").string() +
+                    " --spp 1 -D camera.width=16 -D camera.height=16 -o " + out());
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("a height map, not a scene file: the default scene around it"),
+              std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find("pitch 0.005 mm (the file's)"), std::string::npos) << r.output;
+    EXPECT_TRUE(std::filesystem::exists(out()));
+    std::filesystem::remove(out());
+    std::filesystem::remove(png());
+    // Neither JSON nor a height map: the height-map readers' refusal, naming the file.
+    test::writeText(dir / "notes.txt", "these are notes, not heights\n");
+    expectInputError((dir / "notes.txt").string(), {"notes.txt", "no reader claims this file"});
+    // A file named .json is a scene file, whatever it holds.
+    test::writeText(dir / "broken.json", "these are notes\n");
+    expectInputError((dir / "broken.json").string(), {"broken.json", "not valid JSON"});
+}

@@ -4,8 +4,11 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -429,11 +432,37 @@ void applySceneOverride(json& scene, const std::string& override, const std::str
     }
 }
 
+namespace {
+
+/// A file given where a scene file is asked for that is not JSON: not named .json and not
+/// starting (after blanks) with '{'. Such a file is read as a height map (readSceneFile).
+bool isBareHeightMap(const std::filesystem::path& file) {
+    if (lower(file.extension().string()) == ".json") return false;
+    checkInputFile(file, "the scene file or height map", UINT64_MAX);
+    std::ifstream in(file, std::ios::binary);
+    char c = 0;
+    while (in.get(c))
+        if (!std::isspace(static_cast<unsigned char>(c))) return c != '{';
+    return false;  // empty or blank: the JSON reader says so
+}
+
+}  // namespace
+
 SceneDesc readSceneFile(const std::filesystem::path& file,
                         const std::vector<std::string>& overrides) {
-    json j = parseJsonText(readInputFile(file, "the scene file", kMaxJsonFileBytes,
-                                         "check the path (scene files are JSON)"),
-                           file.string());
+    // A height map where a scene is asked for stands for the default scene around it:
+    // {"heightmap": {"path": FILE}} (README "Quick start").
+    const bool bare = isBareHeightMap(file);
+    json j = bare ? json{{"heightmap", {{"path", file.filename().string()}}}}
+                  : parseJsonText(readInputFile(file, "the scene file", kMaxJsonFileBytes,
+                                                "check the path (scene files are JSON)"),
+                                  file.string());
+    if (bare)
+        spdlog::info(
+            "{}: a height map, not a scene file: the default scene around it (a scene "
+            "file, {{\"heightmap\": {{\"path\": \"{}\"}}}} and more, sets the "
+            "material, the camera and the rest)",
+            file.filename().string(), file.filename().string());
     for (const std::string& o : overrides) applySceneOverride(j, o, file.string());
     std::string where = file.string();
     if (!overrides.empty()) {

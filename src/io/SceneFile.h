@@ -22,6 +22,8 @@ namespace sl {
 /// JSON (a number, true/false, [..], {..}, "..") and otherwise taken as a string; a key names
 /// a field by its sections (e.g. material.alpha, camera.width, render.spp). Relative paths in
 /// a value resolve against the scene file's folder, as in the file. The desc records them.
+/// A file that is not JSON (not named .json, and its first non-blank byte not '{') is a height
+/// map standing for the default scene around it, {"heightmap": {"path": FILE}}; said in the log.
 SceneDesc readSceneFile(const std::filesystem::path& file,
                         const std::vector<std::string>& overrides = {});
 /// Parse a scene from JSON text; relative paths resolve against baseDir.
