@@ -317,7 +317,7 @@ void metrology() {
     at(1372, uint32_t{2});
     at(1376, 312.5);
     at(1384, 312.5);
-    for (uint16_t v : {0, 100, 2000, 30000, 65000, 65535}) putLE(m, v);
+    for (int v : {0, 100, 2000, 30000, 65000, 65535}) putLE(m, static_cast<uint16_t>(v));
     m += std::string(6, '\x7f');
     put("metrology", "nanofocus.nms.bin", m);
 }
