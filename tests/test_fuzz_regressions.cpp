@@ -57,6 +57,9 @@ const std::map<std::string, std::string> kExpected = {
     // before checking it against the file.
     {"heightmap/exr-channel-list-size.bin", "the file ends inside attribute 'channels'"},
     {"envmap/exr-channel-list-size.bin", "the file ends inside attribute 'channels'"},
+    // An empty channel list of 19 bytes under another name: OpenEXR reads a chlist to its end
+    // marker and read the next 18 bytes as attributes, one of them a 2 GB string (1.3 KB file).
+    {"heightmap/exr-chlist-read-past-its-end.bin", "the channel list's end is not its last byte"},
     // OpenEXR allocated the 1.7 GB an attribute's size field claimed in a 211-byte file.
     {"envmap/exr-attribute-size.bin", "damaged OpenEXR header"},
     // A 5242846x1 EXR in 222 bytes: OpenImageIO converted through a 256-row (5 GB) buffer.

@@ -166,21 +166,29 @@ class ExrHeaderWalker {
                 p.tileX = le32(t);
                 p.tileY = le32(t + 4);
                 p.haveTiles = true;
-            } else if (name == "channels" && type == "chlist") {
+            } else if (type == "chlist") {
                 // Entries: name '\0', pixel type (int), pLinear, 3 reserved, x and y sampling
-                // (ints); a '\0' ends the list.
+                // (ints); a '\0' ends the list. Walked whatever the attribute's name: OpenEXR
+                // reads every chlist so.
                 if (static_cast<uint64_t>(size) > size_ - pos_)
                     fail("the file ends inside " + what);
                 std::vector<char> list(static_cast<size_t>(size));
                 read(list.data(), list.size(), what);
-                for (size_t k = 0; k < list.size() && list[k] != '\0';) {
+                size_t k = 0;
+                while (k < list.size() && list[k] != '\0') {
                     const size_t end =
                         std::find(list.begin() + static_cast<std::ptrdiff_t>(k), list.end(), '\0') -
                         list.begin();
                     k = end + 1 + 16;
                     if (k > list.size()) fail("the channel list is cut short");
-                    ++p.channels;
+                    if (name == "channels") ++p.channels;
                 }
+                // OpenEXR reads the entries up to the list's '\0' and goes on from there,
+                // whatever the size says: a list whose '\0' is not its last byte makes OpenEXR
+                // read the rest as further attributes (a 1.3 KB file with an empty list of 19
+                // bytes then asked for 2 GB; found by scripts/fuzz)
+                if (k + 1 != list.size())
+                    fail("the channel list's end is not its last byte (" + what + ")");
             } else if (name == "chunkCount" && type == "int" && size == 4) {
                 unsigned char c[4];
                 read(c, 4, what);

@@ -7,7 +7,9 @@
 //     refused. (OpenImageIO's own open() would then try every reader it has, so a damaged .exr
 //     could be parsed as DICOM, FITS, RAW, ... by any of some thirty format plugins.)
 //   * An OpenEXR file's header is walked by checkExrHeader before OpenEXR reads it: every
-//     attribute must fit in the file, the data window must be a box whose chunk-offset table
+//     attribute must fit in the file, every channel list (type chlist, whatever its name) must
+//     end exactly at its last byte (OpenEXR reads one to its end marker and goes on from
+//     there, whatever its size says), the data window must be a box whose chunk-offset table
 //     fits in the file, and a chunk (a tile, or up to 256 scanlines however few rows the image
 //     has) must pass the size check below. (OpenEXR 3.1 allocates what a header field claims
 //     before it reads it: a 300-byte file could ask for gigabytes.)
