@@ -658,8 +658,8 @@ std::vector<SceneFileField> sceneFileFields() {
         {"heightmap.path", "required",
          "EXR or TIFF (float32/float16/uint16), PNG (16- or 8-bit), NumPy `.npy` "
          "(float32/float64/uint16, C order), X3P (ISO 25178-72), SDF (ISO 25178-71, ASCII or "
-         "binary), and the instrument formats Gwyddion reads (Wyko OPD, Sensofar PLU, Digital "
-         "Surf SUR, Zygo DAT, …), recognised by content"},
+         "binary), TrueMap `.tmd`, NanoFocus µsurf `.nms`, and the instrument formats Gwyddion "
+         "reads (Wyko OPD, Sensofar PLU, Digital Surf SUR, Zygo DAT, …), recognised by content"},
         {"heightmap.pixel_pitch", "required (measured maps: the file's)",
          "sample spacing in scene units (mm); measured maps (X3P, SDF, instrument formats) carry "
          "their own (leave it out); non-square pixels are resampled onto the finer pitch; a map "
