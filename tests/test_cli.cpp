@@ -513,6 +513,14 @@ TEST_F(CliTest, OptimizeWithoutLabelsWarnsWhereTheMapCouldNotJudge) {
               std::string::npos);
     EXPECT_NE(test::readFile(out / "report.html").find("the defect map could not judge 1 region"),
               std::string::npos);
+    // lamps says it too (given the height map itself, the default scene around it)
+    const auto l = runCli("lamps " + (dir / "part.sdf").string() +
+                          " --objective defects --defects auto --count 1 --size 32 -o " +
+                          (dir / "lamps").string());
+    ASSERT_EQ(l.exitCode, 0) << l.output;
+    EXPECT_NE(l.output.find("the defect map could not judge 1 region that stands out"),
+              std::string::npos)
+        << l.output;
 }
 
 // Issue 35 (second pass): defectmap wrote its map, then found a directory where the score CSV

@@ -138,6 +138,10 @@ LampsJobSummary runLampsJob(const LampsJobOptions& o) {
         in.maxDepth = job.transport.file.provenance.maxDepth;
         if (kind == ObjectiveKind::Defects) {
             DefectRegions regions = defectRegionsInImage(*scene, o.defects, o.truth, o.reference);
+            if (const std::string w =
+                    unjudgedRegionsWarning(regions.unjudgedRegions, regions.unjudgedShare);
+                !w.empty())
+                spdlog::warn("{}", w);
             in.defects = std::move(regions.defects);
             in.reference = std::move(regions.reference);
         }

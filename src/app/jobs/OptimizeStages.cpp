@@ -805,14 +805,9 @@ void judgeRun(const Plan& p, const Inputs& in, OptimizeJobSummary& job, LambdaRe
         run.warnings.push_back("training noise: " + run.noise.reason);
     if (!run.judgeRounds.rounds.empty() && !run.judgeRounds.met)
         run.warnings.push_back("judge: " + run.judgeRounds.describe());
-    if (in.unjudgedRegions > 0)
-        run.warnings.push_back(
-            "the defect map could not judge " + std::to_string(in.unjudgedRegions) +
-            (in.unjudgedRegions == 1 ? " region that stands" : " regions that stand") +
-            " out of the texture but reach its border (" +
-            formatNumber(100.0 * in.unjudgedShare, 2) +
-            " % of the height map): they count as texture here, so the light was not asked to "
-            "show them; look there yourself (defectmap writes them as <stem>-unjudged.png)");
+    if (const std::string w = unjudgedRegionsWarning(in.unjudgedRegions, in.unjudgedShare);
+        !w.empty())
+        run.warnings.push_back(w);
     for (const std::string& w : run.warnings) spdlog::warn("lambda {}: {}", run.lambda, w);
 }
 

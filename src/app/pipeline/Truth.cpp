@@ -145,6 +145,15 @@ RegionSpec defectRegionSpec(const RegionSpec& defects, const std::filesystem::pa
     return r;
 }
 
+std::string unjudgedRegionsWarning(size_t unjudgedRegions, double unjudgedShare) {
+    if (unjudgedRegions == 0) return {};
+    return "the defect map could not judge " + std::to_string(unjudgedRegions) +
+           (unjudgedRegions == 1 ? " region that stands" : " regions that stand") +
+           " out of the texture but reach its border (" + formatNumber(100.0 * unjudgedShare, 2) +
+           " % of the height map): they count as texture here, so the light was not asked to "
+           "show them; look there yourself (defectmap writes them as <stem>-unjudged.png)";
+}
+
 DefectRegions defectRegionsInImage(const Scene& scene, const RegionSpec& defectSpec,
                                    const std::filesystem::path& truth,
                                    const RegionSpec& reference) {

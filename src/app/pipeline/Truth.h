@@ -83,6 +83,10 @@ struct DefectRegions {
 DefectRegions defectRegionsInImage(const Scene& scene, const RegionSpec& defects,
                                    const std::filesystem::path& truth, const RegionSpec& reference);
 
+/// The warning a job gives when the defect map could not judge some regions (`auto`): "" when
+/// it judged everywhere. `unjudgedRegions` and `unjudgedShare` as DefectRegions holds them.
+std::string unjudgedRegionsWarning(size_t unjudgedRegions, double unjudgedShare);
+
 /// A defect region's labels as the judge scores them and the reports outline and name them.
 struct JudgedDefectLabels {
     std::vector<uint8_t> labels;      // 0 outside the region
