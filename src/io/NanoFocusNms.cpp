@@ -11,6 +11,7 @@
 #include "core/Error.h"
 #include "core/Text.h"
 #include "io/AtomicFile.h"
+#include "io/ByteOrder.h"
 #include "io/InputFile.h"
 
 namespace sl {
@@ -21,15 +22,6 @@ namespace {
 // uint32 points X and Y at 1368, float64 spacing X and Y (nm) at 1376; the uint16 height image
 // at 3468, then (optionally) a uint8 intensity image of as many points.
 constexpr size_t kZRange = 16, kPoints = 1368, kSpacing = 1376, kData = 3468;
-
-uint64_t le(const char* p, int bytes) {
-    uint64_t v = 0;
-    for (int b = bytes - 1; b >= 0; --b) v = (v << 8) | static_cast<unsigned char>(p[b]);
-    return v;
-}
-double f64(const char* p) {
-    return std::bit_cast<double>(le(p, 8));
-}
 
 }  // namespace
 
@@ -50,10 +42,10 @@ HeightmapData readNanoFocusNms(const std::filesystem::path& file) {
                  "-byte header)",
              kFixDamaged);
     const char* b = bytes.data();
-    const double zmin = f64(b + kZRange), zmax = f64(b + kZRange + 8);
-    const auto nx = static_cast<uint32_t>(le(b + kPoints, 4));
-    const auto ny = static_cast<uint32_t>(le(b + kPoints + 4, 4));
-    const double dx = f64(b + kSpacing), dy = f64(b + kSpacing + 8);
+    const double zmin = loadF64(b + kZRange), zmax = loadF64(b + kZRange + 8);
+    const auto nx = loadU32(b + kPoints);
+    const auto ny = loadU32(b + kPoints + 4);
+    const double dx = loadF64(b + kSpacing), dy = loadF64(b + kSpacing + 8);
     if (nx < 2 || ny < 2 || nx > detail::kMaxMetrologySide || ny > detail::kMaxMetrologySide ||
         static_cast<long long>(nx) * ny > detail::kMaxMetrologySamples)
         fail("its header's size (byte " + std::to_string(kPoints) + ") is " + std::to_string(nx) +
@@ -86,7 +78,8 @@ HeightmapData readNanoFocusNms(const std::filesystem::path& file) {
     const double step = (zmax - zmin) / 65535.0 * 1e-3;  // mm per code
     const char* p = b + kData;
     for (size_t k = 0; k < n; ++k, p += 2)
-        d.heights[k] = static_cast<float>(zmin * 1e-3 + step * static_cast<double>(le(p, 2)));
+        d.heights[k] =
+            static_cast<float>(zmin * 1e-3 + step * static_cast<double>(loadLittleEndian(p, 2)));
     return d;
 }
 
@@ -95,7 +88,7 @@ void writeNanoFocusNms(const std::filesystem::path& file, int width, int height,
     const size_t n = heightsMm.size();
     std::string out(kData + 3 * n, '\0');
     const auto put = [&](size_t at, uint64_t u, int bytes) {
-        for (int b = 0; b < bytes; ++b) out[at + b] = static_cast<char>((u >> (8 * b)) & 0xff);
+        storeLittleEndian(out.data() + at, u, bytes);
     };
     std::memcpy(out.data() + kNmsNameOffset, "OM_MS_2.0", 9);
     const auto [lo, hi] = std::minmax_element(heightsMm.begin(), heightsMm.end());

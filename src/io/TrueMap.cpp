@@ -10,6 +10,7 @@
 #include "core/Error.h"
 #include "core/Text.h"
 #include "io/AtomicFile.h"
+#include "io/ByteOrder.h"
 #include "io/InputFile.h"
 
 namespace sl {
@@ -20,15 +21,6 @@ namespace {
 // of comment, uint32 width and height, float32 length X and Y and offset X and Y (mm).
 constexpr size_t kNameBytes = 32, kCommentBytes = 24;
 constexpr size_t kHeaderBytes = kNameBytes + kCommentBytes + 2 * 4 + 4 * 4;  // 80
-
-uint32_t u32(const char* p) {
-    uint32_t v = 0;
-    for (int b = 3; b >= 0; --b) v = (v << 8) | static_cast<unsigned char>(p[b]);
-    return v;
-}
-float f32(const char* p) {
-    return std::bit_cast<float>(u32(p));
-}
 
 }  // namespace
 
@@ -45,8 +37,8 @@ HeightmapData readTrueMap(const std::filesystem::path& file) {
                  "' and an 80-byte header)",
              kFixDamaged);
     const char* h = bytes.data() + kNameBytes + kCommentBytes;
-    const uint32_t w = u32(h), ht = u32(h + 4);
-    const double lx = f32(h + 8), ly = f32(h + 12);
+    const uint32_t w = loadU32(h), ht = loadU32(h + 4);
+    const double lx = loadF32(h + 8), ly = loadF32(h + 12);
     if (w < 2 || ht < 2 || w > detail::kMaxMetrologySide || ht > detail::kMaxMetrologySide ||
         static_cast<long long>(w) * ht > detail::kMaxMetrologySamples)
         fail("its header's size is " + std::to_string(w) + " x " + std::to_string(ht) +
@@ -73,7 +65,7 @@ HeightmapData readTrueMap(const std::filesystem::path& file) {
     if (ly / ht != *d.pitch) d.pitchY = ly / ht;
     d.heights.resize(n);
     const char* p = bytes.data() + kHeaderBytes;
-    for (size_t k = 0; k < n; ++k, p += 4) d.heights[k] = f32(p);  // mm; NaN is invalid
+    for (size_t k = 0; k < n; ++k, p += 4) d.heights[k] = loadF32(p);  // mm; NaN is invalid
     return d;
 }
 
@@ -85,8 +77,7 @@ void writeTrueMap(const std::filesystem::path& file, int width, int height,
     const char comment[] = "scratchlight";
     std::memcpy(out.data() + kNameBytes, comment, sizeof comment - 1);
     const auto put = [&](size_t at, auto v) {
-        const auto u = std::bit_cast<uint32_t>(v);
-        for (int b = 0; b < 4; ++b) out[at + b] = static_cast<char>((u >> (8 * b)) & 0xff);
+        storeLittleEndian(out.data() + at, std::bit_cast<uint32_t>(v), 4);
     };
     const size_t h = kNameBytes + kCommentBytes;
     put(h, static_cast<uint32_t>(width));
