@@ -438,6 +438,51 @@ TEST(SelfSimMap, TheTexturesOwnTailDropsItsParticlesAndKeepsThePit) {
     EXPECT_GT(b.droppedTexture, 0u);
 }
 
+// Step 7b: a line the texture's own tail of peaks hides. The particles of
+// TheTexturesOwnTailDropsItsParticlesAndKeepsThePit set step 7's tail (~38 σ) above a long
+// groove across the striations (the striations' amplitude deep, 4 samples wide, 175 long), so
+// step 7 drops it; its pieces' line score (mean score × √elongation) stands above the
+// texture's own tail of line scores, which the compact particles keep low, so step 7b keeps
+// it. It keeps no particle away from the groove (those it touches are marked with it, as step
+// 7 marks them with a groove deep enough to pass it), and on the particles alone it keeps
+// nothing.
+TEST(SelfSimMap, ALineUnderTheTexturesTailOfPeaksIsKeptItsParticlesAreNot) {
+    std::vector<uint8_t> particles;
+    std::vector<float> h = particleField(&particles);
+    const std::vector<float> alone = h;
+    std::vector<uint8_t> line(h.size(), 0);
+    groove(h, line, 55, 60, 200, 160, 4, 1.0);
+    SelfSimMapOptions off;
+    off.lineNfa = 0;
+    off.particleElongation = 0;  // step 8c would drop the raised particles anyway
+    SelfSimMapOptions on;
+    on.particleElongation = 0;
+    const SelfSimMap a = detectSelfSimDefects(h, kW, kH, off),
+                     b = detectSelfSimDefects(h, kW, kH, on);
+    EXPECT_EQ(a.lineThreshold, 0.0);
+    EXPECT_GT(b.lineThreshold, 0.0);
+    EXPECT_LT(b.lineThreshold, b.textureThreshold) << "lines: a lower tail than the peaks'";
+    const Counts la = count(a.map, line, on.border), lb = count(b.map, line, on.border);
+    EXPECT_EQ(la.hits, 0u) << "step 7 drops the groove";
+    EXPECT_GT(a.droppedTexture, 0u);
+    EXPECT_GE(lb.hits, lb.truth * 8 / 10) << "step 7b keeps it";
+    EXPECT_GE(b.textureLines, 1u);
+    // the particles away from the groove (more than 6 samples): none marked by step 7b
+    size_t awayA = 0, awayB = 0;
+    for (int y = on.border; y < kH - on.border; ++y)
+        for (int x = on.border; x < kW - on.border; ++x) {
+            const size_t i = static_cast<size_t>(y) * kW + x;
+            if (!particles[i] || nearLabel(line, x, y, 6)) continue;
+            awayA += a.map[i] ? 1 : 0;
+            awayB += b.map[i] ? 1 : 0;
+        }
+    EXPECT_EQ(awayB, awayA) << "step 7b marks no particle of its own";
+    // the particles alone: step 7b finds no line
+    const SelfSimMap c = detectSelfSimDefects(alone, kW, kH, on);
+    EXPECT_EQ(c.textureLines, 0u);
+    EXPECT_GT(c.lineThreshold, 0.0);
+}
+
 // Step 8 keeps a weak defect's flanks and revives no texture mark. (1) Striations with a
 // shallow groove, 6 samples wide and 6 noise σ deep, labelled where it is at least a tenth of
 // its depth: its outer labelled samples stand below the growth at 2.5 σ. With step 8 more of it
@@ -1066,6 +1111,9 @@ TEST(SelfSimMap, BadOptionsNameThemselvesAndTheMethodIsInTheTable) {
     o = {};
     o.textureNfa = -1;
     expectNamed(o, "selfsim-texture-nfa");
+    o = {};
+    o.lineNfa = -1;
+    expectNamed(o, "selfsim-line-nfa");
     o = {};
     o.textureQuantile = 1.0;
     expectNamed(o, "selfsim-texture-quantile");
@@ -2028,6 +2076,12 @@ TEST(SelfSimMap, AnEmptyMapSaysWhyWhenRegionsStoodOut) {
               std::string::npos)
         << why;
     EXPECT_NE(why.find("2 shallower than its RMS (0.00343"), std::string::npos) << why;
+    EXPECT_EQ(why.find("line"), std::string::npos) << why;  // step 7b off: not named
+    m.selfsimLineThreshold = 15.6;
+    EXPECT_NE(m.whyNothingMarked().find("(35.2 robust sigmas) and holding no line above its "
+                                        "tail of lines"),
+              std::string::npos)
+        << m.whyNothingMarked();
     EXPECT_EQ(why.find("--"), std::string::npos) << why;  // the library names no option
     m.map[3] = 255;                                       // something marked: nothing to explain
     EXPECT_EQ(m.whyNothingMarked(), "");

@@ -109,6 +109,11 @@ int runDefectMap(const DefectMapJobOptions& o) {
             m.selfsimRegions, m.selfsimDropped, m.selfsimBorderPieces, m.selfsimTextureThreshold,
             m.selfsimCandidates, m.selfsimDroppedTexture, m.selfsimDroppedShallow,
             m.selfsimTextureRms);
+    if (m.method == DefectMethod::SelfSim && m.selfsimTextureLines > 0)
+        std::printf(
+            "  %zu pieces of those regions kept as lines above the texture's own tail of "
+            "lines (%.3f at the growth's level)\n",
+            m.selfsimTextureLines, m.selfsimLineThreshold);
     if (m.method == DefectMethod::SelfSim && m.selfsimBorderLines > 0)
         std::printf("  %zu of those pieces kept as lines across the texture's lay\n",
                     m.selfsimBorderLines);
@@ -493,6 +498,10 @@ void registerDefectMap(CLI::App& app, std::function<int()>& run) {
         ->capture_default_str();
     c->add_option("--selfsim-texture-quantile", q.textureQuantile,
                   "selfsim: ... the tail starting at this quantile of the regions' peaks")
+        ->capture_default_str();
+    c->add_option("--selfsim-line-nfa", q.lineNfa,
+                  "selfsim: expected texture pieces above the texture's own tail of line scores "
+                  "(a region under the tail of peaks kept where it holds a line; 0: off)")
         ->capture_default_str();
     c->add_option("--selfsim-trim-share", q.trimShare,
                   "selfsim: a kept region keeps its samples scoring at least this share of its "

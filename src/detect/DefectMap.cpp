@@ -70,7 +70,9 @@ std::string DefectMap::whyNothingMarked() const {
             .append(std::to_string(selfsimDroppedTexture))
             .append(" no higher than the texture's own tail (")
             .append(formatNumber(selfsimTextureThreshold, 3))
-            .append(" robust sigmas)");
+            .append(" robust sigmas)")
+            .append(selfsimLineThreshold > 0.0 ? " and holding no line above its tail of lines"
+                                               : "");
     if (selfsimDroppedTexture > 0 && selfsimDroppedShallow > 0) why.append(",");
     if (selfsimDroppedShallow > 0)
         why.append(" ")

@@ -357,6 +357,10 @@ struct DefectMap {
     // off), the regions grown and those dropped below it
     double selfsimTextureThreshold = 0;
     size_t selfsimCandidates = 0, selfsimDroppedTexture = 0;
+    // selfsim only: step 7b's threshold on a piece's line score at the growth's level (0 off),
+    // and the pieces of the dropped regions kept as lines
+    double selfsimLineThreshold = 0;
+    size_t selfsimTextureLines = 0;
     // selfsim only: regions whose deepest |r| is below the texture's RMS (step 6), and that RMS
     size_t selfsimDroppedShallow = 0;
     double selfsimTextureRms = 0;

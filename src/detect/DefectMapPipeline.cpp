@@ -216,6 +216,8 @@ void selfSimInto(DefectMap& r, std::span<const float> heights, int width, int he
     r.selfsimTextureThreshold = m.textureThreshold;
     r.selfsimCandidates = m.candidates;
     r.selfsimDroppedTexture = m.droppedTexture;
+    r.selfsimLineThreshold = m.lineThreshold;
+    r.selfsimTextureLines = m.textureLines;
     r.selfsimDroppedShallow = m.droppedShallow;
     r.selfsimTextureRms = m.shallowRms;
     r.selfsimBorderPieces = m.borderPieces;

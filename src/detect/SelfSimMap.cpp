@@ -1223,6 +1223,8 @@ void checkSelfSimMapOptions(const SelfSimMapOptions& o) {
     if (!(o.textureNfa >= 0.0))
         throw inputError(option("selfsim-texture-nfa"), "must be >= 0",
                          "The default is 1 (0: off)");
+    if (!(o.lineNfa >= 0.0))
+        throw inputError(option("selfsim-line-nfa"), "must be >= 0", "The default is 1 (0: off)");
     if (!(o.textureQuantile >= 0.0 && o.textureQuantile < 1.0))
         throw inputError(option("selfsim-texture-quantile"), "must be in [0, 1)",
                          "The default is 0.75");
@@ -1703,6 +1705,15 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
         for (const size_t i : samples) peak = std::max(peak, zDetect[i]);
         return peak;
     };
+    // step 7b's line score of a set of samples: its mean score at the growth's scales × the
+    // root of its elongation (the number of its width's cells along its length)
+    auto lineScore = [&](std::span<const size_t> samples) {
+        if (samples.empty()) return 0.0;
+        double sum = 0.0;
+        for (const size_t i : samples) sum += zGrow[i];
+        return sum / static_cast<double>(samples.size()) *
+               std::sqrt(extentOf(samples, W).elongation);
+    };
     struct Region {
         size_t begin, end;  // its samples in `members`
         float peak;         // its largest zDetect
@@ -1724,6 +1735,38 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             regions.push_back(reg);
         }
     out.candidates = regions.size();
+    // step 7b's pieces of a region: at the levels growSigma × borderLevelStep^k up to its
+    // largest score (k = 0, 1, ...), its 8-connected samples of one sign scoring at least the
+    // level and not marked yet; `visit(piece, atBorder, k)`
+    const bool lineTest = o.lineNfa > 0.0 && o.textureNfa > 0.0 && !relief.relief;
+    std::vector<uint8_t> lineSeen(lineTest ? n : 0, 0), lineIn(lineSeen.size(), 0);
+    std::vector<size_t> linePiece;
+    auto forEachLevelPiece = [&](const Region& reg, auto&& visit) {
+        float top = 0.0f;
+        for (size_t k = reg.begin; k < reg.end; ++k) {
+            top = std::max(top, zGrow[members[k]]);
+            lineIn[members[k]] = 1;
+        }
+        size_t index = 0;
+        for (double level = grow; level <= top; level *= o.borderLevelStep, ++index) {
+            for (size_t k = reg.begin; k < reg.end; ++k) lineSeen[members[k]] = 0;
+            const float cut = static_cast<float>(level);
+            for (size_t k = reg.begin; k < reg.end; ++k) {
+                const size_t i0 = members[k];
+                if (lineSeen[i0] || out.map[i0] || zGrow[i0] < cut) continue;
+                const bool negative = out.residual[i0] < 0.0f;
+                const auto accept = [&](size_t q) {
+                    return lineIn[q] && !out.map[q] && zGrow[q] >= cut &&
+                           (out.residual[q] < 0.0f) == negative;
+                };
+                linePiece.clear();
+                const bool atBorder = floodRegion(i0, lineSeen, linePiece, accept);
+                visit(std::span<const size_t>(linePiece), atBorder, index);
+            }
+            if (!(o.borderLevelStep > 1.0)) break;  // the growth's level alone
+        }
+        for (size_t k = reg.begin; k < reg.end; ++k) lineIn[members[k]] = 0;
+    };
     // (not on a relief: its plateaus, flat to within their band, leave no texture whose tail
     // the regions would sample -- nearly all of them are the defects)
     if (o.textureNfa > 0.0 && !relief.relief) {
@@ -1731,6 +1774,24 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
         peaks.reserve(regions.size());
         for (const Region& reg : regions) peaks.push_back(reg.peak);
         out.textureThreshold = textureTailThreshold(peaks, o.textureQuantile, o.textureNfa);
+    }
+    // step 7b: the texture's own tail of line scores, per level, over every piece of every
+    // region at that level (the levels are as many tests: lineNfa shared among them); a level
+    // with too few pieces to measure a tail on keeps none
+    std::vector<double> lineThresholds;
+    if (lineTest) {
+        std::vector<std::vector<float>> scores;
+        for (const Region& reg : regions)
+            forEachLevelPiece(reg, [&](std::span<const size_t> part, bool, size_t level) {
+                if (scores.size() <= level) scores.resize(level + 1);
+                scores[level].push_back(static_cast<float>(lineScore(part)));
+            });
+        const double nfa = o.lineNfa / static_cast<double>(std::max<size_t>(1, scores.size()));
+        for (const std::vector<float>& level : scores) {
+            const double t = textureTailThreshold(level, o.textureQuantile, nfa);
+            lineThresholds.push_back(t > 0.0 ? t : std::numeric_limits<double>::infinity());
+        }
+        if (!lineThresholds.empty()) out.lineThreshold = lineThresholds.front();
     }
     // steps 6-7's gates on a region (or a border piece) with its peak score: a detection and
     // minRegion samples, its largest |r| at least textureRms × the texture's RMS, its peak
@@ -2058,6 +2119,20 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
         }
         if (verdict == Gate::Texture) {
             ++out.droppedTexture;
+            // step 7b: its pieces that are lines above the texture's own tail of line scores
+            if (lineThresholds.empty()) continue;
+            forEachLevelPiece(reg, [&](std::span<const size_t> part, bool atBorder, size_t level) {
+                if (atBorder || static_cast<int>(part.size()) < o.minRegion ||
+                    !(lineScore(part) >= lineThresholds[level]))
+                    return;
+                float deepest = 0.0f;  // step 6's RMS gate, on the piece
+                for (const size_t i : part) deepest = std::max(deepest, std::abs(out.residual[i]));
+                if (deepest < o.textureRms * out.shallowRms) return;
+                // (a copy: the piece's vector is the enumeration's own)
+                const std::vector<size_t> line(part.begin(), part.end());
+                if (keepRegion(line, peakOf(line), false, 0.0, 0.0, 0.0, out.borderLines))
+                    ++out.textureLines;
+            });
             continue;
         }
         if (o.dropBorderRegions && b > 0 && reg.atBorder) {
