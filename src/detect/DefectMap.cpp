@@ -81,9 +81,9 @@ std::string DefectMap::whyNothingMarked() const {
             .append(formatNumber(selfsimTextureRms, 4))
             .append(" height units)");
     why.append(
-        ". A defect that stands no higher than the texture's own features is not told from "
-        "them: on textures the map was not tuned on (a rubber, a coin's relief, a moulded "
-        "pattern) it marked nothing where a person sees inserted scratches");
+        ". A defect that stands no higher than the texture's own features, and is not a long "
+        "even line, is not told from them: on textures the map was not tuned on (a rubber's "
+        "pores, a coin's relief) it misses dents and pits a person sees");
     return why;
 }
 
