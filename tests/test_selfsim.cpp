@@ -2076,7 +2076,7 @@ TEST(SelfSimMap, AnEmptyMapSaysWhyWhenRegionsStoodOut) {
               std::string::npos)
         << why;
     EXPECT_NE(why.find("2 shallower than its RMS (0.00343"), std::string::npos) << why;
-    EXPECT_EQ(why.find("line"), std::string::npos) << why;  // step 7b off: not named
+    EXPECT_EQ(why.find("tail of lines"), std::string::npos) << why;  // step 7b off
     m.selfsimLineThreshold = 15.6;
     EXPECT_NE(m.whyNothingMarked().find("(35.2 robust sigmas) and holding no line above its "
                                         "tail of lines"),
