@@ -2122,7 +2122,10 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
             // step 7b: its pieces that are lines above the texture's own tail of line scores
             if (lineThresholds.empty()) continue;
             forEachLevelPiece(reg, [&](std::span<const size_t> part, bool atBorder, size_t level) {
-                if (atBorder || static_cast<int>(part.size()) < o.minRegion ||
+                // (every level of a region had a piece when the tails were read, before
+                // anything was marked; the bound only guards that)
+                if (atBorder || level >= lineThresholds.size() ||
+                    static_cast<int>(part.size()) < o.minRegion ||
                     !(lineScore(part) >= lineThresholds[level]))
                     return;
                 float deepest = 0.0f;  // step 6's RMS gate, on the piece
