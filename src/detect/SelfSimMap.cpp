@@ -1797,13 +1797,16 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
     // minRegion samples, its largest |r| at least textureRms × the texture's RMS, its peak
     // above the texture's own tail
     enum class Gate { Small, Shallow, Texture, Pass };
+    // step 6's RMS gate: the samples' largest |r| below textureRms × the texture's RMS
+    auto shallow = [&](std::span<const size_t> samples) {
+        if (!(o.textureRms > 0.0)) return false;
+        float deepest = 0.0f;
+        for (const size_t i : samples) deepest = std::max(deepest, std::abs(out.residual[i]));
+        return deepest < o.textureRms * out.shallowRms;
+    };
     auto gate = [&](std::span<const size_t> samples, float peak) {
         if (!(peak >= thr) || static_cast<int>(samples.size()) < o.minRegion) return Gate::Small;
-        if (o.textureRms > 0.0) {
-            float deepest = 0.0f;
-            for (const size_t i : samples) deepest = std::max(deepest, std::abs(out.residual[i]));
-            if (deepest < o.textureRms * out.shallowRms) return Gate::Shallow;
-        }
+        if (shallow(samples)) return Gate::Shallow;
         if (peak < out.textureThreshold) return Gate::Texture;
         return Gate::Pass;
     };
@@ -2126,14 +2129,9 @@ SelfSimMap detectSelfSimDefects(std::span<const float> heights, int width, int h
                 // anything was marked; the bound only guards that)
                 if (atBorder || level >= lineThresholds.size() ||
                     static_cast<int>(part.size()) < o.minRegion ||
-                    !(lineScore(part) >= lineThresholds[level]))
+                    !(lineScore(part) >= lineThresholds[level]) || shallow(part))
                     return;
-                float deepest = 0.0f;  // step 6's RMS gate, on the piece
-                for (const size_t i : part) deepest = std::max(deepest, std::abs(out.residual[i]));
-                if (deepest < o.textureRms * out.shallowRms) return;
-                // (a copy: the piece's vector is the enumeration's own)
-                const std::vector<size_t> line(part.begin(), part.end());
-                if (keepRegion(line, peakOf(line), false, 0.0, 0.0, 0.0, out.borderLines))
+                if (keepRegion(part, peakOf(part), false, 0.0, 0.0, 0.0, out.borderLines))
                     ++out.textureLines;
             });
             continue;
