@@ -9,6 +9,7 @@
 
 #include "core/Error.h"
 #include "core/Text.h"
+#include "io/ByteOrder.h"
 #include "io/ExrReader.h"
 
 namespace sl::detail {
@@ -18,10 +19,6 @@ namespace fs = std::filesystem;
 namespace {
 
 const char* const kExrFix = "The file is not a complete OpenEXR file; write it again";
-
-uint32_t le32(const unsigned char* p) {
-    return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
-}
 
 /// Scanlines per chunk of each OpenEXR compression (NO, RLE, ZIPS, ZIP, PIZ, PXR24, B44, B44A,
 /// DWAA, DWAB).
@@ -39,9 +36,9 @@ class ExrHeaderWalker {
     void walk() {
         unsigned char head[8];
         read(head, 8, "the magic number and version");
-        if (le32(head) != 20000630u)
+        if (loadU32(head) != 20000630u)
             throw inputError(where_, "not an OpenEXR file (no OpenEXR magic number)", kExrFix);
-        const uint32_t flags = le32(head + 4);
+        const uint32_t flags = loadU32(head + 4);
         if ((flags & 0xff) != 2)
             throw inputError(where_,
                              "OpenEXR format version " + std::to_string(flags & 0xff) +
@@ -147,14 +144,14 @@ class ExrHeaderWalker {
             const std::string type = readName("an attribute type");
             unsigned char sz[4];
             read(sz, 4, "the size of attribute '" + name + "'");
-            const auto size = static_cast<int32_t>(le32(sz));
+            const auto size = static_cast<int32_t>(loadU32(sz));
             if (size < 0) fail("attribute '" + name + "' has a negative size");
             const std::string what =
                 "attribute '" + name + "' (" + std::to_string(size) + " bytes)";
             if (name == "dataWindow" && type == "box2i" && size == 16) {
                 unsigned char b[16];
                 read(b, 16, what);
-                for (int k = 0; k < 4; ++k) p.box[k] = static_cast<int32_t>(le32(b + 4 * k));
+                for (int k = 0; k < 4; ++k) p.box[k] = static_cast<int32_t>(loadU32(b + 4 * k));
                 p.haveDataWindow = true;
             } else if (name == "compression" && type == "compression" && size == 1) {
                 unsigned char c;
@@ -163,8 +160,8 @@ class ExrHeaderWalker {
             } else if (name == "tiles" && type == "tiledesc" && size == 9) {
                 unsigned char t[9];
                 read(t, 9, what);
-                p.tileX = le32(t);
-                p.tileY = le32(t + 4);
+                p.tileX = loadU32(t);
+                p.tileY = loadU32(t + 4);
                 p.haveTiles = true;
             } else if (type == "chlist") {
                 // Entries: name '\0', pixel type (int), pLinear, 3 reserved, x and y sampling
@@ -192,7 +189,7 @@ class ExrHeaderWalker {
             } else if (name == "chunkCount" && type == "int" && size == 4) {
                 unsigned char c[4];
                 read(c, 4, what);
-                const auto n = static_cast<int32_t>(le32(c));
+                const auto n = static_cast<int32_t>(loadU32(c));
                 if (n < 0) fail("chunkCount is negative");
                 p.chunkCount = n;
             } else {

@@ -16,6 +16,7 @@
 
 #include "core/Error.h"
 #include "core/Text.h"
+#include "io/ByteOrder.h"
 
 namespace sl {
 
@@ -66,8 +67,7 @@ bool parseDouble(std::string_view t, double& v) {
 
 /// Little-endian value of type `t` at `p`, as double.
 double decode(const SdfType& t, const unsigned char* p) {
-    uint64_t u = 0;
-    for (size_t b = t.bytes; b-- > 0;) u = (u << 8) | p[b];
+    const uint64_t u = loadLittleEndian(p, static_cast<int>(t.bytes));
     if (t.isFloat)
         return t.bytes == 4 ? static_cast<double>(std::bit_cast<float>(static_cast<uint32_t>(u)))
                             : std::bit_cast<double>(u);
@@ -191,15 +191,14 @@ class SdfReader {
                  kFixDamaged);
         const unsigned char* p = bytes_.data() + 8 + 10 + 12 + 12;
         const auto u16 = [&]() {
-            const auto v = static_cast<uint16_t>(p[0] | (p[1] << 8));
+            const uint16_t v = loadU16(p);
             p += 2;
             return v;
         };
         const auto f64 = [&]() {
-            uint64_t u = 0;
-            for (int b = 7; b >= 0; --b) u = (u << 8) | p[b];
+            const double v = loadF64(p);
             p += 8;
-            return std::bit_cast<double>(u);
+            return v;
         };
         const long long points = u16(), profiles = u16();
         const double xs = f64(), ys = f64(), zs = f64();

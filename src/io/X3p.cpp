@@ -27,6 +27,7 @@
 #include "core/Md5.h"
 #include "core/Text.h"
 #include "io/AtomicFile.h"
+#include "io/ByteOrder.h"
 
 namespace sl {
 
@@ -457,22 +458,16 @@ class X3pReader {
                 for (size_t k = 0; k < count; ++k)
                     if (!((valid[k / 8] >> (k % 8)) & 1)) out[k] = nan;
         };
-        const auto u32 = [](const unsigned char* p) {
-            return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 |
-                   uint32_t(p[3]) << 24;
-        };
         if (code_ == 'I')
-            convert([](const unsigned char* p) {
-                return double(std::bit_cast<int16_t>(static_cast<uint16_t>(p[0] | (p[1] << 8))));
-            });
+            convert(
+                [](const unsigned char* p) { return double(std::bit_cast<int16_t>(loadU16(p))); });
         else if (code_ == 'L')
-            convert([&](const unsigned char* p) { return double(std::bit_cast<int32_t>(u32(p))); });
+            convert(
+                [](const unsigned char* p) { return double(std::bit_cast<int32_t>(loadU32(p))); });
         else if (code_ == 'F')
-            convert([&](const unsigned char* p) { return double(std::bit_cast<float>(u32(p))); });
+            convert([](const unsigned char* p) { return double(loadF32(p)); });
         else
-            convert([&](const unsigned char* p) {
-                return std::bit_cast<double>(uint64_t(u32(p)) | uint64_t(u32(p + 4)) << 32);
-            });
+            convert([](const unsigned char* p) { return loadF64(p); });
         return d;
     }
 
