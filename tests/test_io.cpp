@@ -320,14 +320,21 @@ TEST(HeightSource, BareMapOrSceneFile) {
     EXPECT_EQ(bare.width(), 3);
     EXPECT_EQ(bare.height(), 2);
     for (size_t k = 0; k < v.size(); ++k) EXPECT_EQ(bare.heights()[k], v[k] / 255.0f);
-    // overrides belong to a scene file: with a bare map they are refused, naming the map
+    // overrides on a bare map make it the default scene around it, as render reads one: a
+    // scene's rules then hold (an integer map needs its range, named with the map) ...
     try {
         (void)loadHeightSource(dir / "b.png", {"material.alpha=0.1"});
-        ADD_FAILURE() << "overrides on a bare map were accepted";
+        ADD_FAILURE() << "an integer map without a range was read as a scene";
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("b.png"), std::string::npos) << e.what();
-        EXPECT_NE(std::string(e.what()).find("scene file"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("height_range"), std::string::npos) << e.what();
     }
+    // ... and the overrides apply
+    const HeightSource over = loadHeightSource(
+        dir / "b.png", {"heightmap.height_range=[2, 4]", "heightmap.pixel_pitch=0.01"});
+    ASSERT_NE(over.scene, nullptr);
+    EXPECT_EQ(over.heights()[2], 4.0f);
+    EXPECT_EQ(over.heights()[0], 2.0f);
     // a scene file gives the whole scene (its range, its camera); overrides apply to it
     std::ofstream(dir / "s.json")
         << (R"({"heightmap": {"path": "b.png", "height_range": [2, 4], "pixel_pitch": 0.01}, "camera": {"width": 8,

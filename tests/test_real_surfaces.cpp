@@ -357,6 +357,116 @@ TEST(FormatsGwyddion, ReadsGwyddionsOwnFileByContent) {
     EXPECT_THROW(loadHeightmap(dir / "junk.xyz123", {}), InputError);
 }
 
+// An instrument file of several channels (an AFM's Amplitude beside its Height, both in metres;
+// a Phase in degrees): the height channel is read by its title, any channel by number or title
+// when heightmap.channel asks, and a channel that holds no heights, is not there or is named
+// ambiguously is refused naming heightmap.channel and listing the file's channels.
+TEST(FormatsGwyddion, AFileOfSeveralChannelsReadsItsHeightChannelOrTheOneAskedFor) {
+    if (!SL_HAVE_GWYDDION) GTEST_SKIP() << "built with -DSCRATCHLIGHT_GWYDDION=OFF";
+    test::TempDir dir("gwych");
+    const int w = 6, h = 5;
+    const size_t n = static_cast<size_t>(w * h);
+    std::vector<float> amplitude(n), height(n), phase(n);
+    for (size_t k = 0; k < n; ++k) {
+        amplitude[k] = 0.0001f * static_cast<float>(k);
+        height[k] = 0.002f * std::sin(0.7f * static_cast<float>(k));
+        phase[k] = 10.0f + static_cast<float>(k);
+    }
+    writeGwy(dir / "afm.gwy", w, h,
+             {{"Amplitude", "m", amplitude}, {"Height", "m", height}, {"Phase", "deg", phase}},
+             0.001);
+    const auto read = [&](const std::string& channel) {
+        HeightmapOptions o;
+        o.channel = channel;
+        return loadHeightmap(dir / "afm.gwy", o);
+    };
+    const auto same = [&](const std::vector<float>& got, const std::vector<float>& want) {
+        ASSERT_EQ(got.size(), want.size());
+        for (size_t k = 0; k < want.size(); ++k) EXPECT_NEAR(got[k], want[k], 1e-9) << k;
+    };
+    // the rule: the channel in metres whose title names heights, not the lowest-numbered one
+    const HeightmapData byTitle = read("");
+    same(byTitle.heights, height);
+    EXPECT_NE(byTitle.channel.find("channel 1 \"Height\" (heights in m)"), std::string::npos)
+        << byTitle.channel;
+    EXPECT_NE(byTitle.channel.find("0 \"Amplitude\" (heights in m)"), std::string::npos);
+    EXPECT_NE(byTitle.channel.find("2 \"Phase\" (deg)"), std::string::npos);
+    // asked for: by number, by whole title in any case, by a part naming one channel
+    same(read("0").heights, amplitude);
+    same(read("AMPLITUDE").heights, amplitude);
+    same(read("eigh").heights, height);
+    EXPECT_NE(read("0").channel.find("as heightmap.channel asks"), std::string::npos);
+    const auto refused = [&](const std::string& channel, const std::string& says) {
+        try {
+            read(channel);
+            ADD_FAILURE() << channel << " was read";
+        } catch (const InputError& e) {
+            const std::string m = e.what();
+            EXPECT_NE(m.find("heightmap.channel"), std::string::npos) << m;
+            EXPECT_NE(m.find("afm.gwy"), std::string::npos) << m;
+            EXPECT_NE(m.find(says), std::string::npos) << m;
+            EXPECT_NE(m.find("1 \"Height\""), std::string::npos) << m;  // the list
+        }
+    };
+    refused("2", "does not hold heights in metres");
+    refused("phase", "does not hold heights in metres");
+    refused("7", "no channel \"7\"");
+    refused("a", "names more than one channel");  // Amplitude and Phase
+
+    // no title says heights: the lowest-numbered channel in metres
+    writeGwy(dir / "untitled.gwy", w, h,
+             {{"Error", "V", phase}, {"", "m", height}, {"", "m", amplitude}}, 0.001);
+    const HeightmapData first = loadHeightmap(dir / "untitled.gwy", {});
+    same(first.heights, height);
+    EXPECT_NE(first.channel.find("channel 1 (heights in m), the first in metres"),
+              std::string::npos)
+        << first.channel;
+    // one channel: nothing to say
+    writeGwy(dir / "one.gwy", w, h, height, 0.001);
+    EXPECT_EQ(loadHeightmap(dir / "one.gwy", {}).channel, "");
+    // a file our own reader reads holds one height map: a channel asked of it is refused
+    writeX3p(dir / "one.x3p", w, h, height, 0.001);
+    try {
+        HeightmapOptions o;
+        o.channel = "0";
+        loadHeightmap(dir / "one.x3p", o);
+        ADD_FAILURE() << "read";
+    } catch (const InputError& e) {
+        const std::string m = e.what();
+        EXPECT_NE(m.find("heightmap.channel"), std::string::npos) << m;
+        EXPECT_NE(m.find("one.x3p"), std::string::npos) << m;
+    }
+
+    // the scene's heightmap.channel (and -D), recorded in the summary's heightmap section
+    test::writeText(dir / "scene.json",
+                    R"({"heightmap": {"path": "afm.gwy", "levelling": "none", "channel": 0}})");
+    const std::unique_ptr<Scene> s0 = loadScene(dir / "scene.json", {});
+    same(s0->heights, amplitude);
+    const std::unique_ptr<Scene> s1 = loadScene(dir / "scene.json", {"heightmap.channel=Height"});
+    same(s1->heights, height);
+    const nlohmann::ordered_json j = heightmapLoadJson(*s1);
+    ASSERT_TRUE(j.at("channel").is_string());
+    EXPECT_NE(j.at("channel").get<std::string>().find("\"Height\""), std::string::npos);
+    // a bare map takes the same override, as the default scene around it (defectmap, info)
+    const HeightSource bare = loadHeightSource(dir / "afm.gwy", {"heightmap.channel=amplitude",
+                                                                 "heightmap.levelling=none"});
+    ASSERT_TRUE(bare.scene);
+    same(bare.heights(), amplitude);
+    same(loadHeightSource(dir / "afm.gwy").heights(), [&] {  // no override: the Height, levelled
+        HeightmapData d = loadHeightmap(dir / "afm.gwy", {});
+        levelHeights(d.heights, d.width, d.height, *d.pitch, d.invalid, LevellingDesc{}, true,
+                     "afm.gwy");
+        return d.heights;
+    }());
+    test::writeText(dir / "bad.json", R"({"heightmap": {"path": "afm.gwy", "channel": -1}})");
+    try {
+        loadScene(dir / "bad.json", {});
+        ADD_FAILURE() << "read";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("heightmap.channel"), std::string::npos) << e.what();
+    }
+}
+
 // A file no reader claims is refused naming the file and the readers there are; a build without
 // Gwyddion names the option that adds the instrument formats (README, "Gwyddion's licence").
 TEST(Formats, AFileNoReaderClaimsIsRefusedNamingTheReaders) {

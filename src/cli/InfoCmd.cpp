@@ -36,6 +36,7 @@ int runInfo(const InfoArgs& a) {
                     s.pitchFrom.c_str());
     else
         std::printf("pitch       none in the file (a scene must give heightmap.pixel_pitch)\n");
+    if (!s.channel.empty()) std::printf("channel     %s\n", s.channel.c_str());
     std::printf("resampled   %s\n", s.resampling.empty() ? "no" : s.resampling.c_str());
     std::printf("invalid     %zu points filled\n", s.invalidFilled);
     std::printf("levelling   %s\n", s.levelling.text().c_str());

@@ -4,6 +4,7 @@
 // into it.
 #include "io/GwyddionModule.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -60,13 +61,6 @@ bool initialise(GwyddionProblem* problem) {
     return false;
 }
 
-struct ChannelSearch {
-    GwyContainer* container = nullptr;
-    int id = -1;             // the lowest id with metre units
-    int firstAny = -1;       // the lowest id of any channel
-    std::string otherUnits;  // what the other channels hold, for the error
-};
-
 std::string unitString(GwySIUnit* u) {
     gchar* s = gwy_si_unit_get_string(u, GWY_SI_UNIT_FORMAT_PLAIN);
     std::string r = s && *s ? s : "(none)";
@@ -74,8 +68,15 @@ std::string unitString(GwySIUnit* u) {
     return r;
 }
 
+/// A channel of the file: its number N (/N/data), its title (/N/data/title) and units.
+struct Channel {
+    int id = 0;
+    std::string title, zUnit, xyUnit;
+    bool metres = false;  // heights and lateral both in metres: a height map
+};
+
 void findChannel(gpointer quark, gpointer value, gpointer user) {
-    auto* search = static_cast<ChannelSearch*>(user);
+    auto* channels = static_cast<std::vector<Channel>*>(user);
     const gchar* key = g_quark_to_string(GPOINTER_TO_UINT(quark));
     auto* v = static_cast<GValue*>(value);
     if (!key || key[0] != '/' || !G_VALUE_HOLDS_OBJECT(v)) return;
@@ -85,22 +86,96 @@ void findChannel(gpointer quark, gpointer value, gpointer user) {
     const long id = std::strtol(key + 1, &end, 10);
     if (end == key + 1 || id < 0 || id > 1000000 || std::string(end) != "/data") return;
     GwyDataField* f = GWY_DATA_FIELD(obj);
-    const int i = static_cast<int>(id);
-    if (search->firstAny < 0 || i < search->firstAny) search->firstAny = i;
-    const bool metres = gwy_si_unit_equal_string(gwy_data_field_get_si_unit_z(f), "m") &&
-                        gwy_si_unit_equal_string(gwy_data_field_get_si_unit_xy(f), "m");
-    if (metres) {
-        if (search->id < 0 || i < search->id) search->id = i;
-    } else {
-        std::string& u = search->otherUnits;
-        if (!u.empty()) u += "; ";
-        u += "channel ";
-        u += std::to_string(i);
-        u += ": heights in ";
-        u += unitString(gwy_data_field_get_si_unit_z(f));
-        u += ", lateral in ";
-        u += unitString(gwy_data_field_get_si_unit_xy(f));
+    Channel c;
+    c.id = static_cast<int>(id);
+    c.zUnit = unitString(gwy_data_field_get_si_unit_z(f));
+    c.xyUnit = unitString(gwy_data_field_get_si_unit_xy(f));
+    c.metres = gwy_si_unit_equal_string(gwy_data_field_get_si_unit_z(f), "m") &&
+               gwy_si_unit_equal_string(gwy_data_field_get_si_unit_xy(f), "m");
+    channels->push_back(std::move(c));
+}
+
+std::string lowerAscii(std::string s) {
+    for (char& ch : s)
+        if (ch >= 'A' && ch <= 'Z') ch = static_cast<char>(ch - 'A' + 'a');
+    return s;
+}
+
+/// `0 "Height" (m)`: how a channel is named in messages.
+std::string channelName(const Channel& c) {
+    std::string s = std::to_string(c.id);
+    if (!c.title.empty()) s += " \"" + c.title + "\"";
+    if (c.metres) return s + " (heights in m)";
+    s += " (" + (c.zUnit == "(none)" ? std::string("no unit") : c.zUnit);
+    return s + (c.xyUnit == "m" ? ")" : ", lateral " + c.xyUnit + ")");
+}
+
+std::string channelList(const std::vector<Channel>& channels, int except = -1) {
+    std::string s;
+    for (const Channel& c : channels) {
+        if (c.id == except) continue;
+        if (!s.empty()) s += "; ";
+        s += channelName(c);
     }
+    return s;
+}
+
+/// The channel to read (io/GwyddionReader.h: the rule), or nullptr with *problem set.
+const Channel* chooseChannel(const std::vector<Channel>& channels, const std::string& request,
+                             const std::string& file, const std::string& module, std::string* how,
+                             GwyddionProblem* problem) {
+    const std::string all = "the file's channels: " + channelList(channels);
+    const Channel* chosen = nullptr;
+    if (!request.empty()) {
+        const bool number = request.find_first_not_of("0123456789") == std::string::npos;
+        std::vector<const Channel*> titled;
+        for (const Channel& c : channels) {
+            if (number ? std::to_string(c.id) == request
+                       : lowerAscii(c.title) == lowerAscii(request)) {
+                chosen = &c;
+                break;
+            }
+            if (!number && lowerAscii(c.title).find(lowerAscii(request)) != std::string::npos)
+                titled.push_back(&c);
+        }
+        if (!chosen && titled.size() == 1) chosen = titled.front();
+        if (!chosen) {
+            *problem = {"heightmap.channel",
+                        titled.size() > 1
+                            ? "\"" + request + "\" names more than one channel of " + file + " (" +
+                                  all + ")"
+                            : "no channel \"" + request + "\" in " + file + " (" + all + ")",
+                        "Give the channel's number or its whole title"};
+            return nullptr;
+        }
+        if (!chosen->metres) {
+            *problem = {"heightmap.channel",
+                        "channel " + channelName(*chosen) + " of " + file +
+                            " does not hold heights in metres (" + all + ")",
+                        "Choose the height (topography) channel"};
+            return nullptr;
+        }
+        *how = "as heightmap.channel asks";
+        return chosen;
+    }
+    for (const Channel& c : channels) {
+        if (!c.metres) continue;
+        const std::string t = lowerAscii(c.title);
+        if (t.find("height") != std::string::npos || t.find("topo") != std::string::npos) {
+            *how = "its title names heights";
+            return &c;
+        }
+    }
+    for (const Channel& c : channels)
+        if (c.metres) {
+            *how = "the first in metres";
+            return &c;
+        }
+    *problem = {"",
+                channels.empty() ? "Gwyddion's '" + module + "' module found no image"
+                                 : "no channel holds heights in metres (" + all + ")",
+                "Export the height (topography) channel of the measurement"};
+    return nullptr;
 }
 
 struct ContainerRef {
@@ -118,7 +193,8 @@ bool detect(const std::string& file, std::string* module, GwyddionProblem* probl
     return true;
 }
 
-bool read(const std::string& file, HeightmapData* out, GwyddionProblem* problem) {
+bool read(const std::string& file, const std::string& channel, HeightmapData* out,
+          GwyddionProblem* problem) {
     const std::lock_guard<std::mutex> lock(gwyLock());
     if (!initialise(problem)) return false;
     const gchar* module = gwy_file_detect(file.c_str(), FALSE, GWY_FILE_OPERATION_LOAD);
@@ -140,22 +216,32 @@ bool read(const std::string& file, HeightmapData* out, GwyddionProblem* problem)
         return false;
     }
     if (err) g_error_free(err);
-    ChannelSearch search;
-    search.container = ref.c;
-    gwy_container_foreach(ref.c, nullptr, findChannel, &search);
-    if (search.id < 0) {
-        *problem = {
-            "",
-            search.firstAny < 0
-                ? std::string("Gwyddion's '") + module + "' module found no image"
-                : std::string("no channel holds heights in metres (") + search.otherUnits + ")",
-            "Export the height (topography) channel of the measurement"};
-        return false;
+    std::vector<Channel> channels;
+    gwy_container_foreach(ref.c, nullptr, findChannel, &channels);
+    std::sort(channels.begin(), channels.end(),
+              [](const Channel& x, const Channel& y) { return x.id < y.id; });
+    for (Channel& c : channels) {
+        char titleKey[48];
+        std::snprintf(titleKey, sizeof titleKey, "/%d/data/title", c.id);
+        const guchar* title = nullptr;
+        if (gwy_container_gis_string_by_name(ref.c, titleKey, &title) && title)
+            c.title = reinterpret_cast<const char*>(title);
     }
+    std::string how;
+    const Channel* chosen = chooseChannel(channels, channel, file, module, &how, problem);
+    if (!chosen) return false;
+    const int chosenId = chosen->id;
+    std::string chosenText;
+    if (channels.size() > 1 || !channel.empty())
+        chosenText =
+            "channel " + channelName(*chosen) + ", " + how +
+            (channels.size() > 1 ? "; the others: " + channelList(channels, chosenId) +
+                                       (channel.empty() ? " (heightmap.channel chooses)" : "")
+                                 : std::string());
     char key[48];
-    std::snprintf(key, sizeof key, "/%d/data", search.id);
+    std::snprintf(key, sizeof key, "/%d/data", chosenId);
     GwyDataField* f = GWY_DATA_FIELD(gwy_container_get_object_by_name(ref.c, key));
-    std::snprintf(key, sizeof key, "/%d/mask", search.id);
+    std::snprintf(key, sizeof key, "/%d/mask", chosenId);
     GObject* maskObj = nullptr;
     GwyDataField* mask = nullptr;
     if (gwy_container_gis_object_by_name(ref.c, key, &maskObj) && maskObj &&
@@ -181,6 +267,7 @@ bool read(const std::string& file, HeightmapData* out, GwyddionProblem* problem)
     d.pitch = gwy_data_field_get_dx(f) * 1000.0;
     d.pitchY = gwy_data_field_get_dy(f) * 1000.0;
     d.format = std::string("gwyddion ") + module;
+    d.channel = chosenText;
     if (!(std::isfinite(*d.pitch) && *d.pitch > 0 && std::isfinite(*d.pitchY) && *d.pitchY > 0)) {
         *problem = {"", "the file's sample spacing is not a positive number",
                     "Check the measurement's calibration; export it again"};
@@ -205,20 +292,32 @@ bool read(const std::string& file, HeightmapData* out, GwyddionProblem* problem)
     return true;
 }
 
-bool writeGwy(const std::string& path, int width, int height, const std::vector<float>& heightsMm,
-              double pitchMm, GwyddionProblem* problem) {
+bool writeGwy(const std::string& path, int width, int height,
+              const std::vector<GwyChannel>& channels, double pitchMm, GwyddionProblem* problem) {
     const std::lock_guard<std::mutex> lock(gwyLock());
     if (!initialise(problem)) return false;
     const double p = pitchMm / 1000.0;
-    GwyDataField* f = gwy_data_field_new(width, height, width * p, height * p, FALSE);
-    gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(f), "m");
-    gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_z(f), "m");
-    double* z = gwy_data_field_get_data(f);
-    for (size_t k = 0; k < heightsMm.size(); ++k) z[k] = static_cast<double>(heightsMm[k]) / 1000.0;
     ContainerRef ref;
     ref.c = gwy_container_new();
-    gwy_container_set_object_by_name(ref.c, "/0/data", f);
-    g_object_unref(f);
+    for (size_t i = 0; i < channels.size(); ++i) {
+        const GwyChannel& c = channels[i];
+        GwyDataField* f = gwy_data_field_new(width, height, width * p, height * p, FALSE);
+        gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(f), "m");
+        gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_z(f), c.unit.c_str());
+        double* z = gwy_data_field_get_data(f);
+        const double scale = c.unit == "m" ? 1e-3 : 1.0;  // heights are given in mm
+        for (size_t k = 0; k < c.values.size(); ++k)
+            z[k] = static_cast<double>(c.values[k]) * scale;
+        char key[48];
+        std::snprintf(key, sizeof key, "/%zu/data", i);
+        gwy_container_set_object_by_name(ref.c, key, f);
+        g_object_unref(f);
+        if (!c.title.empty()) {
+            std::snprintf(key, sizeof key, "/%zu/data/title", i);
+            gwy_container_set_const_string_by_name(
+                ref.c, key, reinterpret_cast<const guchar*>(c.title.c_str()));
+        }
+    }
     GError* err = nullptr;
     if (!gwy_file_func_run_save("gwyfile", ref.c, path.c_str(), GWY_RUN_NONINTERACTIVE, &err)) {
         const std::string msg = err && err->message ? err->message : "no reason given";

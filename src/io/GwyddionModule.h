@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "io/GwyChannel.h"
 #include "io/HeightmapData.h"
 
 namespace sl::detail {
@@ -24,7 +25,7 @@ struct GwyddionProblem {
     std::string where, problem, fix;
 };
 
-inline constexpr int kGwyddionModuleVersion = 1;
+inline constexpr int kGwyddionModuleVersion = 2;
 
 /// The module's entry points (kGwyddionModuleVersion: both sides must agree). Each returns
 /// false with *problem set when it fails. Gwyddion is initialised on the first call; every
@@ -33,11 +34,13 @@ struct GwyddionModule {
     int version = kGwyddionModuleVersion;
     /// The file module that claims `file` by its content and name ("" when none does).
     bool (*detect)(const std::string& file, std::string* module, GwyddionProblem* problem);
-    /// The file's height channel (io/GwyddionReader.h readGwyddion).
-    bool (*read)(const std::string& file, HeightmapData* out, GwyddionProblem* problem);
-    /// A W×H map (mm, row 0 first) of square pitch pitchMm as a .gwy file at `path`.
+    /// The file's height channel, or the one `channel` names (io/GwyddionReader.h readGwyddion).
+    bool (*read)(const std::string& file, const std::string& channel, HeightmapData* out,
+                 GwyddionProblem* problem);
+    /// W×H channels (row 0 first) of square pitch pitchMm as a .gwy file at `path`.
     bool (*writeGwy)(const std::string& path, int width, int height,
-                     const std::vector<float>& heightsMm, double pitchMm, GwyddionProblem* problem);
+                     const std::vector<GwyChannel>& channels, double pitchMm,
+                     GwyddionProblem* problem);
 };
 
 }  // namespace sl::detail

@@ -1,5 +1,6 @@
 #include "io/GwyddionReader.h"
 
+#include <algorithm>
 #include <mutex>
 #include <string>
 
@@ -56,26 +57,35 @@ std::string gwyddionDetect(const fs::path& file) {
     return module;
 }
 
-HeightmapData readGwyddion(const fs::path& file) {
+HeightmapData readGwyddion(const fs::path& file, const std::string& channel) {
     HeightmapData d;
     detail::GwyddionProblem problem;
-    if (!gwyddion(file.string()).read(file.string(), &d, &problem)) fail(file.string(), problem);
+    if (!gwyddion(file.string()).read(file.string(), channel, &d, &problem))
+        fail(file.string(), problem);
     return d;
 }
 
 void writeGwy(const fs::path& file, int width, int height, const std::vector<float>& heightsMm,
               double pitchMm) {
+    writeGwy(file, width, height, std::vector<GwyChannel>{{"", "m", heightsMm}}, pitchMm);
+}
+
+void writeGwy(const fs::path& file, int width, int height, const std::vector<GwyChannel>& channels,
+              double pitchMm) {
     const std::string where = file.string();
-    if (width < 1 || height < 1 ||
-        heightsMm.size() != static_cast<size_t>(width) * static_cast<size_t>(height) ||
-        !(pitchMm > 0))
-        throw inputError(where, "cannot write a .gwy file of " + std::to_string(heightsMm.size()) +
-                                    " heights as " + std::to_string(width) + "x" +
-                                    std::to_string(height));
+    const size_t n =
+        static_cast<size_t>(std::max(width, 0)) * static_cast<size_t>(std::max(height, 0));
+    const bool sized = std::all_of(channels.begin(), channels.end(),
+                                   [&](const GwyChannel& c) { return c.values.size() == n; });
+    if (width < 1 || height < 1 || channels.empty() || !sized || !(pitchMm > 0))
+        throw inputError(where, "cannot write a .gwy file of " + std::to_string(channels.size()) +
+                                    " channel(s) as " + std::to_string(width) + "x" +
+                                    std::to_string(height) + " at pitch " +
+                                    std::to_string(pitchMm));
     const detail::GwyddionModule& m = gwyddion(where);
     writeAtomically(file, [&](const fs::path& temp) {
         detail::GwyddionProblem problem;
-        if (!m.writeGwy(temp.string(), width, height, heightsMm, pitchMm, &problem))
+        if (!m.writeGwy(temp.string(), width, height, channels, pitchMm, &problem))
             fail(where, problem);
     });
 }
@@ -99,10 +109,13 @@ bool gwyddionBuilt() {
 std::string gwyddionDetect(const fs::path&) {
     return "";
 }
-HeightmapData readGwyddion(const fs::path& file) {
+HeightmapData readGwyddion(const fs::path& file, const std::string&) {
     notBuilt(file);
 }
 void writeGwy(const fs::path& file, int, int, const std::vector<float>&, double) {
+    notBuilt(file);
+}
+void writeGwy(const fs::path& file, int, int, const std::vector<GwyChannel>&, double) {
     notBuilt(file);
 }
 

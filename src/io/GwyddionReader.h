@@ -10,15 +10,23 @@
 // module kinds need a display). Gwyddion is not thread-safe: every call into it holds one lock.
 //
 // What is read (loadHeightmap dispatches here for a file whose content none of our own readers
-// claims, io/HeightmapIO.h): the lowest-numbered channel (/N/data) whose lateral and height units
-// are metres; heights become millimetres (×1000), NaN where the channel's mask (/N/mask, the
-// file module's invalid points) is set or the value is not finite. pitch = dx, pitchY = dy (mm).
+// claims, io/HeightmapIO.h): one channel (/N/data) whose lateral and height units are metres --
+//   - the one `channel` names (heightmap.channel): its number N, its title (/N/data/title, any
+//     case), or a part of the title that names no other channel; a channel not in metres, or
+//     none, is refused naming heightmap.channel and listing the file's channels;
+//   - else the lowest-numbered channel in metres whose title names heights ("height", "topo",
+//     any case): an AFM file's Height beside an Amplitude (error) channel also in metres;
+//   - else the lowest-numbered channel in metres.
+// Heights become millimetres (×1000), NaN where the channel's mask (/N/mask, the file module's
+// invalid points) is set or the value is not finite. pitch = dx, pitchY = dy (mm). `channel` of
+// the result says which channel was read and lists the others when the file holds several.
 #pragma once
 
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include "io/GwyChannel.h"
 #include "io/HeightmapData.h"
 
 namespace sl {
@@ -31,12 +39,16 @@ bool gwyddionBuilt();
 std::string gwyddionDetect(const std::filesystem::path& file);
 
 /// Reads `file` through Gwyddion (see above): heights in mm, NaN for invalid points, `pitch` and
-/// `pitchY` in mm, `format` "gwyddion <module>". Throws InputError naming the file.
-HeightmapData readGwyddion(const std::filesystem::path& file);
+/// `pitchY` in mm, `format` "gwyddion <module>". `channel` "" reads the height channel the rule
+/// above finds. Throws InputError naming the file (or heightmap.channel).
+HeightmapData readGwyddion(const std::filesystem::path& file, const std::string& channel = "");
 
 /// Writes a W×H height map (mm, row 0 first) with square pitch pitchMm as Gwyddion's own .gwy
 /// file (heights and lateral units in metres). For benches and tests.
 void writeGwy(const std::filesystem::path& file, int width, int height,
               const std::vector<float>& heightsMm, double pitchMm);
+/// ... and several channels, numbered 0, 1, ... in order (tests of the channel rule).
+void writeGwy(const std::filesystem::path& file, int width, int height,
+              const std::vector<GwyChannel>& channels, double pitchMm);
 
 }  // namespace sl

@@ -24,7 +24,11 @@ struct HeightmapData {
     /// Per sample, 1 where the height was invented (an invalid point filled, or interpolated
     /// from one); empty when every height is measured. Levelling fits the others only.
     std::vector<uint8_t> invalid;
-    std::string resampling;             // "" or how non-square pixels were made square
+    std::string resampling;  // "" or how non-square pixels were made square
+    /// Files of several channels (and any channel asked for): which one was read and the
+    /// others, e.g. `channel 1 "Height" (heights in m), its title names heights; the others:
+    /// 0 "Amplitude" (heights in m)` (io/GwyddionReader.h); "" otherwise.
+    std::string channel;
     std::vector<std::string> warnings;  // what an imperfect file made the reader assume
     /// A measured map (X3P, SDF, an instrument format): carries its pitch and heights in mm.
     bool measured() const { return pitch.has_value(); }

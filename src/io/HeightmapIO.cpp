@@ -474,8 +474,10 @@ Content sniff(const fs::path& file) {
 
 }  // namespace
 
-HeightmapData loadHeightmap(const fs::path& file, const HeightmapOptions& opt,
-                            HeightmapReader reader) {
+namespace {
+
+HeightmapData loadAnyHeightmap(const fs::path& file, const HeightmapOptions& opt,
+                               HeightmapReader reader) {
     const std::string where = file.string();
     checkOptions(where, opt);
     std::error_code ec;
@@ -486,7 +488,8 @@ HeightmapData loadHeightmap(const fs::path& file, const HeightmapOptions& opt,
     if (!fs::is_regular_file(file, ec))
         throw inputError(where, "the height map path is not a regular file",
                          "Point heightmap.path at an EXR, TIFF, PNG, .npy, X3P or SDF file");
-    if (reader == HeightmapReader::Gwyddion) return finishMetrology(where, readGwyddion(file), opt);
+    if (reader == HeightmapReader::Gwyddion)
+        return finishMetrology(where, readGwyddion(file, opt.channel), opt);
     const std::string ext = lower(file.extension().string());
     switch (sniff(file)) {
         case Content::Npy:
@@ -508,7 +511,7 @@ HeightmapData loadHeightmap(const fs::path& file, const HeightmapOptions& opt,
             } catch (const InputError&) {
                 if (gwyddionDetect(file).empty()) throw;
             }
-            return finishMetrology(where, readGwyddion(file), opt);
+            return finishMetrology(where, readGwyddion(file, opt.channel), opt);
         case Content::Unknown:
             break;
     }
@@ -522,7 +525,8 @@ HeightmapData loadHeightmap(const fs::path& file, const HeightmapOptions& opt,
     const bool image = ext == ".exr" || ext == ".tif" || ext == ".tiff" || ext == ".png" ||
                        ext == ".jpg" || ext == ".jpeg" || ext == ".hdr";
     if (image) return loadWithOiio(file, opt);
-    if (!gwyddionDetect(file).empty()) return finishMetrology(where, readGwyddion(file), opt);
+    if (!gwyddionDetect(file).empty())
+        return finishMetrology(where, readGwyddion(file, opt.channel), opt);
     try {
         return loadWithOiio(file, opt);  // an image format named otherwise
     } catch (const InputError&) {
@@ -543,6 +547,21 @@ HeightmapData loadHeightmap(const fs::path& file, const HeightmapOptions& opt,
                          "Build scratchlight with -DSCRATCHLIGHT_GWYDDION=ON, or export the file "
                          "from the instrument's software as X3P or SDF");
     }
+}
+
+}  // namespace
+
+HeightmapData loadHeightmap(const fs::path& file, const HeightmapOptions& opt,
+                            HeightmapReader reader) {
+    HeightmapData d = loadAnyHeightmap(file, opt, reader);
+    // Our own readers' files hold one height channel: a channel asked of one is a mistake.
+    if (!opt.channel.empty() && d.format.rfind("gwyddion ", 0) != 0)
+        throw inputError("heightmap.channel",
+                         "\"" + opt.channel + "\" asks for a channel of " + file.string() + " (" +
+                             d.format + "), which holds one height map",
+                         "Remove heightmap.channel; it chooses among an instrument file's "
+                         "channels read through Gwyddion");
+    return d;
 }
 
 }  // namespace sl

@@ -68,7 +68,9 @@
 //       - instrument formats (Wyko OPD, Sensofar PLU, Digital Surf SUR, Zygo DAT, NanoFocus,
 //         Gwyddion's .gwy and whatever else Gwyddion's file modules read): through Gwyddion
 //         (io/GwyddionReader.h; the build option SCRATCHLIGHT_GWYDDION), heights and spacing in
-//         metres, invalid points from the channel's mask; format "gwyddion <module>".
+//         metres, invalid points from the channel's mask; format "gwyddion <module>"; of a
+//         file of several channels the height channel, or the one heightmap.channel names
+//         (HeightmapData::channel says which).
 //     Non-square pixels (X spacing px ≠ Y spacing py): the map is resampled onto the finer pitch
 //     p = min(px, py) by linear interpolation along the coarser axis (the finer axis keeps its
 //     samples): W' = ⌊(W−1)·px/p⌋ + 1 columns, H' = ⌊(H−1)·py/p⌋ + 1 rows, new sample k at
@@ -84,13 +86,12 @@
 //     all at once, then counts them valid. HeightmapData::invalidFilled counts them (and the
 //     format string says so). Refused: no valid point, or more than half the points invalid.
 // Which reader: by content (the first bytes: .npy's magic, a zip = X3P, SDF's version line,
-// TrueMap's name, NMS's name at byte 32, EXR/PNG/TIFF/JPEG magic), then by extension for what the content does not say (a damaged
-// file keeps its format's error), then Gwyddion's file modules (by content and name), then
-// OpenImageIO. X3P and SDF use our own readers, also when Gwyddion is built: they read the X3P
-// files whose members sit in a folder (Gwyddion refuses them) and are faster (README
-// "Instrument files").
-// Checks: file exists and decodes, at least 2×2 samples, every height finite (the error names
-// the first bad row and column).
+// TrueMap's name, NMS's name at byte 32, EXR/PNG/TIFF/JPEG magic), then by extension for what the
+// content does not say (a damaged file keeps its format's error), then Gwyddion's file modules (by
+// content and name), then OpenImageIO. X3P and SDF use our own readers, also when Gwyddion is
+// built: they read the X3P files whose members sit in a folder (Gwyddion refuses them) and are
+// faster (README "Instrument files"). Checks: file exists and decodes, at least 2×2 samples, every
+// height finite (the error names the first bad row and column).
 //
 // Memory: one float buffer of W·H values (plus a strip of rows for multi-channel files); a
 // single-channel file is decoded straight into it. X3P and SDF also hold the file's data
@@ -116,6 +117,10 @@ struct HeightmapOptions {
     /// scratch and defect maps read an integer map as [0, 1]); unset for anything rendered.
     std::optional<std::array<double, 2>> defaultIntegerRange;
     double heightScale = 1.0;  // float maps: multiplier
+    /// heightmap.channel: the channel of an instrument file read through Gwyddion, by number or
+    /// title (io/GwyddionReader.h); "" the height channel its rule finds. A file one of our
+    /// own readers reads holds one height channel and is refused with a channel asked for.
+    std::string channel;
 };
 
 /// Which reader loadHeightmap uses: the one the content says, or Gwyddion's file modules for

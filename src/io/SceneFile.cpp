@@ -232,6 +232,16 @@ void parseHeightmap(Fields& f, const std::filesystem::path& baseDir, HeightmapDe
     h.heightScale = f.number("height_scale", h.heightScale);
     if (!(h.heightScale != 0)) f.fail("height_scale", "must be non-zero");
     if (const json* l = f.get("levelling")) h.levelling = parseLevelling(f, *l);
+    if (const json* c = f.get("channel")) {
+        if (c->is_number_unsigned())
+            h.channel = std::to_string(c->get<unsigned long long>());
+        else if (c->is_string() && !c->get<std::string>().empty())
+            h.channel = c->get<std::string>();
+        else
+            f.fail("channel",
+                   "must be a channel's number (0, 1, ...) or title, got " + jsonExcerpt(*c),
+                   "`scratchlight info FILE` lists an instrument file's channels");
+    }
     if (const json* m = f.get("measured")) {
         if (!m->is_boolean())
             f.fail("measured", "must be true or false, got " + jsonExcerpt(*m),
@@ -485,6 +495,7 @@ HeightmapLoad levelMap(HeightmapData& map, const LevellingDesc& levelling, doubl
     load.format = map.format;
     load.invalidFilled = map.invalidFilled;
     load.resampling = map.resampling;
+    load.channel = map.channel;
     load.warnings = map.warnings;
     load.levelling = levelHeights(map.heights, map.width, map.height, pitch, map.invalid, levelling,
                                   map.measured(), where);
@@ -513,6 +524,7 @@ std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
     HeightmapOptions opt;
     opt.heightRange = desc.heightmap.heightRange;
     opt.heightScale = desc.heightmap.heightScale;
+    opt.channel = desc.heightmap.channel;
     HeightmapData map = loadHeightmap(desc.heightmap.path, opt);
     SceneDesc d = desc;
     const std::string sceneWhere =
@@ -586,14 +598,12 @@ std::unique_ptr<Scene> loadScene(const std::filesystem::path& file,
 HeightSource loadHeightSource(const std::filesystem::path& file,
                               const std::vector<std::string>& overrides) {
     HeightSource s;
-    if (file.extension() == ".json") {
+    // A scene file, or a bare map with overrides (-D heightmap.channel=..., levelling=...): the
+    // default scene around it, as render reads one (readSceneFile).
+    if (file.extension() == ".json" || !overrides.empty()) {
         s.scene = loadScene(file, overrides);
         return s;
     }
-    if (!overrides.empty())
-        throw inputError(file.string(),
-                         "is a bare height map: scene overrides (-D) apply to a scene file",
-                         "give SCENE.json, or leave out the overrides");
     HeightmapOptions o;
     o.defaultIntegerRange = std::array<double, 2>{0.0, 1.0};
     s.map = loadHeightmap(file, o);
@@ -642,6 +652,8 @@ nlohmann::ordered_json heightmapLoadJson(const Scene& scene) {
     j["invalid_filled"] = l.invalidFilled;
     j["resampling"] = l.resampling.empty() ? nlohmann::ordered_json(nullptr)
                                            : nlohmann::ordered_json(l.resampling);
+    j["channel"] =
+        l.channel.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(l.channel);
     j["levelling"] = lev;
     j["warnings"] = l.warnings;
     j["measured"] = l.measured;
@@ -676,6 +688,11 @@ std::vector<SceneFileField> sceneFileFields() {
          "circle arc across it), or `{\"mode\": \"cylinder\", \"axis\": \"y\"}`; `auto` is "
          "`plane` for measured maps (X3P, SDF, instrument formats), `none` for EXR, TIFF, PNG "
          "and .npy"},
+        {"heightmap.channel", "the height channel",
+         "instrument files of several channels (read through Gwyddion): the channel's number "
+         "(`0`, `1`, ...) or title (any case, or a part of it naming one channel); unset, the "
+         "lowest-numbered channel in metres whose title says height or topography, else the "
+         "lowest in metres. `scratchlight info FILE` lists the channels"},
         {"heightmap.measured", "the file's",
          "`true`: the map is a measurement (an instrument's), `false`: a simulator's or a "
          "generator's; unset, X3P, SDF and instrument formats are measurements, EXR, TIFF, PNG "

@@ -48,9 +48,12 @@ std::string describePart(const Scene& scene);
 /// The heights of a scene file's part (SCENE.json: the whole Scene, its camera included) or of a
 /// bare height map (any other extension, io/HeightmapIO.h; an integer map without a height
 /// range is read as [0, 1], for tools invariant to an affine change of the heights, such as
-/// the defect and scratch maps). `overrides` apply to a scene file only: given with a bare
-/// map they are an InputError naming it. Logs what was read (a bare map: its grid, pitch when
-/// the file has one, height range and invalid points; a scene: loadScene's describePart).
+/// the defect and scratch maps). A bare map given with `overrides` (-D heightmap.channel=1,
+/// heightmap.levelling=cylinder:x) is read as the default scene around it with them applied,
+/// as render reads it (readSceneFile): a scene's rules hold then (a map without a pitch needs
+/// heightmap.pixel_pitch, an integer map heightmap.height_range). Logs what was read (a bare
+/// map: its grid, pitch when the file has one, height range and invalid points; a scene:
+/// loadScene's describePart).
 struct HeightSource {
     std::unique_ptr<Scene> scene;  // null for a bare height map
     HeightmapData map;             // the bare height map's data (empty for a scene)

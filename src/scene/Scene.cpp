@@ -33,6 +33,7 @@ std::string HeightmapLoad::text(int width, int height, double pitch) const {
     std::snprintf(b, sizeof b, "%dx%d samples at %.6g mm", width, height, pitch);
     std::string t = b;
     if (!format.empty()) t += ", " + format;
+    if (!channel.empty()) t += "; " + channel;
     if (!resampling.empty()) t += "; " + resampling;
     t += "; levelling: " + levelling.text();
     return t;

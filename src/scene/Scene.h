@@ -28,6 +28,9 @@ struct HeightmapDesc {
     std::optional<std::array<double, 2>> heightRange;  // integer maps: [min, max] in mm
     double heightScale = 1.0;                          // float maps: multiplier
     LevellingDesc levelling;  // form removal when loaded (scene/Levelling.h)
+    /// heightmap.channel: which channel of an instrument file of several (its number or title,
+    /// io/GwyddionReader.h); "" the height channel the reader's rule finds.
+    std::string channel;
     /// heightmap.measured: the map is a measurement (an instrument's), or not (a simulator's
     /// or a generator's), whatever its file format; unset: the file says (io/HeightmapIO.h
     /// HeightmapData::measured). The defect map's auto method follows it (detect/DefectMap.h).
@@ -40,6 +43,7 @@ struct HeightmapLoad {
     std::string format;         // the reader's, e.g. "gwyddion opdfile, 809 invalid points filled"
     size_t invalidFilled = 0;   // invalid points of the file, filled
     std::string resampling;     // "" or how non-square pixels were made square
+    std::string channel;        // "" or which channel of a file of several was read
     LevellingResult levelling;  // what was removed
     std::vector<std::string> warnings;  // the reader's
     bool measured = false;              // HeightmapDesc::measured, else the file's

@@ -17,6 +17,7 @@ InfoJobSummary runInfoJob(const InfoJobOptions& o) {
     s.reader = load.format;
     s.measured = src.measured();
     s.resampling = load.resampling;
+    s.channel = load.channel;
     s.invalidFilled = load.invalidFilled;
     s.levelling = load.levelling;
     s.warnings = load.warnings;
@@ -65,6 +66,7 @@ nlohmann::ordered_json infoJson(const InfoJobSummary& s) {
                        : nlohmann::ordered_json(nullptr);
     j["resampled"] = !s.resampling.empty();
     j["resampling"] = s.resampling;
+    j["channel"] = s.channel;
     j["invalid_points_filled"] = s.invalidFilled;
     nlohmann::ordered_json lev;
     lev["mode"] = levellingName(s.levelling.applied);

@@ -37,6 +37,7 @@ struct InfoJobSummary {
     std::optional<double> pitch;  // mm per sample; none for a bare map without one
     std::string pitchFrom;        // "file", "scene" or "none"
     std::string resampling;       // "" or how non-square pixels were made square
+    std::string channel;          // "" or which channel of a file of several was read
     size_t invalidFilled = 0;     // invalid points of the file, filled
     LevellingResult levelling;    // the levelling in force and what it removed
     double minHeight = 0, maxHeight = 0, sq = 0;  // after levelling; mm when `heightsInMm`

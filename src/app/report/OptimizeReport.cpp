@@ -483,6 +483,8 @@ std::string heightmapSentence(const json& hm) {
         f << ", " << hm["size"][0].dump() << "×" << hm["size"][1].dump() << " samples";
     if (hm.contains("pitch") && hm["pitch"].is_number())
         f << " at " << fmt(hm["pitch"].get<double>(), 4) << " mm";
+    if (hm.contains("channel") && hm["channel"].is_string())
+        f << "; " << hm["channel"].get<std::string>();
     if (hm.contains("resampling") && hm["resampling"].is_string())
         f << "; " << hm["resampling"].get<std::string>();
     f << ".";
