@@ -448,8 +448,8 @@ TEST(FormatsGwyddion, AFileOfSeveralChannelsReadsItsHeightChannelOrTheOneAskedFo
     ASSERT_TRUE(j.at("channel").is_string());
     EXPECT_NE(j.at("channel").get<std::string>().find("\"Height\""), std::string::npos);
     // a bare map takes the same override, as the default scene around it (defectmap, info)
-    const HeightSource bare = loadHeightSource(dir / "afm.gwy", {"heightmap.channel=amplitude",
-                                                                 "heightmap.levelling=none"});
+    const HeightSource bare = loadHeightSource(
+        dir / "afm.gwy", {"heightmap.channel=amplitude", "heightmap.levelling=none"});
     ASSERT_TRUE(bare.scene);
     same(bare.heights(), amplitude);
     same(loadHeightSource(dir / "afm.gwy").heights(), [&] {  // no override: the Height, levelled
