@@ -467,6 +467,59 @@ TEST(FormatsGwyddion, AFileOfSeveralChannelsReadsItsHeightChannelOrTheOneAskedFo
     }
 }
 
+// A measurement more than half invalid whose valid points lie in a smaller rectangle (a part
+// smaller than the instrument's field) is read as that rectangle, exactly, with a warning; one
+// whose valid points are spread over the field is still refused; one at most half invalid keeps
+// its grid (its invalid border filled, as before).
+TEST(Formats, AMeasurementMostlyInvalidAroundItsPartIsCroppedToIt) {
+    test::TempDir dir("crop");
+    const int w = 20, h = 10;
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    std::vector<float> mm(static_cast<size_t>(w * h), nan);
+    const auto at = [&](int x, int y) -> float& { return mm[static_cast<size_t>(y * w + x)]; };
+    for (int y = 2; y <= 6; ++y)
+        for (int x = 3; x <= 9; ++x) at(x, y) = 0.001f * static_cast<float>(x + 10 * y);
+    at(5, 4) = nan;  // an invalid point inside the part: filled
+    writeX3p(dir / "part.x3p", w, h, mm, 0.002);
+    const HeightmapData d = loadHeightmap(dir / "part.x3p", {});
+    ASSERT_EQ(d.width, 7);
+    ASSERT_EQ(d.height, 5);
+    EXPECT_EQ(d.invalidFilled, 1u);
+    for (int y = 0; y < 5; ++y)
+        for (int x = 0; x < 7; ++x)
+            if (!(x == 2 && y == 2)) {
+                EXPECT_FLOAT_EQ(d.heights[static_cast<size_t>(y * 7 + x)], at(x + 3, y + 2));
+            }
+    ASSERT_EQ(d.warnings.size(), 1u);
+    EXPECT_NE(d.warnings[0].find("columns 3..9 and rows 2..6"), std::string::npos) << d.warnings[0];
+    // valid points at two far corners: the box is the whole map, still mostly invalid
+    std::vector<float> spread(static_cast<size_t>(w * h), nan);
+    for (int y = 0; y < 3; ++y)
+        for (int x = 0; x < 3; ++x) {
+            spread[static_cast<size_t>(y * w + x)] = 0.001f;
+            spread[static_cast<size_t>((h - 1 - y) * w + (w - 1 - x))] = 0.002f;
+        }
+    writeX3p(dir / "spread.x3p", w, h, spread, 0.002);
+    try {
+        loadHeightmap(dir / "spread.x3p", {});
+        ADD_FAILURE() << "read";
+    } catch (const InputError& e) {
+        const std::string m = e.what();
+        EXPECT_NE(m.find("spread.x3p"), std::string::npos) << m;
+        EXPECT_NE(m.find("more than half"), std::string::npos) << m;
+        EXPECT_NE(m.find("Crop the measurement"), std::string::npos) << m;
+    }
+    // at most half invalid: the file's grid, the border filled
+    std::vector<float> half(static_cast<size_t>(w * h), 0.001f);
+    for (int x = 0; x < w; ++x) half[static_cast<size_t>(x)] = nan;  // row 0
+    writeX3p(dir / "half.x3p", w, h, half, 0.002);
+    const HeightmapData hd = loadHeightmap(dir / "half.x3p", {});
+    EXPECT_EQ(hd.width, w);
+    EXPECT_EQ(hd.height, h);
+    EXPECT_EQ(hd.invalidFilled, static_cast<size_t>(w));
+    EXPECT_TRUE(hd.warnings.empty());
+}
+
 // A file no reader claims is refused naming the file and the readers there are; a build without
 // Gwyddion names the option that adds the instrument formats (README, "Gwyddion's licence").
 TEST(Formats, AFileNoReaderClaimsIsRefusedNamingTheReaders) {

@@ -294,8 +294,39 @@ void resampleSquare(const std::string& where, HeightmapData& d) {
     d.pitch = p;
 }
 
+/// Crops `d` (NaN for invalid points) to the bounding box of its valid points: the border rows
+/// and columns that hold none (a part smaller than the instrument's field, a round field on a
+/// rectangular sensor) are not the part, and filling them would invent it. Says so among the
+/// warnings (the map's grid is no longer the file's). Needs at least one valid point.
+void cropToValid(HeightmapData& d) {
+    const int w = d.width, h = d.height;
+    int x0 = w, x1 = -1, y0 = h, y1 = -1;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            if (!std::isnan(d.heights[static_cast<size_t>(y) * w + x])) {
+                x0 = std::min(x0, x), x1 = std::max(x1, x);
+                y0 = std::min(y0, y), y1 = std::max(y1, y);
+            }
+    if (x1 < 0 || (x0 == 0 && y0 == 0 && x1 == w - 1 && y1 == h - 1)) return;
+    const int cw = x1 - x0 + 1, ch = y1 - y0 + 1;
+    std::vector<float> z(static_cast<size_t>(cw) * static_cast<size_t>(ch));
+    for (int y = 0; y < ch; ++y)
+        std::copy_n(d.heights.begin() + (static_cast<ptrdiff_t>(y0 + y) * w + x0), cw,
+                    z.begin() + static_cast<ptrdiff_t>(y) * cw);
+    d.warnings.push_back("more than half of its " + std::to_string(w) + "x" + std::to_string(h) +
+                         " points are invalid: read as the columns " + std::to_string(x0) + ".." +
+                         std::to_string(x1) + " and rows " + std::to_string(y0) + ".." +
+                         std::to_string(y1) +
+                         " that hold every valid point (a mask or labels drawn on the file's "
+                         "grid no longer line up)");
+    d.heights = std::move(z);
+    d.width = cw;
+    d.height = ch;
+}
+
 /// Measured maps (X3P, SDF, Gwyddion): heights in mm with NaN for invalid points -> checked,
-/// filled, square, scaled heights.
+/// (cropped to their valid points when more than half are invalid,) filled, square, scaled
+/// heights.
 HeightmapData finishMetrology(const std::string& where, HeightmapData d,
                               const HeightmapOptions& opt) {
     checkSize(where, d.width, d.height);
@@ -312,13 +343,23 @@ HeightmapData finishMetrology(const std::string& where, HeightmapData d,
     if (invalid == n)
         throw inputError(where, "every point of the height map is invalid (" + d.format + ")",
                          "Export a measurement that has valid points");
-    if (invalid > n / 2)
-        throw inputError(
-            where,
-            std::to_string(invalid) + " of " + std::to_string(n) +
-                " points are invalid (NaN, infinite or masked), more than half; the height "
-                "map would be mostly invented",
-            "Crop the measurement to its valid region and export it again");
+    if (invalid > n / 2) {
+        cropToValid(d);
+        checkSize(where, d.width, d.height);
+        const size_t kept = d.heights.size();
+        const size_t stillInvalid = static_cast<size_t>(std::count_if(
+            d.heights.begin(), d.heights.end(), [](float v) { return std::isnan(v); }));
+        if (stillInvalid > kept / 2)
+            throw inputError(
+                where,
+                std::to_string(invalid) + " of " + std::to_string(n) +
+                    " points are invalid (NaN, infinite or masked), more than half" +
+                    (kept < n ? ", also within the " + std::to_string(d.width) + "x" +
+                                    std::to_string(d.height) + " box that holds the valid ones"
+                              : std::string()) +
+                    "; the height map would be mostly invented",
+                "Crop the measurement to its valid region and export it again");
+    }
     d.invalidFilled = fillInvalid(d);
     if (d.invalidFilled > 0)
         d.format += ", " + std::to_string(d.invalidFilled) + " invalid points filled";

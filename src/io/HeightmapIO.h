@@ -84,7 +84,10 @@
 //     Invalid points are filled, deterministically, layer by layer from the valid region: each
 //     pass gives every invalid point that has a valid 4-neighbour the mean of those neighbours,
 //     all at once, then counts them valid. HeightmapData::invalidFilled counts them (and the
-//     format string says so). Refused: no valid point, or more than half the points invalid.
+//     format string says so). A map more than half invalid is first cropped to the bounding
+//     box of its valid points (the rows and columns at its border that hold none: a part
+//     smaller than the field), with a warning naming the rows and columns kept. Refused: no
+//     valid point, or more than half the points invalid within that box.
 // Which reader: by content (the first bytes: .npy's magic, a zip = X3P, SDF's version line,
 // TrueMap's name, NMS's name at byte 32, EXR/PNG/TIFF/JPEG magic), then by extension for what the
 // content does not say (a damaged file keeps its format's error), then Gwyddion's file modules (by
