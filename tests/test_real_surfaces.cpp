@@ -520,6 +520,31 @@ TEST(Formats, AMeasurementMostlyInvalidAroundItsPartIsCroppedToIt) {
     EXPECT_TRUE(hd.warnings.empty());
 }
 
+// A file Gwyddion reads that holds no image says what it holds instead: a point cloud (its XYZ
+// text module reads three columns of numbers) is named as one, with how to grid it.
+TEST(FormatsGwyddion, APointCloudIsRefusedAsOneWithHowToGridIt) {
+    if (!SL_HAVE_GWYDDION) GTEST_SKIP() << "built with -DSCRATCHLIGHT_GWYDDION=OFF";
+    test::TempDir dir("xyz");
+    std::string text;
+    for (int k = 0; k < 200; ++k) {
+        // scattered, not on a grid (points on a regular grid are read as an image)
+        const double x = 1e-4 * std::fmod(0.618034 * k, 1.0),
+                     y = 1e-4 * std::fmod(0.754878 * k + 0.1, 1.0), z = 1e-8 * ((k * 7) % 13);
+        text += std::to_string(x) + " " + std::to_string(y) + " " + std::to_string(z) + "\n";
+    }
+    test::writeText(dir / "points.xyz", text);
+    try {
+        loadHeightmap(dir / "points.xyz", {});
+        FAIL() << "read";
+    } catch (const InputError& e) {
+        const std::string m = e.what();
+        EXPECT_NE(m.find("points.xyz"), std::string::npos) << m;
+        EXPECT_NE(m.find("1 point cloud (XYZ data), not a grid of heights"), std::string::npos)
+            << m;
+        EXPECT_NE(m.find("Rasterize"), std::string::npos) << m;
+    }
+}
+
 // A file no reader claims is refused naming the file and the readers there are; a build without
 // Gwyddion names the option that adds the instrument formats (README, "Gwyddion's licence").
 TEST(Formats, AFileNoReaderClaimsIsRefusedNamingTheReaders) {

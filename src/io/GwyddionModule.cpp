@@ -75,13 +75,25 @@ struct Channel {
     bool metres = false;  // heights and lateral both in metres: a height map
 };
 
+/// What a file module read: its channels (images), and the data that are not images.
+struct FileContents {
+    std::vector<Channel> channels;
+    int pointClouds = 0;  // XYZ data (/xyz/N: GwySurface)
+    int volumes = 0;      // volume data (/brick/N: GwyBrick)
+    int curves = 0;       // graphs: profiles, spectra (GwyGraphModel)
+};
+
 void findChannel(gpointer quark, gpointer value, gpointer user) {
-    auto* channels = static_cast<std::vector<Channel>*>(user);
+    auto* contents = static_cast<FileContents*>(user);
     const gchar* key = g_quark_to_string(GPOINTER_TO_UINT(quark));
     auto* v = static_cast<GValue*>(value);
     if (!key || key[0] != '/' || !G_VALUE_HOLDS_OBJECT(v)) return;
     GObject* obj = G_OBJECT(g_value_get_object(v));
-    if (!obj || !GWY_IS_DATA_FIELD(obj)) return;
+    if (!obj) return;
+    if (GWY_IS_SURFACE(obj)) ++contents->pointClouds;
+    if (GWY_IS_BRICK(obj)) ++contents->volumes;
+    if (GWY_IS_GRAPH_MODEL(obj)) ++contents->curves;
+    if (!GWY_IS_DATA_FIELD(obj)) return;
     gchar* end = nullptr;
     const long id = std::strtol(key + 1, &end, 10);
     if (end == key + 1 || id < 0 || id > 1000000 || std::string(end) != "/data") return;
@@ -92,7 +104,7 @@ void findChannel(gpointer quark, gpointer value, gpointer user) {
     c.xyUnit = unitString(gwy_data_field_get_si_unit_xy(f));
     c.metres = gwy_si_unit_equal_string(gwy_data_field_get_si_unit_z(f), "m") &&
                gwy_si_unit_equal_string(gwy_data_field_get_si_unit_xy(f), "m");
-    channels->push_back(std::move(c));
+    contents->channels.push_back(std::move(c));
 }
 
 std::string lowerAscii(std::string s) {
@@ -122,8 +134,7 @@ std::string channelList(const std::vector<Channel>& channels, int except = -1) {
 
 /// The channel to read (io/GwyddionReader.h: the rule), or nullptr with *problem set.
 const Channel* chooseChannel(const std::vector<Channel>& channels, const std::string& request,
-                             const std::string& file, const std::string& module, std::string* how,
-                             GwyddionProblem* problem) {
+                             const std::string& file, std::string* how, GwyddionProblem* problem) {
     const std::string all = "the file's channels: " + channelList(channels);
     const Channel* chosen = nullptr;
     if (!request.empty()) {
@@ -171,11 +182,33 @@ const Channel* chooseChannel(const std::vector<Channel>& channels, const std::st
             *how = "the first in metres";
             return &c;
         }
-    *problem = {"",
-                channels.empty() ? "Gwyddion's '" + module + "' module found no image"
-                                 : "no channel holds heights in metres (" + all + ")",
+    *problem = {"", "no channel holds heights in metres (" + all + ")",
                 "Export the height (topography) channel of the measurement"};
     return nullptr;
+}
+
+/// Why a file holds no image to read, by what it holds instead.
+GwyddionProblem noImage(const FileContents& f, const std::string& module) {
+    const std::string read = "Gwyddion's '" + module + "' module read ";
+    const auto count = [](int n, const char* one, const char* many) {
+        return std::to_string(n) + " " + (n == 1 ? one : many);
+    };
+    if (f.pointClouds > 0)
+        return {"",
+                read + count(f.pointClouds, "point cloud", "point clouds") +
+                    " (XYZ data), not a grid of heights",
+                "Rasterize the points onto a regular grid (Gwyddion: XYZ Data > Rasterize) and "
+                "save the image as .gwy or X3P"};
+    if (f.volumes > 0)
+        return {"", read + count(f.volumes, "volume", "volumes") + " (volume data), no height map",
+                "Export a height (topography) image of the measurement"};
+    if (f.curves > 0)
+        return {"",
+                read + count(f.curves, "graph", "graphs") +
+                    " (profiles or spectra), no height map: an areal measurement is needed",
+                "Measure or export the surface as an image (a height map)"};
+    return {"", "Gwyddion's '" + module + "' module found no image",
+            "Export the height (topography) channel of the measurement"};
 }
 
 struct ContainerRef {
@@ -216,8 +249,13 @@ bool read(const std::string& file, const std::string& channel, HeightmapData* ou
         return false;
     }
     if (err) g_error_free(err);
-    std::vector<Channel> channels;
-    gwy_container_foreach(ref.c, nullptr, findChannel, &channels);
+    FileContents contents;
+    gwy_container_foreach(ref.c, nullptr, findChannel, &contents);
+    if (contents.channels.empty()) {
+        *problem = noImage(contents, module);
+        return false;
+    }
+    std::vector<Channel>& channels = contents.channels;
     std::sort(channels.begin(), channels.end(),
               [](const Channel& x, const Channel& y) { return x.id < y.id; });
     for (Channel& c : channels) {
@@ -228,7 +266,7 @@ bool read(const std::string& file, const std::string& channel, HeightmapData* ou
             c.title = reinterpret_cast<const char*>(title);
     }
     std::string how;
-    const Channel* chosen = chooseChannel(channels, channel, file, module, &how, problem);
+    const Channel* chosen = chooseChannel(channels, channel, file, &how, problem);
     if (!chosen) return false;
     const int chosenId = chosen->id;
     std::string chosenText;

@@ -19,7 +19,9 @@
 //   - else the lowest-numbered channel in metres.
 // Heights become millimetres (×1000), NaN where the channel's mask (/N/mask, the file module's
 // invalid points) is set or the value is not finite. pitch = dx, pitchY = dy (mm). `channel` of
-// the result says which channel was read and lists the others when the file holds several.
+// the result says which channel was read and lists the others when the file holds several. A
+// file with no channel is refused saying what it holds instead: point clouds (/xyz/N), volume
+// data (/brick/N) or graphs (profiles, spectra).
 #pragma once
 
 #include <filesystem>
