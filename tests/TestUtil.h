@@ -1,6 +1,7 @@
 // Helpers shared by tests: temporary directories, tiny file writers, running the CLI.
 #pragma once
 
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -15,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include "core/Error.h"
+#include "io/HeightmapIO.h"
 #include "scene/Scene.h"
 #include "transport/TransportMatrix.h"
 
@@ -99,6 +102,19 @@ inline double sampleSd(const std::vector<double>& v) {
     double q = 0;
     for (double x : v) q += (x - m) * (x - m);
     return std::sqrt(q / static_cast<double>(v.size() - 1));
+}
+
+/// Expects loadHeightmap(file, opt) to throw InputError naming the file and every part.
+inline void expectRefused(const std::filesystem::path& file, const std::vector<std::string>& parts,
+                          const HeightmapOptions& opt = {}) {
+    try {
+        loadHeightmap(file, opt);
+        ADD_FAILURE() << file << " was accepted";
+    } catch (const InputError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find(file.string()), std::string::npos) << msg;
+        for (const auto& p : parts) EXPECT_NE(msg.find(p), std::string::npos) << p << " | " << msg;
+    }
 }
 
 inline std::string readFile(const std::filesystem::path& p) {

@@ -149,18 +149,7 @@ std::vector<double> ramp(int w, int h, double base = 0.0) {
     return v;
 }
 
-/// Expects loadHeightmap(file, opt) to throw InputError naming the file and every part.
-void expectRefused(const fs::path& file, const std::vector<std::string>& parts,
-                   const HeightmapOptions& opt = {}) {
-    try {
-        loadHeightmap(file, opt);
-        ADD_FAILURE() << file << " was accepted";
-    } catch (const InputError& e) {
-        const std::string msg = e.what();
-        EXPECT_NE(msg.find(file.string()), std::string::npos) << msg;
-        for (const auto& p : parts) EXPECT_NE(msg.find(p), std::string::npos) << p << " | " << msg;
-    }
-}
+using test::expectRefused;
 
 /// SDF header fields.
 struct SdfSpec {
