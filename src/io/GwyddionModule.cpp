@@ -113,7 +113,7 @@ std::string lowerAscii(std::string s) {
     return s;
 }
 
-/// `0 "Height" (m)`: how a channel is named in messages.
+/// `1 "Height" (heights in m)`, `2 "Phase" (deg)`: how a channel is named in messages.
 std::string channelName(const Channel& c) {
     std::string s = std::to_string(c.id);
     if (!c.title.empty()) s += " \"" + c.title + "\"";
@@ -343,9 +343,9 @@ bool writeGwy(const std::string& path, int width, int height,
         gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(f), "m");
         gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_z(f), c.unit.c_str());
         double* z = gwy_data_field_get_data(f);
-        const double scale = c.unit == "m" ? 1e-3 : 1.0;  // heights are given in mm
+        const double mmPerUnit = c.unit == "m" ? 1000.0 : 1.0;  // heights are given in mm
         for (size_t k = 0; k < c.values.size(); ++k)
-            z[k] = static_cast<double>(c.values[k]) * scale;
+            z[k] = static_cast<double>(c.values[k]) / mmPerUnit;
         char key[48];
         std::snprintf(key, sizeof key, "/%zu/data", i);
         gwy_container_set_object_by_name(ref.c, key, f);
