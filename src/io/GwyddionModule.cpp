@@ -16,6 +16,8 @@
 #include <system_error>
 #include <vector>
 
+#include "core/Text.h"
+
 // After the standard headers, as before they were moved here (glib's libintl.h otherwise
 // collides with them).
 #include <libgwyddion/gwyddion.h>
@@ -107,12 +109,6 @@ void findChannel(gpointer quark, gpointer value, gpointer user) {
     contents->channels.push_back(std::move(c));
 }
 
-std::string lowerAscii(std::string s) {
-    for (char& ch : s)
-        if (ch >= 'A' && ch <= 'Z') ch = static_cast<char>(ch - 'A' + 'a');
-    return s;
-}
-
 /// `1 "Height" (heights in m)`, `2 "Phase" (deg)`: how a channel is named in messages.
 std::string channelName(const Channel& c) {
     std::string s = std::to_string(c.id);
@@ -139,15 +135,15 @@ const Channel* chooseChannel(const std::vector<Channel>& channels, const std::st
     const Channel* chosen = nullptr;
     if (!request.empty()) {
         const bool number = request.find_first_not_of("0123456789") == std::string::npos;
+        const std::string asked = lower(request);
         std::vector<const Channel*> titled;
         for (const Channel& c : channels) {
-            if (number ? std::to_string(c.id) == request
-                       : lowerAscii(c.title) == lowerAscii(request)) {
+            const std::string title = lower(c.title);
+            if (number ? std::to_string(c.id) == request : title == asked) {
                 chosen = &c;
                 break;
             }
-            if (!number && lowerAscii(c.title).find(lowerAscii(request)) != std::string::npos)
-                titled.push_back(&c);
+            if (!number && title.find(asked) != std::string::npos) titled.push_back(&c);
         }
         if (!chosen && titled.size() == 1) chosen = titled.front();
         if (!chosen) {
@@ -171,7 +167,7 @@ const Channel* chooseChannel(const std::vector<Channel>& channels, const std::st
     }
     for (const Channel& c : channels) {
         if (!c.metres) continue;
-        const std::string t = lowerAscii(c.title);
+        const std::string t = lower(c.title);
         if (t.find("height") != std::string::npos || t.find("topo") != std::string::npos) {
             *how = "its title names heights";
             return &c;
