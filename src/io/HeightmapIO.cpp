@@ -346,9 +346,9 @@ HeightmapData finishMetrology(const std::string& where, HeightmapData d,
     if (invalid > n / 2) {
         cropToValid(d);
         checkSize(where, d.width, d.height);
+        // the crop drops only invalid points: the invalid ones left follow from the sizes
         const size_t kept = d.heights.size();
-        const size_t stillInvalid = static_cast<size_t>(std::count_if(
-            d.heights.begin(), d.heights.end(), [](float v) { return std::isnan(v); }));
+        const size_t stillInvalid = invalid - (n - kept);
         if (stillInvalid > kept / 2)
             throw inputError(
                 where,
