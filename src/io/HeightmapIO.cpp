@@ -596,7 +596,8 @@ HeightmapData loadHeightmap(const fs::path& file, const HeightmapOptions& opt,
                             HeightmapReader reader) {
     HeightmapData d = loadAnyHeightmap(file, opt, reader);
     // Our own readers' files hold one height channel: a channel asked of one is a mistake.
-    if (!opt.channel.empty() && d.format.rfind("gwyddion ", 0) != 0)
+    // (Gwyddion says which channel it read whenever one is asked for: HeightmapData::channel.)
+    if (!opt.channel.empty() && d.channel.empty())
         throw inputError("heightmap.channel",
                          "\"" + opt.channel + "\" asks for a channel of " + file.string() + " (" +
                              d.format + "), which holds one height map",
