@@ -424,7 +424,7 @@ TEST(DefectObjective, OptimizeRunsItOnAGeneratedPart) {
         for (size_t q = 0; q < labels.pixelCount(); ++q) {
             const long v = std::lround(labels.data[q * labels.channels] * 255.0f);
             lines += v == kMarkLine;
-            other += v != 0 && v != kMarkLine && v != kMarkSpot;
+            other += v != 0 && !isMarkShapeLabel(static_cast<uint8_t>(v));
         }
         EXPECT_GT(lines, 0u);
         EXPECT_EQ(other, 0u);

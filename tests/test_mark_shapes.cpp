@@ -41,8 +41,10 @@ TEST(MarkShapes, ALineIsALineWhateverItsDirectionASpotIsASpot) {
     EXPECT_EQ(at(31, 4), kMarkLine);
     EXPECT_EQ(at(40, 10), kMarkLine);
     EXPECT_EQ(at(51, 21), kMarkLine);
-    EXPECT_EQ(at(15, 25), kMarkSpot);
-    EXPECT_EQ(at(10, 25), kMarkSpot);
+    // the disc (81 samples) is more than 8x the shape's lower median, the 5x2 bar's 10: a large
+    // spot (next test)
+    EXPECT_EQ(at(15, 25), kMarkLargeSpot);
+    EXPECT_EQ(at(10, 25), kMarkLargeSpot);
     EXPECT_EQ(at(42, 41), kMarkSpot);
     EXPECT_EQ(at(53, 40), kMarkLine);
     // every marked sample is labelled, nothing else
@@ -65,6 +67,46 @@ TEST(MarkShapes, ALineIsALineWhateverItsDirectionASpotIsASpot) {
     EXPECT_THROW(labelMarksByShape(map, W + 1, H), std::invalid_argument);
 }
 
+TEST(MarkShapes, AMarkManyTimesItsShapesMedianIsLabelledApart) {
+    const int W = 120, H = 60;
+    std::vector<uint8_t> map(static_cast<size_t>(W) * H, 0);
+    auto box = [&](int x0, int y0, int w, int h) {
+        for (int y = y0; y < y0 + h; ++y)
+            for (int x = x0; x < x0 + w; ++x) map[static_cast<size_t>(y) * W + x] = 255;
+    };
+    // spots: four of 3x3 (9 samples), one of 8x9 (72 = 8 x 9, not more: a spot), one of 9x9
+    // (81 > 72: a large spot); the lower median is 9
+    for (int k = 0; k < 4; ++k) box(2 + 5 * k, 2, 3, 3);
+    box(30, 2, 8, 9);
+    box(45, 2, 9, 9);
+    // lines: three of 8x1 (8 samples), one of 60x2 (120 > 8 x 8: a large line)
+    for (int k = 0; k < 3; ++k) box(2 + 12 * k, 20, 8, 1);
+    box(2, 30, 60, 2);
+    const std::vector<uint8_t> labels = labelMarksByShape(map, W, H);
+    auto at = [&](int x, int y) { return labels[static_cast<size_t>(y) * W + x]; };
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(at(3 + 5 * k, 3), kMarkSpot) << k;
+    EXPECT_EQ(at(31, 3), kMarkSpot);
+    EXPECT_EQ(at(46, 3), kMarkLargeSpot);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(at(3 + 12 * k, 20), kMarkLine) << k;
+    EXPECT_EQ(at(30, 31), kMarkLargeLine);
+    for (size_t k = 0; k < map.size(); ++k) EXPECT_EQ(labels[k] != 0, map[k] != 0) << k;
+    // of two marks of a shape, the smaller is the median: the larger, 8x as large or more, apart
+    std::vector<uint8_t> two(static_cast<size_t>(W) * H, 0);
+    for (int y = 2; y < 5; ++y)
+        for (int x = 2; x < 5; ++x) two[static_cast<size_t>(y) * W + x] = 1;  // 9
+    for (int y = 20; y < 30; ++y)
+        for (int x = 20; x < 30; ++x) two[static_cast<size_t>(y) * W + x] = 1;  // 100
+    const std::vector<uint8_t> twoLabels = labelMarksByShape(two, W, H);
+    EXPECT_EQ(twoLabels[static_cast<size_t>(3) * W + 3], kMarkSpot);
+    EXPECT_EQ(twoLabels[static_cast<size_t>(25) * W + 25], kMarkLargeSpot);
+    // marks all alike: none apart
+    std::vector<uint8_t> alike(static_cast<size_t>(W) * H, 0);
+    for (int k = 0; k < 6; ++k)
+        for (int y = 2; y < 6; ++y)
+            for (int x = 2 + 8 * k; x < 6 + 8 * k; ++x) alike[static_cast<size_t>(y) * W + x] = 1;
+    for (const uint8_t v : labelMarksByShape(alike, W, H)) EXPECT_TRUE(v == 0 || v == kMarkSpot);
+}
+
 TEST(MarkShapes, TheJudgeScoresTheMapsMarksByShapeAndAnyOtherRegionAsOne) {
     const std::vector<uint8_t> defects = {0, kMarkLine, kMarkLine, 0, kMarkSpot};
     const JudgedDefectLabels byShape = judgedDefectLabels(defects, true);
@@ -74,6 +116,14 @@ TEST(MarkShapes, TheJudgeScoresTheMapsMarksByShapeAndAnyOtherRegionAsOne) {
     EXPECT_EQ(byShape.legend[0].name, "lines");
     EXPECT_EQ(byShape.legend[1].value, kMarkSpot);
     EXPECT_EQ(byShape.legend[1].name, "spots");
+    // the large marks' labels are named too, in the legend's order
+    const JudgedDefectLabels large =
+        judgedDefectLabels(std::vector<uint8_t>{kMarkLargeSpot, kMarkSpot, kMarkLargeLine}, true);
+    ASSERT_EQ(large.legend.size(), 3u);
+    EXPECT_EQ(large.legend[0].name, "spots");
+    EXPECT_EQ(large.legend[1].name, "large lines");
+    EXPECT_EQ(large.legend[2].name, "large spots");
+    for (const RegionLabel& l : markShapeLegend()) EXPECT_TRUE(isMarkShapeLabel(l.value));
     // only the shapes present are named
     const JudgedDefectLabels linesOnly =
         judgedDefectLabels(std::vector<uint8_t>{0, kMarkLine}, true);

@@ -224,7 +224,7 @@ TEST(SelfSimMap, TheObjectivesAutoRegionCountsWhatTheMapCouldNotJudge) {
     size_t marked = 0, other = 0;
     for (const uint8_t v : r.defects) {
         marked += v != 0;
-        other += v != 0 && v != kMarkLine && v != kMarkSpot;
+        other += v != 0 && !isMarkShapeLabel(static_cast<uint8_t>(v));
     }
     EXPECT_GT(marked, 0u) << "the pit, seen by the camera";
     EXPECT_EQ(other, 0u);

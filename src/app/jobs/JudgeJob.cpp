@@ -165,7 +165,7 @@ JudgeJobSummary runJudgeJob(const JudgeJobOptions& o) {
                              "give " + option("defects") + " too (e.g. auto)");
         // With a defect region: its regions in the image first (a bad mask fails before the
         // trace), then its labels as optimize's held-out judge scores them (app/pipeline/Truth.h
-        // judgedDefectLabels: auto's lines and spots, else one region "defects").
+        // judgedDefectLabels: auto's kinds of mark, else one region "defects").
         std::optional<DefectRegions> regions;
         if (!o.defects.empty())
             regions = defectRegionsInImage(*scene, o.defects, jo.truth, o.reference);

@@ -75,10 +75,10 @@ struct DefectRegions {
     size_t unjudgedRegions = 0;
     double unjudgedShare = 0;
 };
-/// defects: defectRegionSpec(defects, truth) projected (auto: each mark labelled by its shape,
-/// detect/MarkShapes.h labelMarksByShape, so the objective asks each kind to show); reference:
-/// empty when not given, auto:
-/// the part the defect map leaves unmarked and outside the defects, else the region given.
+/// defects: defectRegionSpec(defects, truth) projected (auto: each mark labelled by its shape
+/// and size, detect/MarkShapes.h labelMarksByShape, so the objective asks each kind to show);
+/// reference: empty when not given, auto: the part the defect map leaves unmarked and outside
+/// the defects, else the region given.
 /// Throws InputError when an automatic defect region marks nothing the camera sees.
 DefectRegions defectRegionsInImage(const Scene& scene, const RegionSpec& defects,
                                    const std::filesystem::path& truth, const RegionSpec& reference);
@@ -93,7 +93,7 @@ struct JudgedDefectLabels {
     std::vector<RegionLabel> legend;  // the labels present
 };
 /// `byShape` (the region is the defect map's own, `auto`): the marks' shapes as labelled
-/// (detect/MarkShapes.h: lines, spots), else one region "defects" (255) over every nonzero value.
+/// (detect/MarkShapes.h: lines, spots, large lines, large spots), else one region "defects" (255) over every nonzero value.
 JudgedDefectLabels judgedDefectLabels(std::span<const uint8_t> defects, bool byShape);
 
 /// The defects objective's regions as an optimize output keeps them, in image space:
