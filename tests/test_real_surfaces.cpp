@@ -453,6 +453,61 @@ TEST(FormatsGwyddion, AFileOfSeveralChannelsReadsItsHeightChannelOrTheOneAskedFo
     }
 }
 
+// A channel of heights in metres on a grid without lateral calibration (an AFM file saved in
+// pixels): read with a warning, its heights in mm and no pitch, a measurement (levelled as one);
+// the scene gives the spacing, and without it the refusal says why and names
+// heightmap.pixel_pitch. A channel over lateral axes in another unit (seconds) is not a height map.
+TEST(FormatsGwyddion, HeightsOnAnUncalibratedGridTakeTheScenesPitch) {
+    if (!SL_HAVE_GWYDDION) GTEST_SKIP() << "built with -DSCRATCHLIGHT_GWYDDION=OFF";
+    test::TempDir dir("gwypx");
+    const int w = 7, h = 6;
+    const size_t n = static_cast<size_t>(w * h);
+    std::vector<float> height(n), signal(n);
+    for (size_t k = 0; k < n; ++k) {
+        height[k] = 0.001f * std::cos(0.5f * static_cast<float>(k));
+        signal[k] = 0.002f * static_cast<float>(k);
+    }
+    writeGwy(dir / "px.gwy", w, h, {{"Height", "m", height, ""}}, 0.001);
+    const HeightmapData d = loadHeightmap(dir / "px.gwy", {});
+    EXPECT_FALSE(d.pitch);
+    EXPECT_TRUE(d.uncalibratedLateral);
+    EXPECT_TRUE(d.measured());
+    ASSERT_EQ(d.heights.size(), n);
+    for (size_t k = 0; k < n; ++k) EXPECT_NEAR(d.heights[k], height[k], 1e-9) << k;
+    ASSERT_EQ(d.warnings.size(), 1u);
+    EXPECT_NE(d.warnings[0].find("carries no lateral calibration"), std::string::npos)
+        << d.warnings[0];
+    EXPECT_NE(d.warnings[0].find("heightmap.pixel_pitch"), std::string::npos);
+    // a scene without a pitch: refused, saying why and what to add
+    test::writeText(dir / "scene.json", R"({"heightmap": {"path": "px.gwy"}})");
+    try {
+        loadScene(dir / "scene.json", {});
+        ADD_FAILURE() << "read without a pitch";
+    } catch (const InputError& e) {
+        const std::string m = e.what();
+        EXPECT_NE(m.find("scene.json"), std::string::npos) << m;
+        EXPECT_NE(m.find("lateral axes carry no calibration"), std::string::npos) << m;
+        EXPECT_NE(m.find("pixel_pitch"), std::string::npos) << m;
+    }
+    // with one: its pitch, levelled as a measurement (auto: plane)
+    const std::unique_ptr<Scene> s = loadScene(dir / "scene.json", {"heightmap.pixel_pitch=0.002"});
+    EXPECT_DOUBLE_EQ(s->desc.heightmap.pitch, 0.002);
+    EXPECT_TRUE(s->load.measured);
+    EXPECT_TRUE(s->load.levelling.automatic);
+    EXPECT_NE(s->load.levelling.text().find("plane"), std::string::npos)
+        << s->load.levelling.text();
+    // pixels ("px") are uncalibrated too; seconds are not a length: refused, listing channels
+    writeGwy(dir / "two.gwy", w, h, {{"Height", "m", height, "px"}, {"Time", "m", signal, "s"}},
+             0.001);
+    EXPECT_TRUE(loadHeightmap(dir / "two.gwy", {}).uncalibratedLateral);
+    HeightmapOptions time;
+    time.channel = "Time";
+    test::expectRefused(dir / "two.gwy",
+                        {"heightmap.channel", "lateral axes in s, not a length",
+                         "0 \"Height\" (heights in m, lateral uncalibrated)"},
+                        time);
+}
+
 // A measurement more than half invalid whose valid points lie in a smaller rectangle (a part
 // smaller than the instrument's field) is read as that rectangle, exactly, with a warning; one
 // whose valid points are spread over the field is still refused; one at most half invalid keeps

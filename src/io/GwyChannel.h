@@ -8,12 +8,14 @@
 
 namespace sl {
 
-/// Its title (may be empty) and its unit of value ("m": `values` are heights in mm; anything
-/// else, e.g. "deg" or "V": as they are).
+/// Its title (may be empty), its unit of value ("m": `values` are heights in mm; anything
+/// else, e.g. "deg" or "V": as they are) and its lateral unit ("m": the grid at the pitch
+/// written; anything else, "" for none: one unit per sample, an uncalibrated grid).
 struct GwyChannel {
     std::string title;
     std::string unit = "m";
     std::vector<float> values;  // W×H, row 0 first
+    std::string lateralUnit = "m";
 };
 
 }  // namespace sl

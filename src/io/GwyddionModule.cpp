@@ -74,7 +74,9 @@ std::string unitString(GwySIUnit* u) {
 struct Channel {
     int id = 0;
     std::string title, zUnit, xyUnit;
-    bool metres = false;  // heights and lateral both in metres: a height map
+    bool metres = false;        // heights and lateral both in metres: a height map
+    bool uncalibrated = false;  // heights in metres on a grid without a lateral unit (or px)
+    bool heights() const { return metres || uncalibrated; }  // a height map the rule may read
 };
 
 /// What a file module read: its channels (images), and the data that are not images.
@@ -104,8 +106,9 @@ void findChannel(gpointer quark, gpointer value, gpointer user) {
     c.id = static_cast<int>(id);
     c.zUnit = unitString(gwy_data_field_get_si_unit_z(f));
     c.xyUnit = unitString(gwy_data_field_get_si_unit_xy(f));
-    c.metres = gwy_si_unit_equal_string(gwy_data_field_get_si_unit_z(f), "m") &&
-               gwy_si_unit_equal_string(gwy_data_field_get_si_unit_xy(f), "m");
+    const bool zMetres = gwy_si_unit_equal_string(gwy_data_field_get_si_unit_z(f), "m");
+    c.metres = zMetres && gwy_si_unit_equal_string(gwy_data_field_get_si_unit_xy(f), "m");
+    c.uncalibrated = zMetres && (c.xyUnit == "(none)" || c.xyUnit == "px");
     contents->channels.push_back(std::move(c));
 }
 
@@ -114,6 +117,7 @@ std::string channelName(const Channel& c) {
     std::string s = std::to_string(c.id);
     if (!c.title.empty()) s += " \"" + c.title + "\"";
     if (c.metres) return s + " (heights in m)";
+    if (c.uncalibrated) return s + " (heights in m, lateral uncalibrated)";
     s += " (" + (c.zUnit == "(none)" ? std::string("no unit") : c.zUnit);
     return s + (c.xyUnit == "m" ? ")" : ", lateral " + c.xyUnit + ")");
 }
@@ -155,10 +159,13 @@ const Channel* chooseChannel(const std::vector<Channel>& channels, const std::st
                         "Give the channel's number or its whole title"};
             return nullptr;
         }
-        if (!chosen->metres) {
+        if (!chosen->heights()) {
             *problem = {"heightmap.channel",
                         "channel " + channelName(*chosen) + " of " + file +
-                            " does not hold heights in metres (" + all + ")",
+                            (chosen->zUnit == "m" ? " holds heights over lateral axes in " +
+                                                        chosen->xyUnit + ", not a length ("
+                                                  : " does not hold heights in metres (") +
+                            all + ")",
                         "Choose the height (topography) channel"};
             return nullptr;
         }
@@ -166,7 +173,7 @@ const Channel* chooseChannel(const std::vector<Channel>& channels, const std::st
         return chosen;
     }
     for (const Channel& c : channels) {
-        if (!c.metres) continue;
+        if (!c.heights()) continue;
         const std::string t = lower(c.title);
         if (t.find("height") != std::string::npos || t.find("topo") != std::string::npos) {
             *how = "its title names heights";
@@ -174,7 +181,7 @@ const Channel* chooseChannel(const std::vector<Channel>& channels, const std::st
         }
     }
     for (const Channel& c : channels)
-        if (c.metres) {
+        if (c.heights()) {
             *how = "the first in metres";
             return &c;
         }
@@ -298,11 +305,22 @@ bool read(const std::string& file, const std::string& channel, HeightmapData* ou
     d = HeightmapData{};
     d.width = w;
     d.height = h;
-    d.pitch = gwy_data_field_get_dx(f) * 1000.0;
-    d.pitchY = gwy_data_field_get_dy(f) * 1000.0;
     d.format = std::string("gwyddion ") + module;
     d.channel = chosenText;
-    if (!(std::isfinite(*d.pitch) && *d.pitch > 0 && std::isfinite(*d.pitchY) && *d.pitchY > 0)) {
+    if (chosen->uncalibrated) {
+        // no lateral calibration: the samples' spacing is the scene's (heightmap.pixel_pitch)
+        d.uncalibratedLateral = true;
+        d.warnings.push_back("channel " + channelName(*chosen) +
+                             " carries no lateral calibration (its grid is in " +
+                             (chosen->xyUnit == "px" ? std::string("pixels") : "no unit") +
+                             "): its samples are taken as square at the scene's "
+                             "heightmap.pixel_pitch");
+    } else {
+        d.pitch = gwy_data_field_get_dx(f) * 1000.0;
+        d.pitchY = gwy_data_field_get_dy(f) * 1000.0;
+    }
+    if (d.pitch &&
+        !(std::isfinite(*d.pitch) && *d.pitch > 0 && std::isfinite(*d.pitchY) && *d.pitchY > 0)) {
         *problem = {"", "the file's sample spacing is not a positive number",
                     "Check the measurement's calibration; export it again"};
         return false;
@@ -335,8 +353,11 @@ bool writeGwy(const std::string& path, int width, int height,
     ref.c = gwy_container_new();
     for (size_t i = 0; i < channels.size(); ++i) {
         const GwyChannel& c = channels[i];
-        GwyDataField* f = gwy_data_field_new(width, height, width * p, height * p, FALSE);
-        gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(f), "m");
+        const bool calibrated = c.lateralUnit == "m";  // else one unit per sample
+        GwyDataField* f = calibrated
+                              ? gwy_data_field_new(width, height, width * p, height * p, FALSE)
+                              : gwy_data_field_new(width, height, width, height, FALSE);
+        gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(f), c.lateralUnit.c_str());
         gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_z(f), c.unit.c_str());
         double* z = gwy_data_field_get_data(f);
         const double mmPerUnit = c.unit == "m" ? 1000.0 : 1.0;  // heights are given in mm

@@ -25,7 +25,7 @@ struct GwyddionProblem {
     std::string where, problem, fix;
 };
 
-inline constexpr int kGwyddionModuleVersion = 2;
+inline constexpr int kGwyddionModuleVersion = 3;
 
 /// The module's entry points (kGwyddionModuleVersion: both sides must agree). Each returns
 /// false with *problem set when it fails. Gwyddion is initialised on the first call; every

@@ -10,7 +10,8 @@
 // module kinds need a display). Gwyddion is not thread-safe: every call into it holds one lock.
 //
 // What is read (loadHeightmap dispatches here for a file whose content none of our own readers
-// claims, io/HeightmapIO.h): one channel (/N/data) whose lateral and height units are metres --
+// claims, io/HeightmapIO.h): one channel (/N/data) of heights in metres whose lateral unit is
+// metres, or none (or px: a grid without calibration, below) --
 //   - the one `channel` names (heightmap.channel): its number N, its title (/N/data/title, any
 //     case), or a part of the title that names no other channel; a channel not in metres, or
 //     none, is refused naming heightmap.channel and listing the file's channels;
@@ -18,7 +19,9 @@
 //     any case): an AFM file's Height beside an Amplitude (error) channel also in metres;
 //   - else the lowest-numbered channel in metres.
 // Heights become millimetres (×1000), NaN where the channel's mask (/N/mask, the file module's
-// invalid points) is set or the value is not finite. pitch = dx, pitchY = dy (mm). `channel` of
+// invalid points) is set or the value is not finite. pitch = dx, pitchY = dy (mm); on a grid
+// without lateral calibration, pitch is unset and uncalibratedLateral set, with a warning: the
+// scene gives heightmap.pixel_pitch, or it is refused saying so. `channel` of
 // the result says which channel was read and lists the others when the file holds several. A
 // file with no channel is refused saying what it holds instead: point clouds (/xyz/N), volume
 // data (/brick/N) or graphs (profiles, spectra).

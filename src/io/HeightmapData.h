@@ -30,8 +30,13 @@ struct HeightmapData {
     /// 0 "Amplitude" (heights in m)` (io/GwyddionReader.h); "" otherwise.
     std::string channel;
     std::vector<std::string> warnings;  // what an imperfect file made the reader assume
-    /// A measured map (X3P, SDF, an instrument format): carries its pitch and heights in mm.
-    bool measured() const { return pitch.has_value(); }
+    /// An instrument's channel of heights in metres on a grid whose lateral axes carry no
+    /// calibration (unit none or pixels): heights in mm, `pitch` unset, so the scene gives
+    /// heightmap.pixel_pitch (io/GwyddionReader.h).
+    bool uncalibratedLateral = false;
+    /// A measured map (X3P, SDF, an instrument format): heights in mm, with its pitch (unless
+    /// its lateral axes are uncalibrated).
+    bool measured() const { return pitch.has_value() || uncalibratedLateral; }
 };
 
 namespace detail {

@@ -534,6 +534,16 @@ std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
     if (!map.pitch && !desc.heightmap.pitchGiven) {
         const std::string where =
             desc.file.empty() ? desc.heightmap.path.string() : desc.file.string();
+        if (map.uncalibratedLateral)  // an instrument's heights on a grid without a length unit
+            throw inputError(where,
+                             desc.heightmap.path.filename().string() + " (" + map.format + ", " +
+                                 std::to_string(map.width) + "x" + std::to_string(map.height) +
+                                 ") holds heights whose lateral axes carry no calibration" +
+                                 (map.channel.empty() ? std::string() : " (" + map.channel + ")") +
+                                 ", and the scene gives no heightmap.pixel_pitch",
+                             "Add \"pixel_pitch\": MM (the spacing of the samples in mm, from "
+                             "the instrument's field of view over its points) to the scene's "
+                             "heightmap section, or -D heightmap.pixel_pitch=MM");
         throw inputError(where,
                          desc.heightmap.path.filename().string() + " (" + map.format + ", " +
                              std::to_string(map.width) + "x" + std::to_string(map.height) +
@@ -674,7 +684,8 @@ std::vector<SceneFileField> sceneFileFields() {
          "reads (Wyko OPD, Sensofar PLU, Digital Surf SUR, Zygo DAT, …), recognised by content"},
         {"heightmap.pixel_pitch", "required (measured maps: the file's)",
          "sample spacing in scene units (mm); measured maps (X3P, SDF, instrument formats) carry "
-         "their own (leave it out); non-square pixels are resampled onto the finer pitch; a map "
+         "their own (leave it out), except a grid without lateral calibration; non-square pixels "
+         "are resampled onto the finer pitch; a map "
          "without one is refused unless given (or " +
              num(d.heightmap.pitch) + " accepted on the command line)"},
         {"heightmap.height_range", "required for integer maps",
