@@ -93,7 +93,8 @@ struct JudgedDefectLabels {
     std::vector<RegionLabel> legend;  // the labels present
 };
 /// `byShape` (the region is the defect map's own, `auto`): the marks' shapes as labelled
-/// (detect/MarkShapes.h: lines, spots, large lines, large spots), else one region "defects" (255) over every nonzero value.
+/// (detect/MarkShapes.h: lines, spots, large lines, large spots), else one region "defects"
+/// (255) over every nonzero value.
 JudgedDefectLabels judgedDefectLabels(std::span<const uint8_t> defects, bool byShape);
 
 /// The defects objective's regions as an optimize output keeps them, in image space:
