@@ -532,22 +532,20 @@ std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
     // A map without a pitch (EXR, TIFF, PNG, .npy) is refused unless the scene gives one: a
     // silent default was 6x off on a real part.
     if (!map.pitch && !desc.heightmap.pitchGiven) {
-        const std::string where =
-            desc.file.empty() ? desc.heightmap.path.string() : desc.file.string();
+        const std::string file = desc.heightmap.path.filename().string() + " (" + map.format +
+                                 ", " + std::to_string(map.width) + "x" +
+                                 std::to_string(map.height) + ")";
         if (map.uncalibratedLateral)  // an instrument's heights on a grid without a length unit
-            throw inputError(where,
-                             desc.heightmap.path.filename().string() + " (" + map.format + ", " +
-                                 std::to_string(map.width) + "x" + std::to_string(map.height) +
-                                 ") holds heights whose lateral axes carry no calibration" +
+            throw inputError(sceneWhere,
+                             file + " holds heights whose lateral axes carry no calibration" +
                                  (map.channel.empty() ? std::string() : " (" + map.channel + ")") +
                                  ", and the scene gives no heightmap.pixel_pitch",
                              "Add \"pixel_pitch\": MM (the spacing of the samples in mm, from "
                              "the instrument's field of view over its points) to the scene's "
                              "heightmap section, or -D heightmap.pixel_pitch=MM");
-        throw inputError(where,
-                         desc.heightmap.path.filename().string() + " (" + map.format + ", " +
-                             std::to_string(map.width) + "x" + std::to_string(map.height) +
-                             ") carries no sample spacing, and the scene gives no "
+        throw inputError(sceneWhere,
+                         file +
+                             " carries no sample spacing, and the scene gives no "
                              "heightmap.pixel_pitch",
                          "Add \"pixel_pitch\": MM (the spacing of the samples in mm) to the "
                          "scene's heightmap section, or accept the default " +
@@ -562,12 +560,11 @@ std::unique_ptr<Scene> loadScene(const SceneDesc& desc) {
             d.heightmap.pitch = filePitch;
         } else if (std::abs(desc.heightmap.pitch - filePitch) >
                    1e-6 * std::max(desc.heightmap.pitch, filePitch)) {
-            const std::string where =
-                desc.file.empty() ? desc.heightmap.path.string() : desc.file.string();
-            throw inputError(where, "heightmap.pixel_pitch " + formatNumber(desc.heightmap.pitch) +
-                                        " disagrees with the file's " + formatNumber(filePitch) +
-                                        " mm (" + desc.heightmap.path.string() +
-                                        "); remove pixel_pitch from the scene to use the file's");
+            throw inputError(sceneWhere,
+                             "heightmap.pixel_pitch " + formatNumber(desc.heightmap.pitch) +
+                                 " disagrees with the file's " + formatNumber(filePitch) + " mm (" +
+                                 desc.heightmap.path.string() +
+                                 "); remove pixel_pitch from the scene to use the file's");
         }
     }
     HeightmapLoad load = levelMap(map, d.heightmap.levelling, d.heightmap.pitch, sceneWhere);
