@@ -63,9 +63,12 @@ bool initialise(GwyddionProblem* problem) {
     return false;
 }
 
+/// unitString of a dimensionless value (no unit).
+constexpr const char* kNoUnit = "(none)";
+
 std::string unitString(GwySIUnit* u) {
     gchar* s = gwy_si_unit_get_string(u, GWY_SI_UNIT_FORMAT_PLAIN);
-    std::string r = s && *s ? s : "(none)";
+    std::string r = s && *s ? s : kNoUnit;
     g_free(s);
     return r;
 }
@@ -108,7 +111,7 @@ void findChannel(gpointer quark, gpointer value, gpointer user) {
     c.xyUnit = unitString(gwy_data_field_get_si_unit_xy(f));
     const bool zMetres = gwy_si_unit_equal_string(gwy_data_field_get_si_unit_z(f), "m");
     c.metres = zMetres && gwy_si_unit_equal_string(gwy_data_field_get_si_unit_xy(f), "m");
-    c.uncalibrated = zMetres && (c.xyUnit == "(none)" || c.xyUnit == "px");
+    c.uncalibrated = zMetres && (c.xyUnit == kNoUnit || c.xyUnit == "px");
     contents->channels.push_back(std::move(c));
 }
 
@@ -118,7 +121,7 @@ std::string channelName(const Channel& c) {
     if (!c.title.empty()) s += " \"" + c.title + "\"";
     if (c.metres) return s + " (heights in m)";
     if (c.uncalibrated) return s + " (heights in m, lateral uncalibrated)";
-    s += " (" + (c.zUnit == "(none)" ? std::string("no unit") : c.zUnit);
+    s += " (" + (c.zUnit == kNoUnit ? std::string("no unit") : c.zUnit);
     return s + (c.xyUnit == "m" ? ")" : ", lateral " + c.xyUnit + ")");
 }
 
